@@ -1,0 +1,33 @@
+"""cvxgeodesic: geodesic distance fields on triangle meshes by convex optimization.
+
+Quick use::
+
+    import cvxgeodesic as cg
+    mesh = cg.load_mesh("bunny.obj")
+    d = cg.geodesic_distance(mesh, sources=0)            # QCQP-Hessian, m = 1
+    res = cg.GeodesicSolver(mesh, method="qclp").solve([0, 17])
+    res.distance, res.info.iterations, res.info.solve_time
+"""
+
+from .api import ALL_METHODS, BASELINE_METHODS, GeodesicResult, GeodesicSolver, SolveInfo, geodesic_distance
+from .errors import (
+    CvxGeodesicError,
+    MeshError,
+    MeshFormatError,
+    NonManifoldError,
+    ParameterError,
+    SolverError,
+    SourceError,
+)
+from .formulations import FORMULATIONS, smoothness_weight
+from .mesh import TriMesh, cylinder, grid_plane, icosphere
+from .mesh.io import load_mesh, save_distance
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "ALL_METHODS", "BASELINE_METHODS", "FORMULATIONS", "CvxGeodesicError", "GeodesicResult", "GeodesicSolver",
+    "MeshError", "MeshFormatError", "NonManifoldError", "ParameterError", "SolveInfo", "SolverError", "SourceError",
+    "TriMesh", "cylinder", "geodesic_distance", "grid_plane", "icosphere", "load_mesh", "save_distance",
+    "smoothness_weight",
+]

@@ -1,0 +1,136 @@
+"""Command-line interface: ``cvxgeodesic distance | compare | demo``.
+
+Every error a user can cause ends the program with exit code 2 and a one-line
+message on stderr; ``--debug`` shows the full traceback instead.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+import traceback
+
+from . import __version__
+from .api import ALL_METHODS, SOLVERS
+
+EXIT_USAGE = 2
+
+
+def _progress_printer(stream, every: float = 0.5):
+    """IPM callback printing one line per iteration once a solve has run for ``every`` seconds."""
+    t0 = time.perf_counter()
+
+    def callback(iteration: int, info: dict) -> None:
+        if time.perf_counter() - t0 < every:
+            return
+        parts = [f"iter {iteration:3d}"]
+        for key in ("gap", "primal_residual", "dual_residual"):
+            if key in info:
+                parts.append(f"{key}={info[key]:.2e}")
+        print("  " + "  ".join(parts), file=stream, flush=True)
+
+    return callback
+
+
+def _cmd_distance(args) -> int:
+    from .api import GeodesicSolver
+    from .mesh.io import load_mesh, save_distance
+
+    mesh = load_mesh(args.mesh)
+    log = sys.stderr
+    if not args.quiet:
+        print(f"{mesh.name}: {mesh.n_vertices} vertices, {mesh.n_faces} faces; method {args.method}", file=log)
+    solver = GeodesicSolver(mesh, args.method, m=args.m, lam=args.lam, solver=args.solver)
+    callback = None if args.quiet else _progress_printer(log)
+    res = solver.solve(args.source, callback=callback)
+    save_distance(args.output, mesh, res.distance)
+    if args.png:
+        from .plotting import plot_field
+
+        plot_field(mesh, res.distance, args.png, title=f"{solver.method}, sources {list(map(int, res.sources))}")
+    if not args.quiet:
+        i = res.info
+        print(f"{i.method} via {i.solver}: {i.status}, {i.iterations} iterations, set-up {i.setup_time:.2f} s, "
+              f"solve {i.solve_time:.2f} s; wrote {args.output}" + (f" and {args.png}" if args.png else ""), file=log)
+    return 0
+
+
+def _cmd_compare(args) -> int:
+    from .compare import format_table, run_compare
+    from .mesh.io import load_mesh
+
+    mesh = load_mesh(args.mesh)
+    methods = [m.strip() for m in args.methods.split(",") if m.strip()]
+    rows = run_compare(mesh, args.source, methods, args.out, m=args.m, solver=args.solver, progress=not args.quiet)
+    print(format_table(rows))
+    return 0
+
+
+def _cmd_demo(args) -> int:
+    from .demo import run_demo
+
+    run_demo(args.out, source=args.source)
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="cvxgeodesic",
+        description="Geodesic distance fields on triangle meshes by convex optimization.",
+    )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    parser.add_argument("--debug", action="store_true", help="show full tracebacks on errors")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    def common(p):
+        p.add_argument("mesh", help="mesh file (.obj, .off, .ply, .stl)")
+        p.add_argument("--source", "-s", type=int, action="append", required=True, metavar="I",
+                       help="source vertex index (repeat for several sources)")
+        p.add_argument("--m", type=float, default=1.0, help="smoothness multiplier m, λ = m·100·h/n (default 1)")
+        p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")
+        p.add_argument("--quiet", "-q", action="store_true", help="no progress output")
+        p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
+
+    p = sub.add_parser("distance", help="compute one distance field and write it")
+    common(p)
+    p.add_argument("--method", default="qcqp-hessian", choices=ALL_METHODS, metavar="NAME",
+                   help=f"one of: {', '.join(ALL_METHODS)} (default qcqp-hessian)")
+    p.add_argument("--lam", type=float, default=None, help="give λ directly (overrides --m)")
+    p.add_argument("-o", "--output", required=True, help="output file: .ply (mesh + distance), .npy or .csv")
+    p.add_argument("--png", default=None, help="also render the field with isolines to this PNG")
+    p.set_defaults(func=_cmd_distance)
+
+    p = sub.add_parser("compare", help="run several methods, compare them with the exact distance")
+    common(p)
+    p.add_argument("--methods", default="all", help="comma-separated method names, or 'all' (default)")
+    p.add_argument("--out", default="compare_output", help="output folder (CSV table and PNGs)")
+    p.set_defaults(func=_cmd_compare)
+
+    p = sub.add_parser("demo", help="QCQP-Hessian on the bundled Spot mesh; writes PLY + PNG, prints a table")
+    p.add_argument("--out", default="demo_output", help="output folder (default demo_output)")
+    p.add_argument("--source", type=int, default=0, help="source vertex (default 0)")
+    p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
+    p.set_defaults(func=_cmd_demo)
+    return parser
+
+
+def main(argv=None) -> int:
+    """Entry point of the ``cvxgeodesic`` console script; returns the exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except KeyboardInterrupt:
+        print("cvxgeodesic: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:  # every failure becomes one line; --debug shows where it came from
+        if args.debug:
+            traceback.print_exc()
+        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        print(f"cvxgeodesic: error: {msg}", file=sys.stderr)
+        return EXIT_USAGE
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

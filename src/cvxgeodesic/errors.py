@@ -1,0 +1,54 @@
+"""Exception types raised by cvxgeodesic.
+
+Every error a user can cause is one of these. They derive from the built-in
+exception a caller would expect (``ValueError`` for bad input, ``RuntimeError``
+for solver failure), so ``except ValueError`` keeps working.
+"""
+
+from __future__ import annotations
+
+
+class CvxGeodesicError(Exception):
+    """Base class of every exception raised on purpose by cvxgeodesic."""
+
+
+class MeshError(CvxGeodesicError, ValueError):
+    """A mesh (arrays or file contents) is invalid; the message names the problem."""
+
+
+class MeshFormatError(MeshError):
+    """A mesh file cannot be read: missing, unsupported extension or malformed."""
+
+
+class SourceError(CvxGeodesicError, ValueError):
+    """The source vertices passed to a solve are invalid."""
+
+
+class ParameterError(CvxGeodesicError, ValueError):
+    """A parameter (method name, smoothness weight, solver name, ...) is invalid."""
+
+
+class NonManifoldError(MeshError):
+    """The requested method needs an edge-manifold mesh and the mesh is not one."""
+
+
+class SolverError(CvxGeodesicError, RuntimeError):
+    """A numerical solver did not return an optimal solution.
+
+    Parameters
+    ----------
+    message : str
+        Human-readable explanation.
+    solver : str
+        Name of the backend (``"clarabel"``, ``"ipm"``).
+    status : str
+        The backend's own status string (e.g. ``"MaxIterations"``).
+    info : dict, optional
+        Iterations, residuals and timings reached before the failure.
+    """
+
+    def __init__(self, message: str, *, solver: str, status: str, info: dict | None = None):
+        super().__init__(f"{message} (solver={solver}, status={status})")
+        self.solver = solver
+        self.status = status
+        self.info = dict(info or {})

@@ -1,0 +1,122 @@
+"""Meshes generated in code: for tests with analytic distances and for the demo."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ParameterError
+from .trimesh import TriMesh
+
+
+def _check_count(value, name: str, minimum: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
+        raise ParameterError(f"{name} must be an integer >= {minimum}, got {value!r}")
+    return int(value)
+
+
+def grid_plane(
+    nx: int = 20, ny: int | None = None, size: float = 1.0, *, jitter: float = 0.0, seed: int = 0
+) -> TriMesh:
+    """A flat square ``[0, size]²`` in the z = 0 plane, split into right triangles.
+
+    Parameters
+    ----------
+    nx, ny : int
+        Number of cells along x and y (``ny`` defaults to ``nx``).
+    size : float
+        Side length of the square.
+    jitter : float
+        Interior vertices move by up to ``jitter`` times the cell size in x and y
+        (deterministic for a given ``seed``); 0 gives a regular grid.
+    seed : int
+        Seed of the jitter.
+
+    Returns
+    -------
+    TriMesh
+        ``(nx + 1)(ny + 1)`` vertices, ``2 nx ny`` faces, consistently oriented (+z).
+    """
+    nx = _check_count(nx, "nx", 1)
+    ny = nx if ny is None else _check_count(ny, "ny", 1)
+    xs, ys = np.linspace(0.0, size, nx + 1), np.linspace(0.0, size, ny + 1)
+    X, Y = np.meshgrid(xs, ys, indexing="xy")
+    V = np.column_stack([X.ravel(), Y.ravel(), np.zeros(X.size)])
+    if jitter:
+        rng = np.random.default_rng(seed)
+        interior = (V[:, 0] > 0) & (V[:, 0] < size) & (V[:, 1] > 0) & (V[:, 1] < size)
+        V[interior, :2] += rng.uniform(-jitter, jitter, (interior.sum(), 2)) * size / max(nx, ny)
+    idx = np.arange((nx + 1) * (ny + 1)).reshape(ny + 1, nx + 1)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, 1:].ravel(), idx[1:, :-1].ravel()
+    # alternate the diagonal so the grid has no preferred direction
+    flip = ((np.arange(ny)[:, None] + np.arange(nx)[None, :]) % 2).ravel().astype(bool)
+    F1 = np.where(flip[:, None], np.column_stack([a, b, d]), np.column_stack([a, b, c]))
+    F2 = np.where(flip[:, None], np.column_stack([b, c, d]), np.column_stack([a, c, d]))
+    return TriMesh(V, np.vstack([F1, F2]), name=f"plane{nx}x{ny}")
+
+
+def icosphere(subdivisions: int = 3, radius: float = 1.0) -> TriMesh:
+    """A sphere made by repeated 4-to-1 subdivision of an icosahedron.
+
+    Parameters
+    ----------
+    subdivisions : int
+        Number of subdivision rounds; the mesh has ``20 · 4**subdivisions`` faces.
+    radius : float
+        Sphere radius.
+
+    Returns
+    -------
+    TriMesh
+        Outward-oriented sphere; vertex 0 is ``(0, 0, radius)``-adjacent icosahedron vertex.
+    """
+    subdivisions = _check_count(subdivisions, "subdivisions", 0)
+    t = (1.0 + 5.0**0.5) / 2.0
+    V = np.array(
+        [[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t],
+         [0, -1, -t], [0, 1, -t], [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]], dtype=float)
+    F = np.array(
+        [[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4],
+         [11, 10, 2], [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8],
+         [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]], dtype=np.int64)
+    V /= np.linalg.norm(V, axis=1, keepdims=True)
+    for _ in range(subdivisions):
+        V, F = _subdivide_midpoint(V, F)
+        V /= np.linalg.norm(V, axis=1, keepdims=True)
+    return TriMesh(V * radius, F, name=f"icosphere{subdivisions}")
+
+
+def _subdivide_midpoint(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    E.sort(axis=1)
+    uniq, inv = np.unique(E, axis=0, return_inverse=True)
+    mid = len(V) + inv.reshape(3, -1).T  # (m, 3): midpoints of edges 01, 12, 20
+    Vn = np.vstack([V, 0.5 * (V[uniq[:, 0]] + V[uniq[:, 1]])])
+    a, b, c = F[:, 0], F[:, 1], F[:, 2]
+    ab, bc, ca = mid[:, 0], mid[:, 1], mid[:, 2]
+    Fn = np.vstack([np.column_stack([a, ab, ca]), np.column_stack([b, bc, ab]),
+                    np.column_stack([c, ca, bc]), np.column_stack([ab, bc, ca])])
+    return Vn, Fn
+
+
+def cylinder(n_around: int = 32, n_along: int = 16, radius: float = 1.0, height: float = 2.0) -> TriMesh:
+    """An open cylinder (no caps) around the z axis, ``0 <= z <= height``.
+
+    Geodesic distances on it equal Euclidean distances in the unrolled
+    rectangle (taking the shorter way around), which tests use as ground truth.
+
+    Returns
+    -------
+    TriMesh
+        ``n_around · (n_along + 1)`` vertices, ``2 · n_around · n_along`` faces.
+    """
+    n_around = _check_count(n_around, "n_around", 3)
+    n_along = _check_count(n_along, "n_along", 1)
+    theta = 2.0 * np.pi * np.arange(n_around) / n_around
+    z = np.linspace(0.0, height, n_along + 1)
+    T, Z = np.meshgrid(theta, z, indexing="xy")
+    V = np.column_stack([radius * np.cos(T.ravel()), radius * np.sin(T.ravel()), Z.ravel()])
+    idx = np.arange(n_around * (n_along + 1)).reshape(n_along + 1, n_around)
+    nxt = np.roll(idx, -1, axis=1)
+    a, b, c, d = idx[:-1].ravel(), nxt[:-1].ravel(), nxt[1:].ravel(), idx[1:].ravel()
+    F = np.vstack([np.column_stack([a, b, c]), np.column_stack([a, c, d])])
+    return TriMesh(V, F, name=f"cylinder{n_around}x{n_along}")

@@ -1,0 +1,188 @@
+"""The validated triangle-mesh model used everywhere in cvxgeodesic."""
+
+from __future__ import annotations
+
+from functools import cached_property
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+
+from ..errors import MeshError
+
+
+class TriMesh:
+    """An immutable, validated triangle mesh.
+
+    Parameters
+    ----------
+    V : (n, 3) array_like of float
+        Vertex positions. Must be finite.
+    F : (m, 3) array_like of int
+        Triangles as 0-based vertex indices. Every index must lie in ``[0, n)``
+        and the three indices of a face must be distinct.
+    vertex_map : (n,) array_like of int, optional
+        Index of each vertex in the file it was read from (``load_mesh`` sets
+        it after welding duplicates and dropping unreferenced vertices).
+    name : str, optional
+        Label used in messages and reports (usually the file name).
+
+    Raises
+    ------
+    MeshError
+        If an array has the wrong shape or type, a coordinate is not finite,
+        an index is out of range, or a face repeats a vertex.
+
+    Notes
+    -----
+    Vertices not referenced by any face are allowed: they form components of
+    their own and get an infinite distance. ``V`` and ``F`` are stored as
+    read-only float64 / int64 arrays.
+    """
+
+    def __init__(self, V, F, *, vertex_map=None, name: str | None = None):
+        self.name = name or "mesh"
+        self.V = _as_vertices(V, self.name)
+        self.F = _as_faces(F, self.V.shape[0], self.name)
+        if vertex_map is None:
+            vertex_map = np.arange(self.V.shape[0], dtype=np.int64)
+        vertex_map = np.asarray(vertex_map, dtype=np.int64)
+        if vertex_map.shape != (self.V.shape[0],):
+            raise MeshError(f"{self.name}: vertex_map must have shape ({self.V.shape[0]},), got {vertex_map.shape}")
+        vertex_map.setflags(write=False)
+        self.vertex_map = vertex_map
+
+    def __repr__(self) -> str:
+        return f"TriMesh(name={self.name!r}, n_vertices={self.n_vertices}, n_faces={self.n_faces})"
+
+    @property
+    def n_vertices(self) -> int:
+        return int(self.V.shape[0])
+
+    @property
+    def n_faces(self) -> int:
+        return int(self.F.shape[0])
+
+    @cached_property
+    def face_normals_unnormalized(self) -> np.ndarray:
+        """(m, 3) float ndarray: cross products (v2 - v1) x (v3 - v1), length 2·area."""
+        V, F = self.V, self.F
+        return np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+
+    @cached_property
+    def face_areas(self) -> np.ndarray:
+        """(m,) float ndarray: triangle areas."""
+        return 0.5 * np.linalg.norm(self.face_normals_unnormalized, axis=1)
+
+    @cached_property
+    def edges(self) -> np.ndarray:
+        """(e, 2) int64 ndarray: unique undirected edges, ``edges[:, 0] < edges[:, 1]``."""
+        F = self.F
+        E = np.concatenate([F[:, [1, 2]], F[:, [2, 0]], F[:, [0, 1]]])
+        E.sort(axis=1)
+        return np.unique(E, axis=0)
+
+    @cached_property
+    def edge_lengths(self) -> np.ndarray:
+        """(e,) float ndarray: Euclidean length of each edge of :attr:`edges`."""
+        E = self.edges
+        return np.linalg.norm(self.V[E[:, 0]] - self.V[E[:, 1]], axis=1)
+
+    @cached_property
+    def mean_edge_length(self) -> float:
+        """Mean length of the unique edges (``h`` in the paper's λ formula)."""
+        return float(self.edge_lengths.mean()) if len(self.edge_lengths) else 0.0
+
+    @cached_property
+    def bbox_diagonal(self) -> float:
+        """Length of the diagonal of the axis-aligned bounding box."""
+        return float(np.linalg.norm(self.V.max(axis=0) - self.V.min(axis=0)))
+
+    @cached_property
+    def edge_face_counts(self) -> np.ndarray:
+        """(e,) int ndarray: number of faces incident to each edge of :attr:`edges`."""
+        F = self.F
+        E = np.concatenate([F[:, [1, 2]], F[:, [2, 0]], F[:, [0, 1]]])
+        E.sort(axis=1)
+        _, counts = np.unique(E, axis=0, return_counts=True)
+        return counts
+
+    @cached_property
+    def is_edge_manifold(self) -> bool:
+        """True when no edge is shared by more than two faces."""
+        return bool(np.all(self.edge_face_counts <= 2))
+
+    @cached_property
+    def vertex_adjacency(self) -> sp.csr_matrix:
+        """(n, n) sparse matrix with the edge lengths of the edge graph (symmetric)."""
+        n = self.n_vertices
+        E, w = self.edges, self.edge_lengths
+        A = sp.coo_matrix((np.r_[w, w], (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])), shape=(n, n))
+        return A.tocsr()
+
+    @cached_property
+    def component_labels(self) -> np.ndarray:
+        """(n,) int ndarray: connected-component label of each vertex (edge graph)."""
+        _, labels = connected_components(self.vertex_adjacency, directed=False)
+        return labels
+
+
+def _as_vertices(V, name: str) -> np.ndarray:
+    try:
+        V = np.array(V, dtype=np.float64, order="C")
+    except (TypeError, ValueError) as exc:
+        raise MeshError(f"{name}: vertices must be a numeric (n, 3) array ({exc})") from None
+    if V.ndim != 2 or V.shape[1] != 3:
+        raise MeshError(f"{name}: vertices must have shape (n, 3), got {V.shape}")
+    if V.shape[0] == 0:
+        raise MeshError(f"{name}: the mesh has no vertices")
+    bad = ~np.isfinite(V).all(axis=1)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise MeshError(
+            f"{name}: vertex {i} has a non-finite coordinate {V[i].tolist()} ({int(bad.sum())} such vertices)"
+        )
+    V.setflags(write=False)
+    return V
+
+
+def _as_faces(F, n: int, name: str) -> np.ndarray:
+    F_in = np.asarray(F)
+    if F_in.ndim != 2 or F_in.shape[1] != 3:
+        raise MeshError(f"{name}: faces must have shape (m, 3) (triangles only), got {F_in.shape}")
+    if F_in.shape[0] == 0:
+        raise MeshError(f"{name}: the mesh has no faces")
+    if F_in.dtype.kind == "f":
+        if not np.all(np.isfinite(F_in)) or not np.all(F_in == np.round(F_in)):
+            raise MeshError(f"{name}: face indices must be integers")
+    elif F_in.dtype.kind not in "iu":
+        raise MeshError(f"{name}: face indices must be integers, got dtype {F_in.dtype}")
+    F = np.array(F_in, dtype=np.int64, order="C")
+    out = (F < 0) | (F >= n)
+    if out.any():
+        f = int(np.flatnonzero(out.any(axis=1))[0])
+        raise MeshError(f"{name}: face {f} has vertex index {F[f].tolist()} outside [0, {n})")
+    rep = (F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 0] == F[:, 2])
+    if rep.any():
+        f = int(np.flatnonzero(rep)[0])
+        raise MeshError(
+            f"{name}: face {f} repeats a vertex {F[f].tolist()} ({int(rep.sum())} such faces); "
+            "remove degenerate faces first"
+        )
+    F.setflags(write=False)
+    return F
+
+
+def as_trimesh(mesh, name: str = "mesh") -> TriMesh:
+    """Return ``mesh`` as a :class:`TriMesh`; accepts a TriMesh or a ``(V, F)`` tuple.
+
+    Raises
+    ------
+    TypeError
+        If ``mesh`` is neither.
+    """
+    if isinstance(mesh, TriMesh):
+        return mesh
+    if isinstance(mesh, tuple | list) and len(mesh) == 2:
+        return TriMesh(mesh[0], mesh[1], name=name)
+    raise TypeError(f"mesh must be a TriMesh or a (V, F) tuple, got {type(mesh).__name__}")

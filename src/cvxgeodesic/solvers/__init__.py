@@ -1,0 +1,6 @@
+"""Backends that solve :class:`~cvxgeodesic.solvers.problem.ConicProblem`."""
+
+from .clarabel_backend import solve_clarabel
+from .problem import BackendResult, ConicProblem, kkt_pattern
+
+__all__ = ["BackendResult", "ConicProblem", "kkt_pattern", "solve_clarabel"]

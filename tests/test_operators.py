@@ -1,0 +1,112 @@
+"""Operator identities (gpytoolbox style): hand-computed triangles, L = GᵀAG, L·1 = 0, Σ mass = area."""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from cvxgeodesic.errors import NonManifoldError
+from cvxgeodesic.mesh import TriMesh, cylinder, grid_plane, icosphere
+from cvxgeodesic.operators import (
+    cotan_stiffness,
+    dirichlet_energy_matrix,
+    gradient_blocks,
+    gradient_matrix,
+    gradient_norms,
+    hessian_energy_matrix,
+    laplacian_energy_matrix,
+    mass_matrix,
+)
+
+MESHES = [icosphere(2), grid_plane(6, jitter=0.3), cylinder(12, 5)]
+
+
+def test_gradient_of_hat_functions_on_unit_right_triangle():
+    mesh = TriMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])
+    B = gradient_blocks(mesh)[0]
+    # local frame: ex along v0->v1 = x, ey = n x ex = y; ∇φ0 = (-1,-1), ∇φ1 = (1,0), ∇φ2 = (0,1)
+    np.testing.assert_allclose(B, [[-1, 1, 0], [-1, 0, 1]], atol=1e-15)
+
+
+@pytest.mark.parametrize("mesh", MESHES, ids=lambda m: m.name)
+def test_gradient_exact_on_linear_functions(mesh):
+    rng = np.random.default_rng(1)
+    a = rng.normal(size=3)
+    d = mesh.V @ a
+    norms = gradient_norms(mesh, d)
+    # the in-plane part of the constant 3D gradient a
+    F = mesh.F
+    nrm = np.cross(mesh.V[F[:, 1]] - mesh.V[F[:, 0]], mesh.V[F[:, 2]] - mesh.V[F[:, 0]])
+    nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+    tangential = a - (nrm @ a)[:, None] * nrm
+    np.testing.assert_allclose(norms, np.linalg.norm(tangential, axis=1), rtol=1e-10, atol=1e-12)
+
+
+@pytest.mark.parametrize("mesh", MESHES, ids=lambda m: m.name)
+def test_stiffness_equals_G_transpose_A_G(mesh):
+    G = gradient_matrix(mesh)
+    A = sp.diags(np.repeat(mesh.face_areas, 2))
+    S = cotan_stiffness(mesh)
+    assert abs(G.T @ A @ G - S).max() < 1e-12 * abs(S).max()
+    assert abs(S @ np.ones(mesh.n_vertices)).max() < 1e-12 * abs(S).max()
+    assert abs(S - S.T).max() == 0
+
+
+@pytest.mark.parametrize("mesh", MESHES, ids=lambda m: m.name)
+def test_mass_sums_to_area(mesh):
+    M = mass_matrix(mesh)
+    assert M.diagonal().min() > 0
+    assert M.diagonal().sum() == pytest.approx(mesh.face_areas.sum(), rel=1e-12)
+
+
+def test_sphere_area_converges():
+    assert icosphere(4).face_areas.sum() == pytest.approx(4 * np.pi, rel=5e-3)
+
+
+def test_dirichlet_energy_of_linear_function_is_squared_slope():
+    mesh = grid_plane(8, jitter=0.2)
+    d = 3.0 * mesh.V[:, 0] - 4.0 * mesh.V[:, 1]
+    assert d @ dirichlet_energy_matrix(mesh) @ d == pytest.approx(25.0, rel=1e-12)
+
+
+def test_laplacian_energy_of_quadratic():
+    # interior Laplacian of x² + y² is 4: the energy restricted to interior vertices approaches 16·area
+    mesh = grid_plane(24)
+    d = mesh.V[:, 0] ** 2 + mesh.V[:, 1] ** 2
+    Q = laplacian_energy_matrix(mesh)
+    assert abs(Q - Q.T).max() < 1e-9
+    assert np.linalg.eigvalsh(laplacian_energy_matrix(grid_plane(4)).toarray()).min() > -1e-9
+    S = cotan_stiffness(mesh)
+    lap = -(S @ d) / mass_matrix(mesh).diagonal()
+    interior = (mesh.V[:, 0] > 0.05) & (mesh.V[:, 0] < 0.95) & (mesh.V[:, 1] > 0.05) & (mesh.V[:, 1] < 0.95)
+    np.testing.assert_allclose(lap[interior], 4.0, rtol=1e-9)
+
+
+def test_hessian_energy_vanishes_on_linear_functions_of_flat_mesh():
+    mesh = grid_plane(10, jitter=0.3)
+    H = hessian_energy_matrix(mesh)
+    for a in ([1, 0, 0], [0, 1, 0], [2, -3, 0]):
+        d = mesh.V @ np.array(a, float)
+        assert abs(d @ H @ d) < 1e-9
+
+
+def test_hessian_energy_of_quadratic_converges():
+    # ∫‖Hess(x²)‖² over the unit square is 4; the discrete value approaches it like 1/n
+    errs = []
+    for n in (8, 16, 32):
+        mesh = grid_plane(n)
+        d = mesh.V[:, 0] ** 2
+        errs.append(abs(d @ hessian_energy_matrix(mesh) @ d - 4.0))
+    assert errs[2] < 0.15
+    assert errs[0] / errs[2] > 3.5
+
+
+def test_hessian_energy_is_psd_on_sphere():
+    H = hessian_energy_matrix(icosphere(2)).toarray()
+    assert np.linalg.eigvalsh(H).min() > -1e-9 * np.abs(H).max()
+
+
+def test_hessian_energy_rejects_nonmanifold_edge():
+    V = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1]]
+    F = [[0, 1, 2], [1, 0, 3], [0, 1, 4]]
+    with pytest.raises(NonManifoldError, match="qcqp-laplacian"):
+        hessian_energy_matrix(TriMesh(V, F))
