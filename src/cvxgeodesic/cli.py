@@ -35,9 +35,14 @@ def _progress_printer(stream, every: float = 0.5):
 
 def _cmd_distance(args) -> int:
     from .api import GeodesicSolver
-    from .mesh.io import load_mesh, save_distance
+    from .formulations import validate_sources
+    from .mesh.io import check_output_path, load_mesh, save_distance
 
+    check_output_path(args.output)
+    if args.png:
+        check_output_path(args.png, (".png",))
     mesh = load_mesh(args.mesh)
+    validate_sources(args.source, mesh.n_vertices)
     log = sys.stderr
     if not args.quiet:
         print(f"{mesh.name}: {mesh.n_vertices} vertices, {mesh.n_faces} faces; method {args.method}", file=log)

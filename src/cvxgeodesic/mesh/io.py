@@ -19,7 +19,9 @@ import numpy as np
 from ..errors import MeshError, MeshFormatError, ParameterError
 from .trimesh import TriMesh, as_trimesh
 
-__all__ = ["load_mesh", "save_distance", "load_distance_ply", "MESH_EXTENSIONS", "DISTANCE_EXTENSIONS"]
+__all__ = [
+    "load_mesh", "save_distance", "load_distance_ply", "check_output_path", "MESH_EXTENSIONS", "DISTANCE_EXTENSIONS",
+]
 
 #: File extensions understood by :func:`load_mesh` (compared case-insensitively).
 MESH_EXTENSIONS = (".obj", ".off", ".ply", ".stl")
@@ -855,12 +857,8 @@ def save_distance(path, mesh, distance, *, name: str = "distance") -> Path:
     OSError
         If writing fails (e.g. permission denied).
     """
-    p = Path(path)
+    p = check_output_path(path)
     ext = p.suffix.lower()
-    if ext not in DISTANCE_EXTENSIONS:
-        raise ParameterError(
-            f"{p}: unsupported distance file extension {p.suffix!r}; supported: {', '.join(DISTANCE_EXTENSIONS)}"
-        )
     mesh = as_trimesh(mesh)
     n = mesh.n_vertices
     try:
@@ -873,13 +871,36 @@ def save_distance(path, mesh, distance, *, name: str = "distance") -> Path:
         raise ParameterError(
             f"invalid field name {name!r}: use letters, digits, '_', '.', '-' (not x, y, z, vertex, file_vertex)"
         )
-    parent = p.parent
-    if not parent.is_dir():
-        raise ParameterError(f"cannot write {p}: directory {parent} does not exist")
-    if p.is_dir():
-        raise ParameterError(f"cannot write {p}: it is a directory")
     writer = {".ply": _write_ply, ".npy": _write_npy, ".csv": _write_csv}[ext]
     _atomic_write(p, lambda fh: writer(fh, mesh, d, name))
+    return p
+
+
+def check_output_path(path, extensions=DISTANCE_EXTENSIONS) -> Path:
+    """Check that ``path`` can be written before expensive work produces its content.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    extensions : tuple of str
+        Accepted lower-case suffixes.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    ParameterError
+        Unsupported extension, missing parent directory, or ``path`` is a directory.
+    """
+    p = Path(path)
+    if p.suffix.lower() not in extensions:
+        raise ParameterError(f"{p}: unsupported output file extension {p.suffix!r}; supported: {', '.join(extensions)}")
+    if not p.parent.is_dir():
+        raise ParameterError(f"cannot write {p}: directory {p.parent} does not exist")
+    if p.is_dir():
+        raise ParameterError(f"cannot write {p}: it is a directory")
     return p
 
 

@@ -1,0 +1,85 @@
+"""Public API behaviour and error paths."""
+
+import numpy as np
+import pytest
+
+import cvxgeodesic as cg
+from cvxgeodesic.errors import MeshError, MeshFormatError, ParameterError, SourceError
+
+
+@pytest.fixture(scope="module")
+def sphere():
+    return cg.icosphere(2)
+
+
+def test_result_carries_info(sphere):
+    res = cg.GeodesicSolver(sphere, "qclp", solver="clarabel").solve([0])
+    info = res.info
+    assert res.distance.shape == (sphere.n_vertices,)
+    assert info.method == "qclp" and info.solver == "clarabel" and info.status == "optimal"
+    assert info.iterations > 0 and info.total_time >= info.solve_time > 0
+    assert info.gap < 1e-6 and info.primal_residual < 1e-6
+    assert set(info.as_dict()) >= {"method", "solver", "status", "iterations", "total_time", "gap"}
+
+
+def test_tuple_mesh_and_alias(sphere):
+    d1 = cg.geodesic_distance((sphere.V, sphere.F), 0, method="qgdf", solver="clarabel")
+    d2 = cg.geodesic_distance(sphere, 0, method="lcqp-hessian", solver="clarabel")
+    np.testing.assert_allclose(d1, d2)
+
+
+def test_solver_reused_for_several_sources(sphere):
+    solver = cg.GeodesicSolver(sphere, "qcqp-hessian", solver="clarabel")
+    results = solver.solve_many([0, [1, 2], 5])
+    assert [r.sources.tolist() for r in results] == [[0], [1, 2], [5]]
+    assert all(r.info.setup_time == solver.setup_time for r in results)
+
+
+@pytest.mark.parametrize(
+    "sources, match",
+    [(-1, "out of range"), (10**6, "out of range"), ([], "empty"), ([1, 1], "more than once"),
+     (1.5, "integer"), ("a", "integer"), (True, "vertex indices"), ([[0, 1]], "1-D")],
+)
+def test_bad_sources(sphere, sources, match):
+    with pytest.raises(SourceError, match=match):
+        cg.geodesic_distance(sphere, sources, method="qclp", solver="clarabel")
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [({"method": "nope"}, "unknown formulation"), ({"solver": "mosek"}, "unknown solver"),
+     ({"m": -1.0}, "m must be"), ({"m": float("nan")}, "m must be"), ({"lam": -2.0}, "lam must be"),
+     ({"tol": 0.0}, "tol"), ({"max_iter": 0}, "max_iter")],
+)
+def test_bad_parameters(sphere, kwargs, match):
+    with pytest.raises(ParameterError, match=match):
+        cg.GeodesicSolver(sphere, **{"method": "qclp", **kwargs})
+
+
+def test_bad_mesh_arrays():
+    with pytest.raises(MeshError, match="triangles only"):
+        cg.geodesic_distance(([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], [[0, 1, 2, 3]]), 0)
+    with pytest.raises(MeshError, match="outside"):
+        cg.geodesic_distance(([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 3]]), 0)
+    with pytest.raises(MeshError, match="non-finite"):
+        cg.geodesic_distance(([[0, 0, np.nan], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]]), 0)
+    with pytest.raises(TypeError, match="TriMesh"):
+        cg.geodesic_distance("mesh.obj", 0)
+
+
+def test_missing_and_unsupported_files(tmp_path):
+    with pytest.raises(MeshFormatError, match="no such file"):
+        cg.load_mesh(tmp_path / "missing.obj")
+    bad = tmp_path / "mesh.xyz"
+    bad.write_text("1 2 3\n")
+    with pytest.raises(MeshFormatError, match="unsupported"):
+        cg.load_mesh(bad)
+
+
+def test_bundled_demo_mesh_is_welded():
+    from cvxgeodesic.demo import demo_mesh
+
+    mesh = demo_mesh()
+    # spot.obj has texture seams: loading must weld them (a split mesh would have boundary edges)
+    assert (mesh.n_vertices, mesh.n_faces) == (2930, 5856)
+    assert np.all(mesh.edge_face_counts == 2)

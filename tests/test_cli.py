@@ -1,0 +1,68 @@
+"""Command-line interface: outputs, exit codes and one-line errors."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import cvxgeodesic as cg
+from cvxgeodesic.cli import main
+from cvxgeodesic.mesh.io import load_distance_ply
+
+
+@pytest.fixture(scope="module")
+def sphere_file(tmp_path_factory):
+    mesh = cg.icosphere(2)
+    path = tmp_path_factory.mktemp("mesh") / "sphere.off"
+    lines = ["OFF", f"{mesh.n_vertices} {mesh.n_faces} 0"]
+    lines += [" ".join(map(repr, v)) for v in mesh.V.tolist()]
+    lines += ["3 " + " ".join(map(str, f)) for f in mesh.F.tolist()]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_distance_writes_ply_and_png(sphere_file, tmp_path, capsys):
+    out, png = tmp_path / "d.ply", tmp_path / "d.png"
+    rc = main(["distance", str(sphere_file), "--source", "0", "--source", "5", "--method", "qclp",
+               "--solver", "clarabel", "-o", str(out), "--png", str(png)])
+    assert rc == 0
+    mesh, props = load_distance_ply(out)
+    d = props["distance"]
+    assert d.shape == (162,) and d[0] == 0 and d[5] == 0 and np.all(d[[1, 2, 3]] > 0)
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "optimal" in capsys.readouterr().err
+
+
+def test_distance_npy_matches_api(sphere_file, tmp_path):
+    out = tmp_path / "d.npy"
+    assert main(["distance", str(sphere_file), "-s", "3", "--method", "lclp", "--solver", "clarabel",
+                 "-q", "-o", str(out)]) == 0
+    expected = cg.geodesic_distance(cg.load_mesh(sphere_file), 3, method="lclp", solver="clarabel")
+    np.testing.assert_allclose(np.load(out), expected)
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [(["distance", "missing.obj", "-s", "0", "-o", "x.ply"], "no such file"),
+     (["distance", "{mesh}", "-s", "999", "-o", "{tmp}/x.ply"], "out of range"),
+     (["distance", "{mesh}", "-s", "0", "-o", "{tmp}/x.txt"], "x.txt"),
+     (["distance", "{mesh}", "-s", "0", "-o", "{tmp}/nodir/x.ply"], "nodir")],
+)
+def test_bad_input_exits_2_with_one_line(sphere_file, tmp_path, capsys, args, message):
+    args = [a.format(mesh=sphere_file, tmp=tmp_path) for a in args]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("cvxgeodesic: error:") and message in err[0]
+    assert not (tmp_path / "x.ply").exists()
+
+
+def test_debug_shows_traceback(capsys):
+    assert main(["--debug", "distance", "missing.obj", "-s", "0", "-o", "x.ply"]) == 2
+    assert "Traceback" in capsys.readouterr().err
+
+
+def test_unknown_method_is_usage_error(sphere_file):
+    proc = subprocess.run([sys.executable, "-m", "cvxgeodesic.cli", "distance", str(sphere_file), "-s", "0",
+                           "--method", "nope", "-o", "x.ply"], capture_output=True, text=True)
+    assert proc.returncode == 2 and "invalid choice" in proc.stderr
