@@ -1,0 +1,187 @@
+"""The paper's facts (Lemma 1, Theorems 1 and 2), analytic distances, and all eight formulations.
+
+Tolerances: Clarabel is run at its default tolerance here (1e-8 relative gap), so
+"equal" means within 1e-6 of the mesh's bounding-box diagonal.
+"""
+
+import numpy as np
+import pytest
+from scipy.sparse.csgraph import dijkstra
+
+import cvxgeodesic as cg
+from conftest import shared_mesh_path
+from cvxgeodesic.formulations import FORMULATIONS, MeshOperators, build_problem, smoothness_weight
+from cvxgeodesic.mesh import cylinder, grid_plane, icosphere
+from cvxgeodesic.operators import gradient_norms
+from cvxgeodesic.solvers import solve_clarabel
+
+GENERATED = [icosphere(2), grid_plane(8, jitter=0.3), cylinder(16, 6)]
+
+
+def _dijkstra(mesh, sources):
+    return dijkstra(mesh.vertex_adjacency, indices=np.atleast_1d(sources), min_only=True)
+
+
+@pytest.mark.parametrize("mesh", GENERATED + [grid_plane(7, 5, jitter=0.2, seed=3)], ids=lambda m: m.name)
+def test_lemma1_lclp_equals_dijkstra(mesh):
+    for sources in ([0], [3, mesh.n_vertices - 1]):
+        d = cg.geodesic_distance(mesh, sources, method="lclp", solver="clarabel")
+        np.testing.assert_allclose(d, _dijkstra(mesh, sources), atol=1e-6 * mesh.bbox_diagonal)
+
+
+@pytest.mark.parametrize("mesh", GENERATED, ids=lambda m: m.name)
+def test_theorems_1_and_2_for_qclp(mesh):
+    sources = [1]
+    d = cg.geodesic_distance(mesh, sources, method="qclp", solver="clarabel")
+    tol = 1e-6 * mesh.bbox_diagonal
+    # Theorem 2: QCLP <= Dijkstra everywhere
+    assert np.all(d <= _dijkstra(mesh, sources) + tol)
+    # Theorem 1: edge triangle inequality
+    E = mesh.edges
+    assert np.all(np.abs(d[E[:, 0]] - d[E[:, 1]]) <= mesh.edge_lengths + tol)
+    # and the constraint itself on every triangle away from the source
+    away = ~np.isin(mesh.F, sources).any(axis=1)
+    assert gradient_norms(mesh, d)[away].max() <= 1 + 1e-6
+
+
+def test_qclp_on_plane_matches_euclidean_and_converges():
+    """On a convex flat square the geodesic distance is Euclidean.
+
+    QCLP is 1-Lipschitz along the surface away from the source star, so it can
+    exceed the Euclidean distance only by the detour through a one-ring vertex
+    (< one edge length); it undershoots where the piecewise-linear interpolant of
+    the exact cone would need a gradient above 1, an O(h / r) effect that
+    shrinks under refinement. The worst relative error is next to the source.
+    """
+    worst = []
+    for n in (10, 20, 40):
+        mesh = grid_plane(n, jitter=0.25)
+        s = int(np.argmin(np.linalg.norm(mesh.V - [0.5, 0.5, 0.0], axis=1)))
+        d = cg.geodesic_distance(mesh, s, method="qclp", solver="clarabel")
+        e = np.linalg.norm(mesh.V - mesh.V[s], axis=1)
+        assert np.all(d <= e + mesh.mean_edge_length)
+        band = e > 0.25
+        rel = np.abs(d - e)[band] / e[band]
+        assert rel.mean() < 0.035
+        worst.append(rel.max())
+    assert worst[0] > worst[1] > worst[2]
+    assert worst[2] < 0.06
+
+
+def test_qclp_on_sphere_converges_to_great_circle_distance():
+    h, err = [], []
+    for k in (2, 3, 4):
+        mesh = icosphere(k)
+        d = cg.geodesic_distance(mesh, 0, method="qclp", solver="clarabel")
+        gc = np.arccos(np.clip(mesh.V @ mesh.V[0], -1.0, 1.0))
+        h.append(mesh.mean_edge_length)
+        err.append(np.abs(d - gc)[1:].mean())
+    rate = np.polyfit(np.log(h), np.log(err), 1)[0]
+    # measured: mean abs error 0.029, 0.022, 0.016 -> rate ≈ 0.43 (the error is dominated by the source cone)
+    assert err[0] > err[1] > err[2]
+    assert 0.3 < rate < 1.5
+
+
+def test_qclp_on_cylinder_matches_unrolled_distance():
+    mesh = cylinder(48, 24, radius=1.0, height=2.0)
+    s = int(np.argmin(np.linalg.norm(mesh.V - [1.0, 0.0, 1.0], axis=1)))
+    d = cg.geodesic_distance(mesh, s, method="qclp", solver="clarabel")
+    theta = np.arctan2(mesh.V[:, 1], mesh.V[:, 0])
+    arc = np.abs(np.angle(np.exp(1j * (theta - theta[s]))))
+    e = np.hypot(arc, mesh.V[:, 2] - mesh.V[s, 2])
+    far = e > 0.5
+    assert (np.abs(d - e)[far] / e[far]).mean() < 0.02
+
+
+@pytest.mark.parametrize("method", [*FORMULATIONS])
+@pytest.mark.parametrize("mesh", GENERATED, ids=lambda m: m.name)
+def test_every_formulation_solves_on_generated_meshes(mesh, method):
+    res = cg.GeodesicSolver(mesh, method, solver="clarabel").solve([0])
+    d = res.distance
+    assert res.info.status in ("optimal", "almost_optimal")
+    assert np.all(np.isfinite(d)) and d[0] == 0.0 and np.all(d >= -1e-9)
+    assert np.all(d <= _dijkstra(mesh, [0]) + 1e-6 * mesh.bbox_diagonal)
+    assert res.info.iterations > 0 and res.info.solve_time > 0
+
+
+@pytest.mark.shared
+@pytest.mark.parametrize("name", ["spot.obj", "bunny_7k.off"])
+def test_every_formulation_solves_on_real_meshes(name):
+    mesh = cg.load_mesh(shared_mesh_path(name))
+    ops = MeshOperators(mesh)
+    dj = _dijkstra(mesh, [0])
+    lam = smoothness_weight(mesh, 1.0)
+    for method in FORMULATIONS:
+        res = solve_clarabel(build_problem(ops, np.array([0]), method, lam))
+        assert res.status in ("optimal", "almost_optimal"), method
+        assert np.all(res.x <= dj + 1e-6 * mesh.bbox_diagonal), method
+
+
+def test_smoothness_lowers_hessian_energy():
+    mesh = icosphere(3)
+    ops = MeshOperators(mesh)
+    H = ops.energy("hessian")
+    d0 = cg.geodesic_distance(mesh, 0, method="qclp", solver="clarabel")
+    d1 = cg.geodesic_distance(mesh, 0, method="qcqp-hessian", m=1.0, solver="clarabel")
+    assert d1 @ H @ d1 < 0.8 * (d0 @ H @ d0)
+    assert d1.sum() < d0.sum()  # QCLP maximizes the sum; any other term can only lower it
+
+
+def test_lam_zero_equals_lp():
+    mesh = icosphere(2)
+    d_lp = cg.geodesic_distance(mesh, 0, method="qclp", solver="clarabel")
+    d_qp = cg.geodesic_distance(mesh, 0, method="qcqp-laplacian", lam=0.0, solver="clarabel")
+    np.testing.assert_allclose(d_qp, d_lp, atol=1e-6)
+
+
+def test_several_sources_give_min_of_single_sources_for_lclp():
+    mesh = grid_plane(8, jitter=0.2)
+    d01 = cg.geodesic_distance(mesh, [0, 80], method="lclp", solver="clarabel")
+    d0 = cg.geodesic_distance(mesh, 0, method="lclp", solver="clarabel")
+    d1 = cg.geodesic_distance(mesh, 80, method="lclp", solver="clarabel")
+    np.testing.assert_allclose(d01, np.minimum(d0, d1), atol=1e-6)
+
+
+def test_unreachable_component_is_inf():
+    a, b = icosphere(1), icosphere(1)
+    V = np.vstack([a.V, b.V + [5.0, 0, 0]])
+    F = np.vstack([a.F, b.F + a.n_vertices])
+    for method in ("qclp", "lclp", "qcqp-hessian"):
+        res = cg.GeodesicSolver((V, F), method, solver="clarabel").solve(0)
+        assert np.all(np.isfinite(res.distance[: a.n_vertices]))
+        assert np.all(np.isinf(res.distance[a.n_vertices:]))
+        assert res.info.n_unreachable == b.n_vertices
+
+
+@pytest.mark.parametrize("method", ["qclp", "qcqp-hessian", "lcqp-laplacian"])
+def test_scale_equivariance(method):
+    mesh = icosphere(2)
+    d = cg.geodesic_distance(mesh, 0, method=method, solver="clarabel")
+    for s in (1e-3, 1e3):
+        ds = cg.geodesic_distance((mesh.V * s, mesh.F), 0, method=method, solver="clarabel")
+        np.testing.assert_allclose(ds / s, d, atol=1e-5 * mesh.bbox_diagonal)
+
+
+def test_smoothness_weight_formula():
+    mesh = icosphere(2)
+    assert smoothness_weight(mesh, 2.0) == pytest.approx(2.0 * 100 * mesh.mean_edge_length / mesh.n_vertices)
+
+
+def test_default_m_rounds_the_ridge_and_keeps_accuracy_off_it():
+    """The calibration documented in docs/method.md, on the bundled spot mesh (source 0).
+
+    Measured: ridge sharpness 0.725 (exact) -> 0.291 (qcqp-hessian, m = 1); error off the ridge
+    1.82 % (qclp) -> 1.94 %.
+    """
+    from cvxgeodesic.demo import demo_mesh
+    from cvxgeodesic.evaluation import smoothness_report
+
+    mesh = demo_mesh()
+    exact = cg.geodesic_distance(mesh, 0, method="exact")
+    reports = {}
+    for method in ("qclp", "qcqp-hessian"):
+        d = cg.geodesic_distance(mesh, 0, method=method, solver="clarabel")
+        reports[method] = smoothness_report(mesh, d, exact, [0])
+    assert reports["qcqp-hessian"]["ridge_jump_p95"] < 0.5 * reports["qcqp-hessian"]["exact_ridge_jump_p95"]
+    assert reports["qclp"]["ridge_jump_p95"] > 0.9 * reports["qclp"]["exact_ridge_jump_p95"]
+    assert reports["qcqp-hessian"]["off_ridge_rel_mean"] < 1.1 * reports["qclp"]["off_ridge_rel_mean"]
