@@ -1,0 +1,797 @@
+"""Headless pictures of distance fields, error maps and gradient-norm histograms.
+
+Everything here renders with matplotlib's Agg canvas directly (no ``pyplot``,
+no display, no global state) and writes PNG files atomically: the picture is
+rendered into a temporary file next to the target and moved over it with
+:func:`os.replace`, so a reader never sees a half-written PNG.
+
+The surface renderer is a small software pipeline on top of matplotlib:
+
+* orthographic projection along a view direction (a 3/4 view derived from the
+  mesh's principal axes by default);
+* back-face culling on closed, consistently oriented meshes; two-sided
+  lighting on open or non-orientable ones;
+* painter's algorithm: triangles sorted far-to-near and drawn with per-vertex
+  colours (Gouraud interpolation, colour map times Lambert shading);
+* isolines by marching triangles (:func:`isoline_segments`), drawn interleaved
+  with the depth-sorted triangles in slabs, so surface in front of an isoline
+  hides it.
+
+A 46K-face mesh (bimba) takes about half a second per picture once matplotlib is imported
+(about 0.6 s, once per process); time and memory grow linearly (330K faces: 4 s, 210 MB).
+"""
+
+from __future__ import annotations
+
+import os
+import secrets
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+
+from .mesh.trimesh import as_trimesh
+
+__all__ = ["plot_field", "plot_error_map", "plot_gradient_histogram", "isoline_segments"]
+
+#: Output formats accepted by the ``plot_*`` functions.
+PLOT_EXTENSIONS = (".png",)
+
+_UNREACHABLE_RGB = np.array([0.80, 0.80, 0.80])  # light grey for inf / NaN values
+_FIGSIZE = (6.4, 5.4)  # inches; the PNG is round(6.4·dpi) × round(5.4·dpi) pixels
+_SEGMENT_BLOCK = 400_000  # (triangle, level) pairs processed at once by the marching triangles
+
+
+# ----------------------------------------------------------------------------------------------------------------------
+# validation and output
+# ----------------------------------------------------------------------------------------------------------------------
+
+
+def _check_path(path) -> Path:
+    try:
+        p = Path(os.fspath(path))
+    except TypeError:
+        raise TypeError(f"path must be a str or os.PathLike, got {type(path).__name__}") from None
+    if p.suffix.lower() not in PLOT_EXTENSIONS:
+        raise ValueError(
+            f"path: unsupported extension {p.suffix!r} in {str(p)!r}; supported: {', '.join(PLOT_EXTENSIONS)}"
+        )
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir():
+        raise FileNotFoundError(f"path: directory {str(parent)!r} does not exist")
+    return p
+
+
+def _check_values(values, n: int, name: str = "values") -> np.ndarray:
+    try:
+        arr = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be a numeric array of shape ({n},) ({exc})") from None
+    if arr.shape != (n,):
+        raise ValueError(f"{name} must have shape ({n},) (one value per mesh vertex), got shape {arr.shape}")
+    return arr
+
+
+def _check_marks(sources, n: int) -> np.ndarray:
+    if sources is None:
+        return np.empty(0, dtype=np.int64)
+    arr = np.atleast_1d(np.asarray(sources))
+    if arr.ndim != 1 or (arr.size and arr.dtype.kind not in "iu"):
+        raise ValueError(f"sources must be an int or a 1-D sequence of vertex indices, got {sources!r}")
+    arr = arr.astype(np.int64)
+    if arr.size and (arr.min() < 0 or arr.max() >= n):
+        raise ValueError(f"sources: vertex index out of range [0, {n}): {arr.tolist()}")
+    return arr
+
+
+def _check_dpi(dpi) -> float:
+    if isinstance(dpi, bool) or not isinstance(dpi, int | float | np.integer | np.floating) or not 10 <= dpi <= 2000:
+        raise ValueError(f"dpi must be a number in [10, 2000], got {dpi!r}")
+    return float(dpi)
+
+
+def _new_figure(dpi: float, figsize=_FIGSIZE):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=figsize, dpi=dpi)
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _save_atomic(fig, path: Path) -> None:
+    """Write ``fig`` as PNG to a temporary file next to ``path``, then ``os.replace`` it over ``path``."""
+    parent = path.parent if str(path.parent) else Path(".")
+    while True:
+        tmp = parent / f".{path.name}.{secrets.token_hex(4)}.tmp"
+        try:
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
+            break
+        except FileExistsError:  # pragma: no cover - astronomically unlikely
+            continue
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fig.canvas.print_png(fh, pil_kwargs={"compress_level": 3})  # 2x faster than the default 6, ~20% larger
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise
+
+
+# ----------------------------------------------------------------------------------------------------------------------
+# marching triangles
+# ----------------------------------------------------------------------------------------------------------------------
+
+
+def _isolevels(levels, lo: float, hi: float) -> np.ndarray:
+    """Resolve ``isolines`` (count or explicit levels) into a sorted float array."""
+    if levels is None or levels is False:
+        return np.empty(0)
+    if isinstance(levels, int | np.integer) and not isinstance(levels, bool):
+        k = int(levels)
+        if k < 0:
+            raise ValueError(f"isolines must be a non-negative count or an array of levels, got {levels}")
+        if k == 0 or not (np.isfinite(lo) and np.isfinite(hi)) or hi <= lo:
+            return np.empty(0)
+        return np.linspace(lo, hi, k + 2)[1:-1]
+    arr = np.asarray(levels, dtype=np.float64).ravel()
+    if not np.all(np.isfinite(arr)):
+        raise ValueError("isolines: explicit levels must be finite")
+    return np.unique(arr)
+
+
+def _marching_triangles(V: np.ndarray, F: np.ndarray, values: np.ndarray, levels: np.ndarray):
+    """Segments where the piecewise-linear field crosses each level.
+
+    Returns ``(segments (s, 2, 3), face index (s,), level index (s,))``. A vertex
+    counts as *above* a level when its value is strictly greater, so a triangle
+    with a vertex exactly at a level gives a segment through that vertex, and
+    an edge lying on a level is emitted once (by the triangle on the upper side).
+    Zero-length segments are dropped; triangles with a non-finite value give none.
+    """
+    levels = np.sort(np.asarray(levels, dtype=np.float64).ravel())
+    empty = (np.empty((0, 2, 3)), np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64))
+    if levels.size == 0 or F.shape[0] == 0:
+        return empty
+    fval = values[F]
+    faces = np.flatnonzero(np.isfinite(fval).all(axis=1))
+    fval = fval[faces]
+    start = np.searchsorted(levels, fval.min(axis=1), side="left")  # first level >= min
+    stop = np.searchsorted(levels, fval.max(axis=1), side="left")  # first level >= max
+    counts = stop - start
+    keep = counts > 0
+    faces, fval, start, counts = faces[keep], fval[keep], start[keep], counts[keep]
+    total = int(counts.sum())
+    if total == 0:
+        return empty
+    offsets = np.cumsum(counts) - counts
+    seg_out, face_out, lev_out = [], [], []
+    # process (face, level) pairs in blocks of faces to bound the temporaries
+    cum = np.cumsum(counts)
+    block_edges = np.searchsorted(cum, np.arange(_SEGMENT_BLOCK, total, _SEGMENT_BLOCK), side="left")
+    bounds = np.r_[0, block_edges + 1, len(faces)]
+    bounds = np.unique(np.clip(bounds, 0, len(faces)))
+    for b0, b1 in zip(bounds[:-1], bounds[1:], strict=False):
+        if b1 <= b0:
+            continue
+        cnt = counts[b0:b1]
+        n_pairs = int(cnt.sum())
+        local = np.repeat(np.arange(b0, b1), cnt)
+        lev = start[local] + (np.arange(n_pairs) - (offsets[local] - offsets[b0]))
+        lv = levels[lev]
+        fv = fval[local]  # (p, 3)
+        P = V[F[faces[local]]]  # (p, 3, 3)
+        above = fv > lv[:, None]
+        i_idx, j_idx = np.array([0, 1, 2]), np.array([1, 2, 0])
+        a, b = fv[:, i_idx], fv[:, j_idx]  # edge end values (p, 3)
+        cross = above[:, i_idx] != above[:, j_idx]  # exactly two True per row
+        denom = np.where(cross, b - a, 1.0)
+        t = np.where(cross, (lv[:, None] - a) / denom, 0.0)
+        pts = P[:, i_idx] + t[..., None] * (P[:, j_idx] - P[:, i_idx])  # (p, 3 edges, 3)
+        order = np.argsort(~cross, axis=1, kind="stable")[:, :2]  # the two crossing edges, in edge order
+        seg = np.take_along_axis(pts, order[..., None], axis=1)  # (p, 2, 3)
+        nonzero = np.any(seg[:, 0] != seg[:, 1], axis=1)
+        seg_out.append(seg[nonzero])
+        face_out.append(faces[local][nonzero])
+        lev_out.append(lev[nonzero])
+    return np.concatenate(seg_out), np.concatenate(face_out), np.concatenate(lev_out)
+
+
+def isoline_segments(mesh, values, levels) -> np.ndarray:
+    """Isoline segments of a piecewise-linear vertex field (marching triangles).
+
+    Parameters
+    ----------
+    mesh : TriMesh or (V, F) tuple
+        The surface, ``n`` vertices and ``m`` faces.
+    values : (n,) array_like of float
+        One value per vertex, interpolated linearly inside each triangle.
+        Triangles with a non-finite value (``inf`` = unreachable) give no segment.
+    levels : float or (k,) array_like of float
+        The iso-values.
+
+    Returns
+    -------
+    (s, 2, 3) float ndarray
+        One row per (triangle, level) crossing: the two end points, which lie on
+        the triangle's edges. A vertex counts as above a level when its value is
+        strictly greater; hence an isoline through a vertex is continuous, an
+        edge lying exactly on a level is returned once, and zero-length segments
+        are dropped. Rows are grouped by block, not sorted.
+
+    Raises
+    ------
+    ValueError
+        If ``values`` does not have shape ``(n,)`` or a level is not finite.
+
+    Examples
+    --------
+    >>> from cvxgeodesic.mesh import grid_plane
+    >>> mesh = grid_plane(4)
+    >>> seg = isoline_segments(mesh, mesh.V[:, 0], [0.3])
+    >>> bool(np.allclose(seg[..., 0], 0.3))
+    True
+    """
+    mesh = as_trimesh(mesh)
+    vals = _check_values(values, mesh.n_vertices)
+    lev = np.asarray(levels, dtype=np.float64).ravel()
+    if not np.all(np.isfinite(lev)):
+        raise ValueError("levels must be finite")
+    return _marching_triangles(mesh.V, mesh.F, vals, lev)[0]
+
+
+# ----------------------------------------------------------------------------------------------------------------------
+# camera and shading
+# ----------------------------------------------------------------------------------------------------------------------
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    n = np.linalg.norm(v)
+    return v / n if n > 0 else v
+
+
+def _camera(V: np.ndarray, view, focus=None) -> np.ndarray:
+    """Rows: screen right, screen up, direction towards the viewer (orthonormal, right-handed).
+
+    ``focus`` (a unit normal, optional) makes the default view pick, among its four mirror images
+    (front or back, turned left or right), the one that faces that normal most.
+    """
+    if view is not None:
+        try:
+            elev, azim = (float(x) for x in view)
+        except (TypeError, ValueError):
+            raise ValueError(f"view must be None or (elev, azim) in degrees, got {view!r}") from None
+        if not (np.isfinite(elev) and np.isfinite(azim)):
+            raise ValueError(f"view must be finite (elev, azim) degrees, got {view!r}")
+        e, a = np.radians(elev), np.radians(azim)
+        toward = np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
+        world_up = np.array([0.0, 0.0, 1.0])
+        if abs(toward[2]) > 0.999:  # looking straight down or up: screen up along -azim (or +azim)
+            world_up = -np.sign(toward[2]) * np.array([np.cos(a), np.sin(a), 0.0])
+        right = _unit(np.cross(world_up, toward))
+        up = np.cross(toward, right)
+        return np.vstack([right, up, toward])
+    # default: principal axes snapped to the nearest world axes (scanned models are usually axis-aligned);
+    # of the two longest, world y (OBJ convention) points up if it is one, else world z; we look along the thinnest,
+    # from its positive side, then turn 35 degrees sideways and raise the eye 15 degrees (a 3/4 view)
+    X = V - V.mean(axis=0)
+    _, U = np.linalg.eigh(X.T @ X)
+    axes = U[:, ::-1].T  # rows, largest variance first
+    snapped, free = [], [0, 1, 2]
+    for ax_i in axes:
+        j = max(free, key=lambda k: abs(ax_i[k]))
+        free.remove(j)
+        snapped.append(np.eye(3)[j])
+    long1, long2, thin = snapped
+    up = long1 if long1[1] == 1.0 else long2 if long2[1] == 1.0 else long1 if long1[2] == 1.0 else long2
+    best = None
+    for front in (1.0, -1.0) if focus is not None else (1.0,):
+        for turn in (1.0, -1.0) if focus is not None else (1.0,):
+            R = _three_quarter(up, front * thin, turn)
+            score = -np.inf if focus is None else float(R[2] @ focus)
+            if best is None or score > best[0] + 1e-9:
+                best = (score, R)
+    return best[1]
+
+
+def _three_quarter(up: np.ndarray, toward: np.ndarray, turn: float) -> np.ndarray:
+    side = np.cross(up, toward)  # screen right: (right, up, toward) is right-handed
+    az, el = np.radians(35.0) * turn, np.radians(15.0)
+    toward = np.cos(az) * toward + np.sin(az) * side
+    side = _unit(np.cross(up, toward))
+    toward = np.cos(el) * toward + np.sin(el) * up
+    up = _unit(np.cross(toward, side))
+    return np.vstack([side, up, _unit(toward)])
+
+
+def _closed_oriented(F: np.ndarray, n: int) -> bool:
+    """True when every directed edge appears once and its reverse once (closed, consistently oriented)."""
+    a = np.concatenate([F[:, 0], F[:, 1], F[:, 2]])
+    b = np.concatenate([F[:, 1], F[:, 2], F[:, 0]])
+    fwd = a * n + b
+    rev = b * n + a
+    fwd.sort()
+    rev.sort()
+    return bool(np.all(fwd[1:] != fwd[:-1]) and np.array_equal(fwd, rev))
+
+
+def _vertex_normals(V: np.ndarray, F: np.ndarray, fn: np.ndarray) -> np.ndarray:
+    N = np.zeros_like(V)
+    for k in range(3):
+        np.add.at(N, F[:, k], fn)
+    nrm = np.linalg.norm(N, axis=1, keepdims=True)
+    return N / np.where(nrm > 0, nrm, 1.0)
+
+
+# ----------------------------------------------------------------------------------------------------------------------
+# the surface renderer
+# ----------------------------------------------------------------------------------------------------------------------
+
+
+def _gouraud_artist_class():
+    from matplotlib.artist import Artist
+
+    class _GouraudTriangles(Artist):
+        """Triangles with per-corner RGBA colours, drawn in the given order (painter's algorithm)."""
+
+        def __init__(self, verts, colors, zorder):
+            super().__init__()
+            self.set_zorder(zorder)
+            self._verts = verts  # (k, 3, 2)
+            self._colors = colors  # (k, 3, 4)
+
+        def draw(self, renderer):
+            if not self.get_visible() or len(self._verts) == 0:
+                return
+            gc = renderer.new_gc()
+            self._set_gc_clip(gc)
+            renderer.draw_gouraud_triangles(gc, self._verts, self._colors, self.get_transform().frozen())
+            gc.restore()
+            self.stale = False
+
+    return _GouraudTriangles
+
+
+def _render_surface(ax, mesh, values, *, cmap, norm, levels, view, line_width=0.45, ambient=0.38, marks=None):
+    """Draw the shaded, colour-mapped surface, its isolines and marked vertices into ``ax``."""
+    from matplotlib.collections import LineCollection
+
+    V, F = mesh.V, mesh.F
+    fn = mesh.face_normals_unnormalized
+    closed = _closed_oriented(F, mesh.n_vertices)
+    if closed:
+        # outward orientation: signed volume positive
+        vol = np.einsum("ij,ij->", V[F[:, 0]] - V.mean(axis=0), fn)
+        if vol < 0:
+            fn = -fn
+    vnorm = _vertex_normals(V, F, fn)
+    marks = np.empty(0, dtype=np.int64) if marks is None else marks
+    focus = vnorm[marks[0]] if marks.size and np.any(vnorm[marks[0]]) else None
+    R = _camera(V, view, focus)
+    P = (V - V.mean(axis=0)) @ R.T  # (n, 3): screen x, screen y, depth (towards the viewer)
+    facing = fn @ R[2]
+    if closed:
+        vis = np.flatnonzero(facing > 0)
+    else:
+        vis = np.arange(F.shape[0])
+    Fv = F[vis]
+    depth = P[Fv, 2].mean(axis=1)
+    order = np.argsort(depth, kind="stable")  # far to near
+    vis, Fv = vis[order], Fv[order]
+
+    # per-vertex colours: colour map times Lambert shading (two-sided when not closed)
+    light = _unit(-0.35 * R[0] + 0.55 * R[1] + 1.0 * R[2])
+    lam = vnorm @ light
+    lam = np.abs(lam) if not closed else np.clip(lam, 0.0, None)
+    shade = ambient + (1.0 - ambient) * lam
+    finite = np.isfinite(values)
+    rgba = np.empty((len(V), 4))
+    rgba[:, 3] = 1.0
+    rgba[finite, :3] = cmap(norm(values[finite]))[:, :3]
+    rgba[~finite, :3] = _UNREACHABLE_RGB
+    rgba[:, :3] *= shade[:, None]
+
+    verts = P[Fv][:, :, :2]  # (k, 3, 2)
+    colors = rgba[Fv]  # (k, 3, 4)
+    partial = ~finite[Fv].all(axis=1)  # a triangle touching an unreachable vertex is grey as a whole
+    if partial.any():
+        colors[partial, :, :3] = _UNREACHABLE_RGB * shade[Fv[partial]][..., None]
+
+    # isolines, assigned to the depth slab of their triangle
+    k = len(Fv)
+    n_slabs = int(np.clip(k // 4, 1, 128))
+    bounds = np.linspace(0, k, n_slabs + 1).astype(np.int64)
+    slab_of_rank = np.repeat(np.arange(n_slabs), np.diff(bounds))
+    if levels.size:
+        seg3, seg_face, _ = _marching_triangles(V, F, values, levels)
+        rank = np.full(F.shape[0], -1, dtype=np.int64)
+        rank[vis] = np.arange(k)
+        r = rank[seg_face]
+        on = r >= 0
+        seg2 = ((seg3[on] - V.mean(axis=0)) @ R[:2].T)  # (s, 2, 2)
+        seg_slab = slab_of_rank[r[on]]
+    else:
+        seg2, seg_slab = np.empty((0, 2, 2)), np.empty(0, dtype=np.int64)
+    seg_order = np.argsort(seg_slab, kind="stable")
+    seg2, seg_slab = seg2[seg_order], seg_slab[seg_order]
+    seg_bounds = np.searchsorted(seg_slab, np.arange(n_slabs + 1), side="left")
+
+    # marked vertices: drawn with the slab of their nearest visible incident triangle (hidden if none is visible)
+    mark_slab = np.full(marks.size, -1, dtype=np.int64)
+    if marks.size:
+        slab_of_face = np.full(F.shape[0], -1, dtype=np.int64)
+        slab_of_face[vis] = slab_of_rank
+        want = np.full(mesh.n_vertices, -1, dtype=np.int64)
+        for c in range(3):
+            np.maximum.at(want, F[:, c], slab_of_face)
+        mark_slab = want[marks]
+
+    Gouraud = _gouraud_artist_class()
+    for i in range(n_slabs):
+        a, b = bounds[i], bounds[i + 1]
+        ax.add_artist(Gouraud(verts[a:b], colors[a:b], zorder=1.0 + 2 * i * 1e-3))
+        s0, s1 = seg_bounds[i], seg_bounds[i + 1]
+        if s1 > s0:
+            lc = LineCollection(seg2[s0:s1], colors="black", linewidths=line_width, alpha=0.85,
+                                capstyle="round", zorder=1.0 + (2 * i + 1) * 1e-3)
+            ax.add_collection(lc, autolim=False)
+        here = marks[mark_slab == i]
+        if here.size:
+            ax.scatter(P[here, 0], P[here, 1], s=28, c="#e8112d", edgecolors="white", linewidths=0.9,
+                       zorder=1.0 + (2 * i + 1.5) * 1e-3)
+
+    lo, hi = P[:, :2].min(axis=0), P[:, :2].max(axis=0)
+    pad = 0.03 * max(float(np.max(hi - lo)), 1e-12)
+    ax.set_xlim(lo[0] - pad, hi[0] + pad)
+    ax.set_ylim(lo[1] - pad, hi[1] + pad)
+    ax.set_aspect("equal", adjustable="box")
+    ax.set_axis_off()
+
+
+def _finite_range(values: np.ndarray, vmin, vmax) -> tuple[float, float]:
+    fin = values[np.isfinite(values)]
+    lo = float(vmin) if vmin is not None else (float(fin.min()) if fin.size else 0.0)
+    hi = float(vmax) if vmax is not None else (float(fin.max()) if fin.size else 1.0)
+    if not (np.isfinite(lo) and np.isfinite(hi)):
+        raise ValueError(f"vmin and vmax must be finite, got {vmin!r}, {vmax!r}")
+    if hi <= lo:
+        hi = lo + (abs(lo) * 1e-6 if lo else 1.0)
+    return lo, hi
+
+
+def _layout(fig, show_colorbar: bool, title):
+    top = 0.90 if title else 0.97
+    if show_colorbar:
+        ax = fig.add_axes((0.01, 0.02, 0.80, top - 0.02))
+        cax = fig.add_axes((0.84, 0.15, 0.03, (top - 0.02) * 0.78))
+    else:
+        ax = fig.add_axes((0.01, 0.02, 0.98, top - 0.02))
+        cax = None
+    if title:
+        fig.suptitle(str(title), y=0.975, fontsize=12)
+    return ax, cax
+
+
+def plot_field(
+    mesh,
+    values,
+    path,
+    *,
+    isolines=20,
+    title=None,
+    cmap="viridis",
+    view=None,
+    vmin=None,
+    vmax=None,
+    show_colorbar=True,
+    dpi=150,
+    colorbar_label=None,
+    sources=None,
+) -> Path:
+    """Render a per-vertex scalar field on the surface, with isolines, into a PNG.
+
+    Parameters
+    ----------
+    mesh : TriMesh or (V, F) tuple
+        The surface, ``n`` vertices and ``m`` faces.
+    values : (n,) array_like of float
+        One value per vertex (e.g. a distance field). ``inf`` / ``NaN``
+        (unreachable) vertices are drawn light grey and carry no isolines.
+    path : str or os.PathLike
+        Output file; must end in ``.png``. Its directory must exist. The file
+        is written atomically (temporary file + :func:`os.replace`).
+    isolines : int or (k,) array_like of float, default 20
+        Number of evenly spaced levels strictly inside ``[vmin, vmax]``, or the
+        explicit levels; 0 or None draws none. Lines are thin and black.
+    title : str, optional
+        Title above the picture.
+    cmap : str or matplotlib Colormap, default "viridis"
+        Colour map.
+    view : (elev, azim) tuple of float, optional
+        Camera direction in degrees, matplotlib's ``mplot3d`` convention (world
+        ``z`` up, ``azim`` around ``z`` from ``+x``). Default: a 3/4 view from
+        the mesh's principal axes (the axis closest to world ``y`` on screen up,
+        looking along the thinnest axis, turned 35° sideways and raised 20°).
+    vmin, vmax : float, optional
+        Colour range; default the finite minimum and maximum of ``values``.
+    show_colorbar : bool, default True
+        Draw a colour bar on the right.
+    dpi : float, default 150
+        Resolution; the PNG is ``round(6.4·dpi) × round(5.4·dpi)`` pixels
+        (960 × 810 at 150 dpi).
+    colorbar_label : str, optional
+        Label of the colour bar.
+    sources : int or (k,) array_like of int, optional
+        Vertices to mark with a red dot (where visible). The default view
+        then picks, among its mirror images (front/back, turned left/right),
+        the one that faces the first of them.
+
+    Returns
+    -------
+    pathlib.Path
+        The written file.
+
+    Raises
+    ------
+    ValueError
+        If ``values`` does not have shape ``(n,)``, ``path`` does not end in
+        ``.png``, ``view`` is malformed, ``dpi`` is out of range or a source
+        index is out of range.
+    FileNotFoundError
+        If the directory of ``path`` does not exist.
+
+    Notes
+    -----
+    Closed, consistently oriented meshes are drawn with back-face culling;
+    other meshes with two-sided lighting. Isolines are drawn in depth slabs
+    interleaved with the surface, so surface in front of them hides them
+    (up to the slab thickness: 1/128 of the visible triangles, or 4 triangles).
+
+    Examples
+    --------
+    >>> from cvxgeodesic.mesh import icosphere
+    >>> mesh = icosphere(3)
+    >>> plot_field(mesh, mesh.V[:, 2], "/tmp/height.png", title="height")  # doctest: +SKIP
+    """
+    from matplotlib import colormaps
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import Colormap, Normalize
+
+    mesh = as_trimesh(mesh)
+    vals = _check_values(values, mesh.n_vertices)
+    marks = _check_marks(sources, mesh.n_vertices)
+    p = _check_path(path)
+    dpi = _check_dpi(dpi)
+    cm = cmap if isinstance(cmap, Colormap) else colormaps[cmap]
+    lo, hi = _finite_range(vals, vmin, vmax)
+    levels = _isolevels(isolines, lo, hi)
+    norm = Normalize(lo, hi, clip=True)
+
+    fig = _new_figure(dpi)
+    ax, cax = _layout(fig, show_colorbar, title)
+    _render_surface(ax, mesh, vals, cmap=cm, norm=norm, levels=levels, view=view, marks=marks)
+    if cax is not None:
+        cb = fig.colorbar(ScalarMappable(norm=Normalize(lo, hi), cmap=cm), cax=cax)
+        if levels.size and levels.size <= 60:
+            cb.ax.hlines(levels, 0, 1, colors="black", linewidths=0.4, alpha=0.6)
+        if colorbar_label:
+            cb.set_label(colorbar_label)
+    _save_atomic(fig, p)
+    return p
+
+
+def plot_error_map(mesh, rel_error, path, *, title=None, vmax=None, view=None, dpi=150, sources=None) -> Path:
+    """Relative-error colour map on the surface (paper Fig. 6).
+
+    Parameters
+    ----------
+    mesh : TriMesh or (V, F) tuple
+        The surface, ``n`` vertices.
+    rel_error : (n,) array_like of float
+        Per-vertex relative error ``|d - d_exact| / d_exact``; ``NaN`` at the
+        sources (and ``inf`` / ``NaN`` where undefined) is drawn grey.
+    path : str or os.PathLike
+        Output ``.png`` file, written atomically.
+    title : str, optional
+        Title above the picture.
+    vmax : float, optional
+        Top of the colour range (the range starts at 0); default the 99th
+        percentile of the finite errors, so a few outliers do not wash out the map.
+    view : (elev, azim) tuple of float, optional
+        As in :func:`plot_field`.
+    dpi : float, default 150
+        Resolution (same picture size as :func:`plot_field`).
+    sources : int or (k,) array_like of int, optional
+        Vertices to mark (and to face), as in :func:`plot_field`.
+
+    Returns
+    -------
+    pathlib.Path
+        The written file.
+
+    Raises
+    ------
+    ValueError
+        If ``rel_error`` does not have shape ``(n,)``, ``path`` is not ``.png``
+        or a source index is out of range.
+    """
+    from matplotlib import colormaps
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import Normalize
+    from matplotlib.ticker import PercentFormatter
+
+    mesh = as_trimesh(mesh)
+    err = _check_values(rel_error, mesh.n_vertices, "rel_error")
+    marks = _check_marks(sources, mesh.n_vertices)
+    p = _check_path(path)
+    dpi = _check_dpi(dpi)
+    fin = err[np.isfinite(err)]
+    if vmax is None:
+        vmax = float(np.percentile(fin, 99.0)) if fin.size else 1.0
+    vmax = float(vmax)
+    if not np.isfinite(vmax) or vmax <= 0:
+        vmax = float(fin.max()) if fin.size and fin.max() > 0 else 1.0
+    cm = colormaps["inferno_r"]
+    norm = Normalize(0.0, vmax, clip=True)
+
+    fig = _new_figure(dpi)
+    ax, cax = _layout(fig, True, title)
+    # light shading only: dark shading would read as large error on this colour map
+    _render_surface(ax, mesh, err, cmap=cm, norm=norm, levels=np.empty(0), view=view, ambient=0.78,
+                    marks=marks)
+    extend = "max" if fin.size and fin.max() > vmax else "neither"
+    cb = fig.colorbar(ScalarMappable(norm=Normalize(0.0, vmax), cmap=cm), cax=cax, extend=extend)
+    cb.set_label("relative error |d − d_exact| / d_exact")
+    cb.ax.yaxis.set_major_formatter(PercentFormatter(xmax=1.0, decimals=None))
+    if fin.size:
+        note = f"mean {100 * fin.mean():.2f}%   max {100 * fin.max():.2f}%   (grey: no value, e.g. sources)"
+        ax.text(0.01, 0.01, note, transform=ax.transAxes, fontsize=8, color="0.25", ha="left", va="bottom")
+    _save_atomic(fig, p)
+    return p
+
+
+# ----------------------------------------------------------------------------------------------------------------------
+# gradient-norm histograms
+# ----------------------------------------------------------------------------------------------------------------------
+
+
+def _as_hist_entry(label, entry, weights):
+    """Return ('hist', counts, edges) or ('raw', norms, weights) for one label."""
+    if isinstance(entry, tuple) and len(entry) == 2:
+        counts, edges = (np.asarray(x, dtype=np.float64).ravel() for x in entry)
+        if edges.size != counts.size + 1:
+            raise ValueError(
+                f"norms_by_label[{label!r}]: a (counts, edges) pair needs len(edges) == len(counts) + 1, "
+                f"got {counts.size} and {edges.size}"
+            )
+        return "hist", counts, edges
+    norms = np.asarray(entry, dtype=np.float64)
+    if norms.ndim != 1:
+        raise ValueError(
+            f"norms_by_label[{label!r}] must be (m,) norms or a (counts, edges) pair, got shape {norms.shape}"
+        )
+    w = weights.get(label) if isinstance(weights, Mapping) else weights
+    if w is not None:
+        w = np.asarray(w, dtype=np.float64)
+        if w.shape != norms.shape:
+            raise ValueError(f"weights for {label!r} must have shape {norms.shape}, got {w.shape}")
+    ok = np.isfinite(norms) if w is None else np.isfinite(norms) & np.isfinite(w)
+    return "raw", norms[ok], (None if w is None else w[ok])
+
+
+def plot_gradient_histogram(norms_by_label, path, *, weights=None, title=None, bins=80, dpi=150) -> Path:
+    """Histograms of per-triangle gradient norms ``‖∇d|_t‖`` (paper Fig. 2), one per label.
+
+    Parameters
+    ----------
+    norms_by_label : dict[str, (m,) array_like or (counts, edges) tuple]
+        For each label (method name) either the per-triangle norms or a
+        precomputed histogram ``(counts (b,), edges (b + 1,))``. Labels are
+        drawn in dict order; a label ``"exact"`` (or else the first one) is the
+        reference, drawn grey behind every panel.
+    path : str or os.PathLike
+        Output ``.png`` file, written atomically.
+    weights : (m,) array_like or dict[str, (m,) array_like], optional
+        Per-triangle weights for the raw norms (e.g. ``mesh.face_areas`` for an
+        area-weighted histogram), one array for all labels or one per label.
+    title : str, optional
+        Figure title.
+    bins : int, default 80
+        Number of bins for raw norms, shared by all labels, over
+        ``[0, max(1.5, 99.9th percentile)]`` (capped at 3); norms beyond the
+        range are counted in the last bin.
+    dpi : float, default 150
+        Resolution.
+
+    Returns
+    -------
+    pathlib.Path
+        The written file.
+
+    Notes
+    -----
+    Histograms are normalised to fractions (of triangles, or of total weight)
+    and drawn on a log scale, so the small populations away from 1 (across the
+    ridge: < 1; at the sources: > 1) stay visible. Up to three labels share one
+    axis; more are drawn as small multiples. The dashed line marks ``‖∇d‖ = 1``.
+    """
+    if not isinstance(norms_by_label, Mapping) or len(norms_by_label) == 0:
+        raise ValueError("norms_by_label must be a non-empty dict {label: norms or (counts, edges)}")
+    p = _check_path(path)
+    dpi = _check_dpi(dpi)
+    if isinstance(bins, bool) or not isinstance(bins, int | np.integer) or bins < 1:
+        raise ValueError(f"bins must be a positive integer, got {bins!r}")
+    entries = {str(k): _as_hist_entry(k, v, weights) for k, v in norms_by_label.items()}
+
+    raw_all = [e[1] for e in entries.values() if e[0] == "raw" and e[1].size]
+    top = 1.5
+    if raw_all:
+        top = min(3.0, max(1.5, float(np.percentile(np.concatenate(raw_all), 99.9)) * 1.02))
+    edges_common = np.linspace(0.0, top, int(bins) + 1)
+    hists = {}
+    for label, (kind, a, b) in entries.items():
+        if kind == "hist":
+            counts, edges = a, b
+        else:
+            counts, edges = np.histogram(np.clip(a, 0.0, top), bins=edges_common, weights=b)
+        total = counts.sum()
+        hists[label] = (counts / total if total > 0 else counts, edges)
+
+    labels = list(hists)
+    ref = "exact" if "exact" in hists else labels[0]
+    others = [lab for lab in labels if lab != ref] or [ref]
+    import matplotlib as mpl
+
+    colors = mpl.colormaps["tab10"].colors
+    if len(labels) <= 3:
+        ncols, nrows = 1, 1
+    else:
+        ncols = 3 if len(others) > 4 else 2
+        nrows = int(np.ceil(len(others) / ncols))
+    figsize = (6.4, 4.2) if nrows == 1 and ncols == 1 else (3.2 * ncols, 2.3 * nrows + 0.6)
+    fig = _new_figure(dpi, figsize=figsize)
+    axes = fig.subplots(nrows, ncols, squeeze=False, sharex=True, sharey=True)
+    positive = np.concatenate([h[0][h[0] > 0] for h in hists.values()] + [np.ones(1)])
+    ymin = max(float(positive.min()) * 0.5, 1e-7)
+
+    def draw_ref(ax):
+        c, e = hists[ref]
+        ax.stairs(c, e, fill=True, color="0.80", label=f"{ref}", zorder=1)
+
+    if nrows == 1 and ncols == 1:
+        ax = axes[0, 0]
+        draw_ref(ax)
+        for i, lab in enumerate(lab for lab in labels if lab != ref):
+            c, e = hists[lab]
+            ax.stairs(c, e, color=colors[i % len(colors)], linewidth=1.4, label=lab, zorder=2)
+        ax.legend(fontsize=8, frameon=False, loc="upper left")
+    else:
+        for i, lab in enumerate(others):
+            ax = axes.flat[i]
+            draw_ref(ax)
+            c, e = hists[lab]
+            ax.stairs(c, e, color=colors[i % len(colors)], linewidth=1.3, zorder=2)
+            ax.set_title(lab, fontsize=9, pad=3)
+        for ax in axes.flat[len(others):]:
+            ax.set_visible(False)
+        axes.flat[0].legend(fontsize=7, frameon=False, loc="upper left")
+    for ax in axes.flat:
+        ax.axvline(1.0, color="black", linestyle="--", linewidth=0.9, zorder=3)
+        ax.set_yscale("log")
+        ax.set_ylim(ymin, 1.5)
+        ax.tick_params(labelsize=8)
+        ax.grid(True, which="major", alpha=0.25)
+    for ax in axes[-1, :]:
+        ax.set_xlabel("‖∇d‖ per triangle", fontsize=9)
+    for ax in axes[:, 0]:
+        ax.set_ylabel("fraction" + (" (area-weighted)" if weights is not None else ""), fontsize=9)
+    if title:
+        fig.suptitle(str(title), fontsize=11)
+    fig.set_layout_engine("constrained")
+    _save_atomic(fig, p)
+    return p

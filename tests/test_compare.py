@@ -1,0 +1,179 @@
+"""Tests of cvxgeodesic.compare (the engine of ``cvxgeodesic compare``) on small generated meshes."""
+
+from __future__ import annotations
+
+import csv
+import math
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from cvxgeodesic.api import ALL_METHODS, GeodesicSolver
+from cvxgeodesic.compare import CSV_COLUMNS, format_table, resolve_methods, run_compare
+from cvxgeodesic.errors import ParameterError, SolverError, SourceError
+from cvxgeodesic.mesh import TriMesh, grid_plane, icosphere
+
+METHODS = ["exact", "dijkstra", "heat", "qclp"]
+
+
+def _read_csv(path):
+    with open(path, newline="", encoding="utf-8") as fh:
+        reader = csv.DictReader(fh)
+        return reader.fieldnames, list(reader)
+
+
+def _valid_png(path) -> bool:
+    with Image.open(path) as im:
+        im.verify()
+    with Image.open(path) as im:
+        im.load()
+        return im.size[0] > 100 and im.size[1] > 100
+
+
+@pytest.fixture(scope="module")
+def sphere_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("cmp")
+    mesh = icosphere(2)
+    rows = run_compare(mesh, 0, METHODS, out, progress=False)
+    return mesh, out, rows
+
+
+def test_every_promised_file_exists(sphere_run):
+    _, out, _ = sphere_run
+    expected = {"compare.csv", "gradient_histogram.png"}
+    expected |= {f"field_{m}.png" for m in METHODS} | {f"error_{m}.png" for m in METHODS}
+    assert {p.name for p in out.iterdir()} == expected  # and no temporary files left
+    for name in expected - {"compare.csv"}:
+        assert _valid_png(out / name), name
+
+
+def test_csv_columns_rows_and_values(sphere_run):
+    _, out, rows = sphere_run
+    header, records = _read_csv(out / "compare.csv")
+    assert header == list(CSV_COLUMNS)
+    for col in ("method", "time_s", "setup_s", "iterations", "rel_mean", "rel_max", "rel_p99", "abs_max",
+                "off_ridge_rel_mean", "status"):
+        assert col in header
+    assert [r["method"] for r in records] == METHODS
+    assert [r["method"] for r in rows] == METHODS
+    by = {r["method"]: r for r in records}
+    for m in METHODS:
+        assert by[m]["status"] in ("optimal", "almost_optimal"), by[m]["status"]
+        for col in ("time_s", "setup_s", "rel_mean", "rel_max", "rel_p99", "abs_max", "ridge_jump_p95",
+                    "off_ridge_rel_mean"):
+            assert math.isfinite(float(by[m][col])), (m, col)
+    assert float(by["exact"]["rel_max"]) == 0.0
+    assert float(by["exact"]["ridge_jump_ratio"]) == pytest.approx(1.0)
+    assert float(by["dijkstra"]["rel_mean"]) > float(by["heat"]["rel_mean"]) > 0.0
+    assert int(by["qclp"]["iterations"]) > 0
+    # returned rows carry the same numbers as the CSV
+    for row in rows:
+        rec = by[row["method"]]
+        assert float(rec["rel_mean"]) == pytest.approx(row["rel_mean"], rel=1e-5, abs=1e-12)
+        assert set(row) == set(CSV_COLUMNS)
+
+
+def test_format_table(sphere_run):
+    _, _, rows = sphere_run
+    text = format_table(rows)
+    lines = text.splitlines()
+    assert len(lines) == 2 + len(METHODS)
+    assert lines[0].startswith("method") and set(lines[1]) <= {"-", " "}
+    for m, line in zip(METHODS, lines[2:], strict=True):
+        assert line.split()[0] == m
+    # columns line up: every row has its status column starting where the header's does
+    col = lines[0].index("status")
+    assert all(line[col:].split()[0] in ("optimal", "almost_optimal") for line in lines[2:])
+    partial = format_table([{"method": "x", "status": "boom " * 30, "time_s": 1.5}])
+    assert "-" in partial and "…" in partial and "1.50" in partial
+
+
+def test_failing_method_is_reported_and_others_continue(tmp_path, monkeypatch, capsys):
+    real_solve = GeodesicSolver.solve
+
+    def flaky_solve(self, sources, **kwargs):
+        if self.method == "heat":
+            raise SolverError("did not converge", solver="ipm", status="MaxIterations", info={"iterations": 7})
+        if self.method == "fmm":
+            raise RuntimeError("library crashed")
+        return real_solve(self, sources, **kwargs)
+
+    monkeypatch.setattr(GeodesicSolver, "solve", flaky_solve)
+    mesh = icosphere(2)
+    rows = run_compare(mesh, [0], ["heat", "exact", "fmm", "dijkstra"], tmp_path, progress=True)
+    err = capsys.readouterr().err
+    assert "heat" in err and "FAILED" in err and "dijkstra" in err
+    header, records = _read_csv(tmp_path / "compare.csv")
+    by = {r["method"]: r for r in records}
+    assert [r["method"] for r in records] == ["heat", "exact", "fmm", "dijkstra"]
+    assert "did not converge" in by["heat"]["status"] and "MaxIterations" in by["heat"]["status"]
+    assert by["heat"]["solver"] == "ipm" and by["heat"]["iterations"] == "7"
+    assert by["heat"]["rel_mean"] == ""
+    assert by["fmm"]["status"] == "RuntimeError: library crashed"
+    assert by["dijkstra"]["status"] == "optimal" and float(by["dijkstra"]["rel_mean"]) > 0
+    names = {p.name for p in tmp_path.iterdir()}
+    assert not {"field_heat.png", "error_heat.png", "field_fmm.png", "error_fmm.png"} & names
+    assert {"field_dijkstra.png", "error_dijkstra.png", "field_exact.png", "gradient_histogram.png"} <= names
+    assert rows[0]["status"].startswith("did not converge")
+    assert "did not converge" in format_table(rows)
+
+
+def test_without_exact_reference(tmp_path, capsys):
+    """A non-manifold mesh: the exact method cannot run, the others are still timed and drawn."""
+    plane = grid_plane(4)
+    V = np.vstack([plane.V, [[0.25, 0.5, 0.3], [0.5, 0.5, 0.3]]])  # a fin on the edges of the line y = 0.5
+    a, b, c = [int(np.flatnonzero(np.all(np.isclose(plane.V, p), axis=1))[0]) for p in
+               ([0.25, 0.5, 0], [0.5, 0.5, 0], [0.75, 0.5, 0])]
+    n = plane.n_vertices
+    mesh = TriMesh(V, np.vstack([plane.F, [[a, b, n], [b, c, n + 1]]]), name="fin")
+    assert not mesh.is_edge_manifold
+    rows = run_compare(mesh, 0, ["exact", "dijkstra"], tmp_path, progress=True)
+    err = capsys.readouterr().err
+    assert "no exact reference" in err
+    exact, dijk = rows
+    assert exact["status"] and exact["status"] != "optimal" and exact["rel_mean"] is None
+    assert dijk["status"] == "optimal" and dijk["rel_mean"] is None and dijk["time_s"] is not None
+    names = {p.name for p in tmp_path.iterdir()}
+    assert names == {"compare.csv", "field_dijkstra.png", "gradient_histogram.png"}
+
+
+def test_alias_solved_once_and_quiet(tmp_path, monkeypatch, capsys):
+    calls = []
+    real_solve = GeodesicSolver.solve
+
+    def counting_solve(self, sources, **kwargs):
+        calls.append(self.method)
+        return real_solve(self, sources, **kwargs)
+
+    monkeypatch.setattr(GeodesicSolver, "solve", counting_solve)
+    rows = run_compare(icosphere(1), 3, ["lcqp-hessian", "QGDF"], tmp_path / "new" / "dir", progress=False)
+    assert capsys.readouterr().err == ""
+    assert calls.count("lcqp-hessian") == 1 and calls.count("exact") == 1
+    assert [r["method"] for r in rows] == ["lcqp-hessian", "qgdf"]
+    assert rows[0]["rel_mean"] == rows[1]["rel_mean"]
+    assert (tmp_path / "new" / "dir" / "field_qgdf.png").is_file()
+
+
+def test_resolve_methods():
+    allm = resolve_methods(["all"])
+    assert "qgdf" not in allm and "lcqp-hessian" in allm and len(allm) == len(ALL_METHODS) - 1
+    assert set(allm) <= set(ALL_METHODS)
+    assert resolve_methods("Exact, dijkstra,exact") == ["exact", "dijkstra"]
+    assert resolve_methods(["qgdf"]) == ["qgdf"]
+    assert resolve_methods(["heat", "all"])[0] == "heat"
+    with pytest.raises(ParameterError, match="unknown method 'nope'"):
+        resolve_methods(["exact", "nope"])
+    with pytest.raises(ParameterError, match="empty"):
+        resolve_methods([])
+
+
+def test_bad_input_fails_before_any_work(tmp_path):
+    mesh = icosphere(1)
+    with pytest.raises(SourceError):
+        run_compare(mesh, [10_000], ["exact"], tmp_path / "a", progress=False)
+    with pytest.raises(ParameterError):
+        run_compare(mesh, 0, ["exact", "magic"], tmp_path / "b", progress=False)
+    with pytest.raises(ParameterError, match="solver"):
+        run_compare(mesh, 0, ["exact"], tmp_path / "c", solver="mosek", progress=False)
+    assert list(tmp_path.iterdir()) == []
