@@ -29,7 +29,7 @@ demo: $(STAMP)
 	$(VENV)/bin/cvxgeodesic demo --out $(OUT)
 
 test: $(STAMP)
-	$(VENV)/bin/ruff check src tests benchmarks
+	$(VENV)/bin/ruff check .
 	$(PY) -m pytest -m "not slow" -q
 
 test-all: $(STAMP)
