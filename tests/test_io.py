@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import cvxgeodesic._atomic
 import cvxgeodesic.mesh.io as mio
 from cvxgeodesic.errors import MeshError, MeshFormatError, ParameterError
 from cvxgeodesic.mesh import TriMesh, load_mesh, save_distance
@@ -550,7 +551,7 @@ def test_save_atomic_when_replace_fails(tmp_path, monkeypatch, mesh_and_dist):
     def boom(src, dst):
         raise OSError("replace failed")
 
-    monkeypatch.setattr(mio.os, "replace", boom)
+    monkeypatch.setattr(cvxgeodesic._atomic.os, "replace", boom)
     before = set(tmp_path.iterdir())
     with pytest.raises(OSError, match="replace failed"):
         save_distance(tmp_path / "d.ply", m, d)

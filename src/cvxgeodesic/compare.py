@@ -23,13 +23,13 @@ import csv
 import io
 import math
 import os
-import secrets
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
+from ._atomic import atomic_write
 from .errors import CvxGeodesicError, ParameterError, SolverError
 
 __all__ = ["run_compare", "format_table", "resolve_methods", "CSV_COLUMNS"]
@@ -108,19 +108,7 @@ def _canonical(method: str) -> str:
 
 
 def _atomic_write_text(path: Path, text: str) -> None:
-    tmp = path.parent / f".{path.name}.{secrets.token_hex(4)}.tmp"
-    try:
-        with open(tmp, "w", encoding="utf-8", newline="") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
+    atomic_write(path, lambda fh: fh.write(text.encode("utf-8")))
 
 
 def _error_message(exc: BaseException) -> str:

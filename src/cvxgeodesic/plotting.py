@@ -24,12 +24,12 @@ A 46K-face mesh (bimba) takes about half a second per picture once matplotlib is
 from __future__ import annotations
 
 import os
-import secrets
 from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 
+from ._atomic import atomic_write
 from .mesh.trimesh import as_trimesh
 
 __all__ = ["plot_field", "plot_error_map", "plot_gradient_histogram", "isoline_segments"]
@@ -100,27 +100,9 @@ def _new_figure(dpi: float, figsize=_FIGSIZE):
 
 
 def _save_atomic(fig, path: Path) -> None:
-    """Write ``fig`` as PNG to a temporary file next to ``path``, then ``os.replace`` it over ``path``."""
-    parent = path.parent if str(path.parent) else Path(".")
-    while True:
-        tmp = parent / f".{path.name}.{secrets.token_hex(4)}.tmp"
-        try:
-            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
-            break
-        except FileExistsError:  # pragma: no cover - astronomically unlikely
-            continue
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fig.canvas.print_png(fh, pil_kwargs={"compress_level": 3})  # 2x faster than the default 6, ~20% larger
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
+    """Write ``fig`` as PNG to ``path`` atomically (see :func:`cvxgeodesic._atomic.atomic_write`)."""
+    # compress_level 3: twice as fast as the default 6 for ~20% larger files
+    atomic_write(path, lambda fh: fig.canvas.print_png(fh, pil_kwargs={"compress_level": 3}))
 
 
 # ----------------------------------------------------------------------------------------------------------------------

@@ -7,15 +7,14 @@ message names the file and, for text formats, the line.
 
 from __future__ import annotations
 
-import os
 import re
-import secrets
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from .._atomic import atomic_write
 from ..errors import MeshError, MeshFormatError, ParameterError
 from .trimesh import TriMesh, as_trimesh
 
@@ -872,7 +871,7 @@ def save_distance(path, mesh, distance, *, name: str = "distance") -> Path:
             f"invalid field name {name!r}: use letters, digits, '_', '.', '-' (not x, y, z, vertex, file_vertex)"
         )
     writer = {".ply": _write_ply, ".npy": _write_npy, ".csv": _write_csv}[ext]
-    _atomic_write(p, lambda fh: writer(fh, mesh, d, name))
+    atomic_write(p, lambda fh: writer(fh, mesh, d, name))
     return p
 
 
@@ -902,29 +901,6 @@ def check_output_path(path, extensions=DISTANCE_EXTENSIONS) -> Path:
     if p.is_dir():
         raise ParameterError(f"cannot write {p}: it is a directory")
     return p
-
-
-def _atomic_write(target: Path, write) -> None:
-    """Call ``write(fh)`` on a fresh temporary file next to ``target``, then move it over ``target``."""
-    while True:
-        tmp = target.parent / f".{target.name}.{secrets.token_hex(4)}.tmp"
-        try:
-            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
-            break
-        except FileExistsError:  # pragma: no cover - astronomically unlikely
-            continue
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            write(fh)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, target)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
 
 
 def _write_ply(fh, mesh: TriMesh, d: np.ndarray, name: str) -> None:
