@@ -1,0 +1,349 @@
+"""The structured interior-point solver against the Clarabel reference, and its error paths."""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from conftest import shared_mesh_path
+from cvxgeodesic.errors import SolverError
+from cvxgeodesic.formulations import FORMULATIONS, MeshOperators, build_problem, smoothness_weight
+from cvxgeodesic.mesh import TriMesh, cylinder, grid_plane, icosphere
+from cvxgeodesic.solvers import cholesky as chol_mod
+from cvxgeodesic.solvers.cholesky import NotPositiveDefiniteError, SymbolicCholesky
+from cvxgeodesic.solvers.clarabel_backend import solve_clarabel
+from cvxgeodesic.solvers.ipm import InteriorPointSolver, _soc_max_step, _SocScaling
+from cvxgeodesic.solvers.problem import kkt_pattern
+
+OBJ_RTOL = 1e-6
+DIST_TOL = 1e-5  # times the bounding-box diagonal
+
+
+def _union_pattern(ops: MeshOperators):
+    """The widest pattern of a mesh: Hessian and Laplacian energies have different 2-rings."""
+    m = ops.mesh
+    P = abs(ops.energy("hessian")) + abs(ops.energy("laplacian"))
+    return kkt_pattern(m.n_vertices, m.F, m.edges, P)
+
+
+def _assert_matches(res, ref, problem, mesh):
+    assert res.status == "optimal"
+    assert abs(res.objective - ref.objective) <= OBJ_RTOL * max(1.0, abs(ref.objective))
+    assert np.max(np.abs(res.x - ref.x)) <= DIST_TOL * mesh.bbox_diagonal
+    assert problem.constraint_violation(res.x) <= 1e-7
+    np.testing.assert_array_equal(res.x[problem.fixed_mask], np.where(problem.unreachable, 0.0,
+                                                                      problem.fixed_values)[problem.fixed_mask])
+
+
+@pytest.fixture(scope="module")
+def sphere():
+    m = icosphere(3)
+    ops = MeshOperators(m)
+    return m, ops, InteriorPointSolver(_union_pattern(ops))
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Agreement with Clarabel
+# ---------------------------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("method", list(FORMULATIONS))
+def test_every_formulation_matches_clarabel(sphere, method):
+    m, ops, ipm = sphere
+    p = build_problem(ops, np.array([0]), method, smoothness_weight(m, 1.0))
+    res = ipm.solve(p)
+    _assert_matches(res, solve_clarabel(p), p, m)
+    assert res.iterations < 40
+    assert res.primal_residual < 1e-8 and res.dual_residual < 1e-8
+
+
+@pytest.mark.parametrize(
+    "mesh",
+    [grid_plane(14, jitter=0.35, seed=3), cylinder(24, 10)],
+    ids=lambda m: m.name,
+)
+@pytest.mark.parametrize("method", ["lclp", "qclp", "qcqp-hessian", "lcqp-laplacian"])
+def test_other_meshes_match_clarabel(mesh, method):
+    ops = MeshOperators(mesh)
+    p = build_problem(ops, np.array([7]), method, smoothness_weight(mesh, 1.0))
+    ipm = InteriorPointSolver(kkt_pattern(mesh.n_vertices, mesh.F, mesh.edges, p.P))
+    _assert_matches(ipm.solve(p), solve_clarabel(p), p, mesh)
+
+
+@pytest.mark.parametrize("method", ["qclp", "qcqp-dirichlet", "lcqp-hessian"])
+def test_several_sources(sphere, method):
+    m, ops, ipm = sphere
+    p = build_problem(ops, np.array([0, 101, 333, 600]), method, smoothness_weight(m, 2.0))
+    _assert_matches(ipm.solve(p), solve_clarabel(p), p, m)
+
+
+def test_unreachable_component_is_fixed_and_zero():
+    a, b = icosphere(2), icosphere(1)
+    V = np.vstack([a.V, b.V + [3.0, 0.0, 0.0]])
+    F = np.vstack([a.F, b.F + a.n_vertices])
+    m = TriMesh(V, F, name="two-spheres")
+    ops = MeshOperators(m)
+    for method in ("qcqp-hessian", "lclp"):
+        p = build_problem(ops, np.array([5]), method, smoothness_weight(m, 1.0))
+        assert p.unreachable.sum() == b.n_vertices
+        ipm = InteriorPointSolver(kkt_pattern(m.n_vertices, m.F, m.edges, p.P))
+        res = ipm.solve(p)
+        _assert_matches(res, solve_clarabel(p), p, m)
+        assert np.all(res.x[p.unreachable] == 0.0)
+
+
+def test_fixed_nonzero_values_match_clarabel(sphere):
+    # fixed vertices with nonzero values exercise the reduced-problem constants (q̃, b̃, const)
+    m, ops, ipm = sphere
+    p = build_problem(ops, np.array([0]), "qcqp-laplacian", smoothness_weight(m, 1.0))
+    fm, fv = p.fixed_mask.copy(), p.fixed_values.copy()
+    far = np.argsort(m.V @ m.V[0])[:3]  # three vertices near the antipode of the source (distance ≈ π)
+    fm[far] = True
+    fv[far] = 2.5
+    p = dataclasses.replace(p, fixed_mask=fm, fixed_values=fv)
+    _assert_matches(ipm.solve(p), solve_clarabel(p), p, m)
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# One symbolic analysis per mesh
+# ---------------------------------------------------------------------------------------------------------------
+
+
+def test_symbolic_analysis_is_reused_across_sources_lambdas_and_methods():
+    m = icosphere(3)
+    ops = MeshOperators(m)
+    ipm = InteriorPointSolver(kkt_pattern(m.n_vertices, m.F, m.edges, ops.energy("hessian")))
+    assert ipm.n_analyses == 1
+    factorizations = 0
+    for sources, method, mult in [([0], "qcqp-hessian", 1.0), ([17, 400], "qcqp-hessian", 3.0),
+                                  ([5], "qclp", 0.0), ([9], "lcqp-hessian", 0.5), ([3], "qcqp-dirichlet", 1.0)]:
+        res = ipm.solve(build_problem(ops, np.array(sources), method, smoothness_weight(m, mult)))
+        assert res.extra["new_analyses"] == 0
+        assert ipm.cholesky.n_factorizations > factorizations
+        factorizations = ipm.cholesky.n_factorizations
+    assert ipm.n_analyses == 1 and ipm.cholesky.n_analyses == 1
+
+
+def test_problem_outside_the_pattern_triggers_one_new_analysis():
+    m = icosphere(2)
+    ops = MeshOperators(m)
+    ipm = InteriorPointSolver(kkt_pattern(m.n_vertices, m.F, m.edges))  # no energy: face/edge pattern only
+    p = build_problem(ops, np.array([0]), "qcqp-laplacian", smoothness_weight(m, 1.0))
+    res = ipm.solve(p)
+    assert res.extra["new_analyses"] == 1 and ipm.n_analyses == 2
+    _assert_matches(res, solve_clarabel(p), p, m)
+    res2 = ipm.solve(build_problem(ops, np.array([3]), "qcqp-laplacian", smoothness_weight(m, 2.0)))
+    assert res2.extra["new_analyses"] == 0 and ipm.n_analyses == 2
+
+
+def test_problem_for_another_mesh_is_rejected():
+    a, b = icosphere(1), icosphere(2)
+    ipm = InteriorPointSolver(kkt_pattern(a.n_vertices, a.F, a.edges))
+    with pytest.raises(ValueError, match="variables"):
+        ipm.solve(build_problem(MeshOperators(b), np.array([0]), "qclp", 0.0))
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Cholesky backends
+# ---------------------------------------------------------------------------------------------------------------
+
+
+def _random_spd_on_pattern(S, seed=0):
+    chol = SymbolicCholesky(S, backend="scipy")
+    rng = np.random.default_rng(seed)
+    A = chol.matrix(rng.uniform(-1, 1, chol.nnz))
+    A = A + sp.diags(np.asarray(abs(A).sum(axis=1)).ravel() + 1.0)  # diagonally dominant: SPD
+    return sp.tril(A, format="csc")
+
+
+@pytest.mark.parametrize(("backend", "mode"), [("cholmod", "supernodal"), ("cholmod", "simplicial"),
+                                               ("scipy", "auto")])
+def test_cholesky_backends_solve_correctly(backend, mode):
+    if backend == "cholmod" and not chol_mod.cholmod_available():
+        pytest.skip("scikit-sparse not installed")
+    m = icosphere(2)
+    S = kkt_pattern(m.n_vertices, m.F, m.edges)
+    chol = SymbolicCholesky(S, backend=backend, mode=mode)
+    assert chol.backend == backend
+    Al = _random_spd_on_pattern(S)
+    A = (Al + sp.tril(Al, -1).T).tocsc()
+    data = chol.matrix(np.zeros(chol.nnz))  # structure check only
+    assert data.shape == A.shape
+    pos = chol.positions(*sp.find(Al)[:2])
+    vals = np.zeros(chol.nnz)
+    vals[pos] = sp.find(Al)[2]
+    b = np.random.default_rng(1).normal(size=(m.n_vertices, 2))
+    for beta in (0.0, 0.5):
+        solve = chol.factorize(vals, beta=beta)
+        np.testing.assert_allclose((A + beta * sp.identity(A.shape[0])) @ solve(b), b, atol=1e-10)
+    assert chol.n_factorizations == 2
+    assert chol.n_analyses == (1 if backend == "cholmod" else 0)
+    with pytest.raises(NotPositiveDefiniteError):
+        chol.factorize(-vals)
+    with pytest.raises(ValueError, match="not in the sparsity pattern"):
+        chol.positions(np.array([0]), np.array([m.n_vertices - 1]))
+
+
+def test_fallback_when_sksparse_is_missing_warns_and_matches(monkeypatch):
+    monkeypatch.setattr(chol_mod, "_cholmod", None)
+    m = icosphere(2)
+    ops = MeshOperators(m)
+    p = build_problem(ops, np.array([0]), "qcqp-hessian", smoothness_weight(m, 1.0))
+    with pytest.warns(RuntimeWarning, match="scikit-sparse==0.4.16"):
+        ipm = InteriorPointSolver(kkt_pattern(m.n_vertices, m.F, m.edges, p.P))
+    assert ipm.cholesky.backend == "scipy"
+    res = ipm.solve(p)
+    assert res.extra["backend"] == "scipy"
+    _assert_matches(res, solve_clarabel(p), p, m)
+    with pytest.raises(ImportError, match="libsuitesparse-dev"):
+        SymbolicCholesky(kkt_pattern(m.n_vertices, m.F, m.edges), backend="cholmod")
+
+
+def test_cholmod_backend_does_not_warn():
+    if not chol_mod.cholmod_available():
+        pytest.skip("scikit-sparse not installed")
+    m = icosphere(1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert SymbolicCholesky(kkt_pattern(m.n_vertices, m.F, m.edges)).backend == "cholmod"
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Failures, reporting
+# ---------------------------------------------------------------------------------------------------------------
+
+
+def test_max_iter_raises_solver_error_with_status_and_info(sphere):
+    m, ops, ipm = sphere
+    p = build_problem(ops, np.array([0]), "qclp", 0.0)
+    with pytest.raises(SolverError) as exc:
+        ipm.solve(p, max_iter=2)
+    err = exc.value
+    assert err.solver == "ipm" and err.status == "max_iterations"
+    assert err.info["iterations"] == 2
+    for key in ("res_primal", "res_dual", "gap_rel", "pcost", "factor_time"):
+        assert np.isfinite(err.info[key])
+    assert "max_iter=2" in str(err)
+
+
+def test_primal_infeasible_problem_is_detected():
+    m = icosphere(2)
+    ops = MeshOperators(m)
+    p = build_problem(ops, np.array([0]), "qclp", 0.0)
+    fm, fv = p.fixed_mask.copy(), p.fixed_values.copy()
+    fm[p.cone_vertices[10]] = True
+    fv[p.cone_vertices[10]] = [0.0, 0.0, 5.0]  # a gradient far steeper than 1 on a fixed triangle
+    p = dataclasses.replace(p, fixed_mask=fm, fixed_values=fv)
+    with pytest.raises(SolverError) as exc:
+        InteriorPointSolver(kkt_pattern(m.n_vertices, m.F, m.edges)).solve(p)
+    assert exc.value.status == "primal_infeasible"
+
+
+def test_unbounded_problems_are_detected():
+    m = icosphere(2)
+    ops = MeshOperators(m)
+    p = build_problem(ops, np.array([0]), "qclp", 0.0)
+    ipm = InteriorPointSolver(kkt_pattern(m.n_vertices, m.F, m.edges))
+    v = 40
+    cones = ~(p.cone_vertices == v).any(axis=1)
+    ineqs = ~(p.ineq_vertices == v).any(axis=1)
+    base = dict(cone_vertices=p.cone_vertices[cones], cone_blocks=p.cone_blocks[cones])
+    # v only bounded below (−d_v ≤ 1) while the objective maximizes it
+    unbounded = dataclasses.replace(
+        p, **base,
+        ineq_vertices=np.vstack([p.ineq_vertices[ineqs], [[v, v]]]),
+        ineq_coeffs=np.vstack([p.ineq_coeffs[ineqs], [[-1.0, 0.0]]]),
+        ineq_rhs=np.concatenate([p.ineq_rhs[ineqs], [1.0]]),
+    )
+    with pytest.raises(SolverError) as exc:
+        ipm.solve(unbounded)
+    assert exc.value.status == "dual_infeasible"
+    # v in no constraint at all
+    loose = dataclasses.replace(p, **base, ineq_vertices=p.ineq_vertices[ineqs], ineq_coeffs=p.ineq_coeffs[ineqs],
+                                ineq_rhs=p.ineq_rhs[ineqs])
+    with pytest.raises(SolverError, match="variable 40") as exc:
+        ipm.solve(loose)
+    assert exc.value.status == "dual_infeasible"
+
+
+def test_callback_and_timing_breakdown(sphere):
+    m, ops, ipm = sphere
+    seen = []
+    res = ipm.solve(build_problem(ops, np.array([0]), "qcqp-hessian", smoothness_weight(m, 1.0)),
+                    callback=lambda it, info: seen.append((it, info["gap_abs"], info["res_primal"])))
+    assert [s[0] for s in seen] == list(range(res.iterations + 1))
+    ex = res.extra
+    parts = ex["setup_time"] + ex["assembly_time"] + ex["factor_time"] + ex["linear_solve_time"] + ex["other_time"]
+    assert parts == pytest.approx(res.solve_time, rel=1e-6)
+    assert ex["analyze_time"] >= 0 and ex["backend"] in ("cholmod", "scipy")
+    assert res.gap < 1e-8 or ex["gap_abs"] < 1e-8
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Second-order-cone kernels
+# ---------------------------------------------------------------------------------------------------------------
+
+
+def test_soc_max_step_matches_bisection():
+    rng = np.random.default_rng(0)
+    k = 200
+    u = rng.normal(size=(3, k))
+    u[0] = np.sqrt(u[1] ** 2 + u[2] ** 2) + 10.0 ** rng.uniform(-6, 0, k)
+    du = rng.normal(size=(3, k))
+
+    def inside(i, t):
+        w = u[:, i] + t * du[:, i]
+        return w[0] >= np.hypot(w[1], w[2])
+
+    for i in range(0, k, 20):
+        a = _soc_max_step(u[:, i : i + 1], du[:, i : i + 1])
+        if np.isinf(a):
+            assert inside(i, 1e6)
+        else:
+            assert inside(i, a * (1 - 1e-7)) and not inside(i, a * (1 + 1e-7))
+    assert _soc_max_step(u, du) == pytest.approx(min(_soc_max_step(u[:, i : i + 1], du[:, i : i + 1])
+                                                     for i in range(k)))
+
+
+def test_nesterov_todd_scaling_identities():
+    rng = np.random.default_rng(2)
+    k = 50
+
+    def interior():
+        v = rng.normal(size=(3, k))
+        v[0] = np.sqrt(v[1] ** 2 + v[2] ** 2) + rng.uniform(1e-3, 2.0, k)
+        return v
+
+    s, z = interior(), interior()
+    sc = _SocScaling(s, z)
+    np.testing.assert_allclose(sc.apply(z), sc.lam, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(sc.apply_inv(s), sc.lam, rtol=1e-10, atol=1e-12)
+    v = rng.normal(size=(3, k))
+    np.testing.assert_allclose(sc.apply_inv2(v), sc.apply_inv(sc.apply_inv(v)), rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(sc.apply(sc.apply_inv(v)), v, rtol=1e-9, atol=1e-12)
+    body = sc.apply_inv2(np.concatenate([np.zeros((1, k)), v[1:]]))[1:]
+    np.testing.assert_allclose(sc.body_inv2(v[1:]), body, rtol=1e-9, atol=1e-12)
+    full = sc.apply_inv2(np.concatenate([np.zeros((1, k)), -v[1:]]))
+    np.testing.assert_allclose(sc.body_to_inv2(v[1:]), full, rtol=1e-9, atol=1e-12)
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Real mesh (development data)
+# ---------------------------------------------------------------------------------------------------------------
+
+
+@pytest.mark.shared
+def test_spot_every_formulation_matches_clarabel():
+    from cvxgeodesic.mesh.io import load_mesh
+
+    m = load_mesh(shared_mesh_path("spot.obj"))
+    ops = MeshOperators(m)
+    ipm = InteriorPointSolver(_union_pattern(ops))
+    for method in FORMULATIONS:
+        p = build_problem(ops, np.array([0]), method, smoothness_weight(m, 1.0))
+        _assert_matches(ipm.solve(p), solve_clarabel(p), p, m)
+    assert ipm.n_analyses == 1
