@@ -83,3 +83,26 @@ def test_bundled_demo_mesh_is_welded():
     # spot.obj has texture seams: loading must weld them (a split mesh would have boundary edges)
     assert (mesh.n_vertices, mesh.n_faces) == (2930, 5856)
     assert np.all(mesh.edge_face_counts == 2)
+
+
+def test_negative_values_trigger_a_nonnegative_resolve():
+    # a strongly smoothed field on a 3x3 grid trades negative values for a larger sum (measured: min -0.11)
+    mesh = cg.grid_plane(3, jitter=0.3, seed=1)
+    res = cg.GeodesicSolver(mesh, "qcqp-hessian", solver="clarabel").solve(4)
+    assert res.distance.min() == 0.0
+    assert res.info.extra["resolved_nonnegative"] and res.info.extra["negative_min"] < -0.05
+
+
+def test_auto_falls_back_to_clarabel_when_ipm_fails(sphere, monkeypatch):
+    from cvxgeodesic.errors import SolverError
+    from cvxgeodesic.solvers.ipm import InteriorPointSolver
+
+    def fail(self, problem, **kwargs):
+        raise SolverError("forced", solver="ipm", status="numerical_error")
+
+    monkeypatch.setattr(InteriorPointSolver, "solve", fail)
+    with pytest.warns(RuntimeWarning, match="Clarabel instead"):
+        res = cg.GeodesicSolver(sphere, "qclp", solver="auto").solve(0)
+    assert res.info.solver == "clarabel" and res.info.extra["ipm_failure"] == "numerical_error"
+    with pytest.raises(SolverError, match="forced"):
+        cg.GeodesicSolver(sphere, "qclp", solver="ipm").solve(0)

@@ -32,6 +32,10 @@ class NonManifoldError(MeshError):
     """The requested method needs an edge-manifold mesh and the mesh is not one."""
 
 
+class DegenerateFacesWarning(UserWarning):
+    """The mesh has degenerate (zero or near-zero area) faces, which the convex formulations leave out."""
+
+
 class SolverError(CvxGeodesicError, RuntimeError):
     """A numerical solver did not return an optimal solution.
 

@@ -7,7 +7,9 @@ message names the file and, for text formats, the line.
 
 from __future__ import annotations
 
+import os
 import re
+import tempfile
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -891,7 +893,9 @@ def check_output_path(path, extensions=DISTANCE_EXTENSIONS) -> Path:
     Raises
     ------
     ParameterError
-        Unsupported extension, missing parent directory, or ``path`` is a directory.
+        Unsupported extension, missing parent directory, ``path`` is a directory, or
+        no file can be created in the directory (permissions, read-only file system:
+        checked by creating and removing an empty temporary file there).
     """
     p = Path(path)
     if p.suffix.lower() not in extensions:
@@ -900,6 +904,14 @@ def check_output_path(path, extensions=DISTANCE_EXTENSIONS) -> Path:
         raise ParameterError(f"cannot write {p}: directory {p.parent} does not exist")
     if p.is_dir():
         raise ParameterError(f"cannot write {p}: it is a directory")
+    try:  # the output is written to a temporary file in this directory: try exactly that
+        fd, probe = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".probe", dir=p.parent)
+    except OSError as exc:
+        raise ParameterError(
+            f"cannot write {p}: cannot create files in directory {p.parent} ({exc.strerror or exc})"
+        ) from None
+    os.close(fd)
+    os.unlink(probe)
     return p
 
 

@@ -66,7 +66,10 @@ def hessian_energy_matrix(mesh: TriMesh) -> sp.csc_matrix:
             f"{mesh.name}: the curved Hessian energy needs an edge-manifold mesh, but {bad} edges have more "
             "than two faces; use method='qcqp-laplacian', 'qcqp-dirichlet' or 'qclp' on this mesh"
         )
-    Q = sp.csc_matrix(igl.curved_hessian_energy(mesh.V, mesh.F))
+    Q = sp.coo_matrix(igl.curved_hessian_energy(mesh.V, mesh.F))
+    # libigl sizes it by the largest referenced vertex index + 1: pad to n (unreferenced vertices)
+    n = mesh.n_vertices
+    Q = sp.csc_matrix((Q.data, (Q.row, Q.col)), shape=(n, n))
     return sp.csc_matrix(0.5 * (Q + Q.T))
 
 

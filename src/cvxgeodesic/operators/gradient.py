@@ -15,12 +15,14 @@ def triangle_frames(mesh: TriMesh) -> tuple[np.ndarray, np.ndarray]:
     -------
     ex, ey : (m, 3) float ndarray
         ``ex`` along the edge v1→v2, ``ey = n̂ × ex`` (so ``(ex, ey, n̂)`` is right-handed).
+        NaN on faces of zero area (no warning).
     """
     V, F = mesh.V, mesh.F
     e = V[F[:, 1]] - V[F[:, 0]]
-    ex = e / np.linalg.norm(e, axis=1, keepdims=True)
     nrm = mesh.face_normals_unnormalized
-    nhat = nrm / np.linalg.norm(nrm, axis=1, keepdims=True)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ex = e / np.linalg.norm(e, axis=1, keepdims=True)
+        nhat = nrm / np.linalg.norm(nrm, axis=1, keepdims=True)
     ey = np.cross(nhat, ex)
     return ex, ey
 

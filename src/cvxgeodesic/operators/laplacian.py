@@ -32,4 +32,7 @@ def mass_matrix(mesh: TriMesh) -> sp.dia_matrix:
     (n, n) scipy.sparse.dia_matrix
     """
     M = igl.massmatrix(mesh.V, mesh.F, igl.MASSMATRIX_TYPE_VORONOI)
-    return sp.diags(np.asarray(M.diagonal()).ravel())
+    diag = np.zeros(mesh.n_vertices)
+    m = np.asarray(M.diagonal()).ravel()  # libigl sizes it by the largest referenced index + 1
+    diag[: m.size] = m
+    return sp.diags(diag)
