@@ -6,12 +6,22 @@ Quick use::
     mesh = cg.load_mesh("bunny.obj")
     d = cg.geodesic_distance(mesh, sources=0)            # QCQP-Hessian, m = 1
     res = cg.GeodesicSolver(mesh, method="qclp").solve([0, 17])
+    D = cg.distance_matrix(mesh, [0, 17, 99])          # (3, n): one row per source vertex
     res.distance, res.info.iterations, res.info.solve_time
 """
 
-from .api import ALL_METHODS, BASELINE_METHODS, GeodesicResult, GeodesicSolver, SolveInfo, geodesic_distance
+from .api import (
+    ALL_METHODS,
+    BASELINE_METHODS,
+    GeodesicResult,
+    GeodesicSolver,
+    SolveInfo,
+    distance_matrix,
+    geodesic_distance,
+)
 from .errors import (
     CvxGeodesicError,
+    DegenerateFacesWarning,
     MeshError,
     MeshFormatError,
     NonManifoldError,
@@ -26,8 +36,9 @@ from .mesh.io import load_mesh, save_distance
 __version__ = "0.1.0"
 
 __all__ = [
-    "ALL_METHODS", "BASELINE_METHODS", "FORMULATIONS", "CvxGeodesicError", "GeodesicResult", "GeodesicSolver",
+    "ALL_METHODS", "BASELINE_METHODS", "FORMULATIONS", "CvxGeodesicError", "DegenerateFacesWarning",
+    "GeodesicResult", "GeodesicSolver",
     "MeshError", "MeshFormatError", "NonManifoldError", "ParameterError", "SolveInfo", "SolverError", "SourceError",
-    "TriMesh", "cylinder", "geodesic_distance", "grid_plane", "icosphere", "load_mesh", "save_distance",
-    "smoothness_weight",
+    "TriMesh", "cylinder", "distance_matrix", "geodesic_distance", "grid_plane", "icosphere", "load_mesh",
+    "save_distance", "smoothness_weight",
 ]

@@ -1,7 +1,8 @@
-"""Command-line interface: ``cvxgeodesic distance | compare | demo``.
+"""Command-line interface: ``cvxgeodesic distance | compare | batch | demo``.
 
 Every error a user can cause ends the program with exit code 2 and a one-line
-message on stderr; ``--debug`` shows the full traceback instead.
+message on stderr; ``--debug`` shows the full traceback instead. ``batch``
+returns 1 when some meshes failed (each listed) and the others were solved.
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ import argparse
 import sys
 import time
 import traceback
+import warnings
 
 from . import __version__
 from .api import ALL_METHODS, SOLVERS
@@ -25,9 +27,10 @@ def _progress_printer(stream, every: float = 0.5):
         if time.perf_counter() - t0 < every:
             return
         parts = [f"iter {iteration:3d}"]
-        for key in ("gap", "primal_residual", "dual_residual"):
+        for key, label in (("gap_rel", "gap"), ("res_primal", "primal res"), ("res_dual", "dual res")):
             if key in info:
-                parts.append(f"{key}={info[key]:.2e}")
+                parts.append(f"{label} {info[key]:.2e}")
+        parts.append(f"{time.perf_counter() - t0:6.1f} s")
         print("  " + "  ".join(parts), file=stream, flush=True)
 
     return callback
@@ -72,6 +75,20 @@ def _cmd_compare(args) -> int:
     return 0
 
 
+def _cmd_batch(args) -> int:
+    from .batch import expand_mesh_paths, format_summary, run_batch
+
+    paths = expand_mesh_paths(args.meshes)
+    if not args.quiet:
+        where = args.scheduler or f"a local cluster of {args.workers} worker processes"
+        print(f"{len(paths)} mesh file(s); method {args.method}; running on {where}", file=sys.stderr)
+    rows = run_batch(paths, args.source, args.out, method=args.method, m=args.m, solver=args.solver,
+                     scheduler=args.scheduler, n_workers=args.workers, force=args.force, progress=not args.quiet,
+                     multires=args.multires, output_format=args.format)
+    print(format_summary(rows))
+    return 1 if any(r["status"] == "failed" for r in rows) else 0
+
+
 def _cmd_demo(args) -> int:
     from .demo import run_demo
 
@@ -112,6 +129,33 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default="compare_output", help="output folder (CSV table and PNGs)")
     p.set_defaults(func=_cmd_compare)
 
+    p = sub.add_parser(
+        "batch", help="distance fields for many meshes with Dask (local cluster or --scheduler)",
+        description="Solve the same sources on every mesh matched by MESH_GLOB, one Dask task per mesh. Writes "
+                    "OUT/<stem>.ply (or .npy) and OUT/<stem>.json (SolveInfo, parameters); skips meshes already "
+                    "done with the same parameters. Exit code 0: all solved; 1: some meshes failed (listed); "
+                    "2: usage error.")
+    p.add_argument("meshes", nargs="+", metavar="MESH_GLOB",
+                   help="mesh files or quoted glob patterns ('data/*.obj', 'data/**/*.ply')")
+    p.add_argument("--source", "-s", type=int, action="append", required=True, metavar="I",
+                   help="source vertex index, the same in every mesh (repeat for several sources)")
+    p.add_argument("--method", default="qcqp-hessian", choices=ALL_METHODS, metavar="NAME",
+                   help=f"one of: {', '.join(ALL_METHODS)} (default qcqp-hessian)")
+    p.add_argument("--m", type=float, default=1.0, help="smoothness multiplier m, λ = m·100·h/n (default 1)")
+    p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")
+    p.add_argument("--multires", type=int, default=0, metavar="FACES",
+                   help="coarse-to-fine approximation: solve on a mesh simplified to FACES faces (default 0: off)")
+    p.add_argument("--out", required=True, metavar="DIR", help="output folder (created if missing)")
+    p.add_argument("--format", choices=("ply", "npy"), default="ply", help="distance file format (default ply)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="address of a running Dask scheduler, e.g. tcp://10.0.0.5:8786 (default: a local cluster)")
+    p.add_argument("--workers", type=int, default=2, metavar="N",
+                   help="worker processes of the local cluster, one thread each (default 2)")
+    p.add_argument("--force", action="store_true", help="recompute meshes whose outputs already exist")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress bar (failures still in the summary)")
+    p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
+    p.set_defaults(func=_cmd_batch)
+
     p = sub.add_parser("demo", help="QCQP-Hessian on the bundled Spot mesh; writes PLY + PNG, prints a table")
     p.add_argument("--out", default="demo_output", help="output folder (default demo_output)")
     p.add_argument("--source", type=int, default=0, help="source vertex (default 0)")
@@ -120,12 +164,19 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    print(f"cvxgeodesic: warning: {str(message).splitlines()[0]}", file=sys.stderr if file is None else file)
+
+
 def main(argv=None) -> int:
     """Entry point of the ``cvxgeodesic`` console script; returns the exit code."""
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return args.func(args)
+        with warnings.catch_warnings():
+            if not args.debug:  # "cvxgeodesic: warning: <message>", one line, instead of file:line + source
+                warnings.showwarning = _one_line_warning
+            return args.func(args)
     except KeyboardInterrupt:
         print("cvxgeodesic: interrupted", file=sys.stderr)
         return 130

@@ -1,0 +1,382 @@
+"""Distance fields for many meshes on a Dask cluster: the engine behind ``cvxgeodesic batch``.
+
+:func:`run_batch` runs one Dask task per mesh. By default it starts a
+``dask.distributed.LocalCluster`` on this machine (worker processes with one
+thread each); ``scheduler="tcp://host:8786"`` uses an existing cluster instead,
+whose workers must have cvxgeodesic installed and see the mesh files and the
+output folder at the same paths (a shared file system).
+
+Every task loads its mesh, solves, and writes, atomically,
+
+- ``OUT/<mesh stem>.ply`` (mesh + per-vertex ``distance``, read it with
+  :func:`~cvxgeodesic.mesh.io.load_distance_ply`) or ``OUT/<mesh stem>.npy``
+  (the (n,) array, in the vertex order of :func:`~cvxgeodesic.mesh.io.load_mesh`,
+  i.e. after welding), then
+- ``OUT/<mesh stem>.json``: the mesh path, the parameters, the mesh size, the
+  :class:`~cvxgeodesic.api.SolveInfo` as a dict and any warnings from loading.
+
+The JSON file is written last, so it marks a finished mesh: a rerun skips every
+mesh whose two outputs exist and were computed with the same parameters
+(``force=True`` recomputes them). A mesh that fails (unreadable file, source out
+of range, solver failure, worker crash) gives a ``"failed"`` row with the error
+and does not stop the others.
+
+Dask is an optional dependency (``pip install 'cvxgeodesic[cluster]'``); it is
+imported only when a batch runs.
+"""
+
+from __future__ import annotations
+
+import glob
+import json
+import math
+import os
+import socket
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from .errors import ParameterError
+
+__all__ = ["OUTPUT_FORMATS", "expand_mesh_paths", "format_summary", "output_paths", "run_batch", "solve_one"]
+
+#: Formats of the distance file written per mesh.
+OUTPUT_FORMATS = ("ply", "npy")
+
+
+def _require_distributed():
+    try:
+        import dask
+        import distributed
+    except ImportError as exc:
+        raise ImportError(
+            "cvxgeodesic batch needs Dask's distributed scheduler, which is not installed: "
+            "pip install 'dask[distributed]' (or pip install 'cvxgeodesic[cluster]')"
+        ) from exc
+    return dask, distributed
+
+
+def expand_mesh_paths(patterns) -> list[Path]:
+    """Mesh files named by paths and glob patterns.
+
+    Parameters
+    ----------
+    patterns : str or sequence of str
+        File names or patterns (``*``, ``?``, ``[...]``; ``**`` matches any depth).
+        A pattern keeps only files with a mesh extension (``.obj``, ``.off``,
+        ``.ply``, ``.stl``); a plain file name is kept whatever its extension (so
+        that a wrong file is reported, not silently dropped).
+
+    Returns
+    -------
+    list of pathlib.Path
+        Absolute paths, sorted, without duplicates.
+
+    Raises
+    ------
+    ParameterError
+        Nothing matches.
+    """
+    from .mesh.io import MESH_EXTENSIONS
+
+    if isinstance(patterns, str | os.PathLike):
+        patterns = [patterns]
+    found: dict[Path, None] = {}
+    for pat in patterns:
+        pat = os.fspath(pat)
+        if glob.has_magic(pat):
+            for name in sorted(glob.glob(os.path.expanduser(pat), recursive=True)):
+                p = Path(name)
+                if p.is_file() and p.suffix.lower() in MESH_EXTENSIONS:
+                    found[p.resolve()] = None
+        else:
+            p = Path(pat).expanduser()
+            if p.is_dir():
+                raise ParameterError(f"{p} is a directory; give mesh files or a pattern such as '{p}/*.obj'")
+            if p.exists():
+                found[p.resolve()] = None
+            else:
+                raise ParameterError(f"{p}: no such file")
+    if not found:
+        raise ParameterError(f"no mesh file ({', '.join(MESH_EXTENSIONS)}) matches {' '.join(map(str, patterns))}")
+    return sorted(found)
+
+
+def output_paths(mesh_path, out_dir, output_format: str = "ply") -> tuple[Path, Path]:
+    """``(OUT/<stem>.<format>, OUT/<stem>.json)`` for one mesh."""
+    stem = Path(mesh_path).stem
+    out = Path(out_dir)
+    return out / f"{stem}.{output_format}", out / f"{stem}.json"
+
+
+def _params(sources, method, m, solver, multires, output_format) -> dict:
+    return {"sources": [int(s) for s in sources], "method": method, "m": float(m), "solver": solver,
+            "multires": multires if isinstance(multires, bool) else int(multires), "format": output_format}
+
+
+def _json_safe(obj):
+    """Replace NaN/inf by None and numpy scalars by Python numbers, recursively (strict JSON)."""
+    if isinstance(obj, dict):
+        return {str(k): _json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_json_safe(v) for v in obj]
+    if isinstance(obj, np.generic):
+        obj = obj.item()
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    if isinstance(obj, str | int | float | bool) or obj is None:
+        return obj
+    return str(obj)
+
+
+def _finished(dist_path: Path, sidecar: Path, params: dict) -> bool | None:
+    """True: done with these parameters; False: not done; None: done with other parameters."""
+    if not (dist_path.is_file() and sidecar.is_file()):
+        return False
+    try:
+        meta = json.loads(sidecar.read_text())
+    except (OSError, ValueError):
+        return False
+    if meta.get("status") != "ok":
+        return False
+    return True if meta.get("params") == params else None
+
+
+def _error_text(exc: BaseException) -> str:
+    msg = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {msg[0]}" if msg else type(exc).__name__
+
+
+def solve_one(mesh_path: str, sources: list[int], out_dir: str, method: str = "qcqp-hessian", m: float = 1.0,
+              solver: str = "auto", multires: bool | int = False, output_format: str = "ply") -> dict:
+    """Load one mesh, solve, write its outputs; the task that :func:`run_batch` runs on a worker.
+
+    Never raises: a failure is returned as a row with ``status="failed"``.
+
+    Parameters
+    ----------
+    mesh_path : str
+        Mesh file (absolute path, visible to the worker).
+    sources : list of int
+        Source vertices (indices after welding, as :func:`~cvxgeodesic.mesh.io.load_mesh` numbers them).
+    out_dir : str
+        Existing output folder.
+    method, m, solver, multires
+        See :class:`~cvxgeodesic.api.GeodesicSolver`.
+    output_format : {"ply", "npy"}
+
+    Returns
+    -------
+    dict
+        A row of :func:`run_batch`'s result.
+    """
+    t0 = time.perf_counter()
+    dist_path, sidecar = output_paths(mesh_path, out_dir, output_format)
+    row = {"mesh": mesh_path, "status": "failed", "output": None, "n_vertices": None, "n_faces": None,
+           "iterations": None, "solve_status": None, "time_s": None, "error": None, "warnings": [],
+           "worker": socket.gethostname()}
+    try:
+        from . import __version__
+        from ._atomic import atomic_write
+        from .api import GeodesicSolver
+        from .mesh.io import load_mesh, save_distance
+
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            mesh = load_mesh(mesh_path)
+        row["warnings"] = [str(w.message) for w in caught]
+        row["n_vertices"], row["n_faces"] = mesh.n_vertices, mesh.n_faces
+        res = GeodesicSolver(mesh, method, m=m, solver=solver, multires=multires).solve(sources)
+        save_distance(dist_path, mesh, res.distance)
+        row.update(status="ok", output=str(dist_path), iterations=res.info.iterations,
+                   solve_status=res.info.status, time_s=time.perf_counter() - t0)
+        meta = {"status": "ok", "mesh": mesh_path, "output": dist_path.name, "cvxgeodesic": __version__,
+                "params": _params(sources, method, m, solver, multires, output_format),
+                "n_vertices": mesh.n_vertices, "n_faces": mesh.n_faces, "wall_time": row["time_s"],
+                "worker": row["worker"], "warnings": row["warnings"], "info": res.info.as_dict()}
+        text = json.dumps(_json_safe(meta), indent=1, allow_nan=False) + "\n"
+        atomic_write(sidecar, lambda fh: fh.write(text.encode("utf-8")))
+    except Exception as exc:  # one bad mesh must not stop the batch: report it in the row
+        row.update(status="failed", output=None, error=_error_text(exc), time_s=time.perf_counter() - t0)
+    return row
+
+
+def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float = 1.0, solver: str = "auto",
+              scheduler=None, n_workers: int = 2, force: bool = False, progress: bool = True,
+              multires: bool | int = False, output_format: str = "ply") -> list[dict]:
+    """Solve the same sources on many meshes, one Dask task per mesh.
+
+    Parameters
+    ----------
+    paths : sequence of str or Path
+        Mesh files (see :func:`expand_mesh_paths` for globs). Their stems must
+        be distinct: each names the outputs ``out_dir/<stem>.<format|json>``.
+    sources : int or sequence of int
+        Source vertex indices, the same for every mesh (a mesh where one is out
+        of range fails, the others go on).
+    out_dir : str or Path
+        Output folder, created if missing. With a remote ``scheduler`` it must
+        be writable by the workers at the same path.
+    method, m, solver, multires
+        See :class:`~cvxgeodesic.api.GeodesicSolver`.
+    scheduler : str or distributed.Client, optional
+        Address of a running Dask scheduler (``"tcp://host:8786"``) or a
+        connected client. Default: a ``LocalCluster`` of ``n_workers`` worker
+        processes with one thread each, closed at the end. Its workers' BLAS
+        (CHOLMOD's dense kernels) gets ``cpu_count // n_workers`` threads unless
+        ``OPENBLAS_NUM_THREADS`` / ``OMP_NUM_THREADS`` are set.
+    n_workers : int
+        Workers of the local cluster (ignored with ``scheduler``).
+    force : bool
+        Recompute meshes whose outputs exist.
+    progress : bool
+        Show a progress bar and one line per failed mesh on stderr.
+    output_format : {"ply", "npy"}
+        Format of the distance file.
+
+    Returns
+    -------
+    list of dict
+        One row per mesh, in the order of ``paths``: ``mesh``, ``status``
+        (``"ok"``, ``"skipped"`` (already done) or ``"failed"``), ``output``,
+        ``n_vertices``, ``n_faces``, ``iterations``, ``solve_status``, ``time_s``
+        (load + solve + write, on the worker), ``error`` (one line, or None),
+        ``warnings`` (from loading the mesh) and ``worker`` (host name).
+
+    Raises
+    ------
+    ParameterError
+        Bad parameters, no paths, or two meshes with the same stem.
+    ImportError
+        Dask's ``distributed`` is not installed.
+    """
+    from .api import ALL_METHODS, BASELINE_METHODS, SOLVERS
+    from .multires import resolve_target
+
+    paths = [Path(p).expanduser().resolve() for p in ([paths] if isinstance(paths, str | os.PathLike) else paths)]
+    paths = list(dict.fromkeys(paths))
+    if not paths:
+        raise ParameterError("no mesh files given")
+    src = np.atleast_1d(np.asarray(sources))
+    if src.ndim != 1 or src.size == 0 or src.dtype.kind not in "iu" or (src < 0).any():
+        raise ParameterError(f"sources must be one or more vertex indices >= 0, got {sources!r}")
+    if len(np.unique(src)) != src.size:
+        raise ParameterError(f"sources contain a duplicate: {src.tolist()}")
+    if not isinstance(method, str) or method.lower() not in ALL_METHODS:
+        raise ParameterError(f"unknown method {method!r}; choose one of {', '.join(ALL_METHODS)}")
+    if solver not in SOLVERS:
+        raise ParameterError(f"unknown solver {solver!r}; choose one of {', '.join(SOLVERS)}")
+    if not isinstance(m, int | float) or not math.isfinite(m) or m < 0:
+        raise ParameterError(f"m must be a finite number >= 0, got {m!r}")
+    if resolve_target(multires, 10**9) is not None and method.lower() in BASELINE_METHODS:
+        raise ParameterError(f"multires applies to the convex formulations, not to baseline {method!r}")
+    if output_format not in OUTPUT_FORMATS:
+        raise ParameterError(f"output_format must be one of {', '.join(OUTPUT_FORMATS)}, got {output_format!r}")
+    if scheduler is None and (isinstance(n_workers, bool) or not isinstance(n_workers, int) or n_workers < 1):
+        raise ParameterError(f"n_workers must be a positive integer, got {n_workers!r}")
+    stems: dict[str, Path] = {}
+    for p in paths:
+        if p.stem in stems:
+            raise ParameterError(f"{stems[p.stem]} and {p} would write the same outputs ({p.stem}.*); "
+                                 "rename one or run them into different --out folders")
+        stems[p.stem] = p
+    out = Path(out_dir).expanduser().resolve()
+    if out.exists() and not out.is_dir():
+        raise ParameterError(f"--out {out} exists and is not a directory")
+    out.mkdir(parents=True, exist_ok=True)
+    method = method.lower()
+    sources_list = [int(s) for s in src]
+    params = _params(sources_list, method, m, solver, multires, output_format)
+
+    rows: dict[Path, dict] = {}
+    todo: list[Path] = []
+    for p in paths:
+        dist_path, sidecar = output_paths(p, out, output_format)
+        state = False if force else _finished(dist_path, sidecar, params)
+        if state is True:
+            rows[p] = {"mesh": str(p), "status": "skipped", "output": str(dist_path), "n_vertices": None,
+                       "n_faces": None, "iterations": None, "solve_status": None, "time_s": None, "error": None,
+                       "warnings": [], "worker": None}
+        else:
+            todo.append(p)
+    if todo:
+        _run_on_cluster(todo, rows, sources_list, out, method, m, solver, multires, output_format,
+                        scheduler, n_workers, progress)
+    return [rows[p] for p in paths]
+
+
+def _run_on_cluster(todo, rows, sources, out, method, m, solver, multires, output_format,
+                    scheduler, n_workers, progress) -> None:
+    dask, distributed = _require_distributed()
+    from contextlib import ExitStack
+
+    with ExitStack() as stack:
+        if scheduler is None:
+            threads = max(1, (os.cpu_count() or 1) // n_workers)
+            blas = {f"distributed.nanny.pre-spawn-environ.{k}": threads
+                    for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}
+            with dask.config.set(blas):
+                cluster = stack.enter_context(distributed.LocalCluster(
+                    n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=":0"))
+            client = stack.enter_context(distributed.Client(cluster))
+        elif isinstance(scheduler, distributed.Client):
+            client = scheduler
+        else:
+            try:
+                client = stack.enter_context(distributed.Client(scheduler, timeout="20s"))
+            except OSError as exc:
+                raise ConnectionError(f"cannot connect to the Dask scheduler at {scheduler}: {exc}") from None
+
+        futures = {}
+        for i, p in enumerate(todo):
+            size = p.stat().st_size if p.exists() else 0
+            fut = client.submit(solve_one, str(p), sources, str(out), method, m, solver, multires, output_format,
+                                key=f"cvxgeodesic-batch-{i}-{p.stem}-{os.getpid()}-{time.time_ns()}",
+                                pure=False, priority=size)  # biggest meshes first: better load balance
+            futures[fut] = p
+        bar = None
+        if progress:
+            from tqdm import tqdm
+
+            bar = tqdm(total=len(futures), desc="meshes", unit="mesh", file=sys.stderr)
+        for fut in distributed.as_completed(list(futures)):
+            p = futures[fut]
+            try:
+                row = fut.result()
+            except Exception as exc:  # the task itself died (worker killed, out of memory, ...)
+                row = {"mesh": str(p), "status": "failed", "output": None, "n_vertices": None, "n_faces": None,
+                       "iterations": None, "solve_status": None, "time_s": None, "error": _error_text(exc),
+                       "warnings": [], "worker": None}
+            rows[p] = row
+            if bar is not None:
+                bar.update(1)
+                if row["status"] == "failed":
+                    bar.write(f"FAILED {p}: {row['error']}", file=sys.stderr)
+        if bar is not None:
+            bar.close()
+
+
+def format_summary(rows: list[dict]) -> str:
+    """Plain-text table of :func:`run_batch` rows, with a totals line."""
+    head = ("mesh", "status", "vertices", "faces", "iters", "time_s", "output / error")
+    body = []
+    for r in rows:
+        note = r["error"] if r["status"] == "failed" else (r["output"] or "")
+        if r["status"] == "ok" and r.get("solve_status") not in (None, "optimal"):
+            note = f"[{r['solve_status']}] {note}"
+        body.append((Path(r["mesh"]).name, r["status"],
+                     "" if r["n_vertices"] is None else str(r["n_vertices"]),
+                     "" if r["n_faces"] is None else str(r["n_faces"]),
+                     "" if r["iterations"] is None else str(r["iterations"]),
+                     "" if r["time_s"] is None else f"{r['time_s']:.2f}", note or ""))
+    widths = [max(len(h), *(len(b[i]) for b in body)) if body else len(h) for i, h in enumerate(head)]
+    fmt = "  ".join(f"{{:<{w}}}" for w in widths[:-1]) + "  {}"
+    lines = [fmt.format(*head), fmt.format(*("-" * w for w in widths[:-1]), "-" * len(head[-1]))]
+    lines += [fmt.format(*b) for b in body]
+    counts = {s: sum(r["status"] == s for r in rows) for s in ("ok", "skipped", "failed")}
+    lines.append(f"{len(rows)} meshes: {counts['ok']} solved, {counts['skipped']} skipped (already done), "
+                 f"{counts['failed']} failed")
+    return "\n".join(lines)

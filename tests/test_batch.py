@@ -1,0 +1,152 @@
+"""``cvxgeodesic batch`` / ``run_batch`` on a real ``dask.distributed.LocalCluster``."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+import numpy as np
+import pytest
+
+import cvxgeodesic as cg
+from cvxgeodesic.batch import expand_mesh_paths, format_summary, run_batch
+from cvxgeodesic.cli import main
+from cvxgeodesic.errors import ParameterError
+from cvxgeodesic.mesh.io import load_distance_ply
+
+distributed = pytest.importorskip("distributed")
+
+SOURCES = [0, 50]
+
+
+def _write_off(path, mesh):
+    lines = ["OFF", f"{mesh.n_vertices} {mesh.n_faces} 0"]
+    lines += [" ".join(map(repr, v)) for v in mesh.V.tolist()]
+    lines += ["3 " + " ".join(map(str, f)) for f in mesh.F.tolist()]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as c:
+        yield c
+
+
+@pytest.fixture
+def meshes(tmp_path):
+    """Three good meshes, one corrupt file, one mesh too small for source 50."""
+    d = tmp_path / "meshes"
+    d.mkdir()
+    good = [_write_off(d / "sphere2.off", cg.icosphere(2)),
+            _write_off(d / "plane.off", cg.grid_plane(9, 9)),
+            _write_off(d / "cylinder.off", cg.cylinder(12, 6))]
+    corrupt = d / "corrupt.obj"
+    corrupt.write_text("v 0 0 0\nv 1 0 0\nf 1 2 7\n")
+    small = _write_off(d / "small.off", cg.icosphere(1))  # 42 vertices: source 50 is out of range
+    return good, corrupt, small
+
+
+def _by_name(rows):
+    return {r["mesh"].rsplit("/", 1)[-1]: r for r in rows}
+
+
+def test_outputs_failures_and_rerun(cluster, meshes, tmp_path):
+    good, corrupt, small = meshes
+    out = tmp_path / "out"
+    paths = [*good, corrupt, small]
+    rows = run_batch(paths, SOURCES, out, method="qcqp-hessian", m=1.0, solver="auto",
+                     scheduler=cluster.scheduler_address, progress=False)
+    assert [r["mesh"] for r in rows] == [str(p.resolve()) for p in paths]  # input order
+    by = _by_name(rows)
+    assert by["corrupt.obj"]["status"] == "failed" and "MeshFormatError" in by["corrupt.obj"]["error"]
+    assert by["small.off"]["status"] == "failed" and "out of range" in by["small.off"]["error"]
+    assert not (out / "corrupt.json").exists() and not (out / "small.ply").exists()
+    for p in good:
+        r = by[p.name]
+        assert r["status"] == "ok" and r["solve_status"] == "optimal", r
+        mesh, fields = load_distance_ply(out / f"{p.stem}.ply")
+        expected = cg.geodesic_distance(cg.load_mesh(p), SOURCES)
+        np.testing.assert_allclose(fields["distance"], expected, rtol=1e-7, atol=1e-9)
+        meta = json.loads((out / f"{p.stem}.json").read_text())
+        assert meta["mesh"] == str(p.resolve()) and meta["params"]["sources"] == SOURCES
+        assert meta["info"]["status"] == "optimal" and meta["info"]["iterations"] == r["iterations"] > 0
+        assert meta["n_vertices"] == mesh.n_vertices
+    assert not list(out.glob(".*.tmp"))  # atomic writes leave no temporary files
+
+    table = format_summary(rows)
+    assert "3 solved, 0 skipped (already done), 2 failed" in table and "out of range" in table
+
+    # a rerun skips finished meshes and retries the failed ones
+    stamp = {p.name: (out / f"{p.stem}.ply").stat().st_mtime_ns for p in good}
+    rows2 = _by_name(run_batch(paths, SOURCES, out, scheduler=cluster.scheduler_address, progress=False))
+    assert all(rows2[p.name]["status"] == "skipped" for p in good)
+    assert rows2["corrupt.obj"]["status"] == "failed" and rows2["small.off"]["status"] == "failed"
+    assert all((out / f"{p.stem}.ply").stat().st_mtime_ns == stamp[p.name] for p in good)
+
+    # other parameters are not "done": recomputed; force recomputes everything
+    rows3 = run_batch(good[:1], SOURCES, out, m=0.5, scheduler=cluster.scheduler_address, progress=False)
+    assert rows3[0]["status"] == "ok"
+    assert json.loads((out / "sphere2.json").read_text())["params"]["m"] == 0.5
+    rows4 = run_batch(good[1:], SOURCES, out, force=True, scheduler=cluster.scheduler_address, progress=False)
+    assert [r["status"] for r in rows4] == ["ok", "ok"]
+
+
+def test_npy_output_and_client_object(cluster, meshes, tmp_path):
+    good, _, _ = meshes
+    out = tmp_path / "npy"
+    with distributed.Client(cluster) as client:
+        rows = run_batch(good[:1], [3], out, method="qclp", scheduler=client, progress=False, output_format="npy")
+    assert rows[0]["status"] == "ok"
+    np.testing.assert_allclose(np.load(out / "sphere2.npy"),
+                               cg.geodesic_distance(cg.load_mesh(good[0]), 3, method="qclp"), rtol=1e-7, atol=1e-9)
+
+
+def test_cli_exit_codes(cluster, meshes, tmp_path, capsys):
+    good, corrupt, _ = meshes
+    out = tmp_path / "cli"
+    folder = good[0].parent
+    args = ["batch", "--scheduler", cluster.scheduler_address, "-s", "0", "-s", "50", "--out", str(out), "-q"]
+    assert main([*args, str(folder / "*.off"), str(corrupt)]) == 1  # small.off and corrupt.obj fail
+    captured = capsys.readouterr()
+    assert "2 failed" in captured.out and "corrupt.obj" in captured.out
+    assert main([*args, *map(str, good)]) == 0  # all three done already: skipped, exit 0
+    assert "3 skipped" in capsys.readouterr().out
+    assert main([*args, str(folder / "*.nothing")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no mesh file" in err[0]
+
+
+def test_default_local_cluster(meshes, tmp_path, capsys):
+    good, _, _ = meshes
+    rc = main(["batch", str(good[1]), "-s", "0", "--method", "qclp", "--out", str(tmp_path / "local"),
+               "--workers", "1"])
+    assert rc == 0 and (tmp_path / "local" / "plane.ply").exists()
+    assert "1 solved" in capsys.readouterr().out
+
+
+def test_usage_errors_before_any_work(meshes, tmp_path):
+    good, _, _ = meshes
+    twin = tmp_path / "other" / "plane.obj"
+    twin.parent.mkdir()
+    twin.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    with pytest.raises(ParameterError, match="same outputs"):
+        run_batch([good[1], twin], [0], tmp_path / "o")
+    with pytest.raises(ParameterError, match="sources"):
+        run_batch(good, [], tmp_path / "o")
+    with pytest.raises(ParameterError, match="unknown method"):
+        run_batch(good, [0], tmp_path / "o", method="nope")
+    with pytest.raises(ParameterError, match="no mesh file"):
+        expand_mesh_paths([str(tmp_path / "*.stl")])
+    with pytest.raises(ParameterError, match="no such file"):
+        expand_mesh_paths([str(tmp_path / "missing.obj")])
+    assert not (tmp_path / "o").exists()
+
+
+def test_without_dask_names_the_package(meshes, tmp_path, monkeypatch, capsys):
+    good, _, _ = meshes
+    monkeypatch.setitem(sys.modules, "distributed", None)  # makes `import distributed` fail
+    with pytest.raises(ImportError, match=r"dask\[distributed\]"):
+        run_batch(good[:1], [0], tmp_path / "o", progress=False)
+    assert main(["batch", str(good[0]), "-s", "0", "--out", str(tmp_path / "o")]) == 2
+    assert "pip install 'dask[distributed]'" in capsys.readouterr().err
