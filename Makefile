@@ -38,5 +38,8 @@ test-all: $(STAMP)
 bench: $(STAMP)
 	$(PY) benchmarks/solver_speed.py
 
+report: $(STAMP)
+	$(PY) benchmarks/report.py --out docs
+
 clean:
 	rm -rf $(VENV) $(OUT) build src/*.egg-info .pytest_cache .ruff_cache

@@ -1,0 +1,728 @@
+"""Reproduce the paper's experiments as a results report: ``docs/results.md`` + ``docs/figures/*.png``.
+
+Usage (``make report`` runs the first line)::
+
+    python benchmarks/report.py --out docs                       # every section; finished ones are skipped
+    python benchmarks/report.py --out docs --sections fig4 fig9  # recompute these sections only
+    python benchmarks/report.py --out docs --fresh               # drop all caches first
+    python benchmarks/report.py --out /tmp/r --quick             # small meshes only (development)
+
+Paper: *Convex Quadratic Programming for Computing Geodesic Distances on Triangle Meshes*,
+Mathematics 12(7):993, 2024. Meshes come from ``--shared`` (default ``../shared/meshes`` next to the
+repository). Each section caches its numbers in ``report_output/cache/sections`` and every distance
+field in ``report_output/cache/fields``, so a rerun after an interruption continues where it stopped;
+``results.md`` is rewritten from all cached sections at the end of every run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import shutil
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+import cvxgeodesic as cg
+from report_common import (
+    COLORS,
+    DEFAULT_SHARED,
+    MARKERS,
+    PANEL_DPI,
+    REPO,
+    Context,
+    dump_json,
+    environment,
+    label,
+    log,
+    metrics,
+    save_figure,
+    solve,
+    solver_text,
+    status_text,
+    submesh,
+    tile,
+)
+
+SOURCE = 0
+PAPER = {  # the paper's Table 2 figures we are sure of (MATLAB + Mosek, their machine and their meshes)
+    "bunny": {"faces": "28K", "time_s": 20.5},
+    "bimba": {"faces": "51K", "time_s": 35.8},
+    "dragon": {"faces": "240K", "time_s": 501.5},
+}
+PAPER_MEAN_ERR = (0.46, 0.94)  # percent
+
+TABLE2_MESHES = ["bunny.obj", "bimba.obj", "horse.ply", "lucy_20k.obj", "dragon_20k.obj"]
+TABLE2_METHODS = ["qcqp-hessian", "heat", "dijkstra", "fmm", "lcqp-hessian", "exact", "qclp"]
+SWEEP_M = [0.0, 0.1, 0.3, 1.0, 3.0, 10.0]
+SWEEP_ENERGIES = ["qcqp-dirichlet", "qcqp-laplacian", "qcqp-hessian"]
+RES_TARGETS = [5000, 20000]
+RES_METHODS = ["qcqp-hessian", "qclp", "heat", "fmm"]
+THINGI_METHODS = ["qcqp-hessian", "qclp", "lcqp-hessian", "heat", "fmm", "dijkstra"]
+MEDIAL_METHODS = ["exact", "fmm", "qcqp-hessian", "lcqp-hessian", "heat", "dijkstra", "qclp", "qcqp-laplacian",
+                  "qcqp-dirichlet", "lclp"]
+
+
+class Plan:
+    """Which meshes each section uses (``--quick`` swaps in small ones for development)."""
+
+    def __init__(self, quick: bool):
+        self.quick = quick
+        self.table2 = ["spot.obj", "bunny_7k.off"] if quick else TABLE2_MESHES
+        self.hist_pair = ("bunny_7k.off", "bunny.obj") if not quick else ("spot.obj", "bunny_7k.off")
+        self.one = "spot.obj" if quick else "bimba.obj"  # Fig. 3, 4, 9
+        self.res_base = "bunny_7k.off" if quick else "bunny.obj"
+        self.res_targets = [1000, 3000] if quick else RES_TARGETS
+        self.fig6 = "bunny_7k.off" if quick else "bunny.obj"
+        self.sweep_m = [0.0, 1.0, 10.0] if quick else SWEEP_M
+
+
+# ----------------------------------------------------------------------------------------------------------------------
+# helpers
+# ----------------------------------------------------------------------------------------------------------------------
+
+
+def log_axis(ax, axis: str = "y") -> None:
+    """Log scale with plain-number tick labels (1, 2, 5, 10, ...)."""
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+    getattr(ax, f"set_{axis}scale")("log")
+    a = ax.yaxis if axis == "y" else ax.xaxis
+    a.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 3.0, 5.0)))
+    a.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    a.set_minor_formatter(NullFormatter())
+
+
+def mesh_row(mesh) -> dict:
+    from cvxgeodesic.evaluation import mesh_anisotropy
+
+    return {"name": mesh.name, "vertices": mesh.n_vertices, "faces": mesh.n_faces,
+            "manifold": bool(mesh.is_edge_manifold), "components": int(len(np.unique(mesh.component_labels))),
+            "tau": mesh_anisotropy(mesh), "bbox_diag": mesh.bbox_diagonal, "h": mesh.mean_edge_length}
+
+
+def rec_row(rec: dict, mets: dict | None = None) -> dict:
+    row = {k: rec.get(k) for k in ("method", "ok", "solver", "status", "time_s", "setup_s", "solve_s", "iterations",
+                                   "fallback", "error", "warnings", "m", "resolved_nonnegative")}
+    row["solver_text"] = solver_text(rec)
+    row["attempts"] = rec.get("attempts")
+    if rec.get("fallback") and rec.get("attempts"):
+        row["ipm_time_s"] = rec["attempts"][0].get("time_s")
+    row["status_text"] = status_text(rec)
+    if mets:
+        row.update(mets)
+    return row
+
+
+def evaluate(ctx, mesh, key, methods, source=SOURCE, m=1.0, exact=None):
+    """Solve every method (cached), measure against the exact field; returns (rows by method, exact record)."""
+    if exact is None:
+        exact = solve(ctx, mesh, key, "exact", source)
+    d_ex = exact["distance"]
+    rows = {}
+    for meth in methods:
+        rec = exact if meth == "exact" else solve(ctx, mesh, key, meth, source, m)
+        mets = None
+        if rec["ok"] and d_ex is not None and meth != "exact":
+            mets = metrics(mesh, rec["distance"], d_ex, source)
+        elif meth == "exact" and rec["ok"]:
+            mets = metrics(mesh, d_ex, d_ex, source)
+        rows[meth] = rec_row(rec, mets)
+    return rows, exact
+
+
+def fin_max(d) -> int:
+    """Index of the largest finite value."""
+    return int(np.argmax(np.where(np.isfinite(d), d, -np.inf)))
+
+
+def panel(ctx, name: str) -> Path:
+    return ctx.panels / f"{name}.png"
+
+
+def field_panel(ctx, mesh, d, name, title, *, vmin=0.0, vmax=None, levels=None, sources=(SOURCE,), view=None):
+    from cvxgeodesic.plotting import plot_field
+
+    p = panel(ctx, name)
+    plot_field(mesh, d, p, isolines=levels if levels is not None else 20, title=title, vmin=vmin, vmax=vmax,
+               dpi=PANEL_DPI, colorbar_label="distance", sources=list(sources) if sources else None, view=view)
+    return p
+
+
+def error_panel(ctx, mesh, rel, name, title, vmax, sources=(SOURCE,)):
+    from cvxgeodesic.plotting import plot_error_map
+
+    p = panel(ctx, name)
+    plot_error_map(mesh, rel, p, title=title, vmax=vmax, dpi=PANEL_DPI, sources=list(sources))
+    return p
+
+
+def ridge_crop(mesh, d_exact, source, *, radius_frac=0.07):
+    """A patch of the surface around a stretch of the exact field's ridge (for close-ups of the isolines).
+
+    The ridge shows as edges where the exact field has a concave crease (signed normal-derivative jump
+    below -0.5, fronts meeting at more than about 29°) at more than 30 % of the maximum distance. The centre
+    is the crease vertex with the most crease edges within 0.6 patch radii; the patch is the connected piece
+    of the faces within ``radius_frac`` bounding-box diagonals of it.
+    Returns (patch mesh, vertex ids in ``mesh``, centre vertex).
+    """
+    from cvxgeodesic.evaluation import edge_gradient_jumps
+
+    edges, jump = edge_gradient_jumps(mesh, d_exact, signed=True)
+    fin = np.isfinite(d_exact)
+    dmax = float(d_exact[fin].max())
+    mid = 0.5 * (d_exact[edges[:, 0]] + d_exact[edges[:, 1]])
+    crease = np.isfinite(jump) & (jump < -0.5) & (mid > 0.3 * dmax) & np.isfinite(mid)
+    r = radius_frac * mesh.bbox_diagonal
+    cand = np.unique(edges[crease].ravel())
+    if cand.size == 0:
+        cand = np.array([int(np.argmax(np.where(fin, d_exact, -1)))])
+    cpts = 0.5 * (mesh.V[edges[crease, 0]] + mesh.V[edges[crease, 1]])
+    if cand.size > 500:
+        cand = np.random.default_rng(0).choice(cand, 500, replace=False)
+    score = [int(np.sum(np.linalg.norm(cpts - mesh.V[c], axis=1) < 0.6 * r)) for c in cand]
+    center = int(cand[int(np.argmax(score))])
+    inside = np.linalg.norm(mesh.V - mesh.V[center], axis=1) < r
+    fmask = inside[mesh.F].all(axis=1)
+    sub, used = submesh(mesh, fmask, f"{mesh.name} (close-up)")
+    lab = sub.component_labels
+    keep = lab[sub.F[:, 0]] == lab[int(np.searchsorted(used, center))]
+    fmask2 = np.zeros(mesh.n_faces, dtype=bool)
+    fmask2[np.flatnonzero(fmask)[keep]] = True
+    sub, used = submesh(mesh, fmask2, f"{mesh.name} (close-up)")
+    return sub, used, center
+
+
+# ----------------------------------------------------------------------------------------------------------------------
+# sections: compute (numbers + figures)
+# ----------------------------------------------------------------------------------------------------------------------
+
+
+def sec_table2(ctx, plan):
+    out = {"meshes": [], "rows": {}}
+    for name in plan.table2:
+        mesh = ctx.mesh(name)
+        log(f"  Table 2: {name} ({mesh.n_faces} faces)")
+        rows, _ = evaluate(ctx, mesh, name, TABLE2_METHODS)
+        out["meshes"].append(mesh_row(mesh))
+        out["rows"][name] = rows
+    return out
+
+
+def sec_fig2(ctx, plan):
+    from cvxgeodesic.evaluation import gradient_norm_histogram
+    from cvxgeodesic.operators import gradient_norms
+    from cvxgeodesic.plotting import plot_gradient_histogram
+
+    res = {"meshes": [], "stats": {}}
+    hists = {}
+    edges = np.linspace(0.0, 1.6, 129)
+    for name in plan.hist_pair:
+        mesh = ctx.mesh(name)
+        ex = solve(ctx, mesh, name, "exact", SOURCE)
+        d = ex["distance"]
+        norms = gradient_norms(mesh, d)
+        srcmask = np.zeros(mesh.n_vertices, bool)
+        srcmask[SOURCE] = True
+        at_src = srcmask[mesh.F].any(axis=1)
+        a = mesh.face_areas
+        st = {"triangles": int(mesh.n_faces), "source_triangles": int(at_src.sum())}
+        for tag, sel in (("all", np.ones_like(at_src)), ("no_src", ~at_src)):
+            nn, aa = norms[sel], a[sel]
+            st[tag] = {
+                "count_above_1.01": int(np.sum(nn > 1.01)), "count_above_1.05": int(np.sum(nn > 1.05)),
+                "frac_above_1.05": float(np.mean(nn > 1.05)), "area_above_1.01": float(aa[nn > 1.01].sum() / aa.sum()),
+                "count_below_0.99": int(np.sum(nn < 0.99)),
+                "count_below_0.9": int(np.sum(nn < 0.9)),
+                "frac_above_1.01": float(np.mean(nn > 1.01)), "frac_below_0.99": float(np.mean(nn < 0.99)),
+                "frac_below_0.9": float(np.mean(nn < 0.9)),
+                "area_below_0.99": float(aa[nn < 0.99].sum() / aa.sum()),
+                "area_below_0.9": float(aa[nn < 0.9].sum() / aa.sum()),
+                "max": float(nn.max()), "min": float(nn.min()),
+            }
+        res["stats"][name] = st
+        res["meshes"].append(mesh_row(mesh))
+        lab = f"{name} ({mesh.n_faces / 1000:.0f}K faces)"
+        hists[lab] = gradient_norm_histogram(mesh, d, bins=edges, sources=None)
+    fig = ctx.figures / "fig2_gradient_histograms.png"
+    plot_gradient_histogram(hists, fig, title="‖∇d‖ per triangle of the exact field (area-weighted, all triangles)",
+                            dpi=90)
+    res["figures"] = [fig.name]
+    return res
+
+
+def sec_fig3(ctx, plan):
+    from cvxgeodesic.evaluation import relative_error
+
+    name = plan.one
+    mesh = ctx.mesh(name)
+    rows, exact = evaluate(ctx, mesh, name, ["lclp", "qclp", "dijkstra"])
+    d_ex = exact["distance"]
+    lclp = solve(ctx, mesh, name, "lclp", SOURCE)
+    qclp = solve(ctx, mesh, name, "qclp", SOURCE)
+    dij = solve(ctx, mesh, name, "dijkstra", SOURCE)
+    checks = {}
+    if lclp["ok"] and dij["ok"]:
+        checks["lclp_minus_dijkstra_max_abs_over_diag"] = float(
+            np.max(np.abs(lclp["distance"] - dij["distance"])) / mesh.bbox_diagonal)
+    if qclp["ok"] and dij["ok"]:
+        checks["qclp_minus_dijkstra_max_over_diag"] = float(
+            np.max(qclp["distance"] - dij["distance"]) / mesh.bbox_diagonal)
+        checks["qclp_below_dijkstra_share"] = float(np.mean(qclp["distance"] <= dij["distance"] + 1e-9))
+    panels = []
+    dmax = float(np.max(d_ex[np.isfinite(d_ex)]))
+    levels = np.linspace(0, dmax, 22)[1:-1]
+    rels = {}
+    for meth, rec in (("lclp", lclp), ("qclp", qclp)):
+        if rec["ok"]:
+            rels[meth] = relative_error(rec["distance"], d_ex, [SOURCE])
+    vmax = float(np.nanpercentile(np.concatenate([r[np.isfinite(r)] for r in rels.values()]), 99)) if rels else None
+    for meth, rec in (("lclp", lclp), ("qclp", qclp)):
+        if not rec["ok"]:
+            continue
+        panels.append(field_panel(ctx, mesh, rec["distance"], f"fig3_field_{meth}", f"{label(meth)}: field",
+                                  vmax=dmax, levels=levels))
+    for meth in rels:
+        panels.append(error_panel(ctx, mesh, rels[meth], f"fig3_err_{meth}",
+                                  f"{label(meth)}: relative error", vmax))
+    fig = tile(panels, ctx.figures / "fig3_lclp_vs_qclp.png", ncols=2)
+    return {"mesh": mesh_row(mesh), "rows": rows, "checks": checks, "figures": [fig.name]}
+
+
+def sec_fig4(ctx, plan):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    name = plan.one
+    mesh = ctx.mesh(name)
+    exact = solve(ctx, mesh, name, "exact", SOURCE)
+    d_ex = exact["distance"]
+    table = {}
+    for energy in SWEEP_ENERGIES:
+        table[energy] = {}
+        for m in plan.sweep_m:
+            meth = "qclp" if m == 0 else energy
+            log(f"  Fig. 4: {energy}, m = {m:g}")
+            rec = solve(ctx, mesh, name, meth, SOURCE, m)
+            mets = metrics(mesh, rec["distance"], d_ex, SOURCE) if rec["ok"] else None
+            table[energy][f"{m:g}"] = rec_row(rec, mets)
+    refs = {}
+    for meth in ("heat", "fmm", "exact"):
+        rec = exact if meth == "exact" else solve(ctx, mesh, name, meth, SOURCE)
+        refs[meth] = rec_row(rec, metrics(mesh, rec["distance"], d_ex, SOURCE) if rec["ok"] else None)
+
+    # -- the sweep plot
+    xs = np.arange(len(plan.sweep_m))
+    fig, axes = plt.subplots(1, 3, figsize=(11.5, 3.5))
+    specs = [("rel_mean", "mean relative error (%)", 100.0),
+             ("off_ridge_rel_mean", "off-ridge mean rel. error (%)", 100.0),
+             ("ridge_jump_p95", "ridge sharpness (p95 jump)", 1.0)]
+    ecolors = {"qcqp-dirichlet": "tab:olive", "qcqp-laplacian": "tab:cyan", "qcqp-hessian": "tab:red"}
+    for ax, (k, ylab, scale) in zip(axes, specs, strict=True):
+        for energy in SWEEP_ENERGIES:
+            ys = [table[energy][f"{m:g}"].get(k) for m in plan.sweep_m]
+            ys = [np.nan if y is None else scale * y for y in ys]
+            ax.plot(xs, ys, marker="o", ms=4, color=ecolors[energy], label=label(energy))
+        for meth, ls in (("heat", "--"), ("fmm", ":"), ("exact", "-.")):
+            v = refs[meth].get(k)
+            if v is not None and np.isfinite(v) and not (meth == "exact" and k != "ridge_jump_p95"):
+                ax.axhline(scale * v, color=COLORS[meth], ls=ls, lw=1, label=label(meth))
+        ax.set_xticks(xs, [f"{m:g}" for m in plan.sweep_m])
+        ax.set_xlabel("m  (λ = m·100·h/n; m = 0 is QCLP)")
+        ax.set_ylabel(ylab)
+        ax.grid(alpha=0.3)
+        if k != "ridge_jump_p95":
+            log_axis(ax)
+    axes[2].legend(fontsize=7, frameon=False)
+    fig.suptitle(f"λ sweep on {name} (source vertex {SOURCE}; errors against the exact MMP distance)", fontsize=10)
+    fig.tight_layout()
+    f1 = save_figure(fig, ctx.figures / "fig4_lambda_sweep.png", dpi=90)
+    plt.close(fig)
+
+    # -- close-ups of QCQP-Hessian fields near the ridge for a few m
+    sub, used, center = ridge_crop(mesh, d_ex, SOURCE)
+    dsub = d_ex[used]
+    lo, hi = float(dsub.min()), float(dsub.max())
+    levels = np.linspace(lo, hi, 22)[1:-1]
+    panels = []
+    ms = [m for m in (0.0, 0.3, 1.0, 10.0) if m in plan.sweep_m] or plan.sweep_m[:4]
+    for m in ms:
+        meth = "qclp" if m == 0 else "qcqp-hessian"
+        rec = solve(ctx, mesh, name, meth, SOURCE, m)
+        if not rec["ok"]:
+            continue
+        r = table["qcqp-hessian"][f"{m:g}"]
+        t = f"QCQP-Hessian m={m:g}" if m else "QCLP (m=0)"
+        t += f": sharpness {r['ridge_jump_p95']:.2f}"
+        panels.append(field_panel(ctx, sub, rec["distance"][used], f"fig4_crop_{m:g}", t, vmin=lo, vmax=hi,
+                                  levels=levels, sources=None))
+    f2 = tile(panels, ctx.figures / "fig4_hessian_closeups.png", ncols=2 if len(panels) <= 4 else 3)
+    return {"mesh": mesh_row(mesh), "table": table, "refs": refs, "figures": [f1.name, f2.name],
+            "crop_center": center, "crop_vertices": int(used.size)}
+
+
+def decimate(mesh, target: int, name: str):
+    """QEM decimation to about ``target`` faces (fast-simplification, else libigl)."""
+    V, F = np.array(mesh.V, dtype=np.float64), np.array(mesh.F, dtype=np.int64)
+    try:
+        import fast_simplification as fs
+
+        V2, F2 = fs.simplify(V, F, target_reduction=1.0 - target / mesh.n_faces)
+        tool = "fast-simplification " + __import__("importlib.metadata").metadata.version("fast_simplification")
+    except ImportError:
+        import igl
+
+        r = igl.decimate(V, F, int(target))
+        V2, F2 = (r[1], r[2]) if isinstance(r[0], bool | np.bool_) else (r[0], r[1])
+        tool = "libigl decimate"
+    return cg.TriMesh(np.asarray(V2, float), np.asarray(F2, np.int64), name=name), tool
+
+
+def sec_fig5(ctx, plan):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    base = ctx.mesh(plan.res_base)
+    p0 = base.V[SOURCE]
+    levels = []
+    tool = None
+    for target in plan.res_targets:
+        key = f"{Path(plan.res_base).stem}_dec{target // 1000}k"
+        mesh, tool = decimate(base, target, key)
+        ctx.register(key, mesh)
+        levels.append((key, mesh))
+    levels.append((plan.res_base, base))
+    out = {"levels": [], "rows": {}, "tool": tool}
+    for key, mesh in levels:
+        src = int(np.argmin(np.linalg.norm(mesh.V - p0, axis=1)))
+        log(f"  Fig. 5: {key} ({mesh.n_faces} faces), source {src}")
+        rows, _ = evaluate(ctx, mesh, key, RES_METHODS, source=src)
+        mr = mesh_row(mesh)
+        mr.update(key=key, source=src, source_offset=float(np.linalg.norm(mesh.V[src] - p0) / base.bbox_diagonal))
+        out["levels"].append(mr)
+        out["rows"][key] = rows
+    fig, axes = plt.subplots(1, 3, figsize=(11.5, 3.4))
+    faces = [lv["faces"] for lv in out["levels"]]
+    for meth in RES_METHODS:
+        for ax, k, sc in ((axes[0], "rel_mean", 100), (axes[1], "rel_max", 100), (axes[2], "time_s", 1)):
+            ys = [out["rows"][lv["key"]][meth].get(k) for lv in out["levels"]]
+            ys = [np.nan if y is None else sc * y for y in ys]
+            ax.plot(faces, ys, marker=MARKERS.get(meth, "o"), color=COLORS[meth], label=label(meth))
+    from matplotlib.ticker import NullLocator
+
+    for ax, yl in zip(axes, ("mean relative error (%)", "max relative error (%)", "time (s)"), strict=True):
+        ax.set_xscale("log")
+        log_axis(ax)
+        ax.set_xlabel("faces")
+        ax.set_ylabel(yl)
+        ax.grid(alpha=0.3, which="major")
+        ax.set_xticks(faces, [f"{f / 1000:.0f}K" for f in faces])
+        ax.xaxis.set_minor_locator(NullLocator())
+    axes[0].legend(fontsize=8, frameon=False)
+    fig.suptitle(f"Accuracy vs resolution: {plan.res_base} decimated ({tool}); source nearest to the original "
+                 f"vertex {SOURCE}", fontsize=10)
+    fig.tight_layout()
+    f = save_figure(fig, ctx.figures / "fig5_resolution.png", dpi=90)
+    plt.close(fig)
+    out["figures"] = [f.name]
+    return out
+
+
+def sec_fig6(ctx, plan):
+    from cvxgeodesic.evaluation import relative_error
+
+    name = plan.fig6
+    mesh = ctx.mesh(name)
+    methods = ["qcqp-hessian", "qclp", "lcqp-hessian", "heat", "fmm", "dijkstra"]
+    rows, exact = evaluate(ctx, mesh, name, methods)
+    d_ex = exact["distance"]
+    rels = {}
+    for meth in methods:
+        rec = solve(ctx, mesh, name, meth, SOURCE)
+        if rec["ok"]:
+            rels[meth] = relative_error(rec["distance"], d_ex, [SOURCE])
+    p99 = [float(np.nanpercentile(r[np.isfinite(r)], 99)) for r in rels.values()]
+    vmax = float(np.median(p99)) if p99 else None
+    panels = [error_panel(ctx, mesh, r, f"fig6_{meth}", label(meth), vmax) for meth, r in rels.items()]
+    f = tile(panels, ctx.figures / "fig6_error_maps.png", ncols=3)
+    return {"mesh": mesh_row(mesh), "rows": rows, "vmax": vmax, "figures": [f.name]}
+
+
+def sec_fig7(ctx, plan):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from cvxgeodesic.evaluation import triangle_anisotropy
+
+    files = sorted(p.name for p in ctx.shared.glob("thingi_*.stl"))
+    if plan.quick:
+        files = files[:3]
+    out = {"meshes": [], "rows": {}}
+    for name in files:
+        mesh = ctx.mesh(name)
+        log(f"  Fig. 7: {name} ({mesh.n_faces} faces)")
+        mr = mesh_row(mesh)
+        tau = triangle_anisotropy(mesh)
+        mr["tau_median"] = float(np.median(tau[np.isfinite(tau)]))
+        rel_area = mesh.face_areas / np.median(mesh.face_areas)
+        mr["near_zero_faces"] = int(np.sum(rel_area < 1e-6))
+        out["meshes"].append(mr)
+        rows, exact = evaluate(ctx, mesh, name, THINGI_METHODS)
+        counts = [int(g) for r in rows.values() for w in (r.get("warnings") or [])
+                  for g in re.findall(r"(\d+) degenerate face", w)]
+        mr["degenerate_faces"] = max(counts) if counts else 0
+        if not exact["ok"]:
+            for r in rows.values():
+                r["note"] = "no exact reference"
+        out["rows"][name] = rows
+    from matplotlib.transforms import blended_transform_factory
+
+    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.3), sharey=True)
+    ok_vals = [100 * out["rows"][n][m]["rel_mean"] for n in files for m in THINGI_METHODS
+               if out["rows"][n][m].get("rel_mean") is not None and np.isfinite(out["rows"][n][m]["rel_mean"])]
+    ymax = max(ok_vals) if ok_vals else 100.0
+    yfail = ymax * 2.2
+    for ax, key, xl in ((axes[0], "tau", "τ(T): mean of τ(t) = P·H / (2√3·S)  (paper's measure)"),
+                        (axes[1], "tau_median", "median of τ(t)  (robust to a few slivers)")):
+        xv = {m["name"]: m[key] for m in out["meshes"]}
+        for k, meth in enumerate(THINGI_METHODS):
+            good = [n for n in files if out["rows"][n][meth].get("rel_mean") is not None
+                    and np.isfinite(out["rows"][n][meth]["rel_mean"])]
+            bad = [n for n in files if n not in good]
+            mk = MARKERS.get(meth, "o")
+            ax.scatter([xv[n] for n in good], [100 * out["rows"][n][meth]["rel_mean"] for n in good], marker=mk,
+                       color=COLORS[meth], label=label(meth), s=32, alpha=0.85, zorder=3)
+            if bad:
+                ax.scatter([xv[n] * (1 + 0.06 * (k - 2.5)) for n in bad], [yfail] * len(bad), marker=mk,
+                           color=COLORS[meth], s=32, alpha=0.85, zorder=3)
+        ax.axhline(ymax * 1.5, color="0.6", lw=0.8, ls="--")
+        tr = blended_transform_factory(ax.transAxes, ax.transData)
+        ax.text(0.01, yfail * 1.25, "failed: no field", transform=tr, fontsize=7, color="0.35", va="bottom")
+        trx = blended_transform_factory(ax.transData, ax.transAxes)
+        placed = []
+        for n in sorted(files, key=lambda n: xv[n]):
+            lx = np.log10(xv[n])
+            level = sum(1 for p in placed if abs(p - lx) < 0.06 * (np.log10(max(xv.values()) + 1) + 1))
+            placed.append(lx)
+            ax.text(xv[n], 0.01 + 0.1 * level, n.replace("thingi_", "").replace(".stl", ""), transform=trx,
+                    fontsize=6, color="0.4", ha="center", va="bottom", rotation=90)
+        ax.set_xscale("log")
+        ax.set_xlabel(xl, fontsize=9)
+        ax.grid(alpha=0.3, which="major")
+    log_axis(axes[0])
+    axes[0].set_ylim(top=yfail * 2.0)
+    axes[0].set_ylabel("mean relative error (%)")
+    axes[1].legend(fontsize=7, frameon=False, loc="center left", bbox_to_anchor=(1.0, 0.5))
+    fig.suptitle("Thingi10K meshes: accuracy vs anisotropy (source vertex 0; errors against exact MMP)", fontsize=10)
+    fig.tight_layout()
+    f = save_figure(fig, ctx.figures / "fig7_anisotropy.png", dpi=90)
+    plt.close(fig)
+    out["figures"] = [f.name]
+    return out
+
+
+def sec_fig8(ctx, plan):
+    name = "bug_medial_axis.obj"
+    mesh = ctx.mesh(name)
+    mr = mesh_row(mesh)
+    mr["nonmanifold_edges"] = int(np.sum(mesh.edge_face_counts > 2))
+    mr["boundary_edges"] = int(np.sum(mesh.edge_face_counts == 1))
+    lab = mesh.component_labels
+    mr["source_component_vertices"] = int(np.sum(lab == lab[SOURCE]))
+    rows = {}
+    recs = {}
+    for meth in MEDIAL_METHODS:
+        rec = solve(ctx, mesh, name, meth, SOURCE)
+        recs[meth] = rec
+        rows[meth] = rec_row(rec)
+    comp = {}
+    ok = {k: r for k, r in recs.items() if r["ok"]}
+    if "dijkstra" in ok:
+        dj = ok["dijkstra"]["distance"]
+        fin = np.isfinite(dj) & (dj > 0)
+        for k, r in ok.items():
+            d = r["distance"]
+            comp[k] = {
+                "mean_rel_diff_to_dijkstra": float(np.mean(np.abs(d[fin] - dj[fin]) / dj[fin])),
+                "max_above_dijkstra_over_diag": float(np.max(d[fin] - dj[fin]) / mesh.bbox_diagonal),
+                "share_below_dijkstra": float(np.mean(d[fin] <= dj[fin] + 1e-9 * mesh.bbox_diagonal)),
+                "unreachable": int(np.sum(~np.isfinite(d))),
+            }
+    shown = [m for m in ("heat", "dijkstra", "qclp", "qcqp-laplacian") if m in ok]
+    ref = ok.get("dijkstra") or (next(iter(ok.values())) if ok else None)
+    figs = []
+    if ref is not None:
+        dref = ref["distance"]
+        vmax = float(np.max(dref[np.isfinite(dref)]))
+        levels = np.linspace(0, vmax, 22)[1:-1]
+        panels = []
+        for m in shown:
+            t = f"{label(m)} ({ok[m]['time_s']:.2f} s, {solver_text(ok[m]).split(';')[0]})"
+            panels.append(field_panel(ctx, mesh, ok[m]["distance"], f"fig8_{m}", t, vmax=vmax, levels=levels))
+        figs.append(tile(panels, ctx.figures / "fig8_medial_axis.png", ncols=2).name)
+    return {"mesh": mr, "rows": rows, "comparison": comp, "figures": figs, "shown": shown}
+
+
+def sec_fig9(ctx, plan):
+    name = plan.one
+    mesh = ctx.mesh(name)
+    methods = ["exact", "heat", "fmm", "qclp", "qcqp-hessian", "lcqp-hessian"]
+    rows, exact = evaluate(ctx, mesh, name, methods)
+    d_ex = exact["distance"]
+    sub, used, center = ridge_crop(mesh, d_ex, SOURCE)
+    dsub = d_ex[used]
+    lo, hi = float(dsub.min()), float(dsub.max())
+    levels = np.linspace(lo, hi, 22)[1:-1]
+    # where the close-up is: the whole model, the patch in grey-free colours and the rest dimmed
+    from cvxgeodesic.plotting import plot_field
+
+    where = np.full(mesh.n_vertices, np.nan)
+    where[used] = d_ex[used]
+    pw = panel(ctx, "fig9_where")
+    plot_field(mesh, where, pw, isolines=0, title=f"{name}: where the close-up is",
+               vmin=0.0, vmax=float(d_ex[fin_max(d_ex)]), dpi=PANEL_DPI, colorbar_label="exact distance",
+               sources=[SOURCE])
+    panels = [pw]
+    for meth in ("exact", "heat", "fmm", "qclp", "qcqp-hessian"):
+        rec = exact if meth == "exact" else solve(ctx, mesh, name, meth, SOURCE)
+        if not rec["ok"]:
+            continue
+        r = rows[meth]
+        t = f"{label(meth)}: sharpness {r['ridge_jump_p95']:.2f}"
+        if meth != "exact":
+            t += f", off-ridge {100 * r['off_ridge_rel_mean']:.2f}%"
+        panels.append(field_panel(ctx, sub, rec["distance"][used], f"fig9_{meth}", t, vmin=lo, vmax=hi,
+                                  levels=levels, sources=None))
+    f = tile(panels, ctx.figures / "fig9_ridge_isolines.png", ncols=3)
+    return {"mesh": mesh_row(mesh), "rows": rows, "figures": [f.name], "crop_center": center,
+            "crop_vertices": int(used.size), "crop_faces": int(sub.n_faces), "n_isolines": int(len(levels))}
+
+
+SECTIONS = {
+    "table2": sec_table2, "fig2": sec_fig2, "fig3": sec_fig3, "fig4": sec_fig4, "fig5": sec_fig5,
+    "fig6": sec_fig6, "fig7": sec_fig7, "fig8": sec_fig8, "fig9": sec_fig9,
+}
+
+
+# ----------------------------------------------------------------------------------------------------------------------
+# markdown
+# ----------------------------------------------------------------------------------------------------------------------
+
+
+def md_table(header: list[str], rows: list[list[str]], align: str | None = None) -> str:
+    align = align or "l" + "r" * (len(header) - 1)
+    sep = ["---:" if a == "r" else ":---:" if a == "c" else "---" for a in align]
+    lines = ["| " + " | ".join(header) + " |", "| " + " | ".join(sep) + " |"]
+    lines += ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def fig_md(name: str, alt: str) -> str:
+    return f"![{alt}](figures/{name})"
+
+
+def kfaces(n: int) -> str:
+    return f"{n / 1000:.1f}K" if n < 10000 else f"{n / 1000:.0f}K"
+
+
+def render(results: dict, env: dict, timings: dict, plan: Plan) -> str:
+    import report_text as rt
+
+    return rt.render(results, env, timings, plan, helpers=sys.modules[__name__])
+
+
+# ----------------------------------------------------------------------------------------------------------------------
+# main
+# ----------------------------------------------------------------------------------------------------------------------
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--out", default="docs", help="output folder: results.md and figures/ (default: docs)")
+    ap.add_argument("--shared", default=None, help=f"folder of the meshes (default: {DEFAULT_SHARED})")
+    ap.add_argument("--cache", default=None, help="cache folder (default: report_output/cache in the repository)")
+    ap.add_argument("--sections", nargs="+", choices=list(SECTIONS), default=None,
+                    help="recompute these sections (their cached numbers are dropped; fields stay cached)")
+    ap.add_argument("--fresh", action="store_true", help="delete every cache (sections and fields) first")
+    ap.add_argument("--quick", action="store_true", help="small meshes only, for development (use another --out)")
+    ap.add_argument("--no-compute", action="store_true", help="only rewrite results.md from the cached sections")
+    args = ap.parse_args(argv)
+
+    shared = Path(args.shared) if args.shared else DEFAULT_SHARED
+    if not shared.is_dir() or not (shared / "bunny.obj").exists():
+        print(f"error: mesh folder {shared} not found (or without bunny.obj). The report needs the development "
+              "meshes; pass --shared DIR.", file=sys.stderr)
+        return 2
+    cache = Path(args.cache) if args.cache else REPO / "report_output" / ("cache_quick" if args.quick else "cache")
+    if args.fresh and cache.exists():
+        shutil.rmtree(cache)
+    ctx = Context(shared=shared.resolve(), out=Path(args.out), cache=cache, quick=args.quick)
+    ctx.setup()
+    plan = Plan(args.quick)
+    argv_used = ["benchmarks/report.py", *(argv if argv is not None else sys.argv[1:])]
+    env_path = cache / "environment.json"
+    timings_path = cache / "timings.json"
+    timings = json.loads(timings_path.read_text()) if timings_path.exists() else {}
+
+    if not env_path.exists() and not args.no_compute:  # the date and load of the first (fresh) run's start
+        start = environment(argv_used)
+        start["first_run"] = start["date"]
+        dump_json(env_path, start)
+
+    wanted = args.sections or list(SECTIONS)
+    if not args.no_compute:
+        for name in SECTIONS:
+            path = cache / "sections" / f"{name}.json"
+            if args.sections and name in args.sections and path.exists():
+                path.unlink()
+            if name not in wanted and args.sections:
+                continue
+            if path.exists():
+                data = json.loads(path.read_text())
+                if all((ctx.figures / f).exists() for f in data.get("figures", [])):
+                    log(f"{name}: cached, skipped")
+                    continue
+            log(f"{name}: computing")
+            t0 = time.perf_counter()
+            data = SECTIONS[name](ctx, plan)
+            wall = time.perf_counter() - t0
+            dump_json(path, data)
+            timings[name] = {"wall_s": wall, "finished": time.strftime("%Y-%m-%d %H:%M:%S"),
+                             "loadavg_1min": round(os.getloadavg()[0], 2)}
+            dump_json(timings_path, timings)
+            log(f"{name}: done in {wall:.1f} s")
+        env = environment(argv_used)  # refresh versions and date; keep the first run's start and load
+        old = json.loads(env_path.read_text())
+        env["first_run"] = old.get("first_run", old.get("date"))
+        env["loadavg_at_start"] = old.get("loadavg_at_start", env["loadavg_at_start"])
+        dump_json(env_path, env)
+    env = json.loads(env_path.read_text()) if env_path.exists() else environment(argv_used)
+    results = {}
+    for name in SECTIONS:
+        path = cache / "sections" / f"{name}.json"
+        if path.exists():
+            results[name] = json.loads(path.read_text())
+    text = render(results, env, timings, plan)
+    out_md = ctx.out / "results.md"
+    out_md.write_text(text)
+    log(f"wrote {out_md} ({len(results)}/{len(SECTIONS)} sections)")
+    written = {f for r in results.values() for f in r.get("figures", [])}
+    for png in ctx.figures.glob("fig*.png"):
+        if png.name not in written:
+            log(f"removing stale figure {png}")
+            png.unlink()
+    return 0 if len(results) == len(SECTIONS) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
