@@ -110,3 +110,24 @@ def test_hessian_energy_rejects_nonmanifold_edge():
     F = [[0, 1, 2], [1, 0, 3], [0, 1, 4]]
     with pytest.raises(NonManifoldError, match="qcqp-laplacian"):
         hessian_energy_matrix(TriMesh(V, F))
+
+
+@pytest.mark.shared
+def test_indefinite_curved_hessian_falls_back_to_planar_energy():
+    # measured: libigl's curved Hessian energy has eigenvalue -59 (largest diagonal 1.2e7) on this CAD mesh
+    from conftest import shared_mesh_path
+    from cvxgeodesic import IndefiniteEnergyWarning, load_mesh
+    from cvxgeodesic.solvers.cholesky import is_positive_semidefinite
+
+    mesh = load_mesh(shared_mesh_path("thingi_37881.stl"))
+    with pytest.warns(IndefiniteEnergyWarning, match="planar Hessian"):
+        H = hessian_energy_matrix(mesh)
+    assert is_positive_semidefinite(H)
+
+
+def test_psd_check_detects_a_negative_eigenvalue():
+    from cvxgeodesic.solvers.cholesky import is_positive_semidefinite
+
+    S = cotan_stiffness(icosphere(2))
+    assert is_positive_semidefinite(S)
+    assert not is_positive_semidefinite(S - 1e-3 * sp.identity(S.shape[0]) * abs(S.diagonal()).max())

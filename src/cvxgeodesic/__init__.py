@@ -22,6 +22,7 @@ from .api import (
 from .errors import (
     CvxGeodesicError,
     DegenerateFacesWarning,
+    IndefiniteEnergyWarning,
     MeshError,
     MeshFormatError,
     NonManifoldError,
@@ -37,7 +38,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "ALL_METHODS", "BASELINE_METHODS", "FORMULATIONS", "CvxGeodesicError", "DegenerateFacesWarning",
-    "GeodesicResult", "GeodesicSolver",
+    "IndefiniteEnergyWarning", "GeodesicResult", "GeodesicSolver",
     "MeshError", "MeshFormatError", "NonManifoldError", "ParameterError", "SolveInfo", "SolverError", "SourceError",
     "TriMesh", "cylinder", "distance_matrix", "geodesic_distance", "grid_plane", "icosphere", "load_mesh",
     "save_distance", "smoothness_weight",

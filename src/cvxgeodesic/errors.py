@@ -56,3 +56,7 @@ class SolverError(CvxGeodesicError, RuntimeError):
         self.solver = solver
         self.status = status
         self.info = dict(info or {})
+
+
+class IndefiniteEnergyWarning(UserWarning):
+    """libigl's curved Hessian energy is indefinite on this mesh; the planar Hessian energy is used instead."""

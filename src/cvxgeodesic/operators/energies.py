@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import warnings
+
 import igl
 import numpy as np
 import scipy.sparse as sp
 
-from ..errors import NonManifoldError
+from ..errors import IndefiniteEnergyWarning, NonManifoldError
 from ..mesh.trimesh import TriMesh
+from ..solvers.cholesky import is_positive_semidefinite
 from .laplacian import cotan_stiffness, mass_matrix
 
 ENERGIES = ("dirichlet", "laplacian", "hessian")
@@ -56,6 +59,14 @@ def hessian_energy_matrix(mesh: TriMesh) -> sp.csc_matrix:
         edge-manifold mesh; on a mesh with an edge shared by more than two
         faces use the Laplacian or Dirichlet energy instead.
 
+    Warns
+    -----
+    IndefiniteEnergyWarning
+        The curved energy has a negative eigenvalue on this mesh (checked with one
+        CHOLMOD factorization; skipped without scikit-sparse): the planar Hessian
+        energy of Stein et al. 2018 (libigl ``hessian_energy``), which is PSD, is
+        returned instead.
+
     Returns
     -------
     (n, n) scipy.sparse.csc_matrix, symmetric PSD
@@ -66,9 +77,23 @@ def hessian_energy_matrix(mesh: TriMesh) -> sp.csc_matrix:
             f"{mesh.name}: the curved Hessian energy needs an edge-manifold mesh, but {bad} edges have more "
             "than two faces; use method='qcqp-laplacian', 'qcqp-dirichlet' or 'qclp' on this mesh"
         )
-    Q = sp.coo_matrix(igl.curved_hessian_energy(mesh.V, mesh.F))
-    # libigl sizes it by the largest referenced vertex index + 1: pad to n (unreferenced vertices)
-    n = mesh.n_vertices
+    Q = _padded_symmetric(igl.curved_hessian_energy(mesh.V, mesh.F), mesh.n_vertices)
+    if is_positive_semidefinite(Q) is False:
+        # measured: lucy_20k and thingi_37881 (min eigenvalue -59 against a largest diagonal of 1.2e7); the
+        # curvature correction of the curved energy is not PSD where the angle defect is large, and the QP would
+        # then be non-convex. The planar Hessian energy (Stein et al. 2018) is PSD by construction.
+        warnings.warn(
+            f"{mesh.name}: libigl's curved Hessian energy is indefinite on this mesh (sharp corners or large "
+            "angle defects); using the planar Hessian energy (Stein et al. 2018) instead",
+            IndefiniteEnergyWarning, stacklevel=3,
+        )
+        Q = _padded_symmetric(igl.hessian_energy(mesh.V, mesh.F), mesh.n_vertices)
+    return Q
+
+
+def _padded_symmetric(Q, n: int) -> sp.csc_matrix:
+    """Symmetrized (n, n) copy; libigl sizes its matrices by the largest referenced vertex index + 1."""
+    Q = sp.coo_matrix(Q)
     Q = sp.csc_matrix((Q.data, (Q.row, Q.col)), shape=(n, n))
     return sp.csc_matrix(0.5 * (Q + Q.T))
 

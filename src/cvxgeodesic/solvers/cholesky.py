@@ -220,3 +220,39 @@ class SymbolicCholesky:
         finally:
             self.n_factorizations += 1
             self.factor_time += time.perf_counter() - t0
+
+
+def is_positive_semidefinite(Q: sp.spmatrix, *, rel_shift: float = 1e-9) -> bool | None:
+    """Whether a symmetric sparse matrix is positive semidefinite, by one Cholesky factorization.
+
+    ``Q + rel_shift · max|diag Q| · I`` is factored with CHOLMOD; a failed factorization
+    means ``Q`` has an eigenvalue below ``-rel_shift · max|diag Q|``.
+
+    Parameters
+    ----------
+    Q : (n, n) scipy.sparse matrix
+        Symmetric.
+    rel_shift : float
+        Relative diagonal shift that absorbs rounding in the zero eigenvalues.
+
+    Returns
+    -------
+    bool or None
+        ``None`` when CHOLMOD is not installed (the check is skipped).
+    """
+    if not cholmod_available():
+        return None
+    n = Q.shape[0]
+    tri = sp.tril(sp.coo_matrix(Q))
+    # an explicit (zero) diagonal: the symbolic analysis wants a full diagonal, e.g. for unreferenced vertices
+    lower = sp.csc_matrix(
+        (np.r_[tri.data, np.zeros(n)], (np.r_[tri.row, np.arange(n)], np.r_[tri.col, np.arange(n)])), shape=(n, n)
+    )
+    lower.sum_duplicates()
+    lower.sort_indices()
+    scale = float(np.abs(Q.diagonal()).max()) if Q.shape[0] else 0.0
+    try:
+        SymbolicCholesky(lower, backend="cholmod", mode="supernodal").factorize(lower.data, beta=rel_shift * scale)
+    except NotPositiveDefiniteError:
+        return False
+    return True
