@@ -174,10 +174,20 @@ def main(argv=None) -> int:
     ap.add_argument("--multires-faces", type=int, default=None, help="coarse face count (default: multires=True)")
     ap.add_argument("--timeout", type=float, default=540.0, help="seconds per case (default 540)")
     ap.add_argument("--json", default=None, help="also write the rows to this JSON file")
+    ap.add_argument("--merge", nargs="+", default=None, metavar="JSON",
+                    help="print the table of rows saved by earlier --json runs (no new runs); "
+                         "a later file's cases replace an earlier one's for the same size")
     args = ap.parse_args(argv)
 
     if args.child:
         print(json.dumps(run_case(json.loads(args.child))))
+        return 0
+    if args.merge:
+        merged: dict[int, dict] = {}
+        for name in args.merge:
+            for row in json.loads(Path(name).read_text()):
+                merged.setdefault(row["faces"], {}).update(row)
+        report([merged[k] for k in sorted(merged)])
         return 0
 
     import cvxgeodesic as cg
@@ -216,7 +226,14 @@ def main(argv=None) -> int:
                           if k not in ("method", "faces", "vertices")}
                 print(f"  {method:8s} {detail}", flush=True)
             rows.append(row)
+    report(rows)
+    if args.json:
+        Path(args.json).write_text(json.dumps(rows, indent=1))
+    return 0
 
+
+def report(rows: list[dict]) -> None:
+    """Print the table and the growth exponents."""
     head = ["faces", "vertices", "direct s", "it", "fact s", "MiB", "multires s", "coarse", "err mean/max %",
             "MiB", "heat s", "MiB", "direct/heat", "multires/heat"]
     lines = [head]
@@ -228,8 +245,8 @@ def main(argv=None) -> int:
             str(row["faces"]), str(row["vertices"]), fmt_time(d), str(d["iterations"]) if ok(d) else "-",
             f"{d['fact']:.3f}" if ok(d) else "-", fmt_mem(d), fmt_time(mr),
             str(mr.get("coarse_faces")) if ok(mr) else "-", err, fmt_mem(mr), fmt_time(h), fmt_mem(h),
-            f"{d['total'] / h['total']:.0f}" if ok(d) and ok(h) else "-",
-            f"{mr['total'] / h['total']:.0f}" if ok(mr) and ok(h) else "-",
+            f"{d['total'] / h['total']:.1f}" if ok(d) and ok(h) else "-",
+            f"{mr['total'] / h['total']:.1f}" if ok(mr) and ok(h) else "-",
         ])
     widths = [max(len(r[i]) for r in lines) for i in range(len(head))]
     print()
@@ -248,9 +265,6 @@ def main(argv=None) -> int:
     for label, ys in [("direct total", series("direct")), ("one factorization", series("direct", "fact")),
                       ("multires total", series("multires")), ("heat total", series("heat"))]:
         print(f"  {label:18s} {slope(faces, ys):.2f}")
-    if args.json:
-        Path(args.json).write_text(json.dumps(rows, indent=1))
-    return 0
 
 
 if __name__ == "__main__":
