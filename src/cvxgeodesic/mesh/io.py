@@ -61,6 +61,21 @@ class _Raw:
     raw_idx: np.ndarray | None = None
 
 
+def _read_bytes(p: Path, what: str) -> bytes:
+    """The whole file, or MeshFormatError when it is missing, a directory, unreadable or empty."""
+    if not p.exists():
+        raise _err(p, "no such file")
+    if p.is_dir():
+        raise _err(p, f"is a directory, not {what}")
+    try:
+        data = p.read_bytes()
+    except OSError as exc:
+        raise _err(p, f"cannot read file ({exc.strerror or exc})") from None
+    if not data.strip():
+        raise _err(p, "file is empty")
+    return data
+
+
 def _err(path: Path, msg: str) -> MeshFormatError:
     return MeshFormatError(f"{path}: {msg}")
 
@@ -129,16 +144,7 @@ def load_mesh(path) -> TriMesh:
         raise _err(
             p, f"unsupported mesh file extension {p.suffix!r}; supported: {', '.join(MESH_EXTENSIONS)} (any case)"
         )
-    if not p.exists():
-        raise _err(p, "no such file")
-    if p.is_dir():
-        raise _err(p, "is a directory, not a mesh file")
-    try:
-        data = p.read_bytes()
-    except OSError as exc:
-        raise _err(p, f"cannot read file ({exc.strerror or exc})") from None
-    if not data.strip():
-        raise _err(p, "file is empty")
+    data = _read_bytes(p, "a mesh file")
     reader = {".obj": _read_obj, ".off": _read_off, ".ply": _read_ply_raw, ".stl": _read_stl}[ext]
     try:
         raw = reader(p, data)
@@ -978,16 +984,7 @@ def load_distance_ply(path) -> tuple[TriMesh, dict[str, np.ndarray]]:
         If the file is missing or malformed, or has non-triangle faces.
     """
     p = Path(path)
-    if not p.exists():
-        raise _err(p, "no such file")
-    if p.is_dir():
-        raise _err(p, "is a directory, not a PLY file")
-    try:
-        data = p.read_bytes()
-    except OSError as exc:
-        raise _err(p, f"cannot read file ({exc.strerror or exc})") from None
-    if not data.strip():
-        raise _err(p, "file is empty")
+    data = _read_bytes(p, "a PLY file")
     try:
         values, line_nos = _read_ply_elements(p, data)
         V, idx, sizes, _, _, props = _ply_mesh_parts(p, values, line_nos)
