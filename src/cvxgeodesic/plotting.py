@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from ._atomic import atomic_write
-from .mesh.trimesh import as_trimesh
+from .mesh.trimesh import as_trimesh, as_vertex_field
 
 __all__ = ["plot_field", "plot_error_map", "plot_gradient_histogram", "isoline_segments"]
 
@@ -60,16 +60,6 @@ def _check_path(path) -> Path:
     if not parent.is_dir():
         raise FileNotFoundError(f"path: directory {str(parent)!r} does not exist")
     return p
-
-
-def _check_values(values, n: int, name: str = "values") -> np.ndarray:
-    try:
-        arr = np.asarray(values, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a numeric array of shape ({n},) ({exc})") from None
-    if arr.shape != (n,):
-        raise ValueError(f"{name} must have shape ({n},) (one value per mesh vertex), got shape {arr.shape}")
-    return arr
 
 
 def _check_marks(sources, n: int) -> np.ndarray:
@@ -220,7 +210,7 @@ def isoline_segments(mesh, values, levels) -> np.ndarray:
     True
     """
     mesh = as_trimesh(mesh)
-    vals = _check_values(values, mesh.n_vertices)
+    vals = as_vertex_field(values, "values", mesh.n_vertices)
     lev = np.asarray(levels, dtype=np.float64).ravel()
     if not np.all(np.isfinite(lev)):
         raise ValueError("levels must be finite")
@@ -545,7 +535,7 @@ def plot_field(
     from matplotlib.colors import Colormap, Normalize
 
     mesh = as_trimesh(mesh)
-    vals = _check_values(values, mesh.n_vertices)
+    vals = as_vertex_field(values, "values", mesh.n_vertices)
     marks = _check_marks(sources, mesh.n_vertices)
     p = _check_path(path)
     dpi = _check_dpi(dpi)
@@ -608,7 +598,7 @@ def plot_error_map(mesh, rel_error, path, *, title=None, vmax=None, view=None, d
     from matplotlib.ticker import PercentFormatter
 
     mesh = as_trimesh(mesh)
-    err = _check_values(rel_error, mesh.n_vertices, "rel_error")
+    err = as_vertex_field(rel_error, "rel_error", mesh.n_vertices)
     marks = _check_marks(sources, mesh.n_vertices)
     p = _check_path(path)
     dpi = _check_dpi(dpi)

@@ -5,25 +5,13 @@ from __future__ import annotations
 import numpy as np
 
 from ..mesh.trimesh import TriMesh
+from ..mesh.trimesh import as_vertex_field as vertex_field  # noqa: F401  (re-exported for the evaluation modules)
 
 
 def check_mesh(mesh, name: str = "mesh") -> TriMesh:
     if not isinstance(mesh, TriMesh):
         raise TypeError(f"{name} must be a TriMesh, got {type(mesh).__name__}")
     return mesh
-
-
-def vertex_field(x, name: str, n: int | None = None) -> np.ndarray:
-    """Return ``x`` as a (n,) float64 array or raise ValueError naming ``name``."""
-    try:
-        arr = np.asarray(x, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a 1-D array of numbers ({exc})") from None
-    if arr.ndim != 1:
-        raise ValueError(f"{name} must be a 1-D array of shape (n,), got shape {arr.shape}")
-    if n is not None and arr.shape[0] != n:
-        raise ValueError(f"{name} must have shape ({n},), got {arr.shape}")
-    return arr
 
 
 def vertex_indices(x, name: str, n: int) -> np.ndarray:

@@ -18,7 +18,7 @@ import numpy as np
 
 from .._atomic import atomic_write
 from ..errors import MeshError, MeshFormatError, ParameterError
-from .trimesh import TriMesh, as_trimesh
+from .trimesh import TriMesh, as_trimesh, as_vertex_field
 
 __all__ = [
     "load_mesh", "save_distance", "load_distance_ply", "check_output_path", "MESH_EXTENSIONS", "DISTANCE_EXTENSIONS",
@@ -868,12 +868,7 @@ def save_distance(path, mesh, distance, *, name: str = "distance") -> Path:
     ext = p.suffix.lower()
     mesh = as_trimesh(mesh)
     n = mesh.n_vertices
-    try:
-        d = np.asarray(distance, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ParameterError(f"distance must be a numeric array of shape ({n},) ({exc})") from None
-    if d.shape != (n,):
-        raise ParameterError(f"distance must have shape ({n},) (one value per mesh vertex), got {d.shape}")
+    d = as_vertex_field(distance, "distance", n)
     if not isinstance(name, str) or not _NAME_RE.match(name) or name in ("x", "y", "z", "vertex", "file_vertex"):
         raise ParameterError(
             f"invalid field name {name!r}: use letters, digits, '_', '.', '-' (not x, y, z, vertex, file_vertex)"

@@ -8,7 +8,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from ..errors import MeshError
+from ..errors import MeshError, ParameterError
 
 #: Default of :meth:`TriMesh.degenerate_faces`: a face whose smallest altitude is below
 #: ``DEGENERATE_TOL`` times its longest edge (a needle or a cap; exactly collinear or
@@ -260,3 +260,35 @@ def as_trimesh(mesh, name: str = "mesh") -> TriMesh:
     if isinstance(mesh, tuple | list) and len(mesh) == 2:
         return TriMesh(mesh[0], mesh[1], name=name)
     raise TypeError(f"mesh must be a TriMesh or a (V, F) tuple, got {type(mesh).__name__}")
+
+
+def as_vertex_field(values, name: str, n: int | None = None) -> np.ndarray:
+    """Return ``values`` as a (n,) float64 array, or raise a ParameterError naming ``name``.
+
+    Parameters
+    ----------
+    values : array_like
+        One number per vertex.
+    name : str
+        Parameter name used in the message.
+    n : int, optional
+        Required length (the mesh's vertex count).
+
+    Returns
+    -------
+    (n,) float64 ndarray
+
+    Raises
+    ------
+    ParameterError
+        Not numeric, not 1-D, or not of length ``n`` (a ``ValueError``).
+    """
+    try:
+        arr = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        shape = f"({n},)" if n is not None else "(n,)"
+        raise ParameterError(f"{name} must be a numeric array of shape {shape} ({exc})") from None
+    if arr.ndim != 1 or (n is not None and arr.shape[0] != n):
+        shape = f"({n},)" if n is not None else "(n,)"
+        raise ParameterError(f"{name} must have shape {shape} (one value per mesh vertex), got shape {arr.shape}")
+    return arr
