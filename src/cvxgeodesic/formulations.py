@@ -292,11 +292,7 @@ def build_problem(
     if not np.isfinite(lam) or lam < 0:
         raise ParameterError(f"smoothness weight lambda must be finite and >= 0, got {lam}")
 
-    labels = mesh.component_labels
-    unreachable = ~np.isin(labels, labels[sources])
-    in_face = np.zeros(n, dtype=bool)
-    in_face[mesh.F.ravel()] = True
-    unreachable |= ~in_face
+    unreachable = ~(mesh.connected_to(sources) & mesh.referenced)
     fixed_mask = unreachable.copy()
     fixed_mask[sources] = True
     fixed_values = np.zeros(n)

@@ -388,9 +388,6 @@ class CoarseToFine:
                 f"method {fine.method!r} cannot use; try another multires face count or multires=False"
             ) from None
         self.transfer = SurfaceTransfer(self.coarse_mesh, mesh.V)
-        in_face = np.zeros(mesh.n_vertices, dtype=bool)
-        in_face[mesh.F.ravel()] = True
-        self._in_face = in_face
 
     def summary(self) -> dict:
         """Per-mesh facts reported in ``info.extra["multires"]``."""
@@ -411,8 +408,7 @@ class CoarseToFine:
 
         t0 = time.perf_counter()
         mesh = fine.mesh
-        labels = mesh.component_labels
-        reach = np.isin(labels, labels[src]) & self._in_face
+        reach = mesh.connected_to(src) & mesh.referenced
         csrc, offset = self.transfer.nearest_vertex(mesh.V[src])
         cres = self.coarse.solve(np.unique(csrc), callback=callback)
         t1 = time.perf_counter()

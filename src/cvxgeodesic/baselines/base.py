@@ -168,8 +168,7 @@ def reachable_mask(mesh: TriMesh, sources: np.ndarray) -> np.ndarray:
     -------
     (n,) bool ndarray
     """
-    labels = mesh.component_labels
-    return np.isin(labels, np.unique(labels[np.asarray(sources, dtype=np.int64)]))
+    return mesh.connected_to(sources)
 
 
 def nonmanifold_vertices(mesh: TriMesh) -> np.ndarray:

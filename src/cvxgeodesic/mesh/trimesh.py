@@ -173,6 +173,29 @@ class TriMesh:
         _, labels = connected_components(self.vertex_adjacency, directed=False)
         return labels
 
+    @cached_property
+    def referenced(self) -> np.ndarray:
+        """(n,) bool ndarray: vertices used by at least one face."""
+        mask = np.zeros(self.n_vertices, dtype=bool)
+        mask[self.F.ravel()] = True
+        return mask
+
+    def connected_to(self, sources) -> np.ndarray:
+        """Vertices connected to at least one of ``sources`` through the edge graph.
+
+        Parameters
+        ----------
+        sources : (k,) int array_like
+            Valid vertex indices.
+
+        Returns
+        -------
+        (n,) bool ndarray
+            Includes the sources themselves (an unreferenced source is its own component).
+        """
+        labels = self.component_labels
+        return np.isin(labels, labels[np.asarray(sources, dtype=np.int64)])
+
 
 def _unique_edges(F: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
     """Unique undirected edges of ``F`` in lexicographic order, ``(e, 2)`` with ``i < j``, and face counts.
