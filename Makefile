@@ -5,7 +5,7 @@ PYTHON ?= python3
 VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
-DEB_PACKAGES := libsuitesparse-dev libopenblas0-pthread
+DEB_PACKAGES := libsuitesparse-dev libopenblas0-pthread libgomp1
 OUT ?= demo_output
 
 .PHONY: demo test test-all lint bench report clean setup

@@ -160,11 +160,13 @@ def _random_spd_on_pattern(S, seed=0):
     return sp.tril(A, format="csc")
 
 
-@pytest.mark.parametrize(("backend", "mode"), [("cholmod", "supernodal"), ("cholmod", "simplicial"),
-                                               ("scipy", "auto")])
+@pytest.mark.parametrize(("backend", "mode"), [("pardiso", "auto"), ("cholmod", "supernodal"),
+                                               ("cholmod", "simplicial"), ("scipy", "auto")])
 def test_cholesky_backends_solve_correctly(backend, mode):
     if backend == "cholmod" and not chol_mod.cholmod_available():
         pytest.skip("scikit-sparse not installed")
+    if backend == "pardiso" and not chol_mod.pardiso_available():
+        pytest.skip("MKL (PARDISO) not installed")
     m = icosphere(2)
     S = kkt_pattern(m.n_vertices, m.F, m.edges)
     chol = SymbolicCholesky(S, backend=backend, mode=mode)
@@ -181,7 +183,7 @@ def test_cholesky_backends_solve_correctly(backend, mode):
         solve = chol.factorize(vals, beta=beta)
         np.testing.assert_allclose((A + beta * sp.identity(A.shape[0])) @ solve(b), b, atol=1e-10)
     assert chol.n_factorizations == 2
-    assert chol.n_analyses == (1 if backend == "cholmod" else 0)
+    assert chol.n_analyses == (0 if backend == "scipy" else 1)
     with pytest.raises(NotPositiveDefiniteError):
         chol.factorize(-vals)
     with pytest.raises(ValueError, match="not in the sparsity pattern"):
@@ -190,6 +192,7 @@ def test_cholesky_backends_solve_correctly(backend, mode):
 
 def test_fallback_when_sksparse_is_missing_warns_and_matches(monkeypatch):
     monkeypatch.setattr(chol_mod, "_cholmod", None)
+    monkeypatch.setattr(chol_mod, "pardiso_available", lambda: False)
     m = icosphere(2)
     ops = MeshOperators(m)
     p = build_problem(ops, np.array([0]), "qcqp-hessian", smoothness_weight(m, 1.0))
@@ -203,13 +206,19 @@ def test_fallback_when_sksparse_is_missing_warns_and_matches(monkeypatch):
         SymbolicCholesky(kkt_pattern(m.n_vertices, m.F, m.edges), backend="cholmod")
 
 
-def test_cholmod_backend_does_not_warn():
+def test_auto_backend_prefers_pardiso_then_cholmod_without_warning(monkeypatch):
     if not chol_mod.cholmod_available():
         pytest.skip("scikit-sparse not installed")
     m = icosphere(1)
+    pattern = kkt_pattern(m.n_vertices, m.F, m.edges)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        assert SymbolicCholesky(kkt_pattern(m.n_vertices, m.F, m.edges)).backend == "cholmod"
+        expected = "pardiso" if chol_mod.pardiso_available() else "cholmod"
+        assert SymbolicCholesky(pattern).backend == expected
+        monkeypatch.setattr(chol_mod, "pardiso_available", lambda: False)
+        assert SymbolicCholesky(pattern).backend == "cholmod"
+    with pytest.raises(ImportError, match="pip install mkl"):
+        SymbolicCholesky(pattern, backend="pardiso")
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -279,7 +288,7 @@ def test_callback_and_timing_breakdown(sphere):
     ex = res.extra
     parts = ex["setup_time"] + ex["assembly_time"] + ex["factor_time"] + ex["linear_solve_time"] + ex["other_time"]
     assert parts == pytest.approx(res.solve_time, rel=1e-6)
-    assert ex["analyze_time"] >= 0 and ex["backend"] in ("cholmod", "scipy")
+    assert ex["analyze_time"] >= 0 and ex["backend"] in ("pardiso", "cholmod", "scipy")
     assert res.gap < 1e-8 or ex["gap_abs"] < 1e-8
 
 

@@ -79,10 +79,10 @@ _MAX_CORRECTORS = 2
 # Corrector target: complementarity eigenvalues into [β_min σμ, β_max σμ] at the trial step min(1, a·α + b).
 _BETA_MIN, _BETA_MAX = 0.1, 10.0
 _GZ_A, _GZ_B = 1.5, 0.1
-# Starting point: "cvxopt" (z = A x − b shifted into the cone) or "mehrotra" (least-norm dual, balanced shifts);
-# "auto" takes Mehrotra's without a quadratic term (bimba QCLP 18 → 17 iterations) and CVXOPT's with one
-# (bimba QCQP-Hessian: 21 with CVXOPT's, 25 with Mehrotra's, whose dual is then only approximately least-norm).
-_INIT = "auto"
+# Starting point: "cvxopt" (z = A x − b shifted into the cone) or "mehrotra" (least-norm dual z = A y with
+# Aᵀz = −q − Px, balanced shifts). Measured on bimba: QCLP 18 (cvxopt) → 17 iterations; QCQP-Hessian 21 → 19
+# when y solves the P-free system AᵀA y = ... (one extra factorization), 25 when it reuses the P + AᵀA factor.
+_INIT = "mehrotra"
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -357,9 +357,10 @@ class _Prepared:
     def Pmul(self, x: np.ndarray) -> np.ndarray:
         return self.P @ x if self.P is not None else np.zeros(self.n)
 
-    def kkt_mul(self, v: np.ndarray, sc: _SocScaling | None, lp_w: np.ndarray) -> np.ndarray:
-        """``(P + AᵀW⁻²A) v`` on the free variables, ``v`` on the fixed ones: the operator, unregularized."""
-        out = self.Pmul(v)
+    def kkt_mul(self, v: np.ndarray, sc: _SocScaling | None, lp_w: np.ndarray, with_P: bool = True) -> np.ndarray:
+        """``(P + AᵀW⁻²A) v`` (without P if not ``with_P``) on the free variables, ``v`` on the fixed ones:
+        the operator, unregularized."""
+        out = self.Pmul(v) if with_P else np.zeros(self.n)
         if self.k:
             out += self.CT @ sc.body_inv2(self.Bx(v)).ravel()
         if self.p:
@@ -367,8 +368,9 @@ class _Prepared:
         out[self.fixed] = v[self.fixed]
         return out
 
-    def assemble(self, sc: _SocScaling | None, lp_w: np.ndarray) -> np.ndarray:
-        """Lower-triangle data of ``P + AᵀW⁻²A``, identity rows for fixed variables, aligned with the pattern."""
+    def assemble(self, sc: _SocScaling | None, lp_w: np.ndarray, with_P: bool = True) -> np.ndarray:
+        """Lower-triangle data of ``P + AᵀW⁻²A`` (``AᵀW⁻²A`` if not ``with_P``), identity rows for fixed
+        variables, aligned with the pattern."""
         parts = []
         if self.k:
             B, w = self.B, sc.w
@@ -378,7 +380,7 @@ class _Prepared:
             parts.append(vals.ravel())
         if self.p:
             parts.append((self.lp_coef * lp_w).ravel())
-        data = self.base.copy()
+        data = self.base.copy() if with_P else np.zeros(self.nnz)
         if parts:
             data += np.bincount(self.pos, weights=np.concatenate(parts), minlength=self.nnz)
         data *= self.keep
@@ -507,10 +509,14 @@ class InteriorPointSolver:
         larger supernodes two threads are slightly faster (7.6 s against 8.7 s) and
         the default is kept.
         """
-        if problem.P is None:
-            with threadpool_limits(1):
-                return self._solve(problem, tol=tol, max_iter=max_iter, callback=callback)
-        return self._solve(problem, tol=tol, max_iter=max_iter, callback=callback)
+        if self.cholesky.backend == "cholmod":
+            limits = 1 if problem.P is None else None
+        else:
+            # PARDISO pins its own threads; an idle OpenBLAS thread pool spins after NumPy's BLAS calls and
+            # takes a core from it (measured on bimba's QCLP: 1.2 s with OpenBLAS on one thread, 2.4 s without).
+            limits = {"libopenblas": 1, "libscipy_openblas": 1}
+        with threadpool_limits(limits):
+            return self._solve(problem, tol=tol, max_iter=max_iter, callback=callback)
 
     def _solve(self, problem: ConicProblem, *, tol: float, max_iter: int, callback) -> BackendResult:
         t_start = time.perf_counter()
@@ -551,12 +557,12 @@ class InteriorPointSolver:
             out[fixed] = 0.0
             return out
 
-        def solve_refined(f, rhs, sc, lp_w, target):
+        def solve_refined(f, rhs, sc, lp_w, target, with_P=True):
             """Solve with iterative refinement until ‖rhs − K dx‖∞ ≤ target (or no more progress)."""
             dx = lsolve(f, rhs)
             prev = np.inf
             for _ in range(_MAX_REFINE):
-                res = rhs - pr.kkt_mul(dx, sc, lp_w)
+                res = rhs - pr.kkt_mul(dx, sc, lp_w, with_P)
                 res[fixed] = 0.0
                 rn = float(np.abs(res).max())
                 if rn <= target or rn >= 0.5 * prev:
@@ -566,7 +572,7 @@ class InteriorPointSolver:
                 counters["refinement_steps"] += 1
             return dx
 
-        # ---- starting point (CVXOPT): solve the W = I system, then shift s and z into the cone ----
+        # ---- starting point: x from the W = I system, then s and z (see _INIT) ----
         t0 = time.perf_counter()
         sc0 = _identity_scaling(k)
         w0 = np.ones(p)
@@ -582,22 +588,36 @@ class InteriorPointSolver:
         x = solve_refined(f0, rhs0, sc0, w0, 1e-12 * max(1.0, float(np.abs(rhs0).max()))) + pr.x_fixed
         s_c = np.concatenate([np.ones((1, k)), pr.Bx(x)])
         s_l = pr.lp_b - pr.ax(x - pr.x_fixed)
-        init = _INIT if _INIT != "auto" else ("mehrotra" if pr.P is None else "cvxopt")
-        if init == "cvxopt":
-            z_c, z_l = -s_c, -s_l
-            s_c, s_l = _shift_into_cone(s_c, s_l)
-            z_c, z_l = _shift_into_cone(z_c, z_l)
-        else:
-            # Mehrotra-style: z = A y, the least-norm solution of A_fᵀz = −q̃ − P_ff x_f when P = 0 (an
-            # approximation otherwise, as y uses the P + AᵀA factor), which is scaled like the true dual,
-            # unlike CVXOPT's z = A x − b (as large as the slacks); then shifts that balance s and z.
+        y = None
+        if _INIT == "mehrotra":
+            # Mehrotra-style: z = A y, the least-norm solution of A_fᵀz = −q̃ − P_ff x_f, which is scaled like
+            # the true dual, unlike CVXOPT's z = A x − b (as large as the slacks, so the first iterations are
+            # spent shrinking a huge duality gap); then shifts that balance s and z. With a quadratic term the
+            # least-norm system (A_fᵀA_f without P) needs its own factorization, and may be singular (a
+            # variable that only P couples): then CVXOPT's start is used.
             Pfx0 = pr.Pmul(x) - pr.Px_fixed
             rhs_y = -(pr.q + pr.Px_fixed + Pfx0)
             rhs_y[fixed] = 0.0
-            y = solve_refined(f0, rhs_y, sc0, w0, 1e-12 * max(1e-300, float(np.abs(rhs_y).max())))
+            target_y = 1e-12 * max(1e-300, float(np.abs(rhs_y).max()))
+            f_y = f0
+            if pr.P is not None:
+                t0 = time.perf_counter()
+                data_y = pr.assemble(sc0, w0, with_P=False)
+                timers["assembly_time"] += time.perf_counter() - t0
+                try:
+                    f_y = factorize(data_y)
+                except NotPositiveDefiniteError:
+                    f_y = None
+            if f_y is not None:
+                y = solve_refined(f_y, rhs_y, sc0, w0, target_y, with_P=pr.P is None)
+        if y is not None:
             z_c = np.concatenate([np.zeros((1, k)), -pr.Bx(y)])  # z = A y (A body = −B)
             z_l = pr.ax(y)
             s_c, s_l, z_c, z_l = _mehrotra_shift(s_c, s_l, z_c, z_l)
+        else:
+            z_c, z_l = -s_c, -s_l
+            s_c, s_l = _shift_into_cone(s_c, s_l)
+            z_c, z_l = _shift_into_cone(z_c, z_l)
 
         # Without a quadratic term the primal and dual steps decouple (as in LP interior-point codes):
         # separate step lengths cut the iteration count on these highly degenerate problems.
