@@ -48,12 +48,14 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from functools import partial
 
 import numpy as np
 import scipy.sparse as sp
 from threadpoolctl import threadpool_limits
 
 from ..errors import SolverError
+from . import _soc_kernels as _kern
 from .cholesky import NotPositiveDefiniteError, SymbolicCholesky
 from .problem import BackendResult, ConicProblem
 
@@ -96,101 +98,52 @@ def _soc_det(u: np.ndarray) -> np.ndarray:
     return (u[0] - nb) * (u[0] + nb)
 
 
-def _soc_jprod(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Jordan product ``u ∘ v = (uᵀv, u₀v₁ + v₀u₁)``."""
-    return np.stack([u[0] * v[0] + u[1] * v[1] + u[2] * v[2], u[0] * v[1] + v[0] * u[1], u[0] * v[2] + v[0] * u[2]])
-
-
-def _soc_jdiv(lam: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """``x`` with ``lam ∘ x = d`` (``lam`` in the interior of the cone)."""
-    x0 = (lam[0] * d[0] - lam[1] * d[1] - lam[2] * d[2]) / _soc_det(lam)
-    return np.stack([x0, (d[1] - x0 * lam[1]) / lam[0], (d[2] - x0 * lam[2]) / lam[0]])
-
-
-class _StepFinder:
-    """Largest ``α`` with ``u + αΔu ∈ K`` for a fixed interior ``u`` and many directions ``Δu``.
-
-    SOC part: maps ``u`` to the identity with the quadratic representation of ``u^{-1/2}``
-    (as ECOS does), where the condition reads ``1 + αρ₀ ≥ α‖ρ₁‖``; the quantities that
-    depend on ``u`` only are computed once.
-    """
-
-    def __init__(self, u_c: np.ndarray, u_l: np.ndarray):
-        self.u_c, self.u_l = u_c, u_l
-        det = _soc_det(u_c)
-        self.lk = np.sqrt(det)
-        self.inv_det = 1.0 / det
-        self.inv_den = 1.0 / (u_c[0] + self.lk)
-
-    def soc(self, du: np.ndarray) -> float:
-        u = self.u_c
-        if not u.shape[1]:
-            return np.inf
-        rho0 = (u[0] * du[0] - u[1] * du[1] - u[2] * du[2]) * self.inv_det
-        c = (rho0 * self.lk + du[0]) * self.inv_den  # ρ₁ = (Δ₁ − c u₁)/lk
-        r1 = du[1] - c * u[1]
-        r2 = du[2] - c * u[2]
-        worst = float((np.sqrt((r1 * r1 + r2 * r2) * self.inv_det) - rho0).max())
-        return 1.0 / worst if worst > 0 else np.inf
-
-    def __call__(self, du_c: np.ndarray, du_l: np.ndarray) -> float:
-        a = self.soc(du_c)
-        neg = du_l < 0
-        if neg.any():
-            a = min(a, float((-self.u_l[neg] / du_l[neg]).min()))
-        return a
-
-
 def _soc_max_step(u: np.ndarray, du: np.ndarray) -> float:
     """Largest ``α`` with ``u + α du`` in SOC(3) for every cone (``inf`` when unbounded); ``u`` interior."""
-    return _StepFinder(u, np.zeros(0)).soc(du)
+    return _kern.max_step_soc(np.ascontiguousarray(u, dtype=np.float64), np.ascontiguousarray(du, dtype=np.float64))
+
+
+def _max_step(u_c: np.ndarray, u_l: np.ndarray, du_c: np.ndarray, du_l: np.ndarray) -> float:
+    """Largest ``α`` with ``(u_c, u_l) + α (du_c, du_l)`` in K (``inf`` when unbounded)."""
+    a = _kern.max_step_soc(u_c, du_c) if u_c.shape[1] else np.inf
+    if u_l.size:
+        a = min(a, _kern.max_step_lp(u_l, du_l))
+    return a
 
 
 class _SocScaling:
     """Nesterov–Todd scaling ``W = η W̄`` of SOC(3) pairs (s, z), vectorized (CVXOPT's formulas).
 
     ``W̄ = [[w₀, w₁ᵀ], [w₁, I + w₁w₁ᵀ/(1 + w₀)]]`` with ``w̄ᵀJw̄ = 1`` (``J = diag(1, −1, −1)``);
-    ``W z = W⁻¹ s = λ``; ``W⁻² = (2 v vᵀ − J)/η²`` with ``v = J w̄``.
+    ``W z = W⁻¹ s = λ``; ``W⁻² = (2 v vᵀ − J)/η²`` with ``v = J w̄``. The loops are the compiled
+    kernels of :mod:`._soc_kernels`.
     """
 
     def __init__(self, s: np.ndarray, z: np.ndarray):
-        sn = np.sqrt(_soc_det(s))
-        zn = np.sqrt(_soc_det(z))
-        sb = s / sn
-        zb = z / zn
-        gamma = np.sqrt(0.5 * (1.0 + sb[0] * zb[0] + sb[1] * zb[1] + sb[2] * zb[2]))
-        inv2g = 0.5 / gamma
-        self.w = np.stack([(sb[0] + zb[0]) * inv2g, (sb[1] - zb[1]) * inv2g, (sb[2] - zb[2]) * inv2g])
-        self.eta = np.sqrt(sn / zn)
-        self.inv_eta2 = zn / sn
-        den = 1.0 / (sb[0] + zb[0] + 2.0 * gamma)
-        scale = np.sqrt(sn * zn)
-        self.lam = np.stack([
-            gamma * scale,
-            ((gamma + zb[0]) * sb[1] + (gamma + sb[0]) * zb[1]) * den * scale,
-            ((gamma + zb[0]) * sb[2] + (gamma + sb[0]) * zb[2]) * den * scale,
-        ])
-
-    def _wbar(self, v: np.ndarray, sign: float) -> np.ndarray:
-        # sign = +1: W̄ v;  sign = −1: J W̄ J v = W̄⁻¹ v
-        w = self.w
-        w1v1 = w[1] * v[1] + w[2] * v[2]
-        c = sign * v[0] + w1v1 / (1.0 + w[0])
-        return np.stack([w[0] * v[0] + sign * w1v1, v[1] + c * w[1], v[2] + c * w[2]])
+        k = s.shape[1]
+        self.w = np.empty((3, k))
+        self.eta = np.empty(k)
+        self.inv_eta2 = np.empty(k)
+        self.lam = np.empty((3, k))
+        _kern.nt_scaling(s, z, self.w, self.eta, self.inv_eta2, self.lam)
 
     def apply(self, v: np.ndarray) -> np.ndarray:
         """``W v``."""
-        return self._wbar(v, 1.0) * self.eta
+        out = np.empty_like(v)
+        _kern.apply_w(self.w, self.eta, v, 1.0, out)
+        return out
 
     def apply_inv(self, v: np.ndarray) -> np.ndarray:
         """``W⁻¹ v``."""
-        return self._wbar(v, -1.0) / self.eta
+        out = np.empty_like(v)
+        _kern.apply_w(self.w, self.eta, v, -1.0, out)
+        return out
 
     def apply_inv2(self, v: np.ndarray) -> np.ndarray:
         """``W⁻² v = (2 v̂ (v̂ᵀv) − J v)/η²`` with ``v̂ = J w̄``."""
-        w = self.w
-        a = 2.0 * (w[0] * v[0] - w[1] * v[1] - w[2] * v[2])
-        return np.stack([a * w[0] - v[0], v[1] - a * w[1], v[2] - a * w[2]]) * self.inv_eta2
+        out = np.empty_like(v)
+        _kern.apply_inv2(self.w, self.inv_eta2, v, out)
+        return out
 
     def body_to_inv2(self, g: np.ndarray) -> np.ndarray:
         """``W⁻² (0, −g)`` for a (2, k) body field ``g`` (that is ``W⁻² A Δx`` with ``g = B Δx``)."""
@@ -278,17 +231,15 @@ class _Prepared:
             P_pos = chol.positions(Pl.row, Pl.col) if Pl is not None else None
         except ValueError as exc:
             raise _PatternMismatch(str(exc)) from None
-        self.pos = np.concatenate([cone_pos, lp_pos])
         self.base = np.zeros(nnz)
         if Pl is not None:
             self.base += np.bincount(P_pos, weights=Pl.data, minlength=nnz)
 
-        # Cone products in SoA order: row i·k + t of C is row i of B_t.
+        # Cone blocks in SoA order for the kernels: B[:, :, t] is B_t.
         self.B = np.ascontiguousarray(Bt.transpose(1, 2, 0))  # (2, 3, k)
-        rows = np.repeat(np.arange(2 * k).reshape(2, k)[:, :, None], 3, axis=2).ravel()
-        cols = np.broadcast_to(cv[None, :, :], (2, k, 3)).ravel()
-        self.C = sp.csr_matrix((self.B.transpose(0, 2, 1).ravel(), (rows, cols)), shape=(2 * k, n))
-        self.CT = self.C.T.tocsr()
+        self.cv = np.ascontiguousarray(cv)
+        self.cone_pos = np.ascontiguousarray(cone_pos)
+        self.lp_pos = np.ascontiguousarray(lp_pos)
         self.L = sp.csr_matrix((ia.ravel(), (np.repeat(np.arange(p), 2), iv.ravel())), shape=(p, n))
         self.LT = self.L.T.tocsr()
         self.rhs = np.asarray(problem.ineq_rhs, dtype=np.float64)
@@ -338,7 +289,9 @@ class _Prepared:
     # --- products with the constraint matrix (A x = (0, −B x) on cones, a·x on inequalities) ---
     def Bx(self, x: np.ndarray) -> np.ndarray:
         """(2, k): ``B_t x_t`` for every cone."""
-        return (self.C @ x).reshape(2, self.k)
+        out = np.empty((2, self.k))
+        _kern.gather(self.B, self.cv, x, out)
+        return out
 
     def ax(self, x: np.ndarray) -> np.ndarray:
         """(p,): ``a_k · x`` for every inequality."""
@@ -346,11 +299,9 @@ class _Prepared:
 
     def At(self, zbody: np.ndarray, zl: np.ndarray) -> np.ndarray:
         """``Aᵀz`` (n,) with fixed entries set to 0; ``zbody`` (2, k) are the cone bodies."""
-        out = np.zeros(self.n)
+        out = self.LT @ zl if self.p else np.zeros(self.n)
         if self.k:
-            out -= self.CT @ zbody.ravel()
-        if self.p:
-            out += self.LT @ zl
+            _kern.scatter(self.B, self.cv, zbody, -1.0, out)
         out[self.fixed] = 0.0
         return out
 
@@ -362,7 +313,7 @@ class _Prepared:
         the operator, unregularized."""
         out = self.Pmul(v) if with_P else np.zeros(self.n)
         if self.k:
-            out += self.CT @ sc.body_inv2(self.Bx(v)).ravel()
+            _kern.kkt_cones(self.B, self.cv, sc.w, sc.inv_eta2, v, out)
         if self.p:
             out += self.LT @ (lp_w * self.ax(v))
         out[self.fixed] = v[self.fixed]
@@ -371,18 +322,11 @@ class _Prepared:
     def assemble(self, sc: _SocScaling | None, lp_w: np.ndarray, with_P: bool = True) -> np.ndarray:
         """Lower-triangle data of ``P + AᵀW⁻²A`` (``AᵀW⁻²A`` if not ``with_P``), identity rows for fixed
         variables, aligned with the pattern."""
-        parts = []
-        if self.k:
-            B, w = self.B, sc.w
-            v = B[0] * w[1] + B[1] * w[2]  # (3, k): B_tᵀ w̄₁
-            vals = self.BtB6 + 2.0 * v[_CLIQUE_A] * v[_CLIQUE_B]
-            vals *= sc.inv_eta2
-            parts.append(vals.ravel())
-        if self.p:
-            parts.append((self.lp_coef * lp_w).ravel())
         data = self.base.copy() if with_P else np.zeros(self.nnz)
-        if parts:
-            data += np.bincount(self.pos, weights=np.concatenate(parts), minlength=self.nnz)
+        if self.k:
+            _kern.assemble_cones(self.B, self.BtB6, sc.w, sc.inv_eta2, self.cone_pos, data)
+        if self.p:
+            _kern.scatter_add((self.lp_coef * lp_w).ravel(), self.lp_pos, data)
         data *= self.keep
         data[self.fixed_diag] = 1.0
         return data
@@ -708,7 +652,7 @@ class InteriorPointSolver:
             # ---- predictor (affine scaling): d_s = −λ∘λ, so W⁻¹(λ \ d_s) = −W⁻¹λ = −z ----
             resid = _Residuals(pr, sc, lp_w, rx, rzc, rzl)
             dx_a, dsc_a, dsl_a, dzc_a, dzl_a, _ = _newton(pr, lin, sc, lp_w, resid, -z_c, -z_l)
-            step_s, step_z = _StepFinder(s_c, s_l), _StepFinder(z_c, z_l)
+            step_s, step_z = partial(_max_step, s_c, s_l), partial(_max_step, z_c, z_l)
             ap_aff = min(1.0, step_s(dsc_a, dsl_a))
             ad_aff = min(1.0, step_z(dzc_a, dzl_a))
             if not separate:
@@ -719,9 +663,8 @@ class InteriorPointSolver:
             sigma = min(1.0, max(0.0, sz_aff / gap if gap > 0 else 0.0)) ** _SIGMA_EXP
 
             # ---- combined step: d_s = −λ∘λ − (W⁻¹Δs_a)∘(WΔz_a) + σμe ----
-            cc = _soc_jprod(sc.apply_inv(dsc_a), sc.apply(dzc_a))
-            cc[0] -= sigma * mu
-            wu_c = -z_c - sc.apply_inv(_soc_jdiv(sc.lam, cc))
+            wu_c = np.empty((3, k))
+            _kern.mehrotra_cones(sc.w, sc.eta, sc.lam, dsc_a, dzc_a, z_c, sigma * mu, wu_c)
             wu_l = -z_l - lp_winv * (dsl_a * dzl_a - sigma * mu) / lp_lam
             dx, dsc, dsl, dzc, dzl, rhs_tot = _newton(pr, lin, sc, lp_w, resid, wu_c, wu_l)
             step_p = min(1.0, _STEP * step_s(dsc, dsl))
@@ -733,10 +676,11 @@ class InteriorPointSolver:
                 if min(step_p, step_d) >= 0.995:
                     break
                 tp, td = min(1.0, _GZ_A * step_p + _GZ_B), min(1.0, _GZ_A * step_d + _GZ_B)
-                tc_, tl_ = _centrality_target(sc, s_c + tp * dsc, z_c + td * dzc, s_l + tp * dsl,
-                                              z_l + td * dzl, sigma * mu)
-                wu_c2 = sc.apply_inv(_soc_jdiv(sc.lam, tc_))
-                wu_l2 = lp_winv * tl_ / lp_lam
+                lo, hi = _BETA_MIN * sigma * mu, _BETA_MAX * sigma * mu
+                wu_c2 = np.empty((3, k))
+                _kern.gondzio_cones(sc.w, sc.eta, sc.lam, s_c, dsc, tp, z_c, dzc, td, lo, hi, wu_c2)
+                vl = (s_l + tp * dsl) * (z_l + td * dzl)
+                wu_l2 = lp_winv * np.maximum(np.clip(vl, lo, hi) - vl, -hi) / lp_lam
                 cx, csc_, csl, czc, czl, crhs = _newton(pr, lin, sc, lp_w, no_resid, wu_c2, wu_l2)
                 nx, nsc, nsl, nzc, nzl = dx + cx, dsc + csc_, dsl + csl, dzc + czc, dzl + czl
                 np_ = min(1.0, _STEP * step_s(nsc, nsl))
@@ -852,33 +796,13 @@ def _newton(pr: _Prepared, lin, sc: _SocScaling, lp_w, res: _Residuals, wu_c, wu
     rhs[pr.fixed] = 0.0
     dx = lin(rhs)
     g = pr.Bx(dx)  # A Δx = (0, −g) on the cones
-    dzc = sc.body_to_inv2(g)
-    dzc += wu_c
-    dzc += res.wrc
+    dzc = np.empty((3, pr.k))
+    dsc = np.empty((3, pr.k))
+    _kern.newton_cones(g, sc.w, sc.inv_eta2, wu_c, res.wrc, res.rzc, dzc, dsc)
     adx = pr.ax(dx)
     dzl = lp_w * adx + wu_l + res.wrl
-    dsc = -res.rzc
-    dsc[1:] += g
     dsl = -res.rzl - adx
     return dx, dsc, dsl, dzc, dzl, rhs
-
-
-def _centrality_target(sc: _SocScaling, s_c, z_c, s_l, z_l, mu_t: float):
-    """Gondzio's corrector right-hand side: move the complementarity products at a trial point into
-    ``[β_min μ_t, β_max μ_t]`` (for SOC, both eigenvalues of the Jordan product of the scaled pair).
-    """
-    v = _soc_jprod(sc.apply_inv(s_c), sc.apply(z_c))
-    nv = np.sqrt(v[1] ** 2 + v[2] ** 2)
-    e1, e2 = v[0] - nv, v[0] + nv
-    lo, hi = _BETA_MIN * mu_t, _BETA_MAX * mu_t
-    t1 = np.maximum(np.clip(e1, lo, hi) - e1, -hi)
-    t2 = np.maximum(np.clip(e2, lo, hi) - e2, -hi)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        u = np.where(nv > 0, v[1:] / nv, 0.0)
-    tc = np.concatenate([0.5 * (t1 + t2)[None], 0.5 * (t2 - t1) * u])
-    vl = s_l * z_l
-    tl = np.maximum(np.clip(vl, lo, hi) - vl, -hi)
-    return tc, tl
 
 
 def _amax(a: np.ndarray) -> float:
