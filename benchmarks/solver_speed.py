@@ -16,7 +16,9 @@ What the columns mean
     ``build_problem`` + ``InteriorPointSolver.solve`` wall time: all problem-specific
     set-up (the ConicProblem, our assembly plan and reduced-problem constants) plus all
     iterations. It excludes the once-per-mesh symbolic Cholesky analysis, printed
-    separately in the per-mesh lines as "symbolic analysis".
+    separately in the per-mesh lines as "symbolic analysis", and the once-per-process load
+    of the compiled kernels (a warm-up solve on a tiny mesh runs before any timing; the
+    very first run after an install also compiles them, about 10 s).
 ``t_clarabel``
     ``build_problem`` + ``solve_clarabel`` wall time (Clarabel's own set-up included).
 ``build``
@@ -84,6 +86,15 @@ def heat_time(mesh, source: int) -> tuple[float, np.ndarray]:
     return time.perf_counter() - t0, d
 
 
+def warm_up() -> None:
+    """One tiny solve per formulation type, so that no timed call loads the compiled kernels (Numba cache)."""
+    mesh = icosphere(1)
+    ops = MeshOperators(mesh)
+    for method in ("qclp", "qcqp-hessian"):
+        p = build_problem(ops, np.array([0]), method, smoothness_weight(mesh, 1.0))
+        InteriorPointSolver(kkt_pattern(mesh.n_vertices, mesh.F, mesh.edges, p.P)).solve(p)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--meshes", nargs="+", default=None,
@@ -95,9 +106,12 @@ def main(argv=None) -> int:
     ap.add_argument("--tol", type=float, default=1e-8)
     ap.add_argument("--m", type=float, default=1.0, help="smoothness multiplier m (λ = m·100·h/n)")
     ap.add_argument("--repeat", type=int, default=1, help="time every call N times and keep the minimum")
+    ap.add_argument("--backend", default="auto", choices=["auto", "pardiso", "cholmod", "scipy"],
+                    help="factorization backend of our solver (auto: PARDISO, else CHOLMOD)")
     args = ap.parse_args(argv)
 
     names = args.meshes or (["icosphere5"] + [n for n in DEFAULT_SHARED if (SHARED / n).exists()])
+    warm_up()
     print(f"# OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}, "
           f"cores={os.cpu_count()}, tol={args.tol}", flush=True)
     rows = []
@@ -134,10 +148,12 @@ def main(argv=None) -> int:
             key = "none" if p.P is None else method
             if key not in solvers:
                 t0 = time.perf_counter()
-                solvers[key] = InteriorPointSolver(kkt_pattern(mesh.n_vertices, mesh.F, mesh.edges, p.P))
+                solvers[key] = InteriorPointSolver(kkt_pattern(mesh.n_vertices, mesh.F, mesh.edges, p.P),
+                                                   backend=args.backend)
                 t_an = time.perf_counter() - t0
+                chol = solvers[key].cholesky
                 print(f"#   symbolic analysis for the {'face/edge' if p.P is None else method} pattern: "
-                      f"{t_an:.3f} s (once per mesh; CHOLMOD analyze {solvers[key].cholesky.analyze_time:.3f} s)",
+                      f"{t_an:.3f} s (once per mesh; {chol.backend} analysis {chol.analyze_time:.3f} s)",
                       flush=True)
             ipm = solvers[key]
             res = min((ipm.solve(p, tol=args.tol) for _ in range(args.repeat)), key=lambda r: r.solve_time)

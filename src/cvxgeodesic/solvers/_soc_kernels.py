@@ -12,24 +12,33 @@ cone t) and ``cv`` (k, 3) its vertices. The Nesterov–Todd scaling is stored as
 ``w`` (3, k) (the scaling point w̄), ``eta`` and ``inv_eta2`` (k,) (η and 1/η²),
 as in :class:`cvxgeodesic.solvers.ipm._SocScaling`, whose formulas are CVXOPT's.
 
-Compiled code is cached on disk (``cache=True``): the first solve after an install
+Loops without scatter (no two cones write the same entry) run in parallel
+(``prange``). Compiled code is cached on disk (``cache=True``): the first solve after an install
 compiles for a few seconds, later processes load the cache in well under a second.
 """
 
 from __future__ import annotations
 
 import math
+import os
 
+import numba
 import numpy as np
-from numba import njit
+from numba import njit, prange
+
+# The element-wise kernels run on all cores. OpenMP first: MKL PARDISO uses the GNU OpenMP runtime too, so both
+# share one thread pool instead of two pools spinning against each other on a small machine.
+if "NUMBA_THREADING_LAYER" not in os.environ and "NUMBA_THREADING_LAYER_PRIORITY" not in os.environ:
+    numba.config.THREADING_LAYER_PRIORITY = ["omp", "tbb", "workqueue"]
 
 _JIT = {"cache": True, "nogil": True, "error_model": "numpy"}
+_PJIT = {**_JIT, "parallel": True}
 
 
-@njit(**_JIT)
+@njit(**_PJIT)
 def nt_scaling(s, z, w, eta, inv_eta2, lam):
     """NT scaling of every pair (s_t, z_t) (both interior): fills ``w``, ``eta``, ``inv_eta2`` and ``λ = W z``."""
-    for t in range(s.shape[1]):
+    for t in prange(s.shape[1]):
         s0, s1, s2 = s[0, t], s[1, t], s[2, t]
         z0, z1, z2 = z[0, t], z[1, t], z[2, t]
         ns = math.sqrt(s1 * s1 + s2 * s2)
@@ -52,10 +61,10 @@ def nt_scaling(s, z, w, eta, inv_eta2, lam):
         lam[2, t] = ((gamma + zb0) * sb2 + (gamma + sb0) * zb2) * den * scale
 
 
-@njit(**_JIT)
+@njit(**_PJIT)
 def apply_w(w, eta, v, sign, out):
     """``out = W v`` (``sign`` = +1) or ``W⁻¹ v`` (``sign`` = −1)."""
-    for t in range(v.shape[1]):
+    for t in prange(v.shape[1]):
         w0, w1, w2 = w[0, t], w[1, t], w[2, t]
         v0, v1, v2 = v[0, t], v[1, t], v[2, t]
         w1v1 = w1 * v1 + w2 * v2
@@ -66,10 +75,10 @@ def apply_w(w, eta, v, sign, out):
         out[2, t] = (v2 + c * w2) * f
 
 
-@njit(**_JIT)
+@njit(**_PJIT)
 def apply_inv2(w, inv_eta2, v, out):
     """``out = W⁻² v = (2 v̂ (v̂ᵀv) − J v)/η²`` with ``v̂ = J w̄``."""
-    for t in range(v.shape[1]):
+    for t in prange(v.shape[1]):
         w0, w1, w2 = w[0, t], w[1, t], w[2, t]
         v0, v1, v2 = v[0, t], v[1, t], v[2, t]
         a = 2.0 * (w0 * v0 - w1 * v1 - w2 * v2)
@@ -79,10 +88,10 @@ def apply_inv2(w, inv_eta2, v, out):
         out[2, t] = (v2 - a * w2) * f
 
 
-@njit(**_JIT)
+@njit(**_PJIT)
 def gather(B, cv, x, out):
     """``out[:, t] = B_t x[cv[t]]`` (2, k): the cone bodies of ``B x``."""
-    for t in range(cv.shape[0]):
+    for t in prange(cv.shape[0]):
         xa, xb, xc = x[cv[t, 0]], x[cv[t, 1]], x[cv[t, 2]]
         out[0, t] = B[0, 0, t] * xa + B[0, 1, t] * xb + B[0, 2, t] * xc
         out[1, t] = B[1, 0, t] * xa + B[1, 1, t] * xb + B[1, 2, t] * xc
@@ -142,15 +151,9 @@ def scatter_add(values, pos, data):
         data[pos[i]] += values[i]
 
 
-@njit(**_JIT)
-def max_step_soc(u, du):
-    """Largest ``α`` with ``u + α du`` in SOC(3) for every cone (``inf`` if unbounded); ``u`` interior.
-
-    Maps ``u`` to the identity with the quadratic representation of ``u^{-1/2}`` (as ECOS does),
-    where the condition reads ``1 + αρ₀ ≥ α‖ρ₁‖``.
-    """
-    worst = -np.inf
-    for t in range(u.shape[1]):
+@njit(**_PJIT)
+def _soc_step_bounds(u, du, out):
+    for t in prange(u.shape[1]):
         u0, u1, u2 = u[0, t], u[1, t], u[2, t]
         nb = math.sqrt(u1 * u1 + u2 * u2)
         det = (u0 - nb) * (u0 + nb)
@@ -160,9 +163,20 @@ def max_step_soc(u, du):
         c = (rho0 * lk + du[0, t]) / (u0 + lk)
         r1 = du[1, t] - c * u1
         r2 = du[2, t] - c * u2
-        val = math.sqrt((r1 * r1 + r2 * r2) * inv_det) - rho0
-        if val > worst:
-            worst = val
+        out[t] = math.sqrt((r1 * r1 + r2 * r2) * inv_det) - rho0
+
+
+def max_step_soc(u, du):
+    """Largest ``α`` with ``u + α du`` in SOC(3) for every cone (``inf`` if unbounded); ``u`` interior.
+
+    Maps ``u`` to the identity with the quadratic representation of ``u^{-1/2}`` (as ECOS does),
+    where the condition reads ``1 + αρ₀ ≥ α‖ρ₁‖``.
+    """
+    if not u.shape[1]:
+        return np.inf
+    bounds = np.empty(u.shape[1])
+    _soc_step_bounds(u, du, bounds)
+    worst = float(bounds.max())
     return 1.0 / worst if worst > 0 else np.inf
 
 
@@ -178,13 +192,13 @@ def max_step_lp(u, du):
     return best
 
 
-@njit(**_JIT)
+@njit(**_PJIT)
 def newton_cones(g, w, inv_eta2, wu, wrc, rzc, dz, ds):
     """Cone parts of a Newton direction from ``g = B Δx``.
 
     ``Δz = W⁻² (0, −g) + wu + W⁻² r_z`` (``wrc`` holds ``W⁻² r_z``) and ``Δs = −r_z + (0, g)``.
     """
-    for t in range(g.shape[1]):
+    for t in prange(g.shape[1]):
         g0, g1 = g[0, t], g[1, t]
         w0, w1, w2 = w[0, t], w[1, t], w[2, t]
         a = 2.0 * (w1 * g0 + w2 * g1)
@@ -214,10 +228,10 @@ def _jdiv_winv(w0, w1, w2, inv_eta, l0, l1, l2, d0, d1, d2):
     return _w_apply(w0, w1, w2, inv_eta, -1.0, x0, x1, x2)
 
 
-@njit(**_JIT)
+@njit(**_PJIT)
 def mehrotra_cones(w, eta, lam, ds_a, dz_a, z, sigma_mu, out):
     """Combined-step term ``out = −z − W⁻¹(λ \\ ((W⁻¹Δs_a)∘(WΔz_a) − σμe))`` of every cone."""
-    for t in range(z.shape[1]):
+    for t in prange(z.shape[1]):
         w0, w1, w2 = w[0, t], w[1, t], w[2, t]
         e = eta[t]
         a0, a1, a2 = _w_apply(w0, w1, w2, 1.0 / e, -1.0, ds_a[0, t], ds_a[1, t], ds_a[2, t])
@@ -231,7 +245,7 @@ def mehrotra_cones(w, eta, lam, ds_a, dz_a, z, sigma_mu, out):
         out[2, t] = -z[2, t] - r2
 
 
-@njit(**_JIT)
+@njit(**_PJIT)
 def gondzio_cones(w, eta, lam, s, ds, tp, z, dz, td, lo, hi, out):
     """Gondzio's corrector term ``out = W⁻¹(λ \\ c)`` of every cone.
 
@@ -239,7 +253,7 @@ def gondzio_cones(w, eta, lam, s, ds, tp, z, dz, td, lo, hi, out):
     complementarity product ``(W⁻¹s)∘(Wz)`` are moved into ``[lo, hi]``: ``c`` is that move
     (each eigenvalue's decrease bounded by ``hi``), expressed in the product's Jordan frame.
     """
-    for t in range(z.shape[1]):
+    for t in prange(z.shape[1]):
         w0, w1, w2 = w[0, t], w[1, t], w[2, t]
         e = eta[t]
         a0, a1, a2 = _w_apply(w0, w1, w2, 1.0 / e, -1.0, s[0, t] + tp * ds[0, t], s[1, t] + tp * ds[1, t],

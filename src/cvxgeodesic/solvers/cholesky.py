@@ -31,6 +31,7 @@ from collections.abc import Callable
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from numba import njit
 
 from . import pardiso as _pardiso
 
@@ -63,6 +64,27 @@ def cholmod_available() -> bool:
 def pardiso_available() -> bool:
     """True when MKL PARDISO (``libmkl_rt``) can be loaded."""
     return _pardiso.pardiso_available()
+
+
+@njit(cache=True, nogil=True)
+def _find_positions(indptr, indices, rows, cols, out):
+    """``out[i]`` = position of entry (rows[i], cols[i]) in the lower-triangular CSC structure (binary search
+    in its column); returns the first ``i`` not in the pattern, or −1."""
+    for i in range(rows.shape[0]):
+        r, c = rows[i], cols[i]
+        if r < c:
+            r, c = c, r
+        lo, hi = indptr[c], indptr[c + 1]
+        while lo < hi:
+            mid = (lo + hi) // 2
+            if indices[mid] < r:
+                lo = mid + 1
+            else:
+                hi = mid
+        if lo >= indptr[c + 1] or indices[lo] != r:
+            return i
+        out[i] = lo
+    return -1
 
 
 class SymbolicCholesky:
@@ -121,9 +143,6 @@ class SymbolicCholesky:
         self.indptr = S.indptr.astype(np.int32)
         self.indices = S.indices.astype(np.int32)
         self.nnz = int(self.indices.size)
-        cols = np.repeat(np.arange(n, dtype=np.int64), np.diff(self.indptr))
-        # entries sorted by (col, row): one searchsorted over these keys locates any (row, col)
-        self._keys = cols * n + self.indices
         self.diag_positions = self.positions(np.arange(n), np.arange(n))
 
         if backend == "auto":
@@ -176,16 +195,13 @@ class SymbolicCholesky:
         ValueError
             If an entry is not in the pattern.
         """
-        rows = np.asarray(rows, dtype=np.int64)
-        cols = np.asarray(cols, dtype=np.int64)
-        lo, hi = np.minimum(rows, cols), np.maximum(rows, cols)
-        keys = lo * self.n + hi
-        pos = np.searchsorted(self._keys, keys)
-        pos_c = np.minimum(pos, self.nnz - 1)
-        if keys.size and not np.array_equal(self._keys[pos_c], keys):
-            bad = np.flatnonzero(self._keys[pos_c] != keys)[0]
+        rows = np.ascontiguousarray(rows, dtype=np.int64)
+        cols = np.ascontiguousarray(cols, dtype=np.int64)
+        out = np.empty(rows.size, dtype=np.int64)
+        bad = _find_positions(self.indptr, self.indices, rows, cols, out)
+        if bad >= 0:
             raise ValueError(f"entry ({rows[bad]}, {cols[bad]}) is not in the sparsity pattern")
-        return pos_c
+        return out
 
     def matrix(self, data: np.ndarray) -> sp.csc_matrix:
         """The full symmetric (n, n) CSC matrix whose lower triangle is ``data`` (for checks)."""
