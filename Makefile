@@ -23,6 +23,7 @@ $(STAMP): pyproject.toml requirements.lock
 	$(PY) -m pip install -q --upgrade pip
 	$(PY) -m pip install -q -r requirements.lock
 	$(PY) -m pip install -q --no-deps -e .
+	$(PY) -c "from cvxgeodesic.solvers.ipm import warm_up; warm_up()"  # compile the solver kernels once (Numba cache)
 	@touch $(STAMP)
 
 demo: $(STAMP)

@@ -50,7 +50,7 @@ import numpy as np
 
 from cvxgeodesic.formulations import MeshOperators, build_problem, smoothness_weight
 from cvxgeodesic.mesh import icosphere
-from cvxgeodesic.solvers.ipm import InteriorPointSolver
+from cvxgeodesic.solvers.ipm import InteriorPointSolver, warm_up
 from cvxgeodesic.solvers.problem import kkt_pattern
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "meshes"
@@ -84,15 +84,6 @@ def heat_time(mesh, source: int) -> tuple[float, np.ndarray]:
     solver = pp3d.MeshHeatMethodDistanceSolver(mesh.V, mesh.F)
     d = solver.compute_distance(source)
     return time.perf_counter() - t0, d
-
-
-def warm_up() -> None:
-    """One tiny solve per formulation type, so that no timed call loads the compiled kernels (Numba cache)."""
-    mesh = icosphere(1)
-    ops = MeshOperators(mesh)
-    for method in ("qclp", "qcqp-hessian"):
-        p = build_problem(ops, np.array([0]), method, smoothness_weight(mesh, 1.0))
-        InteriorPointSolver(kkt_pattern(mesh.n_vertices, mesh.F, mesh.edges, p.P)).solve(p)
 
 
 def main(argv=None) -> int:

@@ -59,7 +59,7 @@ from . import _soc_kernels as _kern
 from .cholesky import NotPositiveDefiniteError, SymbolicCholesky
 from .problem import BackendResult, ConicProblem
 
-__all__ = ["InteriorPointSolver"]
+__all__ = ["InteriorPointSolver", "warm_up"]
 
 # Fraction of the step to the boundary of the cone that is taken (CVXOPT's STEP).
 _STEP = 0.99
@@ -852,3 +852,20 @@ def _shift_into_cone(uc: np.ndarray, ul: np.ndarray) -> tuple[np.ndarray, np.nda
         uc[0] += 1.0 + worst
         ul = ul + (1.0 + worst)
     return uc, ul
+
+
+def warm_up() -> None:
+    """Compile (first run after an install, about 10 s) or load (later, under a second) the solver's kernels.
+
+    The first :meth:`InteriorPointSolver.solve` of a process does this by itself; call it beforehand to keep
+    that one-time cost out of a timing. ``make setup`` runs it once so that the on-disk cache exists.
+    """
+    from ..formulations import MeshOperators, build_problem, smoothness_weight
+    from ..mesh.generate import icosphere
+    from .problem import kkt_pattern
+
+    mesh = icosphere(1)
+    ops = MeshOperators(mesh)
+    for method in ("qclp", "lclp", "qcqp-hessian"):
+        p = build_problem(ops, np.array([0]), method, smoothness_weight(mesh, 1.0))
+        InteriorPointSolver(kkt_pattern(mesh.n_vertices, mesh.F, mesh.edges, p.P)).solve(p)
