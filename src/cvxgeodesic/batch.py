@@ -225,9 +225,9 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
     scheduler : str or distributed.Client, optional
         Address of a running Dask scheduler (``"tcp://host:8786"``) or a
         connected client. Default: a ``LocalCluster`` of ``n_workers`` worker
-        processes with one thread each, closed at the end. Its workers' BLAS
-        (CHOLMOD's dense kernels) gets ``cpu_count // n_workers`` threads unless
-        ``OPENBLAS_NUM_THREADS`` / ``OMP_NUM_THREADS`` are set.
+        processes with one thread each, closed at the end. Each worker's solver
+        threads (PARDISO/MKL, the compiled kernels, CHOLMOD's BLAS) get
+        ``cpu_count // n_workers`` threads.
     n_workers : int
         Workers of the local cluster (ignored with ``scheduler``).
     force : bool
@@ -317,7 +317,7 @@ def _run_on_cluster(todo, rows, sources, out, method, m, solver, multires, outpu
         if scheduler is None:
             threads = max(1, (os.cpu_count() or 1) // n_workers)
             blas = {f"distributed.nanny.pre-spawn-environ.{k}": threads
-                    for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}
+                    for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")}
             with dask.config.set(blas):
                 cluster = stack.enter_context(distributed.LocalCluster(
                     n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=":0"))

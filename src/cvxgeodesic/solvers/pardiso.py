@@ -28,6 +28,9 @@ import numpy as np
 __all__ = ["PardisoFactor", "PardisoError", "pardiso_available"]
 
 _MTYPE_SPD = 2
+# iparm[23], the parallel factorization algorithm: 0 classic, 1 two-level, 10 improved two-level (measured on
+# bimba: 43–48 ms against 55–59 ms per Hessian-pattern factorization, 12–13 ms against 17–19 ms for QCLP).
+_FACTOR_ALGORITHM = 10
 _MKL_THREADING_GNU = 3
 
 # PARDISO error codes (oneMKL reference, "pardiso" error parameter).
@@ -181,6 +184,7 @@ class PardisoFactor:
         iparm[1] = {"amd": 0, "metis": 2}.get(ordering, 2)  # fill-reducing ordering
         iparm[7] = 0  # no iterative refinement inside PARDISO (the caller refines with its own operator)
         iparm[17] = -1  # report nnz(L)
+        iparm[23] = _FACTOR_ALGORITHM
         iparm[24] = 2  # parallel forward/backward substitution (measured 5–10 % faster solves than sequential)
         iparm[34] = 1  # zero-based indices
         self._iparm = iparm
