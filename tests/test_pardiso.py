@@ -51,14 +51,23 @@ def test_errors_are_clear():
     f = PardisoFactor(low.indptr, low.indices)
     with pytest.raises(RuntimeError, match="no successful factorization"):
         f.solve(np.ones(A.shape[0]))
+    # a zero pivot fails the factorization; a negative one gives a non-finite solve
+    singular = low.data.copy()
+    singular[low.indptr[5]:low.indptr[6]] = 0.0
     with pytest.raises(PardisoError, match="not positive definite") as info:
-        f.factorize(-low.data)
+        f.factorize(singular)
     assert info.value.code == -4 and info.value.phase == 22
     with pytest.raises(RuntimeError, match="no successful factorization"):
         f.solve(np.ones(A.shape[0]))
+    f.factorize(-low.data)
+    with pytest.raises(PardisoError, match="not positive definite") as info:
+        f.solve(np.ones(A.shape[0]))
+    assert info.value.code == -4
     f.factorize(low.data)
     with pytest.raises(ValueError, match="right-hand side must have shape"):
         f.solve(np.ones(A.shape[0] + 1))
+    with pytest.raises(ValueError, match="non-finite"):
+        f.solve(np.full(A.shape[0], np.nan))
 
 
 def test_symbolic_cholesky_maps_not_positive_definite():
@@ -68,7 +77,7 @@ def test_symbolic_cholesky_maps_not_positive_definite():
     vals = np.zeros(chol.nnz)
     vals[pos] = sp.find(low)[2]
     with pytest.raises(NotPositiveDefiniteError):
-        chol.factorize(-vals)
+        chol.factorize(-vals)(np.ones(chol.n))
     # a semidefinite matrix made definite by the diagonal shift beta
     chol.factorize(vals - 0.5 * np.isin(np.arange(chol.nnz), chol.diag_positions), beta=0.5)
 

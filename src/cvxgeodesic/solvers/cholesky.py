@@ -208,6 +208,14 @@ class SymbolicCholesky:
         Lw = sp.csc_matrix((np.asarray(data, dtype=float), self.indices, self.indptr), shape=(self.n, self.n))
         return (Lw + sp.tril(Lw, -1).T).tocsc()
 
+    def _pardiso_solve(self, b: np.ndarray) -> np.ndarray:
+        try:
+            return self._factor.solve(b)
+        except _pardiso.PardisoError as exc:
+            if exc.code == _pardiso.NOT_POSITIVE_DEFINITE:
+                raise NotPositiveDefiniteError(str(exc)) from None
+            raise
+
     def factorize(self, data: np.ndarray, *, beta: float = 0.0) -> Callable[[np.ndarray], np.ndarray]:
         """Numeric Cholesky factorization of ``K + beta·I``.
 
@@ -226,7 +234,9 @@ class SymbolicCholesky:
         Raises
         ------
         NotPositiveDefiniteError
-            If the matrix is not numerically positive definite.
+            If the matrix is not numerically positive definite. With PARDISO a negative
+            pivot is only detected by the returned ``solve``, which raises this error
+            when its result is not finite.
         """
         data = np.ascontiguousarray(data, dtype=np.float64)
         if data.shape != (self.nnz,):
@@ -253,7 +263,7 @@ class SymbolicCholesky:
                     if exc.code == _pardiso.NOT_POSITIVE_DEFINITE:
                         raise NotPositiveDefiniteError(str(exc)) from None
                     raise
-                return self._factor.solve
+                return self._pardiso_solve
             K = self.matrix(data)
             if beta:
                 K = (K + beta * sp.identity(self.n, format="csc")).tocsc()

@@ -496,8 +496,14 @@ class InteriorPointSolver:
 
         def lsolve(f, r: np.ndarray) -> np.ndarray:
             t0 = time.perf_counter()
-            out = f(r)
-            timers["linear_solve_time"] += time.perf_counter() - t0
+            try:
+                if not np.isfinite(r).all():
+                    raise fail("numerical_error", "non-finite right-hand side")
+                out = f(r)
+            except NotPositiveDefiniteError as exc:  # PARDISO reports a negative pivot in the solve
+                raise fail("numerical_error", str(exc)) from exc
+            finally:
+                timers["linear_solve_time"] += time.perf_counter() - t0
             out[fixed] = 0.0
             return out
 
@@ -553,7 +559,10 @@ class InteriorPointSolver:
                 except NotPositiveDefiniteError:
                     f_y = None
             if f_y is not None:
-                y = solve_refined(f_y, rhs_y, sc0, w0, target_y, with_P=pr.P is None)
+                try:
+                    y = solve_refined(f_y, rhs_y, sc0, w0, target_y, with_P=pr.P is None)
+                except SolverError:
+                    y = None
         if y is not None:
             z_c = np.concatenate([np.zeros((1, k)), -pr.Bx(y)])  # z = A y (A body = −B)
             z_l = pr.ax(y)

@@ -207,7 +207,9 @@ class PardisoFactor:
         Raises
         ------
         PardisoError
-            ``code == -4`` when the matrix is not numerically positive definite.
+            ``code == -4`` on a zero pivot. A *negative* pivot is not reported here by the
+            improved two-level algorithm (``_FACTOR_ALGORITHM = 10``): it leaves non-finite
+            values in the factor, which :meth:`solve` detects.
         """
         data = np.ascontiguousarray(data, dtype=np.float64)
         dummy = np.zeros(1)
@@ -218,12 +220,21 @@ class PardisoFactor:
         self._data = data  # PARDISO reads the values again in the solve phase
 
     def solve(self, b: np.ndarray) -> np.ndarray:
-        """``A⁻¹ b`` for ``b`` of shape (n,) or (n, r), with the latest factorization."""
+        """``A⁻¹ b`` for ``b`` of shape (n,) or (n, r), with the latest factorization.
+
+        Raises
+        ------
+        PardisoError
+            ``code == -4`` when the solution is not finite although ``b`` is: the factorized
+            matrix was not positive definite.
+        """
         if self._data is None:
             raise RuntimeError("no successful factorization to solve with")
         b = np.asarray(b, dtype=np.float64)
         if b.shape[0] != self.n or b.ndim not in (1, 2):
             raise ValueError(f"right-hand side must have shape ({self.n},) or ({self.n}, r), got {b.shape}")
+        if not np.isfinite(b).all():
+            raise ValueError("right-hand side has non-finite values")
         nrhs = 1 if b.ndim == 1 else b.shape[1]
         bf = np.asfortranarray(b) if b.ndim == 2 else np.ascontiguousarray(b)
         bf = bf.copy(order="F")  # PARDISO may overwrite b
@@ -231,4 +242,6 @@ class PardisoFactor:
         err = self._call(33, self._data, bf, x, nrhs)
         if err:
             raise PardisoError(err, 33)
+        if not np.isfinite(x).all():
+            raise PardisoError(NOT_POSITIVE_DEFINITE, 33)
         return np.ascontiguousarray(x)
