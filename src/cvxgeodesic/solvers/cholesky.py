@@ -234,9 +234,8 @@ class SymbolicCholesky:
         Raises
         ------
         NotPositiveDefiniteError
-            If the matrix is not numerically positive definite. With PARDISO a negative
-            pivot is only detected by the returned ``solve``, which raises this error
-            when its result is not finite.
+            If the matrix is not numerically positive definite. With PARDISO the returned
+            ``solve`` also raises it when its result is not finite (a guard).
         """
         data = np.ascontiguousarray(data, dtype=np.float64)
         if data.shape != (self.nnz,):

@@ -500,7 +500,7 @@ class InteriorPointSolver:
                 if not np.isfinite(r).all():
                     raise fail("numerical_error", "non-finite right-hand side")
                 out = f(r)
-            except NotPositiveDefiniteError as exc:  # PARDISO reports a negative pivot in the solve
+            except NotPositiveDefiniteError as exc:  # PARDISO's guard: a non-finite solve
                 raise fail("numerical_error", str(exc)) from exc
             finally:
                 timers["linear_solve_time"] += time.perf_counter() - t0

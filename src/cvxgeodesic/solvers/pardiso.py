@@ -28,9 +28,12 @@ import numpy as np
 __all__ = ["PardisoFactor", "PardisoError", "pardiso_available"]
 
 _MTYPE_SPD = 2
-# iparm[23], the parallel factorization algorithm: 0 classic, 1 two-level, 10 improved two-level (measured on
-# bimba: 43–48 ms against 55–59 ms per Hessian-pattern factorization, 12–13 ms against 17–19 ms for QCLP).
-_FACTOR_ALGORITHM = 10
+# iparm[23], the parallel factorization algorithm: 0 classic. The improved two-level algorithm (10) factored 25–35 %
+# faster on bimba but crashed the process (general protection fault in libmkl_gnu_thread) on armadillo's
+# QCQP-Hessian solve, and it does not report negative pivots; the two-level one (1) was no faster than 0.
+_FACTOR_ALGORITHM = 0
+# iparm[24]: 2 = parallel forward/backward substitution (measured 5–10 % faster solves than sequential, 0).
+_SOLVE_ALGORITHM = 2
 _MKL_THREADING_GNU = 3
 
 # PARDISO error codes (oneMKL reference, "pardiso" error parameter).
@@ -185,7 +188,7 @@ class PardisoFactor:
         iparm[7] = 0  # no iterative refinement inside PARDISO (the caller refines with its own operator)
         iparm[17] = -1  # report nnz(L)
         iparm[23] = _FACTOR_ALGORITHM
-        iparm[24] = 2  # parallel forward/backward substitution (measured 5–10 % faster solves than sequential)
+        iparm[24] = _SOLVE_ALGORITHM
         iparm[34] = 1  # zero-based indices
         self._iparm = iparm
         self._data = None
@@ -207,9 +210,8 @@ class PardisoFactor:
         Raises
         ------
         PardisoError
-            ``code == -4`` on a zero pivot. A *negative* pivot is not reported here by the
-            improved two-level algorithm (``_FACTOR_ALGORITHM = 10``): it leaves non-finite
-            values in the factor, which :meth:`solve` detects.
+            ``code == -4`` when the matrix is not numerically positive definite (a zero or
+            negative pivot).
         """
         data = np.ascontiguousarray(data, dtype=np.float64)
         dummy = np.zeros(1)
@@ -225,8 +227,9 @@ class PardisoFactor:
         Raises
         ------
         PardisoError
-            ``code == -4`` when the solution is not finite although ``b`` is: the factorized
-            matrix was not positive definite.
+            ``code == -4`` when the solution is not finite although ``b`` is (a factor spoiled
+            by a pivot that the factorization did not report; a guard, PARDISO's own check
+            comes first).
         """
         if self._data is None:
             raise RuntimeError("no successful factorization to solve with")
