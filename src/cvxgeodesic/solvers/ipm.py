@@ -92,12 +92,6 @@ _INIT = "mehrotra"
 # ---------------------------------------------------------------------------------------------------------------
 
 
-def _soc_det(u: np.ndarray) -> np.ndarray:
-    """``u₀² − ‖u₁‖²`` as ``(u₀ − ‖u₁‖)(u₀ + ‖u₁‖)``, which keeps its relative accuracy near the boundary."""
-    nb = np.sqrt(u[1] * u[1] + u[2] * u[2])
-    return (u[0] - nb) * (u[0] + nb)
-
-
 def _soc_max_step(u: np.ndarray, du: np.ndarray) -> float:
     """Largest ``α`` with ``u + α du`` in SOC(3) for every cone (``inf`` when unbounded); ``u`` interior."""
     return _kern.max_step_soc(np.ascontiguousarray(u, dtype=np.float64), np.ascontiguousarray(du, dtype=np.float64))
@@ -150,12 +144,6 @@ class _SocScaling:
         w = self.w
         a = 2.0 * (w[1] * g[0] + w[2] * g[1])
         return np.stack([a * w[0], -g[0] - a * w[1], -g[1] - a * w[2]]) * self.inv_eta2
-
-    def body_inv2(self, g: np.ndarray) -> np.ndarray:
-        """``[W⁻²]_body g = (g + 2 w₁ (w₁ᵀg))/η²`` for a (2, k) body field ``g``."""
-        w = self.w
-        a = 2.0 * (w[1] * g[0] + w[2] * g[1])
-        return np.stack([g[0] + a * w[1], g[1] + a * w[2]]) * self.inv_eta2
 
 
 def _identity_scaling(k: int) -> _SocScaling:
