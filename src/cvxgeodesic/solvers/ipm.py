@@ -28,7 +28,9 @@ rows, which keeps the pattern. One symbolic Cholesky analysis
 (:class:`~.cholesky.SymbolicCholesky`) therefore serves every iteration of
 every solve on a mesh; an iteration costs one numeric factorization, three to
 five triangular solves (predictor, corrector, up to two centrality correctors,
-iterative refinement of the final direction) and O(n) vectorized NumPy work.
+iterative refinement of the final direction) and O(n) per-cone work done by the
+compiled kernels of :mod:`._soc_kernels`. The factorization backend is MKL
+PARDISO when installed, else CHOLMOD (see :mod:`.cholesky`).
 
 ``[W_t⁻²]_body = (I + 2 w̄₁w̄₁ᵀ)/η²`` (NT scaling point ``w̄``, scale ``η``), so the
 3×3 clique of triangle t is ``(B_tᵀB_t + 2 (B_tᵀw̄₁)(B_tᵀw̄₁)ᵀ)/η²``: ``B_tᵀB_t`` is
@@ -40,8 +42,8 @@ gap ``|pcost − dcost|``, absolute or relative to ``max(1, min(|pcost|, |dcost|
 evaluated on the problem with the fixed variables eliminated.
 
 Cone data are stored "structure of arrays": an SOC(3) vector field over k cones
-is a (3, k) array (row 0 the heads), which keeps every NumPy operation on
-contiguous rows.
+is a (3, k) array (row 0 the heads), contiguous per component for the kernels
+and the remaining NumPy operations.
 """
 
 from __future__ import annotations
