@@ -61,18 +61,20 @@ def nt_scaling(s, z, w, eta, inv_eta2, lam):
         lam[2, t] = ((gamma + zb0) * sb2 + (gamma + sb0) * zb2) * den * scale
 
 
+@njit(**_JIT)
+def _w_apply(w0, w1, w2, f, sign, v0, v1, v2):
+    """One cone's ``f · W̄ v`` (``sign`` = +1) or ``f · W̄⁻¹ v`` (``sign`` = −1; ``W̄⁻¹ = J W̄ J``)."""
+    w1v1 = w1 * v1 + w2 * v2
+    c = sign * v0 + w1v1 / (1.0 + w0)
+    return (w0 * v0 + sign * w1v1) * f, (v1 + c * w1) * f, (v2 + c * w2) * f
+
+
 @njit(**_PJIT)
 def apply_w(w, eta, v, sign, out):
     """``out = W v`` (``sign`` = +1) or ``W⁻¹ v`` (``sign`` = −1)."""
     for t in prange(v.shape[1]):
-        w0, w1, w2 = w[0, t], w[1, t], w[2, t]
-        v0, v1, v2 = v[0, t], v[1, t], v[2, t]
-        w1v1 = w1 * v1 + w2 * v2
-        c = sign * v0 + w1v1 / (1.0 + w0)
         f = eta[t] if sign > 0 else 1.0 / eta[t]
-        out[0, t] = (w0 * v0 + sign * w1v1) * f
-        out[1, t] = (v1 + c * w1) * f
-        out[2, t] = (v2 + c * w2) * f
+        out[0, t], out[1, t], out[2, t] = _w_apply(w[0, t], w[1, t], w[2, t], f, sign, v[0, t], v[1, t], v[2, t])
 
 
 @njit(**_PJIT)
@@ -209,13 +211,6 @@ def newton_cones(g, w, inv_eta2, wu, wrc, rzc, dz, ds):
         ds[0, t] = -rzc[0, t]
         ds[1, t] = -rzc[1, t] + g0
         ds[2, t] = -rzc[2, t] + g1
-
-
-@njit(**_JIT)
-def _w_apply(w0, w1, w2, f, sign, v0, v1, v2):
-    w1v1 = w1 * v1 + w2 * v2
-    c = sign * v0 + w1v1 / (1.0 + w0)
-    return (w0 * v0 + sign * w1v1) * f, (v1 + c * w1) * f, (v2 + c * w2) * f
 
 
 @njit(**_JIT)

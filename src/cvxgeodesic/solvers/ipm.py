@@ -101,7 +101,7 @@ def _soc_max_step(u: np.ndarray, du: np.ndarray) -> float:
 
 def _max_step(u_c: np.ndarray, u_l: np.ndarray, du_c: np.ndarray, du_l: np.ndarray) -> float:
     """Largest ``α`` with ``(u_c, u_l) + α (du_c, du_l)`` in K (``inf`` when unbounded)."""
-    a = _kern.max_step_soc(u_c, du_c) if u_c.shape[1] else np.inf
+    a = _kern.max_step_soc(u_c, du_c)
     if u_l.size:
         a = min(a, _kern.max_step_lp(u_l, du_l))
     return a

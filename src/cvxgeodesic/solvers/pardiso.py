@@ -239,8 +239,7 @@ class PardisoFactor:
         if not np.isfinite(b).all():
             raise ValueError("right-hand side has non-finite values")
         nrhs = 1 if b.ndim == 1 else b.shape[1]
-        bf = np.asfortranarray(b) if b.ndim == 2 else np.ascontiguousarray(b)
-        bf = bf.copy(order="F")  # PARDISO may overwrite b
+        bf = np.array(b, order="F")  # a column-major copy: PARDISO may overwrite b
         x = np.zeros_like(bf, order="F")
         err = self._call(33, self._data, bf, x, nrhs)
         if err:
