@@ -108,6 +108,27 @@ def test_fixed_nonzero_values_match_clarabel(sphere):
     _assert_matches(ipm.solve(p), solve_clarabel(p), p, m)
 
 
+def _first_iterate(ipm, p) -> dict:
+    seen = {}
+    ipm.solve(p, callback=lambda it, info: seen.setdefault(it, info))
+    return seen[0]
+
+
+def test_starting_point_is_strictly_primal_feasible_when_the_fixed_values_allow(sphere):
+    m, ops, ipm = sphere
+    for method in ("qclp", "lclp", "qcqp-hessian"):
+        p = build_problem(ops, np.array([0]), method, smoothness_weight(m, 1.0))
+        assert _first_iterate(ipm, p)["res_primal"] < 1e-12, method
+    # 2.5 next to distances 0 violates the gradient bound at the start point x_F: the shifted (Mehrotra) start
+    # is used instead, with a primal residual, and the optimum is still reached (test above)
+    p = build_problem(ops, np.array([0]), "qcqp-laplacian", smoothness_weight(m, 1.0))
+    far = np.argsort(m.V @ m.V[0])[:3]
+    fm, fv = p.fixed_mask.copy(), p.fixed_values.copy()
+    fm[far], fv[far] = True, 2.5
+    p = dataclasses.replace(p, fixed_mask=fm, fixed_values=fv)
+    assert _first_iterate(ipm, p)["res_primal"] > 1e-3
+
+
 # ---------------------------------------------------------------------------------------------------------------
 # One symbolic analysis per mesh
 # ---------------------------------------------------------------------------------------------------------------
