@@ -185,3 +185,26 @@ def test_default_m_rounds_the_ridge_and_keeps_accuracy_off_it():
     assert reports["qcqp-hessian"]["ridge_jump_p95"] < 0.5 * reports["qcqp-hessian"]["exact_ridge_jump_p95"]
     assert reports["qclp"]["ridge_jump_p95"] > 0.9 * reports["qclp"]["exact_ridge_jump_p95"]
     assert reports["qcqp-hessian"]["off_ridge_rel_mean"] < 1.1 * reports["qclp"]["off_ridge_rel_mean"]
+
+
+def test_edge_bounds_at_rounding_level_are_floored():
+    # vertex 3 sits 1e-15 from vertex 1 (not an exact duplicate, so not welded): |d_1 - d_3| <= 1e-15 would be
+    # an equality in disguise, whose duals blow up in the interior-point method
+    V = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1e-15, 0.0], [1.0, 1.0, 0.0]])
+    F = np.array([[0, 1, 2], [1, 3, 2], [3, 4, 2]])
+    mesh = cg.TriMesh(V, F, name="near_duplicate")
+    ops = MeshOperators(mesh)
+    floor = cg.formulations.MIN_EDGE_BOUND * mesh.bbox_diagonal
+    for method in ("lclp", "qclp"):
+        p = build_problem(ops, np.array([0]), method, 0.0)
+        assert p.ineq_rhs.min() == pytest.approx(floor), method
+    d = cg.geodesic_distance(mesh, [0], method="lclp", solver="ipm")
+    np.testing.assert_allclose(d, _dijkstra(mesh, 0), atol=1e-7)
+
+
+def test_lclp_on_a_mesh_with_near_duplicate_vertices_equals_dijkstra():
+    # thingi_65395 has edges of length 6e-16; before the floor the IPM stopped at an objective 5x too high
+    mesh = cg.load_mesh(shared_mesh_path("thingi_65395.stl"))
+    res = cg.GeodesicSolver(mesh, "lclp", solver="ipm").solve(0)
+    assert res.info.status == "optimal" and res.info.solver == "ipm"
+    np.testing.assert_allclose(res.distance, _dijkstra(mesh, 0), atol=1e-6 * mesh.bbox_diagonal)

@@ -71,6 +71,9 @@ FORMULATIONS: dict[str, tuple[str, str | None]] = {
 }
 ALIASES = {"qgdf": "lcqp-hessian"}
 
+#: Smallest right-hand side of an edge bound ``|d_i − d_j| ≤ l_ij``, as a fraction of the bounding-box diagonal.
+MIN_EDGE_BOUND = 1e-9
+
 #: ``c`` in ``E_stretch = −(c/n) Σ d_i``: calibrates the paper's ``m`` (see module docstring).
 STRETCH_SCALE = 10.0
 STRETCH_WEIGHTS = {"calibrated": lambda n: STRETCH_SCALE / n, "mean": lambda n: 1.0 / n, "sum": lambda n: 1.0}
@@ -304,13 +307,18 @@ def build_problem(
 
     F = mesh.F
     face_free = ~fixed_mask[F].all(axis=1)
+    # Edge bounds |d_i - d_j| <= l_ij with l_ij at rounding level (near-duplicate vertices that exact welding
+    # keeps, e.g. 6e-16 on thingi_65395) are equalities in disguise: their slacks start at ~0 and the duals
+    # grow to 1e13, which ruins the interior-point method's dual residual. A floor far below any tolerance
+    # (MIN_EDGE_BOUND x the bounding-box diagonal) keeps them inequalities.
+    ell_all = np.maximum(mesh.edge_lengths, MIN_EDGE_BOUND * mesh.bbox_diagonal)
     if constraint == "qc":
         is_source = np.zeros(n, dtype=bool)
         is_source[sources] = True
         keep = face_free & ~is_source[F].any(axis=1) & ~ops.degenerate
         cone_vertices = np.ascontiguousarray(F[keep])
         cone_blocks = np.ascontiguousarray(ops.gradient_blocks[keep])
-        E, ell = mesh.edges, mesh.edge_lengths
+        E, ell = mesh.edges, ell_all
         star = is_source[E[:, 0]] ^ is_source[E[:, 1]]
         s_end = np.where(is_source[E[star, 0]], E[star, 0], E[star, 1])
         o_end = np.where(is_source[E[star, 0]], E[star, 1], E[star, 0])
@@ -330,7 +338,7 @@ def build_problem(
     else:
         cone_vertices = np.zeros((0, 3), dtype=np.int64)
         cone_blocks = np.zeros((0, 2, 3))
-        E, ell = mesh.edges, mesh.edge_lengths
+        E, ell = mesh.edges, ell_all
         keep = ~fixed_mask[E].all(axis=1)
         E, ell = E[keep], ell[keep]
         ineq_vertices = np.vstack([E, E])
