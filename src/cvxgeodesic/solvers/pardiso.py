@@ -72,9 +72,11 @@ def _candidates() -> list[str]:
     names = []
     for prefix in dict.fromkeys([sys.prefix, sys.base_prefix, sys.exec_prefix]):
         names += sorted(glob.glob(os.path.join(prefix, "lib", "libmkl_rt.so*")))
-    found = ctypes.util.find_library("mkl_rt")
-    if found:
-        names.append(found)
+    if not names:
+        # find_library runs ldconfig, gcc and ld in subprocesses: only when the environment has no MKL wheel
+        found = ctypes.util.find_library("mkl_rt")
+        if found:
+            names.append(found)
     names += ["libmkl_rt.so.3", "libmkl_rt.so.2", "libmkl_rt.so"]
     return list(dict.fromkeys(names))
 
