@@ -125,9 +125,18 @@ def test_indefinite_curved_hessian_falls_back_to_planar_energy():
     assert is_positive_semidefinite(H)
 
 
-def test_psd_check_detects_a_negative_eigenvalue():
-    from cvxgeodesic.solvers.cholesky import is_positive_semidefinite
+@pytest.mark.parametrize("backend", ["auto", "pardiso", "cholmod"])
+def test_psd_check_detects_a_negative_eigenvalue(backend):
+    from cvxgeodesic.solvers import cholesky
 
-    S = cotan_stiffness(icosphere(2))
-    assert is_positive_semidefinite(S)
-    assert not is_positive_semidefinite(S - 1e-3 * sp.identity(S.shape[0]) * abs(S.diagonal()).max())
+    if backend != "auto" and not getattr(cholesky, f"{backend}_available")():
+        pytest.skip(f"{backend} not installed")
+    S = cotan_stiffness(icosphere(2))  # PSD with one zero eigenvalue (constants)
+    assert cholesky.is_positive_semidefinite(S, backend=backend)
+    shift = 1e-3 * abs(S.diagonal()).max()
+    assert not cholesky.is_positive_semidefinite(S - shift * sp.identity(S.shape[0]), backend=backend)
+    # a rank-one dent along a random direction v: with constants in the kernel of S the smallest eigenvalue is
+    # at most -shift (1ᵀv)²/n, about -6e-6 of the largest diagonal here, far beyond the 1e-9 rounding shift
+    v = np.random.default_rng(0).standard_normal(S.shape[0])
+    v /= np.linalg.norm(v)
+    assert not cholesky.is_positive_semidefinite(S.toarray() - shift * np.outer(v, v), backend=backend)
