@@ -85,6 +85,36 @@ def test_bundled_demo_mesh_is_welded():
     assert np.all(mesh.edge_face_counts == 2)
 
 
+def test_auto_retries_an_almost_optimal_ipm_solve_with_clarabel(sphere, monkeypatch):
+    from cvxgeodesic.solvers.ipm import InteriorPointSolver
+
+    real_solve = InteriorPointSolver.solve
+
+    def almost(self, problem, **kwargs):
+        res = real_solve(self, problem, **kwargs)
+        res.status = "almost_optimal"
+        return res
+
+    monkeypatch.setattr(InteriorPointSolver, "solve", almost)
+    with pytest.warns(RuntimeWarning, match="'almost_optimal'.*Clarabel instead"):
+        res = cg.GeodesicSolver(sphere, "qclp", solver="auto").solve(0)
+    assert res.info.solver == "clarabel" and res.info.extra["ipm_failure"] == "almost_optimal"
+    assert res.info.status == "optimal"
+    # Clarabel failing too: the interior-point result is kept
+    monkeypatch.setattr("cvxgeodesic.solvers.solve_clarabel", _raise_solver_error)
+    with pytest.warns(RuntimeWarning):
+        res = cg.GeodesicSolver(sphere, "qclp", solver="auto").solve(0)
+    assert res.info.solver == "ipm" and res.info.status == "almost_optimal"
+    res = cg.GeodesicSolver(sphere, "qclp", solver="ipm").solve(0)  # no retry with solver="ipm"
+    assert res.info.solver == "ipm" and res.info.status == "almost_optimal"
+
+
+def _raise_solver_error(*args, **kwargs):
+    from cvxgeodesic.errors import SolverError
+
+    raise SolverError("forced", solver="clarabel", status="NumericalError")
+
+
 def test_negative_values_trigger_a_nonnegative_resolve():
     # a strongly smoothed field on a 3x3 grid trades negative values for a larger sum (measured: min -0.11)
     mesh = cg.grid_plane(3, jitter=0.3, seed=1)

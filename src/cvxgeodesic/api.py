@@ -39,7 +39,9 @@ class SolveInfo:
     solver : str
         Backend that produced the field (``"ipm"``, ``"clarabel"`` or the library of a baseline).
     status : str
-        ``"optimal"`` (or ``"almost_optimal"`` from Clarabel) on success;
+        ``"optimal"`` on success, or ``"almost_optimal"`` (only reduced tolerances
+        were met: Clarabel's ``AlmostSolved``, or an interior-point iterate within
+        100 × ``tol`` before rounding stopped the iterations);
         ``"approximate"`` for an unpolished coarse-to-fine solve
         (``GeodesicSolver(..., multires=...)``), whose field is *not* the
         optimum on this mesh.
@@ -375,23 +377,24 @@ class GeodesicSolver:
         return res
 
     def _run_backend(self, problem, callback=None):
-        """Solve ``problem`` with the chosen backend; under ``solver="auto"`` Clarabel retries a failed IPM solve."""
+        """Solve ``problem`` with the chosen backend; under ``solver="auto"`` Clarabel retries a failed or
+        ``almost_optimal`` IPM solve."""
         from .solvers import solve_clarabel
 
         try:
             if self.solver_name != "ipm":
                 return solve_clarabel(problem, tol=self.tol, max_iter=self.max_iter, verbose=self.verbose)
             try:
-                return self._ipm.solve(problem, tol=self.tol, max_iter=self.max_iter, callback=callback)
+                res = self._ipm.solve(problem, tol=self.tol, max_iter=self.max_iter, callback=callback)
             except SolverError as exc:
                 if not self._fallback_to_clarabel or exc.status in ("primal_infeasible", "dual_infeasible"):
                     raise
-                warnings.warn(
-                    f"the interior-point solver stopped with status {exc.status!r} on {self.mesh.name}; "
-                    "solving with Clarabel instead", RuntimeWarning, stacklevel=4,
-                )
-                res = solve_clarabel(problem, tol=self.tol, max_iter=self.max_iter, verbose=self.verbose)
-                res.extra = dict(res.extra, ipm_failure=exc.status)
+                return self._clarabel_retry(problem, exc.status)
+            if res.status == "optimal" or not self._fallback_to_clarabel:
+                return res
+            try:  # "almost_optimal": Clarabel may reach the full accuracy; else keep the IPM's best iterate
+                return self._clarabel_retry(problem, res.status)
+            except SolverError:
                 return res
         except SolverError as exc:
             if self.energy != "hessian" or problem.P is None:
@@ -404,6 +407,17 @@ class GeodesicSolver:
                 f"corners, which makes {self.method!r} non-convex: try 'qcqp-laplacian' or 'qclp'",
                 solver=exc.solver, status=exc.status, info=exc.info,
             ) from exc
+
+    def _clarabel_retry(self, problem, ipm_status: str):
+        from .solvers import solve_clarabel
+
+        warnings.warn(
+            f"the interior-point solver stopped with status {ipm_status!r} on {self.mesh.name}; "
+            "solving with Clarabel instead", RuntimeWarning, stacklevel=5,
+        )
+        res = solve_clarabel(problem, tol=self.tol, max_iter=self.max_iter, verbose=self.verbose)
+        res.extra = dict(res.extra, ipm_failure=ipm_status)
+        return res
 
     def _solve_direct(self, src: np.ndarray, t0: float, callback=None) -> GeodesicResult:
         """Solve the formulation on this mesh (no multires); ``t0`` starts the solve clock."""

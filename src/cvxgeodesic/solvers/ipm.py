@@ -90,6 +90,14 @@ _GZ_A, _GZ_B = 1.5, 0.1
 # (no extra solve) before giving up. Measured: 783 → 766 iterations over 7 meshes × 8 formulations, 119 → 115
 # on spot/bimba/armadillo/horse (QCLP, QCQP-Hessian), 23 → 22 on a 278K-face bunny.
 _CORRECTOR_WEIGHTS = (1.0, 0.5, 0.25)
+# When the iterations end in numerical trouble, a stall or max_iter, the best iterate is returned as
+# "almost_optimal" if its residuals and gap are below _REDUCED_FACTOR × tol (1e-6 at the default tol; Clarabel's
+# reduced tolerances, 1e-4 and 5e-5, let through a field 5× off on a sliver mesh whose dual residual was hidden by
+# ‖z‖ ≈ 1e7 in its scale). Seen on Thingi10K slivers: gap 1.6e-8, dual residual 1.5e-9, then rounding takes over.
+_REDUCED_FACTOR = 100.0
+# ... and iterating stops when the best iterate, meeting them, has not been improved on for this many iterations
+# (seen: the dual residual stuck at 3–8e-8 by rounding while μ underflows, up to max_iter).
+_STALL_ITERATIONS = 10
 # Starting point: "cvxopt" (z = A x − b shifted into the cone), "mehrotra" (least-norm dual z = A y with
 # Aᵀz = −q − Px, one uniform shift of s and of z, then balancing) or "interior" (x scaled towards x_F so that s
 # is strictly feasible without a shift, the same least-norm z shifted cone by cone, no balancing; falls back to
@@ -444,13 +452,20 @@ class InteriorPointSolver:
             ``correctors_accepted``, ``new_analyses`` (symbolic analyses this call
             needed: 0 unless the problem did not fit the pattern), ``backend``, and
             the once-per-mesh ``analyze_time``, which is *not* part of ``solve_time``.
+            ``status`` is ``"optimal"`` (``tol`` met) or ``"almost_optimal"``: the
+            iterations ended in numerical trouble, a stall (no better iterate in
+            10 iterations) or ``max_iter`` after an iterate whose residuals and gap
+            were below 100 × ``tol``; ``x`` and the residuals are then that best
+            iterate's, ``extra["stopped"]`` the reason and ``extra["best_iteration"]``
+            its iteration.
 
         Raises
         ------
         SolverError
             ``status`` is ``"max_iterations"``, ``"primal_infeasible"``,
-            ``"dual_infeasible"`` (unbounded), ``"stalled"`` or ``"numerical_error"``;
-            ``info`` has the last iterate's residuals, gap and timings.
+            ``"dual_infeasible"`` (unbounded), ``"stalled"`` or ``"numerical_error"``
+            when not even the reduced tolerances were met (infeasibility certificates
+            always raise); ``info`` has the last iterate's residuals, gap and timings.
 
         Notes
         -----
@@ -594,6 +609,7 @@ class InteriorPointSolver:
         step = float("nan")
         small_steps = 0
         status = None
+        best_it = {"merit": np.inf, "x": None, "info": None, "since": 0}
         while True:
             # ---- residuals, costs, convergence ----
             Px = pr.Pmul(x)
@@ -636,6 +652,17 @@ class InteriorPointSolver:
             if res_p < tol and res_d < tol and (gap_abs < tol or gap_rel < tol):
                 status = "optimal"
                 break
+            merit = max(res_p, res_d, min(gap_abs, gap_rel))
+            if merit < best_it["merit"]:
+                # |r_x| against the data and x only: a huge ‖z‖ in dual_scale can hide a large dual residual
+                rx_plain = _amax(rx) / max(1.0, pr.norm_q + norm_x)
+                best_it.update(merit=merit, x=x.copy(), info=dict(info, res_dual_plain=rx_plain), since=0)
+            else:
+                best_it["since"] += 1
+                # no better iterate for a while once the reduced tolerances hold: rounding has the last word
+                if best_it["since"] >= _STALL_ITERATIONS and _almost(best_it["info"], tol):
+                    status = "stalled"
+                    break
             # Infeasibility certificates (Clarabel's tests on the current iterate): for an infeasible problem
             # z diverges along y with A_fᵀy = 0, b̃ᵀy < 0; for an unbounded one x_f diverges along d with
             # P_ff d = 0, −A_f d ∈ K, q̃ᵀd < 0, while the other terms stay bounded.
@@ -653,117 +680,129 @@ class InteriorPointSolver:
                 status = "max_iterations"
                 break
 
-            # ---- NT scaling and the reduced Newton matrix ----
-            sc = _SocScaling(s_c, z_c) if k else _identity_scaling(0)
-            lp_lam = np.sqrt(s_l * z_l)
-            lp_w = z_l / s_l  # W⁻² of the inequalities
-            lp_winv = np.sqrt(lp_w)  # W⁻¹
-            t0 = time.perf_counter()
-            data = pr.assemble(sc, lp_w)
-            timers["assembly_time"] += time.perf_counter() - t0
             try:
-                f = factorize(data)
-            except NotPositiveDefiniteError:
-                status = "numerical_error"
-                break
-            # The solve error becomes the next dual residual: refine it below what the stopping test needs.
-            target = _REFINE_FRACTION * tol * dual_scale
-
-            def lin(rhs, f=f):
-                return lsolve(f, rhs)
-
-            # ---- predictor (affine scaling): d_s = −λ∘λ, so W⁻¹(λ \ d_s) = −W⁻¹λ = −z ----
-            resid = _Residuals(pr, sc, lp_w, rx, rzc, rzl)
-            dx_a, dsc_a, dsl_a, dzc_a, dzl_a, _ = _newton(pr, lin, sc, lp_w, resid, -z_c, -z_l)
-            step_s, step_z = partial(_max_step, s_c, s_l), partial(_max_step, z_c, z_l)
-            ap_aff = min(1.0, step_s(dsc_a, dsl_a))
-            ad_aff = min(1.0, step_z(dzc_a, dzl_a))
-            if not separate:
-                ap_aff = ad_aff = min(ap_aff, ad_aff)
-            gap = mu * max(pr.nu, 1)
-            sz_aff = float(((s_c + ap_aff * dsc_a) * (z_c + ad_aff * dzc_a)).sum()) + float(
-                (s_l + ap_aff * dsl_a) @ (z_l + ad_aff * dzl_a))
-            sigma = min(1.0, max(0.0, sz_aff / gap if gap > 0 else 0.0)) ** _SIGMA_EXP
-
-            # ---- combined step: d_s = −λ∘λ − (W⁻¹Δs_a)∘(WΔz_a) + σμe ----
-            wu_c = np.empty((3, k))
-            _kern.mehrotra_cones(sc.w, sc.eta, sc.lam, dsc_a, dzc_a, z_c, sigma * mu, wu_c)
-            wu_l = -z_l - lp_winv * (dsl_a * dzl_a - sigma * mu) / lp_lam
-            dx, dsc, dsl, dzc, dzl, rhs_tot = _newton(pr, lin, sc, lp_w, resid, wu_c, wu_l)
-            step_p = min(1.0, _STEP * step_s(dsc, dsl))
-            step_d = min(1.0, _STEP * step_z(dzc, dzl))
-            if not separate:
-                step_p = step_d = min(step_p, step_d)
-            # ---- Gondzio's multiple centrality correctors: cheap extra solves with the same factor ----
-            for _ in range(_MAX_CORRECTORS):
-                if min(step_p, step_d) >= 0.995:
+                # ---- NT scaling and the reduced Newton matrix ----
+                sc = _SocScaling(s_c, z_c) if k else _identity_scaling(0)
+                lp_lam = np.sqrt(s_l * z_l)
+                lp_w = z_l / s_l  # W⁻² of the inequalities
+                lp_winv = np.sqrt(lp_w)  # W⁻¹
+                t0 = time.perf_counter()
+                data = pr.assemble(sc, lp_w)
+                timers["assembly_time"] += time.perf_counter() - t0
+                try:
+                    f = factorize(data)
+                except NotPositiveDefiniteError:
+                    status = "numerical_error"
                     break
-                tp, td = min(1.0, _GZ_A * step_p + _GZ_B), min(1.0, _GZ_A * step_d + _GZ_B)
-                lo, hi = _BETA_MIN * sigma * mu, _BETA_MAX * sigma * mu
-                wu_c2 = np.empty((3, k))
-                _kern.gondzio_cones(sc.w, sc.eta, sc.lam, s_c, dsc, tp, z_c, dzc, td, lo, hi, wu_c2)
-                vl = (s_l + tp * dsl) * (z_l + td * dzl)
-                wu_l2 = lp_winv * np.maximum(np.clip(vl, lo, hi) - vl, -hi) / lp_lam
-                cx, csc_, csl, czc, czl, crhs = _newton(pr, lin, sc, lp_w, no_resid, wu_c2, wu_l2)
-                counters["correctors"] += 1
-                best = None
-                for wgt in _CORRECTOR_WEIGHTS:
-                    nsc, nsl, nzc, nzl = dsc + wgt * csc_, dsl + wgt * csl, dzc + wgt * czc, dzl + wgt * czl
-                    np_ = min(1.0, _STEP * step_s(nsc, nsl))
-                    nd_ = min(1.0, _STEP * step_z(nzc, nzl))
-                    if not separate:
-                        np_ = nd_ = min(np_, nd_)
-                    if best is None or min(np_, nd_) > best[0]:
-                        best = (min(np_, nd_), wgt, np_, nd_, nsc, nsl, nzc, nzl)
-                    if min(np_, nd_) >= min(step_p, step_d) + 0.01:
-                        break  # the largest weight that helps
-                if best[0] < min(step_p, step_d) + 0.01:
-                    break
-                _, wgt, step_p, step_d, dsc, dsl, dzc, dzl = best
-                dx = dx + wgt * cx
-                rhs_tot = rhs_tot + wgt * crhs
-                counters["correctors_accepted"] += 1
-            # ---- iterative refinement of the final direction (its Δx error becomes the next dual residual);
-            # every direction above is linear in Δx, so one correction δ updates them all ----
-            refined = False
-            prev = np.inf
-            for _ in range(_MAX_REFINE):
-                res_r = rhs_tot - pr.kkt_mul(dx, sc, lp_w)
-                res_r[fixed] = 0.0
-                rn = _amax(res_r)
-                if rn <= target or rn >= 0.5 * prev:
-                    break
-                prev = rn
-                delta = lsolve(f, res_r)
-                counters["refinement_steps"] += 1
-                refined = True
-                dx += delta
-                g = pr.Bx(delta)
-                dzc = dzc + sc.body_to_inv2(g)
-                dsc = dsc.copy()
-                dsc[1:] += g
-                adl = pr.ax(delta)
-                dzl = dzl + lp_w * adl
-                dsl = dsl - adl
-            if refined:
+                # The solve error becomes the next dual residual: refine it below what the stopping test needs.
+                target = _REFINE_FRACTION * tol * dual_scale
+
+                def lin(rhs, f=f):
+                    return lsolve(f, rhs)
+
+                # ---- predictor (affine scaling): d_s = −λ∘λ, so W⁻¹(λ \ d_s) = −W⁻¹λ = −z ----
+                resid = _Residuals(pr, sc, lp_w, rx, rzc, rzl)
+                dx_a, dsc_a, dsl_a, dzc_a, dzl_a, _ = _newton(pr, lin, sc, lp_w, resid, -z_c, -z_l)
+                step_s, step_z = partial(_max_step, s_c, s_l), partial(_max_step, z_c, z_l)
+                ap_aff = min(1.0, step_s(dsc_a, dsl_a))
+                ad_aff = min(1.0, step_z(dzc_a, dzl_a))
+                if not separate:
+                    ap_aff = ad_aff = min(ap_aff, ad_aff)
+                gap = mu * max(pr.nu, 1)
+                sz_aff = float(((s_c + ap_aff * dsc_a) * (z_c + ad_aff * dzc_a)).sum()) + float(
+                    (s_l + ap_aff * dsl_a) @ (z_l + ad_aff * dzl_a))
+                sigma = min(1.0, max(0.0, sz_aff / gap if gap > 0 else 0.0)) ** _SIGMA_EXP
+
+                # ---- combined step: d_s = −λ∘λ − (W⁻¹Δs_a)∘(WΔz_a) + σμe ----
+                wu_c = np.empty((3, k))
+                _kern.mehrotra_cones(sc.w, sc.eta, sc.lam, dsc_a, dzc_a, z_c, sigma * mu, wu_c)
+                wu_l = -z_l - lp_winv * (dsl_a * dzl_a - sigma * mu) / lp_lam
+                dx, dsc, dsl, dzc, dzl, rhs_tot = _newton(pr, lin, sc, lp_w, resid, wu_c, wu_l)
                 step_p = min(1.0, _STEP * step_s(dsc, dsl))
                 step_d = min(1.0, _STEP * step_z(dzc, dzl))
                 if not separate:
                     step_p = step_d = min(step_p, step_d)
-            step = min(step_p, step_d)
-            x = x + step_p * dx
-            s_c = s_c + step_p * dsc
-            s_l = s_l + step_p * dsl
-            z_c = z_c + step_d * dzc
-            z_l = z_l + step_d * dzl
-            it += 1
-            small_steps = small_steps + 1 if step < 1e-8 else 0
-            if small_steps >= 3:
-                status = "stalled"
+                # ---- Gondzio's multiple centrality correctors: cheap extra solves with the same factor ----
+                for _ in range(_MAX_CORRECTORS):
+                    if min(step_p, step_d) >= 0.995:
+                        break
+                    tp, td = min(1.0, _GZ_A * step_p + _GZ_B), min(1.0, _GZ_A * step_d + _GZ_B)
+                    lo, hi = _BETA_MIN * sigma * mu, _BETA_MAX * sigma * mu
+                    wu_c2 = np.empty((3, k))
+                    _kern.gondzio_cones(sc.w, sc.eta, sc.lam, s_c, dsc, tp, z_c, dzc, td, lo, hi, wu_c2)
+                    vl = (s_l + tp * dsl) * (z_l + td * dzl)
+                    wu_l2 = lp_winv * np.maximum(np.clip(vl, lo, hi) - vl, -hi) / lp_lam
+                    cx, csc_, csl, czc, czl, crhs = _newton(pr, lin, sc, lp_w, no_resid, wu_c2, wu_l2)
+                    counters["correctors"] += 1
+                    best = None
+                    for wgt in _CORRECTOR_WEIGHTS:
+                        nsc, nsl, nzc, nzl = dsc + wgt * csc_, dsl + wgt * csl, dzc + wgt * czc, dzl + wgt * czl
+                        np_ = min(1.0, _STEP * step_s(nsc, nsl))
+                        nd_ = min(1.0, _STEP * step_z(nzc, nzl))
+                        if not separate:
+                            np_ = nd_ = min(np_, nd_)
+                        if best is None or min(np_, nd_) > best[0]:
+                            best = (min(np_, nd_), wgt, np_, nd_, nsc, nsl, nzc, nzl)
+                        if min(np_, nd_) >= min(step_p, step_d) + 0.01:
+                            break  # the largest weight that helps
+                    if best[0] < min(step_p, step_d) + 0.01:
+                        break
+                    _, wgt, step_p, step_d, dsc, dsl, dzc, dzl = best
+                    dx = dx + wgt * cx
+                    rhs_tot = rhs_tot + wgt * crhs
+                    counters["correctors_accepted"] += 1
+                # ---- iterative refinement of the final direction (its Δx error becomes the next dual residual);
+                # every direction above is linear in Δx, so one correction δ updates them all ----
+                refined = False
+                prev = np.inf
+                for _ in range(_MAX_REFINE):
+                    res_r = rhs_tot - pr.kkt_mul(dx, sc, lp_w)
+                    res_r[fixed] = 0.0
+                    rn = _amax(res_r)
+                    if rn <= target or rn >= 0.5 * prev:
+                        break
+                    prev = rn
+                    delta = lsolve(f, res_r)
+                    counters["refinement_steps"] += 1
+                    refined = True
+                    dx += delta
+                    g = pr.Bx(delta)
+                    dzc = dzc + sc.body_to_inv2(g)
+                    dsc = dsc.copy()
+                    dsc[1:] += g
+                    adl = pr.ax(delta)
+                    dzl = dzl + lp_w * adl
+                    dsl = dsl - adl
+                if refined:
+                    step_p = min(1.0, _STEP * step_s(dsc, dsl))
+                    step_d = min(1.0, _STEP * step_z(dzc, dzl))
+                    if not separate:
+                        step_p = step_d = min(step_p, step_d)
+                step = min(step_p, step_d)
+                x = x + step_p * dx
+                s_c = s_c + step_p * dsc
+                s_l = s_l + step_p * dsl
+                z_c = z_c + step_d * dzc
+                z_l = z_l + step_d * dzl
+                it += 1
+                small_steps = small_steps + 1 if step < 1e-8 else 0
+                if small_steps >= 3:
+                    status = "stalled"
+                    break
+            except SolverError as exc:  # a non-finite solve: keep the best iterate (below)
+                if exc.status != "numerical_error":
+                    raise
+                status = "numerical_error"
                 break
 
+        stopped = None
         if status != "optimal":
-            raise fail(status)
+            certificate = status in ("primal_infeasible", "dual_infeasible")
+            if certificate or best_it["x"] is None or not _almost(best_it["info"], tol):
+                raise fail(status)
+            # numerical trouble, a stall or max_iter after an iterate within the reduced tolerances
+            stopped, status = status, "almost_optimal"
+            x, info = best_it["x"], best_it["info"]
         total = time.perf_counter() - t_start
         extra = {
             **timers,
@@ -776,12 +815,14 @@ class InteriorPointSolver:
             "mu": info["mu"],
             "gap_abs": info["gap_abs"],
         }
+        if stopped is not None:
+            extra.update(stopped=stopped, best_iteration=info["iterations"])
         xout = x.copy()
         xout[np.asarray(problem.unreachable, dtype=bool)] = 0.0
         return BackendResult(
             x=xout,
             solver="ipm",
-            status="optimal",
+            status=status,
             iterations=it,
             solve_time=total,
             objective=problem.objective(xout),
@@ -833,6 +874,14 @@ def _newton(pr: _Prepared, lin, sc: _SocScaling, lp_w, res: _Residuals, wu_c, wu
     dzl = lp_w * adx + wu_l + res.wrl
     dsl = -res.rzl - adx
     return dx, dsc, dsl, dzc, dzl, rhs
+
+
+def _almost(info: dict, tol: float) -> bool:
+    """The reduced tolerances on one iterate's ``info``: residuals and gap below ``_REDUCED_FACTOR · tol``, and
+    the dual residual also relative to ``max(1, ‖q‖ + ‖x‖)`` alone (``res_dual_plain``)."""
+    red = _REDUCED_FACTOR * tol
+    return (info["res_primal"] < red and info["res_dual"] < red and info["res_dual_plain"] < red
+            and min(info["gap_abs"], info["gap_rel"]) < red)
 
 
 def _amax(a: np.ndarray) -> float:
