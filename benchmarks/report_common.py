@@ -213,7 +213,7 @@ def solve(ctx: Context, mesh, mesh_key: str, method: str, source: int, m: float 
     if res is not None and (internal or res.info.extra.get("ipm_failure")):
         # the library's solver="auto" retried a failed IPM solve with Clarabel itself; the time includes both
         status = str(res.info.extra.get("ipm_failure") or internal[0])
-        rec["fallback"] = f"ipm failed: {status}"
+        rec["fallback"] = f"ipm {'stopped short' if status == 'almost_optimal' else 'failed'}: {status}"
         rec["attempts"] += [{"solver": "ipm", "time_s": None, "status": status, "error": None, "hint": None},
                             _attempt_record("clarabel", wall, None)]
     elif err is not None and internal and getattr(err, "solver", None) == "clarabel":

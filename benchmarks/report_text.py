@@ -160,9 +160,9 @@ def table2(r) -> tuple[str, list[str]]:
     fails = [(n, m, rows[n][m]) for n in names for m in methods if rows[n].get(m) and not rows[n][m]["ok"]]
     notes = []
     if fallbacks:
-        notes.append("¹ Produced by Clarabel because our IPM failed: " + "; ".join(
+        notes.append("¹ Produced by Clarabel because our IPM did not reach the tolerance: " + "; ".join(
             f"{short(m)} on {n} ({row['fallback']})" for n, m, row in fallbacks)
-            + "; the time includes the failed IPM attempt.")
+            + "; the time includes the IPM attempt.")
     else:
         notes.append("Every convex formulation in this table was solved by our IPM (no Clarabel fallback needed).")
     if fails:
@@ -647,7 +647,7 @@ Mean relative error (**failed** = no field):
 ¹ faces the library flags as degenerate (`DegenerateFacesWarning`: smallest altitude below 10⁻⁴ of the face's
 longest edge or of the mean edge length); the convex formulations drop their cone constraints and energy terms
 and bound their edges by `|d_i − d_j| ≤ ℓ_ij` instead.
-² solved by Clarabel after our IPM failed.
+² solved by Clarabel after our IPM did not reach the tolerance (failed, or stopped short: `almost_optimal`).
 
 Failures and fallbacks in detail:
 
@@ -684,8 +684,8 @@ def fig8(r) -> tuple[str, list[str]]:
     fb = [short(m) for m in MEDIAL_METHODS if rows[m].get("fallback") and rows[m]["ok"]]
     findings = []
     if fb:
-        findings.append(f"**Non-manifold mesh (Fig. 8).** Our IPM failed on {', '.join(fb)} on the medial-axis "
-                        "surface; Clarabel solved it.")
+        findings.append(f"**Non-manifold mesh (Fig. 8).** Our IPM did not reach the tolerance on {', '.join(fb)} "
+                        "on the medial-axis surface; Clarabel solved it.")
     q = comp.get("qclp", {})
     theorem = (f" QCLP stays below Dijkstra on {p1(q.get('share_below_dijkstra'))} of the vertices (Theorem 2)."
                if q else "")
