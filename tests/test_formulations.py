@@ -208,3 +208,18 @@ def test_lclp_on_a_mesh_with_near_duplicate_vertices_equals_dijkstra():
     res = cg.GeodesicSolver(mesh, "lclp", solver="ipm").solve(0)
     assert res.info.status == "optimal" and res.info.solver == "ipm"
     np.testing.assert_allclose(res.distance, _dijkstra(mesh, 0), atol=1e-6 * mesh.bbox_diagonal)
+
+
+def test_without_the_floor_the_solver_fails_loudly_rather_than_wrongly(monkeypatch):
+    # the edge floor removed: duals of the 6e-16 edges reach 1e13 and the dual residual relative to ‖z‖ looks
+    # converged (5e-8) at an objective 5x off; the residual relative to ‖q‖ + ‖x‖ alone must stop that
+    import cvxgeodesic.formulations as formulations
+    from cvxgeodesic.errors import SolverError
+
+    monkeypatch.setattr(formulations, "MIN_EDGE_BOUND", 0.0)
+    mesh = cg.load_mesh(shared_mesh_path("thingi_65395.stl"))
+    try:
+        res = cg.GeodesicSolver(mesh, "lclp", solver="ipm").solve(0)
+    except SolverError:
+        return
+    np.testing.assert_allclose(res.distance, _dijkstra(mesh, 0), atol=1e-5 * mesh.bbox_diagonal)
