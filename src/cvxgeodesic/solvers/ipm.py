@@ -41,7 +41,11 @@ computed once per problem and each iteration adds a rank-one term.
 Residuals, gap and the stopping rule follow Clarabel's definitions (infinity
 norms, relative to ``max(1, ‖b‖ + ‖x‖ + ‖s‖)`` and ``max(1, ‖q‖ + ‖x‖ + ‖z‖)``;
 gap ``|pcost − dcost|``, absolute or relative to ``max(1, min(|pcost|, |dcost|))``),
-evaluated on the problem with the fixed variables eliminated.
+evaluated on the problem with the fixed variables eliminated; convergence also
+needs the dual residual below ``tol`` relative to ``max(1, ‖q‖ + ‖x‖)`` alone, so
+that a dual blown up along a direction that ``Aᵀ`` cancels cannot hide it. Where
+rounding stops the iterations after the best iterate came within 100 × ``tol``,
+that iterate is returned as ``"almost_optimal"``.
 
 Cone data are stored "structure of arrays": an SOC(3) vector field over k cones
 is a (3, k) array (row 0 the heads), contiguous per component for the kernels
