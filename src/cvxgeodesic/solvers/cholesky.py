@@ -318,11 +318,9 @@ def is_positive_semidefinite(Q: sp.spmatrix, *, rel_shift: float = 1e-9, backend
     lower.sum_duplicates()
     lower.sort_indices()
     scale = float(np.abs(Q.diagonal()).max()) if Q.shape[0] else 0.0
-    chol = SymbolicCholesky(lower, backend=backend, ordering="amd", mode="supernodal")
-    data = lower.data.copy()
-    data[chol.diag_positions] += rel_shift * scale
     try:
-        chol.factorize(data)
+        SymbolicCholesky(lower, backend=backend, ordering="amd", mode="supernodal").factorize(
+            lower.data, beta=rel_shift * scale)
     except NotPositiveDefiniteError:
         return False
     return True
