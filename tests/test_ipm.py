@@ -129,6 +129,29 @@ def test_starting_point_is_strictly_primal_feasible_when_the_fixed_values_allow(
     assert _first_iterate(ipm, p)["res_primal"] > 1e-3
 
 
+def test_interior_start_stays_inside_the_cones_next_to_a_nonzero_fixed_value(sphere):
+    # a step that lowers the neighbours of a vertex fixed at 0.6 h steepens their cones along B x_F: the step
+    # bound must measure s = B x_F + α B(x − x_F) (a first version subtracted B x_F twice and left the cone)
+    import cvxgeodesic.solvers.ipm as ipm_mod
+
+    m, ops, ipm = sphere
+    p = build_problem(ops, np.array([0]), "qclp", 0.0)
+    far = int(np.argmin(m.V @ m.V[0]))
+    v = 0.6 * m.mean_edge_length
+    fm, fv = p.fixed_mask.copy(), p.fixed_values.copy()
+    fm[far], fv[far] = True, v
+    p = dataclasses.replace(p, fixed_mask=fm, fixed_values=fv)
+    pr = ipm._prepare(p)
+    ring = np.setdiff1d(m.F[(m.F == far).any(axis=1)], [far])
+    x = pr.x_fixed.copy()
+    x[ring] = -v
+    xi = ipm_mod._interior_primal(pr, x)
+    body = pr.Bx(xi)
+    assert np.sqrt(body[0] ** 2 + body[1] ** 2).max() < 1.0
+    assert (pr.lp_b - pr.ax(xi - pr.x_fixed)).min() > 0.0
+    _assert_matches(ipm.solve(p), solve_clarabel(p), p, m)
+
+
 # ---------------------------------------------------------------------------------------------------------------
 # One symbolic analysis per mesh
 # ---------------------------------------------------------------------------------------------------------------

@@ -950,8 +950,8 @@ def _interior_primal(pr: _Prepared, x: np.ndarray) -> np.ndarray | None:
         return None
     if s0_l.size and float(s0_l.min()) <= 0:
         return None
-    step = x - pr.x_fixed
-    ds_c = np.concatenate([np.zeros((1, k)), pr.Bx(step) - pr.cone_shift])  # s body = B x
+    step = x - pr.x_fixed  # zero on the fixed variables
+    ds_c = np.concatenate([np.zeros((1, k)), pr.Bx(step)])  # s body = B x = cone_shift + α B step
     alpha_max = _max_step(s0_c, s0_l, ds_c, -pr.ax(step))
     return pr.x_fixed + min(1.0, _INTERIOR_FRACTION * alpha_max) * step
 
