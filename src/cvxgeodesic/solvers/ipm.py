@@ -903,20 +903,23 @@ def _amax(a: np.ndarray) -> float:
     return float(np.abs(a).max()) if a.size else 0.0
 
 
+def _min_eigenvalue(uc: np.ndarray, ul: np.ndarray) -> float:
+    """Smallest eigenvalue of ``(uc, ul)`` in K (``head − ‖body‖`` per cone, the entries of ``ul``), ``inf``
+    when empty."""
+    m = np.inf
+    if uc.shape[1]:
+        m = min(m, float((uc[0] - np.sqrt(uc[1] ** 2 + uc[2] ** 2)).min()))
+    if ul.size:
+        m = min(m, float(ul.min()))
+    return m
+
+
 def _mehrotra_shift(s_c, s_l, z_c, z_l):
     """Mehrotra's (1992) starting-point heuristic adapted to SOC: shift both s and z into the
     interior by 1.5× their most negative eigenvalue, then add ½ sᵀz/Σ(heads of the other) to each."""
-    def eig_min(uc, ul):
-        m = np.inf
-        if uc.shape[1]:
-            m = min(m, float((uc[0] - np.sqrt(uc[1] ** 2 + uc[2] ** 2)).min()))
-        if ul.size:
-            m = min(m, float(ul.min()))
-        return m
-
     out = []
     for uc, ul in ((s_c, s_l), (z_c, z_l)):
-        d = max(-_SHIFT_FACTOR * eig_min(uc, ul), 0.0)
+        d = max(-_SHIFT_FACTOR * _min_eigenvalue(uc, ul), 0.0)
         uc = uc.copy()
         uc[0] += d
         out.append((uc, ul + d))
@@ -946,9 +949,7 @@ def _interior_primal(pr: _Prepared, x: np.ndarray) -> np.ndarray | None:
     k = pr.k
     s0_c = np.concatenate([np.ones((1, k)), pr.cone_shift])
     s0_l = pr.lp_b
-    if k and float((s0_c[0] - np.sqrt(s0_c[1] ** 2 + s0_c[2] ** 2)).min()) <= 0:
-        return None
-    if s0_l.size and float(s0_l.min()) <= 0:
+    if _min_eigenvalue(s0_c, s0_l) <= 0:
         return None
     step = x - pr.x_fixed  # zero on the fixed variables
     ds_c = np.concatenate([np.zeros((1, k)), pr.Bx(step)])  # s body = B x = cone_shift + α B step
