@@ -60,6 +60,10 @@ class SolveInfo:
         Smoothness weight λ used (0 for LP formulations and baselines).
     n_unreachable : int
         Vertices with no path to a source (their distance is ``inf``).
+    notes : list of str
+        One line per substitution or repair the library made for this result (degenerate
+        faces left out, another energy, a manifold cover, a Clarabel retry, the ``d ≥ 0``
+        re-solve, ...). Empty when the problem was solved exactly as asked.
     extra : dict
         Backend-specific details (timing breakdown, library parameters).
     """
@@ -76,6 +80,7 @@ class SolveInfo:
     objective: float = float("nan")
     lam: float = 0.0
     n_unreachable: int = 0
+    notes: list[str] = field(default_factory=list)
     extra: dict = field(default_factory=dict)
 
     @property
