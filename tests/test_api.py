@@ -116,11 +116,21 @@ def _raise_solver_error(*args, **kwargs):
 
 
 def test_negative_values_trigger_a_nonnegative_resolve():
-    # a strongly smoothed field on a 3x3 grid trades negative values for a larger sum (measured: min -0.11)
+    # the paper normalization smooths a 3x3 grid so strongly that it trades negative values for a larger sum
+    # (measured: min -0.11); the re-solve with d >= 0 is recorded in the notes
     mesh = cg.grid_plane(3, jitter=0.3, seed=1)
-    res = cg.GeodesicSolver(mesh, "qcqp-hessian", solver="clarabel").solve(4)
+    res = cg.GeodesicSolver(mesh, "qcqp-hessian", solver="clarabel", normalization="paper").solve(4)
     assert res.distance.min() == 0.0
     assert res.info.extra["resolved_nonnegative"] and res.info.extra["negative_min"] < -0.05
+    assert any("re-solved with the bounds d >= 0" in note for note in res.info.notes)
+
+
+def test_the_default_normalization_keeps_a_coarse_grid_nonnegative():
+    # the same grid under the area normalization: the rounding is a length on the surface, not 2-3 edges
+    mesh = cg.grid_plane(3, jitter=0.3, seed=1)
+    res = cg.GeodesicSolver(mesh, "qcqp-hessian", solver="clarabel").solve(4)
+    assert "resolved_nonnegative" not in res.info.extra and res.info.notes == []
+    assert res.distance.min() == 0.0 and np.sort(res.distance)[1] > 0.2
 
 
 def test_auto_falls_back_to_clarabel_when_ipm_fails(sphere, monkeypatch):

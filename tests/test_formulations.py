@@ -10,7 +10,15 @@ from scipy.sparse.csgraph import dijkstra
 
 import cvxgeodesic as cg
 from conftest import shared_mesh_path
-from cvxgeodesic.formulations import FORMULATIONS, MeshOperators, build_problem, smoothness_weight
+from cvxgeodesic.errors import ParameterError
+from cvxgeodesic.formulations import (
+    FORMULATIONS,
+    KAPPA,
+    MeshOperators,
+    build_problem,
+    smoothness_weight,
+    stretch_weights,
+)
 from cvxgeodesic.mesh import cylinder, grid_plane, icosphere
 from cvxgeodesic.operators import gradient_norms
 from cvxgeodesic.solvers import solve_clarabel
@@ -122,9 +130,12 @@ def test_smoothness_lowers_hessian_energy():
     ops = MeshOperators(mesh)
     H = ops.energy("hessian")
     d0 = cg.geodesic_distance(mesh, 0, method="qclp", solver="clarabel")
-    d1 = cg.geodesic_distance(mesh, 0, method="qcqp-hessian", m=1.0, solver="clarabel")
+    # the default m = 1 rounds by a length on the surface that 642 vertices do not resolve (measured: energy
+    # ratio 0.999998); m = 300 gives 0.744, m = 3000 0.372
+    d1 = cg.geodesic_distance(mesh, 0, method="qcqp-hessian", m=300.0, solver="clarabel")
     assert d1 @ H @ d1 < 0.8 * (d0 @ H @ d0)
-    assert d1.sum() < d0.sum()  # QCLP maximizes the sum; any other term can only lower it
+    w = stretch_weights(mesh)
+    assert w @ d1 < w @ d0  # QCLP maximizes the area-weighted sum; any other term can only lower it
 
 
 def test_lam_zero_equals_lp():
@@ -164,14 +175,33 @@ def test_scale_equivariance(method):
 
 def test_smoothness_weight_formula():
     mesh = icosphere(2)
-    assert smoothness_weight(mesh, 2.0) == pytest.approx(2.0 * 100 * mesh.mean_edge_length / mesh.n_vertices)
+    paper = smoothness_weight(mesh, 2.0, normalization="paper")
+    assert paper == pytest.approx(2.0 * 100 * mesh.mean_edge_length / mesh.n_vertices)
+    area = smoothness_weight(mesh, 2.0)
+    assert area == pytest.approx(2.0 * KAPPA["hessian"] * np.sqrt(mesh.face_areas.sum()))
+    with pytest.raises(ParameterError, match="normalization must be one of area, paper"):
+        smoothness_weight(mesh, 1.0, normalization="mean")
+
+
+def test_area_normalization_does_not_depend_on_the_triangulation():
+    """λ and the stretch weights of two triangulations of one square: same λ, same integral of a linear field."""
+    coarse = grid_plane(6, jitter=0.3, seed=2)
+    g = grid_plane(23)
+    graded = cg.TriMesh(np.column_stack([g.V[:, 0] ** 1.5, g.V[:, 1:]]), g.F)  # dense near x = 0
+    assert smoothness_weight(coarse, 1.0) == pytest.approx(smoothness_weight(graded, 1.0), rel=1e-12)
+    for mesh, tol in ((coarse, 1e-12), (graded, 1e-4)):  # graded: its corner vertices get the floor weight
+        w = stretch_weights(mesh)
+        assert w.sum() == pytest.approx(1.0) and w.min() > 0
+        assert w @ mesh.V[:, 0] == pytest.approx(0.5, abs=tol)  # the mean of x over the unit square
+    uniform = stretch_weights(graded, "mean")
+    assert uniform @ graded.V[:, 0] == pytest.approx(0.4, abs=1e-2)  # vertices counted, not area
 
 
 def test_default_m_rounds_the_ridge_and_keeps_accuracy_off_it():
     """The calibration documented in docs/method.md, on the bundled spot mesh (source 0).
 
-    Measured: ridge sharpness 0.725 (exact) -> 0.291 (qcqp-hessian, m = 1); error off the ridge
-    1.82 % (qclp) -> 1.94 %.
+    Measured: ridge sharpness 0.725 (exact) -> 0.492 (qcqp-hessian, m = 1; the paper normalization:
+    0.291); error off the ridge 1.88 % (qclp) -> 1.90 % (paper: 1.94 %).
     """
     from cvxgeodesic.demo import demo_mesh
     from cvxgeodesic.evaluation import smoothness_report
@@ -182,9 +212,9 @@ def test_default_m_rounds_the_ridge_and_keeps_accuracy_off_it():
     for method in ("qclp", "qcqp-hessian"):
         d = cg.geodesic_distance(mesh, 0, method=method, solver="clarabel")
         reports[method] = smoothness_report(mesh, d, exact, [0])
-    assert reports["qcqp-hessian"]["ridge_jump_p95"] < 0.5 * reports["qcqp-hessian"]["exact_ridge_jump_p95"]
+    assert reports["qcqp-hessian"]["ridge_jump_p95"] < 0.75 * reports["qcqp-hessian"]["exact_ridge_jump_p95"]
     assert reports["qclp"]["ridge_jump_p95"] > 0.9 * reports["qclp"]["exact_ridge_jump_p95"]
-    assert reports["qcqp-hessian"]["off_ridge_rel_mean"] < 1.1 * reports["qclp"]["off_ridge_rel_mean"]
+    assert reports["qcqp-hessian"]["off_ridge_rel_mean"] < 1.05 * reports["qclp"]["off_ridge_rel_mean"]
 
 
 def test_edge_bounds_at_rounding_level_are_floored():
@@ -204,9 +234,15 @@ def test_edge_bounds_at_rounding_level_are_floored():
 
 def test_lclp_on_a_mesh_with_near_duplicate_vertices_equals_dijkstra():
     # thingi_65395 has edges of length 6e-16; before the floor the IPM stopped at an objective 5x too high
+    # (uniform stretch weights: with the area weights, which span 0.05 to 54 times their mean on this file, the
+    # IPM does not converge within 200 iterations, and solver="auto" retries with Clarabel, as checked below)
     mesh = cg.load_mesh(shared_mesh_path("thingi_65395.stl"))
-    res = cg.GeodesicSolver(mesh, "lclp", solver="ipm").solve(0)
+    res = cg.GeodesicSolver(mesh, "lclp", solver="ipm", normalization="paper").solve(0)
     assert res.info.status == "optimal" and res.info.solver == "ipm"
+    np.testing.assert_allclose(res.distance, _dijkstra(mesh, 0), atol=1e-6 * mesh.bbox_diagonal)
+    with pytest.warns(RuntimeWarning, match="solving with Clarabel instead"):
+        res = cg.GeodesicSolver(mesh, "lclp").solve(0)
+    assert res.info.solver == "clarabel" and any("Clarabel" in note for note in res.info.notes)
     np.testing.assert_allclose(res.distance, _dijkstra(mesh, 0), atol=1e-6 * mesh.bbox_diagonal)
 
 

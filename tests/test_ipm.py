@@ -51,12 +51,17 @@ def sphere():
 # ---------------------------------------------------------------------------------------------------------------
 
 
+@pytest.mark.parametrize("normalization", ["area", "paper"])
 @pytest.mark.parametrize("method", list(FORMULATIONS))
-def test_every_formulation_matches_clarabel(sphere, method):
+def test_every_formulation_matches_clarabel(sphere, method, normalization):
     m, ops, ipm = sphere
-    p = build_problem(ops, np.array([0]), method, smoothness_weight(m, 1.0))
-    res = ipm.solve(p)
-    _assert_matches(res, solve_clarabel(p), p, m)
+    stretch = "area" if normalization == "area" else "calibrated"
+    p = build_problem(ops, np.array([0]), method, smoothness_weight(m, 1.0, normalization), stretch=stretch)
+    # the antipode of the source is the one weakly determined vertex (the ridge is a point): with the weak
+    # default Laplacian term both solvers stop 1.03e-5 of the diagonal apart there at tol = 1e-8, 1e-7 at 1e-10
+    tol = 1e-9 if method == "qcqp-laplacian" and normalization == "area" else 1e-8
+    res = ipm.solve(p, tol=tol)
+    _assert_matches(res, solve_clarabel(p, tol=tol), p, m)
     assert res.iterations < 40
     assert res.primal_residual < 1e-8 and res.dual_residual < 1e-8
 

@@ -4,7 +4,6 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from cvxgeodesic.errors import NonManifoldError
 from cvxgeodesic.mesh import TriMesh, cylinder, grid_plane, icosphere
 from cvxgeodesic.operators import (
     cotan_stiffness,
@@ -105,11 +104,39 @@ def test_hessian_energy_is_psd_on_sphere():
     assert np.linalg.eigvalsh(H).min() > -1e-9 * np.abs(H).max()
 
 
-def test_hessian_energy_rejects_nonmanifold_edge():
-    V = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1]]
-    F = [[0, 1, 2], [1, 0, 3], [0, 1, 4]]
-    with pytest.raises(NonManifoldError, match="qcqp-laplacian"):
-        hessian_energy_matrix(TriMesh(V, F))
+def test_hessian_energy_on_a_nonmanifold_mesh_is_the_sum_over_its_sheets():
+    """A book of three pages on edge (0, 1): the energy is that of the three triangles taken apart."""
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1.0]])
+    F = np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4]])
+    notes = []
+    Q = hessian_energy_matrix(TriMesh(V, F), notes)
+    assert Q.shape == (5, 5) and "1 non-manifold edge(s)" in notes[0]
+    d = np.random.default_rng(0).random(5)
+    expected = 0.0
+    for f in F:
+        Qf = hessian_energy_matrix(TriMesh(V[f], [[0, 1, 2]]))
+        expected += d[f] @ Qf @ d[f]
+    assert d @ Q @ d == pytest.approx(expected, rel=1e-12)
+
+
+def test_manifold_cover_of_a_fin_on_a_grid():
+    """A fin on an interior edge of a grid: the cut separates the fin from one side; linear stays linear."""
+    from cvxgeodesic.mesh.cover import manifold_cover
+
+    g = grid_plane(6)
+    a, b = g.edges[np.flatnonzero(g.edge_face_counts == 2)[0]]
+    V = np.vstack([g.V, [[0.5, 0.5, 1.0]]])
+    F = np.vstack([g.F, [[a, b, g.n_vertices]]])
+    mesh = TriMesh(V, F)
+    cover, to_mesh = manifold_cover(mesh)
+    assert cover.is_edge_manifold and not mesh.is_edge_manifold
+    np.testing.assert_array_equal(cover.V, V[to_mesh])
+    np.testing.assert_array_equal(to_mesh[cover.F], F)  # the same faces, corner for corner
+    # each end of the edge splits in two, or in three where the grid's fan around it is cut open too
+    assert V.shape[0] + 2 <= cover.n_vertices <= V.shape[0] + 4
+    Q = hessian_energy_matrix(mesh)
+    x = V[:, 0] + 2 * V[:, 1]  # linear on the flat grid and on the flat fin: zero Hessian energy
+    assert abs(x @ Q @ x) < 1e-8 * abs(Q).sum()
 
 
 @pytest.mark.shared

@@ -341,15 +341,11 @@ def test_nonmanifold_mesh(method):
         with pytest.raises(NonManifoldError, match="dijkstra"):
             solve(mesh, [3], method)
         return
-    if FORMULATIONS.get(method, ("", ""))[1] == "hessian":
-        with pytest.raises(NonManifoldError, match="qcqp-laplacian"):
-            solve(mesh, [3], method)
-        return
     d = solve(mesh, [3], method)
     assert np.all(np.isfinite(d)) and d[3] == 0
     if method in ("qclp", "lclp", "dijkstra"):
         # across the shared edge to the third page and through the bowtie vertex to the far fan
-        assert np.all(d <= edge_dijkstra(mesh, [3]) + 1e-9) and d[4] > 0 and d[5] > d[2]
+        assert np.all(d <= edge_dijkstra(mesh, [3]) + 1e-7) and d[4] > 0 and d[5] > d[2]
 
 
 # ----------------------------------------------------------------------------------------------------------------------

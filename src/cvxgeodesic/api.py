@@ -17,6 +17,7 @@ from .formulations import (
     MeshOperators,
     build_problem,
     canonical_method,
+    check_normalization,
     smoothness_weight,
     validate_sources,
 )
@@ -156,12 +157,20 @@ class GeodesicSolver:
         ``"qcqp-hessian"``) or a baseline (``"dijkstra"``, ``"fmm"``, ``"heat"``,
         ``"exact"``). Default ``"qcqp-hessian"``, the paper's recommendation.
     m : float
-        Smoothness multiplier of the paper: ``λ = m · 10² · h / n`` with ``h``
-        the mean edge length and ``n`` the vertex count (``E_stretch`` is the
-        mean distance; see ``docs/method.md``). Ignored by LP formulations and
-        baselines.
+        Smoothness multiplier (default 1; 0 is the LP without smoothing). With the
+        default ``normalization="area"`` the objective is
+        ``−(1/|S|) ∫ d dA + λ E(d)`` with ``λ = m · κ · √|S|`` (``|S|`` the surface
+        area, :data:`~cvxgeodesic.formulations.KAPPA`): one ``m`` rounds the ridge
+        by the same length *on the surface* on every triangulation and at every
+        scale; ``m = 1`` rounds it to about 0.4 of the exact field's sharpness on
+        bimba (``docs/method.md``). Ignored by LP formulations and baselines.
     lam : float, optional
         Give λ directly instead of ``m``.
+    normalization : {"area", "paper"}
+        ``"paper"`` reproduces the paper's ``λ = m · 10² · h / n`` with the
+        uniform stretch ``−(10/n) Σ d_i`` (this library's default before 0.2),
+        whose rounding is a fixed number of *edges* wide: too strong on coarse
+        meshes, invisible on fine ones.
     solver : {"auto", "ipm", "clarabel"}
         Backend for the convex formulations. ``"auto"`` uses the structured
         interior-point solver (``"ipm"``) when it is available, else Clarabel.
@@ -248,6 +257,7 @@ class GeodesicSolver:
         verbose: bool = False,
         multires: bool | int = False,
         multires_polish: bool = False,
+        normalization: str = "area",
     ):
         t0 = time.perf_counter()
         self.mesh: TriMesh = as_trimesh(mesh)
@@ -272,6 +282,8 @@ class GeodesicSolver:
             raise ParameterError(f"max_iter must be a positive integer, got {max_iter!r}")
         self.tol, self.max_iter, self.verbose = float(tol), int(max_iter), bool(verbose)
 
+        self.normalization = check_normalization(normalization)
+        self.energy = None if self.method in BASELINE_METHODS else FORMULATIONS[self.method][1]
         if lam is not None:
             if not _is_real(lam) or not np.isfinite(lam) or lam < 0:
                 raise ParameterError(f"lam must be a finite number >= 0, got {lam!r}")
@@ -279,8 +291,9 @@ class GeodesicSolver:
         else:
             if not _is_real(m) or not np.isfinite(m) or m < 0:
                 raise ParameterError(f"m must be a finite number >= 0, got {m!r}")
-            self.lam = smoothness_weight(self.mesh, m)
+            self.lam = smoothness_weight(self.mesh, m, self.normalization, self.energy or "hessian")
         self.m = None if lam is not None else float(m)
+        self.notes: list[str] = []  # substitutions made for every solve of this object (copied into SolveInfo)
 
         self._baseline = None
         self._ops = None
@@ -301,7 +314,6 @@ class GeodesicSolver:
             self._baseline = BASELINES[self.method](self.mesh)
             self.solver_name = self.method
         else:
-            self.energy = FORMULATIONS[self.method][1]
             if self.energy is None:
                 self.lam = 0.0
             if mr_target is not None:
@@ -312,8 +324,9 @@ class GeodesicSolver:
             if self._multires is None or self._multires.polish:  # the fine mesh's own operators and solver
                 unit_mesh, self._scale = _unit_mesh(self.mesh)
                 self._ops = MeshOperators(unit_mesh)
+                self.notes = self._ops.notes  # the operators add their substitutions as they build
                 if self.energy is not None:
-                    self._ops.energy(self.energy)  # builds it now; raises NonManifoldError early for 'hessian'
+                    self._ops.energy(self.energy)  # builds it now (PSD check, manifold cover)
                 self.solver_name = ("ipm" if _ipm_available() else "clarabel") if solver == "auto" else solver
                 self._fallback_to_clarabel = solver == "auto"
                 if self.solver_name == "ipm":
@@ -381,7 +394,7 @@ class GeodesicSolver:
                                           "skipped": "the mesh has no more faces than the multires target"}
         return res
 
-    def _run_backend(self, problem, callback=None):
+    def _run_backend(self, problem, callback=None, notes=None):
         """Solve ``problem`` with the chosen backend; under ``solver="auto"`` Clarabel retries a failed or
         ``almost_optimal`` IPM solve."""
         from .solvers import solve_clarabel
@@ -394,12 +407,14 @@ class GeodesicSolver:
             except SolverError as exc:
                 if not self._fallback_to_clarabel or exc.status in ("primal_infeasible", "dual_infeasible"):
                     raise
-                return self._clarabel_retry(problem, exc.status)
+                return self._clarabel_retry(problem, exc.status, notes)
             if res.status == "optimal" or not self._fallback_to_clarabel:
                 return res
             try:  # "almost_optimal": Clarabel may reach the full accuracy; else keep the IPM's best iterate
-                return self._clarabel_retry(problem, res.status)
+                return self._clarabel_retry(problem, res.status, notes)
             except SolverError:
+                if notes is not None:
+                    notes.append("Clarabel failed too; kept the interior-point solver's almost optimal iterate")
                 return res
         except SolverError as exc:
             if self.energy != "hessian" or problem.P is None:
@@ -413,13 +428,14 @@ class GeodesicSolver:
                 solver=exc.solver, status=exc.status, info=exc.info,
             ) from exc
 
-    def _clarabel_retry(self, problem, ipm_status: str):
+    def _clarabel_retry(self, problem, ipm_status: str, notes=None):
         from .solvers import solve_clarabel
 
-        warnings.warn(
-            f"the interior-point solver stopped with status {ipm_status!r} on {self.mesh.name}; "
-            "solving with Clarabel instead", RuntimeWarning, stacklevel=5,
-        )
+        message = (f"the interior-point solver stopped with status {ipm_status!r} on {self.mesh.name}; "
+                   "solving with Clarabel instead")
+        warnings.warn(message, RuntimeWarning, stacklevel=5)
+        if notes is not None:
+            notes.append(message)
         res = solve_clarabel(problem, tol=self.tol, max_iter=self.max_iter, verbose=self.verbose)
         res.extra = dict(res.extra, ipm_failure=ipm_status)
         return res
@@ -427,14 +443,20 @@ class GeodesicSolver:
     def _solve_direct(self, src: np.ndarray, t0: float, callback=None) -> GeodesicResult:
         """Solve the formulation on this mesh (no multires); ``t0`` starts the solve clock."""
         # on the mesh scaled by 1/s, the field d/s minimizes (objective)/s when lambda becomes lambda/s
-        problem = build_problem(self._ops, src, self.method, self.lam / self._scale)
-        res = self._run_backend(problem, callback)
-        if np.min(res.x[~problem.fixed_mask], initial=0.0) < -1e-9 * self.mesh.bbox_diagonal / self._scale:
+        stretch = "area" if self.normalization == "area" else "calibrated"
+        problem = build_problem(self._ops, src, self.method, self.lam / self._scale, stretch=stretch)
+        notes = list(self.notes)
+        res = self._run_backend(problem, callback, notes)
+        negative_min = np.min(res.x[~problem.fixed_mask], initial=0.0)
+        if negative_min < -1e-9 * self.mesh.bbox_diagonal / self._scale:
             # folded meshes (and strongly smoothed coarse fields) can trade a few negative values for a larger sum;
             # the bounds d >= 0 fix that but slow ordinary solves down, so they are added only when needed
             extra = dict(res.extra, negative_min=float(np.min(res.x)), resolved_nonnegative=True)
-            problem = build_problem(self._ops, src, self.method, self.lam / self._scale, nonnegative=True)
-            res = self._run_backend(problem, callback)
+            notes.append(f"the optimum had negative distances (down to {negative_min * self._scale:.3g}); "
+                         "re-solved with the bounds d >= 0")
+            problem = build_problem(self._ops, src, self.method, self.lam / self._scale, stretch=stretch,
+                                    nonnegative=True)
+            res = self._run_backend(problem, callback, notes)
             res.extra = {**extra, **res.extra}
         d = np.array(res.x, dtype=float) * self._scale
         d[problem.unreachable] = np.inf
@@ -443,8 +465,9 @@ class GeodesicSolver:
             method=self.method, solver=res.solver, status=res.status, iterations=res.iterations,
             setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
             primal_residual=res.primal_residual, dual_residual=res.dual_residual, gap=res.gap,
-            objective=res.objective * self._scale, lam=self.lam, n_unreachable=int(problem.unreachable.sum()),
-            extra=res.extra,
+            objective=res.objective / problem.objective_scale * self._scale, lam=self.lam,
+            n_unreachable=int(problem.unreachable.sum()),
+            notes=notes, extra=res.extra,
         )
         return GeodesicResult(distance=d, info=info, sources=src)
 
@@ -470,7 +493,8 @@ class GeodesicSolver:
 
 
 def geodesic_distance(mesh, sources, method: str = "qcqp-hessian", m: float = 1.0, solver: str = "auto",
-                      *, lam: float | None = None, tol: float = DEFAULT_TOL, max_iter: int = 200) -> np.ndarray:
+                      *, lam: float | None = None, tol: float = DEFAULT_TOL, max_iter: int = 200,
+                      normalization: str = "area") -> np.ndarray:
     """Geodesic distance field from source vertices (one-shot form of :class:`GeodesicSolver`).
 
     Parameters
@@ -479,7 +503,7 @@ def geodesic_distance(mesh, sources, method: str = "qcqp-hessian", m: float = 1.
         ``V`` (n, 3) float vertex positions, ``F`` (m, 3) int triangles.
     sources : int or sequence of int
         Source vertex indices.
-    method, m, solver, lam, tol, max_iter
+    method, m, solver, lam, tol, max_iter, normalization
         See :class:`GeodesicSolver`.
 
     Returns
@@ -500,13 +524,14 @@ def geodesic_distance(mesh, sources, method: str = "qcqp-hessian", m: float = 1.
     >>> float(d[0])
     0.0
     """
-    solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter)
+    solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter,
+                                normalization=normalization)
     return solver_obj.solve(sources).distance
 
 
 def distance_matrix(mesh, vertices, method: str = "qcqp-hessian", m: float = 1.0, solver: str = "auto",
                     progress: bool = False, *, lam: float | None = None, tol: float = DEFAULT_TOL,
-                    max_iter: int = 200, multires: bool | int = False) -> np.ndarray:
+                    max_iter: int = 200, multires: bool | int = False, normalization: str = "area") -> np.ndarray:
     """Distance fields from several vertices, one row per vertex, with one :class:`GeodesicSolver`.
 
     The per-mesh work (operators, energy matrix, symbolic Cholesky analysis) is
@@ -519,7 +544,7 @@ def distance_matrix(mesh, vertices, method: str = "qcqp-hessian", m: float = 1.0
         ``V`` (n, 3) float vertex positions, ``F`` (m, 3) int triangles.
     vertices : int or (k,) sequence of int
         Source vertex of each row.
-    method, m, solver, lam, tol, max_iter, multires
+    method, m, solver, lam, tol, max_iter, multires, normalization
         See :class:`GeodesicSolver`.
     progress : bool
         Show a tqdm progress bar (one step per distinct vertex) on stderr.
@@ -554,7 +579,7 @@ def distance_matrix(mesh, vertices, method: str = "qcqp-hessian", m: float = 1.0
     uniq, inverse = np.unique(arr, return_inverse=True)
     uniq = validate_sources(uniq, mesh.n_vertices)
     solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter,
-                                multires=multires)
+                                multires=multires, normalization=normalization)
     results = solver_obj.solve_many(uniq.tolist(), progress=progress)
     rows = np.stack([r.distance for r in results])
     return rows[np.asarray(inverse).ravel()]

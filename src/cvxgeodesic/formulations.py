@@ -74,9 +74,56 @@ ALIASES = {"qgdf": "lcqp-hessian"}
 #: Smallest right-hand side of an edge bound ``|d_i − d_j| ≤ l_ij``, as a fraction of the bounding-box diagonal.
 MIN_EDGE_BOUND = 1e-9
 
-#: ``c`` in ``E_stretch = −(c/n) Σ d_i``: calibrates the paper's ``m`` (see module docstring).
+#: ``c`` in the paper normalization's ``E_stretch = −(c/n) Σ d_i`` (see module docstring).
 STRETCH_SCALE = 10.0
-STRETCH_WEIGHTS = {"calibrated": lambda n: STRETCH_SCALE / n, "mean": lambda n: 1.0 / n, "sum": lambda n: 1.0}
+#: Stretch weights per vertex: ``"area"`` is ``−(1/|S|) ∫ d dA`` integrated exactly for the piecewise linear
+#: field (barycentric lumped mass); the others are the uniform weights of the paper normalization.
+STRETCH_WEIGHTS = ("area", "calibrated", "mean", "sum")
+#: Factor on the whole ``"area"`` objective as the backends see it (see :func:`build_problem`).
+SOLVER_SCALE = 10.0
+#: Smallest stretch weight of a vertex in the ``"area"`` stretch, as a fraction of the mean vertex area.
+MIN_STRETCH_WEIGHT = 0.05
+#: The normalizations of ``m`` (:func:`smoothness_weight`): ``"area"`` (default), ``"paper"``.
+NORMALIZATIONS = ("area", "paper")
+#: ``κ`` of ``λ = m · κ · √|S|`` per energy, normalization ``"area"``. Calibrated on bimba (46K faces,
+#: source vertex 0) so that ``m = 1`` rounds the ridge as the paper normalization's ``m = 1`` did there
+#: (ridge sharpness 0.24, 0.4 of the exact field's); docs/method.md has the sweep.
+KAPPA = {"hessian": 3.0e-6, "laplacian": 3.0e-6, "dirichlet": 1.3e-2}
+
+
+def stretch_weights(mesh: TriMesh, stretch: str = "area") -> np.ndarray:
+    """Per-vertex weights ``w`` of the stretch term ``E_stretch = −wᵀd``.
+
+    Parameters
+    ----------
+    mesh : TriMesh
+    stretch : {"area", "calibrated", "mean", "sum"}
+        ``"area"``: ``w_i = M_i / |S|`` with ``M_i`` a third of the area of the faces around
+        vertex ``i`` (the exact integral of the piecewise linear field, so ``wᵀd`` is the mean of
+        ``d`` over the surface, whatever the triangulation); ``"calibrated"``: ``10 / n`` (the paper
+        normalization of this library); ``"mean"``: ``1 / n``; ``"sum"``: 1 (the paper's literal
+        ``−Σ d_i``).
+
+    Returns
+    -------
+    (n,) float ndarray
+    """
+    n = mesh.n_vertices
+    if stretch == "area":
+        mass = np.bincount(mesh.F.ravel(), weights=np.repeat(mesh.face_areas / 3.0, 3), minlength=n)
+        total = mass.sum()
+        if not total > 0:
+            raise MeshError(f"{mesh.name}: the surface has zero area")
+        # A vertex whose faces have (almost) no area would get (almost) no weight: the optimum is then (almost)
+        # not unique there, and the solvers stop anywhere in its feasible range (measured: LCLP 3e-4 of the
+        # diagonal off Dijkstra on Thingi10K slivers). The floor changes no vertex of an ordinary mesh.
+        floor = MIN_STRETCH_WEIGHT * total / max(int(mesh.referenced.sum()), 1)
+        mass = np.where(mesh.referenced, np.maximum(mass, floor), 0.0)
+        return mass / mass.sum()
+    scale = {"calibrated": STRETCH_SCALE / n, "mean": 1.0 / n, "sum": 1.0}.get(stretch)
+    if scale is None:
+        raise ParameterError(f"stretch must be one of {', '.join(STRETCH_WEIGHTS)}, got {stretch!r}")
+    return np.full(n, scale)
 
 
 def canonical_method(method: str) -> str:
@@ -89,21 +136,48 @@ def canonical_method(method: str) -> str:
     return name
 
 
-def smoothness_weight(mesh: TriMesh, m: float) -> float:
-    """The paper's weight ``λ = m · 10² · h / n`` (§4.2.3).
+def check_normalization(normalization) -> str:
+    """Validated name of a normalization of ``m`` (see :data:`NORMALIZATIONS`)."""
+    if not isinstance(normalization, str) or normalization.lower() not in NORMALIZATIONS:
+        raise ParameterError(f"normalization must be one of {', '.join(NORMALIZATIONS)}, got {normalization!r}")
+    return normalization.lower()
+
+
+def smoothness_weight(mesh: TriMesh, m: float, normalization: str = "area", energy: str = "hessian") -> float:
+    """The smoothness weight λ for a multiplier ``m``.
 
     Parameters
     ----------
     mesh : TriMesh
     m : float
-        Dimensionless multiplier (the paper recommends 1).
+        Dimensionless multiplier; ``m = 1`` is the default rounding (docs/method.md).
+    normalization : {"area", "paper"}
+        ``"area"`` (default): ``λ = m · κ · √|S|`` (``|S|`` the surface area, ``κ`` =
+        :data:`KAPPA` of the energy), paired with the area-weighted stretch ``−(1/|S|) ∫ d dA``:
+        the discretization of one continuous problem, so one ``m`` means one rounding, measured on
+        the surface, on every triangulation and at every scale. ``"paper"``: the paper's
+        ``λ = m · 10² · h / n`` (§4.2.3; ``h`` the mean edge length, ``n`` the vertex count), paired
+        with the uniform stretch ``−(10/n) Σ d_i``: its rounding is a fixed number of edges wide.
+    energy : {"hessian", "laplacian", "dirichlet"}
+        Selects ``κ`` (``"area"`` only).
 
     Returns
     -------
     float
-        ``h`` is the mean edge length, ``n`` the number of vertices.
+
+    Examples
+    --------
+    >>> import cvxgeodesic as cg
+    >>> sphere = cg.icosphere(3)
+    >>> round(cg.smoothness_weight(sphere, 1.0) / sphere.face_areas.sum() ** 0.5, 9)
+    3e-06
     """
-    return float(m) * 100.0 * mesh.mean_edge_length / mesh.n_vertices
+    normalization = check_normalization(normalization)
+    if normalization == "paper":
+        return float(m) * 100.0 * mesh.mean_edge_length / mesh.n_vertices
+    if energy not in KAPPA:
+        raise ParameterError(f"energy must be one of {', '.join(KAPPA)}, got {energy!r}")
+    return float(m) * KAPPA[energy] * float(np.sqrt(mesh.face_areas.sum()))
 
 
 def _short(value, limit: int = 60) -> str:
@@ -198,6 +272,9 @@ class MeshOperators:
         The faces left out.
     degenerate_edges : (k,) int64 ndarray
         Indices into ``mesh.edges`` of the edges of degenerate faces.
+    notes : list of str
+        One line per substitution made while building the operators (degenerate faces left
+        out, a manifold cover or the planar Hessian energy), copied into every ``SolveInfo``.
 
     Raises
     ------
@@ -211,6 +288,8 @@ class MeshOperators:
     def __post_init__(self):
         self._blocks = None
         self._energies: dict[str, sp.csc_matrix] = {}
+        self._stretch: dict[str, np.ndarray] = {}
+        self.notes: list[str] = []
         mesh = self.mesh
         tol = self.degenerate_tol
         if isinstance(tol, bool) or not isinstance(tol, int | float | np.floating) or not 0 <= tol < 1:
@@ -231,13 +310,13 @@ class MeshOperators:
             self.degenerate_edges = np.unique(np.searchsorted(keys, Ed[:, 0] * n + Ed[:, 1])).astype(np.int64)
             self._energy_mesh = TriMesh(mesh.V, mesh.F[~self.degenerate], name=mesh.name)
             f = int(np.flatnonzero(self.degenerate)[0])
-            warnings.warn(
+            message = (
                 f"{mesh.name}: {n_bad} degenerate face(s) (smallest altitude below {tol:g} of the face's longest "
                 f"edge or of the mean edge length; first: face {f} {mesh.F[f].tolist()}) are left out of the cone "
-                "constraints and energies; their edges are constrained by |d_i - d_j| <= edge length instead",
-                DegenerateFacesWarning,
-                stacklevel=3,
+                "constraints and energies; their edges are constrained by |d_i - d_j| <= edge length instead"
             )
+            warnings.warn(message, DegenerateFacesWarning, stacklevel=3)
+            self.notes.append(message)
         else:
             self.degenerate_edges = np.zeros(0, dtype=np.int64)
             self._energy_mesh = mesh
@@ -254,8 +333,14 @@ class MeshOperators:
     def energy(self, name: str) -> sp.csc_matrix:
         """(n, n) csc_matrix of a named energy, assembled on the non-degenerate faces."""
         if name not in self._energies:
-            self._energies[name] = energy_matrix(self._energy_mesh, name)
+            self._energies[name] = energy_matrix(self._energy_mesh, name, self.notes)
         return self._energies[name]
+
+    def stretch_weights(self, stretch: str = "area") -> np.ndarray:
+        """(n,) float ndarray: :func:`stretch_weights` of the mesh (cached)."""
+        if stretch not in self._stretch:
+            self._stretch[stretch] = stretch_weights(self.mesh, stretch)
+        return self._stretch[stretch]
 
 
 def build_problem(
@@ -264,7 +349,7 @@ def build_problem(
     method: str,
     lam: float,
     *,
-    stretch: str = "calibrated",
+    stretch: str = "area",
     nonnegative: bool = False,
 ) -> ConicProblem:
     """Assemble one formulation for given sources.
@@ -278,10 +363,11 @@ def build_problem(
         A name of :data:`FORMULATIONS` (aliases allowed).
     lam : float
         Smoothness weight λ (ignored by lclp / qclp).
-    stretch : {"calibrated", "mean", "sum"}
-        Normalization of ``E_stretch``: ``−(10/n) Σd`` (default, see module
-        docstring), ``−Σd/n`` or the paper's literal ``−Σd``. The alternatives
-        exist to reproduce the normalization study in ``docs/method.md``.
+    stretch : {"area", "calibrated", "mean", "sum"}
+        Weights of ``E_stretch`` (:func:`stretch_weights`): ``−(1/|S|) ∫ d dA``
+        (default, normalization ``"area"``), ``−(10/n) Σd`` (normalization
+        ``"paper"``), ``−Σd/n`` or the paper's literal ``−Σd`` (the last two
+        reproduce the normalization study in ``docs/method.md``).
     nonnegative : bool
         Add the bounds ``d_i ≥ 0`` for every free vertex.
 
@@ -300,10 +386,11 @@ def build_problem(
     fixed_mask[sources] = True
     fixed_values = np.zeros(n)
 
-    if stretch not in STRETCH_WEIGHTS:
-        raise ParameterError(f"stretch must be one of {', '.join(STRETCH_WEIGHTS)}, got {stretch!r}")
-    weight = STRETCH_WEIGHTS[stretch](n)
-    q = np.where(fixed_mask, 0.0, -weight)
+    # The "area" objective is solved times SOLVER_SCALE: its terms are then as large as the paper normalization's
+    # (-(10/n) Σd), the scale the backends' absolute tolerances were tuned at (measured: at scale 1 Clarabel left
+    # 1.8e-5 of the diagonal between a 20-vertex mesh and its 10x copy). ConicProblem.objective_scale undoes it.
+    objective_scale = SOLVER_SCALE if stretch == "area" else 1.0
+    q = np.where(fixed_mask, 0.0, -objective_scale * ops.stretch_weights(stretch))
 
     F = mesh.F
     face_free = ~fixed_mask[F].all(axis=1)
@@ -356,7 +443,7 @@ def build_problem(
 
     P = None
     if energy is not None and lam > 0:
-        P = sp.csc_matrix(2.0 * lam * ops.energy(energy))
+        P = sp.csc_matrix(2.0 * objective_scale * lam * ops.energy(energy))
 
     return ConicProblem(
         n=n, P=P, q=q,
@@ -364,5 +451,5 @@ def build_problem(
         ineq_vertices=np.ascontiguousarray(ineq_vertices, dtype=np.int64),
         ineq_coeffs=np.ascontiguousarray(ineq_coeffs), ineq_rhs=ineq_rhs,
         fixed_mask=fixed_mask, fixed_values=fixed_values, unreachable=unreachable,
-        method=canonical_method(method),
+        method=canonical_method(method), objective_scale=objective_scale,
     )

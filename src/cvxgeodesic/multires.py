@@ -358,12 +358,6 @@ class CoarseToFine:
         mesh = fine.mesh
         self.polish = bool(polish)
         self.target_faces = int(target_faces)
-        if fine.energy == "hessian" and not mesh.is_edge_manifold:
-            bad = int(np.sum(mesh.edge_face_counts > 2))
-            raise NonManifoldError(
-                f"{mesh.name}: the curved Hessian energy needs an edge-manifold mesh, but {bad} edges have more "
-                "than two faces; use method='qcqp-laplacian', 'qcqp-dirichlet' or 'qclp' on this mesh"
-            )
         t0 = time.perf_counter()
         self.coarse_mesh = simplify_mesh(mesh, self.target_faces)
         if fine.energy == "hessian" and not self.coarse_mesh.is_edge_manifold and \
@@ -373,7 +367,9 @@ class CoarseToFine:
                 other.simplifier = "quadric (shortest-edge: its result was not edge-manifold)"
                 self.coarse_mesh = other
         self.simplify_time = time.perf_counter() - t0
-        if fine.m is None:  # λ given directly: keep λ·n/h, the quantity the paper's m fixes
+        if fine.normalization == "area":  # λ is a length on the surface: the fine mesh's, also for the coarse one
+            kw = {"lam": fine.lam}
+        elif fine.m is None:  # paper normalization: keep λ·n/h, the quantity the paper's m fixes
             h, n = mesh.mean_edge_length, mesh.n_vertices
             hc, nc = self.coarse_mesh.mean_edge_length, self.coarse_mesh.n_vertices
             kw = {"lam": fine.lam * (hc / nc) / (h / n)}
@@ -381,7 +377,8 @@ class CoarseToFine:
             kw = {"m": fine.m}
         try:
             self.coarse = GeodesicSolver(self.coarse_mesh, fine.method, solver=solver, tol=fine.tol,
-                                         max_iter=fine.max_iter, verbose=fine.verbose, **kw)
+                                         max_iter=fine.max_iter, verbose=fine.verbose,
+                                         normalization=fine.normalization, **kw)
         except NonManifoldError:
             raise MeshError(
                 f"{mesh.name}: simplifying to {self.target_faces} faces produced a non-manifold mesh, which "
@@ -441,7 +438,7 @@ class CoarseToFine:
         info = SolveInfo(
             method=fine.method, solver=cinfo.solver, status="approximate", iterations=cinfo.iterations,
             setup_time=fine.setup_time, solve_time=time.perf_counter() - t0, lam=fine.lam,
-            n_unreachable=int((~reach).sum()),
+            n_unreachable=int((~reach).sum()), notes=[f"coarse mesh: {note}" for note in cinfo.notes],
             extra={"multires": mr, "coarse": {k: v for k, v in cinfo.as_dict().items() if k != "extra"}},
         )
         return GeodesicResult(distance=d, info=info, sources=src)

@@ -8,7 +8,8 @@ import igl
 import numpy as np
 import scipy.sparse as sp
 
-from ..errors import IndefiniteEnergyWarning, NonManifoldError
+from ..errors import IndefiniteEnergyWarning
+from ..mesh.cover import manifold_cover, pull_back
 from ..mesh.trimesh import TriMesh
 from ..solvers.cholesky import is_positive_semidefinite
 from .laplacian import cotan_stiffness, mass_matrix
@@ -46,49 +47,69 @@ def laplacian_energy_matrix(mesh: TriMesh) -> sp.csc_matrix:
     return sp.csc_matrix(0.5 * (Q + Q.T))
 
 
-def hessian_energy_matrix(mesh: TriMesh) -> sp.csc_matrix:
+def hessian_energy_matrix(mesh: TriMesh, notes: list[str] | None = None) -> sp.csc_matrix:
     """Curved-surface Hessian energy (paper eq. 18; Stein et al. TOG 2020) via libigl.
 
     ``E(d) = dᵀ Q d ≈ ∫ ‖Hess d‖² dA``. It vanishes on functions linear on a
     flat mesh and, unlike the planar Hessian energy, has no boundary bias.
 
-    Raises
-    ------
-    NonManifoldError
-        The discretization uses edge (Crouzeix–Raviart) elements and needs an
-        edge-manifold mesh; on a mesh with an edge shared by more than two
-        faces use the Laplacian or Dirichlet energy instead.
+    The discretization uses edge (Crouzeix–Raviart) elements and needs an
+    edge-manifold mesh. On a mesh with an edge of more than two faces the
+    energy is built on :func:`~cvxgeodesic.mesh.cover.manifold_cover` (the mesh
+    cut along its non-manifold edges, each sheet a surface with that edge on its
+    boundary) and pulled back to the mesh's vertices.
+
+    Parameters
+    ----------
+    mesh : TriMesh
+    notes : list of str, optional
+        Gets one line per substitution made (manifold cover, planar energy).
 
     Warns
     -----
     IndefiniteEnergyWarning
         The curved energy has a negative eigenvalue on this mesh (checked with one
-        CHOLMOD factorization; skipped without scikit-sparse): the planar Hessian
-        energy of Stein et al. 2018 (libigl ``hessian_energy``), which is PSD, is
-        returned instead.
+        PARDISO or CHOLMOD factorization; skipped without either): the planar
+        Hessian energy of Stein et al. 2018 (libigl ``hessian_energy``), which is
+        PSD, is returned instead.
 
     Returns
     -------
     (n, n) scipy.sparse.csc_matrix, symmetric PSD
     """
+    notes = [] if notes is None else notes
+    energy_mesh, to_mesh = mesh, None
     if not mesh.is_edge_manifold:
         bad = int(np.sum(mesh.edge_face_counts > 2))
-        raise NonManifoldError(
-            f"{mesh.name}: the curved Hessian energy needs an edge-manifold mesh, but {bad} edges have more "
-            "than two faces; use method='qcqp-laplacian', 'qcqp-dirichlet' or 'qclp' on this mesh"
-        )
-    Q = _padded_symmetric(igl.curved_hessian_energy(mesh.V, mesh.F), mesh.n_vertices)
+        energy_mesh, to_mesh = manifold_cover(mesh)
+        notes.append(f"{mesh.name}: {bad} non-manifold edge(s); the Hessian energy is built on the mesh cut along "
+                     f"them ({energy_mesh.n_vertices} vertices instead of {int(mesh.referenced.sum())})")
+        if not energy_mesh.is_edge_manifold:  # a sheet that closes up around a vertex of a non-manifold edge
+            keep = ~np.isin(np.arange(mesh.n_faces), _faces_on_nonmanifold_edges(energy_mesh))
+            notes.append(f"{mesh.name}: {int((~keep).sum())} face(s) whose non-manifold edge the cut cannot open "
+                         "carry no Hessian energy")
+            energy_mesh = TriMesh(energy_mesh.V, energy_mesh.F[keep], name=energy_mesh.name)
+    n = energy_mesh.n_vertices
+    Q = _padded_symmetric(igl.curved_hessian_energy(energy_mesh.V, energy_mesh.F), n)
     if is_positive_semidefinite(Q) is False:
         # measured: lucy_20k and thingi_37881 (min eigenvalue -59 against a largest diagonal of 1.2e7); the
         # curvature correction of the curved energy is not PSD where the angle defect is large, and the QP would
         # then be non-convex. The planar Hessian energy (Stein et al. 2018) is PSD by construction.
-        warnings.warn(
-            f"{mesh.name}: libigl's curved Hessian energy is indefinite on this mesh (sharp corners or large "
-            "angle defects); using the planar Hessian energy (Stein et al. 2018) instead",
-            IndefiniteEnergyWarning, stacklevel=3,
-        )
-        Q = _padded_symmetric(igl.hessian_energy(mesh.V, mesh.F), mesh.n_vertices)
-    return Q
+        message = (f"{mesh.name}: libigl's curved Hessian energy is indefinite on this mesh (sharp corners or large "
+                   "angle defects); using the planar Hessian energy (Stein et al. 2018) instead")
+        warnings.warn(message, IndefiniteEnergyWarning, stacklevel=3)
+        notes.append(message)
+        Q = _padded_symmetric(igl.hessian_energy(energy_mesh.V, energy_mesh.F), n)
+    return Q if to_mesh is None else pull_back(Q, to_mesh, mesh.n_vertices)
+
+
+def _faces_on_nonmanifold_edges(mesh: TriMesh) -> np.ndarray:
+    """Indices of the faces with an edge shared by more than two faces."""
+    F = mesh.F
+    e = np.sort(np.stack([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1), axis=2)  # (m, 3, 2)
+    key = e[..., 0] * mesh.n_vertices + e[..., 1]
+    uniq, inv, counts = np.unique(key.ravel(), return_inverse=True, return_counts=True)
+    return np.flatnonzero((counts[inv] > 2).reshape(-1, 3).any(axis=1))
 
 
 def _padded_symmetric(Q, n: int) -> sp.csc_matrix:
@@ -98,7 +119,11 @@ def _padded_symmetric(Q, n: int) -> sp.csc_matrix:
     return sp.csc_matrix(0.5 * (Q + Q.T))
 
 
-def energy_matrix(mesh: TriMesh, energy: str) -> sp.csc_matrix:
-    """The matrix of a named energy (``"dirichlet"``, ``"laplacian"`` or ``"hessian"``)."""
-    return {"dirichlet": dirichlet_energy_matrix, "laplacian": laplacian_energy_matrix,
-            "hessian": hessian_energy_matrix}[energy](mesh)
+def energy_matrix(mesh: TriMesh, energy: str, notes: list[str] | None = None) -> sp.csc_matrix:
+    """The matrix of a named energy (``"dirichlet"``, ``"laplacian"`` or ``"hessian"``).
+
+    ``notes`` (optional list) gets one line per substitution made while building it.
+    """
+    if energy == "hessian":
+        return hessian_energy_matrix(mesh, notes)
+    return {"dirichlet": dirichlet_energy_matrix, "laplacian": laplacian_energy_matrix}[energy](mesh)

@@ -55,6 +55,9 @@ class ConicProblem:
         Vertices in components without a source; reported as ``inf``.
     method : str
         Name of the formulation that built the problem.
+    objective_scale : float
+        The factor by which the formulation's objective was multiplied to give ``P`` and
+        ``q`` (a conditioning choice; divide the backend's objective by it).
     """
 
     n: int
@@ -69,6 +72,7 @@ class ConicProblem:
     fixed_values: np.ndarray
     unreachable: np.ndarray
     method: str = ""
+    objective_scale: float = 1.0
 
     @property
     def n_cones(self) -> int:
