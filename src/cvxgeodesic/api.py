@@ -105,11 +105,17 @@ class GeodesicResult:
         Distance of every vertex to the nearest source; ``inf`` where no source is reachable.
     info : SolveInfo
     sources : (k,) int64 ndarray
+        The source vertices (fixed at 0). With point, curve or boundary sources: the vertices among them
+        (points that lie on a vertex, boundary vertices), possibly none; the whole set is ``source_set``.
+    source_set : SourceSet or None
+        The normalized sources (:func:`cvxgeodesic.sources.resolve_sources`) when they were not all
+        vertices; ``None`` otherwise.
     """
 
     distance: np.ndarray
     info: SolveInfo
     sources: np.ndarray
+    source_set: object = None
 
 
 def _is_real(value) -> bool:
@@ -339,8 +345,9 @@ class GeodesicSolver:
 
         Parameters
         ----------
-        sources : int or sequence of int
-            Source vertex indices (distinct, in ``[0, n)``).
+        sources : int, sequence of int, SurfacePoint, SurfaceCurve, "boundary", or a list mixing them
+            Source vertex indices (distinct, in ``[0, n)``), points anywhere on the surface, curves,
+            or every boundary edge (``docs/sources.md``).
         callback : callable, optional
             ``callback(iteration, info_dict)`` after every interior-point
             iteration of the ``"ipm"`` backend (used for progress reports).
@@ -353,13 +360,26 @@ class GeodesicSolver:
         ------
         SourceError
             Invalid sources: empty, ragged, not integers (bools included), out of range,
-            repeated; several sources for a baseline that takes one.
+            repeated; several sources for a baseline that takes one; a bad SurfacePoint or
+            SurfaceCurve, ``"boundary"`` on a closed mesh; a kind of source the method cannot take
+            (the message names the methods that can).
         SolverError
             The backend did not reach an optimal solution (for the Hessian energy the
             message adds that it can be indefinite on meshes with sharp corners).
         """
-        src = validate_sources(sources, self.mesh.n_vertices)
+        from .sources import resolve_sources
+
+        sset = resolve_sources(self.mesh, sources)
+        src = sset.vertices if sset.vertex_only else sset
         t0 = time.perf_counter()
+        if self.is_baseline and not sset.vertex_only:
+            from .baselines.points import solve_baseline_sources
+
+            d, binfo = solve_baseline_sources(self._baseline, sset)
+            info = SolveInfo(method=self.method, solver=str(binfo.pop("solver")), status="optimal",
+                             setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
+                             n_unreachable=int(np.isinf(d).sum()), extra=binfo)
+            return GeodesicResult(distance=d, info=info, sources=sset.vertices, source_set=sset)
         if self.is_baseline:
             if len(src) > 1 and not self._baseline.supports_multiple_sources:
                 raise SourceError(f"method {self.method!r} supports a single source only")
@@ -374,6 +394,9 @@ class GeodesicSolver:
             return GeodesicResult(distance=d, info=info, sources=src)
 
         if self._multires is not None:
+            if not sset.vertex_only:
+                raise SourceError("multires takes vertex sources only; solve point, curve and boundary sources "
+                                  "without multires")
             return self._multires.solve(self, src, callback=callback)
         res = self._solve_direct(src, t0, callback)
         if self._multires_skipped:
@@ -438,7 +461,8 @@ class GeodesicSolver:
             res.extra = {**extra, **res.extra}
         d = np.array(res.x, dtype=float) * self._scale
         d[problem.unreachable] = np.inf
-        d[src] = 0.0
+        vertices = src if isinstance(src, np.ndarray) else src.vertices
+        d[vertices] = 0.0
         info = SolveInfo(
             method=self.method, solver=res.solver, status=res.status, iterations=res.iterations,
             setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
@@ -446,10 +470,12 @@ class GeodesicSolver:
             objective=res.objective * self._scale, lam=self.lam, n_unreachable=int(problem.unreachable.sum()),
             extra=res.extra,
         )
-        return GeodesicResult(distance=d, info=info, sources=src)
+        if isinstance(src, np.ndarray):
+            return GeodesicResult(distance=d, info=info, sources=src)
+        return GeodesicResult(distance=d, info=info, sources=src.vertices, source_set=src)
 
     def solve_many(self, sources_list, *, progress: bool = False) -> list[GeodesicResult]:
-        """Solve for each entry of ``sources_list`` (each an int or a list of ints), reusing all per-mesh work.
+        """Solve for each entry of ``sources_list`` (each anything :meth:`solve` takes), reusing all per-mesh work.
 
         Parameters
         ----------
@@ -477,8 +503,8 @@ def geodesic_distance(mesh, sources, method: str = "qcqp-hessian", m: float = 1.
     ----------
     mesh : TriMesh or tuple (V, F)
         ``V`` (n, 3) float vertex positions, ``F`` (m, 3) int triangles.
-    sources : int or sequence of int
-        Source vertex indices.
+    sources : int, sequence of int, SurfacePoint, SurfaceCurve, "boundary", or a list mixing them
+        Source vertex indices or surface sources (see :meth:`GeodesicSolver.solve`).
     method, m, solver, lam, tol, max_iter
         See :class:`GeodesicSolver`.
 
@@ -517,8 +543,8 @@ def distance_matrix(mesh, vertices, method: str = "qcqp-hessian", m: float = 1.0
     ----------
     mesh : TriMesh or tuple (V, F)
         ``V`` (n, 3) float vertex positions, ``F`` (m, 3) int triangles.
-    vertices : int or (k,) sequence of int
-        Source vertex of each row.
+    vertices : int or (k,) sequence of int, or a sequence of SurfacePoint / SurfaceCurve / "boundary" / int
+        Source of each row (a row per item; see :meth:`GeodesicSolver.solve`).
     method, m, solver, lam, tol, max_iter, multires
         See :class:`GeodesicSolver`.
     progress : bool
@@ -544,6 +570,15 @@ def distance_matrix(mesh, vertices, method: str = "qcqp-hessian", m: float = 1.0
     ((3, 162), 0.0)
     """
     mesh = as_trimesh(mesh)
+    from .sources import SurfaceCurve, SurfacePoint
+
+    surface = (SurfacePoint, SurfaceCurve, str)
+    if isinstance(vertices, surface) or (isinstance(vertices, list | tuple)
+                                         and any(isinstance(v, surface) for v in vertices)):
+        items = [vertices] if isinstance(vertices, surface) else list(vertices)  # one row per item
+        solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter,
+                                    multires=multires)
+        return np.stack([r.distance for r in solver_obj.solve_many(items, progress=progress)])
     if isinstance(vertices, bool | np.bool_):
         raise SourceError(f"vertices must be vertex indices, got {vertices!r}")
     arr = np.atleast_1d(np.asarray(vertices))

@@ -1,0 +1,439 @@
+"""Reading a distance field on the surface: values at surface points, geodesic paths.
+
+:func:`geodesic_path` follows the steepest descent of the piecewise-linear field: inside a face
+along ``−∇d|_t`` to the exact crossing with the face's boundary; across an edge into the next face
+when that face's descent direction enters it, else along the edge (a valley) to its lower end; at a
+vertex into the incident face or along the incident edge of steepest descent. It stops at a
+source vertex, or goes straight to the source once it reaches a face that contains a point or curve
+source (a straight segment inside a flat face is the geodesic there). Optionally (default) the
+edge crossings are then slid along their edges to the shortest path through the same faces
+(the path is unfolded edge by edge; vertices the descent went through stay), which makes it
+straight on a plane and a polyhedral geodesic where the descent's corridor contains one.
+"""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+import scipy.sparse as sp
+
+from .errors import ParameterError, SolverError, SourceError
+from .mesh.trimesh import TriMesh, as_trimesh
+from .sources import BARY_SNAP, SourceSet, SurfacePoint, _barycentric, _incident_faces, resolve_sources
+
+
+def _field(mesh: TriMesh, distance) -> tuple[np.ndarray, object]:
+    """(n,) float field and the result object it came from (or None)."""
+    result = None
+    if hasattr(distance, "distance") and hasattr(distance, "info"):
+        result, distance = distance, distance.distance
+    try:
+        d = np.asarray(distance, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ParameterError(f"distance must be an (n,) array of vertex values, got {type(distance).__name__}") from None
+    if d.shape != (mesh.n_vertices,):
+        raise ParameterError(f"distance has {d.size} values but the mesh has {mesh.n_vertices} vertices")
+    if np.isnan(d).any():
+        raise ParameterError(f"distance has NaN values (first at vertex {int(np.flatnonzero(np.isnan(d))[0])})")
+    return d, result
+
+
+def _as_points(mesh: TriMesh, points) -> tuple[list[SurfacePoint], bool]:
+    from .sources import surface_point
+
+    if isinstance(points, SurfacePoint):
+        return [points], True
+    if isinstance(points, list | tuple) and all(isinstance(p, SurfacePoint) for p in points):
+        pts = list(points)
+    else:
+        try:
+            X = np.asarray(points, dtype=float)
+        except (TypeError, ValueError):
+            raise SourceError("points must be SurfacePoints or (k, 3) positions") from None
+        pts = surface_point(mesh, X)
+        if isinstance(pts, SurfacePoint):
+            return [pts], True
+    for k, p in enumerate(pts):
+        if p.face >= mesh.n_faces:
+            raise SourceError(f"point {k} {p!r}: face index {p.face} is out of range: the mesh has {mesh.n_faces} "
+                              "faces")
+    return pts, False
+
+
+def distance_at(mesh, distance, points):
+    """Values of a piecewise-linear vertex field at surface points.
+
+    Parameters
+    ----------
+    mesh : TriMesh or tuple (V, F)
+    distance : (n,) float array_like or GeodesicResult
+    points : SurfacePoint, sequence of SurfacePoint, or (3,) / (k, 3) positions (closest points are used)
+
+    Returns
+    -------
+    float for one point, else (k,) float ndarray
+        ``Σ_i b_i d[F[face, i]]``.
+
+    Raises
+    ------
+    SourceError
+        A face index out of range, or points that are neither SurfacePoints nor positions.
+    ParameterError
+        ``distance`` of the wrong length or with NaN.
+
+    Examples
+    --------
+    >>> import cvxgeodesic as cg
+    >>> mesh = cg.grid_plane(4)
+    >>> d = cg.geodesic_distance(mesh, 0, method="dijkstra")
+    >>> round(cg.distance_at(mesh, d, cg.SurfacePoint(0, [1.0, 0.0, 0.0])), 6)
+    0.0
+    """
+    mesh = as_trimesh(mesh)
+    d, _ = _field(mesh, distance)
+    pts, single = _as_points(mesh, points)
+    faces = np.array([p.face for p in pts], dtype=np.int64)
+    bary = np.array([p.bary for p in pts]).reshape(-1, 3)
+    with np.errstate(invalid="ignore"):
+        vals = np.einsum("kj,kj->k", bary, d[mesh.F[faces]])
+    # inf * 0 is NaN: a point whose face touches an unreachable vertex with weight 0 takes the others' value
+    bad = np.isnan(vals)
+    if bad.any():
+        Dv = d[mesh.F[faces[bad]]]
+        vals[bad] = np.where(np.any((bary[bad] > 0) & np.isinf(Dv), axis=1), np.inf,
+                             np.nansum(np.where(bary[bad] > 0, bary[bad] * Dv, 0.0), axis=1))
+    return float(vals[0]) if single else vals
+
+
+class _Geometry:
+    """Per-mesh data of the descent: 3D hat-function gradients and edge-to-face maps."""
+
+    def __init__(self, mesh: TriMesh):
+        from .operators.gradient import gradient_blocks, triangle_frames
+
+        self.mesh = mesh
+        V, F = mesh.V, mesh.F
+        ex, ey = triangle_frames(mesh)
+        B = gradient_blocks(mesh)  # (m, 2, 3)
+        with np.errstate(invalid="ignore"):
+            self.H = B[:, 0, :, None] * ex[:, None, :] + B[:, 1, :, None] * ey[:, None, :]  # (m, 3 corners, 3)
+        self.ok = np.all(np.isfinite(self.H.reshape(len(F), -1)), axis=1) & ~np.isin(
+            np.arange(len(F)), mesh.degenerate_faces())
+        self.inc = _incident_faces(mesh)
+        self.V, self.F = V, F
+
+    def faces_of_edge(self, a: int, c: int) -> np.ndarray:
+        return np.intersect1d(self.inc[a].indices, self.inc[c].indices)
+
+    def faces_of_vertex(self, v: int) -> np.ndarray:
+        return self.inc[v].indices
+
+
+def _source_targets(mesh: TriMesh, ss: SourceSet | None):
+    """Per source face, the source points and pieces in it; and the set of source vertices."""
+    per_face: dict[int, list[tuple[np.ndarray, np.ndarray]]] = {}
+    if ss is None:
+        return per_face
+    X = ss.point_positions(mesh)
+    for f, x in zip(ss.point_faces, X, strict=True):
+        per_face.setdefault(int(f), []).append((x, x))
+    T = mesh.V[mesh.F[ss.segment_faces]]
+    for f, ba, t in zip(ss.segment_faces, ss.segment_bary, T, strict=True):
+        per_face.setdefault(int(f), []).append((ba[0] @ t, ba[1] @ t))
+    return per_face
+
+
+def _closest_on(x: np.ndarray, items) -> tuple[np.ndarray, float]:
+    best, bd = None, np.inf
+    for a, b in items:
+        ab = b - a
+        den = float(ab @ ab)
+        t = 0.0 if den == 0 else float(np.clip((x - a) @ ab / den, 0.0, 1.0))
+        y = a + t * ab
+        dist = float(np.linalg.norm(x - y))
+        if dist < bd:
+            best, bd = y, dist
+    return best, bd
+
+
+def geodesic_path(mesh, distance, target, *, sources=None, return_surface_points: bool = False,
+                  straighten: bool = True, max_steps: int | None = None):
+    """Path from ``target`` down the distance field to the nearest source.
+
+    Parameters
+    ----------
+    mesh : TriMesh or tuple (V, F)
+    distance : (n,) float array_like or GeodesicResult
+        The field. A :class:`~cvxgeodesic.api.GeodesicResult` also gives its sources.
+    target : int or SurfacePoint
+        A vertex index or a surface point.
+    sources : optional
+        The field's sources (anything :meth:`GeodesicSolver.solve` takes), needed to end a path on a
+        point or curve source when ``distance`` is a plain array. Without them (and without a
+        result), the sources are the vertices where ``distance`` is 0.
+    return_surface_points : bool
+        Also return the face and barycentric coordinates of every path point.
+    straighten : bool
+        Slide the edge crossings to the shortest path through the same faces (module docstring).
+    max_steps : int, optional
+        Limit of descent steps (default ``3 · n_faces + 10``).
+
+    Returns
+    -------
+    path : (k, 3) float ndarray
+        From the target (first row) to the source (last row).
+    faces : (k,) int64 ndarray
+        Only with ``return_surface_points``: a face containing each point.
+    bary : (k, 3) float ndarray
+        Only with ``return_surface_points``: the point's barycentric coordinates in that face.
+
+    Raises
+    ------
+    SourceError
+        Invalid target (vertex or face out of range) or sources.
+    ParameterError
+        ``distance`` of the wrong length, with NaN, or infinite at the target.
+    SolverError
+        The descent stopped at a local minimum that is no source, or ran past ``max_steps``.
+
+    Examples
+    --------
+    >>> import cvxgeodesic as cg
+    >>> mesh = cg.grid_plane(8)
+    >>> d = cg.geodesic_distance(mesh, 0, method="exact")
+    >>> path = cg.geodesic_path(mesh, d, 80)
+    >>> path[0].tolist(), path[-1].tolist()
+    ([1.0, 1.0, 0.0], [0.0, 0.0, 0.0])
+    """
+    mesh = as_trimesh(mesh)
+    d, result = _field(mesh, distance)
+    ss = None
+    if sources is not None:
+        ss = resolve_sources(mesh, sources)
+    elif result is not None:
+        ss = result.source_set if result.source_set is not None else resolve_sources(mesh, result.sources)
+    if ss is not None:
+        src_v = np.zeros(mesh.n_vertices, dtype=bool)
+        src_v[ss.vertices] = True
+    else:
+        finite = d[np.isfinite(d)]
+        zero = (finite.min() if finite.size else 0.0) + 1e-12 * mesh.bbox_diagonal
+        src_v = d <= zero
+    geo = _Geometry(mesh)
+    per_face = _source_targets(mesh, ss)
+    V, F = geo.V, geo.F
+    tol = 1e-12 * mesh.bbox_diagonal
+    if max_steps is None:
+        max_steps = 3 * mesh.n_faces + 10
+    if isinstance(max_steps, bool) or not isinstance(max_steps, numbers.Integral) or max_steps < 1:
+        raise ParameterError(f"max_steps must be a positive integer, got {max_steps!r}")
+
+    with np.errstate(invalid="ignore"):
+        grad = np.einsum("fkj,fk->fj", geo.H, d[F])  # (m, 3) gradient of the field in each face
+    grad[~geo.ok] = np.nan
+
+    # nodes: ("v", vertex) | ("e", a, c, face_in, face_out, position) | ("p", face, position)
+    nodes: list[tuple] = []
+    if isinstance(target, SurfacePoint):
+        if target.face >= mesh.n_faces:
+            raise SourceError(f"target {target!r}: face index {target.face} is out of range: the mesh has "
+                              f"{mesh.n_faces} faces")
+        b = target.bary
+        k = int(np.argmax(b))
+        if b[k] >= 1 - BARY_SNAP:
+            state = ("v", int(F[target.face, k]))
+            nodes.append(state)
+        else:
+            x = b @ V[F[target.face]]
+            nodes.append(("p", target.face, x))
+            state = ("f", target.face, np.where(b <= BARY_SNAP, 0.0, b))
+    else:
+        if isinstance(target, bool | np.bool_) or not isinstance(target, numbers.Integral):
+            raise SourceError(f"target must be a vertex index or a SurfacePoint, got {target!r}")
+        if not 0 <= int(target) < mesh.n_vertices:
+            raise SourceError(f"target vertex {int(target)} is out of range: the mesh has {mesh.n_vertices} vertices")
+        state = ("v", int(target))
+        nodes.append(state)
+    t_val = distance_at(mesh, d, SurfacePoint(*_locate(mesh, geo, nodes[0])))
+    if not np.isfinite(t_val):
+        raise ParameterError("the distance is infinite at the target: no source is reachable from it")
+
+    def finish_in_face(f: int, x: np.ndarray, dx: float) -> bool:
+        items = per_face.get(f)
+        if not items:
+            return False
+        y, dist = _closest_on(x, items)
+        if dist > dx + 1e-9 * mesh.bbox_diagonal + 1e-6 * dx:
+            return False  # another source is nearer: keep descending
+        nodes.append(("p", f, y))
+        return True
+
+    for _ in range(max_steps):
+        if state[0] == "v":
+            v = state[1]
+            if src_v[v]:
+                break
+            fs = geo.faces_of_vertex(v)
+            done = False
+            for f in fs:
+                if finish_in_face(int(f), V[v], d[v]):
+                    done = True
+                    break
+            if done:
+                break
+            best, choice = 1e-14, None
+            for f in fs:
+                g = grad[f]
+                if not np.all(np.isfinite(g)):
+                    continue
+                rate = float(np.linalg.norm(g))
+                if rate <= best:
+                    continue
+                db = geo.H[f] @ (-g)
+                iv = int(np.flatnonzero(F[f] == v)[0])
+                others = [j for j in range(3) if j != iv]
+                if all(db[j] >= -1e-12 * np.abs(db).max() for j in others):
+                    best, choice = rate, ("f", int(f), np.eye(3)[iv])
+            nb = sp.csr_matrix(mesh.vertex_adjacency)[v]
+            for w, length in zip(nb.indices, nb.data, strict=True):
+                if length <= 0 or not np.isfinite(d[w]):
+                    continue
+                rate = (d[v] - d[w]) / length
+                if rate > best:
+                    best, choice = rate, ("v", int(w))
+            if choice is None:
+                raise SolverError(f"geodesic_path: the field has a local minimum at vertex {v} (d = {d[v]:.6g}), "
+                                  "which is no source", solver="geodesic_path", status="local_minimum")
+            state = choice
+            if state[0] == "v":
+                nodes.append(state)
+            continue
+
+        # inside (or on the boundary of) face f at barycentric b
+        _, f, b = state
+        x = b @ V[F[f]]
+        if finish_in_face(f, x, float(b @ d[F[f]])):
+            break
+        g = grad[f]
+        if not np.all(np.isfinite(g)) or np.linalg.norm(g) <= 1e-14:
+            j = int(np.argmin(d[F[f]]))  # flat or degenerate face: to its lowest corner
+            state = ("v", int(F[f, j]))
+            nodes.append(state)
+            continue
+        db = geo.H[f] @ (-g)
+        scale = np.abs(db).max()
+        out = db < -1e-12 * scale
+        ts = np.where(out, b / np.where(out, -db, 1.0), np.inf)
+        t = float(ts.min())
+        nb_ = np.clip(b + t * db, 0.0, None)
+        nb_[int(np.argmin(ts))] = 0.0
+        nb_ /= nb_.sum()
+        k = int(np.argmax(nb_))
+        if nb_[k] >= 1 - 1e-10:
+            state = ("v", int(F[f, k]))
+            nodes.append(state)
+            continue
+        i = int(np.argmin(nb_))  # the exit edge is opposite corner i
+        a, c = int(F[f, (i + 1) % 3]), int(F[f, (i + 2) % 3])
+        y = nb_ @ V[F[f]]
+        across = [int(h) for h in geo.faces_of_edge(a, c) if h != f]
+        entered = None
+        for h in across:
+            gh = grad[h]
+            if not np.all(np.isfinite(gh)):
+                continue
+            third = int(np.flatnonzero((F[h] != a) & (F[h] != c))[0])
+            dbh = geo.H[h] @ (-gh)
+            if dbh[third] > 1e-12 * max(np.abs(dbh).max(), 1e-300):
+                entered = h
+                break
+        if entered is None:  # a valley along the edge (or the boundary): slide to its lower end
+            w = a if d[a] <= d[c] else c
+            if np.linalg.norm(y - V[w]) > tol and t > 0:
+                nodes.append(("e", a, c, f, f, y))
+            state = ("v", w)
+            nodes.append(state)
+            continue
+        bh = np.zeros(3)
+        bh[F[entered] == a] = nb_[(i + 1) % 3]
+        bh[F[entered] == c] = nb_[(i + 2) % 3]
+        nodes.append(("e", a, c, f, entered, y))
+        state = ("f", entered, bh)
+    else:
+        raise SolverError(f"geodesic_path: no source reached within max_steps={max_steps} steps",
+                          solver="geodesic_path", status="max_steps")
+
+    if straighten:
+        _straighten(mesh, nodes)
+    P = np.array([_position(mesh, nd) for nd in nodes])
+    # consecutive duplicates (a valley that starts at a crossing, a point that was already on its source)
+    keep = np.r_[True, np.linalg.norm(np.diff(P, axis=0), axis=1) > tol]
+    nodes = [nd for nd, kp in zip(nodes, keep, strict=True) if kp]
+    P = P[keep]
+    if not return_surface_points:
+        return P
+    fb = [_locate(mesh, geo, nd) for nd in nodes]
+    return P, np.array([f for f, _ in fb], dtype=np.int64), np.array([b for _, b in fb]).reshape(-1, 3)
+
+
+def _position(mesh: TriMesh, node) -> np.ndarray:
+    if node[0] == "v":
+        return mesh.V[node[1]]
+    return node[-1]
+
+
+def _locate(mesh: TriMesh, geo: _Geometry, node) -> tuple[int, np.ndarray]:
+    """A face containing the node and the node's barycentric coordinates in it."""
+    F, V = mesh.F, mesh.V
+    if node[0] == "v":
+        f = int(geo.faces_of_vertex(node[1])[0])
+        return f, (F[f] == node[1]).astype(float)
+    f = node[4] if node[0] == "e" else node[1]
+    b = _barycentric(V[F[f]][None], node[-1][None])[0]
+    if node[0] == "e":  # exactly on the edge (a, c)
+        a, c = node[1], node[2]
+        b[(F[f] != a) & (F[f] != c)] = 0.0
+        b /= b.sum()
+    return int(f), b
+
+
+def _straighten(mesh: TriMesh, nodes: list, sweeps: int = 20000) -> None:
+    """Slide every edge crossing between two fixed nodes to the shortest path through the same faces."""
+    V = mesh.V
+    n = len(nodes)
+    free = [i for i in range(1, n - 1) if nodes[i][0] == "e" and nodes[i][3] != nodes[i][4]]
+    if not free:
+        return
+    idx = np.array(free)
+    A = np.array([V[nodes[i][1]] for i in free])
+    C = np.array([V[nodes[i][2]] for i in free])
+    L = np.linalg.norm(C - A, axis=1)
+    e = (C - A) / L[:, None]
+    P = np.array([_position(mesh, nd) for nd in nodes])
+    # red-black Gauss-Seidel: each update is the exact minimizer of |prev - x| + |x - next| on the edge (unfolded)
+    parity = np.arange(len(free)) % 2
+    diag = mesh.bbox_diagonal
+    for _ in range(sweeps):
+        change = 0.0
+        for par in (0, 1):
+            sel = parity == par
+            ii = idx[sel]
+            prev, nxt = P[ii - 1], P[ii + 1]
+            a, ev, ln = A[sel], e[sel], L[sel]
+            s1 = np.einsum("ij,ij->i", prev - a, ev)
+            s2 = np.einsum("ij,ij->i", nxt - a, ev)
+            r1 = np.linalg.norm(prev - a - s1[:, None] * ev, axis=1)
+            r2 = np.linalg.norm(nxt - a - s2[:, None] * ev, axis=1)
+            den = r1 + r2
+            with np.errstate(invalid="ignore", divide="ignore"):
+                s = np.where(den > 0, s1 + (s2 - s1) * r1 / den, 0.5 * (s1 + s2))
+            s = np.clip(s, 0.0, ln)
+            new = a + s[:, None] * ev
+            change = max(change, float(np.abs(new - P[ii]).max(initial=0.0)))
+            P[ii] = new
+        if change <= 1e-14 * diag:
+            break
+    for k, i in enumerate(free):
+        nd = nodes[i]
+        nodes[i] = (*nd[:5], P[i])
