@@ -5,7 +5,9 @@ along ``−∇d|_t`` to the exact crossing with the face's boundary; across an e
 when that face's descent direction enters it, else along the edge (a valley) to its lower end; at a
 vertex into the incident face or along the incident edge of steepest descent. It stops at a
 source vertex, or goes straight to the source once it reaches a face that contains a point or curve
-source (a straight segment inside a flat face is the geodesic there). Optionally (default) the
+source (a straight segment inside a flat face is the geodesic there). For a field of
+``method="exact"`` (a :class:`~cvxgeodesic.api.GeodesicResult`) from vertex sources to a vertex,
+the path is pygeodesic's exact (MMP) path instead. Optionally (default) the
 edge crossings are then slid along their edges to the shortest path through the same faces
 (the path is unfolded edge by edge; vertices the descent went through stay), which makes it
 straight on a plane and a polyhedral geodesic where the descent's corridor contains one.
@@ -220,6 +222,10 @@ def geodesic_path(mesh, distance, target, *, sources=None, return_surface_points
         finite = d[np.isfinite(d)]
         zero = (finite.min() if finite.size else 0.0) + 1e-12 * mesh.bbox_diagonal
         src_v = d <= zero
+    if (result is not None and getattr(result.info, "method", None) == "exact" and ss is not None and ss.vertex_only
+            and isinstance(target, numbers.Integral) and not isinstance(target, bool | np.bool_)
+            and 0 <= int(target) < mesh.n_vertices and mesh.is_edge_manifold):
+        return _exact_path(mesh, ss.vertices, int(target), return_surface_points)
     geo = _Geometry(mesh)
     per_face = _source_targets(mesh, ss)
     V, F = geo.V, geo.F
@@ -377,6 +383,32 @@ def geodesic_path(mesh, distance, target, *, sources=None, return_surface_points
     return P, np.array([f for f, _ in fb], dtype=np.int64), np.array([b for _, b in fb]).reshape(-1, 3)
 
 
+def _exact_path(mesh: TriMesh, sources: np.ndarray, target: int, return_surface_points: bool):
+    """pygeodesic's exact (MMP) path from ``target`` to the nearest of ``sources``."""
+    import contextlib
+    import io
+
+    from pygeodesic import geodesic
+
+    from .sources import closest_points
+
+    with contextlib.redirect_stdout(io.StringIO()):
+        alg = geodesic.PyGeodesicAlgorithmExact(mesh.V, mesh.F.astype(np.int32))
+        best = None
+        for s in sources:
+            dist, path = alg.geodesicDistance(int(s), target)
+            if path is not None and dist is not None and dist >= 0 and (best is None or dist < best[0]):
+                best = (dist, np.asarray(path, dtype=float).reshape(-1, 3))
+    if best is None:
+        raise ParameterError("the distance is infinite at the target: no source is reachable from it")
+    P = best[1]
+    P[0], P[-1] = mesh.V[target], mesh.V[int(sources[np.argmin(np.linalg.norm(mesh.V[sources] - P[-1], axis=1))])]
+    if not return_surface_points:
+        return P
+    faces, bary, _ = closest_points(mesh, P)
+    return P, faces, bary
+
+
 def _position(mesh: TriMesh, node) -> np.ndarray:
     if node[0] == "v":
         return mesh.V[node[1]]
@@ -398,7 +430,7 @@ def _locate(mesh: TriMesh, geo: _Geometry, node) -> tuple[int, np.ndarray]:
     return int(f), b
 
 
-def _straighten(mesh: TriMesh, nodes: list, sweeps: int = 20000) -> None:
+def _straighten(mesh: TriMesh, nodes: list, sweeps: int = 4000) -> None:
     """Slide every edge crossing between two fixed nodes to the shortest path through the same faces."""
     V = mesh.V
     n = len(nodes)
@@ -432,7 +464,7 @@ def _straighten(mesh: TriMesh, nodes: list, sweeps: int = 20000) -> None:
             new = a + s[:, None] * ev
             change = max(change, float(np.abs(new - P[ii]).max(initial=0.0)))
             P[ii] = new
-        if change <= 1e-14 * diag:
+        if change <= 1e-13 * diag:
             break
     for k, i in enumerate(free):
         nd = nodes[i]
