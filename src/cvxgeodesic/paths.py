@@ -308,6 +308,12 @@ def geodesic_path(mesh, distance, target, *, sources=None, return_surface_points
                 rate = (d[v] - d[w]) / length
                 if rate > best:
                     best, choice = rate, ("v", int(w))
+            if choice is None and any(int(f) in per_face for f in fs):
+                # a smoothed field can sit below the straight distance next to its source: end there
+                ends = [(*_closest_on(V[v], per_face[int(f)]), int(f)) for f in fs if int(f) in per_face]
+                y, _, f_end = min(ends, key=lambda e: e[1])
+                nodes.append(("p", f_end, y))
+                break
             if choice is None:
                 raise SolverError(f"geodesic_path: the field has a local minimum at vertex {v} (d = {d[v]:.6g}), "
                                   "which is no source", solver="geodesic_path", status="local_minimum")
