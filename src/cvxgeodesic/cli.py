@@ -82,11 +82,14 @@ def _cmd_compare(args) -> int:
 def _cmd_batch(args) -> int:
     from .batch import expand_mesh_paths, format_summary, run_batch
 
+    from .cli_sources import batch_sources
+
+    sources = batch_sources(args)
     paths = expand_mesh_paths(args.meshes)
     if not args.quiet:
         where = args.scheduler or f"a local cluster of {args.workers} worker processes"
         print(f"{len(paths)} mesh file(s); method {args.method}; running on {where}", file=sys.stderr)
-    rows = run_batch(paths, args.source, args.out, method=args.method, m=args.m, solver=args.solver,
+    rows = run_batch(paths, sources, args.out, method=args.method, m=args.m, solver=args.solver,
                      scheduler=args.scheduler, n_workers=args.workers, force=args.force, progress=not args.quiet,
                      multires=args.multires, output_format=args.format)
     print(format_summary(rows))
@@ -142,8 +145,9 @@ def build_parser() -> argparse.ArgumentParser:
                     "2: usage error.")
     p.add_argument("meshes", nargs="+", metavar="MESH_GLOB",
                    help="mesh files or quoted glob patterns ('data/*.obj', 'data/**/*.ply')")
-    p.add_argument("--source", "-s", type=int, action="append", required=True, metavar="I",
+    p.add_argument("--source", "-s", type=int, action="append", default=None, metavar="I",
                    help="source vertex index, the same in every mesh (repeat for several sources)")
+    add_point_options(p)
     p.add_argument("--method", default="qcqp-hessian", choices=ALL_METHODS, metavar="NAME",
                    help=f"one of: {', '.join(ALL_METHODS)} (default qcqp-hessian)")
     p.add_argument("--m", type=float, default=1.0, help="smoothness multiplier m, λ = m·100·h/n (default 1)")

@@ -63,6 +63,19 @@ def cli_sources(args, mesh) -> tuple[object, str]:
     return [*vertices, *pts], label
 
 
+def batch_sources(args):
+    """The ``sources`` of :func:`~cvxgeodesic.batch.run_batch` from the options (positions stay positions)."""
+    vertices = list(args.source or [])
+    points = [list(x) for x in (getattr(args, "source_point", None) or [])]
+    if getattr(args, "boundary", False):
+        if vertices or points:
+            raise SourceError("--boundary is a source on its own: do not combine it with --source/--source-point")
+        return "boundary"
+    if not vertices and not points:
+        raise SourceError("give a source: --source I, --source-point X,Y,Z or --boundary")
+    return [*vertices, *points] if points else vertices
+
+
 def _target(args, mesh):
     from .sources import surface_point
 
