@@ -66,10 +66,9 @@ def _cmd_distance(args) -> int:
 
 
 def _cmd_compare(args) -> int:
+    from .cli_sources import cli_sources
     from .compare import format_table, run_compare
     from .mesh.io import load_mesh
-
-    from .cli_sources import cli_sources
 
     mesh = load_mesh(args.mesh)
     sources, _ = cli_sources(args, mesh)
@@ -81,7 +80,6 @@ def _cmd_compare(args) -> int:
 
 def _cmd_batch(args) -> int:
     from .batch import expand_mesh_paths, format_summary, run_batch
-
     from .cli_sources import batch_sources
 
     sources = batch_sources(args)

@@ -33,7 +33,8 @@ def _field(mesh: TriMesh, distance) -> tuple[np.ndarray, object]:
     try:
         d = np.asarray(distance, dtype=float).reshape(-1)
     except (TypeError, ValueError):
-        raise ParameterError(f"distance must be an (n,) array of vertex values, got {type(distance).__name__}") from None
+        raise ParameterError(
+            f"distance must be an (n,) array of vertex values, got {type(distance).__name__}") from None
     if d.shape != (mesh.n_vertices,):
         raise ParameterError(f"distance has {d.size} values but the mesh has {mesh.n_vertices} vertices")
     if np.isnan(d).any():
@@ -472,6 +473,6 @@ def _straighten(mesh: TriMesh, nodes: list, sweeps: int = 4000) -> None:
             P[ii] = new
         if change <= 1e-13 * diag:
             break
-    for k, i in enumerate(free):
+    for i in free:
         nd = nodes[i]
         nodes[i] = (*nd[:5], P[i])

@@ -175,7 +175,8 @@ class SurfaceCurve:
             try:
                 x = np.asarray(p, dtype=float).reshape(-1)
             except (TypeError, ValueError):
-                raise SourceError(f"SurfaceCurve point {k} must be a SurfacePoint or 3 coordinates, got {p!r}") from None
+                raise SourceError(
+                    f"SurfaceCurve point {k} must be a SurfacePoint or 3 coordinates, got {p!r}") from None
             if x.shape != (3,) or not np.all(np.isfinite(x)):
                 raise SourceError(f"SurfaceCurve point {k} must be a SurfacePoint or 3 finite coordinates, got {p!r}")
             x.setflags(write=False)

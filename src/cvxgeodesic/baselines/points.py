@@ -79,7 +79,8 @@ def _dijkstra(mesh: TriMesh, ss: SourceSet) -> np.ndarray:
     # zero weights are "no edge" in scipy's sparse graphs: a vertex exactly on a point is a vertex source already
     w = np.maximum(bound[bv], 1e-300)
     G = mesh.vertex_adjacency.tocoo()
-    A = sp.coo_matrix((np.r_[G.data, w, w], (np.r_[G.row, np.full(len(bv), n), bv], np.r_[G.col, bv, np.full(len(bv), n)])),
+    virtual = np.full(len(bv), n)
+    A = sp.coo_matrix((np.r_[G.data, w, w], (np.r_[G.row, virtual, bv], np.r_[G.col, bv, virtual])),
                       shape=(n + 1, n + 1)).tocsr()
     idx = np.r_[ss.vertices, n] if bv.size else ss.vertices
     d = dijkstra(A, directed=False, indices=idx, min_only=True)
