@@ -200,7 +200,7 @@ def test_curve_point_off_the_surface():
 
 def test_other_bad_sources():
     mesh = PLANE
-    with pytest.raises(SourceError, match="only named source is 'boundary'"):
+    with pytest.raises(SourceError, match="'boundary' \\(the only named source\\)"):
         cg.geodesic_distance(mesh, "everywhere", method="qclp")
     with pytest.raises(SourceError, match="source 1 must be"):
         cg.geodesic_distance(mesh, [0, "boundary"], method="qclp")

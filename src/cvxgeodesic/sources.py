@@ -511,7 +511,8 @@ def resolve_sources(mesh: TriMesh, sources) -> SourceSet:
     n = mesh.n_vertices
     if isinstance(sources, str):
         if sources.lower() != "boundary":
-            raise SourceError(f"unknown source {sources!r}: the only named source is 'boundary'")
+            raise SourceError(f"unknown source {sources!r}: sources must be integer vertex indices, SurfacePoints, "
+                              "SurfaceCurves or 'boundary' (the only named source)")
         E, faces = boundary_edges(mesh)
         if not len(E):
             raise SourceError(f"sources='boundary' but {mesh.name} is closed: it has no boundary edge "
