@@ -378,7 +378,12 @@ def geodesic_path(mesh, distance, target, *, sources=None, return_surface_points
                           solver="geodesic_path", status="max_steps")
 
     if straighten:
-        _straighten(mesh, nodes)
+        nodes = _open_vertices(mesh, geo, nodes)
+        for _ in range(64):
+            _straighten(mesh, nodes)
+            nodes, switched = _switch_sides(mesh, geo, nodes)
+            if not switched:
+                break
     P = np.array([_position(mesh, nd) for nd in nodes])
     # consecutive duplicates (a valley that starts at a crossing, a point that was already on its source)
     keep = np.r_[True, np.linalg.norm(np.diff(P, axis=0), axis=1) > tol]
@@ -437,7 +442,156 @@ def _locate(mesh: TriMesh, geo: _Geometry, node) -> tuple[int, np.ndarray]:
     return int(f), b
 
 
-def _straighten(mesh: TriMesh, nodes: list, sweeps: int = 4000) -> None:
+def _segment_face(geo: _Geometry, a, b) -> int | None:
+    """A face that contains the path segment between nodes ``a`` and ``b``."""
+    F = geo.F
+    if b[0] == "e":
+        return b[3]
+    if a[0] == "e":
+        return a[4]
+    if a[0] == "p":
+        return a[1]
+    if b[0] == "p":
+        return b[1]
+    shared = geo.faces_of_edge(a[1], b[1])  # an edge walk
+    return int(shared[0]) if len(shared) else None
+
+
+def _fan(geo: _Geometry, v: int, start: int, goal: int) -> list[tuple[int, list[int]]]:
+    """The two walks around vertex ``v`` from face ``start`` to face ``goal``: (edge ends, faces) each."""
+    F = geo.F
+    walks = []
+    for first in range(2):
+        f = start
+        others = [int(u) for u in F[f] if u != v]
+        u = others[first]
+        faces, ends = [f], []
+        ok = False
+        for _ in range(64):
+            across = [int(h) for h in geo.faces_of_edge(v, u) if h != f]
+            if len(across) != 1:
+                break  # the boundary, or a non-manifold edge
+            ends.append(u)
+            f = across[0]
+            faces.append(f)
+            if f == goal:
+                ok = True
+                break
+            u = next(int(w) for w in F[f] if w != v and w != u)
+        if ok:
+            walks.append((ends, faces))
+    return walks
+
+
+def _open_vertices(mesh: TriMesh, geo: _Geometry, nodes: list) -> list:
+    """Replace each vertex the descent passed through by crossings of the edges around it.
+
+    The crossings start at the vertex; :func:`_straighten` may then pull them off it, on the side of the
+    smaller angle (where the straight line between the path's neighbours runs on a flat surface).
+    """
+    V = mesh.V
+    # the start of a valley (a point on an edge from which the descent slid along it) is in the face of the
+    # crossing before it together with the vertex after it: the straight segment between those replaces it
+    nodes = [nd for i, nd in enumerate(nodes) if i in (0, len(nodes) - 1) or not (nd[0] == "e" and nd[3] == nd[4])]
+    out = [nodes[0]]
+    for i in range(1, len(nodes) - 1):
+        nd = nodes[i]
+        if nd[0] != "v":
+            out.append(nd)
+            continue
+        v = nd[1]
+        f_in = _segment_face(geo, nodes[i - 1], nd)
+        f_out = _segment_face(geo, nd, nodes[i + 1])
+        if f_in is None or f_out is None or f_in == f_out:
+            out.append(nd)
+            continue
+        walks = _fan(geo, v, f_in, f_out)
+        if not walks:
+            out.append(nd)
+            continue
+
+        def angle(walk):
+            total = 0.0
+            for f in walk[1][1:-1]:
+                a, b = [V[u] - V[v] for u in geo.F[f] if u != v]
+                total += float(np.arccos(np.clip(a @ b / (np.linalg.norm(a) * np.linalg.norm(b)), -1, 1)))
+            return total
+
+        ends, faces = min(walks, key=angle)
+        for j, u in enumerate(ends):
+            out.append(("e", v, u, faces[j], faces[j + 1], 0.7 * V[v] + 0.3 * V[u]))
+    out.append(nodes[-1])
+    return out
+
+
+def _corner(V, u, p, q) -> float:
+    a, b = V[p] - V[u] if np.ndim(p) == 0 else p - V[u], V[q] - V[u] if np.ndim(q) == 0 else q - V[u]
+    na, nb = np.linalg.norm(a), np.linalg.norm(b)
+    if na == 0 or nb == 0:
+        return 0.0
+    return float(np.arccos(np.clip(a @ b / (na * nb), -1.0, 1.0)))
+
+
+def _walk_angle(geo: _Geometry, u: int, walk, q0: np.ndarray, q1: np.ndarray) -> float:
+    """Angle at ``u`` swept by a walk around it from the direction of ``q0`` to that of ``q1``."""
+    V, F = geo.V, geo.F
+    ends, faces = walk
+    total = _corner(V, u, q0, V[ends[0]]) + _corner(V, u, V[ends[-1]], q1)
+    for f in faces[1:-1]:
+        a, b = [int(w) for w in F[f] if w != u]
+        total += _corner(V, u, a, b)
+    return total
+
+
+def _switch_sides(mesh: TriMesh, geo: _Geometry, nodes: list) -> tuple[list, bool]:
+    """Where the straightened path is held at a vertex, go around it on the side of the smaller angle.
+
+    A run of crossings that all sit on one vertex means the shortest path through the current faces wraps
+    around that vertex; if the angle on the other side is smaller, the path through the faces there is
+    shorter (on a flat surface it is the straight line), so the run is replaced by the walk on that side.
+    """
+    V = mesh.V
+    tol = 1e-12 * mesh.bbox_diagonal
+
+    def held(nd):
+        if nd[0] != "e" or nd[3] == nd[4]:
+            return None
+        for w in (nd[1], nd[2]):
+            if np.linalg.norm(nd[5] - V[w]) <= tol:
+                return int(w)
+        return None
+
+    out, switched, i, n = [nodes[0]], False, 1, len(nodes)
+    while i < n - 1:
+        u = held(nodes[i])
+        if u is None:
+            out.append(nodes[i])
+            i += 1
+            continue
+        j = i
+        while j + 1 < n - 1 and held(nodes[j + 1]) == u:
+            j += 1
+        run = nodes[i:j + 1]
+        f_in, f_out = run[0][3], run[-1][4]
+        current = [run[0][3], *(r[4] for r in run)]
+        q0, q1 = _position(mesh, out[-1]), _position(mesh, nodes[j + 1])
+        walks = [w for w in _fan(geo, u, f_in, f_out) if w[1] != current] if f_in != f_out else []
+        if walks and np.linalg.norm(q0 - V[u]) > tol and np.linalg.norm(q1 - V[u]) > tol:
+            cur_walk = ([r[2] if r[1] == u else r[1] for r in run], current)
+            other = walks[0]
+            if _walk_angle(geo, u, other, q0, q1) < _walk_angle(geo, u, cur_walk, q0, q1) - 1e-9:
+                ends, faces = other
+                out.extend(("e", u, w, faces[k], faces[k + 1], 0.7 * V[u] + 0.3 * V[w]) for k, w in enumerate(ends))
+                switched = True
+                i = j + 1
+                continue
+        out.extend(run)
+        i = j + 1
+    out.append(nodes[-1])
+    return out, switched
+
+
+def _straighten(mesh: TriMesh, nodes: list, sweeps: int = 100000) -> None:
     """Slide every edge crossing between two fixed nodes to the shortest path through the same faces."""
     V = mesh.V
     n = len(nodes)
