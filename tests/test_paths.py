@@ -26,27 +26,40 @@ def sphere_field():
 
 @pytest.mark.parametrize("target", [100, 1000, 2000, 2500])
 def test_sphere_path_length_is_great_circle(sphere_field, target):
-    """Measured: +0.14 % .. +0.39 % (straightened), +0.18 % .. +0.48 % (raw descent)."""
+    """Measured: -0.06 % (straightened: the polyhedral geodesic, inscribed), +0.18 % .. +0.48 % (raw descent)."""
     mesh, res = sphere_field
     gc = float(np.arccos(np.clip(mesh.V[0] @ mesh.V[target], -1, 1)))
     for straighten in (True, False):
         P, faces, bary = cg.geodesic_path(mesh, res, target, straighten=straighten, return_surface_points=True)
         assert abs(_length(P) - gc) <= 0.03 * gc
-        np.testing.assert_allclose(P[-1], mesh.V[0])
+        np.testing.assert_array_equal(P[-1], mesh.V[0])
         _on_faces(mesh, P, faces, bary)
 
 
-def test_exact_path_on_plane_is_straight():
+@pytest.mark.parametrize("method", ["exact", "qclp", "qcqp-hessian"])
+@pytest.mark.parametrize("target", [400, cg.SurfacePoint(700, [0.3, 0.3, 0.4])], ids=["vertex", "point"])
+def test_path_on_plane_is_straight(method, target):
+    """Measured: 2e-16 from the chord for every method and target (the raw descent: 6e-3 .. 7e-2)."""
     mesh = cg.grid_plane(20, jitter=0.25)
-    res = cg.GeodesicSolver(mesh, "exact").solve(50)
-    P, faces, bary = cg.geodesic_path(mesh, res, 400, return_surface_points=True)
+    s = int(np.argmin(np.linalg.norm(mesh.V - [0.2, 0.3, 0.0], axis=1)))
+    res = cg.GeodesicSolver(mesh, method).solve(s)
+    P, faces, bary = cg.geodesic_path(mesh, res, target, return_surface_points=True)
     a, b = P[0], P[-1]
     u = (b - a) / np.linalg.norm(b - a)
     dev = np.linalg.norm((P - a) - ((P - a) @ u)[:, None] * u, axis=1)
     assert dev.max() <= 1e-6
-    np.testing.assert_allclose(P[0], mesh.V[400])
-    np.testing.assert_allclose(P[-1], mesh.V[50])
+    start = mesh.V[target] if isinstance(target, int) else target.position(mesh)
+    np.testing.assert_allclose(P[0], start, atol=1e-12)
+    np.testing.assert_array_equal(P[-1], mesh.V[s])
     _on_faces(mesh, P, faces, bary)
+
+
+def test_straightened_path_is_never_shorter_than_the_exact_distance(sphere_field):
+    mesh, res = sphere_field
+    exact = cg.geodesic_distance(mesh, 0, method="exact")
+    for target in (100, 1000, 2000, 2500):
+        L = _length(cg.geodesic_path(mesh, res, target))
+        assert exact[target] - 1e-9 <= L <= exact[target] * 1.001
 
 
 def test_descent_path_on_plane_in_the_source_face_is_straight():
