@@ -454,7 +454,6 @@ def _locate(mesh: TriMesh, geo: _Geometry, node) -> tuple[int, np.ndarray]:
 
 def _segment_face(geo: _Geometry, a, b) -> int | None:
     """A face that contains the path segment between nodes ``a`` and ``b``."""
-    F = geo.F
     if b[0] == "e":
         return b[3]
     if a[0] == "e":
@@ -520,14 +519,8 @@ def _open_vertices(mesh: TriMesh, geo: _Geometry, nodes: list) -> list:
             out.append(nd)
             continue
 
-        def angle(walk):
-            total = 0.0
-            for f in walk[1][1:-1]:
-                a, b = [V[u] - V[v] for u in geo.F[f] if u != v]
-                total += float(np.arccos(np.clip(a @ b / (np.linalg.norm(a) * np.linalg.norm(b)), -1, 1)))
-            return total
-
-        ends, faces = min(walks, key=angle)
+        q0, q1 = _position(mesh, nodes[i - 1]), _position(mesh, nodes[i + 1])
+        ends, faces = min(walks, key=lambda w, v=v, q0=q0, q1=q1: _walk_angle(geo, v, w, q0, q1))
         for j, u in enumerate(ends):
             out.append(("e", v, u, faces[j], faces[j + 1], 0.7 * V[v] + 0.3 * V[u]))
     out.append(nodes[-1])
