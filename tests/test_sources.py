@@ -210,3 +210,15 @@ def test_other_bad_sources():
         cg.SurfaceCurve([])
     with pytest.raises(SourceError, match="multires"):
         cg.GeodesicSolver(cg.icosphere(3), "qclp", multires=100).solve(cg.SurfacePoint(0, [0.2, 0.3, 0.5]))
+
+
+@pytest.mark.parametrize("method", ["qclp", "qcqp-hessian", "lcqp-laplacian"])
+def test_both_backends_agree_on_surface_sources(method):
+    mesh = PLANE
+    srcs = [cg.SurfacePoint(30, [0.2, 0.3, 0.5]), cg.SurfaceCurve([[0.2, 0.2, 0.0], [0.6, 0.7, 0.0]]), "boundary"]
+    ipm = cg.GeodesicSolver(mesh, method, solver="ipm")
+    cla = cg.GeodesicSolver(mesh, method, solver="clarabel")
+    for src in srcs:
+        a, b = ipm.solve(src), cla.solve(src)
+        assert a.info.status == "optimal" and b.info.status == "optimal"
+        assert np.abs(a.distance - b.distance).max() <= 1e-5 * mesh.bbox_diagonal
