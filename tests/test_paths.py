@@ -126,3 +126,16 @@ def test_path_errors():
     d[40] = -1.0  # a local minimum that is no source (vertex 40 is not a field minimum otherwise)
     with pytest.raises(SolverError, match="local minimum|max_steps"):
         cg.geodesic_path(mesh, d, 41, sources=0)
+
+
+def test_exact_path_between_surface_points():
+    """method='exact' with point sources: pygeodesic's path on the mesh with the points inserted."""
+    mesh = cg.grid_plane(20, jitter=0.25)
+    src, tgt = cg.SurfacePoint(300, [0.2, 0.3, 0.5]), cg.SurfacePoint(700, [0.3, 0.3, 0.4])
+    res = cg.GeodesicSolver(mesh, "exact").solve(src)
+    P, faces, bary = cg.geodesic_path(mesh, res, tgt, return_surface_points=True)
+    x, y = tgt.position(mesh), src.position(mesh)
+    np.testing.assert_allclose(P[0], x, atol=1e-15)
+    np.testing.assert_allclose(P[-1], y, atol=1e-15)
+    assert _length(P) == pytest.approx(np.linalg.norm(x - y), abs=1e-12)
+    _on_faces(mesh, P, faces, bary)

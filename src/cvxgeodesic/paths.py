@@ -6,8 +6,9 @@ when that face's descent direction enters it, else along the edge (a valley) to 
 vertex into the incident face or along the incident edge of steepest descent. It stops at a
 source vertex, or goes straight to the source once it reaches a face that contains a point or curve
 source (a straight segment inside a flat face is the geodesic there). For a field of
-``method="exact"`` (a :class:`~cvxgeodesic.api.GeodesicResult`) from vertex sources to a vertex,
-the path is pygeodesic's exact (MMP) path instead.
+``method="exact"`` (a :class:`~cvxgeodesic.api.GeodesicResult`) from vertex or point sources to a
+vertex or a point, the path is pygeodesic's exact (MMP) path instead (on the mesh with the points
+inserted as vertices).
 
 With ``straighten=True`` (default) the descent only chooses the corridor: the faces it crossed,
 plus, at each vertex it passed through, the fan of faces around that vertex on the side of the
@@ -230,10 +231,10 @@ def geodesic_path(mesh, distance, target, *, sources=None, return_surface_points
         finite = d[np.isfinite(d)]
         zero = (finite.min() if finite.size else 0.0) + 1e-12 * mesh.bbox_diagonal
         src_v = d <= zero
-    if (result is not None and getattr(result.info, "method", None) == "exact" and ss is not None and ss.vertex_only
-            and isinstance(target, numbers.Integral) and not isinstance(target, bool | np.bool_)
-            and 0 <= int(target) < mesh.n_vertices and mesh.is_edge_manifold):
-        return _exact_path(mesh, ss.vertices, int(target), return_surface_points)
+    if (result is not None and getattr(result.info, "method", None) == "exact" and ss is not None
+            and not ss.segment_faces.size and _exact_target(mesh, target) and mesh.is_edge_manifold
+            and mesh.referenced.all() and np.unique(mesh.component_labels).size == 1):
+        return _exact_path(mesh, ss, target, return_surface_points)
     geo = _Geometry(mesh)
     per_face = _source_targets(mesh, ss)
     V, F = geo.V, geo.F
@@ -405,26 +406,44 @@ def geodesic_path(mesh, distance, target, *, sources=None, return_surface_points
     return P, np.array([f for f, _ in fb], dtype=np.int64), np.array([b for _, b in fb]).reshape(-1, 3)
 
 
-def _exact_path(mesh: TriMesh, sources: np.ndarray, target: int, return_surface_points: bool):
-    """pygeodesic's exact (MMP) path from ``target`` to the nearest of ``sources``."""
+def _exact_target(mesh: TriMesh, target) -> bool:
+    if isinstance(target, SurfacePoint):
+        return target.face < mesh.n_faces
+    return (isinstance(target, numbers.Integral) and not isinstance(target, bool | np.bool_)
+            and 0 <= int(target) < mesh.n_vertices)
+
+
+def _exact_path(mesh: TriMesh, ss: SourceSet, target, return_surface_points: bool):
+    """pygeodesic's exact (MMP) path from ``target`` to the nearest source (points inserted as vertices)."""
     import contextlib
     import io
 
     from pygeodesic import geodesic
 
+    from .baselines.points import _unique_points, insert_points
     from .sources import closest_points
 
+    X = _unique_points(mesh, ss)
+    start = target.position(mesh) if isinstance(target, SurfacePoint) else mesh.V[int(target)]
+    extra = np.vstack([X, start[None]]) if isinstance(target, SurfacePoint) else X
+    V2, F2, idx = (insert_points(mesh.V, mesh.F, extra) if len(extra) else (mesh.V, mesh.F, np.zeros(0, np.int64)))
+    sources = np.unique(np.r_[ss.vertices, idx[: len(X)]]).astype(np.int64)
+    t2 = int(idx[-1]) if isinstance(target, SurfacePoint) else int(target)
+    best = None
+    if t2 in set(sources.tolist()):
+        best = (0.0, np.array([V2[t2]]))
     with contextlib.redirect_stdout(io.StringIO()):
-        alg = geodesic.PyGeodesicAlgorithmExact(mesh.V, mesh.F.astype(np.int32))
-        best = None
-        for s in sources:
-            dist, path = alg.geodesicDistance(int(s), target)
-            if path is not None and dist is not None and dist >= 0 and (best is None or dist < best[0]):
-                best = (dist, np.asarray(path, dtype=float).reshape(-1, 3))
+        alg = geodesic.PyGeodesicAlgorithmExact(np.ascontiguousarray(V2), np.ascontiguousarray(F2, dtype=np.int32))
+        for s in sources if best is None else []:
+            dist, path = alg.geodesicDistance(int(s), t2)
+            if path is not None and dist is not None and 0 <= dist < 1e99 and (best is None or dist < best[0]):
+                best = (dist, np.asarray(path, dtype=float).reshape(-1, 3), int(s))
     if best is None:
         raise ParameterError("the distance is infinite at the target: no source is reachable from it")
     P = best[1]
-    P[0], P[-1] = mesh.V[target], mesh.V[int(sources[np.argmin(np.linalg.norm(mesh.V[sources] - P[-1], axis=1))])]
+    P[0] = start
+    if len(best) > 2:
+        P[-1] = V2[best[2]]
     if not return_surface_points:
         return P
     faces, bary, _ = closest_points(mesh, P)
