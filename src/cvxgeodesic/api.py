@@ -499,12 +499,15 @@ def geodesic_distance(mesh, sources, method: str = "qcqp-hessian", m: float = 1.
                       *, lam: float | None = None, tol: float = DEFAULT_TOL, max_iter: int = 200) -> np.ndarray:
     """Geodesic distance field from source vertices (one-shot form of :class:`GeodesicSolver`).
 
+    ``sources`` may also be SurfacePoints, SurfaceCurves, ``"boundary"`` or a list mixing them
+    with vertex indices (see :meth:`GeodesicSolver.solve` and ``docs/sources.md``).
+
     Parameters
     ----------
     mesh : TriMesh or tuple (V, F)
         ``V`` (n, 3) float vertex positions, ``F`` (m, 3) int triangles.
-    sources : int, sequence of int, SurfacePoint, SurfaceCurve, "boundary", or a list mixing them
-        Source vertex indices or surface sources (see :meth:`GeodesicSolver.solve`).
+    sources : int or sequence of int
+        Source vertex indices.
     method, m, solver, lam, tol, max_iter
         See :class:`GeodesicSolver`.
 
@@ -537,14 +540,15 @@ def distance_matrix(mesh, vertices, method: str = "qcqp-hessian", m: float = 1.0
 
     The per-mesh work (operators, energy matrix, symbolic Cholesky analysis) is
     done once; every row is one solve with a single source. A vertex listed
-    twice is solved once and its row copied.
+    twice is solved once and its row copied. ``vertices`` may also be a SurfacePoint, a
+    SurfaceCurve, ``"boundary"`` or a list of them and ints: one row per item.
 
     Parameters
     ----------
     mesh : TriMesh or tuple (V, F)
         ``V`` (n, 3) float vertex positions, ``F`` (m, 3) int triangles.
-    vertices : int or (k,) sequence of int, or a sequence of SurfacePoint / SurfaceCurve / "boundary" / int
-        Source of each row (a row per item; see :meth:`GeodesicSolver.solve`).
+    vertices : int or (k,) sequence of int
+        Source vertex of each row.
     method, m, solver, lam, tol, max_iter, multires
         See :class:`GeodesicSolver`.
     progress : bool

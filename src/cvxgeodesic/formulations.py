@@ -297,12 +297,7 @@ def build_problem(
     if not np.isfinite(lam) or lam < 0:
         raise ParameterError(f"smoothness weight lambda must be finite and >= 0, got {lam}")
 
-    # edge bounds |d_i - d_j| <= l_ij with l_ij at rounding level (near-duplicate vertices that exact welding
-    # keeps, e.g. 6e-16 on thingi_65395) are equalities in disguise: their slacks start at ~0 and the duals
-    # grow to 1e13, which ruins the interior-point method's dual residual. A floor far below any tolerance
-    # (MIN_EDGE_BOUND x the bounding-box diagonal) keeps them inequalities.
-    ell_all = np.maximum(mesh.edge_lengths, MIN_EDGE_BOUND * mesh.bbox_diagonal)
-    sc = source_constraints(ops, sources, ell_all, MIN_EDGE_BOUND * mesh.bbox_diagonal)
+    sc = source_constraints(ops, sources)  # fixed vertices, cone-free faces and source bounds (sources.py)
     unreachable = ~(mesh.connected_to(sc.anchors) & mesh.referenced)
     fixed_mask = unreachable.copy()
     fixed_mask[sc.fixed] = True
@@ -315,6 +310,11 @@ def build_problem(
 
     F = mesh.F
     face_free = ~fixed_mask[F].all(axis=1)
+    # Edge bounds |d_i - d_j| <= l_ij with l_ij at rounding level (near-duplicate vertices that exact welding
+    # keeps, e.g. 6e-16 on thingi_65395) are equalities in disguise: their slacks start at ~0 and the duals
+    # grow to 1e13, which ruins the interior-point method's dual residual. A floor far below any tolerance
+    # (MIN_EDGE_BOUND x the bounding-box diagonal) keeps them inequalities.
+    ell_all = np.maximum(mesh.edge_lengths, MIN_EDGE_BOUND * mesh.bbox_diagonal)
     if constraint == "qc":
         # faces incident to a source (and the faces of point and curve sources, sources.py) carry no cone
         keep = face_free & ~sc.no_cone & ~ops.degenerate

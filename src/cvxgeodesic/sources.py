@@ -641,7 +641,7 @@ def vertex_bounds(mesh: TriMesh, ss: SourceSet) -> np.ndarray:
     return bound
 
 
-def source_constraints(ops, sources, ell: np.ndarray, floor: float) -> SourceConstraints:
+def source_constraints(ops, sources) -> SourceConstraints:
     """Constraints of a source set (or of validated source vertices) for one mesh.
 
     Parameters
@@ -649,18 +649,19 @@ def source_constraints(ops, sources, ell: np.ndarray, floor: float) -> SourceCon
     ops : MeshOperators
         The mesh (possibly the solver's rescaled copy), its gradient blocks and degenerate faces.
     sources : (k,) int64 ndarray or SourceSet
-    ell : (e,) float ndarray
-        Edge lengths of ``ops.mesh.edges`` as the formulation bounds them (floored).
-    floor : float
-        Smallest right-hand side of a vertex bound (keeps it an inequality next to a point
-        that almost touches a vertex).
 
     Returns
     -------
     SourceConstraints
     """
+    from .formulations import MIN_EDGE_BOUND
+
     mesh = ops.mesh
     n, F, E = mesh.n_vertices, mesh.F, mesh.edges
+    # the formulations' floor of the edge bounds, also for the vertex bounds next to a point that almost
+    # touches a vertex: it keeps them inequalities
+    floor = MIN_EDGE_BOUND * mesh.bbox_diagonal
+    ell = np.maximum(mesh.edge_lengths, floor)
     ss = sources if isinstance(sources, SourceSet) else None
     fixed = np.asarray(ss.vertices if ss is not None else sources, dtype=np.int64)
     is_source = np.zeros(n, dtype=bool)
