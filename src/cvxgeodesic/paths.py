@@ -182,7 +182,8 @@ def geodesic_path(mesh, distance, target, *, sources=None, return_surface_points
     sources : optional
         The field's sources (anything :meth:`GeodesicSolver.solve` takes), needed to end a path on a
         point or curve source when ``distance`` is a plain array. Without them (and without a
-        result), the sources are the vertices where ``distance`` is 0.
+        result), the sources are the vertices where ``distance`` takes its minimum (0 for vertex
+        sources; for a point source the path then ends at the lowest vertex of its face).
     return_surface_points : bool
         Also return the face and barycentric coordinates of every path point.
     straighten : bool
