@@ -222,3 +222,14 @@ def test_both_backends_agree_on_surface_sources(method):
         a, b = ipm.solve(src), cla.solve(src)
         assert a.info.status == "optimal" and b.info.status == "optimal"
         assert np.abs(a.distance - b.distance).max() <= 1e-5 * mesh.bbox_diagonal
+
+
+@pytest.mark.parametrize("mesh", [PLANE, cg.icosphere(2)], ids=lambda m: m.name)
+def test_qclp_stays_below_dijkstra_for_surface_sources(mesh):
+    """Theorem 2 with point and curve sources: Dijkstra starts from the same vertex bounds (virtual node)."""
+    p = cg.SurfacePoint(30, [0.2, 0.3, 0.5])
+    curve = cg.SurfaceCurve([cg.SurfacePoint(10, [0.3, 0.3, 0.4]), cg.SurfacePoint(60, [0.5, 0.2, 0.3])])
+    for src in (p, [p, 3], curve):
+        d = cg.geodesic_distance(mesh, src, method="qclp")
+        dij = cg.geodesic_distance(mesh, src, method="dijkstra")
+        assert np.all(d <= dij + 1e-7 * mesh.bbox_diagonal)
