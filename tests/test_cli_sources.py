@@ -112,3 +112,21 @@ def test_batch_task_with_positions_and_boundary(plane_file, tmp_path):
     row = solve_one(str(plane_file), "boundary", str(tmp_path / "b"), method="qclp", output_format="npy")
     assert row["status"] == "ok", row["error"]
     assert np.load(row["output"]).min() == 0.0
+
+
+def test_batch_source_options_and_spec():
+    from cvxgeodesic.batch import _source_spec
+    from cvxgeodesic.cli import build_parser
+    from cvxgeodesic.cli_sources import batch_sources
+    from cvxgeodesic.errors import ParameterError, SourceError
+
+    args = build_parser().parse_args(["batch", "x.obj", "-s", "3", "--source-point", "0.1,0.2,0.3", "--out", "o"])
+    spec = batch_sources(args)
+    assert spec == [3, [0.1, 0.2, 0.3]] and _source_spec(spec) == [3, [0.1, 0.2, 0.3]]
+    assert batch_sources(build_parser().parse_args(["batch", "x.obj", "--boundary", "--out", "o"])) == "boundary"
+    with pytest.raises(SourceError, match="give a source"):
+        batch_sources(build_parser().parse_args(["batch", "x.obj", "--out", "o"]))
+    with pytest.raises(ParameterError, match="3 finite numbers"):
+        _source_spec([0, [0.1, 0.2]])
+    with pytest.raises(ParameterError, match="duplicate"):
+        _source_spec([1, 1])
