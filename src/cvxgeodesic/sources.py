@@ -147,7 +147,8 @@ class SurfaceCurve:
         surface (within ``1e-6`` of the bounding-box diagonal; checked when the curve is
         used). Each segment is sampled at an eighth of the mean edge length and every sample
         projected to the surface, so on a curved surface the segment follows the surface
-        under its chord.
+        under its chord: keep segments short against the surface's curvature (a chord through
+        the inside of a sphere projects to an ill-defined curve).
 
     Examples
     --------
