@@ -139,3 +139,15 @@ def test_exact_path_between_surface_points():
     np.testing.assert_allclose(P[-1], y, atol=1e-15)
     assert _length(P) == pytest.approx(np.linalg.norm(x - y), abs=1e-12)
     _on_faces(mesh, P, faces, bary)
+
+
+def test_plain_array_from_geodesic_distance_remembers_its_sources():
+    mesh = cg.grid_plane(12, jitter=0.2)
+    src = cg.SurfacePoint(100, [0.2, 0.3, 0.5])
+    d = cg.geodesic_distance(mesh, src, method="qclp")
+    P = cg.geodesic_path(mesh, d, 150)
+    np.testing.assert_allclose(P[-1], src.position(mesh), atol=1e-12)
+    # an array of unknown origin: the sources are the field's minimum vertices (here the lowest corner of the face)
+    P = cg.geodesic_path(mesh, d.copy(), 150)
+    assert int(np.argmin(np.linalg.norm(mesh.V - P[-1], axis=1))) in mesh.F[100]
+    np.testing.assert_allclose(cg.geodesic_path(mesh, d.copy(), 150, sources=src)[-1], src.position(mesh), atol=1e-12)

@@ -117,6 +117,12 @@ class GeodesicResult:
     sources: np.ndarray
     source_set: object = None
 
+    def __post_init__(self):
+        if self.source_set is not None:  # geodesic_path(mesh, result.distance, ...) then knows the sources
+            from .sources import remember_sources
+
+            remember_sources(self.distance, self.source_set)
+
 
 def _is_real(value) -> bool:
     """True for Python and NumPy real numbers other than booleans."""

@@ -181,9 +181,10 @@ def geodesic_path(mesh, distance, target, *, sources=None, return_surface_points
         A vertex index or a surface point.
     sources : optional
         The field's sources (anything :meth:`GeodesicSolver.solve` takes), needed to end a path on a
-        point or curve source when ``distance`` is a plain array. Without them (and without a
-        result), the sources are the vertices where ``distance`` takes its minimum (0 for vertex
-        sources; for a point source the path then ends at the lowest vertex of its face).
+        point or curve source when ``distance`` is a plain array that did not come from this
+        library (an array returned by :func:`geodesic_distance` or ``GeodesicResult.distance``
+        remembers its sources). Without them, the sources are the vertices where ``distance``
+        takes its minimum (0 for vertex sources).
     return_surface_points : bool
         Also return the face and barycentric coordinates of every path point.
     straighten : bool
@@ -225,6 +226,10 @@ def geodesic_path(mesh, distance, target, *, sources=None, return_surface_points
         ss = resolve_sources(mesh, sources)
     elif result is not None:
         ss = result.source_set if result.source_set is not None else resolve_sources(mesh, result.sources)
+    else:
+        from .sources import remembered_sources
+
+        ss = remembered_sources(distance)  # an array returned by geodesic_distance from surface sources
     if ss is not None:
         src_v = np.zeros(mesh.n_vertices, dtype=bool)
         src_v[ss.vertices] = True

@@ -345,6 +345,32 @@ class SourceSet:
         return np.unique(np.concatenate([self.vertices, mesh.F[self.source_faces()].ravel()])).astype(np.int64)
 
 
+# fields computed from point, curve or boundary sources remember them, so that a plain array returned by
+# geodesic_distance still leads geodesic_path to the source points (id -> (weak reference, source set))
+_FIELD_SOURCES: dict[int, tuple] = {}
+
+
+def remember_sources(distance: np.ndarray, ss: SourceSet) -> None:
+    """Record that the array ``distance`` was computed from ``ss`` (for as long as the array lives)."""
+    import weakref
+
+    key = id(distance)
+    try:
+        ref = weakref.ref(distance)
+    except TypeError:  # pragma: no cover - not weak-referenceable
+        return
+    _FIELD_SOURCES[key] = (ref, ss)
+    weakref.finalize(distance, _FIELD_SOURCES.pop, key, None)
+
+
+def remembered_sources(distance) -> SourceSet | None:
+    """The source set :func:`remember_sources` recorded for this very array, if any."""
+    entry = _FIELD_SOURCES.get(id(distance))
+    if entry is None or entry[0]() is not distance:
+        return None
+    return entry[1]
+
+
 def _incident_faces(mesh: TriMesh) -> sp.csr_matrix:
     """(n, m) csr_matrix with a 1 where a vertex belongs to a face (cached on the mesh object)."""
     cached = getattr(mesh, "_cg_vertex_faces", None)
