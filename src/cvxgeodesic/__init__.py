@@ -33,6 +33,8 @@ from .errors import (
 from .formulations import FORMULATIONS, smoothness_weight
 from .mesh import TriMesh, cylinder, grid_plane, icosphere
 from .mesh.io import load_mesh, save_distance
+from .paths import distance_at, geodesic_path
+from .sources import SurfaceCurve, SurfacePoint, surface_point
 
 __version__ = "0.1.0"
 
@@ -41,5 +43,6 @@ __all__ = [
     "IndefiniteEnergyWarning", "GeodesicResult", "GeodesicSolver",
     "MeshError", "MeshFormatError", "NonManifoldError", "ParameterError", "SolveInfo", "SolverError", "SourceError",
     "TriMesh", "cylinder", "distance_matrix", "geodesic_distance", "grid_plane", "icosphere", "load_mesh",
-    "save_distance", "smoothness_weight",
+    "save_distance", "smoothness_weight", "SurfaceCurve", "SurfacePoint", "surface_point", "distance_at",
+    "geodesic_path",
 ]

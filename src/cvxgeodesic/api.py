@@ -106,11 +106,23 @@ class GeodesicResult:
         Distance of every vertex to the nearest source; ``inf`` where no source is reachable.
     info : SolveInfo
     sources : (k,) int64 ndarray
+        The source vertices (fixed at 0). With point, curve or boundary sources: the vertices among them
+        (points that lie on a vertex, boundary vertices), possibly none; the whole set is ``source_set``.
+    source_set : SourceSet or None
+        The normalized sources (:func:`cvxgeodesic.sources.resolve_sources`) when they were not all
+        vertices; ``None`` otherwise.
     """
 
     distance: np.ndarray
     info: SolveInfo
     sources: np.ndarray
+    source_set: object = None
+
+    def __post_init__(self):
+        if self.source_set is not None:  # geodesic_path(mesh, result.distance, ...) then knows the sources
+            from .sources import remember_sources
+
+            remember_sources(self.distance, self.source_set)
 
 
 def _is_real(value) -> bool:
@@ -352,8 +364,9 @@ class GeodesicSolver:
 
         Parameters
         ----------
-        sources : int or sequence of int
-            Source vertex indices (distinct, in ``[0, n)``).
+        sources : int, sequence of int, SurfacePoint, SurfaceCurve, "boundary", or a list mixing them
+            Source vertex indices (distinct, in ``[0, n)``), points anywhere on the surface, curves,
+            or every boundary edge (``docs/sources.md``).
         callback : callable, optional
             ``callback(iteration, info_dict)`` after every interior-point
             iteration of the ``"ipm"`` backend (used for progress reports).
@@ -366,13 +379,26 @@ class GeodesicSolver:
         ------
         SourceError
             Invalid sources: empty, ragged, not integers (bools included), out of range,
-            repeated; several sources for a baseline that takes one.
+            repeated; several sources for a baseline that takes one; a bad SurfacePoint or
+            SurfaceCurve, ``"boundary"`` on a closed mesh; a kind of source the method cannot take
+            (the message names the methods that can).
         SolverError
             The backend did not reach an optimal solution (for the Hessian energy the
             message adds that it can be indefinite on meshes with sharp corners).
         """
-        src = validate_sources(sources, self.mesh.n_vertices)
+        from .sources import resolve_sources
+
+        sset = resolve_sources(self.mesh, sources)
+        src = sset.vertices if sset.vertex_only else sset
         t0 = time.perf_counter()
+        if self.is_baseline and not sset.vertex_only:
+            from .baselines.points import solve_baseline_sources
+
+            d, binfo = solve_baseline_sources(self._baseline, sset)
+            info = SolveInfo(method=self.method, solver=str(binfo.pop("solver")), status="optimal",
+                             setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
+                             n_unreachable=int(np.isinf(d).sum()), extra=binfo)
+            return GeodesicResult(distance=d, info=info, sources=sset.vertices, source_set=sset)
         if self.is_baseline:
             if len(src) > 1 and not self._baseline.supports_multiple_sources:
                 raise SourceError(f"method {self.method!r} supports a single source only")
@@ -387,6 +413,9 @@ class GeodesicSolver:
             return GeodesicResult(distance=d, info=info, sources=src)
 
         if self._multires is not None:
+            if not sset.vertex_only:
+                raise SourceError("multires takes vertex sources only; solve point, curve and boundary sources "
+                                  "without multires")
             return self._multires.solve(self, src, callback=callback)
         res = self._solve_direct(src, t0, callback)
         if self._multires_skipped:
@@ -460,7 +489,8 @@ class GeodesicSolver:
             res.extra = {**extra, **res.extra}
         d = np.array(res.x, dtype=float) * self._scale
         d[problem.unreachable] = np.inf
-        d[src] = 0.0
+        vertices = src if isinstance(src, np.ndarray) else src.vertices
+        d[vertices] = 0.0
         info = SolveInfo(
             method=self.method, solver=res.solver, status=res.status, iterations=res.iterations,
             setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
@@ -469,10 +499,12 @@ class GeodesicSolver:
             n_unreachable=int(problem.unreachable.sum()),
             notes=notes, extra=res.extra,
         )
-        return GeodesicResult(distance=d, info=info, sources=src)
+        if isinstance(src, np.ndarray):
+            return GeodesicResult(distance=d, info=info, sources=src)
+        return GeodesicResult(distance=d, info=info, sources=src.vertices, source_set=src)
 
     def solve_many(self, sources_list, *, progress: bool = False) -> list[GeodesicResult]:
-        """Solve for each entry of ``sources_list`` (each an int or a list of ints), reusing all per-mesh work.
+        """Solve for each entry of ``sources_list`` (each anything :meth:`solve` takes), reusing all per-mesh work.
 
         Parameters
         ----------
@@ -496,6 +528,9 @@ def geodesic_distance(mesh, sources, method: str = "qcqp-hessian", m: float = 1.
                       *, lam: float | None = None, tol: float = DEFAULT_TOL, max_iter: int = 200,
                       normalization: str = "area") -> np.ndarray:
     """Geodesic distance field from source vertices (one-shot form of :class:`GeodesicSolver`).
+
+    ``sources`` may also be SurfacePoints, SurfaceCurves, ``"boundary"`` or a list mixing them
+    with vertex indices (see :meth:`GeodesicSolver.solve` and ``docs/sources.md``).
 
     Parameters
     ----------
@@ -536,7 +571,8 @@ def distance_matrix(mesh, vertices, method: str = "qcqp-hessian", m: float = 1.0
 
     The per-mesh work (operators, energy matrix, symbolic Cholesky analysis) is
     done once; every row is one solve with a single source. A vertex listed
-    twice is solved once and its row copied.
+    twice is solved once and its row copied. ``vertices`` may also be a SurfacePoint, a
+    SurfaceCurve, ``"boundary"`` or a list of them and ints: one row per item.
 
     Parameters
     ----------
@@ -569,6 +605,15 @@ def distance_matrix(mesh, vertices, method: str = "qcqp-hessian", m: float = 1.0
     ((3, 162), 0.0)
     """
     mesh = as_trimesh(mesh)
+    from .sources import SurfaceCurve, SurfacePoint
+
+    surface = (SurfacePoint, SurfaceCurve, str)
+    if isinstance(vertices, surface) or (isinstance(vertices, list | tuple)
+                                         and any(isinstance(v, surface) for v in vertices)):
+        items = [vertices] if isinstance(vertices, surface) else list(vertices)  # one row per item
+        solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter,
+                                    multires=multires)
+        return np.stack([r.distance for r in solver_obj.solve_many(items, progress=progress)])
     if isinstance(vertices, bool | np.bool_):
         raise SourceError(f"vertices must be vertex indices, got {vertices!r}")
     arr = np.atleast_1d(np.asarray(vertices))

@@ -112,8 +112,44 @@ def output_paths(mesh_path, out_dir, output_format: str = "ply") -> tuple[Path, 
     return out / f"{stem}.{output_format}", out / f"{stem}.json"
 
 
+def _source_spec(sources):
+    """JSON form of batch sources: ``"boundary"``, or a list of vertex indices and ``[x, y, z]`` positions."""
+    if isinstance(sources, str):
+        if sources.lower() != "boundary":
+            raise ParameterError(f"unknown source {sources!r}: the only named source is 'boundary'")
+        return "boundary"
+    items = list(sources) if isinstance(sources, list | tuple) else [sources]
+    if not any(isinstance(s, list | tuple) for s in items):
+        src = np.atleast_1d(np.asarray(sources))
+        if src.ndim != 1 or src.size == 0 or src.dtype.kind not in "iu" or (src < 0).any():
+            raise ParameterError(f"sources must be one or more vertex indices >= 0, got {sources!r}")
+        if len(np.unique(src)) != src.size:
+            raise ParameterError(f"sources contain a duplicate: {src.tolist()}")
+        return [int(s) for s in src]
+    out = []
+    for s in items:
+        if isinstance(s, list | tuple):
+            if len(s) != 3 or not all(isinstance(c, int | float) and math.isfinite(c) for c in s):
+                raise ParameterError(f"a source position must be 3 finite numbers, got {s!r}")
+            out.append([float(c) for c in s])
+        elif isinstance(s, int | np.integer) and not isinstance(s, bool) and s >= 0:
+            out.append(int(s))
+        else:
+            raise ParameterError(f"sources must be vertex indices >= 0 or [x, y, z] positions, got {s!r}")
+    return out
+
+
+def _mesh_sources(mesh, spec):
+    """The ``sources`` of one mesh: positions become that mesh's closest surface points."""
+    if spec == "boundary" or all(isinstance(s, int) for s in spec):
+        return spec
+    from .sources import surface_point
+
+    return [s if isinstance(s, int) else surface_point(mesh, s) for s in spec]
+
+
 def _params(sources, method, m, solver, multires, output_format) -> dict:
-    return {"sources": [int(s) for s in sources], "method": method, "m": float(m), "solver": solver,
+    return {"sources": _source_spec(sources), "method": method, "m": float(m), "solver": solver,
             "multires": multires if isinstance(multires, bool) else int(multires), "format": output_format}
 
 
@@ -160,8 +196,9 @@ def solve_one(mesh_path: str, sources: list[int], out_dir: str, method: str = "q
     ----------
     mesh_path : str
         Mesh file (absolute path, visible to the worker).
-    sources : list of int
-        Source vertices (indices after welding, as :func:`~cvxgeodesic.mesh.io.load_mesh` numbers them).
+    sources : list of int and [x, y, z] positions, or "boundary"
+        Source vertices (indices after welding, as :func:`~cvxgeodesic.mesh.io.load_mesh` numbers them),
+        positions (the mesh's closest surface points) or the boundary.
     out_dir : str
         Existing output folder.
     method, m, solver, multires
@@ -189,7 +226,7 @@ def solve_one(mesh_path: str, sources: list[int], out_dir: str, method: str = "q
             mesh = load_mesh(mesh_path)
         row["warnings"] = [str(w.message) for w in caught]
         row["n_vertices"], row["n_faces"] = mesh.n_vertices, mesh.n_faces
-        res = GeodesicSolver(mesh, method, m=m, solver=solver, multires=multires).solve(sources)
+        res = GeodesicSolver(mesh, method, m=m, solver=solver, multires=multires).solve(_mesh_sources(mesh, sources))
         save_distance(dist_path, mesh, res.distance)
         row.update(status="ok", output=str(dist_path), iterations=res.info.iterations,
                    solve_status=res.info.status, time_s=time.perf_counter() - t0)
@@ -214,9 +251,10 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
     paths : sequence of str or Path
         Mesh files (see :func:`expand_mesh_paths` for globs). Their stems must
         be distinct: each names the outputs ``out_dir/<stem>.<format|json>``.
-    sources : int or sequence of int
+    sources : int, sequence of int and [x, y, z] positions, or "boundary"
         Source vertex indices, the same for every mesh (a mesh where one is out
-        of range fails, the others go on).
+        of range fails, the others go on); a position is each mesh's closest
+        surface point; ``"boundary"`` each mesh's boundary.
     out_dir : str or Path
         Output folder, created if missing. With a remote ``scheduler`` it must
         be writable by the workers at the same path.
@@ -260,11 +298,7 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
     paths = list(dict.fromkeys(paths))
     if not paths:
         raise ParameterError("no mesh files given")
-    src = np.atleast_1d(np.asarray(sources))
-    if src.ndim != 1 or src.size == 0 or src.dtype.kind not in "iu" or (src < 0).any():
-        raise ParameterError(f"sources must be one or more vertex indices >= 0, got {sources!r}")
-    if len(np.unique(src)) != src.size:
-        raise ParameterError(f"sources contain a duplicate: {src.tolist()}")
+    sources_list = _source_spec(sources)
     if not isinstance(method, str) or method.lower() not in ALL_METHODS:
         raise ParameterError(f"unknown method {method!r}; choose one of {', '.join(ALL_METHODS)}")
     if solver not in SOLVERS:
@@ -288,7 +322,6 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
         raise ParameterError(f"--out {out} exists and is not a directory")
     out.mkdir(parents=True, exist_ok=True)
     method = method.lower()
-    sources_list = [int(s) for s in src]
     params = _params(sources_list, method, m, solver, multires, output_format)
 
     rows: dict[Path, dict] = {}

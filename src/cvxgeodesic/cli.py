@@ -1,4 +1,4 @@
-"""Command-line interface: ``cvxgeodesic distance | compare | batch | demo``.
+"""Command-line interface: ``cvxgeodesic distance | compare | batch | path | demo``.
 
 Every error a user can cause ends the program with exit code 2 and a one-line
 message on stderr; ``--debug`` shows the full traceback instead. ``batch``
@@ -15,6 +15,7 @@ import warnings
 
 from . import __version__
 from .api import ALL_METHODS, SOLVERS
+from .cli_sources import add_path_parser, add_point_options
 
 EXIT_USAGE = 2
 
@@ -38,25 +39,25 @@ def _progress_printer(stream, every: float = 0.5):
 
 def _cmd_distance(args) -> int:
     from .api import GeodesicSolver
-    from .formulations import validate_sources
+    from .cli_sources import cli_sources
     from .mesh.io import check_output_path, load_mesh, save_distance
 
     check_output_path(args.output)
     if args.png:
         check_output_path(args.png, (".png",))
     mesh = load_mesh(args.mesh)
-    validate_sources(args.source, mesh.n_vertices)
+    sources, label = cli_sources(args, mesh)
     log = sys.stderr
     if not args.quiet:
         print(f"{mesh.name}: {mesh.n_vertices} vertices, {mesh.n_faces} faces; method {args.method}", file=log)
     solver = GeodesicSolver(mesh, args.method, m=args.m, lam=args.lam, solver=args.solver)
     callback = None if args.quiet else _progress_printer(log)
-    res = solver.solve(args.source, callback=callback)
+    res = solver.solve(sources, callback=callback)
     save_distance(args.output, mesh, res.distance)
     if args.png:
         from .plotting import plot_field
 
-        plot_field(mesh, res.distance, args.png, title=f"{solver.method}, sources {list(map(int, res.sources))}")
+        plot_field(mesh, res.distance, args.png, title=f"{solver.method}, sources {label}")
     if not args.quiet:
         i = res.info
         print(f"{i.method} via {i.solver}: {i.status}, {i.iterations} iterations, set-up {i.setup_time:.2f} s, "
@@ -65,24 +66,28 @@ def _cmd_distance(args) -> int:
 
 
 def _cmd_compare(args) -> int:
+    from .cli_sources import cli_sources
     from .compare import format_table, run_compare
     from .mesh.io import load_mesh
 
     mesh = load_mesh(args.mesh)
+    sources, _ = cli_sources(args, mesh)
     methods = [m.strip() for m in args.methods.split(",") if m.strip()]
-    rows = run_compare(mesh, args.source, methods, args.out, m=args.m, solver=args.solver, progress=not args.quiet)
+    rows = run_compare(mesh, sources, methods, args.out, m=args.m, solver=args.solver, progress=not args.quiet)
     print(format_table(rows))
     return 0
 
 
 def _cmd_batch(args) -> int:
     from .batch import expand_mesh_paths, format_summary, run_batch
+    from .cli_sources import batch_sources
 
+    sources = batch_sources(args)
     paths = expand_mesh_paths(args.meshes)
     if not args.quiet:
         where = args.scheduler or f"a local cluster of {args.workers} worker processes"
         print(f"{len(paths)} mesh file(s); method {args.method}; running on {where}", file=sys.stderr)
-    rows = run_batch(paths, args.source, args.out, method=args.method, m=args.m, solver=args.solver,
+    rows = run_batch(paths, sources, args.out, method=args.method, m=args.m, solver=args.solver,
                      scheduler=args.scheduler, n_workers=args.workers, force=args.force, progress=not args.quiet,
                      multires=args.multires, output_format=args.format)
     print(format_summary(rows))
@@ -107,8 +112,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     def common(p):
         p.add_argument("mesh", help="mesh file (.obj, .off, .ply, .stl)")
-        p.add_argument("--source", "-s", type=int, action="append", required=True, metavar="I",
+        p.add_argument("--source", "-s", type=int, action="append", default=None, metavar="I",
                        help="source vertex index (repeat for several sources)")
+        add_point_options(p)
         p.add_argument("--m", type=float, default=1.0, help="smoothness multiplier m, λ = m·100·h/n (default 1)")
         p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")
         p.add_argument("--quiet", "-q", action="store_true", help="no progress output")
@@ -137,8 +143,9 @@ def build_parser() -> argparse.ArgumentParser:
                     "2: usage error.")
     p.add_argument("meshes", nargs="+", metavar="MESH_GLOB",
                    help="mesh files or quoted glob patterns ('data/*.obj', 'data/**/*.ply')")
-    p.add_argument("--source", "-s", type=int, action="append", required=True, metavar="I",
+    p.add_argument("--source", "-s", type=int, action="append", default=None, metavar="I",
                    help="source vertex index, the same in every mesh (repeat for several sources)")
+    add_point_options(p)
     p.add_argument("--method", default="qcqp-hessian", choices=ALL_METHODS, metavar="NAME",
                    help=f"one of: {', '.join(ALL_METHODS)} (default qcqp-hessian)")
     p.add_argument("--m", type=float, default=1.0, help="smoothness multiplier m, λ = m·100·h/n (default 1)")
@@ -155,6 +162,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar (failures still in the summary)")
     p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
     p.set_defaults(func=_cmd_batch)
+
+    add_path_parser(sub)
 
     p = sub.add_parser("demo", help="QCQP-Hessian on the bundled Spot mesh; writes PLY + PNG, prints a table")
     p.add_argument("--out", default="demo_output", help="output folder (default demo_output)")

@@ -155,8 +155,9 @@ def run_compare(mesh, sources, methods, out_dir, *, m=1.0, solver="auto", progre
     ----------
     mesh : TriMesh or (V, F) tuple
         The surface, ``n`` vertices.
-    sources : int or sequence of int
-        Source vertex indices (as for :meth:`cvxgeodesic.GeodesicSolver.solve`).
+    sources : int, sequence of int, SurfacePoint, SurfaceCurve, "boundary", or a list mixing them
+        As for :meth:`cvxgeodesic.GeodesicSolver.solve`; methods that cannot take the kind of source
+        get a failed row naming the methods that can.
     methods : sequence of str or str
         Method names (see :func:`resolve_methods`); ``"all"`` means every method.
     out_dir : str or os.PathLike
@@ -192,13 +193,16 @@ def run_compare(mesh, sources, methods, out_dir, *, m=1.0, solver="auto", progre
     reported under both names.
     """
     from .evaluation import error_stats, gradient_norm_histogram, relative_error, smoothness_report
-    from .formulations import validate_sources
     from .mesh.trimesh import as_trimesh
     from .plotting import plot_error_map, plot_field, plot_gradient_histogram
 
     mesh = as_trimesh(mesh)
     names = resolve_methods(methods)
-    src = validate_sources(sources, mesh.n_vertices)
+    from .sources import resolve_sources
+
+    sset = resolve_sources(mesh, sources)
+    src = sset.vertices  # excluded from the error statistics and marked in the plots (none for point sources)
+    solve_src = src if sset.vertex_only else sset
     from .api import SOLVERS
 
     if not isinstance(solver, str) or solver.lower() not in SOLVERS:
@@ -216,7 +220,7 @@ def run_compare(mesh, sources, methods, out_dir, *, m=1.0, solver="auto", progre
     results: dict[str, tuple] = {}  # canonical method -> (result or None, wall seconds, exception or None)
     t0 = time.perf_counter()
     try:
-        res, wall = _solve(mesh, "exact", src, m, solver)
+        res, wall = _solve(mesh, "exact", solve_src, m, solver)
         results["exact"] = (res, wall, None)
     except Exception as exc:  # noqa: BLE001 - a failed method becomes a row, never the end of the comparison
         results["exact"] = (None, time.perf_counter() - t0, exc)
@@ -233,7 +237,7 @@ def run_compare(mesh, sources, methods, out_dir, *, m=1.0, solver="auto", progre
         if key not in results:
             t0 = time.perf_counter()
             try:
-                results[key] = (*_solve(mesh, key, src, m, solver), None)
+                results[key] = (*_solve(mesh, key, solve_src, m, solver), None)
             except Exception as exc:  # noqa: BLE001
                 results[key] = (None, time.perf_counter() - t0, exc)
         res, wall, err = results[key]
@@ -302,6 +306,8 @@ def run_compare(mesh, sources, methods, out_dir, *, m=1.0, solver="auto", progre
     p99s = [p for p in (_finite_or_none(r["rel_p99"]) for r in rows) if p]
     vmax_err = float(np.median(p99s)) if p99s else None
     src_txt = ", ".join(str(int(s)) for s in src[:5]) + (", ..." if len(src) > 5 else "")
+    if not sset.vertex_only:
+        src_txt = sset.description
     for name, row in zip(names, rows, strict=True):
         res = results[_canonical(name)][0]
         if res is None:

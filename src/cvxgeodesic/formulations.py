@@ -58,6 +58,7 @@ from .errors import DegenerateFacesWarning, MeshError, ParameterError, SourceErr
 from .mesh.trimesh import DEGENERATE_TOL, TriMesh
 from .operators import energy_matrix, gradient_blocks
 from .solvers.problem import ConicProblem
+from .sources import source_constraints
 
 FORMULATIONS: dict[str, tuple[str, str | None]] = {
     "lclp": ("lc", None),
@@ -357,8 +358,9 @@ def build_problem(
     Parameters
     ----------
     ops : MeshOperators
-    sources : (k,) int64 ndarray
-        Validated source vertices.
+    sources : (k,) int64 ndarray or SourceSet
+        Validated source vertices, or any source set of :func:`cvxgeodesic.sources.resolve_sources`
+        (points, curves, the boundary; their constraints are in :func:`cvxgeodesic.sources.source_constraints`).
     method : str
         A name of :data:`FORMULATIONS` (aliases allowed).
     lam : float
@@ -381,9 +383,10 @@ def build_problem(
     if not np.isfinite(lam) or lam < 0:
         raise ParameterError(f"smoothness weight lambda must be finite and >= 0, got {lam}")
 
-    unreachable = ~(mesh.connected_to(sources) & mesh.referenced)
+    sc = source_constraints(ops, sources)  # fixed vertices, cone-free faces and source bounds (sources.py)
+    unreachable = ~(mesh.connected_to(sc.anchors) & mesh.referenced)
     fixed_mask = unreachable.copy()
-    fixed_mask[sources] = True
+    fixed_mask[sc.fixed] = True
     fixed_values = np.zeros(n)
 
     # The "area" objective is solved times SOLVER_SCALE: its terms are then as large as the paper normalization's
@@ -400,19 +403,15 @@ def build_problem(
     # (MIN_EDGE_BOUND x the bounding-box diagonal) keeps them inequalities.
     ell_all = np.maximum(mesh.edge_lengths, MIN_EDGE_BOUND * mesh.bbox_diagonal)
     if constraint == "qc":
-        is_source = np.zeros(n, dtype=bool)
-        is_source[sources] = True
-        keep = face_free & ~is_source[F].any(axis=1) & ~ops.degenerate
+        # faces incident to a source (and the faces of point and curve sources, sources.py) carry no cone
+        keep = face_free & ~sc.no_cone & ~ops.degenerate
         cone_vertices = np.ascontiguousarray(F[keep])
         cone_blocks = np.ascontiguousarray(ops.gradient_blocks[keep])
         E, ell = mesh.edges, ell_all
-        star = is_source[E[:, 0]] ^ is_source[E[:, 1]]
-        s_end = np.where(is_source[E[star, 0]], E[star, 0], E[star, 1])
-        o_end = np.where(is_source[E[star, 0]], E[star, 1], E[star, 0])
-        # d_j - d_s <= |v_j - v_s|; with d_s fixed at 0 this is a bound on d_j
-        ineq_vertices = np.column_stack([o_end, s_end])
-        ineq_coeffs = np.tile([1.0, -1.0], (len(o_end), 1))
-        ineq_rhs = ell[star].copy()
+        # d_j - d_s <= |v_j - v_s| on the source stars; with d_s fixed at 0 this is a bound on d_j
+        ineq_vertices = np.column_stack([sc.star_other, sc.star_source])
+        ineq_coeffs = np.tile([1.0, -1.0], (len(sc.star_other), 1))
+        ineq_rhs = sc.star_rhs.copy()
         if ops.degenerate_edges.size:
             # degenerate faces carry no cone: their edges get |d_i - d_j| <= l_ij (both directions)
             Ed, ld = E[ops.degenerate_edges], ell[ops.degenerate_edges]
@@ -431,6 +430,12 @@ def build_problem(
         ineq_vertices = np.vstack([E, E])
         ineq_coeffs = np.vstack([np.tile([1.0, -1.0], (len(E), 1)), np.tile([-1.0, 1.0], (len(E), 1))])
         ineq_rhs = np.concatenate([ell, ell])
+
+    if sc.bound_vertices.size:  # point and curve sources: d_v <= (a surface path to the source)
+        bv = sc.bound_vertices
+        ineq_vertices = np.vstack([ineq_vertices, np.column_stack([bv, bv])])
+        ineq_coeffs = np.vstack([ineq_coeffs, np.tile([1.0, 0.0], (len(bv), 1))])
+        ineq_rhs = np.concatenate([ineq_rhs, sc.bound_rhs])
 
     if nonnegative:
         # d_i >= 0 holds for the exact distance; without it maximizing the sum can push a few vertices of folded

@@ -329,7 +329,8 @@ def _gouraud_artist_class():
     return _GouraudTriangles
 
 
-def _render_surface(ax, mesh, values, *, cmap, norm, levels, view, line_width=0.45, ambient=0.38, marks=None):
+def _render_surface(ax, mesh, values, *, cmap, norm, levels, view, line_width=0.45, ambient=0.38, marks=None,
+                    paths=()):
     """Draw the shaded, colour-mapped surface, its isolines and marked vertices into ``ax``."""
     from matplotlib.collections import LineCollection
 
@@ -417,6 +418,10 @@ def _render_surface(ax, mesh, values, *, cmap, norm, levels, view, line_width=0.
             ax.scatter(P[here, 0], P[here, 1], s=28, c="#e8112d", edgecolors="white", linewidths=0.9,
                        zorder=1.0 + (2 * i + 1.5) * 1e-3)
 
+    for path in paths:  # polylines on the surface (geodesic paths), drawn on top
+        Q = (np.asarray(path, dtype=float).reshape(-1, 3) - V.mean(axis=0)) @ R[:2].T
+        ax.plot(Q[:, 0], Q[:, 1], color="#e8112d", linewidth=2.0, solid_capstyle="round", zorder=3.0)
+
     lo, hi = P[:, :2].min(axis=0), P[:, :2].max(axis=0)
     pad = 0.03 * max(float(np.max(hi - lo)), 1e-12)
     ax.set_xlim(lo[0] - pad, hi[0] + pad)
@@ -464,6 +469,7 @@ def plot_field(
     dpi=150,
     colorbar_label=None,
     sources=None,
+    paths=(),
 ) -> Path:
     """Render a per-vertex scalar field on the surface, with isolines, into a PNG.
 
@@ -502,6 +508,8 @@ def plot_field(
         Vertices to mark with a red dot (where visible). The default view
         then picks, among its mirror images (front/back, turned left/right),
         the one that faces the first of them.
+    paths : sequence of (k, 3) float array_like, optional
+        Polylines on the surface (e.g. :func:`cvxgeodesic.geodesic_path`), drawn on top in red.
 
     Returns
     -------
@@ -546,7 +554,7 @@ def plot_field(
 
     fig = _new_figure(dpi)
     ax, cax = _layout(fig, show_colorbar, title)
-    _render_surface(ax, mesh, vals, cmap=cm, norm=norm, levels=levels, view=view, marks=marks)
+    _render_surface(ax, mesh, vals, cmap=cm, norm=norm, levels=levels, view=view, marks=marks, paths=paths)
     if cax is not None:
         cb = fig.colorbar(ScalarMappable(norm=Normalize(lo, hi), cmap=cm), cax=cax)
         if levels.size and levels.size <= 60:

@@ -1,0 +1,178 @@
+"""Point, curve and boundary sources for the baselines, where their libraries can take them.
+
+- ``dijkstra``: the edge graph plus one virtual node joined to every vertex of a source face by
+  an edge as long as :func:`~cvxgeodesic.sources.vertex_bounds` (the straight segment to the point
+  or curve piece inside that face); vertex sources start at 0.
+- ``exact``: the points are inserted into the mesh (a face split in three, an edge and its two
+  faces split in two: the same surface) and pygeodesic runs from the new vertices, so the result
+  is the exact polyhedral distance to the points. A curve is its samples
+  (:data:`~cvxgeodesic.sources.CURVE_STEP`); ``"boundary"`` is the boundary vertices.
+- ``fmm``: potpourri3d's fast marching takes ``(face, [b0, b1, b2])`` points natively; a curve is
+  its samples; ``"boundary"`` is the boundary vertices. Single-component meshes only.
+- ``heat``: potpourri3d's heat method takes vertices only; points and curves raise
+  :class:`~cvxgeodesic.errors.SourceError`, ``"boundary"`` is the boundary vertices.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import dijkstra
+
+from ..errors import SolverError, SourceError
+from ..mesh.trimesh import TriMesh
+from ..sources import BARY_SNAP, SourceSet, closest_points, vertex_bounds
+
+#: Methods that take every kind of source (the eight formulations, then the baselines that take points).
+POINT_METHODS = ("lclp", "lcqp-dirichlet", "lcqp-laplacian", "lcqp-hessian", "qclp", "qcqp-dirichlet",
+                 "qcqp-laplacian", "qcqp-hessian", "dijkstra", "exact", "fmm")
+
+
+def _cannot(method: str, what: str, why: str) -> SourceError:
+    return SourceError(f"method {method!r} cannot take {what} sources ({why}); methods that can: "
+                       f"{', '.join(m for m in POINT_METHODS if m != method)}")
+
+
+def solve_baseline_sources(baseline, ss: SourceSet) -> tuple[np.ndarray, dict]:
+    """Distance field of a baseline from a non-vertex source set.
+
+    Parameters
+    ----------
+    baseline : BaselineSolver
+    ss : SourceSet
+
+    Returns
+    -------
+    d : (n,) float ndarray
+    info : dict
+        ``solver`` and method-specific keys (``sources`` says how the set was passed).
+
+    Raises
+    ------
+    SourceError
+        The method cannot take this kind of source; the message names the methods that can.
+    """
+    name, mesh = baseline.name, baseline.mesh
+    has_points = ss.point_faces.size > 0 or ss.kind in ("curve", "points", "mixed")
+    if name == "dijkstra":
+        return _dijkstra(mesh, ss), {"solver": baseline.library, "sources": "virtual node with offsets"}
+    if ss.kind == "boundary":  # the vertex baselines take the boundary's vertices
+        d, info = baseline.solve(ss.vertices)
+        info["sources"] = "boundary vertices"
+        return d, info
+    if name == "heat" and has_points:
+        raise _cannot(name, "point or curve", "potpourri3d's heat method takes vertex sources only")
+    if name == "exact":
+        return _exact_inserted(mesh, ss)
+    if name == "fmm":
+        return _fmm_points(baseline, ss)
+    raise _cannot(name, "point or curve", "not supported")  # pragma: no cover
+
+
+def _dijkstra(mesh: TriMesh, ss: SourceSet) -> np.ndarray:
+    n = mesh.n_vertices
+    bound = vertex_bounds(mesh, ss)
+    bv = np.flatnonzero(np.isfinite(bound))
+    # zero weights are "no edge" in scipy's sparse graphs: a vertex exactly on a point is a vertex source already
+    w = np.maximum(bound[bv], 1e-300)
+    G = mesh.vertex_adjacency.tocoo()
+    virtual = np.full(len(bv), n)
+    A = sp.coo_matrix((np.r_[G.data, w, w], (np.r_[G.row, virtual, bv], np.r_[G.col, bv, virtual])),
+                      shape=(n + 1, n + 1)).tocsr()
+    idx = np.r_[ss.vertices, n] if bv.size else ss.vertices
+    d = dijkstra(A, directed=False, indices=idx, min_only=True)
+    return np.asarray(d[:n], dtype=float)
+
+
+def _unique_points(mesh: TriMesh, ss: SourceSet) -> np.ndarray:
+    """(p, 3) positions of the point sources, one per point (an edge point is listed once per face)."""
+    X = ss.point_positions(mesh)
+    if not len(X):
+        return X
+    key = np.round(X / max(mesh.bbox_diagonal, 1e-300), 12)
+    _, first = np.unique(key, axis=0, return_index=True)
+    return X[np.sort(first)]
+
+
+def insert_points(V: np.ndarray, F: np.ndarray, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Insert surface points as vertices (the surface does not change).
+
+    Parameters
+    ----------
+    V : (n, 3) float ndarray
+    F : (m, 3) int ndarray
+    X : (p, 3) float ndarray
+        Positions on the surface.
+
+    Returns
+    -------
+    V2 : (n + q, 3) float ndarray
+    F2 : (m + 2q', 3) int64 ndarray
+    index : (p,) int64 ndarray
+        Vertex of each point in ``V2`` (an old vertex where a point lies on one).
+    """
+    V2, F2 = [np.asarray(V, dtype=float)], np.array(F, dtype=np.int64)
+    Vc = V2[0]
+    index = np.zeros(len(X), dtype=np.int64)
+    for i, x in enumerate(X):
+        tm = TriMesh(Vc, F2)
+        (f,), (b,), _ = closest_points(tm, x[None])
+        k = int(np.argmax(b))
+        if b[k] >= 1 - BARY_SNAP:
+            index[i] = F2[f, k]
+            continue
+        new = len(Vc)
+        Vc = np.vstack([Vc, b @ Vc[F2[f]]])
+        zero = np.flatnonzero(b <= BARY_SNAP)
+        if zero.size:  # on the edge opposite corner zero[0]: split every face of that edge in two
+            a, c = F2[f, (zero[0] + 1) % 3], F2[f, (zero[0] + 2) % 3]
+            faces = np.flatnonzero((F2 == a).any(axis=1) & (F2 == c).any(axis=1))
+            add = []
+            for g in faces:
+                tri = F2[g].copy()
+                ia, ic = int(np.flatnonzero(tri == a)[0]), int(np.flatnonzero(tri == c)[0])
+                t1, t2 = tri.copy(), tri.copy()
+                t1[ic] = new  # keeps a and the third corner
+                t2[ia] = new
+                F2[g] = t1
+                add.append(t2)
+            F2 = np.vstack([F2, np.array(add)])
+        else:
+            a, bb, c = F2[f]
+            F2[f] = [a, bb, new]
+            F2 = np.vstack([F2, [[bb, c, new], [c, a, new]]])
+        index[i] = new
+    return Vc, F2, index
+
+
+def _exact_inserted(mesh: TriMesh, ss: SourceSet) -> tuple[np.ndarray, dict]:
+    from .exact import ExactBaseline
+
+    X = _unique_points(mesh, ss)
+    V2, F2, idx = insert_points(mesh.V, mesh.F, X)
+    solver = ExactBaseline(TriMesh(V2, F2, name=mesh.name))
+    src = np.unique(np.r_[ss.vertices, idx]).astype(np.int64)
+    with contextlib.redirect_stdout(io.StringIO()):
+        d, info = solver.solve(src)
+    info = {"solver": info["solver"], "sources": f"{len(X)} point(s) inserted into the mesh",
+            "inserted_vertices": int(len(V2) - mesh.n_vertices)}
+    return np.asarray(d[: mesh.n_vertices], dtype=float), info
+
+
+def _fmm_points(baseline, ss: SourceSet) -> tuple[np.ndarray, dict]:
+    mesh = baseline.mesh
+    parts = baseline._parts
+    if len(parts) != 1 or next(iter(parts.values())).vertices.size != mesh.n_vertices:
+        raise _cannot("fmm", "point or curve", "on a mesh with several components or unreferenced vertices; "
+                      "the library's face indices are per component")
+    solver = next(iter(parts.values())).solver
+    pts = [(int(v), []) for v in ss.vertices]
+    pts += [(int(f), [float(x) for x in b]) for f, b in zip(ss.point_faces, ss.point_bary, strict=True)]
+    d = np.asarray(solver.compute_distance([pts], [], False), dtype=np.float64).reshape(-1)
+    if d.shape != (mesh.n_vertices,) or not np.all(np.isfinite(d)):
+        raise SolverError("baseline 'fmm' returned a bad field for point sources", solver=baseline.library,
+                          status="bad_output")
+    return d, {"solver": baseline.library, "sources": "potpourri3d surface points"}

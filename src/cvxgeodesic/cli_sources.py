@@ -1,0 +1,170 @@
+"""Command-line options for surface sources (``--source-point``, ``--boundary``) and ``cvxgeodesic path``."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+import numpy as np
+
+from .errors import ParameterError, SourceError
+
+
+def _xyz(text: str) -> tuple[float, float, float]:
+    parts = [p for p in text.replace(" ", "").split(",") if p]
+    try:
+        vals = tuple(float(p) for p in parts)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected X,Y,Z (three numbers), got {text!r}") from None
+    if len(vals) != 3 or not all(np.isfinite(vals)):
+        raise argparse.ArgumentTypeError(f"expected X,Y,Z (three finite numbers), got {text!r}")
+    return vals
+
+
+def add_point_options(p: argparse.ArgumentParser) -> None:
+    """``--source-point X,Y,Z`` (repeatable) and ``--boundary``."""
+    p.add_argument("--source-point", type=_xyz, action="append", default=None, metavar="X,Y,Z",
+                   help="source at the surface point closest to X,Y,Z (repeat for several)")
+    p.add_argument("--boundary", action="store_true", help="the mesh boundary (every boundary edge) is the source")
+
+
+def cli_sources(args, mesh) -> tuple[object, str]:
+    """The ``sources`` value for :meth:`GeodesicSolver.solve` from the options, and a label for titles.
+
+    Raises
+    ------
+    SourceError
+        No source option, or ``--boundary`` together with other sources.
+    """
+    from .formulations import validate_sources
+    from .sources import ON_SURFACE_TOL, closest_points, surface_point
+
+    vertices = list(args.source or [])
+    points = list(getattr(args, "source_point", None) or [])
+    boundary = bool(getattr(args, "boundary", False))
+    if not vertices and not points and not boundary:
+        raise SourceError("give a source: --source I, --source-point X,Y,Z or --boundary")
+    if boundary:
+        if vertices or points:
+            raise SourceError("--boundary is a source on its own: do not combine it with --source/--source-point")
+        return "boundary", "boundary"
+    if vertices:
+        validate_sources(vertices, mesh.n_vertices)
+    if not points:
+        return vertices, str(vertices)
+    X = np.array(points, dtype=float)
+    _, _, dist = closest_points(mesh, X)
+    for x, dd in zip(points, dist, strict=True):
+        if dd > ON_SURFACE_TOL * mesh.bbox_diagonal:
+            print(f"cvxgeodesic: note: --source-point {','.join(f'{c:g}' for c in x)} is {dd:.3g} from the surface; "
+                  "using the closest surface point", file=sys.stderr)
+    pts = surface_point(mesh, X)
+    label = ", ".join([*(str(v) for v in vertices), *("(" + ",".join(f"{c:g}" for c in x) + ")" for x in points)])
+    return [*vertices, *pts], label
+
+
+def batch_sources(args):
+    """The ``sources`` of :func:`~cvxgeodesic.batch.run_batch` from the options (positions stay positions)."""
+    vertices = list(args.source or [])
+    points = [list(x) for x in (getattr(args, "source_point", None) or [])]
+    if getattr(args, "boundary", False):
+        if vertices or points:
+            raise SourceError("--boundary is a source on its own: do not combine it with --source/--source-point")
+        return "boundary"
+    if not vertices and not points:
+        raise SourceError("give a source: --source I, --source-point X,Y,Z or --boundary")
+    return [*vertices, *points] if points else vertices
+
+
+def _target(args, mesh):
+    from .sources import surface_point
+
+    if (args.to is None) == (args.to_point is None):
+        raise ParameterError("give exactly one target: --to I or --to-point X,Y,Z")
+    if args.to is not None:
+        if not 0 <= args.to < mesh.n_vertices:
+            raise SourceError(f"target vertex {args.to} is out of range: the mesh has {mesh.n_vertices} vertices "
+                              f"(0..{mesh.n_vertices - 1})")
+        return args.to
+    return surface_point(mesh, np.array(args.to_point))
+
+
+def _write_path(path: str, P: np.ndarray, faces: np.ndarray, bary: np.ndarray) -> None:
+    import io
+
+    from ._atomic import atomic_write
+
+    lower = path.lower()
+    if lower.endswith(".npy"):
+        def write(fh):
+            np.save(fh, P)
+    elif lower.endswith(".csv"):
+        def write(fh):
+            buf = io.StringIO()
+            buf.write("x,y,z,face,b0,b1,b2\n")
+            for x, f, b in zip(P, faces, bary, strict=True):
+                buf.write(",".join([*(repr(float(c)) for c in x), str(int(f)), *(repr(float(c)) for c in b)]) + "\n")
+            fh.write(buf.getvalue().encode())
+    elif lower.endswith(".ply"):
+        def write(fh):
+            k = len(P)
+            head = (f"ply\nformat ascii 1.0\ncomment geodesic path (cvxgeodesic)\nelement vertex {k}\n"
+                    f"property double x\nproperty double y\nproperty double z\nelement edge {max(k - 1, 0)}\n"
+                    "property int vertex1\nproperty int vertex2\nend_header\n")
+            body = "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in P.tolist())
+            body += "".join(f"{i} {i + 1}\n" for i in range(k - 1))
+            fh.write((head + body).encode())
+    else:
+        raise ParameterError(f"output {path!r}: the path is written as .csv, .npy or .ply")
+    atomic_write(path, write)
+
+
+def _cmd_path(args) -> int:
+    from .api import GeodesicSolver
+    from .mesh.io import load_mesh
+    from .paths import geodesic_path
+
+    if not args.output.lower().endswith((".csv", ".npy", ".ply")):
+        raise ParameterError(f"output {args.output!r}: the path is written as .csv, .npy or .ply")
+    from .mesh.io import check_output_path
+
+    check_output_path(args.output, (".csv", ".npy", ".ply"))
+    if args.png:
+        check_output_path(args.png, (".png",))
+    mesh = load_mesh(args.mesh)
+    sources, label = cli_sources(args, mesh)
+    target = _target(args, mesh)
+    res = GeodesicSolver(mesh, args.method, m=args.m, solver=args.solver).solve(sources)
+    P, faces, bary = geodesic_path(mesh, res, target, return_surface_points=True)
+    _write_path(args.output, P, faces, bary)
+    if args.png:
+        from .plotting import plot_field
+
+        plot_field(mesh, res.distance, args.png, title=f"{res.info.method}, path to sources {label}", paths=[P])
+    if not args.quiet:
+        length = float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum())
+        print(f"{res.info.method}: path of {len(P)} points, length {length:.6g}; wrote {args.output}"
+              + (f" and {args.png}" if args.png else ""), file=sys.stderr)
+    return 0
+
+
+def add_path_parser(sub) -> None:
+    """The ``path`` sub-command."""
+    from .api import ALL_METHODS, SOLVERS
+
+    p = sub.add_parser("path", help="geodesic path from a target down the distance field to the nearest source")
+    p.add_argument("mesh", help="mesh file (.obj, .off, .ply, .stl)")
+    p.add_argument("--source", "-s", type=int, action="append", default=None, metavar="I",
+                   help="source vertex index (repeat for several sources)")
+    add_point_options(p)
+    p.add_argument("--to", type=int, default=None, metavar="I", help="target vertex")
+    p.add_argument("--to-point", type=_xyz, default=None, metavar="X,Y,Z", help="target: the closest surface point")
+    p.add_argument("--method", default="qcqp-hessian", choices=ALL_METHODS, metavar="NAME",
+                   help=f"one of: {', '.join(ALL_METHODS)} (default qcqp-hessian)")
+    p.add_argument("--m", type=float, default=1.0, help="smoothness multiplier m (default 1)")
+    p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")
+    p.add_argument("-o", "--output", required=True, help="path file: .csv (x,y,z,face,b0,b1,b2), .npy or .ply")
+    p.add_argument("--png", default=None, help="also draw the path on the field to this PNG")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress output")
+    p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
+    p.set_defaults(func=_cmd_path)

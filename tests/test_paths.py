@@ -1,0 +1,153 @@
+"""distance_at and geodesic_path (issue 15)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import cvxgeodesic as cg
+from cvxgeodesic.errors import ParameterError, SolverError, SourceError
+
+
+def _on_faces(mesh, P, faces, bary):
+    assert np.all(bary >= 0) and np.allclose(bary.sum(axis=1), 1.0)
+    np.testing.assert_allclose(np.einsum("kj,kji->ki", bary, mesh.V[mesh.F[faces]]), P, atol=1e-12)
+
+
+def _length(P):
+    return float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum())
+
+
+@pytest.fixture(scope="module")
+def sphere_field():
+    mesh = cg.icosphere(4)
+    return mesh, cg.GeodesicSolver(mesh, "qclp").solve(0)
+
+
+@pytest.mark.parametrize("target", [100, 1000, 2000, 2500])
+def test_sphere_path_length_is_great_circle(sphere_field, target):
+    """Measured: -0.06 % (straightened: the polyhedral geodesic, inscribed), +0.18 % .. +0.48 % (raw descent)."""
+    mesh, res = sphere_field
+    gc = float(np.arccos(np.clip(mesh.V[0] @ mesh.V[target], -1, 1)))
+    for straighten in (True, False):
+        P, faces, bary = cg.geodesic_path(mesh, res, target, straighten=straighten, return_surface_points=True)
+        assert abs(_length(P) - gc) <= 0.03 * gc
+        np.testing.assert_array_equal(P[-1], mesh.V[0])
+        _on_faces(mesh, P, faces, bary)
+
+
+@pytest.mark.parametrize("method", ["exact", "qclp", "qcqp-hessian"])
+@pytest.mark.parametrize("target", [400, cg.SurfacePoint(700, [0.3, 0.3, 0.4])], ids=["vertex", "point"])
+def test_path_on_plane_is_straight(method, target):
+    """Measured: 2e-16 from the chord for every method and target (the raw descent: 6e-3 .. 7e-2)."""
+    mesh = cg.grid_plane(20, jitter=0.25)
+    s = int(np.argmin(np.linalg.norm(mesh.V - [0.2, 0.3, 0.0], axis=1)))
+    res = cg.GeodesicSolver(mesh, method).solve(s)
+    P, faces, bary = cg.geodesic_path(mesh, res, target, return_surface_points=True)
+    a, b = P[0], P[-1]
+    u = (b - a) / np.linalg.norm(b - a)
+    dev = np.linalg.norm((P - a) - ((P - a) @ u)[:, None] * u, axis=1)
+    assert dev.max() <= 1e-6
+    start = mesh.V[target] if isinstance(target, int) else target.position(mesh)
+    np.testing.assert_allclose(P[0], start, atol=1e-12)
+    np.testing.assert_array_equal(P[-1], mesh.V[s])
+    _on_faces(mesh, P, faces, bary)
+
+
+def test_straightened_path_is_never_shorter_than_the_exact_distance(sphere_field):
+    mesh, res = sphere_field
+    exact = cg.geodesic_distance(mesh, 0, method="exact")
+    for target in (100, 1000, 2000, 2500):
+        L = _length(cg.geodesic_path(mesh, res, target))
+        assert exact[target] - 1e-9 <= L <= exact[target] * 1.001
+
+
+def test_descent_path_on_plane_in_the_source_face_is_straight():
+    mesh = cg.grid_plane(20, jitter=0.25)
+    src = cg.SurfacePoint(300, [0.2, 0.3, 0.5])
+    res = cg.GeodesicSolver(mesh, "qclp").solve(src)
+    P = cg.geodesic_path(mesh, res, cg.SurfacePoint(300, [0.6, 0.2, 0.2]))
+    assert len(P) == 2
+    np.testing.assert_allclose(P[-1], src.position(mesh), atol=1e-12)
+
+
+@pytest.mark.parametrize("source_kind", ["vertex", "point", "curve", "boundary"])
+def test_paths_end_on_their_source_and_stay_on_the_surface(source_kind):
+    mesh = cg.grid_plane(16, jitter=0.2)
+    src = {"vertex": 20, "point": cg.SurfacePoint(100, [0.2, 0.3, 0.5]),
+           "curve": cg.SurfaceCurve([[0.2, 0.2, 0.0], [0.45, 0.6, 0.0]]), "boundary": "boundary"}[source_kind]
+    res = cg.GeodesicSolver(mesh, "qcqp-hessian").solve(src)
+    for target in (250, cg.SurfacePoint(400, [0.1, 0.6, 0.3])):
+        P, faces, bary = cg.geodesic_path(mesh, res, target, return_surface_points=True)
+        _on_faces(mesh, P, faces, bary)
+        end = P[-1]
+        if source_kind == "vertex":
+            np.testing.assert_allclose(end, mesh.V[20])
+        elif source_kind == "point":
+            np.testing.assert_allclose(end, src.position(mesh), atol=1e-12)
+        elif source_kind == "curve":
+            A, B = np.array([0.2, 0.2, 0.0]), np.array([0.45, 0.6, 0.0])
+            t = np.clip((end - A) @ (B - A) / ((B - A) @ (B - A)), 0, 1)
+            assert np.linalg.norm(end - (A + t * (B - A))) < 1e-9
+        else:
+            assert min(end[0], end[1], 1 - end[0], 1 - end[1]) < 1e-12
+        # the raw descent never climbs (the last point is the source itself, where the interpolant is not 0)
+        P, faces, bary = cg.geodesic_path(mesh, res, target, return_surface_points=True, straighten=False)
+        vals = cg.distance_at(mesh, res, [cg.SurfacePoint(int(f), b) for f, b in zip(faces, bary, strict=True)])
+        assert np.all(np.diff(vals[:-1]) <= 1e-9)
+
+
+def test_distance_at():
+    mesh = cg.grid_plane(4)
+    d = np.arange(mesh.n_vertices, dtype=float)
+    f = 3
+    b = np.array([0.2, 0.3, 0.5])
+    assert cg.distance_at(mesh, d, cg.SurfacePoint(f, b)) == pytest.approx(b @ d[mesh.F[f]])
+    vals = cg.distance_at(mesh, d, [cg.SurfacePoint(f, b), cg.SurfacePoint(0, [1.0, 0.0, 0.0])])
+    np.testing.assert_allclose(vals, [b @ d[mesh.F[f]], d[mesh.F[0, 0]]])
+    x = cg.SurfacePoint(f, b).position(mesh)
+    assert cg.distance_at(mesh, d, x) == pytest.approx(b @ d[mesh.F[f]])
+    with pytest.raises(ParameterError, match="vertices"):
+        cg.distance_at(mesh, d[:-1], cg.SurfacePoint(f, b))
+    with pytest.raises(SourceError, match="out of range"):
+        cg.distance_at(mesh, d, [cg.SurfacePoint(999, b)])
+
+
+def test_path_errors():
+    mesh = cg.grid_plane(8)
+    res = cg.GeodesicSolver(mesh, "qclp").solve(0)
+    with pytest.raises(SourceError, match="out of range"):
+        cg.geodesic_path(mesh, res, 10_000)
+    with pytest.raises(SourceError, match="face index"):
+        cg.geodesic_path(mesh, res, cg.SurfacePoint(10_000, [0.2, 0.3, 0.5]))
+    with pytest.raises(SolverError, match="max_steps=2"):
+        cg.geodesic_path(mesh, res.distance, 80, max_steps=2)
+    d = res.distance.copy()
+    d[40] = -1.0  # a local minimum that is no source (vertex 40 is not a field minimum otherwise)
+    with pytest.raises(SolverError, match="local minimum|max_steps"):
+        cg.geodesic_path(mesh, d, 41, sources=0)
+
+
+def test_exact_path_between_surface_points():
+    """method='exact' with point sources: pygeodesic's path on the mesh with the points inserted."""
+    mesh = cg.grid_plane(20, jitter=0.25)
+    src, tgt = cg.SurfacePoint(300, [0.2, 0.3, 0.5]), cg.SurfacePoint(700, [0.3, 0.3, 0.4])
+    res = cg.GeodesicSolver(mesh, "exact").solve(src)
+    P, faces, bary = cg.geodesic_path(mesh, res, tgt, return_surface_points=True)
+    x, y = tgt.position(mesh), src.position(mesh)
+    np.testing.assert_allclose(P[0], x, atol=1e-15)
+    np.testing.assert_allclose(P[-1], y, atol=1e-15)
+    assert _length(P) == pytest.approx(np.linalg.norm(x - y), abs=1e-12)
+    _on_faces(mesh, P, faces, bary)
+
+
+def test_plain_array_from_geodesic_distance_remembers_its_sources():
+    mesh = cg.grid_plane(12, jitter=0.2)
+    src = cg.SurfacePoint(100, [0.2, 0.3, 0.5])
+    d = cg.geodesic_distance(mesh, src, method="qclp")
+    P = cg.geodesic_path(mesh, d, 150)
+    np.testing.assert_allclose(P[-1], src.position(mesh), atol=1e-12)
+    # an array of unknown origin: the sources are the field's minimum vertices (here the lowest corner of the face)
+    P = cg.geodesic_path(mesh, d.copy(), 150)
+    assert int(np.argmin(np.linalg.norm(mesh.V - P[-1], axis=1))) in mesh.F[100]
+    np.testing.assert_allclose(cg.geodesic_path(mesh, d.copy(), 150, sources=src)[-1], src.position(mesh), atol=1e-12)
