@@ -279,10 +279,10 @@ def test_directory(tmp_path):
 
 
 def test_unsupported_extension_lists_supported(tmp_path):
-    p = write(tmp_path / "mesh.gltf", "x")
-    with pytest.raises(MeshFormatError, match=r"\.obj, \.off, \.ply, \.stl") as exc:
+    p = write(tmp_path / "mesh.blend", "x")
+    with pytest.raises(MeshFormatError, match=r"\.obj, \.off, \.ply, \.stl, \.glb, \.gltf, \.3mf, \.vtk, \.vtu") as exc:
         load_mesh(p)
-    assert "mesh.gltf" in str(exc.value)
+    assert "mesh.blend" in str(exc.value)
     with pytest.raises(MeshFormatError, match="unsupported"):
         load_mesh(tmp_path / "noext")
 
@@ -469,13 +469,13 @@ def test_save_ply_round_trip(tmp_path, mesh_and_dist):
     assert out == tmp_path / "d.ply"
     header = out.read_bytes().split(b"end_header\n")[0].decode()
     assert "format binary_little_endian 1.0" in header
-    assert "property float x" in header and "property double geo" in header
+    assert "property double x" in header and "property double geo" in header
     assert "property list uchar int vertex_indices" in header
     m2, fields = load_distance_ply(out)
     assert list(fields) == ["geo"]
     np.testing.assert_array_equal(fields["geo"], d)  # float64 exact, inf kept
     np.testing.assert_array_equal(m2.F, m.F)
-    np.testing.assert_array_equal(m2.V, m.V.astype(np.float32))
+    np.testing.assert_array_equal(m2.V, m.V)  # float64 coordinates: exact
     # the file is also a valid mesh for load_mesh
     assert load_mesh(out).n_faces == m.n_faces
 
