@@ -12,7 +12,7 @@ import pytest
 
 import cvxgeodesic._atomic
 import cvxgeodesic.mesh.io as mio
-from cvxgeodesic.errors import MeshError, MeshFormatError, ParameterError
+from cvxgeodesic.errors import MeshError, MeshFormatError, MeshRepairWarning, ParameterError
 from cvxgeodesic.mesh import TriMesh, load_mesh, save_distance
 from cvxgeodesic.mesh.io import load_distance_ply
 
@@ -590,27 +590,13 @@ def test_load_distance_ply_errors(tmp_path):
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "meshes"
 
-# Files whose manifest counts differ from exact welding; each was investigated by hand.
-MANIFEST_DISAGREEMENTS = {
-    # beetle.off has two pairs of distinct vertices at exactly the same position (file vertices 14/386 and 40/387,
-    # on opposite boundary fans); exact welding merges them: 19885 vertices, the manifest lists 19887 (unwelded).
-    "beetle_open.off": "manifest counts vertices before welding 2 exact-duplicate positions (19885 after welding)",
-}
-
-
 def _manifest_rows():
     manifest = SHARED / "MANIFEST.tsv"
     if not manifest.is_file():
         return [pytest.param(None, id="shared-meshes-absent")]
     with manifest.open(newline="") as fh:
         rows = [r for r in csv.DictReader(fh, delimiter="\t") if not r["file"].startswith("thingi10k_small/")]
-    params = []
-    for r in rows:
-        marks = ()
-        if r["file"] in MANIFEST_DISAGREEMENTS:
-            marks = pytest.mark.xfail(strict=True, reason=MANIFEST_DISAGREEMENTS[r["file"]])
-        params.append(pytest.param(r, id=r["file"], marks=marks))
-    return params
+    return [pytest.param(r, id=r["file"]) for r in rows]
 
 
 @pytest.mark.shared
@@ -620,7 +606,12 @@ def test_shared_mesh_counts_match_manifest(row):
         pytest.skip(f"shared meshes not available at {SHARED}")
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # none of these files has degenerate or duplicate faces
+        # beetle.off has two pairs of distinct vertices at exactly the same position (file vertices 14/386 and
+        # 40/387); welding merges them (19885 mesh vertices) and says so; the manifest counts the file's 19887
+        warnings.filterwarnings("ignore", message=r".*vertices in the file", category=MeshRepairWarning)
         m = load_mesh(SHARED / row["file"])
-    assert (m.n_vertices, m.n_faces) == (int(row["vertices"]), int(row["faces"]))
+    # an STL's file vertices are its triangle corners: the manifest counts the welded ones
+    n = m.n_vertices if row["file"].lower().endswith(".stl") else m.n_file_vertices
+    assert (n, m.n_faces) == (int(row["vertices"]), int(row["faces"]))
     assert m.name == Path(row["file"]).name
     assert np.all(np.diff(m.vertex_map) > 0)

@@ -7,6 +7,7 @@ import numbers
 import time
 import warnings
 from dataclasses import asdict, dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -134,6 +135,16 @@ def _unit_mesh(mesh: TriMesh) -> tuple[TriMesh, float]:
     return TriMesh(mesh.V / scale, mesh.F, vertex_map=mesh.vertex_map, name=mesh.name), scale
 
 
+def _is_2d(x: Any) -> bool:
+    """True for a 2-D array_like (a vertex or face array), False for anything else (meshes, sources)."""
+    if isinstance(x, TriMesh | str) or not isinstance(x, np.ndarray | list | tuple) and not hasattr(x, "__array__"):
+        return False
+    try:
+        return np.ndim(x) == 2
+    except ValueError:  # ragged
+        return False
+
+
 def _ipm_available() -> bool:
     try:
         from .solvers import ipm  # noqa: F401
@@ -256,6 +267,8 @@ class GeodesicSolver:
         key = method.lower()
         if key in BASELINE_METHODS:
             self.method = key
+        elif key not in FORMULATIONS and key not in ALIASES:
+            raise ParameterError(f"unknown method {method!r}; choose one of {', '.join(ALL_METHODS)}")
         else:
             self.method = canonical_method(method)
         if not isinstance(solver, str) or solver.lower() not in SOLVERS:
@@ -389,6 +402,10 @@ class GeodesicSolver:
         try:
             if self.solver_name != "ipm":
                 return solve_clarabel(problem, tol=self.tol, max_iter=self.max_iter, verbose=self.verbose)
+            if self.verbose:
+                from ._verbose import ipm_log
+
+                callback = ipm_log(callback)
             try:
                 res = self._ipm.solve(problem, tol=self.tol, max_iter=self.max_iter, callback=callback)
             except SolverError as exc:
@@ -469,18 +486,26 @@ class GeodesicSolver:
         return [self.solve(s) for s in items]
 
 
-def geodesic_distance(mesh, sources, method: str = "qcqp-hessian", m: float = 1.0, solver: str = "auto",
-                      *, lam: float | None = None, tol: float = DEFAULT_TOL, max_iter: int = 200) -> np.ndarray:
+def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | None = None, m: float | None = None,
+                      solver: str | None = None, lam: float | None = None, tol: float = DEFAULT_TOL,
+                      max_iter: int = 200) -> np.ndarray:
     """Geodesic distance field from source vertices (one-shot form of :class:`GeodesicSolver`).
+
+    Two call forms, told apart by the second argument (sources are never a 2-D array):
+
+    - ``geodesic_distance(mesh, sources, method="qcqp-hessian", m=1.0, solver="auto")``;
+    - ``geodesic_distance(V, F, sources, method, m, solver)``: the argument order of
+      potpourri3d and libigl, used when both ``V`` and ``F`` are 2-D arrays.
 
     Parameters
     ----------
-    mesh : TriMesh or tuple (V, F)
-        ``V`` (n, 3) float vertex positions, ``F`` (m, 3) int triangles.
+    mesh : TriMesh, tuple (V, F), file path, trimesh.Trimesh, open3d TriangleMesh or meshio.Mesh
+        See :func:`~cvxgeodesic.mesh.trimesh.as_trimesh`; or ``V``, (n, 3) float vertex
+        positions, followed by ``F``, (m, 3) int triangles.
     sources : int or sequence of int
-        Source vertex indices.
+        Source vertex indices (positional after the mesh, or keyword).
     method, m, solver, lam, tol, max_iter
-        See :class:`GeodesicSolver`.
+        See :class:`GeodesicSolver` (defaults ``"qcqp-hessian"``, 1.0, ``"auto"``).
 
     Returns
     -------
@@ -491,7 +516,8 @@ def geodesic_distance(mesh, sources, method: str = "qcqp-hessian", m: float = 1.
     Raises
     ------
     MeshError, NonManifoldError, ParameterError, SourceError, SolverError, TypeError
-        See :class:`GeodesicSolver` and :meth:`GeodesicSolver.solve`.
+        See :class:`GeodesicSolver` and :meth:`GeodesicSolver.solve`; ``TypeError`` also for
+        missing sources or an argument given both by position and by keyword.
 
     Examples
     --------
@@ -499,7 +525,28 @@ def geodesic_distance(mesh, sources, method: str = "qcqp-hessian", m: float = 1.
     >>> d = cg.geodesic_distance(cg.icosphere(2), 0, method="qclp")
     >>> float(d[0])
     0.0
+    >>> mesh = cg.icosphere(2)
+    >>> bool((cg.geodesic_distance(mesh.V, mesh.F, 0, method="qclp") == d).all())
+    True
     """
+    rest = list(args)
+    if rest and _is_2d(mesh) and _is_2d(rest[0]):  # potpourri3d / libigl order: (V, F, sources, ...)
+        mesh = (mesh, rest.pop(0))
+    names = ("sources", "method", "m", "solver")
+    if len(rest) > len(names):
+        raise TypeError(f"geodesic_distance() takes at most {len(names)} arguments after the mesh")
+    given = dict(zip(names, rest, strict=False))
+    for key, value in (("sources", sources), ("method", method), ("m", m), ("solver", solver)):
+        if value is not None:
+            if key in given:
+                raise TypeError(f"geodesic_distance() got multiple values for argument {key!r}")
+            given[key] = value
+    if "sources" not in given:
+        raise TypeError("geodesic_distance() missing the source vertices: geodesic_distance(mesh, sources)")
+    sources = given["sources"]
+    method = given.get("method", "qcqp-hessian")
+    m = given.get("m", 1.0)
+    solver = given.get("solver", "auto")
     solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter)
     return solver_obj.solve(sources).distance
 

@@ -86,17 +86,13 @@ def file_sources(mesh: TriMesh, sources: ArrayLike) -> np.ndarray:
     Raises
     ------
     SourceError
-        A source is not an integer, is out of the file's range, or is a file vertex in
+        A source is not an integer, is given twice, is out of the file's range, or is a file vertex in
         no face (the mesh dropped it, so it has no distance field).
     """
-    arr = np.atleast_1d(np.asarray(sources))
-    if arr.ndim != 1 or arr.size == 0 or arr.dtype.kind not in "iu":
-        raise SourceError(f"sources must be one or more file vertex indices, got {sources!r}")
-    n_file = mesh.n_file_vertices
-    out_of_range = (arr < 0) | (arr >= n_file)
-    if out_of_range.any():
-        bad = int(arr[np.flatnonzero(out_of_range)[0]])
-        raise SourceError(f"source vertex {bad} is out of range: {mesh.name} has {n_file} vertices (0 to {n_file - 1})")
+    from ..formulations import validate_sources
+
+    # the same checks and messages as the Python API, against the file's vertex count
+    arr = validate_sources(sources, mesh.n_file_vertices)
     idx = mesh.file_index[arr]
     if (idx < 0).any():
         bad = int(arr[np.flatnonzero(idx < 0)[0]])
