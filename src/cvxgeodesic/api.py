@@ -6,10 +6,12 @@ import math
 import numbers
 import time
 import warnings
+from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .errors import ParameterError, SolverError, SourceError
 from .formulations import (
@@ -248,7 +250,7 @@ class GeodesicSolver:
 
     def __init__(
         self,
-        mesh,
+        mesh: Any,
         method: str = "qcqp-hessian",
         *,
         m: float = 1.0,
@@ -295,9 +297,9 @@ class GeodesicSolver:
             self.lam = smoothness_weight(self.mesh, m)
         self.m = None if lam is not None else float(m)
 
-        self._baseline = None
-        self._ops = None
-        self._ipm = None
+        self._baseline: Any = None
+        self._ops: Any = None
+        self._ipm: Any = None
         self._scale = 1.0  # the convex formulations are solved on the mesh divided by this power of two
         self._multires = None
         from .multires import resolve_target
@@ -347,7 +349,7 @@ class GeodesicSolver:
             f"solver={self.solver_name!r}, lam={self.lam:.3g})"
         )
 
-    def solve(self, sources, *, callback=None) -> GeodesicResult:
+    def solve(self, sources: ArrayLike, *, callback: Callable[[int, dict], None] | None = None) -> GeodesicResult:
         """Distance field from one or several source vertices.
 
         Parameters
@@ -465,7 +467,7 @@ class GeodesicSolver:
         )
         return GeodesicResult(distance=d, info=info, sources=src)
 
-    def solve_many(self, sources_list, *, progress: bool = False) -> list[GeodesicResult]:
+    def solve_many(self, sources_list: Iterable[ArrayLike], *, progress: bool = False) -> list[GeodesicResult]:
         """Solve for each entry of ``sources_list`` (each an int or a list of ints), reusing all per-mesh work.
 
         Parameters
@@ -551,7 +553,7 @@ def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | 
     return solver_obj.solve(sources).distance
 
 
-def distance_matrix(mesh, vertices, method: str = "qcqp-hessian", m: float = 1.0, solver: str = "auto",
+def distance_matrix(mesh: Any, vertices: ArrayLike, method: str = "qcqp-hessian", m: float = 1.0, solver: str = "auto",
                     progress: bool = False, *, lam: float | None = None, tol: float = DEFAULT_TOL,
                     max_iter: int = 200, multires: bool | int = False) -> np.ndarray:
     """Distance fields from several vertices, one row per vertex, with one :class:`GeodesicSolver`.

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import tempfile
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 import numpy as np
 
@@ -94,7 +94,7 @@ def read_external(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return V, np.concatenate(parts), np.concatenate(sizes)
 
 
-def write_meshio(fh, V: np.ndarray, F: np.ndarray, d: np.ndarray, name: str, ext: str) -> None:
+def write_meshio(fh: BinaryIO, V: np.ndarray, F: np.ndarray, d: np.ndarray, name: str, ext: str) -> None:
     """Write a VTU (XML, binary) or legacy VTK (binary) file with the field as point data ``name``.
 
     Parameters

@@ -13,8 +13,10 @@ import tempfile
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._atomic import atomic_write
 from ..errors import MeshError, MeshFormatError, MeshRepairWarning, ParameterError
@@ -59,8 +61,8 @@ class _Raw:
     V: np.ndarray
     idx: np.ndarray
     sizes: np.ndarray
-    v_lines: object = None
-    f_lines: object = None
+    v_lines: Any = None
+    f_lines: Any = None
     raw_idx: np.ndarray | None = None
 
 
@@ -155,18 +157,13 @@ def load_mesh(path: str | os.PathLike) -> TriMesh:
         raise _err(
             p, f"unsupported mesh file extension {p.suffix!r}; supported: {', '.join(MESH_EXTENSIONS)} (any case)"
         )
-    if ext in EXTERNAL_MESH_EXTENSIONS:
-        _read_bytes(p, "a mesh file")  # the same messages for missing, directory and empty files
-        V_ext, idx_ext, sizes_ext = read_external(p)
-        data = b""
-
-        def reader(p: Path, data: bytes) -> _Raw:
-            return _Raw(V_ext, idx_ext, sizes_ext)
-    else:
-        data = _read_bytes(p, "a mesh file")
-        reader = {".obj": _read_obj, ".off": _read_off, ".ply": _read_ply_raw, ".stl": _read_stl}[ext]
     try:
-        raw = reader(p, data)
+        if ext in EXTERNAL_MESH_EXTENSIONS:
+            _read_bytes(p, "a mesh file")  # the same messages for missing, directory and empty files
+            raw = _Raw(*read_external(p))
+        else:
+            data = _read_bytes(p, "a mesh file")
+            raw = {".obj": _read_obj, ".off": _read_off, ".ply": _read_ply_raw, ".stl": _read_stl}[ext](p, data)
         V, F, vertex_map, file_index, dropped, notes = _finish(p, raw)
         return TriMesh(V, F, vertex_map=vertex_map, file_index=file_index, dropped_vertices=dropped, notes=notes,
                        name=p.name)
@@ -861,7 +858,7 @@ def _read_stl_ascii(path: Path, data: bytes) -> _Raw:
 _NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*\Z")
 
 
-def save_distance(path: str | os.PathLike, mesh: object, distance: object, *, name: str = "distance",
+def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, name: str = "distance",
                   file_order: bool = False) -> Path:
     """Write a per-vertex distance field, atomically.
 
@@ -940,7 +937,7 @@ def save_distance(path: str | os.PathLike, mesh: object, distance: object, *, na
     return p
 
 
-def check_output_path(path, extensions=DISTANCE_EXTENSIONS) -> Path:
+def check_output_path(path: str | os.PathLike, extensions: tuple[str, ...] = DISTANCE_EXTENSIONS) -> Path:
     """Check that ``path`` can be written before expensive work produces its content.
 
     Parameters
@@ -1019,7 +1016,7 @@ def _write_csv(fh, mesh: TriMesh, d: np.ndarray, name: str, vertex: np.ndarray) 
     fh.write(body.encode("ascii"))
 
 
-def load_distance_ply(path) -> tuple[TriMesh, dict[str, np.ndarray]]:
+def load_distance_ply(path: str | os.PathLike) -> tuple[TriMesh, dict[str, np.ndarray]]:
     """Read a PLY file written by :func:`save_distance`, without welding.
 
     Parameters

@@ -232,7 +232,7 @@ class TriMesh:
         mask[self.F.ravel()] = True
         return mask
 
-    def connected_to(self, sources) -> np.ndarray:
+    def connected_to(self, sources: ArrayLike) -> np.ndarray:
         """Vertices connected to at least one of ``sources`` through the edge graph.
 
         Parameters
@@ -380,7 +380,7 @@ def as_trimesh(mesh: Any, name: str = "mesh") -> TriMesh:
     )
 
 
-def as_vertex_field(values, name: str, n: int | None = None) -> np.ndarray:
+def as_vertex_field(values: ArrayLike, name: str, n: int | None = None) -> np.ndarray:
     """Return ``values`` as a (n,) float64 array, or raise a ParameterError naming ``name``.
 
     Parameters
