@@ -7,6 +7,8 @@ error names the package to install.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import tempfile
 from pathlib import Path
 from typing import Any, BinaryIO
@@ -74,11 +76,14 @@ def read_external(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             V = np.asarray(tm.vertices, dtype=np.float64)
             F = np.asarray(tm.faces, dtype=np.int64)
             return V, F.ravel(), np.full(F.shape[0], 3, dtype=np.int64)
-        mm = lib.read(str(path))
+        # meshio prints its own error and calls sys.exit(1) on files it cannot parse
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+            mm = lib.read(str(path))
     except MeshFormatError:
         raise
-    except Exception as exc:  # the libraries raise anything from KeyError to their own ReadError
-        raise MeshFormatError(f"{path}: {pkg} cannot read the file ({type(exc).__name__}: {exc})") from None
+    except (Exception, SystemExit) as exc:  # anything from KeyError to their own ReadError, and meshio's exit
+        detail = f"{type(exc).__name__}: {exc}" if not isinstance(exc, SystemExit) else "not a valid file"
+        raise MeshFormatError(f"{path}: {pkg} cannot read the file ({detail})") from None
     V = np.asarray(mm.points, dtype=np.float64)
     if V.ndim == 2 and V.shape[1] == 2:
         V = np.column_stack([V, np.zeros(V.shape[0])])
