@@ -9,13 +9,12 @@ import numpy as np
 import pytest
 
 import cvxgeodesic as cg
+from conftest import shared_mesh_path
 from cvxgeodesic.batch import solve_one
 from cvxgeodesic.cli import main
 from cvxgeodesic.errors import MeshRepairWarning, ParameterError, SourceError
 from cvxgeodesic.mesh.fileorder import file_order_mesh, file_sources
 from cvxgeodesic.mesh.io import load_distance_ply
-
-from conftest import shared_mesh_path
 
 PLANE = cg.grid_plane(4, jitter=0.05)  # 25 vertices, 32 faces
 
