@@ -44,4 +44,4 @@ report: $(STAMP)
 	$(PY) benchmarks/report.py --out docs
 
 clean:
-	rm -rf $(VENV) $(OUT) build src/*.egg-info .pytest_cache .ruff_cache
+	rm -rf $(VENV) $(OUT) build dist src/*.egg-info .pytest_cache .ruff_cache .mypy_cache

@@ -261,7 +261,7 @@ class GeodesicSolver:
         verbose: bool = False,
         multires: bool | int = False,
         multires_polish: bool = False,
-    ):
+    ) -> None:
         t0 = time.perf_counter()
         self.mesh: TriMesh = as_trimesh(mesh)
         if not isinstance(method, str):

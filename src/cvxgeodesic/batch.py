@@ -339,7 +339,7 @@ def _check_scheduler(address: str, timeout: float = PROBE_TIMEOUT) -> None:
     and a server that never speaks makes it wait. A scheduler sends its handshake as soon
     as a connection opens, a small message whose 8-byte little-endian length comes
     first; this checks exactly that, within ``2 * timeout`` seconds. Only plain TCP
-    addresses (``tcp://host:port`` or ``host:port``) are checked; others go to Dask.
+    addresses (``tcp://SCHEDULER:8786`` or ``host:port``) are checked; others go to Dask.
 
     Raises
     ------
@@ -371,6 +371,8 @@ def _check_scheduler(address: str, timeout: float = PROBE_TIMEOUT) -> None:
                     raise ConnectionError(f"{what} closed the connection without a Dask handshake: "
                                           "is it a Dask scheduler?")
                 head += chunk
+    except (ConnectionRefusedError, ConnectionResetError, ConnectionAbortedError) as exc:
+        raise ConnectionError(f"cannot connect to {what}: {exc.strerror or exc}") from None
     except TimeoutError:
         raise ConnectionError(f"{what} did not answer within {timeout:g} s: is it a Dask scheduler "
                               "(dask scheduler --port 8786), and reachable?") from None
