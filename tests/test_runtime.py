@@ -147,7 +147,9 @@ def test_ctrl_c_in_batch_is_one_line_and_exit_130(tmp_path):
         cg.save_distance(meshes / f"m{i}.ply", big, np.zeros(big.n_vertices))
     cmd = [sys.executable, "-m", "cvxgeodesic.cli", "batch", str(meshes / "*.ply"), "-s", "0", "--out",
            str(tmp_path / "out"), "--solver", "clarabel", "--workers", "2"]
-    env = dict(os.environ, PYTHONPATH=str(ROOT / "src") + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    # the package under test: the checkout's src/ when it has one, else the installed one
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(Path(cg.__file__).parents[1]),
+                                                       os.environ.get("PYTHONPATH", "")]))
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, start_new_session=True)
     deadline = time.time() + 60
     while time.time() < deadline and not (tmp_path / "out").is_dir():  # the cluster is up once OUT exists
@@ -165,6 +167,7 @@ def test_ctrl_c_in_batch_is_one_line_and_exit_130(tmp_path):
     assert elapsed < 5, elapsed
 
 
+@pytest.mark.skipif(not (ROOT / "README.md").is_file(), reason="needs the source checkout")
 def test_docs_use_a_placeholder_scheduler_address():
     files = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md")), *sorted((ROOT / "src").rglob("*.py"))]
     found = []
