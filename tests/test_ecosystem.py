@@ -204,3 +204,18 @@ def test_cli_writes_vtu(tmp_path, capsys):
     assert main(["distance", str(src), "-s", "0", "--method", "dijkstra", "-q", "-o", str(out)]) == 0
     np.testing.assert_array_equal(meshio.read(out).point_data["distance"],
                                   cg.geodesic_distance(SPHERE, 0, method="dijkstra"))
+
+
+def test_open3d_reads_the_field_and_takes_a_copy_of_the_vertices(tmp_path):
+    o3d = pytest.importorskip("open3d")
+    d = _field(SPHERE)
+    path = cg.save_distance(tmp_path / "d.ply", SPHERE, d)
+    pc = o3d.t.io.read_point_cloud(str(path))  # the tensor PLY reader that keeps custom properties
+    np.testing.assert_array_equal(pc.point["distance"].numpy().ravel(), d)
+    np.testing.assert_array_equal(pc.point["positions"].numpy(), SPHERE.V)
+    with pytest.raises(ValueError, match="not writeable"):
+        o3d.utility.Vector3dVector(SPHERE.V)
+    tm = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(SPHERE.V.copy()),
+                                   o3d.utility.Vector3iVector(SPHERE.F.astype(np.int32)))
+    np.testing.assert_array_equal(cg.geodesic_distance(tm, 0, method="dijkstra"),
+                                  cg.geodesic_distance(SPHERE, 0, method="dijkstra"))
