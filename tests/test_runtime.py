@@ -151,13 +151,18 @@ def test_ctrl_c_in_batch_is_one_line_and_exit_130(tmp_path):
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(Path(cg.__file__).parents[1]),
                                                        os.environ.get("PYTHONPATH", "")]))
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, start_new_session=True)
+    chunks: list[bytes] = []
+    reader = threading.Thread(target=lambda: chunks.extend(iter(lambda: proc.stderr.read1(4096), b"")), daemon=True)
+    reader.start()
     deadline = time.time() + 60
-    while time.time() < deadline and not (tmp_path / "out").is_dir():  # the cluster is up once OUT exists
-        time.sleep(0.2)
-    time.sleep(4.0)  # workers started, solves running
+    while time.time() < deadline and b"meshes:" not in b"".join(chunks):  # the bar appears once tasks are submitted
+        time.sleep(0.1)
+    time.sleep(1.5)  # solves running
     t0 = time.time()
     os.killpg(proc.pid, signal.SIGINT)  # what Ctrl-C in a terminal does: the whole process group
-    _, err = proc.communicate(timeout=60)
+    proc.wait(timeout=60)
+    reader.join(timeout=10)
+    err = b"".join(chunks)
     elapsed = time.time() - t0
     text = err.decode()
     lines = [ln for ln in re.split(r"[\r\n]+", text) if ln.strip() and not ln.lstrip().startswith("meshes:")]

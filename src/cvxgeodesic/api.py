@@ -160,8 +160,8 @@ class GeodesicSolver:
 
     Parameters
     ----------
-    mesh : TriMesh or tuple (V, F)
-        ``V`` (n, 3) float, ``F`` (m, 3) int.
+    mesh : TriMesh, tuple (V, F), file path, trimesh.Trimesh, open3d TriangleMesh or meshio.Mesh
+        ``V`` (n, 3) float, ``F`` (m, 3) int (see :func:`~cvxgeodesic.mesh.trimesh.as_trimesh`).
     method : str
         One of :data:`ALL_METHODS`: the eight convex formulations
         (``"lclp"``, ``"lcqp-dirichlet"``, ``"lcqp-laplacian"``, ``"lcqp-hessian"``
@@ -220,7 +220,7 @@ class GeodesicSolver:
     ParameterError
         Unknown method or solver, invalid ``m``, ``lam``, ``tol`` or ``max_iter``.
     TypeError
-        ``mesh`` is neither a TriMesh nor a ``(V, F)`` tuple.
+        ``mesh`` is none of the accepted kinds.
 
     Warns
     -----
