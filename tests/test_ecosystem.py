@@ -137,6 +137,18 @@ def test_missing_library_gives_the_install_hint(tmp_path, monkeypatch, ext, pkg)
         cg.load_mesh(path)
 
 
+def test_3mf_without_networkx_names_it(tmp_path, monkeypatch):
+    trimesh = pytest.importorskip("trimesh")
+    path = tmp_path / "m.3mf"
+    try:
+        trimesh.Trimesh(SPHERE.V, SPHERE.F, process=False).export(path)
+    except ImportError:  # trimesh's 3MF writer needs networkx and lxml as well
+        path.write_bytes(b"PK not really a 3mf")
+    monkeypatch.setitem(sys.modules, "networkx", None)
+    with pytest.raises(MeshFormatError, match="networkx"):
+        cg.load_mesh(path)
+
+
 def test_unreadable_external_file_is_a_mesh_format_error(tmp_path):
     pytest.importorskip("meshio")
     path = tmp_path / "junk.vtu"

@@ -83,6 +83,8 @@ def read_external(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         raise
     except (Exception, SystemExit) as exc:  # anything from KeyError to their own ReadError, and meshio's exit
         detail = f"{type(exc).__name__}: {exc}" if not isinstance(exc, SystemExit) else "not a valid file"
+        if isinstance(exc, ImportError) and ext == ".3mf":  # trimesh's 3MF reader needs networkx
+            detail += "; 3MF files need networkx too: pip install networkx"
         raise MeshFormatError(f"{path}: {pkg} cannot read the file ({detail})") from None
     V = np.asarray(mm.points, dtype=np.float64)
     if V.ndim == 2 and V.shape[1] == 2:
