@@ -31,6 +31,7 @@ demo: $(STAMP)
 
 test: $(STAMP)
 	$(VENV)/bin/ruff check .
+	$(VENV)/bin/mypy
 	$(PY) -m pytest -m "not slow" -q
 
 test-all: $(STAMP)
@@ -43,4 +44,4 @@ report: $(STAMP)
 	$(PY) benchmarks/report.py --out docs
 
 clean:
-	rm -rf $(VENV) $(OUT) build src/*.egg-info .pytest_cache .ruff_cache
+	rm -rf $(VENV) $(OUT) build dist src/*.egg-info .pytest_cache .ruff_cache .mypy_cache

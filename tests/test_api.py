@@ -47,7 +47,8 @@ def test_bad_sources(sphere, sources, match):
 
 @pytest.mark.parametrize(
     "kwargs, match",
-    [({"method": "nope"}, "unknown formulation"), ({"solver": "mosek"}, "unknown solver"),
+    [({"method": "nope"}, "unknown method .nope.; choose one of lclp, .*, qgdf, dijkstra, fmm, heat, exact"),
+     ({"solver": "mosek"}, "unknown solver"),
      ({"m": -1.0}, "m must be"), ({"m": float("nan")}, "m must be"), ({"lam": -2.0}, "lam must be"),
      ({"tol": 0.0}, "tol"), ({"max_iter": 0}, "max_iter")],
 )
@@ -64,6 +65,8 @@ def test_bad_mesh_arrays():
     with pytest.raises(MeshError, match="non-finite"):
         cg.geodesic_distance(([[0, 0, np.nan], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]]), 0)
     with pytest.raises(TypeError, match="TriMesh"):
+        cg.geodesic_distance(object(), 0)
+    with pytest.raises(MeshFormatError, match="no such file"):  # a path is read with load_mesh
         cg.geodesic_distance("mesh.obj", 0)
 
 

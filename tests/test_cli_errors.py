@@ -130,13 +130,13 @@ def test_nonmanifold_mesh_solves_with_the_laplacian_and_warnings_are_one_line(fi
     rc, err = run_cli(["distance", files["book"], "-s", "3", "--method", "qcqp-laplacian", "--solver", "clarabel",
                        "-o", out], capsys)
     assert rc == 0 and np.all(np.isfinite(np.load(out)))
-    # a zero-area face: solved, with a one-line warning instead of a file:line report
+    # a zero-area face: solved, with a one-line note instead of a file:line warning report
     V = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.5, 0.5, 0], [1, 1, 0]]
     sliver = write_off(tmp_path / "sliver.off", V, [[0, 1, 3], [0, 3, 2], [1, 4, 3], [3, 4, 2], [1, 2, 3]])
     rc, err = run_cli(["distance", sliver, "-s", "0", "--method", "qclp", "--solver", "clarabel", "-q", "-o", out],
                       capsys)
     assert rc == 0 and np.all(np.isfinite(np.load(out)))
-    assert len(err) == 1 and err[0].startswith("cvxgeodesic: warning: sliver.off: 1 degenerate face"), err
+    assert len(err) == 1 and err[0].startswith("cvxgeodesic: note: sliver.off: 1 degenerate face"), err
 
 
 def test_debug_flag_shows_the_traceback(files, tmp_path, capsys):

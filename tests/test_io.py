@@ -12,7 +12,7 @@ import pytest
 
 import cvxgeodesic._atomic
 import cvxgeodesic.mesh.io as mio
-from cvxgeodesic.errors import MeshError, MeshFormatError, ParameterError
+from cvxgeodesic.errors import MeshError, MeshFormatError, MeshRepairWarning, ParameterError
 from cvxgeodesic.mesh import TriMesh, load_mesh, save_distance
 from cvxgeodesic.mesh.io import load_distance_ply
 
@@ -279,10 +279,10 @@ def test_directory(tmp_path):
 
 
 def test_unsupported_extension_lists_supported(tmp_path):
-    p = write(tmp_path / "mesh.gltf", "x")
-    with pytest.raises(MeshFormatError, match=r"\.obj, \.off, \.ply, \.stl") as exc:
+    p = write(tmp_path / "mesh.blend", "x")
+    with pytest.raises(MeshFormatError, match=r"\.obj, \.off, \.ply, \.stl, \.glb, \.gltf, \.3mf, \.vtk, \.vtu") as exc:
         load_mesh(p)
-    assert "mesh.gltf" in str(exc.value)
+    assert "mesh.blend" in str(exc.value)
     with pytest.raises(MeshFormatError, match="unsupported"):
         load_mesh(tmp_path / "noext")
 
@@ -469,13 +469,13 @@ def test_save_ply_round_trip(tmp_path, mesh_and_dist):
     assert out == tmp_path / "d.ply"
     header = out.read_bytes().split(b"end_header\n")[0].decode()
     assert "format binary_little_endian 1.0" in header
-    assert "property float x" in header and "property double geo" in header
+    assert "property double x" in header and "property double geo" in header
     assert "property list uchar int vertex_indices" in header
     m2, fields = load_distance_ply(out)
     assert list(fields) == ["geo"]
     np.testing.assert_array_equal(fields["geo"], d)  # float64 exact, inf kept
     np.testing.assert_array_equal(m2.F, m.F)
-    np.testing.assert_array_equal(m2.V, m.V.astype(np.float32))
+    np.testing.assert_array_equal(m2.V, m.V)  # float64 coordinates: exact
     # the file is also a valid mesh for load_mesh
     assert load_mesh(out).n_faces == m.n_faces
 
@@ -590,27 +590,13 @@ def test_load_distance_ply_errors(tmp_path):
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "meshes"
 
-# Files whose manifest counts differ from exact welding; each was investigated by hand.
-MANIFEST_DISAGREEMENTS = {
-    # beetle.off has two pairs of distinct vertices at exactly the same position (file vertices 14/386 and 40/387,
-    # on opposite boundary fans); exact welding merges them: 19885 vertices, the manifest lists 19887 (unwelded).
-    "beetle_open.off": "manifest counts vertices before welding 2 exact-duplicate positions (19885 after welding)",
-}
-
-
 def _manifest_rows():
     manifest = SHARED / "MANIFEST.tsv"
     if not manifest.is_file():
         return [pytest.param(None, id="shared-meshes-absent")]
     with manifest.open(newline="") as fh:
         rows = [r for r in csv.DictReader(fh, delimiter="\t") if not r["file"].startswith("thingi10k_small/")]
-    params = []
-    for r in rows:
-        marks = ()
-        if r["file"] in MANIFEST_DISAGREEMENTS:
-            marks = pytest.mark.xfail(strict=True, reason=MANIFEST_DISAGREEMENTS[r["file"]])
-        params.append(pytest.param(r, id=r["file"], marks=marks))
-    return params
+    return [pytest.param(r, id=r["file"]) for r in rows]
 
 
 @pytest.mark.shared
@@ -620,7 +606,12 @@ def test_shared_mesh_counts_match_manifest(row):
         pytest.skip(f"shared meshes not available at {SHARED}")
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # none of these files has degenerate or duplicate faces
+        # beetle.off has two pairs of distinct vertices at exactly the same position (file vertices 14/386 and
+        # 40/387); welding merges them (19885 mesh vertices) and says so; the manifest counts the file's 19887
+        warnings.filterwarnings("ignore", message=r".*vertices in the file", category=MeshRepairWarning)
         m = load_mesh(SHARED / row["file"])
-    assert (m.n_vertices, m.n_faces) == (int(row["vertices"]), int(row["faces"]))
+    # an STL's file vertices are its triangle corners: the manifest counts the welded ones
+    n = m.n_vertices if row["file"].lower().endswith(".stl") else m.n_file_vertices
+    assert (n, m.n_faces) == (int(row["vertices"]), int(row["faces"]))
     assert m.name == Path(row["file"]).name
     assert np.all(np.diff(m.vertex_map) > 0)

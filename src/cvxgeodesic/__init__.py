@@ -25,6 +25,7 @@ from .errors import (
     IndefiniteEnergyWarning,
     MeshError,
     MeshFormatError,
+    MeshRepairWarning,
     NonManifoldError,
     ParameterError,
     SolverError,
@@ -32,6 +33,7 @@ from .errors import (
 )
 from .formulations import FORMULATIONS, smoothness_weight
 from .mesh import TriMesh, cylinder, grid_plane, icosphere
+from .mesh.fileorder import to_file_order
 from .mesh.io import load_mesh, save_distance
 from .paths import distance_at, geodesic_path
 from .sources import SurfaceCurve, SurfacePoint, surface_point
@@ -41,8 +43,18 @@ __version__ = "0.1.0"
 __all__ = [
     "ALL_METHODS", "BASELINE_METHODS", "FORMULATIONS", "CvxGeodesicError", "DegenerateFacesWarning",
     "IndefiniteEnergyWarning", "GeodesicResult", "GeodesicSolver",
-    "MeshError", "MeshFormatError", "NonManifoldError", "ParameterError", "SolveInfo", "SolverError", "SourceError",
+    "MeshError", "MeshFormatError", "MeshRepairWarning",
+    "NonManifoldError", "ParameterError", "SolveInfo", "SolverError", "SourceError",
     "TriMesh", "cylinder", "distance_matrix", "geodesic_distance", "grid_plane", "icosphere", "load_mesh",
-    "save_distance", "smoothness_weight", "SurfaceCurve", "SurfacePoint", "surface_point", "distance_at",
-    "geodesic_path",
+    "plot_field", "save_distance", "smoothness_weight", "to_file_order", "SurfaceCurve", "SurfacePoint",
+    "surface_point", "distance_at", "geodesic_path",
 ]
+
+
+def __getattr__(name: str) -> object:
+    # plot_field needs matplotlib, which costs ~0.3 s to import: only on first use
+    if name == "plot_field":
+        from .plotting import plot_field
+
+        return plot_field
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

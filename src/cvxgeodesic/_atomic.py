@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import os
 import secrets
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import BinaryIO
 
@@ -49,3 +50,40 @@ def atomic_write(target: str | os.PathLike, write: Callable[[BinaryIO], None]) -
             pass
         raise
     return target
+
+
+@contextmanager
+def output_set(*targets: str | os.PathLike) -> Iterator[list[Path]]:
+    """Temporary paths for several outputs that must appear together: all of them, or none.
+
+    Yields one temporary path per target, next to it and with the same suffix (so writers
+    that check the extension accept it). When the block ends normally, every temporary file
+    is renamed over its target; when it raises (KeyboardInterrupt included), every
+    temporary file is removed and no target changes. A failure between two renames (the
+    disk vanishing) can still leave the first target replaced.
+
+    Parameters
+    ----------
+    *targets : str or os.PathLike
+        Final paths; their directories must exist.
+
+    Yields
+    ------
+    list of pathlib.Path
+        The temporary paths, in the order of ``targets``.
+    """
+    finals = [Path(t) for t in targets]
+    tmps = [p.parent / f".{p.stem}.{secrets.token_hex(4)}.part{p.suffix}" for p in finals]
+    try:
+        yield tmps
+        missing = [str(f) for f, t in zip(finals, tmps, strict=True) if not t.exists()]
+        if missing:
+            raise RuntimeError(f"output_set: nothing was written for {', '.join(missing)}")
+        for final, tmp in zip(finals, tmps, strict=True):
+            os.replace(tmp, final)
+    finally:
+        for tmp in tmps:
+            try:
+                os.unlink(tmp)
+            except FileNotFoundError:
+                pass

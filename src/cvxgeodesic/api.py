@@ -6,9 +6,12 @@ import math
 import numbers
 import time
 import warnings
+from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass, field
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .errors import ParameterError, SolverError, SourceError
 from .formulations import (
@@ -116,9 +119,9 @@ class GeodesicResult:
     distance: np.ndarray
     info: SolveInfo
     sources: np.ndarray
-    source_set: object = None
+    source_set: Any = None
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.source_set is not None:  # geodesic_path(mesh, result.distance, ...) then knows the sources
             from .sources import remember_sources
 
@@ -147,6 +150,16 @@ def _unit_mesh(mesh: TriMesh) -> tuple[TriMesh, float]:
     return TriMesh(mesh.V / scale, mesh.F, vertex_map=mesh.vertex_map, name=mesh.name), scale
 
 
+def _is_2d(x: Any) -> bool:
+    """True for a 2-D array_like (a vertex or face array), False for anything else (meshes, sources)."""
+    if isinstance(x, TriMesh | str) or not isinstance(x, np.ndarray | list | tuple) and not hasattr(x, "__array__"):
+        return False
+    try:
+        return np.ndim(x) == 2
+    except ValueError:  # ragged
+        return False
+
+
 def _ipm_available() -> bool:
     try:
         from .solvers import ipm  # noqa: F401
@@ -160,8 +173,8 @@ class GeodesicSolver:
 
     Parameters
     ----------
-    mesh : TriMesh or tuple (V, F)
-        ``V`` (n, 3) float, ``F`` (m, 3) int.
+    mesh : TriMesh, tuple (V, F), file path, trimesh.Trimesh, open3d TriangleMesh or meshio.Mesh
+        ``V`` (n, 3) float, ``F`` (m, 3) int (see :func:`~cvxgeodesic.mesh.trimesh.as_trimesh`).
     method : str
         One of :data:`ALL_METHODS`: the eight convex formulations
         (``"lclp"``, ``"lcqp-dirichlet"``, ``"lcqp-laplacian"``, ``"lcqp-hessian"``
@@ -228,7 +241,7 @@ class GeodesicSolver:
     ParameterError
         Unknown method or solver, invalid ``m``, ``lam``, ``tol`` or ``max_iter``.
     TypeError
-        ``mesh`` is neither a TriMesh nor a ``(V, F)`` tuple.
+        ``mesh`` is none of the accepted kinds.
 
     Warns
     -----
@@ -258,7 +271,7 @@ class GeodesicSolver:
 
     def __init__(
         self,
-        mesh,
+        mesh: Any,
         method: str = "qcqp-hessian",
         *,
         m: float = 1.0,
@@ -270,7 +283,7 @@ class GeodesicSolver:
         multires: bool | int = False,
         multires_polish: bool = False,
         normalization: str = "area",
-    ):
+    ) -> None:
         t0 = time.perf_counter()
         self.mesh: TriMesh = as_trimesh(mesh)
         if not isinstance(method, str):
@@ -278,6 +291,8 @@ class GeodesicSolver:
         key = method.lower()
         if key in BASELINE_METHODS:
             self.method = key
+        elif key not in FORMULATIONS and key not in ALIASES:
+            raise ParameterError(f"unknown method {method!r}; choose one of {', '.join(ALL_METHODS)}")
         else:
             self.method = canonical_method(method)
         if not isinstance(solver, str) or solver.lower() not in SOLVERS:
@@ -305,11 +320,12 @@ class GeodesicSolver:
                 raise ParameterError(f"m must be a finite number >= 0, got {m!r}")
             self.lam = smoothness_weight(self.mesh, m, self.normalization, self.energy or "hessian")
         self.m = None if lam is not None else float(m)
-        self.notes: list[str] = []  # substitutions made for every solve of this object (copied into SolveInfo)
+        # substitutions made for every solve of this object (copied into SolveInfo): the loader's repairs first
+        self.notes: list[str] = list(getattr(self.mesh, "notes", ()))
 
-        self._baseline = None
-        self._ops = None
-        self._ipm = None
+        self._baseline: Any = None
+        self._ops: Any = None
+        self._ipm: Any = None
         self._scale = 1.0  # the convex formulations are solved on the mesh divided by this power of two
         self._multires = None
         from .multires import resolve_target
@@ -336,6 +352,7 @@ class GeodesicSolver:
             if self._multires is None or self._multires.polish:  # the fine mesh's own operators and solver
                 unit_mesh, self._scale = _unit_mesh(self.mesh)
                 self._ops = MeshOperators(unit_mesh)
+                self._ops.notes[0:0] = self.notes
                 self.notes = self._ops.notes  # the operators add their substitutions as they build
                 if self.energy is not None:
                     self._ops.energy(self.energy)  # builds it now (PSD check, manifold cover)
@@ -359,7 +376,7 @@ class GeodesicSolver:
             f"solver={self.solver_name!r}, lam={self.lam:.3g})"
         )
 
-    def solve(self, sources, *, callback=None) -> GeodesicResult:
+    def solve(self, sources: ArrayLike, *, callback: Callable[[int, dict], None] | None = None) -> GeodesicResult:
         """Distance field from one or several source vertices.
 
         Parameters
@@ -397,9 +414,10 @@ class GeodesicSolver:
             d, binfo = solve_baseline_sources(self._baseline, sset)
             info = SolveInfo(method=self.method, solver=str(binfo.pop("solver")), status="optimal",
                              setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
-                             n_unreachable=int(np.isinf(d).sum()), extra=binfo)
+                             n_unreachable=int(np.isinf(d).sum()), notes=list(self.notes), extra=binfo)
             return GeodesicResult(distance=d, info=info, sources=sset.vertices, source_set=sset)
         if self.is_baseline:
+            src = sset.vertices
             if len(src) > 1 and not self._baseline.supports_multiple_sources:
                 raise SourceError(f"method {self.method!r} supports a single source only")
             d, binfo = self._baseline.solve(src)
@@ -407,7 +425,7 @@ class GeodesicSolver:
             info = SolveInfo(
                 method=self.method, solver=str(binfo.get("solver", self.method)), status=binfo.get("status", "optimal"),
                 iterations=int(binfo.get("iterations", 0)), setup_time=self.setup_time,
-                solve_time=time.perf_counter() - t0, n_unreachable=int(np.isinf(d).sum()),
+                solve_time=time.perf_counter() - t0, n_unreachable=int(np.isinf(d).sum()), notes=list(self.notes),
                 extra={k: v for k, v in binfo.items() if k not in ("solver", "status", "iterations")},
             )
             return GeodesicResult(distance=d, info=info, sources=src)
@@ -416,7 +434,7 @@ class GeodesicSolver:
             if not sset.vertex_only:
                 raise SourceError("multires takes vertex sources only; solve point, curve and boundary sources "
                                   "without multires")
-            return self._multires.solve(self, src, callback=callback)
+            return self._multires.solve(self, sset.vertices, callback=callback)
         res = self._solve_direct(src, t0, callback)
         if self._multires_skipped:
             res.info.extra["multires"] = {"coarse_faces": self.mesh.n_faces, "polished": True,
@@ -431,6 +449,10 @@ class GeodesicSolver:
         try:
             if self.solver_name != "ipm":
                 return solve_clarabel(problem, tol=self.tol, max_iter=self.max_iter, verbose=self.verbose)
+            if self.verbose:
+                from ._verbose import ipm_log
+
+                callback = ipm_log(callback)
             try:
                 res = self._ipm.solve(problem, tol=self.tol, max_iter=self.max_iter, callback=callback)
             except SolverError as exc:
@@ -469,7 +491,7 @@ class GeodesicSolver:
         res.extra = dict(res.extra, ipm_failure=ipm_status)
         return res
 
-    def _solve_direct(self, src: np.ndarray, t0: float, callback=None) -> GeodesicResult:
+    def _solve_direct(self, src: Any, t0: float, callback=None) -> GeodesicResult:
         """Solve the formulation on this mesh (no multires); ``t0`` starts the solve clock."""
         # on the mesh scaled by 1/s, the field d/s minimizes (objective)/s when lambda becomes lambda/s
         stretch = "area" if self.normalization == "area" else "calibrated"
@@ -503,7 +525,7 @@ class GeodesicSolver:
             return GeodesicResult(distance=d, info=info, sources=src)
         return GeodesicResult(distance=d, info=info, sources=src.vertices, source_set=src)
 
-    def solve_many(self, sources_list, *, progress: bool = False) -> list[GeodesicResult]:
+    def solve_many(self, sources_list: Iterable[Any], *, progress: bool = False) -> list[GeodesicResult]:
         """Solve for each entry of ``sources_list`` (each anything :meth:`solve` takes), reusing all per-mesh work.
 
         Parameters
@@ -524,22 +546,29 @@ class GeodesicSolver:
         return [self.solve(s) for s in items]
 
 
-def geodesic_distance(mesh, sources, method: str = "qcqp-hessian", m: float = 1.0, solver: str = "auto",
-                      *, lam: float | None = None, tol: float = DEFAULT_TOL, max_iter: int = 200,
-                      normalization: str = "area") -> np.ndarray:
+def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | None = None, m: float | None = None,
+                      solver: str | None = None, lam: float | None = None, tol: float = DEFAULT_TOL,
+                      max_iter: int = 200, normalization: str = "area") -> np.ndarray:
     """Geodesic distance field from source vertices (one-shot form of :class:`GeodesicSolver`).
+
+    Two call forms, told apart by the second argument (sources are never a 2-D array):
+
+    - ``geodesic_distance(mesh, sources, method="qcqp-hessian", m=1.0, solver="auto")``;
+    - ``geodesic_distance(V, F, sources, method, m, solver)``: the argument order of
+      potpourri3d and libigl, used when both ``V`` and ``F`` are 2-D arrays.
 
     ``sources`` may also be SurfacePoints, SurfaceCurves, ``"boundary"`` or a list mixing them
     with vertex indices (see :meth:`GeodesicSolver.solve` and ``docs/sources.md``).
 
     Parameters
     ----------
-    mesh : TriMesh or tuple (V, F)
-        ``V`` (n, 3) float vertex positions, ``F`` (m, 3) int triangles.
+    mesh : TriMesh, tuple (V, F), file path, trimesh.Trimesh, open3d TriangleMesh or meshio.Mesh
+        See :func:`~cvxgeodesic.mesh.trimesh.as_trimesh`; or ``V``, (n, 3) float vertex
+        positions, followed by ``F``, (m, 3) int triangles.
     sources : int or sequence of int
-        Source vertex indices.
+        Source vertex indices (positional after the mesh, or keyword), or surface sources.
     method, m, solver, lam, tol, max_iter, normalization
-        See :class:`GeodesicSolver`.
+        See :class:`GeodesicSolver` (defaults ``"qcqp-hessian"``, 1.0, ``"auto"``).
 
     Returns
     -------
@@ -550,7 +579,8 @@ def geodesic_distance(mesh, sources, method: str = "qcqp-hessian", m: float = 1.
     Raises
     ------
     MeshError, NonManifoldError, ParameterError, SourceError, SolverError, TypeError
-        See :class:`GeodesicSolver` and :meth:`GeodesicSolver.solve`.
+        See :class:`GeodesicSolver` and :meth:`GeodesicSolver.solve`; ``TypeError`` also for
+        missing sources or an argument given both by position and by keyword.
 
     Examples
     --------
@@ -558,13 +588,34 @@ def geodesic_distance(mesh, sources, method: str = "qcqp-hessian", m: float = 1.
     >>> d = cg.geodesic_distance(cg.icosphere(2), 0, method="qclp")
     >>> float(d[0])
     0.0
+    >>> mesh = cg.icosphere(2)
+    >>> bool((cg.geodesic_distance(mesh.V, mesh.F, 0, method="qclp") == d).all())
+    True
     """
+    rest = list(args)
+    if rest and _is_2d(mesh) and _is_2d(rest[0]):  # potpourri3d / libigl order: (V, F, sources, ...)
+        mesh = (mesh, rest.pop(0))
+    names = ("sources", "method", "m", "solver")
+    if len(rest) > len(names):
+        raise TypeError(f"geodesic_distance() takes at most {len(names)} arguments after the mesh")
+    given = dict(zip(names, rest, strict=False))
+    for key, value in (("sources", sources), ("method", method), ("m", m), ("solver", solver)):
+        if value is not None:
+            if key in given:
+                raise TypeError(f"geodesic_distance() got multiple values for argument {key!r}")
+            given[key] = value
+    if "sources" not in given:
+        raise TypeError("geodesic_distance() missing the source vertices: geodesic_distance(mesh, sources)")
+    sources = given["sources"]
+    method = given.get("method", "qcqp-hessian")
+    m = given.get("m", 1.0)
+    solver = given.get("solver", "auto")
     solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter,
                                 normalization=normalization)
     return solver_obj.solve(sources).distance
 
 
-def distance_matrix(mesh, vertices, method: str = "qcqp-hessian", m: float = 1.0, solver: str = "auto",
+def distance_matrix(mesh: Any, vertices: ArrayLike, method: str = "qcqp-hessian", m: float = 1.0, solver: str = "auto",
                     progress: bool = False, *, lam: float | None = None, tol: float = DEFAULT_TOL,
                     max_iter: int = 200, multires: bool | int = False, normalization: str = "area") -> np.ndarray:
     """Distance fields from several vertices, one row per vertex, with one :class:`GeodesicSolver`.
@@ -612,7 +663,7 @@ def distance_matrix(mesh, vertices, method: str = "qcqp-hessian", m: float = 1.0
                                          and any(isinstance(v, surface) for v in vertices)):
         items = [vertices] if isinstance(vertices, surface) else list(vertices)  # one row per item
         solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter,
-                                    multires=multires)
+                                    multires=multires, normalization=normalization)
         return np.stack([r.distance for r in solver_obj.solve_many(items, progress=progress)])
     if isinstance(vertices, bool | np.bool_):
         raise SourceError(f"vertices must be vertex indices, got {vertices!r}")

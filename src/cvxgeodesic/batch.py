@@ -2,7 +2,7 @@
 
 :func:`run_batch` runs one Dask task per mesh. By default it starts a
 ``dask.distributed.LocalCluster`` on this machine (worker processes with one
-thread each); ``scheduler="tcp://host:8786"`` uses an existing cluster instead,
+thread each); ``scheduler="tcp://SCHEDULER:8786"`` uses an existing cluster instead,
 whose workers must have cvxgeodesic installed and see the mesh files and the
 output folder at the same paths (a shared file system).
 
@@ -10,10 +10,12 @@ Every task loads its mesh, solves, and writes, atomically,
 
 - ``OUT/<mesh stem>.ply`` (mesh + per-vertex ``distance``, read it with
   :func:`~cvxgeodesic.mesh.io.load_distance_ply`) or ``OUT/<mesh stem>.npy``
-  (the (n,) array, in the vertex order of :func:`~cvxgeodesic.mesh.io.load_mesh`,
-  i.e. after welding), then
+  (the (n_file,) array), both in the file's vertex numbering and count (welded duplicates
+  share a value, vertices in no face get ``inf``; see
+  :func:`~cvxgeodesic.mesh.fileorder.to_file_order`), then
 - ``OUT/<mesh stem>.json``: the mesh path, the parameters, the mesh size, the
-  :class:`~cvxgeodesic.api.SolveInfo` as a dict and any warnings from loading.
+  :class:`~cvxgeodesic.api.SolveInfo` as a dict, ``warnings`` (from loading) and
+  ``notes`` (every repair, substitution and warning of the task, each once).
 
 The JSON file is written last, so it marks a finished mesh: a rerun skips every
 mesh whose two outputs exist and were computed with the same parameters
@@ -27,6 +29,7 @@ imported only when a batch runs.
 
 from __future__ import annotations
 
+import contextlib
 import glob
 import json
 import math
@@ -140,17 +143,21 @@ def _source_spec(sources):
 
 
 def _mesh_sources(mesh, spec):
-    """The ``sources`` of one mesh: positions become that mesh's closest surface points."""
-    if spec == "boundary" or all(isinstance(s, int) for s in spec):
+    """The ``sources`` of one mesh: file vertex indices become mesh indices, positions its closest surface points."""
+    if spec == "boundary":
         return spec
+    from .mesh.fileorder import file_sources
     from .sources import surface_point
 
-    return [s if isinstance(s, int) else surface_point(mesh, s) for s in spec]
+    if all(isinstance(s, int) for s in spec):
+        return file_sources(mesh, spec).tolist()
+    return [int(file_sources(mesh, [s])[0]) if isinstance(s, int) else surface_point(mesh, s) for s in spec]
 
 
 def _params(sources, method, m, solver, multires, output_format) -> dict:
-    return {"sources": _source_spec(sources), "method": method, "m": float(m), "solver": solver,
-            "multires": multires if isinstance(multires, bool) else int(multires), "format": output_format}
+    return {"sources": _source_spec(sources), "numbering": "file", "method": method, "m": float(m),
+            "solver": solver, "multires": multires if isinstance(multires, bool) else int(multires),
+            "format": output_format}
 
 
 def _json_safe(obj):
@@ -197,8 +204,9 @@ def solve_one(mesh_path: str, sources: list[int], out_dir: str, method: str = "q
     mesh_path : str
         Mesh file (absolute path, visible to the worker).
     sources : list of int and [x, y, z] positions, or "boundary"
-        Source vertices (indices after welding, as :func:`~cvxgeodesic.mesh.io.load_mesh` numbers them),
-        positions (the mesh's closest surface points) or the boundary.
+        Source vertices as vertex indices of the file (before welding; see
+        :func:`~cvxgeodesic.mesh.fileorder.file_sources`), positions (the mesh's closest
+        surface points) or the boundary.
     out_dir : str
         Existing output folder.
     method, m, solver, multires
@@ -213,32 +221,44 @@ def solve_one(mesh_path: str, sources: list[int], out_dir: str, method: str = "q
     t0 = time.perf_counter()
     dist_path, sidecar = output_paths(mesh_path, out_dir, output_format)
     row = {"mesh": mesh_path, "status": "failed", "output": None, "n_vertices": None, "n_faces": None,
-           "iterations": None, "solve_status": None, "time_s": None, "error": None, "warnings": [],
+           "iterations": None, "solve_status": None, "time_s": None, "error": None, "warnings": [], "notes": [],
            "worker": socket.gethostname()}
+    caught: list[warnings.WarningMessage] = []
     try:
         from . import __version__
         from ._atomic import atomic_write
         from .api import GeodesicSolver
         from .mesh.io import load_mesh, save_distance
 
+        # every warning of the task becomes a note of its row (a worker's stderr would print it as raw
+        # "file.py:309: Warning: ..." text inside the client's progress bar)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             mesh = load_mesh(mesh_path)
-        row["warnings"] = [str(w.message) for w in caught]
-        row["n_vertices"], row["n_faces"] = mesh.n_vertices, mesh.n_faces
-        res = GeodesicSolver(mesh, method, m=m, solver=solver, multires=multires).solve(_mesh_sources(mesh, sources))
-        save_distance(dist_path, mesh, res.distance)
+            row["warnings"] = [str(w.message) for w in caught]
+            row["n_vertices"], row["n_faces"] = mesh.n_file_vertices, mesh.n_faces
+            src = _mesh_sources(mesh, sources)  # vertex indices are the file's
+            res = GeodesicSolver(mesh, method, m=m, solver=solver, multires=multires).solve(src)
+            save_distance(dist_path, mesh, res.distance, file_order=True)
+        row["notes"] = _unique([*res.info.notes, *(str(w.message) for w in caught)])
         row.update(status="ok", output=str(dist_path), iterations=res.info.iterations,
                    solve_status=res.info.status, time_s=time.perf_counter() - t0)
         meta = {"status": "ok", "mesh": mesh_path, "output": dist_path.name, "cvxgeodesic": __version__,
                 "params": _params(sources, method, m, solver, multires, output_format),
-                "n_vertices": mesh.n_vertices, "n_faces": mesh.n_faces, "wall_time": row["time_s"],
-                "worker": row["worker"], "warnings": row["warnings"], "info": res.info.as_dict()}
+                "n_vertices": mesh.n_file_vertices, "n_mesh_vertices": mesh.n_vertices, "n_faces": mesh.n_faces,
+                "wall_time": row["time_s"], "worker": row["worker"], "warnings": row["warnings"],
+                "notes": row["notes"], "info": res.info.as_dict()}
         text = json.dumps(_json_safe(meta), indent=1, allow_nan=False) + "\n"
         atomic_write(sidecar, lambda fh: fh.write(text.encode("utf-8")))
     except Exception as exc:  # one bad mesh must not stop the batch: report it in the row
-        row.update(status="failed", output=None, error=_error_text(exc), time_s=time.perf_counter() - t0)
+        row.update(status="failed", output=None, error=_error_text(exc), time_s=time.perf_counter() - t0,
+                   notes=_unique(str(w.message) for w in caught))
     return row
+
+
+def _unique(lines) -> list[str]:
+    """The lines in order, each once."""
+    return list(dict.fromkeys(str(x) for x in lines))
 
 
 def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float = 1.0, solver: str = "auto",
@@ -261,7 +281,7 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
     method, m, solver, multires
         See :class:`~cvxgeodesic.api.GeodesicSolver`.
     scheduler : str or distributed.Client, optional
-        Address of a running Dask scheduler (``"tcp://host:8786"``) or a
+        Address of a running Dask scheduler (``"tcp://SCHEDULER:8786"``) or a
         connected client. Default: a ``LocalCluster`` of ``n_workers`` worker
         processes with one thread each, closed at the end. Each worker's solver
         threads (PARDISO/MKL, the compiled kernels, CHOLMOD's BLAS) get
@@ -282,7 +302,8 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
         (``"ok"``, ``"skipped"`` (already done) or ``"failed"``), ``output``,
         ``n_vertices``, ``n_faces``, ``iterations``, ``solve_status``, ``time_s``
         (load + solve + write, on the worker), ``error`` (one line, or None),
-        ``warnings`` (from loading the mesh) and ``worker`` (host name).
+        ``warnings`` (from loading the mesh), ``notes`` (every note and warning of the
+        task, each once) and ``worker`` (host name). ``n_vertices`` is the file's count.
 
     Raises
     ------
@@ -332,13 +353,72 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
         if state is True:
             rows[p] = {"mesh": str(p), "status": "skipped", "output": str(dist_path), "n_vertices": None,
                        "n_faces": None, "iterations": None, "solve_status": None, "time_s": None, "error": None,
-                       "warnings": [], "worker": None}
+                       "warnings": [], "notes": [], "worker": None}
         else:
             todo.append(p)
     if todo:
         _run_on_cluster(todo, rows, sources_list, out, method, m, solver, multires, output_format,
                         scheduler, n_workers, progress)
     return [rows[p] for p in paths]
+
+
+#: Seconds :func:`_check_scheduler` waits for the connection and for the scheduler's first bytes.
+PROBE_TIMEOUT = 4.0
+
+
+def _check_scheduler(address: str, timeout: float = PROBE_TIMEOUT) -> None:
+    """Fail fast, with a clear message, when ``address`` is not a Dask scheduler.
+
+    Dask's own client trusts the first 8 bytes the server sends as a message length: an
+    HTTP or SSH server there makes it allocate exabytes ("Unable to allocate 3.07 EiB"),
+    and a server that never speaks makes it wait. A scheduler sends its handshake as soon
+    as a connection opens, a small message whose 8-byte little-endian length comes
+    first; this checks exactly that, within ``2 * timeout`` seconds. Only plain TCP
+    addresses (``tcp://SCHEDULER:8786`` or ``host:port``) are checked; others go to Dask.
+
+    Raises
+    ------
+    ConnectionError
+        Nothing listens there, the connection or the first bytes time out, or the server
+        does not speak Dask's protocol.
+    """
+    import struct
+
+    text = str(address)
+    if "://" in text:
+        scheme, rest = text.split("://", 1)
+        if scheme != "tcp":
+            return
+    else:
+        rest = text
+    host, sep, port_text = rest.rstrip("/").rpartition(":")
+    if not sep or not port_text.isdigit():
+        raise ConnectionError(f"--scheduler {address!r} is not an address like tcp://SCHEDULER:8786")
+    host = host.strip("[]") or "127.0.0.1"
+    what = f"the Dask scheduler at {address}"
+    try:
+        with socket.create_connection((host, int(port_text)), timeout=timeout) as sock:
+            sock.settimeout(timeout)
+            head = b""
+            while len(head) < 8:
+                chunk = sock.recv(8 - len(head))
+                if not chunk:
+                    raise ConnectionError(f"{what} closed the connection without a Dask handshake: "
+                                          "is it a Dask scheduler?")
+                head += chunk
+    except (ConnectionRefusedError, ConnectionResetError, ConnectionAbortedError) as exc:
+        raise ConnectionError(f"cannot connect to {what}: {exc.strerror or exc}") from None
+    except TimeoutError:
+        raise ConnectionError(f"{what} did not answer within {timeout:g} s: is it a Dask scheduler "
+                              "(dask scheduler --port 8786), and reachable?") from None
+    except ConnectionError:
+        raise
+    except OSError as exc:
+        raise ConnectionError(f"cannot connect to {what}: {exc.strerror or exc}") from None
+    (nbytes,) = struct.unpack("<Q", head)
+    if not 0 < nbytes < 2**24:
+        raise ConnectionError(f"{what} does not speak Dask's protocol (first bytes {head!r}): "
+                              "is the address a Dask scheduler's (default port 8786), not a web or other server?")
 
 
 def _run_on_cluster(todo, rows, sources, out, method, m, solver, multires, output_format,
@@ -351,13 +431,16 @@ def _run_on_cluster(todo, rows, sources, out, method, m, solver, multires, outpu
             threads = max(1, (os.cpu_count() or 1) // n_workers)
             blas = {f"distributed.nanny.pre-spawn-environ.{k}": threads
                     for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")}
-            with dask.config.set(blas):
+            # Ctrl-C goes to the whole process group: worker processes started with SIGINT ignored keep
+            # quiet (no tracebacks of their own) and this process alone stops them (_stop_after_interrupt)
+            with dask.config.set(blas), _sigint_ignored():
                 cluster = stack.enter_context(distributed.LocalCluster(
                     n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=":0"))
             client = stack.enter_context(distributed.Client(cluster))
         elif isinstance(scheduler, distributed.Client):
             client = scheduler
         else:
+            _check_scheduler(scheduler)
             try:
                 client = stack.enter_context(distributed.Client(scheduler, timeout="20s"))
             except OSError as exc:
@@ -375,21 +458,80 @@ def _run_on_cluster(todo, rows, sources, out, method, m, solver, multires, outpu
             from tqdm import tqdm
 
             bar = tqdm(total=len(futures), desc="meshes", unit="mesh", file=sys.stderr)
-        for fut in distributed.as_completed(list(futures)):
-            p = futures[fut]
-            try:
-                row = fut.result()
-            except Exception as exc:  # the task itself died (worker killed, out of memory, ...)
-                row = {"mesh": str(p), "status": "failed", "output": None, "n_vertices": None, "n_faces": None,
-                       "iterations": None, "solve_status": None, "time_s": None, "error": _error_text(exc),
-                       "warnings": [], "worker": None}
-            rows[p] = row
+        try:
+            _collect(distributed, futures, rows, bar)
+        except KeyboardInterrupt:
             if bar is not None:
-                bar.update(1)
-                if row["status"] == "failed":
-                    bar.write(f"FAILED {p}: {row['error']}", file=sys.stderr)
+                bar.close()
+            _stop_after_interrupt(client, futures, cluster if scheduler is None else None)
+            raise
         if bar is not None:
             bar.close()
+
+
+@contextlib.contextmanager
+def _sigint_ignored():
+    """Ignore SIGINT while the block runs (processes started then inherit it); main thread only."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _stop_after_interrupt(client, futures, cluster) -> None:
+    """After Ctrl-C: cancel the tasks, kill the local workers (a running solve does not return for
+    seconds) and silence Dask's shutdown logging, so that one line says what happened."""
+    import logging
+    import signal
+
+    for name in ("distributed", "tornado", "asyncio"):
+        logging.getLogger(name).setLevel(logging.CRITICAL + 1)
+    try:
+        client.cancel(list(futures), force=True)
+    except Exception:  # the connection may be gone already; nothing to report
+        pass
+    if cluster is None:
+        return
+    for nanny in list(getattr(cluster, "workers", {}).values()):
+        try:
+            nanny.close_gracefully()  # no restart of the worker we kill next
+            pid = nanny.process.process.pid
+            if pid:
+                os.kill(pid, signal.SIGKILL)
+        except Exception:
+            pass
+
+
+def _collect(distributed, futures: dict, rows: dict, bar) -> None:
+    """Gather the rows of ``futures`` as they finish; progress bar and notes on stderr."""
+    for fut in distributed.as_completed(list(futures)):
+        p = futures[fut]
+        try:
+            row = fut.result()
+        except Exception as exc:  # the task itself died (worker killed, out of memory, ...)
+            row = {"mesh": str(p), "status": "failed", "output": None, "n_vertices": None, "n_faces": None,
+                   "iterations": None, "solve_status": None, "time_s": None, "error": _error_text(exc),
+                   "warnings": [], "notes": [], "worker": None}
+        rows[p] = row
+        if bar is not None:
+            bar.update(1)
+            for note in row.get("notes", []):
+                bar.write(f"cvxgeodesic: note: {_with_name(p.name, note)}", file=sys.stderr)
+            if row["status"] == "failed":
+                bar.write(f"FAILED {p}: {row['error']}", file=sys.stderr)
+
+
+def _with_name(name: str, note: str) -> str:
+    """``note``'s first line, prefixed with the mesh's file name unless it already starts with it."""
+    line = note.splitlines()[0] if note else ""
+    return line if line.startswith(name) else f"{name}: {line}"
 
 
 def format_summary(rows: list[dict]) -> str:

@@ -38,6 +38,7 @@ def _progress_printer(stream, every: float = 0.5):
 
 
 def _cmd_distance(args) -> int:
+    from ._atomic import output_set
     from .api import GeodesicSolver
     from .cli_sources import cli_sources
     from .mesh.io import check_output_path, load_mesh, save_distance
@@ -49,15 +50,20 @@ def _cmd_distance(args) -> int:
     sources, label = cli_sources(args, mesh)
     log = sys.stderr
     if not args.quiet:
-        print(f"{mesh.name}: {mesh.n_vertices} vertices, {mesh.n_faces} faces; method {args.method}", file=log)
+        print(f"{mesh.name}: {mesh.n_file_vertices} vertices, {mesh.n_faces} faces; method {args.method}", file=log)
     solver = GeodesicSolver(mesh, args.method, m=args.m, lam=args.lam, solver=args.solver)
     callback = None if args.quiet else _progress_printer(log)
     res = solver.solve(sources, callback=callback)
-    save_distance(args.output, mesh, res.distance)
-    if args.png:
-        from .plotting import plot_field
+    for note in res.info.notes:
+        args.notes.say(note)
+    with output_set(*([args.output, args.png] if args.png else [args.output])) as tmp:
+        # every file in the file's numbering and vertex count, so it joins the input by index
+        save_distance(tmp[0], mesh, res.distance, file_order=True)
+        if args.png:
+            from .plotting import plot_field
 
-        plot_field(mesh, res.distance, args.png, title=f"{solver.method}, sources {label}")
+            plot_field(mesh, res.distance, tmp[1], title=f"{solver.method}, sources {label}",
+                       sources=res.sources, colorbar_label="geodesic distance")
     if not args.quiet:
         i = res.info
         print(f"{i.method} via {i.solver}: {i.status}, {i.iterations} iterations, set-up {i.setup_time:.2f} s, "
@@ -101,6 +107,33 @@ def _cmd_demo(args) -> int:
     return 0
 
 
+def _vertex_list(text: str) -> list[int]:
+    """``"0,5"`` -> ``[0, 5]``: the value of one ``--source`` option."""
+    try:
+        values = [int(t) for t in text.split(",") if t.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"invalid vertex index list {text!r}: give integers like 0 or 0,5") from None
+    if not values:
+        raise argparse.ArgumentTypeError("empty vertex index list")
+    return values
+
+
+class _Notes:
+    """Prints each note or warning once per command, as ``cvxgeodesic: note: <first line>`` on stderr."""
+
+    def __init__(self) -> None:
+        self.seen: set[str] = set()
+
+    def say(self, text: str) -> None:
+        line = str(text).splitlines()[0] if str(text) else ""
+        if line and line not in self.seen:
+            self.seen.add(line)
+            print(f"cvxgeodesic: note: {line}", file=sys.stderr, flush=True)
+
+    def showwarning(self, message, category, filename, lineno, file=None, line=None) -> None:
+        self.say(str(message))
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="cvxgeodesic",
@@ -111,9 +144,10 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
 
     def common(p):
-        p.add_argument("mesh", help="mesh file (.obj, .off, .ply, .stl)")
-        p.add_argument("--source", "-s", type=int, action="append", default=None, metavar="I",
-                       help="source vertex index (repeat for several sources)")
+        p.add_argument("mesh", help="mesh file (.obj, .off, .ply, .stl; .glb, .gltf, .3mf with trimesh; .vtk, .vtu "
+                                    "with meshio)")
+        p.add_argument("--source", "-s", type=_vertex_list, action="extend", default=None, metavar="I[,J...]",
+                       help="source vertex index in the file's numbering (repeat, or give a list: -s 0,5)")
         add_point_options(p)
         p.add_argument("--m", type=float, default=1.0, help="smoothness multiplier m, λ = m·100·h/n (default 1)")
         p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")
@@ -125,8 +159,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--method", default="qcqp-hessian", choices=ALL_METHODS, metavar="NAME",
                    help=f"one of: {', '.join(ALL_METHODS)} (default qcqp-hessian)")
     p.add_argument("--lam", type=float, default=None, help="give λ directly (overrides --m)")
-    p.add_argument("-o", "--output", required=True, help="output file: .ply (mesh + distance), .npy or .csv")
-    p.add_argument("--png", default=None, help="also render the field with isolines to this PNG")
+    p.add_argument("-o", "--output", required=True,
+                   help="output file: .ply (mesh + distance), .npy, .csv, or .vtu/.vtk (needs meshio), in the "
+                        "file's vertex numbering")
+    p.add_argument("--png", default=None,
+                   help="also render the field with isolines and the sources to this PNG (both files or neither)")
     p.set_defaults(func=_cmd_distance)
 
     p = sub.add_parser("compare", help="run several methods, compare them with the exact distance")
@@ -143,8 +180,9 @@ def build_parser() -> argparse.ArgumentParser:
                     "2: usage error.")
     p.add_argument("meshes", nargs="+", metavar="MESH_GLOB",
                    help="mesh files or quoted glob patterns ('data/*.obj', 'data/**/*.ply')")
-    p.add_argument("--source", "-s", type=int, action="append", default=None, metavar="I",
-                   help="source vertex index, the same in every mesh (repeat for several sources)")
+    p.add_argument("--source", "-s", type=_vertex_list, action="extend", default=None, metavar="I[,J...]",
+                   help="source vertex index in each file's numbering, the same in every mesh "
+                        "(repeat, or give a list: -s 0,5)")
     add_point_options(p)
     p.add_argument("--method", default="qcqp-hessian", choices=ALL_METHODS, metavar="NAME",
                    help=f"one of: {', '.join(ALL_METHODS)} (default qcqp-hessian)")
@@ -155,7 +193,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created if missing)")
     p.add_argument("--format", choices=("ply", "npy"), default="ply", help="distance file format (default ply)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="address of a running Dask scheduler, e.g. tcp://10.0.0.5:8786 (default: a local cluster)")
+                   help="address of a running Dask scheduler, e.g. tcp://SCHEDULER:8786 (default: a local cluster)")
     p.add_argument("--workers", type=int, default=2, metavar="N",
                    help="worker processes of the local cluster, one thread each (default 2)")
     p.add_argument("--force", action="store_true", help="recompute meshes whose outputs already exist")
@@ -173,18 +211,15 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
-    print(f"cvxgeodesic: warning: {str(message).splitlines()[0]}", file=sys.stderr if file is None else file)
-
-
 def main(argv=None) -> int:
     """Entry point of the ``cvxgeodesic`` console script; returns the exit code."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.notes = _Notes()
     try:
         with warnings.catch_warnings():
-            if not args.debug:  # "cvxgeodesic: warning: <message>", one line, instead of file:line + source
-                warnings.showwarning = _one_line_warning
+            if not args.debug:  # "cvxgeodesic: note: <message>", once, instead of file:line + source
+                warnings.showwarning = args.notes.showwarning
             return args.func(args)
     except KeyboardInterrupt:
         print("cvxgeodesic: interrupted", file=sys.stderr)

@@ -36,7 +36,7 @@ def cli_sources(args, mesh) -> tuple[object, str]:
     SourceError
         No source option, or ``--boundary`` together with other sources.
     """
-    from .formulations import validate_sources
+    from .mesh.fileorder import file_sources
     from .sources import ON_SURFACE_TOL, closest_points, surface_point
 
     vertices = list(args.source or [])
@@ -48,8 +48,8 @@ def cli_sources(args, mesh) -> tuple[object, str]:
         if vertices or points:
             raise SourceError("--boundary is a source on its own: do not combine it with --source/--source-point")
         return "boundary", "boundary"
-    if vertices:
-        validate_sources(vertices, mesh.n_vertices)
+    if vertices:  # vertex indices of the file (load_mesh may weld or drop vertices)
+        vertices = file_sources(mesh, vertices).tolist()
     if not points:
         return vertices, str(vertices)
     X = np.array(points, dtype=float)

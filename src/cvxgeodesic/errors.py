@@ -36,6 +36,10 @@ class DegenerateFacesWarning(UserWarning):
     """The mesh has degenerate (zero or near-zero area) faces, which the convex formulations leave out."""
 
 
+class MeshRepairWarning(UserWarning):
+    """``load_mesh`` changed the file's mesh: welded or dropped vertices, dropped faces (the message says which)."""
+
+
 class SolverError(CvxGeodesicError, RuntimeError):
     """A numerical solver did not return an optimal solution.
 

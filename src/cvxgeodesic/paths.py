@@ -24,9 +24,11 @@ descent), and within 0.1 % of the exact polyhedral distance on the unit icospher
 from __future__ import annotations
 
 import numbers
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
+from numpy.typing import ArrayLike
 
 from .errors import ParameterError, SolverError, SourceError
 from .mesh.trimesh import TriMesh, as_trimesh
@@ -72,7 +74,7 @@ def _as_points(mesh: TriMesh, points) -> tuple[list[SurfacePoint], bool]:
     return pts, False
 
 
-def distance_at(mesh, distance, points):
+def distance_at(mesh: Any, distance: ArrayLike, points: Any) -> np.ndarray:
     """Values of a piecewise-linear vertex field at surface points.
 
     Parameters
@@ -168,8 +170,9 @@ def _closest_on(x: np.ndarray, items) -> tuple[np.ndarray, float]:
     return best, bd
 
 
-def geodesic_path(mesh, distance, target, *, sources=None, return_surface_points: bool = False,
-                  straighten: bool = True, max_steps: int | None = None):
+def geodesic_path(mesh: Any, distance: ArrayLike, target: Any, *, sources: Any = None,
+                  return_surface_points: bool = False, straighten: bool = True,
+                  max_steps: int | None = None) -> Any:
     """Path from ``target`` down the distance field to the nearest source.
 
     Parameters

@@ -26,8 +26,10 @@ from __future__ import annotations
 import os
 from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ._atomic import atomic_write
 from .mesh.trimesh import as_trimesh, as_vertex_field
@@ -455,21 +457,21 @@ def _layout(fig, show_colorbar: bool, title):
 
 
 def plot_field(
-    mesh,
-    values,
-    path,
+    mesh: Any,
+    values: ArrayLike,
+    path: str | os.PathLike,
     *,
-    isolines=20,
-    title=None,
-    cmap="viridis",
-    view=None,
-    vmin=None,
-    vmax=None,
-    show_colorbar=True,
-    dpi=150,
-    colorbar_label=None,
-    sources=None,
-    paths=(),
+    isolines: int | ArrayLike | None = 20,
+    title: str | None = None,
+    cmap: Any = "viridis",
+    view: tuple[float, float] | None = None,
+    vmin: float | None = None,
+    vmax: float | None = None,
+    show_colorbar: bool = True,
+    dpi: float = 150,
+    colorbar_label: str | None = None,
+    sources: ArrayLike | None = None,
+    paths: Any = (),
 ) -> Path:
     """Render a per-vertex scalar field on the surface, with isolines, into a PNG.
 

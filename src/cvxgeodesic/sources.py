@@ -37,9 +37,11 @@ import math
 import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
+from numpy.typing import ArrayLike
 
 from .errors import SourceError
 from .mesh.trimesh import TriMesh
@@ -129,7 +131,7 @@ class SurfacePoint:
     def __hash__(self) -> int:
         return hash((self.face, self.bary.tobytes()))
 
-    def position(self, mesh) -> np.ndarray:
+    def position(self, mesh: Any) -> np.ndarray:
         """(3,) float ndarray: the point's position on ``mesh`` (a TriMesh or ``(V, F)``)."""
         mesh = _mesh(mesh)
         _check_face(self, mesh, "point")
@@ -254,7 +256,7 @@ def closest_points(mesh: TriMesh, X) -> tuple[np.ndarray, np.ndarray, np.ndarray
     return faces, bary, np.sqrt(np.maximum(np.asarray(sqd), 0.0))
 
 
-def surface_point(mesh, xyz):
+def surface_point(mesh: Any, xyz: ArrayLike) -> SurfacePoint | list[SurfacePoint]:
     """The closest :class:`SurfacePoint` of a 3D position (or of each of ``k`` positions).
 
     Parameters

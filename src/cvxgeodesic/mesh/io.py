@@ -13,21 +13,26 @@ import tempfile
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._atomic import atomic_write
-from ..errors import MeshError, MeshFormatError, ParameterError
+from ..errors import MeshError, MeshFormatError, MeshRepairWarning, ParameterError
+from .external import EXTERNAL_DISTANCE_EXTENSIONS, EXTERNAL_MESH_EXTENSIONS, read_external, write_meshio
 from .trimesh import TriMesh, as_trimesh, as_vertex_field
 
 __all__ = [
     "load_mesh", "save_distance", "load_distance_ply", "check_output_path", "MESH_EXTENSIONS", "DISTANCE_EXTENSIONS",
 ]
 
-#: File extensions understood by :func:`load_mesh` (compared case-insensitively).
-MESH_EXTENSIONS = (".obj", ".off", ".ply", ".stl")
-#: File extensions understood by :func:`save_distance` (compared case-insensitively).
-DISTANCE_EXTENSIONS = (".ply", ".npy", ".csv")
+#: File extensions understood by :func:`load_mesh` (compared case-insensitively); the last five
+#: through the optional packages trimesh (``.glb``, ``.gltf``, ``.3mf``) and meshio (``.vtk``, ``.vtu``).
+MESH_EXTENSIONS = (".obj", ".off", ".ply", ".stl", *EXTERNAL_MESH_EXTENSIONS)
+#: File extensions understood by :func:`save_distance` (compared case-insensitively); ``.vtu`` and
+#: ``.vtk`` through the optional package meshio.
+DISTANCE_EXTENSIONS = (".ply", ".npy", ".csv", *EXTERNAL_DISTANCE_EXTENSIONS)
 
 
 # ----------------------------------------------------------------------------------------------------------------------
@@ -56,8 +61,8 @@ class _Raw:
     V: np.ndarray
     idx: np.ndarray
     sizes: np.ndarray
-    v_lines: object = None
-    f_lines: object = None
+    v_lines: Any = None
+    f_lines: Any = None
     raw_idx: np.ndarray | None = None
 
 
@@ -89,11 +94,14 @@ def _at_line(lines: np.ndarray | None, i: int) -> str:
 # ----------------------------------------------------------------------------------------------------------------------
 
 
-def load_mesh(path) -> TriMesh:
-    """Read a triangle mesh from an OBJ, OFF, PLY or STL file.
+def load_mesh(path: str | os.PathLike) -> TriMesh:
+    """Read a triangle mesh from an OBJ, OFF, PLY or STL file (glTF, GLB, 3MF, VTK, VTU with the ``io`` extra).
 
     The format is chosen from the extension (case-insensitive): ``.obj``, ``.off``,
-    ``.ply`` (ASCII, binary little- or big-endian) or ``.stl`` (ASCII or binary).
+    ``.ply`` (ASCII, binary little- or big-endian) or ``.stl`` (ASCII or binary), read by
+    this module; ``.glb``, ``.gltf``, ``.3mf`` through trimesh and ``.vtk``, ``.vtu``
+    through meshio, when installed (``pip install 'cvxgeodesic[io]'``), with the same
+    welding and checks.
 
     Parameters
     ----------
@@ -107,6 +115,10 @@ def load_mesh(path) -> TriMesh:
         ``mesh.vertex_map[i]`` is the 0-based index in the file of the (first)
         original vertex of vertex ``i``; for STL, whose vertices are the triangle
         corners, it is the corner number ``3 * triangle + corner``.
+        ``mesh.file_index[j]`` is the mesh index of file vertex ``j`` (-1: in no face),
+        ``mesh.n_file_vertices`` the file's vertex count, and ``mesh.notes`` one line per
+        repair. The mesh's numbering differs from the file's when vertices were welded or
+        dropped: :func:`~cvxgeodesic.mesh.fileorder.to_file_order` maps a field back.
 
     Raises
     ------
@@ -118,10 +130,11 @@ def load_mesh(path) -> TriMesh:
 
     Warns
     -----
-    UserWarning
-        When faces that became degenerate by welding (a repeated vertex) or exact
-        duplicate faces (the same vertex set as an earlier face) are dropped; the
-        message says how many.
+    MeshRepairWarning
+        (a ``UserWarning``) When faces that became degenerate by welding (a repeated
+        vertex) or exact duplicate faces (the same vertex set as an earlier face) are
+        dropped, and when welding or dropping vertices makes the mesh's vertex count
+        differ from the file's; the message says how many.
 
     Notes
     -----
@@ -144,12 +157,16 @@ def load_mesh(path) -> TriMesh:
         raise _err(
             p, f"unsupported mesh file extension {p.suffix!r}; supported: {', '.join(MESH_EXTENSIONS)} (any case)"
         )
-    data = _read_bytes(p, "a mesh file")
-    reader = {".obj": _read_obj, ".off": _read_off, ".ply": _read_ply_raw, ".stl": _read_stl}[ext]
     try:
-        raw = reader(p, data)
-        V, F, vertex_map = _finish(p, raw)
-        return TriMesh(V, F, vertex_map=vertex_map, name=p.name)
+        if ext in EXTERNAL_MESH_EXTENSIONS:
+            _read_bytes(p, "a mesh file")  # the same messages for missing, directory and empty files
+            raw = _Raw(*read_external(p))
+        else:
+            data = _read_bytes(p, "a mesh file")
+            raw = {".obj": _read_obj, ".off": _read_off, ".ply": _read_ply_raw, ".stl": _read_stl}[ext](p, data)
+        V, F, vertex_map, file_index, dropped, notes = _finish(p, raw)
+        return TriMesh(V, F, vertex_map=vertex_map, file_index=file_index, dropped_vertices=dropped, notes=notes,
+                       name=p.name)
     except MeshFormatError:
         raise
     except MeshError as exc:
@@ -158,8 +175,11 @@ def load_mesh(path) -> TriMesh:
         raise _err(p, f"malformed {ext[1:].upper()} file ({type(exc).__name__}: {exc})") from None
 
 
-def _finish(path: Path, raw: _Raw) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Validate, triangulate, weld, and clean a raw polygon mesh. Returns ``(V, F, vertex_map)``."""
+def _finish(path: Path, raw: _Raw) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[str]]:
+    """Validate, triangulate, weld and clean a raw polygon mesh.
+
+    Returns ``(V, F, vertex_map, file_index, dropped_vertices, notes)``.
+    """
     V = np.asarray(raw.V, dtype=np.float64).reshape(-1, 3)
     n = V.shape[0]
     idx, sizes = raw.idx, raw.sizes
@@ -205,17 +225,17 @@ def _finish(path: Path, raw: _Raw) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     rep = order[new_group]  # lexsort is stable: the smallest file index of each group
     F = group[F]  # faces in terms of group ids
 
+    notes: list[str] = []
+
     # Drop faces made degenerate by welding.
     degenerate = (F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 0] == F[:, 2])
     n_deg = int(degenerate.sum())
     if n_deg:
         F = F[~degenerate]
-        warnings.warn(
-            f"{path.name}: dropped {n_deg} degenerate face(s) with a repeated vertex after welding "
-            "vertices with identical positions",
-            UserWarning,
-            stacklevel=3,
-        )
+        msg = (f"{path.name}: dropped {n_deg} degenerate face(s) with a repeated vertex after welding "
+               "vertices with identical positions")
+        notes.append(msg)
+        warnings.warn(msg, MeshRepairWarning, stacklevel=3)
     # Drop exact duplicate faces (same vertex set), keeping the first.
     n_dup = 0
     if F.shape[0]:
@@ -223,11 +243,9 @@ def _finish(path: Path, raw: _Raw) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         n_dup = F.shape[0] - first.size
         if n_dup:
             F = F[np.sort(first)]
-            warnings.warn(
-                f"{path.name}: dropped {n_dup} duplicate face(s) (same vertices as an earlier face)",
-                UserWarning,
-                stacklevel=3,
-            )
+            msg = f"{path.name}: dropped {n_dup} duplicate face(s) (same vertices as an earlier face)"
+            notes.append(msg)
+            warnings.warn(msg, MeshRepairWarning, stacklevel=3)
     if F.shape[0] == 0:
         raise _err(path, f"no faces left after dropping {n_deg} degenerate and {n_dup} duplicate face(s)")
 
@@ -239,7 +257,24 @@ def _finish(path: Path, raw: _Raw) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     new_id = np.full(rep.size, -1, dtype=np.int64)
     new_id[kept] = np.arange(kept.size)
     vertex_map = rep[kept]
-    return V[vertex_map], new_id[F], vertex_map
+    file_index = new_id[group]  # mesh index of every file vertex; -1: dropped (in no face)
+
+    n_welded = n - rep.size
+    n_dropped = int(np.count_nonzero(file_index < 0))
+    if n_welded or n_dropped:
+        what = []
+        if n_welded:
+            what.append(f"welded {n_welded} vertices at the same position as an earlier one")
+        if n_dropped:
+            what.append(f"dropped {n_dropped} vertices in no face")
+        changed = np.flatnonzero(file_index != np.arange(n))
+        msg = (f"{path.name}: {n} vertices in the file, {kept.size} in the mesh ({'; '.join(what)}); mesh indices "
+               f"differ from the file's from file vertex {int(changed[0])} on: cvxgeodesic.to_file_order(mesh, field) "
+               "maps a field to the file's numbering")
+        notes.append(msg)
+        if path.suffix.lower() != ".stl":  # an STL is a triangle soup: welding its corners is always expected
+            warnings.warn(msg, MeshRepairWarning, stacklevel=3)
+    return V[vertex_map], new_id[F], vertex_map, file_index, V[file_index < 0], notes
 
 
 def _fan_triangulate(idx: np.ndarray, sizes: np.ndarray, starts: np.ndarray) -> np.ndarray:
@@ -823,17 +858,22 @@ def _read_stl_ascii(path: Path, data: bytes) -> _Raw:
 _NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*\Z")
 
 
-def save_distance(path, mesh, distance, *, name: str = "distance") -> Path:
+def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, name: str = "distance",
+                  file_order: bool = False) -> Path:
     """Write a per-vertex distance field, atomically.
 
     The format follows the extension (case-insensitive):
 
-    - ``.ply``: binary little-endian PLY; vertices with ``float`` ``x, y, z`` and a
+    - ``.ply``: binary little-endian PLY; vertices with ``double`` ``x, y, z`` and a
       ``double`` property called ``name``; faces as ``property list uchar int
-      vertex_indices``. Read it back with :func:`load_distance_ply`.
+      vertex_indices``. Read it back with :func:`load_distance_ply`; trimesh
+      (``mesh.vertex_attributes[name]``), open3d's tensor reader
+      (``o3d.t.io.read_triangle_mesh``) and meshio (``point_data[name]``) read the field.
     - ``.npy``: the (n,) float64 array (``numpy.save``).
     - ``.csv``: header ``vertex,file_vertex,x,y,z,<name>``, one row per vertex;
       ``file_vertex`` is ``mesh.vertex_map``; infinite values are written as ``inf``.
+    - ``.vtu`` / ``.vtk`` (needs meshio, ``pip install 'cvxgeodesic[io]'``): VTK
+      unstructured grid with the field as point data ``name``, for ParaView.
 
     The data is written to a temporary file in the target directory which then
     replaces ``path`` (``os.replace``); if anything fails, the temporary file is
@@ -850,6 +890,12 @@ def save_distance(path, mesh, distance, *, name: str = "distance") -> Path:
     name : str, optional
         Name of the PLY property / CSV column (letters, digits, ``_``, ``.``, ``-``;
         not ``x``, ``y``, ``z``, ``vertex`` or ``file_vertex``).
+    file_order : bool, default False
+        Write the file's vertices in the numbering of the file ``mesh`` was read from
+        (``mesh.n_file_vertices`` rows; :func:`~cvxgeodesic.mesh.fileorder.to_file_order`:
+        welded duplicates share a value, vertices in no face get ``inf``), so the
+        output joins the input file by vertex index. In the CSV, ``vertex`` is then
+        the mesh index (-1 for dropped vertices). The command line always does this.
 
     Returns
     -------
@@ -873,12 +919,25 @@ def save_distance(path, mesh, distance, *, name: str = "distance") -> Path:
         raise ParameterError(
             f"invalid field name {name!r}: use letters, digits, '_', '.', '-' (not x, y, z, vertex, file_vertex)"
         )
-    writer = {".ply": _write_ply, ".npy": _write_npy, ".csv": _write_csv}[ext]
-    atomic_write(p, lambda fh: writer(fh, mesh, d, name))
+    if file_order:
+        from .fileorder import file_order_mesh, to_file_order
+
+        vertex = np.where(mesh.file_index >= 0, mesh.file_index, -1)
+        d, mesh = to_file_order(mesh, d), file_order_mesh(mesh)
+    else:
+        vertex = np.arange(n)
+    out_mesh = mesh
+    if ext in EXTERNAL_DISTANCE_EXTENSIONS:
+        atomic_write(p, lambda fh: write_meshio(fh, out_mesh.V, out_mesh.F, d, name, ext))
+    elif ext == ".csv":
+        atomic_write(p, lambda fh: _write_csv(fh, out_mesh, d, name, vertex))
+    else:
+        writer = {".ply": _write_ply, ".npy": _write_npy}[ext]
+        atomic_write(p, lambda fh: writer(fh, out_mesh, d, name))
     return p
 
 
-def check_output_path(path, extensions=DISTANCE_EXTENSIONS) -> Path:
+def check_output_path(path: str | os.PathLike, extensions: tuple[str, ...] = DISTANCE_EXTENSIONS) -> Path:
     """Check that ``path`` can be written before expensive work produces its content.
 
     Parameters
@@ -924,14 +983,15 @@ def _write_ply(fh, mesh: TriMesh, d: np.ndarray, name: str) -> None:
         "comment written by cvxgeodesic\n"
         f"comment mesh {re.sub(r'[^ -~]', '?', mesh.name)}\n"
         f"element vertex {n}\n"
-        "property float x\nproperty float y\nproperty float z\n"
+        "property double x\nproperty double y\nproperty double z\n"
         f"property double {name}\n"
         f"element face {m}\n"
         "property list uchar int vertex_indices\n"
         "end_header\n"
     )
     fh.write(header.encode("ascii"))
-    vert = np.empty(n, dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("d", "<f8")])
+    # float64 coordinates: float32 moves georeferenced coordinates (~5e6) by up to 0.25
+    vert = np.empty(n, dtype=[("x", "<f8"), ("y", "<f8"), ("z", "<f8"), ("d", "<f8")])
     vert["x"], vert["y"], vert["z"] = mesh.V[:, 0], mesh.V[:, 1], mesh.V[:, 2]
     vert["d"] = d
     fh.write(vert.tobytes())
@@ -945,19 +1005,18 @@ def _write_npy(fh, mesh: TriMesh, d: np.ndarray, name: str) -> None:
     np.save(fh, d, allow_pickle=False)
 
 
-def _write_csv(fh, mesh: TriMesh, d: np.ndarray, name: str) -> None:
-    n = mesh.n_vertices
+def _write_csv(fh, mesh: TriMesh, d: np.ndarray, name: str, vertex: np.ndarray) -> None:
     fh.write(f"vertex,file_vertex,x,y,z,{name}\n".encode("ascii"))
     V = mesh.V.tolist()
     # repr(float) round-trips exactly and writes inf / -inf / nan as such
     body = "".join(
         f"{i},{j},{x!r},{y!r},{z!r},{v!r}\n"
-        for i, j, (x, y, z), v in zip(range(n), mesh.vertex_map.tolist(), V, d.tolist(), strict=True)
+        for i, j, (x, y, z), v in zip(vertex.tolist(), mesh.vertex_map.tolist(), V, d.tolist(), strict=True)
     )
     fh.write(body.encode("ascii"))
 
 
-def load_distance_ply(path) -> tuple[TriMesh, dict[str, np.ndarray]]:
+def load_distance_ply(path: str | os.PathLike) -> tuple[TriMesh, dict[str, np.ndarray]]:
     """Read a PLY file written by :func:`save_distance`, without welding.
 
     Parameters
@@ -969,7 +1028,7 @@ def load_distance_ply(path) -> tuple[TriMesh, dict[str, np.ndarray]]:
     -------
     mesh : TriMesh
         The mesh exactly as stored (vertex order kept, no welding; coordinates are
-        the file's, i.e. float32-rounded for files from :func:`save_distance`).
+        the file's: float64 for files from :func:`save_distance`).
     fields : dict of str to (n,) ndarray
         Every scalar per-vertex property other than ``x``, ``y``, ``z``, as float64.
 

@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import os
+from collections.abc import Sequence
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
+from numpy.typing import ArrayLike
 from scipy.sparse.csgraph import connected_components
 
 from ..errors import MeshError, ParameterError
@@ -34,6 +38,15 @@ class TriMesh:
         it after welding duplicates and dropping unreferenced vertices).
     name : str, optional
         Label used in messages and reports (usually the file name).
+    file_index : (n_file,) array_like of int, optional
+        For each vertex *of the file*, its index in this mesh, or -1 for a vertex the
+        reader dropped (referenced by no face). Welded duplicates share an index.
+        ``load_mesh`` sets it; default ``arange(n)`` (the mesh is its own file).
+    dropped_vertices : (k, 3) array_like of float, optional
+        Positions of the file vertices with ``file_index == -1``, in file order (so that
+        outputs in the file's numbering keep their coordinates).
+    notes : sequence of str, optional
+        One line per repair the reader made (welding, dropped vertices or faces).
 
     Raises
     ------
@@ -51,10 +64,27 @@ class TriMesh:
     welding). Faces of zero or near-zero area are allowed;
     :meth:`degenerate_faces` finds them and the convex formulations leave them
     out (README, "Input meshes"). ``V`` and ``F`` are stored as read-only
-    float64 / int64 arrays.
+    float64 / int64 arrays: libraries that need writable arrays (e.g.
+    ``open3d.utility.Vector3dVector``) take ``mesh.V.copy()``.
+
+    Vertex numbering: every array of the Python API (``V``, fields, source indices)
+    uses this mesh's numbering, which :func:`~cvxgeodesic.mesh.io.load_mesh` makes by
+    welding duplicates and dropping unreferenced vertices;
+    :func:`~cvxgeodesic.mesh.fileorder.to_file_order` maps a field back to the file's
+    numbering (the command line does that for every file it writes).
     """
 
-    def __init__(self, V, F, *, vertex_map=None, name: str | None = None):
+    def __init__(
+        self,
+        V: ArrayLike,
+        F: ArrayLike,
+        *,
+        vertex_map: ArrayLike | None = None,
+        name: str | None = None,
+        file_index: ArrayLike | None = None,
+        dropped_vertices: ArrayLike | None = None,
+        notes: Sequence[str] = (),
+    ) -> None:
         self.name = name or "mesh"
         self.V = _as_vertices(V, self.name)
         self.F = _as_faces(F, self.V.shape[0], self.name)
@@ -65,6 +95,23 @@ class TriMesh:
             raise MeshError(f"{self.name}: vertex_map must have shape ({self.V.shape[0]},), got {vertex_map.shape}")
         vertex_map.setflags(write=False)
         self.vertex_map = vertex_map
+        if file_index is None:
+            file_index = np.arange(self.V.shape[0], dtype=np.int64)
+        file_index = np.asarray(file_index, dtype=np.int64)
+        if file_index.ndim != 1 or np.any(file_index < -1) or np.any(file_index >= self.V.shape[0]):
+            raise MeshError(f"{self.name}: file_index must be a 1-D array of indices in [-1, {self.V.shape[0]})")
+        file_index.setflags(write=False)
+        self.file_index = file_index
+        n_dropped = int(np.count_nonzero(file_index < 0))
+        if dropped_vertices is None:
+            dropped = np.full((n_dropped, 3), np.nan)
+        else:
+            dropped = np.array(dropped_vertices, dtype=np.float64).reshape(-1, 3)
+        if dropped.shape[0] != n_dropped:
+            raise MeshError(f"{self.name}: dropped_vertices must have {n_dropped} rows, got {dropped.shape[0]}")
+        dropped.setflags(write=False)
+        self.dropped_vertices = dropped
+        self.notes: tuple[str, ...] = tuple(str(n) for n in notes)
 
     def __repr__(self) -> str:
         return f"TriMesh(name={self.name!r}, n_vertices={self.n_vertices}, n_faces={self.n_faces})"
@@ -76,6 +123,11 @@ class TriMesh:
     @property
     def n_faces(self) -> int:
         return int(self.F.shape[0])
+
+    @property
+    def n_file_vertices(self) -> int:
+        """Number of vertices in the file the mesh was read from (``n_vertices`` when not from a file)."""
+        return int(self.file_index.shape[0])
 
     @cached_property
     def face_normals_unnormalized(self) -> np.ndarray:
@@ -180,7 +232,7 @@ class TriMesh:
         mask[self.F.ravel()] = True
         return mask
 
-    def connected_to(self, sources) -> np.ndarray:
+    def connected_to(self, sources: ArrayLike) -> np.ndarray:
         """Vertices connected to at least one of ``sources`` through the edge graph.
 
         Parameters
@@ -270,22 +322,65 @@ def _as_faces(F, n: int, name: str) -> np.ndarray:
     return F
 
 
-def as_trimesh(mesh, name: str = "mesh") -> TriMesh:
-    """Return ``mesh`` as a :class:`TriMesh`; accepts a TriMesh or a ``(V, F)`` tuple.
+def as_trimesh(mesh: Any, name: str = "mesh") -> TriMesh:
+    """Return ``mesh`` as a :class:`TriMesh`, accepting the meshes other libraries use.
+
+    Accepted, by duck typing (none of these libraries is imported or required):
+
+    - a :class:`TriMesh` (returned as is);
+    - a ``(V, F)`` tuple or list of arrays;
+    - a ``str`` or :class:`os.PathLike`: read with :func:`~cvxgeodesic.mesh.io.load_mesh`;
+    - ``trimesh.Trimesh`` (anything with ``.vertices`` and ``.faces``);
+    - open3d's ``TriangleMesh`` (``.vertices`` and ``.triangles``, converted with ``np.asarray``);
+    - ``meshio.Mesh`` (``.points`` and ``.cells_dict["triangle"]``; other cell types are ignored).
+
+    The vertex order of the object is kept (no welding): indices mean the same in both.
+
+    Parameters
+    ----------
+    mesh : object
+        One of the above.
+    name : str
+        Label for messages (a file's base name for paths; the object's ``name``
+        attribute, if it is a non-empty string, for the others).
+
+    Returns
+    -------
+    TriMesh
 
     Raises
     ------
     TypeError
-        If ``mesh`` is neither.
+        If ``mesh`` is none of these.
+    MeshError
+        If the arrays are invalid, or a ``meshio.Mesh`` has no triangle cells.
     """
     if isinstance(mesh, TriMesh):
         return mesh
+    if isinstance(mesh, str | os.PathLike):
+        from .io import load_mesh
+
+        return load_mesh(mesh)
     if isinstance(mesh, tuple | list) and len(mesh) == 2:
         return TriMesh(mesh[0], mesh[1], name=name)
-    raise TypeError(f"mesh must be a TriMesh or a (V, F) tuple, got {type(mesh).__name__}")
+    label = getattr(mesh, "name", None)
+    label = label if isinstance(label, str) and label else name
+    if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):  # trimesh.Trimesh
+        return TriMesh(np.asarray(mesh.vertices), np.asarray(mesh.faces), name=label)
+    if hasattr(mesh, "vertices") and hasattr(mesh, "triangles"):  # open3d.geometry.TriangleMesh
+        return TriMesh(np.asarray(mesh.vertices), np.asarray(mesh.triangles), name=label)
+    if hasattr(mesh, "points") and hasattr(mesh, "cells_dict"):  # meshio.Mesh
+        cells = mesh.cells_dict
+        if "triangle" not in cells:
+            raise MeshError(f"{label}: the meshio.Mesh has no 'triangle' cells (cell types: {', '.join(cells)})")
+        return TriMesh(np.asarray(mesh.points)[:, :3], np.asarray(cells["triangle"]), name=label)
+    raise TypeError(
+        "mesh must be a TriMesh, a (V, F) tuple, a file path, or a trimesh.Trimesh / open3d TriangleMesh / "
+        f"meshio.Mesh, got {type(mesh).__name__}"
+    )
 
 
-def as_vertex_field(values, name: str, n: int | None = None) -> np.ndarray:
+def as_vertex_field(values: ArrayLike, name: str, n: int | None = None) -> np.ndarray:
     """Return ``values`` as a (n,) float64 array, or raise a ParameterError naming ``name``.
 
     Parameters

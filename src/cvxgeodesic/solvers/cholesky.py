@@ -43,10 +43,12 @@ except ImportError:  # pragma: no cover - exercised by forcing backend="scipy" i
 __all__ = ["SymbolicCholesky", "NotPositiveDefiniteError", "cholmod_available", "pardiso_available"]
 
 _FALLBACK_WARNING = (
-    "neither MKL PARDISO (`pip install mkl`) nor scikit-sparse (CHOLMOD) is available: falling back to "
-    "SciPy's SuperLU, which is several times slower for the interior-point solver. To get CHOLMOD on Debian/Ubuntu: "
-    "`apt-get install libsuitesparse-dev` then `pip install scikit-sparse==0.4.16`."
+    "neither MKL PARDISO nor scikit-sparse (CHOLMOD) is available: falling back to SciPy's SuperLU, which is "
+    "several times slower for the interior-point solver. On Linux x86-64: pip install 'cvxgeodesic[pardiso]'; "
+    "elsewhere: pip install 'cvxgeodesic[cholmod]' (needs SuiteSparse, e.g. apt-get install libsuitesparse-dev "
+    "or brew install suite-sparse)."
 )
+_fallback_warned = False  # the warning is given once per process, not once per solver object
 
 
 _SIMPLICIAL_BELOW = 10_000
@@ -151,12 +153,15 @@ class SymbolicCholesky:
             elif _cholmod is not None:
                 backend = "cholmod"
             else:
-                warnings.warn(_FALLBACK_WARNING, RuntimeWarning, stacklevel=2)
+                global _fallback_warned
+                if not _fallback_warned:
+                    _fallback_warned = True
+                    warnings.warn(_FALLBACK_WARNING, RuntimeWarning, stacklevel=2)
                 backend = "scipy"
         elif backend == "cholmod" and _cholmod is None:
             raise ImportError(_FALLBACK_WARNING)
         elif backend == "pardiso" and not pardiso_available():
-            raise ImportError("MKL PARDISO is not available: `pip install mkl` (see requirements.lock)")
+            raise ImportError("MKL PARDISO is not available: pip install 'cvxgeodesic[pardiso]' (Linux/Windows x86-64)")
         self.backend = backend
         self.ordering = ordering
         self.mode = mode if mode != "auto" else ("simplicial" if n < _SIMPLICIAL_BELOW else "supernodal")

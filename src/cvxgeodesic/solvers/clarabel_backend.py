@@ -9,6 +9,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import SolverError
+from ._interrupt import interruptible
 from .problem import BackendResult, ConicProblem
 
 _SOLVED = {"Solved"}
@@ -115,7 +116,8 @@ def solve_clarabel(
         settings.time_limit = float(time_limit)
     solver = clarabel.DefaultSolver(Pu, q, A, b, cones, settings)
     t_setup = time.perf_counter() - t0
-    sol = solver.solve()
+    with interruptible(solver):  # Ctrl-C stops the solve at the next iteration
+        sol = solver.solve()
     status = str(sol.status)
     info = {"iterations": int(sol.iterations), "setup_time": t_setup}
     if status not in _SOLVED | _ALMOST:

@@ -1,0 +1,132 @@
+"""Mesh formats read and written through optional libraries: trimesh (glTF, GLB, 3MF) and meshio (VTK, VTU).
+
+Neither library is a dependency of cvxgeodesic: ``pip install 'cvxgeodesic[io]'`` installs
+both. Each is imported only when a file of its formats is read or written; without it the
+error names the package to install.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import tempfile
+from pathlib import Path
+from typing import Any, BinaryIO
+
+import numpy as np
+
+from ..errors import MeshFormatError, ParameterError
+
+__all__ = ["EXTERNAL_MESH_EXTENSIONS", "EXTERNAL_DISTANCE_EXTENSIONS", "read_external", "write_meshio"]
+
+#: Mesh files read through trimesh (key ``"trimesh"``) or meshio (``"meshio"``).
+_READERS = {".glb": "trimesh", ".gltf": "trimesh", ".3mf": "trimesh", ".vtk": "meshio", ".vtu": "meshio"}
+EXTERNAL_MESH_EXTENSIONS = tuple(_READERS)
+#: Distance files written through meshio (ParaView reads both).
+EXTERNAL_DISTANCE_EXTENSIONS = (".vtu", ".vtk")
+
+_HINT = "pip install 'cvxgeodesic[io]' (or pip install {pkg})"
+
+
+def _import(pkg: str, path: Path, what: str) -> Any:
+    try:
+        if pkg == "trimesh":
+            import trimesh
+
+            return trimesh
+        import meshio
+
+        return meshio
+    except ImportError:
+        raise MeshFormatError(f"{path}: {what} {path.suffix} files needs the optional package {pkg}: "
+                              + _HINT.format(pkg=pkg)) from None
+
+
+def read_external(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Read a glTF/GLB/3MF (trimesh) or VTK/VTU (meshio) file as a polygon soup.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        An existing file whose lower-case suffix is in :data:`EXTERNAL_MESH_EXTENSIONS`.
+
+    Returns
+    -------
+    V : (n, 3) float64 ndarray
+        Vertex positions in the file's order (for a glTF scene of several meshes, the
+        meshes' vertices one after the other, as trimesh concatenates them).
+    idx : (k,) int64 ndarray
+        Concatenated polygon vertex indices.
+    sizes : (p,) int64 ndarray
+        Vertices per polygon (3 for triangles, 4 for meshio quads).
+
+    Raises
+    ------
+    MeshFormatError
+        The library is missing (the message says what to install), cannot read the
+        file, or the file has no triangles.
+    """
+    ext = path.suffix.lower()
+    pkg = _READERS[ext]
+    lib = _import(pkg, path, "reading")
+    try:
+        if pkg == "trimesh":
+            # process=False: no merging or reordering, so indices stay the file's
+            tm = lib.load(str(path), force="mesh", process=False)
+            V = np.asarray(tm.vertices, dtype=np.float64)
+            F = np.asarray(tm.faces, dtype=np.int64)
+            return V, F.ravel(), np.full(F.shape[0], 3, dtype=np.int64)
+        # meshio prints its own error and calls sys.exit(1) on files it cannot parse
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+            mm = lib.read(str(path))
+    except MeshFormatError:
+        raise
+    except (Exception, SystemExit) as exc:  # anything from KeyError to their own ReadError, and meshio's exit
+        detail = f"{type(exc).__name__}: {exc}" if not isinstance(exc, SystemExit) else "not a valid file"
+        if isinstance(exc, ImportError) and ext == ".3mf":  # trimesh's 3MF reader needs networkx
+            detail += "; 3MF files need networkx too: pip install networkx"
+        raise MeshFormatError(f"{path}: {pkg} cannot read the file ({detail})") from None
+    V = np.asarray(mm.points, dtype=np.float64)
+    if V.ndim == 2 and V.shape[1] == 2:
+        V = np.column_stack([V, np.zeros(V.shape[0])])
+    parts, sizes = [], []
+    for block in mm.cells:
+        if block.type in ("triangle", "quad"):
+            data = np.asarray(block.data, dtype=np.int64)
+            parts.append(data.ravel())
+            sizes.append(np.full(data.shape[0], data.shape[1], dtype=np.int64))
+    if not parts:
+        types = ", ".join(sorted({b.type for b in mm.cells})) or "none"
+        raise MeshFormatError(f"{path}: no triangle or quad cells (cell types: {types})")
+    return V, np.concatenate(parts), np.concatenate(sizes)
+
+
+def write_meshio(fh: BinaryIO, V: np.ndarray, F: np.ndarray, d: np.ndarray, name: str, ext: str) -> None:
+    """Write a VTU (XML, binary) or legacy VTK (binary) file with the field as point data ``name``.
+
+    Parameters
+    ----------
+    fh : binary file object
+    V : (n, 3) float ndarray
+    F : (m, 3) int ndarray
+    d : (n,) float ndarray
+    name : str
+    ext : {".vtu", ".vtk"}
+
+    Raises
+    ------
+    ParameterError
+        meshio is not installed (the message says what to install).
+    """
+    try:
+        import meshio
+    except ImportError:
+        raise ParameterError(f"writing {ext} files needs the optional package meshio: "
+                             + _HINT.format(pkg="meshio")) from None
+    mesh = meshio.Mesh(np.asarray(V, dtype=np.float64), [("triangle", np.asarray(F, dtype=np.int64))],
+                       point_data={name: np.asarray(d, dtype=np.float64)})
+    # meshio writes to paths only: write into a private temporary folder, then copy into ``fh``
+    with tempfile.TemporaryDirectory(prefix="cvxgeodesic-") as tmp:
+        out = Path(tmp) / f"field{ext}"
+        mesh.write(out, file_format="vtu" if ext == ".vtu" else "vtk")
+        fh.write(out.read_bytes())
