@@ -608,9 +608,86 @@ def sec_fig9(ctx, plan):
             "crop_vertices": int(used.size), "crop_faces": int(sub.n_faces), "n_isolines": int(len(levels))}
 
 
+def _norm_row(mesh, source, d_exact, normalization):
+    """QCLP and QCQP-Hessian (m = 1) under one normalization of m: errors, deficit, sharpness, time."""
+    from normalization_study import field_metrics
+    from normalization_study import solve as solve_norm
+
+    d_lp, t_lp, _ = solve_norm(mesh, "qclp", source, normalization=normalization)
+    d_h, t_h, info = solve_norm(mesh, "qcqp-hessian", source, normalization=normalization)
+    lp = field_metrics(mesh, d_lp, d_exact, source, d_lp)
+    h = field_metrics(mesh, d_h, d_exact, source, d_lp)
+    return {"normalization": normalization, "qclp": {**lp, "time_s": t_lp},
+            "hessian": {**h, "time_s": t_h, "iterations": info.iterations, "lam": info.lam}}, d_h
+
+
+def sec_norm_resolution(ctx, plan):
+    """One surface at six resolutions: does m = 1 round the same on every one (area) or not (paper)?"""
+    from cvxgeodesic.mesh.generate import _subdivide_midpoint
+
+    base = ctx.mesh(plan.res_base)
+    p0 = base.V[SOURCE]
+    targets = [t for t in (500, 2000, 8000, 20000) if t < base.n_faces]
+    from cvxgeodesic.multires import simplify_mesh  # shortest-edge collapse: stays manifold (QEM did not at 500)
+
+    levels = [(f"{Path(plan.res_base).stem}_se{t}", simplify_mesh(base, t)) for t in targets]
+    levels.append((plan.res_base, base))
+    if not plan.quick:
+        V2, F2 = _subdivide_midpoint(np.array(base.V), np.array(base.F))
+        levels.append((f"{Path(plan.res_base).stem}_sub4", cg.TriMesh(V2, F2, name="bunny subdivided")))
+    out = {"levels": [], "figures": []}
+    for key, mesh in levels:
+        ctx.register(key, mesh)
+        src = int(np.argmin(np.linalg.norm(mesh.V - p0, axis=1)))
+        log(f"  resolution: {key} ({mesh.n_faces} faces), source {src}")
+        d_ex = solve(ctx, mesh, key, "exact", src)["distance"]
+        rows = [_norm_row(mesh, src, d_ex, norm)[0] for norm in ("area", "paper")]
+        out["levels"].append({**mesh_row(mesh), "key": key, "source": src, "rows": rows,
+                              "h_over_sqrt_area": mesh.mean_edge_length / float(np.sqrt(mesh.face_areas.sum()))})
+    return out
+
+
+def sec_norm_remeshing(ctx, plan):
+    """One cylinder, an isotropic and a strongly anisotropic triangulation, against the unrolled distance."""
+    rng = np.random.default_rng(0)
+    n_pts = 2000
+    theta, z = rng.uniform(0, 2 * np.pi, n_pts), rng.uniform(0.05, 1.95, n_pts)
+    P = np.column_stack([np.cos(theta), np.sin(theta), z])
+    dth = np.minimum(np.abs(theta), 2 * np.pi - np.abs(theta))
+    d_pts = np.hypot(dth, z - 1.0)
+    cases = [("isotropic (96 × 32 cells, 1 : 1)", cg.cylinder(96, 32)),
+             ("anisotropic (192 × 8 cells, 1 : 7.6)", cg.cylinder(192, 8))]
+    out = {"cases": [], "agreement": {}, "figures": []}
+    fields = {}
+    for label_text, mesh in cases:
+        src = int(np.argmin(np.linalg.norm(mesh.V - [1.0, 0.0, 1.0], axis=1)))
+        th = np.arctan2(mesh.V[:, 1], mesh.V[:, 0]) - np.arctan2(mesh.V[src, 1], mesh.V[src, 0])
+        th = np.abs((th + np.pi) % (2 * np.pi) - np.pi)
+        d_ex = np.hypot(th, mesh.V[:, 2] - mesh.V[src, 2])
+        rows = []
+        for norm in ("area", "paper"):
+            row, d_h = _norm_row(mesh, src, d_ex, norm)
+            sp_ = cg.surface_point(mesh, P)
+            row["hessian"]["at_points"] = cg.distance_at(mesh, d_h, sp_).tolist()
+            rows.append(row)
+        fields[label_text] = rows
+        out["cases"].append({**mesh_row(mesh), "label": label_text, "source": src, "rows": rows})
+    a, b = (np.array([r["hessian"]["at_points"] for r in fields[c[0]]]) for c in cases)
+    for i, norm in enumerate(("area", "paper")):
+        diff = np.abs(a[i] - b[i])
+        out["agreement"][norm] = {"mean": float(diff.mean()), "max": float(diff.max()),
+                                  "err_iso": float(np.mean(np.abs(a[i] - d_pts) / d_pts)),
+                                  "err_aniso": float(np.mean(np.abs(b[i] - d_pts) / d_pts))}
+    for case in out["cases"]:
+        for row in case["rows"]:
+            row["hessian"].pop("at_points")
+    return out
+
+
 SECTIONS = {
     "table2": sec_table2, "fig2": sec_fig2, "fig3": sec_fig3, "fig4": sec_fig4, "fig5": sec_fig5,
     "fig6": sec_fig6, "fig7": sec_fig7, "fig8": sec_fig8, "fig9": sec_fig9,
+    "norm_resolution": sec_norm_resolution, "norm_remeshing": sec_norm_remeshing,
 }
 
 

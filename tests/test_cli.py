@@ -42,6 +42,15 @@ def test_distance_npy_matches_api(sphere_file, tmp_path):
     np.testing.assert_allclose(np.load(out), expected)
 
 
+@pytest.mark.parametrize("normalization", ["area", "paper"])
+def test_distance_normalization_flag_matches_api(sphere_file, tmp_path, normalization):
+    out = tmp_path / "d.npy"
+    assert main(["distance", str(sphere_file), "-s", "3", "--solver", "clarabel", "--normalization", normalization,
+                 "-q", "-o", str(out)]) == 0
+    expected = cg.geodesic_distance(cg.load_mesh(sphere_file), 3, solver="clarabel", normalization=normalization)
+    np.testing.assert_allclose(np.load(out), expected, atol=1e-12)
+
+
 @pytest.mark.parametrize(
     "args, message",
     [(["distance", "missing.obj", "-s", "0", "-o", "x.ply"], "no such file"),

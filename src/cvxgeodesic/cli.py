@@ -18,6 +18,7 @@ from .api import ALL_METHODS, SOLVERS
 from .cli_sources import add_path_parser, add_point_options
 
 EXIT_USAGE = 2
+M_HELP = "smoothness multiplier m (default 1): λ = m·κ·√area, one rounding on the surface whatever the mesh"
 
 
 def _progress_printer(stream, every: float = 0.5):
@@ -51,7 +52,8 @@ def _cmd_distance(args) -> int:
     log = sys.stderr
     if not args.quiet:
         print(f"{mesh.name}: {mesh.n_file_vertices} vertices, {mesh.n_faces} faces; method {args.method}", file=log)
-    solver = GeodesicSolver(mesh, args.method, m=args.m, lam=args.lam, solver=args.solver)
+    solver = GeodesicSolver(mesh, args.method, m=args.m, lam=args.lam, solver=args.solver,
+                            normalization=args.normalization)
     callback = None if args.quiet else _progress_printer(log)
     res = solver.solve(sources, callback=callback)
     for note in res.info.notes:
@@ -149,7 +151,7 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--source", "-s", type=_vertex_list, action="extend", default=None, metavar="I[,J...]",
                        help="source vertex index in the file's numbering (repeat, or give a list: -s 0,5)")
         add_point_options(p)
-        p.add_argument("--m", type=float, default=1.0, help="smoothness multiplier m, λ = m·100·h/n (default 1)")
+        p.add_argument("--m", type=float, default=1.0, help=M_HELP)
         p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")
         p.add_argument("--quiet", "-q", action="store_true", help="no progress output")
         p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
@@ -159,6 +161,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--method", default="qcqp-hessian", choices=ALL_METHODS, metavar="NAME",
                    help=f"one of: {', '.join(ALL_METHODS)} (default qcqp-hessian)")
     p.add_argument("--lam", type=float, default=None, help="give λ directly (overrides --m)")
+    p.add_argument("--normalization", default="area", choices=("area", "paper"),
+                   help="meaning of --m: 'area' (default) or the paper's λ = m·100·h/n")
     p.add_argument("-o", "--output", required=True,
                    help="output file: .ply (mesh + distance), .npy, .csv, or .vtu/.vtk (needs meshio), in the "
                         "file's vertex numbering")
@@ -186,7 +190,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_point_options(p)
     p.add_argument("--method", default="qcqp-hessian", choices=ALL_METHODS, metavar="NAME",
                    help=f"one of: {', '.join(ALL_METHODS)} (default qcqp-hessian)")
-    p.add_argument("--m", type=float, default=1.0, help="smoothness multiplier m, λ = m·100·h/n (default 1)")
+    p.add_argument("--m", type=float, default=1.0, help=M_HELP)
     p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")
     p.add_argument("--multires", type=int, default=0, metavar="FACES",
                    help="coarse-to-fine approximation: solve on a mesh simplified to FACES faces (default 0: off)")

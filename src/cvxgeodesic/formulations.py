@@ -13,19 +13,15 @@ qcqp-laplacian     QC                           Laplacian
 qcqp-hessian       QC  (recommended)            Hessian
 =================  ===========================  =================
 
-Objective: minimize ``E_stretch + λ E_smooth`` with
-``E_stretch = −(c/n) Σ_i d_i``, ``c = STRETCH_SCALE = 10``, and the paper's
-weight ``λ = m · 10² · h / n`` (§4.2.3). Why: with the paper's literal
-``−Σ d_i``, ``m = 1`` changes nothing measurable (the ``1/n`` in λ makes the
-smoothing force ``n`` times weaker than the stretching force). With the mean
-distance (``c = 1``) the ``n`` cancels, so the effect of ``m`` no longer depends
-on the resolution or the scale of the mesh, but ``m = 1`` over-smooths (on
-bimba the error off the ridge grows from 1.10 % to 1.35 %, the maximum error to
-61 %). ``c = 10`` puts the paper's recommended ``m = 1`` where the paper's
-pictures are: on spot and bimba the ridge's sharpness drops to about 40 % of the
-exact field's (smoother than the heat method) while the error off the ridge
-grows by 1–7 % (numbers in ``docs/method.md``). Both terms scale linearly with
-the mesh, so the solution is exactly scale-equivariant.
+Objective: minimize ``E_stretch + λ E_smooth``. Default (normalization
+``"area"``): ``E_stretch = −(1/|S|) Σ_i M_i d_i``, the mean of ``d`` over the
+surface integrated exactly for the piecewise linear field (``M_i`` a third of
+the area around vertex ``i``), and ``λ = m · κ · √|S|`` (:data:`KAPPA`): the
+discretization of one continuous problem, so one ``m`` is one rounding measured
+on the surface on every triangulation. Normalization ``"paper"``:
+``E_stretch = −(c/n) Σ_i d_i`` with ``c = STRETCH_SCALE = 10`` and the paper's
+``λ = m · 10² · h / n`` (§4.2.3), whose rounding is a fixed number of edges
+wide. Both are scale-equivariant. Measurements: ``docs/method.md``.
 
 Sources (DESIGN §1, "Situation #1"): source vertices are fixed at 0. The exact
 field is a cone around a source, steeper than 1 on the source's incident
@@ -88,7 +84,8 @@ MIN_STRETCH_WEIGHT = 0.05
 NORMALIZATIONS = ("area", "paper")
 #: ``κ`` of ``λ = m · κ · √|S|`` per energy, normalization ``"area"``. Calibrated on bimba (46K faces,
 #: source vertex 0) so that ``m = 1`` rounds the ridge as the paper normalization's ``m = 1`` did there
-#: (ridge sharpness 0.24, 0.4 of the exact field's); docs/method.md has the sweep.
+#: (ridge sharpness 0.24, 0.41 of the exact field's; Laplacian 0.241, Dirichlet 0.243); docs/method.md has
+#: the sweep and what other values of κ trade.
 KAPPA = {"hessian": 3.0e-6, "laplacian": 3.0e-6, "dirichlet": 1.3e-2}
 
 
