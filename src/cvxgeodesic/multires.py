@@ -34,6 +34,7 @@ import time
 import numpy as np
 
 from .errors import MeshError, ParameterError
+from .mesh.geometry import clipped_barycentric
 from .mesh.trimesh import TriMesh
 
 __all__ = ["DEFAULT_MULTIRES_FACES", "SIMPLIFIERS", "SurfaceTransfer", "default_target_faces", "simplify_mesh"]
@@ -217,35 +218,6 @@ def simplify_mesh(mesh: TriMesh, target_faces: int, method: str = "shortest-edge
     return coarse
 
 
-def _barycentric(P: np.ndarray, A: np.ndarray, B: np.ndarray, C: np.ndarray) -> np.ndarray:
-    """(k, 3) barycentric coordinates of points ``P`` in triangles ``(A, B, C)``, clipped to the triangle.
-
-    Degenerate triangles get weight 1 on their corner nearest to the point.
-    """
-    v0, v1, v2 = B - A, C - A, P - A
-    d00 = np.einsum("ij,ij->i", v0, v0)
-    d01 = np.einsum("ij,ij->i", v0, v1)
-    d11 = np.einsum("ij,ij->i", v1, v1)
-    d20 = np.einsum("ij,ij->i", v2, v0)
-    d21 = np.einsum("ij,ij->i", v2, v1)
-    denom = d00 * d11 - d01 * d01
-    good = denom > 1e-14 * np.maximum(d00 * d11, np.finfo(float).tiny)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        v = (d11 * d20 - d01 * d21) / denom
-        w = (d00 * d21 - d01 * d20) / denom
-    W = np.column_stack([1.0 - v - w, v, w])
-    W = np.clip(W, 0.0, 1.0)
-    s = W.sum(axis=1)
-    good &= np.isfinite(s) & (s > 0)
-    W[good] /= s[good, None]
-    if not good.all():
-        bad = np.flatnonzero(~good)
-        dist = np.stack([np.linalg.norm(P[bad] - X[bad], axis=1) for X in (A, B, C)], axis=1)
-        W[bad] = 0.0
-        W[bad, np.argmin(dist, axis=1)] = 1.0
-    return W
-
-
 class SurfaceTransfer:
     """Interpolation of coarse per-vertex fields at points near the coarse surface.
 
@@ -284,7 +256,7 @@ class SurfaceTransfer:
         sqd, fi, C = igl.point_mesh_squared_distance(P, self.coarse.V, F)
         fi = faces[np.asarray(fi, dtype=np.int64)]
         Vt = self.coarse.V[self.coarse.F[fi]]
-        W = _barycentric(np.asarray(C), Vt[:, 0], Vt[:, 1], Vt[:, 2])
+        W = clipped_barycentric(np.asarray(C), Vt[:, 0], Vt[:, 1], Vt[:, 2])
         return fi, W, np.asarray(sqd)
 
     def apply(self, values: np.ndarray, need: np.ndarray | None = None) -> np.ndarray:

@@ -44,6 +44,7 @@ import scipy.sparse as sp
 from numpy.typing import ArrayLike
 
 from .errors import SourceError
+from .mesh.geometry import clipped_barycentric
 from .mesh.trimesh import TriMesh
 
 #: A barycentric coordinate this close to 0 (or 1) counts as exactly 0 (1): the point is on an edge (a vertex).
@@ -209,25 +210,7 @@ def _check_face(p: SurfacePoint, mesh: TriMesh, label: str) -> None:
 # ---------------------------------------------------------------------------------------------------------------
 def _barycentric(T: np.ndarray, X: np.ndarray) -> np.ndarray:
     """(k, 3) barycentric coordinates of points ``X`` (k, 3) in triangles ``T`` (k, 3, 3), clipped to the face."""
-    a, b, c = T[:, 0], T[:, 1], T[:, 2]
-    v0, v1, v2 = b - a, c - a, X - a
-    d00 = np.einsum("ij,ij->i", v0, v0)
-    d01 = np.einsum("ij,ij->i", v0, v1)
-    d11 = np.einsum("ij,ij->i", v1, v1)
-    d20 = np.einsum("ij,ij->i", v2, v0)
-    d21 = np.einsum("ij,ij->i", v2, v1)
-    den = d00 * d11 - d01 * d01
-    with np.errstate(divide="ignore", invalid="ignore"):
-        v = (d11 * d20 - d01 * d21) / den
-        w = (d00 * d21 - d01 * d20) / den
-    B = np.column_stack([1.0 - v - w, v, w])
-    bad = ~np.all(np.isfinite(B), axis=1)
-    if bad.any():  # zero-area face: the nearest corner
-        dist = np.linalg.norm(T[bad] - X[bad, None, :], axis=2)
-        B[bad] = 0.0
-        B[np.flatnonzero(bad), np.argmin(dist, axis=1)] = 1.0
-    B = np.clip(B, 0.0, None)
-    return B / B.sum(axis=1, keepdims=True)
+    return clipped_barycentric(X, T[:, 0], T[:, 1], T[:, 2])
 
 
 def closest_points(mesh: TriMesh, X) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
