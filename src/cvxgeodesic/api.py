@@ -248,6 +248,7 @@ class GeodesicSolver:
         verbose: bool = False,
         multires: bool | int = False,
         multires_polish: bool = False,
+        order: int = 1,
     ):
         t0 = time.perf_counter()
         self.mesh: TriMesh = as_trimesh(mesh)
@@ -271,6 +272,22 @@ class GeodesicSolver:
         if isinstance(max_iter, bool) or not isinstance(max_iter, int | np.integer) or max_iter < 1:
             raise ParameterError(f"max_iter must be a positive integer, got {max_iter!r}")
         self.tol, self.max_iter, self.verbose = float(tol), int(max_iter), bool(verbose)
+        if isinstance(order, bool) or order not in (1, 2):
+            raise ParameterError(f"order must be 1 (P1 distance) or 2 (P2 squared distance), got {order!r}")
+        self.order = int(order)
+        self._order2 = None
+        if self.order == 2:  # P2 elements for d² (cvxgeodesic.elements_p2): its own program and solvers
+            if self.is_baseline or multires:
+                raise ParameterError("order=2 applies to the convex formulations without multires")
+            from .elements_p2 import Order2Strategy
+
+            self.lam = 0.0
+            self.m = None
+            self.energy = None
+            self._order2 = Order2Strategy(self, solver)
+            self.solver_name = self._order2.backend
+            self.setup_time = time.perf_counter() - t0
+            return
 
         if lam is not None:
             if not _is_real(lam) or not np.isfinite(lam) or lam < 0:
@@ -358,6 +375,8 @@ class GeodesicSolver:
             The backend did not reach an optimal solution (for the Hessian energy the
             message adds that it can be indefinite on meshes with sharp corners).
         """
+        if self._order2 is not None:
+            return self._order2.solve(sources, callback=callback)
         src = validate_sources(sources, self.mesh.n_vertices)
         t0 = time.perf_counter()
         if self.is_baseline:
@@ -470,7 +489,8 @@ class GeodesicSolver:
 
 
 def geodesic_distance(mesh, sources, method: str = "qcqp-hessian", m: float = 1.0, solver: str = "auto",
-                      *, lam: float | None = None, tol: float = DEFAULT_TOL, max_iter: int = 200) -> np.ndarray:
+                      *, lam: float | None = None, tol: float = DEFAULT_TOL, max_iter: int = 200,
+                      order: int = 1) -> np.ndarray:
     """Geodesic distance field from source vertices (one-shot form of :class:`GeodesicSolver`).
 
     Parameters
@@ -500,13 +520,13 @@ def geodesic_distance(mesh, sources, method: str = "qcqp-hessian", m: float = 1.
     >>> float(d[0])
     0.0
     """
-    solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter)
+    solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter, order=order)
     return solver_obj.solve(sources).distance
 
 
 def distance_matrix(mesh, vertices, method: str = "qcqp-hessian", m: float = 1.0, solver: str = "auto",
                     progress: bool = False, *, lam: float | None = None, tol: float = DEFAULT_TOL,
-                    max_iter: int = 200, multires: bool | int = False) -> np.ndarray:
+                    max_iter: int = 200, multires: bool | int = False, order: int = 1) -> np.ndarray:
     """Distance fields from several vertices, one row per vertex, with one :class:`GeodesicSolver`.
 
     The per-mesh work (operators, energy matrix, symbolic Cholesky analysis) is
@@ -554,7 +574,7 @@ def distance_matrix(mesh, vertices, method: str = "qcqp-hessian", m: float = 1.0
     uniq, inverse = np.unique(arr, return_inverse=True)
     uniq = validate_sources(uniq, mesh.n_vertices)
     solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter,
-                                multires=multires)
+                                multires=multires, order=order)
     results = solver_obj.solve_many(uniq.tolist(), progress=progress)
     rows = np.stack([r.distance for r in results])
     return rows[np.asarray(inverse).ravel()]

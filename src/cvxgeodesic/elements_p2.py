@@ -50,10 +50,13 @@ from .operators.gradient import gradient_blocks
 SAMPLES = {
     "nodes": np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 0.5, 0.5], [0.5, 0, 0.5], [0.5, 0.5, 0]], float),
 }
+SAMPLES["corners"] = SAMPLES["nodes"][:3]
 SAMPLES["nodes+centroid"] = np.vstack([SAMPLES["nodes"], [[1 / 3, 1 / 3, 1 / 3]]])
 SAMPLES["nodes+gauss"] = np.vstack([SAMPLES["nodes"], [[2 / 3, 1 / 6, 1 / 6], [1 / 6, 2 / 3, 1 / 6],
                                                       [1 / 6, 1 / 6, 2 / 3]]])
 WEIGHTS = ("lumped", "p2")
+#: Cutting-plane rounds add a cone where ``|∇φ|² − 4φ`` exceeds this fraction of ``4φ`` (flat faces only).
+REFINE_TOL = 1e-7
 #: Edges shorter than this fraction of the bounding-box diagonal get no 1-D cone (their DOF is tied linearly).
 MIN_EDGE = 1e-9
 #: Tolerance on barycentric coordinates for "this source point is a vertex / on an edge / a sample point".
@@ -143,6 +146,24 @@ class P2Space:
             g = gradient_blocks(mesh)
         g[deg] = 0.0
         self.lam_grad = g
+
+    @property
+    def flat_faces(self) -> np.ndarray:
+        """(m,) bool ndarray: proper faces whose edge-neighbours all lie in their plane (|cos| ≥ 1 − 1e-10)."""
+        if getattr(self, "_flat", None) is None:
+            nrm = self.mesh.face_normals_unnormalized
+            with np.errstate(divide="ignore", invalid="ignore"):
+                nrm = nrm / np.linalg.norm(nrm, axis=1, keepdims=True)
+            fe = self.face_edges.ravel()
+            fo = np.repeat(np.arange(self.mesh.n_faces), 3)
+            _, first = np.unique(fe, return_index=True)
+            ref = np.zeros((self.n_edges, 3))
+            ref[fe[first]] = nrm[fo[first]]
+            cos = np.abs(np.einsum("ij,ij->i", nrm[fo], ref[fe]))
+            edge_cos = np.ones(self.n_edges)
+            np.minimum.at(edge_cos, fe, np.where(np.isfinite(cos), cos, 0.0))
+            self._flat = (edge_cos[self.face_edges] >= 1 - 1e-10).all(axis=1) & ~self.degenerate
+        return self._flat
 
     def weights(self, kind: str = "lumped") -> np.ndarray:
         """Objective weights ``w`` (``∫φ ≈ wᵀφ``).
@@ -360,6 +381,7 @@ class P2Builder:
 
     def __init__(self, mesh: TriMesh, samples: str = "nodes", weights: str = "p2", source_hessian: bool = False, cone_scale: str = "dijkstra"):
         self.source_hessian = bool(source_hessian)
+        self.hess_lower = False
         self.cone_scale = cone_scale
         if samples not in SAMPLES:
             raise ParameterError(f"samples must be one of {tuple(SAMPLES)}, got {samples!r}")
@@ -428,11 +450,30 @@ class P2Builder:
         self.cone_vertex = np.where(self.cone_corner >= 0,
                                     mesh.F[self.cone_face, np.maximum(self.cone_corner, 0)], -1)
 
-    def build(self, sources) -> P2Problem:
-        """The program for one set of sources (see :func:`parse_sources`)."""
+    def build(self, sources, extra=None) -> P2Problem:
+        """The program for one set of sources (see :func:`parse_sources`).
+
+        Parameters
+        ----------
+        sources
+            Vertex indices and/or points (see :func:`parse_sources`).
+        extra : tuple (faces (k,) int ndarray, bary (k, 3) float ndarray), optional
+            Additional cone sample points (from :func:`max_violation`).
+        """
         mesh, space = self.mesh, self.space
         n = mesh.n_vertices
         vsrc, points = parse_sources(sources, mesh)
+        G0, h0, cone_face, cone_bary, cone_vertex = self.G, self.h, self.cone_face, self.cone_bary, self.cone_vertex
+        if extra is not None and len(extra[0]):
+            ef, eb = np.asarray(extra[0], dtype=np.int64), np.asarray(extra[1], dtype=float)
+            ok = ~space.degenerate[ef]
+            ef, eb = ef[ok], eb[ok]
+            N, dN = p2_basis(eb)
+            Gx, hx = _cone_rows(N, np.einsum("kai,kci->kca", dN, space.lam_grad[ef]))
+            G0, h0 = np.concatenate([G0, Gx]), np.concatenate([h0, hx])
+            cone_face = np.concatenate([cone_face, ef])
+            cone_bary = np.concatenate([cone_bary, eb])
+            cone_vertex = np.concatenate([cone_vertex, -np.ones(ef.size, dtype=np.int64)])
         if mesh.n_faces == 0 or np.all(space.degenerate):
             raise MeshError(f"{mesh.name}: every face is degenerate; order 2 needs at least one proper face")
         seed = np.concatenate([vsrc, *[mesh.F[p.face] for p in points]]) if points else vsrc
@@ -442,8 +483,8 @@ class P2Builder:
         reach = np.concatenate([reach_v, reach_v[E[:, 0]] & reach_v[E[:, 1]]])
         fixed = ~reach
         fixed[vsrc] = True
-        keep = ~np.isin(self.cone_vertex, vsrc)
-        keep &= reach[self.cone_dofs].all(axis=1)
+        keep = ~np.isin(cone_vertex, vsrc)
+        keep &= reach[space.face_dofs[cone_face]].all(axis=1)
         rows, cols, vals = [], [], []
         r = 0
         # vertex sources: zero derivative along every incident edge at s: 4 φ_mid − φ_j − 3 φ_s = 0 (φ_s fixed 0)
@@ -495,7 +536,7 @@ class P2Builder:
                     vals += g.tolist()
                     r += 1
                 # a sample coinciding with the point has a degenerate cone there
-                same = (self.cone_face == f) & (np.abs(self.cone_bary - bary_f).max(axis=1) < 1e-12)
+                same = (cone_face == f) & (np.abs(cone_bary - bary_f).max(axis=1) < 1e-12)
                 keep &= ~same
         extra_G, extra_h, extra_f = [], [], []
         if self.source_hessian:
@@ -515,6 +556,19 @@ class P2Builder:
                 extra_G.append(Gq)
                 extra_h.append(np.tile([2.0, 0.0, 0.0, 0.0], (sf.size, 1)))
                 extra_f.append(sf)
+        if self.hess_lower:
+            # Hess φ ≽ 2I on every proper face: the exact polyhedral d² satisfies it on every face the cut locus
+            # misses (each window is |x − p'|² or (σ + |x − v|)²), and it makes |∇φ|² − 4φ convex on the face,
+            # so the cones at the corners then hold on the whole face
+            hf = np.flatnonzero(~space.degenerate & reach[space.face_dofs].all(axis=1))
+            Hq = 0.5 * space.hessian_rows(hf)
+            Gq = np.zeros((hf.size, 4, 6))
+            Gq[:, 0] = -(Hq[:, 0, 0] + Hq[:, 1, 1])
+            Gq[:, 1] = -(Hq[:, 0, 0] - Hq[:, 1, 1])
+            Gq[:, 2] = -2 * Hq[:, 0, 1]
+            extra_G.append(Gq)
+            extra_h.append(np.tile([-2.0, 0.0, 0.0, 0.0], (hf.size, 1)))
+            extra_f.append(hf)
         Emat = sp.csr_matrix((vals, (rows, cols)), shape=(r, space.n_dofs))
         # fixed DOFs leave the equalities; drop rows that are then empty
         Emat = Emat[:, :].tolil()
@@ -523,10 +577,11 @@ class P2Builder:
         Emat.eliminate_zeros()
         nonempty = np.diff(Emat.indptr) > 0
         Emat = Emat[nonempty]
-        c = -self.w.copy()
+        # the mean of φ, not its integral: the backends' absolute gap tolerance then means the same on any area
+        c = -self.w / max(self.w.sum(), 1e-300)
         c[fixed] = 0.0
-        cf = np.concatenate([self.cone_face[keep], *extra_f])
-        cb = self.cone_bary[keep]
+        cf = np.concatenate([cone_face[keep], *extra_f])
+        cb = cone_bary[keep]
         if self.cone_scale == "dijkstra" and vsrc.size:
             # ‖(√a ∇φ, φ − a)‖ ≤ φ + a is |∇φ|² ≤ 4φ for every a > 0; a ≈ φ at the sample centres the cone there
             from scipy.sparse.csgraph import dijkstra
@@ -534,13 +589,13 @@ class P2Builder:
             dv = np.where(np.isfinite(dv), dv, 0.0)
             h2 = np.mean(mesh.face_longest_edges[cf[: cb.shape[0]]]) ** 2
             a = np.maximum(np.einsum("ki,ki->k", cb, dv[mesh.F[cf[: cb.shape[0]]]]) ** 2, h2)
-            Gk = self.G[keep].copy()
-            hk = self.h[keep].copy()
+            Gk = G0[keep].copy()
+            hk = h0[keep].copy()
             Gk[:, 1:3] *= np.sqrt(a)[:, None, None]
             hk[:, 0] = a
             hk[:, 3] = -a
         else:
-            Gk, hk = self.G[keep], self.h[keep]
+            Gk, hk = G0[keep], h0[keep]
         Gall = np.concatenate([Gk, *extra_G])
         hall = np.concatenate([hk, *extra_h])
         # a fixed DOF is 0: its columns do not matter, but zero them so backends need not know
@@ -560,6 +615,79 @@ def _frame(mesh: TriMesh, f: int) -> tuple[np.ndarray, np.ndarray]:
     nrm = np.cross(V[F[f, 1]] - V[F[f, 0]], V[F[f, 2]] - V[F[f, 0]])
     ey = np.cross(nrm / np.linalg.norm(nrm), ex)
     return ex, ey
+
+
+def max_violation(space: P2Space, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Largest ``v = |∇φ|² − 4φ`` on each face, exactly (``v`` is itself a quadratic on the face).
+
+    Parameters
+    ----------
+    space : P2Space
+    x : (n_dofs,) float ndarray
+        ``φ`` (finite).
+
+    Returns
+    -------
+    vmax : (m,) float ndarray
+        ``max_T v`` (NaN-free; 0 on degenerate faces).
+    bary : (m, 3) float ndarray
+        Where it is reached.
+    phi_at : (m,) float ndarray
+        ``φ`` there.
+    """
+    nodes = SAMPLES["nodes"]
+    N, grad = space.face_cones(nodes)
+    xf = x[space.face_dofs]
+    g = np.einsum("tsca,ta->tsc", grad, xf)
+    v = (g**2).sum(-1) - 4 * np.einsum("sa,ta->ts", N, xf)  # nodal values of the quadratic v
+    # candidates: corners, edge extrema, interior extremum, in barycentric coordinates (λ1, λ2), λ0 = 1 − λ1 − λ2
+    m = xf.shape[0]
+    cands = [np.eye(3)[None].repeat(m, 0)]
+    # v(λ) = Σ_a v_a N_a(λ): write v = c0 + b·y + yᵀ A y with y = (λ1, λ2)
+    def at(b3):
+        Nn, _ = p2_basis(b3.reshape(-1, 3))
+        return Nn.reshape(b3.shape[:-1] + (6,))
+    # fit the quadratic in y from its nodal values (exact: P2 is unisolvent on the nodes)
+    Y = nodes[:, 1:]
+    Mfit = np.column_stack([np.ones(6), Y[:, 0], Y[:, 1], Y[:, 0] ** 2, Y[:, 0] * Y[:, 1], Y[:, 1] ** 2])
+    coef = np.linalg.solve(Mfit, v.T).T  # (m, 6): c, b1, b2, a11, a12, a22
+    c0, b1, b2, a11, a12, a22 = coef.T
+    # interior stationary point: [2a11 a12; a12 2a22] y = −b
+    det = 4 * a11 * a22 - a12**2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        y1 = (-b1 * 2 * a22 + b2 * a12) / det
+        y2 = (-b2 * 2 * a11 + b1 * a12) / det
+    inter = np.stack([1 - y1 - y2, y1, y2], axis=1)
+    inter[~np.isfinite(inter).all(axis=1)] = 1 / 3
+    cands.append(inter[:, None])
+    # edge stationary points: along each edge, v is a 1-D quadratic in t through its three nodal values
+    for k in range(3):
+        i, j = (k + 1) % 3, (k + 2) % 3
+        vi, vm, vj = v[:, i], v[:, 3 + k], v[:, j]
+        # q(t) = vi (1−t)(1−2t) + vm 4t(1−t) + vj t(2t−1); q'(t) = 0
+        A2 = 2 * vi - 4 * vm + 2 * vj
+        B1 = -3 * vi + 4 * vm - vj
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = np.clip(-B1 / (2 * A2), 0.0, 1.0)
+        t = np.where(np.isfinite(t), t, 0.5)
+        bb = np.zeros((m, 3))
+        bb[:, i] = 1 - t
+        bb[:, j] = t
+        cands.append(bb[:, None])
+    C = np.concatenate(cands, axis=1)  # (m, c, 3)
+    inside = (C >= -1e-12).all(axis=2)
+    C = np.clip(C, 0.0, None)
+    C /= C.sum(axis=2, keepdims=True)
+    Nc = at(C)  # (m, c, 6)
+    vc = np.einsum("tca,ta->tc", Nc, v)
+    vc[~inside] = -np.inf
+    best = np.argmax(vc, axis=1)
+    r = np.arange(m)
+    vmax = vc[r, best]
+    vmax[space.degenerate] = 0.0
+    bary = C[r, best]
+    phi_at = np.einsum("ta,ta->t", Nc[r, best], xf)
+    return vmax, bary, phi_at
 
 
 # --------------------------------------------------------------------------- Clarabel backend
@@ -676,6 +804,106 @@ class P2Field:
         return np.sqrt(np.maximum(self.squared_distance_at(faces, bary), 0.0))
 
 
+class SplitMesh:
+    """A mesh with source points inserted as vertices (each face holding one is split into 2 or 3 faces).
+
+    Face ``f`` of the original mesh keeps its index for its first piece; the other pieces are appended.
+    Original vertices keep their indices; point ``i`` becomes vertex ``n + i``.
+
+    Parameters
+    ----------
+    mesh : TriMesh
+    points : list of objects with ``face`` and normalized ``bary`` (on an edge or inside a face)
+
+    Raises
+    ------
+    SourceError
+        Two points on one face.
+    """
+
+    def __init__(self, mesh: TriMesh, points):
+        n = mesh.n_vertices
+        F = [row for row in mesh.F.tolist()]
+        V = [mesh.V]
+        self.pieces: dict[int, list[tuple[int, int, np.ndarray]]] = {}  # face -> [(corner k, piece, bary)]
+        new_ids = []
+        for i, p in enumerate(points):
+            vid = n + i
+            new_ids.append(vid)
+            V.append((p.bary @ mesh.V[mesh.F[p.face]])[None])
+            nz = np.flatnonzero(p.bary > 0)
+            corners = mesh.F[p.face, nz]
+            if nz.size == 2:
+                fs = np.flatnonzero((mesh.F == corners[0]).any(axis=1) & (mesh.F == corners[1]).any(axis=1))
+            else:
+                fs = np.array([p.face])
+            for f in fs.tolist():
+                if f in self.pieces:
+                    raise SourceError(f"two source points on face {f}: order 2 takes at most one per face")
+                beta = np.zeros(3)
+                for kk in range(3):
+                    hit = np.flatnonzero(corners == mesh.F[f, kk])
+                    if hit.size:
+                        beta[kk] = p.bary[nz[hit[0]]]
+                lst = []
+                for k in np.flatnonzero(beta > 0).tolist():
+                    tri = list(mesh.F[f])
+                    tri[k] = vid
+                    if not lst:
+                        F[f] = tri
+                        idx = f
+                    else:
+                        F.append(tri)
+                        idx = len(F) - 1
+                    lst.append((k, idx, beta))
+                self.pieces[f] = lst
+        self.mesh = TriMesh(np.vstack(V), np.asarray(F, dtype=np.int64), name=mesh.name)
+        self.point_vertices = np.asarray(new_ids, dtype=np.int64)
+        self.n_original = n
+
+    def locate(self, faces: np.ndarray, bary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Original (face, bary) pairs → (piece, bary in the piece)."""
+        faces = faces.copy()
+        bary = bary.copy()
+        for r, f in enumerate(faces.tolist()):
+            lst = self.pieces.get(f)
+            if not lst:
+                continue
+            lam = bary[r]
+            beta = lst[0][2]
+            ratios = [lam[k] / beta[k] for k, _, _ in lst]
+            j = int(np.argmin(ratios))
+            k, idx, _ = lst[j]
+            mu = lam - ratios[j] * beta
+            mu[k] = ratios[j]  # corner k of the piece is the inserted point
+            mu = np.clip(mu, 0.0, None)
+            faces[r], bary[r] = idx, mu / mu.sum()
+        return faces, bary
+
+
+class SplitP2Field(P2Field):
+    """:class:`P2Field` of a :class:`SplitMesh`, queried with the original mesh's faces."""
+
+    def __init__(self, original: TriMesh, split: SplitMesh, phi: np.ndarray, space: P2Space | None = None):
+        super().__init__(split.mesh, phi, space)
+        self.original = original
+        self.split = split
+
+    @property
+    def vertex_distance(self) -> np.ndarray:
+        return super().vertex_distance[: self.split.n_original]
+
+    def squared_distance_at(self, faces, bary) -> np.ndarray:
+        faces = np.atleast_1d(np.asarray(faces))
+        bary = np.atleast_2d(np.asarray(bary, dtype=float))
+        if faces.ndim == 1 and np.issubdtype(faces.dtype, np.integer) and bary.shape == (faces.size, 3) \
+                and (faces.size == 0 or (faces.min() >= 0 and faces.max() < self.original.n_faces)):
+            faces, bary = self.split.locate(faces, bary)
+        else:
+            raise ParameterError(f"faces must be indices in [0, {self.original.n_faces}) and bary of shape (k, 3)")
+        return super().squared_distance_at(faces, bary)
+
+
 def p2_field_at(field_: P2Field, faces, bary) -> np.ndarray:
     """Distance at points inside faces of a :class:`P2Field` (``field_.distance_at``)."""
     return field_.distance_at(faces, bary)
@@ -683,6 +911,14 @@ def p2_field_at(field_: P2Field, faces, bary) -> np.ndarray:
 
 # --------------------------------------------------------------------------- API strategy
 ORDER2_METHODS = ("qclp",)
+
+
+def _default_backend() -> str:
+    try:
+        from .solvers import ipm_soc  # noqa: F401
+    except ImportError:
+        return "clarabel"
+    return "ipm"
 
 
 class Order2Strategy:
@@ -697,7 +933,8 @@ class Order2Strategy:
         See :class:`P2Builder`.
     """
 
-    def __init__(self, solver, backend: str = "auto", *, samples: str = "nodes", weights: str = "lumped"):
+    def __init__(self, solver, backend: str = "auto", *, samples: str = "nodes", weights: str = "p2",
+                 refine: int = 4):
         from .api import _unit_mesh
 
         if solver.method not in ORDER2_METHODS:
@@ -705,9 +942,10 @@ class Order2Strategy:
                 f"order=2 is implemented for {', '.join(ORDER2_METHODS)}, not for {solver.method!r} "
                 "(no consistent P2 smoothing energy for d² yet; see docs/order2.md)")
         self.owner = solver
+        self.samples, self.weights, self.refine = samples, weights, int(refine)
         unit, self.scale = _unit_mesh(solver.mesh)
         self.builder = P2Builder(unit, samples=samples, weights=weights)
-        self.backend = "ipm" if backend == "auto" else backend
+        self.backend = _default_backend() if backend == "auto" else backend
         self._fallback = backend == "auto"
         self._ipm = None
         if self.backend == "ipm":
@@ -715,16 +953,12 @@ class Order2Strategy:
 
             self._ipm = P2InteriorPoint(self.builder)
 
-    def solve(self, sources, callback=None):
-        from .api import GeodesicResult, SolveInfo
-
-        t0 = time.perf_counter()
+    def _solve_once(self, problem: P2Problem, ipm, callback, notes: list[str]) -> dict:
+        """One conic solve: the structured solver, with Clarabel as the fallback under ``solver="auto"``."""
         own = self.owner
-        problem = self.builder.build(sources)
-        notes = list(problem.notes)
-        if self._ipm is not None:
+        if ipm is not None:
             try:
-                res = self._ipm.solve(problem, tol=own.tol, max_iter=own.max_iter, callback=callback)
+                res = ipm.solve(problem, tol=own.tol, max_iter=own.max_iter, callback=callback)
             except SolverError as exc:
                 if not self._fallback:
                     raise
@@ -741,15 +975,64 @@ class Order2Strategy:
                         pass
         else:
             res = solve_p2_clarabel(problem, tol=own.tol, max_iter=own.max_iter, verbose=own.verbose)
+        return res
+
+    def solve(self, sources, callback=None):
+        from .api import GeodesicResult, SolveInfo
+
+        t0 = time.perf_counter()
+        own = self.owner
+        vsrc, points = parse_sources(sources, own.mesh)
+        builder, split, ipm = self.builder, None, self._ipm
+        if points:
+            # a point inside a face becomes a vertex of a locally split mesh (measured: imposing φ(p) = 0,
+            # ∇φ(p) = 0 on the unsplit face leaves 2–7e-3 errors on a flat grid; see docs/order2.md)
+            split = SplitMesh(own.mesh, points)
+            # the inserted points lie in the mesh's faces, so the bounding box and the unit scale do not change
+            sm = split.mesh
+            unit = TriMesh(sm.V / self.scale, sm.F, name=sm.name) if self.scale != 1.0 else sm
+            builder = P2Builder(unit, samples=self.samples, weights=self.weights)
+            if ipm is not None:
+                from .solvers.ipm_soc import P2InteriorPoint
+
+                ipm = P2InteriorPoint(builder)
+            sources = np.concatenate([vsrc, split.point_vertices])
+        problem = builder.build(sources)
+        notes = list(problem.notes)
+        res = self._solve_once(problem, ipm, callback, notes)
+        # cutting planes on flat patches: the corner/midpoint cones leave |∇φ|² ≤ 4φ free between the samples, and
+        # there d² is exactly quadratic, so a cone at each face's worst point closes the gap (docs/order2.md)
+        flat = builder.space.flat_faces
+        extra_f, extra_b = np.zeros(0, dtype=np.int64), np.zeros((0, 3))
+        rounds = 0
+        while rounds < self.refine and flat.any():
+            x = np.where(problem.fixed, 0.0, res["x"])
+            vmax, bary, phi_at = max_violation(builder.space, x)
+            rel = vmax / np.maximum(4 * phi_at, 1e-300)
+            add = np.flatnonzero(flat & (rel > REFINE_TOL) & (vmax > 1e-15))
+            if add.size == 0:
+                break
+            extra_f, extra_b = np.concatenate([extra_f, add]), np.concatenate([extra_b, bary[add]])
+            problem = builder.build(sources, extra=(extra_f, extra_b))
+            res = self._solve_once(problem, ipm, callback, notes)
+            rounds += 1
+        if rounds:
+            notes.append(f"{rounds} cutting-plane round(s) on flat faces added {extra_f.size} cone(s)")
+        if split is not None:
+            notes.append(f"{len(points)} source point(s) inserted as vertices ({split.mesh.n_faces - own.mesh.n_faces} "
+                         "face(s) added; new symbolic analysis for this solve)")
         phi = res["x"] * self.scale**2
         n = own.mesh.n_vertices
-        E = own.mesh.edges
+        bm = builder.mesh
+        E = bm.edges
         unreach = np.concatenate([problem.unreachable_vertices,
                                   problem.unreachable_vertices[E[:, 0]] | problem.unreachable_vertices[E[:, 1]]])
         phi[unreach] = np.inf
-        fld = P2Field(own.mesh, phi, self.builder.space)
-        d = fld.vertex_distance
-        vsrc, _ = parse_sources(sources, own.mesh)
+        if split is None:
+            fld = P2Field(own.mesh, phi, builder.space)
+        else:
+            fld = SplitP2Field(own.mesh, split, phi, builder.space)
+        d = fld.vertex_distance.copy()
         d[vsrc] = 0.0
         info = SolveInfo(
             method=own.method, solver=res["solver"], status=res["status"], iterations=res["iterations"],
