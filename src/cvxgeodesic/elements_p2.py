@@ -379,7 +379,8 @@ class P2Builder:
     weights : {"lumped", "p2"}
     """
 
-    def __init__(self, mesh: TriMesh, samples: str = "nodes", weights: str = "p2", source_hessian: bool = False, cone_scale: str = "dijkstra"):
+    def __init__(self, mesh: TriMesh, samples: str = "nodes", weights: str = "p2", source_hessian: bool = False,
+                 cone_scale: str = "dijkstra"):
         self.source_hessian = bool(source_hessian)
         self.hess_lower = False
         self.cone_scale = cone_scale
@@ -945,7 +946,8 @@ class Order2Strategy:
         self.samples, self.weights, self.refine = samples, weights, int(refine)
         unit, self.scale = _unit_mesh(solver.mesh)
         self.builder = P2Builder(unit, samples=samples, weights=weights)
-        self.backend = _default_backend() if backend == "auto" else backend
+        # "auto" is Clarabel: the structured solver (solvers/ipm_soc.py) does not yet converge reliably here
+        self.backend = "clarabel" if backend == "auto" else backend
         self._fallback = backend == "auto"
         self._ipm = None
         if self.backend == "ipm":
