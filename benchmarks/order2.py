@@ -1,6 +1,6 @@
 """Order 2 (P2 squared distance) against order 1 (P1 qclp), heat, FMM and exact MMP.
 
-Usage: ``PYTHONPATH=src python benchmarks/order2.py OUT.json [mesh ...]``; meshes are names in
+Usage: ``PYTHONPATH=src python benchmarks/order2.py [--weights=p2|lumped] OUT.json [mesh ...]``; meshes are names in
 ../shared/meshes (``thingi10k_small`` expands to its files). Source vertex 0; errors are relative,
 per vertex, sources excluded, against pygeodesic's exact MMP. Times are wall-clock on whatever
 machine runs it (state its load when you publish them).
@@ -52,6 +52,10 @@ def run(name: str) -> dict:
 
 def main(argv):
     warnings.simplefilter("ignore")
+    if argv[0].startswith("--weights="):
+        import cvxgeodesic.elements_p2 as p2
+
+        p2.DEFAULT_WEIGHTS = argv.pop(0).split("=", 1)[1]
     dest = Path(argv[0])
     names = []
     for a in argv[1:]:

@@ -9,6 +9,7 @@ import pytest
 from scipy.spatial import Delaunay
 
 import cvxgeodesic as cg
+from conftest import shared_mesh_path
 from cvxgeodesic.elements_p2 import (
     P2Builder,
     P2Space,
@@ -18,8 +19,6 @@ from cvxgeodesic.elements_p2 import (
     solve_p2_clarabel,
 )
 from cvxgeodesic.errors import ParameterError, SourceError
-
-from conftest import shared_mesh_path
 
 FLAT_TOL = 1e-5  # max vertex error / largest distance on flat meshes (issue 17)
 

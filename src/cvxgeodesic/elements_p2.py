@@ -55,6 +55,8 @@ SAMPLES["nodes+centroid"] = np.vstack([SAMPLES["nodes"], [[1 / 3, 1 / 3, 1 / 3]]
 SAMPLES["nodes+gauss"] = np.vstack([SAMPLES["nodes"], [[2 / 3, 1 / 6, 1 / 6], [1 / 6, 2 / 3, 1 / 6],
                                                       [1 / 6, 1 / 6, 2 / 3]]])
 WEIGHTS = ("lumped", "p2")
+#: Objective weights used by the API (see docs/order2.md for the measurement behind the choice).
+DEFAULT_WEIGHTS = "p2"
 #: Cutting-plane rounds add a cone where ``|∇φ|² − 4φ`` exceeds this fraction of ``4φ`` (flat faces only).
 REFINE_TOL = 1e-7
 #: Edges shorter than this fraction of the bounding-box diagonal get no 1-D cone (their DOF is tied linearly).
@@ -934,8 +936,9 @@ class Order2Strategy:
         See :class:`P2Builder`.
     """
 
-    def __init__(self, solver, backend: str = "auto", *, samples: str = "nodes", weights: str = "p2",
+    def __init__(self, solver, backend: str = "auto", *, samples: str = "nodes", weights: str | None = None,
                  refine: int = 4):
+        weights = DEFAULT_WEIGHTS if weights is None else weights
         from .api import _unit_mesh
 
         if solver.method not in ORDER2_METHODS:
