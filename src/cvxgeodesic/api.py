@@ -195,6 +195,13 @@ class GeodesicSolver:
         ``max_diff_to_coarse_transfer``, the largest difference between the
         transferred and the optimal field. The interior-point solver takes no
         warm start yet, so this costs a coarse solve *more* than a direct solve.
+    order : {1, 2}
+        ``2``: second-order elements for the squared distance (``method="qclp"`` only;
+        :mod:`cvxgeodesic.elements_p2`, ``docs/order2.md``): exact on flat regions whatever
+        the triangle shapes, sources may also be ``(face, bary)`` points, and
+        ``info.extra["p2_field"].distance_at(faces, bary)`` evaluates the field inside
+        faces. Solved with Clarabel by default (``solver="ipm"``: the experimental
+        structured solver). Not with ``multires`` or the baselines.
 
     Raises
     ------
@@ -357,7 +364,8 @@ class GeodesicSolver:
         Parameters
         ----------
         sources : int or sequence of int
-            Source vertex indices (distinct, in ``[0, n)``).
+            Source vertex indices (distinct, in ``[0, n)``). With ``order=2`` also
+            ``(face, bary)`` points or objects with ``.face`` and ``.bary``.
         callback : callable, optional
             ``callback(iteration, info_dict)`` after every interior-point
             iteration of the ``"ipm"`` backend (used for progress reports).
