@@ -73,7 +73,7 @@ def order2(mesh, src, **kw):
 def flat_error(mesh, src) -> float:
     res = order2(mesh, src)
     ex = euclid_from(mesh, src)
-    assert res.info.status == "optimal"
+    assert res.info.status in ("optimal", "almost_optimal")  # Clarabel: AlmostSolved on the aspect-1000 needle
     return float(np.abs(res.distance - ex).max() / ex.max())
 
 

@@ -54,9 +54,9 @@ SAMPLES["corners"] = SAMPLES["nodes"][:3]
 SAMPLES["nodes+centroid"] = np.vstack([SAMPLES["nodes"], [[1 / 3, 1 / 3, 1 / 3]]])
 SAMPLES["nodes+gauss"] = np.vstack([SAMPLES["nodes"], [[2 / 3, 1 / 6, 1 / 6], [1 / 6, 2 / 3, 1 / 6],
                                                       [1 / 6, 1 / 6, 2 / 3]]])
-WEIGHTS = ("lumped", "p2")
+WEIGHTS = ("lumped", "p2", "mixed")
 #: Objective weights used by the API (see docs/order2.md for the measurement behind the choice).
-DEFAULT_WEIGHTS = "p2"
+DEFAULT_WEIGHTS = "lumped"
 #: Cutting-plane rounds add a cone where ``|∇φ|² − 4φ`` exceeds this fraction of ``4φ`` (flat faces only).
 REFINE_TOL = 1e-7
 #: Edges shorter than this fraction of the bounding-box diagonal get no 1-D cone (their DOF is tied linearly).
@@ -185,6 +185,8 @@ class P2Space:
             per = np.repeat(A[:, None] / 6.0, 6, axis=1)
         elif kind == "p2":
             per = np.hstack([np.zeros((A.size, 3)), np.repeat(A[:, None] / 3.0, 3, axis=1)])
+        elif kind == "mixed":
+            per = np.hstack([np.repeat(A[:, None] / 12.0, 3, axis=1), np.repeat(A[:, None] / 4.0, 3, axis=1)])
         else:
             raise ParameterError(f"weights must be one of {WEIGHTS}, got {kind!r}")
         return np.bincount(self.face_dofs.ravel(), per.ravel(), minlength=self.n_dofs)
@@ -1018,9 +1020,18 @@ class Order2Strategy:
             if add.size == 0:
                 break
             extra_f, extra_b = np.concatenate([extra_f, add]), np.concatenate([extra_b, bary[add]])
-            problem = builder.build(sources, extra=(extra_f, extra_b))
-            res = self._solve_once(problem, ipm, callback, notes)
+            cand = builder.build(sources, extra=(extra_f, extra_b))
+            try:
+                res_c = self._solve_once(cand, ipm, callback, notes)
+            except SolverError:
+                res_c = None
             rounds += 1
+            if res_c is None or (res_c["status"] != "optimal" and res["status"] == "optimal"):
+                # measured on a needle strip of aspect 1000: a round that only reached "almost" was worse (4.8e-5)
+                # than the optimal solve before it (1.3e-7); keep the last fully solved round
+                notes.append(f"cutting-plane round {rounds} not fully solved; kept round {rounds - 1}")
+                break
+            problem, res = cand, res_c
         if rounds:
             notes.append(f"{rounds} cutting-plane round(s) on flat faces added {extra_f.size} cone(s)")
         if split is not None:
