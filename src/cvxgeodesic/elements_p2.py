@@ -14,15 +14,19 @@ exactly, so flat distances come out exact on triangles of any shape.
 Discretization (choices and measurements in ``docs/order2.md``):
 
 * the cone is imposed at sample points of every face, by default its three corners and
-  three edge midpoints (:data:`SAMPLES`);
-* the objective is ``Σ w_a φ_a`` with lumped weights ``w_a = A/6`` per node of each
-  face (``weights="lumped"``; the consistent P2 weights, 0 at corners and ``A/3`` at
-  midpoints, are ``weights="p2"``);
+  three edge midpoints (:data:`SAMPLES`), with the cone centred near the expected ``φ``
+  (``‖(√a ∇φ, φ − a)‖ ≤ φ + a`` is the same cone for every ``a > 0``);
+* on *flat* faces, cutting planes: after a solve, a cone is added where ``|∇φ|² − 4φ`` is
+  largest on each violating face (:func:`max_violation`, exact) and the problem re-solved;
+* the objective is the mean of ``φ`` with lumped weights ``A/6`` per node of each face
+  (``weights="lumped"``; the consistent P2 weights, 0 at corners and ``A/3`` at midpoints,
+  are ``weights="p2"``);
 * a source vertex ``s`` gets ``φ_s = 0`` and zero derivative at ``s`` along each of its
   edges (``4 φ_mid − φ_j = 0``), which is ``∇φ(s) = 0`` on every incident face without
   redundant rows; the cones at ``s`` (degenerate there) are left out;
-* a source point ``p`` inside a face gets ``φ(p) = 0`` and ``∇φ(p) = 0`` on its face
-  (on an edge: on every face of the edge, without the redundant along-edge rows);
+* a source point inside a face or on an edge is inserted as a vertex (:class:`SplitMesh`);
+  :meth:`P2Builder.build` can instead impose ``φ(p) = 0``, ``∇φ(p) = 0`` on the unsplit face
+  (measured less accurate, kept for comparison);
 * a degenerate face (:meth:`TriMesh.degenerate_faces`) gets no face cones; the 1-D cone
   ``(∂φ/∂s)² ≤ 4φ`` along each of its edges (endpoints and midpoint) bounds its DOFs
   whatever its shape;
@@ -172,9 +176,10 @@ class P2Space:
 
         Parameters
         ----------
-        kind : {"lumped", "p2"}
+        kind : {"lumped", "p2", "mixed"}
             ``"lumped"``: ``A/6`` to each of a face's six nodes. ``"p2"``: the exact
             integrals of the P2 shape functions (0 for corners, ``A/3`` for midpoints).
+            ``"mixed"``: their average (``A/12`` and ``A/4``).
 
         Returns
         -------
@@ -380,13 +385,22 @@ class P2Builder:
         Already scaled to unit size by the caller.
     samples : str
         Key of :data:`SAMPLES`.
-    weights : {"lumped", "p2"}
+    weights : {"lumped", "p2", "mixed"}, optional
+        Objective weights (:meth:`P2Space.weights`); default :data:`DEFAULT_WEIGHTS`.
+    source_hessian : bool
+        Also impose ``Hess φ ≼ 2I`` on faces holding a source (measured: no gain; off).
+    cone_scale : {"dijkstra", "unit"}
+        Centre of each cone: ``a`` = (Dijkstra distance at the sample)², floored at the squared
+        mean longest edge, or ``a = 1``.
+    hess_lower : bool
+        Impose ``Hess φ ≽ 2I`` on every face (exact on flat meshes, worse on curved ones; off).
     """
 
-    def __init__(self, mesh: TriMesh, samples: str = "nodes", weights: str = "p2", source_hessian: bool = False,
-                 cone_scale: str = "dijkstra"):
+    def __init__(self, mesh: TriMesh, samples: str = "nodes", weights: str | None = None,
+                 source_hessian: bool = False, cone_scale: str = "dijkstra", hess_lower: bool = False):
+        weights = DEFAULT_WEIGHTS if weights is None else weights
         self.source_hessian = bool(source_hessian)
-        self.hess_lower = False
+        self.hess_lower = bool(hess_lower)
         self.cone_scale = cone_scale
         if samples not in SAMPLES:
             raise ParameterError(f"samples must be one of {tuple(SAMPLES)}, got {samples!r}")
