@@ -322,6 +322,7 @@ class P2InteriorPoint:
         info = {}
         best = None
         it = 0
+        last_step = last_sigma = float("nan")
         for it in range(1, max_iter + 1):
             rd = c + self._Gtz(pb, z) + (ET @ y if p else 0.0)
             rd[fixed] = 0.0
@@ -334,7 +335,8 @@ class P2InteriorPoint:
             pres = max(float(np.linalg.norm(rp)) / hnorm, float(np.linalg.norm(re)) / max(1.0, np.linalg.norm(f)))
             dres = float(np.linalg.norm(rd)) / cnorm
             rgap = gap / max(1.0, abs(pobj))
-            info = {"primal_residual": pres, "dual_residual": dres, "gap": rgap, "pobj": pobj, "dobj": dobj}
+            info = {"primal_residual": pres, "dual_residual": dres, "gap": rgap, "pobj": pobj, "dobj": dobj,
+                    "step": last_step, "sigma": last_sigma}
             if callback is not None:
                 callback(it, dict(info))
             score = max(pres, dres / DUAL_TOL_FACTOR, rgap)
@@ -369,6 +371,7 @@ class P2InteriorPoint:
             if not np.isfinite(alpha) or alpha <= 1e-12:
                 status = "step_failure"
                 break
+            last_step, last_sigma = alpha, sigma
             x = x + alpha * dx
             y = y + alpha * dy
             s = s + alpha * ds
