@@ -44,7 +44,8 @@ def run(name: str) -> dict:
             t = time.perf_counter()
             r = s.solve(0)
             out[label] = {"time": time.perf_counter() - t + s.setup_time, "status": r.info.status,
-                          "mean": rel_err(r.distance, de)[0], "max": rel_err(r.distance, de)[1]}
+                          "mean": rel_err(r.distance, de)[0], "max": rel_err(r.distance, de)[1],
+                          "solver": r.info.solver, "notes": list(r.info.notes)}
         except Exception as exc:
             out[label] = {"error": f"{type(exc).__name__}: {exc}"}
     return out

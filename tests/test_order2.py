@@ -302,7 +302,8 @@ def test_solve_info_order2():
     res = order2(cg.icosphere(2), 0)
     info = res.info
     assert info.method == "qclp" and info.status == "optimal" and info.iterations > 0
-    assert info.extra["order"] == 2 and info.solver == "clarabel"
+    assert info.extra["order"] == 2 and info.solver == "ipm"  # the structured solver under solver="auto"
+    assert order2(cg.icosphere(2), 0, solver="clarabel").info.solver == "clarabel"
     assert info.primal_residual < 1e-6 and info.gap < 1e-6
     assert info.solve_time > 0
 
@@ -369,3 +370,20 @@ def test_fine_mesh_not_worse_than_p1(name):
     e1 = _rel(cg.GeodesicSolver(mesh, "qclp").solve(0).distance, de)
     e2 = _rel(order2(mesh, 0).distance, de)
     assert e2 <= e1
+
+
+def test_auto_falls_back_to_clarabel(monkeypatch):
+    from cvxgeodesic.errors import SolverError
+    from cvxgeodesic.solvers import ipm_soc
+
+    def boom(self, problem, **kw):
+        raise SolverError("forced", solver="ipm", status="numerical_error")
+
+    monkeypatch.setattr(ipm_soc.P2InteriorPoint, "solve", boom)
+    mesh = cg.grid_plane(6, jitter=0.2, seed=0)
+    res = order2(mesh, 4)
+    assert res.info.solver == "clarabel"
+    assert any("Clarabel" in n for n in res.info.notes)
+    np.testing.assert_allclose(res.distance, euclid_from(mesh, 4), atol=1e-6)
+    with pytest.raises(SolverError):
+        order2(mesh, 4, solver="ipm")
