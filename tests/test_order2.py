@@ -9,6 +9,7 @@ import pytest
 from scipy.spatial import Delaunay
 
 import cvxgeodesic as cg
+import cvxgeodesic.elements_p2 as p2mod
 from conftest import shared_mesh_path
 from cvxgeodesic.elements_p2 import (
     P2Builder,
@@ -302,8 +303,8 @@ def test_solve_info_order2():
     res = order2(cg.icosphere(2), 0)
     info = res.info
     assert info.method == "qclp" and info.status == "optimal" and info.iterations > 0
-    assert info.extra["order"] == 2 and info.solver == "ipm"  # the structured solver under solver="auto"
-    assert order2(cg.icosphere(2), 0, solver="clarabel").info.solver == "clarabel"
+    assert info.extra["order"] == 2 and info.solver == "clarabel"  # solver="auto" on a small mesh
+    assert order2(cg.icosphere(2), 0, solver="ipm").info.solver == "ipm"
     assert info.primal_residual < 1e-6 and info.gap < 1e-6
     assert info.solve_time > 0
 
@@ -380,6 +381,7 @@ def test_auto_falls_back_to_clarabel(monkeypatch):
         raise SolverError("forced", solver="ipm", status="numerical_error")
 
     monkeypatch.setattr(ipm_soc.P2InteriorPoint, "solve", boom)
+    monkeypatch.setattr(p2mod, "IPM_MIN_FACES", 0)  # "auto" picks the structured solver
     mesh = cg.grid_plane(6, jitter=0.2, seed=0)
     res = order2(mesh, 4)
     assert res.info.solver == "clarabel"
