@@ -200,8 +200,8 @@ class GeodesicSolver:
         :mod:`cvxgeodesic.elements_p2`, ``docs/order2.md``): exact on flat regions whatever
         the triangle shapes, sources may also be ``(face, bary)`` points, and
         ``info.extra["p2_field"].distance_at(faces, bary)`` evaluates the field inside
-        faces. ``solver="auto"`` uses Clarabel below 30 000 faces and the structured
-        solver above. Not with ``multires`` or the baselines.
+        faces. ``solver="auto"`` uses the order-2 structured solver (Clarabel as its
+        fallback). Not with ``multires`` or the baselines.
 
     Raises
     ------
