@@ -967,7 +967,7 @@ class Order2Strategy:
         self.samples, self.weights, self.refine = samples, weights, int(refine)
         unit, self.scale = _unit_mesh(solver.mesh)
         self.builder = P2Builder(unit, samples=samples, weights=weights)
-        # "auto": the structured solver, with Clarabel as its fallback. Measured: it solved all 52 coarse CAD
+        # "auto": the structured solver, with Clarabel as its fallback. Measured: it solved all 53 coarse CAD
         # meshes ("optimal", no fallback) and was more accurate on needles with a source inside a face (1.9e-6
         # against Clarabel's 2.5e-5 at aspect 240); side by side it is 2–3× slower than Clarabel up to 7K faces,
         # 1.3× at 20K, and 1.1–1.6× faster on bimba (46K; docs/order2.md)
