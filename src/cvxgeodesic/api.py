@@ -229,6 +229,13 @@ class GeodesicSolver:
         ``max_diff_to_coarse_transfer``, the largest difference between the
         transferred and the optimal field. The interior-point solver takes no
         warm start yet, so this costs a coarse solve *more* than a direct solve.
+    order : {1, 2}
+        ``2``: second-order elements for the squared distance (``method="qclp"`` only;
+        :mod:`cvxgeodesic.elements_p2`, ``docs/order2.md``): exact on flat regions whatever
+        the triangle shapes, sources may also be ``(face, bary)`` points, and
+        ``info.extra["p2_field"].distance_at(faces, bary)`` evaluates the field inside
+        faces. ``solver="auto"`` uses the order-2 structured solver (Clarabel as its
+        fallback). Not with ``multires`` or the baselines.
 
     Raises
     ------
@@ -283,6 +290,7 @@ class GeodesicSolver:
         multires: bool | int = False,
         multires_polish: bool = False,
         normalization: str = "area",
+        order: int = 1,
     ) -> None:
         t0 = time.perf_counter()
         self.mesh: TriMesh = as_trimesh(mesh)
@@ -308,8 +316,26 @@ class GeodesicSolver:
         if isinstance(max_iter, bool) or not isinstance(max_iter, int | np.integer) or max_iter < 1:
             raise ParameterError(f"max_iter must be a positive integer, got {max_iter!r}")
         self.tol, self.max_iter, self.verbose = float(tol), int(max_iter), bool(verbose)
-
         self.normalization = check_normalization(normalization)
+        # substitutions made for every solve of this object (copied into SolveInfo): the loader's repairs first
+        self.notes: list[str] = list(getattr(self.mesh, "notes", ()))
+        if isinstance(order, bool) or order not in (1, 2):
+            raise ParameterError(f"order must be 1 (P1 distance) or 2 (P2 squared distance), got {order!r}")
+        self.order = int(order)
+        self._order2 = None
+        if self.order == 2:  # P2 elements for d² (cvxgeodesic.elements_p2): its own program and solvers
+            if self.is_baseline or multires:
+                raise ParameterError("order=2 applies to the convex formulations without multires")
+            from .elements_p2 import Order2Strategy
+
+            self.lam = 0.0
+            self.m = None
+            self.energy = None
+            self._order2 = Order2Strategy(self, solver)
+            self.solver_name = self._order2.backend
+            self.setup_time = time.perf_counter() - t0
+            return
+
         self.energy = None if self.method in BASELINE_METHODS else FORMULATIONS[self.method][1]
         if lam is not None:
             if not _is_real(lam) or not np.isfinite(lam) or lam < 0:
@@ -320,8 +346,6 @@ class GeodesicSolver:
                 raise ParameterError(f"m must be a finite number >= 0, got {m!r}")
             self.lam = smoothness_weight(self.mesh, m, self.normalization, self.energy or "hessian")
         self.m = None if lam is not None else float(m)
-        # substitutions made for every solve of this object (copied into SolveInfo): the loader's repairs first
-        self.notes: list[str] = list(getattr(self.mesh, "notes", ()))
 
         self._baseline: Any = None
         self._ops: Any = None
@@ -383,7 +407,8 @@ class GeodesicSolver:
         ----------
         sources : int, sequence of int, SurfacePoint, SurfaceCurve, "boundary", or a list mixing them
             Source vertex indices (distinct, in ``[0, n)``), points anywhere on the surface, curves,
-            or every boundary edge (``docs/sources.md``).
+            or every boundary edge (``docs/sources.md``). With ``order=2``
+            (P2 squared distance): vertices and points (SurfacePoints, ``(face, bary)``) only.
         callback : callable, optional
             ``callback(iteration, info_dict)`` after every interior-point
             iteration of the ``"ipm"`` backend (used for progress reports).
@@ -403,6 +428,8 @@ class GeodesicSolver:
             The backend did not reach an optimal solution (for the Hessian energy the
             message adds that it can be indefinite on meshes with sharp corners).
         """
+        if self._order2 is not None:
+            return self._order2.solve(sources, callback=callback)
         from .sources import resolve_sources
 
         sset = resolve_sources(self.mesh, sources)
@@ -548,7 +575,8 @@ class GeodesicSolver:
 
 def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | None = None, m: float | None = None,
                       solver: str | None = None, lam: float | None = None, tol: float = DEFAULT_TOL,
-                      max_iter: int = 200, normalization: str = "area") -> np.ndarray:
+                      max_iter: int = 200, normalization: str = "area",
+                      order: int = 1) -> np.ndarray:
     """Geodesic distance field from source vertices (one-shot form of :class:`GeodesicSolver`).
 
     Two call forms, told apart by the second argument (sources are never a 2-D array):
@@ -611,13 +639,14 @@ def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | 
     m = given.get("m", 1.0)
     solver = given.get("solver", "auto")
     solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter,
-                                normalization=normalization)
+                                normalization=normalization, order=order)
     return solver_obj.solve(sources).distance
 
 
 def distance_matrix(mesh: Any, vertices: ArrayLike, method: str = "qcqp-hessian", m: float = 1.0, solver: str = "auto",
                     progress: bool = False, *, lam: float | None = None, tol: float = DEFAULT_TOL,
-                    max_iter: int = 200, multires: bool | int = False, normalization: str = "area") -> np.ndarray:
+                    max_iter: int = 200, multires: bool | int = False, normalization: str = "area",
+                    order: int = 1) -> np.ndarray:
     """Distance fields from several vertices, one row per vertex, with one :class:`GeodesicSolver`.
 
     The per-mesh work (operators, energy matrix, symbolic Cholesky analysis) is
@@ -663,7 +692,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str = "qcqp-hessian"
                                          and any(isinstance(v, surface) for v in vertices)):
         items = [vertices] if isinstance(vertices, surface) else list(vertices)  # one row per item
         solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter,
-                                    multires=multires, normalization=normalization)
+                                    multires=multires, normalization=normalization, order=order)
         return np.stack([r.distance for r in solver_obj.solve_many(items, progress=progress)])
     if isinstance(vertices, bool | np.bool_):
         raise SourceError(f"vertices must be vertex indices, got {vertices!r}")
@@ -675,7 +704,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str = "qcqp-hessian"
     uniq, inverse = np.unique(arr, return_inverse=True)
     uniq = validate_sources(uniq, mesh.n_vertices)
     solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter,
-                                multires=multires, normalization=normalization)
+                                multires=multires, normalization=normalization, order=order)
     results = solver_obj.solve_many(uniq.tolist(), progress=progress)
     rows = np.stack([r.distance for r in results])
     return rows[np.asarray(inverse).ravel()]

@@ -1,0 +1,393 @@
+"""Structured primal-dual interior-point solver for the order-2 program (SOC(4) cones on face cliques).
+
+Solves :class:`~cvxgeodesic.elements_p2.P2Problem`::
+
+    minimize cᵀx   subject to   s_k = h_k − G_k x[dofs_k] ∈ SOC(4)   (every cone k),
+                                E x = f,   x[fixed] = 0
+
+with Nesterov–Todd scaling and Mehrotra's predictor–corrector (the scheme of CVXOPT's
+``conelp``; written here from the textbook equations). Every cone touches the six P2 DOFs
+of one face, so after eliminating ``Δs`` and ``Δz`` the Newton matrix is
+
+    H = Σ_k G_kᵀ W_k⁻² G_k        (one 6 × 6 block per cone, summed per face clique)
+
+whose sparsity pattern (the union of the face cliques) never changes: it is analyzed once
+per mesh (:class:`~cvxgeodesic.solvers.cholesky.SymbolicCholesky`) and only refactorized
+numerically at each iteration, for every source and every cutting-plane round.
+
+The few source equalities ``E x = f`` (one per edge at a source vertex) are kept as a
+Schur complement ``E H⁻¹ Eᵀ`` (p × p dense, p = number of source-star edges), which needs
+p extra triangular solves per iteration and keeps the pattern of ``H`` independent of the
+sources. Fixed DOFs have zero columns in ``G`` and ``E`` and an identity row in ``H``.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+from ..errors import SolverError
+from . import pardiso as _pardiso
+from .cholesky import NotPositiveDefiniteError, SymbolicCholesky
+
+_TRIL = np.tril_indices(6)
+#: Iterative-refinement steps per Newton solve.
+REFINE_STEPS = 3
+#: The dual residual is accepted at this multiple of ``tol``: near the optimum Δz = W⁻²(…) magnifies rounding
+#: by up to 1/μ and the dual residual stalls around 1e-7 (relative) while x has converged (measured on a flat
+#: grid: x within 5e-8 of Clarabel's optimum, relative to max φ, when the gap was 2e-8 and the dual residual 1e-7).
+DUAL_TOL_FACTOR = 1000.0
+#: Static regularization of the Newton matrix, relative to each diagonal entry. Relative to the *largest* entry
+#: (first version) it swamped the far-from-source rows, whose entries are ~1e10 smaller near the optimum, and
+#: iterative refinement then gained only a factor 2.5 per step (spot stalled at a dual residual of 1e-2).
+REG = 1e-13
+
+
+def _mv(M: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Batched ``M[k] @ v[k]`` (matmul measured faster than einsum for these small blocks)."""
+    return np.matmul(M, v[..., None])[..., 0]
+
+
+def _soc_step(u: np.ndarray, du: np.ndarray) -> np.ndarray:
+    """Largest ``α`` with ``u + α du`` in the closed SOC, per cone (``inf`` when unbounded)."""
+    a = du[:, 0] ** 2 - np.einsum("ki,ki->k", du[:, 1:], du[:, 1:])
+    b = 2 * (u[:, 0] * du[:, 0] - np.einsum("ki,ki->k", u[:, 1:], du[:, 1:]))
+    c = np.maximum(u[:, 0] ** 2 - np.einsum("ki,ki->k", u[:, 1:], u[:, 1:]), 0.0)
+    disc = b * b - 4 * a * c
+    hit = (a < 0) | ((b < 0) & (disc >= 0))
+    out = np.full(u.shape[0], np.inf)
+    den = -b[hit] + np.sqrt(np.maximum(disc[hit], 0.0))
+    with np.errstate(divide="ignore"):
+        out[hit] = np.where(den > 0, 2 * c[hit] / den, 0.0)
+    return out
+
+
+def _jdiv(lam: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """``u`` with ``lam ∘ u = d`` (Jordan product of the SOC), per cone."""
+    det = lam[:, 0] ** 2 - np.einsum("ki,ki->k", lam[:, 1:], lam[:, 1:])
+    u0 = (lam[:, 0] * d[:, 0] - np.einsum("ki,ki->k", lam[:, 1:], d[:, 1:])) / det
+    u1 = (d[:, 1:] - u0[:, None] * lam[:, 1:]) / lam[:, :1]
+    return np.column_stack([u0, u1])
+
+
+def _jprod(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.column_stack([np.einsum("ki,ki->k", a, b), a[:, :1] * b[:, 1:] + b[:, :1] * a[:, 1:]])
+
+
+def _nt_scaling(s: np.ndarray, z: np.ndarray):
+    """Nesterov–Todd scaling ``W`` (symmetric, per cone) with ``W z = W⁻¹ s = λ``; returns W, W⁻¹, λ."""
+    # (u0 − ‖u1‖)(u0 + ‖u1‖) loses less to cancellation than u0² − ‖u1‖² next to the boundary
+    ns, nz = np.linalg.norm(s[:, 1:], axis=1), np.linalg.norm(z[:, 1:], axis=1)
+    sJs = np.maximum((s[:, 0] - ns) * (s[:, 0] + ns), 1e-300)
+    zJz = np.maximum((z[:, 0] - nz) * (z[:, 0] + nz), 1e-300)
+    sn = s / np.sqrt(sJs)[:, None]
+    zn = z / np.sqrt(zJz)[:, None]
+    gamma = np.sqrt(np.maximum((1 + np.einsum("ki,ki->k", sn, zn)) / 2, 1e-300))
+    w = (sn + np.column_stack([zn[:, :1], -zn[:, 1:]])) / (2 * gamma)[:, None]
+    w[:, 0] = np.sqrt(1 + np.einsum("ki,ki->k", w[:, 1:], w[:, 1:]))  # restore wᵀJw = 1 exactly
+    eta = (sJs / zJz) ** 0.25
+    k = s.shape[0]
+    w1 = w[:, 1:]
+    M = np.eye(3)[None] + np.einsum("ki,kj->kij", w1, w1) / (1 + w[:, 0])[:, None, None]
+    W = np.empty((k, 4, 4))
+    W[:, 0, 0] = w[:, 0]
+    W[:, 0, 1:] = w1
+    W[:, 1:, 0] = w1
+    W[:, 1:, 1:] = M
+    Wi = W.copy()
+    Wi[:, 0, 1:] = -w1
+    Wi[:, 1:, 0] = -w1
+    W *= eta[:, None, None]
+    Wi /= eta[:, None, None]
+    lam = _mv(W, z)
+    return W, Wi, lam
+
+
+class P2InteriorPoint:
+    """Interior-point solver bound to one :class:`~cvxgeodesic.elements_p2.P2Builder` (one mesh).
+
+    Parameters
+    ----------
+    builder : P2Builder
+    backend : str
+        :class:`SymbolicCholesky` backend.
+
+    Attributes
+    ----------
+    chol : SymbolicCholesky
+        The one symbolic analysis of the face-clique pattern.
+    """
+
+    def __init__(self, builder, *, backend: str = "auto"):
+        space = builder.space
+        self.n = n = space.n_dofs
+        fd = space.face_dofs
+        rows = np.repeat(fd, 6, axis=1).ravel()
+        cols = np.tile(fd, (1, 6)).ravel()
+        pattern = sp.coo_matrix((np.ones(rows.size), (rows, cols)), shape=(n, n)).tocsc()
+        t0 = time.perf_counter()
+        lib = _pardiso._load() if backend in ("auto", "pardiso") else None
+        if lib is not None:
+            # one PARDISO thread, fixed at the analysis (PARDISO keeps the analysis's thread count): on the shared
+            # 2-core machine a solve took 63 ms with MKL's default threads and 9 ms with one (spot, 11.7K DOFs)
+            previous = lib.MKL_Set_Num_Threads_Local(1)
+        try:
+            self.chol = SymbolicCholesky(pattern, backend=backend)
+        finally:
+            if lib is not None:
+                lib.MKL_Set_Num_Threads_Local(previous)
+        # positions of each face's lower-triangular 6×6 entries in the factor's data array
+        r = fd[:, _TRIL[0]]
+        c = fd[:, _TRIL[1]]
+        self.face_pos = self.chol.positions(r.ravel(), c.ravel()).reshape(fd.shape[0], 21)
+        self.analyze_time = time.perf_counter() - t0
+
+    # ------------------------------------------------------------------ helpers
+    def _Gx(self, pb, x):
+        return _mv(pb.G, x[pb.cone_dofs])
+
+    def _Gtz(self, pb, z):
+        Gtz = np.matmul(z[:, None, :], pb.G)[:, 0]
+        return np.bincount(pb.cone_dofs.ravel(), Gtz.ravel(), minlength=self.n)
+
+    def solve(self, problem, *, tol: float = 1e-8, max_iter: int = 200, callback=None) -> dict:
+        """Solve one :class:`~cvxgeodesic.elements_p2.P2Problem`.
+
+        Returns
+        -------
+        dict
+            As :func:`~cvxgeodesic.elements_p2.solve_p2_clarabel`.
+
+        Raises
+        ------
+        SolverError
+            Numerical failure or iteration limit without reaching 100 × ``tol``.
+        """
+        from threadpoolctl import threadpool_limits
+
+        # PARDISO runs its own threads; an idle OpenBLAS pool spinning beside it costs a core (as in solvers/ipm.py)
+        with threadpool_limits({"libopenblas": 1, "libscipy_openblas": 1}):
+            return self._solve(problem, tol=tol, max_iter=max_iter, callback=callback)
+
+    def _solve(self, problem, *, tol, max_iter, callback) -> dict:
+        import copy
+
+        t0 = time.perf_counter()
+        # equilibration (one Ruiz pass): columns by the square root of their largest cone-row norm, then every
+        # cone by its largest row (a positive multiple of a cone vector stays in the cone), the objective to ∞-norm 1
+        pb = copy.copy(problem)
+        n = self.n
+        colmax = np.zeros(n)
+        np.maximum.at(colmax, pb.cone_dofs.ravel(), np.abs(pb.G).max(axis=1).ravel())
+        D = np.where((colmax > 0) & ~pb.fixed, 1.0 / np.sqrt(np.where(colmax > 0, colmax, 1.0)), 1.0)
+        G = pb.G * D[pb.cone_dofs][:, None, :]
+        rs = 1.0 / np.maximum(np.abs(G).max(axis=(1, 2)), np.abs(pb.h).max(axis=1))
+        pb.G = G * rs[:, None, None]
+        pb.h = pb.h * rs[:, None]
+        cD = pb.c * D
+        csc = max(float(np.abs(cD).max()), 1e-300)
+        pb.c = cD / csc
+        pb.E = (pb.E @ sp.diags(D)).tocsr()
+        out = self._solve_scaled(pb, tol=tol, max_iter=max_iter, callback=callback)
+        out["x"] = out["x"] * D
+        out["objective"] = float(problem.c @ out["x"])
+        out["time"] = time.perf_counter() - t0
+        return out
+
+    def _solve_scaled(self, pb, *, tol, max_iter, callback) -> dict:
+        t0 = time.perf_counter()
+        n, k = self.n, pb.n_cones
+        c, h = pb.c, pb.h
+        E = pb.E.tocsr()
+        ET = E.T.tocsc()
+        p = E.shape[0]
+        f = pb.f
+        fixed = pb.fixed
+        Gl = pb.G
+        face_pos = self.face_pos[pb.cone_face]
+        diag = self.chol.diag_positions
+        hnorm = max(1.0, float(np.linalg.norm(h)))
+        cnorm = max(1.0, float(np.linalg.norm(c)))
+
+        def factor(Wi2):
+            # Σ_k G_kᵀ (W_k⁻²) G_k, lower triangle of each 6×6 block, scattered into the fixed pattern
+            B = np.matmul(Gl.transpose(0, 2, 1), np.matmul(Wi2, Gl))
+            data = np.bincount(face_pos.ravel(), B[:, _TRIL[0], _TRIL[1]].ravel(), minlength=self.chol.nnz)
+            dg = data[diag]
+            scale = max(float(dg.max()), 1e-300)
+            data[diag] += np.where(fixed, 1.0, 0.0) + REG * np.abs(dg) + np.where(dg <= 0, scale, 0.0) * (~fixed)
+            solve_h = None
+            for bump in (0.0, 1e-10, 1e-8, 1e-6):  # rounding can make the near-singular H look indefinite
+                try:
+                    solve_h = self.chol.factorize(data, beta=bump * scale)
+                    break
+                except NotPositiveDefiniteError:
+                    continue
+            if solve_h is None:
+                raise NotPositiveDefiniteError("Newton matrix not positive definite after regularization")
+            if p:
+                Y = solve_h(ET.toarray())
+                Y = Y.reshape(n, p)
+                S = E @ Y
+                S = 0.5 * (S + S.T)
+                cf = sla.cho_factor(S + 1e-14 * max(1.0, np.abs(S).max()) * np.eye(p))
+            else:
+                Y, cf = None, None
+            return solve_h, Y, cf
+
+        def reduced(fac, b1, b2):
+            """Solve [H Eᵀ; E 0] (dx, dy) = (b1, b2) through the (regularized) factor."""
+            solve_h, Y, cf = fac
+            hb = solve_h(b1)
+            if p:
+                dy = sla.cho_solve(cf, E @ hb - b2)
+                return hb - Y @ dy, dy
+            return hb, np.zeros(0)
+
+        def hmul(Wi2, v):
+            out = self._Gtz(pb, _mv(Wi2, self._Gx(pb, v)))
+            out[fixed] = v[fixed]
+            return out
+
+        def kkt_solve(fac, Wi, Wi2, bd, be, bp, bu):
+            """Solve Gᵀdz + Eᵀdy = bd, E dx = be, G dx + ds = bp, W dz + W⁻¹ ds = bu (reduced to H)."""
+            Wib = _mv(Wi, bu)
+            b1 = bd - self._Gtz(pb, Wib - _mv(Wi2, bp))
+            b1[fixed] = 0.0
+            dx, dy = reduced(fac, b1, be)
+            Gdx = self._Gx(pb, dx)
+            ds = bp - Gdx
+            dz = Wib - _mv(Wi2, ds)
+            return dx, dy, dz, ds
+
+        def newton(fac, Wi2, W, lam, rd, rp, re, d, Wi=None):
+            u = _jdiv(lam, d)
+            bd, be, bp = -rd, -re, -rp
+            dx, dy, dz, ds = kkt_solve(fac, Wi, Wi2, bd, be, bp, u)
+            # iterative refinement on the full system: Δz = W⁻²(…) amplifies any error in Δx by up to 1/μ,
+            # so the residual of the dual equation has to be corrected through Δz itself
+            scale_b = max(float(np.abs(bd).max(initial=0.0)), float(np.abs(u).max(initial=0.0)), 1e-300)
+            for _ in range(REFINE_STEPS):
+                r1 = bd - self._Gtz(pb, dz) - (ET @ dy if p else 0.0)
+                r1[fixed] = 0.0
+                r2 = be - (E @ dx if p else np.zeros(0))
+                r3 = bp - self._Gx(pb, dx) - ds
+                r4 = u - _mv(W, dz) - _mv(Wi, ds)
+                err = max(float(np.abs(r1).max(initial=0.0)), float(np.abs(r3).max(initial=0.0)),
+                          float(np.abs(r4).max(initial=0.0)), float(np.abs(r2).max(initial=0.0)))
+                if err <= 1e-11 * scale_b:
+                    break
+                ex, ey, ez, es = kkt_solve(fac, Wi, Wi2, r1, r2, r3, r4)
+                dx, dy, dz, ds = dx + ex, dy + ey, dz + ez, ds + es
+            return dx, dy, dz, ds
+
+        # ---- initial point: least squares with W = I (CVXOPT's default start)
+        eye = np.broadcast_to(np.eye(4), (k, 4, 4))
+        fac0 = factor(eye)
+        solve_h, Y, cf = fac0
+        g = self._Gtz(pb, h)
+        g[fixed] = 0.0
+        hb = solve_h(g)
+        if p:
+            y0 = sla.cho_solve(cf, E @ hb - f)
+            x = hb - Y @ y0
+        else:
+            x = hb
+        x[fixed] = 0.0
+        s = h - self._Gx(pb, x)
+        cc = -c.copy()
+        cc[fixed] = 0.0
+        hb = solve_h(cc)
+        if p:
+            wy = sla.cho_solve(cf, E @ hb)
+            wv = hb - Y @ wy
+        else:
+            wv = hb
+        z = self._Gx(pb, wv)  # least-norm z with Gᵀz = −c
+
+        def shift(u):
+            m = u[:, 0] - np.linalg.norm(u[:, 1:], axis=1)
+            a = -float(m.min())
+            if a >= -1e-8:
+                u = u.copy()
+                u[:, 0] += 1 + max(a, 0.0)
+            return u
+
+        s, z = shift(s), shift(z)
+        y = np.zeros(p)
+        status = "max_iterations"
+        info = {}
+        best = None
+        it = 0
+        last_step = last_sigma = float("nan")
+        for it in range(1, max_iter + 1):
+            rd = c + self._Gtz(pb, z) + (ET @ y if p else 0.0)
+            rd[fixed] = 0.0
+            rp = self._Gx(pb, x) + s - h
+            re = E @ x - f if p else np.zeros(0)
+            gap = float(np.einsum("ki,ki->", s, z))
+            mu = gap / k
+            pobj = float(c @ x)
+            dobj = -float(np.einsum("ki,ki->", h, z)) - float(f @ y)
+            pres = max(float(np.linalg.norm(rp)) / hnorm, float(np.linalg.norm(re)) / max(1.0, np.linalg.norm(f)))
+            dres = float(np.linalg.norm(rd)) / cnorm
+            rgap = gap / max(1.0, abs(pobj))
+            info = {"primal_residual": pres, "dual_residual": dres, "gap": rgap, "pobj": pobj, "dobj": dobj,
+                    "step": last_step, "sigma": last_sigma}
+            if callback is not None:
+                callback(it, dict(info))
+            score = max(pres, dres / DUAL_TOL_FACTOR, rgap)
+            if best is None or score < best[0]:
+                best = (score, x.copy(), dict(info))
+            if pres <= tol and dres <= DUAL_TOL_FACTOR * tol and rgap <= tol:
+                status = "optimal"
+                break
+            try:
+                W, Wi, lam = _nt_scaling(s, z)
+                Wi2 = np.matmul(Wi, Wi)
+                fac = factor(Wi2)
+                # predictor
+                d_a = -_jprod(lam, lam)
+                dxa, dya, dza, dsa = newton(fac, Wi2, W, lam, rd, rp, re, d_a, Wi)
+                alpha_a = min(1.0, float(np.min(_soc_step(s, dsa), initial=np.inf)),
+                              float(np.min(_soc_step(z, dza), initial=np.inf)))
+                sa, za = s + alpha_a * dsa, z + alpha_a * dza
+                sigma = (max(float(np.einsum("ki,ki->", sa, za)), 0.0) / gap) ** 3
+                # corrector
+                wds = _mv(Wi, dsa)
+                wdz = _mv(W, dza)
+                d_c = d_a - _jprod(wds, wdz)
+                d_c[:, 0] += sigma * mu
+                dx, dy, dz, ds = newton(fac, Wi2, W, lam, rd, rp, re, d_c, Wi)
+            except (FloatingPointError, np.linalg.LinAlgError, NotPositiveDefiniteError, ValueError) as exc:
+                status = f"numerical_error: {exc}"
+                break
+            alpha = min(float(np.min(_soc_step(s, ds), initial=np.inf)),
+                        float(np.min(_soc_step(z, dz), initial=np.inf)))
+            alpha = min(1.0, 0.99 * alpha)
+            if not np.isfinite(alpha) or alpha <= 1e-12:
+                status = "step_failure"
+                break
+            last_step, last_sigma = alpha, sigma
+            x = x + alpha * dx
+            y = y + alpha * dy
+            s = s + alpha * ds
+            z = z + alpha * dz
+        if status != "optimal":
+            score, xb, ib = best
+            if score <= 100 * tol:
+                x, info, status = xb, ib, "almost_optimal"
+            else:
+                raise SolverError(f"order-2 interior-point solver stopped: {status}", solver="ipm",
+                                  status="numerical_error" if status != "max_iterations" else status,
+                                  info={"iterations": it, **ib})
+        x = x.copy()
+        x[fixed] = 0.0
+        return {
+            "x": x, "status": status, "solver": "ipm", "iterations": it, "objective": float(c @ x),
+            "primal_residual": info["primal_residual"], "dual_residual": info["dual_residual"], "gap": info["gap"],
+            "time": time.perf_counter() - t0,
+        }

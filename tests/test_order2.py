@@ -1,0 +1,391 @@
+"""Order 2: P2 elements for the squared distance (``cvxgeodesic.elements_p2``)."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from scipy.spatial import Delaunay
+
+import cvxgeodesic as cg
+import cvxgeodesic.elements_p2 as p2mod
+from conftest import shared_mesh_path
+from cvxgeodesic.elements_p2 import (
+    P2Builder,
+    P2Space,
+    max_violation,
+    p2_basis,
+    parse_sources,
+    solve_p2_clarabel,
+)
+from cvxgeodesic.errors import ParameterError, SourceError
+
+FLAT_TOL = 1e-5  # max vertex error / largest distance on flat meshes (issue 17)
+
+
+# ---------------------------------------------------------------- meshes
+def needle_strip(nx: int, aspect: float) -> cg.TriMesh:
+    """A flat strip of 2·nx triangles of aspect ratio about ``aspect`` (edge length / altitude)."""
+    L = 1.0
+    H = L / nx / aspect
+    xs = np.linspace(0, L, nx + 1)
+    V = np.array([[x, 0, 0] for x in xs] + [[x + 0.5 * L / nx, H, 0] for x in xs])
+    F = []
+    for i in range(nx):
+        F += [[i, i + 1, nx + 1 + i], [i + 1, nx + 2 + i, nx + 1 + i]]
+    return cg.TriMesh(V, np.array(F))
+
+
+def delaunay_mesh(k: int = 300, seed: int = 3) -> cg.TriMesh:
+    P = np.random.default_rng(seed).random((k, 2))
+    return cg.TriMesh(np.c_[P, np.zeros(k)], Delaunay(P).simplices)
+
+
+def fan_plate(k: int = 12) -> cg.TriMesh:
+    """A flat 2 × 1 CAD-style plate: ``k`` points on each side, every face a fan from one corner or the other."""
+    top = [(x, 1.0) for x in np.linspace(0, 2, k)]
+    bottom = [(x, 0.0) for x in np.linspace(0, 2, k)]
+    V = np.array([(*p, 0.0) for p in bottom + top])
+    F = []
+    # bottom-left corner (0) fans to the top row, top-right corner (2k−1) fans to the bottom row
+    for i in range(k - 1):
+        F.append([0, k + i + 1, k + i])
+    for i in range(k - 1):
+        F.append([i, i + 1, 2 * k - 1])
+    F = [f for f in F if len(set(f)) == 3]
+    return cg.TriMesh(V, np.array(F))
+
+
+def euclid_from(mesh: cg.TriMesh, src) -> np.ndarray:
+    if isinstance(src, int | np.integer):
+        p = mesh.V[src]
+    else:
+        p = np.asarray(src[1]) @ mesh.V[mesh.F[src[0]]]
+    return np.linalg.norm(mesh.V - p, axis=1)
+
+
+def order2(mesh, src, **kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", cg.DegenerateFacesWarning)
+        return cg.GeodesicSolver(mesh, "qclp", order=2, **kw).solve(src)
+
+
+def flat_error(mesh, src) -> float:
+    res = order2(mesh, src)
+    ex = euclid_from(mesh, src)
+    assert res.info.status in ("optimal", "almost_optimal")  # Clarabel: AlmostSolved on the aspect-1000 needle
+    return float(np.abs(res.distance - ex).max() / ex.max())
+
+
+# ---------------------------------------------------------------- elements
+def test_p2_basis_partition_of_unity_and_nodal():
+    nodes = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [0, .5, .5], [.5, 0, .5], [.5, .5, 0]])
+    N, dN = p2_basis(nodes)
+    np.testing.assert_allclose(N, np.eye(6), atol=1e-15)
+    lam = np.random.default_rng(0).dirichlet([1, 1, 1], 20)
+    N, dN = p2_basis(lam)
+    np.testing.assert_allclose(N.sum(axis=1), 1.0, atol=1e-14)
+
+
+def test_p2_weights_integrate_quadratics_exactly():
+    # ∫∫_{[0,1]²} (x² + y²) = 2/3 ; the consistent P2 weights are exact for quadratics on any triangulation
+    mesh = cg.grid_plane(5, jitter=0.3, seed=2)
+    space = P2Space(mesh)
+    E = mesh.edges
+    P = np.vstack([mesh.V, 0.5 * (mesh.V[E[:, 0]] + mesh.V[E[:, 1]])])
+    phi = (P[:, :2] ** 2).sum(axis=1)
+    assert space.weights("p2") @ phi == pytest.approx(2 / 3, abs=1e-13)
+    assert space.weights("lumped").sum() == pytest.approx(1.0, abs=1e-13)
+    assert abs(space.weights("lumped") @ phi - 2 / 3) > 1e-4  # lumped weights are not exact
+
+
+def test_gradient_of_exact_square_distance_on_a_face():
+    mesh = delaunay_mesh(30)
+    space = P2Space(mesh)
+    E = mesh.edges
+    P = np.vstack([mesh.V, 0.5 * (mesh.V[E[:, 0]] + mesh.V[E[:, 1]])])
+    p = np.array([0.3, 0.4, 0.0])
+    phi = ((P - p) ** 2).sum(axis=1)
+    vmax, _, _ = max_violation(space, phi)  # |∇φ|² − 4φ ≡ 0 for φ = |x − p|²
+    assert np.abs(vmax).max() < 1e-12
+
+
+def test_max_violation_finds_interior_maximum():
+    # a hand-built quadratic on one face: v = |∇φ|² − 4φ, compare with dense sampling
+    mesh = cg.TriMesh(np.array([[0, 0, 0], [1, 0, 0], [0.2, 0.9, 0.0]]), np.array([[0, 1, 2]]))
+    space = P2Space(mesh)
+    rng = np.random.default_rng(1)
+    for _ in range(5):
+        x = rng.random(space.n_dofs)
+        vmax, bary, _ = max_violation(space, x)
+        g = np.linspace(0, 1, 81)
+        B = np.array([[1 - a - b, a, b] for a in g for b in g if a + b <= 1 + 1e-12])
+        N, dN = p2_basis(B)
+        grad = np.einsum("sai,ci->sca", dN, space.lam_grad[0]) @ x[space.face_dofs[0]]
+        v = (grad**2).sum(axis=1) - 4 * N @ x[space.face_dofs[0]]
+        assert vmax[0] >= v.max() - 1e-12
+        assert vmax[0] <= v.max() + 1e-3 * (abs(v.max()) + 1)
+
+
+# ---------------------------------------------------------------- flat meshes of any quality
+@pytest.mark.parametrize("src", [0, 200, 37])
+def test_flat_jittered_grid_vertex_sources(src):
+    assert flat_error(cg.grid_plane(20, jitter=0.4, seed=1), src) <= FLAT_TOL
+
+
+@pytest.mark.parametrize("aspect", [50, 240, 1000])
+@pytest.mark.parametrize("src", [0, 5, (4, (0.25, 0.25, 0.5))])
+def test_flat_needle_strip(aspect, src):
+    assert flat_error(needle_strip(10, aspect), src) <= FLAT_TOL
+
+
+def test_flat_random_delaunay():
+    mesh = delaunay_mesh()
+    for src in (0, 17):
+        assert flat_error(mesh, src) <= FLAT_TOL
+
+
+def test_flat_fan_plate():
+    mesh = fan_plate()
+    aspect = mesh.face_longest_edges / mesh.face_min_altitudes
+    assert aspect.max() > 20  # the fans are long and thin
+    for src in (0, 5, mesh.n_vertices - 1, (3, (0.3, 0.3, 0.4)), (15, (0.1, 0.1, 0.8))):
+        assert flat_error(mesh, src) <= FLAT_TOL
+
+
+@pytest.mark.parametrize("bary", [(0.2, 0.3, 0.5), (0.5, 0.5, 0.0), (1 / 3, 1 / 3, 1 / 3)])
+def test_flat_in_face_sources(bary):
+    mesh = cg.grid_plane(20, jitter=0.4, seed=1)
+    assert flat_error(mesh, (37, bary)) <= FLAT_TOL
+    assert flat_error(delaunay_mesh(), (10, bary)) <= FLAT_TOL
+
+
+def test_in_face_source_from_surface_point_object():
+    class Pt:  # anything with .face and .bary (cg.SurfacePoint, from another branch)
+        face = 37
+        bary = (0.2, 0.3, 0.5)
+
+    mesh = cg.grid_plane(12, jitter=0.3, seed=4)
+    res = order2(mesh, [Pt()])
+    ex = euclid_from(mesh, (37, Pt.bary))
+    assert np.abs(res.distance - ex).max() / ex.max() <= FLAT_TOL
+
+
+def test_field_inside_faces_flat():
+    mesh = delaunay_mesh(120)
+    res = order2(mesh, 3)
+    fld = res.info.extra["p2_field"]
+    rng = np.random.default_rng(0)
+    faces = rng.integers(0, mesh.n_faces, 300)
+    bary = rng.dirichlet([1, 1, 1], 300)
+    pts = np.einsum("ki,kij->kj", bary, mesh.V[mesh.F[faces]])
+    ex = np.linalg.norm(pts - mesh.V[3], axis=1)
+    # √φ near the source magnifies φ's last digits: 1e-4 here against 1e-5 at the vertices
+    assert np.abs(fld.distance_at(faces, bary) - ex).max() <= 1e-4 * ex.max()
+    np.testing.assert_allclose(fld.distance_at(faces[:1], bary[:1]), fld.distance_at(faces[0], bary[0]))
+
+
+def test_field_inside_split_face_after_point_source():
+    mesh = cg.grid_plane(10, jitter=0.3, seed=5)
+    src = (12, (0.2, 0.5, 0.3))
+    res = order2(mesh, src)
+    fld = res.info.extra["p2_field"]
+    p = np.asarray(src[1]) @ mesh.V[mesh.F[12]]
+    bary = np.array([[0.6, 0.2, 0.2], [0.1, 0.1, 0.8], *[src[1]]])
+    pts = bary @ mesh.V[mesh.F[12]]
+    got = fld.distance_at(np.full(3, 12), bary)
+    np.testing.assert_allclose(got, np.linalg.norm(pts - p, axis=1), atol=1e-4)
+    assert got[-1] < 1e-4
+
+
+def test_cutting_planes_are_needed_next_to_an_inserted_source():
+    # without the cutting planes the corner/midpoint cones let the field overshoot: it measured 3.7e-3
+    mesh = cg.grid_plane(20, jitter=0.4, seed=1)
+    ex = euclid_from(mesh, (37, (0.2, 0.3, 0.5)))
+    s = cg.GeodesicSolver(mesh, "qclp", order=2)
+    s._order2.refine = 0
+    d0 = s.solve((37, (0.2, 0.3, 0.5))).distance
+    assert np.abs(d0 - ex).max() / ex.max() > 1e-3
+
+
+# ---------------------------------------------------------------- curved meshes
+def test_sphere_converges_faster_than_p1():
+    levels = [2, 3, 4]  # at level 1 (80 faces) the polyhedral shrink dominates: P1 and P2 are both ~3 % off
+    e1, e2, h = [], [], []
+    for lv in levels:
+        mesh = cg.icosphere(lv)
+        ex = np.arccos(np.clip(mesh.V @ mesh.V[0] / np.linalg.norm(mesh.V, axis=1) / np.linalg.norm(mesh.V[0]),
+                               -1, 1)) * np.linalg.norm(mesh.V[0])
+        mask = ex > 1e-9
+        d1 = cg.GeodesicSolver(mesh, "qclp").solve(0).distance
+        d2 = order2(mesh, 0).distance
+        e1.append(np.mean(np.abs(d1 - ex)[mask] / ex[mask]))
+        e2.append(np.mean(np.abs(d2 - ex)[mask] / ex[mask]))
+        h.append(mesh.mean_edge_length)
+    r1 = np.polyfit(np.log(h), np.log(e1), 1)[0]
+    r2 = np.polyfit(np.log(h), np.log(e2), 1)[0]
+    assert all(a < b for a, b in zip(e2, e1, strict=True))
+    assert r2 > r1 + 0.3, (r1, r2)
+
+
+def test_multiple_components_and_degenerate_faces():
+    a = cg.grid_plane(4)
+    b = cg.grid_plane(4)
+    V = np.vstack([a.V, b.V + [5, 0, 0], [[0.5, 0.5, 0.0]]])
+    F = np.vstack([a.F, b.F + a.n_vertices, [[0, 1, V.shape[0] - 1]]])  # plus a needle-ish face
+    V[-1] = (V[0] + V[1]) / 2 + [0, 1e-6, 0]
+    mesh = cg.TriMesh(V, F)
+    assert mesh.degenerate_faces().size == 1
+    with pytest.warns(cg.DegenerateFacesWarning):
+        res = cg.GeodesicSolver(mesh, "qclp", order=2).solve(0)
+    d = res.distance
+    assert np.all(np.isinf(d[a.n_vertices:2 * a.n_vertices]))
+    ex = np.linalg.norm(V[: a.n_vertices] - V[0], axis=1)
+    assert np.abs(d[: a.n_vertices] - ex).max() < 1e-5
+    assert abs(d[-1] - np.linalg.norm(V[-1] - V[0])) < 1e-5  # held by the 1-D edge cones of the degenerate face
+    assert res.info.n_unreachable == a.n_vertices
+    assert any("degenerate" in n for n in res.info.notes)
+
+
+def test_non_manifold_book_of_flat_pages():
+    # three flat pages sharing the spine (0,0,0)-(0,0,1): from a spine vertex the distance is Euclidean on each
+    spine = [[0, 0, 0], [0, 0, 1]]
+    pages = [[1, 0, 0.5], [-1, 0, 0.5], [0, 1, 0.5]]
+    V = np.array(spine + pages, dtype=float)
+    F = np.array([[0, 1, 2], [0, 1, 3], [0, 1, 4]])
+    mesh = cg.TriMesh(V, F)
+    assert not mesh.is_edge_manifold
+    d = order2(mesh, 0).distance
+    np.testing.assert_allclose(d, np.linalg.norm(V - V[0], axis=1), atol=1e-6)
+
+
+# ---------------------------------------------------------------- API
+def test_order_parameter_validation():
+    mesh = cg.icosphere(1)
+    for bad in (0, 3, 1.5, True, "2"):
+        with pytest.raises(ParameterError, match="order"):
+            cg.GeodesicSolver(mesh, "qclp", order=bad)
+    with pytest.raises(ParameterError, match="order=2"):
+        cg.GeodesicSolver(mesh, "qcqp-hessian", order=2)
+    with pytest.raises(ParameterError, match="order=2"):
+        cg.GeodesicSolver(mesh, "heat", order=2)
+
+
+def test_bad_sources():
+    mesh = cg.icosphere(1)
+    s = cg.GeodesicSolver(mesh, "qclp", order=2)
+    for bad, msg in (([], "empty"), (mesh.n_vertices, "out of range"), ([1, 1], "more than once"),
+                     ((0, (0.5, 0.6, 0.1)), "sum to 1"), ((mesh.n_faces, (1, 0, 0)), "face"),
+                     (True, "vertex"), ("a", "sources")):
+        with pytest.raises(SourceError, match=msg):
+            s.solve(bad)
+
+
+def test_parse_sources_vertex_and_edge_points():
+    mesh = cg.grid_plane(3)
+    v, pts = parse_sources([(0, (0, 1, 0)), 5, (2, (0.5, 0.5, 0))], mesh)
+    assert v.tolist() == [int(mesh.F[0, 1]), 5]
+    assert len(pts) == 1 and pts[0].face == 2
+
+
+def test_geodesic_distance_and_distance_matrix_order2():
+    mesh = cg.grid_plane(6, jitter=0.2, seed=0)
+    d = cg.geodesic_distance(mesh, 4, method="qclp", order=2)
+    np.testing.assert_allclose(d, euclid_from(mesh, 4), atol=1e-6)
+    D = cg.distance_matrix(mesh, [4, 10, 4], method="qclp", order=2)
+    assert D.shape == (3, mesh.n_vertices)
+    np.testing.assert_allclose(D[1], euclid_from(mesh, 10), atol=1e-6)
+    np.testing.assert_array_equal(D[0], D[2])
+
+
+def test_solve_info_order2():
+    res = order2(cg.icosphere(2), 0)
+    info = res.info
+    assert info.method == "qclp" and info.status == "optimal" and info.iterations > 0
+    assert info.extra["order"] == 2 and info.solver == "ipm"  # the structured solver under solver="auto"
+    assert order2(cg.icosphere(2), 0, solver="clarabel").info.solver == "clarabel"
+    assert info.primal_residual < 1e-6 and info.gap < 1e-6
+    assert info.solve_time > 0
+
+
+def test_scale_equivariance():
+    mesh = cg.icosphere(2)
+    d = order2(mesh, 0).distance
+    big = cg.TriMesh(mesh.V * 1024.0, mesh.F)
+    np.testing.assert_allclose(order2(big, 0).distance, d * 1024.0, rtol=1e-12, atol=0)
+
+
+# ---------------------------------------------------------------- structured solver
+@pytest.mark.parametrize("mesh", [cg.grid_plane(12, jitter=0.3, seed=1), cg.icosphere(2)], ids=["grid", "ico2"])
+def test_structured_ipm_matches_clarabel(mesh):
+    from cvxgeodesic.api import _unit_mesh
+    from cvxgeodesic.solvers.ipm_soc import P2InteriorPoint
+
+    unit, _ = _unit_mesh(mesh)
+    b = P2Builder(unit)
+    pr = b.build(0)
+    ipm = P2InteriorPoint(b)
+    ri = ipm.solve(pr)
+    rc = solve_p2_clarabel(pr)
+    assert ri["status"] in ("optimal", "almost_optimal")
+    assert np.abs(ri["x"] - rc["x"]).max() <= 1e-6 * rc["x"].max()
+    assert ipm.chol.n_analyses == 1
+    ipm.solve(b.build(5))  # another source: same symbolic analysis
+    assert ipm.chol.n_analyses == 1
+
+
+# ---------------------------------------------------------------- real meshes (development data)
+CAD = ["thingi_243015.stl", "thingi_32770.stl", "thingi_37881.stl", "thingi_47076.stl", "thingi_65395.stl",
+       "thingi_93703.stl", "thingi_96457.stl"]
+
+
+def _rel(d, de):
+    ok = np.isfinite(de) & (de > 1e-12 * np.nanmax(de[np.isfinite(de)]))
+    return float(np.mean(np.abs(d[ok] - de[ok]) / de[ok]))
+
+
+@pytest.mark.slow
+def test_coarse_cad_median_ratio():
+    from cvxgeodesic.baselines import BASELINES
+
+    ratios = []
+    for name in CAD:
+        mesh = cg.load_mesh(shared_mesh_path(name))
+        if mesh.n_faces > 10_000:
+            continue  # thingi_32770 (38K faces) is not coarse; benchmarks/order2.py covers it
+        de, _ = BASELINES["exact"](mesh).solve(np.array([0]))
+        e1 = _rel(cg.GeodesicSolver(mesh, "qclp").solve(0).distance, de)
+        e2 = _rel(order2(mesh, 0).distance, de)
+        ratios.append(e2 / e1)
+    assert np.median(ratios) <= 0.5, ratios
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["bunny_7k.off", "lucy_20k.obj"])
+def test_fine_mesh_not_worse_than_p1(name):
+    from cvxgeodesic.baselines import BASELINES
+
+    mesh = cg.load_mesh(shared_mesh_path(name))
+    de, _ = BASELINES["exact"](mesh).solve(np.array([0]))
+    e1 = _rel(cg.GeodesicSolver(mesh, "qclp").solve(0).distance, de)
+    e2 = _rel(order2(mesh, 0).distance, de)
+    assert e2 <= e1
+
+
+def test_auto_falls_back_to_clarabel(monkeypatch):
+    from cvxgeodesic.errors import SolverError
+    from cvxgeodesic.solvers import ipm_soc
+
+    def boom(self, problem, **kw):
+        raise SolverError("forced", solver="ipm", status="numerical_error")
+
+    monkeypatch.setattr(ipm_soc.P2InteriorPoint, "solve", boom)
+    monkeypatch.setattr(p2mod, "IPM_MIN_FACES", 0)  # "auto" picks the structured solver
+    mesh = cg.grid_plane(6, jitter=0.2, seed=0)
+    res = order2(mesh, 4)
+    assert res.info.solver == "clarabel"
+    assert any("Clarabel" in n for n in res.info.notes)
+    np.testing.assert_allclose(res.distance, euclid_from(mesh, 4), atol=1e-6)
+    with pytest.raises(SolverError):
+        order2(mesh, 4, solver="ipm")
