@@ -806,9 +806,9 @@ rounding of fixed width on the surface reads as sharper on coarser meshes.
 {dp[0]:.1e} of the diagonal at {kf(lv[0]['faces'])} faces and {dp[-1]:.1e} at {kf(lv[-1]['faces'])}
 ({_ratio(dp)}), swamping coarse meshes and vanishing on fine ones. Under the area normalization one `m` is one
 length on the surface: the deficit is {' → '.join(f'{v:.1e}' for v in da)} ({_ratio(da_fine)} apart from 8K
-faces up). Below that the mesh no longer resolves the rounding (its width at `m = 1` is about a hundredth of
-√area, an edge of the 2K-face mesh is {lv[1]['h_over_sqrt_area']:.3f} √area): coarse meshes are then smoothed
-*less*, and QCQP-Hessian tends to QCLP there instead of collapsing.
+faces up). Below that the mesh no longer resolves the rounding (an edge of the 2K-face mesh is
+{lv[1]['h_over_sqrt_area']:.3f} √area long): coarse meshes are then smoothed *less*, and QCQP-Hessian tends
+to QCLP there instead of collapsing.
 """
     return text, findings
 
