@@ -51,6 +51,16 @@ def test_distance_normalization_flag_matches_api(sphere_file, tmp_path, normaliz
     np.testing.assert_allclose(np.load(out), expected, atol=1e-12)
 
 
+def test_distance_order_two(sphere_file, tmp_path):
+    out = tmp_path / "d.npy"
+    assert main(["distance", str(sphere_file), "-s", "3", "--method", "qclp", "--order", "2", "-q",
+                 "-o", str(out)]) == 0
+    expected = cg.geodesic_distance(cg.load_mesh(sphere_file), 3, method="qclp", order=2)
+    np.testing.assert_allclose(np.load(out), expected, atol=1e-12)
+    p1 = cg.geodesic_distance(cg.load_mesh(sphere_file), 3, method="qclp")
+    assert np.abs(np.load(out) - p1).max() > 1e-3
+
+
 @pytest.mark.parametrize(
     "args, message",
     [(["distance", "missing.obj", "-s", "0", "-o", "x.ply"], "no such file"),

@@ -389,3 +389,18 @@ def test_auto_falls_back_to_clarabel(monkeypatch):
     np.testing.assert_allclose(res.distance, euclid_from(mesh, 4), atol=1e-6)
     with pytest.raises(SolverError):
         order2(mesh, 4, solver="ipm")
+
+
+def test_distance_at_evaluates_the_p2_field_inside_faces():
+    """cg.distance_at on an order=2 result reads the quadratic field: exact on a flat grid between vertices."""
+    mesh = cg.grid_plane(8, jitter=0.3, seed=5)
+    res = cg.GeodesicSolver(mesh, "qclp", order=2).solve(40)
+    rng = np.random.default_rng(1)
+    faces = rng.integers(0, mesh.n_faces, 20)
+    bary = rng.dirichlet([1.0, 1.0, 1.0], 20)
+    pts = [cg.SurfacePoint(int(f), b) for f, b in zip(faces, bary, strict=True)]
+    xyz = np.einsum("kj,kjd->kd", bary, mesh.V[mesh.F[faces]])
+    exact = np.linalg.norm(xyz - mesh.V[40], axis=1)
+    np.testing.assert_allclose(cg.distance_at(mesh, res, pts), exact, atol=1e-5 * exact.max())
+    linear = cg.distance_at(mesh, res.distance, pts)  # the vertex values interpolated linearly are not exact
+    assert np.abs(linear - exact).max() > 1e-3

@@ -53,7 +53,7 @@ def _cmd_distance(args) -> int:
     if not args.quiet:
         print(f"{mesh.name}: {mesh.n_file_vertices} vertices, {mesh.n_faces} faces; method {args.method}", file=log)
     solver = GeodesicSolver(mesh, args.method, m=args.m, lam=args.lam, solver=args.solver,
-                            normalization=args.normalization)
+                            normalization=args.normalization, order=args.order)
     callback = None if args.quiet else _progress_printer(log)
     res = solver.solve(sources, callback=callback)
     for note in res.info.notes:
@@ -163,6 +163,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--lam", type=float, default=None, help="give λ directly (overrides --m)")
     p.add_argument("--normalization", default="area", choices=("area", "paper"),
                    help="meaning of --m: 'area' (default) or the paper's λ = m·100·h/n")
+    p.add_argument("--order", type=int, default=1, choices=(1, 2),
+                   help="2: second-order elements for the squared distance (qclp only; docs/order2.md)")
     p.add_argument("-o", "--output", required=True,
                    help="output file: .ply (mesh + distance), .npy, .csv, or .vtu/.vtk (needs meshio), in the "
                         "file's vertex numbering")

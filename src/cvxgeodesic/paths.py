@@ -75,7 +75,11 @@ def _as_points(mesh: TriMesh, points) -> tuple[list[SurfacePoint], bool]:
 
 
 def distance_at(mesh: Any, distance: ArrayLike, points: Any) -> np.ndarray:
-    """Values of a piecewise-linear vertex field at surface points.
+    """Values of a distance field at surface points.
+
+    A vertex field is interpolated linearly in each face; the result of an ``order=2`` solve
+    (a :class:`~cvxgeodesic.api.GeodesicResult`) is evaluated as its piecewise quadratic squared
+    distance, ``√φ``.
 
     Parameters
     ----------
@@ -104,6 +108,12 @@ def distance_at(mesh: Any, distance: ArrayLike, points: Any) -> np.ndarray:
     0.0
     """
     mesh = as_trimesh(mesh)
+    p2_field = getattr(getattr(distance, "info", None), "extra", {}).get("p2_field")
+    if p2_field is not None:  # an order=2 result: its piecewise quadratic field, not the vertex values
+        pts, single = _as_points(mesh, points)
+        faces = np.array([p.face for p in pts], dtype=np.int64)
+        vals = p2_field.distance_at(faces, np.array([p.bary for p in pts]).reshape(-1, 3))
+        return float(vals[0]) if single else vals
     d, _ = _field(mesh, distance)
     pts, single = _as_points(mesh, points)
     faces = np.array([p.face for p in pts], dtype=np.int64)
