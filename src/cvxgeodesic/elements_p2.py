@@ -744,16 +744,14 @@ def solve_p2_clarabel(problem: P2Problem, *, tol: float = 1e-8, max_iter: int = 
     if Ef.shape[0]:
         cones.append(clarabel.ZeroConeT(Ef.shape[0]))
     cones.extend([clarabel.SecondOrderConeT(4)] * k)
-    settings = clarabel.DefaultSettings()
-    settings.verbose = verbose
-    settings.max_iter = max_iter
-    settings.tol_gap_abs = tol
-    settings.tol_gap_rel = tol
-    settings.tol_feas = tol
-    settings.tol_ktratio = 1e-6
+    from .solvers._interrupt import interruptible
+    from .solvers.clarabel_backend import clarabel_settings
+
     t0 = time.perf_counter()
-    solver = clarabel.DefaultSolver(sp.csc_matrix((free.size, free.size)), problem.c[free], A, b, cones, settings)
-    sol = solver.solve()
+    solver = clarabel.DefaultSolver(sp.csc_matrix((free.size, free.size)), problem.c[free], A, b, cones,
+                                    clarabel_settings(tol, max_iter, verbose))
+    with interruptible(solver):  # Ctrl-C stops the solve at the next iteration
+        sol = solver.solve()
     status = str(sol.status)
     if status not in ("Solved", "AlmostSolved"):
         raise SolverError("Clarabel did not solve the order-2 problem", solver="clarabel", status=status,

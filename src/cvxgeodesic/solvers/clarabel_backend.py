@@ -53,6 +53,20 @@ def reduce_to_free(problem: ConicProblem):
     return free, P, q, const, A_cone, g_cone, A_ineq, b_ineq
 
 
+def clarabel_settings(tol: float, max_iter: int, verbose: bool = False, time_limit: float | None = None):
+    """Clarabel settings of every cvxgeodesic solve: ``tol`` on gap and feasibility, ``max_iter``, a time limit."""
+    settings = clarabel.DefaultSettings()
+    settings.verbose = verbose
+    settings.max_iter = max_iter
+    settings.tol_gap_abs = tol
+    settings.tol_gap_rel = tol
+    settings.tol_feas = tol
+    settings.tol_ktratio = 1e-6
+    if time_limit is not None:
+        settings.time_limit = float(time_limit)
+    return settings
+
+
 def solve_clarabel(
     problem: ConicProblem,
     *,
@@ -105,16 +119,7 @@ def solve_clarabel(
     cones.extend([clarabel.SecondOrderConeT(3)] * k)
     Pu = sp.triu(P).tocsc() if P is not None else sp.csc_matrix((nf, nf))
 
-    settings = clarabel.DefaultSettings()
-    settings.verbose = verbose
-    settings.max_iter = max_iter
-    settings.tol_gap_abs = tol
-    settings.tol_gap_rel = tol
-    settings.tol_feas = tol
-    settings.tol_ktratio = 1e-6
-    if time_limit is not None:
-        settings.time_limit = float(time_limit)
-    solver = clarabel.DefaultSolver(Pu, q, A, b, cones, settings)
+    solver = clarabel.DefaultSolver(Pu, q, A, b, cones, clarabel_settings(tol, max_iter, verbose, time_limit))
     t_setup = time.perf_counter() - t0
     with interruptible(solver):  # Ctrl-C stops the solve at the next iteration
         sol = solver.solve()
