@@ -95,11 +95,11 @@ class _Viewer:
         top = float(d[finite].max()) if finite.any() else 1.0
         shown = np.where(finite, d, top)
         period = (top - float(shown.min())) / N_ISOLINES if top > shown.min() else 1.0
-        # every isoline setter of polyscope 2.6 switches isolines on: pass none of them to keep them off
+        # every isoline setter of polyscope 2.6 switches isolines on, and the on/off state persists per
+        # quantity name across calls: say isolines_enabled=False explicitly and alone to keep them off
         iso = dict(isolines_enabled=True, isoline_period=period, isoline_period_relative=False,
-                   isoline_style="contour", isoline_darkness=0.85)
-        self.surface.add_scalar_quantity(FIELD_NAME, shown, enabled=True, cmap="viridis",
-                                         **(iso if self.isolines else {}))
+                   isoline_style="contour", isoline_darkness=0.85) if self.isolines else dict(isolines_enabled=False)
+        self.surface.add_scalar_quantity(FIELD_NAME, shown, enabled=True, cmap="viridis", **iso)
         self.distance = d
         radius = 0.012 * float(self.mesh.bbox_diagonal) if self.mesh.bbox_diagonal > 0 else 0.01
         cloud = self.ps.register_point_cloud(SOURCES_NAME, marks.reshape(-1, 3), color=(0.9, 0.05, 0.05))

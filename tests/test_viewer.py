@@ -1,0 +1,153 @@
+"""Issue 16, item 8: the polyscope viewer (cg.show, cvxgeodesic view), tested off-screen on pixels.
+
+The rendering tests need polyscope (the ``viewer`` extra) and an off-screen OpenGL context (EGL with
+Mesa: libegl1 libegl-mesa0 libgl1-mesa-dri, installed by ``make``); they skip when either is missing.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import cvxgeodesic as cg
+from cvxgeodesic.errors import ParameterError
+
+W, H = 400, 300
+
+
+def _egl_works() -> bool:
+    # in a subprocess: a failed polyscope.init can abort the interpreter
+    code = "import polyscope as ps; ps.set_allow_headless_backends(True); ps.init('openGL3_egl')"
+    try:
+        return subprocess.run([sys.executable, "-c", code], capture_output=True, timeout=60).returncode == 0
+    except (OSError, subprocess.TimeoutExpired):
+        return False
+
+
+@pytest.fixture(scope="module")
+def gl():
+    pytest.importorskip("polyscope", reason="polyscope not installed (pip install 'cvxgeodesic[viewer]')")
+    if not _egl_works():
+        pytest.skip("no off-screen OpenGL context (EGL/Mesa missing)")
+
+
+@pytest.fixture(scope="module")
+def sphere():
+    return cg.icosphere(3)
+
+
+def _front_vertex(mesh) -> int:
+    # polyscope's home view looks down the -z axis: the vertex of largest z faces the camera
+    return int(np.argmax(mesh.V[:, 2]))
+
+
+def _render(tmp_path, name, *args, **kw) -> np.ndarray:
+    import matplotlib.image as mpimg
+
+    path = tmp_path / name
+    cg.show(*args, screenshot=path, window_size=(W, H), **kw)
+    img = mpimg.imread(path)[..., :3]  # (H, W, 3) float in [0, 1]
+    assert img.shape == (H, W, 3)
+    return img
+
+
+def _surface(img):
+    return np.abs(img - 1.0).sum(axis=-1) > 0.05  # background is white
+
+
+def _dark(img):
+    return img.sum(axis=-1) < 0.45
+
+
+def _red(img):
+    return (img[..., 0] > 0.6) & (img[..., 1] < 0.25) & (img[..., 2] < 0.25)
+
+
+def test_screenshot_shows_field_isolines_and_sources(gl, sphere, tmp_path):
+    s = _front_vertex(sphere)
+    d = cg.geodesic_distance(sphere, s, method="fmm")
+    on = _render(tmp_path, "on.png", sphere, d, sources=[s])
+    off = _render(tmp_path, "off.png", sphere, d, sources=[s], isolines=False)
+    surf = _surface(off)
+    assert surf.mean() > 0.3  # the sphere fills ~half of the frame
+    assert np.array_equal(surf, _surface(on))
+    # the field is drawn in colour: shading alone would leave the surface one hue
+    colours = off[surf]
+    assert np.ptp(colours[:, 1]) > 0.3 and np.unique((colours * 16).astype(int), axis=0).shape[0] > 30
+    # isolines: thin dark bands that exist only when switched on
+    assert _dark(on)[surf].mean() > 0.1 and _dark(off)[surf].mean() < 0.01
+    # the source: a red mark where the centre of the view is (viridis has no red)
+    red = _red(on)
+    assert 10 < red.sum() < 0.05 * surf.sum()
+    ys, xs = np.nonzero(red)
+    assert abs(xs.mean() - W / 2) < 0.1 * W and abs(ys.mean() - H / 2) < 0.1 * H
+    # no sources: marks at the zeros of the field (the same vertex)
+    assert _red(_render(tmp_path, "zeros.png", sphere, d)).sum() > 10
+
+
+def test_show_solves_and_returns_the_field(gl, sphere, tmp_path):
+    s = _front_vertex(sphere)
+    d = cg.show(sphere, sources=s, method="fmm", screenshot=tmp_path / "x.png", window_size=(W, H))
+    np.testing.assert_array_equal(d, cg.geodesic_distance(sphere, s, method="fmm"))
+
+
+def test_a_pick_resolves_from_the_picked_vertex(gl, sphere, tmp_path):
+    import polyscope as ps
+
+    from cvxgeodesic.viewer import _Viewer
+
+    cg.show(sphere, sources=0, method="fmm", screenshot=tmp_path / "x.png", window_size=(W, H))
+    v = _Viewer(ps, sphere, method="fmm", solver_kwargs={}, isolines=True)
+    v.solve([0])
+    ps.screenshot_to_buffer()  # a rendered frame to pick from
+    hit = ps.pick(screen_coords=(W // 2, H // 2))
+    assert v.pick(hit)
+    i = hit.structure_data["index"]
+    assert i == _front_vertex(sphere) or np.linalg.norm(sphere.V[i] - sphere.V[_front_vertex(sphere)]) < 0.2
+    np.testing.assert_allclose(v.distance, cg.geodesic_distance(sphere, i, method="fmm"), atol=1e-12)
+    assert not v.pick(ps.pick(screen_coords=(2, 2)))  # background: nothing re-solved
+    np.testing.assert_allclose(v.distance, cg.geodesic_distance(sphere, i, method="fmm"), atol=1e-12)
+
+
+def test_cli_view_screenshot(gl, sphere, tmp_path):
+    from cvxgeodesic.cli import main
+
+    obj = tmp_path / "sphere.obj"
+    obj.write_text("".join(f"v {x} {y} {z}\n" for x, y, z in sphere.V)
+                   + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in sphere.F))
+    out = tmp_path / "view.png"
+    assert main(["view", str(obj), "-s", str(_front_vertex(sphere)), "--method", "fmm", "--screenshot", str(out),
+                 "-q"]) == 0
+    import matplotlib.image as mpimg
+
+    assert _red(mpimg.imread(out)[..., :3]).sum() > 10
+
+
+def test_show_is_exported_lazily():
+    from cvxgeodesic import viewer
+
+    assert cg.show is viewer.show and "show" in cg.__all__
+
+
+def test_missing_polyscope_names_the_extra(monkeypatch):
+    from cvxgeodesic import viewer
+
+    monkeypatch.setitem(sys.modules, "polyscope", None)  # import polyscope now raises ImportError
+    with pytest.raises(ImportError, match=r"cvxgeodesic\[viewer\]"):
+        viewer._polyscope()
+
+
+def test_bad_arguments_are_named(sphere, monkeypatch, tmp_path):
+    with pytest.raises(ParameterError, match="distance must have shape"):
+        cg.show(sphere, np.zeros(3), screenshot=tmp_path / "x.png")
+    with pytest.raises(ParameterError, match="window_size"):
+        cg.show(sphere, np.zeros(sphere.n_vertices), screenshot=tmp_path / "x.png", window_size=(0, 0))
+    with pytest.raises(ParameterError, match=r"\.png"):
+        cg.show(sphere, np.zeros(sphere.n_vertices), screenshot=tmp_path / "x.jpg")
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    with pytest.raises(ParameterError, match="no display"):
+        cg.show(sphere, np.zeros(sphere.n_vertices))
