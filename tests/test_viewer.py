@@ -74,9 +74,17 @@ def test_screenshot_shows_field_isolines_and_sources(gl, sphere, tmp_path):
     surf = _surface(off)
     assert surf.mean() > 0.3  # the sphere fills ~half of the frame
     assert np.array_equal(surf, _surface(on))
-    # the field is drawn in colour: shading alone would leave the surface one hue
+    # the field is drawn in colour (a grey, shaded surface has r = g = b) ...
     colours = off[surf]
-    assert np.ptp(colours[:, 1]) > 0.3 and np.unique((colours * 16).astype(int), axis=0).shape[0] > 30
+    assert np.median(colours.max(axis=1) - colours.min(axis=1)) > 0.1
+    # ... and it follows the distance: the source faces the camera, so the distance grows with the radius
+    # in the image; viridis goes from purple (more red) near the source to teal (less red) farther out
+    ys, xs = np.nonzero(surf)
+    R = np.sqrt(surf.sum() / np.pi)
+    r = np.hypot(*np.meshgrid(np.arange(W) - xs.mean(), np.arange(H) - ys.mean())) / R
+    chroma = off / np.maximum(off.sum(axis=-1, keepdims=True), 1e-6)  # colour without the shading's brightness
+    near, far = chroma[surf & (r > 0.2) & (r < 0.4)].mean(axis=0), chroma[surf & (r > 0.75) & (r < 0.95)].mean(axis=0)
+    assert near[0] > far[0] + 0.04 and far[1] > near[1] + 0.04
     # isolines: thin dark bands that exist only when switched on
     assert _dark(on)[surf].mean() > 0.1 and _dark(off)[surf].mean() < 0.01
     # the source: a red mark where the centre of the view is (viridis has no red)
