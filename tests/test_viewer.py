@@ -73,7 +73,7 @@ def test_screenshot_shows_field_isolines_and_sources(gl, sphere, tmp_path):
     off = _render(tmp_path, "off.png", sphere, d, sources=[s], isolines=False)
     surf = _surface(off)
     assert surf.mean() > 0.3  # the sphere fills ~half of the frame
-    assert np.array_equal(surf, _surface(on))
+    assert (surf != _surface(on)).sum() < 0.01 * surf.sum()  # the same view (isoline tubes touch the rim)
     # the field is drawn in colour (a grey, shaded surface has r = g = b) ...
     colours = off[surf]
     assert np.median(colours.max(axis=1) - colours.min(axis=1)) > 0.1
@@ -85,8 +85,11 @@ def test_screenshot_shows_field_isolines_and_sources(gl, sphere, tmp_path):
     chroma = off / np.maximum(off.sum(axis=-1, keepdims=True), 1e-6)  # colour without the shading's brightness
     near, far = chroma[surf & (r > 0.2) & (r < 0.4)].mean(axis=0), chroma[surf & (r > 0.75) & (r < 0.95)].mean(axis=0)
     assert near[0] > far[0] + 0.04 and far[1] > near[1] + 0.04
-    # isolines: thin dark bands that exist only when switched on
-    assert _dark(on)[surf].mean() > 0.1 and _dark(off)[surf].mean() < 0.01
+    # isolines: thin dark lines, only when switched on: pixels much darker than without them, a few percent
+    # of the surface (20 isolines of a few pixels; polyscope's own isoline bands would cover a third)
+    line = (off - on).sum(axis=-1) > 0.3
+    assert 0.02 < line[surf].mean() < 0.15
+    assert on[line].sum(axis=-1).mean() < 1.0 and not _dark(off)[surf].any()
     # the source: a red mark where the centre of the view is (viridis has no red)
     red = _red(on)
     assert 10 < red.sum() < 0.05 * surf.sum()

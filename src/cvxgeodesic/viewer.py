@@ -23,6 +23,10 @@ INSTALL_HINT = "pip install 'cvxgeodesic[viewer]' (or pip install polyscope)"
 MESH_NAME = "surface"
 FIELD_NAME = "geodesic distance"
 SOURCES_NAME = "sources"
+ISOLINES_NAME = "isolines"
+#: isoline tube radius, and source sphere radius, per bounding-box diagonal
+ISOLINE_RADIUS = 0.0012
+SOURCE_RADIUS = 0.012
 #: isolines per field range: the same density as plot_field's default of 20
 N_ISOLINES = 20
 
@@ -79,6 +83,8 @@ class _Viewer:
         self.surface = ps.register_surface_mesh(MESH_NAME, mesh.V, mesh.F, smooth_shade=True,
                                                 color=(0.8, 0.8, 0.8))
         self.surface.set_selection_mode("vertices_only")
+        diag = float(mesh.bbox_diagonal)
+        self._diag = diag if np.isfinite(diag) and diag > 0 else 1.0
 
     def solver(self) -> Any:
         if self._solver is None:
@@ -94,16 +100,25 @@ class _Viewer:
         # polyscope cannot colour inf/NaN: unreachable vertices get the top of the range (and no isoline)
         top = float(d[finite].max()) if finite.any() else 1.0
         shown = np.where(finite, d, top)
-        period = (top - float(shown.min())) / N_ISOLINES if top > shown.min() else 1.0
-        # every isoline setter of polyscope 2.6 switches isolines on, and the on/off state persists per
-        # quantity name across calls: say isolines_enabled=False explicitly and alone to keep them off
-        iso = dict(isolines_enabled=True, isoline_period=period, isoline_period_relative=False,
-                   isoline_style="contour", isoline_darkness=0.85) if self.isolines else dict(isolines_enabled=False)
-        self.surface.add_scalar_quantity(FIELD_NAME, shown, enabled=True, cmap="viridis", **iso)
+        # polyscope 2.6's own isolines are bands a third of the period wide whatever the thickness
+        # option (and their on/off state persists per quantity name): keep them off, and draw thin tubes
+        # along marching-triangles isolines instead, the levels plot_field would draw
+        self.surface.add_scalar_quantity(FIELD_NAME, shown, enabled=True, cmap="viridis", isolines_enabled=False)
+        if self.ps.has_curve_network(ISOLINES_NAME):
+            self.ps.remove_curve_network(ISOLINES_NAME)
+        if self.isolines and top > float(shown.min()):
+            from .plotting import isoline_segments
+
+            levels = np.linspace(float(shown.min()), top, N_ISOLINES + 1)[1:-1]
+            seg = isoline_segments(self.mesh, np.where(finite, d, np.inf), levels)
+            if len(seg):
+                edges = np.arange(2 * len(seg)).reshape(-1, 2)
+                lines = self.ps.register_curve_network(ISOLINES_NAME, seg.reshape(-1, 3), edges,
+                                                       color=(0.05, 0.05, 0.05))
+                lines.set_radius(ISOLINE_RADIUS * self._diag, relative=False)
         self.distance = d
-        radius = 0.012 * float(self.mesh.bbox_diagonal) if self.mesh.bbox_diagonal > 0 else 0.01
         cloud = self.ps.register_point_cloud(SOURCES_NAME, marks.reshape(-1, 3), color=(0.9, 0.05, 0.05))
-        cloud.set_radius(radius, relative=False)
+        cloud.set_radius(SOURCE_RADIUS * self._diag, relative=False)
 
     def solve(self, sources: Any) -> np.ndarray:
         t0 = time.perf_counter()
