@@ -123,6 +123,26 @@ def test_a_pick_resolves_from_the_picked_vertex(gl, sphere, tmp_path):
     np.testing.assert_allclose(v.distance, cg.geodesic_distance(sphere, i, method="fmm"), atol=1e-12)
 
 
+def test_the_user_callback_runs_in_a_frame(gl, sphere, tmp_path):
+    # a frame without a click leaves the field; what a click selects is ps.get_selection(), which only
+    # a real mouse sets (polyscope has no set_selection), so the click path is tested through pick() above
+    import polyscope as ps
+
+    from cvxgeodesic.viewer import _Viewer
+
+    cg.show(sphere, sources=0, method="fmm", screenshot=tmp_path / "x.png", window_size=(W, H))
+    v = _Viewer(ps, sphere, method="fmm", solver_kwargs={}, isolines=True)
+    before = v.solve([0]).copy()
+    ps.set_user_callback(v.callback)
+    try:
+        ps.frame_tick()
+    finally:
+        ps.clear_user_callback()
+    assert not ps.have_selection()
+    np.testing.assert_array_equal(v.distance, before)
+    assert v.message.startswith("fmm: sources [0]")
+
+
 def test_cli_view_screenshot(gl, sphere, tmp_path):
     from cvxgeodesic.cli import main
 
