@@ -144,17 +144,22 @@ def test_the_user_callback_runs_in_a_frame(gl, sphere, tmp_path):
 
 
 def test_cli_view_screenshot(gl, sphere, tmp_path):
-    from cvxgeodesic.cli import main
-
-    obj = tmp_path / "sphere.obj"
-    obj.write_text("".join(f"v {x} {y} {z}\n" for x, y, z in sphere.V)
-                   + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in sphere.F))
-    out = tmp_path / "view.png"
-    assert main(["view", str(obj), "-s", str(_front_vertex(sphere)), "--method", "fmm", "--screenshot", str(out),
-                 "-q"]) == 0
     import matplotlib.image as mpimg
 
-    assert _red(mpimg.imread(out)[..., :3]).sum() > 10
+    from cvxgeodesic.cli import main
+
+    # file vertex 0 is in no face (load_mesh drops it): file vertex i + 1 is mesh vertex i, and -s is a file index
+    obj = tmp_path / "sphere.obj"
+    obj.write_text("v 9 9 9\n" + "".join(f"v {x} {y} {z}\n" for x, y, z in sphere.V)
+                   + "".join(f"f {a + 2} {b + 2} {c + 2}\n" for a, b, c in sphere.F))
+    out = tmp_path / "view.png"
+    argv = ["view", str(obj), "--method", "fmm", "--screenshot", str(out), "-q"]
+    assert main([*argv, "-s", str(_front_vertex(sphere) + 1)]) == 0
+    red = _red(mpimg.imread(out)[..., :3])
+    ys, xs = np.nonzero(red)
+    assert red.sum() > 10 and abs(xs.mean() - 512) < 100 and abs(ys.mean() - 384) < 100  # default 1024 x 768
+    assert main([*argv, "-s", "0"]) == 2  # the dropped vertex: a one-line error
+    assert main(argv) == 0  # no source: the first vertex
 
 
 def test_show_is_exported_lazily():
@@ -178,6 +183,8 @@ def test_bad_arguments_are_named(sphere, monkeypatch, tmp_path):
         cg.show(sphere, np.zeros(sphere.n_vertices), screenshot=tmp_path / "x.png", window_size=(0, 0))
     with pytest.raises(ParameterError, match=r"\.png"):
         cg.show(sphere, np.zeros(sphere.n_vertices), screenshot=tmp_path / "x.jpg")
+    with pytest.raises(ParameterError, match="does not exist"):
+        cg.show(sphere, np.zeros(sphere.n_vertices), screenshot=tmp_path / "no" / "x.png")
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     with pytest.raises(ParameterError, match="no display"):

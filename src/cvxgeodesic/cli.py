@@ -109,7 +109,7 @@ def _cmd_view(args) -> int:
 
     mesh = load_mesh(args.mesh)
     given = args.source or args.source_point or args.boundary
-    sources = cli_sources(args, mesh)[0] if given else 0
+    sources = cli_sources(args, mesh)[0] if given else 0  # a field to start from; clicks choose the next ones
     show(mesh, sources=sources, method=args.method, screenshot=args.screenshot, m=args.m, solver=args.solver)
     if args.screenshot and not args.quiet:
         print(f"wrote {args.screenshot}", file=sys.stderr)
@@ -223,7 +223,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_path_parser(sub)
 
-    p = sub.add_parser("view", help="interactive viewer (polyscope): field, isolines, sources; click re-solves")
+    p = sub.add_parser("view", help="interactive viewer (polyscope): field, isolines, sources; a click re-solves "
+                                      "(default source: the first vertex of a face)")
     common(p)
     p.add_argument("--method", default="qcqp-hessian", choices=ALL_METHODS, metavar="NAME",
                    help=f"one of: {', '.join(ALL_METHODS)} (default qcqp-hessian)")

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import os
 import time
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -214,8 +213,10 @@ def show(
     if screenshot is None and headless:
         raise ParameterError("no display (DISPLAY/WAYLAND_DISPLAY unset): render off-screen with "
                              "screenshot='out.png' (CLI: --screenshot out.png)")
-    if screenshot is not None and Path(screenshot).suffix.lower() != ".png":
-        raise ParameterError(f"screenshot must be a .png path, got {str(screenshot)!r}")
+    if screenshot is not None:  # before the solve: a bad path fails at once, not after it
+        from .mesh.io import check_output_path
+
+        check_output_path(screenshot, (".png",))
 
     ps = _polyscope()
     _init(ps, headless)
@@ -237,7 +238,10 @@ def show(
     ps.reset_camera_to_home_view()
     try:
         if screenshot is not None:
-            ps.screenshot(str(screenshot), transparent_bg=False)
+            from ._atomic import output_set
+
+            with output_set(screenshot) as tmp:  # polyscope reports a failed write only on stdout
+                ps.screenshot(str(tmp[0]), transparent_bg=False)
         else:
             ps.set_user_callback(viewer.callback)
             ps.show()
