@@ -29,7 +29,8 @@ def _egl_works() -> bool:
 
 @pytest.fixture(scope="module")
 def gl():
-    pytest.importorskip("polyscope", reason="polyscope not installed (pip install 'cvxgeodesic[viewer]')")
+    pytest.importorskip("polyscope", reason="polyscope not installed (pip install 'cvxgeodesic[viewer]')",
+                        exc_type=ImportError)
     if not _egl_works():
         pytest.skip("no off-screen OpenGL context (EGL/Mesa missing)")
 
