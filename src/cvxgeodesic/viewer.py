@@ -48,6 +48,7 @@ def _init(ps: Any, headless: bool) -> None:
     if getattr(_init, "done", False):
         return
     ps.set_program_name("cvxgeodesic")
+    ps.set_verbosity(0)  # its backend notes go to stdout, among a command's output
     ps.set_allow_headless_backends(True)
     # "auto" tries GLFW first and logs an X11 error when there is no display: go straight to EGL then
     ps.init("openGL3_egl" if headless else "auto")
