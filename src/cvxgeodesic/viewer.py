@@ -52,6 +52,9 @@ def _init(ps: Any, headless: bool) -> None:
     ps.set_allow_headless_backends(True)
     # "auto" tries GLFW first and logs an X11 error when there is no display: go straight to EGL then
     ps.init("openGL3_egl" if headless else "auto")
+    # Dear ImGui would save its window layout to ./imgui.ini at exit, into whatever folder this runs in
+    psim: Any = importlib.import_module("polyscope.imgui")
+    psim.GetIO().IniFilename = ""
     _init.done = True  # type: ignore[attr-defined]
 
 
