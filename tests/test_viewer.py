@@ -18,20 +18,22 @@ from cvxgeodesic.errors import ParameterError
 W, H = 400, 300
 
 
-def _egl_works() -> bool:
-    # in a subprocess: a failed polyscope.init can abort the interpreter
+def _egl_works(folder) -> bool:
+    # in a subprocess (a failed polyscope.init can abort the interpreter) run in a scratch folder, where
+    # Dear ImGui saves its imgui.ini at exit
     code = "import polyscope as ps; ps.set_allow_headless_backends(True); ps.init('openGL3_egl')"
     try:
-        return subprocess.run([sys.executable, "-c", code], capture_output=True, timeout=60).returncode == 0
+        res = subprocess.run([sys.executable, "-c", code], capture_output=True, timeout=60, cwd=folder)
     except (OSError, subprocess.TimeoutExpired):
         return False
+    return res.returncode == 0
 
 
 @pytest.fixture(scope="module")
-def gl():
+def gl(tmp_path_factory):
     pytest.importorskip("polyscope", reason="polyscope not installed (pip install 'cvxgeodesic[viewer]')",
                         exc_type=ImportError)
-    if not _egl_works():
+    if not _egl_works(tmp_path_factory.mktemp("egl")):
         pytest.skip("no off-screen OpenGL context (EGL/Mesa missing)")
 
 
