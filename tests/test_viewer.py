@@ -146,6 +146,13 @@ def test_the_user_callback_runs_in_a_frame(gl, sphere, tmp_path):
     assert v.message.startswith("fmm: sources [0]")
 
 
+def test_no_window_once_polyscope_runs_off_screen(gl, sphere, tmp_path, monkeypatch):
+    cg.show(sphere, sources=0, method="fmm", screenshot=tmp_path / "x.png", window_size=(W, H))
+    monkeypatch.setenv("DISPLAY", ":99")
+    with pytest.raises(ParameterError, match="off-screen in this process"):
+        cg.show(sphere, np.zeros(sphere.n_vertices))
+
+
 def test_cli_view_screenshot(gl, sphere, tmp_path):
     import matplotlib.image as mpimg
 

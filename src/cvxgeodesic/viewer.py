@@ -198,7 +198,8 @@ def show(
     ImportError
         polyscope is not installed (``pip install 'cvxgeodesic[viewer]'``).
     ParameterError
-        ``distance`` of the wrong shape, a bad ``window_size``, or no display and no ``screenshot``.
+        ``distance`` of the wrong shape, a bad ``window_size``, a bad ``screenshot`` path, or no display
+        (or polyscope already started off-screen in this process) and no ``screenshot``.
     """
     from .mesh.trimesh import as_trimesh
 
@@ -225,6 +226,9 @@ def show(
 
     ps = _polyscope()
     _init(ps, headless)
+    if screenshot is None and ps.is_headless():
+        raise ParameterError("polyscope runs off-screen in this process (an earlier screenshot=, or no display "
+                             "when it started) and cannot open a window now: pass screenshot='out.png'")
     ps.remove_all_structures()
     ps.set_window_size(w, h)
     ps.set_ground_plane_mode("none")
