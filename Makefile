@@ -5,7 +5,8 @@ PYTHON ?= python3
 VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
-DEB_PACKAGES := libsuitesparse-dev libopenblas0-pthread libgomp1
+# libegl1 libegl-mesa0 libgl1-mesa-dri: an off-screen OpenGL context for the viewer's screenshot test
+DEB_PACKAGES := libsuitesparse-dev libopenblas0-pthread libgomp1 libegl1 libegl-mesa0 libgl1-mesa-dri
 OUT ?= demo_output
 
 .PHONY: demo test test-all lint bench report clean setup

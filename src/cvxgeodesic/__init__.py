@@ -47,7 +47,7 @@ __all__ = [
     "NonManifoldError", "ParameterError", "SolveInfo", "SolverError", "SourceError",
     "TriMesh", "cylinder", "distance_matrix", "geodesic_distance", "grid_plane", "icosphere", "load_mesh",
     "plot_field", "save_distance", "smoothness_weight", "to_file_order", "SurfaceCurve", "SurfacePoint",
-    "surface_point", "distance_at", "geodesic_path",
+    "surface_point", "distance_at", "geodesic_path", "show",
 ]
 
 
@@ -57,4 +57,8 @@ def __getattr__(name: str) -> object:
         from .plotting import plot_field
 
         return plot_field
+    if name == "show":  # polyscope is an optional extra: imported when show() runs
+        from .viewer import show
+
+        return show
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,4 +1,4 @@
-"""Command-line interface: ``cvxgeodesic distance | compare | batch | path | demo``.
+"""Command-line interface: ``cvxgeodesic distance | compare | batch | path | view | demo``.
 
 Every error a user can cause ends the program with exit code 2 and a one-line
 message on stderr; ``--debug`` shows the full traceback instead. ``batch``
@@ -100,6 +100,20 @@ def _cmd_batch(args) -> int:
                      multires=args.multires, output_format=args.format)
     print(format_summary(rows))
     return 1 if any(r["status"] == "failed" for r in rows) else 0
+
+
+def _cmd_view(args) -> int:
+    from .cli_sources import cli_sources
+    from .mesh.io import load_mesh
+    from .viewer import show
+
+    mesh = load_mesh(args.mesh)
+    given = args.source or args.source_point or args.boundary
+    sources = cli_sources(args, mesh)[0] if given else 0  # a field to start from; clicks choose the next ones
+    show(mesh, sources=sources, method=args.method, screenshot=args.screenshot, m=args.m, solver=args.solver)
+    if args.screenshot and not args.quiet:
+        print(f"wrote {args.screenshot}", file=sys.stderr)
+    return 0
 
 
 def _cmd_demo(args) -> int:
@@ -208,6 +222,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_batch)
 
     add_path_parser(sub)
+
+    p = sub.add_parser("view", help="interactive viewer (polyscope): field, isolines, sources; a click re-solves "
+                                      "(default source: the first vertex of a face)")
+    common(p)
+    p.add_argument("--method", default="qcqp-hessian", choices=ALL_METHODS, metavar="NAME",
+                   help=f"one of: {', '.join(ALL_METHODS)} (default qcqp-hessian)")
+    p.add_argument("--screenshot", default=None, metavar="OUT.png",
+                   help="render one frame to this PNG without opening a window (works without a display)")
+    p.set_defaults(func=_cmd_view)
 
     p = sub.add_parser("demo", help="QCQP-Hessian on the bundled Spot mesh; writes PLY + PNG, prints a table")
     p.add_argument("--out", default="demo_output", help="output folder (default demo_output)")

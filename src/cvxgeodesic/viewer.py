@@ -1,0 +1,260 @@
+"""Interactive viewer (polyscope): the distance field with isolines and its sources; a click re-solves.
+
+polyscope is an optional extra (``pip install 'cvxgeodesic[viewer]'``) and is imported only when
+:func:`show` runs. ``show(..., screenshot="out.png")`` renders one frame off-screen (polyscope's EGL
+backend when there is no display) and returns without opening a window: tests and headless use.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import time
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .errors import ParameterError
+
+__all__ = ["show"]
+
+INSTALL_HINT = "pip install 'cvxgeodesic[viewer]' (or pip install polyscope)"
+MESH_NAME = "surface"
+FIELD_NAME = "geodesic distance"
+SOURCES_NAME = "sources"
+ISOLINES_NAME = "isolines"
+#: isoline tube radius, and source sphere radius, per bounding-box diagonal
+ISOLINE_RADIUS = 0.0012
+SOURCE_RADIUS = 0.012
+#: isolines per field range: the same density as plot_field's default of 20
+N_ISOLINES = 20
+
+
+def _polyscope() -> Any:
+    try:
+        import polyscope
+    except ImportError:
+        raise ImportError(f"cvxgeodesic.show needs the optional package polyscope: {INSTALL_HINT}") from None
+    return polyscope
+
+
+def _have_display() -> bool:
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
+def _init(ps: Any, headless: bool) -> None:
+    """Start polyscope once per process (it cannot be restarted with another backend)."""
+    if getattr(_init, "done", False):
+        return
+    ps.set_program_name("cvxgeodesic")
+    ps.set_verbosity(0)  # its backend notes go to stdout, among a command's output
+    ps.set_allow_headless_backends(True)
+    # "auto" tries GLFW first and logs an X11 error when there is no display: go straight to EGL then
+    ps.init("openGL3_egl" if headless else "auto")
+    # Dear ImGui would save its window layout to ./imgui.ini at exit, into whatever folder this runs in
+    psim: Any = importlib.import_module("polyscope.imgui")
+    psim.GetIO().IniFilename = ""
+    _init.done = True  # type: ignore[attr-defined]
+
+
+def _source_positions(mesh: Any, source_set: Any, vertices: np.ndarray) -> np.ndarray:
+    """(k, 3) positions of the source marks: vertices, surface points, and the ends of curve pieces."""
+    V, F = mesh.V, mesh.F
+    parts = [V[np.asarray(vertices, dtype=np.int64)]]
+    if source_set is not None:
+        if len(source_set.point_faces):
+            parts.append(np.einsum("pk,pkd->pd", source_set.point_bary, V[F[source_set.point_faces]]))
+        if len(source_set.segment_faces):
+            ends = np.einsum("sek,skd->sed", source_set.segment_bary, V[F[source_set.segment_faces]])
+            parts.append(ends.reshape(-1, 3))
+    return np.concatenate(parts, axis=0) if parts else np.zeros((0, 3))
+
+
+class _Viewer:
+    """The polyscope scene of one mesh: field, isolines, source marks; ``pick`` re-solves from a vertex."""
+
+    def __init__(self, ps: Any, mesh: Any, *, method: str, solver_kwargs: dict, isolines: bool) -> None:
+        self.ps = ps
+        self.mesh = mesh
+        self.method = method
+        self.solver_kwargs = solver_kwargs
+        self.isolines = isolines
+        self._solver: Any = None  # built on the first re-solve: per-mesh work done once
+        self._last_selection: tuple | None = None
+        self.message = "click a vertex to re-solve from it"
+        self.distance: np.ndarray | None = None
+        self.surface = ps.register_surface_mesh(MESH_NAME, mesh.V, mesh.F, smooth_shade=True,
+                                                color=(0.8, 0.8, 0.8))
+        self.surface.set_selection_mode("vertices_only")
+        diag = float(mesh.bbox_diagonal)
+        self._diag = diag if np.isfinite(diag) and diag > 0 else 1.0
+
+    def solver(self) -> Any:
+        if self._solver is None:
+            from .api import GeodesicSolver
+
+            self._solver = GeodesicSolver(self.mesh, self.method, **self.solver_kwargs)
+        return self._solver
+
+    def set_field(self, distance: np.ndarray, marks: np.ndarray) -> None:
+        """Show ``distance`` ((n,) float) on the surface and ``marks`` ((k, 3) float) as red spheres."""
+        d = np.asarray(distance, dtype=np.float64)
+        finite = np.isfinite(d)
+        # polyscope cannot colour inf/NaN: unreachable vertices get the top of the range (and no isoline)
+        top = float(d[finite].max()) if finite.any() else 1.0
+        shown = np.where(finite, d, top)
+        # polyscope 2.6's own isolines are bands a third of the period wide whatever the thickness
+        # option (and their on/off state persists per quantity name): keep them off, and draw thin tubes
+        # along marching-triangles isolines instead, the levels plot_field would draw
+        self.surface.add_scalar_quantity(FIELD_NAME, shown, enabled=True, cmap="viridis", isolines_enabled=False)
+        if self.ps.has_curve_network(ISOLINES_NAME):
+            self.ps.remove_curve_network(ISOLINES_NAME)
+        if self.isolines and top > float(shown.min()):
+            from .plotting import isoline_segments
+
+            levels = np.linspace(float(shown.min()), top, N_ISOLINES + 1)[1:-1]
+            seg = isoline_segments(self.mesh, np.where(finite, d, np.inf), levels)
+            if len(seg):
+                edges = np.arange(2 * len(seg)).reshape(-1, 2)
+                lines = self.ps.register_curve_network(ISOLINES_NAME, seg.reshape(-1, 3), edges,
+                                                       color=(0.05, 0.05, 0.05))
+                lines.set_radius(ISOLINE_RADIUS * self._diag, relative=False)
+        self.distance = d
+        cloud = self.ps.register_point_cloud(SOURCES_NAME, marks.reshape(-1, 3), color=(0.9, 0.05, 0.05))
+        cloud.set_radius(SOURCE_RADIUS * self._diag, relative=False)
+
+    def solve(self, sources: Any) -> np.ndarray:
+        t0 = time.perf_counter()
+        res = self.solver().solve(sources)
+        self.set_field(res.distance, _source_positions(self.mesh, res.source_set, res.sources))
+        self.message = (f"{res.info.method}: sources {res.sources.tolist() if res.source_set is None else 'set'}, "
+                        f"{time.perf_counter() - t0:.2f} s")
+        return res.distance
+
+    def pick(self, result: Any) -> bool:
+        """Re-solve from the vertex of a polyscope ``PickResult`` on the surface; False if it is none."""
+        data = getattr(result, "structure_data", {}) or {}
+        if not (getattr(result, "is_hit", False) and getattr(result, "structure_name", None) == MESH_NAME
+                and data.get("element_type") == "vertex"):
+            return False
+        self.solve([int(data["index"])])
+        return True
+
+    def callback(self) -> None:
+        """Per-frame user callback: a new selection (a click, not a drag) on a vertex re-solves."""
+        ps = self.ps
+        if ps.have_selection():
+            sel = ps.get_selection()
+            key = (sel.structure_name, sel.structure_data.get("element_type"), sel.structure_data.get("index"))
+            if key != self._last_selection:
+                self._last_selection = key
+                self.pick(sel)
+        # bound in C++ with no stub: Any, so mypy is the same with and without polyscope installed
+        psim: Any = importlib.import_module("polyscope.imgui")
+        psim.TextUnformatted(self.message)
+
+
+def show(
+    mesh: Any,
+    distance: ArrayLike | None = None,
+    *,
+    sources: Any = None,
+    method: str = "qcqp-hessian",
+    screenshot: str | os.PathLike | None = None,
+    isolines: bool = True,
+    window_size: tuple[int, int] = (1024, 768),
+    **solver_kwargs: Any,
+) -> np.ndarray:
+    """Show a distance field in an interactive polyscope window; clicking a vertex re-solves from it.
+
+    Parameters
+    ----------
+    mesh : TriMesh, (V, F) tuple or path
+        The surface, ``n`` vertices (anything :class:`~cvxgeodesic.GeodesicSolver` accepts).
+    distance : (n,) array_like of float, optional
+        The field to show (``inf`` where unreachable). Without it the field is solved from ``sources``.
+    sources : optional
+        Anything :meth:`GeodesicSolver.solve` takes. With ``distance``: only marked (default: the
+        vertices where ``distance`` is 0). Without ``distance``: solved (default: vertex 0).
+    method : str
+        Method of the initial solve (when ``distance`` is None) and of the re-solves after a click.
+    screenshot : str or path-like, optional
+        Render one frame to this PNG and return without opening a window (works without a display).
+    isolines : bool
+        Draw isolines (20 over the field's range).
+    window_size : (int, int)
+        Width and height in pixels of the window or screenshot.
+    **solver_kwargs
+        Passed to :class:`GeodesicSolver` (``m``, ``lam``, ``solver``, ...).
+
+    Returns
+    -------
+    (n,) float ndarray
+        The field shown last (after the user's clicks, if any).
+
+    Raises
+    ------
+    ImportError
+        polyscope is not installed (``pip install 'cvxgeodesic[viewer]'``).
+    ParameterError
+        ``distance`` of the wrong shape, a bad ``window_size``, a bad ``screenshot`` path, or no display
+        (or polyscope already started off-screen in this process) and no ``screenshot``.
+    """
+    from .mesh.trimesh import as_trimesh
+
+    mesh = as_trimesh(mesh)
+    n = mesh.n_vertices
+    try:
+        w, h = (int(x) for x in window_size)
+    except (TypeError, ValueError):
+        raise ParameterError(f"window_size must be (width, height), got {window_size!r}") from None
+    if w < 16 or h < 16:
+        raise ParameterError(f"window_size must be at least 16 x 16 pixels, got {window_size!r}")
+    if distance is not None:
+        d = np.asarray(distance, dtype=np.float64)
+        if d.shape != (n,):
+            raise ParameterError(f"distance must have shape ({n},) (one value per vertex), got {d.shape}")
+    headless = screenshot is not None or not _have_display()
+    if screenshot is None and headless:
+        raise ParameterError("no display (DISPLAY/WAYLAND_DISPLAY unset): render off-screen with "
+                             "screenshot='out.png' (CLI: --screenshot out.png)")
+    if screenshot is not None:  # before the solve: a bad path fails at once, not after it
+        from .mesh.io import check_output_path
+
+        check_output_path(screenshot, (".png",))
+
+    ps = _polyscope()
+    _init(ps, headless)
+    if screenshot is None and ps.is_headless():
+        raise ParameterError("polyscope runs off-screen in this process (an earlier screenshot=, or no display "
+                             "when it started) and cannot open a window now: pass screenshot='out.png'")
+    ps.remove_all_structures()
+    ps.set_window_size(w, h)
+    ps.set_ground_plane_mode("none")
+    viewer = _Viewer(ps, mesh, method=method, solver_kwargs=solver_kwargs, isolines=isolines)
+    if distance is None:
+        viewer.solve(0 if sources is None else sources)
+    else:
+        if sources is None:
+            marks = mesh.V[np.flatnonzero(d == 0)]
+        else:
+            from .sources import resolve_sources
+
+            ss = resolve_sources(mesh, sources)
+            marks = _source_positions(mesh, None if ss.vertex_only else ss, ss.vertices)
+        viewer.set_field(d, marks)
+    ps.reset_camera_to_home_view()
+    try:
+        if screenshot is not None:
+            from ._atomic import output_set
+
+            with output_set(screenshot) as tmp:  # polyscope reports a failed write only on stdout
+                ps.screenshot(str(tmp[0]), transparent_bg=False)
+        else:
+            ps.set_user_callback(viewer.callback)
+            ps.show()
+    finally:
+        ps.clear_user_callback()
+    assert viewer.distance is not None
+    return viewer.distance
