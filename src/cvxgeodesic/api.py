@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ._threads import limited
 from .errors import ParameterError, SolverError, SourceError
 from .formulations import (
     ALIASES,
@@ -229,6 +230,12 @@ class GeodesicSolver:
         ``max_diff_to_coarse_transfer``, the largest difference between the
         transferred and the optimal field. The interior-point solver takes no
         warm start yet, so this costs a coarse solve *more* than a direct solve.
+    threads : int, optional
+        Threads of every pool the solver uses (PARDISO, the compiled kernels, BLAS),
+        for its construction and each solve; recorded in ``info.extra["threads"]``.
+        ``None``: the environment variable ``CVXGEODESIC_THREADS``, else the cores
+        that other processes leave free when the solver is built, at least one
+        (``docs/performance.md``).
 
     Raises
     ------
@@ -239,7 +246,8 @@ class GeodesicSolver:
         ``"lcqp-hessian"`` / ``"qcqp-hessian"`` on a mesh with an edge of more than two
         (non-degenerate) faces, ``"fmm"`` / ``"exact"`` on any non-manifold mesh.
     ParameterError
-        Unknown method or solver, invalid ``m``, ``lam``, ``tol`` or ``max_iter``.
+        Unknown method or solver, invalid ``m``, ``lam``, ``tol``, ``max_iter`` or ``threads``
+        (or ``CVXGEODESIC_THREADS``).
     TypeError
         ``mesh`` is none of the accepted kinds.
 
@@ -269,6 +277,7 @@ class GeodesicSolver:
     ((642,), 'optimal')
     """
 
+    @limited
     def __init__(
         self,
         mesh: Any,
@@ -283,6 +292,7 @@ class GeodesicSolver:
         multires: bool | int = False,
         multires_polish: bool = False,
         normalization: str = "area",
+        threads: int | None = None,
     ) -> None:
         t0 = time.perf_counter()
         self.mesh: TriMesh = as_trimesh(mesh)
@@ -376,6 +386,7 @@ class GeodesicSolver:
             f"solver={self.solver_name!r}, lam={self.lam:.3g})"
         )
 
+    @limited
     def solve(self, sources: ArrayLike, *, callback: Callable[[int, dict], None] | None = None) -> GeodesicResult:
         """Distance field from one or several source vertices.
 
@@ -548,7 +559,7 @@ class GeodesicSolver:
 
 def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | None = None, m: float | None = None,
                       solver: str | None = None, lam: float | None = None, tol: float = DEFAULT_TOL,
-                      max_iter: int = 200, normalization: str = "area") -> np.ndarray:
+                      max_iter: int = 200, normalization: str = "area", threads: int | None = None) -> np.ndarray:
     """Geodesic distance field from source vertices (one-shot form of :class:`GeodesicSolver`).
 
     Two call forms, told apart by the second argument (sources are never a 2-D array):
@@ -567,7 +578,7 @@ def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | 
         positions, followed by ``F``, (m, 3) int triangles.
     sources : int or sequence of int
         Source vertex indices (positional after the mesh, or keyword), or surface sources.
-    method, m, solver, lam, tol, max_iter, normalization
+    method, m, solver, lam, tol, max_iter, normalization, threads
         See :class:`GeodesicSolver` (defaults ``"qcqp-hessian"``, 1.0, ``"auto"``).
 
     Returns
@@ -611,13 +622,14 @@ def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | 
     m = given.get("m", 1.0)
     solver = given.get("solver", "auto")
     solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter,
-                                normalization=normalization)
+                                normalization=normalization, threads=threads)
     return solver_obj.solve(sources).distance
 
 
 def distance_matrix(mesh: Any, vertices: ArrayLike, method: str = "qcqp-hessian", m: float = 1.0, solver: str = "auto",
                     progress: bool = False, *, lam: float | None = None, tol: float = DEFAULT_TOL,
-                    max_iter: int = 200, multires: bool | int = False, normalization: str = "area") -> np.ndarray:
+                    max_iter: int = 200, multires: bool | int = False, normalization: str = "area",
+                    threads: int | None = None) -> np.ndarray:
     """Distance fields from several vertices, one row per vertex, with one :class:`GeodesicSolver`.
 
     The per-mesh work (operators, energy matrix, symbolic Cholesky analysis) is
@@ -631,7 +643,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str = "qcqp-hessian"
         ``V`` (n, 3) float vertex positions, ``F`` (m, 3) int triangles.
     vertices : int or (k,) sequence of int
         Source vertex of each row.
-    method, m, solver, lam, tol, max_iter, multires, normalization
+    method, m, solver, lam, tol, max_iter, multires, normalization, threads
         See :class:`GeodesicSolver`.
     progress : bool
         Show a tqdm progress bar (one step per distinct vertex) on stderr.
@@ -663,7 +675,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str = "qcqp-hessian"
                                          and any(isinstance(v, surface) for v in vertices)):
         items = [vertices] if isinstance(vertices, surface) else list(vertices)  # one row per item
         solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter,
-                                    multires=multires, normalization=normalization)
+                                    multires=multires, normalization=normalization, threads=threads)
         return np.stack([r.distance for r in solver_obj.solve_many(items, progress=progress)])
     if isinstance(vertices, bool | np.bool_):
         raise SourceError(f"vertices must be vertex indices, got {vertices!r}")
@@ -675,7 +687,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str = "qcqp-hessian"
     uniq, inverse = np.unique(arr, return_inverse=True)
     uniq = validate_sources(uniq, mesh.n_vertices)
     solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter,
-                                multires=multires, normalization=normalization)
+                                multires=multires, normalization=normalization, threads=threads)
     results = solver_obj.solve_many(uniq.tolist(), progress=progress)
     rows = np.stack([r.distance for r in results])
     return rows[np.asarray(inverse).ravel()]
