@@ -2,6 +2,11 @@
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -120,6 +125,39 @@ def test_busy_neighbours_reads_procs_running(monkeypatch):
     monkeypatch.setattr(_threads, "_procs_running", lambda: None)
     assert _threads.busy_neighbours(samples=3, interval=0) == 0
     assert _threads._procs_running() is None or _threads._procs_running() >= 1  # the real file, where there is one
+
+
+def test_wait_policy_set_before_libgomp_loads(monkeypatch):
+    monkeypatch.delenv("GOMP_SPINCOUNT", raising=False)
+    monkeypatch.delenv("OMP_WAIT_POLICY", raising=False)
+    monkeypatch.setattr(_threads, "_libgomp_loaded", lambda: False)
+    assert _threads.set_openmp_wait_policy() == _threads.SPINCOUNT_DEFAULT
+    assert os.environ["GOMP_SPINCOUNT"] == _threads.SPINCOUNT_DEFAULT
+    monkeypatch.setenv("GOMP_SPINCOUNT", "5")  # the user's choice stays
+    assert _threads.set_openmp_wait_policy() is None and os.environ["GOMP_SPINCOUNT"] == "5"
+    monkeypatch.delenv("GOMP_SPINCOUNT")
+    monkeypatch.setenv("OMP_WAIT_POLICY", "ACTIVE")
+    assert _threads.set_openmp_wait_policy() is None and "GOMP_SPINCOUNT" not in os.environ
+    monkeypatch.delenv("OMP_WAIT_POLICY")
+    monkeypatch.setattr(_threads, "_libgomp_loaded", lambda: True)  # too late: the runtime read its variables
+    assert _threads.set_openmp_wait_policy() is None and "GOMP_SPINCOUNT" not in os.environ
+
+
+@pytest.mark.parametrize("user", [None, "7"])
+def test_import_sets_the_wait_policy_first(user):
+    """In a fresh process ``import cvxgeodesic`` loads libgomp (CHOLMOD, MKL): the variable is set before."""
+    env = {k: v for k, v in os.environ.items() if k not in ("GOMP_SPINCOUNT", "OMP_WAIT_POLICY")}
+    if user:
+        env["GOMP_SPINCOUNT"] = user
+    env["PYTHONPATH"] = os.pathsep.join([str(Path(cg.__file__).parents[1]), env.get("PYTHONPATH", "")])
+    code = ("import os, cvxgeodesic.solvers.cholesky; "
+            "print(os.environ['GOMP_SPINCOUNT'], 'libgomp' in open('/proc/self/maps').read())")
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    value, loaded = out.stdout.split()
+    assert value == (user or _threads.SPINCOUNT_DEFAULT)
+    if not loaded == "True":
+        pytest.skip("no library loaded libgomp at import here")
 
 
 def test_batch_local_cluster_sets_the_variable(monkeypatch):
