@@ -50,9 +50,9 @@ SPINCOUNT_DEFAULT = "10000"
 _local = threading.local()
 
 # procs_running is an instantaneous count: a few samples a couple of milliseconds apart see a busy neighbour
-# every time and a neighbour between bursts of work only sometimes (about 10 ms per solver built)
+# every time and a neighbour between bursts of work only sometimes (about 5 ms per solver built)
 _SAMPLES = 5
-_SAMPLE_INTERVAL = 0.002
+_SAMPLE_INTERVAL = 0.001
 
 
 def _libgomp_loaded() -> bool:
