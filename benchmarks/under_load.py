@@ -19,15 +19,18 @@ thread count when a solver is built), minimum of ``--repeat`` runs:
 ``beside busy``
     while a process runs ``while True: pass``.
 
-``ratio`` is the time under load over the time alone. Every process this script
-starts stops by itself after ``--neighbour-seconds`` and is terminated when the
-measurement is done.
+``ratio`` is the time under load over the time alone. The three take turns in
+every repetition (the neighbours are paused with SIGSTOP outside their turn), so a
+change in the rest of the machine's load affects them alike. Every process this
+script starts stops by itself after ``--neighbour-seconds`` and is terminated when
+the measurement is done.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -91,22 +94,42 @@ def start_neighbour(kind: str, args, method: str, threads) -> subprocess.Popen:
     return proc
 
 
-def measure(mesh, method, threads, kind, args) -> tuple[float, int]:
-    proc = start_neighbour(kind, args, method, threads) if kind != "alone" else None
+def stop(proc: subprocess.Popen) -> None:
+    proc.send_signal(signal.SIGCONT)
+    proc.terminate()
     try:
-        if proc is not None:
-            time.sleep(0.5)
-        runs = [solve_once(mesh, method, threads) for _ in range(args.repeat)]
+        proc.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+
+
+def measure(mesh, method, threads, kinds, args) -> dict:
+    """Best (time, threads used) per kind; the kinds take turns in every repetition, so that a change in the
+    rest of the machine's load hits them alike. A neighbour runs only during its own turn (SIGSTOP else)."""
+    neighbours = {}
+    best: dict = {}
+    try:
+        for kind in kinds:
+            if kind != "alone":
+                neighbours[kind] = proc = start_neighbour(kind, args, method, threads)
+                proc.send_signal(signal.SIGSTOP)
+        for _ in range(args.repeat):
+            for kind in kinds:
+                proc = neighbours.get(kind)
+                if proc is not None:
+                    proc.send_signal(signal.SIGCONT)
+                    time.sleep(0.3)  # back in its loop (a solve, or the busy loop)
+                try:
+                    run = solve_once(mesh, method, threads)
+                finally:
+                    if proc is not None:
+                        proc.send_signal(signal.SIGSTOP)
+                best[kind] = min(best.get(kind, run), run)
     finally:
-        if proc is not None:
-            proc.terminate()
-            try:
-                proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
-    best = min(runs)
-    return best[0], best[1]
+        for proc in neighbours.values():
+            stop(proc)
+    return best
 
 
 def main(argv=None) -> None:
@@ -117,6 +140,7 @@ def main(argv=None) -> None:
     ap.add_argument("--policies", nargs="+", default=["default", "1"],
                     help="thread policies: default (threads=None), a number, or all (threads = usable cores, "
                          "the library's behaviour before the policy)")
+    ap.add_argument("--alone-only", action="store_true", help="time the solves alone only")
     ap.add_argument("--neighbour-seconds", type=float, default=120.0,
                     help="every neighbour process stops by itself after this long")
     ap.add_argument("--worker", help=argparse.SUPPRESS)
@@ -136,8 +160,12 @@ def main(argv=None) -> None:
     for method in args.methods:
         for policy in args.policies:
             threads = policy_threads(policy)
-            t = {kind: measure(mesh, method, threads, kind, args) for kind in ("alone", "solver", "busy")}
+            kinds = ("alone",) if args.alone_only else ("alone", "solver", "busy")
+            t = measure(mesh, method, threads, kinds, args)
             a = t["alone"][0]
+            if args.alone_only:
+                print(f"{method:14s} {policy:>8s} {a:8.3f}   threads used {t['alone'][1]}", flush=True)
+                continue
             print(f"{method:14s} {policy:>8s} {a:8.3f} {t['solver'][0]:14.3f} "
                   f"{t['solver'][0] / a:6.2f} {t['busy'][0]:12.3f} {t['busy'][0] / a:6.2f}   "
                   f"{t['alone'][1]}/{t['solver'][1]}/{t['busy'][1]}", flush=True)
