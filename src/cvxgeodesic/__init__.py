@@ -10,6 +10,7 @@ Quick use::
     res.distance, res.info.iterations, res.info.solve_time
 """
 
+from . import _threads  # noqa: F401  (first: it sets OpenMP's wait policy before a library loads the runtime)
 from .api import (
     ALL_METHODS,
     BASELINE_METHODS,

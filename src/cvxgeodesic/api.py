@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ._threads import limited
 from .errors import ParameterError, SolverError, SourceError
 from .formulations import (
     ALIASES,
@@ -236,6 +237,12 @@ class GeodesicSolver:
         ``info.extra["p2_field"].distance_at(faces, bary)`` evaluates the field inside
         faces. ``solver="auto"`` uses the order-2 structured solver (Clarabel as its
         fallback). Not with ``multires`` or the baselines.
+    threads : int, optional
+        Threads of every pool the solver uses (PARDISO, the compiled kernels, BLAS),
+        for its construction and each solve; recorded in ``info.extra["threads"]``.
+        ``None``: the environment variable ``CVXGEODESIC_THREADS``, else the cores
+        that other processes leave free when the solver is built, at least one
+        (``docs/performance.md``).
 
     Raises
     ------
@@ -246,7 +253,8 @@ class GeodesicSolver:
         ``"lcqp-hessian"`` / ``"qcqp-hessian"`` on a mesh with an edge of more than two
         (non-degenerate) faces, ``"fmm"`` / ``"exact"`` on any non-manifold mesh.
     ParameterError
-        Unknown method or solver, invalid ``m``, ``lam``, ``tol`` or ``max_iter``.
+        Unknown method or solver, invalid ``m``, ``lam``, ``tol``, ``max_iter`` or ``threads``
+        (or ``CVXGEODESIC_THREADS``).
     TypeError
         ``mesh`` is none of the accepted kinds.
 
@@ -276,6 +284,7 @@ class GeodesicSolver:
     ((642,), 'optimal')
     """
 
+    @limited
     def __init__(
         self,
         mesh: Any,
@@ -291,6 +300,7 @@ class GeodesicSolver:
         multires_polish: bool = False,
         normalization: str = "area",
         order: int = 1,
+        threads: int | None = None,
     ) -> None:
         t0 = time.perf_counter()
         self.mesh: TriMesh = as_trimesh(mesh)
@@ -400,6 +410,7 @@ class GeodesicSolver:
             f"solver={self.solver_name!r}, lam={self.lam:.3g})"
         )
 
+    @limited
     def solve(self, sources: ArrayLike, *, callback: Callable[[int, dict], None] | None = None) -> GeodesicResult:
         """Distance field from one or several source vertices.
 
@@ -576,7 +587,7 @@ class GeodesicSolver:
 def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | None = None, m: float | None = None,
                       solver: str | None = None, lam: float | None = None, tol: float = DEFAULT_TOL,
                       max_iter: int = 200, normalization: str = "area",
-                      order: int = 1) -> np.ndarray:
+                      order: int = 1, threads: int | None = None) -> np.ndarray:
     """Geodesic distance field from source vertices (one-shot form of :class:`GeodesicSolver`).
 
     Two call forms, told apart by the second argument (sources are never a 2-D array):
@@ -595,7 +606,7 @@ def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | 
         positions, followed by ``F``, (m, 3) int triangles.
     sources : int or sequence of int
         Source vertex indices (positional after the mesh, or keyword), or surface sources.
-    method, m, solver, lam, tol, max_iter, normalization
+    method, m, solver, lam, tol, max_iter, normalization, threads
         See :class:`GeodesicSolver` (defaults ``"qcqp-hessian"``, 1.0, ``"auto"``).
 
     Returns
@@ -639,14 +650,14 @@ def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | 
     m = given.get("m", 1.0)
     solver = given.get("solver", "auto")
     solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter,
-                                normalization=normalization, order=order)
+                                normalization=normalization, order=order, threads=threads)
     return solver_obj.solve(sources).distance
 
 
 def distance_matrix(mesh: Any, vertices: ArrayLike, method: str = "qcqp-hessian", m: float = 1.0, solver: str = "auto",
                     progress: bool = False, *, lam: float | None = None, tol: float = DEFAULT_TOL,
                     max_iter: int = 200, multires: bool | int = False, normalization: str = "area",
-                    order: int = 1) -> np.ndarray:
+                    order: int = 1, threads: int | None = None) -> np.ndarray:
     """Distance fields from several vertices, one row per vertex, with one :class:`GeodesicSolver`.
 
     The per-mesh work (operators, energy matrix, symbolic Cholesky analysis) is
@@ -660,7 +671,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str = "qcqp-hessian"
         ``V`` (n, 3) float vertex positions, ``F`` (m, 3) int triangles.
     vertices : int or (k,) sequence of int
         Source vertex of each row.
-    method, m, solver, lam, tol, max_iter, multires, normalization
+    method, m, solver, lam, tol, max_iter, multires, normalization, threads
         See :class:`GeodesicSolver`.
     progress : bool
         Show a tqdm progress bar (one step per distinct vertex) on stderr.
@@ -692,7 +703,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str = "qcqp-hessian"
                                          and any(isinstance(v, surface) for v in vertices)):
         items = [vertices] if isinstance(vertices, surface) else list(vertices)  # one row per item
         solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter,
-                                    multires=multires, normalization=normalization, order=order)
+                                    multires=multires, normalization=normalization, order=order, threads=threads)
         return np.stack([r.distance for r in solver_obj.solve_many(items, progress=progress)])
     if isinstance(vertices, bool | np.bool_):
         raise SourceError(f"vertices must be vertex indices, got {vertices!r}")
@@ -704,7 +715,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str = "qcqp-hessian"
     uniq, inverse = np.unique(arr, return_inverse=True)
     uniq = validate_sources(uniq, mesh.n_vertices)
     solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter,
-                                multires=multires, normalization=normalization, order=order)
+                                multires=multires, normalization=normalization, order=order, threads=threads)
     results = solver_obj.solve_many(uniq.tolist(), progress=progress)
     rows = np.stack([r.distance for r in results])
     return rows[np.asarray(inverse).ravel()]

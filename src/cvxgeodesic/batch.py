@@ -285,7 +285,9 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
         connected client. Default: a ``LocalCluster`` of ``n_workers`` worker
         processes with one thread each, closed at the end. Each worker's solver
         threads (PARDISO/MKL, the compiled kernels, CHOLMOD's BLAS) get
-        ``cpu_count // n_workers`` threads.
+        ``cpu_count // n_workers`` threads (``CVXGEODESIC_THREADS`` and the
+        libraries' own variables); on an existing cluster the workers' solvers
+        follow their environment or the default policy (``docs/performance.md``).
     n_workers : int
         Workers of the local cluster (ignored with ``scheduler``).
     force : bool
@@ -421,6 +423,14 @@ def _check_scheduler(address: str, timeout: float = PROBE_TIMEOUT) -> None:
                               "is the address a Dask scheduler's (default port 8786), not a web or other server?")
 
 
+def _local_worker_environ(n_workers: int) -> dict:
+    """Dask config of a local cluster: every worker process's pools get ``cpu_count // n_workers`` threads."""
+    threads = max(1, (os.cpu_count() or 1) // n_workers)
+    return {f"distributed.nanny.pre-spawn-environ.{k}": threads
+            for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS",
+                      "CVXGEODESIC_THREADS")}
+
+
 def _run_on_cluster(todo, rows, sources, out, method, m, solver, multires, output_format,
                     scheduler, n_workers, progress) -> None:
     dask, distributed = _require_distributed()
@@ -428,9 +438,7 @@ def _run_on_cluster(todo, rows, sources, out, method, m, solver, multires, outpu
 
     with ExitStack() as stack:
         if scheduler is None:
-            threads = max(1, (os.cpu_count() or 1) // n_workers)
-            blas = {f"distributed.nanny.pre-spawn-environ.{k}": threads
-                    for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")}
+            blas = _local_worker_environ(n_workers)
             # Ctrl-C goes to the whole process group: worker processes started with SIGINT ignored keep
             # quiet (no tracebacks of their own) and this process alone stops them (_stop_after_interrupt)
             with dask.config.set(blas), _sigint_ignored():

@@ -1,0 +1,222 @@
+"""How many threads a solve uses: the ``threads=`` parameter, ``CVXGEODESIC_THREADS`` and the default policy.
+
+A solve runs four thread pools: MKL PARDISO (GNU OpenMP), the Numba kernels of the
+interior-point solver (Numba's ``omp`` layer, the same GNU OpenMP runtime), OpenBLAS
+(NumPy, SciPy, CHOLMOD) and OpenMP regions of other libraries (libigl). Every pool
+is bounded by :func:`thread_limit` for the whole construction of a solver and for
+each of its solves.
+
+Why a policy at all: OpenMP threads wait for each other at the end of every parallel
+region, and an interior-point iteration has hundreds of short regions. When the
+machine's cores are all taken (another solving process, any CPU-bound neighbour),
+the threads of one region are not scheduled together and every barrier waits for a
+time slice: measured on a 2-core machine, a solve beside another solving process
+took 14–17× its time alone (``DESIGN.md`` §9), and with one thread each 1.4×.
+
+The default (``threads=None``, no ``CVXGEODESIC_THREADS``) counts the cores this
+process may run on and the runnable tasks of other processes (``procs_running`` of
+``/proc/stat``, sampled a few times) when a solver is built, and uses the cores
+left free, at least one. The count is taken once per solver because PARDISO's
+thread count is fixed by its analysis (changing it afterwards crashes it, see
+:mod:`~cvxgeodesic.solvers.pardiso`).
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import threading
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+import numpy as np
+
+from .errors import ParameterError
+
+__all__ = ["ENV_VAR", "check_threads", "default_threads", "resolve_threads", "thread_limit", "usable_cores"]
+
+ENV_VAR = "CVXGEODESIC_THREADS"
+
+# GNU OpenMP (PARDISO through MKL's GNU threading layer, the Numba kernels, CHOLMOD) lets an idle thread spin
+# GOMP_SPINCOUNT times before it sleeps: 300 000 by default, milliseconds of a core that a neighbour process
+# could use, and the cause of the collapse beside other jobs. The runtime reads the variable once, when it is
+# loaded, so it is set (unless the user set it or OMP_WAIT_POLICY) when cvxgeodesic is imported, before
+# anything loads libgomp. Measured with 2 threads on bimba's QCLP beside a second solving process
+# (docs/performance.md): SPINCOUNT_DEFAULT spins cut the slowdown from 3.1x to 1.6x.
+SPINCOUNT_DEFAULT = "10000"
+
+# the limit of the solve running in this thread; nested solvers (multires' coarse solver) inherit it
+_local = threading.local()
+
+# procs_running is an instantaneous count: a few samples a couple of milliseconds apart see a busy neighbour
+# every time and a neighbour between bursts of work only sometimes (about 5 ms per solver built)
+_SAMPLES = 5
+_SAMPLE_INTERVAL = 0.001
+
+
+def _libgomp_loaded() -> bool:
+    try:
+        with open("/proc/self/maps") as fh:
+            return "libgomp" in fh.read()
+    except OSError:
+        return False
+
+
+def set_openmp_wait_policy() -> str | None:
+    """Shorten GNU OpenMP's busy wait (``GOMP_SPINCOUNT``) unless the user chose one or libgomp is loaded.
+
+    Returns the value set, or None when nothing was changed.
+    """
+    if any(k in os.environ for k in ("GOMP_SPINCOUNT", "OMP_WAIT_POLICY")) or _libgomp_loaded():
+        return None
+    os.environ["GOMP_SPINCOUNT"] = SPINCOUNT_DEFAULT
+    return SPINCOUNT_DEFAULT
+
+
+set_openmp_wait_policy()
+
+
+def check_threads(value, *, name: str = "threads") -> int | None:
+    """``value`` as an int, or None; ParameterError unless it is None or a positive integer."""
+    if value is None:
+        return None
+    if isinstance(value, bool | np.bool_) or not isinstance(value, int | np.integer) or value < 1:
+        raise ParameterError(f"{name} must be a positive integer or None, got {value!r}")
+    return int(value)
+
+
+def env_threads() -> int | None:
+    """The thread count set by ``CVXGEODESIC_THREADS`` (None when unset or empty)."""
+    raw = os.environ.get(ENV_VAR, "").strip()
+    if not raw:
+        return None
+    try:
+        value = int(raw)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise ParameterError(f"environment variable {ENV_VAR} must be a positive integer, got {raw!r}")
+    return value
+
+
+def usable_cores() -> int:
+    """Cores this process may run on (its CPU affinity), at least 1."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):
+        return max(1, os.cpu_count() or 1)
+
+
+def _procs_running() -> int | None:
+    try:
+        with open("/proc/stat", "rb") as fh:
+            for line in fh:
+                if line.startswith(b"procs_running"):
+                    return int(line.split()[1])
+    except (OSError, ValueError, IndexError):
+        return None
+    return None
+
+
+def busy_neighbours(samples: int = _SAMPLES, interval: float = _SAMPLE_INTERVAL) -> int:
+    """Runnable tasks of other processes: the median over ``samples`` reads of ``/proc/stat``, minus this thread.
+
+    0 where ``/proc/stat`` is not readable (not Linux).
+    """
+    counts = []
+    for i in range(samples):
+        if i:
+            time.sleep(interval)
+        n = _procs_running()
+        if n is None:
+            return 0
+        counts.append(n - 1)  # this thread is running while it reads
+    return max(0, int(np.median(counts)))
+
+
+def default_threads() -> int:
+    """The default policy: the usable cores not taken by other runnable tasks, at least 1."""
+    cores = usable_cores()
+    if cores == 1:
+        return 1
+    return max(1, min(cores, cores - busy_neighbours()))
+
+
+def resolve_threads(threads=None) -> int:
+    """The thread count of a solver: ``threads``, else the enclosing solve's, else ``CVXGEODESIC_THREADS``,
+    else :func:`default_threads`.
+
+    Raises
+    ------
+    ParameterError
+        ``threads`` or ``CVXGEODESIC_THREADS`` is not a positive integer.
+    """
+    value = check_threads(threads)
+    if value is not None:
+        return value
+    current = getattr(_local, "limit", None)
+    if current is not None:
+        return current
+    value = env_threads()
+    return value if value is not None else default_threads()
+
+
+def _numba():
+    try:  # importing the kernels first selects their threading layer (OpenMP) before Numba starts a pool
+        import numba
+
+        from .solvers import _soc_kernels  # noqa: F401
+    except ImportError:
+        return None
+    return numba
+
+
+@contextmanager
+def thread_limit(threads: int) -> Iterator[None]:
+    """Bound every thread pool of a solve to ``threads`` while the block runs (in this thread).
+
+    OpenBLAS, MKL (hence PARDISO analyses run inside) and OpenMP through threadpoolctl,
+    the Numba kernels through :func:`numba.set_num_threads` (thread-local in Numba).
+    """
+    threads = int(threads)
+    previous = getattr(_local, "limit", None)
+    numba = _numba()
+    nb_previous = None
+    _local.limit = threads
+    try:
+        if numba is not None:
+            nb_previous = numba.get_num_threads()
+            numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
+        from threadpoolctl import threadpool_limits
+
+        from .solvers.pardiso import pardiso_available
+
+        pardiso_available()  # loads MKL now, so that the limit covers it (threadpoolctl sees loaded libraries only)
+        with threadpool_limits(limits=threads):
+            yield
+    finally:
+        _local.limit = previous
+        if nb_previous is not None:
+            numba.set_num_threads(nb_previous)
+
+
+def limited(method):
+    """Run a :class:`~cvxgeodesic.api.GeodesicSolver` method under the solver's thread limit.
+
+    On ``__init__`` it resolves the ``threads`` keyword into ``self.threads`` first; a
+    result with an ``info`` gets ``info.extra["threads"]``.
+    """
+
+    @functools.wraps(method)
+    def wrapper(self, *args, **kwargs):
+        if method.__name__ == "__init__":
+            self.threads = resolve_threads(kwargs.get("threads"))
+        with thread_limit(self.threads):
+            result = method(self, *args, **kwargs)
+        info = getattr(result, "info", None)
+        if info is not None and isinstance(getattr(info, "extra", None), dict):
+            info.extra["threads"] = self.threads
+        return result
+
+    return wrapper
