@@ -66,7 +66,8 @@ def run_demo(out_dir: str | Path, *, source: int = 0, stream=None) -> list[dict]
     ply = out / f"spot_{main}.ply"
     png = out / f"spot_{main}.png"
     save_distance(ply, mesh, fields[main])
-    plot_field(mesh, fields[main], png, title=f"{main} (m = 1), source vertex {source}", sources=[source])
+    plot_field(mesh, fields[main], png, title=f"{main} (m = 1), source vertex {source}", sources=[source],
+               colorbar_label="geodesic distance")
     print(f"mesh: spot.obj ({mesh.n_vertices} vertices, {mesh.n_faces} faces), source vertex {source}", file=stream)
     print(format_rows(rows), file=stream)
     print("time includes per-mesh set-up; ridge = 95th percentile of the gradient jump near the exact ridge "
