@@ -250,8 +250,8 @@ class GeodesicSolver:
         Invalid arrays (see :class:`~cvxgeodesic.mesh.trimesh.TriMesh`), or every face is
         degenerate (convex formulations).
     NonManifoldError
-        ``"lcqp-hessian"`` / ``"qcqp-hessian"`` on a mesh with an edge of more than two
-        (non-degenerate) faces, ``"fmm"`` / ``"exact"`` on any non-manifold mesh.
+        ``"fmm"`` / ``"exact"`` on any non-manifold mesh (the Hessian formulations build their
+        energy on a manifold cover instead, see ``info.notes``).
     ParameterError
         Unknown method or solver, invalid ``m``, ``lam``, ``tol``, ``max_iter`` or ``threads``
         (or ``CVXGEODESIC_THREADS``).
