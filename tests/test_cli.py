@@ -85,3 +85,23 @@ def test_unknown_method_is_usage_error(sphere_file):
     proc = subprocess.run([sys.executable, "-m", "cvxgeodesic.cli", "distance", str(sphere_file), "-s", "0",
                            "--method", "nope", "-o", "x.ply"], capture_output=True, text=True)
     assert proc.returncode == 2 and "invalid choice" in proc.stderr
+
+
+def test_matrix_rows_in_the_given_order_in_file_numbering(tmp_path):
+    """`cvxgeodesic matrix`: one row per -s in the given order (repeats allowed), columns in the file's numbering."""
+    mesh = cg.icosphere(2)
+    path = tmp_path / "sphere.obj"
+    # vertex 0 of the file is in no face: the file's numbering is the mesh's shifted by one
+    lines = ["v 9 9 9"] + [f"v {x!r} {y!r} {z!r}" for x, y, z in mesh.V.tolist()]
+    lines += [f"f {a + 2} {b + 2} {c + 2}" for a, b, c in mesh.F.tolist()]
+    path.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "D.npy"
+    assert main(["matrix", str(path), "-s", "6,1", "-s", "6", "--method", "qclp", "-q", "-o", str(out)]) == 0
+    D = np.load(out)
+    assert D.shape == (3, 163) and np.all(np.isinf(D[:, 0]))
+    expected = cg.distance_matrix(mesh, [5, 0, 5], method="qclp")
+    np.testing.assert_allclose(D[:, 1:], expected, atol=1e-12)
+    assert D[0, 6] == 0 and D[1, 1] == 0
+    assert main(["matrix", str(path), "-s", "0", "-q", "-o", str(tmp_path / "E.npy")]) == 2  # in no face
+    assert not (tmp_path / "E.npy").exists()
+    assert main(["matrix", str(path), "-s", "1", "-q", "-o", str(tmp_path / "E.csv")]) == 2

@@ -16,6 +16,7 @@ import warnings
 from . import __version__
 from .api import ALL_METHODS, SOLVERS
 from .cli_sources import add_path_parser, add_point_options
+from .errors import SourceError
 
 EXIT_USAGE = 2
 M_HELP = "smoothness multiplier m (default 1): λ = m·κ·√area, one rounding on the surface whatever the mesh"
@@ -113,6 +114,30 @@ def _cmd_view(args) -> int:
     show(mesh, sources=sources, method=args.method, screenshot=args.screenshot, m=args.m, solver=args.solver)
     if args.screenshot and not args.quiet:
         print(f"wrote {args.screenshot}", file=sys.stderr)
+    return 0
+
+
+def _cmd_matrix(args) -> int:
+    import numpy as np
+
+    from ._atomic import atomic_write
+    from .api import distance_matrix
+    from .mesh.fileorder import file_sources, to_file_order
+    from .mesh.io import check_output_path, load_mesh
+
+    check_output_path(args.output, (".npy",))
+    mesh = load_mesh(args.mesh)
+    if not args.source:
+        raise SourceError("give the source vertex of each row: -s I[,J...] (repeatable)")
+    rows = [int(file_sources(mesh, [s])[0]) for s in args.source]  # one row per -s, in the given order
+    if not args.quiet:
+        print(f"{mesh.name}: {mesh.n_file_vertices} vertices, {len(rows)} rows; method {args.method}",
+              file=sys.stderr)
+    D = distance_matrix(mesh, rows, args.method, m=args.m, solver=args.solver, progress=not args.quiet)
+    D = to_file_order(mesh, D)  # columns in the file's numbering, like every other output
+    atomic_write(args.output, lambda fh: np.save(fh, D))
+    if not args.quiet:
+        print(f"wrote {args.output}: {D.shape[0]} × {D.shape[1]} distances", file=sys.stderr)
     return 0
 
 
@@ -231,6 +256,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--screenshot", default=None, metavar="OUT.png",
                    help="render one frame to this PNG without opening a window (works without a display)")
     p.set_defaults(func=_cmd_view)
+
+    p = sub.add_parser("matrix", help="distance matrix: one row per source vertex (-s), in the given order")
+    p.add_argument("mesh", help="mesh file")
+    p.add_argument("--source", "-s", type=_vertex_list, action="extend", default=None, metavar="I[,J...]",
+                   help="source vertex of a row, in the file's numbering (repeat, or give a list: -s 0,5,9)")
+    p.add_argument("--method", default="qcqp-hessian", choices=ALL_METHODS, metavar="NAME",
+                   help=f"one of: {', '.join(ALL_METHODS)} (default qcqp-hessian)")
+    p.add_argument("--m", type=float, default=1.0, help=M_HELP)
+    p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")
+    p.add_argument("-o", "--output", required=True,
+                   help="output .npy: (rows, file vertices) float64, columns in the file's numbering")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+    p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
+    p.set_defaults(func=_cmd_matrix)
 
     p = sub.add_parser("demo", help="QCQP-Hessian on the bundled Spot mesh; writes PLY + PNG, prints a table")
     p.add_argument("--out", default="demo_output", help="output folder (default demo_output)")
