@@ -167,3 +167,11 @@ def test_psd_check_detects_a_negative_eigenvalue(backend):
     v = np.random.default_rng(0).standard_normal(S.shape[0])
     v /= np.linalg.norm(v)
     assert not cholesky.is_positive_semidefinite(S.toarray() - shift * np.outer(v, v), backend=backend)
+
+
+def test_face_edges_index_the_edge_opposite_each_corner():
+    mesh = grid_plane(5, jitter=0.2, seed=1)
+    fe = mesh.face_edges
+    for k in range(3):
+        expected = np.sort(mesh.F[:, [(k + 1) % 3, (k + 2) % 3]], axis=1)
+        np.testing.assert_array_equal(mesh.edges[fe[:, k]], expected)

@@ -138,13 +138,7 @@ class P2Space:
         E = mesh.edges
         self.n_edges = int(E.shape[0])
         self.n_dofs = n + self.n_edges
-        key = E[:, 0] * n + E[:, 1]
-        order = np.argsort(key)
-        fe = np.empty((mesh.n_faces, 3), dtype=np.int64)
-        for k in range(3):
-            a, b = F[:, (k + 1) % 3], F[:, (k + 2) % 3]
-            q = np.minimum(a, b) * n + np.maximum(a, b)
-            fe[:, k] = order[np.searchsorted(key, q, sorter=order)]
+        fe = mesh.face_edges  # column k: the edge opposite corner k
         self.face_edges = fe
         self.face_dofs = np.hstack([F, n + fe]).astype(np.int64)
         deg = np.zeros(mesh.n_faces, dtype=bool)

@@ -301,11 +301,7 @@ class MeshOperators:
                 "need proper triangles; use method='dijkstra' on this mesh"
             )
         if n_bad:
-            Fd = mesh.F[self.degenerate]
-            Ed = np.sort(np.concatenate([Fd[:, [1, 2]], Fd[:, [2, 0]], Fd[:, [0, 1]]]), axis=1)
-            n = mesh.n_vertices
-            keys = mesh.edges[:, 0] * n + mesh.edges[:, 1]  # mesh.edges is sorted, so keys are too
-            self.degenerate_edges = np.unique(np.searchsorted(keys, Ed[:, 0] * n + Ed[:, 1])).astype(np.int64)
+            self.degenerate_edges = np.unique(mesh.face_edges[self.degenerate])
             self._energy_mesh = TriMesh(mesh.V, mesh.F[~self.degenerate], name=mesh.name)
             f = int(np.flatnonzero(self.degenerate)[0])
             message = (

@@ -186,6 +186,15 @@ class TriMesh:
         return _unique_edges(self.F, self.n_vertices)[0]
 
     @cached_property
+    def face_edges(self) -> np.ndarray:
+        """(m, 3) int64 ndarray: index into :attr:`edges` of each face's edge opposite corner ``k``."""
+        n = np.int64(self.n_vertices)
+        E = self.edges
+        keys = E[:, 0] * n + E[:, 1]  # edges are sorted, so their keys are too
+        a, b = self.F[:, [1, 2, 0]], self.F[:, [2, 0, 1]]
+        return np.searchsorted(keys, np.minimum(a, b) * n + np.maximum(a, b)).astype(np.int64)
+
+    @cached_property
     def edge_lengths(self) -> np.ndarray:
         """(e,) float ndarray: Euclidean length of each edge of :attr:`edges`."""
         E = self.edges

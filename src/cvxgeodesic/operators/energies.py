@@ -85,7 +85,7 @@ def hessian_energy_matrix(mesh: TriMesh, notes: list[str] | None = None) -> sp.c
         notes.append(f"{mesh.name}: {bad} non-manifold edge(s); the Hessian energy is built on the mesh cut along "
                      f"them ({energy_mesh.n_vertices} vertices instead of {int(mesh.referenced.sum())})")
         if not energy_mesh.is_edge_manifold:  # a sheet that closes up around a vertex of a non-manifold edge
-            keep = ~np.isin(np.arange(mesh.n_faces), _faces_on_nonmanifold_edges(energy_mesh))
+            keep = ~(energy_mesh.edge_face_counts[energy_mesh.face_edges] > 2).any(axis=1)
             notes.append(f"{mesh.name}: {int((~keep).sum())} face(s) whose non-manifold edge the cut cannot open "
                          "carry no Hessian energy")
             energy_mesh = TriMesh(energy_mesh.V, energy_mesh.F[keep], name=energy_mesh.name)
@@ -101,15 +101,6 @@ def hessian_energy_matrix(mesh: TriMesh, notes: list[str] | None = None) -> sp.c
         notes.append(message)
         Q = _padded_symmetric(igl.hessian_energy(energy_mesh.V, energy_mesh.F), n)
     return Q if to_mesh is None else pull_back(Q, to_mesh, mesh.n_vertices)
-
-
-def _faces_on_nonmanifold_edges(mesh: TriMesh) -> np.ndarray:
-    """Indices of the faces with an edge shared by more than two faces."""
-    F = mesh.F
-    e = np.sort(np.stack([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1), axis=2)  # (m, 3, 2)
-    key = e[..., 0] * mesh.n_vertices + e[..., 1]
-    uniq, inv, counts = np.unique(key.ravel(), return_inverse=True, return_counts=True)
-    return np.flatnonzero((counts[inv] > 2).reshape(-1, 3).any(axis=1))
 
 
 def _padded_symmetric(Q, n: int) -> sp.csc_matrix:
