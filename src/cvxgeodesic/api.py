@@ -559,9 +559,8 @@ class GeodesicSolver:
             n_unreachable=int(problem.unreachable.sum()),
             notes=notes, extra=res.extra,
         )
-        if isinstance(src, np.ndarray):
-            return GeodesicResult(distance=d, info=info, sources=src)
-        return GeodesicResult(distance=d, info=info, sources=src.vertices, source_set=src)
+        return GeodesicResult(distance=d, info=info, sources=vertices,
+                              source_set=None if isinstance(src, np.ndarray) else src)
 
     def solve_many(self, sources_list: Iterable[Any], *, progress: bool = False) -> list[GeodesicResult]:
         """Solve for each entry of ``sources_list`` (each anything :meth:`solve` takes), reusing all per-mesh work.
@@ -698,13 +697,15 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str = "qcqp-hessian"
     mesh = as_trimesh(mesh)
     from .sources import SurfaceCurve, SurfacePoint
 
-    surface = (SurfacePoint, SurfaceCurve, str)
-    if isinstance(vertices, surface) or (isinstance(vertices, list | tuple)
-                                         and any(isinstance(v, surface) for v in vertices)):
-        items = [vertices] if isinstance(vertices, surface) else list(vertices)  # one row per item
+    def rows_of(items: list) -> np.ndarray:
         solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter,
                                     multires=multires, normalization=normalization, order=order, threads=threads)
         return np.stack([r.distance for r in solver_obj.solve_many(items, progress=progress)])
+
+    surface = (SurfacePoint, SurfaceCurve, str)
+    if isinstance(vertices, surface) or (isinstance(vertices, list | tuple)
+                                         and any(isinstance(v, surface) for v in vertices)):
+        return rows_of([vertices] if isinstance(vertices, surface) else list(vertices))  # one row per item
     if isinstance(vertices, bool | np.bool_):
         raise SourceError(f"vertices must be vertex indices, got {vertices!r}")
     arr = np.atleast_1d(np.asarray(vertices))
@@ -714,8 +715,4 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str = "qcqp-hessian"
         raise SourceError("vertices is empty: give at least one source vertex")
     uniq, inverse = np.unique(arr, return_inverse=True)
     uniq = validate_sources(uniq, mesh.n_vertices)
-    solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter,
-                                multires=multires, normalization=normalization, order=order, threads=threads)
-    results = solver_obj.solve_many(uniq.tolist(), progress=progress)
-    rows = np.stack([r.distance for r in results])
-    return rows[np.asarray(inverse).ravel()]
+    return rows_of(uniq.tolist())[np.asarray(inverse).ravel()]
