@@ -52,15 +52,10 @@ def manifold_cover(mesh: TriMesh) -> tuple[TriMesh, np.ndarray]:
     # half-edge k of face f runs from corner (f, k) to corner (f, k+1)
     start = np.arange(3 * m).reshape(m, 3)
     end = start[:, [1, 2, 0]]
-    a, b = F.ravel(), F[:, [1, 2, 0]].ravel()
-    key = np.minimum(a, b) * mesh.n_vertices + np.maximum(a, b)
-    order = np.argsort(key, kind="stable")
-    ks = key[order]
-    first = np.r_[True, ks[1:] != ks[:-1]]
-    group = np.cumsum(first) - 1
-    counts = np.bincount(group)
-    pair = counts[group] == 2
-    h = order[pair].reshape(-1, 2)  # the two half-edges of every manifold edge
+    a = F.ravel()
+    edge = mesh.face_edges[:, [2, 0, 1]].ravel()  # half-edge k lies on the edge opposite corner k+2
+    manifold = np.flatnonzero(mesh.edge_face_counts[edge] == 2)
+    h = manifold[np.argsort(edge[manifold], kind="stable")].reshape(-1, 2)  # the two half-edges of each
     h1, h2 = h[:, 0], h[:, 1]
     s1, e1, s2, e2 = start.ravel()[h1], end.ravel()[h1], start.ravel()[h2], end.ravel()[h2]
     same_direction = a[h1] == a[h2]
