@@ -663,28 +663,25 @@ def _funnel(start, portals, end) -> tuple[list[np.ndarray], list[int]]:
     i = 1
     while i < len(P):
         left, right = P[i]
+        corner = None
         if _cross(pr - apex, right - apex) >= 0:  # tightens the right side
             if np.array_equal(apex, pr) or _cross(pl - apex, right - apex) < 0:
                 pr, ir = right, i
             else:  # crosses the left side: the left point becomes a corner
-                path.append(pl)
-                idx.append(il)
-                apex, ia = pl, il
-                pl = pr = apex
-                il = ir = ia
-                i = ia + 1
-                continue
-        if _cross(pl - apex, left - apex) <= 0:  # tightens the left side
+                corner, ic = pl, il
+        if corner is None and _cross(pl - apex, left - apex) <= 0:  # tightens the left side
             if np.array_equal(apex, pl) or _cross(pr - apex, left - apex) > 0:
                 pl, il = left, i
-            else:
-                path.append(pr)
-                idx.append(ir)
-                apex, ia = pr, ir
-                pl = pr = apex
-                il = ir = ia
-                i = ia + 1
-                continue
+            else:  # crosses the right side: the right point becomes a corner
+                corner, ic = pr, ir
+        if corner is not None:  # the funnel closed: restart it at the new corner
+            path.append(corner)
+            idx.append(ic)
+            apex, ia = corner, ic
+            pl = pr = apex
+            il = ir = ia
+            i = ia + 1
+            continue
         i += 1
     if not np.array_equal(path[-1], end) or idx[-1] != len(P) - 1:
         path.append(end)
