@@ -325,7 +325,6 @@ class CoarseToFine:
 
     def __init__(self, fine, target_faces: int, solver: str, polish: bool):
         from .api import GeodesicSolver
-        from .errors import NonManifoldError
 
         mesh = fine.mesh
         self.polish = bool(polish)
@@ -333,7 +332,7 @@ class CoarseToFine:
         t0 = time.perf_counter()
         self.coarse_mesh = simplify_mesh(mesh, self.target_faces)
         if fine.energy == "hessian" and not self.coarse_mesh.is_edge_manifold and \
-                self.coarse_mesh.simplifier == "shortest-edge":  # the Hessian needs a manifold coarse mesh
+                self.coarse_mesh.simplifier == "shortest-edge":  # a manifold coarse mesh needs no cut for the Hessian
             other = simplify_mesh(mesh, self.target_faces, method="quadric")
             if other.is_edge_manifold:
                 other.simplifier = "quadric (shortest-edge: its result was not edge-manifold)"
@@ -347,15 +346,9 @@ class CoarseToFine:
             kw = {"lam": fine.lam * (hc / nc) / (h / n)}
         else:
             kw = {"m": fine.m}
-        try:
-            self.coarse = GeodesicSolver(self.coarse_mesh, fine.method, solver=solver, tol=fine.tol,
-                                         max_iter=fine.max_iter, verbose=fine.verbose,
-                                         normalization=fine.normalization, **kw)
-        except NonManifoldError:
-            raise MeshError(
-                f"{mesh.name}: simplifying to {self.target_faces} faces produced a non-manifold mesh, which "
-                f"method {fine.method!r} cannot use; try another multires face count or multires=False"
-            ) from None
+        self.coarse = GeodesicSolver(self.coarse_mesh, fine.method, solver=solver, tol=fine.tol,
+                                     max_iter=fine.max_iter, verbose=fine.verbose,
+                                     normalization=fine.normalization, **kw)
         self.transfer = SurfaceTransfer(self.coarse_mesh, mesh.V)
 
     def summary(self) -> dict:
