@@ -73,6 +73,14 @@ def test_path_to_vertex_from_point(plane_file, tmp_path):
     np.testing.assert_allclose(P[-1], [0.3, 0.3, 0.0], atol=1e-12)
 
 
+def test_path_takes_a_source_list_like_every_command(plane_file, tmp_path):
+    a, b = tmp_path / "a.npy", tmp_path / "b.npy"
+    assert main(["path", str(plane_file), "-s", "0,120", "--to", "60", "--method", "dijkstra", "-q", "-o", str(a)]) == 0
+    assert main(["path", str(plane_file), "-s", "0", "-s", "120", "--to", "60", "--method", "dijkstra", "-q",
+                 "-o", str(b)]) == 0
+    np.testing.assert_array_equal(np.load(a), np.load(b))
+
+
 @pytest.mark.parametrize("args, message", [
     (["distance", "{mesh}", "-o", "{tmp}/x.npy"], "give a source"),
     (["distance", "{mesh}", "--boundary", "-s", "0", "-o", "{tmp}/x.npy"], "on its own"),

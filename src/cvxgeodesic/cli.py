@@ -1,4 +1,4 @@
-"""Command-line interface: ``cvxgeodesic distance | compare | batch | path | view | demo``.
+"""Command-line interface: ``cvxgeodesic distance | compare | batch | path | view | matrix | demo``.
 
 Every error a user can cause ends the program with exit code 2 and a one-line
 message on stderr; ``--debug`` shows the full traceback instead. ``batch``
@@ -14,8 +14,8 @@ import traceback
 import warnings
 
 from . import __version__
-from .api import ALL_METHODS, SOLVERS
-from .cli_sources import add_path_parser, add_point_options
+from .api import SOLVERS
+from .cli_sources import add_method_option, add_path_parser, add_source_options
 from .errors import SourceError
 
 EXIT_USAGE = 2
@@ -148,17 +148,6 @@ def _cmd_demo(args) -> int:
     return 0
 
 
-def _vertex_list(text: str) -> list[int]:
-    """``"0,5"`` -> ``[0, 5]``: the value of one ``--source`` option."""
-    try:
-        values = [int(t) for t in text.split(",") if t.strip()]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"invalid vertex index list {text!r}: give integers like 0 or 0,5") from None
-    if not values:
-        raise argparse.ArgumentTypeError("empty vertex index list")
-    return values
-
-
 class _Notes:
     """Prints each note or warning once per command, as ``cvxgeodesic: note: <first line>`` on stderr."""
 
@@ -187,9 +176,7 @@ def build_parser() -> argparse.ArgumentParser:
     def common(p):
         p.add_argument("mesh", help="mesh file (.obj, .off, .ply, .stl; .glb, .gltf, .3mf with trimesh; .vtk, .vtu "
                                     "with meshio)")
-        p.add_argument("--source", "-s", type=_vertex_list, action="extend", default=None, metavar="I[,J...]",
-                       help="source vertex index in the file's numbering (repeat, or give a list: -s 0,5)")
-        add_point_options(p)
+        add_source_options(p)
         p.add_argument("--m", type=float, default=1.0, help=M_HELP)
         p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")
         p.add_argument("--quiet", "-q", action="store_true", help="no progress output")
@@ -197,8 +184,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("distance", help="compute one distance field and write it")
     common(p)
-    p.add_argument("--method", default="qcqp-hessian", choices=ALL_METHODS, metavar="NAME",
-                   help=f"one of: {', '.join(ALL_METHODS)} (default qcqp-hessian)")
+    add_method_option(p)
     p.add_argument("--lam", type=float, default=None, help="give λ directly (overrides --m)")
     p.add_argument("--normalization", default="area", choices=("area", "paper"),
                    help="meaning of --m: 'area' (default) or the paper's λ = m·100·h/n")
@@ -225,12 +211,9 @@ def build_parser() -> argparse.ArgumentParser:
                     "2: usage error.")
     p.add_argument("meshes", nargs="+", metavar="MESH_GLOB",
                    help="mesh files or quoted glob patterns ('data/*.obj', 'data/**/*.ply')")
-    p.add_argument("--source", "-s", type=_vertex_list, action="extend", default=None, metavar="I[,J...]",
-                   help="source vertex index in each file's numbering, the same in every mesh "
-                        "(repeat, or give a list: -s 0,5)")
-    add_point_options(p)
-    p.add_argument("--method", default="qcqp-hessian", choices=ALL_METHODS, metavar="NAME",
-                   help=f"one of: {', '.join(ALL_METHODS)} (default qcqp-hessian)")
+    add_source_options(p, "source vertex index in each file's numbering, the same in every mesh "
+                          "(repeat, or give a list: -s 0,5)")
+    add_method_option(p)
     p.add_argument("--m", type=float, default=1.0, help=M_HELP)
     p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")
     p.add_argument("--multires", type=int, default=0, metavar="FACES",
@@ -251,18 +234,16 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("view", help="interactive viewer (polyscope): field, isolines, sources; a click re-solves "
                                       "(default source: the first vertex of a face)")
     common(p)
-    p.add_argument("--method", default="qcqp-hessian", choices=ALL_METHODS, metavar="NAME",
-                   help=f"one of: {', '.join(ALL_METHODS)} (default qcqp-hessian)")
+    add_method_option(p)
     p.add_argument("--screenshot", default=None, metavar="OUT.png",
                    help="render one frame to this PNG without opening a window (works without a display)")
     p.set_defaults(func=_cmd_view)
 
     p = sub.add_parser("matrix", help="distance matrix: one row per source vertex (-s), in the given order")
     p.add_argument("mesh", help="mesh file")
-    p.add_argument("--source", "-s", type=_vertex_list, action="extend", default=None, metavar="I[,J...]",
-                   help="source vertex of a row, in the file's numbering (repeat, or give a list: -s 0,5,9)")
-    p.add_argument("--method", default="qcqp-hessian", choices=ALL_METHODS, metavar="NAME",
-                   help=f"one of: {', '.join(ALL_METHODS)} (default qcqp-hessian)")
+    add_source_options(p, "source vertex of a row, in the file's numbering (repeat, or give a list: -s 0,5,9)",
+                       points=False)
+    add_method_option(p)
     p.add_argument("--m", type=float, default=1.0, help=M_HELP)
     p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")
     p.add_argument("-o", "--output", required=True,

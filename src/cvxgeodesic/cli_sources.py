@@ -7,6 +7,7 @@ import sys
 
 import numpy as np
 
+from .api import ALL_METHODS, SOLVERS
 from .errors import ParameterError, SourceError
 
 
@@ -19,6 +20,33 @@ def _xyz(text: str) -> tuple[float, float, float]:
     if len(vals) != 3 or not all(np.isfinite(vals)):
         raise argparse.ArgumentTypeError(f"expected X,Y,Z (three finite numbers), got {text!r}")
     return vals
+
+
+def vertex_list(text: str) -> list[int]:
+    """``"0,5"`` -> ``[0, 5]``: the value of one ``--source`` option."""
+    try:
+        values = [int(t) for t in text.split(",") if t.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"invalid vertex index list {text!r}: give integers like 0 or 0,5") from None
+    if not values:
+        raise argparse.ArgumentTypeError("empty vertex index list")
+    return values
+
+
+def add_source_options(p: argparse.ArgumentParser,
+                       help_text: str = "source vertex index in the file's numbering (repeat, or give a list: -s 0,5)",
+                       *, points: bool = True) -> None:
+    """``--source/-s I[,J...]`` (file vertex indices) and, with ``points``, the surface-source options."""
+    p.add_argument("--source", "-s", type=vertex_list, action="extend", default=None, metavar="I[,J...]",
+                   help=help_text)
+    if points:
+        add_point_options(p)
+
+
+def add_method_option(p: argparse.ArgumentParser) -> None:
+    """``--method NAME``, any method of :data:`~cvxgeodesic.api.ALL_METHODS` (default qcqp-hessian)."""
+    p.add_argument("--method", default="qcqp-hessian", choices=ALL_METHODS, metavar="NAME",
+                   help=f"one of: {', '.join(ALL_METHODS)} (default qcqp-hessian)")
 
 
 def add_point_options(p: argparse.ArgumentParser) -> None:
@@ -150,17 +178,12 @@ def _cmd_path(args) -> int:
 
 def add_path_parser(sub) -> None:
     """The ``path`` sub-command."""
-    from .api import ALL_METHODS, SOLVERS
-
     p = sub.add_parser("path", help="geodesic path from a target down the distance field to the nearest source")
     p.add_argument("mesh", help="mesh file (.obj, .off, .ply, .stl)")
-    p.add_argument("--source", "-s", type=int, action="append", default=None, metavar="I",
-                   help="source vertex index (repeat for several sources)")
-    add_point_options(p)
+    add_source_options(p)
     p.add_argument("--to", type=int, default=None, metavar="I", help="target vertex")
     p.add_argument("--to-point", type=_xyz, default=None, metavar="X,Y,Z", help="target: the closest surface point")
-    p.add_argument("--method", default="qcqp-hessian", choices=ALL_METHODS, metavar="NAME",
-                   help=f"one of: {', '.join(ALL_METHODS)} (default qcqp-hessian)")
+    add_method_option(p)
     p.add_argument("--m", type=float, default=1.0, help="smoothness multiplier m (default 1)")
     p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")
     p.add_argument("-o", "--output", required=True, help="path file: .csv (x,y,z,face,b0,b1,b2), .npy or .ply")
