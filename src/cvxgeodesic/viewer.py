@@ -201,7 +201,7 @@ def show(
         ``distance`` of the wrong shape, a bad ``window_size``, a bad ``screenshot`` path, or no display
         (or polyscope already started off-screen in this process) and no ``screenshot``.
     """
-    from .mesh.trimesh import as_trimesh
+    from .mesh.trimesh import as_trimesh, as_vertex_field
 
     mesh = as_trimesh(mesh)
     n = mesh.n_vertices
@@ -212,9 +212,7 @@ def show(
     if w < 16 or h < 16:
         raise ParameterError(f"window_size must be at least 16 x 16 pixels, got {window_size!r}")
     if distance is not None:
-        d = np.asarray(distance, dtype=np.float64)
-        if d.shape != (n,):
-            raise ParameterError(f"distance must have shape ({n},) (one value per vertex), got {d.shape}")
+        d = as_vertex_field(distance, "distance", n)
     headless = screenshot is not None or not _have_display()
     if screenshot is None and headless:
         raise ParameterError("no display (DISPLAY/WAYLAND_DISPLAY unset): render off-screen with "
