@@ -177,8 +177,11 @@ def test_power_of_two_scaling_is_exact(method):
 def test_fields_do_not_depend_on_numbering_or_placement(method, case, motion, seed):
     mesh, sources = case
     moved, new_of_old = renumbered(mesh, seed, *motion)
-    d = solve(mesh, sources, method)
-    d_moved = solve(moved, new_of_old[sources], method)
+    # the default backend (the IPM): Clarabel's "optimal" at tol 1e-8 is only ~2e-5 of the diagonal accurate on
+    # QCQP-Hessian's flat objectives (measured 1.55e-5 between two numberings of a 12-vertex bump, where the IPM's
+    # fields agree to 5e-7), which is a property of the backend's stopping rule, not of the formulation
+    d = solve(mesh, sources, method, solver="auto")
+    d_moved = solve(moved, new_of_old[sources], method, solver="auto")
     # heat: the library's intrinsic Delaunay flips depend on the numbering at the round-off level
     np.testing.assert_allclose(d_moved[new_of_old], d, rtol=0, atol=TOL * mesh.bbox_diagonal)
 
@@ -502,3 +505,15 @@ def test_solver_failure_with_the_hessian_energy_says_it_may_be_indefinite(method
         solve(grid_plane(3), [0], method)
     assert exc.value.status == "NumericalError" and str(exc.value).endswith("(solver=clarabel, status=NumericalError)")
     assert ("indefinite" in str(exc.value)) == (method == "qcqp-hessian")
+
+
+@pytest.mark.parametrize("solver", SOLVERS)
+@pytest.mark.parametrize("method", ["qclp", "qcqp-hessian"])
+def test_edges_of_cone_free_faces_keep_the_dijkstra_bound(method, solver):
+    # hypothesis 6.170 found it: with sources 0 and 4 on this 3x5-vertex grid, edges whose faces all touch a
+    # source had no constraint and QCLP reached 0.559 at vertex 6 against Dijkstra's 0.5 (Theorem 2: d ≤ Dijkstra)
+    mesh = grid_plane(2, 4, 1.0)
+    sources = np.array([4, 0])
+    d = solve(mesh, sources, method, solver)
+    dij = edge_dijkstra(mesh, sources)
+    assert np.all(d <= dij + 1e-6 * mesh.bbox_diagonal), np.max(d - dij)
