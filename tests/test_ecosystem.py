@@ -179,9 +179,9 @@ def test_ply_field_read_by_trimesh_and_meshio(tmp_path):
     path = cg.save_distance(tmp_path / "d.ply", SPHERE, d)
     tm = trimesh.load(path, process=False)
     np.testing.assert_array_equal(tm.vertices, SPHERE.V)
-    # trimesh 5.2 keeps custom PLY vertex properties in the raw PLY data, not in vertex_attributes
-    attrs = tm.vertex_attributes if "distance" in tm.vertex_attributes else tm.metadata["_ply_raw"]["vertex"]["data"]
-    np.testing.assert_array_equal(np.asarray(attrs["distance"]), d)
+    # trimesh 5.2 keeps custom PLY vertex properties in the raw PLY data only (save_distance's docstring says so;
+    # the .glb output below is the file trimesh reads into vertex_attributes)
+    np.testing.assert_array_equal(np.asarray(tm.metadata["_ply_raw"]["vertex"]["data"]["distance"]), d)
     mm = meshio.read(path)
     np.testing.assert_array_equal(mm.point_data["distance"], d)
     np.testing.assert_array_equal(mm.points, SPHERE.V)
@@ -197,6 +197,61 @@ def test_vtk_output_for_paraview(tmp_path, ext):
     np.testing.assert_array_equal(mm.cells_dict["triangle"], SPHERE.F)
     np.testing.assert_array_equal(mm.point_data["geodesic"], d)
     assert sorted(p.name for p in tmp_path.iterdir()) == [f"d.{ext.upper()}"]  # no temporary file left
+
+
+def _glb_json(path):
+    import json
+    import struct
+
+    data = path.read_bytes()
+    assert data[:4] == b"glTF"
+    (length,) = struct.unpack("<I", data[12:16])
+    # strict JSON: trimesh would write Infinity for an inf field, which JavaScript/Blender readers reject
+    return json.loads(data[20:20 + length], parse_constant=lambda c: pytest.fail(f"non-JSON constant {c}"))
+
+
+def test_glb_field_is_a_trimesh_vertex_attribute(tmp_path):
+    trimesh = pytest.importorskip("trimesh")
+    from cvxgeodesic.mesh.external import GLB_NO_DISTANCE
+
+    d = _field(SPHERE)
+    path = cg.save_distance(tmp_path / "d.glb", SPHERE, d)
+    header = _glb_json(path)
+    assert "_DISTANCE" in header["meshes"][0]["primitives"][0]["attributes"]
+    scene = trimesh.load(path, process=False)
+    (tm,) = scene.geometry.values()
+    np.testing.assert_allclose(tm.vertices, SPHERE.V, atol=1e-6)  # glTF positions are float32
+    got = np.asarray(tm.vertex_attributes["_DISTANCE"], dtype=np.float64).ravel()
+    finite = np.isfinite(d)
+    np.testing.assert_allclose(got[finite], d[finite], rtol=1e-7)
+    assert got[~finite].tolist() == [GLB_NO_DISTANCE]
+    np.testing.assert_array_equal(tm.faces, SPHERE.F)
+
+
+def test_glb_attribute_name_follows_the_field_name(tmp_path):
+    pytest.importorskip("trimesh")
+    path = cg.save_distance(tmp_path / "d.GLB", SPHERE, np.zeros(SPHERE.n_vertices), name="geo.dist-1")
+    assert "_GEO_DIST_1" in _glb_json(path)["meshes"][0]["primitives"][0]["attributes"]
+
+
+def test_glb_output_without_trimesh_names_the_extra(tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "trimesh", None)
+    with pytest.raises(ParameterError, match=r"writing \.glb files needs the optional package trimesh: "
+                                             r"pip install 'cvxgeodesic\[io\]'"):
+        cg.save_distance(tmp_path / "d.glb", SPHERE, _field(SPHERE))
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_cli_writes_glb_in_file_order(tmp_path):
+    trimesh = pytest.importorskip("trimesh")
+    from cvxgeodesic.cli import main
+
+    src = cg.save_distance(tmp_path / "in.ply", SPHERE, np.zeros(SPHERE.n_vertices))
+    out = tmp_path / "out.glb"
+    assert main(["distance", str(src), "-s", "3", "--method", "dijkstra", "-q", "-o", str(out)]) == 0
+    (tm,) = trimesh.load(out, process=False).geometry.values()
+    np.testing.assert_allclose(np.asarray(tm.vertex_attributes["_DISTANCE"]).ravel(),
+                               cg.geodesic_distance(SPHERE, 3, method="dijkstra"), rtol=1e-7)
 
 
 def test_vtk_output_without_meshio_names_the_extra(tmp_path, monkeypatch):

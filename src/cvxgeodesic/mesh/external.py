@@ -17,13 +17,19 @@ import numpy as np
 
 from ..errors import MeshFormatError, ParameterError
 
-__all__ = ["EXTERNAL_MESH_EXTENSIONS", "EXTERNAL_DISTANCE_EXTENSIONS", "read_external", "write_meshio"]
+__all__ = ["EXTERNAL_MESH_EXTENSIONS", "EXTERNAL_DISTANCE_EXTENSIONS", "read_external", "write_external",
+           "write_meshio", "write_glb", "glb_attribute_name"]
 
 #: Mesh files read through trimesh (key ``"trimesh"``) or meshio (``"meshio"``).
 _READERS = {".glb": "trimesh", ".gltf": "trimesh", ".3mf": "trimesh", ".vtk": "meshio", ".vtu": "meshio"}
 EXTERNAL_MESH_EXTENSIONS = tuple(_READERS)
-#: Distance files written through meshio (ParaView reads both).
-EXTERNAL_DISTANCE_EXTENSIONS = (".vtu", ".vtk")
+#: Distance files written through meshio (``.vtu``, ``.vtk``: ParaView reads both) or trimesh (``.glb``: the
+#: field as a custom glTF vertex attribute, which ``trimesh.load`` puts in ``vertex_attributes``).
+_WRITERS = {".vtu": "meshio", ".vtk": "meshio", ".glb": "trimesh"}
+EXTERNAL_DISTANCE_EXTENSIONS = tuple(_WRITERS)
+#: Value written in a ``.glb`` for a vertex without a distance (``inf``): glTF's JSON header holds each
+#: accessor's min/max, and JSON has no infinity (trimesh would write ``Infinity``, which strict readers reject).
+GLB_NO_DISTANCE = -1.0
 
 _HINT = "pip install 'cvxgeodesic[io]' (or pip install {pkg})"
 
@@ -130,3 +136,73 @@ def write_meshio(fh: BinaryIO, V: np.ndarray, F: np.ndarray, d: np.ndarray, name
         out = Path(tmp) / f"field{ext}"
         mesh.write(out, file_format="vtu" if ext == ".vtu" else "vtk")
         fh.write(out.read_bytes())
+
+
+def write_external(fh: BinaryIO, V: np.ndarray, F: np.ndarray, d: np.ndarray, name: str, ext: str) -> None:
+    """Write a distance file in a format of :data:`EXTERNAL_DISTANCE_EXTENSIONS` (dispatch by ``ext``).
+
+    Parameters
+    ----------
+    fh : binary file object
+    V : (n, 3) float ndarray
+    F : (m, 3) int ndarray
+    d : (n,) float ndarray
+    name : str
+    ext : {".vtu", ".vtk", ".glb"}
+    """
+    if _WRITERS[ext] == "trimesh":
+        write_glb(fh, V, F, d, name)
+    else:
+        write_meshio(fh, V, F, d, name, ext)
+
+
+def glb_attribute_name(name: str) -> str:
+    """The glTF vertex attribute a field called ``name`` is stored as: ``"_" + name.upper()``.
+
+    glTF 2.0 requires application-specific attribute semantics to start with an underscore, and writes
+    them in capitals by convention (``_TEMPERATURE`` in the specification); ``"distance"`` becomes
+    ``"_DISTANCE"``.
+
+    Parameters
+    ----------
+    name : str
+
+    Returns
+    -------
+    str
+    """
+    return "_" + name.upper().replace(".", "_").replace("-", "_")
+
+
+def write_glb(fh: BinaryIO, V: np.ndarray, F: np.ndarray, d: np.ndarray, name: str) -> None:
+    """Write a binary glTF (GLB) file with the field as the custom vertex attribute :func:`glb_attribute_name`.
+
+    glTF stores 32-bit floats only, so positions and the field are rounded to float32 (use ``.ply`` for
+    float64); ``inf`` (a vertex without a distance) is written as :data:`GLB_NO_DISTANCE`. trimesh reads
+    the field back as ``trimesh.load(path).geometry[...].vertex_attributes["_DISTANCE"]``.
+
+    Parameters
+    ----------
+    fh : binary file object
+    V : (n, 3) float ndarray
+    F : (m, 3) int ndarray
+    d : (n,) float ndarray
+    name : str
+
+    Raises
+    ------
+    ParameterError
+        trimesh is not installed (the message says what to install).
+    """
+    try:
+        import trimesh
+    except ImportError:
+        raise ParameterError("writing .glb files needs the optional package trimesh: "
+                             + _HINT.format(pkg="trimesh")) from None
+    mesh = trimesh.Trimesh(np.asarray(V, dtype=np.float64), np.asarray(F, dtype=np.int64), process=False)
+    values = np.where(np.isfinite(d), d, GLB_NO_DISTANCE).astype(np.float32)
+    mesh.vertex_attributes[glb_attribute_name(name)] = values
+    data = mesh.export(file_type="glb")
+    if not isinstance(data, bytes):  # trimesh returns the GLB as bytes; anything else is a trimesh change
+        raise TypeError(f"trimesh's GLB export returned {type(data).__name__}, not bytes")
+    fh.write(data)

@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike
 
 from .._atomic import atomic_write
 from ..errors import MeshError, MeshFormatError, MeshRepairWarning, ParameterError
-from .external import EXTERNAL_DISTANCE_EXTENSIONS, EXTERNAL_MESH_EXTENSIONS, read_external, write_meshio
+from .external import EXTERNAL_DISTANCE_EXTENSIONS, EXTERNAL_MESH_EXTENSIONS, read_external, write_external
 from .trimesh import TriMesh, as_trimesh, as_vertex_field
 
 __all__ = [
@@ -31,7 +31,7 @@ __all__ = [
 #: through the optional packages trimesh (``.glb``, ``.gltf``, ``.3mf``) and meshio (``.vtk``, ``.vtu``).
 MESH_EXTENSIONS = (".obj", ".off", ".ply", ".stl", *EXTERNAL_MESH_EXTENSIONS)
 #: File extensions understood by :func:`save_distance` (compared case-insensitively); ``.vtu`` and
-#: ``.vtk`` through the optional package meshio.
+#: ``.vtk`` through the optional package meshio, ``.glb`` through trimesh.
 DISTANCE_EXTENSIONS = (".ply", ".npy", ".csv", *EXTERNAL_DISTANCE_EXTENSIONS)
 
 
@@ -866,14 +866,20 @@ def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, na
 
     - ``.ply``: binary little-endian PLY; vertices with ``double`` ``x, y, z`` and a
       ``double`` property called ``name``; faces as ``property list uchar int
-      vertex_indices``. Read it back with :func:`load_distance_ply`; trimesh
-      (``mesh.vertex_attributes[name]``), open3d's tensor reader
-      (``o3d.t.io.read_triangle_mesh``) and meshio (``point_data[name]``) read the field.
+      vertex_indices``. Read it back with :func:`load_distance_ply`; open3d's tensor
+      reader (``o3d.t.io.read_triangle_mesh``) and meshio (``point_data[name]``) read the
+      field by name. trimesh (5.2) keeps custom PLY properties only in
+      ``mesh.metadata["_ply_raw"]["vertex"]["data"][name]``, never in ``vertex_attributes``
+      (it does not read them back from its own PLY export either): write ``.glb`` for trimesh.
     - ``.npy``: the (n,) float64 array (``numpy.save``).
     - ``.csv``: header ``vertex,file_vertex,x,y,z,<name>``, one row per vertex;
       ``file_vertex`` is ``mesh.vertex_map``; infinite values are written as ``inf``.
     - ``.vtu`` / ``.vtk`` (needs meshio, ``pip install 'cvxgeodesic[io]'``): VTK
       unstructured grid with the field as point data ``name``, for ParaView.
+    - ``.glb`` (needs trimesh, ``pip install 'cvxgeodesic[io]'``): binary glTF with the field
+      as the custom vertex attribute ``"_" + name.upper()`` (``_DISTANCE``), which
+      ``trimesh.load`` puts in ``vertex_attributes``; float32 (glTF has no float64), and
+      ``inf`` is written as -1 (the format's JSON header cannot hold infinity).
 
     The data is written to a temporary file in the target directory which then
     replaces ``path`` (``os.replace``); if anything fails, the temporary file is
@@ -928,7 +934,7 @@ def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, na
         vertex = np.arange(n)
     out_mesh = mesh
     if ext in EXTERNAL_DISTANCE_EXTENSIONS:
-        atomic_write(p, lambda fh: write_meshio(fh, out_mesh.V, out_mesh.F, d, name, ext))
+        atomic_write(p, lambda fh: write_external(fh, out_mesh.V, out_mesh.F, d, name, ext))
     elif ext == ".csv":
         atomic_write(p, lambda fh: _write_csv(fh, out_mesh, d, name, vertex))
     else:
