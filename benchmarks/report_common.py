@@ -275,16 +275,15 @@ def status_text(rec: dict) -> str:
 
 
 def metrics(mesh, d, d_exact, source) -> dict:
-    """Errors against the exact field plus ridge sharpness / off-ridge error (NaN-free JSON-able dict)."""
-    from cvxgeodesic.evaluation import error_stats, smoothness_report
+    """Errors against the exact field plus ridge sharpness / off-ridge error (NaN-free JSON-able dict).
 
-    src = np.array([source])
-    st = error_stats(d, d_exact, src)
-    sm = smoothness_report(mesh, d, d_exact, src)
-    out = {k: st[k] for k in ("rel_mean", "rel_max", "rel_p99", "abs_max", "n_compared", "n_nonfinite")}
-    out.update({k: sm[k] for k in ("ridge_jump_p95", "ridge_jump_ratio", "exact_ridge_jump_p95",
-                                    "off_ridge_rel_mean", "on_ridge_rel_mean", "band_vertices")})
-    return {k: (float(v) if isinstance(v, float | np.floating) else v) for k, v in out.items()}
+    The library's evaluation record (:func:`cvxgeodesic.evaluation.summary.summarize_field`, the one
+    ``cvxgeodesic compare`` and the demo print) without the gradient statistics the report does not use.
+    """
+    from cvxgeodesic.evaluation.summary import summarize_field
+
+    rec = summarize_field(mesh, d, d_exact, np.array([source]), gradient=False)
+    return {k: v for k, v in rec.items() if v is not None}
 
 
 def pct(x, digits: int = 2) -> str:

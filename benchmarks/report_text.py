@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 import re
 
+from cvxgeodesic.tables import markdown_table as md_table
 from report_common import label, pct, secs
 
 H = None  # the report module (constants), set by render()
@@ -25,14 +26,6 @@ def short(m: str) -> str:
 
 def ok_num(x) -> bool:
     return x is not None and isinstance(x, int | float) and math.isfinite(x)
-
-
-def md_table(header, rows, align=None) -> str:
-    align = align or "l" + "r" * (len(header) - 1)
-    sep = ["---:" if a == "r" else ":---:" if a == "c" else "---" for a in align]
-    out = ["| " + " | ".join(header) + " |", "| " + " | ".join(sep) + " |"]
-    out += ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]
-    return "\n".join(out)
 
 
 def fig(name: str, alt: str) -> str:
