@@ -118,66 +118,21 @@ on 2 cores); times are wall-clock and carry that noise |
 # ----------------------------------------------------------------------------------------------------------------------
 
 
-def table2(r) -> tuple[str, list[str]]:
-    meshes = r["meshes"]
-    rows = r["rows"]
-    methods = [m for m in T2_ORDER if any(m in rows[x["name"]] for x in meshes)]
+def _best_of(rows, methods, name, key):
+    """(lowest value, method) of ``key`` on mesh ``name`` among the methods other than exact."""
+    cand = [(rows[name][m].get(key), m) for m in methods if m != "exact" and ok_num(rows[name][m].get(key))]
+    return min(cand) if cand else (None, None)
+
+
+def _table2_findings(meshes, rows, methods, pairs) -> tuple[list[str], str, list[str]]:
+    """Table 2's computed sentences: one line per mesh, the summary, and the findings for the top of the page."""
+    PAPER, PAPER_MEAN_ERR = H.PAPER, H.PAPER_MEAN_ERR
+    names = [x["name"] for x in meshes]
     findings = []
 
     def best_of(name, key):
-        cand = [(rows[name][m].get(key), m) for m in methods if m != "exact" and ok_num(rows[name][m].get(key))]
-        return min(cand) if cand else (None, None)
+        return _best_of(rows, methods, name, key)
 
-    def cell(name, m, key, fmt):
-        row = rows[name].get(m)
-        if row is None:
-            return "—"
-        if not row["ok"]:
-            return "failed"
-        if m == "exact" and key != "time_s":
-            return "(reference)"
-        v = row.get(key)
-        s = fmt(v)
-        if key != "time_s" and ok_num(v) and best_of(name, key)[1] == m:
-            s = f"**{s}**"
-        if row.get("fallback"):
-            s += "¹"
-        return s
-
-    head = ["model (faces / vertices)"] + [short(m) for m in methods]
-    names = [x["name"] for x in meshes]
-    mesh_lab = {x["name"]: f"{x['name']} ({kf(x['faces'])} / {kf(x['vertices'])})" for x in meshes}
-    t_mean = md_table(head, [[mesh_lab[n]] + [cell(n, m, "rel_mean", p2) for m in methods] for n in names])
-    t_max = md_table(head, [[mesh_lab[n]] + [cell(n, m, "rel_max", p1) for m in methods] for n in names])
-    t_time = md_table(head, [[mesh_lab[n]] + [cell(n, m, "time_s", secs) for m in methods] for n in names])
-    fallbacks = [(n, m, rows[n][m]) for n in names for m in methods if rows[n].get(m) and rows[n][m].get("fallback")]
-    fails = [(n, m, rows[n][m]) for n in names for m in methods if rows[n].get(m) and not rows[n][m]["ok"]]
-    notes = []
-    if fallbacks:
-        notes.append("¹ Produced by Clarabel because our IPM did not reach the tolerance: " + "; ".join(
-            f"{short(m)} on {n} ({row['fallback']})" for n, m, row in fallbacks)
-            + "; the time includes the IPM attempt.")
-    else:
-        notes.append("Every convex formulation in this table was solved by our IPM (no Clarabel fallback needed).")
-    if fails:
-        notes.append("Failed: " + "; ".join(f"{short(m)} on {n}: {row['status_text']}" for n, m, row in fails) + ".")
-
-    # --- the paper's numbers next to ours
-    pairs = [("bunny", "bunny.obj"), ("bimba", "bimba.obj"), ("dragon", "dragon_20k.obj")]
-    PAPER, PAPER_MEAN_ERR = H.PAPER, H.PAPER_MEAN_ERR
-
-    prow = []
-    for key, ours in pairs:
-        if ours not in rows:
-            continue
-        mrow = next(x for x in meshes if x["name"] == ours)
-        q = rows[ours].get("qcqp-hessian", {})
-        prow.append([key, PAPER[key]["faces"], f"{PAPER[key]['time_s']} s", kf(mrow["faces"]),
-                     f"{secs(q.get('time_s'))} s" if q.get("ok") else "failed", p2(q.get("rel_mean"))])
-    paper_t = md_table(["model", "paper: faces", "paper: time (Mosek)", "ours: faces", "ours: time (ipm)",
-                        "ours: mean rel. error"], prow) if prow else ""
-
-    # --- computed findings
     lines = []
     q_means = {n: rows[n]["qcqp-hessian"].get("rel_mean") for n in names if rows[n].get("qcqp-hessian", {}).get("ok")}
     for n in names:
@@ -239,6 +194,69 @@ def table2(r) -> tuple[str, list[str]]:
         ratios = [tq[n] / rows[n]["heat"]["time_s"] for n in heat_faster]
         findings.append(f"**Cost against the heat method.** QCQP-Hessian takes {min(ratios):.0f}–{max(ratios):.0f}× "
                         "the heat method's time on these models.")
+
+    return lines, summary, findings
+
+
+def table2(r) -> tuple[str, list[str]]:
+    meshes = r["meshes"]
+    rows = r["rows"]
+    methods = [m for m in T2_ORDER if any(m in rows[x["name"]] for x in meshes)]
+
+    def best_of(name, key):
+        return _best_of(rows, methods, name, key)
+
+    def cell(name, m, key, fmt):
+        row = rows[name].get(m)
+        if row is None:
+            return "—"
+        if not row["ok"]:
+            return "failed"
+        if m == "exact" and key != "time_s":
+            return "(reference)"
+        v = row.get(key)
+        s = fmt(v)
+        if key != "time_s" and ok_num(v) and best_of(name, key)[1] == m:
+            s = f"**{s}**"
+        if row.get("fallback"):
+            s += "¹"
+        return s
+
+    head = ["model (faces / vertices)"] + [short(m) for m in methods]
+    names = [x["name"] for x in meshes]
+    mesh_lab = {x["name"]: f"{x['name']} ({kf(x['faces'])} / {kf(x['vertices'])})" for x in meshes}
+    t_mean = md_table(head, [[mesh_lab[n]] + [cell(n, m, "rel_mean", p2) for m in methods] for n in names])
+    t_max = md_table(head, [[mesh_lab[n]] + [cell(n, m, "rel_max", p1) for m in methods] for n in names])
+    t_time = md_table(head, [[mesh_lab[n]] + [cell(n, m, "time_s", secs) for m in methods] for n in names])
+    fallbacks = [(n, m, rows[n][m]) for n in names for m in methods if rows[n].get(m) and rows[n][m].get("fallback")]
+    fails = [(n, m, rows[n][m]) for n in names for m in methods if rows[n].get(m) and not rows[n][m]["ok"]]
+    notes = []
+    if fallbacks:
+        notes.append("¹ Produced by Clarabel because our IPM did not reach the tolerance: " + "; ".join(
+            f"{short(m)} on {n} ({row['fallback']})" for n, m, row in fallbacks)
+            + "; the time includes the IPM attempt.")
+    else:
+        notes.append("Every convex formulation in this table was solved by our IPM (no Clarabel fallback needed).")
+    if fails:
+        notes.append("Failed: " + "; ".join(f"{short(m)} on {n}: {row['status_text']}" for n, m, row in fails) + ".")
+
+    # --- the paper's numbers next to ours
+    pairs = [("bunny", "bunny.obj"), ("bimba", "bimba.obj"), ("dragon", "dragon_20k.obj")]
+    PAPER, PAPER_MEAN_ERR = H.PAPER, H.PAPER_MEAN_ERR
+
+    prow = []
+    for key, ours in pairs:
+        if ours not in rows:
+            continue
+        mrow = next(x for x in meshes if x["name"] == ours)
+        q = rows[ours].get("qcqp-hessian", {})
+        prow.append([key, PAPER[key]["faces"], f"{PAPER[key]['time_s']} s", kf(mrow["faces"]),
+                     f"{secs(q.get('time_s'))} s" if q.get("ok") else "failed", p2(q.get("rel_mean"))])
+    paper_t = md_table(["model", "paper: faces", "paper: time (Mosek)", "ours: faces", "ours: time (ipm)",
+                        "ours: mean rel. error"], prow) if prow else ""
+
+    lines, summary, findings = _table2_findings(meshes, rows, methods, pairs)
+    lo, hi = PAPER_MEAN_ERR
 
     H_NOISE = NOISE
     text = f"""## 1. Table 2: time and accuracy on five models
