@@ -72,11 +72,11 @@ def header(env, plan, timings) -> str:
     return f"""# Results: the paper's experiments, reproduced
 
 This page is generated. `make report` (which runs `.venv/bin/python benchmarks/report.py --out docs`) recomputes
-every number and figure on it from the meshes in `../shared/meshes`; nothing here was typed in by hand except
-the paper's own numbers. It repeats the experiments of *Convex Quadratic Programming for Computing Geodesic
-Distances on Triangle Meshes* (Mathematics 12(7):993, 2024) with this library, and puts the paper's numbers
-next to ours where we are sure of them. It reports what we measured; where that disagrees with the paper, it
-says so.
+every number and figure on it from the development meshes (`--shared DIR`; they are not part of the repository);
+nothing here was typed in by hand except the paper's own numbers. It repeats the experiments of *Convex
+Quadratic Programming for Computing Geodesic Distances on Triangle Meshes* (Mathematics 12(7):993, 2024) with
+this library, and puts the paper's numbers next to ours where we are sure of them. It reports what we
+measured; where that disagrees with the paper, it says so.
 {quick}
 | | |
 |---|---|
@@ -643,7 +643,7 @@ def fig7(r) -> tuple[str, list[str]]:
         hint_txt = ("The library's own diagnosis, appended to these errors: *" + "*; *".join(sorted(hints)) + "*.")
     text = f"""## 7. Fig. 7: accuracy against anisotropy (Thingi10K meshes)
 
-**What was run.** Every `thingi_*.stl` in the shared folder (3D-printing models: long thin triangles, some with
+**What was run.** Every `thingi_*.stl` of the development meshes (3D-printing models: long thin triangles, some with
 near-zero-area faces or several components), source vertex 0; methods as in Table 2. τ(t) = P·H / (2√3·S)
 (half-perimeter × longest edge / area; 1 for an equilateral triangle) and τ(T) its mean, as in the paper. On
 some meshes the mean is dominated by a few slivers (τ(T) up to {max(x['tau'] for x in meshes):.1e}), so the
