@@ -26,6 +26,7 @@ import os
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -112,7 +113,10 @@ def _canonical(method: str) -> str:
 
 
 def _atomic_write_text(path: Path, text: str) -> None:
-    atomic_write(path, lambda fh: fh.write(text.encode("utf-8")))
+    def write(fh) -> None:
+        fh.write(text.encode("utf-8"))
+
+    atomic_write(path, write)
 
 
 def _error_message(exc: BaseException) -> str:
@@ -135,7 +139,7 @@ def _solve(mesh, method: str, sources: np.ndarray, m: float, solver: str):
 
 
 def _empty_row(method: str) -> dict:
-    row = {c: None for c in CSV_COLUMNS}
+    row: dict[str, Any] = dict.fromkeys(CSV_COLUMNS)
     row["method"] = method
     return row
 
@@ -357,7 +361,8 @@ def _field_scale(results, names, d_exact):
     if field_ref is None:
         ok = [results[_canonical(n)][0] for n in names if results[_canonical(n)][0] is not None]
         field_ref = ok[0].distance if ok else None
-    vmax_field, levels = None, 20
+    vmax_field: float | None = None
+    levels: int | np.ndarray = 20
     if field_ref is not None:
         fin = field_ref[np.isfinite(field_ref)]
         if fin.size and fin.max() > 0:
