@@ -230,7 +230,7 @@ def run_compare(mesh, sources, methods, out_dir, *, m=1.0, solver="auto", progre
 
 #: What :func:`solve_methods` keeps of one method: the result (None if it failed), the wall-clock
 #: seconds, and the exception (None if it did not fail).
-Outcome = tuple  # (GeodesicResult | None, float, BaseException | None)
+Outcome = tuple[Any, float, BaseException | None]  # (GeodesicResult or None, seconds, exception or None)
 
 
 def _attempt(mesh, method: str, sources, m: float, solver: str) -> Outcome:
