@@ -696,22 +696,6 @@ SECTIONS = {
 # ----------------------------------------------------------------------------------------------------------------------
 
 
-def md_table(header: list[str], rows: list[list[str]], align: str | None = None) -> str:
-    align = align or "l" + "r" * (len(header) - 1)
-    sep = ["---:" if a == "r" else ":---:" if a == "c" else "---" for a in align]
-    lines = ["| " + " | ".join(header) + " |", "| " + " | ".join(sep) + " |"]
-    lines += ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]
-    return "\n".join(lines)
-
-
-def fig_md(name: str, alt: str) -> str:
-    return f"![{alt}](figures/{name})"
-
-
-def kfaces(n: int) -> str:
-    return f"{n / 1000:.1f}K" if n < 10000 else f"{n / 1000:.0f}K"
-
-
 def render(results: dict, env: dict, timings: dict, plan: Plan) -> str:
     import report_text as rt
 

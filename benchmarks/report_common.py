@@ -231,10 +231,11 @@ def solve(ctx: Context, mesh, mesh_key: str, method: str, source: int, m: float 
         wall, err = wall2, err2
     rec["warnings"] = msgs
     if err is None:
-        info = res.info
-        rec.update(ok=True, solver=str(info.solver), status=str(info.status), time_s=float(wall),
-                   setup_s=float(info.setup_time), solve_s=float(info.solve_time), iterations=int(info.iterations),
-                   error=None, resolved_nonnegative=bool(info.extra.get("resolved_nonnegative", False)))
+        from cvxgeodesic.evaluation.summary import summarize_run
+
+        run = summarize_run(res.info, time_s=wall)  # the library's solve record, with the wall-clock time
+        rec.update(ok=True, **{k: run[k] for k in ("solver", "status", "time_s", "setup_s", "solve_s", "iterations")},
+                   error=None, resolved_nonnegative=bool(res.info.extra.get("resolved_nonnegative", False)))
         d = np.asarray(res.distance, dtype=np.float64)
     else:
         rec.update(ok=False, solver=getattr(err, "solver", None), status=_short(getattr(err, "status", "error"), 60),
@@ -275,16 +276,15 @@ def status_text(rec: dict) -> str:
 
 
 def metrics(mesh, d, d_exact, source) -> dict:
-    """Errors against the exact field plus ridge sharpness / off-ridge error (NaN-free JSON-able dict)."""
-    from cvxgeodesic.evaluation import error_stats, smoothness_report
+    """Errors against the exact field plus ridge sharpness / off-ridge error (NaN-free JSON-able dict).
 
-    src = np.array([source])
-    st = error_stats(d, d_exact, src)
-    sm = smoothness_report(mesh, d, d_exact, src)
-    out = {k: st[k] for k in ("rel_mean", "rel_max", "rel_p99", "abs_max", "n_compared", "n_nonfinite")}
-    out.update({k: sm[k] for k in ("ridge_jump_p95", "ridge_jump_ratio", "exact_ridge_jump_p95",
-                                    "off_ridge_rel_mean", "on_ridge_rel_mean", "band_vertices")})
-    return {k: (float(v) if isinstance(v, float | np.floating) else v) for k, v in out.items()}
+    The library's evaluation record (:func:`cvxgeodesic.evaluation.summary.summarize_field`, the one
+    ``cvxgeodesic compare`` and the demo print) without the gradient statistics the report does not use.
+    """
+    from cvxgeodesic.evaluation.summary import summarize_field
+
+    rec = summarize_field(mesh, d, d_exact, np.array([source]), gradient=False)
+    return {k: v for k, v in rec.items() if v is not None}
 
 
 def pct(x, digits: int = 2) -> str:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 import re
 
+from cvxgeodesic.tables import markdown_table as md_table
 from report_common import label, pct, secs
 
 H = None  # the report module (constants), set by render()
@@ -25,14 +26,6 @@ def short(m: str) -> str:
 
 def ok_num(x) -> bool:
     return x is not None and isinstance(x, int | float) and math.isfinite(x)
-
-
-def md_table(header, rows, align=None) -> str:
-    align = align or "l" + "r" * (len(header) - 1)
-    sep = ["---:" if a == "r" else ":---:" if a == "c" else "---" for a in align]
-    out = ["| " + " | ".join(header) + " |", "| " + " | ".join(sep) + " |"]
-    out += ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]
-    return "\n".join(out)
 
 
 def fig(name: str, alt: str) -> str:
@@ -79,11 +72,11 @@ def header(env, plan, timings) -> str:
     return f"""# Results: the paper's experiments, reproduced
 
 This page is generated. `make report` (which runs `.venv/bin/python benchmarks/report.py --out docs`) recomputes
-every number and figure on it from the meshes in `../shared/meshes`; nothing here was typed in by hand except
-the paper's own numbers. It repeats the experiments of *Convex Quadratic Programming for Computing Geodesic
-Distances on Triangle Meshes* (Mathematics 12(7):993, 2024) with this library, and puts the paper's numbers
-next to ours where we are sure of them. It reports what we measured; where that disagrees with the paper, it
-says so.
+every number and figure on it from the development meshes (`--shared DIR`; they are not part of the repository);
+nothing here was typed in by hand except the paper's own numbers. It repeats the experiments of *Convex
+Quadratic Programming for Computing Geodesic Distances on Triangle Meshes* (Mathematics 12(7):993, 2024) with
+this library, and puts the paper's numbers next to ours where we are sure of them. It reports what we
+measured; where that disagrees with the paper, it says so.
 {quick}
 | | |
 |---|---|
@@ -125,66 +118,21 @@ on 2 cores); times are wall-clock and carry that noise |
 # ----------------------------------------------------------------------------------------------------------------------
 
 
-def table2(r) -> tuple[str, list[str]]:
-    meshes = r["meshes"]
-    rows = r["rows"]
-    methods = [m for m in T2_ORDER if any(m in rows[x["name"]] for x in meshes)]
+def _best_of(rows, methods, name, key):
+    """(lowest value, method) of ``key`` on mesh ``name`` among the methods other than exact."""
+    cand = [(rows[name][m].get(key), m) for m in methods if m != "exact" and ok_num(rows[name][m].get(key))]
+    return min(cand) if cand else (None, None)
+
+
+def _table2_findings(meshes, rows, methods, pairs) -> tuple[list[str], str, list[str]]:
+    """Table 2's computed sentences: one line per mesh, the summary, and the findings for the top of the page."""
+    PAPER, PAPER_MEAN_ERR = H.PAPER, H.PAPER_MEAN_ERR
+    names = [x["name"] for x in meshes]
     findings = []
 
     def best_of(name, key):
-        cand = [(rows[name][m].get(key), m) for m in methods if m != "exact" and ok_num(rows[name][m].get(key))]
-        return min(cand) if cand else (None, None)
+        return _best_of(rows, methods, name, key)
 
-    def cell(name, m, key, fmt):
-        row = rows[name].get(m)
-        if row is None:
-            return "—"
-        if not row["ok"]:
-            return "failed"
-        if m == "exact" and key != "time_s":
-            return "(reference)"
-        v = row.get(key)
-        s = fmt(v)
-        if key != "time_s" and ok_num(v) and best_of(name, key)[1] == m:
-            s = f"**{s}**"
-        if row.get("fallback"):
-            s += "¹"
-        return s
-
-    head = ["model (faces / vertices)"] + [short(m) for m in methods]
-    names = [x["name"] for x in meshes]
-    mesh_lab = {x["name"]: f"{x['name']} ({kf(x['faces'])} / {kf(x['vertices'])})" for x in meshes}
-    t_mean = md_table(head, [[mesh_lab[n]] + [cell(n, m, "rel_mean", p2) for m in methods] for n in names])
-    t_max = md_table(head, [[mesh_lab[n]] + [cell(n, m, "rel_max", p1) for m in methods] for n in names])
-    t_time = md_table(head, [[mesh_lab[n]] + [cell(n, m, "time_s", secs) for m in methods] for n in names])
-    fallbacks = [(n, m, rows[n][m]) for n in names for m in methods if rows[n].get(m) and rows[n][m].get("fallback")]
-    fails = [(n, m, rows[n][m]) for n in names for m in methods if rows[n].get(m) and not rows[n][m]["ok"]]
-    notes = []
-    if fallbacks:
-        notes.append("¹ Produced by Clarabel because our IPM did not reach the tolerance: " + "; ".join(
-            f"{short(m)} on {n} ({row['fallback']})" for n, m, row in fallbacks)
-            + "; the time includes the IPM attempt.")
-    else:
-        notes.append("Every convex formulation in this table was solved by our IPM (no Clarabel fallback needed).")
-    if fails:
-        notes.append("Failed: " + "; ".join(f"{short(m)} on {n}: {row['status_text']}" for n, m, row in fails) + ".")
-
-    # --- the paper's numbers next to ours
-    pairs = [("bunny", "bunny.obj"), ("bimba", "bimba.obj"), ("dragon", "dragon_20k.obj")]
-    PAPER, PAPER_MEAN_ERR = H.PAPER, H.PAPER_MEAN_ERR
-
-    prow = []
-    for key, ours in pairs:
-        if ours not in rows:
-            continue
-        mrow = next(x for x in meshes if x["name"] == ours)
-        q = rows[ours].get("qcqp-hessian", {})
-        prow.append([key, PAPER[key]["faces"], f"{PAPER[key]['time_s']} s", kf(mrow["faces"]),
-                     f"{secs(q.get('time_s'))} s" if q.get("ok") else "failed", p2(q.get("rel_mean"))])
-    paper_t = md_table(["model", "paper: faces", "paper: time (Mosek)", "ours: faces", "ours: time (ipm)",
-                        "ours: mean rel. error"], prow) if prow else ""
-
-    # --- computed findings
     lines = []
     q_means = {n: rows[n]["qcqp-hessian"].get("rel_mean") for n in names if rows[n].get("qcqp-hessian", {}).get("ok")}
     for n in names:
@@ -246,6 +194,69 @@ def table2(r) -> tuple[str, list[str]]:
         ratios = [tq[n] / rows[n]["heat"]["time_s"] for n in heat_faster]
         findings.append(f"**Cost against the heat method.** QCQP-Hessian takes {min(ratios):.0f}–{max(ratios):.0f}× "
                         "the heat method's time on these models.")
+
+    return lines, summary, findings
+
+
+def table2(r) -> tuple[str, list[str]]:
+    meshes = r["meshes"]
+    rows = r["rows"]
+    methods = [m for m in T2_ORDER if any(m in rows[x["name"]] for x in meshes)]
+
+    def best_of(name, key):
+        return _best_of(rows, methods, name, key)
+
+    def cell(name, m, key, fmt):
+        row = rows[name].get(m)
+        if row is None:
+            return "—"
+        if not row["ok"]:
+            return "failed"
+        if m == "exact" and key != "time_s":
+            return "(reference)"
+        v = row.get(key)
+        s = fmt(v)
+        if key != "time_s" and ok_num(v) and best_of(name, key)[1] == m:
+            s = f"**{s}**"
+        if row.get("fallback"):
+            s += "¹"
+        return s
+
+    head = ["model (faces / vertices)"] + [short(m) for m in methods]
+    names = [x["name"] for x in meshes]
+    mesh_lab = {x["name"]: f"{x['name']} ({kf(x['faces'])} / {kf(x['vertices'])})" for x in meshes}
+    t_mean = md_table(head, [[mesh_lab[n]] + [cell(n, m, "rel_mean", p2) for m in methods] for n in names])
+    t_max = md_table(head, [[mesh_lab[n]] + [cell(n, m, "rel_max", p1) for m in methods] for n in names])
+    t_time = md_table(head, [[mesh_lab[n]] + [cell(n, m, "time_s", secs) for m in methods] for n in names])
+    fallbacks = [(n, m, rows[n][m]) for n in names for m in methods if rows[n].get(m) and rows[n][m].get("fallback")]
+    fails = [(n, m, rows[n][m]) for n in names for m in methods if rows[n].get(m) and not rows[n][m]["ok"]]
+    notes = []
+    if fallbacks:
+        notes.append("¹ Produced by Clarabel because our IPM did not reach the tolerance: " + "; ".join(
+            f"{short(m)} on {n} ({row['fallback']})" for n, m, row in fallbacks)
+            + "; the time includes the IPM attempt.")
+    else:
+        notes.append("Every convex formulation in this table was solved by our IPM (no Clarabel fallback needed).")
+    if fails:
+        notes.append("Failed: " + "; ".join(f"{short(m)} on {n}: {row['status_text']}" for n, m, row in fails) + ".")
+
+    # --- the paper's numbers next to ours
+    pairs = [("bunny", "bunny.obj"), ("bimba", "bimba.obj"), ("dragon", "dragon_20k.obj")]
+    PAPER, PAPER_MEAN_ERR = H.PAPER, H.PAPER_MEAN_ERR
+
+    prow = []
+    for key, ours in pairs:
+        if ours not in rows:
+            continue
+        mrow = next(x for x in meshes if x["name"] == ours)
+        q = rows[ours].get("qcqp-hessian", {})
+        prow.append([key, PAPER[key]["faces"], f"{PAPER[key]['time_s']} s", kf(mrow["faces"]),
+                     f"{secs(q.get('time_s'))} s" if q.get("ok") else "failed", p2(q.get("rel_mean"))])
+    paper_t = md_table(["model", "paper: faces", "paper: time (Mosek)", "ours: faces", "ours: time (ipm)",
+                        "ours: mean rel. error"], prow) if prow else ""
+
+    lines, summary, findings = _table2_findings(meshes, rows, methods, pairs)
+    lo, hi = PAPER_MEAN_ERR
 
     H_NOISE = NOISE
     text = f"""## 1. Table 2: time and accuracy on five models
@@ -632,7 +643,7 @@ def fig7(r) -> tuple[str, list[str]]:
         hint_txt = ("The library's own diagnosis, appended to these errors: *" + "*; *".join(sorted(hints)) + "*.")
     text = f"""## 7. Fig. 7: accuracy against anisotropy (Thingi10K meshes)
 
-**What was run.** Every `thingi_*.stl` in the shared folder (3D-printing models: long thin triangles, some with
+**What was run.** Every `thingi_*.stl` of the development meshes (3D-printing models: long thin triangles, some with
 near-zero-area faces or several components), source vertex 0; methods as in Table 2. τ(t) = P·H / (2√3·S)
 (half-perimeter × longest edge / area; 1 for an equilateral triangle) and τ(T) its mean, as in the paper. On
 some meshes the mean is dominated by a few slivers (τ(T) up to {max(x['tau'] for x in meshes):.1e}), so the

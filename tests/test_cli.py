@@ -105,3 +105,20 @@ def test_matrix_rows_in_the_given_order_in_file_numbering(tmp_path):
     assert main(["matrix", str(path), "-s", "0", "-q", "-o", str(tmp_path / "E.npy")]) == 2  # in no face
     assert not (tmp_path / "E.npy").exists()
     assert main(["matrix", str(path), "-s", "1", "-q", "-o", str(tmp_path / "E.csv")]) == 2
+
+
+def test_demo_prints_one_aligned_table_and_writes_its_files(tmp_path, capsys):
+    from cvxgeodesic.demo import DEMO_METHODS
+
+    assert main(["demo", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out.splitlines()
+    head, rule = out[1], out[2]
+    rows = out[3: 3 + len(DEMO_METHODS) + 1]
+    assert head.split()[:2] == ["method", "solver"] and set(rule) == {"-", " "}
+    assert [r.split()[0] for r in rows] == [*DEMO_METHODS, "exact"]
+    # numbers are right-aligned under their headers: each ends where its header ends
+    for title in ("time [s]", "iters", "mean rel err", "off-ridge err"):
+        end = head.index(title) + len(title)
+        assert all(r[end - 1] != " " and (len(r) == end or r[end] == " ") for r in rows), title
+    assert rows[-1].split()[4:6] == ["0.000%", "0.00%"]  # the exact field against itself
+    assert {p.name for p in tmp_path.iterdir()} == {"spot_qcqp-hessian.ply", "spot_qcqp-hessian.png"}

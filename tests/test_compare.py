@@ -177,3 +177,17 @@ def test_bad_input_fails_before_any_work(tmp_path):
     with pytest.raises(ParameterError, match="solver"):
         run_compare(mesh, 0, ["exact"], tmp_path / "c", solver="mosek", progress=False)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_rows_are_the_evaluation_summary(sphere_run):
+    """compare measures with the one evaluation record that demo and the report use."""
+    from cvxgeodesic.evaluation.summary import summarize_field
+
+    mesh, _, rows = sphere_run
+    exact = GeodesicSolver(mesh, "exact").solve(0).distance
+    for row in rows:
+        d = GeodesicSolver(mesh, row["method"]).solve(0).distance if row["method"] != "exact" else exact
+        rec = summarize_field(mesh, d, exact, [0], gradient=False)
+        for key in ("rel_mean", "rel_max", "rel_p99", "abs_max", "ridge_jump_p95", "ridge_jump_ratio",
+                    "off_ridge_rel_mean"):
+            assert row[key] == pytest.approx(rec[key], rel=1e-6, abs=1e-9), (row["method"], key)

@@ -1,4 +1,4 @@
-"""Tests of cvxgeodesic.plotting: PNG output, marching triangles, validation and atomic writes."""
+"""Tests of cvxgeodesic.plotting: PNG output, pixel content, marching triangles, validation and atomic writes."""
 
 from __future__ import annotations
 
@@ -243,3 +243,83 @@ def test_plot_gradient_histogram(tmp_path):
     with pytest.raises(ValueError, match="non-empty"):
         plot_gradient_histogram({}, tmp_path / "bad.png")
     assert not (tmp_path / "bad.png").exists()
+
+
+# ----------------------------------------------------------------------------------------------------------------------
+# pixel content: what the renderer draws (issue 13: these guard the surface, the isolines and the culling)
+# ----------------------------------------------------------------------------------------------------------------------
+
+
+def _pixels(path) -> np.ndarray:
+    import matplotlib.image as mpimg
+
+    return mpimg.imread(path)[..., :3]  # (H, W, 3) float in [0, 1]
+
+
+def _screen(mesh, view=None) -> np.ndarray:
+    """Vertex positions in the renderer's camera frame: (n, 3) screen right, screen up, towards the viewer."""
+    from cvxgeodesic.plotting import _camera
+
+    return (mesh.V - mesh.V.mean(axis=0)) @ _camera(mesh.V, view).T
+
+
+def _surface_mask(img) -> np.ndarray:
+    return ~np.all(img > 0.98, axis=2)  # the figure background is white
+
+
+def test_surface_is_drawn_and_coloured_along_the_field(tmp_path):
+    mesh = icosphere(3)
+    P = _screen(mesh)
+    src = int(np.argmin(P[:, 0]))  # the vertex furthest left on screen
+    d = np.linalg.norm(mesh.V - mesh.V[src], axis=1)
+    img = _pixels(plot_field(mesh, d, tmp_path / "f.png", isolines=0, show_colorbar=False, dpi=40))
+    surf = _surface_mask(img)
+    # a unit sphere fills about half of the square panel it is fitted into
+    assert 0.35 < surf.mean() < 0.75
+    cols = np.flatnonzero(surf.any(axis=0))
+    width = cols[-1] - cols[0]
+    near = img[:, cols[0]: cols[0] + width // 5][surf[:, cols[0]: cols[0] + width // 5]]
+    far = img[:, cols[-1] - width // 5: cols[-1]][surf[:, cols[-1] - width // 5: cols[-1]]]
+    # viridis: blue over red at the low end (near the source), red over blue at the high end (far from it);
+    # the Lambert shading scales all three channels alike, so the comparison holds in shadow too
+    assert np.mean(near[:, 2] > near[:, 0]) > 0.9
+    assert np.mean(far[:, 0] > far[:, 2]) > 0.9
+    assert np.ptp(img[surf].mean(axis=1)) > 0.3  # not one flat colour
+
+
+def test_isolines_are_drawn_where_the_levels_are_and_only_then(tmp_path):
+    plane = grid_plane(16)
+    view = (90.0, 0.0)  # from straight above: the plane is a square on screen, unshaded
+    x = _screen(plane, view)[:, 0]  # screen right, centred: -0.5 .. 0.5
+    levels = [-0.3, 0.05, 0.3]
+    kw = {"show_colorbar": False, "dpi": 80, "cmap": "autumn", "view": view}  # autumn: bright everywhere
+    on = _pixels(plot_field(plane, x, tmp_path / "on.png", isolines=levels, **kw))
+    off = _pixels(plot_field(plane, x, tmp_path / "off.png", isolines=0, **kw))
+
+    def dips(img):
+        # pixels darker than the surface two pixels to their left and right: thin dark lines across each row
+        lum = img.mean(axis=2)
+        return lum[:, 2:-2] < np.minimum(lum[:, :-4], lum[:, 4:]) - 0.1
+
+    assert dips(off).sum() == 0
+    dark = dips(on)
+    surf = _surface_mask(off)
+    assert 0 < dark.sum() < 0.05 * surf.sum()  # lines, not areas
+    rows = np.flatnonzero(surf.any(axis=1))
+    line_cols = np.flatnonzero(dark.sum(axis=0) > 0.5 * rows.size) + 2  # columns dark over half the square's height
+    cols = np.flatnonzero(surf.any(axis=0))
+    expected = cols[0] + (np.array(levels) + 0.5) * (cols[-1] - cols[0])
+    groups = np.split(line_cols, np.flatnonzero(np.diff(line_cols) > 1) + 1)
+    assert len(groups) == len(levels), line_cols
+    assert np.allclose([g.mean() for g in groups], expected, atol=3.0)
+
+
+def test_back_faces_are_culled_on_a_closed_mesh(tmp_path):
+    mesh = icosphere(3)
+    front = (_screen(mesh)[:, 2] > 0).astype(float)  # 1 on the half facing the camera, 0 on the far half
+    img = _pixels(plot_field(mesh, front, tmp_path / "c.png", isolines=0, show_colorbar=False, dpi=40, cmap="bwr",
+                             vmin=0.0, vmax=1.0))
+    s = img[_surface_mask(img)]
+    red = np.mean(s[:, 0] - s[:, 2] > 0.2)  # bwr: 1 is red, 0 is blue
+    blue = np.mean(s[:, 2] - s[:, 0] > 0.2)
+    assert red > 0.9 and blue < 0.02, (red, blue)

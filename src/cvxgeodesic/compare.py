@@ -26,13 +26,18 @@ import os
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from ._atomic import atomic_write
 from .errors import CvxGeodesicError, ParameterError, SolverError
+from .tables import Column, text_table
 
-__all__ = ["run_compare", "format_table", "resolve_methods", "CSV_COLUMNS"]
+__all__ = [
+    "CSV_COLUMNS", "TABLE_COLUMNS", "evaluate_methods", "format_table", "resolve_methods", "run_compare",
+    "solve_methods", "write_csv", "write_pictures",
+]
 
 #: Columns of ``compare.csv`` (and keys of every row returned by :func:`run_compare`), in order.
 #:
@@ -108,7 +113,10 @@ def _canonical(method: str) -> str:
 
 
 def _atomic_write_text(path: Path, text: str) -> None:
-    atomic_write(path, lambda fh: fh.write(text.encode("utf-8")))
+    def write(fh) -> None:
+        fh.write(text.encode("utf-8"))
+
+    atomic_write(path, write)
 
 
 def _error_message(exc: BaseException) -> str:
@@ -131,7 +139,7 @@ def _solve(mesh, method: str, sources: np.ndarray, m: float, solver: str):
 
 
 def _empty_row(method: str) -> dict:
-    row = {c: None for c in CSV_COLUMNS}
+    row: dict[str, Any] = dict.fromkeys(CSV_COLUMNS)
     row["method"] = method
     return row
 
@@ -185,69 +193,135 @@ def run_compare(mesh, sources, methods, out_dir, *, m=1.0, solver="auto", progre
 
     Notes
     -----
-    The exact field is computed first, once, whether or not ``"exact"`` is in
-    ``methods`` (only then does it get a row and PNGs). If it cannot be
-    computed (e.g. a non-manifold mesh), the error columns stay empty, no
-    ``error_*.png`` is drawn and a warning goes to stderr. A method named twice
-    under an alias (``"qgdf"`` and ``"lcqp-hessian"``) is solved once and
-    reported under both names.
+    Three steps, each a function of its own: :func:`solve_methods` (the exact field first, once,
+    whether or not ``"exact"`` is in ``methods``: only then does it get a row and PNGs),
+    :func:`evaluate_methods` (the rows, measured with
+    :func:`cvxgeodesic.evaluation.summary.summarize_field`), :func:`write_csv` and
+    :func:`write_pictures`. If the exact field cannot be computed (e.g. a non-manifold mesh), the
+    error columns stay empty, no ``error_*.png`` is drawn and a warning goes to stderr. A method
+    named twice under an alias (``"qgdf"`` and ``"lcqp-hessian"``) is solved once and reported
+    under both names.
     """
-    from .evaluation import error_stats, gradient_norm_histogram, relative_error, smoothness_report
+    from .api import SOLVERS
     from .mesh.trimesh import as_trimesh
-    from .plotting import plot_error_map, plot_field, plot_gradient_histogram
+    from .sources import resolve_sources
 
     mesh = as_trimesh(mesh)
     names = resolve_methods(methods)
-    from .sources import resolve_sources
-
     sset = resolve_sources(mesh, sources)
-    src = sset.vertices  # excluded from the error statistics and marked in the plots (none for point sources)
-    solve_src = src if sset.vertex_only else sset
-    from .api import SOLVERS
-
     if not isinstance(solver, str) or solver.lower() not in SOLVERS:
         raise ParameterError(f"unknown solver {solver!r}; choose one of {', '.join(SOLVERS)}")
     out = Path(os.fspath(out_dir))
     out.mkdir(parents=True, exist_ok=True)
-    log = sys.stderr
-    width = max(len(n) for n in [*names, "exact"])
 
     def say(text: str) -> None:
         if progress:
-            print(text, file=log, flush=True)
+            print(text, file=sys.stderr, flush=True)
 
-    # -- the reference -------------------------------------------------------------------------------------------------
-    results: dict[str, tuple] = {}  # canonical method -> (result or None, wall seconds, exception or None)
+    results = solve_methods(mesh, sset, names, m=m, solver=solver, say=say)
+    rows, rel_errors = evaluate_methods(mesh, sset.vertices, names, results)
+    write_csv(out / "compare.csv", rows)  # the numbers first: they matter more than the pictures
+    t_png = time.perf_counter()
+    write_pictures(out, mesh, sset, names, results, rows, rel_errors)
+    say(f"wrote {out / 'compare.csv'} and {sum(1 for _ in out.glob('*.png'))} PNGs in {out} "
+        f"({time.perf_counter() - t_png:.1f} s for the pictures)")
+    return rows
+
+
+#: What :func:`solve_methods` keeps of one method: the result (None if it failed), the wall-clock
+#: seconds, and the exception (None if it did not fail).
+Outcome = tuple[Any, float, BaseException | None]  # (GeodesicResult or None, seconds, exception or None)
+
+
+def _attempt(mesh, method: str, sources, m: float, solver: str) -> Outcome:
     t0 = time.perf_counter()
     try:
-        res, wall = _solve(mesh, "exact", solve_src, m, solver)
-        results["exact"] = (res, wall, None)
+        return (*_solve(mesh, method, sources, m, solver), None)
     except Exception as exc:  # noqa: BLE001 - a failed method becomes a row, never the end of the comparison
-        results["exact"] = (None, time.perf_counter() - t0, exc)
-    ref_res, ref_wall, ref_err = results["exact"]
-    d_exact = ref_res.distance if ref_res is not None else None
+        return None, time.perf_counter() - t0, exc
+
+
+def solve_methods(mesh, sset, names, *, m: float = 1.0, solver: str = "auto", say=None) -> dict[str, Outcome]:
+    """Solve the exact reference and every method once; a failure is kept, not raised.
+
+    Parameters
+    ----------
+    mesh : TriMesh
+        The surface.
+    sset : SourceSet
+        The resolved sources (:func:`cvxgeodesic.sources.resolve_sources`).
+    names : list of str
+        Method names as :func:`resolve_methods` returns them.
+    m : float, default 1.0
+        Smoothness multiplier.
+    solver : str, default "auto"
+        Backend of the convex formulations.
+    say : callable, optional
+        Receives one progress line per method (and a warning when there is no exact reference).
+
+    Returns
+    -------
+    dict
+        Canonical method name (aliases resolved) → ``(result or None, wall seconds, exception or None)``;
+        always has ``"exact"``.
+    """
+    say = say or (lambda text: None)
+    solve_src = sset.vertices if sset.vertex_only else sset
+    width = max(len(n) for n in [*names, "exact"])
+    results: dict[str, Outcome] = {"exact": _attempt(mesh, "exact", solve_src, m, solver)}
+    _, ref_wall, ref_err = results["exact"]
     if ref_err is not None:
         say(f"warning: no exact reference, errors are not computed ({_error_message(ref_err)})")
     elif "exact" not in names:
         say(f"{'exact':<{width}}  {ref_wall:8.2f} s  (reference)")
-
-    # -- every method --------------------------------------------------------------------------------------------------
     for i, name in enumerate(names, 1):
         key = _canonical(name)
         if key not in results:
-            t0 = time.perf_counter()
-            try:
-                results[key] = (*_solve(mesh, key, solve_src, m, solver), None)
-            except Exception as exc:  # noqa: BLE001
-                results[key] = (None, time.perf_counter() - t0, exc)
+            results[key] = _attempt(mesh, key, solve_src, m, solver)
         res, wall, err = results[key]
         tag = f"[{i}/{len(names)}] {name:<{width}}"
         if err is None:
             say(f"{tag}  {wall:8.2f} s  {res.info.status}, {res.info.iterations} it")
         else:
             say(f"{tag}  {wall:8.2f} s  FAILED: {_error_message(err)}")
+    return results
 
-    # -- rows and measurements ----------------------------------------------------------------------------------------
+
+def _failed_row(row: dict, wall: float, err: BaseException) -> None:
+    row["time_s"] = float(wall)
+    row["status"] = _error_message(err)
+    if isinstance(err, SolverError):
+        row["solver"] = str(err.solver)
+        it = err.info.get("iterations")
+        row["iterations"] = int(it) if isinstance(it, int | np.integer) else None
+
+
+def evaluate_methods(mesh, src, names, results) -> tuple[list[dict], dict[str, np.ndarray]]:
+    """The rows of the comparison: each method's solve record and its errors against the exact field.
+
+    Parameters
+    ----------
+    mesh : TriMesh
+        The surface, ``n`` vertices.
+    src : (k,) int ndarray
+        Source vertices, left out of the errors (none for point sources).
+    names : list of str
+        Method names, one row each, in this order.
+    results : dict
+        As :func:`solve_methods` returns it.
+
+    Returns
+    -------
+    rows : list of dict
+        Keys :data:`CSV_COLUMNS`; None where a value does not apply.
+    rel_errors : dict
+        Method name → (n,) per-vertex relative error, for the methods that were measured.
+    """
+    from .evaluation import relative_error
+    from .evaluation.summary import summarize_field, summarize_run
+
+    ref = results["exact"][0]
+    d_exact = ref.distance if ref is not None else None
     rows: list[dict] = []
     rel_errors: dict[str, np.ndarray] = {}
     for name in names:
@@ -255,52 +329,66 @@ def run_compare(mesh, sources, methods, out_dir, *, m=1.0, solver="auto", progre
         row = _empty_row(name)
         rows.append(row)
         if err is not None:
-            row["time_s"] = float(wall)
-            row["status"] = _error_message(err)
-            if isinstance(err, SolverError):
-                row["solver"] = str(err.solver)
-                it = err.info.get("iterations")
-                row["iterations"] = int(it) if isinstance(it, int | np.integer) else None
+            _failed_row(row, wall, err)
             continue
-        info = res.info
-        row.update(
-            solver=str(info.solver), time_s=float(info.setup_time + info.solve_time),
-            setup_s=float(info.setup_time), solve_s=float(info.solve_time), iterations=int(info.iterations),
-            status=str(info.status),
-        )
+        run = summarize_run(res.info)
+        row.update({k: run[k] for k in ("solver", "time_s", "setup_s", "solve_s", "iterations", "status")})
         if d_exact is None:
             continue
         try:
-            stats = error_stats(res.distance, d_exact, src)
-            smooth = smoothness_report(mesh, res.distance, d_exact, src)
+            summary = summarize_field(mesh, res.distance, d_exact, src, gradient=False)
             rel_errors[name] = relative_error(res.distance, d_exact, src)
         except Exception as exc:  # noqa: BLE001
-            row["status"] = f"{info.status}; evaluation failed: {_error_message(exc)}"
+            row["status"] = f"{row['status']}; evaluation failed: {_error_message(exc)}"
             continue
-        row.update({k: float(stats[k]) for k in _ERROR_KEYS})
-        row.update({k: float(smooth[k]) for k in _SMOOTH_KEYS})
+        row.update({k: summary[k] for k in _ERROR_KEYS + _SMOOTH_KEYS})
+    return rows, rel_errors
 
-    # -- the CSV first (the numbers matter more than the pictures) ---------------------------------------------------
+
+def write_csv(path: Path, rows: list[dict]) -> None:
+    """Write the rows as ``compare.csv`` (columns :data:`CSV_COLUMNS`, empty cells for None), atomically."""
     buf = io.StringIO()
     writer = csv.DictWriter(buf, fieldnames=list(CSV_COLUMNS), lineterminator="\n")
     writer.writeheader()
     for row in rows:
         writer.writerow({k: _fmt_csv(row[k]) for k in CSV_COLUMNS})
-    _atomic_write_text(out / "compare.csv", buf.getvalue())
+    _atomic_write_text(path, buf.getvalue())
 
-    # -- pictures -----------------------------------------------------------------------------------------------------
-    t_png = time.perf_counter()
+
+def _field_scale(results, names, d_exact):
+    """Colour range and isoline levels shared by every field picture: the exact field's, else the first result's."""
     field_ref = d_exact
-    if field_ref is None:  # no reference: take the colour range from the first successful method
+    if field_ref is None:
         ok = [results[_canonical(n)][0] for n in names if results[_canonical(n)][0] is not None]
         field_ref = ok[0].distance if ok else None
-    vmax_field = None
-    levels = 20
+    vmax_field: float | None = None
+    levels: int | np.ndarray = 20
     if field_ref is not None:
         fin = field_ref[np.isfinite(field_ref)]
         if fin.size and fin.max() > 0:
             vmax_field = float(fin.max())
             levels = np.linspace(0.0, vmax_field, 22)[1:-1]
+    return vmax_field, levels
+
+
+def write_pictures(out: Path, mesh, sset, names, results, rows, rel_errors) -> None:
+    """Write ``field_<method>.png``, ``error_<method>.png`` and ``gradient_histogram.png`` into ``out``.
+
+    Parameters
+    ----------
+    out : Path
+        The output folder (must exist).
+    mesh, sset, names
+        As for :func:`solve_methods`.
+    results, rows, rel_errors
+        What :func:`solve_methods` and :func:`evaluate_methods` returned.
+    """
+    from .plotting import plot_error_map, plot_field
+
+    src = sset.vertices
+    ref = results["exact"][0]
+    d_exact = ref.distance if ref is not None else None
+    vmax_field, levels = _field_scale(results, names, d_exact)
     # one colour scale for every error map: the median of the methods' 99th percentiles (the exact field's 0 aside),
     # so one very bad method does not wash out the others; the colour bar shows an arrow where it clips
     p99s = [p for p in (_finite_or_none(r["rel_p99"]) for r in rows) if p]
@@ -321,8 +409,14 @@ def run_compare(mesh, sources, methods, out_dir, *, m=1.0, solver="auto", progre
             mean_txt = f" (mean {100 * rm:.2f}%)" if rm is not None and np.isfinite(rm) else ""
             etitle = f"{name}: relative error{mean_txt}"
             plot_error_map(mesh, rel_errors[name], out / f"error_{name}.png", title=etitle, vmax=vmax_err, sources=src)
+    _write_histograms(out, mesh, src, names, results, d_exact)
 
-    # gradient-norm histograms: the exact field first (the reference), then every successful method
+
+def _write_histograms(out: Path, mesh, src, names, results, d_exact) -> None:
+    """Gradient-norm histograms: the exact field first (the reference), then every successful method."""
+    from .evaluation import gradient_norm_histogram
+    from .plotting import plot_gradient_histogram
+
     hist_fields = {}
     if d_exact is not None:
         hist_fields["exact"] = d_exact
@@ -330,39 +424,37 @@ def run_compare(mesh, sources, methods, out_dir, *, m=1.0, solver="auto", progre
         res = results[_canonical(name)][0]
         if res is not None and name not in hist_fields:
             hist_fields[name] = res.distance
-    if hist_fields:
-        edges = np.linspace(0.0, 2.0, 161)
-        hists = {k: gradient_norm_histogram(mesh, d, bins=edges, sources=src) for k, d in hist_fields.items()}
-        nonzero = [np.flatnonzero(c > 0) for c, _ in hists.values()]
-        last = max((int(nz[-1]) for nz in nonzero if nz.size), default=len(edges) - 2)
-        cut = min(max(last + 2, int(np.searchsorted(edges, 1.5))), len(edges) - 1)  # show at least [0, 1.5]
-        hists = {k: (c[:cut], e[: cut + 1]) for k, (c, e) in hists.items()}
-        plot_gradient_histogram(
-            hists, out / "gradient_histogram.png",
-            title=f"‖∇d‖ per triangle on {mesh.name} (area-weighted, source triangles excluded)",
-        )
-    say(f"wrote {out / 'compare.csv'} and {sum(1 for _ in out.glob('*.png'))} PNGs in {out} "
-        f"({time.perf_counter() - t_png:.1f} s for the pictures)")
-    return rows
+    if not hist_fields:
+        return
+    edges = np.linspace(0.0, 2.0, 161)
+    hists = {k: gradient_norm_histogram(mesh, d, bins=edges, sources=src) for k, d in hist_fields.items()}
+    nonzero = [np.flatnonzero(c > 0) for c, _ in hists.values()]
+    last = max((int(nz[-1]) for nz in nonzero if nz.size), default=len(edges) - 2)
+    cut = min(max(last + 2, int(np.searchsorted(edges, 1.5))), len(edges) - 1)  # show at least [0, 1.5]
+    hists = {k: (c[:cut], e[: cut + 1]) for k, (c, e) in hists.items()}
+    plot_gradient_histogram(
+        hists, out / "gradient_histogram.png",
+        title=f"‖∇d‖ per triangle on {mesh.name} (area-weighted, source triangles excluded)",
+    )
 
 
 # ----------------------------------------------------------------------------------------------------------------------
 # text table
 # ----------------------------------------------------------------------------------------------------------------------
 
-_TABLE = (
-    # header, key, formatter
-    ("method", "method", str),
-    ("time s", "time_s", lambda v: f"{v:.2f}"),
-    ("setup s", "setup_s", lambda v: f"{v:.2f}"),
-    ("iters", "iterations", lambda v: f"{int(v)}"),
-    ("rel mean %", "rel_mean", lambda v: f"{100 * v:.2f}"),
-    ("rel max %", "rel_max", lambda v: f"{100 * v:.1f}"),
-    ("rel p99 %", "rel_p99", lambda v: f"{100 * v:.1f}"),
-    ("off-ridge %", "off_ridge_rel_mean", lambda v: f"{100 * v:.2f}"),
-    ("ridge jump p95", "ridge_jump_p95", lambda v: f"{v:.3f}"),
-    ("vs exact", "ridge_jump_ratio", lambda v: f"{v:.2f}"),
-    ("status", "status", str),
+#: The columns of :func:`format_table`.
+TABLE_COLUMNS = (
+    Column("method", "method", align="left"),
+    Column("time s", "time_s", lambda v: f"{v:.2f}"),
+    Column("setup s", "setup_s", lambda v: f"{v:.2f}"),
+    Column("iters", "iterations", lambda v: f"{int(v)}"),
+    Column("rel mean %", "rel_mean", lambda v: f"{100 * v:.2f}"),
+    Column("rel max %", "rel_max", lambda v: f"{100 * v:.1f}"),
+    Column("rel p99 %", "rel_p99", lambda v: f"{100 * v:.1f}"),
+    Column("off-ridge %", "off_ridge_rel_mean", lambda v: f"{100 * v:.2f}"),
+    Column("ridge jump p95", "ridge_jump_p95", lambda v: f"{v:.3f}"),
+    Column("vs exact", "ridge_jump_ratio", lambda v: f"{v:.2f}"),
+    Column("status", "status", align="left", max_len=60),
 )
 
 
@@ -379,32 +471,6 @@ def format_table(rows) -> str:
     str
         Header, a rule and one line per row; numbers right-aligned, errors in
         percent, times in seconds. Long status messages are shortened to 60
-        characters (the CSV keeps them whole).
+        characters (the CSV keeps them whole). Laid out by :func:`cvxgeodesic.tables.text_table`.
     """
-    cells = []
-    for row in rows:
-        line = []
-        for _, key, fmt in _TABLE:
-            v = row.get(key)
-            if v is None or (isinstance(v, str) and not v and key != "method"):
-                line.append("-")
-                continue
-            try:
-                s = fmt(v)
-            except (TypeError, ValueError):
-                s = str(v)
-            if key == "status" and len(s) > 60:
-                s = s[:59] + "…"
-            line.append(s)
-        cells.append(line)
-    heads = [h for h, _, _ in _TABLE]
-    widths = [max([len(h)] + [len(c[j]) for c in cells]) for j, h in enumerate(heads)]
-    left = {0, len(heads) - 1}  # method and status left-aligned
-
-    def fmt_line(items):
-        parts = [s.ljust(w) if j in left else s.rjust(w) for j, (s, w) in enumerate(zip(items, widths, strict=True))]
-        return "  ".join(parts).rstrip()
-
-    lines = [fmt_line(heads), "  ".join("-" * w for w in widths)]
-    lines += [fmt_line(c) for c in cells]
-    return "\n".join(lines)
+    return text_table(rows, TABLE_COLUMNS)

@@ -9,6 +9,7 @@ from pathlib import Path
 from .api import GeodesicSolver
 from .mesh.io import load_mesh, save_distance
 from .mesh.trimesh import TriMesh
+from .tables import Column, text_table
 
 DEMO_METHODS = ("qcqp-hessian", "qclp", "heat", "fmm", "dijkstra")
 
@@ -39,9 +40,11 @@ def run_demo(out_dir: str | Path, *, source: int = 0, stream=None) -> list[dict]
     Returns
     -------
     list of dict
-        One row per method: ``method, solver, time_s, iterations, rel_mean, rel_max``.
+        One row per method of :data:`DEMO_METHODS`, then the exact field's: the record of
+        :func:`cvxgeodesic.evaluation.summary.summarize` (keys ``SUMMARY_KEYS``: ``method, solver,
+        time_s, iterations, rel_mean, rel_max, ridge_jump_p95, off_ridge_rel_mean``, ...).
     """
-    from .evaluation import error_stats, smoothness_report
+    from .evaluation.summary import summarize
     from .plotting import plot_field
 
     stream = stream or sys.stdout
@@ -54,14 +57,8 @@ def run_demo(out_dir: str | Path, *, source: int = 0, stream=None) -> list[dict]
     for method in DEMO_METHODS:
         res = GeodesicSolver(mesh, method).solve(source)
         fields[method] = res.distance
-        st = error_stats(res.distance, exact.distance, res.sources)
-        sm = smoothness_report(mesh, res.distance, exact.distance, res.sources)
-        rows.append({"method": method, "solver": res.info.solver, "time_s": res.info.total_time,
-                     "iterations": res.info.iterations, "rel_mean": st["rel_mean"], "rel_max": st["rel_max"],
-                     "ridge": sm["ridge_jump_p95"], "off_ridge": sm["off_ridge_rel_mean"]})
-    sm = smoothness_report(mesh, exact.distance, exact.distance, exact.sources)
-    rows.append({"method": "exact", "solver": exact.info.solver, "time_s": exact.info.total_time,
-                 "iterations": 0, "rel_mean": 0.0, "rel_max": 0.0, "ridge": sm["ridge_jump_p95"], "off_ridge": 0.0})
+        rows.append(summarize(mesh, res, exact.distance, gradient=False))
+    rows.append(summarize(mesh, exact, exact.distance, gradient=False))
     main = "qcqp-hessian"
     ply = out / f"spot_{main}.ply"
     png = out / f"spot_{main}.png"
@@ -76,13 +73,19 @@ def run_demo(out_dir: str | Path, *, source: int = 0, stream=None) -> list[dict]
     return rows
 
 
+#: The columns of :func:`format_rows`.
+DEMO_COLUMNS = (
+    Column("method", "method", align="left"),
+    Column("solver", "solver", lambda s: str(s).split(".")[0], align="left"),
+    Column("time [s]", "time_s", lambda v: f"{v:.3f}"),
+    Column("iters", "iterations", lambda v: f"{int(v):d}"),
+    Column("mean rel err", "rel_mean", lambda v: f"{v:.3%}"),
+    Column("max rel err", "rel_max", lambda v: f"{v:.2%}"),
+    Column("ridge", "ridge_jump_p95", lambda v: f"{v:.3f}"),
+    Column("off-ridge err", "off_ridge_rel_mean", lambda v: f"{v:.3%}"),
+)
+
+
 def format_rows(rows: list[dict]) -> str:
-    """Aligned text table of demo rows."""
-    head = (f"{'method':<14} {'solver':<12} {'time [s]':>9} {'iters':>6} {'mean rel err':>13} {'max rel err':>12} "
-            f"{'ridge':>7} {'off-ridge err':>14}")
-    lines = [head, "-" * len(head)]
-    for r in rows:
-        solver = r["solver"].split(".")[0]
-        lines.append(f"{r['method']:<14} {solver:<12} {r['time_s']:>9.3f} {r['iterations']:>6d} "
-                     f"{r['rel_mean']:>12.3%} {r['rel_max']:>12.2%} {r['ridge']:>7.3f} {r['off_ridge']:>13.3%}")
-    return "\n".join(lines)
+    """Aligned text table of demo rows (:func:`cvxgeodesic.tables.text_table` with :data:`DEMO_COLUMNS`)."""
+    return text_table(rows, DEMO_COLUMNS)
