@@ -191,8 +191,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--order", type=int, default=1, choices=(1, 2),
                    help="2: second-order elements for the squared distance (qclp only; docs/order2.md)")
     p.add_argument("-o", "--output", required=True,
-                   help="output file: .ply (mesh + distance), .npy, .csv, or .vtu/.vtk (needs meshio), in the "
-                        "file's vertex numbering")
+                   help="output file: .ply (mesh + distance), .npy, .csv, .vtu/.vtk (needs meshio) or .glb (needs "
+                        "trimesh), in the file's vertex numbering")
     p.add_argument("--png", default=None,
                    help="also render the field with isolines and the sources to this PNG (both files or neither)")
     p.set_defaults(func=_cmd_distance)
