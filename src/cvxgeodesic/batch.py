@@ -315,7 +315,7 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
         Dask's ``distributed`` is not installed.
     """
     from .api import ALL_METHODS, BASELINE_METHODS, SOLVERS
-    from .multires import resolve_target
+    from .strategies import resolve_target
 
     paths = [Path(p).expanduser().resolve() for p in ([paths] if isinstance(paths, str | os.PathLike) else paths)]
     paths = list(dict.fromkeys(paths))

@@ -193,7 +193,7 @@ def run_compare(mesh, sources, methods, out_dir, *, m=1.0, solver="auto", progre
     reported under both names.
     """
     from .evaluation import error_stats, gradient_norm_histogram, relative_error, smoothness_report
-    from .mesh.trimesh import as_trimesh
+    from .mesh.io import as_trimesh
     from .plotting import plot_error_map, plot_field, plot_gradient_histogram
 
     mesh = as_trimesh(mesh)

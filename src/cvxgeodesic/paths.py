@@ -31,7 +31,8 @@ import scipy.sparse as sp
 from numpy.typing import ArrayLike
 
 from .errors import ParameterError, SolverError, SourceError
-from .mesh.trimesh import TriMesh, as_trimesh
+from .mesh.io import as_trimesh
+from .mesh.trimesh import TriMesh
 from .sources import BARY_SNAP, SourceSet, SurfacePoint, _barycentric, _incident_faces, resolve_sources
 
 
@@ -240,7 +241,7 @@ def geodesic_path(mesh: Any, distance: ArrayLike, target: Any, *, sources: Any =
     elif result is not None:
         ss = result.source_set if result.source_set is not None else resolve_sources(mesh, result.sources)
     else:
-        from .sources import remembered_sources
+        from .results import remembered_sources
 
         ss = remembered_sources(distance)  # an array returned by geodesic_distance from surface sources
     if ss is not None:

@@ -32,7 +32,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ._atomic import atomic_write
-from .mesh.trimesh import as_trimesh, as_vertex_field
+from .mesh.io import as_trimesh
+from .validation import as_vertex_field
 
 __all__ = ["plot_field", "plot_error_map", "plot_gradient_histogram", "isoline_segments"]
 

@@ -201,7 +201,8 @@ def show(
         ``distance`` of the wrong shape, a bad ``window_size``, a bad ``screenshot`` path, or no display
         (or polyscope already started off-screen in this process) and no ``screenshot``.
     """
-    from .mesh.trimesh import as_trimesh, as_vertex_field
+    from .mesh.io import as_trimesh
+    from .validation import as_vertex_field
 
     mesh = as_trimesh(mesh)
     n = mesh.n_vertices

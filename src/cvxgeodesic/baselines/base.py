@@ -31,7 +31,8 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from ..errors import CvxGeodesicError, NonManifoldError, SolverError
-from ..mesh.trimesh import TriMesh, as_trimesh
+from ..mesh.io import as_trimesh
+from ..mesh.trimesh import TriMesh
 
 
 class BaselineSolver:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..mesh.trimesh import TriMesh
-from ..mesh.trimesh import as_vertex_field as vertex_field  # noqa: F401  (re-exported for the evaluation modules)
+from ..validation import as_vertex_field as vertex_field  # noqa: F401  (re-exported for the evaluation modules)
 
 
 def check_mesh(mesh, name: str = "mesh") -> TriMesh:
