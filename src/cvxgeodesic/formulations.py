@@ -55,7 +55,7 @@ from .mesh.trimesh import DEGENERATE_TOL, TriMesh
 from .operators import energy_matrix, gradient_blocks
 from .solvers.problem import ConicProblem
 from .sources import source_constraints
-from .validation import check_choice
+from .validation import check_choice, check_number
 
 FORMULATIONS: dict[str, tuple[str, str | None]] = {
     "lclp": ("lc", None),
@@ -119,9 +119,8 @@ def stretch_weights(mesh: TriMesh, stretch: str = "area") -> np.ndarray:
         floor = MIN_STRETCH_WEIGHT * total / max(int(mesh.referenced.sum()), 1)
         mass = np.where(mesh.referenced, np.maximum(mass, floor), 0.0)
         return mass / mass.sum()
-    scale = {"calibrated": STRETCH_SCALE / n, "mean": 1.0 / n, "sum": 1.0}.get(stretch)
-    if scale is None:
-        raise ParameterError(f"stretch must be one of {', '.join(STRETCH_WEIGHTS)}, got {stretch!r}")
+    check_choice(stretch, "stretch", STRETCH_WEIGHTS, lower=False)
+    scale = {"calibrated": STRETCH_SCALE / n, "mean": 1.0 / n, "sum": 1.0}[stretch]
     return np.full(n, scale)
 
 
@@ -172,8 +171,7 @@ def smoothness_weight(mesh: TriMesh, m: float, normalization: str = "area", ener
     normalization = check_normalization(normalization)
     if normalization == "paper":
         return float(m) * 100.0 * mesh.mean_edge_length / mesh.n_vertices
-    if energy not in KAPPA:
-        raise ParameterError(f"energy must be one of {', '.join(KAPPA)}, got {energy!r}")
+    check_choice(energy, "energy", KAPPA, lower=False)
     return float(m) * KAPPA[energy] * float(np.sqrt(mesh.face_areas.sum()))
 
 
@@ -226,8 +224,7 @@ class MeshOperators:
         self.notes: list[str] = []
         mesh = self.mesh
         tol = self.degenerate_tol
-        if isinstance(tol, bool) or not isinstance(tol, int | float | np.floating) or not 0 <= tol < 1:
-            raise ParameterError(f"degenerate_tol must be a number in [0, 1), got {tol!r}")
+        check_number(tol, "degenerate_tol", low=0, high=1, high_open=True)
         self.degenerate = np.zeros(mesh.n_faces, dtype=bool)
         self.degenerate[mesh.degenerate_faces(tol)] = True
         n_bad = int(self.degenerate.sum())

@@ -119,7 +119,7 @@ def check_choice(value: Any, name: str, choices: Iterable[str], *, lower: bool =
     return key
 
 
-def as_vertex_field(values: ArrayLike, name: str, n: int | None = None) -> np.ndarray:
+def as_vertex_field(values: ArrayLike, name: str, n: int | None = None, *, nan_ok: bool = True) -> np.ndarray:
     """Return ``values`` as a (n,) float64 array, or raise a ParameterError naming ``name``.
 
     Parameters
@@ -130,6 +130,8 @@ def as_vertex_field(values: ArrayLike, name: str, n: int | None = None) -> np.nd
         Parameter name used in the message.
     n : int, optional
         Required length (the mesh's vertex count).
+    nan_ok : bool
+        Accept NaN values (``inf`` is always accepted: it marks unreachable vertices).
 
     Returns
     -------
@@ -138,7 +140,8 @@ def as_vertex_field(values: ArrayLike, name: str, n: int | None = None) -> np.nd
     Raises
     ------
     ParameterError
-        Not numeric, not 1-D, or not of length ``n`` (a ``ValueError``).
+        Not numeric, not 1-D, not of length ``n``, or NaN where ``nan_ok`` is False (the message names the
+        first NaN vertex).
     """
     shape = f"({n},)" if n is not None else "(n,)"
     try:
@@ -147,6 +150,8 @@ def as_vertex_field(values: ArrayLike, name: str, n: int | None = None) -> np.nd
         raise ParameterError(f"{name} must be a numeric array of shape {shape} ({exc})") from None
     if arr.ndim != 1 or (n is not None and arr.shape[0] != n):
         raise ParameterError(f"{name} must have shape {shape} (one value per mesh vertex), got shape {arr.shape}")
+    if not nan_ok and np.isnan(arr).any():
+        raise ParameterError(f"{name} has NaN values (first at vertex {int(np.flatnonzero(np.isnan(arr))[0])})")
     return arr
 
 
@@ -169,7 +174,7 @@ def vertex_indices(x: ArrayLike, name: str, n: int) -> np.ndarray:
         arr = arr.reshape(1)
     if arr.ndim != 1:
         raise ParameterError(f"{name} must be an int or a 1-D array of vertex indices, got shape {arr.shape}")
-    if arr.size and (arr.dtype.kind not in "iu" or arr.dtype == np.bool_):
+    if arr.size and arr.dtype.kind not in "iu":  # bool is kind "b": rejected
         if arr.dtype.kind == "f" and np.all(np.isfinite(arr)) and np.all(arr == np.round(arr)):
             arr = arr.astype(np.int64)
         else:

@@ -219,7 +219,7 @@ def show(
         raise ParameterError("no display (DISPLAY/WAYLAND_DISPLAY unset): render off-screen with "
                              "screenshot='out.png' (CLI: --screenshot out.png)")
     if screenshot is not None:  # before the solve: a bad path fails at once, not after it
-        from .mesh.io import check_output_path
+        from .validation import check_output_path
 
         check_output_path(screenshot, (".png",))
 
