@@ -8,6 +8,7 @@ coarse triangle; a coarse per-vertex field is then interpolated there.
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import numpy as np
 
@@ -44,7 +45,7 @@ class SurfaceTransfer:
         self.coarse = coarse
         self.points = np.ascontiguousarray(points, dtype=np.float64)
         self.face, self.weights, self.sq_distance = self._project(np.arange(coarse.n_faces))
-        self._kdtree = None
+        self._kdtree: Any = None  # built on the first nearest_vertex call
         self.setup_time = time.perf_counter() - t0
 
     def _project(self, faces: np.ndarray, idx: np.ndarray | None = None):

@@ -73,6 +73,9 @@ class TriMesh:
     numbering (the command line does that for every file it writes).
     """
 
+    #: Set on the coarse meshes of :func:`~cvxgeodesic.mesh.decimate.simplify_mesh` only: the method used.
+    simplifier: str
+
     def __init__(
         self,
         V: ArrayLike,
