@@ -123,6 +123,10 @@ def test_entry_points_share_the_vocabulary(tmp_path):
         from cvxgeodesic.baselines import HeatBaseline
 
         HeatBaseline(mesh, t_coef=0)
+    with pytest.raises(SourceError, match="source index 42 is out of range: the mesh has 42 vertices"):
+        from cvxgeodesic.baselines import DijkstraBaseline
+
+        DijkstraBaseline(mesh).solve([0, 42])
     with pytest.raises(ParameterError, match="^subdivisions must be an integer >= 0, got -1"):
         cg.icosphere(-1)
     with pytest.raises(ParameterError, match="^unknown normalization 'cotan'; choose one of area, paper"):

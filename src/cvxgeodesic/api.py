@@ -49,7 +49,7 @@ class GeodesicSolver:
     Parameters
     ----------
     mesh : TriMesh, tuple (V, F), file path, trimesh.Trimesh, open3d TriangleMesh or meshio.Mesh
-        ``V`` (n, 3) float, ``F`` (m, 3) int (see :func:`~cvxgeodesic.mesh.trimesh.as_trimesh`).
+        ``V`` (n, 3) float, ``F`` (m, 3) int (see :func:`~cvxgeodesic.mesh.io.as_trimesh`).
     method : str
         One of :data:`ALL_METHODS`: the eight convex formulations
         (``"lclp"``, ``"lcqp-dirichlet"``, ``"lcqp-laplacian"``, ``"lcqp-hessian"``
@@ -316,7 +316,7 @@ def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | 
     Parameters
     ----------
     mesh : TriMesh, tuple (V, F), file path, trimesh.Trimesh, open3d TriangleMesh or meshio.Mesh
-        See :func:`~cvxgeodesic.mesh.trimesh.as_trimesh`; or ``V``, (n, 3) float vertex
+        See :func:`~cvxgeodesic.mesh.io.as_trimesh`; or ``V``, (n, 3) float vertex
         positions, followed by ``F``, (m, 3) int triangles.
     sources : int or sequence of int
         Source vertex indices (positional after the mesh, or keyword), or surface sources.
