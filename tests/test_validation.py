@@ -8,6 +8,7 @@ import pytest
 import cvxgeodesic as cg
 from cvxgeodesic.errors import ParameterError, SourceError
 from cvxgeodesic.validation import (
+    as_points,
     as_vertex_field,
     check_choice,
     check_count,
@@ -73,6 +74,16 @@ def test_vertex_arrays_name_the_parameter_and_the_index():
         as_vertex_field([0.0, np.nan, np.nan], "d", 3, nan_ok=False)
     with pytest.raises(ParameterError, match=r"d must have shape \(3,\)"):
         as_vertex_field(np.zeros((3, 1)), "d", 3)
+
+
+def test_points_name_the_first_bad_row():
+    assert as_points([1, 2, 3], "x").shape == (3,) and as_points(np.zeros((4, 3)), "x").shape == (4, 3)
+    with pytest.raises(ParameterError, match=r"x\[2\] = \[0.0, nan, 0.0\]"):
+        as_points([[0, 0, 0], [1, 1, 1], [0, np.nan, 0]], "x")
+    with pytest.raises(ParameterError, match=r"got shape \(2, 2\)"):
+        as_points(np.zeros((2, 2)), "x")
+    with pytest.raises(SourceError, match=r"xyz must be .* finite positions: xyz = \[0.5, inf, 0.0\]"):
+        cg.surface_point(cg.grid_plane(3), [0.5, np.inf, 0.0])
 
 
 def test_validate_sources():

@@ -46,7 +46,7 @@ from numpy.typing import ArrayLike
 from .errors import SourceError
 from .mesh.geometry import clipped_barycentric
 from .mesh.trimesh import TriMesh
-from .validation import validate_sources
+from .validation import as_points, validate_sources
 
 #: A barycentric coordinate this close to 0 (or 1) counts as exactly 0 (1): the point is on an edge (a vertex).
 BARY_SNAP = 1e-9
@@ -266,13 +266,8 @@ def surface_point(mesh: Any, xyz: ArrayLike) -> SurfacePoint | list[SurfacePoint
     [0.3, 0.6, 0.0]
     """
     mesh = _mesh(mesh)
-    try:
-        X = np.asarray(xyz, dtype=float)
-    except (TypeError, ValueError):
-        raise SourceError(f"xyz must be a (3,) or (k, 3) array of positions, got {xyz!r}") from None
+    X = as_points(xyz, "xyz", error=SourceError)
     single = X.ndim == 1
-    if X.shape[-1:] != (3,) or X.ndim > 2 or not np.all(np.isfinite(X)):
-        raise SourceError(f"xyz must be a (3,) or (k, 3) array of finite positions, got shape {X.shape}")
     faces, bary, _ = closest_points(mesh, X.reshape(-1, 3))
     pts = [SurfacePoint(int(f), b) for f, b in zip(faces, bary, strict=True)]
     return pts[0] if single else pts

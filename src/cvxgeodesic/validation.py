@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike
 from .errors import ParameterError, SourceError
 
 __all__ = [
-    "as_vertex_field", "check_choice", "check_count", "check_number", "check_output_path", "check_type",
+    "as_points", "as_vertex_field", "check_choice", "check_count", "check_number", "check_output_path", "check_type",
     "is_integer", "is_real", "short_repr", "validate_sources", "vertex_indices", "vertex_mask",
 ]
 
@@ -153,6 +153,44 @@ def as_vertex_field(values: ArrayLike, name: str, n: int | None = None, *, nan_o
     if not nan_ok and np.isnan(arr).any():
         raise ParameterError(f"{name} has NaN values (first at vertex {int(np.flatnonzero(np.isnan(arr))[0])})")
     return arr
+
+
+def as_points(x: ArrayLike, name: str, *, error: type[Exception] = ParameterError) -> np.ndarray:
+    """Return ``x`` as a (3,) or (k, 3) float64 array of finite positions, or raise ``error`` naming ``name``.
+
+    Parameters
+    ----------
+    x : array_like
+        One position (3,) or k positions (k, 3).
+    name : str
+        Parameter name used in the message.
+    error : type
+        :class:`~cvxgeodesic.errors.ParameterError` (default) or :class:`~cvxgeodesic.errors.SourceError`
+        (positions that define sources).
+
+    Returns
+    -------
+    (3,) or (k, 3) float64 ndarray
+
+    Raises
+    ------
+    error
+        Not numeric, of another shape, or with a NaN or infinite coordinate (the message names the
+        first such row).
+    """
+    try:
+        X = np.asarray(x, dtype=float)
+    except (TypeError, ValueError):
+        raise error(f"{name} must be a (3,) or (k, 3) array of positions, got {short_repr(x)}") from None
+    if X.shape[-1:] != (3,) or X.ndim > 2:
+        raise error(f"{name} must be a (3,) or (k, 3) array of finite positions, got shape {X.shape}")
+    bad = ~np.isfinite(X.reshape(-1, 3)).all(axis=1)
+    if bad.any():
+        k = int(np.flatnonzero(bad)[0])
+        where = name if X.ndim == 1 else f"{name}[{k}]"
+        raise error(f"{name} must be a (3,) or (k, 3) array of finite positions: {where} = "
+                    f"{X.reshape(-1, 3)[k].tolist()}")
+    return X
 
 
 def vertex_indices(x: ArrayLike, name: str, n: int) -> np.ndarray:
