@@ -628,7 +628,7 @@ def sec_norm_resolution(ctx, plan):
     base = ctx.mesh(plan.res_base)
     p0 = base.V[SOURCE]
     targets = [t for t in (500, 2000, 8000, 20000) if t < base.n_faces]
-    from cvxgeodesic.multires import simplify_mesh  # shortest-edge collapse: stays manifold (QEM did not at 500)
+    from cvxgeodesic.mesh.decimate import simplify_mesh  # shortest-edge collapse: stays manifold (QEM did not at 500)
 
     levels = [(f"{Path(plan.res_base).stem}_se{t}", simplify_mesh(base, t)) for t in targets]
     levels.append((plan.res_base, base))

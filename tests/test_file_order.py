@@ -13,8 +13,8 @@ from conftest import shared_mesh_path
 from cvxgeodesic.batch import solve_one
 from cvxgeodesic.cli import main
 from cvxgeodesic.errors import MeshRepairWarning, ParameterError, SourceError
-from cvxgeodesic.mesh.fileorder import file_order_mesh, file_sources
-from cvxgeodesic.mesh.io import load_distance_ply
+from cvxgeodesic.mesh.fileorder import file_sources
+from cvxgeodesic.mesh.io import file_order_mesh, load_distance_ply
 
 PLANE = cg.grid_plane(4, jitter=0.05)  # 25 vertices, 32 faces
 

@@ -179,7 +179,7 @@ def test_smoothness_weight_formula():
     assert paper == pytest.approx(2.0 * 100 * mesh.mean_edge_length / mesh.n_vertices)
     area = smoothness_weight(mesh, 2.0)
     assert area == pytest.approx(2.0 * KAPPA["hessian"] * np.sqrt(mesh.face_areas.sum()))
-    with pytest.raises(ParameterError, match="normalization must be one of area, paper"):
+    with pytest.raises(ParameterError, match="unknown normalization 'mean'; choose one of area, paper"):
         smoothness_weight(mesh, 1.0, normalization="mean")
 
 

@@ -5,7 +5,9 @@ import pytest
 
 import cvxgeodesic as cg
 from cvxgeodesic.errors import ParameterError
-from cvxgeodesic.multires import SurfaceTransfer, default_target_faces, resolve_target, simplify_mesh
+from cvxgeodesic.mesh.decimate import simplify_mesh
+from cvxgeodesic.mesh.transfer import SurfaceTransfer
+from cvxgeodesic.strategies import default_target_faces, resolve_target
 
 
 @pytest.fixture(scope="module")
@@ -77,7 +79,7 @@ def test_lam_is_carried_to_the_coarse_mesh(sphere, normalization):
     lam = cg.smoothness_weight(sphere, 1.0, normalization)
     s1 = cg.GeodesicSolver(sphere, multires=400, normalization=normalization)
     s2 = cg.GeodesicSolver(sphere, lam=lam, multires=400, normalization=normalization)
-    assert s2._multires.coarse.lam == pytest.approx(s1._multires.coarse.lam, rel=1e-12)
+    assert s2._strategy.coarse.config.lam == pytest.approx(s1._strategy.coarse.config.lam, rel=1e-12)
     np.testing.assert_allclose(s1.solve(5).distance, s2.solve(5).distance, atol=1e-7)
 
 
@@ -111,7 +113,7 @@ def test_multires_rejects_baselines_and_nonmanifold_hessian(sphere):
 
 
 def test_decimation_time_limit_falls_back_to_quadric(sphere, monkeypatch):
-    import cvxgeodesic.multires as mr
+    import cvxgeodesic.mesh.decimate as mr
 
     monkeypatch.setattr(mr, "decimate_timeout", lambda n_faces: 0.01)  # libigl hangs on some meshes
     c = simplify_mesh(sphere, 320)

@@ -204,7 +204,7 @@ def test_cutting_planes_are_needed_next_to_an_inserted_source():
     mesh = cg.grid_plane(20, jitter=0.4, seed=1)
     ex = euclid_from(mesh, (37, (0.2, 0.3, 0.5)))
     s = cg.GeodesicSolver(mesh, "qclp", order=2)
-    s._order2.refine = 0
+    s._strategy.p2.refine = 0
     d0 = s.solve((37, (0.2, 0.3, 0.5))).distance
     assert np.abs(d0 - ex).max() / ex.max() > 1e-3
 
@@ -319,7 +319,7 @@ def test_scale_equivariance():
 # ---------------------------------------------------------------- structured solver
 @pytest.mark.parametrize("mesh", [cg.grid_plane(12, jitter=0.3, seed=1), cg.icosphere(2)], ids=["grid", "ico2"])
 def test_structured_ipm_matches_clarabel(mesh):
-    from cvxgeodesic.api import _unit_mesh
+    from cvxgeodesic.mesh.trimesh import unit_mesh as _unit_mesh
     from cvxgeodesic.solvers.ipm_soc import P2InteriorPoint
 
     unit, _ = _unit_mesh(mesh)

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from cvxgeodesic.errors import ParameterError
 from cvxgeodesic.mesh import TriMesh, cylinder, grid_plane, icosphere
 from cvxgeodesic.plotting import isoline_segments, plot_error_map, plot_field, plot_gradient_histogram
 
@@ -127,7 +128,7 @@ def test_bad_view_and_missing_directory(tmp_path):
     mesh = icosphere(1)
     with pytest.raises(ValueError, match="view"):
         plot_field(mesh, mesh.V[:, 0], tmp_path / "v.png", view=(1, 2, 3))
-    with pytest.raises(FileNotFoundError):
+    with pytest.raises(ParameterError, match="does not exist"):
         plot_field(mesh, mesh.V[:, 0], tmp_path / "nope" / "v.png")
 
 

@@ -33,6 +33,7 @@ from contextlib import contextmanager
 import numpy as np
 
 from .errors import ParameterError
+from .validation import check_count
 
 __all__ = ["ENV_VAR", "check_threads", "default_threads", "resolve_threads", "thread_limit", "usable_cores"]
 
@@ -81,9 +82,7 @@ def check_threads(value, *, name: str = "threads") -> int | None:
     """``value`` as an int, or None; ParameterError unless it is None or a positive integer."""
     if value is None:
         return None
-    if isinstance(value, bool | np.bool_) or not isinstance(value, int | np.integer) or value < 1:
-        raise ParameterError(f"{name} must be a positive integer or None, got {value!r}")
-    return int(value)
+    return check_count(value, name, or_none=True)
 
 
 def env_threads() -> int | None:
@@ -190,9 +189,12 @@ def thread_limit(threads: int) -> Iterator[None]:
             numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
         from threadpoolctl import threadpool_limits
 
-        from .solvers.pardiso import pardiso_available
-
-        pardiso_available()  # loads MKL now, so that the limit covers it (threadpoolctl sees loaded libraries only)
+        try:
+            from .solvers.pardiso import pardiso_available
+        except ImportError:  # no PARDISO binding in this installation: no MKL to load
+            pass
+        else:
+            pardiso_available()  # loads MKL now, so that the limit covers it (threadpoolctl sees loaded libraries)
         with threadpool_limits(limits=threads):
             yield
     finally:

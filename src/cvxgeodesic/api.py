@@ -1,154 +1,36 @@
-"""Public entry points: :class:`GeodesicSolver` (stateful) and :func:`geodesic_distance` (one shot)."""
+"""Public entry points: :class:`GeodesicSolver` (stateful) and :func:`geodesic_distance` (one shot).
+
+:class:`GeodesicSolver` is a façade: it validates its arguments once, builds the solve strategy that fits
+them (:mod:`cvxgeodesic.strategies`: direct, baseline, coarse-to-fine, order 2) and delegates every solve
+to it. The result types live in :mod:`cvxgeodesic.results` and are re-exported here.
+"""
 
 from __future__ import annotations
 
-import math
-import numbers
 import time
-import warnings
 from collections.abc import Callable, Iterable
-from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ._threads import limited
-from .errors import ParameterError, SolverError, SourceError
-from .formulations import (
-    ALIASES,
-    FORMULATIONS,
-    MeshOperators,
-    build_problem,
-    canonical_method,
-    check_normalization,
-    smoothness_weight,
-    validate_sources,
-)
-from .mesh.trimesh import TriMesh, as_trimesh
+from .baselines import BASELINES
+from .errors import ParameterError, SourceError
+from .formulations import ALIASES, FORMULATIONS, NORMALIZATIONS, canonical_method, smoothness_weight
+from .mesh.io import as_trimesh
+from .mesh.trimesh import TriMesh
+from .results import GeodesicResult, SolveInfo
+from .strategies import SolveConfig, SolveStrategy, make_strategy, resolve_target
+from .validation import check_choice, check_count, check_number, validate_sources
 
-BASELINE_METHODS = ("dijkstra", "fmm", "heat", "exact")
+__all__ = ["ALL_METHODS", "BASELINE_METHODS", "DEFAULT_TOL", "GeodesicResult", "GeodesicSolver", "SOLVERS",
+           "SolveInfo", "distance_matrix", "geodesic_distance"]
+
+BASELINE_METHODS = tuple(BASELINES)
 ALL_METHODS = (*FORMULATIONS, *ALIASES, *BASELINE_METHODS)
 SOLVERS = ("auto", "ipm", "clarabel")
 DEFAULT_TOL = 1e-8
-
-
-@dataclass
-class SolveInfo:
-    """What happened during one solve.
-
-    Attributes
-    ----------
-    method : str
-        Formulation or baseline name (aliases resolved).
-    solver : str
-        Backend that produced the field (``"ipm"``, ``"clarabel"`` or the library of a baseline).
-    status : str
-        ``"optimal"`` on success, or ``"almost_optimal"`` (only reduced tolerances
-        were met: Clarabel's ``AlmostSolved``, or an interior-point iterate within
-        100 × ``tol`` before rounding stopped the iterations);
-        ``"approximate"`` for an unpolished coarse-to-fine solve
-        (``GeodesicSolver(..., multires=...)``), whose field is *not* the
-        optimum on this mesh.
-    iterations : int
-        Interior-point iterations (0 for baselines).
-    setup_time : float
-        Seconds spent on per-mesh precomputation, paid once per solver object
-        (operators, energy matrices, symbolic factorization, baseline set-up).
-    solve_time : float
-        Seconds spent on this solve.
-    primal_residual, dual_residual, gap : float
-        Final relative residuals / duality gap (NaN for baselines).
-    objective : float
-        Optimal objective value (NaN for baselines).
-    lam : float
-        Smoothness weight λ used (0 for LP formulations and baselines).
-    n_unreachable : int
-        Vertices with no path to a source (their distance is ``inf``).
-    notes : list of str
-        One line per substitution or repair the library made for this result (degenerate
-        faces left out, another energy, a manifold cover, a Clarabel retry, the ``d ≥ 0``
-        re-solve, ...). Empty when the problem was solved exactly as asked.
-    extra : dict
-        Backend-specific details (timing breakdown, library parameters).
-    """
-
-    method: str
-    solver: str
-    status: str
-    iterations: int = 0
-    setup_time: float = 0.0
-    solve_time: float = 0.0
-    primal_residual: float = float("nan")
-    dual_residual: float = float("nan")
-    gap: float = float("nan")
-    objective: float = float("nan")
-    lam: float = 0.0
-    n_unreachable: int = 0
-    notes: list[str] = field(default_factory=list)
-    extra: dict = field(default_factory=dict)
-
-    @property
-    def total_time(self) -> float:
-        """``setup_time + solve_time`` in seconds."""
-        return self.setup_time + self.solve_time
-
-    def as_dict(self) -> dict:
-        """Plain-dict copy (with ``total_time``), e.g. for JSON or CSV."""
-        out = asdict(self)
-        out["total_time"] = self.total_time
-        return out
-
-
-@dataclass
-class GeodesicResult:
-    """Distance field plus the :class:`SolveInfo` of the solve that made it.
-
-    Attributes
-    ----------
-    distance : (n,) float ndarray
-        Distance of every vertex to the nearest source; ``inf`` where no source is reachable.
-    info : SolveInfo
-    sources : (k,) int64 ndarray
-        The source vertices (fixed at 0). With point, curve or boundary sources: the vertices among them
-        (points that lie on a vertex, boundary vertices), possibly none; the whole set is ``source_set``.
-    source_set : SourceSet or None
-        The normalized sources (:func:`cvxgeodesic.sources.resolve_sources`) when they were not all
-        vertices; ``None`` otherwise.
-    """
-
-    distance: np.ndarray
-    info: SolveInfo
-    sources: np.ndarray
-    source_set: Any = None
-
-    def __post_init__(self) -> None:
-        if self.source_set is not None:  # geodesic_path(mesh, result.distance, ...) then knows the sources
-            from .sources import remember_sources
-
-            remember_sources(self.distance, self.source_set)
-
-
-def _is_real(value) -> bool:
-    """True for Python and NumPy real numbers other than booleans."""
-    return isinstance(value, numbers.Real) and not isinstance(value, bool | np.bool_)
-
-
-def _unit_mesh(mesh: TriMesh) -> tuple[TriMesh, float]:
-    """The mesh divided by the power of two ``s`` that puts its bounding-box diagonal in [0.5, 1), and ``s``.
-
-    The convex formulations are solved on this copy and the field is multiplied by ``s``:
-    the backends' absolute tolerances then mean the same thing on a mesh of any size
-    (without it a 1e-6-sized mesh lost three digits), and since ``s`` is a power of two
-    the division is exact, so ``d(2^k V) = 2^k d(V)`` to the last bit.
-    """
-    diag = mesh.bbox_diagonal
-    if not (np.isfinite(diag) and diag > 0):
-        return mesh, 1.0
-    scale = math.ldexp(1.0, math.frexp(diag)[1])
-    if scale == 1.0:
-        return mesh, 1.0
-    return TriMesh(mesh.V / scale, mesh.F, vertex_map=mesh.vertex_map, name=mesh.name), scale
 
 
 def _is_2d(x: Any) -> bool:
@@ -161,21 +43,13 @@ def _is_2d(x: Any) -> bool:
         return False
 
 
-def _ipm_available() -> bool:
-    try:
-        from .solvers import ipm  # noqa: F401
-    except ImportError:
-        return False
-    return True
-
-
 class GeodesicSolver:
     """Geodesic distances on one mesh, with per-mesh work done once.
 
     Parameters
     ----------
     mesh : TriMesh, tuple (V, F), file path, trimesh.Trimesh, open3d TriangleMesh or meshio.Mesh
-        ``V`` (n, 3) float, ``F`` (m, 3) int (see :func:`~cvxgeodesic.mesh.trimesh.as_trimesh`).
+        ``V`` (n, 3) float, ``F`` (m, 3) int (see :func:`~cvxgeodesic.mesh.io.as_trimesh`).
     method : str
         One of :data:`ALL_METHODS`: the eight convex formulations
         (``"lclp"``, ``"lcqp-dirichlet"``, ``"lcqp-laplacian"``, ``"lcqp-hessian"``
@@ -213,7 +87,7 @@ class GeodesicSolver:
         solved directly). Every solve then runs on the coarse mesh (sources
         mapped to the nearest coarse vertex, same ``m``) and the field is moved
         to this mesh by closest-point barycentric interpolation
-        (:mod:`cvxgeodesic.multires`). **Without** ``multires_polish`` the result
+        (:mod:`cvxgeodesic.strategies.coarse_to_fine`). **Without** ``multires_polish`` the result
         is an approximation of this mesh's optimum, reported with
         ``info.status == "approximate"``: it is the optimum of a coarser mesh.
         Measured against the direct solve at 1/4 of the faces, source vertex 0:
@@ -304,6 +178,38 @@ class GeodesicSolver:
     ) -> None:
         t0 = time.perf_counter()
         self.mesh: TriMesh = as_trimesh(mesh)
+        self._check_method_and_solver(method, solver)
+        self.tol = check_number(tol, "tol", low=0, high=1, low_open=True, high_open=True)
+        self.max_iter = check_count(max_iter, "max_iter")
+        self.verbose = bool(verbose)
+        self.normalization = check_choice(normalization, "normalization", NORMALIZATIONS)
+        if isinstance(order, bool) or order not in (1, 2):
+            raise ParameterError(f"order must be 1 (P1 distance) or 2 (P2 squared distance), got {order!r}")
+        self.order = int(order)
+        self.energy: str | None = None
+        self.m: float | None = None
+        target = None
+        if self.order == 2:  # P2 elements for d² (cvxgeodesic.elements_p2): its own program and solvers
+            if self.is_baseline or multires:
+                raise ParameterError("order=2 applies to the convex formulations without multires")
+            self.lam = 0.0
+        else:
+            self._set_smoothness(m, lam)
+            target = resolve_target(multires, self.mesh.n_faces)
+            if target is not None and self.is_baseline:
+                raise ParameterError(f"multires applies to the convex formulations, not to baseline {self.method!r}")
+        config = SolveConfig(mesh=self.mesh, method=self.method, lam=self.lam, m=self.m,
+                             normalization=self.normalization, solver=self._solver, tol=self.tol,
+                             max_iter=self.max_iter, verbose=self.verbose,
+                             notes=tuple(getattr(self.mesh, "notes", ())))
+        self._strategy: SolveStrategy = make_strategy(config, baseline=self.is_baseline, order=self.order,
+                                                      multires_target=target, polish=bool(multires_polish))
+        self.solver_name = self._strategy.backend
+        # substitutions made for every solve of this object (copied into SolveInfo): the loader's repairs first
+        self.notes: list[str] = self._strategy.notes
+        self.setup_time = time.perf_counter() - t0
+
+    def _check_method_and_solver(self, method: Any, solver: Any) -> None:
         if not isinstance(method, str):
             raise ParameterError(f"method must be a string, got {type(method).__name__}")
         key = method.lower()
@@ -313,96 +219,24 @@ class GeodesicSolver:
             raise ParameterError(f"unknown method {method!r}; choose one of {', '.join(ALL_METHODS)}")
         else:
             self.method = canonical_method(method)
-        if not isinstance(solver, str) or solver.lower() not in SOLVERS:
-            raise ParameterError(f"unknown solver {solver!r}; choose one of {', '.join(SOLVERS)}")
-        solver = solver.lower()
+        self._solver = check_choice(solver, "solver", SOLVERS)
         self.is_baseline = self.method in BASELINE_METHODS
-        if self.is_baseline and solver not in ("auto",):
+        if self.is_baseline and self._solver != "auto":
             raise ParameterError(
-                f"solver={solver!r} applies to the convex formulations, not to baseline {self.method!r}"
+                f"solver={self._solver!r} applies to the convex formulations, not to baseline {self.method!r}"
             )
-        if not (_is_real(tol) and 0 < tol < 1):
-            raise ParameterError(f"tol must be a number in (0, 1), got {tol!r}")
-        if isinstance(max_iter, bool) or not isinstance(max_iter, int | np.integer) or max_iter < 1:
-            raise ParameterError(f"max_iter must be a positive integer, got {max_iter!r}")
-        self.tol, self.max_iter, self.verbose = float(tol), int(max_iter), bool(verbose)
-        self.normalization = check_normalization(normalization)
-        # substitutions made for every solve of this object (copied into SolveInfo): the loader's repairs first
-        self.notes: list[str] = list(getattr(self.mesh, "notes", ()))
-        if isinstance(order, bool) or order not in (1, 2):
-            raise ParameterError(f"order must be 1 (P1 distance) or 2 (P2 squared distance), got {order!r}")
-        self.order = int(order)
-        self._order2 = None
-        if self.order == 2:  # P2 elements for d² (cvxgeodesic.elements_p2): its own program and solvers
-            if self.is_baseline or multires:
-                raise ParameterError("order=2 applies to the convex formulations without multires")
-            from .elements_p2 import Order2Strategy
 
-            self.lam = 0.0
-            self.m = None
-            self.energy = None
-            self._order2 = Order2Strategy(self, solver)
-            self.solver_name = self._order2.backend
-            self.setup_time = time.perf_counter() - t0
-            return
-
-        self.energy = None if self.method in BASELINE_METHODS else FORMULATIONS[self.method][1]
+    def _set_smoothness(self, m: Any, lam: Any) -> None:
+        """``self.lam`` (λ in the mesh's units), ``self.m`` and ``self.energy`` from ``m`` or ``lam``."""
+        self.energy = None if self.is_baseline else FORMULATIONS[self.method][1]
         if lam is not None:
-            if not _is_real(lam) or not np.isfinite(lam) or lam < 0:
-                raise ParameterError(f"lam must be a finite number >= 0, got {lam!r}")
-            self.lam = float(lam)
+            self.lam = check_number(lam, "lam", low=0)
         else:
-            if not _is_real(m) or not np.isfinite(m) or m < 0:
-                raise ParameterError(f"m must be a finite number >= 0, got {m!r}")
+            check_number(m, "m", low=0)
             self.lam = smoothness_weight(self.mesh, m, self.normalization, self.energy or "hessian")
         self.m = None if lam is not None else float(m)
-
-        self._baseline: Any = None
-        self._ops: Any = None
-        self._ipm: Any = None
-        self._scale = 1.0  # the convex formulations are solved on the mesh divided by this power of two
-        self._multires = None
-        from .multires import resolve_target
-
-        mr_target = resolve_target(multires, self.mesh.n_faces)
-        if mr_target is not None and self.is_baseline:
-            raise ParameterError(f"multires applies to the convex formulations, not to baseline {self.method!r}")
-        self._multires_skipped = mr_target is not None and mr_target >= self.mesh.n_faces
-        if self._multires_skipped:
-            mr_target = None
-        if self.is_baseline:
-            from .baselines import BASELINES
-
-            self._baseline = BASELINES[self.method](self.mesh)
-            self.solver_name = self.method
-        else:
-            if self.energy is None:
-                self.lam = 0.0
-            if mr_target is not None:
-                from .multires import CoarseToFine
-
-                self._multires = CoarseToFine(self, mr_target, solver, multires_polish)
-                self.solver_name = self._multires.coarse.solver_name
-            if self._multires is None or self._multires.polish:  # the fine mesh's own operators and solver
-                unit_mesh, self._scale = _unit_mesh(self.mesh)
-                self._ops = MeshOperators(unit_mesh)
-                self._ops.notes[0:0] = self.notes
-                self.notes = self._ops.notes  # the operators add their substitutions as they build
-                if self.energy is not None:
-                    self._ops.energy(self.energy)  # builds it now (PSD check, manifold cover)
-                self.solver_name = ("ipm" if _ipm_available() else "clarabel") if solver == "auto" else solver
-                self._fallback_to_clarabel = solver == "auto"
-                if self.solver_name == "ipm":
-                    if not _ipm_available():
-                        raise ParameterError("solver='ipm' is not available in this installation")
-                    from .solvers.ipm import InteriorPointSolver
-                    from .solvers.problem import kkt_pattern
-
-                    P = self._ops.energy(self.energy) if self.energy is not None else None
-                    self._ipm = InteriorPointSolver(
-                        kkt_pattern(self.mesh.n_vertices, self.mesh.F, self.mesh.edges, P))
-                _ = self._ops.gradient_blocks
-        self.setup_time = time.perf_counter() - t0
+        if self.energy is None and not self.is_baseline:
+            self.lam = 0.0
 
     def __repr__(self) -> str:
         return (
@@ -439,128 +273,9 @@ class GeodesicSolver:
             The backend did not reach an optimal solution (for the Hessian energy the
             message adds that it can be indefinite on meshes with sharp corners).
         """
-        if self._order2 is not None:
-            return self._order2.solve(sources, callback=callback)
-        from .sources import resolve_sources
-
-        sset = resolve_sources(self.mesh, sources)
-        src = sset.vertices if sset.vertex_only else sset
-        t0 = time.perf_counter()
-        if self.is_baseline and not sset.vertex_only:
-            from .baselines.points import solve_baseline_sources
-
-            d, binfo = solve_baseline_sources(self._baseline, sset)
-            info = SolveInfo(method=self.method, solver=str(binfo.pop("solver")), status="optimal",
-                             setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
-                             n_unreachable=int(np.isinf(d).sum()), notes=list(self.notes), extra=binfo)
-            return GeodesicResult(distance=d, info=info, sources=sset.vertices, source_set=sset)
-        if self.is_baseline:
-            src = sset.vertices
-            if len(src) > 1 and not self._baseline.supports_multiple_sources:
-                raise SourceError(f"method {self.method!r} supports a single source only")
-            d, binfo = self._baseline.solve(src)
-            d = np.asarray(d, dtype=float)
-            info = SolveInfo(
-                method=self.method, solver=str(binfo.get("solver", self.method)), status=binfo.get("status", "optimal"),
-                iterations=int(binfo.get("iterations", 0)), setup_time=self.setup_time,
-                solve_time=time.perf_counter() - t0, n_unreachable=int(np.isinf(d).sum()), notes=list(self.notes),
-                extra={k: v for k, v in binfo.items() if k not in ("solver", "status", "iterations")},
-            )
-            return GeodesicResult(distance=d, info=info, sources=src)
-
-        if self._multires is not None:
-            if not sset.vertex_only:
-                raise SourceError("multires takes vertex sources only; solve point, curve and boundary sources "
-                                  "without multires")
-            return self._multires.solve(self, sset.vertices, callback=callback)
-        res = self._solve_direct(src, t0, callback)
-        if self._multires_skipped:
-            res.info.extra["multires"] = {"coarse_faces": self.mesh.n_faces, "polished": True,
-                                          "skipped": "the mesh has no more faces than the multires target"}
+        res = self._strategy.solve(sources, callback=callback)
+        res.info.setup_time = self.setup_time
         return res
-
-    def _run_backend(self, problem, callback=None, notes=None):
-        """Solve ``problem`` with the chosen backend; under ``solver="auto"`` Clarabel retries a failed or
-        ``almost_optimal`` IPM solve."""
-        from .solvers import solve_clarabel
-
-        try:
-            if self.solver_name != "ipm":
-                return solve_clarabel(problem, tol=self.tol, max_iter=self.max_iter, verbose=self.verbose)
-            if self.verbose:
-                from ._verbose import ipm_log
-
-                callback = ipm_log(callback)
-            try:
-                res = self._ipm.solve(problem, tol=self.tol, max_iter=self.max_iter, callback=callback)
-            except SolverError as exc:
-                if not self._fallback_to_clarabel or exc.status in ("primal_infeasible", "dual_infeasible"):
-                    raise
-                return self._clarabel_retry(problem, exc.status, notes)
-            if res.status == "optimal" or not self._fallback_to_clarabel:
-                return res
-            try:  # "almost_optimal": Clarabel may reach the full accuracy; else keep the IPM's best iterate
-                return self._clarabel_retry(problem, res.status, notes)
-            except SolverError:
-                if notes is not None:
-                    notes.append("Clarabel failed too; kept the interior-point solver's almost optimal iterate")
-                return res
-        except SolverError as exc:
-            if self.energy != "hessian" or problem.P is None:
-                raise
-            # measured on Thingi10K CAD meshes: libigl's curved Hessian energy has negative eigenvalues where
-            # the angle defect is large (sharp corners), and the problem is then not convex
-            msg = str(exc).rsplit(" (solver=", 1)[0]
-            raise SolverError(
-                f"{msg} on {self.mesh.name}; the curved Hessian energy can be indefinite on meshes with sharp "
-                f"corners, which makes {self.method!r} non-convex: try 'qcqp-laplacian' or 'qclp'",
-                solver=exc.solver, status=exc.status, info=exc.info,
-            ) from exc
-
-    def _clarabel_retry(self, problem, ipm_status: str, notes=None):
-        from .solvers import solve_clarabel
-
-        message = (f"the interior-point solver stopped with status {ipm_status!r} on {self.mesh.name}; "
-                   "solving with Clarabel instead")
-        warnings.warn(message, RuntimeWarning, stacklevel=5)
-        if notes is not None:
-            notes.append(message)
-        res = solve_clarabel(problem, tol=self.tol, max_iter=self.max_iter, verbose=self.verbose)
-        res.extra = dict(res.extra, ipm_failure=ipm_status)
-        return res
-
-    def _solve_direct(self, src: Any, t0: float, callback=None) -> GeodesicResult:
-        """Solve the formulation on this mesh (no multires); ``t0`` starts the solve clock."""
-        # on the mesh scaled by 1/s, the field d/s minimizes (objective)/s when lambda becomes lambda/s
-        stretch = "area" if self.normalization == "area" else "calibrated"
-        problem = build_problem(self._ops, src, self.method, self.lam / self._scale, stretch=stretch)
-        notes = list(self.notes)
-        res = self._run_backend(problem, callback, notes)
-        negative_min = np.min(res.x[~problem.fixed_mask], initial=0.0)
-        if negative_min < -1e-9 * self.mesh.bbox_diagonal / self._scale:
-            # folded meshes (and strongly smoothed coarse fields) can trade a few negative values for a larger sum;
-            # the bounds d >= 0 fix that but slow ordinary solves down, so they are added only when needed
-            extra = dict(res.extra, negative_min=float(np.min(res.x)), resolved_nonnegative=True)
-            notes.append(f"the optimum had negative distances (down to {negative_min * self._scale:.3g}); "
-                         "re-solved with the bounds d >= 0")
-            problem = build_problem(self._ops, src, self.method, self.lam / self._scale, stretch=stretch,
-                                    nonnegative=True)
-            res = self._run_backend(problem, callback, notes)
-            res.extra = {**extra, **res.extra}
-        d = np.array(res.x, dtype=float) * self._scale
-        d[problem.unreachable] = np.inf
-        vertices = src if isinstance(src, np.ndarray) else src.vertices
-        d[vertices] = 0.0
-        info = SolveInfo(
-            method=self.method, solver=res.solver, status=res.status, iterations=res.iterations,
-            setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
-            primal_residual=res.primal_residual, dual_residual=res.dual_residual, gap=res.gap,
-            objective=res.objective / problem.objective_scale * self._scale, lam=self.lam,
-            n_unreachable=int(problem.unreachable.sum()),
-            notes=notes, extra=res.extra,
-        )
-        return GeodesicResult(distance=d, info=info, sources=vertices,
-                              source_set=None if isinstance(src, np.ndarray) else src)
 
     def solve_many(self, sources_list: Iterable[Any], *, progress: bool = False) -> list[GeodesicResult]:
         """Solve for each entry of ``sources_list`` (each anything :meth:`solve` takes), reusing all per-mesh work.
@@ -601,7 +316,7 @@ def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | 
     Parameters
     ----------
     mesh : TriMesh, tuple (V, F), file path, trimesh.Trimesh, open3d TriangleMesh or meshio.Mesh
-        See :func:`~cvxgeodesic.mesh.trimesh.as_trimesh`; or ``V``, (n, 3) float vertex
+        See :func:`~cvxgeodesic.mesh.io.as_trimesh`; or ``V``, (n, 3) float vertex
         positions, followed by ``F``, (m, 3) int triangles.
     sources : int or sequence of int
         Source vertex indices (positional after the mesh, or keyword), or surface sources.

@@ -43,6 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ParameterError
+from .validation import check_choice, check_count, check_number
 
 __all__ = ["OUTPUT_FORMATS", "expand_mesh_paths", "format_summary", "output_paths", "run_batch", "solve_one"]
 
@@ -315,25 +316,21 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
         Dask's ``distributed`` is not installed.
     """
     from .api import ALL_METHODS, BASELINE_METHODS, SOLVERS
-    from .multires import resolve_target
+    from .strategies import resolve_target
 
     paths = [Path(p).expanduser().resolve() for p in ([paths] if isinstance(paths, str | os.PathLike) else paths)]
     paths = list(dict.fromkeys(paths))
     if not paths:
         raise ParameterError("no mesh files given")
     sources_list = _source_spec(sources)
-    if not isinstance(method, str) or method.lower() not in ALL_METHODS:
-        raise ParameterError(f"unknown method {method!r}; choose one of {', '.join(ALL_METHODS)}")
-    if solver not in SOLVERS:
-        raise ParameterError(f"unknown solver {solver!r}; choose one of {', '.join(SOLVERS)}")
-    if not isinstance(m, int | float) or not math.isfinite(m) or m < 0:
-        raise ParameterError(f"m must be a finite number >= 0, got {m!r}")
-    if resolve_target(multires, 10**9) is not None and method.lower() in BASELINE_METHODS:
+    method = check_choice(method, "method", ALL_METHODS)
+    check_choice(solver, "solver", SOLVERS, lower=False)
+    check_number(m, "m", low=0)
+    if resolve_target(multires, 10**9) is not None and method in BASELINE_METHODS:
         raise ParameterError(f"multires applies to the convex formulations, not to baseline {method!r}")
-    if output_format not in OUTPUT_FORMATS:
-        raise ParameterError(f"output_format must be one of {', '.join(OUTPUT_FORMATS)}, got {output_format!r}")
-    if scheduler is None and (isinstance(n_workers, bool) or not isinstance(n_workers, int) or n_workers < 1):
-        raise ParameterError(f"n_workers must be a positive integer, got {n_workers!r}")
+    check_choice(output_format, "output_format", OUTPUT_FORMATS, lower=False)
+    if scheduler is None:
+        check_count(n_workers, "n_workers")
     stems: dict[str, Path] = {}
     for p in paths:
         if p.stem in stems:
@@ -344,7 +341,6 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
     if out.exists() and not out.is_dir():
         raise ParameterError(f"--out {out} exists and is not a directory")
     out.mkdir(parents=True, exist_ok=True)
-    method = method.lower()
     params = _params(sources_list, method, m, solver, multires, output_format)
 
     rows: dict[Path, dict] = {}

@@ -203,7 +203,7 @@ def run_compare(mesh, sources, methods, out_dir, *, m=1.0, solver="auto", progre
     under both names.
     """
     from .api import SOLVERS
-    from .mesh.trimesh import as_trimesh
+    from .mesh.io import as_trimesh
     from .sources import resolve_sources
 
     mesh = as_trimesh(mesh)

@@ -949,7 +949,7 @@ class Order2Strategy:
     def __init__(self, solver, backend: str = "auto", *, samples: str = "nodes", weights: str | None = None,
                  refine: int = 4):
         weights = DEFAULT_WEIGHTS if weights is None else weights
-        from .api import _unit_mesh
+        from .mesh.trimesh import unit_mesh as _unit_mesh
 
         if solver.method not in ORDER2_METHODS:
             raise ParameterError(
@@ -999,7 +999,7 @@ class Order2Strategy:
         return res
 
     def solve(self, sources, callback=None):
-        from .api import GeodesicResult, SolveInfo
+        from .results import GeodesicResult, SolveInfo
 
         t0 = time.perf_counter()
         own = self.owner

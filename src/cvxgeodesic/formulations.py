@@ -53,11 +53,12 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from .errors import DegenerateFacesWarning, MeshError, ParameterError, SourceError
+from .errors import DegenerateFacesWarning, MeshError, ParameterError
 from .mesh.trimesh import DEGENERATE_TOL, TriMesh
 from .operators import energy_matrix, gradient_blocks
 from .solvers.problem import ConicProblem
 from .sources import source_constraints
+from .validation import check_choice, check_number
 
 FORMULATIONS: dict[str, tuple[str, str | None]] = {
     "lclp": ("lc", None),
@@ -121,9 +122,8 @@ def stretch_weights(mesh: TriMesh, stretch: str = "area") -> np.ndarray:
         floor = MIN_STRETCH_WEIGHT * total / max(int(mesh.referenced.sum()), 1)
         mass = np.where(mesh.referenced, np.maximum(mass, floor), 0.0)
         return mass / mass.sum()
-    scale = {"calibrated": STRETCH_SCALE / n, "mean": 1.0 / n, "sum": 1.0}.get(stretch)
-    if scale is None:
-        raise ParameterError(f"stretch must be one of {', '.join(STRETCH_WEIGHTS)}, got {stretch!r}")
+    check_choice(stretch, "stretch", STRETCH_WEIGHTS, lower=False)
+    scale = {"calibrated": STRETCH_SCALE / n, "mean": 1.0 / n, "sum": 1.0}[stretch]
     return np.full(n, scale)
 
 
@@ -139,9 +139,7 @@ def canonical_method(method: str) -> str:
 
 def check_normalization(normalization) -> str:
     """Validated name of a normalization of ``m`` (see :data:`NORMALIZATIONS`)."""
-    if not isinstance(normalization, str) or normalization.lower() not in NORMALIZATIONS:
-        raise ParameterError(f"normalization must be one of {', '.join(NORMALIZATIONS)}, got {normalization!r}")
-    return normalization.lower()
+    return check_choice(normalization, "normalization", NORMALIZATIONS)
 
 
 def smoothness_weight(mesh: TriMesh, m: float, normalization: str = "area", energy: str = "hessian") -> float:
@@ -176,72 +174,8 @@ def smoothness_weight(mesh: TriMesh, m: float, normalization: str = "area", ener
     normalization = check_normalization(normalization)
     if normalization == "paper":
         return float(m) * 100.0 * mesh.mean_edge_length / mesh.n_vertices
-    if energy not in KAPPA:
-        raise ParameterError(f"energy must be one of {', '.join(KAPPA)}, got {energy!r}")
+    check_choice(energy, "energy", KAPPA, lower=False)
     return float(m) * KAPPA[energy] * float(np.sqrt(mesh.face_areas.sum()))
-
-
-def _short(value, limit: int = 60) -> str:
-    """``repr(value)``, cut to ``limit`` characters for error messages."""
-    r = repr(value)
-    return r if len(r) <= limit else r[: limit - 3] + "..."
-
-
-def validate_sources(sources, n: int) -> np.ndarray:
-    """Check and normalize source vertex indices.
-
-    Parameters
-    ----------
-    sources : int or sequence of int
-        Python or NumPy integers; floats with an integral value are accepted, booleans
-        (including NumPy bool arrays) are not.
-    n : int
-        Number of vertices.
-
-    Returns
-    -------
-    (k,) int64 ndarray
-        The indices, in the given order.
-
-    Raises
-    ------
-    SourceError
-        Empty, ragged, nested, non-integer (bool, float with a fraction, NaN, string,
-        ``None``), negative, out-of-range or duplicated indices.
-    """
-    if isinstance(sources, bool | np.bool_):
-        raise SourceError(f"sources must be vertex indices, got {sources!r}")
-    try:
-        arr = np.atleast_1d(np.asarray(sources))
-    except (ValueError, TypeError, OverflowError):  # ragged nesting and the like
-        raise SourceError(f"sources must be an int or a 1-D sequence of ints, got {_short(sources)}") from None
-    if arr.ndim != 1:
-        raise SourceError(f"sources must be an int or a 1-D sequence of ints, got shape {arr.shape}")
-    if arr.size == 0:
-        raise SourceError("sources is empty: give at least one source vertex")
-    if arr.dtype == object and all(isinstance(v, int) and not isinstance(v, bool) for v in arr):
-        # Python ints too large for int64
-        big = next(v for v in arr if not -(2**63) <= v < 2**63)
-        raise SourceError(f"source index {big} is out of range: the mesh has {n} vertices (0..{n - 1})")
-    if arr.dtype.kind == "f" and np.all(np.isfinite(arr)) and np.all(arr == np.round(arr)):
-        big = np.abs(arr) >= 2.0**62
-        if big.any():
-            raise SourceError(
-                f"source index {arr[big][0]:g} is out of range: the mesh has {n} vertices (0..{n - 1})"
-            )
-        arr = arr.astype(np.int64)
-    if arr.dtype.kind not in "iu":
-        raise SourceError(f"sources must be integer vertex indices, got {_short(sources)}")
-    if arr.dtype.kind == "u" and arr.max() >= 2**63:
-        raise SourceError(f"source index {int(arr.max())} is out of range: the mesh has {n} vertices (0..{n - 1})")
-    arr = arr.astype(np.int64)
-    bad = (arr < 0) | (arr >= n)
-    if bad.any():
-        raise SourceError(f"source index {int(arr[bad][0])} is out of range: the mesh has {n} vertices (0..{n - 1})")
-    uniq, counts = np.unique(arr, return_counts=True)
-    if (counts > 1).any():
-        raise SourceError(f"source vertex {int(uniq[counts > 1][0])} is given more than once")
-    return arr
 
 
 @dataclass
@@ -293,8 +227,7 @@ class MeshOperators:
         self.notes: list[str] = []
         mesh = self.mesh
         tol = self.degenerate_tol
-        if isinstance(tol, bool) or not isinstance(tol, int | float | np.floating) or not 0 <= tol < 1:
-            raise ParameterError(f"degenerate_tol must be a number in [0, 1), got {tol!r}")
+        check_number(tol, "degenerate_tol", low=0, high=1, high_open=True)
         self.degenerate = np.zeros(mesh.n_faces, dtype=bool)
         self.degenerate[mesh.degenerate_faces(tol)] = True
         n_bad = int(self.degenerate.sum())
@@ -400,7 +333,8 @@ def build_problem(
     if not np.isfinite(lam) or lam < 0:
         raise ParameterError(f"smoothness weight lambda must be finite and >= 0, got {lam}")
 
-    sc = source_constraints(ops, sources)  # fixed vertices, cone-free faces and source bounds (sources.py)
+    # fixed vertices, cone-free faces and source bounds (sources.py)
+    sc = source_constraints(ops, sources, min_edge_bound=MIN_EDGE_BOUND)
     unreachable = ~(mesh.connected_to(sc.anchors) & mesh.referenced)
     fixed_mask = unreachable.copy()
     fixed_mask[sc.fixed] = True

@@ -31,8 +31,10 @@ import scipy.sparse as sp
 from numpy.typing import ArrayLike
 
 from .errors import ParameterError, SolverError, SourceError
-from .mesh.trimesh import TriMesh, as_trimesh
+from .mesh.io import as_trimesh
+from .mesh.trimesh import TriMesh
 from .sources import BARY_SNAP, SourceSet, SurfacePoint, _barycentric, _incident_faces, resolve_sources
+from .validation import as_vertex_field, check_count
 
 
 def _field(mesh: TriMesh, distance) -> tuple[np.ndarray, object]:
@@ -40,16 +42,7 @@ def _field(mesh: TriMesh, distance) -> tuple[np.ndarray, object]:
     result = None
     if hasattr(distance, "distance") and hasattr(distance, "info"):
         result, distance = distance, distance.distance
-    try:
-        d = np.asarray(distance, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise ParameterError(
-            f"distance must be an (n,) array of vertex values, got {type(distance).__name__}") from None
-    if d.shape != (mesh.n_vertices,):
-        raise ParameterError(f"distance has {d.size} values but the mesh has {mesh.n_vertices} vertices")
-    if np.isnan(d).any():
-        raise ParameterError(f"distance has NaN values (first at vertex {int(np.flatnonzero(np.isnan(d))[0])})")
-    return d, result
+    return as_vertex_field(distance, "distance", mesh.n_vertices, nan_ok=False), result
 
 
 def _as_points(mesh: TriMesh, points) -> tuple[list[SurfacePoint], bool]:
@@ -234,13 +227,37 @@ def geodesic_path(mesh: Any, distance: ArrayLike, target: Any, *, sources: Any =
     """
     mesh = as_trimesh(mesh)
     d, result = _field(mesh, distance)
+    ss, src_v = _path_sources(mesh, d, distance, result, sources)
+    if (result is not None and getattr(result.info, "method", None) == "exact" and ss is not None
+            and not ss.segment_faces.size and _exact_target(mesh, target) and mesh.is_edge_manifold
+            and mesh.referenced.all() and np.unique(mesh.component_labels).size == 1):
+        return _exact_path(mesh, ss, target, return_surface_points)
+    geo = _Geometry(mesh)
+    if max_steps is None:
+        max_steps = 3 * mesh.n_faces + 10
+    check_count(max_steps, "max_steps")
+    walk = _Descent(mesh, geo, d, src_v, _source_targets(mesh, ss))
+    state = walk.start(target)
+    for _ in range(max_steps):
+        state = walk.from_vertex(state[1]) if state[0] == "v" else walk.from_face(state[1], state[2])
+        if state is None:
+            break
+    else:
+        raise SolverError(f"geodesic_path: no source reached within max_steps={max_steps} steps",
+                          solver="geodesic_path", status="max_steps")
+    return _finish_path(mesh, geo, walk.nodes, straighten, return_surface_points)
+
+
+def _path_sources(mesh: TriMesh, d: np.ndarray, distance: Any, result: Any,
+                  sources: Any) -> tuple[SourceSet | None, np.ndarray]:
+    """The field's source set (None when unknown) and the (n,) bool mask of its source vertices."""
     ss = None
     if sources is not None:
         ss = resolve_sources(mesh, sources)
     elif result is not None:
         ss = result.source_set if result.source_set is not None else resolve_sources(mesh, result.sources)
     else:
-        from .sources import remembered_sources
+        from .results import remembered_sources
 
         ss = remembered_sources(distance)  # an array returned by geodesic_distance from surface sources
     if ss is not None:
@@ -250,117 +267,114 @@ def geodesic_path(mesh: Any, distance: ArrayLike, target: Any, *, sources: Any =
         finite = d[np.isfinite(d)]
         zero = (finite.min() if finite.size else 0.0) + 1e-12 * mesh.bbox_diagonal
         src_v = d <= zero
-    if (result is not None and getattr(result.info, "method", None) == "exact" and ss is not None
-            and not ss.segment_faces.size and _exact_target(mesh, target) and mesh.is_edge_manifold
-            and mesh.referenced.all() and np.unique(mesh.component_labels).size == 1):
-        return _exact_path(mesh, ss, target, return_surface_points)
-    geo = _Geometry(mesh)
-    per_face = _source_targets(mesh, ss)
-    V, F = geo.V, geo.F
-    tol = 1e-12 * mesh.bbox_diagonal
-    if max_steps is None:
-        max_steps = 3 * mesh.n_faces + 10
-    if isinstance(max_steps, bool) or not isinstance(max_steps, numbers.Integral) or max_steps < 1:
-        raise ParameterError(f"max_steps must be a positive integer, got {max_steps!r}")
+    return ss, src_v
 
-    with np.errstate(invalid="ignore"):
-        grad = np.einsum("fkj,fk->fj", geo.H, d[F])  # (m, 3) gradient of the field in each face
-    grad[~geo.ok] = np.nan
 
-    # nodes: ("v", vertex) | ("e", a, c, face_in, face_out, position) | ("p", face, position)
-    nodes: list[tuple] = []
-    if isinstance(target, SurfacePoint):
-        if target.face >= mesh.n_faces:
-            raise SourceError(f"target {target!r}: face index {target.face} is out of range: the mesh has "
-                              f"{mesh.n_faces} faces")
-        b = target.bary
-        k = int(np.argmax(b))
-        if b[k] >= 1 - BARY_SNAP:
-            state = ("v", int(F[target.face, k]))
-            nodes.append(state)
+class _Descent:
+    """The steepest-descent walk of :func:`geodesic_path`: a state ``("v", vertex)`` or ``("f", face, bary)``.
+
+    ``nodes`` collects the path: ``("v", vertex) | ("e", a, c, face_in, face_out, position) | ("p", face,
+    position)``. Each step appends what it crossed and returns the next state, or None at a source.
+    """
+
+    def __init__(self, mesh: TriMesh, geo: _Geometry, d: np.ndarray, src_v: np.ndarray, per_face: dict) -> None:
+        self.mesh, self.geo, self.d, self.src_v, self.per_face = mesh, geo, d, src_v, per_face
+        self.tol = 1e-12 * mesh.bbox_diagonal
+        with np.errstate(invalid="ignore"):
+            grad = np.einsum("fkj,fk->fj", geo.H, d[geo.F])  # (m, 3) gradient of the field in each face
+        grad[~geo.ok] = np.nan
+        self.grad = grad
+        self.nodes: list[tuple] = []
+
+    def start(self, target: Any) -> tuple:
+        """The first state, from a vertex index or a SurfacePoint (validated)."""
+        mesh, F, V = self.mesh, self.geo.F, self.geo.V
+        if isinstance(target, SurfacePoint):
+            if target.face >= mesh.n_faces:
+                raise SourceError(f"target {target!r}: face index {target.face} is out of range: the mesh has "
+                                  f"{mesh.n_faces} faces")
+            b = target.bary
+            k = int(np.argmax(b))
+            if b[k] >= 1 - BARY_SNAP:
+                state: tuple = ("v", int(F[target.face, k]))
+                self.nodes.append(state)
+            else:
+                self.nodes.append(("p", target.face, b @ V[F[target.face]]))
+                state = ("f", target.face, np.where(b <= BARY_SNAP, 0.0, b))
         else:
-            x = b @ V[F[target.face]]
-            nodes.append(("p", target.face, x))
-            state = ("f", target.face, np.where(b <= BARY_SNAP, 0.0, b))
-    else:
-        if isinstance(target, bool | np.bool_) or not isinstance(target, numbers.Integral):
-            raise SourceError(f"target must be a vertex index or a SurfacePoint, got {target!r}")
-        if not 0 <= int(target) < mesh.n_vertices:
-            raise SourceError(f"target vertex {int(target)} is out of range: the mesh has {mesh.n_vertices} vertices")
-        state = ("v", int(target))
-        nodes.append(state)
-    t_val = distance_at(mesh, d, SurfacePoint(*_locate(mesh, geo, nodes[0])))
-    if not np.isfinite(t_val):
-        raise ParameterError("the distance is infinite at the target: no source is reachable from it")
+            if isinstance(target, bool | np.bool_) or not isinstance(target, numbers.Integral):
+                raise SourceError(f"target must be a vertex index or a SurfacePoint, got {target!r}")
+            if not 0 <= int(target) < mesh.n_vertices:
+                raise SourceError(f"target vertex {int(target)} is out of range: the mesh has {mesh.n_vertices} "
+                                  "vertices")
+            state = ("v", int(target))
+            self.nodes.append(state)
+        t_val = distance_at(mesh, self.d, SurfacePoint(*_locate(mesh, self.geo, self.nodes[0])))
+        if not np.isfinite(t_val):
+            raise ParameterError("the distance is infinite at the target: no source is reachable from it")
+        return state
 
-    def finish_in_face(f: int, x: np.ndarray, dx: float) -> bool:
-        items = per_face.get(f)
+    def _finish_in_face(self, f: int, x: np.ndarray, dx: float) -> bool:
+        items = self.per_face.get(f)
         if not items:
             return False
         y, dist = _closest_on(x, items)
-        if dist > dx + 1e-9 * mesh.bbox_diagonal + 1e-6 * dx:
+        if dist > dx + 1e-9 * self.mesh.bbox_diagonal + 1e-6 * dx:
             return False  # another source is nearer: keep descending
-        nodes.append(("p", f, y))
+        self.nodes.append(("p", f, y))
         return True
 
-    for _ in range(max_steps):
-        if state[0] == "v":
-            v = state[1]
-            if src_v[v]:
-                break
-            fs = geo.faces_of_vertex(v)
-            done = False
-            for f in fs:
-                if finish_in_face(int(f), V[v], d[v]):
-                    done = True
-                    break
-            if done:
-                break
-            best, choice = 1e-14, None
-            for f in fs:
-                g = grad[f]
-                if not np.all(np.isfinite(g)):
-                    continue
-                rate = float(np.linalg.norm(g))
-                if rate <= best:
-                    continue
-                db = geo.H[f] @ (-g)
-                iv = int(np.flatnonzero(F[f] == v)[0])
-                others = [j for j in range(3) if j != iv]
-                if all(db[j] >= -1e-12 * np.abs(db).max() for j in others):
-                    best, choice = rate, ("f", int(f), np.eye(3)[iv])
-            nb = sp.csr_matrix(mesh.vertex_adjacency)[v]
-            for w, length in zip(nb.indices, nb.data, strict=True):
-                if length <= 0 or not np.isfinite(d[w]):
-                    continue
-                rate = (d[v] - d[w]) / length
-                if rate > best:
-                    best, choice = rate, ("v", int(w))
-            if choice is None and any(int(f) in per_face for f in fs):
-                # a smoothed field can sit below the straight distance next to its source: end there
-                ends = [(*_closest_on(V[v], per_face[int(f)]), int(f)) for f in fs if int(f) in per_face]
-                y, _, f_end = min(ends, key=lambda e: e[1])
-                nodes.append(("p", f_end, y))
-                break
-            if choice is None:
-                raise SolverError(f"geodesic_path: the field has a local minimum at vertex {v} (d = {d[v]:.6g}), "
-                                  "which is no source", solver="geodesic_path", status="local_minimum")
-            state = choice
-            if state[0] == "v":
-                nodes.append(state)
-            continue
+    def from_vertex(self, v: int) -> tuple | None:
+        """Step from vertex ``v``: into the steepest face or along the steepest edge."""
+        geo, d, F, V = self.geo, self.d, self.geo.F, self.geo.V
+        if self.src_v[v]:
+            return None
+        fs = geo.faces_of_vertex(v)
+        if any(self._finish_in_face(int(f), V[v], d[v]) for f in fs):
+            return None
+        best, choice = 1e-14, None
+        for f in fs:
+            g = self.grad[f]
+            if not np.all(np.isfinite(g)):
+                continue
+            rate = float(np.linalg.norm(g))
+            if rate <= best:
+                continue
+            db = geo.H[f] @ (-g)
+            iv = int(np.flatnonzero(F[f] == v)[0])
+            others = [j for j in range(3) if j != iv]
+            if all(db[j] >= -1e-12 * np.abs(db).max() for j in others):
+                best, choice = rate, ("f", int(f), np.eye(3)[iv])
+        nb = sp.csr_matrix(self.mesh.vertex_adjacency)[v]
+        for w, length in zip(nb.indices, nb.data, strict=True):
+            if length <= 0 or not np.isfinite(d[w]):
+                continue
+            rate = (d[v] - d[w]) / length
+            if rate > best:
+                best, choice = rate, ("v", int(w))
+        if choice is None and any(int(f) in self.per_face for f in fs):
+            # a smoothed field can sit below the straight distance next to its source: end there
+            ends = [(*_closest_on(V[v], self.per_face[int(f)]), int(f)) for f in fs if int(f) in self.per_face]
+            y, _, f_end = min(ends, key=lambda e: e[1])
+            self.nodes.append(("p", f_end, y))
+            return None
+        if choice is None:
+            raise SolverError(f"geodesic_path: the field has a local minimum at vertex {v} (d = {d[v]:.6g}), "
+                              "which is no source", solver="geodesic_path", status="local_minimum")
+        if choice[0] == "v":
+            self.nodes.append(choice)
+        return choice
 
-        # inside (or on the boundary of) face f at barycentric b
-        _, f, b = state
+    def from_face(self, f: int, b: np.ndarray) -> tuple | None:
+        """Step from barycentric ``b`` inside (or on the boundary of) face ``f`` to where the descent leaves it."""
+        geo, d, F, V = self.geo, self.d, self.geo.F, self.geo.V
         x = b @ V[F[f]]
-        if finish_in_face(f, x, float(b @ d[F[f]])):
-            break
-        g = grad[f]
+        if self._finish_in_face(f, x, float(b @ d[F[f]])):
+            return None
+        g = self.grad[f]
         if not np.all(np.isfinite(g)) or np.linalg.norm(g) <= 1e-14:
             j = int(np.argmin(d[F[f]]))  # flat or degenerate face: to its lowest corner
-            state = ("v", int(F[f, j]))
-            nodes.append(state)
-            continue
+            return self._to_vertex(int(F[f, j]))
         db = geo.H[f] @ (-g)
         scale = np.abs(db).max()
         out = db < -1e-12 * scale
@@ -371,39 +385,45 @@ def geodesic_path(mesh: Any, distance: ArrayLike, target: Any, *, sources: Any =
         nb_ /= nb_.sum()
         k = int(np.argmax(nb_))
         if nb_[k] >= 1 - 1e-10:
-            state = ("v", int(F[f, k]))
-            nodes.append(state)
-            continue
+            return self._to_vertex(int(F[f, k]))
         i = int(np.argmin(nb_))  # the exit edge is opposite corner i
         a, c = int(F[f, (i + 1) % 3]), int(F[f, (i + 2) % 3])
         y = nb_ @ V[F[f]]
-        across = [int(h) for h in geo.faces_of_edge(a, c) if h != f]
-        entered = None
-        for h in across:
-            gh = grad[h]
+        entered = self._face_across(f, a, c)
+        if entered is None:  # a valley along the edge (or the boundary): slide to its lower end
+            w = a if d[a] <= d[c] else c
+            if np.linalg.norm(y - V[w]) > self.tol and t > 0:
+                self.nodes.append(("e", a, c, f, f, y))
+            return self._to_vertex(w)
+        bh = np.zeros(3)
+        bh[F[entered] == a] = nb_[(i + 1) % 3]
+        bh[F[entered] == c] = nb_[(i + 2) % 3]
+        self.nodes.append(("e", a, c, f, entered, y))
+        return ("f", entered, bh)
+
+    def _to_vertex(self, v: int) -> tuple:
+        state = ("v", v)
+        self.nodes.append(state)
+        return state
+
+    def _face_across(self, f: int, a: int, c: int) -> int | None:
+        """The face across edge ``(a, c)`` of ``f`` into which the descent continues, or None."""
+        geo, F = self.geo, self.geo.F
+        for h in (int(h) for h in geo.faces_of_edge(a, c) if h != f):
+            gh = self.grad[h]
             if not np.all(np.isfinite(gh)):
                 continue
             third = int(np.flatnonzero((F[h] != a) & (F[h] != c))[0])
             dbh = geo.H[h] @ (-gh)
             if dbh[third] > 1e-12 * max(np.abs(dbh).max(), 1e-300):
-                entered = h
-                break
-        if entered is None:  # a valley along the edge (or the boundary): slide to its lower end
-            w = a if d[a] <= d[c] else c
-            if np.linalg.norm(y - V[w]) > tol and t > 0:
-                nodes.append(("e", a, c, f, f, y))
-            state = ("v", w)
-            nodes.append(state)
-            continue
-        bh = np.zeros(3)
-        bh[F[entered] == a] = nb_[(i + 1) % 3]
-        bh[F[entered] == c] = nb_[(i + 2) % 3]
-        nodes.append(("e", a, c, f, entered, y))
-        state = ("f", entered, bh)
-    else:
-        raise SolverError(f"geodesic_path: no source reached within max_steps={max_steps} steps",
-                          solver="geodesic_path", status="max_steps")
+                return h
+        return None
 
+
+def _finish_path(mesh: TriMesh, geo: _Geometry, nodes: list[tuple], straighten: bool,
+                 return_surface_points: bool) -> Any:
+    """Straighten the walk's nodes, drop duplicates and return positions (and faces, barycentric coordinates)."""
+    tol = 1e-12 * mesh.bbox_diagonal
     if straighten:
         nodes = _open_vertices(mesh, geo, nodes)
         for _ in range(64):

@@ -32,7 +32,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ._atomic import atomic_write
-from .mesh.trimesh import as_trimesh, as_vertex_field
+from .mesh.io import as_trimesh
+from .validation import as_vertex_field, check_number, check_output_path, vertex_indices
 
 __all__ = ["plot_field", "plot_error_map", "plot_gradient_histogram", "isoline_segments"]
 
@@ -49,37 +50,10 @@ _SEGMENT_BLOCK = 400_000  # (triangle, level) pairs processed at once by the mar
 # ----------------------------------------------------------------------------------------------------------------------
 
 
-def _check_path(path) -> Path:
-    try:
-        p = Path(os.fspath(path))
-    except TypeError:
-        raise TypeError(f"path must be a str or os.PathLike, got {type(path).__name__}") from None
-    if p.suffix.lower() not in PLOT_EXTENSIONS:
-        raise ValueError(
-            f"path: unsupported extension {p.suffix!r} in {str(p)!r}; supported: {', '.join(PLOT_EXTENSIONS)}"
-        )
-    parent = p.parent if str(p.parent) else Path(".")
-    if not parent.is_dir():
-        raise FileNotFoundError(f"path: directory {str(parent)!r} does not exist")
-    return p
-
-
 def _check_marks(sources, n: int) -> np.ndarray:
     if sources is None:
         return np.empty(0, dtype=np.int64)
-    arr = np.atleast_1d(np.asarray(sources))
-    if arr.ndim != 1 or (arr.size and arr.dtype.kind not in "iu"):
-        raise ValueError(f"sources must be an int or a 1-D sequence of vertex indices, got {sources!r}")
-    arr = arr.astype(np.int64)
-    if arr.size and (arr.min() < 0 or arr.max() >= n):
-        raise ValueError(f"sources: vertex index out of range [0, {n}): {arr.tolist()}")
-    return arr
-
-
-def _check_dpi(dpi) -> float:
-    if isinstance(dpi, bool) or not isinstance(dpi, int | float | np.integer | np.floating) or not 10 <= dpi <= 2000:
-        raise ValueError(f"dpi must be a number in [10, 2000], got {dpi!r}")
-    return float(dpi)
+    return vertex_indices(sources, "sources", n)
 
 
 def _new_figure(dpi: float, figsize=_FIGSIZE):
@@ -521,11 +495,9 @@ def plot_field(
     Raises
     ------
     ValueError
-        If ``values`` does not have shape ``(n,)``, ``path`` does not end in
-        ``.png``, ``view`` is malformed, ``dpi`` is out of range or a source
-        index is out of range.
-    FileNotFoundError
-        If the directory of ``path`` does not exist.
+        If ``view`` is malformed; a :class:`~cvxgeodesic.errors.ParameterError` (a ``ValueError``) if
+        ``values`` does not have shape ``(n,)``, ``path`` does not end in ``.png`` or cannot be written
+        (its directory does not exist), ``dpi`` is out of range or a source index is out of range.
 
     Notes
     -----
@@ -547,8 +519,8 @@ def plot_field(
     mesh = as_trimesh(mesh)
     vals = as_vertex_field(values, "values", mesh.n_vertices)
     marks = _check_marks(sources, mesh.n_vertices)
-    p = _check_path(path)
-    dpi = _check_dpi(dpi)
+    p = check_output_path(path, PLOT_EXTENSIONS)
+    dpi = check_number(dpi, "dpi", low=10, high=2000)
     cm = cmap if isinstance(cmap, Colormap) else colormaps[cmap]
     lo, hi = _finite_range(vals, vmin, vmax)
     levels = _isolevels(isolines, lo, hi)
@@ -610,8 +582,8 @@ def plot_error_map(mesh, rel_error, path, *, title=None, vmax=None, view=None, d
     mesh = as_trimesh(mesh)
     err = as_vertex_field(rel_error, "rel_error", mesh.n_vertices)
     marks = _check_marks(sources, mesh.n_vertices)
-    p = _check_path(path)
-    dpi = _check_dpi(dpi)
+    p = check_output_path(path, PLOT_EXTENSIONS)
+    dpi = check_number(dpi, "dpi", low=10, high=2000)
     fin = err[np.isfinite(err)]
     if vmax is None:
         vmax = float(np.percentile(fin, 99.0)) if fin.size else 1.0
@@ -704,8 +676,8 @@ def plot_gradient_histogram(norms_by_label, path, *, weights=None, title=None, b
     """
     if not isinstance(norms_by_label, Mapping) or len(norms_by_label) == 0:
         raise ValueError("norms_by_label must be a non-empty dict {label: norms or (counts, edges)}")
-    p = _check_path(path)
-    dpi = _check_dpi(dpi)
+    p = check_output_path(path, PLOT_EXTENSIONS)
+    dpi = check_number(dpi, "dpi", low=10, high=2000)
     if isinstance(bins, bool) or not isinstance(bins, int | np.integer) or bins < 1:
         raise ValueError(f"bins must be a positive integer, got {bins!r}")
     entries = {str(k): _as_hist_entry(k, v, weights) for k, v in norms_by_label.items()}

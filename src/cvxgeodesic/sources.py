@@ -46,6 +46,7 @@ from numpy.typing import ArrayLike
 from .errors import SourceError
 from .mesh.geometry import clipped_barycentric
 from .mesh.trimesh import TriMesh
+from .validation import as_points, validate_sources
 
 #: A barycentric coordinate this close to 0 (or 1) counts as exactly 0 (1): the point is on an edge (a vertex).
 BARY_SNAP = 1e-9
@@ -194,7 +195,7 @@ class SurfaceCurve:
 
 
 def _mesh(mesh) -> TriMesh:
-    from .mesh.trimesh import as_trimesh
+    from .mesh.io import as_trimesh
 
     return as_trimesh(mesh)
 
@@ -265,13 +266,8 @@ def surface_point(mesh: Any, xyz: ArrayLike) -> SurfacePoint | list[SurfacePoint
     [0.3, 0.6, 0.0]
     """
     mesh = _mesh(mesh)
-    try:
-        X = np.asarray(xyz, dtype=float)
-    except (TypeError, ValueError):
-        raise SourceError(f"xyz must be a (3,) or (k, 3) array of positions, got {xyz!r}") from None
+    X = as_points(xyz, "xyz", error=SourceError)
     single = X.ndim == 1
-    if X.shape[-1:] != (3,) or X.ndim > 2 or not np.all(np.isfinite(X)):
-        raise SourceError(f"xyz must be a (3,) or (k, 3) array of finite positions, got shape {X.shape}")
     faces, bary, _ = closest_points(mesh, X.reshape(-1, 3))
     pts = [SurfacePoint(int(f), b) for f, b in zip(faces, bary, strict=True)]
     return pts[0] if single else pts
@@ -328,32 +324,6 @@ class SourceSet:
     def anchor_vertices(self, mesh: TriMesh) -> np.ndarray:
         """(r,) int64 ndarray: vertices whose connected components contain a source."""
         return np.unique(np.concatenate([self.vertices, mesh.F[self.source_faces()].ravel()])).astype(np.int64)
-
-
-# fields computed from point, curve or boundary sources remember them, so that a plain array returned by
-# geodesic_distance still leads geodesic_path to the source points (id -> (weak reference, source set))
-_FIELD_SOURCES: dict[int, tuple] = {}
-
-
-def remember_sources(distance: np.ndarray, ss: SourceSet) -> None:
-    """Record that the array ``distance`` was computed from ``ss`` (for as long as the array lives)."""
-    import weakref
-
-    key = id(distance)
-    try:
-        ref = weakref.ref(distance)
-    except TypeError:  # pragma: no cover - not weak-referenceable
-        return
-    _FIELD_SOURCES[key] = (ref, ss)
-    weakref.finalize(distance, _FIELD_SOURCES.pop, key, None)
-
-
-def remembered_sources(distance) -> SourceSet | None:
-    """The source set :func:`remember_sources` recorded for this very array, if any."""
-    entry = _FIELD_SOURCES.get(id(distance))
-    if entry is None or entry[0]() is not distance:
-        return None
-    return entry[1]
 
 
 def _incident_faces(mesh: TriMesh) -> sp.csr_matrix:
@@ -513,10 +483,9 @@ def resolve_sources(mesh: TriMesh, sources) -> SourceSet:
     ------
     SourceError
         Anything else, naming the offending item: invalid vertex indices (see
-        :func:`~cvxgeodesic.formulations.validate_sources`), a face index out of range, a curve
+        :func:`~cvxgeodesic.validation.validate_sources`), a face index out of range, a curve
         point off the surface, ``"boundary"`` on a closed mesh, an unknown string.
     """
-    from .formulations import validate_sources
 
     if isinstance(sources, SourceSet):
         return sources
@@ -653,7 +622,7 @@ def vertex_bounds(mesh: TriMesh, ss: SourceSet) -> np.ndarray:
     return bound
 
 
-def source_constraints(ops, sources) -> SourceConstraints:
+def source_constraints(ops, sources, min_edge_bound: float) -> SourceConstraints:
     """Constraints of a source set (or of validated source vertices) for one mesh.
 
     Parameters
@@ -661,18 +630,19 @@ def source_constraints(ops, sources) -> SourceConstraints:
     ops : MeshOperators
         The mesh (possibly the solver's rescaled copy), its gradient blocks and degenerate faces.
     sources : (k,) int64 ndarray or SourceSet
+    min_edge_bound : float
+        The formulations' floor of the edge bounds (:data:`~cvxgeodesic.formulations.MIN_EDGE_BOUND`),
+        as a fraction of the bounding-box diagonal; passed in so that sources do not import the formulations.
 
     Returns
     -------
     SourceConstraints
     """
-    from .formulations import MIN_EDGE_BOUND
-
     mesh = ops.mesh
     n, F, E = mesh.n_vertices, mesh.F, mesh.edges
     # the formulations' floor of the edge bounds, also for the vertex bounds next to a point that almost
     # touches a vertex: it keeps them inequalities
-    floor = MIN_EDGE_BOUND * mesh.bbox_diagonal
+    floor = min_edge_bound * mesh.bbox_diagonal
     ell = np.maximum(mesh.edge_lengths, floor)
     ss = sources if isinstance(sources, SourceSet) else None
     fixed = np.asarray(ss.vertices if ss is not None else sources, dtype=np.int64)

@@ -201,7 +201,8 @@ def show(
         ``distance`` of the wrong shape, a bad ``window_size``, a bad ``screenshot`` path, or no display
         (or polyscope already started off-screen in this process) and no ``screenshot``.
     """
-    from .mesh.trimesh import as_trimesh, as_vertex_field
+    from .mesh.io import as_trimesh
+    from .validation import as_vertex_field
 
     mesh = as_trimesh(mesh)
     n = mesh.n_vertices
@@ -218,7 +219,7 @@ def show(
         raise ParameterError("no display (DISPLAY/WAYLAND_DISPLAY unset): render off-screen with "
                              "screenshot='out.png' (CLI: --screenshot out.png)")
     if screenshot is not None:  # before the solve: a bad path fails at once, not after it
-        from .mesh.io import check_output_path
+        from .validation import check_output_path
 
         check_output_path(screenshot, (".png",))
 

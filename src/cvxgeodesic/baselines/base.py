@@ -31,7 +31,9 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from ..errors import CvxGeodesicError, NonManifoldError, SolverError
-from ..mesh.trimesh import TriMesh, as_trimesh
+from ..mesh.io import as_trimesh
+from ..mesh.trimesh import TriMesh
+from ..validation import validate_sources
 
 
 class BaselineSolver:
@@ -95,9 +97,9 @@ class BaselineSolver:
 
         Parameters
         ----------
-        sources : (k,) int ndarray
-            Source vertex indices, already validated by the caller: unique, in
-            ``[0, n)``, ``k >= 1``.
+        sources : int or (k,) int array_like
+            Source vertex indices: unique, in ``[0, n)``, ``k >= 1``
+            (:func:`~cvxgeodesic.validation.validate_sources`).
 
         Returns
         -------
@@ -110,11 +112,13 @@ class BaselineSolver:
 
         Raises
         ------
+        SourceError
+            Invalid source indices.
         SolverError
             If the library fails or returns non-finite values where a source is
             reachable.
         """
-        sources = np.asarray(sources, dtype=np.int64).reshape(-1)
+        sources = validate_sources(sources, self.mesh.n_vertices)
         t0 = time.perf_counter()
         try:
             d, extra = self._solve(sources)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import ParameterError
+from ..validation import check_number
 from .base import ComponentwiseSolver
 
 DEFAULT_T_COEF = 1.0
@@ -54,13 +54,7 @@ class HeatBaseline(ComponentwiseSolver):
     supports_multiple_sources = True
 
     def __init__(self, mesh, *, t_coef: float = DEFAULT_T_COEF, use_robust: bool = True):
-        try:
-            t_coef = float(t_coef)
-        except (TypeError, ValueError):
-            raise ParameterError(f"t_coef must be a positive number, got {t_coef!r}") from None
-        if not np.isfinite(t_coef) or t_coef <= 0:
-            raise ParameterError(f"t_coef must be a positive finite number, got {t_coef!r}")
-        self.t_coef = t_coef
+        self.t_coef = check_number(t_coef, "t_coef", low=0, low_open=True)
         self.use_robust = bool(use_robust)
         super().__init__(mesh)
 

@@ -13,9 +13,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import ParameterError, SourceError
-from .trimesh import TriMesh, as_trimesh
+from .io import as_trimesh
+from .trimesh import TriMesh
 
-__all__ = ["file_order_mesh", "file_sources", "to_file_order"]
+__all__ = ["file_sources", "to_file_order"]
 
 
 def to_file_order(mesh: TriMesh, field: ArrayLike, *, fill: float = np.inf) -> np.ndarray:
@@ -89,7 +90,7 @@ def file_sources(mesh: TriMesh, sources: ArrayLike) -> np.ndarray:
         A source is not an integer, is given twice, is out of the file's range, or is a file vertex in
         no face (the mesh dropped it, so it has no distance field).
     """
-    from ..formulations import validate_sources
+    from ..validation import validate_sources
 
     # the same checks and messages as the Python API, against the file's vertex count
     arr = validate_sources(sources, mesh.n_file_vertices)
@@ -100,30 +101,3 @@ def file_sources(mesh: TriMesh, sources: ArrayLike) -> np.ndarray:
                           "choose a vertex of a triangle")
     _, first = np.unique(idx, return_index=True)
     return idx[np.sort(first)]
-
-
-def file_order_mesh(mesh: TriMesh) -> TriMesh:
-    """The mesh with the file's vertices, numbering and vertex count (for writing files).
-
-    Welded duplicates get their mesh vertex's position, dropped vertices their file position;
-    faces use the first file vertex of each welded group.
-
-    Parameters
-    ----------
-    mesh : TriMesh
-
-    Returns
-    -------
-    TriMesh
-        ``n_file_vertices`` vertices (``mesh`` itself when the numberings agree).
-    """
-    idx = mesh.file_index
-    if idx.size == mesh.n_vertices and np.array_equal(idx, np.arange(idx.size)):
-        return mesh
-    keep = idx >= 0
-    V = np.empty((idx.size, 3))
-    V[keep] = mesh.V[idx[keep]]
-    V[~keep] = mesh.dropped_vertices
-    if not np.all(np.isfinite(V[~keep])):  # positions unknown (file_index given without them): put them at the origin
-        V[~keep] = 0.0
-    return TriMesh(V, mesh.vertex_map[mesh.F], name=mesh.name)

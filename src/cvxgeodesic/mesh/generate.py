@@ -4,14 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import ParameterError
+from ..validation import check_count
 from .trimesh import TriMesh
-
-
-def _check_count(value, name: str, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
-        raise ParameterError(f"{name} must be an integer >= {minimum}, got {value!r}")
-    return int(value)
 
 
 def grid_plane(
@@ -36,8 +30,8 @@ def grid_plane(
     TriMesh
         ``(nx + 1)(ny + 1)`` vertices, ``2 nx ny`` faces, consistently oriented (+z).
     """
-    nx = _check_count(nx, "nx", 1)
-    ny = nx if ny is None else _check_count(ny, "ny", 1)
+    nx = check_count(nx, "nx", minimum=1)
+    ny = nx if ny is None else check_count(ny, "ny", minimum=1)
     xs, ys = np.linspace(0.0, size, nx + 1), np.linspace(0.0, size, ny + 1)
     X, Y = np.meshgrid(xs, ys, indexing="xy")
     V = np.column_stack([X.ravel(), Y.ravel(), np.zeros(X.size)])
@@ -69,7 +63,7 @@ def icosphere(subdivisions: int = 3, radius: float = 1.0) -> TriMesh:
     TriMesh
         Outward-oriented sphere; vertex 0 is ``(0, 0, radius)``-adjacent icosahedron vertex.
     """
-    subdivisions = _check_count(subdivisions, "subdivisions", 0)
+    subdivisions = check_count(subdivisions, "subdivisions", minimum=0)
     t = (1.0 + 5.0**0.5) / 2.0
     V = np.array(
         [[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t],
@@ -109,8 +103,8 @@ def cylinder(n_around: int = 32, n_along: int = 16, radius: float = 1.0, height:
     TriMesh
         ``n_around · (n_along + 1)`` vertices, ``2 · n_around · n_along`` faces.
     """
-    n_around = _check_count(n_around, "n_around", 3)
-    n_along = _check_count(n_along, "n_along", 1)
+    n_around = check_count(n_around, "n_around", minimum=3)
+    n_along = check_count(n_along, "n_along", minimum=1)
     theta = 2.0 * np.pi * np.arange(n_around) / n_around
     z = np.linspace(0.0, height, n_along + 1)
     T, Z = np.meshgrid(theta, z, indexing="xy")

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import os
 import re
-import tempfile
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,11 +19,14 @@ from numpy.typing import ArrayLike
 
 from .._atomic import atomic_write
 from ..errors import MeshError, MeshFormatError, MeshRepairWarning, ParameterError
+from ..validation import as_vertex_field
+from ..validation import check_output_path as _check_output_path
 from .external import EXTERNAL_DISTANCE_EXTENSIONS, EXTERNAL_MESH_EXTENSIONS, read_external, write_external
-from .trimesh import TriMesh, as_trimesh, as_vertex_field
+from .trimesh import TriMesh
 
 __all__ = [
-    "load_mesh", "save_distance", "load_distance_ply", "check_output_path", "MESH_EXTENSIONS", "DISTANCE_EXTENSIONS",
+    "as_trimesh", "check_output_path", "file_order_mesh", "load_distance_ply", "load_mesh", "save_distance",
+    "MESH_EXTENSIONS", "DISTANCE_EXTENSIONS",
 ]
 
 #: File extensions understood by :func:`load_mesh` (compared case-insensitively); the last five
@@ -926,10 +928,11 @@ def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, na
             f"invalid field name {name!r}: use letters, digits, '_', '.', '-' (not x, y, z, vertex, file_vertex)"
         )
     if file_order:
-        from .fileorder import file_order_mesh, to_file_order
-
-        vertex = np.where(mesh.file_index >= 0, mesh.file_index, -1)
-        d, mesh = to_file_order(mesh, d), file_order_mesh(mesh)
+        idx = mesh.file_index
+        vertex = np.where(idx >= 0, idx, -1)
+        d_file = np.full(idx.size, np.inf)  # file vertices in no face: unreachable, as cg.to_file_order fills them
+        d_file[idx >= 0] = d[idx[idx >= 0]]
+        d, mesh = d_file, file_order_mesh(mesh)
     else:
         vertex = np.arange(n)
     out_mesh = mesh
@@ -944,41 +947,8 @@ def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, na
 
 
 def check_output_path(path: str | os.PathLike, extensions: tuple[str, ...] = DISTANCE_EXTENSIONS) -> Path:
-    """Check that ``path`` can be written before expensive work produces its content.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-    extensions : tuple of str
-        Accepted lower-case suffixes.
-
-    Returns
-    -------
-    pathlib.Path
-
-    Raises
-    ------
-    ParameterError
-        Unsupported extension, missing parent directory, ``path`` is a directory, or
-        no file can be created in the directory (permissions, read-only file system:
-        checked by creating and removing an empty temporary file there).
-    """
-    p = Path(path)
-    if p.suffix.lower() not in extensions:
-        raise ParameterError(f"{p}: unsupported output file extension {p.suffix!r}; supported: {', '.join(extensions)}")
-    if not p.parent.is_dir():
-        raise ParameterError(f"cannot write {p}: directory {p.parent} does not exist")
-    if p.is_dir():
-        raise ParameterError(f"cannot write {p}: it is a directory")
-    try:  # the output is written to a temporary file in this directory: try exactly that
-        fd, probe = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".probe", dir=p.parent)
-    except OSError as exc:
-        raise ParameterError(
-            f"cannot write {p}: cannot create files in directory {p.parent} ({exc.strerror or exc})"
-        ) from None
-    os.close(fd)
-    os.unlink(probe)
-    return p
+    """:func:`cvxgeodesic.validation.check_output_path` with the distance-file extensions as the default."""
+    return _check_output_path(path, extensions)
 
 
 def _write_ply(fh, mesh: TriMesh, d: np.ndarray, name: str) -> None:
@@ -1058,3 +1028,86 @@ def load_distance_ply(path: str | os.PathLike) -> tuple[TriMesh, dict[str, np.nd
     except (ValueError, TypeError, IndexError, OverflowError, UnicodeDecodeError, MemoryError) as exc:
         raise _err(p, f"malformed PLY file ({type(exc).__name__}: {exc})") from None
     return mesh, {k: np.asarray(v, dtype=np.float64) for k, v in props.items()}
+
+
+def as_trimesh(mesh: Any, name: str = "mesh") -> TriMesh:
+    """Return ``mesh`` as a :class:`TriMesh`, accepting the meshes other libraries use.
+
+    Accepted, by duck typing (none of these libraries is imported or required):
+
+    - a :class:`TriMesh` (returned as is);
+    - a ``(V, F)`` tuple or list of arrays;
+    - a ``str`` or :class:`os.PathLike`: read with :func:`~cvxgeodesic.mesh.io.load_mesh`;
+    - ``trimesh.Trimesh`` (anything with ``.vertices`` and ``.faces``);
+    - open3d's ``TriangleMesh`` (``.vertices`` and ``.triangles``, converted with ``np.asarray``);
+    - ``meshio.Mesh`` (``.points`` and ``.cells_dict["triangle"]``; other cell types are ignored).
+
+    The vertex order of the object is kept (no welding): indices mean the same in both.
+
+    Parameters
+    ----------
+    mesh : object
+        One of the above.
+    name : str
+        Label for messages (a file's base name for paths; the object's ``name``
+        attribute, if it is a non-empty string, for the others).
+
+    Returns
+    -------
+    TriMesh
+
+    Raises
+    ------
+    TypeError
+        If ``mesh`` is none of these.
+    MeshError
+        If the arrays are invalid, or a ``meshio.Mesh`` has no triangle cells.
+    """
+    if isinstance(mesh, TriMesh):
+        return mesh
+    if isinstance(mesh, str | os.PathLike):
+        return load_mesh(mesh)
+    if isinstance(mesh, tuple | list) and len(mesh) == 2:
+        return TriMesh(mesh[0], mesh[1], name=name)
+    label = getattr(mesh, "name", None)
+    label = label if isinstance(label, str) and label else name
+    if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):  # trimesh.Trimesh
+        return TriMesh(np.asarray(mesh.vertices), np.asarray(mesh.faces), name=label)
+    if hasattr(mesh, "vertices") and hasattr(mesh, "triangles"):  # open3d.geometry.TriangleMesh
+        return TriMesh(np.asarray(mesh.vertices), np.asarray(mesh.triangles), name=label)
+    if hasattr(mesh, "points") and hasattr(mesh, "cells_dict"):  # meshio.Mesh
+        cells = mesh.cells_dict
+        if "triangle" not in cells:
+            raise MeshError(f"{label}: the meshio.Mesh has no 'triangle' cells (cell types: {', '.join(cells)})")
+        return TriMesh(np.asarray(mesh.points)[:, :3], np.asarray(cells["triangle"]), name=label)
+    raise TypeError(
+        "mesh must be a TriMesh, a (V, F) tuple, a file path, or a trimesh.Trimesh / open3d TriangleMesh / "
+        f"meshio.Mesh, got {type(mesh).__name__}"
+    )
+
+
+def file_order_mesh(mesh: TriMesh) -> TriMesh:
+    """The mesh with the file's vertices, numbering and vertex count (for writing files).
+
+    Welded duplicates get their mesh vertex's position, dropped vertices their file position;
+    faces use the first file vertex of each welded group.
+
+    Parameters
+    ----------
+    mesh : TriMesh
+
+    Returns
+    -------
+    TriMesh
+        ``n_file_vertices`` vertices (``mesh`` itself when the numberings agree).
+    """
+    idx = mesh.file_index
+    if idx.size == mesh.n_vertices and np.array_equal(idx, np.arange(idx.size)):
+        return mesh
+    keep = idx >= 0
+    V = np.empty((idx.size, 3))
+    V[keep] = mesh.V[idx[keep]]
+    V[~keep] = mesh.dropped_vertices
+    if not np.all(np.isfinite(V[~keep])):  # positions unknown (file_index given without them): put them at the origin
+        V[~keep] = 0.0
+    return TriMesh(V, mesh.vertex_map[mesh.F], name=mesh.name)

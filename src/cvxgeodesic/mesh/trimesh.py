@@ -2,17 +2,16 @@
 
 from __future__ import annotations
 
-import os
+import math
 from collections.abc import Sequence
 from functools import cached_property
-from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike
 from scipy.sparse.csgraph import connected_components
 
-from ..errors import MeshError, ParameterError
+from ..errors import MeshError
 
 #: Default of :meth:`TriMesh.degenerate_faces`: a face whose smallest altitude is below
 #: ``DEGENERATE_TOL`` times its longest edge (a needle or a cap; exactly collinear or
@@ -73,6 +72,9 @@ class TriMesh:
     :func:`~cvxgeodesic.mesh.fileorder.to_file_order` maps a field back to the file's
     numbering (the command line does that for every file it writes).
     """
+
+    #: Set on the coarse meshes of :func:`~cvxgeodesic.mesh.decimate.simplify_mesh` only: the method used.
+    simplifier: str
 
     def __init__(
         self,
@@ -331,91 +333,30 @@ def _as_faces(F, n: int, name: str) -> np.ndarray:
     return F
 
 
-def as_trimesh(mesh: Any, name: str = "mesh") -> TriMesh:
-    """Return ``mesh`` as a :class:`TriMesh`, accepting the meshes other libraries use.
+def unit_mesh(mesh: TriMesh) -> tuple[TriMesh, float]:
+    """The mesh divided by the power of two ``s`` that puts its bounding-box diagonal in [0.5, 1), and ``s``.
 
-    Accepted, by duck typing (none of these libraries is imported or required):
-
-    - a :class:`TriMesh` (returned as is);
-    - a ``(V, F)`` tuple or list of arrays;
-    - a ``str`` or :class:`os.PathLike`: read with :func:`~cvxgeodesic.mesh.io.load_mesh`;
-    - ``trimesh.Trimesh`` (anything with ``.vertices`` and ``.faces``);
-    - open3d's ``TriangleMesh`` (``.vertices`` and ``.triangles``, converted with ``np.asarray``);
-    - ``meshio.Mesh`` (``.points`` and ``.cells_dict["triangle"]``; other cell types are ignored).
-
-    The vertex order of the object is kept (no welding): indices mean the same in both.
+    The convex formulations are solved on this copy and the field is multiplied by ``s``:
+    the backends' absolute tolerances then mean the same thing on a mesh of any size
+    (without it a 1e-6-sized mesh lost three digits), and since ``s`` is a power of two
+    the division is exact, so ``d(2^k V) = 2^k d(V)`` to the last bit.
 
     Parameters
     ----------
-    mesh : object
-        One of the above.
-    name : str
-        Label for messages (a file's base name for paths; the object's ``name``
-        attribute, if it is a non-empty string, for the others).
+    mesh : TriMesh
+        ``n`` vertices ``V`` (n, 3).
 
     Returns
     -------
-    TriMesh
-
-    Raises
-    ------
-    TypeError
-        If ``mesh`` is none of these.
-    MeshError
-        If the arrays are invalid, or a ``meshio.Mesh`` has no triangle cells.
+    unit : TriMesh
+        ``V / s`` with the same faces, vertex map and name (``mesh`` itself when ``s == 1``).
+    s : float
+        A power of two (1.0 for an empty or zero-size mesh).
     """
-    if isinstance(mesh, TriMesh):
-        return mesh
-    if isinstance(mesh, str | os.PathLike):
-        from .io import load_mesh
-
-        return load_mesh(mesh)
-    if isinstance(mesh, tuple | list) and len(mesh) == 2:
-        return TriMesh(mesh[0], mesh[1], name=name)
-    label = getattr(mesh, "name", None)
-    label = label if isinstance(label, str) and label else name
-    if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):  # trimesh.Trimesh
-        return TriMesh(np.asarray(mesh.vertices), np.asarray(mesh.faces), name=label)
-    if hasattr(mesh, "vertices") and hasattr(mesh, "triangles"):  # open3d.geometry.TriangleMesh
-        return TriMesh(np.asarray(mesh.vertices), np.asarray(mesh.triangles), name=label)
-    if hasattr(mesh, "points") and hasattr(mesh, "cells_dict"):  # meshio.Mesh
-        cells = mesh.cells_dict
-        if "triangle" not in cells:
-            raise MeshError(f"{label}: the meshio.Mesh has no 'triangle' cells (cell types: {', '.join(cells)})")
-        return TriMesh(np.asarray(mesh.points)[:, :3], np.asarray(cells["triangle"]), name=label)
-    raise TypeError(
-        "mesh must be a TriMesh, a (V, F) tuple, a file path, or a trimesh.Trimesh / open3d TriangleMesh / "
-        f"meshio.Mesh, got {type(mesh).__name__}"
-    )
-
-
-def as_vertex_field(values: ArrayLike, name: str, n: int | None = None) -> np.ndarray:
-    """Return ``values`` as a (n,) float64 array, or raise a ParameterError naming ``name``.
-
-    Parameters
-    ----------
-    values : array_like
-        One number per vertex.
-    name : str
-        Parameter name used in the message.
-    n : int, optional
-        Required length (the mesh's vertex count).
-
-    Returns
-    -------
-    (n,) float64 ndarray
-
-    Raises
-    ------
-    ParameterError
-        Not numeric, not 1-D, or not of length ``n`` (a ``ValueError``).
-    """
-    try:
-        arr = np.asarray(values, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        shape = f"({n},)" if n is not None else "(n,)"
-        raise ParameterError(f"{name} must be a numeric array of shape {shape} ({exc})") from None
-    if arr.ndim != 1 or (n is not None and arr.shape[0] != n):
-        shape = f"({n},)" if n is not None else "(n,)"
-        raise ParameterError(f"{name} must have shape {shape} (one value per mesh vertex), got shape {arr.shape}")
-    return arr
+    diag = mesh.bbox_diagonal
+    if not (np.isfinite(diag) and diag > 0):
+        return mesh, 1.0
+    scale = math.ldexp(1.0, math.frexp(diag)[1])
+    if scale == 1.0:
+        return mesh, 1.0
+    return TriMesh(mesh.V / scale, mesh.F, vertex_map=mesh.vertex_map, name=mesh.name), scale

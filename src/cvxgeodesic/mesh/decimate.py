@@ -1,0 +1,139 @@
+"""Edge-collapse decimation of a mesh to a target face count (the coarse mesh of coarse-to-fine solves).
+
+By default shortest edge first with midpoint placement (libigl ``decimate``), which keeps triangles well
+shaped; quadric error decimation (``fast-simplification``) is 2× faster but its elongated triangles make
+the coarse solve less accurate (bimba at 1/4 of the faces, mean ``|Δd|`` against the direct solve: 0.62 %
+of the largest distance with ``"shortest-edge"``, 2.4 % with ``"quadric"``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import MeshError, ParameterError
+from .trimesh import TriMesh
+
+__all__ = ["SIMPLIFIERS", "decimate_timeout", "simplify_mesh"]
+
+
+def _fast_simplification():
+    try:
+        import fast_simplification
+    except ImportError as exc:  # pragma: no cover - depends on the installation
+        raise ImportError(
+            "multires needs the package 'fast-simplification' (a dependency of cvxgeodesic): "
+            "pip install fast-simplification"
+        ) from exc
+    return fast_simplification
+
+
+#: Decimation methods of :func:`simplify_mesh`.
+SIMPLIFIERS = ("shortest-edge", "quadric")
+
+
+# libigl's decimate runs in a child process: on some meshes (near-degenerate faces, boundaries; 4 of the 60
+# Thingi10K files in ../shared/meshes) it never returns, and a C++ loop cannot be interrupted in-process.
+_DECIMATE_SCRIPT = """
+import sys
+import numpy as np
+import igl
+d, m = sys.argv[1], int(sys.argv[2])
+V, F = np.load(d + "/V.npy"), np.load(d + "/F.npy")
+U, G, _, _ = igl.decimate(np.asfortranarray(V), np.asfortranarray(F), m)
+np.save(d + "/U.npy", np.asarray(U, dtype=np.float64))
+np.save(d + "/G.npy", np.asarray(G, dtype=np.int64))
+"""
+
+
+def decimate_timeout(n_faces: int) -> float:
+    """Seconds the ``"shortest-edge"`` decimation of an ``n_faces`` mesh may take before it is abandoned."""
+    return 10.0 + 1e-4 * n_faces
+
+
+def _igl_decimate(mesh: TriMesh, target_faces: int):
+    """``((U, G), None)`` from libigl's decimate in a child process, or ``(None, reason)``."""
+    import subprocess
+    import sys
+    import tempfile
+
+    timeout = decimate_timeout(mesh.n_faces)
+    with tempfile.TemporaryDirectory(prefix="cvxgeodesic-decimate-") as tmp:
+        np.save(f"{tmp}/V.npy", mesh.V)
+        np.save(f"{tmp}/F.npy", mesh.F.astype(np.int32))
+        try:
+            proc = subprocess.run([sys.executable, "-c", _DECIMATE_SCRIPT, tmp, str(int(target_faces))],
+                                  capture_output=True, text=True, timeout=timeout, stdin=subprocess.DEVNULL)
+        except subprocess.TimeoutExpired:
+            return None, f"libigl decimate did not finish within {timeout:.0f} s"
+        except OSError as exc:  # pragma: no cover - no way to start a process
+            return None, f"cannot run libigl decimate ({exc})"
+        if proc.returncode != 0:
+            last = (proc.stderr.strip().splitlines() or [f"exit code {proc.returncode}"])[-1]
+            return None, f"libigl decimate failed ({last})"
+        U, G = np.load(f"{tmp}/U.npy"), np.load(f"{tmp}/G.npy")
+    if G.shape[0] == 0:
+        return None, "libigl decimate found no collapsible edges"
+    return (U, G), None
+
+
+def simplify_mesh(mesh: TriMesh, target_faces: int, method: str = "shortest-edge") -> TriMesh:
+    """Decimate a mesh to about ``target_faces`` faces by edge collapses.
+
+    Parameters
+    ----------
+    mesh : TriMesh
+        Fine mesh with ``m`` faces.
+    target_faces : int
+        Wanted face count (``< m``); the result may differ by a few faces.
+    method : {"shortest-edge", "quadric"}
+        ``"shortest-edge"``: libigl ``decimate`` (shortest edge first, midpoint
+        placement: well-shaped triangles). It runs in a child process with a time
+        limit (:func:`decimate_timeout`) because it never returns on some meshes;
+        when it fails, times out, or the mesh is not edge-manifold, ``"quadric"``
+        is used instead. ``"quadric"``: quadric error decimation of
+        ``fast-simplification`` (faster, robust, elongated triangles).
+
+    Returns
+    -------
+    TriMesh
+        The coarse mesh, without unreferenced vertices or degenerate faces,
+        named ``"<name>@<faces>"``. Its ``vertex_map`` is the identity (coarse
+        vertices are new points, not fine vertices). ``coarse.simplifier`` says
+        which method made it (with the reason of a fallback).
+
+    Raises
+    ------
+    ParameterError
+        ``target_faces`` is not below the mesh's face count.
+    MeshError
+        The simplification left no faces.
+    """
+    if not 0 < target_faces < mesh.n_faces:
+        raise ParameterError(f"target_faces must be in (0, {mesh.n_faces}), got {target_faces}")
+    if method not in SIMPLIFIERS:
+        raise ParameterError(f"unknown simplification method {method!r}; choose one of {', '.join(SIMPLIFIERS)}")
+    result, used = None, method
+    if method == "shortest-edge":
+        if mesh.is_edge_manifold:
+            result, why = _igl_decimate(mesh, target_faces)
+        else:
+            why = "the mesh is not edge-manifold"
+        if result is None:
+            used = f"quadric (shortest-edge: {why})"
+    if result is None:
+        fs = _fast_simplification()
+        # writable copies: the extension rejects the read-only arrays of a TriMesh
+        result = fs.simplify(np.array(mesh.V, dtype=np.float64), np.array(mesh.F, dtype=np.int64),
+                             target_count=int(target_faces))
+    pts = np.asarray(result[0], dtype=np.float64)
+    tris = np.asarray(result[1], dtype=np.int64).reshape(-1, 3)
+    ok = (tris[:, 0] != tris[:, 1]) & (tris[:, 1] != tris[:, 2]) & (tris[:, 0] != tris[:, 2])
+    tris = tris[ok]
+    if tris.shape[0] == 0:
+        raise MeshError(f"{mesh.name}: simplification to {target_faces} faces left no faces")
+    used_v = np.unique(tris)
+    remap = np.full(pts.shape[0], -1, dtype=np.int64)
+    remap[used_v] = np.arange(used_v.size)
+    coarse = TriMesh(pts[used_v], remap[tris], name=f"{mesh.name}@{tris.shape[0]}")
+    coarse.simplifier = used
+    return coarse

@@ -1,0 +1,107 @@
+"""Moving per-vertex fields between two meshes of one surface by closest-point barycentric interpolation.
+
+For every query point (the fine mesh's vertices), :class:`SurfaceTransfer` finds the closest point on the
+coarse surface (libigl's AABB tree, exact point–triangle distance) and its barycentric coordinates in that
+coarse triangle; a coarse per-vertex field is then interpolated there.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+
+from .geometry import clipped_barycentric
+from .trimesh import TriMesh
+
+__all__ = ["SurfaceTransfer"]
+
+
+class SurfaceTransfer:
+    """Interpolation of coarse per-vertex fields at points near the coarse surface.
+
+    Parameters
+    ----------
+    coarse : TriMesh
+        Mesh the fields live on (``nc`` vertices, ``mc`` faces).
+    points : (k, 3) float ndarray
+        Where the fields are wanted (the fine mesh's vertices).
+
+    Attributes
+    ----------
+    face : (k,) int64 ndarray
+        Coarse triangle holding the closest point of each query point.
+    weights : (k, 3) float ndarray
+        Barycentric coordinates of that closest point.
+    sq_distance : (k,) float ndarray
+        Squared distance of each point to the coarse surface.
+    setup_time : float
+        Seconds spent in the constructor.
+    """
+
+    def __init__(self, coarse: TriMesh, points: np.ndarray):
+        t0 = time.perf_counter()
+        self.coarse = coarse
+        self.points = np.ascontiguousarray(points, dtype=np.float64)
+        self.face, self.weights, self.sq_distance = self._project(np.arange(coarse.n_faces))
+        self._kdtree: Any = None  # built on the first nearest_vertex call
+        self.setup_time = time.perf_counter() - t0
+
+    def _project(self, faces: np.ndarray, idx: np.ndarray | None = None):
+        import igl
+
+        P = self.points if idx is None else self.points[idx]
+        F = np.ascontiguousarray(self.coarse.F[faces])
+        sqd, fi, C = igl.point_mesh_squared_distance(P, self.coarse.V, F)
+        fi = faces[np.asarray(fi, dtype=np.int64)]
+        Vt = self.coarse.V[self.coarse.F[fi]]
+        W = clipped_barycentric(np.asarray(C), Vt[:, 0], Vt[:, 1], Vt[:, 2])
+        return fi, W, np.asarray(sqd)
+
+    def apply(self, values: np.ndarray, need: np.ndarray | None = None) -> np.ndarray:
+        """Interpolate a coarse field at the query points.
+
+        Parameters
+        ----------
+        values : (nc,) float ndarray
+            Coarse per-vertex values; ``inf`` marks vertices without a value.
+        need : (k,) bool ndarray, optional
+            Points that must get a finite value when one exists: a point whose
+            closest coarse triangle has a non-finite corner is re-projected onto
+            the triangles whose three values are finite.
+
+        Returns
+        -------
+        (k,) float ndarray
+        """
+        tri_vals = values[self.coarse.F[self.face]]
+        out = np.einsum("ij,ij->i", self.weights, np.where(np.isfinite(tri_vals), tri_vals, 0.0))
+        bad = ~np.isfinite(tri_vals).all(axis=1)
+        out[bad] = np.inf
+        if need is not None:
+            redo = np.flatnonzero(bad & need)
+            finite_faces = np.flatnonzero(np.isfinite(values[self.coarse.F]).all(axis=1))
+            if redo.size and finite_faces.size:
+                fi, W, _ = self._project(finite_faces, redo)
+                out[redo] = np.einsum("ij,ij->i", W, values[self.coarse.F[fi]])
+        return out
+
+    def nearest_vertex(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Nearest coarse vertex of each point.
+
+        Parameters
+        ----------
+        points : (k, 3) float ndarray
+
+        Returns
+        -------
+        index : (k,) int64 ndarray
+        distance : (k,) float ndarray
+        """
+        if self._kdtree is None:
+            from scipy.spatial import cKDTree
+
+            self._kdtree = cKDTree(self.coarse.V)
+        dist, idx = self._kdtree.query(np.atleast_2d(points))
+        return np.asarray(idx, dtype=np.int64), np.asarray(dist)

@@ -1,0 +1,133 @@
+"""Result types of a solve: :class:`SolveInfo` and :class:`GeodesicResult` (a leaf module: NumPy only).
+
+Every solve strategy (:mod:`cvxgeodesic.strategies`) returns a :class:`GeodesicResult`; both types are
+re-exported unchanged by :mod:`cvxgeodesic.api` and the package top level.
+"""
+
+from __future__ import annotations
+
+import weakref
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+__all__ = ["GeodesicResult", "SolveInfo", "remember_sources", "remembered_sources"]
+
+# fields computed from point, curve or boundary sources remember them, so that a plain array returned by
+# geodesic_distance still leads geodesic_path to the source points (id -> (weak reference, source set))
+_FIELD_SOURCES: dict[int, tuple] = {}
+
+
+def remember_sources(distance: np.ndarray, ss: Any) -> None:
+    """Record that the array ``distance`` was computed from ``ss`` (for as long as the array lives)."""
+    key = id(distance)
+    try:
+        ref = weakref.ref(distance)
+    except TypeError:  # pragma: no cover - not weak-referenceable
+        return
+    _FIELD_SOURCES[key] = (ref, ss)
+    weakref.finalize(distance, _FIELD_SOURCES.pop, key, None)
+
+
+def remembered_sources(distance: Any) -> Any:
+    """The source set :func:`remember_sources` recorded for this very array, if any."""
+    entry = _FIELD_SOURCES.get(id(distance))
+    if entry is None or entry[0]() is not distance:
+        return None
+    return entry[1]
+
+
+
+@dataclass
+class SolveInfo:
+    """What happened during one solve.
+
+    Attributes
+    ----------
+    method : str
+        Formulation or baseline name (aliases resolved).
+    solver : str
+        Backend that produced the field (``"ipm"``, ``"clarabel"`` or the library of a baseline).
+    status : str
+        ``"optimal"`` on success, or ``"almost_optimal"`` (only reduced tolerances
+        were met: Clarabel's ``AlmostSolved``, or an interior-point iterate within
+        100 × ``tol`` before rounding stopped the iterations);
+        ``"approximate"`` for an unpolished coarse-to-fine solve
+        (``GeodesicSolver(..., multires=...)``), whose field is *not* the
+        optimum on this mesh.
+    iterations : int
+        Interior-point iterations (0 for baselines).
+    setup_time : float
+        Seconds spent on per-mesh precomputation, paid once per solver object
+        (operators, energy matrices, symbolic factorization, baseline set-up).
+    solve_time : float
+        Seconds spent on this solve.
+    primal_residual, dual_residual, gap : float
+        Final relative residuals / duality gap (NaN for baselines).
+    objective : float
+        Optimal objective value (NaN for baselines).
+    lam : float
+        Smoothness weight λ used (0 for LP formulations and baselines).
+    n_unreachable : int
+        Vertices with no path to a source (their distance is ``inf``).
+    notes : list of str
+        One line per substitution or repair the library made for this result (degenerate
+        faces left out, another energy, a manifold cover, a Clarabel retry, the ``d ≥ 0``
+        re-solve, ...). Empty when the problem was solved exactly as asked.
+    extra : dict
+        Backend-specific details (timing breakdown, library parameters).
+    """
+
+    method: str
+    solver: str
+    status: str
+    iterations: int = 0
+    setup_time: float = 0.0
+    solve_time: float = 0.0
+    primal_residual: float = float("nan")
+    dual_residual: float = float("nan")
+    gap: float = float("nan")
+    objective: float = float("nan")
+    lam: float = 0.0
+    n_unreachable: int = 0
+    notes: list[str] = field(default_factory=list)
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def total_time(self) -> float:
+        """``setup_time + solve_time`` in seconds."""
+        return self.setup_time + self.solve_time
+
+    def as_dict(self) -> dict:
+        """Plain-dict copy (with ``total_time``), e.g. for JSON or CSV."""
+        out = asdict(self)
+        out["total_time"] = self.total_time
+        return out
+
+
+@dataclass
+class GeodesicResult:
+    """Distance field plus the :class:`SolveInfo` of the solve that made it.
+
+    Attributes
+    ----------
+    distance : (n,) float ndarray
+        Distance of every vertex to the nearest source; ``inf`` where no source is reachable.
+    info : SolveInfo
+    sources : (k,) int64 ndarray
+        The source vertices (fixed at 0). With point, curve or boundary sources: the vertices among them
+        (points that lie on a vertex, boundary vertices), possibly none; the whole set is ``source_set``.
+    source_set : SourceSet or None
+        The normalized sources (:func:`cvxgeodesic.sources.resolve_sources`) when they were not all
+        vertices; ``None`` otherwise.
+    """
+
+    distance: np.ndarray
+    info: SolveInfo
+    sources: np.ndarray
+    source_set: Any = None
+
+    def __post_init__(self) -> None:
+        if self.source_set is not None:  # geodesic_path(mesh, result.distance, ...) then knows the sources
+            remember_sources(self.distance, self.source_set)

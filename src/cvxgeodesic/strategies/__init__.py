@@ -1,0 +1,54 @@
+"""Solve strategies behind :class:`~cvxgeodesic.api.GeodesicSolver`, all with one signature.
+
+Each strategy is built once per solver object from a validated :class:`SolveConfig` (the per-mesh work)
+and then answers ``strategy.solve(sources, callback=None) -> GeodesicResult``:
+
+=========================  =====================================================================
+:class:`DirectStrategy`    one conic solve of a P1 formulation, with the backend policy (IPM,
+                           Clarabel retry under ``solver="auto"``, the ``d >= 0`` re-solve)
+:class:`BaselineStrategy`  Dijkstra, fast marching, heat, exact (:mod:`cvxgeodesic.baselines`)
+:class:`CoarseToFine`      two direct solves: a decimated mesh, then (with polish) the mesh itself
+:class:`Order2`            P2 elements for d² (:class:`~cvxgeodesic.elements_p2.Order2Strategy`)
+=========================  =====================================================================
+"""
+
+from __future__ import annotations
+
+from .base import Callback, SolveConfig, SolveStrategy
+from .baseline import BaselineStrategy
+from .coarse_to_fine import CoarseToFine, default_target_faces, resolve_target
+from .direct import DirectStrategy, ipm_available
+from .order2 import Order2
+
+__all__ = [
+    "BaselineStrategy", "Callback", "CoarseToFine", "DirectStrategy", "Order2", "SolveConfig", "SolveStrategy",
+    "default_target_faces", "ipm_available", "make_strategy", "resolve_target",
+]
+
+
+def make_strategy(config: SolveConfig, *, baseline: bool, order: int = 1, multires_target: int | None = None,
+                  polish: bool = False) -> SolveStrategy:
+    """The strategy for a validated config.
+
+    Parameters
+    ----------
+    config : SolveConfig
+    baseline : bool
+        ``config.method`` is a baseline.
+    order : {1, 2}
+    multires_target : int, optional
+        Coarse face count (from :func:`resolve_target`); None for a direct solve.
+    polish : bool
+        With ``multires_target``: finish with a direct solve on the mesh.
+
+    Returns
+    -------
+    SolveStrategy
+    """
+    if order == 2:
+        return Order2(config)
+    if baseline:
+        return BaselineStrategy(config)
+    if multires_target is not None:
+        return CoarseToFine(config, multires_target, polish)
+    return DirectStrategy(config)

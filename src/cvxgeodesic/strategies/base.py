@@ -1,0 +1,99 @@
+"""What every solve strategy shares: the validated :class:`SolveConfig` and the :class:`SolveStrategy` protocol."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from typing import Any, Protocol
+
+from ..formulations import FORMULATIONS, smoothness_weight
+from ..mesh.trimesh import TriMesh
+from ..results import GeodesicResult
+
+#: ``callback(iteration, info_dict)`` after every interior-point iteration.
+Callback = Callable[[int, dict], None]
+
+
+@dataclass(frozen=True)
+class SolveConfig:
+    """The validated parameters of one :class:`~cvxgeodesic.api.GeodesicSolver`, as its strategies see them.
+
+    Attributes
+    ----------
+    mesh : TriMesh
+        The mesh in its own units (``n`` vertices, ``m`` faces).
+    method : str
+        Canonical formulation name (a key of :data:`~cvxgeodesic.formulations.FORMULATIONS`) or baseline name.
+    lam : float
+        Smoothness weight λ in the mesh's units (0 for LP formulations).
+    m : float or None
+        The multiplier ``lam`` came from, or None when λ was given directly.
+    normalization : {"area", "paper"}
+    solver : {"auto", "ipm", "clarabel"}
+        The backend asked for (``"auto"``: the structured solver when available, Clarabel as its fallback).
+    tol : float
+    max_iter : int
+    verbose : bool
+    notes : tuple of str
+        Substitutions already made before any strategy ran (the loader's repairs of the mesh).
+    """
+
+    mesh: TriMesh
+    method: str
+    lam: float = 0.0
+    m: float | None = None
+    normalization: str = "area"
+    solver: str = "auto"
+    tol: float = 1e-8
+    max_iter: int = 200
+    verbose: bool = False
+    notes: tuple[str, ...] = field(default_factory=tuple)
+
+    @property
+    def energy(self) -> str | None:
+        """Smoothness energy of the formulation (``"hessian"``, ``"laplacian"``, ``"dirichlet"``), None for LPs."""
+        entry = FORMULATIONS.get(self.method)
+        return None if entry is None else entry[1]
+
+    def on(self, mesh: TriMesh, *, lam: float | None = None, m: float | None = None) -> SolveConfig:
+        """The same parameters on another mesh (a coarse one), with λ given directly or recomputed from ``m``.
+
+        Parameters
+        ----------
+        mesh : TriMesh
+        lam : float, optional
+            λ on ``mesh``; exclusive with ``m``.
+        m : float, optional
+            Multiplier: λ is :func:`~cvxgeodesic.formulations.smoothness_weight` of ``mesh``.
+
+        Returns
+        -------
+        SolveConfig
+        """
+        if m is not None:
+            lam = smoothness_weight(mesh, m, self.normalization, self.energy or "hessian")
+        lam = 0.0 if self.energy is None else float(lam if lam is not None else self.lam)
+        return replace(self, mesh=mesh, lam=lam, m=m, notes=tuple(getattr(mesh, "notes", ())))
+
+
+class SolveStrategy(Protocol):
+    """How a :class:`~cvxgeodesic.api.GeodesicSolver` computes its fields; built once per solver object.
+
+    Attributes
+    ----------
+    backend : str
+        The backend that will produce the fields (``"ipm"``, ``"clarabel"`` or the baseline's name), reported
+        as ``GeodesicSolver.solver_name``.
+    notes : list of str
+        Substitutions made for every solve of this object (copied into each ``info.notes``).
+    setup_time : float
+        Seconds the constructor took (per-mesh work).
+    """
+
+    backend: str
+    notes: list[str]
+    setup_time: float
+
+    def solve(self, sources: Any, *, callback: Callback | None = None) -> GeodesicResult:
+        """Distance field from ``sources`` (anything :meth:`GeodesicSolver.solve` takes) on the config's mesh."""
+        ...

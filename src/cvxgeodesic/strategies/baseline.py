@@ -1,0 +1,63 @@
+"""The baseline strategy: Dijkstra, fast marching, heat or exact MMP (:mod:`cvxgeodesic.baselines`)."""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+
+from ..baselines import BASELINES
+from ..errors import SourceError
+from ..results import GeodesicResult, SolveInfo
+from ..sources import resolve_sources
+from .base import Callback, SolveConfig
+
+
+class BaselineStrategy:
+    """One of :data:`~cvxgeodesic.baselines.BASELINES` on the mesh (its set-up done once).
+
+    Parameters
+    ----------
+    config : SolveConfig
+        ``config.method`` is a key of :data:`~cvxgeodesic.baselines.BASELINES`.
+
+    Raises
+    ------
+    NonManifoldError
+        ``"fmm"`` / ``"exact"`` on a non-manifold mesh.
+    """
+
+    def __init__(self, config: SolveConfig) -> None:
+        t0 = time.perf_counter()
+        self.config = config
+        self.baseline = BASELINES[config.method](config.mesh)
+        self.backend = config.method
+        self.notes: list[str] = list(config.notes)
+        self.setup_time = time.perf_counter() - t0
+
+    def solve(self, sources: Any, *, callback: Callback | None = None) -> GeodesicResult:
+        """Distance field from ``sources``; ``callback`` is ignored (no iterations to report)."""
+        sset = resolve_sources(self.config.mesh, sources)
+        t0 = time.perf_counter()
+        method = self.config.method
+        if not sset.vertex_only:
+            from ..baselines.points import solve_baseline_sources
+
+            d, binfo = solve_baseline_sources(self.baseline, sset)
+            info = SolveInfo(method=method, solver=str(binfo.pop("solver")), status="optimal",
+                             setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
+                             n_unreachable=int(np.isinf(d).sum()), notes=list(self.notes), extra=binfo)
+            return GeodesicResult(distance=d, info=info, sources=sset.vertices, source_set=sset)
+        src = sset.vertices
+        if len(src) > 1 and not self.baseline.supports_multiple_sources:
+            raise SourceError(f"method {method!r} supports a single source only")
+        d, binfo = self.baseline.solve(src)
+        d = np.asarray(d, dtype=float)
+        info = SolveInfo(
+            method=method, solver=str(binfo.get("solver", method)), status=binfo.get("status", "optimal"),
+            iterations=int(binfo.get("iterations", 0)), setup_time=self.setup_time,
+            solve_time=time.perf_counter() - t0, n_unreachable=int(np.isinf(d).sum()), notes=list(self.notes),
+            extra={k: v for k, v in binfo.items() if k not in ("solver", "status", "iterations")},
+        )
+        return GeodesicResult(distance=d, info=info, sources=src)

@@ -1,0 +1,72 @@
+"""Solve strategies (cvxgeodesic.strategies): one signature, picked by the façade, usable on their own."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import cvxgeodesic as cg
+from cvxgeodesic import strategies
+from cvxgeodesic.strategies import BaselineStrategy, CoarseToFine, DirectStrategy, Order2, SolveConfig
+
+
+@pytest.fixture(scope="module")
+def sphere():
+    return cg.icosphere(3)
+
+
+@pytest.mark.parametrize(("kwargs", "kind"), [
+    ({"method": "qclp"}, DirectStrategy),
+    ({"method": "heat"}, BaselineStrategy),
+    ({"method": "qclp", "multires": 400}, CoarseToFine),
+    ({"method": "qclp", "order": 2}, Order2),
+])
+def test_the_facade_picks_one_strategy_and_reports_its_backend(sphere, kwargs, kind):
+    solver = cg.GeodesicSolver(sphere, **kwargs)
+    assert type(solver._strategy) is kind
+    assert solver.solver_name == solver._strategy.backend and solver.notes is solver._strategy.notes
+    res = solver.solve(0)
+    assert res.info.setup_time == solver.setup_time >= solver._strategy.setup_time
+
+
+def test_a_strategy_alone_gives_the_facade_field(sphere):
+    lam = cg.smoothness_weight(sphere, 1.0)
+    direct = DirectStrategy(SolveConfig(mesh=sphere, method="qcqp-hessian", lam=lam, m=1.0))
+    res = direct.solve([0, 5])
+    ref = cg.GeodesicSolver(sphere).solve([0, 5])
+    np.testing.assert_array_equal(res.distance, ref.distance)
+    assert res.info.iterations == ref.info.iterations and res.info.lam == ref.info.lam
+
+
+def test_coarse_to_fine_composes_two_direct_solves(sphere):
+    solver = cg.GeodesicSolver(sphere, "qcqp-laplacian", multires=400, multires_polish=True)
+    c2f = solver._strategy
+    assert isinstance(c2f.coarse, DirectStrategy) and isinstance(c2f.fine, DirectStrategy)
+    assert c2f.coarse.config.mesh is c2f.coarse_mesh and c2f.fine.config.mesh is sphere
+    assert c2f.coarse.config.lam == pytest.approx(solver.lam, rel=1e-12)  # "area": λ is a length on the surface
+    res = solver.solve(3)
+    np.testing.assert_array_equal(res.distance, c2f.fine.solve(3).distance)  # the polish is the direct solve
+    mr = res.info.extra["multires"]
+    assert mr["coarse_faces"] == c2f.coarse_mesh.n_faces and mr["max_diff_to_coarse_transfer"] > 0
+
+
+def test_auto_falls_back_to_clarabel_and_says_why_when_the_ipm_is_missing(sphere, monkeypatch):
+    ref = cg.GeodesicSolver(sphere, "qclp", solver="ipm").solve(0)
+    monkeypatch.setattr(strategies.direct, "ipm_available", lambda: False)
+    solver = cg.GeodesicSolver(sphere, "qclp")
+    assert solver.solver_name == "clarabel"
+    res = solver.solve(0)
+    assert res.info.solver == "clarabel"
+    assert any("interior-point solver is not available" in n and "Clarabel" in n for n in res.info.notes)
+    np.testing.assert_allclose(res.distance, ref.distance, atol=1e-6 * sphere.bbox_diagonal)
+    with pytest.raises(cg.ParameterError, match="solver='ipm' is not available"):
+        cg.GeodesicSolver(sphere, "qclp", solver="ipm")
+
+
+def test_config_on_a_coarse_mesh_keeps_the_smoothness_meaning(sphere):
+    coarse = cg.icosphere(2)
+    cfg = SolveConfig(mesh=sphere, method="qcqp-hessian", lam=0.5, m=None)
+    assert cfg.on(coarse, lam=0.25).lam == 0.25 and cfg.on(coarse).lam == 0.5
+    assert cfg.on(coarse, m=1.0).lam == pytest.approx(cg.smoothness_weight(coarse, 1.0))
+    assert SolveConfig(mesh=sphere, method="qclp", lam=0.5).on(coarse, lam=0.3).lam == 0.0  # an LP has no λ
+    assert cfg.energy == "hessian" and SolveConfig(mesh=sphere, method="heat").energy is None

@@ -1,0 +1,164 @@
+"""cvxgeodesic.validation: one vocabulary of checks, and the entry points that use it."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import cvxgeodesic as cg
+from cvxgeodesic.errors import ParameterError, SourceError
+from cvxgeodesic.validation import (
+    as_points,
+    as_vertex_field,
+    check_choice,
+    check_count,
+    check_number,
+    check_output_path,
+    check_type,
+    validate_sources,
+    vertex_indices,
+    vertex_mask,
+)
+
+
+@pytest.mark.parametrize(("kwargs", "good", "bad", "text"), [
+    ({"low": 0, "high": 1, "low_open": True, "high_open": True}, 0.5, [0, 1, 1.5, np.nan], r"a number in \(0, 1\)"),
+    ({"low": 10, "high": 2000}, 10, [9.99, 2001, np.inf], r"a number in \[10, 2000\]"),
+    ({"low": 0}, 0, [-1e-300, np.inf, np.nan], "a finite number >= 0"),
+    ({"low": 0, "low_open": True}, 1e-30, [0.0, -1], "a finite number > 0"),
+])
+def test_check_number(kwargs, good, bad, text):
+    assert check_number(good, "x", **kwargs) == float(good)
+    assert isinstance(check_number(np.float32(good), "x", **kwargs), float)
+    for value in [*bad, True, "1", None, [1]]:
+        with pytest.raises(ParameterError, match=rf"^x must be {text}, got "):
+            check_number(value, "x", **kwargs)
+
+
+def test_check_count_and_choice():
+    assert check_count(np.int64(3), "k") == 3 and check_count(0, "k", minimum=0) == 0
+    for value in (0, -1, 1.0, True, "2", None):
+        with pytest.raises(ParameterError, match="^k must be a positive integer, got"):
+            check_count(value, "k")
+    with pytest.raises(ParameterError, match="^k must be an integer >= 3 or None, got 2"):
+        check_count(2, "k", minimum=3, or_none=True)
+    assert check_choice("IPM", "solver", ("auto", "ipm")) == "ipm"
+    with pytest.raises(ParameterError, match="^unknown solver 'IPM'; choose one of auto, ipm$"):
+        check_choice("IPM", "solver", ("auto", "ipm"), lower=False)
+    with pytest.raises(ParameterError, match="unknown solver 3"):
+        check_choice(3, "solver", ("auto",))
+    with pytest.raises(TypeError, match="mesh must be a TriMesh, got list"):
+        check_type([], "mesh", cg.TriMesh, "a TriMesh")
+
+
+def test_vertex_arrays_name_the_parameter_and_the_index():
+    assert vertex_indices(3, "s", 5).tolist() == [3]
+    assert vertex_indices([1.0, 1.0], "s", 5).tolist() == [1, 1]  # repeats are fine outside sources
+    with pytest.raises(ParameterError, match=r"^s\[2\] = 7 is outside \[0, 5\)"):
+        vertex_indices([0, 4, 7, -1], "s", 5)
+    with pytest.raises(ParameterError, match=r"^s\[0\] = -1 is outside"):
+        vertex_indices([-1], "s", 5)
+    with pytest.raises(ParameterError, match="s must hold integer vertex indices"):
+        vertex_indices([0.5], "s", 5)
+    with pytest.raises(ParameterError, match="s must hold integer vertex indices"):
+        vertex_indices(np.array([True]), "s", 5)
+    with pytest.raises(ParameterError, match="1-D"):
+        vertex_indices([[0, 1]], "s", 5)
+    with pytest.raises(ParameterError, match=r"m must have shape \(3,\)"):
+        vertex_mask(np.ones(4, bool), "m", 3)
+    with pytest.raises(ParameterError, match="boolean vertex mask"):
+        vertex_mask(np.ones(3), "m", 3)
+    d = as_vertex_field([0.0, np.inf, 1.0], "d", 3, nan_ok=False)
+    assert d.dtype == np.float64
+    with pytest.raises(ParameterError, match=r"^d has NaN values \(first at vertex 1\)"):
+        as_vertex_field([0.0, np.nan, np.nan], "d", 3, nan_ok=False)
+    with pytest.raises(ParameterError, match=r"d must have shape \(3,\)"):
+        as_vertex_field(np.zeros((3, 1)), "d", 3)
+
+
+def test_points_name_the_first_bad_row():
+    assert as_points([1, 2, 3], "x").shape == (3,) and as_points(np.zeros((4, 3)), "x").shape == (4, 3)
+    with pytest.raises(ParameterError, match=r"x\[2\] = \[0.0, nan, 0.0\]"):
+        as_points([[0, 0, 0], [1, 1, 1], [0, np.nan, 0]], "x")
+    with pytest.raises(ParameterError, match=r"got shape \(2, 2\)"):
+        as_points(np.zeros((2, 2)), "x")
+    with pytest.raises(SourceError, match=r"xyz must be .* finite positions: xyz = \[0.5, inf, 0.0\]"):
+        cg.surface_point(cg.grid_plane(3), [0.5, np.inf, 0.0])
+
+
+def test_validate_sources():
+    assert validate_sources(np.uint8(2), 3).tolist() == [2]
+    for value, text in [([], "empty"), ([0, 0], "vertex 0 is given more than once"), (3, "source index 3 is out"),
+                        ([[0], [1, 2]], "1-D sequence"), (True, "vertex indices"), ([2**70], "out of range"),
+                        ([0.5], "integer vertex indices")]:
+        with pytest.raises(SourceError, match=text):
+            validate_sources(value, 3)
+
+
+def test_check_output_path(tmp_path):
+    assert check_output_path(tmp_path / "a.PNG", (".png",)) == tmp_path / "a.PNG"
+    assert list(tmp_path.iterdir()) == []  # the probe file is removed
+    with pytest.raises(ParameterError, match="unsupported output file extension '.jpg'"):
+        check_output_path(tmp_path / "a.jpg", (".png",))
+    with pytest.raises(ParameterError, match="does not exist"):
+        check_output_path(tmp_path / "no" / "a.png", (".png",))
+    (tmp_path / "d.png").mkdir()
+    with pytest.raises(ParameterError, match="it is a directory"):
+        check_output_path(tmp_path / "d.png", (".png",))
+    with pytest.raises(TypeError, match="path must be a str or os.PathLike"):
+        check_output_path(3, (".png",))
+
+
+# ---------------------------------------------------------------- entry points: the same checks everywhere
+def test_entry_points_share_the_vocabulary(tmp_path):
+    mesh = cg.icosphere(1)
+    d = cg.geodesic_distance(mesh, 0, method="dijkstra")
+    from cvxgeodesic.evaluation import error_stats, gradient_norm_stats
+    from cvxgeodesic.plotting import plot_field
+
+    with pytest.raises(ParameterError, match=r"^sources\[1\] = 99 is outside"):
+        error_stats(d, d, sources=[0, 99])
+    with pytest.raises(ParameterError, match=r"^d must have shape \(42,\)"):
+        gradient_norm_stats(mesh, d[:-1])
+    with pytest.raises(ParameterError, match=r"^sources\[0\] = 42 is outside"):
+        plot_field(mesh, d, tmp_path / "a.png", sources=[42])
+    with pytest.raises(ParameterError, match=r"^dpi must be a number in \[10, 2000\], got 5"):
+        plot_field(mesh, d, tmp_path / "a.png", dpi=5)
+    with pytest.raises(ParameterError, match="does not exist"):
+        plot_field(mesh, d, tmp_path / "no" / "a.png")
+    bad = d.copy()
+    bad[5] = np.nan
+    with pytest.raises(ParameterError, match=r"distance has NaN values \(first at vertex 5\)"):
+        cg.geodesic_path(mesh, bad, 3)
+    with pytest.raises(ParameterError, match="^t_coef must be a finite number > 0, got 0"):
+        from cvxgeodesic.baselines import HeatBaseline
+
+        HeatBaseline(mesh, t_coef=0)
+    with pytest.raises(SourceError, match="source index 42 is out of range: the mesh has 42 vertices"):
+        from cvxgeodesic.baselines import DijkstraBaseline
+
+        DijkstraBaseline(mesh).solve([0, 42])
+    with pytest.raises(ParameterError, match="^subdivisions must be an integer >= 0, got -1"):
+        cg.icosphere(-1)
+    with pytest.raises(ParameterError, match="^unknown normalization 'cotan'; choose one of area, paper"):
+        cg.GeodesicSolver(mesh, normalization="cotan")
+    with pytest.raises(ParameterError, match=r"^tol must be a number in \(0, 1\), got 0"):
+        cg.GeodesicSolver(mesh, tol=0)
+    with pytest.raises(ParameterError, match="^max_iter must be a positive integer, got 0"):
+        cg.GeodesicSolver(mesh, max_iter=0)
+    with pytest.raises(ParameterError, match="^threads must be a positive integer or None, got 0"):
+        cg.GeodesicSolver(mesh, threads=0)
+
+
+def test_batch_uses_the_same_checks(tmp_path):
+    from cvxgeodesic.batch import run_batch
+
+    mesh_path = tmp_path / "m.obj"
+    mesh_path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    for kwargs, text in [({"method": "nope"}, "^unknown method 'nope'; choose one of"),
+                         ({"solver": "IPM"}, "^unknown solver 'IPM'"),
+                         ({"m": True}, "^m must be a finite number >= 0, got True"),
+                         ({"output_format": "obj"}, "^unknown output_format 'obj'; choose one of"),
+                         ({"n_workers": 0}, "^n_workers must be a positive integer, got 0")]:
+        with pytest.raises(ParameterError, match=text):
+            run_batch([mesh_path], 0, tmp_path / "out", **kwargs)
