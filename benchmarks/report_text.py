@@ -862,12 +862,234 @@ triangulation with fewer vertices several times more.
     return text, findings
 
 
+# ----------------------------------------------------------------------------------------------------------------------
+# order 2 (issue 17)
+# ----------------------------------------------------------------------------------------------------------------------
+
+O2_TAGS = ("p1", "p2", "heat", "fmm")
+O2_NAMES = {"p1": "order 1", "p2": "order 2", "heat": "heat", "fmm": "FMM"}
+
+
+def e1(x) -> str:
+    return f"{x:.1e}" if ok_num(x) else "—"
+
+
+def _span(values) -> str:
+    """'a – b' of the finite values (one value alone when they agree to two digits), '—' if none."""
+    vals = [v for v in values if ok_num(v)]
+    if not vals:
+        return "—"
+    lo, hi = e1(min(vals)), e1(max(vals))
+    return lo if lo == hi else f"{lo} – {hi}"
+
+
+def _times(recs, tags=O2_TAGS) -> str:
+    """Mean seconds per solve of each method, 'order 1 / order 2 / heat / FMM'."""
+    out = []
+    for t in tags:
+        ts = [r[t]["time_s"] for r in recs if ok_num(r.get(t, {}).get("time_s"))]
+        out.append(secs(sum(ts) / len(ts)) if ts else "—")
+    return " / ".join(out)
+
+
+def _o2_flat(flat) -> tuple[str, str]:
+    """The flat-case table and its computed sentence."""
+    rows, worst2, best1 = [], (None, ""), (None, "")
+    for row in flat:
+        per = row["per_source"]
+        cells = []
+        for t in O2_TAGS:
+            errs = [o[t].get("err") for o in per]
+            failed = [o[t] for o in per if not ok_num(o[t].get("err"))]
+            cell = _span(errs)
+            if failed and t == "heat" and row["kind"] == "point":
+                cell = "—²"
+            elif failed:
+                cell += " (failed: " + "; ".join(sorted({f.get("error") or f.get("status") for f in failed})) + ")"
+            cells.append(cell)
+        for o in per:
+            e2, e1_ = o["p2"].get("err"), o["p1"].get("err")
+            if ok_num(e2) and (worst2[0] is None or e2 > worst2[0]):
+                worst2 = (e2, f"{row['case']}, {row['kind']} source {o['source']}")
+            if ok_num(e1_) and (best1[0] is None or e1_ < best1[0]):
+                best1 = (e1_, f"{row['case']}, {row['kind']} source {o['source']}")
+        if row["kind"] == "vertex":
+            srcs = "vertices " + ", ".join(str(o["source"]) for o in per)
+        else:
+            srcs = f"{len(per)} point(s) in face(s) " + ", ".join(sorted({str(o["source"][0]) for o in per}))
+        rows.append([f"{row['case']} ({row['faces']:,} faces, aspect ≤ {row['aspect_max']:.0f})", srcs,
+                     *cells, _times(per), f"{row['loadavg_1min']:.1f}"])
+    t = md_table(["mesh", "sources", "order 1 (qclp)", "order 2", "heat", "FMM",
+                  "s per solve: order 1 / order 2 / heat / FMM", "load (1 min)"], rows)
+    sentence = (f"Order 2's largest error on these meshes is {e1(worst2[0])} ({worst2[1]}); order 1's smallest is "
+                f"{e1(best1[0])} ({best1[1]})." if ok_num(worst2[0]) and ok_num(best1[0]) else "")
+    return t, sentence
+
+
+def _mean_max(rec) -> str:
+    if not rec or not rec.get("ok"):
+        return "failed" if rec else "—"
+    return f"{p2(rec.get('rel_mean'))} / {p1(rec.get('rel_max'))}"
+
+
+def _o2_ratios(rows):
+    """(ratios order-2 mean / order-1 mean, meshes where order 1 is exact (no ratio)) over rows where both solved."""
+    rat, exact1 = [], 0
+    for r in rows:
+        a, b = r["p1"].get("rel_mean"), r["p2"].get("rel_mean")
+        if ok_num(a) and ok_num(b):
+            if a > 0:
+                rat.append(b / a)
+            else:
+                exact1 += 1
+    return rat, exact1
+
+
+def _o2_cad_tables(cad) -> tuple[str, str, dict]:
+    """The per-mesh table of thingi_*.stl (with the left-out meshes' stored numbers) and the summary table."""
+    import statistics
+
+    rows = cad["rows"]
+    per = []
+    for r in (x for x in rows if x["set"] == "thingi_*.stl"):
+        best = min((r[t]["rel_mean"], t) for t in O2_TAGS if ok_num(r[t].get("rel_mean")))[1]
+        cells = [f"**{_mean_max(r[t])}**" if t == best else _mean_max(r[t]) for t in O2_TAGS]
+        loads = [r[t].get("loadavg_1min") for t in O2_TAGS if ok_num(r[t].get("loadavg_1min"))]
+        per.append([f"{r['name'].replace('.stl', '')} ({r['faces']:,})", *cells, _times([r]),
+                    f"{max(loads):.1f}" if loads else "?"])
+    for lo in cad["left_out"]:
+        st = lo.get("stored") or {}
+        cells = [f"{p2(st[t]['mean'])} / {p1(st[t]['max'])}" if "mean" in st.get(t, {}) else "—" for t in O2_TAGS]
+        tm = " / ".join(secs(st.get(t, {}).get("time")) for t in O2_TAGS)
+        per.append([f"{lo['name'].replace('.stl', '')} ({lo['faces']:,}): **stored run³**", *cells, tm, "5–11"])
+    t_per = md_table(["mesh (faces)", "order 1", "order 2", "heat", "FMM", "s: order 1 / order 2 / heat / FMM",
+                      "load (1 min)"], per)
+    summ, stats = [], {}
+    for set_name, sel in (("thingi_*.stl", lambda x: x["set"] == "thingi_*.stl"),
+                          ("thingi10k_small", lambda x: x["set"] == "thingi10k_small"), ("all", lambda x: True)):
+        rs = [x for x in rows if sel(x)]
+        if not rs:
+            continue
+        rat, exact1 = _o2_ratios(rs)
+        med = statistics.median(rat) if rat else None
+        half = sum(1 for x in rs if ok_num(x["p2"].get("rel_mean")) and ok_num(x["p1"].get("rel_mean"))
+                   and x["p2"]["rel_mean"] <= 0.5 * x["p1"]["rel_mean"])
+        worse = sum(1 for x in rs if ok_num(x["p2"].get("rel_mean")) and ok_num(x["p1"].get("rel_mean"))
+                    and x["p2"]["rel_mean"] > x["p1"]["rel_mean"])
+        means = []
+        for t in O2_TAGS:
+            v = [x[t]["rel_mean"] for x in rs if ok_num(x[t].get("rel_mean"))]
+            means.append(p1(sum(v) / len(v)) if v else "—")
+        tot = [sum(x[t]["time_s"] for x in rs if ok_num(x[t].get("time_s"))) for t in ("p1", "p2")]
+        stats[set_name] = {"median": med, "n": len(rs), "half": half, "worse": worse, "exact1": exact1}
+        summ.append([set_name, str(len(rs)), (f"**{med:.2f}**" if set_name == "all" else f"{med:.2f}")
+                     if med is not None else "—", str(half), str(worse), " / ".join(means),
+                     f"{secs(tot[0])} / {secs(tot[1])}"])
+    t_sum = md_table(["set", "meshes", "median of (order-2 mean error / order-1 mean error)", "order 2 ≤ ½ order 1",
+                      "order 2 worse", "mean of the mean errors: order 1 / order 2 / heat / FMM",
+                      "total s: order 1 / order 2"], summ)
+    return t_per, t_sum, stats
+
+
+def _o2_against_stored(cad) -> str:
+    """How this run's mean errors compare with the stored run behind docs/order2.md (computed)."""
+    parts = []
+    for t in ("p1", "p2"):
+        diffs = [(abs(r[t]["rel_mean"] - cad["stored"][r["name"]][t]["mean"]), r["name"]) for r in cad["rows"]
+                 if r["name"] in cad["stored"] and ok_num(r[t].get("rel_mean"))
+                 and ok_num(cad["stored"][r["name"]][t].get("mean"))]
+        if not diffs:
+            continue
+        close = sum(1 for d, _ in diffs if d <= 0.001)
+        worst = max(diffs)
+        parts.append(f"{O2_NAMES[t]}'s mean error agrees with it to 0.1 points on {close} of {len(diffs)} meshes"
+                     + (f" (largest difference {100 * worst[0]:.2f} points, {worst[1]})" if close < len(diffs) else ""))
+    if not parts:
+        return ""
+    return (f"Against the stored run of `benchmarks/order2.py` behind [order2.md](order2.md) (`{cad['stored_file']}`): "
+            + "; ".join(parts) + ".")
+
+
+def order2(r) -> tuple[str, list[str]]:
+    flat_t, flat_s = _o2_flat(r["flat"])
+    cad = r["cad"]
+    t_per, t_sum, stats = _o2_cad_tables(cad)
+    allst = stats.get("all", {})
+    med = allst.get("median")
+    verdict = ""
+    if med is not None:
+        verdict = (f"Over the {allst['n']} meshes the median ratio of order 2's mean error to order 1's is "
+                   f"**{med:.2f}** ({'meets' if med <= 0.5 else 'misses'} issue 17's target ≤ 0.5); order 2 is at "
+                   f"most half of order 1 on {allst['half']} and worse on {allst['worse']}"
+                   + (f"; on {allst['exact1']} order 1 is exact (error 0), no ratio" if allst["exact1"] else "") + ".")
+    worse = [(x["name"], x["p1"]["rel_mean"], x["p2"]["rel_mean"]) for x in cad["rows"]
+             if ok_num(x["p2"].get("rel_mean")) and ok_num(x["p1"].get("rel_mean"))
+             and x["p2"]["rel_mean"] > x["p1"]["rel_mean"]]
+    worse_txt = ("Order 2 is worse on: " + "; ".join(f"{n} ({a:.1e} against order 1's {b:.1e})" for n, b, a in worse)
+                 + "." if worse else "")
+    fails = [f"{O2_NAMES[t]} on {x['name']} ({x[t].get('error') or x[t].get('status')})" for x in cad["rows"]
+             for t in O2_TAGS if not x[t].get("ok")]
+    fallback = [f"{x['name']}" for x in cad["rows"] if x["p2"].get("ok") and x["p2"].get("solver") != "ipm"]
+    solver_txt = ("Order 2 was solved by the library's order-2 interior-point solver on every mesh" if not fallback
+                  else f"Order 2 needed Clarabel (the library's fallback) on {', '.join(fallback)}")
+    skipped = cad["skipped"]
+    skip_txt = (f"; {len(skipped)} file{'s' if len(skipped) > 1 else ''} without an exact reference (non-manifold) "
+                "skipped" if skipped else "")
+    left = cad["left_out"]
+    left_txt = ""
+    if left:
+        left_txt = ("³ Not solved in this run: " + "; ".join(f"{x['name']} ({x['faces']:,} faces)" for x in left)
+                    + f" (more than {r['max_faces']:,} faces: one order-2 solve takes minutes; "
+                    "`benchmarks/report.py --order2-large` includes it). Its row is **copied from the stored run** "
+                    f"`{cad['stored_file']}` of `benchmarks/order2.py` (2026-12-01, the numbers of "
+                    "[order2.md](order2.md); load average 5–11 on 2 cores) and is in none of the other numbers of "
+                    "this section.")
+    f_cad, f_flat = (r["figures"] + [None, None])[:2]
+    text = f"""## 12. Order 2: second-order elements (issue 17, not in the paper)
+
+**What was run.** `cg.GeodesicSolver(mesh, "qclp", order=2)` (P2 elements for the squared distance, see
+[order2.md](order2.md)) next to order 1 (`"qclp"`), the heat method and fast marching, each built and solved
+once per source; times are set-up + solve of that call. *Flat meshes* (those of `tests/test_order2.py`,
+generated by `benchmarks/order2.py`): the exact distance is the Euclidean one; the error is
+`max |d − exact| / max exact` over the vertices, as a range over the sources of the row. *Coarse CAD*: the seven
+anisotropic `thingi_*.stl` and the manifold files of `thingi10k_small/` against exact MMP from vertex 0 (mean and
+max relative error over the vertices, source left out){skip_txt}.
+The load column is the 1-minute load average when the row's solves ended (2 cores, shared with other jobs).
+
+### Flat meshes
+
+{flat_t}
+
+² The heat method (potpourri3d) takes vertex sources only.
+
+{flat_s}
+
+{fig(f_flat, 'flat fan plate: error maps') if f_flat else ''}
+
+### Coarse CAD
+
+Per mesh, mean / max relative error (bold: lowest mean):
+
+{t_per}
+
+{left_txt}
+
+{t_sum}
+
+{fig(f_cad, 'coarse CAD: errors against order 1') if f_cad else ''}
+
+**What this shows.** {verdict} {worse_txt} {solver_txt}. {_o2_against_stored(cad)}
+{"Failed: " + "; ".join(fails) + "." if fails else ""}
+"""
+    return text, []
+
+
 SECTION_TEXT = {"table2": table2, "fig2": fig2, "fig3": fig3, "fig4": fig4, "fig5": fig5, "fig6": fig6,
                 "fig7": fig7, "fig8": fig8, "fig9": fig9, "norm_resolution": norm_resolution,
-                "norm_remeshing": norm_remeshing}
+                "norm_remeshing": norm_remeshing, "order2": order2}
 SECTION_TITLE = {"table2": "Table 2", "fig2": "Fig. 2", "fig3": "Fig. 3", "fig4": "Fig. 4", "fig5": "Fig. 5",
                  "fig6": "Fig. 6", "fig7": "Fig. 7", "fig8": "Fig. 8", "fig9": "Fig. 9",
-                 "norm_resolution": "Resolution study", "norm_remeshing": "Remeshing study"}
+                 "norm_resolution": "Resolution study", "norm_remeshing": "Remeshing study", "order2": "Order 2"}
 
 
 def render(results, env, timings, plan, helpers) -> str:
