@@ -65,7 +65,7 @@ def cad_scatter(points: Sequence[Mapping[str, float | None]], dest: Path, title:
 
 
 def flat_panel(mesh: cg.TriMesh, exact: np.ndarray, fields: Mapping[str, np.ndarray], dest: Path,
-               vmax: float = 0.05) -> Path:
+               vmax: float = 0.05, title: str | None = None) -> Path:
     """Error maps ``|d − exact| / max exact`` of several fields on one flat mesh (z = 0), side by side.
 
     Parameters
@@ -80,6 +80,8 @@ def flat_panel(mesh: cg.TriMesh, exact: np.ndarray, fields: Mapping[str, np.ndar
         The PNG to write.
     vmax : float, default 0.05
         Top of the colour scale.
+    title : str, optional
+        A title above the panels.
 
     Returns
     -------
@@ -97,10 +99,15 @@ def flat_panel(mesh: cg.TriMesh, exact: np.ndarray, fields: Mapping[str, np.ndar
         err = np.abs(np.asarray(d) - exact) / exact.max()
         tp = ax.tripcolor(tri, err, shading="gouraud", vmin=0, vmax=vmax, cmap="magma")
         ax.triplot(tri, lw=0.3, color="w")
+        if np.min(exact) == 0.0:  # a vertex source: mark it
+            k = int(np.argmin(exact))
+            ax.plot(V[k, 0], V[k, 1], "o", ms=5, mfc="cyan", mec="k", mew=0.6)
         ax.set_title(f"{name}: max {err.max():.1e}", fontsize=9)
         ax.set_aspect("equal")
         ax.axis("off")
     fig.colorbar(tp, ax=list(axes), shrink=0.8, label="|d − exact| / max d")
+    if title:
+        fig.suptitle(title, fontsize=10)
     fig.savefig(dest, dpi=120, bbox_inches="tight")
     plt.close(fig)
     return dest

@@ -152,7 +152,7 @@ def _error_text(exc: BaseException) -> str:
     return _short(f"{type(exc).__name__}: {exc}")
 
 
-def _attempt(mesh, method: str, source, m: float, solver: str, order: int = 1):
+def _attempt(mesh, method: str, source, m: float, solver: str, order: int = 1, normalization: str = "area"):
     """One solve with a fresh solver object; returns (result or None, wall seconds, exception, warnings)."""
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
@@ -161,6 +161,8 @@ def _attempt(mesh, method: str, source, m: float, solver: str, order: int = 1):
             kwargs = {} if method in BASELINE_METHODS else {"solver": solver, "m": m}
             if order != 1:
                 kwargs["order"] = order
+            if normalization != "area":
+                kwargs["normalization"] = normalization
             res = cg.GeodesicSolver(mesh, method, **kwargs).solve(source)
             err = None
         except Exception as exc:  # noqa: BLE001 - every failure becomes a status in the report
@@ -189,10 +191,12 @@ def _attempt_record(solver: str, wall: float, err) -> dict:
             "error": _short(f"{type(err).__name__}: {msg}", 400), "hint": hint}
 
 
-def solve(ctx: Context, mesh, mesh_key: str, method: str, source: int, m: float = 1.0, order: int = 1) -> dict:
+def solve(ctx: Context, mesh, mesh_key: str, method: str, source: int, m: float = 1.0, order: int = 1,
+          normalization: str = "area") -> dict:
     """Solve ``method`` on ``mesh`` from ``source`` (cached), falling back from our IPM to Clarabel.
 
-    ``order=2``: the library's second-order elements (``method="qclp"`` only), cached under its own key.
+    ``order=2``: the library's second-order elements (``method="qclp"`` only); ``normalization`` other
+    than the default ``"area"`` (formulations only): each cached under its own key.
     Returns a record: ``method, mesh, source, m, order, ok, solver, status, time_s`` (construction +
     solve, what one call costs), ``setup_s, solve_s, iterations, fallback`` (why Clarabel was used, or
     None), ``warnings``, ``notes`` (the library's ``info.notes``; absent in fields cached before it was
@@ -202,6 +206,8 @@ def solve(ctx: Context, mesh, mesh_key: str, method: str, source: int, m: float 
     is_formulation = method in FORMULATIONS
     mtag = f"{m:g}" if is_formulation and FORMULATIONS[method][1] is not None else "-"
     otag = f"__o{order}" if order != 1 else ""  # order-1 keys stay as they were: the existing cache stays valid
+    if normalization != "area" and is_formulation:
+        otag += f"__n{normalization}"
     key = f"{mesh_key}__{method}{otag}__m{mtag}__s{source}__{mesh_fingerprint(mesh)}".replace("/", "+")
     path = ctx.cache / "fields" / f"{key}.npz"
     if path.exists():
@@ -211,8 +217,9 @@ def solve(ctx: Context, mesh, mesh_key: str, method: str, source: int, m: float 
         return rec
 
     rec = {"method": method, "mesh": mesh_key, "source": int(source), "m": m if mtag != "-" else None,
-           "order": order, "n_vertices": mesh.n_vertices, "n_faces": mesh.n_faces, "fallback": None, "attempts": []}
-    res, wall, err, msgs = _attempt(mesh, method, source, m, "auto", order)
+           "order": order, "normalization": normalization if is_formulation else None,
+           "n_vertices": mesh.n_vertices, "n_faces": mesh.n_faces, "fallback": None, "attempts": []}
+    res, wall, err, msgs = _attempt(mesh, method, source, m, "auto", order, normalization)
     internal = [w.split(":", 1)[1] for w in msgs if w.startswith("ipm-fallback:")]
     msgs = [w for w in msgs if not w.startswith("ipm-fallback:")]
     if res is not None and (internal or res.info.extra.get("ipm_failure")):
@@ -230,7 +237,7 @@ def solve(ctx: Context, mesh, mesh_key: str, method: str, source: int, m: float 
     if err is not None and is_formulation and not isinstance(err, NonManifoldError) and not rec["fallback"]:
         rec["fallback"] = f"ipm failed: {_short(getattr(err, 'status', type(err).__name__), 60)}"
         log(f"    {method} on {mesh_key}: {_error_text(err)}; retrying with clarabel")
-        res, wall2, err2, msgs2 = _attempt(mesh, method, source, m, "clarabel", order)
+        res, wall2, err2, msgs2 = _attempt(mesh, method, source, m, "clarabel", order, normalization)
         rec["attempts"].append(_attempt_record("clarabel", wall2, err2))
         msgs = msgs + [w for w in msgs2 if w not in msgs]
         wall, err = wall2, err2
