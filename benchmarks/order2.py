@@ -22,6 +22,89 @@ from cvxgeodesic.baselines import BASELINES
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "meshes"
 
 
+# ---------------------------------------------------------------- flat test meshes (also used by report.py)
+def needle_strip(nx: int, aspect: float) -> cg.TriMesh:
+    """A flat strip of ``2·nx`` triangles of aspect ratio about ``aspect`` (edge length / altitude).
+
+    Returns a mesh of ``2·(nx + 1)`` vertices in the plane z = 0, spanning x in [0, 1.05].
+    """
+    L = 1.0
+    H = L / nx / aspect
+    xs = np.linspace(0, L, nx + 1)
+    V = np.array([[x, 0, 0] for x in xs] + [[x + 0.5 * L / nx, H, 0] for x in xs])
+    F = []
+    for i in range(nx):
+        F += [[i, i + 1, nx + 1 + i], [i + 1, nx + 2 + i, nx + 1 + i]]
+    return cg.TriMesh(V, np.array(F), name=f"needle strip (aspect {aspect:g})")
+
+
+def delaunay_mesh(k: int = 300, seed: int = 3) -> cg.TriMesh:
+    """The Delaunay triangulation of ``k`` uniform random points of the unit square (z = 0)."""
+    from scipy.spatial import Delaunay
+
+    P = np.random.default_rng(seed).random((k, 2))
+    return cg.TriMesh(np.c_[P, np.zeros(k)], Delaunay(P).simplices, name=f"random Delaunay ({k} points)")
+
+
+def fan_plate(k: int = 12) -> cg.TriMesh:
+    """A flat 2 × 1 CAD-style plate: ``k`` points on each long side, every face a fan from one of two corners.
+
+    Returns ``2k`` vertices (bottom row 0..k-1, top row k..2k-1) and ``2(k-1)`` faces; the fans are
+    long and thin (aspect above 20 for ``k = 12``).
+    """
+    top = [(x, 1.0) for x in np.linspace(0, 2, k)]
+    bottom = [(x, 0.0) for x in np.linspace(0, 2, k)]
+    V = np.array([(*p, 0.0) for p in bottom + top])
+    F = []
+    # bottom-left corner (0) fans to the top row, top-right corner (2k−1) fans to the bottom row
+    for i in range(k - 1):
+        F.append([0, k + i + 1, k + i])
+    for i in range(k - 1):
+        F.append([i, i + 1, 2 * k - 1])
+    F = [f for f in F if len(set(f)) == 3]
+    return cg.TriMesh(V, np.array(F), name="CAD plate of fans")
+
+
+def euclid_from(mesh: cg.TriMesh, src) -> np.ndarray:
+    """(n,) Euclidean distances from a vertex index or a ``(face, bary)`` point: exact on a flat mesh."""
+    if isinstance(src, int | np.integer):
+        p = mesh.V[src]
+    else:
+        p = np.asarray(src[1]) @ mesh.V[mesh.F[src[0]]]
+    return np.linalg.norm(mesh.V - p, axis=1)
+
+
+BARYS = ((0.2, 0.3, 0.5), (0.5, 0.5, 0.0), (1 / 3, 1 / 3, 1 / 3))  # inside, on an edge, at the centroid
+
+
+def flat_cases(quick: bool = False) -> list[tuple[str, cg.TriMesh, list, list]]:
+    """The flat meshes of ``tests/test_order2.py`` with their sources.
+
+    Returns
+    -------
+    list of (label, mesh, vertex sources, point sources)
+        Point sources are ``(face, (b0, b1, b2))``; ``quick`` gives smaller stand-ins.
+    """
+    fan = fan_plate()
+    if quick:
+        return [("jittered 8×8 grid", cg.grid_plane(8, jitter=0.4, seed=1), [0, 40], [(10, BARYS[0])]),
+                ("needle strip, aspect 50", needle_strip(10, 50), [0, 5], [(4, (0.25, 0.25, 0.5))]),
+                ("CAD plate of fans", fan, [0, 5, fan.n_vertices - 1], [(3, (0.3, 0.3, 0.4))])]
+    cases = [("jittered 20×20 grid", cg.grid_plane(20, jitter=0.4, seed=1), [0, 200, 37],
+              [(37, b) for b in BARYS])]
+    cases += [(f"needle strip, aspect {a}", needle_strip(10, a), [0, 5], [(4, (0.25, 0.25, 0.5))])
+              for a in (50, 240, 1000)]
+    cases.append(("random Delaunay (300 points)", delaunay_mesh(), [0, 17], [(10, b) for b in BARYS]))
+    cases.append(("CAD plate of fans", fan, [0, 5, fan.n_vertices - 1], [(3, (0.3, 0.3, 0.4)), (15, (0.1, 0.1, 0.8))]))
+    return cases
+
+
+def cad_names(shared: Path = SHARED) -> list[str]:
+    """The coarse CAD set: the seven ``thingi_*.stl`` files, then ``thingi10k_small/*.stl`` (names in ``shared``)."""
+    return (sorted(p.name for p in shared.glob("thingi_*.stl"))
+            + [f"thingi10k_small/{p.name}" for p in sorted((shared / "thingi10k_small").glob("*.stl"))])
+
+
 def rel_err(d, de):
     ok = np.isfinite(de) & (de > 1e-12 * np.nanmax(de[np.isfinite(de)]))
     r = np.abs(d[ok] - de[ok]) / de[ok]
@@ -61,7 +144,7 @@ def main(argv):
     names = []
     for a in argv[1:]:
         if a == "thingi10k_small":
-            names += [f"thingi10k_small/{p.name}" for p in sorted((SHARED / a).glob("*.stl"))]
+            names += [n for n in cad_names() if n.startswith("thingi10k_small/")]
         else:
             names.append(a)
     rows = json.loads(dest.read_text()) if dest.exists() else []

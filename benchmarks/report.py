@@ -6,6 +6,7 @@ Usage (``make report`` runs the first line)::
     python benchmarks/report.py --out docs --sections fig4 fig9  # recompute these sections only
     python benchmarks/report.py --out docs --fresh               # drop all caches first
     python benchmarks/report.py --out /tmp/r --quick             # small meshes only (development)
+    python benchmarks/report.py --out docs --sections order2 --order2-large   # order 2 on thingi_32770 too
 
 Paper: *Convex Quadratic Programming for Computing Geodesic Distances on Triangle Meshes*,
 Mathematics 12(7):993, 2024. Meshes come from ``--shared`` (default ``../shared/meshes`` next to the
@@ -41,6 +42,7 @@ from report_common import (
     log,
     metrics,
     save_figure,
+    save_png,
     solve,
     solver_text,
     status_text,
@@ -63,15 +65,31 @@ SWEEP_ENERGIES = ["qcqp-dirichlet", "qcqp-laplacian", "qcqp-hessian"]
 RES_TARGETS = [5000, 20000]
 RES_METHODS = ["qcqp-hessian", "qclp", "heat", "fmm"]
 THINGI_METHODS = ["qcqp-hessian", "qclp", "lcqp-hessian", "heat", "fmm", "dijkstra"]
+#: Order-2 section: (tag, method, order) of the compared fields; exact MMP is the reference.
+ORDER2_METHODS = (("p1", "qclp", 1), ("p2", "qclp", 2), ("heat", "heat", 1), ("fmm", "fmm", 1))
+#: Also solved on the CAD set: order 1 with the uniform stretch (the default before issue 12's area
+#: normalization, and the order 1 of the stored run behind docs/order2.md).
+ORDER2_EXTRA = (("p1u", "qclp", 1, "paper"),)
+ORDER2_MAX_FACES = 10_000  # above: minutes per order-2 solve (thingi_32770, 38K faces: ~590 s)
+ORDER2_QUICK_CAD = ["thingi_93703.stl", "thingi_96457.stl", "thingi10k_small/43858.stl",  # 96457: left out
+                    "thingi10k_small/100036.stl", "thingi10k_small/54228.stl", "thingi10k_small/93068.stl"]
+ORDER2_STORED = "benchmarks/order2_results/cad_default.json"  # the run behind docs/order2.md's tables
+ORDER2_FIGURE_CASE = ("CAD plate of fans", 5)  # the flat case and vertex source of the error-map figure
 MEDIAL_METHODS = ["exact", "fmm", "qcqp-hessian", "lcqp-hessian", "heat", "dijkstra", "qclp", "qcqp-laplacian",
                   "qcqp-dirichlet", "lclp"]
 
 
 class Plan:
-    """Which meshes each section uses (``--quick`` swaps in small ones for development)."""
+    """Which meshes each section uses (``--quick`` swaps in small ones for development).
 
-    def __init__(self, quick: bool):
+    ``order2_large``: the order-2 section also solves the CAD meshes above ``ORDER2_MAX_FACES`` faces
+    (thingi_32770, 38K faces, took ~590 s); by default it quotes the stored run for them.
+    """
+
+    def __init__(self, quick: bool, order2_large: bool = False):
         self.quick = quick
+        self.order2_quick_cad = ORDER2_QUICK_CAD if quick else None  # None: the whole coarse CAD set
+        self.order2_max_faces = None if order2_large else 1000 if quick else ORDER2_MAX_FACES
         self.table2 = ["spot.obj", "bunny_7k.off"] if quick else TABLE2_MESHES
         self.hist_pair = ("bunny_7k.off", "bunny.obj") if not quick else ("spot.obj", "bunny_7k.off")
         self.one = "spot.obj" if quick else "bimba.obj"  # Fig. 3, 4, 9
@@ -684,10 +702,151 @@ def sec_norm_remeshing(ctx, plan):
     return out
 
 
+# ----------------------------------------------------------------------------------------------------------------------
+# order 2 (issue 17; not in the paper)
+# ----------------------------------------------------------------------------------------------------------------------
+
+
+def _flat_solve(mesh, method: str, order: int, src, exact: np.ndarray) -> tuple[dict, np.ndarray | None]:
+    """One flat-case solve (set-up + solve timed): its record and field, or an ``error`` record and None.
+
+    ``err`` is ``max |d − exact| / max exact`` over the vertices (:func:`summarize_field`'s ``abs_max``
+    over the largest exact distance); a vertex source is left out of the comparison.
+    """
+    import warnings
+
+    from cvxgeodesic.evaluation.summary import summarize_field, summarize_run
+
+    kwargs = {"order": order} if order != 1 else {}
+    point = not isinstance(src, int | np.integer)
+    arg = cg.SurfacePoint(int(src[0]), np.asarray(src[1], dtype=float)) if point else int(src)
+    t0 = time.perf_counter()
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # DegenerateFacesWarning on split needles: in the notes too
+            res = cg.GeodesicSolver(mesh, method, **kwargs).solve(arg)
+    except Exception as exc:  # noqa: BLE001 - e.g. heat cannot take a point source: a '—' in the table
+        return {"err": None, "error": f"{type(exc).__name__}: {str(exc).split(';')[0]}"[:160]}, None
+    wall = time.perf_counter() - t0
+    run = summarize_run(res.info, time_s=wall)
+    vs = [] if point else [int(src)]
+    acc = summarize_field(mesh, res.distance, exact, vs, smoothness=False, gradient=False)
+    rec = {k: run[k] for k in ("solver", "status", "time_s", "iterations", "notes")}
+    rec["err"] = acc["abs_max"] / float(exact.max())
+    return rec, np.asarray(res.distance, dtype=np.float64)
+
+
+def order2_flat(plan) -> tuple[list[dict], tuple | None]:
+    """Flat meshes against the Euclidean distance: one row per (mesh, kind of source).
+
+    Returns (rows, figure data): each row has the case, its size and largest face aspect, the kind
+    (``vertex`` / ``point``) and per source the records of :data:`ORDER2_METHODS`; the figure data is
+    (mesh, exact, {label: field}) of :data:`ORDER2_FIGURE_CASE`, or None when that case was not run.
+    """
+    from order2 import euclid_from, flat_cases
+
+    rows, fig_data = [], None
+    for _tag, meth, order in ORDER2_METHODS:  # load the compiled kernels before anything is timed
+        _flat_solve(cg.grid_plane(3), meth, order, 0, np.ones(16))
+    for case, mesh, vsrc, psrc in flat_cases(plan.quick):
+        aspect = float(np.max(mesh.face_longest_edges / mesh.face_min_altitudes))
+        for kind, sources in (("vertex", vsrc), ("point", psrc)):
+            per = []
+            for src in sources:
+                exact = euclid_from(mesh, src)
+                one = {"source": src if kind == "vertex" else [int(src[0]), [float(b) for b in src[1]]]}
+                fields = {}
+                for tag, meth, order in ORDER2_METHODS:
+                    one[tag], fields[tag] = _flat_solve(mesh, meth, order, src, exact)
+                per.append(one)
+                if (case, src) == ORDER2_FIGURE_CASE:
+                    fig_data = (mesh, exact, {"order 1 (qclp)": fields["p1"], "order 2": fields["p2"],
+                                              "heat": fields["heat"], "FMM": fields["fmm"]})
+            log(f"  order 2, flat: {case}, {kind} sources: order 2 max "
+                f"{max((o['p2']['err'] or 0.0) for o in per):.1e}")
+            rows.append({"case": case, "faces": mesh.n_faces, "vertices": mesh.n_vertices, "aspect_max": aspect,
+                         "kind": kind, "per_source": per, "loadavg_1min": round(os.getloadavg()[0], 2)})
+    return rows, fig_data
+
+
+def _order2_record(rec: dict, exact: dict, mesh) -> dict:
+    """A cached solve record cut to what the order-2 tables show, with its errors against exact MMP."""
+    from cvxgeodesic.evaluation.summary import summarize_field
+
+    out = {k: rec.get(k) for k in ("ok", "solver", "status", "time_s", "setup_s", "solve_s", "iterations",
+                                   "notes", "warnings", "error", "loadavg_1min")}
+    if rec["ok"]:
+        acc = summarize_field(mesh, rec["distance"], exact["distance"], [SOURCE], smoothness=False, gradient=False)
+        out.update(rel_mean=acc["rel_mean"], rel_max=acc["rel_max"], n_compared=acc["n_compared"])
+    return out
+
+
+def order2_cad(ctx, plan) -> dict:
+    """The coarse CAD meshes against exact MMP from vertex 0: order 1, order 2, heat, FMM (fields cached).
+
+    Meshes above ``plan.order2_max_faces`` faces are left out (with the stored run's numbers from
+    :data:`ORDER2_STORED`, labelled so); meshes without an exact reference (non-manifold) are skipped.
+    """
+    from order2 import cad_names
+
+    names = plan.order2_quick_cad or cad_names(ctx.shared)
+    stored_path = REPO / ORDER2_STORED
+    stored = {r["mesh"]: r for r in json.loads(stored_path.read_text())} if stored_path.exists() else {}
+    out = {"rows": [], "skipped": [], "left_out": [], "stored_file": ORDER2_STORED, "stored": {}}
+    for name in names:
+        mesh = ctx.mesh(name)
+        cad_set = "thingi10k_small" if name.startswith("thingi10k_small/") else "thingi_*.stl"
+        if plan.order2_max_faces is not None and mesh.n_faces > plan.order2_max_faces:
+            out["left_out"].append({"name": name, "set": cad_set, "faces": mesh.n_faces, "stored": stored.get(name)})
+            continue
+        key = f"o2_{name}"  # this section's own fields: its times are of this run, not of Fig. 7's
+        exact = solve(ctx, mesh, key, "exact", SOURCE)
+        if not exact["ok"]:
+            out["skipped"].append({"name": name, "set": cad_set, "faces": mesh.n_faces, "why": status_text(exact)})
+            continue
+        log(f"  order 2, CAD: {name} ({mesh.n_faces} faces)")
+        row = {"name": name, "set": cad_set, "faces": mesh.n_faces, "vertices": mesh.n_vertices,
+               "exact": _order2_record(exact, exact, mesh)}
+        for tag, meth, order in ORDER2_METHODS:
+            row[tag] = _order2_record(solve(ctx, mesh, key, meth, SOURCE, order=order), exact, mesh)
+        for tag, meth, order, norm in ORDER2_EXTRA:
+            row[tag] = _order2_record(solve(ctx, mesh, key, meth, SOURCE, order=order, normalization=norm), exact,
+                                      mesh)
+        out["rows"].append(row)
+        if name in stored and "p2" in stored[name]:
+            out["stored"][name] = {t: {k: stored[name].get(t, {}).get(k) for k in ("mean", "max", "time")}
+                                   for t in ("p1", "p2", "heat", "fmm")}
+    return out
+
+
+def sec_order2(ctx, plan):
+    """Issue 17: order 1, order 2, heat, FMM against exact on flat meshes and on the coarse CAD set."""
+    from order2_figures import cad_scatter, flat_panel
+
+    flat, fig_data = order2_flat(plan)
+    cad = order2_cad(ctx, plan)
+    figs = []
+    points = [{t: r[t].get("rel_mean") for t in ("p1", "p2", "heat", "fmm")} for r in cad["rows"]]
+    figs.append(cad_scatter(points, ctx.figures / "fig12_order2_cad.png").name)
+    if fig_data is not None:
+        figs.append(flat_panel(*fig_data, ctx.figures / "fig12_order2_flat.png",
+                               title=f"{ORDER2_FIGURE_CASE[0]}, source vertex {ORDER2_FIGURE_CASE[1]} (cyan): "
+                               "error against the Euclidean distance").name)
+    from PIL import Image
+
+    for f in figs:  # 256 colours like the report's other figures
+        path = ctx.figures / f
+        with Image.open(path) as im:
+            rgb = im.convert("RGB")
+        save_png(rgb, path)
+    return {"flat": flat, "cad": cad, "max_faces": plan.order2_max_faces, "figures": figs,
+            "figure_case": list(ORDER2_FIGURE_CASE)}
+
+
 SECTIONS = {
     "table2": sec_table2, "fig2": sec_fig2, "fig3": sec_fig3, "fig4": sec_fig4, "fig5": sec_fig5,
     "fig6": sec_fig6, "fig7": sec_fig7, "fig8": sec_fig8, "fig9": sec_fig9,
-    "norm_resolution": sec_norm_resolution, "norm_remeshing": sec_norm_remeshing,
+    "norm_resolution": sec_norm_resolution, "norm_remeshing": sec_norm_remeshing, "order2": sec_order2,
 }
 
 
@@ -717,6 +876,8 @@ def main(argv=None) -> int:
     ap.add_argument("--fresh", action="store_true", help="delete every cache (sections and fields) first")
     ap.add_argument("--quick", action="store_true", help="small meshes only, for development (use another --out)")
     ap.add_argument("--no-compute", action="store_true", help="only rewrite results.md from the cached sections")
+    ap.add_argument("--order2-large", action="store_true",
+                    help=f"order2: also solve the CAD meshes above {ORDER2_MAX_FACES:,} faces (thingi_32770: ~10 min)")
     args = ap.parse_args(argv)
 
     shared = Path(args.shared) if args.shared else DEFAULT_SHARED
@@ -729,7 +890,7 @@ def main(argv=None) -> int:
         shutil.rmtree(cache)
     ctx = Context(shared=shared.resolve(), out=Path(args.out), cache=cache, quick=args.quick)
     ctx.setup()
-    plan = Plan(args.quick)
+    plan = Plan(args.quick, order2_large=args.order2_large)
     argv_used = ["benchmarks/report.py", *(argv if argv is not None else sys.argv[1:])]
     env_path = cache / "environment.json"
     timings_path = cache / "timings.json"

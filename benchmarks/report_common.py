@@ -152,13 +152,17 @@ def _error_text(exc: BaseException) -> str:
     return _short(f"{type(exc).__name__}: {exc}")
 
 
-def _attempt(mesh, method: str, source, m: float, solver: str):
+def _attempt(mesh, method: str, source, m: float, solver: str, order: int = 1, normalization: str = "area"):
     """One solve with a fresh solver object; returns (result or None, wall seconds, exception, warnings)."""
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
             kwargs = {} if method in BASELINE_METHODS else {"solver": solver, "m": m}
+            if order != 1:
+                kwargs["order"] = order
+            if normalization != "area":
+                kwargs["normalization"] = normalization
             res = cg.GeodesicSolver(mesh, method, **kwargs).solve(source)
             err = None
         except Exception as exc:  # noqa: BLE001 - every failure becomes a status in the report
@@ -187,17 +191,24 @@ def _attempt_record(solver: str, wall: float, err) -> dict:
             "error": _short(f"{type(err).__name__}: {msg}", 400), "hint": hint}
 
 
-def solve(ctx: Context, mesh, mesh_key: str, method: str, source: int, m: float = 1.0) -> dict:
+def solve(ctx: Context, mesh, mesh_key: str, method: str, source: int, m: float = 1.0, order: int = 1,
+          normalization: str = "area") -> dict:
     """Solve ``method`` on ``mesh`` from ``source`` (cached), falling back from our IPM to Clarabel.
 
-    Returns a record: ``method, mesh, source, m, ok, solver, status, time_s`` (construction + solve,
-    what one call costs), ``setup_s, solve_s, iterations, fallback`` (why Clarabel was used, or None),
-    ``warnings`` and ``distance`` ((n,) ndarray, or None when every attempt failed).
+    ``order=2``: the library's second-order elements (``method="qclp"`` only); ``normalization`` other
+    than the default ``"area"`` (formulations only): each cached under its own key.
+    Returns a record: ``method, mesh, source, m, order, ok, solver, status, time_s`` (construction +
+    solve, what one call costs), ``setup_s, solve_s, iterations, fallback`` (why Clarabel was used, or
+    None), ``warnings``, ``notes`` (the library's ``info.notes``; absent in fields cached before it was
+    recorded) and ``distance`` ((n,) ndarray, or None when every attempt failed).
     """
     method = canonical(method)
     is_formulation = method in FORMULATIONS
     mtag = f"{m:g}" if is_formulation and FORMULATIONS[method][1] is not None else "-"
-    key = f"{mesh_key}__{method}__m{mtag}__s{source}__{mesh_fingerprint(mesh)}"
+    otag = f"__o{order}" if order != 1 else ""  # order-1 keys stay as they were: the existing cache stays valid
+    if normalization != "area" and is_formulation:
+        otag += f"__n{normalization}"
+    key = f"{mesh_key}__{method}{otag}__m{mtag}__s{source}__{mesh_fingerprint(mesh)}".replace("/", "+")
     path = ctx.cache / "fields" / f"{key}.npz"
     if path.exists():
         with np.load(path, allow_pickle=False) as z:
@@ -206,8 +217,9 @@ def solve(ctx: Context, mesh, mesh_key: str, method: str, source: int, m: float 
         return rec
 
     rec = {"method": method, "mesh": mesh_key, "source": int(source), "m": m if mtag != "-" else None,
+           "order": order, "normalization": normalization if is_formulation else None,
            "n_vertices": mesh.n_vertices, "n_faces": mesh.n_faces, "fallback": None, "attempts": []}
-    res, wall, err, msgs = _attempt(mesh, method, source, m, "auto")
+    res, wall, err, msgs = _attempt(mesh, method, source, m, "auto", order, normalization)
     internal = [w.split(":", 1)[1] for w in msgs if w.startswith("ipm-fallback:")]
     msgs = [w for w in msgs if not w.startswith("ipm-fallback:")]
     if res is not None and (internal or res.info.extra.get("ipm_failure")):
@@ -225,7 +237,7 @@ def solve(ctx: Context, mesh, mesh_key: str, method: str, source: int, m: float 
     if err is not None and is_formulation and not isinstance(err, NonManifoldError) and not rec["fallback"]:
         rec["fallback"] = f"ipm failed: {_short(getattr(err, 'status', type(err).__name__), 60)}"
         log(f"    {method} on {mesh_key}: {_error_text(err)}; retrying with clarabel")
-        res, wall2, err2, msgs2 = _attempt(mesh, method, source, m, "clarabel")
+        res, wall2, err2, msgs2 = _attempt(mesh, method, source, m, "clarabel", order, normalization)
         rec["attempts"].append(_attempt_record("clarabel", wall2, err2))
         msgs = msgs + [w for w in msgs2 if w not in msgs]
         wall, err = wall2, err2
@@ -234,17 +246,19 @@ def solve(ctx: Context, mesh, mesh_key: str, method: str, source: int, m: float 
         from cvxgeodesic.evaluation.summary import summarize_run
 
         run = summarize_run(res.info, time_s=wall)  # the library's solve record, with the wall-clock time
-        rec.update(ok=True, **{k: run[k] for k in ("solver", "status", "time_s", "setup_s", "solve_s", "iterations")},
+        rec.update(ok=True, **{k: run[k] for k in ("solver", "status", "time_s", "setup_s", "solve_s", "iterations",
+                                                   "notes")},
                    error=None, resolved_nonnegative=bool(res.info.extra.get("resolved_nonnegative", False)))
         d = np.asarray(res.distance, dtype=np.float64)
     else:
         rec.update(ok=False, solver=getattr(err, "solver", None), status=_short(getattr(err, "status", "error"), 60),
                    time_s=float(wall), setup_s=None, solve_s=None, iterations=None, error=_error_text(err))
         d = np.zeros(0)
+    rec["loadavg_1min"] = round(os.getloadavg()[0], 2)  # the load this time was measured under
     np.savez_compressed(path, distance=d, record=np.array(json.dumps(rec, default=_json_default)))
     rec["distance"] = d if rec["ok"] else None
     state = f"{rec['solver']} {rec['status']}" if rec["ok"] else f"FAILED {rec['error']}"
-    log(f"    {method:<15} on {mesh_key}: {rec['time_s']:7.2f} s  {state}")
+    log(f"    {method + (f' order {order}' if order != 1 else ''):<15} on {mesh_key}: {rec['time_s']:7.2f} s  {state}")
     return rec
 
 

@@ -862,12 +862,290 @@ triangulation with fewer vertices several times more.
     return text, findings
 
 
+# ----------------------------------------------------------------------------------------------------------------------
+# order 2 (issue 17)
+# ----------------------------------------------------------------------------------------------------------------------
+
+O2_TAGS = ("p1", "p2", "heat", "fmm")
+O2_NAMES = {"p1": "order 1", "p2": "order 2", "heat": "heat", "fmm": "FMM"}
+
+
+def e1(x) -> str:
+    return f"{x:.1e}" if ok_num(x) else "—"
+
+
+def _span(values) -> str:
+    """'a – b' of the finite values (one value alone when they agree to two digits), '—' if none."""
+    vals = [v for v in values if ok_num(v)]
+    if not vals:
+        return "—"
+    lo, hi = e1(min(vals)), e1(max(vals))
+    return lo if lo == hi else f"{lo} – {hi}"
+
+
+def _times(recs, tags=O2_TAGS) -> str:
+    """Mean seconds per solve of each method, 'order 1 / order 2 / heat / FMM'."""
+    out = []
+    for t in tags:
+        ts = [r[t]["time_s"] for r in recs if ok_num(r.get(t, {}).get("time_s"))]
+        out.append(secs(sum(ts) / len(ts)) if ts else "—")
+    return " / ".join(out)
+
+
+def _src_text(kind: str, src) -> str:
+    return f"vertex {src}" if kind == "vertex" else f"point {tuple(round(b, 3) for b in src[1])} of face {src[0]}"
+
+
+def _o2_flat(flat) -> tuple[str, str]:
+    """The flat-case table and its computed sentence."""
+    rows, worst = [], {"p1": (None, ""), "p2": (None, "")}
+    n_solves = n_lower = 0
+    for row in flat:
+        per = row["per_source"]
+        cells = []
+        for t in O2_TAGS:
+            errs = [o[t].get("err") for o in per]
+            failed = [o[t] for o in per if not ok_num(o[t].get("err"))]
+            cell = _span(errs)
+            if failed and t == "heat" and row["kind"] == "point":
+                cell = "—¹"
+            elif failed:
+                cell += " (failed: " + "; ".join(sorted({f.get("error") or f.get("status") for f in failed})) + ")"
+            cells.append(cell)
+        for o in per:
+            for t in ("p1", "p2"):
+                e = o[t].get("err")
+                if ok_num(e) and (worst[t][0] is None or e > worst[t][0]):
+                    worst[t] = (e, f"{row['case']}, {_src_text(row['kind'], o['source'])}")
+            if ok_num(o["p2"].get("err")) and ok_num(o["p1"].get("err")):
+                n_solves += 1
+                n_lower += o["p2"]["err"] < o["p1"]["err"]
+        if row["kind"] == "vertex":
+            srcs = "vertices " + ", ".join(str(o["source"]) for o in per)
+        else:
+            faces = sorted({int(o["source"][0]) for o in per})
+            srcs = (f"{len(per)} point{'s' if len(per) > 1 else ''} in face{'s' if len(faces) > 1 else ''} "
+                    + ", ".join(map(str, faces)))
+        rows.append([f"{row['case']} ({row['faces']:,} faces, aspect ≤ {row['aspect_max']:.0f})", srcs,
+                     *cells, _times(per), f"{row['loadavg_1min']:.1f}"])
+    t = md_table(["mesh", "sources", "order 1 (qclp)", "order 2", "heat", "FMM",
+                  "s per solve: order 1 / order 2 / heat / FMM", "load (1 min)"], rows)
+    (w2, at2), (w1, at1) = worst["p2"], worst["p1"]
+    sentence = (f"**What this shows.** Order 2's largest error over these {n_solves} sources is {e1(w2)} ({at2}), "
+                f"order 1's {e1(w1)} ({at1}); order 2 is the lower of the two on {n_lower} of {n_solves}."
+                if ok_num(w2) and ok_num(w1) else "")
+    needle = [o["p1"]["err"] for row in flat if row["case"].startswith("needle") for o in row["per_source"]
+              if ok_num(o["p1"].get("err"))]
+    if sentence and needle and max(needle) < 1e-3:
+        sentence += (f" On the needle strips order 1 is close to exact as well (at most {e1(max(needle))}): a strip is "
+                     "one row of triangles, along which the distance is nearly one-dimensional.")
+    return t, sentence
+
+
+def _mean_max(rec) -> str:
+    if not rec or not rec.get("ok"):
+        return "failed" if rec else "—"
+    return f"{p2(rec.get('rel_mean'))} / {p1(rec.get('rel_max'))}"
+
+
+def _o2_ratios(rows, base: str = "p1"):
+    """(ratios order-2 mean / ``base`` mean, meshes where ``base`` is exact (no ratio)) where both solved."""
+    rat, exact1 = [], 0
+    for r in rows:
+        a, b = r.get(base, {}).get("rel_mean"), r["p2"].get("rel_mean")
+        if ok_num(a) and ok_num(b):
+            if a > 0:
+                rat.append(b / a)
+            else:
+                exact1 += 1
+    return rat, exact1
+
+
+def _both(x, a: str = "p1", b: str = "p2"):
+    """(mean error of ``a``, of ``b``) on one CAD row, or None when either has no result."""
+    u, v = x.get(a, {}).get("rel_mean"), x.get(b, {}).get("rel_mean")
+    return (u, v) if ok_num(u) and ok_num(v) else None
+
+
+def _o2_per_mesh(cad) -> str:
+    """The per-mesh table of thingi_*.stl, then the left-out meshes with the stored run's numbers."""
+    per = []
+    for r in (x for x in cad["rows"] if x["set"] == "thingi_*.stl"):
+        best = min((r[t]["rel_mean"], t) for t in O2_TAGS if ok_num(r[t].get("rel_mean")))[1]
+        cells = [f"**{_mean_max(r[t])}**" if t == best else _mean_max(r[t]) for t in O2_TAGS]
+        loads = [r[t].get("loadavg_1min") for t in O2_TAGS if ok_num(r[t].get("loadavg_1min"))]
+        per.append([f"{r['name'].replace('.stl', '')} ({r['faces']:,})", *cells, _times([r]),
+                    f"{max(loads):.1f}" if loads else "?"])
+    for lo in cad["left_out"]:
+        st = lo.get("stored") or {}
+        cells = [f"{p2(st[t]['mean'])} / {p1(st[t]['max'])}" if "mean" in st.get(t, {}) else "—" for t in O2_TAGS]
+        tm = " / ".join(secs(st.get(t, {}).get("time")) for t in O2_TAGS)
+        per.append([f"{lo['name'].replace('.stl', '')} ({lo['faces']:,}): **stored run²**", *cells, tm, "5–11"])
+    return md_table(["mesh (faces)", "order 1", "order 2", "heat", "FMM", "s: order 1 / order 2 / heat / FMM",
+                     "load (1 min)"], per)
+
+
+def _o2_summary(cad) -> tuple[str, dict]:
+    """The summary table per set (thingi_*.stl, thingi10k_small, all) and its numbers."""
+    import statistics
+
+    summ, stats = [], {}
+    for set_name in ("thingi_*.stl", "thingi10k_small", "all"):
+        rs = [x for x in cad["rows"] if set_name in ("all", x["set"])]
+        if not rs:
+            continue
+        rat, exact1 = _o2_ratios(rs)
+        rat_u, _ = _o2_ratios(rs, "p1u")
+        med = statistics.median(rat) if rat else None
+        med_u = statistics.median(rat_u) if rat_u else None
+        pairs = [b for b in (_both(x) for x in rs) if b]
+        half = sum(1 for u, v in pairs if v <= 0.5 * u)
+        worse = [x for x in rs if (b := _both(x)) and b[1] > b[0]]
+        means = []
+        for t in ("p1", "p1u", "p2", "heat", "fmm"):
+            v = [x[t]["rel_mean"] for x in rs if ok_num(x.get(t, {}).get("rel_mean"))]
+            means.append(p1(sum(v) / len(v)) if v else "—")
+        tot = [sum(x[t]["time_s"] for x in rs if ok_num(x[t].get("time_s"))) for t in ("p1", "p2")]
+        stats[set_name] = {"median": med, "median_u": med_u, "n": len(rs), "half": half, "worse": worse,
+                           "exact1": exact1}
+        bold = "**" if set_name == "all" else ""
+        summ.append([set_name, str(len(rs)), f"{bold}{med:.2f}{bold}" if med is not None else "—", str(half),
+                     str(len(worse)), f"{med_u:.2f}" if med_u is not None else "—", " / ".join(means),
+                     f"{secs(tot[0])} / {secs(tot[1])}"])
+    t = md_table(["set", "meshes", "median of (order-2 mean error / order-1 mean error)", "order 2 ≤ ½ order 1",
+                  "order 2 worse", "median ratio against order 1 with the uniform stretch³",
+                  "mean of the mean errors: order 1 / order 1 uniform³ / order 2 / heat / FMM",
+                  "total s: order 1 / order 2"], summ)
+    return t, stats
+
+
+def _o2_against_stored(cad) -> tuple[str, bool]:
+    """How this run's mean errors compare with the stored run behind docs/order2.md (computed).
+
+    Returns (sentence, whether the stored order 1 is this run's order 1 with the uniform stretch).
+    """
+    parts, agree = [], {}
+    for t, st in (("p1", "p1"), ("p1u", "p1"), ("p2", "p2")):
+        diffs = [(abs(r[t]["rel_mean"] - cad["stored"][r["name"]][st]["mean"]), r["name"]) for r in cad["rows"]
+                 if r["name"] in cad["stored"] and ok_num(r.get(t, {}).get("rel_mean"))
+                 and ok_num(cad["stored"][r["name"]][st].get("mean"))]
+        if not diffs:
+            continue
+        close = sum(1 for d, _ in diffs if d <= 0.001)
+        agree[t] = close == len(diffs)
+        worst = max(diffs)
+        name = {"p1": "order 1", "p1u": "order 1 with the uniform stretch", "p2": "order 2"}[t]
+        parts.append(f"{name} on {close} of {len(diffs)} meshes"
+                     + (f" (largest difference {100 * worst[0]:.2f} points, {worst[1]})" if close < len(diffs) else ""))
+    if not parts:
+        return "", False
+    uniform = bool(agree.get("p1u")) and not agree.get("p1", True)
+    pairs = [b for b in (_both(x, "p1u", "p1") for x in cad["rows"]) if b]
+    worse = sum(1 for u, a in pairs if a > u + 0.001)
+    better = sum(1 for u, a in pairs if a < u - 0.001)
+    why = (" The stored run's order 1 is therefore QCLP with the uniform stretch `−(1/n) Σ d_i`, the default "
+           "before the area normalization of issue 12 ([method.md](method.md)); today's default order 1 weights the "
+           f"stretch by area, and its mean error is more than 0.1 points higher than the uniform stretch's on {worse} "
+           f"and lower on {better} of these {len(pairs)} meshes. Order 2 is unchanged." if uniform else "")
+    return (f"Against the stored run of `benchmarks/order2.py` behind [order2.md](order2.md) (`{cad['stored_file']}`), "
+            "the mean errors agree to 0.1 points for " + "; ".join(parts) + "." + why), uniform
+
+
+def order2(r) -> tuple[str, list[str]]:
+    flat_t, flat_s = _o2_flat(r["flat"])
+    cad = r["cad"]
+    t_per = _o2_per_mesh(cad)
+    t_sum, stats = _o2_summary(cad)
+    stored_txt, uniform = _o2_against_stored(cad)
+    allst = stats.get("all", {})
+    med = allst.get("median")
+    verdict = ""
+    if med is not None:
+        tiny = [x for x in allst["worse"] if max(_both(x)) < 1e-6]
+        verdict = (f"Over the {allst['n']} meshes the median ratio of order 2's mean error to order 1's is "
+                   f"**{med:.2f}** ({'meets' if med <= 0.5 else 'misses'} issue 17's target ≤ 0.5; against order 1 "
+                   f"with the uniform stretch {allst['median_u']:.2f}); order 2 is at most half of order 1 on "
+                   f"{allst['half']} and worse on {len(allst['worse'])}"
+                   + (f", {len(tiny)} of them meshes that both solve exactly (mean errors below 1e-6)" if tiny else "")
+                   + (f"; on {allst['exact1']} order 1 is exact (error 0), no ratio" if allst["exact1"] else "") + ".")
+        real = [x for x in allst["worse"] if x not in tiny]
+        if real:
+            verdict += " Worse by more than that: " + "; ".join(
+                f"{x['name']} ({x['faces']} faces; {p2(x['p2']['rel_mean'])} against {p2(x['p1']['rel_mean'])})"
+                for x in real) + "."
+    fails = [f"{O2_NAMES.get(t, t)} on {x['name']} ({x[t].get('error') or x[t].get('status')})" for x in cad["rows"]
+             for t in (*O2_TAGS, "p1u") if t in x and not x[t].get("ok")]
+    fallback = [f"{x['name']}" for x in cad["rows"] if x["p2"].get("ok") and "clarabel" in str(x["p2"].get("solver"))]
+    solver_txt = ("Order 2 was solved by the library's order-2 interior-point solver on every mesh (no Clarabel "
+                  "fallback)" if not fallback else f"Order 2 needed Clarabel (the library's fallback) on "
+                  f"{', '.join(fallback)}")
+    skipped = cad["skipped"]
+    skip_txt = (f"; {len(skipped)} file{'s' if len(skipped) > 1 else ''} without an exact reference (non-manifold) "
+                "skipped" if skipped else "")
+    left = cad["left_out"]
+    left_txt = ""
+    if left:
+        left_txt = ("² Not solved in this run: " + "; ".join(f"{x['name']} ({x['faces']:,} faces)" for x in left)
+                    + f" (more than {r['max_faces']:,} faces: one order-2 solve takes minutes; "
+                    "`benchmarks/report.py --order2-large` includes it). Its row is **copied from the stored run** "
+                    f"`{cad['stored_file']}` of `benchmarks/order2.py` (2026-12-01, the numbers of "
+                    "[order2.md](order2.md); load average 5–11 on 2 cores) and is in none of the other numbers of "
+                    "this section" + ("; its order-1 column is order 1 with the uniform stretch (below)." if uniform
+                                      else "."))
+    f_cad, f_flat = (r["figures"] + [None, None])[:2]
+    text = f"""## 12. Order 2: second-order elements (issue 17, not in the paper)
+
+**What was run.** `cg.GeodesicSolver(mesh, "qclp", order=2)` (P2 elements for the squared distance, see
+[order2.md](order2.md)) next to order 1 (`"qclp"`), the heat method and fast marching, each built and solved
+once per source; times are set-up + solve of that call. *Flat meshes* (those of `tests/test_order2.py`,
+generated by `benchmarks/order2.py`): the exact distance is the Euclidean one; the error is
+`max |d − exact| / max exact` over the vertices, as a range over the sources of the row. *Coarse CAD*: the seven
+anisotropic `thingi_*.stl` and the manifold files of `thingi10k_small/` against exact MMP from vertex 0 (mean and
+max relative error over the vertices, source left out){skip_txt}.
+The load column is the 1-minute load average when the row's solves ended (2 cores, shared with other jobs).
+
+### Flat meshes
+
+{flat_t}
+
+¹ The heat method (potpourri3d) takes vertex sources only.
+
+{flat_s}
+
+{fig(f_flat, 'flat fan plate: error maps') if f_flat else ''}
+
+Error maps on the {r['figure_case'][0]} from vertex {r['figure_case'][1]} (colour scale 0–5 % of the largest
+distance; the fans are the long thin faces from two corners).
+
+### Coarse CAD
+
+Per mesh, mean / max relative error (bold: lowest mean):
+
+{t_per}
+
+{left_txt}
+
+{t_sum}
+
+³ Order 1 with `normalization="paper"`: the uniform stretch `−(1/n) Σ d_i` instead of the default area-weighted
+one (see [method.md](method.md)); solved on the same meshes in this run.
+
+{fig(f_cad, 'coarse CAD: errors against order 1') if f_cad else ''}
+
+Each mesh of the set is one point per method: its mean error against order 1's (errors below 10⁻⁴ drawn at
+10⁻⁴); below the solid line the method beats order 1, below the dotted one by more than a factor 2.
+
+**What this shows.** {verdict} {solver_txt}. {stored_txt}
+{"Failed: " + "; ".join(fails) + "." if fails else ""}
+"""
+    return text, []
+
 SECTION_TEXT = {"table2": table2, "fig2": fig2, "fig3": fig3, "fig4": fig4, "fig5": fig5, "fig6": fig6,
                 "fig7": fig7, "fig8": fig8, "fig9": fig9, "norm_resolution": norm_resolution,
-                "norm_remeshing": norm_remeshing}
+                "norm_remeshing": norm_remeshing, "order2": order2}
 SECTION_TITLE = {"table2": "Table 2", "fig2": "Fig. 2", "fig3": "Fig. 3", "fig4": "Fig. 4", "fig5": "Fig. 5",
                  "fig6": "Fig. 6", "fig7": "Fig. 7", "fig8": "Fig. 8", "fig9": "Fig. 9",
-                 "norm_resolution": "Resolution study", "norm_remeshing": "Remeshing study"}
+                 "norm_resolution": "Resolution study", "norm_remeshing": "Remeshing study", "order2": "Order 2"}
 
 
 def render(results, env, timings, plan, helpers) -> str:
