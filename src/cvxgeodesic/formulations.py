@@ -273,6 +273,49 @@ class MeshOperators:
         return self._stretch[stretch]
 
 
+class _Inequalities:
+    """Rows ``c₀ d[v₀] + c₁ d[v₁] ≤ r`` collected in order (the order is part of the problem the solvers see)."""
+
+    def __init__(self) -> None:
+        self._v: list[np.ndarray] = [np.zeros((0, 2), dtype=np.int64)]
+        self._c: list[np.ndarray] = [np.zeros((0, 2))]
+        self._r: list[np.ndarray] = [np.zeros(0)]
+
+    def add(self, vertices: np.ndarray, coeffs, rhs: np.ndarray) -> None:
+        self._v.append(np.asarray(vertices, dtype=np.int64).reshape(-1, 2))
+        self._c.append(np.tile(np.asarray(coeffs, dtype=np.float64), (len(self._v[-1]), 1)))
+        self._r.append(np.asarray(rhs, dtype=np.float64))
+
+    def both_ways(self, edges: np.ndarray, ell: np.ndarray, pick: np.ndarray | None = None) -> None:
+        """``|d_i − d_j| ≤ l_ij`` for the picked edges: all ``+`` rows, then all ``−`` rows."""
+        if pick is not None:
+            edges, ell = edges[pick], ell[pick]
+        self.add(edges, [1.0, -1.0], ell)
+        self.add(edges, [-1.0, 1.0], ell)
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return (np.ascontiguousarray(np.vstack(self._v), dtype=np.int64), np.ascontiguousarray(np.vstack(self._c)),
+                np.concatenate(self._r))
+
+
+def _qc_constraints(ops: MeshOperators, sc, fixed_mask: np.ndarray, ell: np.ndarray, ineq: _Inequalities):
+    """The QC formulations' cones (F[keep], gradient blocks) and their linear bounds, added to ``ineq``."""
+    mesh = ops.mesh
+    face_free = ~fixed_mask[mesh.F].all(axis=1)
+    # faces incident to a source (and the faces of point and curve sources, sources.py) carry no cone
+    keep = face_free & ~sc.no_cone & ~ops.degenerate
+    # d_j - d_s <= |v_j - v_s| on the source stars; with d_s fixed at 0 this is a bound on d_j
+    ineq.add(np.column_stack([sc.star_other, sc.star_source]), [1.0, -1.0], sc.star_rhs)
+    if ops.degenerate_edges.size:
+        # degenerate faces carry no cone: their edges get |d_i - d_j| <= l_ij (both directions)
+        Ed, ld = mesh.edges[ops.degenerate_edges], ell[ops.degenerate_edges]
+        ineq.both_ways(Ed, ld, ~fixed_mask[Ed].all(axis=1))
+    Eu, lu = _uncovered_edges(mesh, keep, face_free, fixed_mask, ops.degenerate_edges, ell)
+    if len(Eu):
+        ineq.both_ways(Eu, lu)
+    return np.ascontiguousarray(mesh.F[keep]), np.ascontiguousarray(ops.gradient_blocks[keep])
+
+
 def _uncovered_edges(mesh, cone_faces, face_free, fixed_mask, degenerate_edges, ell):
     """Edges between two free vertices that no cone covers, with their bounds: (k, 2) vertices, (k,) lengths.
 
@@ -346,62 +389,26 @@ def build_problem(
     objective_scale = SOLVER_SCALE if stretch == "area" else 1.0
     q = np.where(fixed_mask, 0.0, -objective_scale * ops.stretch_weights(stretch))
 
-    F = mesh.F
-    face_free = ~fixed_mask[F].all(axis=1)
     # Edge bounds |d_i - d_j| <= l_ij with l_ij at rounding level (near-duplicate vertices that exact welding
     # keeps, e.g. 6e-16 on thingi_65395) are equalities in disguise: their slacks start at ~0 and the duals
     # grow to 1e13, which ruins the interior-point method's dual residual. A floor far below any tolerance
     # (MIN_EDGE_BOUND x the bounding-box diagonal) keeps them inequalities.
-    ell_all = np.maximum(mesh.edge_lengths, MIN_EDGE_BOUND * mesh.bbox_diagonal)
+    ell = np.maximum(mesh.edge_lengths, MIN_EDGE_BOUND * mesh.bbox_diagonal)
+    ineq = _Inequalities()
     if constraint == "qc":
-        # faces incident to a source (and the faces of point and curve sources, sources.py) carry no cone
-        keep = face_free & ~sc.no_cone & ~ops.degenerate
-        cone_vertices = np.ascontiguousarray(F[keep])
-        cone_blocks = np.ascontiguousarray(ops.gradient_blocks[keep])
-        E, ell = mesh.edges, ell_all
-        # d_j - d_s <= |v_j - v_s| on the source stars; with d_s fixed at 0 this is a bound on d_j
-        ineq_vertices = np.column_stack([sc.star_other, sc.star_source])
-        ineq_coeffs = np.tile([1.0, -1.0], (len(sc.star_other), 1))
-        ineq_rhs = sc.star_rhs.copy()
-        if ops.degenerate_edges.size:
-            # degenerate faces carry no cone: their edges get |d_i - d_j| <= l_ij (both directions)
-            Ed, ld = E[ops.degenerate_edges], ell[ops.degenerate_edges]
-            free_e = ~fixed_mask[Ed].all(axis=1)
-            Ed, ld = Ed[free_e], ld[free_e]
-            ineq_vertices = np.vstack([ineq_vertices, Ed, Ed])
-            pm = np.tile([1.0, -1.0], (len(Ed), 1))
-            ineq_coeffs = np.vstack([ineq_coeffs, pm, -pm])
-            ineq_rhs = np.concatenate([ineq_rhs, ld, ld])
-        Eu, lu = _uncovered_edges(mesh, keep, face_free, fixed_mask, ops.degenerate_edges, ell)
-        if len(Eu):
-            ineq_vertices = np.vstack([ineq_vertices, Eu, Eu])
-            pm = np.tile([1.0, -1.0], (len(Eu), 1))
-            ineq_coeffs = np.vstack([ineq_coeffs, pm, -pm])
-            ineq_rhs = np.concatenate([ineq_rhs, lu, lu])
+        cone_vertices, cone_blocks = _qc_constraints(ops, sc, fixed_mask, ell, ineq)
     else:
-        cone_vertices = np.zeros((0, 3), dtype=np.int64)
-        cone_blocks = np.zeros((0, 2, 3))
-        E, ell = mesh.edges, ell_all
-        keep = ~fixed_mask[E].all(axis=1)
-        E, ell = E[keep], ell[keep]
-        ineq_vertices = np.vstack([E, E])
-        ineq_coeffs = np.vstack([np.tile([1.0, -1.0], (len(E), 1)), np.tile([-1.0, 1.0], (len(E), 1))])
-        ineq_rhs = np.concatenate([ell, ell])
-
+        cone_vertices, cone_blocks = np.zeros((0, 3), dtype=np.int64), np.zeros((0, 2, 3))
+        ineq.both_ways(mesh.edges, ell, ~fixed_mask[mesh.edges].all(axis=1))
     if sc.bound_vertices.size:  # point and curve sources: d_v <= (a surface path to the source)
-        bv = sc.bound_vertices
-        ineq_vertices = np.vstack([ineq_vertices, np.column_stack([bv, bv])])
-        ineq_coeffs = np.vstack([ineq_coeffs, np.tile([1.0, 0.0], (len(bv), 1))])
-        ineq_rhs = np.concatenate([ineq_rhs, sc.bound_rhs])
-
+        ineq.add(np.column_stack([sc.bound_vertices] * 2), [1.0, 0.0], sc.bound_rhs)
     if nonnegative:
         # d_i >= 0 holds for the exact distance; without it maximizing the sum can push a few vertices of folded
         # or self-intersecting meshes (and strongly smoothed coarse fields) below zero. Off by default: the bounds
         # are inactive on ordinary meshes but cost the interior-point method about 50 % more iterations.
         free_v = np.flatnonzero(~fixed_mask)
-        ineq_vertices = np.vstack([ineq_vertices, np.column_stack([free_v, free_v])])
-        ineq_coeffs = np.vstack([ineq_coeffs, np.tile([-1.0, 0.0], (len(free_v), 1))])
-        ineq_rhs = np.concatenate([ineq_rhs, np.zeros(len(free_v))])
+        ineq.add(np.column_stack([free_v, free_v]), [-1.0, 0.0], np.zeros(len(free_v)))
+    ineq_vertices, ineq_coeffs, ineq_rhs = ineq.arrays()
 
     P = None
     if energy is not None and lam > 0:
@@ -410,8 +417,7 @@ def build_problem(
     return ConicProblem(
         n=n, P=P, q=q,
         cone_vertices=cone_vertices, cone_blocks=cone_blocks,
-        ineq_vertices=np.ascontiguousarray(ineq_vertices, dtype=np.int64),
-        ineq_coeffs=np.ascontiguousarray(ineq_coeffs), ineq_rhs=ineq_rhs,
+        ineq_vertices=ineq_vertices, ineq_coeffs=ineq_coeffs, ineq_rhs=ineq_rhs,
         fixed_mask=fixed_mask, fixed_values=fixed_values, unreachable=unreachable,
         method=canonical_method(method), objective_scale=objective_scale,
     )
