@@ -12,9 +12,9 @@ import scipy.sparse as sp
 from conftest import shared_mesh_path
 from cvxgeodesic.errors import SolverError
 from cvxgeodesic.formulations import FORMULATIONS, MeshOperators, build_problem, smoothness_weight
+from cvxgeodesic.linalg import NotPositiveDefiniteError, SymbolicCholesky
+from cvxgeodesic.linalg import symbolic as chol_mod
 from cvxgeodesic.mesh import TriMesh, cylinder, grid_plane, icosphere
-from cvxgeodesic.solvers import cholesky as chol_mod
-from cvxgeodesic.solvers.cholesky import NotPositiveDefiniteError, SymbolicCholesky
 from cvxgeodesic.solvers.clarabel_backend import solve_clarabel
 from cvxgeodesic.solvers.ipm import InteriorPointSolver, _soc_max_step, _SocScaling
 from cvxgeodesic.solvers.problem import kkt_pattern
@@ -240,7 +240,7 @@ def test_cholesky_backends_solve_correctly(backend, mode):
 
 
 def test_fallback_when_sksparse_is_missing_warns_and_matches(monkeypatch):
-    monkeypatch.setattr(chol_mod, "_cholmod", None)
+    monkeypatch.setattr(chol_mod, "cholmod_available", lambda: False)
     monkeypatch.setattr(chol_mod, "pardiso_available", lambda: False)
     monkeypatch.setattr(chol_mod, "_fallback_warned", False)
     m = icosphere(2)
@@ -485,3 +485,40 @@ def test_assembled_newton_matrix_matches_the_operator():
     v[pr.fixed] = 0.0  # directions never move fixed variables (the operator does not drop their columns)
     np.testing.assert_allclose(K @ v, pr.kkt_mul(v, sc, lp_w), rtol=1e-10, atol=1e-10)
     assert pr.k > 0 and pr.p > 0 and pr.fixed.any()
+
+
+def test_linalg_is_a_low_layer():
+    """cvxgeodesic.linalg imports neither Numba nor the solvers (the operators use it; issue 13)."""
+    import ast
+    from pathlib import Path
+
+    import cvxgeodesic.linalg
+
+    root = Path(cvxgeodesic.linalg.__file__).parent
+    for path in root.glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = []
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                names = [("." * node.level) + (node.module or "")]
+            for name in names:
+                assert not name.startswith(("numba", "..solvers", "cvxgeodesic.solvers")), (path.name, name)
+                assert not (name.startswith("..") and name not in ("..errors", ".._threads")), (path.name, name)
+
+
+def test_positions_match_a_dense_lookup():
+    rng = np.random.default_rng(3)
+    m = icosphere(1)
+    chol = SymbolicCholesky(kkt_pattern(m.n_vertices, m.F, m.edges), backend="scipy")
+    low = sp.csc_matrix((np.arange(chol.nnz, dtype=float), chol.indices, chol.indptr), shape=(chol.n, chol.n))
+    dense = low.toarray()
+    r, c = sp.find(low)[:2]
+    pick = rng.integers(0, r.size, 200)
+    rows, cols = r[pick], c[pick]
+    swap = rng.random(200) < 0.5  # either triangle
+    rows, cols = np.where(swap, cols, rows), np.where(swap, rows, cols)
+    np.testing.assert_array_equal(chol.positions(rows, cols), dense[np.maximum(rows, cols), np.minimum(rows, cols)])
+    for bad in ((0, m.n_vertices), (-1, 0)):
+        with pytest.raises(ValueError, match="not in the sparsity pattern"):
+            chol.positions(np.array([bad[0]]), np.array([bad[1]]))

@@ -18,7 +18,7 @@ process may run on and the runnable tasks of other processes (``procs_running`` 
 ``/proc/stat``, sampled a few times) when a solver is built, and uses the cores
 left free, at least one. The count is taken once per solver because PARDISO's
 thread count is fixed by its analysis (changing it afterwards crashes it, see
-:mod:`~cvxgeodesic.solvers.pardiso`).
+:mod:`~cvxgeodesic.linalg.pardiso`).
 """
 
 from __future__ import annotations
@@ -190,7 +190,7 @@ def thread_limit(threads: int) -> Iterator[None]:
             numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
         from threadpoolctl import threadpool_limits
 
-        from .solvers.pardiso import pardiso_available
+        from .linalg.pardiso import pardiso_available
 
         pardiso_available()  # loads MKL now, so that the limit covers it (threadpoolctl sees loaded libraries only)
         with threadpool_limits(limits=threads):

@@ -63,8 +63,8 @@ import scipy.sparse as sp
 from threadpoolctl import threadpool_limits
 
 from ..errors import SolverError
+from ..linalg import NotPositiveDefiniteError, SymbolicCholesky
 from . import _soc_kernels as _kern
-from .cholesky import NotPositiveDefiniteError, SymbolicCholesky
 from .problem import BackendResult, ConicProblem
 
 __all__ = ["InteriorPointSolver", "warm_up"]

@@ -12,7 +12,7 @@ of one face, so after eliminating ``Δs`` and ``Δz`` the Newton matrix is
     H = Σ_k G_kᵀ W_k⁻² G_k        (one 6 × 6 block per cone, summed per face clique)
 
 whose sparsity pattern (the union of the face cliques) never changes: it is analyzed once
-per mesh (:class:`~cvxgeodesic.solvers.cholesky.SymbolicCholesky`) and only refactorized
+per mesh (:class:`~cvxgeodesic.linalg.SymbolicCholesky`) and only refactorized
 numerically at each iteration, for every source and every cutting-plane round.
 
 The few source equalities ``E x = f`` (one per edge at a source vertex) are kept as a
@@ -30,8 +30,8 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from ..errors import SolverError
-from . import pardiso as _pardiso
-from .cholesky import NotPositiveDefiniteError, SymbolicCholesky
+from ..linalg import NotPositiveDefiniteError, SymbolicCholesky
+from ..linalg import pardiso as _pardiso
 
 _TRIL = np.tril_indices(6)
 #: Iterative-refinement steps per Newton solve.
