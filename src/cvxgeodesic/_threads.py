@@ -166,7 +166,7 @@ def _numba():
     try:  # importing the kernels first selects their threading layer (OpenMP) before Numba starts a pool
         import numba
 
-        from .solvers import _soc_kernels  # noqa: F401
+        from .solvers.ipm import _kernels  # noqa: F401
     except ImportError:
         return None
     return numba

@@ -10,7 +10,7 @@ Conventions: an SOC(3) field over k cones is a (3, k) array (row 0 the heads), a
 body field a (2, k) array; ``B`` is (2, 3, k) (``B[:, :, t]`` is the 2×3 block of
 cone t) and ``cv`` (k, 3) its vertices. The Nesterov–Todd scaling is stored as
 ``w`` (3, k) (the scaling point w̄), ``eta`` and ``inv_eta2`` (k,) (η and 1/η²),
-as in :class:`cvxgeodesic.solvers.ipm._SocScaling`, whose formulas are CVXOPT's.
+as in :class:`cvxgeodesic.solvers.ipm.cones._SocScaling`, whose formulas are CVXOPT's.
 
 Loops without scatter (no two cones write the same entry) run in parallel
 (``prange``). Compiled code is cached on disk (``cache=True``): the first solve after an install
