@@ -474,7 +474,11 @@ def test_positions_match_a_dense_lookup():
     rows, cols = r[pick], c[pick]
     swap = rng.random(200) < 0.5  # either triangle
     rows, cols = np.where(swap, cols, rows), np.where(swap, rows, cols)
-    np.testing.assert_array_equal(chol.positions(rows, cols), dense[np.maximum(rows, cols), np.minimum(rows, cols)])
-    for bad in ((0, m.n_vertices), (-1, 0)):
-        with pytest.raises(ValueError, match="not in the sparsity pattern"):
-            chol.positions(np.array([bad[0]]), np.array([bad[1]]))
+    from cvxgeodesic.solvers.ipm._kernels import positions  # the IPM's compiled twin
+
+    for find in (chol.positions, lambda r, c: positions(chol, r, c)):
+        np.testing.assert_array_equal(find(rows, cols), dense[np.maximum(rows, cols), np.minimum(rows, cols)])
+        far = int(np.argmin(m.V @ m.V[0]))  # not a neighbour of vertex 0
+        for bad in ((0, m.n_vertices), (-1, 0), (0, far)):
+            with pytest.raises(ValueError, match="not in the sparsity pattern"):
+                find(np.array([bad[0]]), np.array([bad[1]]))

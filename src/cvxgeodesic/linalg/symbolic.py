@@ -148,8 +148,10 @@ class SymbolicCholesky:
         self.indptr = S.indptr.astype(np.int32)
         self.indices = S.indices.astype(np.int32)
         self.nnz = int(self.indices.size)
-        # entry keys col·n + row, ascending (CSC with sorted rows): positions are a binary search
-        self._keys = np.repeat(np.arange(n, dtype=np.int64), np.diff(self.indptr)) * n + self.indices
+        # the lower CSC structure read as CSR is the upper triangle; its values are positions + 1, so that SciPy's
+        # compiled sampling (a binary search per entry) looks positions up, 0 meaning "not in the pattern"
+        self._lookup = sp.csr_matrix((np.arange(1, self.nnz + 1, dtype=np.int64), self.indices, self.indptr),
+                                     shape=(n, n))
         self.diag_positions = self.positions(np.arange(n), np.arange(n))
 
         self.backend = choose_backend(backend)
@@ -182,15 +184,22 @@ class SymbolicCholesky:
         """
         rows = np.ascontiguousarray(rows, dtype=np.int64).ravel()
         cols = np.ascontiguousarray(cols, dtype=np.int64).ravel()
+        if rows.shape != cols.shape:
+            raise ValueError(f"rows and cols must have the same length, got {rows.size} and {cols.size}")
         lo, hi = np.minimum(rows, cols), np.maximum(rows, cols)
         inside = (lo >= 0) & (hi < self.n)
-        query = np.where(inside, lo * self.n + hi, -1)
-        out = np.minimum(np.searchsorted(self._keys, query), max(self.nnz - 1, 0))
-        ok = inside & (self._keys[out] == query) if self.nnz else np.zeros(rows.size, dtype=bool)
-        if not ok.all():
-            bad = int(np.flatnonzero(~ok)[0])
+        if not rows.size:
+            return np.zeros(0, dtype=np.int64)
+        if inside.all():
+            out = np.asarray(self._lookup[lo, hi], dtype=np.int64).ravel() - 1
+        else:
+            out = np.full(rows.size, -1, dtype=np.int64)
+            if inside.any():  # (SciPy returns a sparse matrix, not an array, for empty index arrays)
+                out[inside] = np.asarray(self._lookup[lo[inside], hi[inside]], dtype=np.int64).ravel() - 1
+        if (out < 0).any():
+            bad = int(np.flatnonzero(out < 0)[0])
             raise ValueError(f"entry ({rows[bad]}, {cols[bad]}) is not in the sparsity pattern")
-        return out.astype(np.int64)
+        return out
 
     def matrix(self, data: np.ndarray) -> sp.csc_matrix:
         """The full symmetric (n, n) CSC matrix whose lower triangle is ``data`` (for checks)."""

@@ -116,7 +116,7 @@ class TriangleSOCBlock:
         cv = np.asarray(vertices, dtype=np.int64).reshape(-1, 3)
         Bt = np.asarray(blocks, dtype=np.float64).reshape(-1, 2, 3)
         self.count = k = cv.shape[0]
-        self.pos = np.ascontiguousarray(chol.positions(cv[:, _CLIQUE_A].T.ravel(), cv[:, _CLIQUE_B].T.ravel()))
+        self.pos = _kern.positions(chol, cv[:, _CLIQUE_A].T.ravel(), cv[:, _CLIQUE_B].T.ravel())
         # SoA order for the kernels: B[:, :, t] is B_t
         self.B = np.ascontiguousarray(Bt.transpose(1, 2, 0))  # (2, 3, k)
         self.cv = np.ascontiguousarray(cv)
@@ -207,7 +207,7 @@ class PairInequalityBlock:
         ia = np.asarray(coeffs, dtype=np.float64).reshape(-1, 2)
         self.count = p = iv.shape[0]
         n = chol.n
-        self.pos = np.ascontiguousarray(chol.positions(iv[:, [0, 1, 1]].T.ravel(), iv[:, [0, 1, 0]].T.ravel()))
+        self.pos = _kern.positions(chol, iv[:, [0, 1, 1]].T.ravel(), iv[:, [0, 1, 0]].T.ravel())
         self.iv, self.ia = iv, ia
         self.L = sp.csr_matrix((ia.ravel(), (np.repeat(np.arange(p), 2), iv.ravel())), shape=(p, n))
         self.LT = self.L.T.tocsr()

@@ -15,7 +15,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ...linalg import Factor, SymbolicCholesky
+from ...linalg import Factor, NotPositiveDefiniteError, SymbolicCholesky
 from .cones import Scaling
 from .program import Program
 from .settings import IPMSettings
@@ -66,8 +66,6 @@ class LinearSystem:
 
     def solve(self, f: Factor, r: np.ndarray) -> np.ndarray:
         """``K⁻¹ r`` with the fixed entries 0; :class:`Trouble` when ``r`` or the solve is not finite."""
-        from ...linalg import NotPositiveDefiniteError
-
         t0 = time.perf_counter()
         try:
             if not np.isfinite(r).all():

@@ -20,6 +20,7 @@ import scipy.sparse as sp
 
 from ...linalg import SymbolicCholesky
 from ..problem import ConicProblem
+from . import _kernels as _kern
 from .blocks import ConeBlock, PairInequalityBlock, TriangleSOCBlock
 from .cones import Scaling
 
@@ -96,7 +97,7 @@ class Program:
         try:
             self.blocks: Sequence[ConeBlock] = blocks(self.x_fixed, chol)
             Pl = sp.tril(self.P, format="coo") if self.P is not None else None
-            P_pos = chol.positions(Pl.row, Pl.col) if Pl is not None else None
+            P_pos = _kern.positions(chol, Pl.row, Pl.col) if Pl is not None else None
         except ValueError as exc:
             raise PatternMismatch(str(exc)) from None
         self.base = np.zeros(nnz)
