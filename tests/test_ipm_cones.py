@@ -275,3 +275,18 @@ def test_sparse_block_rejects_a_pattern_that_does_not_fit():
         SparseBlock(cone, A, b, np.zeros(n), chol)
     with pytest.raises(ValueError, match="not a multiple of the cone dimension"):
         SparseBlock(SOC(4), A[:7], b[:7], np.zeros(n), chol)
+
+
+def test_settings_are_validated_and_frozen():
+    import dataclasses
+
+    for bad, name in (({"init": "warm"}, "init"), ({"step": 1.0}, "step"), ({"max_correctors": -1}, "max_correctors"),
+                      ({"max_refine": 1.5}, "max_refine"), ({"corrector_weights": ()}, "corrector_weights"),
+                      ({"beta_min": 2.0}, "beta_min"), ({"tol_infeas": -1e-8}, "tol_infeas"),
+                      ({"interior_fraction": 0.0}, "interior_fraction")):
+        with pytest.raises(ValueError, match=rf"IPMSettings.*{name}"):
+            IPMSettings(**bad)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        IPMSettings().step = 0.5  # type: ignore[misc]
+    with pytest.raises(TypeError, match="settings must be an IPMSettings"):
+        InteriorPointSolver(sp.identity(3, format="csc"), settings={"step": 0.9})  # type: ignore[arg-type]

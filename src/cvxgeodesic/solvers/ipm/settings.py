@@ -117,8 +117,8 @@ class IPMSettings:
         if not self.corrector_weights or not all(0.0 < w <= 1.0 for w in self.corrector_weights):
             raise ValueError(f"IPMSettings.corrector_weights must be weights in (0, 1], got {self.corrector_weights!r}")
         if not 0.0 < self.beta_min <= 1.0 <= self.beta_max:
-            raise ValueError(f"IPMSettings needs 0 < beta_min <= 1 <= beta_max, got {self.beta_min!r}, "
-                             f"{self.beta_max!r}")
+            raise ValueError(f"IPMSettings.beta_min and beta_max need 0 < beta_min <= 1 <= beta_max, got "
+                             f"{self.beta_min!r}, {self.beta_max!r}")
         for f in fields(self):
             value = getattr(self, f.name)
             if f.name in ("max_refine", "max_correctors", "stall_iterations"):
