@@ -168,7 +168,7 @@ class P2InteriorPoint:
         """
         from threadpoolctl import threadpool_limits
 
-        # PARDISO runs its own threads; an idle OpenBLAS pool spinning beside it costs a core (as in solvers/ipm/solver.py)
+        # PARDISO runs its own threads; an idle OpenBLAS pool spinning beside it costs a core (as in ipm/solver.py)
         with threadpool_limits({"libopenblas": 1, "libscipy_openblas": 1}):
             return self._solve(problem, tol=tol, max_iter=max_iter, callback=callback)
 
