@@ -31,10 +31,3 @@ class Direction:
     ds: list[np.ndarray]
     dz: list[np.ndarray]
     rhs: np.ndarray
-
-    def plus(self, weight: float, other: Direction) -> Direction:
-        """``self + weight · other`` (a weighted centrality corrector)."""
-        return Direction(self.dx + weight * other.dx,
-                         [a + weight * b for a, b in zip(self.ds, other.ds, strict=True)],
-                         [a + weight * b for a, b in zip(self.dz, other.dz, strict=True)],
-                         self.rhs + weight * other.rhs)
