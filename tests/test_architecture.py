@@ -13,7 +13,6 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "src" / "cvxgeodesic"
 
@@ -35,10 +34,10 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
 
 #: Upward imports that are known and accepted, as (importing module, imported module or package prefix): why.
 EXCEPTIONS: dict[tuple[str, str], str] = {
-    # the thread policy bounds the pools of the compiled kernels and of MKL, which live in the solver layer
-    ("_threads", "solvers"): "thread limits of the Numba kernels and PARDISO",
-    # issue 13: H-ipm moves the PSD check to cvxgeodesic.linalg; delete this entry when that is merged
-    ("operators.energies", "solvers.cholesky"): "PSD check (moves to cvxgeodesic.linalg)",
+    # the thread policy bounds the pools of the compiled kernels (solver layer) and of MKL (linalg), and is
+    # applied by every layer that runs a pool, so it sits at the bottom and imports those two lazily
+    ("_threads", "solvers"): "thread limits of the Numba kernels",
+    ("_threads", "linalg"): "thread limits of PARDISO",
 }
 
 
@@ -158,7 +157,7 @@ def test_the_import_graph_is_read():
     assert "validation" in g["api"] and "strategies" in g["api"]
     assert "elements_p2" in g["strategies.order2"]
     assert "_threads" in g[""]
-    assert "solvers.pardiso" in g["_threads"]
+    assert "linalg.pardiso" in g["_threads"]
 
 
 def test_no_import_cycles():
@@ -183,10 +182,10 @@ def test_every_module_has_a_layer():
         layer_of(mod)
 
 
-# The blocker: numba, mkl and the PARDISO binding cannot be imported and libmkl_rt cannot be loaded.
+# The blocker: numba and mkl cannot be imported and libmkl_rt cannot be loaded (so our PARDISO binding finds no MKL).
 _BLOCKER = r"""
 import ctypes, importlib.abc, sys
-BLOCKED = ("numba", "mkl", "pypardiso", "cvxgeodesic.solvers.pardiso", "cvxgeodesic.linalg.pardiso")
+BLOCKED = ("numba", "mkl", "pypardiso")
 class Blocker(importlib.abc.MetaPathFinder):
     def find_spec(self, name, path=None, target=None):
         if any(name == b or name.startswith(b + ".") for b in BLOCKED):
@@ -224,7 +223,7 @@ def test_the_blocker_blocks(tmp_path):
     # without this the test below could pass because nothing was blocked
     code = _BLOCKER + r"""
 import ctypes
-for name in ("numba", "mkl", "cvxgeodesic.solvers.pardiso"):
+for name in ("numba", "mkl"):
     try:
         __import__(name)
     except ImportError:
@@ -237,15 +236,15 @@ except OSError:
     pass
 else:
     raise SystemExit("libmkl_rt was loaded")
+from cvxgeodesic.linalg import pardiso_available
+if pardiso_available():  # our ctypes binding imports, but finds no MKL to load
+    raise SystemExit("PARDISO is available")
 print("blocked")
 """
     proc = _run(code, tmp_path / "x")
     assert proc.returncode == 0 and "blocked" in proc.stdout, proc.stdout + proc.stderr
 
 
-@pytest.mark.xfail(strict=True, reason="operators/energies.py imports solvers/cholesky.py (Numba) and "
-                   "solvers/__init__.py imports the IPM: H-ipm's linalg package removes both (issue 13); "
-                   "remove this mark when that is merged")
 def test_imports_and_solves_with_clarabel_without_numba_and_mkl(tmp_path):
     import cvxgeodesic as cg
 

@@ -12,11 +12,12 @@ import scipy.sparse as sp
 from conftest import shared_mesh_path
 from cvxgeodesic.errors import SolverError
 from cvxgeodesic.formulations import FORMULATIONS, MeshOperators, build_problem, smoothness_weight
+from cvxgeodesic.linalg import NotPositiveDefiniteError, SymbolicCholesky
+from cvxgeodesic.linalg import symbolic as chol_mod
 from cvxgeodesic.mesh import TriMesh, cylinder, grid_plane, icosphere
-from cvxgeodesic.solvers import cholesky as chol_mod
-from cvxgeodesic.solvers.cholesky import NotPositiveDefiniteError, SymbolicCholesky
 from cvxgeodesic.solvers.clarabel_backend import solve_clarabel
-from cvxgeodesic.solvers.ipm import InteriorPointSolver, _soc_max_step, _SocScaling
+from cvxgeodesic.solvers.ipm import InteriorPointSolver, IPMSettings
+from cvxgeodesic.solvers.ipm.cones import SOC
 from cvxgeodesic.solvers.problem import kkt_pattern
 
 OBJ_RTOL = 1e-6
@@ -137,7 +138,7 @@ def test_starting_point_is_strictly_primal_feasible_when_the_fixed_values_allow(
 def test_interior_start_stays_inside_the_cones_next_to_a_nonzero_fixed_value(sphere):
     # a step that lowers the neighbours of a vertex fixed at 0.6 h steepens their cones along B x_F: the step
     # bound must measure s = B x_F + α B(x − x_F) (a first version subtracted B x_F twice and left the cone)
-    import cvxgeodesic.solvers.ipm as ipm_mod
+    from cvxgeodesic.solvers.ipm.start import interior_primal
 
     m, ops, ipm = sphere
     p = build_problem(ops, np.array([0]), "qclp", 0.0)
@@ -150,10 +151,11 @@ def test_interior_start_stays_inside_the_cones_next_to_a_nonzero_fixed_value(sph
     ring = np.setdiff1d(m.F[(m.F == far).any(axis=1)], [far])
     x = pr.x_fixed.copy()
     x[ring] = -v
-    xi = ipm_mod._interior_primal(pr, x)
-    body = pr.Bx(xi)
+    xi = interior_primal(pr, x, IPMSettings().interior_fraction)
+    cones, ineqs = pr.blocks
+    body = cones.Bx(xi)
     assert np.sqrt(body[0] ** 2 + body[1] ** 2).max() < 1.0
-    assert (pr.lp_b - pr.ax(xi - pr.x_fixed)).min() > 0.0
+    assert ineqs.slack(xi, pr.x_fixed).min() > 0.0
     _assert_matches(ipm.solve(p), solve_clarabel(p), p, m)
 
 
@@ -240,7 +242,7 @@ def test_cholesky_backends_solve_correctly(backend, mode):
 
 
 def test_fallback_when_sksparse_is_missing_warns_and_matches(monkeypatch):
-    monkeypatch.setattr(chol_mod, "_cholmod", None)
+    monkeypatch.setattr(chol_mod, "cholmod_available", lambda: False)
     monkeypatch.setattr(chol_mod, "pardiso_available", lambda: False)
     monkeypatch.setattr(chol_mod, "_fallback_warned", False)
     m = icosphere(2)
@@ -293,13 +295,12 @@ def test_max_iter_raises_solver_error_with_status_and_info(sphere):
 
 
 def test_max_iter_after_the_reduced_tolerances_returns_the_best_iterate(sphere, monkeypatch):
-    import cvxgeodesic.solvers.ipm as ipm_mod
-
     m, ops, ipm = sphere
     p = build_problem(ops, np.array([0]), "qclp", 0.0)
     ref = ipm.solve(p)
     trace = {}
-    monkeypatch.setattr(ipm_mod, "_REDUCED_FACTOR", 1e7)  # reduced tolerances 0.1: met within 6 iterations
+    # reduced tolerances 0.1: met within 6 iterations
+    monkeypatch.setattr(ipm, "settings", IPMSettings(reduced_factor=1e7))
     res = ipm.solve(p, max_iter=6, callback=lambda it, info: trace.setdefault(it, info))
     assert res.status == "almost_optimal" and res.iterations == 6
     assert res.extra["stopped"] == "max_iterations"
@@ -308,7 +309,7 @@ def test_max_iter_after_the_reduced_tolerances_returns_the_best_iterate(sphere, 
     assert res.extra["best_iteration"] == best
     assert res.dual_residual == trace[best]["res_dual"] and res.gap == trace[best]["gap_rel"]
     assert np.max(np.abs(res.x - ref.x)) < 0.1 * m.bbox_diagonal  # an early iterate, not garbage
-    monkeypatch.setattr(ipm_mod, "_REDUCED_FACTOR", 1e-3)  # not met: still an error
+    monkeypatch.setattr(ipm, "settings", IPMSettings(reduced_factor=1e-3))  # not met: still an error
     with pytest.raises(SolverError, match="max_iter=6"):
         ipm.solve(p, max_iter=6)
 
@@ -398,52 +399,6 @@ def test_callback_and_timing_breakdown(sphere):
 
 
 # ---------------------------------------------------------------------------------------------------------------
-# Second-order-cone kernels
-# ---------------------------------------------------------------------------------------------------------------
-
-
-def test_soc_max_step_matches_bisection():
-    rng = np.random.default_rng(0)
-    k = 200
-    u = rng.normal(size=(3, k))
-    u[0] = np.sqrt(u[1] ** 2 + u[2] ** 2) + 10.0 ** rng.uniform(-6, 0, k)
-    du = rng.normal(size=(3, k))
-
-    def inside(i, t):
-        w = u[:, i] + t * du[:, i]
-        return w[0] >= np.hypot(w[1], w[2])
-
-    for i in range(0, k, 20):
-        a = _soc_max_step(u[:, i : i + 1], du[:, i : i + 1])
-        if np.isinf(a):
-            assert inside(i, 1e6)
-        else:
-            assert inside(i, a * (1 - 1e-7)) and not inside(i, a * (1 + 1e-7))
-    assert _soc_max_step(u, du) == pytest.approx(min(_soc_max_step(u[:, i : i + 1], du[:, i : i + 1])
-                                                     for i in range(k)))
-
-
-def test_nesterov_todd_scaling_identities():
-    rng = np.random.default_rng(2)
-    k = 50
-
-    def interior():
-        v = rng.normal(size=(3, k))
-        v[0] = np.sqrt(v[1] ** 2 + v[2] ** 2) + rng.uniform(1e-3, 2.0, k)
-        return v
-
-    s, z = interior(), interior()
-    sc = _SocScaling(s, z)
-    np.testing.assert_allclose(sc.apply(z), sc.lam, rtol=1e-10, atol=1e-12)
-    np.testing.assert_allclose(sc.apply_inv(s), sc.lam, rtol=1e-10, atol=1e-12)
-    v = rng.normal(size=(3, k))
-    np.testing.assert_allclose(sc.apply_inv2(v), sc.apply_inv(sc.apply_inv(v)), rtol=1e-9, atol=1e-12)
-    np.testing.assert_allclose(sc.apply(sc.apply_inv(v)), v, rtol=1e-9, atol=1e-12)
-    full = sc.apply_inv2(np.concatenate([np.zeros((1, k)), -v[1:]]))
-    np.testing.assert_allclose(sc.body_to_inv2(v[1:]), full, rtol=1e-9, atol=1e-12)
-
-
-# ---------------------------------------------------------------------------------------------------------------
 # Real mesh (development data)
 # ---------------------------------------------------------------------------------------------------------------
 
@@ -464,13 +419,13 @@ def test_spot_every_formulation_matches_clarabel():
 def test_assembled_newton_matrix_matches_the_operator():
     """The compiled assembly (cone cliques, inequality pairs, P, fixed rows) and the matrix-free operator
     used by iterative refinement are the same matrix."""
-    from cvxgeodesic.solvers.ipm import _Prepared
+    from cvxgeodesic.solvers.ipm.program import Program
 
     m = icosphere(2)
     ops = MeshOperators(m)
     p = build_problem(ops, np.array([0, 9]), "qcqp-hessian", smoothness_weight(m, 1.0))
     ipm = InteriorPointSolver(kkt_pattern(m.n_vertices, m.F, m.edges, p.P))
-    pr = _Prepared(p, ipm.cholesky)
+    pr = Program.from_problem(p, ipm.cholesky)
     rng = np.random.default_rng(4)
 
     def interior(k):
@@ -478,10 +433,52 @@ def test_assembled_newton_matrix_matches_the_operator():
         u[0] = np.hypot(u[1], u[2]) + rng.uniform(1e-2, 2.0, k)
         return u
 
-    sc = _SocScaling(interior(pr.k), interior(pr.k))
-    lp_w = rng.uniform(0.1, 10.0, pr.p)
-    K = ipm.cholesky.matrix(pr.assemble(sc, lp_w))
+    cones, ineqs = pr.blocks
+    scalings = [SOC(3).scaling(interior(cones.count), interior(cones.count)),
+                ineqs.cone.scaling(rng.uniform(0.1, 3.0, ineqs.count), rng.uniform(0.1, 3.0, ineqs.count))]
+    K = ipm.cholesky.matrix(pr.assemble(scalings))
     v = rng.normal(size=pr.n)
     v[pr.fixed] = 0.0  # directions never move fixed variables (the operator does not drop their columns)
-    np.testing.assert_allclose(K @ v, pr.kkt_mul(v, sc, lp_w), rtol=1e-10, atol=1e-10)
-    assert pr.k > 0 and pr.p > 0 and pr.fixed.any()
+    np.testing.assert_allclose(K @ v, pr.kkt_mul(v, scalings), rtol=1e-10, atol=1e-10)
+    assert cones.count > 0 and ineqs.count > 0 and pr.fixed.any()
+
+
+def test_linalg_is_a_low_layer():
+    """cvxgeodesic.linalg imports neither Numba nor the solvers (the operators use it; issue 13)."""
+    import ast
+    from pathlib import Path
+
+    import cvxgeodesic.linalg
+
+    root = Path(cvxgeodesic.linalg.__file__).parent
+    for path in root.glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = []
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                names = [("." * node.level) + (node.module or "")]
+            for name in names:
+                assert not name.startswith(("numba", "..solvers", "cvxgeodesic.solvers")), (path.name, name)
+                assert not (name.startswith("..") and name not in ("..errors", ".._threads")), (path.name, name)
+
+
+def test_positions_match_a_dense_lookup():
+    rng = np.random.default_rng(3)
+    m = icosphere(1)
+    chol = SymbolicCholesky(kkt_pattern(m.n_vertices, m.F, m.edges), backend="scipy")
+    low = sp.csc_matrix((np.arange(chol.nnz, dtype=float), chol.indices, chol.indptr), shape=(chol.n, chol.n))
+    dense = low.toarray()
+    r, c = sp.find(low)[:2]
+    pick = rng.integers(0, r.size, 200)
+    rows, cols = r[pick], c[pick]
+    swap = rng.random(200) < 0.5  # either triangle
+    rows, cols = np.where(swap, cols, rows), np.where(swap, rows, cols)
+    from cvxgeodesic.solvers.ipm._kernels import positions  # the IPM's compiled twin
+
+    for find in (chol.positions, lambda r, c: positions(chol, r, c)):
+        np.testing.assert_array_equal(find(rows, cols), dense[np.maximum(rows, cols), np.minimum(rows, cols)])
+        far = int(np.argmin(m.V @ m.V[0]))  # not a neighbour of vertex 0
+        for bad in ((0, m.n_vertices), (-1, 0), (0, far)):
+            with pytest.raises(ValueError, match="not in the sparsity pattern"):
+                find(np.array([bad[0]]), np.array([bad[1]]))

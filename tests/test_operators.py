@@ -144,7 +144,7 @@ def test_indefinite_curved_hessian_falls_back_to_planar_energy():
     # measured: libigl's curved Hessian energy has eigenvalue -59 (largest diagonal 1.2e7) on this CAD mesh
     from conftest import shared_mesh_path
     from cvxgeodesic import IndefiniteEnergyWarning, load_mesh
-    from cvxgeodesic.solvers.cholesky import is_positive_semidefinite
+    from cvxgeodesic.linalg import is_positive_semidefinite
 
     mesh = load_mesh(shared_mesh_path("thingi_37881.stl"))
     with pytest.warns(IndefiniteEnergyWarning, match="planar Hessian"):
@@ -154,7 +154,7 @@ def test_indefinite_curved_hessian_falls_back_to_planar_energy():
 
 @pytest.mark.parametrize("backend", ["auto", "pardiso", "cholmod"])
 def test_psd_check_detects_a_negative_eigenvalue(backend):
-    from cvxgeodesic.solvers import cholesky
+    from cvxgeodesic import linalg as cholesky
 
     if backend != "auto" and not getattr(cholesky, f"{backend}_available")():
         pytest.skip(f"{backend} not installed")

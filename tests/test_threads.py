@@ -56,7 +56,7 @@ def _pool_threads() -> dict:
     seen = {"numba": numba.get_num_threads()}
     for pool in threadpool_info():
         seen.setdefault(pool["internal_api"], set()).add(pool["num_threads"])
-    from cvxgeodesic.solvers import pardiso
+    from cvxgeodesic.linalg import pardiso
 
     if pardiso.pardiso_available():
         seen["MKL_Get_Max_Threads"] = pardiso._load().MKL_Get_Max_Threads()
@@ -78,7 +78,7 @@ def test_limit_reaches_every_pool(threads):
         if "MKL_Get_Max_Threads" in pools:
             assert pools["MKL_Get_Max_Threads"] == threads
             assert pools["mkl"] == {threads}
-    factor = solver._strategy.ipm.cholesky._factor
+    factor = solver._strategy.ipm.cholesky.numeric
     if solver._strategy.ipm.cholesky.backend == "pardiso":
         assert factor.threads == threads  # fixed by the analysis, which ran in the constructor's limit
     assert _pool_threads() == before
@@ -98,7 +98,7 @@ def test_multires_coarse_solver_inherits(no_env):
     solver = cg.GeodesicSolver(cg.icosphere(4), "qclp", multires=500, threads=1)
     coarse = solver._strategy.coarse.ipm.cholesky  # the coarse mesh's solver, built inside the façade's limit
     if coarse.backend == "pardiso":
-        assert coarse._factor.threads == 1
+        assert coarse.numeric.threads == 1
     assert solver.solve(0).info.extra["threads"] == 1
 
 
@@ -152,7 +152,7 @@ def test_import_sets_the_wait_policy_first(user):
     if user:
         env["GOMP_SPINCOUNT"] = user
     env["PYTHONPATH"] = os.pathsep.join([str(Path(cg.__file__).parents[1]), env.get("PYTHONPATH", "")])
-    code = ("import os, cvxgeodesic.solvers.cholesky; "
+    code = ("import os, cvxgeodesic.linalg; "
             "print(os.environ['GOMP_SPINCOUNT'], 'libgomp' in open('/proc/self/maps').read())")
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr

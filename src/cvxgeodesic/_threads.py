@@ -18,7 +18,7 @@ process may run on and the runnable tasks of other processes (``procs_running`` 
 ``/proc/stat``, sampled a few times) when a solver is built, and uses the cores
 left free, at least one. The count is taken once per solver because PARDISO's
 thread count is fixed by its analysis (changing it afterwards crashes it, see
-:mod:`~cvxgeodesic.solvers.pardiso`).
+:mod:`~cvxgeodesic.linalg.pardiso`).
 """
 
 from __future__ import annotations
@@ -165,7 +165,7 @@ def _numba():
     try:  # importing the kernels first selects their threading layer (OpenMP) before Numba starts a pool
         import numba
 
-        from .solvers import _soc_kernels  # noqa: F401
+        from .solvers.ipm import _kernels  # noqa: F401
     except ImportError:
         return None
     return numba
@@ -190,7 +190,7 @@ def thread_limit(threads: int) -> Iterator[None]:
         from threadpoolctl import threadpool_limits
 
         try:
-            from .solvers.pardiso import pardiso_available
+            from .linalg.pardiso import pardiso_available
         except ImportError:  # no PARDISO binding in this installation: no MKL to load
             pass
         else:

@@ -465,41 +465,13 @@ class P2Builder:
         self.cone_vertex = np.where(self.cone_corner >= 0,
                                     mesh.F[self.cone_face, np.maximum(self.cone_corner, 0)], -1)
 
-    def build(self, sources, extra=None) -> P2Problem:
-        """The program for one set of sources (see :func:`parse_sources`).
-
-        Parameters
-        ----------
-        sources
-            Vertex indices and/or points (see :func:`parse_sources`).
-        extra : tuple (faces (k,) int ndarray, bary (k, 3) float ndarray), optional
-            Additional cone sample points (from :func:`max_violation`).
-        """
+    def _source_equalities(self, vsrc, points, cone_face, cone_bary, keep):
+        """The source equalities (φ's value and gradient at the source points, zero derivative along the edges
+        at a source vertex) as COO rows ``(rows, cols, vals, count)``, and ``keep`` without the cones that sit
+        on a source point."""
         mesh, space = self.mesh, self.space
         n = mesh.n_vertices
-        vsrc, points = parse_sources(sources, mesh)
-        G0, h0, cone_face, cone_bary, cone_vertex = self.G, self.h, self.cone_face, self.cone_bary, self.cone_vertex
-        if extra is not None and len(extra[0]):
-            ef, eb = np.asarray(extra[0], dtype=np.int64), np.asarray(extra[1], dtype=float)
-            ok = ~space.degenerate[ef]
-            ef, eb = ef[ok], eb[ok]
-            N, dN = p2_basis(eb)
-            Gx, hx = _cone_rows(N, np.einsum("kai,kci->kca", dN, space.lam_grad[ef]))
-            G0, h0 = np.concatenate([G0, Gx]), np.concatenate([h0, hx])
-            cone_face = np.concatenate([cone_face, ef])
-            cone_bary = np.concatenate([cone_bary, eb])
-            cone_vertex = np.concatenate([cone_vertex, -np.ones(ef.size, dtype=np.int64)])
-        if mesh.n_faces == 0 or np.all(space.degenerate):
-            raise MeshError(f"{mesh.name}: every face is degenerate; order 2 needs at least one proper face")
-        seed = np.concatenate([vsrc, *[mesh.F[p.face] for p in points]]) if points else vsrc
-        reach_v = mesh.connected_to(seed) & mesh.referenced
-        reach_v[vsrc] = True
         E = mesh.edges
-        reach = np.concatenate([reach_v, reach_v[E[:, 0]] & reach_v[E[:, 1]]])
-        fixed = ~reach
-        fixed[vsrc] = True
-        keep = ~np.isin(cone_vertex, vsrc)
-        keep &= reach[space.face_dofs[cone_face]].all(axis=1)
         rows, cols, vals = [], [], []
         r = 0
         # vertex sources: zero derivative along every incident edge at s: 4 φ_mid − φ_j − 3 φ_s = 0 (φ_s fixed 0)
@@ -553,6 +525,12 @@ class P2Builder:
                 # a sample coinciding with the point has a degenerate cone there
                 same = (cone_face == f) & (np.abs(cone_bary - bary_f).max(axis=1) < 1e-12)
                 keep &= ~same
+        return rows, cols, vals, r, keep
+
+    def _source_hessian_cones(self, vsrc, points, reach):
+        """The extra SOC(4) cones on the Hessian of φ (``source_hessian``: Q ≼ I on the source faces;
+        ``hess_lower``: Hess φ ≽ 2I on every proper face): lists of G (m, 4, 6), h (m, 4) and faces (m,)."""
+        mesh, space = self.mesh, self.space
         extra_G, extra_h, extra_f = [], [], []
         if self.source_hessian:
             # on a face holding a source point or vertex, φ = (x − p)ᵀ Q (x − p) exactly (the face is flat and convex),
@@ -584,6 +562,44 @@ class P2Builder:
             extra_G.append(Gq)
             extra_h.append(np.tile([-2.0, 0.0, 0.0, 0.0], (hf.size, 1)))
             extra_f.append(hf)
+        return extra_G, extra_h, extra_f
+
+    def build(self, sources, extra=None) -> P2Problem:
+        """The program for one set of sources (see :func:`parse_sources`).
+
+        Parameters
+        ----------
+        sources
+            Vertex indices and/or points (see :func:`parse_sources`).
+        extra : tuple (faces (k,) int ndarray, bary (k, 3) float ndarray), optional
+            Additional cone sample points (from :func:`max_violation`).
+        """
+        mesh, space = self.mesh, self.space
+        vsrc, points = parse_sources(sources, mesh)
+        G0, h0, cone_face, cone_bary, cone_vertex = self.G, self.h, self.cone_face, self.cone_bary, self.cone_vertex
+        if extra is not None and len(extra[0]):
+            ef, eb = np.asarray(extra[0], dtype=np.int64), np.asarray(extra[1], dtype=float)
+            ok = ~space.degenerate[ef]
+            ef, eb = ef[ok], eb[ok]
+            N, dN = p2_basis(eb)
+            Gx, hx = _cone_rows(N, np.einsum("kai,kci->kca", dN, space.lam_grad[ef]))
+            G0, h0 = np.concatenate([G0, Gx]), np.concatenate([h0, hx])
+            cone_face = np.concatenate([cone_face, ef])
+            cone_bary = np.concatenate([cone_bary, eb])
+            cone_vertex = np.concatenate([cone_vertex, -np.ones(ef.size, dtype=np.int64)])
+        if mesh.n_faces == 0 or np.all(space.degenerate):
+            raise MeshError(f"{mesh.name}: every face is degenerate; order 2 needs at least one proper face")
+        seed = np.concatenate([vsrc, *[mesh.F[p.face] for p in points]]) if points else vsrc
+        reach_v = mesh.connected_to(seed) & mesh.referenced
+        reach_v[vsrc] = True
+        E = mesh.edges
+        reach = np.concatenate([reach_v, reach_v[E[:, 0]] & reach_v[E[:, 1]]])
+        fixed = ~reach
+        fixed[vsrc] = True
+        keep = ~np.isin(cone_vertex, vsrc)
+        keep &= reach[space.face_dofs[cone_face]].all(axis=1)
+        rows, cols, vals, r, keep = self._source_equalities(vsrc, points, cone_face, cone_bary, keep)
+        extra_G, extra_h, extra_f = self._source_hessian_cones(vsrc, points, reach)
         Emat = sp.csr_matrix((vals, (rows, cols)), shape=(r, space.n_dofs))
         # fixed DOFs leave the equalities; drop rows that are then empty
         Emat = Emat[:, :].tolil()

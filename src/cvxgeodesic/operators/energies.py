@@ -9,9 +9,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import IndefiniteEnergyWarning
+from ..linalg import is_positive_semidefinite
 from ..mesh.cover import manifold_cover, pull_back
 from ..mesh.trimesh import TriMesh
-from ..solvers.cholesky import is_positive_semidefinite
 from .laplacian import cotan_stiffness, mass_matrix
 
 ENERGIES = ("dirichlet", "laplacian", "hessian")

@@ -12,7 +12,7 @@ of one face, so after eliminating ``Δs`` and ``Δz`` the Newton matrix is
     H = Σ_k G_kᵀ W_k⁻² G_k        (one 6 × 6 block per cone, summed per face clique)
 
 whose sparsity pattern (the union of the face cliques) never changes: it is analyzed once
-per mesh (:class:`~cvxgeodesic.solvers.cholesky.SymbolicCholesky`) and only refactorized
+per mesh (:class:`~cvxgeodesic.linalg.SymbolicCholesky`) and only refactorized
 numerically at each iteration, for every source and every cutting-plane round.
 
 The few source equalities ``E x = f`` (one per edge at a source vertex) are kept as a
@@ -30,8 +30,8 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from ..errors import SolverError
-from . import pardiso as _pardiso
-from .cholesky import NotPositiveDefiniteError, SymbolicCholesky
+from ..linalg import NotPositiveDefiniteError, SymbolicCholesky
+from ..linalg import pardiso as _pardiso
 
 _TRIL = np.tril_indices(6)
 #: Iterative-refinement steps per Newton solve.
@@ -168,7 +168,7 @@ class P2InteriorPoint:
         """
         from threadpoolctl import threadpool_limits
 
-        # PARDISO runs its own threads; an idle OpenBLAS pool spinning beside it costs a core (as in solvers/ipm.py)
+        # PARDISO runs its own threads; an idle OpenBLAS pool spinning beside it costs a core (as in ipm/solver.py)
         with threadpool_limits({"libopenblas": 1, "libscipy_openblas": 1}):
             return self._solve(problem, tol=tol, max_iter=max_iter, callback=callback)
 
@@ -199,124 +199,14 @@ class P2InteriorPoint:
 
     def _solve_scaled(self, pb, *, tol, max_iter, callback) -> dict:
         t0 = time.perf_counter()
-        n, k = self.n, pb.n_cones
+        k = pb.n_cones
         c, h = pb.c, pb.h
-        E = pb.E.tocsr()
-        ET = E.T.tocsc()
-        p = E.shape[0]
-        f = pb.f
-        fixed = pb.fixed
-        Gl = pb.G
-        face_pos = self.face_pos[pb.cone_face]
-        diag = self.chol.diag_positions
+        E, ET, p, f, fixed = pb.E.tocsr(), pb.E.tocsr().T.tocsc(), pb.E.shape[0], pb.f, pb.fixed
         hnorm = max(1.0, float(np.linalg.norm(h)))
         cnorm = max(1.0, float(np.linalg.norm(c)))
-
-        def factor(Wi2):
-            # Σ_k G_kᵀ (W_k⁻²) G_k, lower triangle of each 6×6 block, scattered into the fixed pattern
-            B = np.matmul(Gl.transpose(0, 2, 1), np.matmul(Wi2, Gl))
-            data = np.bincount(face_pos.ravel(), B[:, _TRIL[0], _TRIL[1]].ravel(), minlength=self.chol.nnz)
-            dg = data[diag]
-            scale = max(float(dg.max()), 1e-300)
-            data[diag] += np.where(fixed, 1.0, 0.0) + REG * np.abs(dg) + np.where(dg <= 0, scale, 0.0) * (~fixed)
-            solve_h = None
-            for bump in (0.0, 1e-10, 1e-8, 1e-6):  # rounding can make the near-singular H look indefinite
-                try:
-                    solve_h = self.chol.factorize(data, beta=bump * scale)
-                    break
-                except NotPositiveDefiniteError:
-                    continue
-            if solve_h is None:
-                raise NotPositiveDefiniteError("Newton matrix not positive definite after regularization")
-            if p:
-                Y = solve_h(ET.toarray())
-                Y = Y.reshape(n, p)
-                S = E @ Y
-                S = 0.5 * (S + S.T)
-                cf = sla.cho_factor(S + 1e-14 * max(1.0, np.abs(S).max()) * np.eye(p))
-            else:
-                Y, cf = None, None
-            return solve_h, Y, cf
-
-        def reduced(fac, b1, b2):
-            """Solve [H Eᵀ; E 0] (dx, dy) = (b1, b2) through the (regularized) factor."""
-            solve_h, Y, cf = fac
-            hb = solve_h(b1)
-            if p:
-                dy = sla.cho_solve(cf, E @ hb - b2)
-                return hb - Y @ dy, dy
-            return hb, np.zeros(0)
-
-        def hmul(Wi2, v):
-            out = self._Gtz(pb, _mv(Wi2, self._Gx(pb, v)))
-            out[fixed] = v[fixed]
-            return out
-
-        def kkt_solve(fac, Wi, Wi2, bd, be, bp, bu):
-            """Solve Gᵀdz + Eᵀdy = bd, E dx = be, G dx + ds = bp, W dz + W⁻¹ ds = bu (reduced to H)."""
-            Wib = _mv(Wi, bu)
-            b1 = bd - self._Gtz(pb, Wib - _mv(Wi2, bp))
-            b1[fixed] = 0.0
-            dx, dy = reduced(fac, b1, be)
-            Gdx = self._Gx(pb, dx)
-            ds = bp - Gdx
-            dz = Wib - _mv(Wi2, ds)
-            return dx, dy, dz, ds
-
-        def newton(fac, Wi2, W, lam, rd, rp, re, d, Wi=None):
-            u = _jdiv(lam, d)
-            bd, be, bp = -rd, -re, -rp
-            dx, dy, dz, ds = kkt_solve(fac, Wi, Wi2, bd, be, bp, u)
-            # iterative refinement on the full system: Δz = W⁻²(…) amplifies any error in Δx by up to 1/μ,
-            # so the residual of the dual equation has to be corrected through Δz itself
-            scale_b = max(float(np.abs(bd).max(initial=0.0)), float(np.abs(u).max(initial=0.0)), 1e-300)
-            for _ in range(REFINE_STEPS):
-                r1 = bd - self._Gtz(pb, dz) - (ET @ dy if p else 0.0)
-                r1[fixed] = 0.0
-                r2 = be - (E @ dx if p else np.zeros(0))
-                r3 = bp - self._Gx(pb, dx) - ds
-                r4 = u - _mv(W, dz) - _mv(Wi, ds)
-                err = max(float(np.abs(r1).max(initial=0.0)), float(np.abs(r3).max(initial=0.0)),
-                          float(np.abs(r4).max(initial=0.0)), float(np.abs(r2).max(initial=0.0)))
-                if err <= 1e-11 * scale_b:
-                    break
-                ex, ey, ez, es = kkt_solve(fac, Wi, Wi2, r1, r2, r3, r4)
-                dx, dy, dz, ds = dx + ex, dy + ey, dz + ez, ds + es
-            return dx, dy, dz, ds
-
-        # ---- initial point: least squares with W = I (CVXOPT's default start)
-        eye = np.broadcast_to(np.eye(4), (k, 4, 4))
-        fac0 = factor(eye)
-        solve_h, Y, cf = fac0
-        g = self._Gtz(pb, h)
-        g[fixed] = 0.0
-        hb = solve_h(g)
-        if p:
-            y0 = sla.cho_solve(cf, E @ hb - f)
-            x = hb - Y @ y0
-        else:
-            x = hb
-        x[fixed] = 0.0
-        s = h - self._Gx(pb, x)
-        cc = -c.copy()
-        cc[fixed] = 0.0
-        hb = solve_h(cc)
-        if p:
-            wy = sla.cho_solve(cf, E @ hb)
-            wv = hb - Y @ wy
-        else:
-            wv = hb
-        z = self._Gx(pb, wv)  # least-norm z with Gᵀz = −c
-
-        def shift(u):
-            m = u[:, 0] - np.linalg.norm(u[:, 1:], axis=1)
-            a = -float(m.min())
-            if a >= -1e-8:
-                u = u.copy()
-                u[:, 0] += 1 + max(a, 0.0)
-            return u
-
-        s, z = shift(s), shift(z)
+        system = _P2System(self, pb)
+        factor, newton = system.factor, system.newton
+        x, s, z = system.start()
         y = np.zeros(p)
         status = "max_iterations"
         info = {}
@@ -391,3 +281,129 @@ class P2InteriorPoint:
             "primal_residual": info["primal_residual"], "dual_residual": info["dual_residual"], "gap": info["gap"],
             "time": time.perf_counter() - t0,
         }
+
+
+class _P2System:
+    """The Newton systems of one (equilibrated) order-2 program: the face-clique matrix ``H = Σ GᵀW⁻²G`` in the
+    fixed pattern, the source equalities through a dense Schur complement, refined Newton directions."""
+
+    def __init__(self, solver: P2InteriorPoint, pb):
+        self.solver, self.pb = solver, pb
+        self.n = solver.n
+        self.E = pb.E.tocsr()
+        self.ET = self.E.T.tocsc()
+        self.p = self.E.shape[0]
+        self.fixed = pb.fixed
+        self.Gl = pb.G
+        self.face_pos = solver.face_pos[pb.cone_face]
+        self.chol = solver.chol
+        self.diag = solver.chol.diag_positions
+
+    def factor(self, Wi2):
+        """Factor of ``H`` (Σ_k G_kᵀ (W_k⁻²) G_k, lower triangle of each 6×6 block, scattered into the fixed
+        pattern) and of the Schur complement ``E H⁻¹ Eᵀ``."""
+        Gl, fixed, p, n = self.Gl, self.fixed, self.p, self.n
+        B = np.matmul(Gl.transpose(0, 2, 1), np.matmul(Wi2, Gl))
+        data = np.bincount(self.face_pos.ravel(), B[:, _TRIL[0], _TRIL[1]].ravel(), minlength=self.chol.nnz)
+        dg = data[self.diag]
+        scale = max(float(dg.max()), 1e-300)
+        data[self.diag] += np.where(fixed, 1.0, 0.0) + REG * np.abs(dg) + np.where(dg <= 0, scale, 0.0) * (~fixed)
+        solve_h = None
+        for bump in (0.0, 1e-10, 1e-8, 1e-6):  # rounding can make the near-singular H look indefinite
+            try:
+                solve_h = self.chol.factorize(data, beta=bump * scale)
+                break
+            except NotPositiveDefiniteError:
+                continue
+        if solve_h is None:
+            raise NotPositiveDefiniteError("Newton matrix not positive definite after regularization")
+        if p:
+            Y = solve_h(self.ET.toarray())
+            Y = Y.reshape(n, p)
+            S = self.E @ Y
+            S = 0.5 * (S + S.T)
+            cf = sla.cho_factor(S + 1e-14 * max(1.0, np.abs(S).max()) * np.eye(p))
+        else:
+            Y, cf = None, None
+        return solve_h, Y, cf
+
+    def reduced(self, fac, b1, b2):
+        """Solve [H Eᵀ; E 0] (dx, dy) = (b1, b2) through the (regularized) factor."""
+        solve_h, Y, cf = fac
+        hb = solve_h(b1)
+        if self.p:
+            dy = sla.cho_solve(cf, self.E @ hb - b2)
+            return hb - Y @ dy, dy
+        return hb, np.zeros(0)
+
+    def kkt_solve(self, fac, Wi, Wi2, bd, be, bp, bu):
+        """Solve Gᵀdz + Eᵀdy = bd, E dx = be, G dx + ds = bp, W dz + W⁻¹ ds = bu (reduced to H)."""
+        sv, pb = self.solver, self.pb
+        Wib = _mv(Wi, bu)
+        b1 = bd - sv._Gtz(pb, Wib - _mv(Wi2, bp))
+        b1[self.fixed] = 0.0
+        dx, dy = self.reduced(fac, b1, be)
+        Gdx = sv._Gx(pb, dx)
+        ds = bp - Gdx
+        dz = Wib - _mv(Wi2, ds)
+        return dx, dy, dz, ds
+
+    def newton(self, fac, Wi2, W, lam, rd, rp, re, d, Wi=None):
+        """The direction for the complementarity right-hand side ``d``, refined on the full system."""
+        sv, pb, p, E, ET = self.solver, self.pb, self.p, self.E, self.ET
+        u = _jdiv(lam, d)
+        bd, be, bp = -rd, -re, -rp
+        dx, dy, dz, ds = self.kkt_solve(fac, Wi, Wi2, bd, be, bp, u)
+        # iterative refinement on the full system: Δz = W⁻²(…) amplifies any error in Δx by up to 1/μ,
+        # so the residual of the dual equation has to be corrected through Δz itself
+        scale_b = max(float(np.abs(bd).max(initial=0.0)), float(np.abs(u).max(initial=0.0)), 1e-300)
+        for _ in range(REFINE_STEPS):
+            r1 = bd - sv._Gtz(pb, dz) - (ET @ dy if p else 0.0)
+            r1[self.fixed] = 0.0
+            r2 = be - (E @ dx if p else np.zeros(0))
+            r3 = bp - sv._Gx(pb, dx) - ds
+            r4 = u - _mv(W, dz) - _mv(Wi, ds)
+            err = max(float(np.abs(r1).max(initial=0.0)), float(np.abs(r3).max(initial=0.0)),
+                      float(np.abs(r4).max(initial=0.0)), float(np.abs(r2).max(initial=0.0)))
+            if err <= 1e-11 * scale_b:
+                break
+            ex, ey, ez, es = self.kkt_solve(fac, Wi, Wi2, r1, r2, r3, r4)
+            dx, dy, dz, ds = dx + ex, dy + ey, dz + ez, ds + es
+        return dx, dy, dz, ds
+
+    def start(self):
+        """CVXOPT's default start: least squares with W = I for x, the least-norm z with Gᵀz = −c, both
+        shifted into the cones; returns ``x, s, z``."""
+        sv, pb, p, E = self.solver, self.pb, self.p, self.E
+        k = pb.n_cones
+        eye = np.broadcast_to(np.eye(4), (k, 4, 4))
+        solve_h, Y, cf = self.factor(eye)
+        g = sv._Gtz(pb, pb.h)
+        g[self.fixed] = 0.0
+        hb = solve_h(g)
+        if p:
+            y0 = sla.cho_solve(cf, E @ hb - pb.f)
+            x = hb - Y @ y0
+        else:
+            x = hb
+        x[self.fixed] = 0.0
+        s = pb.h - sv._Gx(pb, x)
+        cc = -pb.c.copy()
+        cc[self.fixed] = 0.0
+        hb = solve_h(cc)
+        if p:
+            wy = sla.cho_solve(cf, E @ hb)
+            wv = hb - Y @ wy
+        else:
+            wv = hb
+        z = sv._Gx(pb, wv)  # least-norm z with Gᵀz = −c
+
+        def shift(u):
+            m = u[:, 0] - np.linalg.norm(u[:, 1:], axis=1)
+            a = -float(m.min())
+            if a >= -1e-8:
+                u = u.copy()
+                u[:, 0] += 1 + max(a, 0.0)
+            return u
+
+        return x, shift(s), shift(z)

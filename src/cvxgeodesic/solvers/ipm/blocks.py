@@ -1,0 +1,355 @@
+"""Constraint blocks: one cone type (:mod:`.cones`) and the linear map that gives its slack, ``s = b − A x``.
+
+A block owns everything of the algorithm that involves its rows of ``A``: the residual ``A x + s − b``,
+``Aᵀz``, its term ``AᵀW⁻²A`` of the reduced Newton matrix (as an operator and assembled into the
+fixed pattern), the Newton direction's ``Δs``, ``Δz`` from ``Δx``, ``b̃ᵀz`` and the recession test
+of the unboundedness certificate. ``x`` is always the full variable vector (fixed entries at their
+values); ``b̃ = b − A x_F`` is the right-hand side of the problem with the fixed variables eliminated.
+
+:class:`TriangleSOCBlock`
+    The mesh problems' cones ``s_t = (1, B_t x_t)`` (every cone touches three variables): SOC(3)
+    with the fused compiled kernels of :mod:`._kernels`.
+:class:`PairInequalityBlock`
+    The mesh problems' linear inequalities ``a_k · x_k ≤ r_k`` (each touches at most two variables),
+    on the nonnegative orthant.
+:class:`SparseBlock`
+    Any cone (:class:`~.cones.SOC` of any size, :class:`~.cones.RotatedSOC`, :class:`~.cones.Orthant`)
+    with a general sparse ``A``, in NumPy/SciPy: for programs that are not mesh-shaped, and the reference
+    the structured blocks are tested against.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+import numpy as np
+import scipy.sparse as sp
+
+from ...linalg import SymbolicCholesky
+from . import _kernels as _kern
+from .cones import SOC, Cone, Orthant, Scaling, _amax
+
+__all__ = ["ConeBlock", "PairInequalityBlock", "SparseBlock", "TriangleSOCBlock"]
+
+# local (a, b) index pairs of the 6 lower-triangle entries of a 3×3 clique
+_CLIQUE_A = np.array([0, 1, 2, 1, 2, 2])
+_CLIQUE_B = np.array([0, 1, 2, 0, 0, 1])
+
+
+class ConeBlock(Protocol):
+    """What the algorithm needs of one block of constraints ``s = b − A x``, ``s ∈ K``."""
+
+    cone: Cone
+    count: int
+    #: the block's rows of the reduced right-hand side ``b̃ = b − A x_F``
+    b_tilde: np.ndarray
+
+    def slack(self, x: np.ndarray, x_fixed: np.ndarray) -> np.ndarray:
+        """``s = b − A x`` (computed as ``b̃ − A(x − x_F)`` where that rounds as the original solver did)."""
+        ...
+
+    def residual(self, x: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, object]:
+        """``r_z = A x + s − b`` and an opaque by-product for :meth:`recession_violation`."""
+        ...
+
+    def recession_violation(self, aux: object) -> float:
+        """How far ``−A d`` is from the cone for the free part ``d`` of the current ``x`` (∞-norm)."""
+        ...
+
+    def b_dot(self, z: np.ndarray) -> float:
+        """``b̃ᵀz``."""
+        ...
+
+    def norm_b(self) -> float:
+        """``‖b̃‖∞`` (0 for an empty block)."""
+        ...
+
+    def A(self, x: np.ndarray) -> np.ndarray:
+        """``A x``."""
+        ...
+
+    def At_add(self, z: np.ndarray, out: np.ndarray) -> None:
+        """``out += Aᵀz``."""
+        ...
+
+    def kkt_add(self, sc: Scaling, v: np.ndarray, out: np.ndarray) -> None:
+        """``out += AᵀW⁻²A v``."""
+        ...
+
+    def assemble_add(self, sc: Scaling, data: np.ndarray) -> None:
+        """``data += AᵀW⁻²A`` on the pattern's lower triangle."""
+        ...
+
+    def newton(self, dx: np.ndarray, sc: Scaling, wu: np.ndarray, wr: np.ndarray, rz: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray]:
+        """``Δs = −r_z − A Δx``, ``Δz = W⁻² A Δx + wu + wr`` (``wr = W⁻² r_z``)."""
+        ...
+
+    def refine(self, delta: np.ndarray, sc: Scaling, ds: np.ndarray, dz: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray]:
+        """``(Δs, Δz)`` after ``Δx += δ``: ``Δs − A δ``, ``Δz + W⁻² A δ``."""
+        ...
+
+    def touch(self, mask: np.ndarray) -> None:
+        """Mark the variables the block constrains."""
+        ...
+
+
+class TriangleSOCBlock:
+    """SOC(3) cones ``‖B_t x[cv[t]]‖ ≤ 1``: ``s_t = (1, B_t x_t)``, i.e. ``A_t = [0; −B_t]``, ``b_t = (1, 0)``.
+
+    Parameters
+    ----------
+    blocks : (k, 2, 3) float ndarray
+        ``B_t``.
+    vertices : (k, 3) int ndarray
+        The variables of each cone.
+    x_fixed : (n,) float ndarray
+        Fixed values (0 on the free variables).
+    chol : SymbolicCholesky
+        The pattern; raises ValueError when a clique is not in it.
+    """
+
+    cone = SOC(3)
+
+    def __init__(self, blocks: np.ndarray, vertices: np.ndarray, x_fixed: np.ndarray, chol: SymbolicCholesky):
+        cv = np.asarray(vertices, dtype=np.int64).reshape(-1, 3)
+        Bt = np.asarray(blocks, dtype=np.float64).reshape(-1, 2, 3)
+        self.count = k = cv.shape[0]
+        self.pos = _kern.positions(chol, cv[:, _CLIQUE_A].T.ravel(), cv[:, _CLIQUE_B].T.ravel())
+        # SoA order for the kernels: B[:, :, t] is B_t
+        self.B = np.ascontiguousarray(Bt.transpose(1, 2, 0))  # (2, 3, k)
+        self.cv = np.ascontiguousarray(cv)
+        B = self.B
+        # clique constants B_tᵀB_t (6, k): each iteration adds a rank-one term
+        self.BtB6 = np.stack([B[0, a] * B[0, b] + B[1, a] * B[1, b] for a, b in zip(_CLIQUE_A, _CLIQUE_B, strict=True)])
+        self.shift = self.Bx(x_fixed)  # b̃ body = +B x_F (A body is −B)
+        self.b_tilde = np.concatenate([np.ones((1, k)), self.shift])
+
+    def Bx(self, x: np.ndarray) -> np.ndarray:
+        """(2, k): ``B_t x_t`` for every cone."""
+        out = np.empty((2, self.count))
+        _kern.gather(self.B, self.cv, x, out)
+        return out
+
+    def slack(self, x, x_fixed):
+        return np.concatenate([np.ones((1, self.count)), self.Bx(x)])
+
+    def residual(self, x, s):
+        Bx = self.Bx(x)
+        rz = s.copy()
+        rz[0] -= 1.0
+        rz[1:] -= Bx
+        return rz, Bx
+
+    def recession_violation(self, aux) -> float:
+        bd = aux - self.shift  # B x_f
+        return _amax(np.sqrt(bd[0] ** 2 + bd[1] ** 2))
+
+    def b_dot(self, z) -> float:
+        return float(z[0].sum() + (self.shift * z[1:]).sum())
+
+    def norm_b(self) -> float:
+        return max(1.0, float(np.abs(self.shift).max())) if self.count else 0.0
+
+    def A(self, x):
+        return np.concatenate([np.zeros((1, self.count)), -self.Bx(x)])
+
+    def At_add(self, z, out) -> None:
+        if self.count:
+            _kern.scatter(self.B, self.cv, z[1:], -1.0, out)
+
+    def kkt_add(self, sc, v, out) -> None:
+        if self.count:
+            _kern.kkt_cones(self.B, self.cv, sc.w, sc.inv_eta2, v, out)
+
+    def assemble_add(self, sc, data) -> None:
+        """``(B_tᵀB_t + 2 (B_tᵀw̄₁)(B_tᵀw̄₁)ᵀ)/η²`` per clique: ``[W_t⁻²]_body = (I + 2 w̄₁w̄₁ᵀ)/η²``."""
+        if self.count:
+            _kern.assemble_cones(self.B, self.BtB6, sc.w, sc.inv_eta2, self.pos, data)
+
+    def newton(self, dx, sc, wu, wr, rz):
+        g = self.Bx(dx)  # A Δx = (0, −g)
+        dz = np.empty((3, self.count))
+        ds = np.empty((3, self.count))
+        _kern.newton_cones(g, sc.w, sc.inv_eta2, wu, wr, rz, dz, ds)
+        return ds, dz
+
+    def refine(self, delta, sc, ds, dz):
+        g = self.Bx(delta)
+        dz = dz + sc.body_to_inv2(g)
+        ds = ds.copy()
+        ds[1:] += g
+        return ds, dz
+
+    def touch(self, mask) -> None:
+        mask[self.cv.ravel()] = True
+
+
+class PairInequalityBlock:
+    """Linear inequalities ``a_k · x[iv[k]] ≤ r_k`` with at most two variables each, on the orthant.
+
+    Parameters
+    ----------
+    vertices : (p, 2) int ndarray
+        A one-variable bound repeats the variable with coefficient 0 for the second.
+    coeffs : (p, 2) float ndarray
+    rhs : (p,) float ndarray
+    x_fixed : (n,) float ndarray
+    chol : SymbolicCholesky
+    """
+
+    cone = Orthant()
+
+    def __init__(self, vertices: np.ndarray, coeffs: np.ndarray, rhs: np.ndarray, x_fixed: np.ndarray,
+                 chol: SymbolicCholesky):
+        iv = np.asarray(vertices, dtype=np.int64).reshape(-1, 2)
+        ia = np.asarray(coeffs, dtype=np.float64).reshape(-1, 2)
+        self.count = p = iv.shape[0]
+        n = chol.n
+        self.pos = _kern.positions(chol, iv[:, [0, 1, 1]].T.ravel(), iv[:, [0, 1, 0]].T.ravel())
+        self.iv, self.ia = iv, ia
+        self.L = sp.csr_matrix((ia.ravel(), (np.repeat(np.arange(p), 2), iv.ravel())), shape=(p, n))
+        self.LT = self.L.T.tocsr()
+        self.rhs = np.asarray(rhs, dtype=np.float64)
+        # clique constants a_i a_j (3, p); a repeated vertex gets its cross term twice
+        same = np.where(iv[:, 0] == iv[:, 1], 2.0, 1.0)
+        self.coef = np.stack([ia[:, 0] ** 2, ia[:, 1] ** 2, ia[:, 0] * ia[:, 1] * same])
+        self.b_tilde = self.rhs - self.L @ x_fixed
+
+    def slack(self, x, x_fixed):
+        return self.b_tilde - self.L @ (x - x_fixed)
+
+    def residual(self, x, s):
+        ax = self.L @ x
+        return ax + s - self.rhs, ax
+
+    def recession_violation(self, aux) -> float:
+        ad = aux - (self.rhs - self.b_tilde)  # a·x_f
+        return _amax(np.maximum(ad, 0.0))
+
+    def b_dot(self, z) -> float:
+        return float(self.b_tilde @ z)
+
+    def norm_b(self) -> float:
+        return float(np.abs(self.b_tilde).max()) if self.count else 0.0
+
+    def A(self, x):
+        return self.L @ x
+
+    def At_add(self, z, out) -> None:
+        if self.count:
+            out += self.LT @ z
+
+    def kkt_add(self, sc, v, out) -> None:
+        if self.count:
+            out += self.LT @ (sc.w2inv * (self.L @ v))
+
+    def assemble_add(self, sc, data) -> None:
+        if self.count:
+            _kern.scatter_add((self.coef * sc.w2inv).ravel(), self.pos, data)
+
+    def newton(self, dx, sc, wu, wr, rz):
+        adx = self.L @ dx
+        return -rz - adx, sc.w2inv * adx + wu + wr
+
+    def refine(self, delta, sc, ds, dz):
+        adl = self.L @ delta
+        return ds - adl, dz + sc.w2inv * adl
+
+    def touch(self, mask) -> None:
+        mask[self.iv[self.ia != 0]] = True
+
+
+class SparseBlock:
+    """``count`` cones of one type with a general sparse map: ``s = b − A x`` (NumPy/SciPy throughout).
+
+    Parameters
+    ----------
+    cone : Cone
+        :class:`~.cones.SOC` (any dimension), :class:`~.cones.RotatedSOC` or :class:`~.cones.Orthant`.
+    A : (count·dim, n) sparse matrix
+        Rows cone-major: row ``t·dim + i`` is component ``i`` of cone ``t`` (``dim = 1`` for the orthant).
+    b : (count·dim,) float ndarray
+    x_fixed : (n,) float ndarray
+    chol : SymbolicCholesky
+        Its pattern must hold the pattern of ``AᵀA`` (ValueError otherwise).
+    """
+
+    def __init__(self, cone: Cone, A, b: np.ndarray, x_fixed: np.ndarray, chol: SymbolicCholesky):
+        self.cone = cone
+        self.A_mat = sp.csr_matrix(A, dtype=np.float64)
+        rows = self.A_mat.shape[0]
+        dim = int(np.prod(cone.shape(1)))
+        if rows % dim:
+            raise ValueError(f"A has {rows} rows, not a multiple of the cone dimension {dim}")
+        self.count = rows // dim
+        self._shape = cone.shape(self.count)
+        self.AT = self.A_mat.T.tocsr()
+        self.b = np.asarray(b, dtype=np.float64).reshape(rows)
+        M = sp.coo_matrix(self.AT @ self.A_mat)
+        chol.positions(M.row, M.col)  # fits the pattern, or ValueError
+        self._chol = chol
+        self.b_tilde = self._field(self.b - self.A_mat @ x_fixed)
+
+    def _field(self, flat: np.ndarray) -> np.ndarray:
+        """Cone-major rows → the cone's field layout."""
+        if len(self._shape) == 1:
+            return flat
+        return np.ascontiguousarray(flat.reshape(self._shape[1], self._shape[0]).T)
+
+    def _flat(self, u: np.ndarray) -> np.ndarray:
+        return u if u.ndim == 1 else u.T.ravel()
+
+    def slack(self, x, x_fixed):
+        return self._field(self.b - self.A_mat @ x)
+
+    def residual(self, x, s):
+        Ax = self.A(x)
+        return Ax + s - self._field(self.b), Ax
+
+    def recession_violation(self, aux) -> float:
+        # −A d ∈ K for d = x − x_F, A d = A x − (b − b̃); the distance measured as the most negative eigenvalue
+        v = -(aux - self._field(self.b) + self.b_tilde)
+        return max(-self.cone.min_eigenvalue(v), 0.0) if self.count else 0.0
+
+    def b_dot(self, z) -> float:
+        return float((self.b_tilde * z).sum())
+
+    def norm_b(self) -> float:
+        return _amax(self.b_tilde)
+
+    def A(self, x):
+        return self._field(self.A_mat @ x)
+
+    def At_add(self, z, out) -> None:
+        out += self.AT @ self._flat(z)
+
+    def kkt_add(self, sc, v, out) -> None:
+        out += self.AT @ self._flat(sc.apply_winv2(self.A(v)))
+
+    def assemble_add(self, sc, data) -> None:
+        # AᵀW⁻²A column by column of A: W⁻² applied to the fields of A's columns (dense per cone)
+        n = self.A_mat.shape[1]
+        cols = self.A_mat.tocsc()
+        touched = np.flatnonzero(np.diff(cols.indptr))
+        WA = np.zeros((self.A_mat.shape[0], touched.size))
+        for j, c in enumerate(touched):
+            e = np.zeros(n)
+            e[c] = 1.0
+            WA[:, j] = self._flat(sc.apply_winv2(self.A(e)))
+        M = sp.coo_matrix(self.AT[touched] @ sp.csr_matrix(WA))
+        rows, colsj = touched[M.row], touched[M.col]
+        low = rows >= colsj
+        np.add.at(data, self._chol.positions(rows[low], colsj[low]), M.data[low])
+
+    def newton(self, dx, sc, wu, wr, rz):
+        adx = self.A(dx)
+        return -rz - adx, sc.apply_winv2(adx) + wu + wr
+
+    def refine(self, delta, sc, ds, dz):
+        ad = self.A(delta)
+        return ds - ad, dz + sc.apply_winv2(ad)
+
+    def touch(self, mask) -> None:
+        mask[np.flatnonzero(np.diff(self.A_mat.tocsc().indptr))] = True

@@ -1,0 +1,451 @@
+"""The cone-block protocol: the algebra of one cone type, vectorized over the cones of a block.
+
+The interior-point algorithm touches a cone only through the methods of :class:`Cone`: the
+identity element, the Nesterov–Todd scaling (a :class:`Scaling`: ``W``, ``W⁻¹``, ``W⁻²`` and
+``λ = W z = W⁻¹ s``), the step to the boundary, the Jordan product and division, the Mehrotra and
+Gondzio terms built on them, and the shifts of the starting point. How a block's slack depends
+on ``x`` (its constraint map) is :mod:`.blocks`' business.
+
+Data layout ("structure of arrays"): a field over ``k`` cones of dimension ``d`` is a (d, k) array,
+row 0 the heads (contiguous per component, as the compiled kernels want); the nonnegative orthant's
+fields are (p,) arrays.
+
+Cone types
+----------
+:class:`SOC`
+    ``{u : u₀ ≥ ‖u₁..‖}`` of any dimension; SOC(3) runs the compiled kernels of
+    :mod:`._kernels`, other dimensions the NumPy formulas (the same ones, CVXOPT's).
+:class:`Orthant`
+    ``{u : u ≥ 0}`` (the linear inequalities).
+:class:`RotatedSOC`
+    ``{u : 2u₀u₁ ≥ ‖u₂..‖², u₀, u₁ ≥ 0}``, through the orthogonal involution
+    ``T u = ((u₀ + u₁)/√2, (u₀ − u₁)/√2, u₂..)`` that maps it onto the SOC: every operation is the
+    SOC's conjugated by ``T`` (``W_r = T W T``, ``u ∘_r v = T(Tu ∘ Tv)``, ``e_r = T e``).
+
+Adding a cone type is one class here with these methods (plus its kernels when speed matters).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Protocol
+
+import numpy as np
+
+from . import _kernels as _kern
+
+__all__ = ["SOC", "Cone", "Orthant", "RotatedSOC", "Scaling"]
+
+
+class Scaling(Protocol):
+    """Nesterov–Todd scaling of one block's pairs (s, z): ``W z = W⁻¹ s = λ``."""
+
+    lam: np.ndarray
+
+    def apply_w(self, v: np.ndarray) -> np.ndarray: ...
+
+    def apply_winv(self, v: np.ndarray) -> np.ndarray: ...
+
+    def apply_winv2(self, v: np.ndarray) -> np.ndarray: ...
+
+
+class Cone(Protocol):
+    """The algebra of one cone type over the ``count`` cones of a block (fields shaped ``shape(count)``)."""
+
+    def shape(self, count: int) -> tuple[int, ...]: ...
+
+    def identity(self, count: int) -> np.ndarray:
+        """``e``, the identity of the Jordan algebra (the cone's centre)."""
+        ...
+
+    def degree(self, count: int) -> int:
+        """Barrier degree (the number of cones for the SOC, of entries for the orthant)."""
+        ...
+
+    def scaling(self, s: np.ndarray, z: np.ndarray) -> Scaling: ...
+
+    def max_step(self, u: np.ndarray, du: np.ndarray) -> float:
+        """Largest ``α`` with ``u + α du`` in the cone (``inf`` when unbounded); ``u`` interior."""
+        ...
+
+    def dot(self, u: np.ndarray, v: np.ndarray) -> float:
+        """``uᵀv`` summed over all cones."""
+        ...
+
+    def min_eigenvalue(self, u: np.ndarray) -> float:
+        """Smallest eigenvalue of ``u`` over all cones (``inf`` when there are none)."""
+        ...
+
+    def product(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Jordan product ``u ∘ v``."""
+        ...
+
+    def divide(self, lam: np.ndarray, d: np.ndarray) -> np.ndarray:
+        """Jordan division ``λ \\ d`` (the ``x`` with ``λ ∘ x = d``; ``λ`` interior)."""
+        ...
+
+    def mehrotra(self, sc: Scaling, ds: np.ndarray, dz: np.ndarray, z: np.ndarray, sigma_mu: float) -> np.ndarray:
+        """Combined-step term ``−z − W⁻¹(λ \\ ((W⁻¹Δs_a)∘(WΔz_a) − σμe))``."""
+        ...
+
+    def gondzio(self, sc: Scaling, s: np.ndarray, ds: np.ndarray, tp: float, z: np.ndarray, dz: np.ndarray,
+                td: float, lo: float, hi: float) -> np.ndarray:
+        """Centrality-corrector term ``W⁻¹(λ \\ c)``: ``c`` moves the eigenvalues of ``(W⁻¹s')∘(Wz')`` at the
+        trial point ``s' = s + tp Δs``, ``z' = z + td Δz`` into ``[lo, hi]`` (each decrease bounded by ``hi``)."""
+        ...
+
+    def add_identity(self, u: np.ndarray, d: float) -> np.ndarray:
+        """``u + d e``."""
+        ...
+
+    def sum_heads(self, u: np.ndarray) -> float:
+        """``eᵀu``-like sum of the heads (the entries for the orthant)."""
+        ...
+
+    def dual_shift(self, z: np.ndarray, factor: float) -> np.ndarray:
+        """Mehrotra's shift cone by cone: each cone raised by ``factor`` × its own deficit (the orthant's
+        entries together by ``factor`` × the most negative one)."""
+        ...
+
+    def floor(self, z: np.ndarray, margin: float) -> np.ndarray:
+        """``z`` with every cone's margin (smallest eigenvalue) at least ``margin``."""
+        ...
+
+
+def _amax(a: np.ndarray) -> float:
+    return float(np.abs(a).max()) if a.size else 0.0
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Second-order cone
+# ---------------------------------------------------------------------------------------------------------------
+
+
+class _SocScaling:
+    """NT scaling ``W = η W̄`` of SOC pairs (s, z), vectorized (CVXOPT's formulas).
+
+    ``W̄ = [[w₀, w₁ᵀ], [w₁, I + w₁w₁ᵀ/(1 + w₀)]]`` with ``w̄ᵀJw̄ = 1`` (``J = diag(1, −1, …)``);
+    ``W z = W⁻¹ s = λ``; ``W⁻² = (2 v vᵀ − J)/η²`` with ``v = J w̄``. SOC(3) runs the compiled kernels,
+    other dimensions the same formulas in NumPy.
+    """
+
+    def __init__(self, s: np.ndarray, z: np.ndarray):
+        d, k = s.shape
+        self._k3 = d == 3
+        self.w = np.empty((d, k))
+        self.eta = np.empty(k)
+        self.inv_eta2 = np.empty(k)
+        self.lam = np.empty((d, k))
+        if self._k3:
+            _kern.nt_scaling(s, z, self.w, self.eta, self.inv_eta2, self.lam)
+            return
+        sn = np.sqrt((s[0] - np.linalg.norm(s[1:], axis=0)) * (s[0] + np.linalg.norm(s[1:], axis=0)))
+        zn = np.sqrt((z[0] - np.linalg.norm(z[1:], axis=0)) * (z[0] + np.linalg.norm(z[1:], axis=0)))
+        sb, zb = s / sn, z / zn
+        gamma = np.sqrt(0.5 * (1.0 + (sb * zb).sum(axis=0)))
+        self.w[0] = (sb[0] + zb[0]) / (2.0 * gamma)
+        self.w[1:] = (sb[1:] - zb[1:]) / (2.0 * gamma)
+        self.eta[:] = np.sqrt(sn / zn)
+        self.inv_eta2[:] = zn / sn
+        scale = np.sqrt(sn * zn)
+        self.lam[0] = gamma * scale
+        self.lam[1:] = ((gamma + zb[0]) * sb[1:] + (gamma + sb[0]) * zb[1:]) / (sb[0] + zb[0] + 2.0 * gamma) * scale
+
+    def _apply(self, v: np.ndarray, sign: float) -> np.ndarray:
+        out = np.empty_like(v)
+        if self._k3:
+            _kern.apply_w(self.w, self.eta, v, sign, out)
+            return out
+        w = self.w
+        f = self.eta if sign > 0 else 1.0 / self.eta
+        w1v1 = (w[1:] * v[1:]).sum(axis=0)
+        c = sign * v[0] + w1v1 / (1.0 + w[0])
+        out[0] = (w[0] * v[0] + sign * w1v1) * f
+        out[1:] = (v[1:] + c * w[1:]) * f
+        return out
+
+    def apply_w(self, v: np.ndarray) -> np.ndarray:
+        """``W v``."""
+        return self._apply(v, 1.0)
+
+    def apply_winv(self, v: np.ndarray) -> np.ndarray:
+        """``W⁻¹ v``."""
+        return self._apply(v, -1.0)
+
+    def apply_winv2(self, v: np.ndarray) -> np.ndarray:
+        """``W⁻² v = (2 v̂ (v̂ᵀv) − J v)/η²`` with ``v̂ = J w̄``."""
+        out = np.empty_like(v)
+        if self._k3:
+            _kern.apply_inv2(self.w, self.inv_eta2, v, out)
+            return out
+        w = self.w
+        a = 2.0 * (w[0] * v[0] - (w[1:] * v[1:]).sum(axis=0))
+        out[0] = (a * w[0] - v[0]) * self.inv_eta2
+        out[1:] = (v[1:] - a * w[1:]) * self.inv_eta2
+        return out
+
+    def body_to_inv2(self, g: np.ndarray) -> np.ndarray:
+        """``W⁻² (0, −g)`` for a (d − 1, k) body field ``g`` (that is ``W⁻² A Δx`` with ``g = B Δx``)."""
+        w = self.w
+        a = 2.0 * (w[1:] * g).sum(axis=0) if not self._k3 else 2.0 * (w[1] * g[0] + w[2] * g[1])
+        return np.concatenate([(a * w[0])[None], -g - a * w[1:]]) * self.inv_eta2
+
+
+class SOC:
+    """The second-order cone ``SOC(dim)`` (``dim ≥ 2``), fields (dim, k); see :class:`Cone`."""
+
+    def __init__(self, dim: int = 3):
+        if dim < 2:
+            raise ValueError(f"SOC dimension must be at least 2, got {dim}")
+        self.dim = int(dim)
+
+    def shape(self, count: int) -> tuple[int, ...]:
+        return (self.dim, count)
+
+    def identity(self, count: int) -> np.ndarray:
+        e = np.zeros((self.dim, count))
+        e[0] = 1.0
+        return e
+
+    def degree(self, count: int) -> int:
+        return count
+
+    def scaling(self, s: np.ndarray, z: np.ndarray) -> _SocScaling:
+        return _SocScaling(s, z)
+
+    def _norm_body(self, u: np.ndarray) -> np.ndarray:
+        return np.sqrt(u[1] ** 2 + u[2] ** 2) if self.dim == 3 else np.linalg.norm(u[1:], axis=0)
+
+    def max_step(self, u: np.ndarray, du: np.ndarray) -> float:
+        """Maps ``u`` to the identity with the quadratic representation of ``u^{-1/2}`` (as ECOS does), where the
+        condition reads ``1 + αρ₀ ≥ α‖ρ₁‖``."""
+        if self.dim == 3:
+            return _kern.max_step_soc(np.ascontiguousarray(u, dtype=np.float64),
+                                      np.ascontiguousarray(du, dtype=np.float64))
+        if not u.shape[1]:
+            return np.inf
+        nb = self._norm_body(u)
+        det = (u[0] - nb) * (u[0] + nb)
+        lk = np.sqrt(det)
+        rho0 = (u[0] * du[0] - (u[1:] * du[1:]).sum(axis=0)) / det
+        c = (rho0 * lk + du[0]) / (u[0] + lk)
+        r = du[1:] - c * u[1:]
+        worst = float((np.sqrt((r * r).sum(axis=0) / det) - rho0).max())
+        return 1.0 / worst if worst > 0 else np.inf
+
+    def min_eigenvalue(self, u: np.ndarray) -> float:
+        return float((u[0] - self._norm_body(u)).min()) if u.shape[1] else np.inf
+
+    def dot(self, u: np.ndarray, v: np.ndarray) -> float:
+        return float((u * v).sum())
+
+    def product(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        return np.concatenate([(u * v).sum(axis=0)[None], u[0] * v[1:] + v[0] * u[1:]])
+
+    def divide(self, lam: np.ndarray, d: np.ndarray) -> np.ndarray:
+        nl = self._norm_body(lam)
+        x0 = (lam[0] * d[0] - (lam[1:] * d[1:]).sum(axis=0)) / ((lam[0] - nl) * (lam[0] + nl))
+        return np.concatenate([x0[None], (d[1:] - x0 * lam[1:]) / lam[0]])
+
+    def mehrotra(self, sc, ds, dz, z, sigma_mu):
+        if self.dim == 3:
+            out = np.empty_like(z)
+            _kern.mehrotra_cones(sc.w, sc.eta, sc.lam, ds, dz, z, sigma_mu, out)
+            return out
+        c = self.product(sc.apply_winv(ds), sc.apply_w(dz))
+        c[0] -= sigma_mu
+        return -z - sc.apply_winv(self.divide(sc.lam, c))
+
+    def gondzio(self, sc, s, ds, tp, z, dz, td, lo, hi):
+        if self.dim == 3:
+            out = np.empty_like(z)
+            _kern.gondzio_cones(sc.w, sc.eta, sc.lam, s, ds, tp, z, dz, td, lo, hi, out)
+            return out
+        v = self.product(sc.apply_winv(s + tp * ds), sc.apply_w(z + td * dz))
+        nv = np.linalg.norm(v[1:], axis=0)
+        e1, e2 = v[0] - nv, v[0] + nv
+        t1 = np.maximum(np.clip(e1, lo, hi) - e1, -hi)
+        t2 = np.maximum(np.clip(e2, lo, hi) - e2, -hi)
+        u = np.divide(v[1:], nv, out=np.zeros_like(v[1:]), where=nv > 0)
+        c = np.concatenate([(0.5 * (t1 + t2))[None], 0.5 * (t2 - t1) * u])
+        return sc.apply_winv(self.divide(sc.lam, c))
+
+    def add_identity(self, u: np.ndarray, d: float) -> np.ndarray:
+        u = u.copy()
+        u[0] += d
+        return u
+
+    def sum_heads(self, u: np.ndarray) -> float:
+        return float(u[0].sum())
+
+    def dual_shift(self, z: np.ndarray, factor: float) -> np.ndarray:
+        z = z.copy()
+        z[0] += factor * np.maximum(self._norm_body(z) - z[0], 0.0)
+        return z
+
+    def floor(self, z: np.ndarray, margin: float) -> np.ndarray:
+        z = z.copy()
+        z[0] = np.maximum(z[0], self._norm_body(z) + margin)
+        return z
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Nonnegative orthant
+# ---------------------------------------------------------------------------------------------------------------
+
+
+class _OrthantScaling:
+    """``W = diag(√(s/z))``: ``λ = √(sz)``, ``W⁻² = z/s``."""
+
+    def __init__(self, s: np.ndarray, z: np.ndarray):
+        self.lam = np.sqrt(s * z)
+        self.w2inv = z / s  # W⁻²
+        self.winv = np.sqrt(self.w2inv)  # W⁻¹
+
+    def apply_w(self, v: np.ndarray) -> np.ndarray:
+        return v / self.winv
+
+    def apply_winv(self, v: np.ndarray) -> np.ndarray:
+        return self.winv * v
+
+    def apply_winv2(self, v: np.ndarray) -> np.ndarray:
+        return self.w2inv * v
+
+
+class Orthant:
+    """The nonnegative orthant ``R₊^p``, fields (p,); see :class:`Cone`."""
+
+    def shape(self, count: int) -> tuple[int, ...]:
+        return (count,)
+
+    def identity(self, count: int) -> np.ndarray:
+        return np.ones(count)
+
+    def degree(self, count: int) -> int:
+        return count
+
+    def scaling(self, s: np.ndarray, z: np.ndarray) -> _OrthantScaling:
+        return _OrthantScaling(s, z)
+
+    def max_step(self, u: np.ndarray, du: np.ndarray) -> float:
+        return _kern.max_step_lp(u, du) if u.size else np.inf
+
+    def min_eigenvalue(self, u: np.ndarray) -> float:
+        return float(u.min()) if u.size else np.inf
+
+    def dot(self, u: np.ndarray, v: np.ndarray) -> float:
+        return float(u @ v)
+
+    def product(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        return u * v
+
+    def divide(self, lam: np.ndarray, d: np.ndarray) -> np.ndarray:
+        return d / lam
+
+    def mehrotra(self, sc, ds, dz, z, sigma_mu):
+        # (W⁻¹Δs)(WΔz) = Δs Δz for a diagonal W
+        return -z - sc.winv * (ds * dz - sigma_mu) / sc.lam
+
+    def gondzio(self, sc, s, ds, tp, z, dz, td, lo, hi):
+        v = (s + tp * ds) * (z + td * dz)
+        return sc.winv * np.maximum(np.clip(v, lo, hi) - v, -hi) / sc.lam
+
+    def add_identity(self, u: np.ndarray, d: float) -> np.ndarray:
+        return u + d
+
+    def sum_heads(self, u: np.ndarray) -> float:
+        return float(u.sum())
+
+    def dual_shift(self, z: np.ndarray, factor: float) -> np.ndarray:
+        return z + max(-factor * float(z.min()), 0.0) if z.size else z.copy()
+
+    def floor(self, z: np.ndarray, margin: float) -> np.ndarray:
+        return np.maximum(z, margin)
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Rotated second-order cone, through its linear map to the SOC
+# ---------------------------------------------------------------------------------------------------------------
+
+_R2 = 1.0 / math.sqrt(2.0)
+
+
+def _rotate(u: np.ndarray) -> np.ndarray:
+    """``T u`` (``T`` orthogonal and its own inverse)."""
+    out = u.copy()
+    out[0] = (u[0] + u[1]) * _R2
+    out[1] = (u[0] - u[1]) * _R2
+    return out
+
+
+class _RotatedScaling:
+    """``W_r = T W T`` of the SOC scaling of ``(T s, T z)``; ``λ_r = T λ``."""
+
+    def __init__(self, inner: _SocScaling):
+        self.inner = inner
+        self.lam = _rotate(inner.lam)
+
+    def apply_w(self, v: np.ndarray) -> np.ndarray:
+        return _rotate(self.inner.apply_w(_rotate(v)))
+
+    def apply_winv(self, v: np.ndarray) -> np.ndarray:
+        return _rotate(self.inner.apply_winv(_rotate(v)))
+
+    def apply_winv2(self, v: np.ndarray) -> np.ndarray:
+        return _rotate(self.inner.apply_winv2(_rotate(v)))
+
+
+class RotatedSOC:
+    """The rotated second-order cone ``{u : 2u₀u₁ ≥ ‖u₂..‖², u₀, u₁ ≥ 0}`` of dimension ``dim ≥ 3``, fields
+    (dim, k); every operation is :class:`SOC`'s conjugated by ``T``. See :class:`Cone`."""
+
+    def __init__(self, dim: int = 3):
+        if dim < 3:
+            raise ValueError(f"rotated SOC dimension must be at least 3, got {dim}")
+        self.dim = int(dim)
+        self.soc = SOC(dim)
+
+    def shape(self, count: int) -> tuple[int, ...]:
+        return (self.dim, count)
+
+    def identity(self, count: int) -> np.ndarray:
+        return _rotate(self.soc.identity(count))
+
+    def degree(self, count: int) -> int:
+        return count
+
+    def scaling(self, s: np.ndarray, z: np.ndarray) -> _RotatedScaling:
+        return _RotatedScaling(self.soc.scaling(_rotate(s), _rotate(z)))
+
+    def max_step(self, u: np.ndarray, du: np.ndarray) -> float:
+        return self.soc.max_step(_rotate(u), _rotate(du))
+
+    def min_eigenvalue(self, u: np.ndarray) -> float:
+        return self.soc.min_eigenvalue(_rotate(u))
+
+    def dot(self, u: np.ndarray, v: np.ndarray) -> float:
+        return self.soc.dot(u, v)  # T is orthogonal
+
+    def product(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        return _rotate(self.soc.product(_rotate(u), _rotate(v)))
+
+    def divide(self, lam: np.ndarray, d: np.ndarray) -> np.ndarray:
+        return _rotate(self.soc.divide(_rotate(lam), _rotate(d)))
+
+    def mehrotra(self, sc, ds, dz, z, sigma_mu):
+        return _rotate(self.soc.mehrotra(sc.inner, _rotate(ds), _rotate(dz), _rotate(z), sigma_mu))
+
+    def gondzio(self, sc, s, ds, tp, z, dz, td, lo, hi):
+        return _rotate(self.soc.gondzio(sc.inner, _rotate(s), _rotate(ds), tp, _rotate(z), _rotate(dz), td, lo, hi))
+
+    def add_identity(self, u: np.ndarray, d: float) -> np.ndarray:
+        return _rotate(self.soc.add_identity(_rotate(u), d))
+
+    def sum_heads(self, u: np.ndarray) -> float:
+        return self.soc.sum_heads(_rotate(u))
+
+    def dual_shift(self, z: np.ndarray, factor: float) -> np.ndarray:
+        return _rotate(self.soc.dual_shift(_rotate(z), factor))
+
+    def floor(self, z: np.ndarray, margin: float) -> np.ndarray:
+        return _rotate(self.soc.floor(_rotate(z), margin))

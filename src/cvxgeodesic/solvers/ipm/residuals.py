@@ -1,0 +1,146 @@
+"""Residuals, costs, the stopping rule and the infeasibility certificates of one iterate.
+
+Residuals, gap and the stopping rule follow Clarabel's definitions (infinity norms, relative to
+``max(1, ‖b‖ + ‖x‖ + ‖s‖)`` and ``max(1, ‖q‖ + ‖x‖ + ‖z‖)``; gap ``|pcost − dcost|``, absolute or
+relative to ``max(1, min(|pcost|, |dcost|))``), evaluated on the problem with the fixed variables
+eliminated; convergence also needs the dual residual below ``tol`` relative to ``max(1, ‖q‖ + ‖x‖)``
+alone, so that a dual blown up along a direction that ``Aᵀ`` cancels cannot hide it. Where rounding
+stops the iterations after the best iterate came within ``reduced_factor`` × ``tol``, that iterate is
+returned as ``"almost_optimal"``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .program import Program
+from .settings import IPMSettings
+from .state import Iterate
+
+__all__ = ["BestIterate", "Evaluation", "almost", "certificate", "evaluate"]
+
+
+def _amax(a: np.ndarray) -> float:
+    return float(np.abs(a).max()) if a.size else 0.0
+
+
+@dataclass
+class Evaluation:
+    """One iterate's residuals (``rx`` (n,), ``rz`` per block), the terms the certificates and the refinement
+    target need, and ``info`` (what the callback sees)."""
+
+    info: dict
+    rx: np.ndarray
+    rz: list
+    aux: list
+    Atz: np.ndarray
+    Pfx: np.ndarray
+    bz: float
+    qx: float
+    dual_scale: float
+    abs_sum_x: float
+
+
+def evaluate(pr: Program, it: Iterate, iteration: int, step: float, elapsed: float) -> Evaluation:
+    """Residuals, costs, gap and ``μ`` of ``it``."""
+    x = it.x
+    Px = pr.Pmul(x)
+    Atz = pr.At(it.z)
+    rx = Px + pr.q + Atz
+    rx[pr.fixed] = 0.0
+    rz, aux = [], []
+    for b, s in zip(pr.blocks, it.s, strict=True):
+        r, a = b.residual(x, s)
+        rz.append(r)
+        aux.append(a)
+    xf = x[pr.free]
+    Pfx = (Px - pr.Px_fixed)[pr.free] if pr.P is not None else np.zeros(xf.size)  # P_ff x_f
+    xPffx = float(xf @ Pfx)
+    qx = float(pr.qt_free @ xf)
+    bz = sum(b.b_dot(z) for b, z in zip(pr.blocks, it.z, strict=True))
+    pcost_r = 0.5 * xPffx + qx
+    dcost_r = -0.5 * xPffx - bz
+    pcost, dcost = pcost_r + pr.const, dcost_r + pr.const
+    gap_abs = abs(pcost_r - dcost_r)
+    gap_rel = gap_abs / max(1.0, min(abs(pcost), abs(dcost)))
+    norm_x = float(np.abs(xf).max()) if xf.size else 0.0
+    norm_s = max([_amax(s) for s in it.s], default=0.0)
+    norm_z = max([_amax(z) for z in it.z], default=0.0)
+    res_p = max([_amax(r) for r in rz], default=0.0) / max(1.0, pr.norm_b + norm_x + norm_s)
+    dual_scale = max(1.0, pr.norm_q + norm_x + norm_z)
+    res_d = _amax(rx) / dual_scale
+    # the same residual without ‖z‖ in its scale: a dual blown up along a direction that Aᵀ cancels
+    # (edge bounds that are equalities in disguise: ‖z‖ ≈ 1e13, |r_x| ≈ 0.9 with res_d ≈ 1e-12)
+    # must not pass for convergence
+    res_d_plain = _amax(rx) / max(1.0, pr.norm_q + norm_x)
+    mu = sum(b.cone.dot(s, z) for b, s, z in zip(pr.blocks, it.s, it.z, strict=True)) / max(pr.nu, 1)
+    info = {
+        "iterations": iteration, "pcost": pcost, "dcost": dcost, "gap_abs": gap_abs, "gap_rel": gap_rel,
+        "res_primal": res_p, "res_dual": res_d, "res_dual_plain": res_d_plain, "mu": mu, "step": step,
+        "time": elapsed,
+    }
+    return Evaluation(info, rx, rz, aux, Atz, Pfx, bz, qx, dual_scale, float(np.abs(xf).sum()))
+
+
+def converged(info: dict, tol: float) -> bool:
+    """``tol`` met by the residuals (both dual ones) and the gap (absolute or relative)."""
+    return (info["res_primal"] < tol and info["res_dual"] < tol and info["res_dual_plain"] < tol
+            and (info["gap_abs"] < tol or info["gap_rel"] < tol))
+
+
+def almost(info: dict, tol: float, settings: IPMSettings) -> bool:
+    """The reduced tolerances on one iterate's ``info``: residuals and gap below ``reduced_factor · tol``, and
+    the dual residual also relative to ``max(1, ‖q‖ + ‖x‖)`` alone (``res_dual_plain``)."""
+    red = settings.reduced_factor * tol
+    return (info["res_primal"] < red and info["res_dual"] < red and info["res_dual_plain"] < red
+            and min(info["gap_abs"], info["gap_rel"]) < red)
+
+
+def certificate(pr: Program, ev: Evaluation, settings: IPMSettings) -> str | None:
+    """``"primal_infeasible"``, ``"dual_infeasible"`` or None (Clarabel's tests on the current iterate).
+
+    For an infeasible problem z diverges along y with ``A_fᵀy = 0``, ``b̃ᵀy < 0``; for an unbounded one x_f
+    diverges along d with ``P_ff d = 0``, ``−A_f d ∈ K``, ``q̃ᵀd < 0``, while the other terms stay bounded.
+    """
+    tol = settings.tol_infeas
+    if ev.bz < 0 and _amax(ev.Atz) < -tol * ev.bz:
+        return "primal_infeasible"
+    if ev.qx < 0:
+        viol = max([b.recession_violation(a) for b, a in zip(pr.blocks, ev.aux, strict=True)], default=0.0)
+        if _amax(ev.Pfx) < -tol * ev.qx and viol < -tol * ev.qx:
+            return "dual_infeasible"
+    return None
+
+
+def refine_target(ev: Evaluation, tol: float, settings: IPMSettings) -> float:
+    """The solve error becomes the next dual residual: refine it below what the stopping test needs (and, in
+    the end game, below what the gap test needs: ``xᵀr_x`` is part of the gap)."""
+    info = ev.info
+    target = settings.refine_fraction * tol * ev.dual_scale
+    if min(info["gap_abs"], info["gap_rel"]) < settings.gap_aware_below * tol:
+        target = min(target, settings.refine_fraction * tol * max(1.0, min(abs(info["pcost"]), abs(info["dcost"])))
+                     / max(1.0, ev.abs_sum_x))
+    return target
+
+
+class BestIterate:
+    """The iterate with the smallest merit ``max(res_p, res_d, min(gap_abs, gap_rel))`` so far."""
+
+    def __init__(self) -> None:
+        self.merit = np.inf
+        self.x: np.ndarray | None = None
+        self.info: dict | None = None
+        self.since = 0
+
+    def update(self, x: np.ndarray, info: dict, tol: float, settings: IPMSettings) -> bool:
+        """Record ``x`` if better; True when nothing better came for ``stall_iterations`` iterations after an
+        iterate within the reduced tolerances (rounding has the last word)."""
+        merit = max(info["res_primal"], info["res_dual"], min(info["gap_abs"], info["gap_rel"]))
+        if merit < self.merit:
+            self.merit, self.x, self.info, self.since = merit, x.copy(), dict(info), 0
+            return False
+        self.since += 1
+        return self.since >= settings.stall_iterations and self.info is not None and almost(self.info, tol,
+                                                                                           settings)

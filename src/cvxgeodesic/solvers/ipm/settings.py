@@ -1,0 +1,128 @@
+"""The tuning constants of the interior-point solver, each with its default and the measurement that chose it."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+__all__ = ["IPMSettings"]
+
+_INITS = ("interior", "mehrotra", "cvxopt")
+
+
+@dataclass(frozen=True)
+class IPMSettings:
+    """Tuning constants of :class:`~cvxgeodesic.solvers.ipm.InteriorPointSolver` (frozen; the defaults are the
+    measured choices, change them for experiments and tests).
+
+    Attributes
+    ----------
+    step : float
+        Fraction of the step to the boundary of the cone that is taken (CVXOPT's STEP). Default 0.99.
+    sigma_exp : float
+        Mehrotra's centering exponent. Default 3.
+    mehrotra_correction : bool
+        The second-order term ``(W⁻¹Δs_a)∘(WΔz_a)`` of Mehrotra's combined step. Default True; False leaves the
+        centering term ``σμe`` alone (a breakage for tests).
+    static_reg : float
+        Proportional static regularization of the diagonal, ``K_ii (1 + δ)``, undone by iterative refinement.
+        Default 1e-12.
+    tol_infeas : float
+        Relative tolerance of the infeasibility certificates (Clarabel's ``tol_infeas_rel``). Default 1e-8.
+    max_refine : int
+        Iterative refinement of the reduced Newton solves: at most this many steps. Default 4.
+    refine_fraction : float
+        ... until the residual of the reduced system is below this fraction of the dual-residual tolerance.
+        Default 0.1.
+    gap_aware_below : float
+        Once the gap is below this many times ``tol``, refinement also aims at ``|xᵀr_x| ≤ 0.1·tol·max(1, |cost|)``:
+        the gap contains ``xᵀr_x`` summed over n variables, and an ∞-norm residual far below ``tol`` left a gap
+        floor of 5e-8 on dragon_20k's QGDF (n = 10K; 26 iterations ending "almost_optimal" → 15 "optimal"). Only
+        in the end game: from the first iteration it cost bimba's QCQP-Hessian 21 more refinement solves (+10 %);
+        from 100·tol, 7 and no measurable time. Default 100.
+    separate_steps : bool
+        Separate primal and dual step lengths when ``P`` is None (measured: 20 → 18 iterations on spot's QCLP).
+        Default True.
+    max_correctors : int
+        Gondzio's centrality correctors per iteration (measured on bimba's QCLP: 24 iterations without, 18 with
+        2, 18 with 4); each costs one triangular solve pair and no factorization. Default 2.
+    beta_min, beta_max : float
+        Corrector target: complementarity eigenvalues into ``[β_min σμ, β_max σμ]``. Defaults 0.1, 10.
+    gz_a, gz_b : float
+        ... at the trial step ``min(1, a·α + b)``. Defaults 1.5, 0.1.
+    corrector_weights : tuple of float
+        Weighted correctors (Colombo & Gondzio, "Further development of multiple centrality correctors for
+        interior point methods", 2008): a corrector that shortens the step at full weight is tried at these
+        smaller weights (no extra solve) before giving up. Measured: 783 → 766 iterations over 7 meshes × 8
+        formulations, 119 → 115 on spot/bimba/armadillo/horse (QCLP, QCQP-Hessian), 23 → 22 on a 278K-face
+        bunny. Default (1.0, 0.5, 0.25).
+    reduced_factor : float
+        When the iterations end in numerical trouble, a stall or ``max_iter``, the best iterate is returned as
+        ``"almost_optimal"`` if its residuals and gap are below ``reduced_factor × tol`` (1e-6 at the default
+        tol; Clarabel's reduced tolerances, 1e-4 and 5e-5, let through a field 5× off on a sliver mesh whose
+        dual residual was hidden by ‖z‖ ≈ 1e7 in its scale). Seen on Thingi10K slivers: gap 1.6e-8, dual
+        residual 1.5e-9, then rounding takes over. Default 100.
+    stall_iterations : int
+        ... and iterating stops when the best iterate, meeting them, has not been improved on for this many
+        iterations (seen: the dual residual stuck at 3–8e-8 by rounding while μ underflows, up to max_iter).
+        Default 10.
+    init : {"interior", "mehrotra", "cvxopt"}
+        Starting point: "cvxopt" (``z = A x − b`` shifted into the cone), "mehrotra" (least-norm dual ``z = A y``
+        with ``Aᵀz = −q − Px``, one uniform shift of s and of z, then balancing) or "interior" (x scaled towards
+        ``x_F`` so that s is strictly feasible without a shift, the same least-norm z shifted cone by cone, no
+        balancing; falls back to "mehrotra" when ``x_F`` is not strictly feasible). Measured on bimba: QCLP 18
+        (cvxopt) → 17 (mehrotra) → 15 (interior) iterations; QCQP-Hessian 25 (y from the P + AᵀA factor) → 19
+        (mehrotra with y from the P-free system AᵀA y = …, one extra factorization) → 16 (interior). Over 7
+        meshes × 8 formulations (spot, fandisk, bunny_7k, kitten, camelhead, fertility, dragon_20k) "interior"
+        took 783 iterations against 913, never more. Default "interior".
+    interior_fraction : float
+        "interior": fraction of the largest feasible step from ``x_F`` towards the least-squares x that is taken.
+        Default 0.9.
+    shift_factor : float
+        Mehrotra's shift: 1.5× the most negative eigenvalue (per cone for the "interior" dual). Default 1.5.
+    dual_floor : float
+        "interior": every dual cone's margin (head − ‖body‖) at least this fraction of the mean head (1e-3: the
+        same iteration counts on spot/bimba/horse/armadillo, 1e-6 too; 1e-2 one fewer on two of them).
+        Default 1e-2.
+    """
+
+    step: float = 0.99
+    sigma_exp: float = 3
+    mehrotra_correction: bool = True
+    static_reg: float = 1e-12
+    tol_infeas: float = 1e-8
+    max_refine: int = 4
+    refine_fraction: float = 0.1
+    gap_aware_below: float = 100.0
+    separate_steps: bool = True
+    max_correctors: int = 2
+    beta_min: float = 0.1
+    beta_max: float = 10.0
+    gz_a: float = 1.5
+    gz_b: float = 0.1
+    corrector_weights: tuple[float, ...] = (1.0, 0.5, 0.25)
+    reduced_factor: float = 100.0
+    stall_iterations: int = 10
+    init: str = "interior"
+    interior_fraction: float = 0.9
+    shift_factor: float = 1.5
+    dual_floor: float = 1e-2
+
+    def __post_init__(self) -> None:
+        if self.init not in _INITS:
+            raise ValueError(f"IPMSettings.init must be one of {', '.join(map(repr, _INITS))}, got {self.init!r}")
+        if not 0.0 < self.step < 1.0:
+            raise ValueError(f"IPMSettings.step must be in (0, 1), got {self.step!r}")
+        if not 0.0 < self.interior_fraction <= 1.0:
+            raise ValueError(f"IPMSettings.interior_fraction must be in (0, 1], got {self.interior_fraction!r}")
+        if not self.corrector_weights or not all(0.0 < w <= 1.0 for w in self.corrector_weights):
+            raise ValueError(f"IPMSettings.corrector_weights must be weights in (0, 1], got {self.corrector_weights!r}")
+        if not 0.0 < self.beta_min <= 1.0 <= self.beta_max:
+            raise ValueError(f"IPMSettings.beta_min and beta_max need 0 < beta_min <= 1 <= beta_max, got "
+                             f"{self.beta_min!r}, {self.beta_max!r}")
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if f.name in ("max_refine", "max_correctors", "stall_iterations"):
+                if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+                    raise ValueError(f"IPMSettings.{f.name} must be a nonnegative integer, got {value!r}")
+            elif isinstance(value, float) and not value >= 0.0:
+                raise ValueError(f"IPMSettings.{f.name} must be a nonnegative number, got {value!r}")
