@@ -18,53 +18,13 @@ import numpy as np
 
 import cvxgeodesic as cg
 from cvxgeodesic.baselines import BASELINES
+from cvxgeodesic.mesh.generate import delaunay_plane as delaunay_mesh
+from cvxgeodesic.mesh.generate import fan_plate, needle_strip
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "meshes"
 
 
 # ---------------------------------------------------------------- flat test meshes (also used by report.py)
-def needle_strip(nx: int, aspect: float) -> cg.TriMesh:
-    """A flat strip of ``2·nx`` triangles of aspect ratio about ``aspect`` (edge length / altitude).
-
-    Returns a mesh of ``2·(nx + 1)`` vertices in the plane z = 0, spanning x in [0, 1.05].
-    """
-    L = 1.0
-    H = L / nx / aspect
-    xs = np.linspace(0, L, nx + 1)
-    V = np.array([[x, 0, 0] for x in xs] + [[x + 0.5 * L / nx, H, 0] for x in xs])
-    F = []
-    for i in range(nx):
-        F += [[i, i + 1, nx + 1 + i], [i + 1, nx + 2 + i, nx + 1 + i]]
-    return cg.TriMesh(V, np.array(F), name=f"needle strip (aspect {aspect:g})")
-
-
-def delaunay_mesh(k: int = 300, seed: int = 3) -> cg.TriMesh:
-    """The Delaunay triangulation of ``k`` uniform random points of the unit square (z = 0)."""
-    from scipy.spatial import Delaunay
-
-    P = np.random.default_rng(seed).random((k, 2))
-    return cg.TriMesh(np.c_[P, np.zeros(k)], Delaunay(P).simplices, name=f"random Delaunay ({k} points)")
-
-
-def fan_plate(k: int = 12) -> cg.TriMesh:
-    """A flat 2 × 1 CAD-style plate: ``k`` points on each long side, every face a fan from one of two corners.
-
-    Returns ``2k`` vertices (bottom row 0..k-1, top row k..2k-1) and ``2(k-1)`` faces; the fans are
-    long and thin (aspect above 20 for ``k = 12``).
-    """
-    top = [(x, 1.0) for x in np.linspace(0, 2, k)]
-    bottom = [(x, 0.0) for x in np.linspace(0, 2, k)]
-    V = np.array([(*p, 0.0) for p in bottom + top])
-    F = []
-    # bottom-left corner (0) fans to the top row, top-right corner (2k−1) fans to the bottom row
-    for i in range(k - 1):
-        F.append([0, k + i + 1, k + i])
-    for i in range(k - 1):
-        F.append([i, i + 1, 2 * k - 1])
-    F = [f for f in F if len(set(f)) == 3]
-    return cg.TriMesh(V, np.array(F), name="CAD plate of fans")
-
-
 def euclid_from(mesh: cg.TriMesh, src) -> np.ndarray:
     """(n,) Euclidean distances from a vertex index or a ``(face, bary)`` point: exact on a flat mesh."""
     if isinstance(src, int | np.integer):

@@ -175,3 +175,22 @@ def test_face_edges_index_the_edge_opposite_each_corner():
     for k in range(3):
         expected = np.sort(mesh.F[:, [(k + 1) % 3, (k + 2) % 3]], axis=1)
         np.testing.assert_array_equal(mesh.edges[fe[:, k]], expected)
+
+
+def test_flat_generators_shapes_and_aspect():
+    from cvxgeodesic.mesh.generate import delaunay_plane, fan_plate, needle_strip
+
+    strip = needle_strip(10, 240)
+    assert (strip.n_vertices, strip.n_faces) == (22, 20) and np.all(strip.V[:, 2] == 0)
+    e = strip.edge_lengths[strip.face_edges]
+    # longest edge / altitude = aspect for every needle (altitude = 2 area / longest edge)
+    np.testing.assert_allclose(e.max(axis=1) ** 2 / (2 * strip.face_areas), 240, rtol=0.01)
+    fan = fan_plate(12)
+    assert (fan.n_vertices, fan.n_faces) == (24, 22) and fan.face_areas.min() > 0
+    assert fan.face_areas.sum() == pytest.approx(2.0)  # the 2 × 1 plate, covered once
+    pts = delaunay_plane(50, seed=1)
+    assert pts.n_vertices == 50 and pts.face_areas.sum() <= 1.0
+    from cvxgeodesic.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="aspect"):
+        needle_strip(10, 0)

@@ -6,7 +6,6 @@ import warnings
 
 import numpy as np
 import pytest
-from scipy.spatial import Delaunay
 
 import cvxgeodesic as cg
 import cvxgeodesic.elements_p2 as p2mod
@@ -20,43 +19,13 @@ from cvxgeodesic.elements_p2 import (
     solve_p2_clarabel,
 )
 from cvxgeodesic.errors import ParameterError, SourceError
+from cvxgeodesic.mesh.generate import delaunay_plane as delaunay_mesh
+from cvxgeodesic.mesh.generate import fan_plate, needle_strip
 
 FLAT_TOL = 1e-5  # max vertex error / largest distance on flat meshes (issue 17)
 
 
 # ---------------------------------------------------------------- meshes
-def needle_strip(nx: int, aspect: float) -> cg.TriMesh:
-    """A flat strip of 2·nx triangles of aspect ratio about ``aspect`` (edge length / altitude)."""
-    L = 1.0
-    H = L / nx / aspect
-    xs = np.linspace(0, L, nx + 1)
-    V = np.array([[x, 0, 0] for x in xs] + [[x + 0.5 * L / nx, H, 0] for x in xs])
-    F = []
-    for i in range(nx):
-        F += [[i, i + 1, nx + 1 + i], [i + 1, nx + 2 + i, nx + 1 + i]]
-    return cg.TriMesh(V, np.array(F))
-
-
-def delaunay_mesh(k: int = 300, seed: int = 3) -> cg.TriMesh:
-    P = np.random.default_rng(seed).random((k, 2))
-    return cg.TriMesh(np.c_[P, np.zeros(k)], Delaunay(P).simplices)
-
-
-def fan_plate(k: int = 12) -> cg.TriMesh:
-    """A flat 2 × 1 CAD-style plate: ``k`` points on each side, every face a fan from one corner or the other."""
-    top = [(x, 1.0) for x in np.linspace(0, 2, k)]
-    bottom = [(x, 0.0) for x in np.linspace(0, 2, k)]
-    V = np.array([(*p, 0.0) for p in bottom + top])
-    F = []
-    # bottom-left corner (0) fans to the top row, top-right corner (2k−1) fans to the bottom row
-    for i in range(k - 1):
-        F.append([0, k + i + 1, k + i])
-    for i in range(k - 1):
-        F.append([i, i + 1, 2 * k - 1])
-    F = [f for f in F if len(set(f)) == 3]
-    return cg.TriMesh(V, np.array(F))
-
-
 def euclid_from(mesh: cg.TriMesh, src) -> np.ndarray:
     if isinstance(src, int | np.integer):
         p = mesh.V[src]

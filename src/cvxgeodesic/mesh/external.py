@@ -8,6 +8,7 @@ error names the package to install.
 from __future__ import annotations
 
 import contextlib
+import importlib
 import io
 import tempfile
 from pathlib import Path
@@ -107,6 +108,15 @@ def read_external(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return V, np.concatenate(parts), np.concatenate(sizes)
 
 
+def _writer_package(pkg: str, ext: str) -> Any:
+    """The optional package that writes ``ext`` files, or a ParameterError that says what to install."""
+    try:
+        return importlib.import_module(pkg)
+    except ImportError:
+        raise ParameterError(f"writing {ext} files needs the optional package {pkg}: "
+                             + _HINT.format(pkg=pkg)) from None
+
+
 def write_meshio(fh: BinaryIO, V: np.ndarray, F: np.ndarray, d: np.ndarray, name: str, ext: str) -> None:
     """Write a VTU (XML, binary) or legacy VTK (binary) file with the field as point data ``name``.
 
@@ -124,11 +134,7 @@ def write_meshio(fh: BinaryIO, V: np.ndarray, F: np.ndarray, d: np.ndarray, name
     ParameterError
         meshio is not installed (the message says what to install).
     """
-    try:
-        import meshio
-    except ImportError:
-        raise ParameterError(f"writing {ext} files needs the optional package meshio: "
-                             + _HINT.format(pkg="meshio")) from None
+    meshio = _writer_package("meshio", ext)
     mesh = meshio.Mesh(np.asarray(V, dtype=np.float64), [("triangle", np.asarray(F, dtype=np.int64))],
                        point_data={name: np.asarray(d, dtype=np.float64)})
     # meshio writes to paths only: write into a private temporary folder, then copy into ``fh``
@@ -194,11 +200,7 @@ def write_glb(fh: BinaryIO, V: np.ndarray, F: np.ndarray, d: np.ndarray, name: s
     ParameterError
         trimesh is not installed (the message says what to install).
     """
-    try:
-        import trimesh
-    except ImportError:
-        raise ParameterError("writing .glb files needs the optional package trimesh: "
-                             + _HINT.format(pkg="trimesh")) from None
+    trimesh = _writer_package("trimesh", ".glb")
     mesh = trimesh.Trimesh(np.asarray(V, dtype=np.float64), np.asarray(F, dtype=np.int64), process=False)
     values = np.where(np.isfinite(d), d, GLB_NO_DISTANCE).astype(np.float32)
     mesh.vertex_attributes[glb_attribute_name(name)] = values

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..validation import check_count
+from ..validation import check_count, check_number
 from .trimesh import TriMesh
 
 
@@ -114,3 +114,82 @@ def cylinder(n_around: int = 32, n_along: int = 16, radius: float = 1.0, height:
     a, b, c, d = idx[:-1].ravel(), nxt[:-1].ravel(), nxt[1:].ravel(), idx[1:].ravel()
     F = np.vstack([np.column_stack([a, b, c]), np.column_stack([a, c, d])])
     return TriMesh(V, F, name=f"cylinder{n_around}x{n_along}")
+
+
+def needle_strip(nx: int = 10, aspect: float = 50.0) -> TriMesh:
+    """A flat strip of needle triangles: ``2·nx`` faces of aspect ratio about ``aspect``.
+
+    The bottom row has ``nx + 1`` vertices on ``[0, 1]``, the top row the same shifted by half a cell at
+    height ``1 / (nx · aspect)``; every face has a long edge of one cell and an altitude ``aspect``
+    times shorter. A test of accuracy on badly shaped, flat triangles (exact distance: Euclidean).
+
+    Parameters
+    ----------
+    nx : int
+        Number of cells along the strip.
+    aspect : float
+        Cell length / strip height (> 0).
+
+    Returns
+    -------
+    TriMesh
+        ``2 (nx + 1)`` vertices in the plane z = 0, ``2 nx`` faces.
+    """
+    nx = check_count(nx, "nx", minimum=1)
+    aspect = check_number(aspect, "aspect", low=0.0, low_open=True)
+    height = 1.0 / nx / aspect
+    xs = np.linspace(0.0, 1.0, nx + 1)
+    V = np.vstack([np.column_stack([xs, np.zeros_like(xs), np.zeros_like(xs)]),
+                   np.column_stack([xs + 0.5 / nx, np.full_like(xs, height), np.zeros_like(xs)])])
+    i = np.arange(nx)
+    F = np.vstack([np.column_stack([i, i + 1, nx + 1 + i]), np.column_stack([i + 1, nx + 2 + i, nx + 1 + i])])
+    F = F.reshape(2, nx, 3).transpose(1, 0, 2).reshape(-1, 3)  # the two faces of a cell next to each other
+    return TriMesh(V, F, name=f"needle strip (aspect {aspect:g})")
+
+
+def delaunay_plane(k: int = 300, seed: int = 3) -> TriMesh:
+    """The Delaunay triangulation of ``k`` uniform random points of the unit square (z = 0).
+
+    Parameters
+    ----------
+    k : int
+        Number of points (≥ 3).
+    seed : int
+        Seed of the points.
+
+    Returns
+    -------
+    TriMesh
+        ``k`` vertices, random slivers near the boundary included.
+    """
+    from scipy.spatial import Delaunay
+
+    k = check_count(k, "k", minimum=3)
+    P = np.random.default_rng(seed).random((k, 2))
+    return TriMesh(np.c_[P, np.zeros(k)], Delaunay(P).simplices, name=f"random Delaunay ({k} points)")
+
+
+def fan_plate(k: int = 12) -> TriMesh:
+    """A flat 2 × 1 CAD-style plate: ``k`` points on each long side, every face a fan from one of two corners.
+
+    Vertices ``0 … k−1`` are the bottom row, ``k … 2k−1`` the top row; corner 0 fans to the top row and
+    corner ``2k − 1`` to the bottom row, so the faces are long and thin (aspect above 20 for ``k = 12``).
+
+    Parameters
+    ----------
+    k : int
+        Points per long side (≥ 2).
+
+    Returns
+    -------
+    TriMesh
+        ``2k`` vertices, ``2(k − 1)`` faces in the plane z = 0.
+    """
+    k = check_count(k, "k", minimum=2)
+    xs = np.linspace(0.0, 2.0, k)
+    V = np.vstack([np.column_stack([xs, np.zeros(k), np.zeros(k)]), np.column_stack([xs, np.ones(k), np.zeros(k)])])
+    i = np.arange(k - 1)
+    F = np.vstack([np.column_stack([np.zeros(k - 1, dtype=np.int64), k + i + 1, k + i]),
+                   np.column_stack([i, i + 1, np.full(k - 1, 2 * k - 1)])])
+    F = F[(F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 0] != F[:, 2])]
+    return TriMesh(V, F, name="CAD plate of fans")
