@@ -12,6 +12,7 @@ This module does not import :mod:`cvxgeodesic.api`: the caller passes the solver
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 import threading
@@ -114,6 +115,7 @@ class _RowBar:
         self.lock = threading.Lock()
         self.events = 0
         self.done = 0
+        self.closed = False
 
     def _show(self) -> None:
         target = min(self.bar.total, max(self.events, self.done))
@@ -123,7 +125,8 @@ class _RowBar:
     def event(self, _event: Any) -> None:
         with self.lock:
             self.events += 1
-            self._show()
+            if not self.closed:  # an event may arrive after the run ended
+                self._show()
 
     def chunk_done(self, rows: int) -> None:
         with self.lock:
@@ -132,7 +135,9 @@ class _RowBar:
 
     def close(self) -> None:
         with self.lock:
-            self.bar.close()
+            if not self.closed:
+                self.closed = True
+                self.bar.close()
 
 
 def distributed_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any], options: dict, *,
@@ -184,13 +189,13 @@ def distributed_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any
         chunks = split_rows(len(items), n_workers if cluster is not None else _slots(client))
         token = f"{os.getpid()}-{time.time_ns()}"
         topic = f"cvxgeodesic-rows-{token}" if progress else None
+        bar = _RowBar(len(items), desc) if progress else None
+        if bar is not None:  # before the tasks start, so that no row's event is missed
+            client.subscribe_topic(topic, bar.event)
         mesh_future = client.scatter(mesh, broadcast=True, hash=False)
         futures = [client.submit(solve_chunk, factory, mesh_future, items[s], options, topic,
                                  key=f"cvxgeodesic-rows-{i}-{token}", pure=False)
                    for i, s in enumerate(chunks)]
-        bar = _RowBar(len(items), desc) if progress else None
-        if bar is not None:
-            client.subscribe_topic(topic, bar.event)
         try:
             parts = _gather(futures, chunks, bar)
         except KeyboardInterrupt:
@@ -199,12 +204,14 @@ def distributed_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any
             stop_after_interrupt(client, futures, cluster)
             raise
         except BaseException:
-            client.cancel(futures, force=True)  # on an existing cluster the other chunks would run on
+            with contextlib.suppress(Exception):  # on an existing cluster the other chunks would run on
+                client.cancel(futures, force=True)
             raise
         finally:
             if bar is not None:
                 bar.close()
-                client.unsubscribe_topic(topic)
+                with contextlib.suppress(Exception):  # the connection may be gone after Ctrl-C
+                    client.unsubscribe_topic(topic)
     _rewarn(w for _, ws in parts for w in ws)
     return np.concatenate([rows for rows, _ in parts])
 
