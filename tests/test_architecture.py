@@ -19,7 +19,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "src" / "cvxgeodesic"
 #: Layers from the bottom up (docs/architecture.md); a module belongs to the layer of its longest matching
 #: prefix. A module may import its own layer and the layers below it.
 LAYERS: list[tuple[str, tuple[str, ...]]] = [
-    ("leaf", ("errors", "_atomic", "_threads", "validation", "results", "tables")),
+    ("leaf", ("errors", "_atomic", "_threads", "_cluster", "validation", "results", "tables")),
     ("mesh", ("mesh",)),
     ("linalg", ("linalg",)),
     ("operators", ("operators",)),
@@ -27,7 +27,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     # elements_p2 holds the order-2 program *and* its solve (Order2Strategy calls the order-2 solvers)
     ("solvers", ("solvers", "elements_p2")),
     ("baselines", ("baselines",)),
-    ("api", ("api", "strategies", "paths", "_verbose")),
+    ("api", ("api", "rows", "strategies", "paths", "_verbose")),
     ("evaluation/pictures", ("evaluation", "plotting", "viewer")),
     ("applications", ("cli", "cli_sources", "compare", "batch", "demo", "")),  # "": the package __init__
 ]

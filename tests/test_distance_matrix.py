@@ -1,9 +1,21 @@
 """``cvxgeodesic.distance_matrix``: one GeodesicSolver, one row per source vertex."""
 
+import contextlib
+import os
+import re
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 import cvxgeodesic as cg
+from cvxgeodesic.cli import main
 from cvxgeodesic.errors import SourceError
 
 
@@ -37,3 +49,223 @@ def test_single_int_and_baseline(sphere):
 def test_bad_vertices(sphere, verts, match):
     with pytest.raises(SourceError, match=match):
         cg.distance_matrix(sphere, verts)
+
+
+# ---- rows on a Dask cluster (cvxgeodesic.rows): loopback only ----
+
+@pytest.fixture(scope="module")
+def cluster():
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as c:
+        yield c
+
+
+def test_cluster_rows_are_the_in_process_rows(sphere, cluster, monkeypatch, capsys):
+    """Same solves, the requested order, a duplicate solved once, one contiguous chunk per worker."""
+    from cvxgeodesic import rows
+
+    chunks = []
+    split = rows.split_rows
+    monkeypatch.setattr(rows, "split_rows", lambda n, k: chunks.append(split(n, k)) or chunks[-1])
+    verts = [100, 17, 0, 17, 5]
+    D = cg.distance_matrix(sphere, verts, method="qcqp-hessian", scheduler=cluster.scheduler_address, progress=True)
+    ref = cg.distance_matrix(sphere, verts, method="qcqp-hessian")
+    assert D.shape == ref.shape == (5, sphere.n_vertices)
+    np.testing.assert_allclose(D, ref, rtol=0, atol=1e-9 * sphere.bbox_diagonal)
+    assert all(D[i, v] == 0.0 for i, v in enumerate(verts))
+    np.testing.assert_array_equal(D[1], D[3])
+    assert chunks == [[slice(0, 2), slice(2, 4)]]  # 4 distinct rows, 2 workers
+    assert "4/4" in capsys.readouterr().err  # the bar counts rows
+
+
+def test_cluster_rows_of_surface_points_and_client_object(cluster):
+    distributed = pytest.importorskip("distributed")
+    mesh = cg.grid_plane(8, 8)
+    pts = [cg.SurfacePoint(30, [0.2, 0.3, 0.5]), 7, "boundary"]
+    with distributed.Client(cluster) as client:
+        D = cg.distance_matrix(mesh, pts, method="qclp", scheduler=client)
+    np.testing.assert_allclose(D, cg.distance_matrix(mesh, pts, method="qclp"), atol=1e-9 * mesh.bbox_diagonal)
+
+
+def test_cluster_warnings_and_errors_reach_the_caller(cluster):
+    from cvxgeodesic.errors import ParameterError
+
+    # a plane with one zero-area face: the worker's DegenerateFacesWarning is issued here, once
+    V = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.5, 0.5, 0], [1, 1, 0]]
+    F = [[0, 1, 3], [0, 3, 2], [1, 4, 3], [3, 4, 2], [1, 2, 3]]
+    with pytest.warns(cg.DegenerateFacesWarning) as record:
+        D = cg.distance_matrix((V, F), [0, 4], method="qclp", scheduler=cluster.scheduler_address)
+    assert sum(issubclass(w.category, cg.DegenerateFacesWarning) for w in record) == 1
+    assert D[0, 0] == 0 and D[1, 4] == 0
+    with pytest.raises(ParameterError, match="unknown method 'nope'"):  # raised on a worker, same type and text
+        cg.distance_matrix(cg.icosphere(1), [0, 1], method="nope", scheduler=cluster.scheduler_address)
+
+
+def test_split_rows_and_one_solver_per_chunk():
+    from cvxgeodesic.rows import solve_chunk, split_rows
+
+    assert split_rows(5, 2) == [slice(0, 2), slice(2, 5)]
+    for n, k in [(1, 4), (7, 3), (16, 2), (3, 3)]:
+        parts = split_rows(n, k)
+        assert len(parts) == min(n, k) and parts[0].start == 0 and parts[-1].stop == n
+        assert all(a.stop == b.start for a, b in zip(parts, parts[1:], strict=False))
+        assert max(p.stop - p.start for p in parts) - min(p.stop - p.start for p in parts) <= 1
+    built = []
+
+    def factory(mesh, **options):
+        built.append(options)
+        return cg.GeodesicSolver(mesh, **options)
+
+    sphere = cg.icosphere(1)
+    rows, caught = solve_chunk(factory, sphere, [0, 3, 9], {"method": "qclp"})
+    assert len(built) == 1 and rows.shape == (3, sphere.n_vertices) and caught == []
+    np.testing.assert_array_equal(rows, cg.distance_matrix(sphere, [0, 3, 9], method="qclp"))
+
+
+def test_cluster_argument_errors_before_any_work(sphere):
+    from cvxgeodesic.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="workers must be a positive integer"):
+        cg.distance_matrix(sphere, [0], workers=0)
+    with pytest.raises(ParameterError, match="not both"):
+        cg.distance_matrix(sphere, [0], workers=2, scheduler="tcp://SCHEDULER:8786")
+    with pytest.raises(SourceError, match="out of range"):  # sources are checked before a cluster starts
+        cg.distance_matrix(sphere, [0, 999], workers=2)
+
+
+def test_without_dask_the_error_names_the_extra(sphere, monkeypatch):
+    monkeypatch.setitem(sys.modules, "distributed", None)  # makes `import distributed` fail
+    with pytest.raises(ImportError, match=r"distance_matrix on a Dask cluster.*cvxgeodesic\[cluster\]"):
+        cg.distance_matrix(sphere, [0, 1], workers=2)
+    np.testing.assert_array_equal(cg.distance_matrix(sphere, [0, 1], method="qclp"),  # in-process needs no Dask
+                                  np.stack([cg.geodesic_distance(sphere, v, method="qclp") for v in (0, 1)]))
+
+
+@contextlib.contextmanager
+def _http_server():
+    """The address of a TCP server on 127.0.0.1 that answers like a web server, not a Dask scheduler."""
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(4)
+    conns = []
+
+    def serve():
+        while True:
+            try:
+                conn, _ = server.accept()
+            except OSError:
+                return
+            conns.append(conn)
+            conn.sendall(b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n")
+
+    threading.Thread(target=serve, daemon=True).start()
+    try:
+        yield f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    finally:
+        for c in conns:
+            c.close()
+        server.close()
+
+
+def test_non_dask_scheduler_fails_fast(sphere, tmp_path, capsys):
+    pytest.importorskip("distributed")
+    with _http_server() as address:
+        t0 = time.perf_counter()
+        with pytest.raises(ConnectionError, match="does not speak Dask's protocol"):
+            cg.distance_matrix(sphere, [0, 1], scheduler=address)
+        path = cg.save_distance(tmp_path / "in.ply", sphere, np.zeros(sphere.n_vertices))
+        assert main(["matrix", str(path), "-s", "0,1", "-q", "--scheduler", address, "-o",
+                     str(tmp_path / "D.npy")]) == 2
+        assert time.perf_counter() - t0 < 20
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("cvxgeodesic: error: ") and "Dask's protocol" in err[0], err
+    assert not (tmp_path / "D.npy").exists()
+
+
+def _sphere_file(tmp_path):
+    """icosphere(2) as OBJ, with a vertex in no face first: the file's numbering is the mesh's plus one."""
+    mesh = cg.icosphere(2)
+    path = tmp_path / "sphere.obj"
+    lines = ["v 9 9 9"] + [f"v {x!r} {y!r} {z!r}" for x, y, z in mesh.V.tolist()]
+    lines += [f"f {a + 2} {b + 2} {c + 2}" for a, b, c in mesh.F.tolist()]
+    path.write_text("\n".join(lines) + "\n")
+    return mesh, path
+
+
+def test_cli_matrix_on_a_cluster(cluster, tmp_path, capsys):
+    mesh, path = _sphere_file(tmp_path)
+    ref, out = tmp_path / "ref.npy", tmp_path / "D.npy"
+    args = ["matrix", str(path), "-s", "6,1", "-s", "6", "-s", "30", "--method", "qclp"]
+    assert main([*args, "-q", "-o", str(ref)]) == 0
+    assert main([*args, "--scheduler", cluster.scheduler_address, "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert f"on {cluster.scheduler_address}" in err and "3/3" in err  # 3 distinct rows counted by the bar
+    assert "row/s" in err or "s/row" in err  # the cluster's bar (in-process, the bar counts "solve"s)
+    D = np.load(out)
+    assert D.shape == (4, 163) and np.all(np.isinf(D[:, 0])) and D[0, 6] == 0 and D[1, 1] == 0 and D[3, 30] == 0
+    np.testing.assert_allclose(D, np.load(ref), rtol=0, atol=1e-9 * mesh.bbox_diagonal)
+    assert not list(tmp_path.glob(".*.tmp"))
+    assert main([*args, "--workers", "2", "--scheduler", cluster.scheduler_address, "-o", str(tmp_path / "E.npy")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "not both" in err[0] and not (tmp_path / "E.npy").exists()
+
+
+def test_cli_matrix_on_a_local_cluster(tmp_path, capsys):
+    pytest.importorskip("distributed")
+    mesh, path = _sphere_file(tmp_path)
+    out = tmp_path / "D.npy"
+    assert main(["matrix", str(path), "-s", "1,6", "--method", "qclp", "--workers", "1", "-o", str(out)]) == 0
+    assert "a local cluster of 1 worker processes" in capsys.readouterr().err
+    expected = cg.distance_matrix(mesh, [0, 5], method="qclp")
+    np.testing.assert_allclose(np.load(out)[:, 1:], expected, rtol=0, atol=1e-9 * mesh.bbox_diagonal)
+
+
+def test_ctrl_c_in_a_cluster_matrix_is_one_line_and_exit_130(tmp_path):
+    pytest.importorskip("distributed")
+    big = cg.grid_plane(70, jitter=0.1)  # ~4 s per Clarabel solve: still running when Ctrl-C comes
+    path = cg.save_distance(tmp_path / "big.ply", big, np.zeros(big.n_vertices))
+    out = tmp_path / "D.npy"
+    cmd = [sys.executable, "-m", "cvxgeodesic.cli", "matrix", str(path), "-s", "0,1,2,3", "--solver", "clarabel",
+           "--workers", "2", "-o", str(out)]
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(Path(cg.__file__).parents[1]),
+                                                       os.environ.get("PYTHONPATH", "")]))
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, start_new_session=True)
+    chunks: list[bytes] = []
+    reader = threading.Thread(target=lambda: chunks.extend(iter(lambda: proc.stderr.read1(4096), b"")), daemon=True)
+    reader.start()
+    deadline = time.time() + 60
+    while time.time() < deadline and b"row" not in b"".join(chunks).split(b"rows;")[-1]:  # the bar is up
+        time.sleep(0.1)
+    time.sleep(1.5)  # solves running
+    t0 = time.time()
+    os.killpg(proc.pid, signal.SIGINT)  # what Ctrl-C in a terminal does: the whole process group
+    proc.wait(timeout=60)
+    reader.join(timeout=10)
+    elapsed = time.time() - t0
+    text = b"".join(chunks).decode()
+    lines = [ln for ln in re.split(r"[\r\n]+", text) if ln.strip() and not ln.lstrip().startswith("qcqp-hessian:")]
+    assert proc.returncode == 130, text
+    assert "Traceback" not in text and "WARNING" not in text and "CancelledError" not in text, text
+    assert lines[-1] == "cvxgeodesic: interrupted" and len(lines) <= 2, lines  # the start line and this one
+    assert elapsed < 5, elapsed
+    assert not out.exists() and not list(tmp_path.glob(".*.tmp"))
+
+
+def test_local_cluster_workers_share_the_cores(monkeypatch):
+    """workers=N gives every worker process cpu_count // N threads (two full OpenMP pools slow each other down)."""
+    pytest.importorskip("distributed")
+    from cvxgeodesic import _cluster
+
+    monkeypatch.setattr(_cluster.os, "cpu_count", lambda: 8)  # read in this process when the cluster starts
+    names = ("CVXGEODESIC_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")
+    for name in (*names, "MALLOC_TRIM_THRESHOLD_"):  # set here (conftest, earlier tests) they would be inherited
+        monkeypatch.delenv(name, raising=False)
+    with contextlib.ExitStack() as stack:
+        client, cluster = _cluster.open_client(stack, None, 2)
+        assert cluster is not None
+        seen = client.run(lambda: {k: os.environ.get(k) for k in (*names, "MALLOC_TRIM_THRESHOLD_")})
+    # Dask's MALLOC_TRIM_THRESHOLD_=65536 made every solve ~1.8x slower on a worker: it is left unset
+    assert len(seen) == 2 and all(v == {**dict.fromkeys(names, "4"), "MALLOC_TRIM_THRESHOLD_": None}
+                                  for v in seen.values()), seen
+    # Dask's nanny writes them into this process too: left there, they would pin the caller's later solves
+    assert not any(name in os.environ for name in names), {k: os.environ.get(k) for k in names}

@@ -371,13 +371,19 @@ def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | 
 def distance_matrix(mesh: Any, vertices: ArrayLike, method: str = "qcqp-hessian", m: float = 1.0, solver: str = "auto",
                     progress: bool = False, *, lam: float | None = None, tol: float = DEFAULT_TOL,
                     max_iter: int = 200, multires: bool | int = False, normalization: str = "area",
-                    order: int = 1, threads: int | None = None) -> np.ndarray:
+                    order: int = 1, threads: int | None = None, workers: int | None = None,
+                    scheduler: Any = None) -> np.ndarray:
     """Distance fields from several vertices, one row per vertex, with one :class:`GeodesicSolver`.
 
     The per-mesh work (operators, energy matrix, symbolic Cholesky analysis) is
     done once; every row is one solve with a single source. A vertex listed
     twice is solved once and its row copied. ``vertices`` may also be a SurfacePoint, a
     SurfaceCurve, ``"boundary"`` or a list of them and ints: one row per item.
+
+    With ``workers`` or ``scheduler`` the rows are solved on a Dask cluster
+    (``pip install 'cvxgeodesic[cluster]'``; :mod:`cvxgeodesic.rows`): split into contiguous
+    chunks, one per worker, each chunk one task with its own solver (the set-up is paid once per
+    chunk), the mesh sent to the workers once. The rows are the same solves as in-process.
 
     Parameters
     ----------
@@ -386,9 +392,17 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str = "qcqp-hessian"
     vertices : int or (k,) sequence of int
         Source vertex of each row.
     method, m, solver, lam, tol, max_iter, multires, normalization, threads
-        See :class:`GeodesicSolver`.
+        See :class:`GeodesicSolver`. On a cluster, ``threads=None`` lets every worker's solver
+        follow the worker's environment: ``cpu_count // workers`` threads on a local cluster.
     progress : bool
         Show a tqdm progress bar (one step per distinct vertex) on stderr.
+    workers : int, optional
+        Solve on a ``LocalCluster`` of this many worker processes, started for this call and
+        closed at the end. Default None: in this process, without Dask.
+    scheduler : str or distributed.Client, optional
+        Solve on an existing Dask cluster: its scheduler's address (``"tcp://SCHEDULER:8786"``) or a
+        connected client; its workers need cvxgeodesic installed (the mesh is sent to them).
+        Not together with ``workers``.
 
     Returns
     -------
@@ -401,6 +415,12 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str = "qcqp-hessian"
     ------
     SourceError
         ``vertices`` is empty, not integers, or out of range.
+    ParameterError
+        ``workers`` is not a positive integer, or both ``workers`` and ``scheduler`` are given.
+    ImportError
+        ``workers`` or ``scheduler`` without Dask's ``distributed`` installed.
+    ConnectionError
+        ``scheduler`` is not a reachable Dask scheduler.
 
     Examples
     --------
@@ -412,9 +432,20 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str = "qcqp-hessian"
     mesh = as_trimesh(mesh)
     from .sources import SurfaceCurve, SurfacePoint
 
+    if workers is not None:
+        check_count(workers, "workers", or_none=True)
+        if scheduler is not None:
+            raise ParameterError("give workers (a local Dask cluster) or scheduler (an existing one), not both")
+    options = {"method": method, "m": m, "lam": lam, "solver": solver, "tol": tol, "max_iter": max_iter,
+               "multires": multires, "normalization": normalization, "order": order, "threads": threads}
+
     def rows_of(items: list) -> np.ndarray:
-        solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter,
-                                    multires=multires, normalization=normalization, order=order, threads=threads)
+        if workers is not None or scheduler is not None:
+            from .rows import distributed_rows
+
+            return distributed_rows(GeodesicSolver, mesh, items, options, scheduler=scheduler, workers=workers,
+                                    progress=progress, desc=str(method))
+        solver_obj = GeodesicSolver(mesh, **options)
         return np.stack([r.distance for r in solver_obj.solve_many(items, progress=progress)])
 
     surface = (SurfacePoint, SurfaceCurve, str)
@@ -431,3 +462,4 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str = "qcqp-hessian"
     uniq, inverse = np.unique(arr, return_inverse=True)
     uniq = validate_sources(uniq, mesh.n_vertices)
     return rows_of(uniq.tolist())[np.asarray(inverse).ravel()]
+

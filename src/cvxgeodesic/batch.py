@@ -29,7 +29,6 @@ imported only when a batch runs.
 
 from __future__ import annotations
 
-import contextlib
 import glob
 import json
 import math
@@ -38,10 +37,12 @@ import socket
 import sys
 import time
 import warnings
+from contextlib import ExitStack
 from pathlib import Path
 
 import numpy as np
 
+from ._cluster import open_client, require_distributed, stop_after_interrupt
 from .errors import ParameterError
 from .validation import check_choice, check_count, check_number
 
@@ -49,18 +50,6 @@ __all__ = ["OUTPUT_FORMATS", "expand_mesh_paths", "format_summary", "output_path
 
 #: Formats of the distance file written per mesh.
 OUTPUT_FORMATS = ("ply", "npy")
-
-
-def _require_distributed():
-    try:
-        import dask
-        import distributed
-    except ImportError as exc:
-        raise ImportError(
-            "cvxgeodesic batch needs Dask's distributed scheduler, which is not installed: "
-            "pip install 'dask[distributed]' (or pip install 'cvxgeodesic[cluster]')"
-        ) from exc
-    return dask, distributed
 
 
 def expand_mesh_paths(patterns) -> list[Path]:
@@ -360,96 +349,10 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
     return [rows[p] for p in paths]
 
 
-#: Seconds :func:`_check_scheduler` waits for the connection and for the scheduler's first bytes.
-PROBE_TIMEOUT = 4.0
-
-
-def _check_scheduler(address: str, timeout: float = PROBE_TIMEOUT) -> None:
-    """Fail fast, with a clear message, when ``address`` is not a Dask scheduler.
-
-    Dask's own client trusts the first 8 bytes the server sends as a message length: an
-    HTTP or SSH server there makes it allocate exabytes ("Unable to allocate 3.07 EiB"),
-    and a server that never speaks makes it wait. A scheduler sends its handshake as soon
-    as a connection opens, a small message whose 8-byte little-endian length comes
-    first; this checks exactly that, within ``2 * timeout`` seconds. Only plain TCP
-    addresses (``tcp://SCHEDULER:8786`` or ``host:port``) are checked; others go to Dask.
-
-    Raises
-    ------
-    ConnectionError
-        Nothing listens there, the connection or the first bytes time out, or the server
-        does not speak Dask's protocol.
-    """
-    import struct
-
-    text = str(address)
-    if "://" in text:
-        scheme, rest = text.split("://", 1)
-        if scheme != "tcp":
-            return
-    else:
-        rest = text
-    host, sep, port_text = rest.rstrip("/").rpartition(":")
-    if not sep or not port_text.isdigit():
-        raise ConnectionError(f"--scheduler {address!r} is not an address like tcp://SCHEDULER:8786")
-    host = host.strip("[]") or "127.0.0.1"
-    what = f"the Dask scheduler at {address}"
-    try:
-        with socket.create_connection((host, int(port_text)), timeout=timeout) as sock:
-            sock.settimeout(timeout)
-            head = b""
-            while len(head) < 8:
-                chunk = sock.recv(8 - len(head))
-                if not chunk:
-                    raise ConnectionError(f"{what} closed the connection without a Dask handshake: "
-                                          "is it a Dask scheduler?")
-                head += chunk
-    except (ConnectionRefusedError, ConnectionResetError, ConnectionAbortedError) as exc:
-        raise ConnectionError(f"cannot connect to {what}: {exc.strerror or exc}") from None
-    except TimeoutError:
-        raise ConnectionError(f"{what} did not answer within {timeout:g} s: is it a Dask scheduler "
-                              "(dask scheduler --port 8786), and reachable?") from None
-    except ConnectionError:
-        raise
-    except OSError as exc:
-        raise ConnectionError(f"cannot connect to {what}: {exc.strerror or exc}") from None
-    (nbytes,) = struct.unpack("<Q", head)
-    if not 0 < nbytes < 2**24:
-        raise ConnectionError(f"{what} does not speak Dask's protocol (first bytes {head!r}): "
-                              "is the address a Dask scheduler's (default port 8786), not a web or other server?")
-
-
-def _local_worker_environ(n_workers: int) -> dict:
-    """Dask config of a local cluster: every worker process's pools get ``cpu_count // n_workers`` threads."""
-    threads = max(1, (os.cpu_count() or 1) // n_workers)
-    return {f"distributed.nanny.pre-spawn-environ.{k}": threads
-            for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS",
-                      "CVXGEODESIC_THREADS")}
-
-
 def _run_on_cluster(todo, rows, sources, out, method, m, solver, multires, output_format,
                     scheduler, n_workers, progress) -> None:
-    dask, distributed = _require_distributed()
-    from contextlib import ExitStack
-
     with ExitStack() as stack:
-        if scheduler is None:
-            blas = _local_worker_environ(n_workers)
-            # Ctrl-C goes to the whole process group: worker processes started with SIGINT ignored keep
-            # quiet (no tracebacks of their own) and this process alone stops them (_stop_after_interrupt)
-            with dask.config.set(blas), _sigint_ignored():
-                cluster = stack.enter_context(distributed.LocalCluster(
-                    n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=":0"))
-            client = stack.enter_context(distributed.Client(cluster))
-        elif isinstance(scheduler, distributed.Client):
-            client = scheduler
-        else:
-            _check_scheduler(scheduler)
-            try:
-                client = stack.enter_context(distributed.Client(scheduler, timeout="20s"))
-            except OSError as exc:
-                raise ConnectionError(f"cannot connect to the Dask scheduler at {scheduler}: {exc}") from None
-
+        client, cluster = open_client(stack, scheduler, n_workers)
         futures = {}
         for i, p in enumerate(todo):
             size = p.stat().st_size if p.exists() else 0
@@ -463,54 +366,14 @@ def _run_on_cluster(todo, rows, sources, out, method, m, solver, multires, outpu
 
             bar = tqdm(total=len(futures), desc="meshes", unit="mesh", file=sys.stderr)
         try:
-            _collect(distributed, futures, rows, bar)
+            _collect(require_distributed()[1], futures, rows, bar)
         except KeyboardInterrupt:
             if bar is not None:
                 bar.close()
-            _stop_after_interrupt(client, futures, cluster if scheduler is None else None)
+            stop_after_interrupt(client, futures, cluster)
             raise
         if bar is not None:
             bar.close()
-
-
-@contextlib.contextmanager
-def _sigint_ignored():
-    """Ignore SIGINT while the block runs (processes started then inherit it); main thread only."""
-    import signal
-    import threading
-
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, previous)
-
-
-def _stop_after_interrupt(client, futures, cluster) -> None:
-    """After Ctrl-C: cancel the tasks, kill the local workers (a running solve does not return for
-    seconds) and silence Dask's shutdown logging, so that one line says what happened."""
-    import logging
-    import signal
-
-    for name in ("distributed", "tornado", "asyncio"):
-        logging.getLogger(name).setLevel(logging.CRITICAL + 1)
-    try:
-        client.cancel(list(futures), force=True)
-    except Exception:  # the connection may be gone already; nothing to report
-        pass
-    if cluster is None:
-        return
-    for nanny in list(getattr(cluster, "workers", {}).values()):
-        try:
-            nanny.close_gracefully()  # no restart of the worker we kill next
-            pid = nanny.process.process.pid
-            if pid:
-                os.kill(pid, signal.SIGKILL)
-        except Exception:
-            pass
 
 
 def _collect(distributed, futures: dict, rows: dict, bar) -> None:

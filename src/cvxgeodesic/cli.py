@@ -16,7 +16,7 @@ import warnings
 from . import __version__
 from .api import SOLVERS
 from .cli_sources import add_method_option, add_path_parser, add_source_options
-from .errors import SourceError
+from .errors import ParameterError, SourceError
 
 EXIT_USAGE = 2
 M_HELP = "smoothness multiplier m (default 1): λ = m·κ·√area, one rounding on the surface whatever the mesh"
@@ -126,14 +126,19 @@ def _cmd_matrix(args) -> int:
     from .mesh.io import check_output_path, load_mesh
 
     check_output_path(args.output, (".npy",))
+    if args.workers is not None and args.scheduler is not None:
+        raise ParameterError("give --workers (a local Dask cluster) or --scheduler (an existing one), not both")
     mesh = load_mesh(args.mesh)
     if not args.source:
         raise SourceError("give the source vertex of each row: -s I[,J...] (repeatable)")
     rows = [int(file_sources(mesh, [s])[0]) for s in args.source]  # one row per -s, in the given order
     if not args.quiet:
-        print(f"{mesh.name}: {mesh.n_file_vertices} vertices, {len(rows)} rows; method {args.method}",
+        where = ("" if args.workers is None and args.scheduler is None
+                 else f"; on {args.scheduler or f'a local cluster of {args.workers} worker processes'}")
+        print(f"{mesh.name}: {mesh.n_file_vertices} vertices, {len(rows)} rows; method {args.method}{where}",
               file=sys.stderr)
-    D = distance_matrix(mesh, rows, args.method, m=args.m, solver=args.solver, progress=not args.quiet)
+    D = distance_matrix(mesh, rows, args.method, m=args.m, solver=args.solver, progress=not args.quiet,
+                        workers=args.workers, scheduler=args.scheduler)
     D = to_file_order(mesh, D)  # columns in the file's numbering, like every other output
     atomic_write(args.output, lambda fh: np.save(fh, D))
     if not args.quiet:
@@ -248,6 +253,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")
     p.add_argument("-o", "--output", required=True,
                    help="output .npy: (rows, file vertices) float64, columns in the file's numbering")
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="solve the rows on a local Dask cluster of N worker processes, cpu_count // N threads "
+                        "each (default: in this process)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="solve the rows on a running Dask cluster, e.g. tcp://SCHEDULER:8786")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
     p.set_defaults(func=_cmd_matrix)
