@@ -32,8 +32,9 @@ import scipy.sparse as sp
 from ..errors import SolverError
 from ..linalg import NotPositiveDefiniteError, SymbolicCholesky
 from ..linalg import pardiso as _pardiso
+from . import _p2_kernels as _kern
 
-_TRIL = np.tril_indices(6)
+_TRIL_R, _TRIL_C = (np.ascontiguousarray(i, dtype=np.int64) for i in np.tril_indices(6))
 #: Iterative-refinement steps per Newton solve.
 REFINE_STEPS = 3
 #: The dual residual is accepted at this multiple of ``tol``: near the optimum Δz = W⁻²(…) magnifies rounding
@@ -46,64 +47,48 @@ DUAL_TOL_FACTOR = 1000.0
 REG = 1e-13
 
 
-def _mv(M: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Batched ``M[k] @ v[k]`` (matmul measured faster than einsum for these small blocks)."""
-    return np.matmul(M, v[..., None])[..., 0]
+class _Scaling:
+    """The NT scaling of every cone (``w`` (k, 4), ``eta`` (k,); see :mod:`._p2_kernels`) and products with it."""
+
+    def __init__(self, w: np.ndarray, eta: np.ndarray):
+        self.w, self.eta = w, eta
+
+    @classmethod
+    def at(cls, s: np.ndarray, z: np.ndarray) -> tuple[_Scaling, np.ndarray]:
+        """Nesterov–Todd scaling ``W`` with ``W z = W⁻¹ s = λ``; returns the scaling and λ (k, 4)."""
+        k = s.shape[0]
+        w, eta, lam = np.empty((k, 4)), np.empty(k), np.empty((k, 4))
+        _kern.nt_scaling(s, z, w, eta, lam)
+        return cls(w, eta), lam
+
+    @classmethod
+    def identity(cls, k: int) -> _Scaling:
+        w = np.zeros((k, 4))
+        w[:, 0] = 1.0
+        return cls(w, np.ones(k))
+
+    def apply(self, v: np.ndarray, power: int) -> np.ndarray:
+        """``W^power v`` per cone, ``power`` ∈ {1, −1, −2}; v (k, 4)."""
+        out = np.empty_like(v)
+        _kern.apply_w(self.w, self.eta, v, power, out)
+        return out
 
 
-def _soc_step(u: np.ndarray, du: np.ndarray) -> np.ndarray:
-    """Largest ``α`` with ``u + α du`` in the closed SOC, per cone (``inf`` when unbounded)."""
-    a = du[:, 0] ** 2 - np.einsum("ki,ki->k", du[:, 1:], du[:, 1:])
-    b = 2 * (u[:, 0] * du[:, 0] - np.einsum("ki,ki->k", u[:, 1:], du[:, 1:]))
-    c = np.maximum(u[:, 0] ** 2 - np.einsum("ki,ki->k", u[:, 1:], u[:, 1:]), 0.0)
-    disc = b * b - 4 * a * c
-    hit = (a < 0) | ((b < 0) & (disc >= 0))
-    out = np.full(u.shape[0], np.inf)
-    den = -b[hit] + np.sqrt(np.maximum(disc[hit], 0.0))
-    with np.errstate(divide="ignore"):
-        out[hit] = np.where(den > 0, 2 * c[hit] / den, 0.0)
+def _jprod(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    out = np.empty_like(a)
+    _kern.jprod(a, b, out)
     return out
 
 
 def _jdiv(lam: np.ndarray, d: np.ndarray) -> np.ndarray:
     """``u`` with ``lam ∘ u = d`` (Jordan product of the SOC), per cone."""
-    det = lam[:, 0] ** 2 - np.einsum("ki,ki->k", lam[:, 1:], lam[:, 1:])
-    u0 = (lam[:, 0] * d[:, 0] - np.einsum("ki,ki->k", lam[:, 1:], d[:, 1:])) / det
-    u1 = (d[:, 1:] - u0[:, None] * lam[:, 1:]) / lam[:, :1]
-    return np.column_stack([u0, u1])
+    out = np.empty_like(d)
+    _kern.jdiv(lam, d, out)
+    return out
 
 
-def _jprod(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.column_stack([np.einsum("ki,ki->k", a, b), a[:, :1] * b[:, 1:] + b[:, :1] * a[:, 1:]])
-
-
-def _nt_scaling(s: np.ndarray, z: np.ndarray):
-    """Nesterov–Todd scaling ``W`` (symmetric, per cone) with ``W z = W⁻¹ s = λ``; returns W, W⁻¹, λ."""
-    # (u0 − ‖u1‖)(u0 + ‖u1‖) loses less to cancellation than u0² − ‖u1‖² next to the boundary
-    ns, nz = np.linalg.norm(s[:, 1:], axis=1), np.linalg.norm(z[:, 1:], axis=1)
-    sJs = np.maximum((s[:, 0] - ns) * (s[:, 0] + ns), 1e-300)
-    zJz = np.maximum((z[:, 0] - nz) * (z[:, 0] + nz), 1e-300)
-    sn = s / np.sqrt(sJs)[:, None]
-    zn = z / np.sqrt(zJz)[:, None]
-    gamma = np.sqrt(np.maximum((1 + np.einsum("ki,ki->k", sn, zn)) / 2, 1e-300))
-    w = (sn + np.column_stack([zn[:, :1], -zn[:, 1:]])) / (2 * gamma)[:, None]
-    w[:, 0] = np.sqrt(1 + np.einsum("ki,ki->k", w[:, 1:], w[:, 1:]))  # restore wᵀJw = 1 exactly
-    eta = (sJs / zJz) ** 0.25
-    k = s.shape[0]
-    w1 = w[:, 1:]
-    M = np.eye(3)[None] + np.einsum("ki,kj->kij", w1, w1) / (1 + w[:, 0])[:, None, None]
-    W = np.empty((k, 4, 4))
-    W[:, 0, 0] = w[:, 0]
-    W[:, 0, 1:] = w1
-    W[:, 1:, 0] = w1
-    W[:, 1:, 1:] = M
-    Wi = W.copy()
-    Wi[:, 0, 1:] = -w1
-    Wi[:, 1:, 0] = -w1
-    W *= eta[:, None, None]
-    Wi /= eta[:, None, None]
-    lam = _mv(W, z)
-    return W, Wi, lam
+def _max_step(s, ds, z, dz) -> float:
+    return min(_kern.max_step(s, ds), _kern.max_step(z, dz))
 
 
 class P2InteriorPoint:
@@ -140,18 +125,21 @@ class P2InteriorPoint:
             if lib is not None:
                 lib.MKL_Set_Num_Threads_Local(previous)
         # positions of each face's lower-triangular 6×6 entries in the factor's data array
-        r = fd[:, _TRIL[0]]
-        c = fd[:, _TRIL[1]]
+        r = fd[:, _TRIL_R]
+        c = fd[:, _TRIL_C]
         self.face_pos = self.chol.positions(r.ravel(), c.ravel()).reshape(fd.shape[0], 21)
         self.analyze_time = time.perf_counter() - t0
 
     # ------------------------------------------------------------------ helpers
     def _Gx(self, pb, x):
-        return _mv(pb.G, x[pb.cone_dofs])
+        out = np.empty((pb.G.shape[0], 4))
+        _kern.gather(pb.G, pb.cone_dofs, np.ascontiguousarray(x, dtype=float), out)
+        return out
 
     def _Gtz(self, pb, z):
-        Gtz = np.matmul(z[:, None, :], pb.G)[:, 0]
-        return np.bincount(pb.cone_dofs.ravel(), Gtz.ravel(), minlength=self.n)
+        out = np.zeros(self.n)
+        _kern.scatter(pb.G, pb.cone_dofs, z, out)
+        return out
 
     def solve(self, problem, *, tol: float = 1e-8, max_iter: int = 200, callback=None) -> dict:
         """Solve one :class:`~cvxgeodesic.elements_p2.P2Problem`.
@@ -236,27 +224,22 @@ class P2InteriorPoint:
                 status = "optimal"
                 break
             try:
-                W, Wi, lam = _nt_scaling(s, z)
-                Wi2 = np.matmul(Wi, Wi)
-                fac = factor(Wi2)
+                sc, lam = _Scaling.at(s, z)
+                fac = factor(sc)
                 # predictor
                 d_a = -_jprod(lam, lam)
-                dxa, dya, dza, dsa = newton(fac, Wi2, W, lam, rd, rp, re, d_a, Wi)
-                alpha_a = min(1.0, float(np.min(_soc_step(s, dsa), initial=np.inf)),
-                              float(np.min(_soc_step(z, dza), initial=np.inf)))
+                dxa, dya, dza, dsa = newton(fac, sc, lam, rd, rp, re, d_a)
+                alpha_a = min(1.0, _max_step(s, dsa, z, dza))
                 sa, za = s + alpha_a * dsa, z + alpha_a * dza
                 sigma = (max(float(np.einsum("ki,ki->", sa, za)), 0.0) / gap) ** 3
                 # corrector
-                wds = _mv(Wi, dsa)
-                wdz = _mv(W, dza)
-                d_c = d_a - _jprod(wds, wdz)
-                d_c[:, 0] += sigma * mu
-                dx, dy, dz, ds = newton(fac, Wi2, W, lam, rd, rp, re, d_c, Wi)
+                d_c = np.empty_like(d_a)
+                _kern.mehrotra_rhs(sc.w, sc.eta, d_a, dsa, dza, sigma * mu, d_c)
+                dx, dy, dz, ds = newton(fac, sc, lam, rd, rp, re, d_c)
             except (FloatingPointError, np.linalg.LinAlgError, NotPositiveDefiniteError, ValueError) as exc:
                 status = f"numerical_error: {exc}"
                 break
-            alpha = min(float(np.min(_soc_step(s, ds), initial=np.inf)),
-                        float(np.min(_soc_step(z, dz), initial=np.inf)))
+            alpha = _max_step(s, ds, z, dz)
             alpha = min(1.0, 0.99 * alpha)
             if not np.isfinite(alpha) or alpha <= 1e-12:
                 status = "step_failure"
@@ -299,12 +282,12 @@ class _P2System:
         self.chol = solver.chol
         self.diag = solver.chol.diag_positions
 
-    def factor(self, Wi2):
-        """Factor of ``H`` (Σ_k G_kᵀ (W_k⁻²) G_k, lower triangle of each 6×6 block, scattered into the fixed
-        pattern) and of the Schur complement ``E H⁻¹ Eᵀ``."""
+    def factor(self, sc: _Scaling):
+        """Factor of ``H`` (Σ_k G_kᵀ (W_k⁻²) G_k, lower triangle of each 6×6 block, summed straight into the fixed
+        pattern's data) and of the Schur complement ``E H⁻¹ Eᵀ``."""
         Gl, fixed, p, n = self.Gl, self.fixed, self.p, self.n
-        B = np.matmul(Gl.transpose(0, 2, 1), np.matmul(Wi2, Gl))
-        data = np.bincount(self.face_pos.ravel(), B[:, _TRIL[0], _TRIL[1]].ravel(), minlength=self.chol.nnz)
+        data = np.zeros(self.chol.nnz)
+        _kern.assemble(Gl, sc.w, sc.eta, self.face_pos, _TRIL_R, _TRIL_C, data)
         dg = data[self.diag]
         scale = max(float(dg.max()), 1e-300)
         data[self.diag] += np.where(fixed, 1.0, 0.0) + REG * np.abs(dg) + np.where(dg <= 0, scale, 0.0) * (~fixed)
@@ -336,24 +319,24 @@ class _P2System:
             return hb - Y @ dy, dy
         return hb, np.zeros(0)
 
-    def kkt_solve(self, fac, Wi, Wi2, bd, be, bp, bu):
+    def kkt_solve(self, fac, sc: _Scaling, bd, be, bp, bu):
         """Solve Gᵀdz + Eᵀdy = bd, E dx = be, G dx + ds = bp, W dz + W⁻¹ ds = bu (reduced to H)."""
         sv, pb = self.solver, self.pb
-        Wib = _mv(Wi, bu)
-        b1 = bd - sv._Gtz(pb, Wib - _mv(Wi2, bp))
+        wib, t = np.empty_like(bu), np.empty_like(bu)
+        _kern.rhs_cones(sc.w, sc.eta, bu, bp, wib, t)
+        b1 = bd - sv._Gtz(pb, t)
         b1[self.fixed] = 0.0
         dx, dy = self.reduced(fac, b1, be)
-        Gdx = sv._Gx(pb, dx)
-        ds = bp - Gdx
-        dz = Wib - _mv(Wi2, ds)
+        ds, dz = np.empty_like(bu), np.empty_like(bu)
+        _kern.back_cones(pb.G, pb.cone_dofs, sc.w, sc.eta, np.ascontiguousarray(dx), bp, wib, ds, dz)
         return dx, dy, dz, ds
 
-    def newton(self, fac, Wi2, W, lam, rd, rp, re, d, Wi=None):
+    def newton(self, fac, sc: _Scaling, lam, rd, rp, re, d):
         """The direction for the complementarity right-hand side ``d``, refined on the full system."""
         sv, pb, p, E, ET = self.solver, self.pb, self.p, self.E, self.ET
         u = _jdiv(lam, d)
         bd, be, bp = -rd, -re, -rp
-        dx, dy, dz, ds = self.kkt_solve(fac, Wi, Wi2, bd, be, bp, u)
+        dx, dy, dz, ds = self.kkt_solve(fac, sc, bd, be, bp, u)
         # iterative refinement on the full system: Δz = W⁻²(…) amplifies any error in Δx by up to 1/μ,
         # so the residual of the dual equation has to be corrected through Δz itself
         scale_b = max(float(np.abs(bd).max(initial=0.0)), float(np.abs(u).max(initial=0.0)), 1e-300)
@@ -361,13 +344,13 @@ class _P2System:
             r1 = bd - sv._Gtz(pb, dz) - (ET @ dy if p else 0.0)
             r1[self.fixed] = 0.0
             r2 = be - (E @ dx if p else np.zeros(0))
-            r3 = bp - sv._Gx(pb, dx) - ds
-            r4 = u - _mv(W, dz) - _mv(Wi, ds)
+            r3, r4 = np.empty_like(u), np.empty_like(u)
+            _kern.residual_cones(pb.G, pb.cone_dofs, sc.w, sc.eta, np.ascontiguousarray(dx), ds, dz, bp, u, r3, r4)
             err = max(float(np.abs(r1).max(initial=0.0)), float(np.abs(r3).max(initial=0.0)),
                       float(np.abs(r4).max(initial=0.0)), float(np.abs(r2).max(initial=0.0)))
             if err <= 1e-11 * scale_b:
                 break
-            ex, ey, ez, es = self.kkt_solve(fac, Wi, Wi2, r1, r2, r3, r4)
+            ex, ey, ez, es = self.kkt_solve(fac, sc, r1, r2, r3, r4)
             dx, dy, dz, ds = dx + ex, dy + ey, dz + ez, ds + es
         return dx, dy, dz, ds
 
@@ -376,8 +359,7 @@ class _P2System:
         shifted into the cones; returns ``x, s, z``."""
         sv, pb, p, E = self.solver, self.pb, self.p, self.E
         k = pb.n_cones
-        eye = np.broadcast_to(np.eye(4), (k, 4, 4))
-        solve_h, Y, cf = self.factor(eye)
+        solve_h, Y, cf = self.factor(_Scaling.identity(k))
         g = sv._Gtz(pb, pb.h)
         g[self.fixed] = 0.0
         hb = solve_h(g)
