@@ -213,3 +213,28 @@ def mehrotra_rhs(w, eta, d_a, dsa, dza, sigma_mu, out):
         out[k, 1] = d_a[k, 1] - (p0 * q1 + q0 * p1)
         out[k, 2] = d_a[k, 2] - (p0 * q2 + q0 * p2)
         out[k, 3] = d_a[k, 3] - (p0 * q3 + q0 * p3)
+
+
+@njit(**_PJIT)
+def gondzio_rhs(w, eta, s, ds, tp, z, dz, td, lo, hi, out):
+    """Gondzio's corrector right-hand side ``out = c`` of every cone (the direction solves ``λ∘(WΔz + W⁻¹Δs) = c``).
+
+    At the trial point ``(s + tp·Δs, z + td·Δz)`` the two eigenvalues ``v0 ∓ ‖v1‖`` of the scaled complementarity
+    product ``v = (W⁻¹s)∘(Wz)`` are moved into ``[lo, hi]``: ``c`` is that move (each eigenvalue's decrease bounded
+    by ``hi``), expressed in the product's Jordan frame (as the order-1 solver's ``gondzio_cones``).
+    """
+    for k in prange(z.shape[0]):
+        w0, w1, w2, w3, e = w[k, 0], w[k, 1], w[k, 2], w[k, 3], eta[k]
+        a0, a1, a2, a3 = _w_apply(w0, w1, w2, w3, 1.0 / e, -1.0, s[k, 0] + tp * ds[k, 0], s[k, 1] + tp * ds[k, 1],
+                                  s[k, 2] + tp * ds[k, 2], s[k, 3] + tp * ds[k, 3])
+        b0, b1, b2, b3 = _w_apply(w0, w1, w2, w3, e, 1.0, z[k, 0] + td * dz[k, 0], z[k, 1] + td * dz[k, 1],
+                                  z[k, 2] + td * dz[k, 2], z[k, 3] + td * dz[k, 3])
+        v0 = a0 * b0 + a1 * b1 + a2 * b2 + a3 * b3
+        v1, v2, v3 = a0 * b1 + b0 * a1, a0 * b2 + b0 * a2, a0 * b3 + b0 * a3
+        nv = math.sqrt(v1 * v1 + v2 * v2 + v3 * v3)
+        e1, e2 = v0 - nv, v0 + nv
+        t1 = max(min(max(e1, lo), hi) - e1, -hi)
+        t2 = max(min(max(e2, lo), hi) - e2, -hi)
+        f = 0.5 * (t2 - t1) / nv if nv > 0 else 0.0
+        out[k, 0] = 0.5 * (t1 + t2)
+        out[k, 1], out[k, 2], out[k, 3] = f * v1, f * v2, f * v3
