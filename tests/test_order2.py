@@ -430,12 +430,13 @@ def test_p2_kernels_gather_scatter_assembly_match_dense_reference():
 
     rng = np.random.default_rng(4)
     k, n = 40, 30
-    G = rng.normal(size=(k, 4, 6))
+    G = rng.normal(size=(k, 3, 6))  # compact: row 3 of each block is row 0
+    Gf = G[:, [0, 1, 2, 0]]
     dofs = np.array([rng.choice(n, 6, replace=False) for _ in range(k)], dtype=np.int64)
     x, zc = rng.normal(size=n), rng.normal(size=(k, 4))
     dense = np.zeros((4 * k, n))
     for c in range(k):
-        dense[4 * c:4 * c + 4, dofs[c]] = G[c]
+        dense[4 * c:4 * c + 4, dofs[c]] = Gf[c]
     out = np.empty((k, 4))
     kern.gather(G, dofs, x, out)
     np.testing.assert_allclose(out.ravel(), dense @ x, rtol=1e-12, atol=1e-12)
@@ -456,7 +457,7 @@ def test_p2_kernels_gather_scatter_assembly_match_dense_reference():
     kern.assemble(G, w, eta, pos, tri, tci, data)
     H = np.zeros((n, n))
     for c_ in range(k):
-        H[np.ix_(dofs[c_], dofs[c_])] += G[c_].T @ Wi[c_] @ Wi[c_] @ G[c_]
+        H[np.ix_(dofs[c_], dofs[c_])] += Gf[c_].T @ Wi[c_] @ Wi[c_] @ Gf[c_]
     got = sp.coo_matrix((data, (key // n, key % n)), shape=(n, n)).toarray()
     np.testing.assert_allclose(got, np.tril(H), rtol=1e-8, atol=1e-10)
 
@@ -507,11 +508,23 @@ def test_p2_kernels_gondzio_target_moves_eigenvalues_into_the_band():
 
 
 def test_structured_ipm_iteration_counts():
-    """Gondzio's correctors took spot from 48 to 26 iterations and a jittered 20×20 grid from 27 to 17 (2026-12-01);
-    a regression in the correctors, the step or the scaling shows here first."""
+    """Gondzio's correctors and Mehrotra's start took spot from 48 to 25 iterations and a jittered 20×20 grid from
+    27 to 15 (2026-12-01); a regression in the correctors, the start, the step or the scaling shows here first."""
     spot = cg.load_mesh(shared_mesh_path("spot.obj"))
     r = order2(spot, 0)
     assert r.info.solver == "ipm" and r.info.status == "optimal"
-    assert r.info.iterations <= 30
+    assert r.info.iterations <= 28
     g = order2(cg.grid_plane(20, jitter=0.4, seed=1), 0)
-    assert g.info.status == "optimal" and g.info.iterations <= 19
+    assert g.info.status == "optimal" and g.info.iterations <= 16
+
+
+def test_structured_ipm_rejects_cones_of_another_shape():
+    from cvxgeodesic.errors import SolverError
+    from cvxgeodesic.solvers.ipm_soc import P2InteriorPoint
+
+    b = P2Builder(cg.grid_plane(4))
+    pr = b.build(0)
+    pr.G = pr.G.copy()
+    pr.G[7, 3, 2] += 0.5
+    with pytest.raises(SolverError, match="order-2 cone 7: rows 0 and 3 of G differ"):
+        P2InteriorPoint(b).solve(pr)
