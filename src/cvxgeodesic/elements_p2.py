@@ -977,8 +977,8 @@ class Order2Strategy:
         self.builder = P2Builder(unit, samples=samples, weights=weights)
         # "auto": the structured solver, with Clarabel as its fallback. Measured: it solved all 53 coarse CAD
         # meshes ("optimal", no fallback) and was more accurate on needles with a source inside a face (1.9e-6
-        # against Clarabel's 2.5e-5 at aspect 240); side by side it is 2–3× slower than Clarabel up to 7K faces,
-        # 1.3× at 20K, and 1.1–1.6× faster on bimba (46K; docs/order2.md)
+        # against Clarabel's 2.5e-5 at aspect 240); with its compiled kernels and correctors it is about twice as
+        # fast as Clarabel on spot and bunny_7k (2026-12-01; before them 2–3× slower up to 7K faces; docs/order2.md)
         if backend == "auto":
             self.backend = _default_backend() if unit.n_faces >= IPM_MIN_FACES else "clarabel"
         else:
