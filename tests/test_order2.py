@@ -528,3 +528,29 @@ def test_structured_ipm_rejects_cones_of_another_shape():
     pr.G[7, 3, 2] += 0.5
     with pytest.raises(SolverError, match="order-2 cone 7: rows 0 and 3 of G differ"):
         P2InteriorPoint(b).solve(pr)
+
+
+def test_order2_without_numba_solves_with_clarabel_and_says_so(tmp_path):
+    import json
+
+    from test_architecture import _BLOCKER, _run
+
+    code = _BLOCKER + r"""
+import json
+import cvxgeodesic as cg
+res = cg.GeodesicSolver(cg.grid_plane(6), "qclp", order=2).solve(0)
+assert "numba" not in sys.modules
+try:
+    cg.GeodesicSolver(cg.grid_plane(6), "qclp", order=2, solver="ipm")
+except cg.ParameterError as exc:
+    forced = str(exc)
+else:
+    forced = None
+print(json.dumps({"solver": res.info.solver, "status": res.info.status, "notes": res.info.notes, "forced": forced}))
+"""
+    proc = _run(code, tmp_path / "x")
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    info = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert info["solver"] == "clarabel" and info["status"] == "optimal"
+    assert any("order-2 interior-point solver is not available" in n for n in info["notes"]), info
+    assert info["forced"] and "solver='ipm' is not available" in info["forced"], info
