@@ -977,15 +977,23 @@ class Order2Strategy:
         self.builder = P2Builder(unit, samples=samples, weights=weights)
         # "auto": the structured solver, with Clarabel as its fallback. Measured: it solved all 53 coarse CAD
         # meshes ("optimal", no fallback) and was more accurate on needles with a source inside a face (1.9e-6
-        # against Clarabel's 2.5e-5 at aspect 240); side by side it is 2–3× slower than Clarabel up to 7K faces,
-        # 1.3× at 20K, and 1.1–1.6× faster on bimba (46K; docs/order2.md)
+        # against Clarabel's 2.5e-5 at aspect 240); with its compiled kernels and correctors it is about twice as
+        # fast as Clarabel on spot and bunny_7k (2026-12-01; before them 2–3× slower up to 7K faces; docs/order2.md)
+        self._notes: list[str] = []
         if backend == "auto":
-            self.backend = _default_backend() if unit.n_faces >= IPM_MIN_FACES else "clarabel"
+            self.backend = "clarabel"
+            if unit.n_faces >= IPM_MIN_FACES:
+                self.backend = _default_backend()
+                if self.backend == "clarabel":
+                    self._notes.append("the order-2 interior-point solver is not available in this installation "
+                                       "(it needs Numba); solved with Clarabel")
         else:
             self.backend = backend
         self._fallback = backend == "auto"
         self._ipm = None
         if self.backend == "ipm":
+            if _default_backend() != "ipm":
+                raise ParameterError("solver='ipm' is not available in this installation (order 2 needs Numba)")
             from .solvers.ipm_soc import P2InteriorPoint
 
             self._ipm = P2InteriorPoint(self.builder)
@@ -1035,7 +1043,7 @@ class Order2Strategy:
                 ipm = P2InteriorPoint(builder)
             sources = np.concatenate([vsrc, split.point_vertices])
         problem = builder.build(sources)
-        notes = list(problem.notes)
+        notes = list(problem.notes) + self._notes
         res = self._solve_once(problem, ipm, callback, notes)
         # cutting planes on flat patches: the corner/midpoint cones leave |∇φ|² ≤ 4φ free between the samples, and
         # there d² is exactly quadratic, so a cone at each face's worst point closes the gap (docs/order2.md)
