@@ -1,5 +1,5 @@
 #!/bin/bash
-# Install the wheel in a fresh venv and run the default test suite with every shared library of the
+# Build the wheel from HEAD, install it in a fresh venv and run the default test suite with every shared library of the
 # Makefile's Debian packages hidden, as on a Linux x86-64 machine that never ran `make` (issue 16).
 #
 #   sudo scripts/check_wheel_without_debian_libs.sh [WORKDIR]   (root for unshare/mount, network for pip; the wheel
@@ -21,7 +21,10 @@ if [ "${CVXG_INSIDE:-}" != 1 ]; then
            libblas3 liblapack3"
   for p in $deb $runtime; do dpkg -L "$p" 2>/dev/null || true; done | grep -E '\.so(\.|$)' | sort -u \
     | while read -r f; do [ -e "$f" ] && readlink -f "$f"; done | sort -u > "$WORK/hidden.txt"
-  "${BUILD_PYTHON:-$ROOT/.venv/bin/python}" -m build --wheel --outdir "$WORK/dist" "$ROOT" > "$WORK/build.log" 2>&1
+  # from the committed tree only: an in-tree build reuses setuptools' build/lib, whose stale files (modules
+  # deleted since the last build) would end up in the wheel
+  mkdir -p "$WORK/src" && git -C "$ROOT" archive --format=tar HEAD | tar -x -C "$WORK/src"
+  "${BUILD_PYTHON:-$ROOT/.venv/bin/python}" -m build --wheel --outdir "$WORK/dist" "$WORK/src" > "$WORK/build.log" 2>&1
   cp -r "$ROOT/tests" "$WORK/t/"
   exec env CVXG_INSIDE=1 unshare -m --propagation private "$0" "$WORK"
 fi

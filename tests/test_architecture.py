@@ -14,7 +14,10 @@ from pathlib import Path
 
 import numpy as np
 
-PACKAGE = Path(__file__).resolve().parents[1] / "src" / "cvxgeodesic"
+import cvxgeodesic  # noqa: E402
+
+# the package that is imported: src/cvxgeodesic in a checkout (editable install), site-packages for a wheel
+PACKAGE = Path(cvxgeodesic.__file__).resolve().parent
 
 #: Layers from the bottom up (docs/architecture.md); a module belongs to the layer of its longest matching
 #: prefix. A module may import its own layer and the layers below it.
