@@ -35,18 +35,12 @@ GLB_NO_DISTANCE = -1.0
 _HINT = "pip install 'cvxgeodesic[io]' (or pip install {pkg})"
 
 
-def _import(pkg: str, path: Path, what: str) -> Any:
+def _optional_package(pkg: str, needed_for: str, error: type[Exception]) -> Any:
+    """The optional package ``pkg``, or ``error("<needed_for> needs the optional package <pkg>: <hint>")``."""
     try:
-        if pkg == "trimesh":
-            import trimesh
-
-            return trimesh
-        import meshio
-
-        return meshio
+        return importlib.import_module(pkg)
     except ImportError:
-        raise MeshFormatError(f"{path}: {what} {path.suffix} files needs the optional package {pkg}: "
-                              + _HINT.format(pkg=pkg)) from None
+        raise error(f"{needed_for} needs the optional package {pkg}: " + _HINT.format(pkg=pkg)) from None
 
 
 def read_external(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -75,7 +69,7 @@ def read_external(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """
     ext = path.suffix.lower()
     pkg = _READERS[ext]
-    lib = _import(pkg, path, "reading")
+    lib = _optional_package(pkg, f"{path}: reading {path.suffix} files", MeshFormatError)
     try:
         if pkg == "trimesh":
             # process=False: no merging or reordering, so indices stay the file's
@@ -108,15 +102,6 @@ def read_external(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return V, np.concatenate(parts), np.concatenate(sizes)
 
 
-def _writer_package(pkg: str, ext: str) -> Any:
-    """The optional package that writes ``ext`` files, or a ParameterError that says what to install."""
-    try:
-        return importlib.import_module(pkg)
-    except ImportError:
-        raise ParameterError(f"writing {ext} files needs the optional package {pkg}: "
-                             + _HINT.format(pkg=pkg)) from None
-
-
 def write_meshio(fh: BinaryIO, V: np.ndarray, F: np.ndarray, d: np.ndarray, name: str, ext: str) -> None:
     """Write a VTU (XML, binary) or legacy VTK (binary) file with the field as point data ``name``.
 
@@ -134,7 +119,7 @@ def write_meshio(fh: BinaryIO, V: np.ndarray, F: np.ndarray, d: np.ndarray, name
     ParameterError
         meshio is not installed (the message says what to install).
     """
-    meshio = _writer_package("meshio", ext)
+    meshio = _optional_package("meshio", f"writing {ext} files", ParameterError)
     mesh = meshio.Mesh(np.asarray(V, dtype=np.float64), [("triangle", np.asarray(F, dtype=np.int64))],
                        point_data={name: np.asarray(d, dtype=np.float64)})
     # meshio writes to paths only: write into a private temporary folder, then copy into ``fh``
@@ -200,7 +185,7 @@ def write_glb(fh: BinaryIO, V: np.ndarray, F: np.ndarray, d: np.ndarray, name: s
     ParameterError
         trimesh is not installed (the message says what to install).
     """
-    trimesh = _writer_package("trimesh", ".glb")
+    trimesh = _optional_package("trimesh", "writing .glb files", ParameterError)
     mesh = trimesh.Trimesh(np.asarray(V, dtype=np.float64), np.asarray(F, dtype=np.int64), process=False)
     values = np.where(np.isfinite(d), d, GLB_NO_DISTANCE).astype(np.float32)
     mesh.vertex_attributes[glb_attribute_name(name)] = values
