@@ -21,3 +21,59 @@ def shared_mesh_path(name: str) -> Path:
     if not path.exists():
         pytest.skip(f"{path} not available (development data, not part of a user checkout)")
     return path
+
+
+def sphere_file_with_a_loose_vertex(tmp_path: Path):
+    """icosphere(2) as OBJ with a vertex in no face first: the file's numbering is the mesh's plus one.
+
+    Returns the mesh and the path.
+    """
+    import cvxgeodesic as cg
+
+    mesh = cg.icosphere(2)
+    path = tmp_path / "sphere.obj"
+    lines = ["v 9 9 9"] + [f"v {x!r} {y!r} {z!r}" for x, y, z in mesh.V.tolist()]
+    lines += [f"f {a + 2} {b + 2} {c + 2}" for a, b, c in mesh.F.tolist()]
+    path.write_text("\n".join(lines) + "\n")
+    return mesh, path
+
+
+def interrupt_cli(args: list[str], ready, *, settle: float = 1.5):
+    """Run ``python -m cvxgeodesic.cli ARGS`` in its own process group and press Ctrl-C once it is working.
+
+    ``ready(stderr_bytes)`` says when the command is under way (e.g. its progress bar is up); after
+    ``settle`` more seconds SIGINT goes to the whole group, as a terminal's Ctrl-C does. The package under
+    test is the imported one (the checkout's src/ when it has one, else the installed one).
+
+    Returns
+    -------
+    returncode : int
+    stderr : str
+    seconds : float
+        From the signal to the process's exit.
+    """
+    import signal
+    import subprocess
+    import sys
+    import threading
+    import time
+
+    import cvxgeodesic as cg
+
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(Path(cg.__file__).parents[1]),
+                                                       os.environ.get("PYTHONPATH", "")]))
+    proc = subprocess.Popen([sys.executable, "-m", "cvxgeodesic.cli", *args], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, env=env, start_new_session=True)
+    chunks: list[bytes] = []
+    reader = threading.Thread(target=lambda: chunks.extend(iter(lambda: proc.stderr.read1(4096), b"")), daemon=True)
+    reader.start()
+    deadline = time.time() + 60
+    while time.time() < deadline and not ready(b"".join(chunks)):
+        time.sleep(0.1)
+    time.sleep(settle)
+    t0 = time.time()
+    os.killpg(proc.pid, signal.SIGINT)
+    proc.wait(timeout=60)
+    elapsed = time.time() - t0
+    reader.join(timeout=10)
+    return proc.returncode, b"".join(chunks).decode(), elapsed

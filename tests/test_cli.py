@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import cvxgeodesic as cg
+from conftest import sphere_file_with_a_loose_vertex
 from cvxgeodesic.cli import main
 from cvxgeodesic.mesh.io import load_distance_ply
 
@@ -89,12 +90,7 @@ def test_unknown_method_is_usage_error(sphere_file):
 
 def test_matrix_rows_in_the_given_order_in_file_numbering(tmp_path):
     """`cvxgeodesic matrix`: one row per -s in the given order (repeats allowed), columns in the file's numbering."""
-    mesh = cg.icosphere(2)
-    path = tmp_path / "sphere.obj"
-    # vertex 0 of the file is in no face: the file's numbering is the mesh's shifted by one
-    lines = ["v 9 9 9"] + [f"v {x!r} {y!r} {z!r}" for x, y, z in mesh.V.tolist()]
-    lines += [f"f {a + 2} {b + 2} {c + 2}" for a, b, c in mesh.F.tolist()]
-    path.write_text("\n".join(lines) + "\n")
+    mesh, path = sphere_file_with_a_loose_vertex(tmp_path)  # file vertex 0 is in no face
     out = tmp_path / "D.npy"
     assert main(["matrix", str(path), "-s", "6,1", "-s", "6", "--method", "qclp", "-q", "-o", str(out)]) == 0
     D = np.load(out)

@@ -3,18 +3,16 @@
 import contextlib
 import os
 import re
-import signal
 import socket
-import subprocess
 import sys
 import threading
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 import cvxgeodesic as cg
+from conftest import interrupt_cli, sphere_file_with_a_loose_vertex
 from cvxgeodesic.cli import main
 from cvxgeodesic.errors import SourceError
 
@@ -182,18 +180,8 @@ def test_non_dask_scheduler_fails_fast(sphere, tmp_path, capsys):
     assert not (tmp_path / "D.npy").exists()
 
 
-def _sphere_file(tmp_path):
-    """icosphere(2) as OBJ, with a vertex in no face first: the file's numbering is the mesh's plus one."""
-    mesh = cg.icosphere(2)
-    path = tmp_path / "sphere.obj"
-    lines = ["v 9 9 9"] + [f"v {x!r} {y!r} {z!r}" for x, y, z in mesh.V.tolist()]
-    lines += [f"f {a + 2} {b + 2} {c + 2}" for a, b, c in mesh.F.tolist()]
-    path.write_text("\n".join(lines) + "\n")
-    return mesh, path
-
-
 def test_cli_matrix_on_a_cluster(cluster, tmp_path, capsys):
-    mesh, path = _sphere_file(tmp_path)
+    mesh, path = sphere_file_with_a_loose_vertex(tmp_path)
     ref, out = tmp_path / "ref.npy", tmp_path / "D.npy"
     args = ["matrix", str(path), "-s", "6,1", "-s", "6", "-s", "30", "--method", "qclp"]
     assert main([*args, "-q", "-o", str(ref)]) == 0
@@ -212,7 +200,7 @@ def test_cli_matrix_on_a_cluster(cluster, tmp_path, capsys):
 
 def test_cli_matrix_on_a_local_cluster(tmp_path, capsys):
     pytest.importorskip("distributed")
-    mesh, path = _sphere_file(tmp_path)
+    mesh, path = sphere_file_with_a_loose_vertex(tmp_path)
     out = tmp_path / "D.npy"
     assert main(["matrix", str(path), "-s", "1,6", "--method", "qclp", "--workers", "1", "-o", str(out)]) == 0
     assert "a local cluster of 1 worker processes" in capsys.readouterr().err
@@ -225,26 +213,10 @@ def test_ctrl_c_in_a_cluster_matrix_is_one_line_and_exit_130(tmp_path):
     big = cg.grid_plane(70, jitter=0.1)  # ~4 s per Clarabel solve: still running when Ctrl-C comes
     path = cg.save_distance(tmp_path / "big.ply", big, np.zeros(big.n_vertices))
     out = tmp_path / "D.npy"
-    cmd = [sys.executable, "-m", "cvxgeodesic.cli", "matrix", str(path), "-s", "0,1,2,3", "--solver", "clarabel",
-           "--workers", "2", "-o", str(out)]
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(Path(cg.__file__).parents[1]),
-                                                       os.environ.get("PYTHONPATH", "")]))
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, start_new_session=True)
-    chunks: list[bytes] = []
-    reader = threading.Thread(target=lambda: chunks.extend(iter(lambda: proc.stderr.read1(4096), b"")), daemon=True)
-    reader.start()
-    deadline = time.time() + 60
-    while time.time() < deadline and b"row" not in b"".join(chunks).split(b"rows;")[-1]:  # the bar is up
-        time.sleep(0.1)
-    time.sleep(1.5)  # solves running
-    t0 = time.time()
-    os.killpg(proc.pid, signal.SIGINT)  # what Ctrl-C in a terminal does: the whole process group
-    proc.wait(timeout=60)
-    reader.join(timeout=10)
-    elapsed = time.time() - t0
-    text = b"".join(chunks).decode()
+    args = ["matrix", str(path), "-s", "0,1,2,3", "--solver", "clarabel", "--workers", "2", "-o", str(out)]
+    returncode, text, elapsed = interrupt_cli(args, lambda err: b"row" in err.split(b"rows;")[-1])  # the bar is up
     lines = [ln for ln in re.split(r"[\r\n]+", text) if ln.strip() and not ln.lstrip().startswith("qcqp-hessian:")]
-    assert proc.returncode == 130, text
+    assert returncode == 130, text
     assert "Traceback" not in text and "WARNING" not in text and "CancelledError" not in text, text
     assert lines[-1] == "cvxgeodesic: interrupted" and len(lines) <= 2, lines  # the start line and this one
     assert elapsed < 5, elapsed

@@ -6,8 +6,6 @@ import os
 import re
 import signal
 import socket
-import subprocess
-import sys
 import threading
 import time
 from pathlib import Path
@@ -16,6 +14,7 @@ import numpy as np
 import pytest
 
 import cvxgeodesic as cg
+from conftest import interrupt_cli
 from cvxgeodesic.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -145,28 +144,12 @@ def test_ctrl_c_in_batch_is_one_line_and_exit_130(tmp_path):
     big = cg.grid_plane(70, jitter=0.1)  # ~4 s per Clarabel solve: still running when Ctrl-C comes
     for i in range(3):
         cg.save_distance(meshes / f"m{i}.ply", big, np.zeros(big.n_vertices))
-    cmd = [sys.executable, "-m", "cvxgeodesic.cli", "batch", str(meshes / "*.ply"), "-s", "0", "--out",
-           str(tmp_path / "out"), "--solver", "clarabel", "--workers", "2"]
-    # the package under test: the checkout's src/ when it has one, else the installed one
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(Path(cg.__file__).parents[1]),
-                                                       os.environ.get("PYTHONPATH", "")]))
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, start_new_session=True)
-    chunks: list[bytes] = []
-    reader = threading.Thread(target=lambda: chunks.extend(iter(lambda: proc.stderr.read1(4096), b"")), daemon=True)
-    reader.start()
-    deadline = time.time() + 60
-    while time.time() < deadline and b"meshes:" not in b"".join(chunks):  # the bar appears once tasks are submitted
-        time.sleep(0.1)
-    time.sleep(1.5)  # solves running
-    t0 = time.time()
-    os.killpg(proc.pid, signal.SIGINT)  # what Ctrl-C in a terminal does: the whole process group
-    proc.wait(timeout=60)
-    reader.join(timeout=10)
-    err = b"".join(chunks)
-    elapsed = time.time() - t0
-    text = err.decode()
+    args = ["batch", str(meshes / "*.ply"), "-s", "0", "--out", str(tmp_path / "out"), "--solver", "clarabel",
+            "--workers", "2"]
+    # the bar appears once tasks are submitted
+    returncode, text, elapsed = interrupt_cli(args, lambda err: b"meshes:" in err)
     lines = [ln for ln in re.split(r"[\r\n]+", text) if ln.strip() and not ln.lstrip().startswith("meshes:")]
-    assert proc.returncode == 130, text
+    assert returncode == 130, text
     assert "Traceback" not in text and "WARNING" not in text and "CancelledError" not in text, text
     assert lines[-1] == "cvxgeodesic: interrupted" and len(lines) <= 2, lines  # the start line and this one
     assert elapsed < 5, elapsed
