@@ -64,12 +64,24 @@ BETA_MIN, BETA_MAX, GZ_A, GZ_B = 0.1, 10.0, 1.5, 0.1
 CORRECTOR_WEIGHTS = (1.0, 0.5, 0.25)
 
 
-#: Starting point: "mehrotra" (least-squares x and least-norm z, each shifted into the cones by 1.5 × its most
-#: negative eigenvalue, then balanced by ½ sᵀz / Σ heads; Mehrotra 1992, as the order-1 solver's fallback) or
-#: "cvxopt" (both shifted by 1 + their most negative eigenvalue). Measured over spot, bunny_7k and the 25 flat
-#: cases with the correctors above: 469 (cvxopt) → 436 iterations (spot 26 → 25, bunny_7k 27 → 26), worst flat
-#: error 3.5e-7 → 9.3e-7; a per-cone dual shift (the order-1 solver's "interior" dual) took 492.
-START = "mehrotra"
+#: Starting point: "guess" (the problem's guess field scaled into the cones' interior, so that the primal residual
+#: is 0 from the start; the least-norm z shifted into the cones by 1.5 × its most negative eigenvalue and balanced by
+#: ½ sᵀz / Σ heads of s; Mehrotra's start when the problem has no guess), "mehrotra" (least-squares x and least-norm
+#: z, each shifted into the cones by 1.5 × its most negative eigenvalue, then balanced by ½ sᵀz / Σ heads; Mehrotra
+#: 1992, as the order-1 solver's fallback) or "cvxopt" (both shifted by 1 + their most negative eigenvalue).
+#: Measured (2026-12-01, source 0, iterations mehrotra → guess with the σ cap below): spot 25 → 18, bunny_7k 26 → 19,
+#: bimba 39 → 22, lucy_20k and dragon_20k in docs/order2.md. Without the cap the guess alone: spot 21, bunny_7k 21,
+#: bimba 28; the cap with Mehrotra's start: bimba 76. Earlier (over spot, bunny_7k and the 25 flat cases):
+#: cvxopt 469 → mehrotra 436 iterations. Also tried from the guess: Mehrotra's shift of s as well (spot 24,
+#: bunny_7k 27), a per-cone dual shift (23, 24), the perfectly centred z = μ s⁻¹ (22, 41).
+START = "guess"
+#: "guess": the largest θ ≤ 1 keeping every cone strictly inside is scaled by this (0.5: bimba 27, 0.99: 28, 0.9: 28
+#: iterations without the σ cap; spot 21, 21, 20).
+GUESS_FRACTION = 0.9
+#: "guess": Mehrotra's centring parameter σ = (affine gap ratio)³ is capped at this. From a primal-feasible start the
+#: tail converged linearly with σ ≈ 0.3 at steps of 0.95 (bimba: the gap ÷ 2.5 per iteration over 15 iterations);
+#: measured iterations for caps 1 / 0.2 / 0.1 / 0.05: spot 21 / 20 / 18, bunny_7k 22 / 21 / 19, bimba 28 / – / 22 / 21.
+SIGMA_CAP_GUESS = 0.1
 
 
 def _margin(u: np.ndarray) -> np.ndarray:
@@ -234,6 +246,8 @@ class P2InteriorPoint:
         csc = max(float(np.abs(cD).max()), 1e-300)
         pb.c = cD / csc
         pb.E = (pb.E @ sp.diags(D)).tocsr()
+        if getattr(problem, "guess", None) is not None:
+            pb.guess = problem.guess / D
         out = self._solve_scaled(pb, tol=tol, max_iter=max_iter, callback=callback)
         out["x"] = out["x"] * D
         out["objective"] = float(problem.c @ out["x"])
@@ -266,7 +280,9 @@ class P2InteriorPoint:
             dobj = -float(np.einsum("ki,ki->", h, z)) - float(f @ y)
             pres = max(float(np.linalg.norm(rp)) / hnorm, float(np.linalg.norm(re)) / max(1.0, np.linalg.norm(f)))
             dres = float(np.linalg.norm(rd)) / cnorm
-            rgap = gap / max(1.0, abs(pobj))
+            # the objective gap as well as sᵀz: with the dual residual accepted at DUAL_TOL_FACTOR × tol, sᵀz alone
+            # ended a needle strip's solve (from the guess start) 7.6e-5 of the largest distance from its optimum
+            rgap = max(gap, abs(pobj - dobj)) / max(1.0, abs(pobj))
             info = {"primal_residual": pres, "dual_residual": dres, "gap": rgap, "pobj": pobj, "dobj": dobj,
                     "step": last_step, "sigma": last_sigma}
             if callback is not None:
@@ -323,6 +339,7 @@ class _P2System:
         self.face_pos = solver.face_pos[pb.cone_face]
         self.chol = solver.chol
         self.diag = solver.chol.diag_positions
+        self.sigma_cap = 1.0  # SIGMA_CAP_GUESS once :meth:`start` starts from the guess
 
     def factor(self, sc: _Scaling):
         """Factor of ``H`` (Σ_k G_kᵀ (W_k⁻²) G_k, lower triangle of each 6×6 block, summed straight into the fixed
@@ -428,7 +445,8 @@ class _P2System:
         d_a = -_jprod(lam, lam)
         (dxa, dya, dza, dsa), _ = self.newton(fac, sc, lam, rd, rp, re, d_a, refine=not REFINE_ONCE)
         ap, ad = self.steps(s, dsa, z, dza, 1.0)
-        sigma = min(1.0, max(float(np.einsum("ki,ki->", s + ap * dsa, z + ad * dza)), 0.0) / gap) ** 3
+        ratio = min(1.0, max(float(np.einsum("ki,ki->", s + ap * dsa, z + ad * dza)), 0.0) / gap)
+        sigma = min(self.sigma_cap, ratio**3)
         d_c = np.empty_like(d_a)
         _kern.mehrotra_rhs(sc.w, sc.eta, d_a, dsa, dza, sigma * mu, d_c)
         d, u = self.newton(fac, sc, lam, rd, rp, re, d_c, refine=not REFINE_ONCE)
@@ -502,4 +520,45 @@ class _P2System:
 
         if START == "cvxopt":
             return x, shift(s), shift(z)
+        if START == "guess" and (xg := self.interior_guess()) is not None:
+            self.sigma_cap = SIGMA_CAP_GUESS
+            sg = pb.h - sv._Gx(pb, xg)
+            z = z.copy()
+            z[:, 0] += max(-1.5 * float(_margin(z).min()), 0.0)
+            z[:, 0] += 0.5 * float(np.einsum("ki,ki->", sg, z)) / max(float(sg[:, 0].sum()), 1e-300)
+            return xg, sg, z
         return (x, *_mehrotra_shift(s, z))
+
+    def interior_guess(self):
+        """``θ ψ`` for the problem's guess ``ψ`` (scaled), ``θ = min(1, GUESS_FRACTION θ_max)`` with ``θ_max`` the
+        largest ``θ`` keeping every cone's slack ``h − θ Gψ`` strictly inside; ``None`` when no ``θ > 0`` does."""
+        pb = self.pb
+        psi = getattr(pb, "guess", None)
+        if psi is None or (self.p and np.abs(self.E @ psi - pb.f).max() > 1e-9 * max(1.0, np.abs(psi).max())):
+            return None
+        theta = self._cone_theta(psi)
+        theta_max = float(theta.min(initial=np.inf))
+        if not theta_max > 0:
+            return None
+        x = min(1.0, GUESS_FRACTION * theta_max) * psi
+        x[self.fixed] = 0.0
+        return x
+
+    def _cone_theta(self, psi: np.ndarray) -> np.ndarray:
+        """Per cone, the largest ``θ`` with ``h − θ G ψ`` strictly inside on all of ``(0, θ)``: (k,) ndarray, 0 where
+        no ``θ > 0`` is, ``inf`` where every one is."""
+        pb = self.pb
+        g, h = self.solver._Gx(pb, psi), pb.h
+        # the margin (head² − ‖body‖²) of the slack at θ is m0 + B θ + A θ²; the order-2 cones start on the boundary
+        m0 = h[:, 0] ** 2 - np.einsum("ki,ki->k", h[:, 1:], h[:, 1:])
+        m0 = np.where(np.abs(m0) <= 1e-12 * h[:, 0] ** 2, 0.0, m0)
+        B = -2.0 * (h[:, 0] * g[:, 0] - np.einsum("ki,ki->k", h[:, 1:], g[:, 1:]))
+        A = g[:, 0] ** 2 - np.einsum("ki,ki->k", g[:, 1:], g[:, 1:])
+        disc = B * B - 4.0 * A * m0
+        sq = np.sqrt(np.maximum(disc, 0.0))
+        # from inside (m0 > 0, or m0 = 0 and B > 0) the first positive root is (−B − √disc) / 2A, or −m0 / B when A = 0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            root = np.where(A != 0, (-B - sq) / (2 * A), -m0 / B)
+        theta = np.where((disc >= 0) & (root > 0), root, np.inf)
+        inside = (m0 > 0) & (h[:, 0] > 0) | (m0 == 0) & (B > 0)
+        return np.where(inside, theta, 0.0)
