@@ -550,7 +550,7 @@ def test_guess_start_is_strictly_feasible_and_meets_the_source_equalities():
     x = system.interior_guess()
     s = system.pb.h - system.solver._Gx(system.pb, x)
     assert (s[:, 0] - np.linalg.norm(s[:, 1:], axis=1)).min() > 0  # every cone strictly inside
-    assert np.abs(system.E @ x - system.pb.f).max() <= 1e-12 * np.abs(x).max()
+    assert np.abs(pr.E @ pr.guess).max() <= 1e-12 * pr.guess.max()  # 4 φ_mid − φ_j = 0 on the source stars
     # the scaling θ is the largest that keeps every cone inside (× GUESS_FRACTION), not a timid one
     from cvxgeodesic.solvers.ipm_soc import GUESS_FRACTION
 
@@ -587,6 +587,42 @@ def test_guess_start_reaches_mehrotras_optimum_in_fewer_iterations(monkeypatch):
     assert guess.info.status == plain.info.status == "optimal"
     assert guess.info.iterations < plain.info.iterations
     assert np.abs(guess.distance - plain.distance).max() <= 1e-6 * plain.distance.max()
+
+
+def test_eliminating_the_source_equalities_keeps_the_optimum(monkeypatch):
+    from cvxgeodesic.mesh.trimesh import unit_mesh as _unit_mesh
+    from cvxgeodesic.solvers import ipm_soc
+
+    unit, _ = _unit_mesh(cg.icosphere(2))
+    b = P2Builder(unit)
+    pr = b.build([0, 5])
+    reduced, (elim, onto, alpha) = ipm_soc.eliminate_pair_equalities(pr)
+    assert reduced.E.shape[0] == 0 and elim.size == pr.E.shape[0]  # every source-star edge row substituted
+    assert reduced.fixed[elim].all() and np.allclose(alpha, 0.25)
+    ipm = ipm_soc.P2InteriorPoint(b)
+    with_elim = ipm.solve(pr)
+    monkeypatch.setattr(ipm_soc, "ELIMINATE", False)
+    with_schur = ipm.solve(pr)
+    assert np.abs(pr.E @ with_elim["x"]).max() <= 1e-12 * with_elim["x"].max()
+    assert np.abs(with_elim["x"] - with_schur["x"]).max() <= 1e-6 * with_schur["x"].max()
+
+
+def test_pair_equalities_that_cannot_be_substituted_stay_rows():
+    import scipy.sparse as sps
+
+    from cvxgeodesic.solvers.ipm_soc import eliminate_pair_equalities
+
+    b = P2Builder(cg.icosphere(2))
+    pr = b.build(0)
+    n_v = b.mesh.n_vertices
+    far_edge = int(np.argmax(np.linalg.norm(b.mesh.V[b.mesh.edges].mean(axis=1) - b.mesh.V[0], axis=1)))
+    near = int(np.argsort(np.linalg.norm(b.mesh.V - b.mesh.V[0], axis=1))[1])  # next to the source, far from the edge
+    extra = sps.csr_matrix(([4.0, -1.0, 1.0, 1.0], ([0, 0, 1, 1], [n_v + far_edge, near, 2, 3])), shape=(2, pr.n))
+    pr.E = sps.vstack([pr.E, extra]).tocsr()  # a midpoint tied to a vertex of another face; a row with f ≠ 0
+    pr.f = np.concatenate([pr.f, [0.0, 1.0]])
+    reduced, (elim, _, _) = eliminate_pair_equalities(pr)
+    assert reduced.E.shape[0] == 2 and n_v + far_edge not in elim
+    np.testing.assert_array_equal(reduced.f, [0.0, 1.0])
 
 
 def test_no_guess_on_meshes_with_flat_faces():

@@ -82,6 +82,9 @@ GUESS_FRACTION = 0.9
 #: tail converged linearly with σ ≈ 0.3 at steps of 0.95 (bimba: the gap ÷ 2.5 per iteration over 15 iterations);
 #: measured iterations for caps 1 / 0.2 / 0.1 / 0.05: spot 21 / 20 / 18, bunny_7k 22 / 21 / 19, bimba 28 / – / 22 / 21.
 SIGMA_CAP_GUESS = 0.1
+#: Substitute the two-unknown source equalities into the cones (:func:`eliminate_pair_equalities`) instead of
+#: keeping them as a Schur complement.
+ELIMINATE = True
 
 
 def _margin(u: np.ndarray) -> np.ndarray:
@@ -101,6 +104,74 @@ def _mehrotra_shift(s: np.ndarray, z: np.ndarray, factor: float = 1.5) -> tuple[
     s[:, 0] += 0.5 * sz / hz
     z[:, 0] += 0.5 * sz / hs
     return s, z
+
+
+_NONE = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0))
+
+
+def eliminate_pair_equalities(problem):
+    """Substitute the source equalities of two unknowns, ``a x_m + b x_j = 0`` (the zero derivative along an edge
+    at a source vertex, ``4 φ_mid − φ_j = 0``), into the cones and the objective.
+
+    ``x_m = α x_j`` (``α = −b / a``) is eliminated where every cone on ``x_m`` also holds ``x_j`` (on a source-star
+    edge both are DOFs of each face of the edge), so the Newton matrix keeps its pattern: ``x_m`` becomes a fixed
+    DOF. Rows of one unknown (``x = 0``) fix it. Left in ``E``: rows of other shapes, nonzero ``f``, an ``x_m``
+    in several rows or on a cone without its ``x_j``.
+
+    Returns
+    -------
+    problem : P2Problem
+        A shallow copy with new ``G``, ``c``, ``E``, ``f`` and ``fixed``.
+    (elim, onto, alpha) : ((r,) int, (r,) int, (r,) float)
+        ``x[elim] = alpha · x[onto]`` restores the eliminated unknowns from a solution.
+    """
+    import copy
+
+    pb = copy.copy(problem)
+    E = problem.E.tocsr()
+    E.sum_duplicates()
+    n_row = np.diff(E.indptr)
+    col_count = np.bincount(E.indices, minlength=problem.n)
+    zero_f = problem.f == 0
+    fixed = problem.fixed.copy()
+    ones = np.flatnonzero((n_row == 1) & zero_f)
+    fixed[E.indices[E.indptr[ones]]] = True
+    pairs = np.flatnonzero((n_row == 2) & zero_f)
+    c0, c1 = E.indices[E.indptr[pairs]], E.indices[E.indptr[pairs] + 1]
+    v0, v1 = E.data[E.indptr[pairs]], E.data[E.indptr[pairs] + 1]
+    m, j = np.maximum(c0, c1), np.minimum(c0, c1)  # the midpoint DOFs come after the vertices
+    vm, vj = np.where(c0 > c1, v0, v1), np.where(c0 > c1, v1, v0)
+    ok = (col_count[m] == 1) & ~fixed[m] & ~np.isin(m, j) & (vm != 0)
+    alpha = -vj / np.where(vm != 0, vm, 1.0)
+    onto_of = np.full(problem.n, -1, dtype=np.int64)
+    onto_of[m[ok]] = j[ok]
+    dofs = problem.cone_dofs
+    kk, ii = np.nonzero(onto_of[dofs] >= 0)
+    target = onto_of[dofs[kk, ii]]
+    jj = np.argmax(dofs[kk] == target[:, None], axis=1)
+    lacking = np.unique(dofs[kk, ii][dofs[kk, jj] != target])  # x_m on a cone without x_j: keep its row
+    ok &= ~np.isin(m, lacking)
+    onto_of[lacking] = -1
+    keep = onto_of[dofs[kk, ii]] >= 0
+    kk, ii, jj = kk[keep], ii[keep], jj[keep]
+    a_of = np.zeros(problem.n)
+    a_of[m[ok]] = alpha[ok]
+    G = problem.G.copy()
+    np.add.at(G, (kk, slice(None), jj), a_of[dofs[kk, ii]][:, None] * G[kk, :, ii])
+    G[kk, :, ii] = 0.0
+    c = problem.c.copy()
+    np.add.at(c, j[ok], alpha[ok] * c[m[ok]])
+    c[m[ok]] = 0.0
+    fixed[m[ok]] = True
+    rows_left = np.setdiff1d(np.arange(E.shape[0]), np.concatenate([ones, pairs[ok]]))
+    pb.G, pb.c, pb.E, pb.f, pb.fixed = G, c, E[rows_left], problem.f[rows_left], fixed
+    fx = np.flatnonzero(fixed)
+    if fx.size and pb.E.nnz:
+        keep_cols = np.ones(problem.n)
+        keep_cols[fx] = 0.0
+        pb.E = (pb.E @ sp.diags(keep_cols)).tocsr()
+        pb.E.eliminate_zeros()
+    return pb, (m[ok], j[ok], alpha[ok])
 
 
 def _compact(G: np.ndarray) -> np.ndarray:
@@ -231,9 +302,9 @@ class P2InteriorPoint:
         import copy
 
         t0 = time.perf_counter()
+        pb, (elim, onto, alpha) = eliminate_pair_equalities(problem) if ELIMINATE else (copy.copy(problem), _NONE)
         # equilibration (one Ruiz pass): columns by the square root of their largest cone-row norm, then every
         # cone by its largest row (a positive multiple of a cone vector stays in the cone), the objective to ∞-norm 1
-        pb = copy.copy(problem)
         n = self.n
         colmax = np.zeros(n)
         np.maximum.at(colmax, pb.cone_dofs.ravel(), np.abs(pb.G).max(axis=1).ravel())
@@ -250,6 +321,7 @@ class P2InteriorPoint:
             pb.guess = problem.guess / D
         out = self._solve_scaled(pb, tol=tol, max_iter=max_iter, callback=callback)
         out["x"] = out["x"] * D
+        out["x"][elim] = alpha * out["x"][onto]
         out["objective"] = float(problem.c @ out["x"])
         out["time"] = time.perf_counter() - t0
         return out
