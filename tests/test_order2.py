@@ -625,6 +625,23 @@ def test_pair_equalities_that_cannot_be_substituted_stay_rows():
     np.testing.assert_array_equal(reduced.f, [0.0, 1.0])
 
 
+def test_flat_nodes_samples_all_nodes_on_flat_faces_and_midpoints_elsewhere():
+    g = cg.grid_plane(8)
+    V = g.V.copy()
+    V[40, 2] += 0.2  # a bump: the faces around vertex 40 and their neighbours are no longer flat
+    mesh = cg.TriMesh(V, g.F)
+    b = P2Builder(mesh, samples="flat-nodes")
+    flat = b.space.flat_faces
+    assert 0 < flat.sum() < mesh.n_faces
+    per_face = np.bincount(b.cone_face, minlength=mesh.n_faces)
+    assert (per_face[flat] == 6).all() and (per_face[~flat] == 3).all()
+    mid = b.cone_bary[np.isin(b.cone_face, np.flatnonzero(~flat))]
+    assert np.isclose(mid.max(axis=1), 0.5).all()  # edge midpoints only
+    assert p2mod.DEFAULT_SAMPLES == "flat-nodes" and P2Builder(mesh).cone_face.size == b.cone_face.size
+    with pytest.raises(ParameterError, match="samples must be 'flat-nodes' or one of"):
+        P2Builder(mesh, samples="everywhere")
+
+
 def test_no_guess_on_meshes_with_flat_faces():
     assert P2Builder(cg.grid_plane(6)).build(0).guess is None
 

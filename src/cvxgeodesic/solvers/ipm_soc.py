@@ -82,6 +82,10 @@ GUESS_FRACTION = 0.9
 #: tail converged linearly with σ ≈ 0.3 at steps of 0.95 (bimba: the gap ÷ 2.5 per iteration over 15 iterations);
 #: measured iterations for caps 1 / 0.2 / 0.1 / 0.05: spot 21 / 20 / 18, bunny_7k 22 / 21 / 19, bimba 28 / – / 22 / 21.
 SIGMA_CAP_GUESS = 0.1
+#: PARDISO threads of the order-2 solver; None: the solve's thread policy (:mod:`cvxgeodesic._threads`). It was 1:
+#: on the shared 2-core machine (before the policy) a spot solve took 63 ms with MKL's default threads and 9 ms
+#: with one (11.7K DOFs).
+PARDISO_THREADS: int | None = 1
 #: Substitute the two-unknown source equalities into the cones (:func:`eliminate_pair_equalities`) instead of
 #: keeping them as a Schur complement.
 ELIMINATE = True
@@ -254,9 +258,8 @@ class P2InteriorPoint:
         t0 = time.perf_counter()
         lib = _pardiso._load() if backend in ("auto", "pardiso") else None
         if lib is not None:
-            # one PARDISO thread, fixed at the analysis (PARDISO keeps the analysis's thread count): on the shared
-            # 2-core machine a solve took 63 ms with MKL's default threads and 9 ms with one (spot, 11.7K DOFs)
-            previous = lib.MKL_Set_Num_Threads_Local(1)
+            # PARDISO keeps the analysis's thread count
+            previous = lib.MKL_Set_Num_Threads_Local(self._pardiso_threads())
         try:
             self.chol = SymbolicCholesky(pattern, backend=backend)
         finally:
@@ -269,6 +272,15 @@ class P2InteriorPoint:
         self.analyze_time = time.perf_counter() - t0
 
     # ------------------------------------------------------------------ helpers
+    @staticmethod
+    def _pardiso_threads() -> int:
+        """:data:`PARDISO_THREADS`, or the thread count of the enclosing solve (:mod:`cvxgeodesic._threads`)."""
+        if PARDISO_THREADS is not None:
+            return PARDISO_THREADS
+        from .._threads import resolve_threads
+
+        return resolve_threads(None)
+
     def _Gx(self, pb, x):
         out = np.empty((pb.G.shape[0], 4))
         _kern.gather(pb.G, pb.cone_dofs, np.ascontiguousarray(x, dtype=float), out)
