@@ -74,6 +74,7 @@ ORDER2_MAX_FACES = 10_000  # above: minutes per order-2 solve (thingi_32770, 38K
 ORDER2_QUICK_CAD = ["thingi_93703.stl", "thingi_96457.stl", "thingi10k_small/43858.stl",  # 96457: left out
                     "thingi10k_small/100036.stl", "thingi10k_small/54228.stl", "thingi10k_small/93068.stl"]
 ORDER2_STORED = "benchmarks/order2_results/cad_default.json"  # the run behind docs/order2.md's tables
+ORDER2_STORED_LOAD = "≈ 4"  # its 1-minute load average (2026-12-01 22:33 UTC, on 2 cores shared with two jobs)
 ORDER2_FIGURE_CASE = ("CAD plate of fans", 5)  # the flat case and vertex source of the error-map figure
 MEDIAL_METHODS = ["exact", "fmm", "qcqp-hessian", "lcqp-hessian", "heat", "dijkstra", "qclp", "qcqp-laplacian",
                   "qcqp-dirichlet", "lclp"]
@@ -792,7 +793,8 @@ def order2_cad(ctx, plan) -> dict:
     names = plan.order2_quick_cad or cad_names(ctx.shared)
     stored_path = REPO / ORDER2_STORED
     stored = {r["mesh"]: r for r in json.loads(stored_path.read_text())} if stored_path.exists() else {}
-    out = {"rows": [], "skipped": [], "left_out": [], "stored_file": ORDER2_STORED, "stored": {}}
+    out = {"rows": [], "skipped": [], "left_out": [], "stored_file": ORDER2_STORED, "stored_load": ORDER2_STORED_LOAD,
+           "stored": {}}
     for name in names:
         mesh = ctx.mesh(name)
         cad_set = "thingi10k_small" if name.startswith("thingi10k_small/") else "thingi_*.stl"

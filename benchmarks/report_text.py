@@ -980,7 +980,8 @@ def _o2_per_mesh(cad) -> str:
         st = lo.get("stored") or {}
         cells = [f"{p2(st[t]['mean'])} / {p1(st[t]['max'])}" if "mean" in st.get(t, {}) else "—" for t in O2_TAGS]
         tm = " / ".join(secs(st.get(t, {}).get("time")) for t in O2_TAGS)
-        per.append([f"{lo['name'].replace('.stl', '')} ({lo['faces']:,}): **stored run²**", *cells, tm, "5–11"])
+        label = f"{lo['name'].replace('.stl', '')} ({lo['faces']:,}): **stored run²**"
+        per.append([label, *cells, tm, cad.get("stored_load", "?")])
     return md_table(["mesh (faces)", "order 1", "order 2", "heat", "FMM", "s: order 1 / order 2 / heat / FMM",
                      "load (1 min)"], per)
 
@@ -1089,7 +1090,8 @@ def order2(r) -> tuple[str, list[str]]:
                     + f" (more than {r['max_faces']:,} faces: one order-2 solve takes minutes; "
                     "`benchmarks/report.py --order2-large` includes it). Its row is **copied from the stored run** "
                     f"`{cad['stored_file']}` of `benchmarks/order2.py` (2026-12-01, the numbers of "
-                    "[order2.md](order2.md); load average 5–11 on 2 cores) and is in none of the other numbers of "
+                    f"[order2.md](order2.md); load average {cad.get('stored_load', '?')} on 2 cores) and is in none of "
+                    "the other numbers of "
                     "this section" + ("; its order-1 column is order 1 with the uniform stretch (below)." if uniform
                                       else "."))
     f_cad, f_flat = (r["figures"] + [None, None])[:2]
