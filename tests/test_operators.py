@@ -240,6 +240,34 @@ def test_psd_check_detects_a_negative_eigenvalue(backend):
     assert not cholesky.is_positive_semidefinite(S.toarray() - shift * np.outer(v, v), backend=backend)
 
 
+def test_psd_check_in_an_existing_analysis():
+    """``analysis=``: the same answers as the check's own analysis, for a PSD matrix, a shifted one and one with
+    a rank-one dent, factored in a wider pattern (the mesh's Newton pattern with the matrix)."""
+    from cvxgeodesic import linalg as cholesky
+    from cvxgeodesic.solvers.problem import kkt_pattern
+
+    if not (cholesky.pardiso_available() or cholesky.cholmod_available()):
+        pytest.skip("the PSD check needs PARDISO or CHOLMOD")
+    mesh = icosphere(2)
+    S = cotan_stiffness(mesh)
+    shift = 1e-3 * abs(S.diagonal()).max()
+    v = np.random.default_rng(1).standard_normal(S.shape[0])
+    v /= np.linalg.norm(v)
+    H = hessian_energy_matrix(mesh)
+    chol = cholesky.SymbolicCholesky(kkt_pattern(mesh.n_vertices, mesh.F, mesh.edges, H))
+    for Q, expected in [(S, True), (H, True), (S - shift * sp.identity(S.shape[0]), False),
+                        (sp.csc_matrix(S.toarray() - shift * np.outer(v, v)), None)]:
+        if expected is None:  # dense: does not fit the pattern
+            with pytest.raises(ValueError, match="not in the sparsity pattern"):
+                cholesky.is_positive_semidefinite(Q, analysis=chol)
+            continue
+        assert cholesky.is_positive_semidefinite(Q, analysis=chol) is expected
+        assert cholesky.is_positive_semidefinite(Q) is expected
+    assert chol.n_factorizations == 3
+    with pytest.raises(ValueError, match="analysis is of a"):
+        cholesky.is_positive_semidefinite(cotan_stiffness(icosphere(1)), analysis=chol)
+
+
 def test_face_edges_index_the_edge_opposite_each_corner():
     mesh = grid_plane(5, jitter=0.2, seed=1)
     fe = mesh.face_edges

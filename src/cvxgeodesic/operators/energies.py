@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import warnings
+from collections.abc import Callable
 
 import igl
 import numpy as np
 import scipy.sparse as sp
 
 from ..errors import IndefiniteEnergyWarning
-from ..linalg import is_positive_semidefinite
+from ..linalg import SymbolicCholesky, is_positive_semidefinite
 from ..mesh.cover import manifold_cover, pull_back
 from ..mesh.trimesh import TriMesh
 from .laplacian import cotan_stiffness, mass_matrix
@@ -47,7 +48,8 @@ def laplacian_energy_matrix(mesh: TriMesh) -> sp.csc_matrix:
     return sp.csc_matrix(0.5 * (Q + Q.T))
 
 
-def hessian_energy_matrix(mesh: TriMesh, notes: list[str] | None = None) -> sp.csc_matrix:
+def hessian_energy_matrix(mesh: TriMesh, notes: list[str] | None = None, *,
+                          analyse: Callable[[sp.csc_matrix], SymbolicCholesky] | None = None) -> sp.csc_matrix:
     """Curved-surface Hessian energy (paper eq. 18; Stein et al. TOG 2020) via libigl.
 
     ``E(d) = dᵀ Q d ≈ ∫ ‖Hess d‖² dA``. It vanishes on functions linear on a
@@ -64,6 +66,11 @@ def hessian_energy_matrix(mesh: TriMesh, notes: list[str] | None = None) -> sp.c
     mesh : TriMesh
     notes : list of str, optional
         Gets one line per substitution made (manifold cover, planar energy).
+    analyse : callable, optional
+        ``analyse(Q)`` returns a symbolic analysis of a pattern containing the curved energy ``Q`` (the caller's
+        own, e.g. the interior-point solver's, which it keeps); the PSD check then factors ``Q`` in it
+        (:func:`~cvxgeodesic.linalg.is_positive_semidefinite`, ``analysis=``). Not called on a manifold cover
+        (the cover has vertices of its own).
 
     Warns
     -----
@@ -91,7 +98,8 @@ def hessian_energy_matrix(mesh: TriMesh, notes: list[str] | None = None) -> sp.c
             energy_mesh = TriMesh(energy_mesh.V, energy_mesh.F[keep], name=energy_mesh.name)
     n = energy_mesh.n_vertices
     Q = curved_hessian_energy(energy_mesh)
-    if is_positive_semidefinite(Q) is False:
+    analysis = analyse(Q) if analyse is not None and to_mesh is None else None
+    if is_positive_semidefinite(Q, analysis=analysis) is False:
         # measured: lucy_20k and thingi_37881 (min eigenvalue -59 against a largest diagonal of 1.2e7); the
         # curvature correction of the curved energy is not PSD where the angle defect is large, and the QP would
         # then be non-convex. The planar Hessian energy (Stein et al. 2018) is PSD by construction.
@@ -177,11 +185,13 @@ def _padded_symmetric(Q, n: int) -> sp.csc_matrix:
     return sp.csc_matrix(0.5 * (Q + Q.T))
 
 
-def energy_matrix(mesh: TriMesh, energy: str, notes: list[str] | None = None) -> sp.csc_matrix:
+def energy_matrix(mesh: TriMesh, energy: str, notes: list[str] | None = None, *,
+                  analyse: Callable[[sp.csc_matrix], SymbolicCholesky] | None = None) -> sp.csc_matrix:
     """The matrix of a named energy (``"dirichlet"``, ``"laplacian"`` or ``"hessian"``).
 
-    ``notes`` (optional list) gets one line per substitution made while building it.
+    ``notes`` (optional list) gets one line per substitution made while building it; ``analyse`` is passed to
+    :func:`hessian_energy_matrix` (the other energies are PSD by construction and have no check).
     """
     if energy == "hessian":
-        return hessian_energy_matrix(mesh, notes)
+        return hessian_energy_matrix(mesh, notes, analyse=analyse)
     return {"dirichlet": dirichlet_energy_matrix, "laplacian": laplacian_energy_matrix}[energy](mesh)
