@@ -113,3 +113,14 @@ def test_an_indefinite_curved_energy_gets_an_analysis_of_the_planar_one():
     assert direct.ipm.cholesky.n_factorizations == 0  # not the one the check factored
     res = direct.solve([0])
     assert res.info.status == "optimal" and res.info.extra["new_analyses"] == 0
+
+
+@pytest.mark.parametrize("method", ["qclp", "qcqp-hessian"])
+def test_the_direct_strategy_builds_one_edge_table(method):
+    """The Newton pattern is built from the unit mesh's edges, which the operators computed: the caller's mesh
+    (another TriMesh when it is scaled) gets no second edge table."""
+    mesh = cg.icosphere(3)
+    direct = DirectStrategy(SolveConfig(mesh=mesh, method=method, lam=cg.smoothness_weight(mesh, 1.0), m=1.0,
+                                        solver="ipm"))
+    assert direct.ops.mesh is not mesh and direct.scale != 1.0
+    assert "edges" in vars(direct.ops.mesh) and "edges" not in vars(mesh)

@@ -104,7 +104,8 @@ class DirectStrategy:
     def _pattern(self, P: Any) -> Any:
         from ..solvers.problem import kkt_pattern
 
-        mesh = self.config.mesh
+        # the unit mesh's edge table: the operators built it already (the mesh's own would be a second one)
+        mesh = self.ops.mesh
         return kkt_pattern(mesh.n_vertices, mesh.F, mesh.edges, P)
 
     def _analyser(self, analysed: dict[str, Any]) -> Any:
