@@ -119,14 +119,16 @@ def curved_hessian_energy(mesh: TriMesh, *, compiled: bool | None = None) -> sp.
     mesh : TriMesh
     compiled : bool, optional
         ``True``: the compiled face-by-face assembly of :mod:`._hessian_kernels` (needs Numba; the same
-        matrix to rounding, measured 1e-16 of its largest entry, 4-10x faster, see that module);
+        matrix to rounding, 3e-16 of its largest entry; 4-8x faster, measured 2026-12-01 on bimba and a
+        1.1M-face bunny, docs/performance.md "Set-up cost");
         ``False``: libigl's; ``None`` (default): compiled when Numba can be imported. libigl's is used anyway on a
         mesh that is not edge-manifold and where the compiled assembly has non-finite entries (degenerate faces).
 
     Returns
     -------
     (n, n) scipy.sparse.csc_matrix
-        Symmetric, on the structural pattern of libigl's product.
+        Symmetric, on the structural pattern of libigl's product less the entries that are exactly 0 (as
+        libigl's after SciPy's symmetrization).
     """
     if compiled is None:
         compiled = _kernels() is not None
@@ -157,7 +159,8 @@ def curved_hessian_energy(mesh: TriMesh, *, compiled: bool | None = None) -> sp.
     kern.row_lengths(verts, slot_ptr, slots, width, length)
     indptr = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(length, out=indptr[1:])
-    indices, data = np.empty(indptr[-1], dtype=np.int32), np.zeros(indptr[-1])
+    index = np.int32 if indptr[-1] < np.iinfo(np.int32).max else np.int64  # SciPy's choice for this size
+    indices, data = np.empty(indptr[-1], dtype=index), np.zeros(indptr[-1])
     kern.gather_rows(verts, blocks, slot_ptr, slots, width, indptr, indices, data)
     if not np.isfinite(data).all():
         # faces without a proper shape (zero area, zero-length edges) give inf/nan in both assemblies, where they
@@ -165,7 +168,7 @@ def curved_hessian_energy(mesh: TriMesh, *, compiled: bool | None = None) -> sp.
         return _padded_symmetric(igl.curved_hessian_energy(mesh.V, mesh.F), mesh.n_vertices)
     # rows of a symmetric matrix are its columns; exact zeros (cancelling contributions) are dropped, as SciPy's
     # symmetrization of libigl's matrix drops them, so that both give one pattern
-    Q = sp.csc_matrix((data, indices, indptr.astype(np.int32)), shape=(n, n))
+    Q = sp.csc_matrix((data, indices, indptr.astype(index)), shape=(n, n))
     Q.eliminate_zeros()
     return Q
 
