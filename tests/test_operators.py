@@ -139,6 +139,77 @@ def test_manifold_cover_of_a_fin_on_a_grid():
     assert abs(x @ Q @ x) < 1e-8 * abs(Q).sum()
 
 
+def _flipped(mesh: TriMesh, every: int = 3) -> TriMesh:
+    """The mesh with every ``every``-th face reversed: neighbouring half-edges then run the same way."""
+    F = mesh.F.copy()
+    F[::every] = F[::every, ::-1]
+    return TriMesh(mesh.V, F, name=mesh.name + "-flipped")
+
+
+def _with_a_loose_vertex(mesh: TriMesh) -> TriMesh:
+    """The mesh with a vertex in no face appended (libigl sizes its matrix by the largest referenced index)."""
+    return TriMesh(np.vstack([mesh.V, [[9.0, 9.0, 9.0]]]), mesh.F, name=mesh.name + "-loose")
+
+
+TETRAHEDRON = TriMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.3, 0.2, 0.9]],
+                      [[0, 1, 2], [0, 3, 1], [1, 3, 2], [2, 3, 0]], name="tetrahedron")
+COMPILED_MESHES = [icosphere(2), grid_plane(7, jitter=0.3, seed=2), cylinder(10, 4),
+                   _flipped(icosphere(1)), _with_a_loose_vertex(grid_plane(4, jitter=0.2)), TETRAHEDRON]
+
+
+@pytest.mark.parametrize("mesh", COMPILED_MESHES, ids=lambda m: m.name)
+def test_compiled_curved_hessian_equals_libigl(mesh):
+    """The compiled face-by-face assembly is libigl's matrix to rounding (closed, open, inconsistently oriented
+    meshes, a loose vertex, a tetrahedron whose three opposite vertices coincide), on libigl's pattern but for
+    entries whose contributions cancel (exactly 0 in one assembly, rounding in the other)."""
+    pytest.importorskip("numba")
+    from cvxgeodesic.operators.energies import curved_hessian_energy
+
+    Q = curved_hessian_energy(mesh, compiled=True)
+    ref = curved_hessian_energy(mesh, compiled=False)
+    assert Q.shape == ref.shape == (mesh.n_vertices, mesh.n_vertices)
+    scale = abs(ref).max()
+    assert abs(Q - ref).max() <= 1e-13 * scale
+    ones = sp.csc_matrix((np.ones(Q.nnz), Q.indices, Q.indptr), shape=Q.shape)
+    ones_ref = sp.csc_matrix((np.ones(ref.nnz), ref.indices, ref.indptr), shape=ref.shape)
+    r, c = (ones != ones_ref).nonzero()
+    assert np.abs(Q.toarray()[r, c]).max(initial=0) <= 1e-13 * scale
+    assert np.abs(ref.toarray()[r, c]).max(initial=0) <= 1e-13 * scale
+    assert r.size <= 0.05 * ref.nnz
+    assert abs(Q - Q.T).max() == 0.0
+
+
+@pytest.mark.shared
+@pytest.mark.parametrize("name", ["spot.obj", "camelhead_open.off", "thingi_37881.stl"])
+def test_compiled_curved_hessian_equals_libigl_on_shared_meshes(name):
+    """Real meshes: a closed one, an open one (the angle defect is 0 on the boundary) and the CAD mesh whose
+    curved energy is indefinite (the PSD check must see the same matrix)."""
+    pytest.importorskip("numba")
+    from conftest import shared_mesh_path
+    from cvxgeodesic import load_mesh
+    from cvxgeodesic.operators.energies import curved_hessian_energy
+
+    mesh = load_mesh(shared_mesh_path(name))
+    Q, ref = curved_hessian_energy(mesh, compiled=True), curved_hessian_energy(mesh, compiled=False)
+    assert abs(Q - ref).max() <= 1e-13 * abs(ref).max()
+    assert abs(Q.nnz - ref.nnz) <= 1e-4 * ref.nnz
+
+
+def test_curved_hessian_uses_libigl_off_the_compiled_path():
+    """A non-manifold mesh (not handled by the compiled assembly) and a degenerate face (inf/nan there) get
+    libigl's matrix itself."""
+    import igl
+
+    from cvxgeodesic.operators.energies import _padded_symmetric, curved_hessian_energy
+
+    book = TriMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1.0]], [[0, 1, 2], [1, 0, 3], [0, 1, 4]])
+    sliver = TriMesh([[0, 0, 0], [1, 0, 0], [2, 0, 0], [1, 1, 0]], [[0, 1, 3], [1, 2, 3], [0, 2, 1]])
+    for mesh in (book, sliver):
+        ref = _padded_symmetric(igl.curved_hessian_energy(mesh.V, mesh.F), mesh.n_vertices)
+        Q = curved_hessian_energy(mesh)
+        np.testing.assert_array_equal(Q.toarray(), ref.toarray())
+
+
 @pytest.mark.shared
 def test_indefinite_curved_hessian_falls_back_to_planar_energy():
     # measured: libigl's curved Hessian energy has eigenvalue -59 (largest diagonal 1.2e7) on this CAD mesh
@@ -167,6 +238,34 @@ def test_psd_check_detects_a_negative_eigenvalue(backend):
     v = np.random.default_rng(0).standard_normal(S.shape[0])
     v /= np.linalg.norm(v)
     assert not cholesky.is_positive_semidefinite(S.toarray() - shift * np.outer(v, v), backend=backend)
+
+
+def test_psd_check_in_an_existing_analysis():
+    """``analysis=``: the same answers as the check's own analysis, for a PSD matrix, a shifted one and one with
+    a rank-one dent, factored in a wider pattern (the mesh's Newton pattern with the matrix)."""
+    from cvxgeodesic import linalg as cholesky
+    from cvxgeodesic.solvers.problem import kkt_pattern
+
+    if not (cholesky.pardiso_available() or cholesky.cholmod_available()):
+        pytest.skip("the PSD check needs PARDISO or CHOLMOD")
+    mesh = icosphere(2)
+    S = cotan_stiffness(mesh)
+    shift = 1e-3 * abs(S.diagonal()).max()
+    v = np.random.default_rng(1).standard_normal(S.shape[0])
+    v /= np.linalg.norm(v)
+    H = hessian_energy_matrix(mesh)
+    chol = cholesky.SymbolicCholesky(kkt_pattern(mesh.n_vertices, mesh.F, mesh.edges, H))
+    for Q, expected in [(S, True), (H, True), (S - shift * sp.identity(S.shape[0]), False),
+                        (sp.csc_matrix(S.toarray() - shift * np.outer(v, v)), None)]:
+        if expected is None:  # dense: does not fit the pattern
+            with pytest.raises(ValueError, match="not in the sparsity pattern"):
+                cholesky.is_positive_semidefinite(Q, analysis=chol)
+            continue
+        assert cholesky.is_positive_semidefinite(Q, analysis=chol) is expected
+        assert cholesky.is_positive_semidefinite(Q) is expected
+    assert chol.n_factorizations == 3
+    with pytest.raises(ValueError, match="analysis is of a"):
+        cholesky.is_positive_semidefinite(cotan_stiffness(icosphere(1)), analysis=chol)
 
 
 def test_face_edges_index_the_edge_opposite_each_corner():

@@ -70,3 +70,57 @@ def test_config_on_a_coarse_mesh_keeps_the_smoothness_meaning(sphere):
     assert cfg.on(coarse, m=1.0).lam == pytest.approx(cg.smoothness_weight(coarse, 1.0))
     assert SolveConfig(mesh=sphere, method="qclp", lam=0.5).on(coarse, lam=0.3).lam == 0.0  # an LP has no λ
     assert cfg.energy == "hessian" and SolveConfig(mesh=sphere, method="heat").energy is None
+
+
+def _hessian_strategy(mesh):
+    return DirectStrategy(SolveConfig(mesh=mesh, method="qcqp-hessian", lam=cg.smoothness_weight(mesh, 1.0),
+                                      m=1.0, solver="ipm"))
+
+
+def test_the_hessian_psd_check_factors_in_the_solvers_own_analysis(sphere, monkeypatch):
+    """One symbolic analysis per mesh: the PSD check of the Hessian energy factors it in the interior-point
+    solver's analysis (made from the energy first), which the solves then reuse."""
+    from cvxgeodesic import linalg
+
+    if not (linalg.pardiso_available() or linalg.cholmod_available()):
+        pytest.skip("the PSD check needs PARDISO or CHOLMOD")
+    made = []
+    init = linalg.SymbolicCholesky.__init__
+
+    def counting(self, *args, **kwargs):
+        made.append(self)
+        init(self, *args, **kwargs)
+
+    monkeypatch.setattr(linalg.SymbolicCholesky, "__init__", counting)
+    direct = _hessian_strategy(sphere)
+    assert made == [direct.ipm.cholesky] and direct.ipm.cholesky.n_factorizations == 1
+    res = direct.solve([0])
+    assert res.info.status == "optimal" and len(made) == 1 and direct.ipm.n_analyses == 1
+
+
+@pytest.mark.shared
+def test_an_indefinite_curved_energy_gets_an_analysis_of_the_planar_one():
+    """The analysis the PSD check used was made for the curved energy; the planar energy that replaces it gets
+    the solver's analysis (one more, before any solve), and the solve needs no further one."""
+    from conftest import shared_mesh_path
+    from cvxgeodesic import IndefiniteEnergyWarning, linalg
+
+    if not (linalg.pardiso_available() or linalg.cholmod_available()):
+        pytest.skip("the PSD check needs PARDISO or CHOLMOD")
+    mesh = cg.load_mesh(shared_mesh_path("thingi_37881.stl"))
+    with pytest.warns(IndefiniteEnergyWarning):
+        direct = _hessian_strategy(mesh)
+    assert direct.ipm.cholesky.n_factorizations == 0  # not the one the check factored
+    res = direct.solve([0])
+    assert res.info.status == "optimal" and res.info.extra["new_analyses"] == 0
+
+
+@pytest.mark.parametrize("method", ["qclp", "qcqp-hessian"])
+def test_the_direct_strategy_builds_one_edge_table(method):
+    """The Newton pattern is built from the unit mesh's edges, which the operators computed: the caller's mesh
+    (another TriMesh when it is scaled) gets no second edge table."""
+    mesh = cg.icosphere(3)
+    direct = DirectStrategy(SolveConfig(mesh=mesh, method=method, lam=cg.smoothness_weight(mesh, 1.0), m=1.0,
+                                        solver="ipm"))
+    assert direct.ops.mesh is not mesh and direct.scale != 1.0
+    assert "edges" in vars(direct.ops.mesh) and "edges" not in vars(mesh)

@@ -260,10 +260,14 @@ class MeshOperators:
             self._blocks = blocks
         return self._blocks
 
-    def energy(self, name: str) -> sp.csc_matrix:
-        """(n, n) csc_matrix of a named energy, assembled on the non-degenerate faces."""
+    def energy(self, name: str, *, analyse=None) -> sp.csc_matrix:
+        """(n, n) csc_matrix of a named energy, assembled on the non-degenerate faces (cached).
+
+        ``analyse`` (used when the energy is built, see :func:`~cvxgeodesic.operators.hessian_energy_matrix`)
+        gives the PSD check of the Hessian energy the caller's symbolic analysis.
+        """
         if name not in self._energies:
-            self._energies[name] = energy_matrix(self._energy_mesh, name, self.notes)
+            self._energies[name] = energy_matrix(self._energy_mesh, name, self.notes, analyse=analyse)
         return self._energies[name]
 
     def stretch_weights(self, stretch: str = "area") -> np.ndarray:

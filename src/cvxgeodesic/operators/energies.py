@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import warnings
+from collections.abc import Callable
 
 import igl
 import numpy as np
 import scipy.sparse as sp
 
 from ..errors import IndefiniteEnergyWarning
-from ..linalg import is_positive_semidefinite
+from ..linalg import SymbolicCholesky, is_positive_semidefinite
 from ..mesh.cover import manifold_cover, pull_back
 from ..mesh.trimesh import TriMesh
 from .laplacian import cotan_stiffness, mass_matrix
@@ -47,7 +48,8 @@ def laplacian_energy_matrix(mesh: TriMesh) -> sp.csc_matrix:
     return sp.csc_matrix(0.5 * (Q + Q.T))
 
 
-def hessian_energy_matrix(mesh: TriMesh, notes: list[str] | None = None) -> sp.csc_matrix:
+def hessian_energy_matrix(mesh: TriMesh, notes: list[str] | None = None, *,
+                          analyse: Callable[[sp.csc_matrix], SymbolicCholesky] | None = None) -> sp.csc_matrix:
     """Curved-surface Hessian energy (paper eq. 18; Stein et al. TOG 2020) via libigl.
 
     ``E(d) = dᵀ Q d ≈ ∫ ‖Hess d‖² dA``. It vanishes on functions linear on a
@@ -64,6 +66,11 @@ def hessian_energy_matrix(mesh: TriMesh, notes: list[str] | None = None) -> sp.c
     mesh : TriMesh
     notes : list of str, optional
         Gets one line per substitution made (manifold cover, planar energy).
+    analyse : callable, optional
+        ``analyse(Q)`` returns a symbolic analysis of a pattern containing the curved energy ``Q`` (the caller's
+        own, e.g. the interior-point solver's, which it keeps); the PSD check then factors ``Q`` in it
+        (:func:`~cvxgeodesic.linalg.is_positive_semidefinite`, ``analysis=``). Not called on a manifold cover
+        (the cover has vertices of its own).
 
     Warns
     -----
@@ -90,8 +97,9 @@ def hessian_energy_matrix(mesh: TriMesh, notes: list[str] | None = None) -> sp.c
                          "carry no Hessian energy")
             energy_mesh = TriMesh(energy_mesh.V, energy_mesh.F[keep], name=energy_mesh.name)
     n = energy_mesh.n_vertices
-    Q = _padded_symmetric(igl.curved_hessian_energy(energy_mesh.V, energy_mesh.F), n)
-    if is_positive_semidefinite(Q) is False:
+    Q = curved_hessian_energy(energy_mesh)
+    analysis = analyse(Q) if analyse is not None and to_mesh is None else None
+    if is_positive_semidefinite(Q, analysis=analysis) is False:
         # measured: lucy_20k and thingi_37881 (min eigenvalue -59 against a largest diagonal of 1.2e7); the
         # curvature correction of the curved energy is not PSD where the angle defect is large, and the QP would
         # then be non-convex. The planar Hessian energy (Stein et al. 2018) is PSD by construction.
@@ -103,6 +111,76 @@ def hessian_energy_matrix(mesh: TriMesh, notes: list[str] | None = None) -> sp.c
     return Q if to_mesh is None else pull_back(Q, to_mesh, mesh.n_vertices)
 
 
+def curved_hessian_energy(mesh: TriMesh, *, compiled: bool | None = None) -> sp.csc_matrix:
+    """libigl's curved Hessian energy matrix (``igl.curved_hessian_energy``), symmetrized, sized (n, n).
+
+    Parameters
+    ----------
+    mesh : TriMesh
+    compiled : bool, optional
+        ``True``: the compiled face-by-face assembly of :mod:`._hessian_kernels` (needs Numba; the same
+        matrix to rounding, 3e-16 of its largest entry; 4-8x faster, measured 2026-12-01 on bimba and a
+        1.1M-face bunny, docs/performance.md "Set-up cost");
+        ``False``: libigl's; ``None`` (default): compiled when Numba can be imported. libigl's is used anyway on a
+        mesh that is not edge-manifold and where the compiled assembly has non-finite entries (degenerate faces).
+
+    Returns
+    -------
+    (n, n) scipy.sparse.csc_matrix
+        Symmetric, on the structural pattern of libigl's product less the entries that are exactly 0 (as
+        libigl's after SciPy's symmetrization).
+    """
+    if compiled is None:
+        compiled = _kernels() is not None
+    if not compiled or not mesh.is_edge_manifold:
+        return _padded_symmetric(igl.curved_hessian_energy(mesh.V, mesh.F), mesh.n_vertices)
+    kern = _kernels()
+    if kern is None:
+        raise ImportError("compiled=True needs Numba")
+    V = np.ascontiguousarray(mesh.V, dtype=np.float64)
+    F = np.ascontiguousarray(mesh.F, dtype=np.int64)
+    E = np.ascontiguousarray(mesh.face_edges, dtype=np.int64)
+    n, m, n_edges = mesh.n_vertices, F.shape[0], len(mesh.edges)
+    lsq, dA, theta = np.empty((m, 3)), np.empty(m), np.empty((m, 3))
+    kern.face_geometry(V, F, lsq, dA, theta)
+    mass = np.bincount(E.ravel(), weights=np.repeat(dA / 6.0, 3), minlength=n_edges)
+    minv = np.zeros(n_edges)
+    np.divide(1.0, mass, out=minv, where=mass > 0)
+    angle_sum = np.bincount(F.ravel(), weights=theta.ravel(), minlength=n)
+    defect = 2.0 * np.pi - angle_sum
+    defect[mesh.edges[mesh.edge_face_counts == 1].ravel()] = 0.0  # libigl: no curvature on the boundary
+    sk = np.zeros(n)
+    np.divide(defect, angle_sum, out=sk, where=angle_sum > 0)
+    blocks, verts = np.empty((m, 6, 6)), np.empty((m, 6), dtype=np.int64)
+    kern.face_blocks(F, E, kern.twins(E, n_edges), lsq, dA, theta, minv, sk, blocks, verts)
+    slot_ptr, slots = kern.vertex_slots(verts, n)
+    width = 6 * int(np.diff(slot_ptr).max(initial=0))
+    length = np.zeros(n, dtype=np.int64)
+    kern.row_lengths(verts, slot_ptr, slots, width, length)
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(length, out=indptr[1:])
+    index = np.int32 if indptr[-1] < np.iinfo(np.int32).max else np.int64  # SciPy's choice for this size
+    indices, data = np.empty(indptr[-1], dtype=index), np.zeros(indptr[-1])
+    kern.gather_rows(verts, blocks, slot_ptr, slots, width, indptr, indices, data)
+    if not np.isfinite(data).all():
+        # faces without a proper shape (zero area, zero-length edges) give inf/nan in both assemblies, where they
+        # need not agree: libigl's is the reference
+        return _padded_symmetric(igl.curved_hessian_energy(mesh.V, mesh.F), mesh.n_vertices)
+    # rows of a symmetric matrix are its columns; exact zeros (cancelling contributions) are dropped, as SciPy's
+    # symmetrization of libigl's matrix drops them, so that both give one pattern
+    Q = sp.csc_matrix((data, indices, indptr.astype(index)), shape=(n, n))
+    Q.eliminate_zeros()
+    return Q
+
+
+def _kernels():
+    try:
+        from . import _hessian_kernels
+    except ImportError:
+        return None
+    return _hessian_kernels
+
+
 def _padded_symmetric(Q, n: int) -> sp.csc_matrix:
     """Symmetrized (n, n) copy; libigl sizes its matrices by the largest referenced vertex index + 1."""
     Q = sp.coo_matrix(Q)
@@ -110,11 +188,13 @@ def _padded_symmetric(Q, n: int) -> sp.csc_matrix:
     return sp.csc_matrix(0.5 * (Q + Q.T))
 
 
-def energy_matrix(mesh: TriMesh, energy: str, notes: list[str] | None = None) -> sp.csc_matrix:
+def energy_matrix(mesh: TriMesh, energy: str, notes: list[str] | None = None, *,
+                  analyse: Callable[[sp.csc_matrix], SymbolicCholesky] | None = None) -> sp.csc_matrix:
     """The matrix of a named energy (``"dirichlet"``, ``"laplacian"`` or ``"hessian"``).
 
-    ``notes`` (optional list) gets one line per substitution made while building it.
+    ``notes`` (optional list) gets one line per substitution made while building it; ``analyse`` is passed to
+    :func:`hessian_energy_matrix` (the other energies are PSD by construction and have no check).
     """
     if energy == "hessian":
-        return hessian_energy_matrix(mesh, notes)
+        return hessian_energy_matrix(mesh, notes, analyse=analyse)
     return {"dirichlet": dirichlet_energy_matrix, "laplacian": laplacian_energy_matrix}[energy](mesh)

@@ -164,22 +164,29 @@ def kkt_pattern(n: int, faces: np.ndarray, edges: np.ndarray, P: sp.spmatrix | N
     n : int
         Number of vertices.
     faces : (m, 3) int ndarray
+        The mesh's faces. A triangle couples its vertices along its edges, so only ``edges`` is read: it must
+        hold every edge of ``faces``, as :attr:`~cvxgeodesic.mesh.TriMesh.edges` does.
     edges : (e, 2) int ndarray
     P : (n, n) sparse matrix, optional
 
     Returns
     -------
     (n, n) scipy.sparse.csc_matrix
-        Symmetric pattern with a full diagonal; all stored values are 1.
+        Pattern with a full diagonal and sorted indices; all stored values are 1. Symmetric when ``P``'s pattern
+        is.
+
+    Notes
+    -----
+    Built as a sum of canonical sparse matrices (merges of sorted rows) rather than from one list of
+    coordinates with every triangle's six couplings: measured 2026-12-01 (shared 2-core machine, load 4) on a
+    1.1M-face bunny with its Hessian energy, 0.15–0.21 s against 2.4–5.4 s, the same pattern.
     """
-    r = [np.arange(n), faces[:, [0, 0, 1, 1, 2, 2]].ravel(), edges[:, 0], edges[:, 1]]
-    c = [np.arange(n), faces[:, [1, 2, 0, 2, 0, 1]].ravel(), edges[:, 1], edges[:, 0]]
+    e0, e1 = np.asarray(edges[:, 0]), np.asarray(edges[:, 1])
+    S = sp.csc_matrix((np.ones(2 * e0.size), (np.r_[e0, e1], np.r_[e1, e0])), shape=(n, n))
+    S = S + sp.identity(n, format="csc")
     if P is not None:
-        Pc = sp.coo_matrix(P)
-        r.append(Pc.row)
-        c.append(Pc.col)
-    rows, cols = np.concatenate(r), np.concatenate(c)
-    S = sp.csc_matrix((np.ones(rows.size), (rows, cols)), shape=(n, n))
+        Pc = sp.csc_matrix(P)
+        S = S + sp.csc_matrix((np.ones(Pc.nnz), Pc.indices, Pc.indptr), shape=(n, n))
     S.data[:] = 1.0
     S.sort_indices()
     return S

@@ -75,9 +75,6 @@ class DirectStrategy:
         self.ops = MeshOperators(unit)
         self.ops.notes[0:0] = list(config.notes)
         self.notes: list[str] = self.ops.notes  # the operators add their substitutions as they build
-        energy = config.energy
-        if energy is not None:
-            self.ops.energy(energy)  # builds it now (PSD check, manifold cover)
         if config.solver == "auto":
             self.backend = "ipm" if ipm_available() else "clarabel"
             if self.backend == "clarabel":
@@ -85,19 +82,44 @@ class DirectStrategy:
                                   "Numba); solved with Clarabel")
         else:
             self.backend = config.solver
+        if self.backend == "ipm" and not ipm_available():
+            raise ParameterError("solver='ipm' is not available in this installation")
         self.fallback_to_clarabel = config.solver == "auto"
         self.ipm: Any = None
+        energy = config.energy
+        analysed: dict[str, Any] = {}
+        if energy is not None:
+            # builds it now (PSD check, manifold cover); the interior-point solver's symbolic analysis is made
+            # from the energy before its PSD check, which then factors the energy in that analysis
+            self.ops.energy(energy, analyse=self._analyser(analysed) if self.backend == "ipm" else None)
         if self.backend == "ipm":
-            if not ipm_available():
-                raise ParameterError("solver='ipm' is not available in this installation")
             from ..solvers.ipm import InteriorPointSolver
-            from ..solvers.problem import kkt_pattern
 
             P = self.ops.energy(energy) if energy is not None else None
-            mesh = config.mesh
-            self.ipm = InteriorPointSolver(kkt_pattern(mesh.n_vertices, mesh.F, mesh.edges, P))
+            chol = analysed.get("cholesky") if analysed.get("energy") is P else None
+            self.ipm = InteriorPointSolver(chol if chol is not None else self._pattern(P))
         _ = self.ops.gradient_blocks
         self.setup_time = time.perf_counter() - t0
+
+    def _pattern(self, P: Any) -> Any:
+        from ..solvers.problem import kkt_pattern
+
+        # the unit mesh's edge table: the operators built it already (the mesh's own would be a second one)
+        mesh = self.ops.mesh
+        return kkt_pattern(mesh.n_vertices, mesh.F, mesh.edges, P)
+
+    def _analyser(self, analysed: dict[str, Any]) -> Any:
+        """``analyse(Q)`` for :meth:`MeshOperators.energy`: the analysis of the mesh's Newton pattern with ``Q``,
+        kept in ``analysed`` (with the ``Q`` it was made for: a planar energy that replaced an indefinite
+        curved one gets an analysis of its own)."""
+
+        def analyse(Q: Any) -> Any:
+            from ..linalg import SymbolicCholesky
+
+            analysed.update(energy=Q, cholesky=SymbolicCholesky(self._pattern(Q)))
+            return analysed["cholesky"]
+
+        return analyse
 
     def solve(self, sources: Any, *, callback: Callback | None = None) -> GeodesicResult:
         """Distance field from ``sources`` (see :meth:`~cvxgeodesic.api.GeodesicSolver.solve`)."""

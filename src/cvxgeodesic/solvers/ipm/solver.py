@@ -73,8 +73,9 @@ class InteriorPointSolver:
 
     Parameters
     ----------
-    pattern : (n, n) scipy.sparse matrix
-        :func:`~cvxgeodesic.solvers.problem.kkt_pattern` of the mesh.
+    pattern : (n, n) scipy.sparse matrix or SymbolicCholesky
+        :func:`~cvxgeodesic.solvers.problem.kkt_pattern` of the mesh, or an analysis of it (then ``backend``
+        and ``ordering`` are its own).
     backend : {"auto", "pardiso", "cholmod", "scipy"}
         Sparse Cholesky backend, see :class:`~cvxgeodesic.linalg.SymbolicCholesky`.
     ordering : str
@@ -109,7 +110,9 @@ class InteriorPointSolver:
         self.settings = settings if settings is not None else IPMSettings()
         self._backend = backend
         self._ordering = ordering
-        self.cholesky = SymbolicCholesky(pattern, backend=backend, ordering=ordering)
+        # an analysis made already (the direct strategy's, which the energy's PSD check used) is taken as it is
+        self.cholesky = (pattern if isinstance(pattern, SymbolicCholesky)
+                         else SymbolicCholesky(pattern, backend=backend, ordering=ordering))
         self.n = self.cholesky.n
         self.n_analyses = self.cholesky.n_analyses
 
