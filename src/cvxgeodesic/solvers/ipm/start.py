@@ -1,8 +1,10 @@
-"""The starting point (:attr:`.settings.IPMSettings.init`): ``x`` from the ``W = I`` system, then ``s`` and ``z``.
+"""The starting point (:attr:`.settings.IPMSettings.init`): ``x``, then ``s`` and ``z``.
 
-"interior" (the default): ``x`` scaled towards ``x_F`` so that ``s`` is strictly feasible, the least-norm dual
-``z = A y`` shifted cone by cone; "mehrotra": the same ``z`` with Mehrotra's uniform shifts; "cvxopt":
-``z = A x − b`` shifted into the cone.
+"graph" (the default): ``x`` the shortest-path field of the program's edge bounds (:mod:`.graph`) scaled towards
+``x_F`` so that ``s`` is strictly feasible, the least-norm dual ``z = A y`` shifted cone by cone; "interior": the
+same with the least-squares ``x`` of the ``W = I`` system (also the graph start's fallback); "mehrotra": the
+least-squares ``x`` and the same ``z`` with Mehrotra's uniform shifts; "cvxopt": ``z = A x − b`` shifted into
+the cone.
 """
 
 from __future__ import annotations
