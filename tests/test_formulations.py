@@ -232,14 +232,22 @@ def test_edge_bounds_at_rounding_level_are_floored():
     np.testing.assert_allclose(d, _dijkstra(mesh, 0), atol=1e-7)
 
 
-def test_lclp_on_a_mesh_with_near_duplicate_vertices_equals_dijkstra():
+def test_lclp_on_a_mesh_with_near_duplicate_vertices_equals_dijkstra(monkeypatch):
     # thingi_65395 has edges of length 6e-16; before the floor the IPM stopped at an objective 5x too high
     # (uniform stretch weights: with the area weights, which span 0.05 to 54 times their mean on this file, the
-    # IPM does not converge within 200 iterations, and solver="auto" retries with Clarabel, as checked below)
+    # IPM from the least-squares start does not converge within 200 iterations, and solver="auto" retries with
+    # Clarabel, as checked below; from the graph start it converges in 41)
+    import cvxgeodesic.solvers.ipm.solver as ipm_solver
+    from cvxgeodesic.solvers.ipm import IPMSettings
+
     mesh = cg.load_mesh(shared_mesh_path("thingi_65395.stl"))
     res = cg.GeodesicSolver(mesh, "lclp", solver="ipm", normalization="paper").solve(0)
     assert res.info.status == "optimal" and res.info.solver == "ipm"
     np.testing.assert_allclose(res.distance, _dijkstra(mesh, 0), atol=1e-6 * mesh.bbox_diagonal)
+    res = cg.GeodesicSolver(mesh, "lclp").solve(0)
+    assert res.info.solver == "ipm" and res.info.status == "optimal"
+    np.testing.assert_allclose(res.distance, _dijkstra(mesh, 0), atol=1e-6 * mesh.bbox_diagonal)
+    monkeypatch.setattr(ipm_solver, "IPMSettings", lambda: IPMSettings(init="interior"))
     with pytest.warns(RuntimeWarning, match="solving with Clarabel instead"):
         res = cg.GeodesicSolver(mesh, "lclp").solve(0)
     assert res.info.solver == "clarabel" and any("Clarabel" in note for note in res.info.notes)

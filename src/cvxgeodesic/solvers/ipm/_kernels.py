@@ -310,3 +310,21 @@ def positions(chol, rows, cols):
     if bad >= 0:
         raise ValueError(f"entry ({rows[bad]}, {cols[bad]}) is not in the sparsity pattern")
     return out
+
+
+@njit(**_JIT)
+def arcs_to_csr(src, dst, w, n_nodes, indptr, indices, data):
+    """Counting sort of arcs by ``src`` into CSR arrays (``indptr`` (n_nodes + 1,), ``indices`` and ``data``
+    (m,)), duplicates kept: parallel arcs are harmless to a shortest-path search, and an O(m) pass replaces a
+    sort (the graph start's lexsort took 3 s of a 280K-face solve's start, this takes milliseconds)."""
+    indptr[:] = 0
+    for a in range(src.size):
+        indptr[src[a] + 1] += 1
+    for i in range(n_nodes):
+        indptr[i + 1] += indptr[i]
+    fill = indptr[:-1].copy()
+    for a in range(src.size):
+        k = fill[src[a]]
+        indices[k] = dst[a]
+        data[k] = w[a]
+        fill[src[a]] = k + 1

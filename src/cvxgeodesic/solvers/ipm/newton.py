@@ -4,7 +4,7 @@ Eliminating ``Δs`` and ``Δz`` leaves the n×n SPD system ::
 
     (P + Σ_i A_iᵀ W_i⁻² A_i) Δx = r
 
-(:meth:`.program.Program.assemble`), factorized once per iteration and solved three to five times
+(:meth:`.program.Program.assemble`), factorized once per iteration and solved three to eight times
 (predictor, corrector, centrality correctors, iterative refinement of the final direction).
 """
 

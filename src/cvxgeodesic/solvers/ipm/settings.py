@@ -6,7 +6,7 @@ from dataclasses import dataclass, fields
 
 __all__ = ["IPMSettings"]
 
-_INITS = ("interior", "mehrotra", "cvxopt")
+_INITS = ("graph", "interior", "mehrotra", "cvxopt")
 
 
 @dataclass(frozen=True)
@@ -19,7 +19,11 @@ class IPMSettings:
     step : float
         Fraction of the step to the boundary of the cone that is taken (CVXOPT's STEP). Default 0.99.
     sigma_exp : float
-        Mehrotra's centering exponent. Default 3.
+        Mehrotra's centering exponent. Default 3. Measured 2026-12-01 over spot, bimba, horse, armadillo (QCLP,
+        QCQP-Hessian) and the 70K, 280K bunnies (QCQP-Hessian), graph start, 4 correctors, β = (0.5, 2): 134
+        iterations with 3, 125 with 4, 119 with 6 (the 280K bunny 18, 17, 18); with β = (0.1, 10) and 2
+        correctors, 2 took 179 against 154. Not adopted with the narrower β: the fields moved by up to 2.8e-6 of
+        the bounding-box diagonal on spot (``benchmarks/ipm_regression.py --compare``), beyond its 1e-6 gate.
     mehrotra_correction : bool
         The second-order term ``(W⁻¹Δs_a)∘(WΔz_a)`` of Mehrotra's combined step. Default True; False leaves the
         centering term ``σμe`` alone (a breakage for tests).
@@ -44,9 +48,15 @@ class IPMSettings:
         Default True.
     max_correctors : int
         Gondzio's centrality correctors per iteration (measured on bimba's QCLP: 24 iterations without, 18 with
-        2, 18 with 4); each costs one triangular solve pair and no factorization. Default 2.
+        2, 18 with 4); each costs one triangular solve pair and no factorization. Default 4: on the 280K-face
+        bunny (QCQP-Hessian) both of 2 were accepted in every iteration, and 3, 4, 6 took 20, 19, 19 iterations
+        against 21; the 1.1M-face bunny 29 → 26 (with the graph start); over the set of ``sigma_exp`` 154 → 146
+        with 4 (143 with the graph start), and with β = (0.5, 2) 3 correctors took 140 against 134 with 4.
     beta_min, beta_max : float
-        Corrector target: complementarity eigenvalues into ``[β_min σμ, β_max σμ]``. Defaults 0.1, 10.
+        Corrector target: complementarity eigenvalues into ``[β_min σμ, β_max σμ]``. Defaults 0.1, 10. Over the
+        set of ``sigma_exp`` (graph start, 4 correctors): 143 iterations with (0.1, 10), 139 with (0.3, 3), 134
+        with (0.5, 2), 132 with (0.7, 1.4); not adopted: with (0.5, 2) spot's QCLP field moved by 2.0e-6 of the
+        diagonal (the 1e-6 gate; (0.1, 10) moves it by 6e-7).
     gz_a, gz_b : float
         ... at the trial step ``min(1, a·α + b)``. Defaults 1.5, 0.1.
     corrector_weights : tuple of float
@@ -65,18 +75,23 @@ class IPMSettings:
         ... and iterating stops when the best iterate, meeting them, has not been improved on for this many
         iterations (seen: the dual residual stuck at 3–8e-8 by rounding while μ underflows, up to max_iter).
         Default 10.
-    init : {"interior", "mehrotra", "cvxopt"}
-        Starting point: "cvxopt" (``z = A x − b`` shifted into the cone), "mehrotra" (least-norm dual ``z = A y``
-        with ``Aᵀz = −q − Px``, one uniform shift of s and of z, then balancing) or "interior" (x scaled towards
-        ``x_F`` so that s is strictly feasible without a shift, the same least-norm z shifted cone by cone, no
-        balancing; falls back to "mehrotra" when ``x_F`` is not strictly feasible). Measured on bimba: QCLP 18
-        (cvxopt) → 17 (mehrotra) → 15 (interior) iterations; QCQP-Hessian 25 (y from the P + AᵀA factor) → 19
-        (mehrotra with y from the P-free system AᵀA y = …, one extra factorization) → 16 (interior). Over 7
-        meshes × 8 formulations (spot, fandisk, bunny_7k, kitten, camelhead, fertility, dragon_20k) "interior"
-        took 783 iterations against 913, never more. Default "interior".
+    init : {"graph", "interior", "mehrotra", "cvxopt"}
+        Starting point: "cvxopt" (``z = A x − b`` shifted into the cone), "mehrotra" (least-norm dual
+        ``z = A y`` with ``Aᵀz = −q − Px``, one uniform shift of s and of z, then balancing), "interior" (the
+        least-squares x of the ``W = I`` system scaled towards ``x_F`` so that s is strictly feasible without a
+        shift, the same least-norm z shifted cone by cone, no balancing; falls back to "mehrotra" when ``x_F``
+        is not strictly feasible) or "graph" (as "interior" with the shortest-path field of the program's edge
+        bounds, :mod:`.graph`, in place of the least-squares x: no ``W = I`` system with P to factorize; falls
+        back to "interior" when there is no such field). Measured on bimba: QCLP 18 (cvxopt) → 17 (mehrotra) →
+        15 (interior) iterations; QCQP-Hessian 25 (y from the P + AᵀA factor) → 19 (mehrotra with y from the
+        P-free system AᵀA y = …, one extra factorization) → 16 (interior). Over 7 meshes × 8 formulations (spot,
+        fandisk, bunny_7k, kitten, camelhead, fertility, dragon_20k) "interior" took 783 iterations against 913,
+        never more. "graph" (2026-12-01, spot/bimba/horse/armadillo QCLP and QCQP-Hessian, 70K and 280K
+        bunnies QCQP-Hessian): 154 → 153 iterations with 2 correctors, 146 → 143 with 4, and one factorization
+        fewer per QCQP solve. Default "graph".
     interior_fraction : float
-        "interior": fraction of the largest feasible step from ``x_F`` towards the least-squares x that is taken.
-        Default 0.9.
+        "interior", "graph": fraction of the largest feasible step from ``x_F`` towards the least-squares x (the
+        graph field) that is taken. Default 0.9 (0.5 with the graph field: 143 → 146 iterations on the set above).
     shift_factor : float
         Mehrotra's shift: 1.5× the most negative eigenvalue (per cone for the "interior" dual). Default 1.5.
     dual_floor : float
@@ -94,7 +109,7 @@ class IPMSettings:
     refine_fraction: float = 0.1
     gap_aware_below: float = 100.0
     separate_steps: bool = True
-    max_correctors: int = 2
+    max_correctors: int = 4
     beta_min: float = 0.1
     beta_max: float = 10.0
     gz_a: float = 1.5
@@ -102,7 +117,7 @@ class IPMSettings:
     corrector_weights: tuple[float, ...] = (1.0, 0.5, 0.25)
     reduced_factor: float = 100.0
     stall_iterations: int = 10
-    init: str = "interior"
+    init: str = "graph"
     interior_fraction: float = 0.9
     shift_factor: float = 1.5
     dual_floor: float = 1e-2

@@ -22,7 +22,7 @@ whatever the sources, the formulation or λ. Fixed variables become identity
 rows, which keeps the pattern. One symbolic Cholesky analysis
 (:class:`~cvxgeodesic.linalg.SymbolicCholesky`) therefore serves every iteration of
 every solve on a mesh; an iteration costs one numeric factorization, three to
-five triangular solves (predictor, corrector, up to two centrality correctors,
+eight triangular solves (predictor, corrector, up to four centrality correctors,
 iterative refinement of the final direction) and O(n) per-cone work done by the
 compiled kernels of :mod:`._kernels`. The factorization backend is MKL
 PARDISO when installed, else CHOLMOD (see :mod:`cvxgeodesic.linalg`).

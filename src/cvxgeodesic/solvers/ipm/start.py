@@ -1,8 +1,10 @@
-"""The starting point (:attr:`.settings.IPMSettings.init`): ``x`` from the ``W = I`` system, then ``s`` and ``z``.
+"""The starting point (:attr:`.settings.IPMSettings.init`): ``x``, then ``s`` and ``z``.
 
-"interior" (the default): ``x`` scaled towards ``x_F`` so that ``s`` is strictly feasible, the least-norm dual
-``z = A y`` shifted cone by cone; "mehrotra": the same ``z`` with Mehrotra's uniform shifts; "cvxopt":
-``z = A x − b`` shifted into the cone.
+"graph" (the default): ``x`` the shortest-path field of the program's edge bounds (:mod:`.graph`) scaled towards
+``x_F`` so that ``s`` is strictly feasible, the least-norm dual ``z = A y`` shifted cone by cone; "interior": the
+same with the least-squares ``x`` of the ``W = I`` system (also the graph start's fallback); "mehrotra": the
+least-squares ``x`` and the same ``z`` with Mehrotra's uniform shifts; "cvxopt": ``z = A x − b`` shifted into
+the cone.
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ...linalg import NotPositiveDefiniteError
+from .graph import graph_field
 from .newton import LinearSystem, Trouble
 from .program import Program
 from .settings import IPMSettings
@@ -98,33 +101,32 @@ def shift_into_cone(pr: Program, u: Sequence[np.ndarray]) -> list[np.ndarray]:
     return list(u)
 
 
-def _least_norm_dual(pr: Program, ls: LinearSystem, f0, x: np.ndarray, scalings) -> np.ndarray | None:
+def _least_norm_dual(pr: Program, ls: LinearSystem, f_y, x: np.ndarray, scalings) -> np.ndarray | None:
     """``y`` of the least-norm dual ``z = A y`` with ``A_fᵀz = −q̃ − P_ff x_f`` (``None`` when singular).
 
     ``z = A y`` is scaled like the true dual, unlike CVXOPT's ``z = A x − b`` (as large as the slacks, so the
-    first iterations are spent shrinking a huge duality gap). With a quadratic term the least-norm system
-    (``A_fᵀA_f`` without P) needs its own factorization, and may be singular (a variable that only P couples):
-    then CVXOPT's start is used.
+    first iterations are spent shrinking a huge duality gap). ``f_y`` is the factor of ``A_fᵀA_f`` (the
+    ``W = I`` matrix without P), or None to factorize it here; with a quadratic term it needs its own
+    factorization and may be singular (a variable that only P couples): then CVXOPT's start is used.
     """
     Pfx0 = pr.Pmul(x) - pr.Px_fixed
     rhs_y = -(pr.q + pr.Px_fixed + Pfx0)
     rhs_y[pr.fixed] = 0.0
     target_y = 1e-12 * max(1e-300, float(np.abs(rhs_y).max()))
-    f_y = f0
-    if pr.P is not None:
+    if f_y is None:
         try:
             f_y = ls.factorize(ls.assemble(scalings, with_P=False))
         except NotPositiveDefiniteError:
             return None
     try:
-        return ls.solve_refined(f_y, rhs_y, scalings, target_y, with_P=pr.P is None)
+        return ls.solve_refined(f_y, rhs_y, scalings, target_y, with_P=False)
     except Trouble:
         return None
 
 
-def starting_point(pr: Program, ls: LinearSystem, st: IPMSettings) -> Iterate:
-    """The starting iterate; :class:`StartFailure` when the ``W = I`` system is singular or not finite."""
-    scalings = pr.identity_scalings()
+def _least_squares_x(pr: Program, ls: LinearSystem, scalings) -> tuple[np.ndarray, object]:
+    """``x`` of the ``W = I`` system and its factor (P-free when there is no P); :class:`StartFailure` when
+    the system is singular or not finite."""
     try:
         f0 = ls.factorize(ls.assemble(scalings))
     except NotPositiveDefiniteError as exc:
@@ -135,11 +137,29 @@ def starting_point(pr: Program, ls: LinearSystem, st: IPMSettings) -> Iterate:
         x = ls.solve_refined(f0, rhs0, scalings, 1e-12 * max(1.0, float(np.abs(rhs0).max()))) + pr.x_fixed
     except Trouble as exc:
         raise StartFailure(str(exc)) from exc
-    interior = st.init == "interior" and (x_int := interior_primal(pr, x, st.interior_fraction)) is not None
-    if interior:
-        x = x_int
+    return x, f0
+
+
+def _primal(pr: Program, ls: LinearSystem, st: IPMSettings, scalings) -> tuple[np.ndarray, bool, object]:
+    """``(x, interior, f_y)``: the primal start, whether its slacks are strictly feasible as they are, and the
+    P-free ``W = I`` factor if one was made (else None)."""
+    if st.init == "graph" and (xg := graph_field(pr)) is not None:
+        x_int = interior_primal(pr, xg, st.interior_fraction)
+        if x_int is not None:
+            return x_int, True, None  # no least-squares system to solve
+    x, f0 = _least_squares_x(pr, ls, scalings)
+    f_y = f0 if pr.P is None else None
+    if st.init in ("interior", "graph") and (x_int := interior_primal(pr, x, st.interior_fraction)) is not None:
+        return x_int, True, f_y
+    return x, False, f_y
+
+
+def starting_point(pr: Program, ls: LinearSystem, st: IPMSettings) -> Iterate:
+    """The starting iterate; :class:`StartFailure` when the ``W = I`` system is singular or not finite."""
+    scalings = pr.identity_scalings()
+    x, interior, f_y = _primal(pr, ls, st, scalings)
     s = [b.slack(x, pr.x_fixed) for b in pr.blocks]
-    y = _least_norm_dual(pr, ls, f0, x, scalings) if st.init in ("interior", "mehrotra") else None
+    y = _least_norm_dual(pr, ls, f_y, x, scalings) if st.init != "cvxopt" else None
     if y is not None:
         z = [b.A(y) for b in pr.blocks]
         shifted = dual_shift_per_cone(pr, z, st) if interior else None
