@@ -642,6 +642,17 @@ def test_flat_nodes_samples_all_nodes_on_flat_faces_and_midpoints_elsewhere():
         P2Builder(mesh, samples="everywhere")
 
 
+@pytest.mark.parametrize("threads", [1, 2])
+def test_order2_pardiso_follows_the_thread_setting(threads):
+    from cvxgeodesic.linalg import pardiso_available
+
+    if not pardiso_available():
+        pytest.skip("PARDISO not installed")
+    solver = cg.GeodesicSolver(cg.icosphere(2), "qclp", order=2, threads=threads)
+    chol = solver._strategy.p2._ipm.chol
+    assert chol.backend == "pardiso" and chol.numeric.threads == threads
+
+
 def test_no_guess_on_meshes_with_flat_faces():
     assert P2Builder(cg.grid_plane(6)).build(0).guess is None
 

@@ -82,10 +82,11 @@ GUESS_FRACTION = 0.9
 #: tail converged linearly with σ ≈ 0.3 at steps of 0.95 (bimba: the gap ÷ 2.5 per iteration over 15 iterations);
 #: measured iterations for caps 1 / 0.2 / 0.1 / 0.05: spot 21 / 20 / 18, bunny_7k 22 / 21 / 19, bimba 28 / – / 22 / 21.
 SIGMA_CAP_GUESS = 0.1
-#: PARDISO threads of the order-2 solver; None: the solve's thread policy (:mod:`cvxgeodesic._threads`). It was 1:
-#: on the shared 2-core machine (before the policy) a spot solve took 63 ms with MKL's default threads and 9 ms
-#: with one (11.7K DOFs).
-PARDISO_THREADS: int | None = 1
+#: PARDISO threads of the order-2 solver; None: the solve's thread policy (:mod:`cvxgeodesic._threads`). It was 1
+#: (before the policy, on the shared 2-core machine, a spot solve took 63 ms with MKL's default threads and 9 ms
+#: with one). Measured 2026-12-01 on bimba, quiet (load 0.5–1): one numeric factorization (92K DOFs, nnz(L) 5.0M)
+#: 0.142 s with one thread, 0.087 s with two; one solve 11.9 / 7.3 ms; a whole order-2 solve 9.6–10.5 s / 7.7–9.3 s.
+PARDISO_THREADS: int | None = None
 #: Substitute the two-unknown source equalities into the cones (:func:`eliminate_pair_equalities`) instead of
 #: keeping them as a Schur complement.
 ELIMINATE = True
