@@ -633,11 +633,12 @@ class P2Builder:
         cf = np.concatenate([cone_face[keep], *extra_f])
         cb = cone_bary[keep]
         guess = None
-        if vsrc.size:
+        with_guess = vsrc.size > 0 and not space.flat_faces.any()
+        if with_guess or (self.cone_scale == "dijkstra" and vsrc.size):
             from scipy.sparse.csgraph import dijkstra
             dv = dijkstra(mesh.vertex_adjacency, indices=vsrc, min_only=True)
             dv = np.where(np.isfinite(dv), dv, 0.0)
-        if vsrc.size and not space.flat_faces.any():
+        if with_guess:
             # a starting field for the structured solver: squared distance at the vertices, squared mean at the
             # midpoints (on an edge at a source vertex that is ℓ²/4 = φ_j / 4, so it meets the zero-derivative
             # equalities). Not on meshes with flat faces, where the sampled program's optimum is barely determined

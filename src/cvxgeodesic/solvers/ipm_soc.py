@@ -97,16 +97,20 @@ def _margin(u: np.ndarray) -> np.ndarray:
     return u[:, 0] - np.linalg.norm(u[:, 1:], axis=1)
 
 
-def _mehrotra_shift(s: np.ndarray, z: np.ndarray, factor: float = 1.5) -> tuple[np.ndarray, np.ndarray]:
-    """Mehrotra's starting-point shift for SOC(4) cones: ``s`` and ``z`` (k, 4) into the interior, then balanced."""
+def _mehrotra_shift(s: np.ndarray, z: np.ndarray, factor: float = 1.5, *,
+                    shift_s: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """Mehrotra's starting-point shift for SOC(4) cones: ``s`` and ``z`` (k, 4) into the interior, then balanced;
+    with ``shift_s=False`` a strictly feasible ``s`` is kept as it is and only ``z`` is shifted and balanced."""
     s, z = s.copy(), z.copy()
-    s[:, 0] += max(-factor * float(_margin(s).min()), 0.0)
+    if shift_s:
+        s[:, 0] += max(-factor * float(_margin(s).min()), 0.0)
     z[:, 0] += max(-factor * float(_margin(z).min()), 0.0)
     sz = float(np.einsum("ki,ki->", s, z))
     hs, hz = float(s[:, 0].sum()), float(z[:, 0].sum())
     if sz <= 0 or hs <= 0 or hz <= 0:
         sz, hs, hz = 1.0, 1.0, 1.0
-    s[:, 0] += 0.5 * sz / hz
+    if shift_s:
+        s[:, 0] += 0.5 * sz / hz
     z[:, 0] += 0.5 * sz / hs
     return s, z
 
@@ -330,7 +334,7 @@ class P2InteriorPoint:
         csc = max(float(np.abs(cD).max()), 1e-300)
         pb.c = cD / csc
         pb.E = (pb.E @ sp.diags(D)).tocsr()
-        if getattr(problem, "guess", None) is not None:
+        if problem.guess is not None:
             pb.guess = problem.guess / D
         out = self._solve_scaled(pb, tol=tol, max_iter=max_iter, callback=callback)
         out["x"] = out["x"] * D
@@ -570,11 +574,23 @@ class _P2System:
         return d, u, ap, ad
 
     def start(self):
-        """Least squares with W = I for x, the least-norm z with Gᵀz = −c, both shifted into the cones (:data:`START`);
-        returns ``x, s, z``."""
+        """The least-norm z with Gᵀz = −c and, from the guess (:data:`START` "guess") or least squares with W = I,
+        x; both shifted into the cones (:data:`START`); returns ``x, s, z``."""
         sv, pb, p, E = self.solver, self.pb, self.p, self.E
         k = pb.n_cones
         solve_h, Y, cf = self.factor(_Scaling.identity(k))
+        cc = -pb.c.copy()
+        cc[self.fixed] = 0.0
+        hb = solve_h(cc)
+        if p:
+            wy = sla.cho_solve(cf, E @ hb)
+            wv = hb - Y @ wy
+        else:
+            wv = hb
+        z = sv._Gx(pb, wv)  # least-norm z with Gᵀz = −c
+        if START == "guess" and (xg := self.interior_guess()) is not None:
+            self.sigma_cap = SIGMA_CAP_GUESS
+            return (xg, *_mehrotra_shift(pb.h - sv._Gx(pb, xg), z, shift_s=False))
         g = sv._Gtz(pb, pb.h)
         g[self.fixed] = 0.0
         hb = solve_h(g)
@@ -585,15 +601,6 @@ class _P2System:
             x = hb
         x[self.fixed] = 0.0
         s = pb.h - sv._Gx(pb, x)
-        cc = -pb.c.copy()
-        cc[self.fixed] = 0.0
-        hb = solve_h(cc)
-        if p:
-            wy = sla.cho_solve(cf, E @ hb)
-            wv = hb - Y @ wy
-        else:
-            wv = hb
-        z = sv._Gx(pb, wv)  # least-norm z with Gᵀz = −c
 
         def shift(u):
             m = u[:, 0] - np.linalg.norm(u[:, 1:], axis=1)
@@ -605,20 +612,13 @@ class _P2System:
 
         if START == "cvxopt":
             return x, shift(s), shift(z)
-        if START == "guess" and (xg := self.interior_guess()) is not None:
-            self.sigma_cap = SIGMA_CAP_GUESS
-            sg = pb.h - sv._Gx(pb, xg)
-            z = z.copy()
-            z[:, 0] += max(-1.5 * float(_margin(z).min()), 0.0)
-            z[:, 0] += 0.5 * float(np.einsum("ki,ki->", sg, z)) / max(float(sg[:, 0].sum()), 1e-300)
-            return xg, sg, z
         return (x, *_mehrotra_shift(s, z))
 
     def interior_guess(self):
         """``θ ψ`` for the problem's guess ``ψ`` (scaled), ``θ = min(1, GUESS_FRACTION θ_max)`` with ``θ_max`` the
         largest ``θ`` keeping every cone's slack ``h − θ Gψ`` strictly inside; ``None`` when no ``θ > 0`` does."""
         pb = self.pb
-        psi = getattr(pb, "guess", None)
+        psi = pb.guess
         if psi is None or (self.p and np.abs(self.E @ psi - pb.f).max() > 1e-9 * max(1.0, np.abs(psi).max())):
             return None
         theta = self._cone_theta(psi)
