@@ -132,6 +132,13 @@ def test_jordan_product_and_division(cone):
     assert _inside(cone, cone.product(lam, lam)).all()  # squares lie in the cone
 
 
+def _scaled_pair_and_steps(cone, seed):
+    """Interior ``s, z``, their NT scaling and random directions ``ds, dz`` (the same draws as each test had)."""
+    rng = np.random.default_rng(seed)
+    s, z = _interior(cone, rng), _interior(cone, rng)
+    return s, z, cone.scaling(s, z), rng.normal(size=s.shape), rng.normal(size=s.shape)
+
+
 def _dense_mehrotra(cone, sc, ds, dz, z, sigma_mu, i):
     W, Winv = _dense(sc.apply_w, cone, i), _dense(sc.apply_winv, cone, i)
     a, b = Winv @ _col(ds, i), W @ _col(dz, i)
@@ -141,10 +148,7 @@ def _dense_mehrotra(cone, sc, ds, dz, z, sigma_mu, i):
 
 @pytest.mark.parametrize("cone", CONES, ids=IDS)
 def test_mehrotra_term_matches_dense_reference(cone):
-    rng = np.random.default_rng(4)
-    s, z = _interior(cone, rng), _interior(cone, rng)
-    sc = cone.scaling(s, z)
-    ds, dz = rng.normal(size=s.shape), rng.normal(size=s.shape)
+    s, z, sc, ds, dz = _scaled_pair_and_steps(cone, 4)
     out = cone.mehrotra(sc, ds, dz, z, 0.3)
     for i in (0, 5, K - 1):
         np.testing.assert_allclose(_col(out, i), _dense_mehrotra(cone, sc, ds, dz, z, 0.3, i), rtol=1e-8, atol=1e-9)
@@ -164,10 +168,7 @@ def _spectral(cone, v):
 
 @pytest.mark.parametrize("cone", CONES, ids=IDS)
 def test_gondzio_term_matches_dense_reference(cone):
-    rng = np.random.default_rng(5)
-    s, z = _interior(cone, rng), _interior(cone, rng)
-    sc = cone.scaling(s, z)
-    ds, dz = rng.normal(size=s.shape), rng.normal(size=s.shape)
+    s, z, sc, ds, dz = _scaled_pair_and_steps(cone, 5)
     tp, td, lo, hi = 0.7, 0.4, 0.05, 0.8
     out = cone.gondzio(sc, s, ds, tp, z, dz, td, lo, hi)
     for i in range(0, K, 7):
