@@ -24,6 +24,12 @@ class IPMSettings:
         iterations with 3, 125 with 4, 119 with 6 (the 280K bunny 18, 17, 18); with β = (0.1, 10) and 2
         correctors, 2 took 179 against 154. Not adopted with the narrower β: the fields moved by up to 2.8e-6 of
         the bounding-box diagonal on spot (``benchmarks/ipm_regression.py --compare``), beyond its 1e-6 gate.
+        Measured again 2026-12-02 (σ exponent 4 with β = (0.5, 2) against the defaults, tol 1e-8, fields against a
+        tol-1e-11 solve): 628 → 540 iterations over bunny_7k, fandisk, kitten, camelhead, fertility, dragon_20k × the
+        formulations (bunny_7k 93 → 77, fandisk 111 → 96, camelhead 129 → 112), but on thingi_65395 (near-duplicate
+        vertices) 116 → 136 iterations on QCLP with the field 5.8e-6 of the diagonal from the reference against 7.0e-7,
+        and LCLP's field there 2.7e-6 from Dijkstra (``tests/test_formulations.py`` asks 1e-6): the narrower centring
+        is faster on well-shaped meshes and slower and less accurate on the hard ones. Not adopted.
     mehrotra_correction : bool
         The second-order term ``(W⁻¹Δs_a)∘(WΔz_a)`` of Mehrotra's combined step. Default True; False leaves the
         centering term ``σμe`` alone (a breakage for tests).
