@@ -20,7 +20,7 @@ from .cones import Scaling
 from .newton import LinearSystem, Residuals, newton
 from .program import Program
 from .residuals import Evaluation
-from .settings import IPMSettings
+from .settings import CORRECTORS_LARGE, IPMSettings
 from .state import Direction, Iterate
 
 __all__ = ["Stepper"]
@@ -47,6 +47,9 @@ class Stepper:
         # separate step lengths cut the iteration count on these highly degenerate problems.
         self.separate = pr.P is None and settings.separate_steps
         self.no_resid = Residuals.zero(pr)  # correctors only change the complementarity right-hand side
+        self.max_correctors = settings.correctors_for(ls.chol.nnz)
+        counters["max_correctors"] = self.max_correctors
+        counters.setdefault("corrector_escalations", 0)
 
     def _steps(self, it: Iterate, ds: Sequence[np.ndarray], dz: Sequence[np.ndarray], fraction: float
                ) -> tuple[float, float]:
@@ -92,7 +95,11 @@ class Stepper:
         """Gondzio's multiple centrality correctors: cheap extra solves with the same factor, each tried at the
         weights ``corrector_weights`` and kept when it lengthens the step by 0.01 at least."""
         pr, st = self.pr, self.st
-        for _ in range(st.max_correctors):
+        budget = self.max_correctors
+        if st.max_correctors is None and min(step_p, step_d) < st.short_step and budget < CORRECTORS_LARGE:
+            budget = CORRECTORS_LARGE  # a hard iteration: centrality is worth more than the solves
+            self.counters["corrector_escalations"] += 1
+        for _ in range(budget):
             if min(step_p, step_d) >= 0.995:
                 break
             tp, td = min(1.0, st.gz_a * step_p + st.gz_b), min(1.0, st.gz_a * step_d + st.gz_b)

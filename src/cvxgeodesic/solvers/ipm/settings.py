@@ -8,6 +8,15 @@ __all__ = ["IPMSettings"]
 
 _INITS = ("graph", "interior", "mehrotra", "cvxopt")
 
+#: Centrality correctors per iteration below :data:`LARGE_PATTERN_NNZ` (see ``IPMSettings.max_correctors``).
+CORRECTORS_SMALL = 2
+#: ... and from it.
+CORRECTORS_LARGE = 4
+#: Stored entries (lower triangle) of the Newton pattern from which :data:`CORRECTORS_LARGE` correctors pay:
+#: between the 280K-face bunny's QCQP-Hessian pattern (1.4M, where 2 and 4 cost about the same) and the
+#: 1.1M-face bunny's (5.6M, where 4 is faster); the 100K-face meshes have 0.17–0.49M.
+LARGE_PATTERN_NNZ = 2_000_000
+
 
 @dataclass(frozen=True)
 class IPMSettings:
@@ -52,12 +61,30 @@ class IPMSettings:
     separate_steps : bool
         Separate primal and dual step lengths when ``P`` is None (measured: 20 → 18 iterations on spot's QCLP).
         Default True.
-    max_correctors : int
+    max_correctors : int or None
         Gondzio's centrality correctors per iteration (measured on bimba's QCLP: 24 iterations without, 18 with
-        2, 18 with 4); each costs one triangular solve pair and no factorization. Default 4: on the 280K-face
-        bunny (QCQP-Hessian) both of 2 were accepted in every iteration, and 3, 4, 6 took 20, 19, 19 iterations
-        against 21; the 1.1M-face bunny 29 → 26 (with the graph start); over the set of ``sigma_exp`` 154 → 146
-        with 4 (143 with the graph start), and with β = (0.5, 2) 3 correctors took 140 against 134 with 4.
+        2, 18 with 4). Each costs one triangular solve, a pass over the cones and up to three step-length
+        evaluations, and no factorization, so its worth depends on how a factorization compares with a solve:
+        Gondzio (1996) chooses the count from that ratio. ``None`` (the default) does the same from the size
+        of the Newton pattern, which the ratio grows with (:meth:`correctors_for`): :data:`CORRECTORS_SMALL`
+        below :data:`LARGE_PATTERN_NNZ` stored entries, :data:`CORRECTORS_LARGE` from it. An integer fixes the
+        count. Measured 2026-12-02 (source 0; factorizations / triangular solves / iterations, deterministic):
+        horse QCLP 17 / 76 / 16 with 2 against 17 / 108 / 16 with 4; bimba QCQP-Hessian 16 / 71 / 15 against
+        15 / 93 / 14; the 280K-face bunny QCQP-Hessian 22 / 99 / 21 against 20 / 128 / 19; the 1.1M-face
+        bunny 30 / 145 / 29 against 27 / 178 / 26. One solve with 1 thread (min of 3, variants alternating,
+        2-core machine shared with one other job, load 1.1–3.3), 1 / 2 / 4 correctors: bimba QCLP 0.74 /
+        0.87 / 0.92 s, QCQP-Hessian 1.50 / 1.73 / 1.87 s; horse QCLP 2.22 / 2.13 / 2.56 s, QCQP-Hessian 4.39
+        / 4.56 / 4.70 s; armadillo QCLP 1.54 / 1.52 / 1.98 s, QCQP-Hessian 3.39 / 3.22 / 3.49 s. At 1.1M faces
+        a factorization costs about 20 triangular solves (2.45 s against 0.12 s, 2026-12-01), and the three
+        factorizations that 4 correctors save outweigh their 33 extra solves. 2 rather than 1 below the
+        threshold: 1 was faster on bimba, slower on horse QCLP and armadillo, and 2–3 iterations longer.
+    short_step : float
+        With ``max_correctors=None``: an iteration whose combined step (before the correctors) is shorter than
+        this gets :data:`CORRECTORS_LARGE` correctors whatever the size (counted in
+        ``info.extra["corrector_escalations"]``). On thingi_65395 (near-duplicate vertices, 1.2K vertices) 2
+        correctors took QCLP 116 → 135 iterations and QCQP-Hessian 114 "optimal" → 130 "almost_optimal"
+        against 4; with this rule 120 and 117, both "optimal" (2026-12-02). Default 0.35: 0.2 gave 121 / 117,
+        0.5 gave 116 / 115 but added 4–6 solves on horse and armadillo, where 0.35 adds 0–2 (bimba none).
     beta_min, beta_max : float
         Corrector target: complementarity eigenvalues into ``[β_min σμ, β_max σμ]``. Defaults 0.1, 10. Over the
         set of ``sigma_exp`` (graph start, 4 correctors): 143 iterations with (0.1, 10), 139 with (0.3, 3), 134
@@ -115,7 +142,8 @@ class IPMSettings:
     refine_fraction: float = 0.1
     gap_aware_below: float = 100.0
     separate_steps: bool = True
-    max_correctors: int = 4
+    max_correctors: int | None = None
+    short_step: float = 0.35
     beta_min: float = 0.1
     beta_max: float = 10.0
     gz_a: float = 1.5
@@ -128,11 +156,20 @@ class IPMSettings:
     shift_factor: float = 1.5
     dual_floor: float = 1e-2
 
+    def correctors_for(self, pattern_nnz: int) -> int:
+        """Centrality correctors per iteration for a Newton pattern of ``pattern_nnz`` stored entries (lower
+        triangle): ``max_correctors`` when set, else by size (see ``max_correctors``)."""
+        if self.max_correctors is not None:
+            return self.max_correctors
+        return CORRECTORS_LARGE if pattern_nnz >= LARGE_PATTERN_NNZ else CORRECTORS_SMALL
+
     def __post_init__(self) -> None:
         if self.init not in _INITS:
             raise ValueError(f"IPMSettings.init must be one of {', '.join(map(repr, _INITS))}, got {self.init!r}")
         if not 0.0 < self.step < 1.0:
             raise ValueError(f"IPMSettings.step must be in (0, 1), got {self.step!r}")
+        if not 0.0 <= self.short_step <= 1.0:
+            raise ValueError(f"IPMSettings.short_step must be in [0, 1], got {self.short_step!r}")
         if not 0.0 < self.interior_fraction <= 1.0:
             raise ValueError(f"IPMSettings.interior_fraction must be in (0, 1], got {self.interior_fraction!r}")
         if not self.corrector_weights or not all(0.0 < w <= 1.0 for w in self.corrector_weights):
@@ -142,6 +179,8 @@ class IPMSettings:
                              f"{self.beta_min!r}, {self.beta_max!r}")
         for f in fields(self):
             value = getattr(self, f.name)
+            if f.name == "max_correctors" and value is None:
+                continue
             if f.name in ("max_refine", "max_correctors", "stall_iterations"):
                 if isinstance(value, bool) or not isinstance(value, int) or value < 0:
                     raise ValueError(f"IPMSettings.{f.name} must be a nonnegative integer, got {value!r}")
