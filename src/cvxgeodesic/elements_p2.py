@@ -76,6 +76,11 @@ REFINE_TOL = 1e-7
 MIN_EDGE = 1e-9
 #: Tolerance on barycentric coordinates for "this source point is a vertex / on an edge / a sample point".
 BARY_TOL = 1e-12
+#: Version of the order-2 fields, for caches keyed on the inputs only (``benchmarks/report_common.py``): bump it
+#: whenever a change moves an order-2 result beyond the solver tolerance (formulation, samples, weights, defaults),
+#: so that fields cached by older code are recomputed instead of silently reused. 1: 2026-12-02 (first version;
+#: the fields of the 2026-12-01 defaults, midpoints on curved faces).
+ORDER2_CACHE_VERSION = 1
 
 
 def p2_basis(bary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
