@@ -738,3 +738,13 @@ def test_a_dof_fixed_by_a_one_unknown_row_keeps_no_cone_columns():
     on = pr.cone_dofs == far
     assert on.any() and np.abs(pr.G.transpose(0, 2, 1)[on]).max() > 0
     assert np.abs(reduced.G.transpose(0, 2, 1)[on]).max() == 0.0 and reduced.c[far] == 0.0
+
+
+def test_a_point_source_in_a_face_of_a_vertex_source_is_solved_by_the_structured_solver():
+    # the inserted point's vertex is joined to the vertex source by an edge of the split: adjacent sources again
+    # (before 2026-12-02: the structured solver broke down, Clarabel took 19 iterations)
+    mesh = cg.icosphere(2)
+    f = int(np.flatnonzero((mesh.F == 0).any(axis=1))[0])
+    r = order2(mesh, [0, (f, (0.2, 0.3, 0.5))])
+    assert r.info.solver == "ipm" and r.info.status == "optimal"
+    assert not [n for n in r.info.notes if "Clarabel" in n] and r.info.iterations <= 16  # 14
