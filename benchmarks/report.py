@@ -857,6 +857,24 @@ SECTIONS = {
 # ----------------------------------------------------------------------------------------------------------------------
 
 
+def section_version(name: str) -> int | None:
+    """The library code version a section's cached numbers depend on, or None: the order-2 section's
+    (:data:`cvxgeodesic.elements_p2.ORDER2_CACHE_VERSION`, as its fields' cache keys)."""
+    if name == "order2":
+        from cvxgeodesic.elements_p2 import ORDER2_CACHE_VERSION
+
+        return ORDER2_CACHE_VERSION
+    return None
+
+
+def cached_section_ok(name: str, data: dict, figures: Path) -> bool:
+    """Whether a section's cached numbers ``data`` can be reused: its figures are there and it was computed with
+    the code version it depends on (:func:`section_version`; sections without one keep their caches)."""
+    if data.get("code_version") != section_version(name):
+        return False
+    return all((figures / f).exists() for f in data.get("figures", []))
+
+
 def render(results: dict, env: dict, timings: dict, plan: Plan) -> str:
     import report_text as rt
 
@@ -911,15 +929,15 @@ def main(argv=None) -> int:
                 path.unlink()
             if name not in wanted and args.sections:
                 continue
-            if path.exists():
-                data = json.loads(path.read_text())
-                if all((ctx.figures / f).exists() for f in data.get("figures", [])):
-                    log(f"{name}: cached, skipped")
-                    continue
+            if path.exists() and cached_section_ok(name, json.loads(path.read_text()), ctx.figures):
+                log(f"{name}: cached, skipped")
+                continue
             log(f"{name}: computing")
             t0 = time.perf_counter()
             data = SECTIONS[name](ctx, plan)
             wall = time.perf_counter() - t0
+            if (version := section_version(name)) is not None:
+                data["code_version"] = version
             dump_json(path, data)
             timings[name] = {"wall_s": wall, "finished": time.strftime("%Y-%m-%d %H:%M:%S"),
                              "loadavg_1min": round(os.getloadavg()[0], 2)}

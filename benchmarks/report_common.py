@@ -191,6 +191,25 @@ def _attempt_record(solver: str, wall: float, err) -> dict:
             "error": _short(f"{type(err).__name__}: {msg}", 400), "hint": hint}
 
 
+def field_key(mesh_key: str, method: str, source: int, m: float, order: int, normalization: str,
+              fingerprint: str) -> str:
+    """The name of one cached field (``fields/<key>.npz``): mesh, method, order, m, source and mesh fingerprint.
+
+    Order-1 keys are the ones used before order 2 existed, so the existing cache stays valid. Order-2 keys carry
+    :data:`cvxgeodesic.elements_p2.ORDER2_CACHE_VERSION` (``__o2v<version>``): a field computed by order-2 code
+    whose results have changed since is recomputed, not reused.
+    """
+    from cvxgeodesic.elements_p2 import ORDER2_CACHE_VERSION
+
+    method = canonical(method)
+    is_formulation = method in FORMULATIONS
+    mtag = f"{m:g}" if is_formulation and FORMULATIONS[method][1] is not None else "-"
+    otag = "" if order == 1 else f"__o{order}" + (f"v{ORDER2_CACHE_VERSION}" if order == 2 else "")
+    if normalization != "area" and is_formulation:
+        otag += f"__n{normalization}"
+    return f"{mesh_key}__{method}{otag}__m{mtag}__s{source}__{fingerprint}".replace("/", "+")
+
+
 def solve(ctx: Context, mesh, mesh_key: str, method: str, source: int, m: float = 1.0, order: int = 1,
           normalization: str = "area") -> dict:
     """Solve ``method`` on ``mesh`` from ``source`` (cached), falling back from our IPM to Clarabel.
@@ -205,10 +224,7 @@ def solve(ctx: Context, mesh, mesh_key: str, method: str, source: int, m: float 
     method = canonical(method)
     is_formulation = method in FORMULATIONS
     mtag = f"{m:g}" if is_formulation and FORMULATIONS[method][1] is not None else "-"
-    otag = f"__o{order}" if order != 1 else ""  # order-1 keys stay as they were: the existing cache stays valid
-    if normalization != "area" and is_formulation:
-        otag += f"__n{normalization}"
-    key = f"{mesh_key}__{method}{otag}__m{mtag}__s{source}__{mesh_fingerprint(mesh)}".replace("/", "+")
+    key = field_key(mesh_key, method, source, m, order, normalization, mesh_fingerprint(mesh))
     path = ctx.cache / "fields" / f"{key}.npz"
     if path.exists():
         with np.load(path, allow_pickle=False) as z:

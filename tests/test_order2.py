@@ -693,3 +693,58 @@ print(json.dumps({"solver": res.info.solver, "status": res.info.status, "notes":
     assert info["solver"] == "clarabel" and info["status"] == "optimal"
     assert any("order-2 interior-point solver is not available" in n for n in info["notes"]), info
     assert info["forced"] and "solver='ipm' is not available" in info["forced"], info
+
+
+def test_cones_on_sources_only():
+    corners = np.array([[0, 1, 2], [0, 1, 2], [0, 1, 2], [3, 0, 1], [3, 0, 1]])
+    bary = np.array([[1, 0, 0], [0.5, 0.5, 0], [0, 0.5, 0.5], [0, 0.5, 0.5], [0.2, 0.4, 0.4]])
+    np.testing.assert_array_equal(p2mod._on_sources(corners, bary, np.array([0, 1])),
+                                  [True, True, False, True, False])
+
+
+@pytest.mark.parametrize("which", ["edge", "face"])
+def test_adjacent_sources_are_solved_by_the_structured_solver(which, monkeypatch):
+    """Two sources joined by an edge (or a face of three) put the cones on that edge at their apex for every
+    feasible φ: with them the program had no strictly feasible point, the structured solver broke down and Clarabel
+    took over (icosphere(2): 17 Clarabel iterations; bimba from [0, 7]: 45). They are implied by the source rows
+    and left out: the same optimum, from the guess start."""
+    mesh = cg.icosphere(2)
+    src = mesh.F[0].tolist()[: 2 if which == "edge" else 3]
+    r = order2(mesh, src)
+    assert r.info.solver == "ipm" and r.info.status == "optimal" and not r.info.notes
+    assert r.info.iterations <= 13  # 11 and 12 (2026-12-02); 10 from one source
+    # the optimum with the apex cones kept, solved by Clarabel: the cones were redundant
+    from cvxgeodesic.mesh.trimesh import unit_mesh as _unit_mesh
+
+    unit, scale = _unit_mesh(mesh)
+    monkeypatch.setattr(p2mod, "_on_sources", lambda c, b, v: (b == 1).any(axis=1) & ((b <= 0) | np.isin(c, v)).all(1))
+    full = solve_p2_clarabel(P2Builder(unit).build(src), tol=1e-10)
+    d_full = np.sqrt(np.maximum(full["x"][: mesh.n_vertices], 0.0)) * scale
+    assert np.abs(r.distance - d_full).max() <= 1e-6 * mesh.bbox_diagonal
+
+
+def test_a_dof_fixed_by_a_one_unknown_row_keeps_no_cone_columns():
+    import scipy.sparse as sps
+
+    from cvxgeodesic.solvers.ipm_soc import eliminate_pair_equalities
+
+    b = P2Builder(cg.icosphere(2))
+    pr = b.build(0)
+    far = int(np.argmax(np.linalg.norm(b.mesh.V - b.mesh.V[0], axis=1)))
+    pr.E = sps.vstack([pr.E, sps.csr_matrix(([2.0], ([0], [far])), shape=(1, pr.n))]).tocsr()  # φ_far = 0
+    pr.f = np.concatenate([pr.f, [0.0]])
+    reduced, _ = eliminate_pair_equalities(pr)
+    assert reduced.fixed[far] and reduced.E.shape[0] == 0
+    on = pr.cone_dofs == far
+    assert on.any() and np.abs(pr.G.transpose(0, 2, 1)[on]).max() > 0
+    assert np.abs(reduced.G.transpose(0, 2, 1)[on]).max() == 0.0 and reduced.c[far] == 0.0
+
+
+def test_a_point_source_in_a_face_of_a_vertex_source_is_solved_by_the_structured_solver():
+    # the inserted point's vertex is joined to the vertex source by an edge of the split: adjacent sources again
+    # (before 2026-12-02: the structured solver broke down, Clarabel took 19 iterations)
+    mesh = cg.icosphere(2)
+    f = int(np.flatnonzero((mesh.F == 0).any(axis=1))[0])
+    r = order2(mesh, [0, (f, (0.2, 0.3, 0.5))])
+    assert r.info.solver == "ipm" and r.info.status == "optimal"
+    assert not [n for n in r.info.notes if "Clarabel" in n] and r.info.iterations <= 16  # 14

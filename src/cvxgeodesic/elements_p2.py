@@ -76,6 +76,11 @@ REFINE_TOL = 1e-7
 MIN_EDGE = 1e-9
 #: Tolerance on barycentric coordinates for "this source point is a vertex / on an edge / a sample point".
 BARY_TOL = 1e-12
+#: Version of the order-2 fields, for caches keyed on the inputs only (``benchmarks/report_common.py``): bump it
+#: whenever a change moves an order-2 result beyond the solver tolerance (formulation, samples, weights, defaults),
+#: so that fields cached by older code are recomputed instead of silently reused. 1: 2026-12-02 (first version;
+#: the fields of the 2026-12-01 defaults, midpoints on curved faces).
+ORDER2_CACHE_VERSION = 1
 
 
 def p2_basis(bary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -595,7 +600,7 @@ class P2Builder:
         """
         mesh, space = self.mesh, self.space
         vsrc, points = parse_sources(sources, mesh)
-        G0, h0, cone_face, cone_bary, cone_vertex = self.G, self.h, self.cone_face, self.cone_bary, self.cone_vertex
+        G0, h0, cone_face, cone_bary = self.G, self.h, self.cone_face, self.cone_bary
         if extra is not None and len(extra[0]):
             ef, eb = np.asarray(extra[0], dtype=np.int64), np.asarray(extra[1], dtype=float)
             ok = ~space.degenerate[ef]
@@ -605,7 +610,6 @@ class P2Builder:
             G0, h0 = np.concatenate([G0, Gx]), np.concatenate([h0, hx])
             cone_face = np.concatenate([cone_face, ef])
             cone_bary = np.concatenate([cone_bary, eb])
-            cone_vertex = np.concatenate([cone_vertex, -np.ones(ef.size, dtype=np.int64)])
         if mesh.n_faces == 0 or np.all(space.degenerate):
             raise MeshError(f"{mesh.name}: every face is degenerate; order 2 needs at least one proper face")
         seed = np.concatenate([vsrc, *[mesh.F[p.face] for p in points]]) if points else vsrc
@@ -615,7 +619,11 @@ class P2Builder:
         reach = np.concatenate([reach_v, reach_v[E[:, 0]] & reach_v[E[:, 1]]])
         fixed = ~reach
         fixed[vsrc] = True
-        keep = ~np.isin(cone_vertex, vsrc)
+        both = np.flatnonzero(np.isin(E, vsrc).all(axis=1))
+        # an edge joining two sources: the zero-derivative rows at both ends give φ_mid = 0, so fix it here (as an
+        # E row of one unknown it left its cone columns in place)
+        fixed[mesh.n_vertices + both] = True
+        keep = ~_on_sources(mesh.F[cone_face], cone_bary, vsrc)
         keep &= reach[space.face_dofs[cone_face]].all(axis=1)
         rows, cols, vals, r, keep = self._source_equalities(vsrc, points, cone_face, cone_bary, keep)
         extra_G, extra_h, extra_f = self._source_hessian_cones(vsrc, points, reach)
@@ -666,6 +674,30 @@ class P2Builder:
             G=Gall, h=hall, E=Emat, f=np.zeros(Emat.shape[0]), fixed=fixed,
             unreachable_vertices=~reach_v, notes=list(self.notes), guess=guess,
         )
+
+
+def _on_sources(corners: np.ndarray, bary: np.ndarray, vsrc: np.ndarray) -> np.ndarray:
+    """Which cone samples lie on source vertices only: at a source, on an edge joining two, or on a face of three.
+
+    With the zero-derivative rows at every source, ``φ`` and ``∇φ`` vanish there for every feasible ``φ`` (on a face
+    ``(s, t, x)`` with sources ``s, t`` the rows leave ``φ = φ_x λ_x²``, whose value and gradient are 0 on the edge
+    ``st``): such a cone sits at its apex, implied by the rows, and with it the program has no strictly feasible
+    point (the structured solver broke down on every pair of adjacent sources and Clarabel took over, docs/order2.md).
+
+    Parameters
+    ----------
+    corners : (k, 3) int ndarray
+        The vertices of each sample's face.
+    bary : (k, 3) float ndarray
+        The samples' barycentric coordinates in those faces.
+    vsrc : (p,) int ndarray
+        Source vertices.
+
+    Returns
+    -------
+    (k,) bool ndarray
+    """
+    return ((bary <= 0) | np.isin(corners, vsrc)).all(axis=1)
 
 
 def _frame(mesh: TriMesh, f: int) -> tuple[np.ndarray, np.ndarray]:

@@ -172,6 +172,10 @@ def eliminate_pair_equalities(problem):
     np.add.at(c, j[ok], alpha[ok] * c[m[ok]])
     c[m[ok]] = 0.0
     fixed[m[ok]] = True
+    # a DOF fixed by a row of one unknown keeps no cone columns (the Newton matrix gives fixed DOFs an identity row
+    # only; with their columns left in, x there drifted from 0 during the iterations)
+    G = np.where(fixed[dofs][:, None, :], 0.0, G)
+    c[fixed] = 0.0
     rows_left = np.setdiff1d(np.arange(E.shape[0]), np.concatenate([ones, pairs[ok]]))
     pb.G, pb.c, pb.E, pb.f, pb.fixed = G, c, E[rows_left], problem.f[rows_left], fixed
     fx = np.flatnonzero(fixed)
