@@ -74,10 +74,13 @@ class IPMSettings:
         bunny 30 / 145 / 29 against 27 / 178 / 26. One solve with 1 thread (min of 3, variants alternating,
         2-core machine shared with one other job, load 1.1–3.3), 1 / 2 / 4 correctors: bimba QCLP 0.74 /
         0.87 / 0.92 s, QCQP-Hessian 1.50 / 1.73 / 1.87 s; horse QCLP 2.22 / 2.13 / 2.56 s, QCQP-Hessian 4.39
-        / 4.56 / 4.70 s; armadillo QCLP 1.54 / 1.52 / 1.98 s, QCQP-Hessian 3.39 / 3.22 / 3.49 s. At 1.1M faces
-        a factorization costs about 20 triangular solves (2.45 s against 0.12 s, 2026-12-01), and the three
-        factorizations that 4 correctors save outweigh their 33 extra solves. 2 rather than 1 below the
-        threshold: 1 was faster on bimba, slower on horse QCLP and armadillo, and 2–3 iterations longer.
+        / 4.56 / 4.70 s; armadillo QCLP 1.54 / 1.52 / 1.98 s, QCQP-Hessian 3.39 / 3.22 / 3.49 s. Quiet, 2 threads,
+        the rule against 4: 0–13 % faster on the same six solves (docs/performance.md, "Corrector count by size").
+        At 1.1M faces a factorization costs about 20 triangular solves (2.0 s against 0.1 s), and the three
+        factorizations 4 correctors save there about pay for their 33 extra solves and cone passes (solve 98.6 s
+        in 26 iterations against 96.4 s in 29 at commit 55873ee, 2 correctors and another start); 4 keeps the
+        count down there. 2 rather than 1 below the threshold: 1 was faster on bimba, slower on horse QCLP and
+        armadillo, and 2–3 iterations longer.
     short_step : float
         With ``max_correctors=None``: an iteration whose combined step (before the correctors) is shorter than
         this gets :data:`CORRECTORS_LARGE` correctors whatever the size (counted in
