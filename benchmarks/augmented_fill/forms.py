@@ -24,7 +24,10 @@ from numba import njit
 
 from cvxgeodesic.mesh.io import load_mesh
 from cvxgeodesic.operators import _hessian_kernels as K
-from cvxgeodesic.operators.energies import curved_hessian_energy  # noqa: F401 (re-exported for the scripts)
+from cvxgeodesic.operators.energies import (
+    curved_hessian_energy,  # noqa: F401 (re-exported for the scripts)
+    curved_hessian_face_data,
+)
 from cvxgeodesic.solvers.problem import kkt_pattern  # noqa: F401
 
 
@@ -43,20 +46,8 @@ def _face_factors(F, E, twin, lsq, dA, theta, minv, sk, Cs, LKs, verts):
 def face_factors(mesh):
     """Per face: C (m, 6, 6) rows of G on the face's 6 edge unknowns (par_0..2, perp_0..2), columns verts (m, 6);
     LK (m, 6, 6) the face's block of S = L + K; unknown ids (m, 6) = 2 * edge + (0 par, 1 perp)."""
-    V = np.ascontiguousarray(mesh.V, dtype=np.float64)
-    F = np.ascontiguousarray(mesh.F, dtype=np.int64)
-    E = np.ascontiguousarray(mesh.face_edges, dtype=np.int64)
-    n, m, n_edges = mesh.n_vertices, F.shape[0], len(mesh.edges)
-    lsq, dA, theta = np.empty((m, 3)), np.empty(m), np.empty((m, 3))
-    K.face_geometry(V, F, lsq, dA, theta)
-    mass = np.bincount(E.ravel(), weights=np.repeat(dA / 6.0, 3), minlength=n_edges)
-    minv = np.zeros(n_edges)
-    np.divide(1.0, mass, out=minv, where=mass > 0)
-    angle_sum = np.bincount(F.ravel(), weights=theta.ravel(), minlength=n)
-    defect = 2.0 * np.pi - angle_sum
-    defect[mesh.edges[mesh.edge_face_counts == 1].ravel()] = 0.0
-    sk = np.zeros(n)
-    np.divide(defect, angle_sum, out=sk, where=angle_sum > 0)
+    F, E, n_edges, lsq, dA, theta, minv, sk = curved_hessian_face_data(mesh, K)
+    m = F.shape[0]
     Cs, LKs = np.empty((m, 6, 6)), np.empty((m, 6, 6))
     verts = np.empty((m, 6), dtype=np.int64)
     _face_factors(F, E, K.twins(E, n_edges), lsq, dA, theta, minv, sk, Cs, LKs, verts)

@@ -107,16 +107,22 @@ class Pardiso:
         self._call(-1)
 
 
-def cholmod_counts(A, ordering):
-    """nnz(L) and Σ_j c_j² (the LLᵀ flop count, c_j the nonzeros of column j with the diagonal) from CHOLMOD's
-    symbolic factorization of the pattern (an SPD matrix with A's pattern: only the pattern matters)."""
+def pattern_factor(A, ordering):
+    """CHOLMOD's simplicial factor of an SPD matrix with A's pattern (diagonally dominant: only the pattern
+    matters); ``.L()`` and ``.P()`` give the factor and the fill-reducing permutation."""
     from sksparse.cholmod import analyze
     pat = sp.csc_matrix((np.ones(A.nnz), A.indices, A.indptr), shape=A.shape)
     deg = np.asarray(pat.sum(axis=0)).ravel()
     spd = (-pat + sp.diags(2 * deg + 1.0)).tocsc()
     f = analyze(spd, mode="simplicial", ordering_method=ordering)
     f.cholesky_inplace(spd)
-    Lm = f.L()
+    return f
+
+
+def cholmod_counts(A, ordering):
+    """nnz(L) and Σ_j c_j² (the LLᵀ flop count, c_j the nonzeros of column j with the diagonal) from CHOLMOD's
+    symbolic factorization of the pattern (an SPD matrix with A's pattern: only the pattern matters)."""
+    Lm = pattern_factor(A, ordering).L()
     c = np.diff(Lm.indptr).astype(np.float64)
     return int(Lm.nnz), float((c * c).sum())
 

@@ -9,18 +9,13 @@ from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
-from sksparse.cholmod import analyze
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from measure import build  # noqa: E402
+from measure import build, pattern_factor  # noqa: E402
 
 
 def root_block(A, ordering, n_x):
-    pat = sp.csc_matrix((np.ones(A.nnz), A.indices, A.indptr), shape=A.shape)
-    deg = np.asarray(pat.sum(axis=0)).ravel()
-    spd = (-pat + sp.diags(2 * deg + 1.0)).tocsc()
-    f = analyze(spd, mode="simplicial", ordering_method=ordering)
-    f.cholesky_inplace(spd)
+    f = pattern_factor(A, ordering)
     L = f.L()
     N = A.shape[0]
     c = np.diff(L.indptr)

@@ -111,6 +111,31 @@ def hessian_energy_matrix(mesh: TriMesh, notes: list[str] | None = None, *,
     return Q if to_mesh is None else pull_back(Q, to_mesh, mesh.n_vertices)
 
 
+def curved_hessian_face_data(mesh: TriMesh, kern) -> tuple:
+    """The per-face inputs of the compiled curved Hessian assembly (:mod:`._hessian_kernels`).
+
+    Returns ``(F, E, n_edges, lsq, dA, theta, minv, sk)``: faces (m, 3) and their edges (m, 3) as contiguous
+    int64, the edge count, squared edge lengths (m, 3), doubled areas (m,), corner angles (m, 3), the inverse
+    Crouzeix–Raviart edge masses (n_edges,) (0 on a massless edge) and each vertex's angle defect over its angle
+    sum (n,) (0 on the boundary, as libigl). ``kern`` is the kernels module.
+    """
+    V = np.ascontiguousarray(mesh.V, dtype=np.float64)
+    F = np.ascontiguousarray(mesh.F, dtype=np.int64)
+    E = np.ascontiguousarray(mesh.face_edges, dtype=np.int64)
+    n, m, n_edges = mesh.n_vertices, F.shape[0], len(mesh.edges)
+    lsq, dA, theta = np.empty((m, 3)), np.empty(m), np.empty((m, 3))
+    kern.face_geometry(V, F, lsq, dA, theta)
+    mass = np.bincount(E.ravel(), weights=np.repeat(dA / 6.0, 3), minlength=n_edges)
+    minv = np.zeros(n_edges)
+    np.divide(1.0, mass, out=minv, where=mass > 0)
+    angle_sum = np.bincount(F.ravel(), weights=theta.ravel(), minlength=n)
+    defect = 2.0 * np.pi - angle_sum
+    defect[mesh.edges[mesh.edge_face_counts == 1].ravel()] = 0.0  # libigl: no curvature on the boundary
+    sk = np.zeros(n)
+    np.divide(defect, angle_sum, out=sk, where=angle_sum > 0)
+    return F, E, n_edges, lsq, dA, theta, minv, sk
+
+
 def curved_hessian_energy(mesh: TriMesh, *, compiled: bool | None = None) -> sp.csc_matrix:
     """libigl's curved Hessian energy matrix (``igl.curved_hessian_energy``), symmetrized, sized (n, n).
 
@@ -137,20 +162,8 @@ def curved_hessian_energy(mesh: TriMesh, *, compiled: bool | None = None) -> sp.
     kern = _kernels()
     if kern is None:
         raise ImportError("compiled=True needs Numba")
-    V = np.ascontiguousarray(mesh.V, dtype=np.float64)
-    F = np.ascontiguousarray(mesh.F, dtype=np.int64)
-    E = np.ascontiguousarray(mesh.face_edges, dtype=np.int64)
-    n, m, n_edges = mesh.n_vertices, F.shape[0], len(mesh.edges)
-    lsq, dA, theta = np.empty((m, 3)), np.empty(m), np.empty((m, 3))
-    kern.face_geometry(V, F, lsq, dA, theta)
-    mass = np.bincount(E.ravel(), weights=np.repeat(dA / 6.0, 3), minlength=n_edges)
-    minv = np.zeros(n_edges)
-    np.divide(1.0, mass, out=minv, where=mass > 0)
-    angle_sum = np.bincount(F.ravel(), weights=theta.ravel(), minlength=n)
-    defect = 2.0 * np.pi - angle_sum
-    defect[mesh.edges[mesh.edge_face_counts == 1].ravel()] = 0.0  # libigl: no curvature on the boundary
-    sk = np.zeros(n)
-    np.divide(defect, angle_sum, out=sk, where=angle_sum > 0)
+    F, E, n_edges, lsq, dA, theta, minv, sk = curved_hessian_face_data(mesh, kern)
+    n, m = mesh.n_vertices, F.shape[0]
     blocks, verts = np.empty((m, 6, 6)), np.empty((m, 6), dtype=np.int64)
     kern.face_blocks(F, E, kern.twins(E, n_edges), lsq, dA, theta, minv, sk, blocks, verts)
     slot_ptr, slots = kern.vertex_slots(verts, n)
