@@ -35,7 +35,8 @@ class Stepper:
     ls : LinearSystem
     settings : IPMSettings
     counters : dict
-        ``correctors``, ``correctors_accepted``, ``refinement_steps``, accumulated in place.
+        ``correctors``, ``correctors_accepted``, ``refinement_steps``, ``corrector_escalations``, accumulated in
+        place; ``max_correctors`` (the per-iteration count chosen for this program's pattern) is set here.
 
     Raises (from :meth:`step`) NotPositiveDefiniteError when the Newton matrix cannot be factorized and
     :class:`~.newton.Trouble` when a solve is not finite.
