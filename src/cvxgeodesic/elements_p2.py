@@ -437,7 +437,6 @@ class P2Builder:
         Ge = np.zeros((0, 4, 6))
         he = np.zeros((0, 4))
         e_face = np.zeros(0, dtype=np.int64)
-        e_corner = np.zeros(0, dtype=np.int64)  # local corner index at the sample (−1 for midpoints)
         e_samples = np.zeros((0, 3))
         if deg.size:
             fe = sp_.face_edges[deg]
@@ -449,7 +448,7 @@ class P2Builder:
             ids, owner, kloc, L = ids[ok], owner[ok], kloc[ok], L[ok]
             t = np.array([0.0, 0.5, 1.0])
             Nt, dNt = _edge_basis(t)
-            rows_v, rows_g, fo, co, eb = [], [], [], [], []
+            rows_v, rows_g, fo, eb = [], [], [], []
             for j in range(3):
                 # edge opposite corner k runs from corner k+1 to corner k+2; local DOFs (k+1, 3+k, k+2)
                 val_e = np.zeros((ids.size, 6))
@@ -463,14 +462,12 @@ class P2Builder:
                 rows_v.append(val_e)
                 rows_g.append(grd_e)
                 fo.append(owner)
-                co.append(np.where(j == 0, a, np.where(j == 2, b, -1)))
                 bb = np.zeros((ids.size, 3))
                 bb[r, a] = 1 - t[j]
                 bb[r, b] = t[j]
                 eb.append(bb)
             Ge, he = _cone_rows(np.concatenate(rows_v), np.concatenate(rows_g))
             e_face = np.concatenate(fo)
-            e_corner = np.concatenate(co)
             e_samples = np.concatenate(eb)
             self.notes.append(
                 f"{deg.size} degenerate face(s) carry no face cones; their {ids.size} edge(s) get the "
@@ -481,13 +478,8 @@ class P2Builder:
         self.h = np.concatenate([hf, he])
         self.cone_face = np.concatenate([*[np.repeat(f, b.shape[0]) for f, b in groups], e_face]).astype(np.int64)
         self.cone_dofs = sp_.face_dofs[self.cone_face]
-        # which local corner a cone sits on (for dropping the cones at a source vertex), and its barycentric point
-        corners = [np.array([int(np.argmax(q)) if np.max(q) == 1.0 else -1 for q in b]) for _, b in groups]
-        self.cone_corner = np.concatenate([*[np.tile(c, f.size) for c, (f, _) in zip(corners, groups, strict=True)],
-                                           e_corner]).astype(np.int64)
+        # each cone's barycentric point (for dropping the cones on source vertices, :func:`_on_sources`)
         self.cone_bary = np.concatenate([*[np.tile(b, (f.size, 1)) for f, b in groups], e_samples])
-        self.cone_vertex = np.where(self.cone_corner >= 0,
-                                    mesh.F[self.cone_face, np.maximum(self.cone_corner, 0)], -1)
 
     def _source_equalities(self, vsrc, points, cone_face, cone_bary, keep):
         """The source equalities (φ's value and gradient at the source points, zero derivative along the edges
