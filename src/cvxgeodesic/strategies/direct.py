@@ -87,16 +87,16 @@ class DirectStrategy:
         self.fallback_to_clarabel = config.solver == "auto"
         self.ipm: Any = None
         energy = config.energy
-        analysed: dict[str, Any] = {}
+        self._analysis: tuple[Any, Any] | None = None  # (energy, the analysis made for it), see _analyse
         if energy is not None:
             # builds it now (PSD check, manifold cover); the interior-point solver's symbolic analysis is made
             # from the energy before its PSD check, which then factors the energy in that analysis
-            self.ops.energy(energy, analyse=self._analyser(analysed) if self.backend == "ipm" else None)
+            self.ops.energy(energy, analyse=self._analyse if self.backend == "ipm" else None)
         if self.backend == "ipm":
             from ..solvers.ipm import InteriorPointSolver
 
             P = self.ops.energy(energy) if energy is not None else None
-            chol = analysed.get("cholesky") if analysed.get("energy") is P else None
+            chol = self._analysis[1] if self._analysis is not None and self._analysis[0] is P else None
             self.ipm = InteriorPointSolver(chol if chol is not None else self._pattern(P))
         _ = self.ops.gradient_blocks
         self.setup_time = time.perf_counter() - t0
@@ -108,18 +108,15 @@ class DirectStrategy:
         mesh = self.ops.mesh
         return kkt_pattern(mesh.n_vertices, mesh.F, mesh.edges, P)
 
-    def _analyser(self, analysed: dict[str, Any]) -> Any:
+    def _analyse(self, Q: Any) -> Any:
         """``analyse(Q)`` for :meth:`MeshOperators.energy`: the analysis of the mesh's Newton pattern with ``Q``,
-        kept in ``analysed`` (with the ``Q`` it was made for: a planar energy that replaced an indefinite
-        curved one gets an analysis of its own)."""
+        kept with the ``Q`` it was made for (a planar energy that replaced an indefinite curved one gets an
+        analysis of its own)."""
+        from ..linalg import SymbolicCholesky
 
-        def analyse(Q: Any) -> Any:
-            from ..linalg import SymbolicCholesky
-
-            analysed.update(energy=Q, cholesky=SymbolicCholesky(self._pattern(Q)))
-            return analysed["cholesky"]
-
-        return analyse
+        chol = SymbolicCholesky(self._pattern(Q))
+        self._analysis = (Q, chol)
+        return chol
 
     def solve(self, sources: Any, *, callback: Callback | None = None) -> GeodesicResult:
         """Distance field from ``sources`` (see :meth:`~cvxgeodesic.api.GeodesicSolver.solve`)."""
