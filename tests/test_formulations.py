@@ -227,7 +227,7 @@ def test_edge_bounds_at_rounding_level_are_floored():
     floor = cg.formulations.MIN_EDGE_BOUND * mesh.bbox_diagonal
     for method in ("lclp", "qclp"):
         p = build_problem(ops, np.array([0]), method, 0.0)
-        assert p.ineq_rhs.min() == pytest.approx(floor), method
+        assert p.ineq.rhs.min() == pytest.approx(floor), method
     d = cg.geodesic_distance(mesh, [0], method="lclp", solver="ipm")
     np.testing.assert_allclose(d, _dijkstra(mesh, 0), atol=1e-7)
 

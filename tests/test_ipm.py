@@ -18,7 +18,7 @@ from cvxgeodesic.mesh import TriMesh, cylinder, grid_plane, icosphere
 from cvxgeodesic.solvers.clarabel_backend import solve_clarabel
 from cvxgeodesic.solvers.ipm import InteriorPointSolver, IPMSettings
 from cvxgeodesic.solvers.ipm.cones import SOC
-from cvxgeodesic.solvers.problem import kkt_pattern
+from cvxgeodesic.solvers.problem import PairInequalities, kkt_pattern
 
 OBJ_RTOL = 1e-6
 DIST_TOL = 1e-5  # times the bounding-box diagonal
@@ -350,8 +350,9 @@ def test_primal_infeasible_problem_is_detected():
     ops = MeshOperators(m)
     p = build_problem(ops, np.array([0]), "qclp", 0.0)
     fm, fv = p.fixed_mask.copy(), p.fixed_values.copy()
-    fm[p.cone_vertices[10]] = True
-    fv[p.cone_vertices[10]] = [0.0, 0.0, 5.0]  # a gradient far steeper than 1 on a fixed triangle
+    tri = p.cones[0].dofs[10]
+    fm[tri] = True
+    fv[tri] = [0.0, 0.0, 5.0]  # a gradient far steeper than 1 on a fixed triangle
     p = dataclasses.replace(p, fixed_mask=fm, fixed_values=fv)
     with pytest.raises(SolverError) as exc:
         InteriorPointSolver(kkt_pattern(m.n_vertices, m.F, m.edges)).solve(p)
@@ -364,22 +365,21 @@ def test_unbounded_problems_are_detected():
     p = build_problem(ops, np.array([0]), "qclp", 0.0)
     ipm = InteriorPointSolver(kkt_pattern(m.n_vertices, m.F, m.edges))
     v = 40
-    cones = ~(p.cone_vertices == v).any(axis=1)
-    ineqs = ~(p.ineq_vertices == v).any(axis=1)
-    base = dict(cone_vertices=p.cone_vertices[cones], cone_blocks=p.cone_blocks[cones])
+    cones = ~(p.cones[0].dofs == v).any(axis=1)
+    iq = p.ineq
+    ineqs = ~(iq.vertices == v).any(axis=1)
+    base = dict(cones=[p.cones[0].subset(cones)])
     # v only bounded below (−d_v ≤ 1) while the objective maximizes it
     unbounded = dataclasses.replace(
         p, **base,
-        ineq_vertices=np.vstack([p.ineq_vertices[ineqs], [[v, v]]]),
-        ineq_coeffs=np.vstack([p.ineq_coeffs[ineqs], [[-1.0, 0.0]]]),
-        ineq_rhs=np.concatenate([p.ineq_rhs[ineqs], [1.0]]),
+        ineq=PairInequalities(np.vstack([iq.vertices[ineqs], [[v, v]]]), np.vstack([iq.coeffs[ineqs], [[-1.0, 0.0]]]),
+                              np.concatenate([iq.rhs[ineqs], [1.0]])),
     )
     with pytest.raises(SolverError) as exc:
         ipm.solve(unbounded)
     assert exc.value.status == "dual_infeasible"
     # v in no constraint at all
-    loose = dataclasses.replace(p, **base, ineq_vertices=p.ineq_vertices[ineqs], ineq_coeffs=p.ineq_coeffs[ineqs],
-                                ineq_rhs=p.ineq_rhs[ineqs])
+    loose = dataclasses.replace(p, **base, ineq=PairInequalities(iq.vertices[ineqs], iq.coeffs[ineqs], iq.rhs[ineqs]))
     with pytest.raises(SolverError, match="variable 40") as exc:
         ipm.solve(loose)
     assert exc.value.status == "dual_infeasible"
@@ -392,7 +392,7 @@ def test_callback_and_timing_breakdown(sphere):
                     callback=lambda it, info: seen.append((it, info["gap_abs"], info["res_primal"])))
     assert [s[0] for s in seen] == list(range(res.iterations + 1))
     ex = res.extra
-    parts = ex["setup_time"] + ex["assembly_time"] + ex["factor_time"] + ex["linear_solve_time"] + ex["other_time"]
+    parts = ex["program_time"] + ex["assembly_time"] + ex["factor_time"] + ex["linear_solve_time"] + ex["other_time"]
     assert parts == pytest.approx(res.solve_time, rel=1e-6)
     assert ex["analyze_time"] >= 0 and ex["backend"] in ("pardiso", "cholmod", "scipy")
     assert res.gap < 1e-8 or ex["gap_abs"] < 1e-8

@@ -99,9 +99,9 @@ def test_constraints_do_not_cut_off_the_exact_field(kind):
     exact = _exact_sources_field(mesh, src)
     for method in ("qclp", "lclp"):
         prob = build_problem(MeshOperators(mesh), resolve_sources(mesh, src), method, 0.0)
-        x = exact[prob.ineq_vertices]
-        lhs = np.einsum("kj,kj->k", prob.ineq_coeffs, x)
-        assert np.all(lhs <= prob.ineq_rhs + 1e-9), np.max(lhs - prob.ineq_rhs)
+        x = exact[prob.ineq.vertices]
+        lhs = np.einsum("kj,kj->k", prob.ineq.coeffs, x)
+        assert np.all(lhs <= prob.ineq.rhs + 1e-9), np.max(lhs - prob.ineq.rhs)
         assert np.all(exact[prob.fixed_mask & ~prob.unreachable] == 0.0)
 
 
@@ -113,8 +113,8 @@ def test_curve_constraints_hold_for_the_analytic_field_and_curve_accuracy():
     t = np.clip((mesh.V - A) @ ab / (ab @ ab), 0, 1)
     exact = np.linalg.norm(mesh.V - (A + t[:, None] * ab), axis=1)  # flat and convex: Euclidean distance
     prob = build_problem(MeshOperators(mesh), resolve_sources(mesh, curve), "qclp", 0.0)
-    lhs = np.einsum("kj,kj->k", prob.ineq_coeffs, exact[prob.ineq_vertices])
-    assert np.all(lhs <= prob.ineq_rhs + 1e-9)
+    lhs = np.einsum("kj,kj->k", prob.ineq.coeffs, exact[prob.ineq.vertices])
+    assert np.all(lhs <= prob.ineq.rhs + 1e-9)
     d = cg.geodesic_distance(mesh, curve, method="qclp")
     far = exact > 0.1
     assert (np.abs(d - exact)[far] / exact[far]).mean() < 0.03

@@ -56,7 +56,7 @@ import scipy.sparse as sp
 from .errors import DegenerateFacesWarning, MeshError, ParameterError
 from .mesh.trimesh import DEGENERATE_TOL, TriMesh
 from .operators import energy_matrix, gradient_blocks
-from .solvers.problem import ConicProblem
+from .solvers.problem import ConeGroup, ConicProblem, PairInequalities
 from .sources import source_constraints
 from .validation import check_choice, check_number
 
@@ -420,8 +420,8 @@ def build_problem(
 
     return ConicProblem(
         n=n, P=P, q=q,
-        cone_vertices=cone_vertices, cone_blocks=cone_blocks,
-        ineq_vertices=ineq_vertices, ineq_coeffs=ineq_coeffs, ineq_rhs=ineq_rhs,
+        cones=[ConeGroup.norm_bound(cone_vertices, cone_blocks)],
+        ineq=PairInequalities(ineq_vertices, ineq_coeffs, ineq_rhs),
         fixed_mask=fixed_mask, fixed_values=fixed_values, unreachable=unreachable,
         method=canonical_method(method), objective_scale=objective_scale,
     )

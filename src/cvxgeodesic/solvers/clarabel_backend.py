@@ -17,7 +17,7 @@ _ALMOST = {"AlmostSolved"}
 
 
 def reduce_to_free(problem: ConicProblem):
-    """Eliminate fixed variables.
+    """Eliminate the fixed variables.
 
     Returns
     -------
@@ -27,10 +27,11 @@ def reduce_to_free(problem: ConicProblem):
     q : (nf,) float ndarray
     const : float
         Objective contribution of the fixed variables.
-    A_cone, b_cone : sparse (2k, nf) and (2k,)
-        ``‖b_cone - A_cone x‖`` per pair of rows... expressed so that ``B_t d = A x + b``.
-    A_ineq, b_ineq : sparse (p, nf) and (p,)
-        ``A_ineq x ≤ b_ineq``.
+    A, b : sparse (rows, nf) and (rows,)
+        Clarabel's ``A x + s = b``: the equalities (zero cone) first, then the inequalities (nonnegative
+        cone), then every cone group's rows ``h_t − G_t x`` cone by cone.
+    cones : list
+        Clarabel's cone list in the same order.
     """
     fixed = problem.fixed_mask
     free = np.flatnonzero(~fixed)
@@ -44,13 +45,29 @@ def reduce_to_free(problem: ConicProblem):
         Pd = Pc @ dc
         q += Pd[free]
         const += 0.5 * float(dc @ Pd)
-    C = problem.cone_matrix().tocsc()
-    A_cone = C[:, free]
-    g_cone = C @ dc
-    Aq = problem.ineq_matrix().tocsc()
-    A_ineq = Aq[:, free]
-    b_ineq = problem.ineq_rhs - Aq @ dc
-    return free, P, q, const, A_cone, g_cone, A_ineq, b_ineq
+    n = problem.n
+    mats, rhs, cones = [], [], []
+    if problem.n_eq:
+        E = sp.csr_matrix(problem.eq.E)
+        mats.append(E)
+        rhs.append(problem.eq.f)
+        cones.append(clarabel.ZeroConeT(E.shape[0]))
+    if problem.n_ineq:
+        mats.append(problem.ineq.matrix(n))
+        rhs.append(problem.ineq.rhs)
+        cones.append(clarabel.NonnegativeConeT(problem.n_ineq))
+    for g in problem.cones:
+        if g.count:
+            mats.append(g.matrix(n))
+            rhs.append(g.h.ravel())
+            cones.extend([clarabel.SecondOrderConeT(g.dim)] * g.count)
+    if mats:
+        A_full = sp.vstack(mats).tocsc()
+        b = np.concatenate(rhs) - A_full @ dc
+        A = A_full[:, free].tocsc()
+    else:
+        A, b = sp.csc_matrix((0, free.size)), np.zeros(0)
+    return free, P, q, const, A, b, cones
 
 
 def clarabel_settings(tol: float, max_iter: int, verbose: bool = False, time_limit: float | None = None):
@@ -99,24 +116,8 @@ def solve_clarabel(
         reported in the status).
     """
     t0 = time.perf_counter()
-    free, P, q, const, A_cone, g_cone, A_ineq, b_ineq = reduce_to_free(problem)
+    free, P, q, const, A, b, cones = reduce_to_free(problem)
     nf = free.size
-    k = problem.n_cones
-    # Clarabel form: A x + s = b, s ∈ K.  Nonnegative rows: A_ineq x + s = b_ineq.
-    # SOC rows per cone t: s = (1, B_t d) = (1, A_t x + g_t)  ->  A = [0; -A_t], b = [1; g_t].
-    soc_rows = np.arange(3 * k).reshape(k, 3)
-    A_soc_body = sp.coo_matrix(A_cone)
-    pair_row = soc_rows[:, 1:].ravel()  # the two body rows of every cone, in cone order
-    A_soc = sp.csc_matrix((-A_soc_body.data, (pair_row[A_soc_body.row], A_soc_body.col)), shape=(3 * k, nf))
-    b_soc = np.zeros(3 * k)
-    b_soc[soc_rows[:, 0]] = 1.0
-    b_soc[pair_row] = g_cone
-    A = sp.vstack([A_ineq, A_soc]).tocsc()
-    b = np.concatenate([b_ineq, b_soc])
-    cones = []
-    if problem.n_ineq:
-        cones.append(clarabel.NonnegativeConeT(problem.n_ineq))
-    cones.extend([clarabel.SecondOrderConeT(3)] * k)
     Pu = sp.triu(P).tocsc() if P is not None else sp.csc_matrix((nf, nf))
 
     solver = clarabel.DefaultSolver(Pu, q, A, b, cones, clarabel_settings(tol, max_iter, verbose, time_limit))
@@ -124,7 +125,7 @@ def solve_clarabel(
     with interruptible(solver):  # Ctrl-C stops the solve at the next iteration
         sol = solver.solve()
     status = str(sol.status)
-    info = {"iterations": int(sol.iterations), "setup_time": t_setup}
+    info = {"iterations": int(sol.iterations), "clarabel_setup_time": t_setup}
     if status not in _SOLVED | _ALMOST:
         raise SolverError("Clarabel did not solve the problem", solver="clarabel", status=status, info=info)
     x = problem.fixed_values.copy()
@@ -140,5 +141,5 @@ def solve_clarabel(
         primal_residual=float(sol.r_prim),
         dual_residual=float(sol.r_dual),
         gap=abs(float(sol.obj_val) - float(sol.obj_val_dual)) / max(1.0, abs(float(sol.obj_val))),
-        extra={"setup_time": t_setup, "clarabel_solve_time": float(sol.solve_time)},
+        extra={"clarabel_setup_time": t_setup, "clarabel_solve_time": float(sol.solve_time)},
     )

@@ -1,119 +1,261 @@
-"""The structured convex program every formulation assembles and every backend solves.
+"""The convex program every formulation assembles and every backend solves, at any element order.
 
-All eight formulations share one shape, in the full vertex space ``d ∈ R^n``::
+One shape, in the full variable space ``x ∈ R^n`` (vertex values at order 1, P2 nodal values of ``φ = d²`` at
+order 2)::
 
-    minimize    ½ dᵀ P d + qᵀ d
-    subject to  ‖B_t d[cone_vertices[t]]‖₂ ≤ 1          for every cone t  (SOC(3))
-                a_k · d[ineq_vertices[k]] ≤ ineq_rhs[k]  for every inequality k
-                d[i] = fixed_values[i]                   where fixed_mask[i]
+    minimize    ½ xᵀ P x + qᵀ x
+    subject to  h_k − G_k x[dofs_k] ∈ SOC(d)          for every cone k of every :class:`ConeGroup`
+                a_k · x[pair[k]] ≤ rhs[k]              for every pair inequality k (:class:`PairInequalities`)
+                E x = f                                 (:class:`Equalities`, the zero cone)
+                x[i] = fixed_values[i]                  where fixed_mask[i]
 
-Each cone involves the three vertices of one triangle and each inequality at
-most two vertices. Keeping that structure explicit (instead of a generic
-sparse constraint matrix) is what lets the interior-point solver assemble its
-Newton system quickly with a fixed sparsity pattern.
+Every cone touches a small clique of variables (a triangle's three vertices, a face's six P2 nodes, a
+tetrahedron's four vertices) and each inequality at most two: keeping that structure explicit, instead of one
+generic sparse constraint matrix, is what lets the interior-point solver assemble its Newton system with a
+fixed sparsity pattern (the union of the cliques) and one symbolic analysis per mesh.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
 
+__all__ = ["BackendResult", "ConeGroup", "ConicProblem", "Equalities", "PairInequalities", "clique_pattern",
+           "kkt_pattern"]
+
+
+@dataclass
+class ConeGroup:
+    """``k`` second-order cones ``SOC(d)``, cone ``t`` on the clique of variables ``dofs[t]``:
+    ``h_t − G_t x[dofs_t] ∈ SOC(d)``, i.e. ``‖(h_t − G_t x_t)[1:]‖ ≤ (h_t − G_t x_t)[0]``.
+
+    Attributes
+    ----------
+    dofs : (k, c) int64 ndarray
+        The ``c`` variables of each cone.
+    G : (k, d, c) float ndarray
+    h : (k, d) float ndarray
+
+    Examples
+    --------
+    The gradient bound of one triangle, ``‖B x‖ ≤ 1``:
+
+    >>> import numpy as np
+    >>> g = ConeGroup.norm_bound(np.array([[0, 1, 2]]), np.array([[[-1.0, 1.0, 0.0], [-1.0, 0.0, 1.0]]]))
+    >>> g.count, g.dim, g.clique, g.violation(np.array([0.0, 1.0, 1.0]))
+    (1, 3, 3, 0.41421356237309515)
+    """
+
+    dofs: np.ndarray
+    G: np.ndarray
+    h: np.ndarray
+
+    def __post_init__(self):
+        self.dofs = np.ascontiguousarray(self.dofs, dtype=np.int64)
+        self.G = np.ascontiguousarray(self.G, dtype=np.float64)
+        self.h = np.ascontiguousarray(self.h, dtype=np.float64)
+        ok = self.dofs.ndim == 2 and self.h.ndim == 2 and self.G.ndim == 3
+        if not ok or self.G.shape != (self.dofs.shape[0], self.h.shape[1], self.dofs.shape[1]) \
+                or self.h.shape[0] != self.dofs.shape[0]:
+            raise ValueError(f"ConeGroup shapes do not match: dofs {self.dofs.shape}, G {self.G.shape}, "
+                             f"h {self.h.shape} (want (k, c), (k, d, c), (k, d))")
+        if self.h.shape[1] < 2:
+            raise ValueError(f"a second-order cone needs dimension >= 2, got {self.h.shape[1]}")
+
+    @classmethod
+    def norm_bound(cls, dofs: np.ndarray, B: np.ndarray, bound: np.ndarray | float = 1.0) -> ConeGroup:
+        """The cones ``‖B_t x[dofs_t]‖ ≤ bound_t``: ``G_t = [0; −B_t]``, ``h_t = (bound_t, 0, …)``.
+
+        Parameters
+        ----------
+        dofs : (k, c) int ndarray
+        B : (k, r, c) float ndarray
+        bound : float or (k,) float ndarray
+        """
+        B = np.asarray(B, dtype=np.float64)
+        k, r, c = B.shape
+        G = np.zeros((k, r + 1, c))
+        G[:, 1:] = -B
+        h = np.zeros((k, r + 1))
+        h[:, 0] = bound
+        return cls(dofs, G, h)
+
+    @property
+    def count(self) -> int:
+        return int(self.dofs.shape[0])
+
+    @property
+    def dim(self) -> int:
+        """``d``: the cone dimension."""
+        return int(self.h.shape[1])
+
+    @property
+    def clique(self) -> int:
+        """``c``: variables per cone."""
+        return int(self.dofs.shape[1])
+
+    def unit_blocks(self) -> np.ndarray | None:
+        """``B`` (k, d − 1, c) when every cone is ``‖B_t x_t‖ ≤ 1`` (head row of ``G`` zero, ``h = e₀``), else None:
+        the form the fused triangle kernels of the interior-point solver take."""
+        if self.count and (np.any(self.G[:, 0] != 0) or np.any(self.h[:, 0] != 1) or np.any(self.h[:, 1:] != 0)):
+            return None
+        return -self.G[:, 1:]
+
+    def slacks(self, x: np.ndarray) -> np.ndarray:
+        """(k, d) float ndarray: ``h_t − G_t x[dofs_t]``."""
+        return self.h - np.einsum("kdc,kc->kd", self.G, x[self.dofs])
+
+    def violation(self, x: np.ndarray) -> float:
+        """Largest ``‖body‖ − head`` of the slacks at ``x`` (0 when every cone holds)."""
+        if not self.count:
+            return 0.0
+        s = self.slacks(x)
+        return max(float(np.max(np.linalg.norm(s[:, 1:], axis=1) - s[:, 0])), 0.0)
+
+    def matrix(self, n: int) -> sp.csr_matrix:
+        """(k·d, n) csr_matrix of the stacked ``G_t`` (row ``t·d + i`` is component ``i`` of cone ``t``)."""
+        k, d, c = self.G.shape
+        rows = np.repeat(np.arange(k * d).reshape(k, d, 1), c, axis=2)
+        cols = np.broadcast_to(self.dofs[:, None, :], (k, d, c))
+        M = sp.csr_matrix((self.G.ravel(), (rows.ravel(), cols.ravel())), shape=(k * d, n))
+        M.eliminate_zeros()
+        return M
+
+    def subset(self, keep: np.ndarray) -> ConeGroup:
+        """The cones selected by ``keep`` (bool mask or indices)."""
+        return ConeGroup(self.dofs[keep], self.G[keep], self.h[keep])
+
+
+@dataclass
+class PairInequalities:
+    """Linear inequalities of at most two variables: ``coeffs[k] · x[vertices[k]] ≤ rhs[k]``.
+
+    Attributes
+    ----------
+    vertices : (p, 2) int64 ndarray
+        A one-variable bound repeats the variable and puts 0 in the second coefficient.
+    coeffs : (p, 2) float ndarray
+    rhs : (p,) float ndarray
+    """
+
+    vertices: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=np.int64))
+    coeffs: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    rhs: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    @property
+    def count(self) -> int:
+        return int(self.vertices.shape[0])
+
+    def matrix(self, n: int) -> sp.csr_matrix:
+        """(p, n) csr_matrix (duplicates summed)."""
+        p = self.count
+        return sp.csr_matrix((self.coeffs.ravel(), (np.repeat(np.arange(p), 2), self.vertices.ravel())), shape=(p, n))
+
+    def violation(self, x: np.ndarray) -> float:
+        if not self.count:
+            return 0.0
+        return max(float(np.max(np.einsum("kj,kj->k", self.coeffs, x[self.vertices]) - self.rhs)), 0.0)
+
+
+@dataclass
+class Equalities:
+    """``E x = f`` (the zero cone): a few rows (the source conditions of order 2).
+
+    Attributes
+    ----------
+    E : (r, n) scipy.sparse.csr_matrix
+    f : (r,) float ndarray
+    """
+
+    E: sp.csr_matrix
+    f: np.ndarray
+
+    @property
+    def count(self) -> int:
+        return int(self.E.shape[0])
+
+    def violation(self, x: np.ndarray) -> float:
+        return float(np.abs(self.E @ x - self.f).max()) if self.count else 0.0
+
 
 @dataclass
 class ConicProblem:
-    """A geodesic-distance convex program in the full vertex space.
+    """A geodesic-distance convex program in the full variable space (see the module docstring).
 
     Attributes
     ----------
     n : int
-        Number of variables (mesh vertices).
+        Number of variables.
     P : (n, n) scipy.sparse.csc_matrix or None
-        Symmetric positive semidefinite quadratic term (both triangles stored).
-        ``None`` for the linear-objective formulations (LCLP, QCLP).
+        Symmetric positive semidefinite quadratic term (both triangles stored); None for linear objectives.
     q : (n,) float ndarray
-        Linear term.
-    cone_vertices : (k, 3) int64 ndarray
-        Vertices of the triangle of each cone.
-    cone_blocks : (k, 2, 3) float ndarray
-        ``B_t``: the triangle's gradient in a 2D orthonormal frame of its plane,
-        as a linear map of its three vertex values.
-    ineq_vertices : (p, 2) int64 ndarray
-        Vertices of each linear inequality. A one-vertex bound repeats the vertex
-        and puts 0 in the second coefficient.
-    ineq_coeffs : (p, 2) float ndarray
-        Coefficients of the two vertices.
-    ineq_rhs : (p,) float ndarray
-        Right-hand sides.
+    cones : list of ConeGroup
+    ineq : PairInequalities
+    eq : Equalities or None
     fixed_mask : (n,) bool ndarray
-        Variables held at ``fixed_values`` (sources, and vertices of components
-        without a source).
+        Variables held at ``fixed_values`` (sources, components without a source).
     fixed_values : (n,) float ndarray
-        Values of the fixed variables (ignored elsewhere).
     unreachable : (n,) bool ndarray
-        Vertices in components without a source; reported as ``inf``.
+        Variables in components without a source; reported as ``inf``.
     method : str
         Name of the formulation that built the problem.
     objective_scale : float
-        The factor by which the formulation's objective was multiplied to give ``P`` and
-        ``q`` (a conditioning choice; divide the backend's objective by it).
+        The factor by which the formulation's objective was multiplied to give ``P`` and ``q`` (a
+        conditioning choice; divide the backend's objective by it).
+    guess : (n,) float ndarray or None
+        A field close to the optimum the interior-point solver may start from (scaled into the cones'
+        interior; the order-2 builder gives the squared Dijkstra distance), with ``fixed_values`` on the fixed
+        variables and ``E guess = f``; None when there is none.
+    equilibrate : bool
+        Let the interior-point solver scale columns and cones first (one Ruiz pass; the order-2 programs, whose
+        rows span many orders of magnitude).
     """
 
     n: int
     P: sp.csc_matrix | None
     q: np.ndarray
-    cone_vertices: np.ndarray
-    cone_blocks: np.ndarray
-    ineq_vertices: np.ndarray
-    ineq_coeffs: np.ndarray
-    ineq_rhs: np.ndarray
+    cones: list[ConeGroup]
+    ineq: PairInequalities
     fixed_mask: np.ndarray
     fixed_values: np.ndarray
     unreachable: np.ndarray
+    eq: Equalities | None = None
     method: str = ""
     objective_scale: float = 1.0
+    guess: np.ndarray | None = None
+    equilibrate: bool = False
 
     @property
     def n_cones(self) -> int:
-        return int(self.cone_vertices.shape[0])
+        """Number of cones over every group."""
+        return sum(g.count for g in self.cones)
 
     @property
     def n_ineq(self) -> int:
-        return int(self.ineq_vertices.shape[0])
+        return self.ineq.count
 
-    def objective(self, d: np.ndarray) -> float:
-        """Objective value ``½ dᵀPd + qᵀd`` at a full-space point ``d`` (unreachable vertices ignored)."""
-        d = np.where(self.unreachable, 0.0, d)
-        val = float(self.q @ d)
+    @property
+    def n_eq(self) -> int:
+        return self.eq.count if self.eq is not None else 0
+
+    def objective(self, x: np.ndarray) -> float:
+        """Objective value ``½ xᵀPx + qᵀx`` at a full-space point (unreachable variables ignored)."""
+        x = np.where(self.unreachable, 0.0, x)
+        val = float(self.q @ x)
         if self.P is not None:
-            val += 0.5 * float(d @ (self.P @ d))
+            val += 0.5 * float(x @ (self.P @ x))
         return val
 
-    def cone_matrix(self) -> sp.csr_matrix:
-        """(2k, n) sparse matrix stacking every ``B_t`` (rows 2t and 2t+1 belong to cone t)."""
-        k = self.n_cones
-        rows = np.repeat(np.arange(2 * k), 3)
-        cols = np.repeat(self.cone_vertices, 2, axis=0).ravel()
-        return sp.csr_matrix((self.cone_blocks.reshape(-1), (rows, cols)), shape=(2 * k, self.n))
-
-    def ineq_matrix(self) -> sp.csr_matrix:
-        """(p, n) sparse matrix of the linear inequalities (duplicates summed)."""
-        p = self.n_ineq
-        rows = np.repeat(np.arange(p), 2)
-        return sp.csr_matrix((self.ineq_coeffs.ravel(), (rows, self.ineq_vertices.ravel())), shape=(p, self.n))
-
-    def constraint_violation(self, d: np.ndarray) -> float:
-        """Largest violation of any cone or inequality at ``d`` (0 when feasible)."""
-        d = np.where(self.unreachable, 0.0, d)
-        viol = 0.0
-        if self.n_cones:
-            g = np.einsum("kij,kj->ki", self.cone_blocks, d[self.cone_vertices])
-            viol = max(viol, float(np.max(np.linalg.norm(g, axis=1) - 1.0)))
-        if self.n_ineq:
-            lhs = np.einsum("kj,kj->k", self.ineq_coeffs, d[self.ineq_vertices])
-            viol = max(viol, float(np.max(lhs - self.ineq_rhs)))
-        return max(viol, 0.0)
+    def constraint_violation(self, x: np.ndarray) -> float:
+        """Largest violation of any cone, inequality or equality at ``x`` (0 when feasible)."""
+        x = np.where(self.unreachable, 0.0, x)
+        parts = [g.violation(x) for g in self.cones] + [self.ineq.violation(x)]
+        if self.eq is not None:
+            parts.append(self.eq.violation(x))
+        return max(parts, default=0.0)
 
 
 @dataclass
@@ -137,7 +279,7 @@ class BackendResult:
     primal_residual, dual_residual, gap : float
         Final relative residuals and duality gap as the backend reports them.
     extra : dict
-        Backend-specific details (setup time, factorization counts, ...).
+        Backend-specific details (preparation time, factorization counts, ...).
     """
 
     x: np.ndarray
@@ -152,8 +294,35 @@ class BackendResult:
     extra: dict = field(default_factory=dict)
 
 
+def clique_pattern(n: int, cliques: Sequence[np.ndarray]) -> sp.csc_matrix:
+    """Sparsity pattern (ones, both triangles, full diagonal) of the union of variable cliques.
+
+    Parameters
+    ----------
+    n : int
+    cliques : sequence of (k, c) int ndarrays
+        Each row couples its ``c`` variables (a cone's ``dofs``, an inequality's pair).
+
+    Returns
+    -------
+    (n, n) scipy.sparse.csc_matrix
+    """
+    r, c = [np.arange(n)], [np.arange(n)]
+    for q in cliques:
+        q = np.asarray(q, dtype=np.int64)
+        if q.size:
+            w = q.shape[1]
+            r.append(np.repeat(q, w, axis=1).ravel())
+            c.append(np.tile(q, (1, w)).ravel())
+    rows, cols = np.concatenate(r), np.concatenate(c)
+    S = sp.csc_matrix((np.ones(rows.size), (rows, cols)), shape=(n, n))
+    S.data[:] = 1.0
+    S.sort_indices()
+    return S
+
+
 def kkt_pattern(n: int, faces: np.ndarray, edges: np.ndarray, P: sp.spmatrix | None = None) -> sp.csc_matrix:
-    """Sparsity pattern (ones) covering every Newton matrix of a mesh's problems.
+    """Sparsity pattern (ones) covering every Newton matrix of a mesh's order-1 problems.
 
     ``P + Σ_t B_tᵀ W_t B_t + Σ_k a_kᵀ D_k a_k`` couples vertices of a triangle,
     of an edge, and those coupled by ``P``; the union does not depend on the

@@ -37,13 +37,18 @@ class Stepper:
     counters : dict
         ``correctors``, ``correctors_accepted``, ``refinement_steps``, ``corrector_escalations``, accumulated in
         place; ``max_correctors`` (the per-iteration count chosen for this program's pattern) is set here.
+    sigma_cap : float
+        Upper bound of Mehrotra's centring parameter σ (``IPMSettings.sigma_cap_guess`` after a start from a
+        guess, else 1).
 
     Raises (from :meth:`step`) NotPositiveDefiniteError when the Newton matrix cannot be factorized and
     :class:`~.newton.Trouble` when a solve is not finite.
     """
 
-    def __init__(self, pr: Program, ls: LinearSystem, settings: IPMSettings, counters: dict):
+    def __init__(self, pr: Program, ls: LinearSystem, settings: IPMSettings, counters: dict,
+                 sigma_cap: float = 1.0):
         self.pr, self.ls, self.st, self.counters = pr, ls, settings, counters
+        self.sigma_cap = sigma_cap
         # Without a quadratic term the primal and dual steps decouple (as in LP interior-point codes):
         # separate step lengths cut the iteration count on these highly degenerate problems.
         self.separate = pr.P is None and settings.separate_steps
@@ -69,8 +74,8 @@ class Stepper:
         mu = ev.info["mu"]
         scalings = [b.cone.scaling(s, z) for b, s, z in zip(pr.blocks, it.s, it.z, strict=True)]
         f = self.ls.factorize(self.ls.assemble(scalings))
-        lin = partial(self.ls.solve, f)
-        resid = Residuals(pr, scalings, ev.rx, ev.rz)
+        lin = partial(self.ls.solve_kkt, f)
+        resid = Residuals(pr, scalings, ev.rx, ev.rz, ev.ry)
 
         # ---- predictor (affine scaling): d_s = −λ∘λ, so W⁻¹(λ \ d_s) = −W⁻¹λ = −z ----
         aff = newton(pr, lin, scalings, resid, [-z for z in it.z])
@@ -79,10 +84,12 @@ class Stepper:
         sz_aff = sum(b.cone.dot(s + ap_aff * ds, z + ad_aff * dz)
                      for b, s, z, ds, dz in zip(pr.blocks, it.s, it.z, aff.ds, aff.dz, strict=True))
         sigma = min(1.0, max(0.0, sz_aff / gap if gap > 0 else 0.0)) ** st.sigma_exp
+        sigma = min(sigma, self.sigma_cap)
 
         # ---- combined step: d_s = −λ∘λ − (W⁻¹Δs_a)∘(WΔz_a) + σμe ----
         if not st.mehrotra_correction:
-            aff = Direction(aff.dx, [np.zeros_like(d) for d in aff.ds], [np.zeros_like(d) for d in aff.dz], aff.rhs)
+            aff = Direction(aff.dx, [np.zeros_like(d) for d in aff.ds], [np.zeros_like(d) for d in aff.dz], aff.rhs,
+                            aff.dy, aff.ey)
         wu = [b.cone.mehrotra(sc, ds, dz, z, sigma * mu)
               for b, sc, ds, dz, z in zip(pr.blocks, scalings, aff.ds, aff.dz, it.z, strict=True)]
         d = newton(pr, lin, scalings, resid, wu)
@@ -121,7 +128,7 @@ class Stepper:
             if best is None or best[0] < min(step_p, step_d) + 0.01:
                 break
             _, wgt, step_p, step_d, nds, ndz = best
-            d = Direction(d.dx + wgt * c.dx, nds, ndz, d.rhs + wgt * c.rhs)
+            d = Direction(d.dx + wgt * c.dx, nds, ndz, d.rhs + wgt * c.rhs, d.dy + wgt * c.dy, d.ey)
             self.counters["correctors_accepted"] += 1
         return d, step_p, step_d
 
@@ -132,20 +139,20 @@ class Stepper:
         pr = self.pr
         refined = False
         prev = np.inf
-        dx, ds, dz = d.dx, list(d.ds), list(d.dz)
+        dx, dy, ds, dz = d.dx, d.dy, list(d.ds), list(d.dz)
         for _ in range(self.st.max_refine):
-            res_r = d.rhs - pr.kkt_mul(dx, scalings)
-            res_r[pr.fixed] = 0.0
-            rn = float(np.abs(res_r).max()) if res_r.size else 0.0
+            res_r, res_e = self.ls.residual(dx, dy, d.rhs, d.ey, scalings)
+            rn = max(float(np.abs(res_r).max()) if res_r.size else 0.0, float(np.abs(res_e).max(initial=0.0)))
             if rn <= target or rn >= 0.5 * prev:
                 break
             prev = rn
-            delta = self.ls.solve(f, res_r)
+            delta, delta_y = self.ls.solve_kkt(f, res_r, res_e)
             self.counters["refinement_steps"] += 1
             refined = True
             dx += delta
+            dy = dy + delta_y
             for i, (b, sc) in enumerate(zip(pr.blocks, scalings, strict=True)):
                 ds[i], dz[i] = b.refine(delta, sc, ds[i], dz[i])
         if refined:
             step_p, step_d = self._steps(it, ds, dz, self.st.step)
-        return Direction(dx, ds, dz, d.rhs), step_p, step_d
+        return Direction(dx, ds, dz, d.rhs, dy, d.ey), step_p, step_d

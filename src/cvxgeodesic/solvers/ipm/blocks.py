@@ -9,6 +9,10 @@ values); ``b̃ = b − A x_F`` is the right-hand side of the problem with the fi
 :class:`TriangleSOCBlock`
     The mesh problems' cones ``s_t = (1, B_t x_t)`` (every cone touches three variables): SOC(3)
     with the fused compiled kernels of :mod:`._kernels`.
+:class:`CliqueSOCBlock`
+    Second-order cones of any dimension on variable cliques, ``s_t = h_t − G_t x[dofs_t]`` (a
+    :class:`~cvxgeodesic.solvers.problem.ConeGroup`): the order-2 cones on a face's six P2 nodes, the
+    gradient bounds of tetrahedra; the compiled kernels of :mod:`._clique_kernels`.
 :class:`PairInequalityBlock`
     The mesh problems' linear inequalities ``a_k · x_k ≤ r_k`` (each touches at most two variables),
     on the nonnegative orthant.
@@ -26,10 +30,12 @@ import numpy as np
 import scipy.sparse as sp
 
 from ...linalg import SymbolicCholesky
+from ..problem import ConeGroup
+from . import _clique_kernels as _ck
 from . import _kernels as _kern
 from .cones import SOC, Cone, Orthant, Scaling, _amax
 
-__all__ = ["ConeBlock", "PairInequalityBlock", "SparseBlock", "TriangleSOCBlock"]
+__all__ = ["CliqueSOCBlock", "ConeBlock", "PairInequalityBlock", "SparseBlock", "TriangleSOCBlock"]
 
 # local (a, b) index pairs of the 6 lower-triangle entries of a 3×3 clique
 _CLIQUE_A = np.array([0, 1, 2, 1, 2, 2])
@@ -184,6 +190,92 @@ class TriangleSOCBlock:
 
     def touch(self, mask) -> None:
         mask[self.cv.ravel()] = True
+
+
+class CliqueSOCBlock:
+    """Second-order cones on cliques of variables: ``s_t = h_t − G_t x[dofs_t] ∈ SOC(d)`` (``A_t = G_t``,
+    ``b_t = h_t``).
+
+    Parameters
+    ----------
+    group : ConeGroup
+        ``dofs`` (k, c), ``G`` (k, d, c), ``h`` (k, d).
+    x_fixed : (n,) float ndarray
+        Fixed values (0 on the free variables).
+    chol : SymbolicCholesky
+        The pattern; raises ValueError when a clique is not in it.
+
+    Notes
+    -----
+    ``G_tᵀW_t⁻²G_t = (2 (G_tᵀv̂)(G_tᵀv̂)ᵀ − G_tᵀJG_t)/η²`` (``v̂ = J w̄``): the constant ``G_tᵀJG_t`` is kept per
+    clique entry, so each iteration adds a rank-one term per cone, as for the triangles.
+    """
+
+    def __init__(self, group: ConeGroup, x_fixed: np.ndarray, chol: SymbolicCholesky):
+        self.cone = SOC(group.dim)
+        self.count = k = group.count
+        self.G = group.G  # (k, d, c), C-contiguous (ConeGroup makes it so)
+        self.dofs = group.dofs
+        self.h = np.ascontiguousarray(group.h.T)  # (d, k)
+        ta, tb = np.tril_indices(group.clique)  # lower-triangle clique entries (a ≥ b)
+        self.tri_a, self.tri_b = ta.astype(np.int64), tb.astype(np.int64)
+        dofs = self.dofs
+        self.pos = _kern.positions(chol, dofs[:, ta].T.ravel(), dofs[:, tb].T.ravel()) if k else np.zeros(0, np.int64)
+        G = self.G
+        self.gjg = np.ascontiguousarray(np.einsum("ke,ke->ke", G[:, 0, ta], G[:, 0, tb])
+                                        - np.einsum("kie,kie->ke", G[:, 1:, ta], G[:, 1:, tb]))
+        self.shift = self.Gx(x_fixed)
+        self.b_tilde = self.h - self.shift
+
+    def Gx(self, x: np.ndarray) -> np.ndarray:
+        """(d, k): ``G_t x[dofs_t]`` for every cone."""
+        out = np.empty((self.h.shape[0], self.count))
+        if self.count:
+            _ck.gather(self.G, self.dofs, np.ascontiguousarray(x, dtype=np.float64), out)
+        return out
+
+    def slack(self, x, x_fixed):
+        return self.h - self.Gx(x)
+
+    def residual(self, x, s):
+        gx = self.Gx(x)
+        return gx + s - self.h, gx
+
+    def recession_violation(self, aux) -> float:
+        return max(-self.cone.min_eigenvalue(self.shift - aux), 0.0) if self.count else 0.0  # −G d ∈ K
+
+    def b_dot(self, z) -> float:
+        return float((self.b_tilde * z).sum())
+
+    def norm_b(self) -> float:
+        return _amax(self.b_tilde)
+
+    def A(self, x):
+        return self.Gx(x)
+
+    def At_add(self, z, out) -> None:
+        if self.count:
+            _ck.scatter(self.G, self.dofs, np.ascontiguousarray(z), 1.0, out)
+
+    def kkt_add(self, sc, v, out) -> None:
+        if self.count:
+            _ck.kkt(self.G, self.dofs, sc.w, sc.inv_eta2, np.ascontiguousarray(v, dtype=np.float64), out)
+
+    def assemble_add(self, sc, data) -> None:
+        if self.count:
+            _ck.assemble(self.G, self.gjg, sc.w, sc.inv_eta2, self.tri_a, self.tri_b, self.pos, data)
+
+    def newton(self, dx, sc, wu, wr, rz):
+        g = self.Gx(dx)
+        return -rz - g, sc.apply_winv2(g) + wu + wr
+
+    def refine(self, delta, sc, ds, dz):
+        g = self.Gx(delta)
+        return ds - g, dz + sc.apply_winv2(g)
+
+    def touch(self, mask) -> None:
+        used = np.abs(self.G).max(axis=1) > 0  # (k, c): a column of zeros constrains nothing
+        mask[self.dofs[used]] = True
 
 
 class PairInequalityBlock:

@@ -13,8 +13,8 @@ fields are (p,) arrays.
 Cone types
 ----------
 :class:`SOC`
-    ``{u : u₀ ≥ ‖u₁..‖}`` of any dimension; SOC(3) runs the compiled kernels of
-    :mod:`._kernels`, other dimensions the NumPy formulas (the same ones, CVXOPT's).
+    ``{u : u₀ ≥ ‖u₁..‖}`` of any dimension; SOC(3) runs the unrolled kernels of
+    :mod:`._kernels`, other dimensions those of :mod:`._clique_kernels` (the same formulas, CVXOPT's).
 :class:`Orthant`
     ``{u : u ≥ 0}`` (the linear inequalities).
 :class:`RotatedSOC`
@@ -32,6 +32,7 @@ from typing import Protocol
 
 import numpy as np
 
+from . import _clique_kernels as _ck
 from . import _kernels as _kern
 
 __all__ = ["SOC", "Cone", "Orthant", "RotatedSOC", "Scaling"]
@@ -66,6 +67,11 @@ class Cone(Protocol):
 
     def max_step(self, u: np.ndarray, du: np.ndarray) -> float:
         """Largest ``α`` with ``u + α du`` in the cone (``inf`` when unbounded); ``u`` interior."""
+        ...
+
+    def max_step_closed(self, u: np.ndarray, du: np.ndarray) -> np.ndarray:
+        """Per cone (per entry for the orthant), the largest ``α`` with ``u + t du`` strictly inside for every ``t``
+        in ``(0, α)``; ``u`` may lie on the boundary. 0 where no ``α > 0`` is, ``inf`` where every one is."""
         ...
 
     def dot(self, u: np.ndarray, v: np.ndarray) -> float:
@@ -112,6 +118,11 @@ class Cone(Protocol):
         ...
 
 
+def _c(a: np.ndarray) -> np.ndarray:
+    """``a`` as a C-contiguous float64 array (the compiled kernels' layout)."""
+    return np.ascontiguousarray(a, dtype=np.float64)
+
+
 def _amax(a: np.ndarray) -> float:
     return float(np.abs(a).max()) if a.size else 0.0
 
@@ -125,8 +136,8 @@ class _SocScaling:
     """NT scaling ``W = η W̄`` of SOC pairs (s, z), vectorized (CVXOPT's formulas).
 
     ``W̄ = [[w₀, w₁ᵀ], [w₁, I + w₁w₁ᵀ/(1 + w₀)]]`` with ``w̄ᵀJw̄ = 1`` (``J = diag(1, −1, …)``);
-    ``W z = W⁻¹ s = λ``; ``W⁻² = (2 v vᵀ − J)/η²`` with ``v = J w̄``. SOC(3) runs the compiled kernels,
-    other dimensions the same formulas in NumPy.
+    ``W z = W⁻¹ s = λ``; ``W⁻² = (2 v vᵀ − J)/η²`` with ``v = J w̄``. SOC(3) runs the unrolled kernels of
+    :mod:`._kernels`, other dimensions the same formulas in :mod:`._clique_kernels`.
     """
 
     def __init__(self, s: np.ndarray, z: np.ndarray):
@@ -138,30 +149,15 @@ class _SocScaling:
         self.lam = np.empty((d, k))
         if self._k3:
             _kern.nt_scaling(s, z, self.w, self.eta, self.inv_eta2, self.lam)
-            return
-        sn = np.sqrt((s[0] - np.linalg.norm(s[1:], axis=0)) * (s[0] + np.linalg.norm(s[1:], axis=0)))
-        zn = np.sqrt((z[0] - np.linalg.norm(z[1:], axis=0)) * (z[0] + np.linalg.norm(z[1:], axis=0)))
-        sb, zb = s / sn, z / zn
-        gamma = np.sqrt(0.5 * (1.0 + (sb * zb).sum(axis=0)))
-        self.w[0] = (sb[0] + zb[0]) / (2.0 * gamma)
-        self.w[1:] = (sb[1:] - zb[1:]) / (2.0 * gamma)
-        self.eta[:] = np.sqrt(sn / zn)
-        self.inv_eta2[:] = zn / sn
-        scale = np.sqrt(sn * zn)
-        self.lam[0] = gamma * scale
-        self.lam[1:] = ((gamma + zb[0]) * sb[1:] + (gamma + sb[0]) * zb[1:]) / (sb[0] + zb[0] + 2.0 * gamma) * scale
+        else:
+            _ck.nt_scaling(_c(s), _c(z), self.w, self.eta, self.inv_eta2, self.lam)
 
     def _apply(self, v: np.ndarray, sign: float) -> np.ndarray:
-        out = np.empty_like(v)
+        out = np.empty(v.shape)
         if self._k3:
             _kern.apply_w(self.w, self.eta, v, sign, out)
-            return out
-        w = self.w
-        f = self.eta if sign > 0 else 1.0 / self.eta
-        w1v1 = (w[1:] * v[1:]).sum(axis=0)
-        c = sign * v[0] + w1v1 / (1.0 + w[0])
-        out[0] = (w[0] * v[0] + sign * w1v1) * f
-        out[1:] = (v[1:] + c * w[1:]) * f
+        else:
+            _ck.w_apply(self.w, self.eta, _c(v), sign, out)
         return out
 
     def apply_w(self, v: np.ndarray) -> np.ndarray:
@@ -174,14 +170,11 @@ class _SocScaling:
 
     def apply_winv2(self, v: np.ndarray) -> np.ndarray:
         """``W⁻² v = (2 v̂ (v̂ᵀv) − J v)/η²`` with ``v̂ = J w̄``."""
-        out = np.empty_like(v)
+        out = np.empty(v.shape)
         if self._k3:
             _kern.apply_inv2(self.w, self.inv_eta2, v, out)
-            return out
-        w = self.w
-        a = 2.0 * (w[0] * v[0] - (w[1:] * v[1:]).sum(axis=0))
-        out[0] = (a * w[0] - v[0]) * self.inv_eta2
-        out[1:] = (v[1:] - a * w[1:]) * self.inv_eta2
+        else:
+            _ck.winv2_apply(self.w, self.inv_eta2, _c(v), out)
         return out
 
     def body_to_inv2(self, g: np.ndarray) -> np.ndarray:
@@ -220,18 +213,28 @@ class SOC:
         """Maps ``u`` to the identity with the quadratic representation of ``u^{-1/2}`` (as ECOS does), where the
         condition reads ``1 + αρ₀ ≥ α‖ρ₁‖``."""
         if self.dim == 3:
-            return _kern.max_step_soc(np.ascontiguousarray(u, dtype=np.float64),
-                                      np.ascontiguousarray(du, dtype=np.float64))
-        if not u.shape[1]:
-            return np.inf
-        nb = self._norm_body(u)
-        det = (u[0] - nb) * (u[0] + nb)
-        lk = np.sqrt(det)
-        rho0 = (u[0] * du[0] - (u[1:] * du[1:]).sum(axis=0)) / det
-        c = (rho0 * lk + du[0]) / (u[0] + lk)
-        r = du[1:] - c * u[1:]
-        worst = float((np.sqrt((r * r).sum(axis=0) / det) - rho0).max())
-        return 1.0 / worst if worst > 0 else np.inf
+            return _kern.max_step_soc(_c(u), _c(du))
+        return _ck.max_step(_c(u), _c(du))
+
+    def max_step_closed(self, u: np.ndarray, du: np.ndarray) -> np.ndarray:
+        """Per cone, the largest ``α`` with ``u + t du`` strictly inside for every ``t`` in ``(0, α)``, where ``u``
+        may lie on the boundary (the order-2 cones at ``φ = 0``): (k,) ndarray, 0 where no ``α > 0`` is, ``inf``
+        where every one is.
+
+        The margin ``head² − ‖body‖²`` at ``t`` is the quadratic ``m₀ + B t + A t²``; from inside (``m₀ > 0``, or
+        ``m₀ = 0`` and ``B > 0``) the first positive root ends the interval.
+        """
+        m0 = u[0] ** 2 - (u[1:] ** 2).sum(axis=0)
+        m0 = np.where(np.abs(m0) <= 1e-12 * u[0] ** 2, 0.0, m0)
+        B = 2.0 * (u[0] * du[0] - (u[1:] * du[1:]).sum(axis=0))
+        A = du[0] ** 2 - (du[1:] ** 2).sum(axis=0)
+        disc = B * B - 4.0 * A * m0
+        sq = np.sqrt(np.maximum(disc, 0.0))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            root = np.where(A != 0, (-B - sq) / (2 * A), -m0 / B)
+        alpha = np.where((disc >= 0) & (root > 0), root, np.inf)
+        inside = (m0 > 0) & (u[0] > 0) | (m0 == 0) & (B > 0)
+        return np.where(inside, alpha, 0.0)
 
     def min_eigenvalue(self, u: np.ndarray) -> float:
         return float((u[0] - self._norm_body(u)).min()) if u.shape[1] else np.inf
@@ -248,27 +251,20 @@ class SOC:
         return np.concatenate([x0[None], (d[1:] - x0 * lam[1:]) / lam[0]])
 
     def mehrotra(self, sc, ds, dz, z, sigma_mu):
+        out = np.empty(z.shape)
         if self.dim == 3:
-            out = np.empty_like(z)
             _kern.mehrotra_cones(sc.w, sc.eta, sc.lam, ds, dz, z, sigma_mu, out)
-            return out
-        c = self.product(sc.apply_winv(ds), sc.apply_w(dz))
-        c[0] -= sigma_mu
-        return -z - sc.apply_winv(self.divide(sc.lam, c))
+        else:
+            _ck.mehrotra(sc.w, sc.eta, sc.lam, _c(ds), _c(dz), _c(z), sigma_mu, np.empty(z.shape), out)
+        return out
 
     def gondzio(self, sc, s, ds, tp, z, dz, td, lo, hi):
+        out = np.empty(z.shape)
         if self.dim == 3:
-            out = np.empty_like(z)
             _kern.gondzio_cones(sc.w, sc.eta, sc.lam, s, ds, tp, z, dz, td, lo, hi, out)
-            return out
-        v = self.product(sc.apply_winv(s + tp * ds), sc.apply_w(z + td * dz))
-        nv = np.linalg.norm(v[1:], axis=0)
-        e1, e2 = v[0] - nv, v[0] + nv
-        t1 = np.maximum(np.clip(e1, lo, hi) - e1, -hi)
-        t2 = np.maximum(np.clip(e2, lo, hi) - e2, -hi)
-        u = np.divide(v[1:], nv, out=np.zeros_like(v[1:]), where=nv > 0)
-        c = np.concatenate([(0.5 * (t1 + t2))[None], 0.5 * (t2 - t1) * u])
-        return sc.apply_winv(self.divide(sc.lam, c))
+        else:
+            _ck.gondzio(sc.w, sc.eta, sc.lam, _c(s), _c(ds), tp, _c(z), _c(dz), td, lo, hi, np.empty(z.shape), out)
+        return out
 
     def add_identity(self, u: np.ndarray, d: float) -> np.ndarray:
         u = u.copy()
@@ -329,6 +325,11 @@ class Orthant:
 
     def max_step(self, u: np.ndarray, du: np.ndarray) -> float:
         return _kern.max_step_lp(u, du) if u.size else np.inf
+
+    def max_step_closed(self, u: np.ndarray, du: np.ndarray) -> np.ndarray:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            alpha = np.where(du < 0, -u / du, np.inf)
+        return np.where((u > 0) | (u == 0) & (du > 0), alpha, 0.0)
 
     def min_eigenvalue(self, u: np.ndarray) -> float:
         return float(u.min()) if u.size else np.inf
@@ -419,6 +420,9 @@ class RotatedSOC:
 
     def max_step(self, u: np.ndarray, du: np.ndarray) -> float:
         return self.soc.max_step(_rotate(u), _rotate(du))
+
+    def max_step_closed(self, u: np.ndarray, du: np.ndarray) -> np.ndarray:
+        return self.soc.max_step_closed(_rotate(u), _rotate(du))
 
     def min_eigenvalue(self, u: np.ndarray) -> float:
         return self.soc.min_eigenvalue(_rotate(u))

@@ -4,11 +4,14 @@
 
     minimize    ½ xᵀPx + qᵀx
     subject to  A_i x + s_i = b_i,   s_i ∈ K_i   for every block i (:mod:`.blocks`)
+                E x = f                          (a few equalities: the zero cone)
                 x_j = x_F,j                      for the fixed variables
 
-Fixed variables become identity rows of the reduced Newton matrix ``P + Σ_i A_iᵀW_i⁻²A_i``, which
+Fixed variables become identity rows of the reduced Newton matrix ``K = P + Σ_i A_iᵀW_i⁻²A_i``, which
 keeps its sparsity pattern (the mesh's :func:`~cvxgeodesic.solvers.problem.kkt_pattern`); one
-symbolic analysis therefore serves every iteration of every solve on a mesh.
+symbolic analysis therefore serves every iteration of every solve on a mesh. The equalities stay out
+of that pattern: their rows are few, and the Newton system ``[K Eᵀ; E 0]`` is solved through the
+dense Schur complement ``E K⁻¹ Eᵀ`` (:mod:`.newton`).
 """
 
 from __future__ import annotations
@@ -19,12 +22,16 @@ import numpy as np
 import scipy.sparse as sp
 
 from ...linalg import SymbolicCholesky
-from ..problem import ConicProblem
+from ..problem import ConicProblem, Equalities, clique_pattern
 from . import _kernels as _kern
-from .blocks import ConeBlock, PairInequalityBlock, TriangleSOCBlock
+from .blocks import CliqueSOCBlock, ConeBlock, PairInequalityBlock, TriangleSOCBlock
 from .cones import Scaling
 
 __all__ = ["PatternMismatch", "Program", "problem_pattern"]
+
+
+def _kern_amax(a: np.ndarray) -> float:
+    return float(np.abs(a).max()) if a.size else 0.0
 
 
 class PatternMismatch(Exception):
@@ -42,17 +49,11 @@ def problem_pattern(problem: ConicProblem) -> sp.csc_matrix:
     -------
     (n, n) scipy.sparse.csc_matrix
     """
-    n = problem.n
-    cv, iv = np.asarray(problem.cone_vertices), np.asarray(problem.ineq_vertices)
-    r = [np.arange(n), np.repeat(cv, 3, axis=1).ravel(), np.repeat(iv, 2, axis=1).ravel()]
-    c = [np.arange(n), np.tile(cv, (1, 3)).ravel(), np.tile(iv, (1, 2)).ravel()]
+    S = clique_pattern(problem.n, [g.dofs for g in problem.cones] + [problem.ineq.vertices])
     if problem.P is not None:
-        Pc = sp.coo_matrix(problem.P)
-        r.append(Pc.row)
-        c.append(Pc.col)
-    rows, cols = np.concatenate(r).astype(np.int64), np.concatenate(c).astype(np.int64)
-    S = sp.csc_matrix((np.ones(rows.size), (rows, cols)), shape=(n, n))
-    S.data[:] = 1.0
+        Pc = sp.csc_matrix(problem.P)
+        S = S + sp.csc_matrix((np.ones(Pc.nnz), Pc.indices, Pc.indptr), shape=S.shape)
+        S.data[:] = 1.0
     return S
 
 
@@ -72,6 +73,10 @@ class Program:
         before any other work).
     chol : SymbolicCholesky
         The analysed pattern; :class:`PatternMismatch` when a block or ``P`` does not fit it.
+    eq : Equalities, optional
+        ``E x = f``.
+    guess : (n,) float ndarray, optional
+        A field near the optimum for the "guess" start (:mod:`.start`).
 
     Attributes
     ----------
@@ -83,7 +88,8 @@ class Program:
         with a cost, :attr:`unbounded_var` is its index (else −1).
     """
 
-    def __init__(self, P, q: np.ndarray, fixed: np.ndarray, fixed_values: np.ndarray, blocks, chol: SymbolicCholesky):
+    def __init__(self, P, q: np.ndarray, fixed: np.ndarray, fixed_values: np.ndarray, blocks, chol: SymbolicCholesky,
+                 eq: Equalities | None = None, guess: np.ndarray | None = None):
         n = int(np.asarray(q).shape[0])
         if n != chol.n:
             raise ValueError(f"problem has {n} variables but the solver was built for {chol.n} (another mesh?)")
@@ -104,14 +110,17 @@ class Program:
         if Pl is not None:
             self.base += np.bincount(P_pos, weights=Pl.data, minlength=nnz)
         self.nu = sum(b.cone.degree(b.count) for b in self.blocks)
+        self._eq_touch = np.unique(sp.csr_matrix(eq.E).indices) if eq is not None and eq.count else None
         self._fix_loose()
 
         # Constants of the reduced problem: q̃ = q_f + P_fF x_F, const = objective of x_F (b̃ is in the blocks).
         self.Px_fixed = self.P @ self.x_fixed if self.P is not None else np.zeros(n)
         self.qt_free = (self.q + self.Px_fixed)[self.free]
         self.const = float(self.q @ self.x_fixed) + 0.5 * float(self.x_fixed @ self.Px_fixed)
-        self.norm_b = max([b.norm_b() for b in self.blocks], default=0.0)
+        self._equalities(eq)
+        self.norm_b = max([b.norm_b() for b in self.blocks] + [_kern_amax(self.f_tilde)], default=0.0)
         self.norm_q = float(np.abs(self.qt_free).max()) if self.qt_free.size else 0.0
+        self.guess = None if guess is None else np.asarray(guess, dtype=np.float64)
 
         # Fixed variables: rows and columns replaced by identity rows.
         r = chol.indices.astype(np.int64)
@@ -121,6 +130,35 @@ class Program:
         self.diag_pos = chol.diag_positions
         self.nnz = nnz
 
+    def _equalities(self, eq: Equalities | None) -> None:
+        """``E`` and ``f`` with the fixed variables eliminated: ``E_f`` (fixed columns zeroed, so that ``K⁻¹Eᵀ``
+        vanishes on them as every direction does), ``f̃ = f − E x_F``; rows left empty are dropped."""
+        self.E = self.ET = None
+        self.f = self.f_tilde = np.zeros(0)
+        self.p = 0
+        if eq is None or not eq.count:
+            return
+        E = sp.csr_matrix(eq.E, dtype=np.float64)
+        f_tilde = np.asarray(eq.f, dtype=np.float64) - E @ self.x_fixed
+        Ef = (E @ sp.diags(self.free.astype(np.float64))).tocsr()
+        Ef.eliminate_zeros()
+        rows = np.diff(Ef.indptr) > 0
+        if (~rows).any() and np.abs(f_tilde[~rows]).max() > 0:
+            bad = int(np.flatnonzero(~rows & (f_tilde != 0))[0])
+            raise ValueError(f"equality {bad} involves fixed variables only and is violated by their values")
+        self.E, self.f, self.f_tilde = Ef[rows], np.asarray(eq.f, dtype=np.float64)[rows], f_tilde[rows]
+        self.E_full = E[rows]
+        self.ET = self.E.T.tocsr()
+        self.p = int(self.E.shape[0])
+
+    def Et(self, y: np.ndarray) -> np.ndarray:
+        """``Eᵀy`` (n,) (zero on the fixed variables)."""
+        return self.ET @ y if self.p else np.zeros(self.n)
+
+    def eq_residual(self, x: np.ndarray) -> np.ndarray:
+        """``E x − f`` (p,) at a full-space ``x``."""
+        return self.E_full @ x - self.f if self.p else np.zeros(0)
+
     def _fix_loose(self) -> None:
         """A free variable that nothing constrains or couples is either free to go to ±∞ or irrelevant."""
         touched = np.zeros(self.n, dtype=bool)
@@ -128,6 +166,8 @@ class Program:
             b.touch(touched)
         if self.P is not None:
             touched |= np.asarray(abs(self.P).sum(axis=1)).ravel() > 0
+        if self._eq_touch is not None:
+            touched[self._eq_touch] = True
         loose = ~self.fixed & ~touched
         self.unbounded_var = -1
         if loose.any():
@@ -139,13 +179,21 @@ class Program:
 
     @classmethod
     def from_problem(cls, problem: ConicProblem, chol: SymbolicCholesky) -> Program:
-        """The mesh problem: its triangle cones (SOC(3)) and its pair inequalities (orthant)."""
+        """The blocks of a :class:`ConicProblem`: each cone group (the fused SOC(3) triangle kernels for unit
+        gradient bounds on triangles, :class:`~.blocks.CliqueSOCBlock` otherwise), then the pair inequalities."""
 
         def blocks(x_fixed, chol):
-            return [TriangleSOCBlock(problem.cone_blocks, problem.cone_vertices, x_fixed, chol),
-                    PairInequalityBlock(problem.ineq_vertices, problem.ineq_coeffs, problem.ineq_rhs, x_fixed, chol)]
+            out: list[ConeBlock] = []
+            for g in problem.cones:
+                B = g.unit_blocks() if (g.dim, g.clique) == (3, 3) else None
+                out.append(TriangleSOCBlock(B, g.dofs, x_fixed, chol) if B is not None
+                           else CliqueSOCBlock(g, x_fixed, chol))
+            ineq = problem.ineq
+            out.append(PairInequalityBlock(ineq.vertices, ineq.coeffs, ineq.rhs, x_fixed, chol))
+            return out
 
-        return cls(problem.P, problem.q, problem.fixed_mask, problem.fixed_values, blocks, chol)
+        return cls(problem.P, problem.q, problem.fixed_mask, problem.fixed_values, blocks, chol, eq=problem.eq,
+                   guess=problem.guess)
 
     # --- products with the constraint matrix ---
     def identity_scalings(self) -> list[Scaling]:

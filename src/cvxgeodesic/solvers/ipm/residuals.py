@@ -34,6 +34,7 @@ class Evaluation:
     info: dict
     rx: np.ndarray
     rz: list
+    ry: np.ndarray
     aux: list
     Atz: np.ndarray
     Pfx: np.ndarray
@@ -48,8 +49,11 @@ def evaluate(pr: Program, it: Iterate, iteration: int, step: float, elapsed: flo
     x = it.x
     Px = pr.Pmul(x)
     Atz = pr.At(it.z)
+    if pr.p:
+        Atz = Atz + pr.Et(it.y)
     rx = Px + pr.q + Atz
     rx[pr.fixed] = 0.0
+    ry = pr.eq_residual(x)
     rz, aux = [], []
     for b, s in zip(pr.blocks, it.s, strict=True):
         r, a = b.residual(x, s)
@@ -60,6 +64,8 @@ def evaluate(pr: Program, it: Iterate, iteration: int, step: float, elapsed: flo
     xPffx = float(xf @ Pfx)
     qx = float(pr.qt_free @ xf)
     bz = sum(b.b_dot(z) for b, z in zip(pr.blocks, it.z, strict=True))
+    if pr.p:
+        bz += float(pr.f_tilde @ it.y)
     pcost_r = 0.5 * xPffx + qx
     dcost_r = -0.5 * xPffx - bz
     pcost, dcost = pcost_r + pr.const, dcost_r + pr.const
@@ -68,7 +74,7 @@ def evaluate(pr: Program, it: Iterate, iteration: int, step: float, elapsed: flo
     norm_x = float(np.abs(xf).max()) if xf.size else 0.0
     norm_s = max([_amax(s) for s in it.s], default=0.0)
     norm_z = max([_amax(z) for z in it.z], default=0.0)
-    res_p = max([_amax(r) for r in rz], default=0.0) / max(1.0, pr.norm_b + norm_x + norm_s)
+    res_p = max([_amax(r) for r in rz] + [_amax(ry)], default=0.0) / max(1.0, pr.norm_b + norm_x + norm_s)
     dual_scale = max(1.0, pr.norm_q + norm_x + norm_z)
     res_d = _amax(rx) / dual_scale
     # the same residual without ‖z‖ in its scale: a dual blown up along a direction that Aᵀ cancels
@@ -81,7 +87,7 @@ def evaluate(pr: Program, it: Iterate, iteration: int, step: float, elapsed: flo
         "res_primal": res_p, "res_dual": res_d, "res_dual_plain": res_d_plain, "mu": mu, "step": step,
         "time": elapsed,
     }
-    return Evaluation(info, rx, rz, aux, Atz, Pfx, bz, qx, dual_scale, float(np.abs(xf).sum()))
+    return Evaluation(info, rx, rz, ry, aux, Atz, Pfx, bz, qx, dual_scale, float(np.abs(xf).sum()))
 
 
 def converged(info: dict, tol: float) -> bool:

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 
-__all__ = ["IPMSettings"]
+__all__ = ["ORDER2", "IPMSettings"]
 
-_INITS = ("graph", "interior", "mehrotra", "cvxopt")
+_INITS = ("graph", "interior", "mehrotra", "cvxopt", "guess")
 
 #: Centrality correctors per iteration below :data:`LARGE_PATTERN_NNZ` (see ``IPMSettings.max_correctors``).
 CORRECTORS_SMALL = 2
@@ -111,7 +111,7 @@ class IPMSettings:
         ... and iterating stops when the best iterate, meeting them, has not been improved on for this many
         iterations (seen: the dual residual stuck at 3–8e-8 by rounding while μ underflows, up to max_iter).
         Default 10.
-    init : {"graph", "interior", "mehrotra", "cvxopt"}
+    init : {"graph", "interior", "mehrotra", "cvxopt", "guess"}
         Starting point: "cvxopt" (``z = A x − b`` shifted into the cone), "mehrotra" (least-norm dual
         ``z = A y`` with ``Aᵀz = −q − Px``, one uniform shift of s and of z, then balancing), "interior" (the
         least-squares x of the ``W = I`` system scaled towards ``x_F`` so that s is strictly feasible without a
@@ -124,7 +124,14 @@ class IPMSettings:
         fandisk, bunny_7k, kitten, camelhead, fertility, dragon_20k) "interior" took 783 iterations against 913,
         never more. "graph" (2026-12-01, spot/bimba/horse/armadillo QCLP and QCQP-Hessian, 70K and 280K
         bunnies QCQP-Hessian): 154 → 153 iterations with 2 correctors, 146 → 143 with 4, and one factorization
-        fewer per QCQP solve. Default "graph".
+        fewer per QCQP solve. Default "graph". "guess" (the order-2 programs, :data:`ORDER2`): the program's own
+        guess field scaled into the interior (:func:`.start.guess_primal`), the least-norm z with Mehrotra's shift
+        of z alone; "mehrotra" without a guess.
+    sigma_cap_guess : float
+        After a "guess" start, Mehrotra's σ is capped at this. From a primal-feasible start the tail converged
+        linearly with σ ≈ 0.3 at steps of 0.95 (order 2, bimba: the gap ÷ 2.5 per iteration over 15 iterations);
+        measured iterations for caps 1 / 0.2 / 0.1 / 0.05: spot 21 / 20 / 18, bunny_7k 22 / 21 / 19, bimba
+        28 / – / 22 / 21 (2026-12-01). Default 1 (no cap; :data:`ORDER2` has 0.1).
     interior_fraction : float
         "interior", "graph": fraction of the largest feasible step from ``x_F`` towards the least-squares x (the
         graph field) that is taken. Default 0.9 (0.5 with the graph field: 143 → 146 iterations on the set above).
@@ -158,6 +165,7 @@ class IPMSettings:
     interior_fraction: float = 0.9
     shift_factor: float = 1.5
     dual_floor: float = 1e-2
+    sigma_cap_guess: float = 1.0
 
     def correctors_for(self, pattern_nnz: int) -> int:
         """Centrality correctors per iteration for a Newton pattern of ``pattern_nnz`` stored entries (lower
@@ -173,6 +181,8 @@ class IPMSettings:
             raise ValueError(f"IPMSettings.step must be in (0, 1), got {self.step!r}")
         if not 0.0 <= self.short_step <= 1.0:
             raise ValueError(f"IPMSettings.short_step must be in [0, 1], got {self.short_step!r}")
+        if not 0.0 < self.sigma_cap_guess <= 1.0:
+            raise ValueError(f"IPMSettings.sigma_cap_guess must be in (0, 1], got {self.sigma_cap_guess!r}")
         if not 0.0 < self.interior_fraction <= 1.0:
             raise ValueError(f"IPMSettings.interior_fraction must be in (0, 1], got {self.interior_fraction!r}")
         if not self.corrector_weights or not all(0.0 < w <= 1.0 for w in self.corrector_weights):
@@ -189,3 +199,12 @@ class IPMSettings:
                     raise ValueError(f"IPMSettings.{f.name} must be a nonnegative integer, got {value!r}")
             elif isinstance(value, float) and not value >= 0.0:
                 raise ValueError(f"IPMSettings.{f.name} must be a nonnegative number, got {value!r}")
+
+
+#: The settings of the order-2 programs (SOC(4) cones on P2 face cliques; linear objective), each measured on them
+#: (2026-12-01, docs/order2.md): four correctors always (27 solves: 829 iterations without, 534 with 2, 470 with 4;
+#: the worst flat error 1.9e-6 without, 3.5e-7 with 4), equal primal and dual steps (465 against 470 iterations with
+#: separate ones, but the worst flat error 1.1e-6 against 3.5e-7), the guess start with σ capped at 0.1, and a
+#: static regularization relative to each diagonal entry of 1e-13 (relative to the largest entry it swamped the
+#: far-from-source rows, ~1e10 smaller near the optimum).
+ORDER2 = IPMSettings(max_correctors=4, separate_steps=False, init="guess", sigma_cap_guess=0.1, static_reg=1e-13)

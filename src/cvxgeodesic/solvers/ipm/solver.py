@@ -1,35 +1,35 @@
-"""A structured primal–dual interior-point solver for :class:`~cvxgeodesic.solvers.problem.ConicProblem`.
+"""A structured primal–dual interior-point solver for :class:`~cvxgeodesic.solvers.problem.ConicProblem`, at
+every element order.
 
 The problem (fixed variables eliminated) is written in the standard conic form ::
 
     minimize    ½ xᵀPx + qᵀx
-    subject to  A x + s = b,   s ∈ K = SOC(3)^k × R₊^p
+    subject to  A x + s = b,   s ∈ K = SOC(d₁)^k₁ × … × R₊^p,    E x = f
 
-with one SOC(3) per triangle cone t, ``s_t = (1, B_t x_t)`` (so ``b_t = (1, 0, 0)`` and
-``A_t = [0; −B_t]``), and one nonnegative slack per linear inequality: two cone blocks
-(:mod:`.blocks`) over the cone types of :mod:`.cones`. The algorithm is in :mod:`.algorithm`, the
-starting point in :mod:`.start`, residuals, stopping rule and certificates in :mod:`.residuals`, the
-reduced Newton system in :mod:`.newton` and :mod:`.program`, the tuning constants in :mod:`.settings`.
+with one block per cone group (:mod:`.blocks`: the fused SOC(3) kernels for the order-1 triangle cones
+``s_t = (1, B_t x_t)``, the clique kernels for any other ``s_t = h_t − G_t x[dofs_t]``), one nonnegative slack
+per linear inequality and a few equalities. The algorithm is in :mod:`.algorithm`, the starting point in
+:mod:`.start`, residuals, stopping rule and certificates in :mod:`.residuals`, the reduced Newton system in
+:mod:`.newton` and :mod:`.program`, the equilibration of order-2 programs in :mod:`.equilibrate`, the tuning
+constants in :mod:`.settings` (:data:`~.settings.ORDER2` for the order-2 programs).
 
-What makes it fast is the structure: every cone touches three variables and
-every inequality at most two, so eliminating ``Δs`` and ``Δz`` leaves the n×n
-SPD system ::
+What makes it fast is the structure: every cone touches a small clique of variables (a triangle's three
+vertices, a face's six P2 nodes) and every inequality at most two, so eliminating ``Δs`` and ``Δz`` leaves the
+n×n SPD system ::
 
-    (P + Σ_t B_tᵀ [W_t⁻²]_body B_t + Σ_k a_kᵀ (z_k/s_k) a_k) Δx = r
+    (P + Σ_t G_tᵀ W_t⁻² G_t + Σ_k a_kᵀ (z_k/s_k) a_k) Δx = r
 
-whose sparsity pattern is that of the mesh (:func:`~cvxgeodesic.solvers.problem.kkt_pattern`),
-whatever the sources, the formulation or λ. Fixed variables become identity
-rows, which keeps the pattern. One symbolic Cholesky analysis
-(:class:`~cvxgeodesic.linalg.SymbolicCholesky`) therefore serves every iteration of
-every solve on a mesh; an iteration costs one numeric factorization, three to
-eight triangular solves (predictor, corrector, up to four centrality correctors,
-iterative refinement of the final direction) and O(n) per-cone work done by the
-compiled kernels of :mod:`._kernels`. The factorization backend is MKL
-PARDISO when installed, else CHOLMOD (see :mod:`cvxgeodesic.linalg`).
+whose sparsity pattern is the union of the cliques (:func:`~cvxgeodesic.solvers.problem.kkt_pattern` at order 1),
+whatever the sources, the formulation or λ. Fixed variables become identity rows, which keeps the pattern; the
+equalities enter through a small dense Schur complement. One symbolic Cholesky analysis
+(:class:`~cvxgeodesic.linalg.SymbolicCholesky`) therefore serves every iteration of every solve on a mesh; an
+iteration costs one numeric factorization, three to eight triangular solves (predictor, corrector, up to four
+centrality correctors, iterative refinement of the final direction) and O(n) per-cone work done by compiled
+kernels. The factorization backend is MKL PARDISO when installed, else CHOLMOD (see :mod:`cvxgeodesic.linalg`).
 
-``[W_t⁻²]_body = (I + 2 w̄₁w̄₁ᵀ)/η²`` (NT scaling point ``w̄``, scale ``η``), so the
-3×3 clique of triangle t is ``(B_tᵀB_t + 2 (B_tᵀw̄₁)(B_tᵀw̄₁)ᵀ)/η²``: ``B_tᵀB_t`` is
-computed once per problem and each iteration adds a rank-one term.
+``W_t⁻² = (2 v̂ v̂ᵀ − J)/η²`` (``v̂ = J w̄``, NT scaling point ``w̄``, scale ``η``), so the clique of cone t is
+``(2 (G_tᵀv̂)(G_tᵀv̂)ᵀ − G_tᵀJG_t)/η²``: ``G_tᵀJG_t`` is computed once per problem and each iteration adds a
+rank-one term.
 """
 
 from __future__ import annotations
@@ -44,6 +44,7 @@ from ...errors import SolverError
 from ...linalg import NotPositiveDefiniteError, SymbolicCholesky
 from ..problem import BackendResult, ConicProblem
 from .algorithm import Stepper
+from .equilibrate import equilibrate
 from .newton import LinearSystem, Trouble
 from .program import PatternMismatch, Program, problem_pattern
 from .residuals import BestIterate, almost, certificate, converged, evaluate, refine_target
@@ -155,7 +156,7 @@ class InteriorPointSolver:
         -------
         BackendResult
             ``x`` (n,) with unreachable vertices set to 0. ``extra`` holds the
-            timing breakdown in seconds (``setup_time``, ``assembly_time``,
+            timing breakdown in seconds (``program_time``: the problem turned into blocks, ``assembly_time``,
             ``factor_time``, ``linear_solve_time``, ``other_time``; their sum is
             ``total_time`` = ``solve_time``), ``refinement_steps``, ``correctors``,
             ``correctors_accepted``, ``new_analyses`` (symbolic analyses this call
@@ -197,9 +198,10 @@ class InteriorPointSolver:
     def _solve(self, problem: ConicProblem, *, tol: float, max_iter: int, callback) -> BackendResult:
         t_start = time.perf_counter()
         analyses_before = self.n_analyses
-        pr = self._prepare(problem)
+        solved, scale = (equilibrate(problem) if problem.equilibrate else (problem, None))
+        pr = self._prepare(solved)
         x, status, info, stopped, run = self._run(pr, t_start, tol, max_iter, callback)
-        xout = x.copy()
+        xout = x * scale if scale is not None else x.copy()
         xout[np.asarray(problem.unreachable, dtype=bool)] = 0.0
         return run.result(xout, problem.objective(xout), status, info, stopped, analyses_before)
 
@@ -221,10 +223,12 @@ class InteriorPointSolver:
         if pr.unbounded_var >= 0:
             raise run.fail("dual_infeasible", f"variable {pr.unbounded_var} has a linear cost and no constraint")
         try:
-            it = starting_point(pr, run.ls, self.settings)
+            start = starting_point(pr, run.ls, self.settings)
         except StartFailure as exc:
             raise run.fail("numerical_error", str(exc)) from exc
-        it, status, _ = self._iterate(pr, run, it, tol, max_iter, callback)
+        sigma_cap = self.settings.sigma_cap_guess if start.from_guess else 1.0
+        run.counters["start"] = "guess" if start.from_guess else self.settings.init
+        it, status, _ = self._iterate(pr, run, start.iterate, tol, max_iter, callback, sigma_cap)
         info = run.info
         x = it.x
         stopped = None
@@ -237,9 +241,9 @@ class InteriorPointSolver:
             x, info = run.best.x, run.best.info
         return x, status, info, stopped, run
 
-    def _iterate(self, pr: Program, run: _Run, it, tol: float, max_iter: int, callback):
+    def _iterate(self, pr: Program, run: _Run, it, tol: float, max_iter: int, callback, sigma_cap: float = 1.0):
         """Iterate until a status is reached: ``(last iterate, status, last step)``."""
-        stepper = Stepper(pr, run.ls, self.settings, run.counters)
+        stepper = Stepper(pr, run.ls, self.settings, run.counters, sigma_cap)
         k = 0
         step = float("nan")
         small_steps = 0
@@ -275,7 +279,7 @@ class _Run:
 
     def __init__(self, solver: InteriorPointSolver, pr: Program, t_start: float, max_iter: int):
         self.solver, self.pr, self.t_start, self.max_iter = solver, pr, t_start, max_iter
-        self.timers = {"setup_time": time.perf_counter() - t_start, "assembly_time": 0.0, "factor_time": 0.0,
+        self.timers = {"program_time": time.perf_counter() - t_start, "assembly_time": 0.0, "factor_time": 0.0,
                        "linear_solve_time": 0.0}
         self.counters = {"refinement_steps": 0, "correctors": 0, "correctors_accepted": 0}
         self.info: dict = {"iterations": 0}

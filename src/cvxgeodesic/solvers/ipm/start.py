@@ -4,7 +4,9 @@
 ``x_F`` so that ``s`` is strictly feasible, the least-norm dual ``z = A y`` shifted cone by cone; "interior": the
 same with the least-squares ``x`` of the ``W = I`` system (also the graph start's fallback); "mehrotra": the
 least-squares ``x`` and the same ``z`` with Mehrotra's uniform shifts; "cvxopt": ``z = A x − b`` shifted into
-the cone.
+the cone; "guess": the program's own guess field (:attr:`.program.Program.guess`, the order-2 programs' squared
+Dijkstra distance) scaled towards ``x_F`` into the interior, the least-norm ``z`` with Mehrotra's shift of ``z``
+alone ("mehrotra" without a guess). The equality duals start at 0.
 """
 
 from __future__ import annotations
@@ -20,7 +22,14 @@ from .program import Program
 from .settings import IPMSettings
 from .state import Iterate
 
-__all__ = ["StartFailure", "starting_point"]
+__all__ = ["Start", "StartFailure", "starting_point"]
+
+
+class Start:
+    """The starting iterate and whether it came from the program's guess (the step then caps σ)."""
+
+    def __init__(self, iterate: Iterate, from_guess: bool = False):
+        self.iterate, self.from_guess = iterate, from_guess
 
 
 class StartFailure(Exception):
@@ -80,17 +89,22 @@ def dual_shift_per_cone(pr: Program, z: Sequence[np.ndarray], st: IPMSettings) -
     return [b.cone.floor(zb, floor) for b, zb in zip(pr.blocks, z, strict=True)]
 
 
-def mehrotra_shift(pr: Program, s: Sequence[np.ndarray], z: Sequence[np.ndarray], st: IPMSettings):
+def mehrotra_shift(pr: Program, s: Sequence[np.ndarray], z: Sequence[np.ndarray], st: IPMSettings,
+                   shift_s: bool = True):
     """Mehrotra's (1992) starting-point heuristic adapted to cones: shift both s and z into the interior by
-    ``shift_factor`` × their most negative eigenvalue, then add ½ sᵀz/Σ(heads of the other) to each."""
-    s = _add_identity(pr, s, max(-st.shift_factor * _min_eigenvalue(pr, s), 0.0))
+    ``shift_factor`` × their most negative eigenvalue, then add ½ sᵀz/Σ(heads of the other) to each; with
+    ``shift_s=False`` a strictly feasible ``s`` is kept as it is and only ``z`` is shifted and balanced."""
+    if shift_s:
+        s = _add_identity(pr, s, max(-st.shift_factor * _min_eigenvalue(pr, s), 0.0))
     z = _add_identity(pr, z, max(-st.shift_factor * _min_eigenvalue(pr, z), 0.0))
     sz = sum(b.cone.dot(sb, zb) for b, sb, zb in zip(pr.blocks, s, z, strict=True))
     heads_s = sum(b.cone.sum_heads(sb) for b, sb in zip(pr.blocks, s, strict=True))
     heads_z = sum(b.cone.sum_heads(zb) for b, zb in zip(pr.blocks, z, strict=True))
     if sz <= 0 or heads_s <= 0 or heads_z <= 0:  # degenerate data: fall back to a unit shift
         sz, heads_s, heads_z = 1.0, 1.0, 1.0
-    return _add_identity(pr, s, 0.5 * sz / heads_z), _add_identity(pr, z, 0.5 * sz / heads_s)
+    if shift_s:
+        s = _add_identity(pr, s, 0.5 * sz / heads_z)
+    return list(s), _add_identity(pr, z, 0.5 * sz / heads_s)
 
 
 def shift_into_cone(pr: Program, u: Sequence[np.ndarray]) -> list[np.ndarray]:
@@ -119,7 +133,7 @@ def _least_norm_dual(pr: Program, ls: LinearSystem, f_y, x: np.ndarray, scalings
         except NotPositiveDefiniteError:
             return None
     try:
-        return ls.solve_refined(f_y, rhs_y, scalings, target_y, with_P=False)
+        return ls.solve_refined(f_y, rhs_y, scalings, target_y, with_P=False)[0]
     except Trouble:
         return None
 
@@ -134,10 +148,29 @@ def _least_squares_x(pr: Program, ls: LinearSystem, scalings) -> tuple[np.ndarra
     rhs0 = -(pr.q + pr.Px_fixed) + pr.At([b.b_tilde for b in pr.blocks])  # −q̃ + A_fᵀb̃
     rhs0[pr.fixed] = 0.0
     try:
-        x = ls.solve_refined(f0, rhs0, scalings, 1e-12 * max(1.0, float(np.abs(rhs0).max()))) + pr.x_fixed
+        x = ls.solve_refined(f0, rhs0, scalings, 1e-12 * max(1.0, float(np.abs(rhs0).max())),
+                             e=pr.f_tilde)[0] + pr.x_fixed
     except Trouble as exc:
         raise StartFailure(str(exc)) from exc
     return x, f0
+
+
+def guess_primal(pr: Program, fraction: float) -> np.ndarray | None:
+    """``x_F + θ (g − x_F)`` for the program's guess ``g``, ``θ = min(1, fraction · θ_max)`` with ``θ_max`` the largest
+    ``θ`` keeping every slack strictly inside on all of ``(0, θ)`` (from ``x_F``, whose slacks may lie on the
+    cones' boundary: the order-2 cones at ``φ = 0``); ``None`` without a guess, when the guess breaks an equality,
+    or when no ``θ > 0`` is feasible."""
+    g = pr.guess
+    if g is None:
+        return None
+    if pr.p and np.abs(pr.eq_residual(g)).max() > 1e-9 * max(1.0, float(np.abs(g).max())):
+        return None
+    step = np.where(pr.fixed, 0.0, g - pr.x_fixed)
+    theta = min([float(b.cone.max_step_closed(b.b_tilde, -b.A(step)).min(initial=np.inf)) for b in pr.blocks],
+                default=np.inf)
+    if not theta > 0:
+        return None
+    return pr.x_fixed + min(1.0, fraction * theta) * step
 
 
 def _primal(pr: Program, ls: LinearSystem, st: IPMSettings, scalings) -> tuple[np.ndarray, bool, object]:
@@ -154,9 +187,16 @@ def _primal(pr: Program, ls: LinearSystem, st: IPMSettings, scalings) -> tuple[n
     return x, False, f_y
 
 
-def starting_point(pr: Program, ls: LinearSystem, st: IPMSettings) -> Iterate:
+def starting_point(pr: Program, ls: LinearSystem, st: IPMSettings) -> Start:
     """The starting iterate; :class:`StartFailure` when the ``W = I`` system is singular or not finite."""
     scalings = pr.identity_scalings()
+    y0 = np.zeros(pr.p)
+    if st.init == "guess" and (x := guess_primal(pr, st.interior_fraction)) is not None:
+        s = [b.slack(x, pr.x_fixed) for b in pr.blocks]
+        y = _least_norm_dual(pr, ls, None, x, scalings)
+        if y is not None:
+            s, z = mehrotra_shift(pr, s, [b.A(y) for b in pr.blocks], st, shift_s=False)
+            return Start(Iterate(x, s, z, y0), from_guess=True)
     x, interior, f_y = _primal(pr, ls, st, scalings)
     s = [b.slack(x, pr.x_fixed) for b in pr.blocks]
     y = _least_norm_dual(pr, ls, f_y, x, scalings) if st.init != "cvxopt" else None
@@ -170,4 +210,4 @@ def starting_point(pr: Program, ls: LinearSystem, st: IPMSettings) -> Iterate:
     else:
         z = [-sb for sb in s]
         s, z = shift_into_cone(pr, s), shift_into_cone(pr, z)
-    return Iterate(x, list(s), list(z))
+    return Start(Iterate(x, list(s), list(z), y0))

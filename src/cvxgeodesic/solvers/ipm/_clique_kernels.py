@@ -1,0 +1,280 @@
+"""Compiled kernels of second-order cones of any dimension on cliques of variables (Numba).
+
+The cones of :class:`~cvxgeodesic.solvers.ipm.blocks.CliqueSOCBlock`: ``s_t = h_t − G_t x[dofs_t] ∈ SOC(d)``
+with ``G`` (k, d, c) (each cone's block contiguous: the loops are bound by reading it) and ``dofs`` (k, c): the
+six P2 nodes of a face at order 2 (``d = 4``), a tetrahedron's four vertices (``d = 4``), ten P2 nodes of a
+tetrahedron (``d = 5``). Fields over the cones are (d, k) arrays, row 0 the heads, as everywhere in
+:mod:`..cones`; the Nesterov–Todd scaling is ``w`` (d, k) (the scaling point w̄, ``w̄ᵀJw̄ = 1``), ``eta`` and
+``inv_eta2`` (k,), CVXOPT's formulas (the SOC(3) kernels of :mod:`._kernels` are the same, unrolled).
+
+Per-cone work that needs a temporary vector writes it into the output column or a caller's work array, so no
+kernel allocates inside its loop. Loops without scatter run in parallel (``prange``); scatters into a variable
+vector or the Newton matrix run serially in cone order.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+# importing the SOC(3) kernels first selects Numba's threading layer (OpenMP, shared with MKL PARDISO)
+from ._kernels import _JIT, _PJIT
+
+__all__ = ["assemble", "gather", "gondzio", "kkt", "max_step", "mehrotra", "nt_scaling", "scatter", "w_apply",
+           "winv2_apply"]
+
+
+# ------------------------------------------------------------------------------ one cone, in place on columns
+@njit(**_JIT)
+def _w_col(w, f, sign, t, src, dst):
+    """``dst[:, t] = f · W̄ src[:, t]`` (``sign`` = +1) or ``f · W̄⁻¹ src[:, t]`` (``sign`` = −1); may alias."""
+    d = w.shape[0]
+    w0 = w[0, t]
+    wv = 0.0
+    for i in range(1, d):
+        wv += w[i, t] * src[i, t]
+    v0 = src[0, t]
+    c = sign * v0 + wv / (1.0 + w0)
+    dst[0, t] = (w0 * v0 + sign * wv) * f
+    for i in range(1, d):
+        dst[i, t] = (src[i, t] + c * w[i, t]) * f
+
+
+@njit(**_JIT)
+def _jprod_col(t, a, b, dst):
+    """``dst[:, t] = a[:, t] ∘ b[:, t]`` (Jordan product); ``dst`` may be ``a``."""
+    d = a.shape[0]
+    a0, b0 = a[0, t], b[0, t]
+    p0 = 0.0
+    for i in range(d):
+        p0 += a[i, t] * b[i, t]
+    for i in range(1, d):
+        dst[i, t] = a0 * b[i, t] + b0 * a[i, t]
+    dst[0, t] = p0
+
+
+@njit(**_JIT)
+def _jdiv_col(lam, t, u):
+    """``u[:, t] = λ[:, t] \\ u[:, t]`` in place (the ``x`` with ``λ ∘ x = u``; λ interior)."""
+    d = lam.shape[0]
+    l0 = lam[0, t]
+    nl2 = 0.0
+    ld = 0.0
+    for i in range(1, d):
+        nl2 += lam[i, t] * lam[i, t]
+        ld += lam[i, t] * u[i, t]
+    nl = math.sqrt(nl2)
+    x0 = (l0 * u[0, t] - ld) / ((l0 - nl) * (l0 + nl))
+    for i in range(1, d):
+        u[i, t] = (u[i, t] - x0 * lam[i, t]) / l0
+    u[0, t] = x0
+
+
+# ------------------------------------------------------------------------------ cone algebra over a block
+@njit(**_PJIT)
+def nt_scaling(s, z, w, eta, inv_eta2, lam):
+    """NT scaling of every pair (s_t, z_t) (both interior): fills ``w``, ``eta``, ``inv_eta2`` and ``λ = W z``."""
+    d = s.shape[0]
+    for t in prange(s.shape[1]):
+        ns2 = 0.0
+        nz2 = 0.0
+        for i in range(1, d):
+            ns2 += s[i, t] * s[i, t]
+            nz2 += z[i, t] * z[i, t]
+        ns, nz = math.sqrt(ns2), math.sqrt(nz2)
+        # (u0 − ‖u1‖)(u0 + ‖u1‖) loses less to cancellation next to the boundary than u0² − ‖u1‖²
+        sn = math.sqrt(max((s[0, t] - ns) * (s[0, t] + ns), 1e-300))
+        zn = math.sqrt(max((z[0, t] - nz) * (z[0, t] + nz), 1e-300))
+        dot = 0.0
+        for i in range(d):
+            dot += (s[i, t] / sn) * (z[i, t] / zn)
+        gamma = math.sqrt(0.5 * (1.0 + dot))
+        sb0, zb0 = s[0, t] / sn, z[0, t] / zn
+        w[0, t] = (sb0 + zb0) / (2.0 * gamma)
+        for i in range(1, d):
+            w[i, t] = (s[i, t] / sn - z[i, t] / zn) / (2.0 * gamma)
+        eta[t] = math.sqrt(sn / zn)
+        inv_eta2[t] = zn / sn
+        scale = math.sqrt(sn * zn)
+        den = 1.0 / (sb0 + zb0 + 2.0 * gamma)
+        lam[0, t] = gamma * scale
+        for i in range(1, d):
+            lam[i, t] = ((gamma + zb0) * (s[i, t] / sn) + (gamma + sb0) * (z[i, t] / zn)) * den * scale
+
+
+@njit(**_PJIT)
+def w_apply(w, eta, v, sign, out):
+    """``out = W v`` (``sign`` = +1) or ``W⁻¹ v`` (``sign`` = −1)."""
+    for t in prange(v.shape[1]):
+        _w_col(w, eta[t] if sign > 0 else 1.0 / eta[t], sign, t, v, out)
+
+
+@njit(**_PJIT)
+def winv2_apply(w, inv_eta2, v, out):
+    """``out = W⁻² v = (2 v̂ (v̂ᵀv) − J v)/η²`` with ``v̂ = J w̄``."""
+    d = w.shape[0]
+    for t in prange(v.shape[1]):
+        a = w[0, t] * v[0, t]
+        for i in range(1, d):
+            a -= w[i, t] * v[i, t]
+        a *= 2.0
+        f = inv_eta2[t]
+        out[0, t] = (a * w[0, t] - v[0, t]) * f
+        for i in range(1, d):
+            out[i, t] = (v[i, t] - a * w[i, t]) * f
+
+
+@njit(**_PJIT)
+def _step_bounds(u, du, out):
+    d = u.shape[0]
+    for t in prange(u.shape[1]):
+        u0 = u[0, t]
+        nb2 = 0.0
+        ud = u0 * du[0, t]
+        for i in range(1, d):
+            nb2 += u[i, t] * u[i, t]
+            ud -= u[i, t] * du[i, t]
+        nb = math.sqrt(nb2)
+        det = (u0 - nb) * (u0 + nb)
+        lk = math.sqrt(det)
+        rho0 = ud / det
+        c = (rho0 * lk + du[0, t]) / (u0 + lk)
+        r2 = 0.0
+        for i in range(1, d):
+            r = du[i, t] - c * u[i, t]
+            r2 += r * r
+        out[t] = math.sqrt(r2 / det) - rho0
+
+
+def max_step(u: np.ndarray, du: np.ndarray) -> float:
+    """Largest ``α`` with ``u + α du`` in the cone for every cone (``inf`` if unbounded); ``u`` interior.
+
+    The quadratic representation of ``u^{-1/2}`` maps ``u`` to the identity (as ECOS does); there the condition
+    reads ``1 + αρ₀ ≥ α‖ρ₁‖``.
+    """
+    if not u.shape[1]:
+        return np.inf
+    bounds = np.empty(u.shape[1])
+    _step_bounds(np.ascontiguousarray(u), np.ascontiguousarray(du), bounds)
+    worst = float(bounds.max())
+    return 1.0 / worst if worst > 0 else np.inf
+
+
+@njit(**_PJIT)
+def mehrotra(w, eta, lam, ds_a, dz_a, z, sigma_mu, work, out):
+    """Combined-step term ``out = −z − W⁻¹(λ \\ ((W⁻¹Δs_a)∘(WΔz_a) − σμe))`` of every cone (``work`` (d, k))."""
+    d = z.shape[0]
+    for t in prange(z.shape[1]):
+        e = eta[t]
+        _w_col(w, 1.0 / e, -1.0, t, ds_a, out)
+        _w_col(w, e, 1.0, t, dz_a, work)
+        _jprod_col(t, out, work, out)
+        out[0, t] -= sigma_mu
+        _jdiv_col(lam, t, out)
+        _w_col(w, 1.0 / e, -1.0, t, out, out)
+        for i in range(d):
+            out[i, t] = -z[i, t] - out[i, t]
+
+
+@njit(**_PJIT)
+def gondzio(w, eta, lam, s, ds, tp, z, dz, td, lo, hi, work, out):
+    """Gondzio's corrector term ``out = W⁻¹(λ \\ c)`` of every cone (``work`` (d, k)).
+
+    At the trial point ``(s + tp·Δs, z + td·Δz)`` the two eigenvalues of the scaled complementarity product
+    ``(W⁻¹s)∘(Wz)`` are moved into ``[lo, hi]``: ``c`` is that move (each eigenvalue's decrease bounded by
+    ``hi``), expressed in the product's Jordan frame.
+    """
+    d = z.shape[0]
+    for t in prange(z.shape[1]):
+        e = eta[t]
+        for i in range(d):
+            out[i, t] = s[i, t] + tp * ds[i, t]
+            work[i, t] = z[i, t] + td * dz[i, t]
+        _w_col(w, 1.0 / e, -1.0, t, out, out)
+        _w_col(w, e, 1.0, t, work, work)
+        _jprod_col(t, out, work, out)
+        nv2 = 0.0
+        for i in range(1, d):
+            nv2 += out[i, t] * out[i, t]
+        nv = math.sqrt(nv2)
+        v0 = out[0, t]
+        e1, e2 = v0 - nv, v0 + nv
+        t1 = max(min(max(e1, lo), hi) - e1, -hi)
+        t2 = max(min(max(e2, lo), hi) - e2, -hi)
+        half = 0.5 * (t2 - t1) / nv if nv > 0 else 0.0
+        for i in range(1, d):
+            out[i, t] = half * out[i, t]
+        out[0, t] = 0.5 * (t1 + t2)
+        _jdiv_col(lam, t, out)
+        _w_col(w, 1.0 / e, -1.0, t, out, out)
+
+
+# ------------------------------------------------------------------------------ the clique maps
+@njit(**_PJIT)
+def gather(G, dofs, x, out):
+    """``out[:, t] = G_t x[dofs[t]]`` (d, k)."""
+    k, d, c = G.shape
+    for t in prange(k):
+        for i in range(d):
+            acc = 0.0
+            for j in range(c):
+                acc += G[t, i, j] * x[dofs[t, j]]
+            out[i, t] = acc
+
+
+@njit(**_JIT)
+def scatter(G, dofs, z, sign, out):
+    """``out[dofs[t]] += sign · G_tᵀ z[:, t]`` for every cone."""
+    k, d, c = G.shape
+    for t in range(k):
+        for j in range(c):
+            acc = 0.0
+            for i in range(d):
+                acc += G[t, i, j] * z[i, t]
+            out[dofs[t, j]] += sign * acc
+
+
+@njit(**_JIT)
+def kkt(G, dofs, w, inv_eta2, v, out):
+    """``out += Σ_t G_tᵀ W_t⁻² G_t v[dofs[t]]``."""
+    k, d, c = G.shape
+    g = np.empty(d)
+    for t in range(k):
+        for i in range(d):
+            acc = 0.0
+            for j in range(c):
+                acc += G[t, i, j] * v[dofs[t, j]]
+            g[i] = acc
+        a = w[0, t] * g[0]
+        for i in range(1, d):
+            a -= w[i, t] * g[i]
+        a *= 2.0
+        f = inv_eta2[t]
+        g[0] = (a * w[0, t] - g[0]) * f
+        for i in range(1, d):
+            g[i] = (g[i] - a * w[i, t]) * f
+        for j in range(c):
+            acc = 0.0
+            for i in range(d):
+                acc += G[t, i, j] * g[i]
+            out[dofs[t, j]] += acc
+
+
+@njit(**_JIT)
+def assemble(G, gjg, w, inv_eta2, tri_a, tri_b, pos, data):
+    """``data[pos] += G_tᵀ W_t⁻² G_t = (2 (G_tᵀv̂)(G_tᵀv̂)ᵀ − G_tᵀJG_t)/η²`` (``v̂ = J w̄``) on each clique's lower
+    triangle: entry ``e`` = (``tri_a[e]``, ``tri_b[e]``) of cone ``t`` at ``pos[e·k + t]``; ``gjg`` (k, ne) holds
+    ``G_tᵀJG_t`` at those entries."""
+    k, d, c = G.shape
+    u = np.empty(c)
+    for t in range(k):
+        for j in range(c):
+            acc = w[0, t] * G[t, 0, j]
+            for i in range(1, d):
+                acc -= w[i, t] * G[t, i, j]
+            u[j] = acc
+        f = inv_eta2[t]
+        for e in range(tri_a.shape[0]):
+            data[pos[e * k + t]] += (2.0 * u[tri_a[e]] * u[tri_b[e]] - gjg[t, e]) * f
