@@ -16,13 +16,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._atomic import atomic_write
-from ..errors import MeshError, MeshFormatError, ParameterError
+from ..errors import ParameterError
 from ..validation import as_vertex_field
 from ..validation import check_output_path as _check_output_path
 from .convert import as_trimesh
 from .fileorder import file_order_mesh, to_file_order
 from .formats import ply
-from .formats._common import FieldData, check_file, format_error
+from .formats._common import FieldData, check_file, file_errors, format_error
 from .formats.registry import DISTANCE_EXTENSIONS, FORMATS, MESH_EXTENSIONS, field_reader
 from .load import load_mesh
 from .trimesh import TriMesh
@@ -172,12 +172,8 @@ def load_distance(path: str | os.PathLike, name: str = "distance") -> np.ndarray
     p = Path(path)
     read = field_reader(p)
     check_file(p, "a distance file")
-    try:
+    with file_errors(p):
         return read(p, name)
-    except MeshFormatError:
-        raise
-    except (ValueError, TypeError, IndexError, OverflowError, UnicodeDecodeError, MemoryError, OSError) as exc:
-        raise format_error(p, f"malformed {p.suffix[1:].upper()} file ({type(exc).__name__}: {exc})") from None
 
 
 def check_output_path(path: str | os.PathLike, extensions: tuple[str, ...] = DISTANCE_EXTENSIONS) -> Path:
@@ -208,15 +204,8 @@ def load_distance_ply(path: str | os.PathLike) -> tuple[TriMesh, dict[str, np.nd
         malformed, or has non-triangle faces.
     """
     p = Path(path)
-    try:
+    with file_errors(p):
         V, idx, sizes, fields = ply.read_fields(p)
         if not np.all(sizes == 3):
             raise format_error(p, "faces must all be triangles")
-        mesh = TriMesh(V, idx.reshape(-1, 3), name=p.name)
-    except MeshFormatError:
-        raise
-    except MeshError as exc:
-        raise format_error(p, str(exc)) from None
-    except (ValueError, TypeError, IndexError, OverflowError, UnicodeDecodeError, MemoryError) as exc:
-        raise format_error(p, f"malformed PLY file ({type(exc).__name__}: {exc})") from None
-    return mesh, fields
+        return TriMesh(V, idx.reshape(-1, 3), name=p.name), fields

@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import MeshError, MeshFormatError, MeshRepairWarning
-from .formats._common import RawMesh, at_line, check_file, format_error
+from ..errors import MeshRepairWarning
+from .formats._common import RawMesh, at_line, check_file, file_errors, format_error
 from .formats.registry import mesh_reader
 from .trimesh import TriMesh
 
@@ -92,16 +92,9 @@ def load_mesh(path: str | os.PathLike) -> TriMesh:
     """
     p = Path(path)
     read = mesh_reader(p)
-    ext = p.suffix.lower()
-    try:
-        check_file(p, "a mesh file")  # the same messages for missing, directory and empty files in every format
+    check_file(p, "a mesh file")  # the same messages for missing, directory and empty files in every format
+    with file_errors(p):
         return _finish(p, read(p))
-    except MeshFormatError:
-        raise
-    except MeshError as exc:
-        raise format_error(p, str(exc)) from None
-    except (ValueError, TypeError, IndexError, OverflowError, UnicodeDecodeError, MemoryError) as exc:
-        raise format_error(p, f"malformed {ext[1:].upper()} file ({type(exc).__name__}: {exc})") from None
 
 
 def _finish(path: Path, raw: RawMesh) -> TriMesh:

@@ -3,15 +3,18 @@
 from __future__ import annotations
 
 import importlib
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ...errors import MeshFileNotFoundError, MeshFormatError
+from ...errors import MeshError, MeshFileNotFoundError, MeshFormatError
 
-__all__ = ["FieldData", "RawMesh", "at_line", "check_file", "format_error", "optional_package", "read_bytes"]
+__all__ = ["FieldData", "RawMesh", "at_line", "check_file", "file_errors", "format_error", "optional_package",
+           "read_bytes"]
 
 #: What to install for a format read or written through an optional package.
 INSTALL_HINT = "pip install 'cvxgeodesic[io]' (or pip install {pkg})"
@@ -75,6 +78,24 @@ class FieldData:
 def format_error(path: Path, msg: str) -> MeshFormatError:
     """``MeshFormatError("<path>: <msg>")``."""
     return MeshFormatError(f"{path}: {msg}")
+
+
+@contextmanager
+def file_errors(path: Path) -> Iterator[None]:
+    """Turn every failure of reading ``path`` into a MeshFormatError naming the file.
+
+    A reader's own MeshFormatError passes through; a MeshError (the arrays did not make a mesh) gets the
+    path in front; the exceptions of parsing garbage (``ValueError``, ``IndexError``, ...) become
+    ``"<path>: malformed <FORMAT> file (<exception>)"``.
+    """
+    try:
+        yield
+    except MeshFormatError:
+        raise
+    except MeshError as exc:
+        raise format_error(path, str(exc)) from None
+    except (ValueError, TypeError, IndexError, OverflowError, UnicodeDecodeError, MemoryError) as exc:
+        raise format_error(path, f"malformed {path.suffix[1:].upper()} file ({type(exc).__name__}: {exc})") from None
 
 
 def at_line(lines: Any, i: int) -> str:

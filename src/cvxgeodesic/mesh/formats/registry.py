@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import BinaryIO
 
@@ -64,9 +65,10 @@ FORMATS: dict[str, Format] = {f.extension: f for f in (
            field_note="vertex attribute _DISTANCE, float32"),
     Format(".gltf", "glTF", "trimesh", gltf.read_mesh),
     Format(".3mf", "3MF", "trimesh", gltf.read_mesh),
-    Format(".vtk", "legacy VTK", "meshio", vtk.read_mesh, vtk.write_vtk, vtk.read_field, field_note="ParaView"),
-    Format(".vtu", "VTK XML unstructured grid", "meshio", vtk.read_mesh, vtk.write_vtu, vtk.read_field,
+    Format(".vtk", "legacy VTK", "meshio", vtk.read_mesh, partial(vtk.write_field, ext=".vtk"), vtk.read_field,
            field_note="ParaView"),
+    Format(".vtu", "VTK XML unstructured grid", "meshio", vtk.read_mesh, partial(vtk.write_field, ext=".vtu"),
+           vtk.read_field, field_note="ParaView"),
 )}
 
 #: File extensions understood by :func:`~cvxgeodesic.mesh.load.load_mesh` (compared case-insensitively).

@@ -16,7 +16,7 @@ import numpy as np
 from ...errors import MeshFormatError, ParameterError
 from ._common import FieldData, RawMesh, format_error, optional_package
 
-__all__ = ["read_field", "read_mesh", "write_vtk", "write_vtu"]
+__all__ = ["read_field", "read_mesh", "write_field"]
 
 
 def _read(path: Path, what: str) -> Any:
@@ -56,7 +56,14 @@ def read_mesh(path: Path) -> RawMesh:
     return RawMesh(V, np.concatenate(parts), np.concatenate(sizes))
 
 
-def _write(fh: BinaryIO, field: FieldData, ext: str) -> None:
+def write_field(fh: BinaryIO, field: FieldData, ext: str) -> None:
+    """VTU (XML, binary; ``ext=".vtu"``) or legacy VTK (binary; ``".vtk"``) with the field as point data ``field.name``.
+
+    Raises
+    ------
+    ParameterError
+        meshio is not installed (the message says what to install).
+    """
     meshio = optional_package("meshio", f"writing {ext} files", ParameterError)
     mesh = meshio.Mesh(np.asarray(field.V, dtype=np.float64), [("triangle", np.asarray(field.F, dtype=np.int64))],
                        point_data={field.name: np.asarray(field.d, dtype=np.float64)})
@@ -65,28 +72,6 @@ def _write(fh: BinaryIO, field: FieldData, ext: str) -> None:
         out = Path(tmp) / f"field{ext}"
         mesh.write(out, file_format="vtu" if ext == ".vtu" else "vtk")
         fh.write(out.read_bytes())
-
-
-def write_vtu(fh: BinaryIO, field: FieldData) -> None:
-    """VTU (XML, binary) with the field as point data ``field.name``, for ParaView.
-
-    Raises
-    ------
-    ParameterError
-        meshio is not installed (the message says what to install).
-    """
-    _write(fh, field, ".vtu")
-
-
-def write_vtk(fh: BinaryIO, field: FieldData) -> None:
-    """Legacy VTK (binary) with the field as point data ``field.name``, for ParaView.
-
-    Raises
-    ------
-    ParameterError
-        meshio is not installed (the message says what to install).
-    """
-    _write(fh, field, ".vtk")
 
 
 def read_field(path: Path, name: str) -> np.ndarray:
