@@ -23,6 +23,8 @@ PACKAGE = Path(cvxgeodesic.__file__).resolve().parent
 #: prefix. A module may import its own layer and the layers below it.
 LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("leaf", ("errors", "_atomic", "_threads", "_cluster", "validation", "results", "tables")),
+    # the file formats know nothing of TriMesh or of each other's callers: load_mesh, io and the CLI use them
+    ("mesh formats", ("mesh.formats",)),
     ("mesh", ("mesh",)),
     ("linalg", ("linalg",)),
     ("operators", ("operators",)),

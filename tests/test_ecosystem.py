@@ -73,7 +73,8 @@ def test_a_path_is_accepted(tmp_path):
 
 
 def test_unknown_object_is_a_type_error_naming_the_accepted_kinds():
-    with pytest.raises(TypeError, match="trimesh.Trimesh / open3d TriangleMesh / meshio.Mesh, got int"):
+    with pytest.raises(TypeError, match=r"a trimesh.Trimesh, an open3d.geometry.TriangleMesh or open3d.t.geometry."
+                                        r"TriangleMesh, or a meshio.Mesh .*, got int$"):
         cg.geodesic_distance(3, 0)
 
 
@@ -212,7 +213,7 @@ def _glb_json(path):
 
 def test_glb_field_is_a_trimesh_vertex_attribute(tmp_path):
     trimesh = pytest.importorskip("trimesh")
-    from cvxgeodesic.mesh.external import GLB_NO_DISTANCE
+    from cvxgeodesic.mesh.formats.gltf import GLB_NO_DISTANCE
 
     d = _field(SPHERE)
     path = cg.save_distance(tmp_path / "d.glb", SPHERE, d)

@@ -128,13 +128,76 @@ def test_cli_source_on_a_dropped_vertex_is_a_clear_error(messy, tmp_path, capsys
     assert not (tmp_path / "d.npy").exists()
 
 
-def test_file_order_mesh_faces_reference_the_first_duplicate(messy):
+def _file_faces(path):
+    """The OBJ's triangles, 0-based, as written."""
+    return np.array([[int(t) - 1 for t in line.split()[1:]] for line in path.read_text().splitlines()
+                     if line.startswith("f ")])
+
+
+def test_file_order_mesh_has_the_file_faces(messy):
     with pytest.warns(MeshRepairWarning):
         mesh = cg.load_mesh(messy[0])
+    F_file = _file_faces(messy[0])
+    assert 26 in F_file  # the duplicate is used by the file's faces
     fm = file_order_mesh(mesh)
     assert fm.n_vertices == 27 and fm.n_faces == mesh.n_faces
-    assert 26 not in fm.F and 0 not in fm.F
+    np.testing.assert_array_equal(fm.F, F_file)  # the file's own indices, the duplicate's included
+    np.testing.assert_array_equal(fm.V, messy[1])
     np.testing.assert_array_equal(fm.V[fm.F], mesh.V[mesh.F])  # the same triangles
+
+
+def _written_faces(path):
+    ext = path.suffix
+    if ext == ".ply":
+        return load_distance_ply(path)[0].F
+    if ext in (".vtu", ".vtk"):
+        return pytest.importorskip("meshio").read(path).cells_dict["triangle"]
+    (tm,) = pytest.importorskip("trimesh").load(path, process=False).geometry.values()
+    return tm.faces
+
+
+@pytest.mark.parametrize("ext", [".ply", ".vtu", ".vtk", ".glb"])
+def test_output_files_keep_the_input_faces(messy, tmp_path, capsys, ext):
+    """Issue 28 item 7: duplicated and unreferenced vertices; every writer with faces, from the CLI and Python."""
+    if ext != ".ply":
+        pytest.importorskip("meshio" if ext != ".glb" else "trimesh")
+    path, V = messy
+    F_file = _file_faces(path)
+    with pytest.warns(MeshRepairWarning):
+        mesh = cg.load_mesh(path)
+    expected = cg.to_file_order(mesh, cg.geodesic_distance(mesh, 19, method="dijkstra"))
+    out = tmp_path / f"cli{ext}"
+    assert main(["distance", str(path), "-s", "20", "--method", "dijkstra", "-q", "-o", str(out)]) == 0
+    capsys.readouterr()
+    np.testing.assert_array_equal(_written_faces(out), F_file)
+    got = cg.load_distance(out)
+    assert got.shape == (27,)
+    np.testing.assert_allclose(got, expected, rtol=1e-7 if ext == ".glb" else 0)
+    # save_distance given the file's path: loads it, writes the file's faces too
+    out2 = tmp_path / f"py{ext}"
+    with pytest.warns(MeshRepairWarning):
+        cg.save_distance(out2, str(path), cg.geodesic_distance(mesh, 19, method="dijkstra"), file_order=True)
+    np.testing.assert_array_equal(_written_faces(out2), F_file)
+    # in the mesh's numbering: the mesh's faces
+    cg.save_distance(out2, mesh, np.zeros(25))
+    np.testing.assert_array_equal(_written_faces(out2), mesh.F)
+
+
+def test_file_faces_leave_out_faces_that_repeat_a_vertex(tmp_path):
+    path = tmp_path / "q.obj"
+    # a quad (fan-triangulated), a triangle naming vertex 1 twice, and vertex 5 at vertex 1's position
+    path.write_text("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 0 0 0\n"
+                    "f 1 2 3 4\nf 2 5 3\nf 1 1 5\nf 6 5 2\n")
+    with pytest.warns(MeshRepairWarning):
+        mesh = cg.load_mesh(path)
+    np.testing.assert_array_equal(mesh.file_faces, [[0, 1, 2], [0, 2, 3], [1, 4, 2], [5, 4, 1]])
+    assert mesh.n_faces == 4 and mesh.n_vertices == 5  # the last face is the mesh's (0, 4, 1)
+    np.testing.assert_array_equal(file_order_mesh(mesh).F, mesh.file_faces)
+    # a clean file stores nothing extra: file_faces is vertex_map[F]
+    clean = tmp_path / "c.obj"
+    clean.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    m2 = cg.load_mesh(clean)
+    assert m2._file_faces is None and file_order_mesh(m2) is m2
 
 
 def test_batch_task_uses_the_file_numbering(messy, tmp_path):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import dataclasses
 import struct
 import warnings
 from pathlib import Path
@@ -11,9 +12,9 @@ import numpy as np
 import pytest
 
 import cvxgeodesic._atomic
-import cvxgeodesic.mesh.io as mio
 from cvxgeodesic.errors import MeshError, MeshFormatError, MeshRepairWarning, ParameterError
 from cvxgeodesic.mesh import TriMesh, load_mesh, save_distance
+from cvxgeodesic.mesh.formats.registry import FORMATS
 from cvxgeodesic.mesh.io import load_distance_ply
 
 # A unit square split into two triangles plus an apex: 5 vertices, 4 triangles.
@@ -520,25 +521,24 @@ def test_save_accepts_vf_tuple(tmp_path):
 def test_save_is_atomic(tmp_path, monkeypatch, mesh_and_dist, ext):
     m, d = mesh_and_dist
     target = tmp_path / f"d.{ext}"
-    writer = {"ply": "_write_ply", "npy": "_write_npy", "csv": "_write_csv"}[ext]
-    original = getattr(mio, writer)
+    original = FORMATS[f".{ext}"]
 
     def failing(fh, *args):
-        original(fh, *args)  # write everything, then fail before the file is moved into place
+        original.write_field(fh, *args)  # write everything, then fail before the file is moved into place
         fh.write(b"partial")
         raise RuntimeError("disk on fire")
 
-    monkeypatch.setattr(mio, writer, failing)
+    monkeypatch.setitem(FORMATS, f".{ext}", dataclasses.replace(original, write_field=failing))
     before = set(tmp_path.iterdir())
     with pytest.raises(RuntimeError, match="disk on fire"):
         save_distance(target, m, d)
     assert set(tmp_path.iterdir()) == before  # neither target nor temporary file
 
     # an existing target survives a failed overwrite unchanged
-    monkeypatch.setattr(mio, writer, original)
+    monkeypatch.setitem(FORMATS, f".{ext}", original)
     save_distance(target, m, d)
     content = target.read_bytes()
-    monkeypatch.setattr(mio, writer, failing)
+    monkeypatch.setitem(FORMATS, f".{ext}", dataclasses.replace(original, write_field=failing))
     with pytest.raises(RuntimeError):
         save_distance(target, m, 2 * d)
     assert target.read_bytes() == content

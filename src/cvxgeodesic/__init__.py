@@ -25,6 +25,7 @@ from .errors import (
     DegenerateFacesWarning,
     IndefiniteEnergyWarning,
     MeshError,
+    MeshFileNotFoundError,
     MeshFormatError,
     MeshRepairWarning,
     NonManifoldError,
@@ -35,7 +36,7 @@ from .errors import (
 from .formulations import FORMULATIONS, smoothness_weight
 from .mesh import TriMesh, cylinder, grid_plane, icosphere
 from .mesh.fileorder import to_file_order
-from .mesh.io import load_mesh, save_distance
+from .mesh.io import load_distance, load_mesh, save_distance
 from .paths import distance_at, geodesic_path
 from .sources import SurfaceCurve, SurfacePoint, surface_point
 
@@ -44,10 +45,10 @@ __version__ = "0.1.0"
 __all__ = [
     "ALL_METHODS", "BASELINE_METHODS", "FORMULATIONS", "CvxGeodesicError", "DegenerateFacesWarning",
     "IndefiniteEnergyWarning", "GeodesicResult", "GeodesicSolver",
-    "MeshError", "MeshFormatError", "MeshRepairWarning",
+    "MeshError", "MeshFileNotFoundError", "MeshFormatError", "MeshRepairWarning",
     "NonManifoldError", "ParameterError", "SolveInfo", "SolverError", "SourceError",
-    "TriMesh", "cylinder", "distance_matrix", "geodesic_distance", "grid_plane", "icosphere", "load_mesh",
-    "plot_field", "save_distance", "smoothness_weight", "to_file_order", "SurfaceCurve", "SurfacePoint",
+    "TriMesh", "cylinder", "distance_matrix", "geodesic_distance", "grid_plane", "icosphere", "load_distance",
+    "load_mesh", "plot_field", "save_distance", "smoothness_weight", "to_file_order", "SurfaceCurve", "SurfacePoint",
     "surface_point", "distance_at", "geodesic_path", "show",
 ]
 

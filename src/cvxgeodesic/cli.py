@@ -9,17 +9,21 @@ from __future__ import annotations
 
 import argparse
 import sys
+import textwrap
 import time
 import traceback
 import warnings
 
 from . import __version__
 from .api import SOLVERS
-from .cli_sources import add_method_option, add_path_parser, add_source_options
+from .cli_sources import MESH_HELP, add_method_option, add_path_parser, add_source_options
 from .errors import ParameterError, SourceError
+from .mesh.formats.registry import field_formats_help
 
 EXIT_USAGE = 2
 M_HELP = "smoothness multiplier m (default 1): λ = m·κ·√area, one rounding on the surface whatever the mesh"
+OUTPUT_HELP = (f"output file: {field_formats_help()} (trimesh and meshio: pip install 'cvxgeodesic[io]'); in the "
+               "input file's vertex numbering, with its faces")
 
 
 def _progress_printer(stream, every: float = 0.5):
@@ -179,8 +183,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
 
     def common(p):
-        p.add_argument("mesh", help="mesh file (.obj, .off, .ply, .stl; .glb, .gltf, .3mf with trimesh; .vtk, .vtu "
-                                    "with meshio)")
+        p.add_argument("mesh", help=MESH_HELP)
         add_source_options(p)
         p.add_argument("--m", type=float, default=1.0, help=M_HELP)
         p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")
@@ -195,14 +198,20 @@ def build_parser() -> argparse.ArgumentParser:
                    help="meaning of --m: 'area' (default) or the paper's λ = m·100·h/n")
     p.add_argument("--order", type=int, default=1, choices=(1, 2),
                    help="2: second-order elements for the squared distance (qclp only; docs/order2.md)")
-    p.add_argument("-o", "--output", required=True,
-                   help="output file: .ply (mesh + distance), .npy, .csv, .vtu/.vtk (needs meshio) or .glb (needs "
-                        "trimesh), in the file's vertex numbering")
+    p.add_argument("-o", "--output", required=True, help=OUTPUT_HELP)
     p.add_argument("--png", default=None,
                    help="also render the field with isolines and the sources to this PNG (both files or neither)")
     p.set_defaults(func=_cmd_distance)
 
-    p = sub.add_parser("compare", help="run several methods, compare them with the exact distance")
+    from .compare import table_legend
+
+    p = sub.add_parser("compare", help="run several methods, compare them with the exact distance",
+                       description="Run several methods on one mesh and compare each with the exact distance "
+                                   "(pygeodesic's MMP): prints a table, writes compare.csv and pictures.",
+                       epilog="columns of the table:\n" + "\n".join(
+                           textwrap.fill(line, 100, initial_indent="  ", subsequent_indent="      ")
+                           for line in table_legend().split("\n")),
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     common(p)
     p.add_argument("--methods", default="all", help="comma-separated method names, or 'all' (default)")
     p.add_argument("--out", default="compare_output", help="output folder (CSV table and PNGs)")
@@ -215,7 +224,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "done with the same parameters. Exit code 0: all solved; 1: some meshes failed (listed); "
                     "2: usage error.")
     p.add_argument("meshes", nargs="+", metavar="MESH_GLOB",
-                   help="mesh files or quoted glob patterns ('data/*.obj', 'data/**/*.ply')")
+                   help="mesh files or quoted glob patterns ('data/*.obj', 'data/**/*.ply'); " + MESH_HELP)
     add_source_options(p, "source vertex index in each file's numbering, the same in every mesh "
                           "(repeat, or give a list: -s 0,5)")
     add_method_option(p)
@@ -245,7 +254,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_view)
 
     p = sub.add_parser("matrix", help="distance matrix: one row per source vertex (-s), in the given order")
-    p.add_argument("mesh", help="mesh file")
+    p.add_argument("mesh", help=MESH_HELP)
     add_source_options(p, "source vertex of a row, in the file's numbering (repeat, or give a list: -s 0,5,9)",
                        points=False)
     add_method_option(p)
@@ -270,12 +279,23 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _check_numbers(args) -> None:
+    """``--m`` and ``--lam`` checked as the Python API checks them, before a command prints or reads anything."""
+    from .validation import check_number
+
+    if getattr(args, "lam", None) is not None:
+        check_number(args.lam, "lam", low=0)
+    elif getattr(args, "m", None) is not None:
+        check_number(args.m, "m", low=0)
+
+
 def main(argv=None) -> int:
     """Entry point of the ``cvxgeodesic`` console script; returns the exit code."""
     parser = build_parser()
     args = parser.parse_args(argv)
     args.notes = _Notes()
     try:
+        _check_numbers(args)
         with warnings.catch_warnings():
             if not args.debug:  # "cvxgeodesic: note: <message>", once, instead of file:line + source
                 warnings.showwarning = args.notes.showwarning

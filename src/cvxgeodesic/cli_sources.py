@@ -9,6 +9,10 @@ import numpy as np
 
 from .api import ALL_METHODS, SOLVERS
 from .errors import ParameterError, SourceError
+from .mesh.formats.registry import mesh_formats_help
+
+#: Help of every command's mesh argument: the formats of the registry.
+MESH_HELP = f"mesh file: {mesh_formats_help()} (trimesh and meshio: pip install 'cvxgeodesic[io]')"
 
 
 def _xyz(text: str) -> tuple[float, float, float]:
@@ -179,7 +183,7 @@ def _cmd_path(args) -> int:
 def add_path_parser(sub) -> None:
     """The ``path`` sub-command."""
     p = sub.add_parser("path", help="geodesic path from a target down the distance field to the nearest source")
-    p.add_argument("mesh", help="mesh file (.obj, .off, .ply, .stl)")
+    p.add_argument("mesh", help=MESH_HELP)
     add_source_options(p)
     p.add_argument("--to", type=int, default=None, metavar="I", help="target vertex")
     p.add_argument("--to-point", type=_xyz, default=None, metavar="X,Y,Z", help="target: the closest surface point")

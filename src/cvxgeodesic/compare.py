@@ -35,8 +35,8 @@ from .errors import CvxGeodesicError, ParameterError, SolverError
 from .tables import Column, text_table
 
 __all__ = [
-    "CSV_COLUMNS", "TABLE_COLUMNS", "evaluate_methods", "format_table", "resolve_methods", "run_compare",
-    "solve_methods", "write_csv", "write_pictures",
+    "COLUMN_HELP", "CSV_COLUMNS", "TABLE_COLUMNS", "evaluate_methods", "format_table", "resolve_methods", "run_compare",
+    "solve_methods", "table_legend", "write_csv", "write_pictures",
 ]
 
 #: Columns of ``compare.csv`` (and keys of every row returned by :func:`run_compare`), in order.
@@ -456,6 +456,34 @@ TABLE_COLUMNS = (
     Column("vs exact", "ridge_jump_ratio", lambda v: f"{v:.2f}"),
     Column("status", "status", align="left", max_len=60),
 )
+
+
+#: What each column of :func:`format_table` means, by header (``cvxgeodesic compare --help`` prints it).
+COLUMN_HELP = {
+    "method": "the method",
+    "time s": "set-up + solve, wall-clock seconds",
+    "setup s": "the per-mesh part of it, paid once per solver",
+    "iters": "solver iterations",
+    "rel mean %": "mean of |d - exact| / exact over the vertices (sources excluded)",
+    "rel max %": "its largest value",
+    "rel p99 %": "its 99th percentile",
+    "off-ridge %": "rel mean away from the ridge (cut locus) of the exact field",
+    "ridge jump p95": "95th percentile of the jump of the normal derivative across the edges near that ridge "
+                      "(how sharp the field's crease is there)",
+    "vs exact": "ridge jump p95 divided by the exact field's: below 1 the field is smoother than the exact "
+                "distance at the ridge (rounded isolines), 1 as sharp",
+    "status": "the solver status, or why the method failed",
+}
+
+
+def table_legend() -> str:
+    """One line per column of :func:`format_table`: ``"<header>: <meaning>"``.
+
+    Returns
+    -------
+    str
+    """
+    return "\n".join(f"{c.header}: {COLUMN_HELP[c.header]}" for c in TABLE_COLUMNS)
 
 
 def format_table(rows) -> str:

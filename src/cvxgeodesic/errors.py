@@ -7,6 +7,8 @@ for solver failure), so ``except ValueError`` keeps working.
 
 from __future__ import annotations
 
+import errno
+
 
 class CvxGeodesicError(Exception):
     """Base class of every exception raised on purpose by cvxgeodesic."""
@@ -18,6 +20,34 @@ class MeshError(CvxGeodesicError, ValueError):
 
 class MeshFormatError(MeshError):
     """A mesh file cannot be read: missing, unsupported extension or malformed."""
+
+
+class MeshFileNotFoundError(MeshFormatError, FileNotFoundError):
+    """A mesh (or distance) file does not exist.
+
+    Both a :class:`MeshFormatError` and a :class:`FileNotFoundError`, so ``except OSError`` and
+    ``except FileNotFoundError`` catch it as they would ``open()``'s error; ``errno`` is ``ENOENT`` and
+    ``filename`` the path. ``str()`` is the message alone (``"<path>: no such file"``).
+
+    Parameters
+    ----------
+    message : str
+    filename : str, optional
+    """
+
+    def __init__(self, message: str, filename: str | None = None) -> None:
+        super().__init__(message)
+        self.errno = errno.ENOENT
+        self.strerror = "No such file or directory"
+        self.filename = filename
+
+    def __str__(self) -> str:
+        # OSError's own __str__ would print "[Errno 2] No such file or directory: '<path>'" instead
+        return str(self.args[0]) if self.args else ""
+
+    def __reduce__(self) -> tuple[type, tuple[str, str | None]]:
+        # OSError pickles as (errno, strerror, filename), which this __init__ does not take
+        return type(self), (str(self), self.filename)
 
 
 class SourceError(CvxGeodesicError, ValueError):

@@ -35,7 +35,8 @@ def _polyscope() -> Any:
     try:
         import polyscope
     except ImportError:
-        raise ImportError(f"cvxgeodesic.show needs the optional package polyscope: {INSTALL_HINT}") from None
+        raise ImportError("the viewer (cvxgeodesic view, cvxgeodesic.show) needs the optional package polyscope: "
+                          f"{INSTALL_HINT}") from None
     return polyscope
 
 

@@ -211,7 +211,11 @@ def nonmanifold_vertices(mesh: TriMesh) -> np.ndarray:
     return verts[counts > 1].astype(np.int64)
 
 
-def require_manifold(mesh: TriMesh, method: str, alternatives: str) -> None:
+#: The methods that solve non-manifold meshes, for the message of :func:`require_manifold`.
+NON_MANIFOLD_METHODS = "a convex formulation (the default 'qcqp-hessian', 'qclp', ...), 'heat' or 'dijkstra'"
+
+
+def require_manifold(mesh: TriMesh, method: str, alternatives: str = NON_MANIFOLD_METHODS) -> None:
     """Raise :class:`NonManifoldError` unless the mesh is edge- and vertex-manifold.
 
     Parameters
@@ -219,7 +223,7 @@ def require_manifold(mesh: TriMesh, method: str, alternatives: str) -> None:
     mesh : TriMesh
     method : str
         Name of the method that needs a manifold mesh (used in the message).
-    alternatives : str
+    alternatives : str, default NON_MANIFOLD_METHODS
         Methods that work on the mesh (used in the message).
     """
     if not mesh.is_edge_manifold:

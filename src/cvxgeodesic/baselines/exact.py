@@ -47,7 +47,7 @@ class ExactBaseline(ComponentwiseSolver):
     supports_multiple_sources = True
 
     def _setup(self) -> None:
-        require_manifold(self.mesh, self.name, "'heat', 'dijkstra' or 'qcqp-laplacian'")
+        require_manifold(self.mesh, self.name)  # the message names the methods that solve non-manifold meshes
         from pygeodesic import geodesic
 
         self._geodesic = geodesic

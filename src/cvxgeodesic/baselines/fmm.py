@@ -42,7 +42,7 @@ class FastMarchingBaseline(ComponentwiseSolver):
     supports_multiple_sources = True
 
     def _setup(self) -> None:
-        require_manifold(self.mesh, self.name, "'heat', 'dijkstra' or 'qcqp-laplacian'")
+        require_manifold(self.mesh, self.name)  # the message names the methods that solve non-manifold meshes
         import potpourri3d as pp3d
 
         self._pp3d = pp3d

@@ -1,7 +1,9 @@
 """Mesh model, generators and file I/O."""
 
+from .convert import as_trimesh
 from .generate import cylinder, grid_plane, icosphere
-from .io import as_trimesh, load_mesh, save_distance
+from .io import load_distance, load_mesh, save_distance
 from .trimesh import TriMesh
 
-__all__ = ["TriMesh", "as_trimesh", "grid_plane", "icosphere", "cylinder", "load_mesh", "save_distance"]
+__all__ = ["TriMesh", "as_trimesh", "grid_plane", "icosphere", "cylinder", "load_distance", "load_mesh",
+           "save_distance"]

@@ -1,10 +1,11 @@
 """The file's vertex numbering: map fields and source indices between a file and its :class:`TriMesh`.
 
-:func:`~cvxgeodesic.mesh.io.load_mesh` welds vertices with identical positions and drops
+:func:`~cvxgeodesic.mesh.load.load_mesh` welds vertices with identical positions and drops
 vertices that no face uses, so the mesh's vertex ``i`` need not be the file's vertex ``i``.
 The Python API always works in the mesh's numbering; :func:`to_file_order` turns a field
-into the file's numbering (the command line does so for every file it writes, and reads
-``--source`` as a file index through :func:`file_sources`).
+into the file's numbering and :func:`file_order_mesh` gives the file's vertices and faces
+(the command line does both for every file it writes, and reads ``--source`` as a file
+index through :func:`file_sources`).
 """
 
 from __future__ import annotations
@@ -13,10 +14,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import ParameterError, SourceError
-from .io import as_trimesh
+from .convert import as_trimesh
 from .trimesh import TriMesh
 
-__all__ = ["file_sources", "to_file_order"]
+__all__ = ["file_order_mesh", "file_sources", "to_file_order"]
 
 
 def to_file_order(mesh: TriMesh, field: ArrayLike, *, fill: float = np.inf) -> np.ndarray:
@@ -25,7 +26,7 @@ def to_file_order(mesh: TriMesh, field: ArrayLike, *, fill: float = np.inf) -> n
     Parameters
     ----------
     mesh : TriMesh
-        A mesh from :func:`~cvxgeodesic.mesh.io.load_mesh` (any other mesh is its own
+        A mesh from :func:`~cvxgeodesic.mesh.load.load_mesh` (any other mesh is its own
         file: the field comes back unchanged, as a copy).
     field : (..., n) array_like of float
         Values per mesh vertex on the last axis, e.g. a distance field (n,) or a
@@ -74,7 +75,7 @@ def file_sources(mesh: TriMesh, sources: ArrayLike) -> np.ndarray:
     Parameters
     ----------
     mesh : TriMesh
-        A mesh from :func:`~cvxgeodesic.mesh.io.load_mesh`.
+        A mesh from :func:`~cvxgeodesic.mesh.load.load_mesh`.
     sources : int or (k,) array_like of int
         File vertex indices in ``[0, mesh.n_file_vertices)``.
 
@@ -101,3 +102,41 @@ def file_sources(mesh: TriMesh, sources: ArrayLike) -> np.ndarray:
                           "choose a vertex of a triangle")
     _, first = np.unique(idx, return_index=True)
     return idx[np.sort(first)]
+
+
+def file_order_mesh(mesh: TriMesh) -> TriMesh:
+    """The mesh with the file's vertices, faces, numbering and vertex count (for writing files).
+
+    Parameters
+    ----------
+    mesh : TriMesh
+        A mesh from :func:`~cvxgeodesic.mesh.load.load_mesh` (any other mesh is its own file).
+
+    Returns
+    -------
+    TriMesh
+        ``mesh.n_file_vertices`` vertices: welded duplicates at their mesh vertex's position
+        (the same, as welding joins identical positions), dropped vertices at their file
+        position; the faces are ``mesh.file_faces``, the file's own triangles (polygons
+        fan-triangulated), including those the loader dropped as duplicates or degenerate
+        after welding. ``mesh`` itself when the file needs nothing else.
+
+    Examples
+    --------
+    >>> import cvxgeodesic as cg
+    >>> from cvxgeodesic.mesh.fileorder import file_order_mesh
+    >>> mesh = cg.icosphere(1)
+    >>> file_order_mesh(mesh) is mesh
+    True
+    """
+    idx = mesh.file_index
+    faces = mesh.file_faces
+    if idx.size == mesh.n_vertices and np.array_equal(idx, np.arange(idx.size)) and np.array_equal(faces, mesh.F):
+        return mesh
+    keep = idx >= 0
+    V = np.empty((idx.size, 3))
+    V[keep] = mesh.V[idx[keep]]
+    V[~keep] = mesh.dropped_vertices
+    if not np.all(np.isfinite(V[~keep])):  # positions unknown (file_index given without them): put them at the origin
+        V[~keep] = 0.0
+    return TriMesh(V, faces, name=mesh.name)

@@ -46,6 +46,10 @@ class TriMesh:
         outputs in the file's numbering keep their coordinates).
     notes : sequence of str, optional
         One line per repair the reader made (welding, dropped vertices or faces).
+    file_faces : (k, 3) array_like of int, optional
+        The file's triangles in the file's vertex numbering (polygons fan-triangulated), before
+        welding: what files written in the file's numbering use. ``load_mesh`` sets it when it
+        differs from the default ``vertex_map[F]``.
 
     Raises
     ------
@@ -86,6 +90,7 @@ class TriMesh:
         file_index: ArrayLike | None = None,
         dropped_vertices: ArrayLike | None = None,
         notes: Sequence[str] = (),
+        file_faces: ArrayLike | None = None,
     ) -> None:
         self.name = name or "mesh"
         self.V = _as_vertices(V, self.name)
@@ -114,6 +119,8 @@ class TriMesh:
         dropped.setflags(write=False)
         self.dropped_vertices = dropped
         self.notes: tuple[str, ...] = tuple(str(n) for n in notes)
+        self._file_faces = None if file_faces is None else _as_faces(file_faces, file_index.shape[0],
+                                                                      f"{self.name} (file faces)")
 
     def __repr__(self) -> str:
         return f"TriMesh(name={self.name!r}, n_vertices={self.n_vertices}, n_faces={self.n_faces})"
@@ -130,6 +137,18 @@ class TriMesh:
     def n_file_vertices(self) -> int:
         """Number of vertices in the file the mesh was read from (``n_vertices`` when not from a file)."""
         return int(self.file_index.shape[0])
+
+    @property
+    def file_faces(self) -> np.ndarray:
+        """(k, 3) int64 ndarray: the file's triangles in the file's vertex numbering.
+
+        The faces as the file has them (before welding; polygons fan-triangulated, faces that
+        repeat a file vertex left out), for files written in the file's numbering; ``vertex_map[F]``
+        when the mesh was not read from a file that needs more.
+        """
+        if self._file_faces is not None:
+            return self._file_faces
+        return self.vertex_map[self.F]
 
     @cached_property
     def face_normals_unnormalized(self) -> np.ndarray:

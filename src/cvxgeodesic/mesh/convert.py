@@ -1,0 +1,100 @@
+"""``as_trimesh``: the meshes of other libraries (and file paths) as a :class:`TriMesh`, by duck typing."""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import numpy as np
+
+from ..errors import MeshError
+from .trimesh import TriMesh
+
+__all__ = ["as_trimesh"]
+
+
+def as_trimesh(mesh: Any, name: str = "mesh") -> TriMesh:
+    """Return ``mesh`` as a :class:`TriMesh`, accepting the meshes other libraries use.
+
+    Accepted, by duck typing (none of these libraries is imported or required):
+
+    - a :class:`TriMesh` (returned as is);
+    - a ``(V, F)`` tuple or list of arrays;
+    - a ``str`` or :class:`os.PathLike`: read with :func:`~cvxgeodesic.mesh.load.load_mesh`;
+    - ``trimesh.Trimesh`` (anything with ``.vertices`` and ``.faces``);
+    - open3d's legacy ``open3d.geometry.TriangleMesh`` (``.vertices`` and ``.triangles``, converted
+      with ``np.asarray``);
+    - open3d's tensor ``open3d.t.geometry.TriangleMesh`` (``.vertex["positions"]`` and
+      ``.triangle["indices"]`` tensors, copied to the CPU and converted with ``.numpy()``);
+    - ``meshio.Mesh`` (``.points`` and ``.cells_dict["triangle"]``; other cell types are ignored).
+
+    The vertex order of the object is kept (no welding): indices mean the same in both.
+
+    Parameters
+    ----------
+    mesh : object
+        One of the above.
+    name : str
+        Label for messages (a file's base name for paths; the object's ``name``
+        attribute, if it is a non-empty string, for the others).
+
+    Returns
+    -------
+    TriMesh
+
+    Raises
+    ------
+    TypeError
+        If ``mesh`` is none of these (the message names its type with its module).
+    MeshError
+        If the arrays are invalid, or a ``meshio.Mesh`` has no triangle cells.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from cvxgeodesic.mesh.convert import as_trimesh
+    >>> as_trimesh((np.eye(3), [[0, 1, 2]]))
+    TriMesh(name='mesh', n_vertices=3, n_faces=1)
+    """
+    if isinstance(mesh, TriMesh):
+        return mesh
+    if isinstance(mesh, str | os.PathLike):
+        from .load import load_mesh
+
+        return load_mesh(mesh)
+    if isinstance(mesh, tuple | list) and len(mesh) == 2:
+        return TriMesh(mesh[0], mesh[1], name=name)
+    label = getattr(mesh, "name", None)
+    label = label if isinstance(label, str) and label else name
+    if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):  # trimesh.Trimesh
+        return TriMesh(np.asarray(mesh.vertices), np.asarray(mesh.faces), name=label)
+    if hasattr(mesh, "vertices") and hasattr(mesh, "triangles"):  # open3d.geometry.TriangleMesh
+        return TriMesh(np.asarray(mesh.vertices), np.asarray(mesh.triangles), name=label)
+    if hasattr(mesh, "vertex") and hasattr(mesh, "triangle"):  # open3d.t.geometry.TriangleMesh
+        return TriMesh(_o3d_tensor(mesh.vertex, "positions", label), _o3d_tensor(mesh.triangle, "indices", label),
+                       name=label)
+    if hasattr(mesh, "points") and hasattr(mesh, "cells_dict"):  # meshio.Mesh
+        cells = mesh.cells_dict
+        if "triangle" not in cells:
+            raise MeshError(f"{label}: the meshio.Mesh has no 'triangle' cells (cell types: {', '.join(cells)})")
+        return TriMesh(np.asarray(mesh.points)[:, :3], np.asarray(cells["triangle"]), name=label)
+    kind = type(mesh)
+    qualified = kind.__qualname__ if kind.__module__ == "builtins" else f"{kind.__module__}.{kind.__qualname__}"
+    raise TypeError(
+        "mesh must be a TriMesh, a (V, F) tuple, a file path, a trimesh.Trimesh, an open3d.geometry.TriangleMesh "
+        "or open3d.t.geometry.TriangleMesh, or a meshio.Mesh (something with vertices and faces, vertices and "
+        f"triangles, vertex and triangle, or points and cells_dict), got {qualified}"
+    )
+
+
+def _o3d_tensor(attributes: Any, key: str, label: str) -> np.ndarray:
+    """``attributes[key]`` of an open3d tensor mesh (a ``TensorMap``) as a numpy array, on the CPU."""
+    try:
+        tensor = attributes[key]
+    except (KeyError, TypeError, IndexError):
+        tensor = getattr(attributes, key, None)
+    if tensor is None:
+        raise MeshError(f"{label}: the open3d tensor mesh has no {key!r} attribute")
+    if hasattr(tensor, "cpu"):  # a tensor on a CUDA device: numpy() works on the CPU only
+        tensor = tensor.cpu()
+    return np.asarray(tensor.numpy() if hasattr(tensor, "numpy") else tensor)

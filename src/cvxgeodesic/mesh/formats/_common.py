@@ -1,0 +1,145 @@
+"""What the format modules share: the polygon soup a reader returns, the field a writer takes, file checks."""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ...errors import MeshError, MeshFileNotFoundError, MeshFormatError
+
+__all__ = ["FieldData", "RawMesh", "at_line", "check_file", "file_errors", "format_error", "optional_package",
+           "read_bytes"]
+
+#: What to install for a format read or written through an optional package.
+INSTALL_HINT = "pip install 'cvxgeodesic[io]' (or pip install {pkg})"
+
+
+@dataclass
+class RawMesh:
+    """Polygon mesh as read from a file, before validation and welding.
+
+    Attributes
+    ----------
+    V : (n, 3) float64 ndarray
+        Vertex positions in file order.
+    idx : (k,) int64 ndarray
+        Concatenated 0-based vertex indices of all polygons (not yet range-checked).
+    sizes : (p,) int64 ndarray
+        Number of vertices of each polygon; ``sizes.sum() == k``.
+    v_lines, f_lines : (n,) / (p,) int64 ndarray (or lazily computed equivalent) or None
+        1-based line number of each vertex / polygon (text formats only).
+    raw_idx : (k,) int64 ndarray or None
+        The indices as written in the file (for messages), when they differ from ``idx``.
+    """
+
+    V: np.ndarray
+    idx: np.ndarray
+    sizes: np.ndarray
+    v_lines: Any = None
+    f_lines: Any = None
+    raw_idx: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class FieldData:
+    """A per-vertex field on its mesh, as a writer gets it (one row per vertex written).
+
+    Attributes
+    ----------
+    V : (n, 3) float64 ndarray
+    F : (m, 3) int64 ndarray
+    d : (n,) float64 ndarray
+        The field (``inf`` allowed).
+    name : str
+        The field's name (a valid PLY property / CSV column name).
+    vertex : (n,) int64 ndarray
+        Mesh index of each row (-1: a file vertex the mesh dropped).
+    file_vertex : (n,) int64 ndarray
+        File index of each row.
+    label : str
+        The mesh's name, for a comment in the file.
+    """
+
+    V: np.ndarray
+    F: np.ndarray
+    d: np.ndarray
+    name: str
+    vertex: np.ndarray
+    file_vertex: np.ndarray
+    label: str = "mesh"
+
+
+def format_error(path: Path, msg: str) -> MeshFormatError:
+    """``MeshFormatError("<path>: <msg>")``."""
+    return MeshFormatError(f"{path}: {msg}")
+
+
+@contextmanager
+def file_errors(path: Path) -> Iterator[None]:
+    """Turn every failure of reading ``path`` into a MeshFormatError naming the file.
+
+    A reader's own MeshFormatError passes through; a MeshError (the arrays did not make a mesh) gets the
+    path in front; the exceptions of parsing garbage (``ValueError``, ``IndexError``, ...) become
+    ``"<path>: malformed <FORMAT> file (<exception>)"``.
+    """
+    try:
+        yield
+    except MeshFormatError:
+        raise
+    except MeshError as exc:
+        raise format_error(path, str(exc)) from None
+    except (ValueError, TypeError, IndexError, OverflowError, UnicodeDecodeError, MemoryError) as exc:
+        raise format_error(path, f"malformed {path.suffix[1:].upper()} file ({type(exc).__name__}: {exc})") from None
+
+
+def at_line(lines: Any, i: int) -> str:
+    """``" (line N)"`` for record ``i`` when line numbers are known, else ``""``."""
+    return f" (line {int(lines[i])})" if lines is not None else ""
+
+
+def check_file(p: Path, what: str) -> None:
+    """Raise unless ``p`` is an existing, non-empty file.
+
+    Raises
+    ------
+    MeshFileNotFoundError
+        ``p`` does not exist (also a ``FileNotFoundError``).
+    MeshFormatError
+        ``p`` is a directory or has no bytes.
+    """
+    if not p.exists():
+        raise MeshFileNotFoundError(f"{p}: no such file", str(p))
+    if p.is_dir():
+        raise format_error(p, f"is a directory, not {what}")
+    try:
+        size = p.stat().st_size
+    except OSError as exc:
+        raise format_error(p, f"cannot read file ({exc.strerror or exc})") from None
+    if size == 0:
+        raise format_error(p, "file is empty")
+
+
+def read_bytes(p: Path, what: str) -> bytes:
+    """The whole file after :func:`check_file`; MeshFormatError when unreadable or only whitespace."""
+    check_file(p, what)
+    try:
+        data = p.read_bytes()
+    except OSError as exc:
+        raise format_error(p, f"cannot read file ({exc.strerror or exc})") from None
+    if not data.strip():
+        raise format_error(p, "file is empty")
+    return data
+
+
+def optional_package(pkg: str, needed_for: str, error: type[Exception]) -> Any:
+    """The optional package ``pkg``, or ``error("<needed_for> needs the optional package <pkg>: <hint>")``."""
+    try:
+        return importlib.import_module(pkg)
+    except ImportError:
+        raise error(f"{needed_for} needs the optional package {pkg}: " + INSTALL_HINT.format(pkg=pkg)) from None

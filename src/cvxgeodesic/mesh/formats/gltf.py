@@ -1,0 +1,110 @@
+"""glTF, GLB, 3MF through trimesh (the ``io`` extra): meshes in; fields out as the GLB vertex attribute ``_DISTANCE``.
+
+trimesh is imported only when such a file is read or written; without it the error names the extra to install.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import BinaryIO
+
+import numpy as np
+
+from ...errors import MeshFormatError, ParameterError
+from ._common import FieldData, RawMesh, format_error, optional_package
+
+__all__ = ["GLB_NO_DISTANCE", "glb_attribute_name", "read_field", "read_mesh", "write_field"]
+
+#: Value written in a ``.glb`` for a vertex without a distance (``inf``): glTF's JSON header holds each
+#: accessor's min/max, and JSON has no infinity (trimesh would write ``Infinity``, which strict readers reject).
+GLB_NO_DISTANCE = -1.0
+
+
+def read_mesh(path: Path) -> RawMesh:
+    """The triangles of a glTF, GLB or 3MF file, read by trimesh without merging or reordering.
+
+    For a scene of several meshes, their vertices one after the other, as trimesh concatenates them.
+
+    Raises
+    ------
+    MeshFormatError
+        trimesh is missing (the message says what to install) or cannot read the file.
+    """
+    lib = optional_package("trimesh", f"{path}: reading {path.suffix} files", MeshFormatError)
+    try:
+        # process=False: no merging or reordering, so indices stay the file's
+        tm = lib.load(str(path), force="mesh", process=False)
+        V = np.asarray(tm.vertices, dtype=np.float64)
+        F = np.asarray(tm.faces, dtype=np.int64)
+    except Exception as exc:  # anything from KeyError to trimesh's own errors
+        detail = f"{type(exc).__name__}: {exc}"
+        if isinstance(exc, ImportError) and path.suffix.lower() == ".3mf":  # trimesh's 3MF reader needs networkx
+            detail += "; 3MF files need networkx too: pip install networkx"
+        raise format_error(path, f"trimesh cannot read the file ({detail})") from None
+    return RawMesh(V, F.ravel(), np.full(F.shape[0], 3, dtype=np.int64))
+
+
+def glb_attribute_name(name: str) -> str:
+    """The glTF vertex attribute a field called ``name`` is stored as: ``"_" + name.upper()``.
+
+    glTF 2.0 requires application-specific attribute semantics to start with an underscore, and writes
+    them in capitals by convention (``_TEMPERATURE`` in the specification); ``"distance"`` becomes
+    ``"_DISTANCE"``.
+
+    Parameters
+    ----------
+    name : str
+
+    Returns
+    -------
+    str
+    """
+    return "_" + name.upper().replace(".", "_").replace("-", "_")
+
+
+def write_field(fh: BinaryIO, field: FieldData) -> None:
+    """Binary glTF (GLB) with the field as the custom vertex attribute :func:`glb_attribute_name`.
+
+    glTF stores 32-bit floats only, so positions and the field are rounded to float32 (use ``.ply`` for
+    float64); ``inf`` (a vertex without a distance) is written as :data:`GLB_NO_DISTANCE`.
+
+    Raises
+    ------
+    ParameterError
+        trimesh is not installed (the message says what to install).
+    """
+    trimesh = optional_package("trimesh", "writing .glb files", ParameterError)
+    mesh = trimesh.Trimesh(np.asarray(field.V, dtype=np.float64), np.asarray(field.F, dtype=np.int64), process=False)
+    values = np.where(np.isfinite(field.d), field.d, GLB_NO_DISTANCE).astype(np.float32)
+    mesh.vertex_attributes[glb_attribute_name(field.name)] = values
+    data = mesh.export(file_type="glb")
+    if not isinstance(data, bytes):  # trimesh returns the GLB as bytes; anything else is a trimesh change
+        raise TypeError(f"trimesh's GLB export returned {type(data).__name__}, not bytes")
+    fh.write(data)
+
+
+def read_field(path: Path, name: str) -> np.ndarray:
+    """The vertex attribute :func:`glb_attribute_name` (``name``) of a one-mesh GLB, as float64.
+
+    :data:`GLB_NO_DISTANCE` (-1) comes back as ``inf``; the values are the file's float32 ones.
+
+    Raises
+    ------
+    MeshFormatError
+        trimesh is missing, cannot read the file, the file holds several meshes, or the mesh has no
+        such attribute (the message lists the ones it has).
+    """
+    lib = optional_package("trimesh", f"{path}: reading fields from {path.suffix} files", MeshFormatError)
+    try:
+        scene = lib.load(str(path), process=False)
+    except Exception as exc:
+        raise format_error(path, f"trimesh cannot read the file ({type(exc).__name__}: {exc})") from None
+    meshes = list(scene.geometry.values()) if hasattr(scene, "geometry") else [scene]
+    if len(meshes) != 1:
+        raise format_error(path, f"expected one mesh, the file has {len(meshes)}")
+    attrs = getattr(meshes[0], "vertex_attributes", {})
+    key = glb_attribute_name(name)
+    if key not in attrs:
+        raise format_error(path, f"no vertex attribute {key!r} (the file's: {', '.join(attrs) or 'none'})")
+    values = np.asarray(attrs[key], dtype=np.float64).ravel()
+    return np.where(values == GLB_NO_DISTANCE, np.inf, values)

@@ -1,0 +1,216 @@
+"""``load_mesh``: read a mesh file through the format registry, then check, triangulate and weld it.
+
+Every problem with a file is reported as a :class:`~cvxgeodesic.errors.MeshFormatError` whose message
+names the file and, for text formats, the line (a missing file as a
+:class:`~cvxgeodesic.errors.MeshFileNotFoundError`, also a ``FileNotFoundError``).
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import MeshRepairWarning
+from .formats._common import RawMesh, at_line, check_file, file_errors, format_error
+from .formats.registry import mesh_reader
+from .trimesh import TriMesh
+
+__all__ = ["load_mesh"]
+
+
+def load_mesh(path: str | os.PathLike) -> TriMesh:
+    """Read a triangle mesh from an OBJ, OFF, PLY or STL file (glTF, GLB, 3MF, VTK, VTU with the ``io`` extra).
+
+    The format is chosen from the extension (case-insensitive; the list is
+    :data:`~cvxgeodesic.mesh.formats.registry.MESH_EXTENSIONS`): ``.obj``, ``.off``,
+    ``.ply`` (ASCII, binary little- or big-endian) or ``.stl`` (ASCII or binary), read by
+    this package; ``.glb``, ``.gltf``, ``.3mf`` through trimesh and ``.vtk``, ``.vtu``
+    through meshio, when installed (``pip install 'cvxgeodesic[io]'``), with the same
+    welding and checks.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to read.
+
+    Returns
+    -------
+    TriMesh
+        The welded triangle mesh, named after the file's base name.
+        ``mesh.vertex_map[i]`` is the 0-based index in the file of the (first)
+        original vertex of vertex ``i``; for STL, whose vertices are the triangle
+        corners, it is the corner number ``3 * triangle + corner``.
+        ``mesh.file_index[j]`` is the mesh index of file vertex ``j`` (-1: in no face),
+        ``mesh.n_file_vertices`` the file's vertex count, ``mesh.file_faces`` the file's
+        triangles in its own numbering, and ``mesh.notes`` one line per repair. The mesh's
+        numbering differs from the file's when vertices were welded or dropped:
+        :func:`~cvxgeodesic.mesh.fileorder.to_file_order` maps a field back.
+
+    Raises
+    ------
+    MeshFileNotFoundError
+        If the file does not exist (a ``MeshFormatError`` and a ``FileNotFoundError``).
+    MeshFormatError
+        If the file is a directory, has an unsupported extension, is empty or malformed
+        (the message names the line for text formats), has a face index out of range
+        (the message names the face and the index), a non-finite coordinate, or no faces.
+
+    Warns
+    -----
+    MeshRepairWarning
+        (a ``UserWarning``) When faces that became degenerate by welding (a repeated
+        vertex) or exact duplicate faces (the same vertex set as an earlier face) are
+        dropped, and when welding or dropping vertices makes the mesh's vertex count
+        differ from the file's; the message says how many.
+
+    Notes
+    -----
+    - OBJ: only ``v`` and ``f`` statements are used; face entries may be ``i``,
+      ``i/t``, ``i//n`` or ``i/t/n`` and negative (relative) indices are resolved.
+      Texture coordinates, normals, groups, materials, lines and points are ignored.
+    - OFF: ``OFF`` and its ``C``/``N``/``ST``/``4`` variants (ASCII only); extra
+      per-vertex values (colors, normals) and per-face colors are ignored.
+    - PLY: the ``vertex`` element's ``x``, ``y``, ``z`` and the ``face`` element's
+      ``vertex_indices`` (or ``vertex_index``) list; other elements are skipped.
+    - Polygons with more than three vertices are fan-triangulated:
+      ``(v0, v1, v2, v3, ...)`` becomes ``(v0, v1, v2), (v0, v2, v3), ...``.
+    - Vertices with exactly identical positions are always welded (this repairs STL
+      triangle soups and OBJ files split at texture seams); vertices referenced by
+      no face are dropped. Vertices keep their file order.
+
+    Examples
+    --------
+    >>> import cvxgeodesic as cg
+    >>> try:
+    ...     cg.load_mesh("no_such_mesh.obj")
+    ... except FileNotFoundError as exc:
+    ...     print(exc)
+    no_such_mesh.obj: no such file
+    """
+    p = Path(path)
+    read = mesh_reader(p)
+    check_file(p, "a mesh file")  # the same messages for missing, directory and empty files in every format
+    with file_errors(p):
+        return _finish(p, read(p))
+
+
+def _finish(path: Path, raw: RawMesh) -> TriMesh:
+    """Validate, triangulate, weld and clean a raw polygon mesh into a :class:`TriMesh` that remembers the file."""
+    V = np.asarray(raw.V, dtype=np.float64).reshape(-1, 3)
+    n = V.shape[0]
+    idx, sizes = raw.idx, raw.sizes
+    if sizes.size == 0:
+        raise format_error(path, "no faces" + (" and no vertices" if n == 0 else ""))
+    if n == 0:
+        raise format_error(path, "no vertices")
+    bad = ~np.isfinite(V).all(axis=1)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise format_error(
+            path,
+            f"vertex {i}{at_line(raw.v_lines, i)} has a non-finite coordinate {V[i].tolist()} "
+            f"({int(bad.sum())} such vertices)",
+        )
+    small = sizes < 3
+    if small.any():
+        f = int(np.flatnonzero(small)[0])
+        raise format_error(
+            path, f"face {f}{at_line(raw.f_lines, f)} has {int(sizes[f])} vertices; a face needs at least 3"
+        )
+    starts = np.cumsum(sizes) - sizes
+    out = (idx < 0) | (idx >= n)
+    if out.any():
+        k = int(np.flatnonzero(out)[0])
+        f = int(np.searchsorted(starts, k, side="right") - 1)
+        shown = int(raw.raw_idx[k]) if raw.raw_idx is not None else int(idx[k])
+        base = " (1-based)" if raw.raw_idx is not None else ""
+        raise format_error(
+            path,
+            f"face {f}{at_line(raw.f_lines, f)} has vertex index {shown}{base} out of range; "
+            f"the file has {n} vertices",
+        )
+    F_file = _fan_triangulate(idx, sizes, starts)
+
+    # Weld vertices with exactly identical positions, keeping the first occurrence (file order).
+    order = np.lexsort((V[:, 2], V[:, 1], V[:, 0]))
+    Vs = V[order]
+    new_group = np.empty(n, dtype=bool)
+    new_group[0] = True
+    np.any(Vs[1:] != Vs[:-1], axis=1, out=new_group[1:])
+    group_sorted = np.cumsum(new_group) - 1
+    group = np.empty(n, dtype=np.int64)
+    group[order] = group_sorted
+    rep = order[new_group]  # lexsort is stable: the smallest file index of each group
+    F = group[F_file]  # faces in terms of group ids
+
+    notes: list[str] = []
+
+    # Drop faces made degenerate by welding.
+    degenerate = (F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 0] == F[:, 2])
+    n_deg = int(degenerate.sum())
+    if n_deg:
+        F = F[~degenerate]
+        msg = (f"{path.name}: dropped {n_deg} degenerate face(s) with a repeated vertex after welding "
+               "vertices with identical positions")
+        notes.append(msg)
+        warnings.warn(msg, MeshRepairWarning, stacklevel=3)
+    # Drop exact duplicate faces (same vertex set), keeping the first.
+    n_dup = 0
+    if F.shape[0]:
+        _, first = np.unique(np.sort(F, axis=1), axis=0, return_index=True)
+        n_dup = F.shape[0] - first.size
+        if n_dup:
+            F = F[np.sort(first)]
+            msg = f"{path.name}: dropped {n_dup} duplicate face(s) (same vertices as an earlier face)"
+            notes.append(msg)
+            warnings.warn(msg, MeshRepairWarning, stacklevel=3)
+    if F.shape[0] == 0:
+        raise format_error(path, f"no faces left after dropping {n_deg} degenerate and {n_dup} duplicate face(s)")
+
+    # Keep only referenced groups, ordered by their first file index.
+    used = np.zeros(rep.size, dtype=bool)
+    used[F.ravel()] = True
+    kept = np.flatnonzero(used)
+    kept = kept[np.argsort(rep[kept], kind="stable")]
+    new_id = np.full(rep.size, -1, dtype=np.int64)
+    new_id[kept] = np.arange(kept.size)
+    vertex_map = rep[kept]
+    file_index = new_id[group]  # mesh index of every file vertex; -1: dropped (in no face)
+
+    n_welded = n - rep.size
+    n_dropped = int(np.count_nonzero(file_index < 0))
+    if n_welded or n_dropped:
+        what = []
+        if n_welded:
+            what.append(f"welded {n_welded} vertices at the same position as an earlier one")
+        if n_dropped:
+            what.append(f"dropped {n_dropped} vertices in no face")
+        changed = np.flatnonzero(file_index != np.arange(n))
+        msg = (f"{path.name}: {n} vertices in the file, {kept.size} in the mesh ({'; '.join(what)}); mesh indices "
+               f"differ from the file's from file vertex {int(changed[0])} on: cvxgeodesic.to_file_order(mesh, field) "
+               "maps a field to the file's numbering")
+        notes.append(msg)
+        if path.suffix.lower() != ".stl":  # an STL is a triangle soup: welding its corners is always expected
+            warnings.warn(msg, MeshRepairWarning, stacklevel=3)
+    F_mesh = new_id[F]
+    # the file's own triangles, for files written in its numbering; a face naming one file vertex twice is no
+    # triangle in any numbering. Kept only when they differ from what vertex_map[F] gives back.
+    F_file = F_file[(F_file[:, 0] != F_file[:, 1]) & (F_file[:, 1] != F_file[:, 2]) & (F_file[:, 0] != F_file[:, 2])]
+    same = F_file.shape == F_mesh.shape and np.array_equal(F_file, vertex_map[F_mesh])
+    return TriMesh(V[vertex_map], F_mesh, vertex_map=vertex_map, file_index=file_index,
+                   dropped_vertices=V[file_index < 0], notes=notes, name=path.name,
+                   file_faces=None if same else F_file)
+
+
+def _fan_triangulate(idx: np.ndarray, sizes: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """Fan-triangulate polygons given as concatenated indices. Returns an (t, 3) int64 array."""
+    if np.all(sizes == 3):
+        return idx.reshape(-1, 3).astype(np.int64, copy=False)
+    ntri = sizes - 2
+    poly = np.repeat(np.arange(sizes.size), ntri)
+    j = np.arange(poly.size) - np.repeat(np.cumsum(ntri) - ntri, ntri)
+    s = starts[poly]
+    return np.stack([idx[s], idx[s + j + 1], idx[s + j + 2]], axis=1).astype(np.int64, copy=False)

@@ -1,0 +1,78 @@
+"""Issue 28 item 8: messages and help that tell the user what to do (files, methods, viewer, --m, compare)."""
+
+from __future__ import annotations
+
+import re
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import cvxgeodesic as cg
+from cvxgeodesic.cli import build_parser, main
+from cvxgeodesic.compare import TABLE_COLUMNS
+from cvxgeodesic.errors import NonManifoldError
+
+README = Path(__file__).resolve().parents[1] / "README.md"
+# three pages on one edge: fmm and exact refuse it
+BOOK = cg.TriMesh([[0, 0, 0], [0, 0, 1], [1, 0, 0.5], [-1, 0, 0.5], [0, 1, 0.5]], [[0, 1, 2], [1, 0, 3], [0, 1, 4]])
+
+
+@pytest.fixture
+def plane_off(tmp_path):
+    plane = cg.grid_plane(3, jitter=0.1)
+    path = tmp_path / "plane.off"
+    path.write_text("OFF\n" + f"{plane.n_vertices} {plane.n_faces} 0\n"
+                    + "".join(" ".join(map(repr, v)) + "\n" for v in plane.V.tolist())
+                    + "".join("3 " + " ".join(map(str, f)) + "\n" for f in plane.F.tolist()))
+    return path
+
+
+@pytest.mark.parametrize("method", ["fmm", "exact"])
+def test_non_manifold_error_names_the_methods_that_work(method):
+    with pytest.raises(NonManifoldError) as info:
+        cg.geodesic_distance(BOOK, 3, method=method)
+    msg = str(info.value)
+    named = re.findall(r"'([a-z-]+)'", msg.split("; use ", 1)[1])
+    assert {"qcqp-hessian", "qclp", "heat", "dijkstra"} <= set(named), msg
+    assert "default 'qcqp-hessian'" in msg
+    for other in named:  # and every method it names solves this mesh
+        assert np.isfinite(cg.geodesic_distance(BOOK, 3, method=other)).all(), other
+
+
+def test_missing_viewer_names_the_command_and_the_extra(plane_off, tmp_path, capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "polyscope", None)  # import fails as if not installed
+    rc = main(["view", str(plane_off), "-s", "0", "--method", "dijkstra", "--screenshot", str(tmp_path / "v.png")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1, err
+    assert "cvxgeodesic view" in err[0] and "pip install 'cvxgeodesic[viewer]'" in err[0], err
+
+
+@pytest.mark.parametrize("command, option", [("distance", ["--m", "-1"]), ("distance", ["--m", "nan"]),
+                                             ("distance", ["--lam", "-2"]), ("matrix", ["--m", "-1"])])
+def test_a_bad_number_is_one_line_and_nothing_before_it(plane_off, tmp_path, capsys, command, option):
+    rc = main([command, str(plane_off), "-s", "0", *option, "-o", str(tmp_path / "d.npy")])  # no -q
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1, err  # no "<mesh>: 16 vertices ..." header first
+    name = option[0][2:]
+    assert err[0].startswith(f"cvxgeodesic: error: {name} must be a finite number >= 0"), err
+
+
+def test_compare_help_explains_every_column(capsys):
+    (sub,) = [a for a in build_parser()._actions if a.__class__.__name__ == "_SubParsersAction"]
+    text = sub.choices["compare"].format_help()
+    for col in TABLE_COLUMNS:
+        assert re.search(rf"^  {re.escape(col.header)}: \S", text, flags=re.M), col.header
+    vs = re.search(r"^  vs exact: (.*?)(?=^  \S)", text, flags=re.M | re.S).group(1)
+    assert "exact field's" in vs and "below 1" in vs and "smoother" in vs
+
+
+@pytest.mark.skipif(not README.is_file(), reason="needs the source checkout")
+def test_readme_says_how_to_read_fields_back():
+    text = README.read_text(encoding="utf-8")
+    assert "cg.load_distance(path" in text
+    glb = text[text.index("`.glb` (vertex attribute"):][:200]
+    assert "`_DISTANCE`" in glb and "float32" in glb
+    assert 'vertex_attributes["_DISTANCE"]' in text
+    assert "`vs\nexact`" in text or "`vs exact`" in text
