@@ -141,7 +141,7 @@ def main(argv):
         speed(argv[1:])
         return
     if argv[0].startswith("--weights="):
-        import cvxgeodesic.elements_p2 as p2
+        import cvxgeodesic.formulations_p2 as p2
 
         p2.DEFAULT_WEIGHTS = argv.pop(0).split("=", 1)[1]
     dest = Path(argv[0])

@@ -72,9 +72,10 @@ def record(out_path: str, quick: bool, repeat: int) -> None:
         key = label.replace(" ", "_")
         data[key + "/d"] = res.distance
         data[key + "/phi"] = info.extra["p2_field"].phi
-        data[key + "/meta"] = np.array([info.iterations, best, mesh.bbox_diagonal, info.status == "optimal",
+        last = info.extra.get("round_iterations", [info.iterations])[-1]  # the last cutting-plane round's solve
+        data[key + "/meta"] = np.array([last, best, mesh.bbox_diagonal, info.status == "optimal",
                                         info.solver == "ipm"])
-        print(f"{label:32s} {info.status:15s} {info.solver:8s} it {info.iterations:3d} {best:8.3f} s "
+        print(f"{label:32s} {info.status:15s} {info.solver:8s} it {last:3d} {best:8.3f} s "
               f"notes: {'; '.join(info.notes)[:100]}", flush=True)
     np.savez(out_path, **data)
 

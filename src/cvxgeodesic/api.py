@@ -21,8 +21,9 @@ from .formulations import ALIASES, FORMULATIONS, NORMALIZATIONS, canonical_metho
 from .mesh.io import as_trimesh
 from .mesh.trimesh import TriMesh
 from .results import GeodesicResult, SolveInfo
+from .sources import resolve_sources
 from .strategies import SolveConfig, SolveStrategy, make_strategy, resolve_target
-from .validation import check_choice, check_count, check_number, validate_sources
+from .validation import check_choice, check_count, check_number, check_order, check_smoothness, validate_sources
 
 __all__ = ["ALL_METHODS", "BASELINE_METHODS", "DEFAULT_TOL", "GeodesicResult", "GeodesicSolver", "SOLVERS",
            "SolveInfo", "distance_matrix", "geodesic_distance"]
@@ -106,11 +107,11 @@ class GeodesicSolver:
         warm start yet, so this costs a coarse solve *more* than a direct solve.
     order : {1, 2}
         ``2``: second-order elements for the squared distance (``method="qclp"`` only;
-        :mod:`cvxgeodesic.elements_p2`, ``docs/order2.md``): exact on flat regions whatever
-        the triangle shapes, sources may also be ``(face, bary)`` points, and
-        ``info.extra["p2_field"].distance_at(faces, bary)`` evaluates the field inside
-        faces. ``solver="auto"`` uses the order-2 structured solver (Clarabel as its
-        fallback). Not with ``multires`` or the baselines.
+        :mod:`cvxgeodesic.formulations_p2`, ``docs/order2.md``): exact on flat regions whatever
+        the triangle shapes; sources may be vertices, SurfacePoints (at most one per face) and
+        ``"boundary"``; ``info.extra["p2_field"].distance_at(faces, bary)`` evaluates the field
+        inside faces. The same solvers and fallback as order 1. Not with ``multires`` or the
+        baselines.
     threads : int, optional
         Threads of every pool the solver uses (PARDISO, the compiled kernels, BLAS),
         for its construction and each solve; recorded in ``info.extra["threads"]``.
@@ -183,18 +184,13 @@ class GeodesicSolver:
         self.max_iter = check_count(max_iter, "max_iter")
         self.verbose = bool(verbose)
         self.normalization = check_choice(normalization, "normalization", NORMALIZATIONS)
-        if isinstance(order, bool) or order not in (1, 2):
-            raise ParameterError(f"order must be 1 (P1 distance) or 2 (P2 squared distance), got {order!r}")
-        self.order = int(order)
-        self.energy: str | None = None
-        self.m: float | None = None
+        self.order = check_order(order)
+        self._set_smoothness(m, lam)
         target = None
-        if self.order == 2:  # P2 elements for d² (cvxgeodesic.elements_p2): its own program and solvers
+        if self.order == 2:  # P2 elements for d² (cvxgeodesic.formulations_p2, strategies/order2.py)
             if self.is_baseline or multires:
                 raise ParameterError("order=2 applies to the convex formulations without multires")
-            self.lam = 0.0
         else:
-            self._set_smoothness(m, lam)
             target = resolve_target(multires, self.mesh.n_faces)
             if target is not None and self.is_baseline:
                 raise ParameterError(f"multires applies to the convex formulations, not to baseline {self.method!r}")
@@ -227,16 +223,17 @@ class GeodesicSolver:
             )
 
     def _set_smoothness(self, m: Any, lam: Any) -> None:
-        """``self.lam`` (λ in the mesh's units), ``self.m`` and ``self.energy`` from ``m`` or ``lam``."""
+        """``self.lam`` (λ in the mesh's units), ``self.m`` and ``self.energy`` from ``m`` or ``lam``: both checked
+        here, λ computed once (0 without a smoothness energy)."""
+        m_value, lam_value = check_smoothness(m, lam)
         self.energy = None if self.is_baseline else FORMULATIONS[self.method][1]
-        if lam is not None:
-            self.lam = check_number(lam, "lam", low=0)
-        else:
-            check_number(m, "m", low=0)
-            self.lam = smoothness_weight(self.mesh, m, self.normalization, self.energy or "hessian")
-        self.m = None if lam is not None else float(m)
-        if self.energy is None and not self.is_baseline:
+        self.m = None if lam_value is not None else m_value
+        if self.energy is None:
             self.lam = 0.0
+        elif lam_value is not None:
+            self.lam = lam_value
+        else:
+            self.lam = smoothness_weight(self.mesh, m_value, self.normalization, self.energy)
 
     def __repr__(self) -> str:
         return (
@@ -252,8 +249,9 @@ class GeodesicSolver:
         ----------
         sources : int, sequence of int, SurfacePoint, SurfaceCurve, "boundary", or a list mixing them
             Source vertex indices (distinct, in ``[0, n)``), points anywhere on the surface, curves,
-            or every boundary edge (``docs/sources.md``). With ``order=2``
-            (P2 squared distance): vertices and points (SurfacePoints, ``(face, bary)``) only.
+            or every boundary edge (``docs/sources.md``), resolved once here
+            (:func:`~cvxgeodesic.sources.resolve_sources`). With ``order=2`` (P2 squared distance):
+            vertices, SurfacePoints and ``"boundary"``.
         callback : callable, optional
             ``callback(iteration, info_dict)`` after every interior-point
             iteration of the ``"ipm"`` backend (used for progress reports).
@@ -273,7 +271,7 @@ class GeodesicSolver:
             The backend did not reach an optimal solution (for the Hessian energy the
             message adds that it can be indefinite on meshes with sharp corners).
         """
-        res = self._strategy.solve(sources, callback=callback)
+        res = self._strategy.solve(resolve_sources(self.mesh, sources), callback=callback)
         res.info.setup_time = self.setup_time
         return res
 

@@ -94,3 +94,18 @@ class SolverError(CvxGeodesicError, RuntimeError):
 
 class IndefiniteEnergyWarning(UserWarning):
     """libigl's curved Hessian energy is indefinite on this mesh; the planar Hessian energy is used instead."""
+
+
+def warn_user(message: str, category: type[Warning] = UserWarning) -> None:
+    """``warnings.warn`` attributed to the first frame outside this package (the user's call), however deep the
+    library's own call chain is."""
+    import sys
+    import types
+    import warnings
+
+    package = __name__.rsplit(".", 1)[0] + "."
+    frame: types.FrameType | None = sys._getframe(1)
+    level = 1
+    while frame is not None and (frame.f_globals.get("__name__") or "").startswith(package):
+        frame, level = frame.f_back, level + 1
+    warnings.warn(message, category, stacklevel=level)

@@ -57,7 +57,7 @@ from .errors import DegenerateFacesWarning, MeshError, ParameterError
 from .mesh.trimesh import DEGENERATE_TOL, TriMesh
 from .operators import energy_matrix, gradient_blocks
 from .solvers.problem import ConeGroup, ConicProblem, PairInequalities
-from .sources import source_constraints
+from .sources import SourceSet, source_constraints
 from .validation import check_choice, check_number
 
 FORMULATIONS: dict[str, tuple[str, str | None]] = {
@@ -343,7 +343,7 @@ def _uncovered_edges(mesh, cone_faces, face_free, fixed_mask, degenerate_edges, 
 
 def build_problem(
     ops: MeshOperators,
-    sources: np.ndarray,
+    sources: np.ndarray | SourceSet,
     method: str,
     lam: float,
     *,

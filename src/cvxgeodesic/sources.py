@@ -321,6 +321,24 @@ class SourceSet:
         """(q,) int64 ndarray: faces that contain a point source or a curve piece (sorted, unique)."""
         return np.unique(np.concatenate([self.point_faces, self.segment_faces])).astype(np.int64)
 
+    def distinct_points(self, mesh: TriMesh) -> list[SurfacePoint]:
+        """The point sources once each: a point on an edge, listed here once per face of the edge, comes back once
+        (in its first face).
+
+        Returns
+        -------
+        list of SurfacePoint
+        """
+        out: list[SurfacePoint] = []
+        seen: set[tuple] = set()
+        for f, b in zip(self.point_faces.tolist(), self.point_bary, strict=True):
+            nz = np.flatnonzero(b > 0)
+            key = tuple(sorted(zip(mesh.F[f, nz].tolist(), b[nz].tolist(), strict=True)))
+            if key not in seen:
+                seen.add(key)
+                out.append(SurfacePoint(f, b))
+        return out
+
     def anchor_vertices(self, mesh: TriMesh) -> np.ndarray:
         """(r,) int64 ndarray: vertices whose connected components contain a source."""
         return np.unique(np.concatenate([self.vertices, mesh.F[self.source_faces()].ravel()])).astype(np.int64)

@@ -119,6 +119,21 @@ def check_choice(value: Any, name: str, choices: Iterable[str], *, lower: bool =
     return key
 
 
+def check_order(order: Any) -> int:
+    """The element order: 1 (P1 distance) or 2 (P2 squared distance); ParameterError otherwise."""
+    if not is_integer(order) or int(order) not in (1, 2):
+        raise ParameterError(f"order must be 1 (P1 distance) or 2 (P2 squared distance), got {short_repr(order)}")
+    return int(order)
+
+
+def check_smoothness(m: Any, lam: Any) -> tuple[float, float | None]:
+    """``(m, lam)`` checked: ``m`` a finite number ≥ 0 (always, even when ``lam`` is given or the method has no
+    smoothness term, so that every order and method gives the same verdict), ``lam`` None or a finite number ≥ 0."""
+    m_value = check_number(m, "m", low=0)
+    lam_value = None if lam is None else check_number(lam, "lam", low=0)
+    return m_value, lam_value
+
+
 def as_vertex_field(values: ArrayLike, name: str, n: int | None = None, *, nan_ok: bool = True) -> np.ndarray:
     """Return ``values`` as a (n,) float64 array, or raise a ParameterError naming ``name``.
 

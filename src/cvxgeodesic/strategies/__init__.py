@@ -8,20 +8,22 @@ and then answers ``strategy.solve(sources, callback=None) -> GeodesicResult``:
                            Clarabel retry under ``solver="auto"``, the ``d >= 0`` re-solve)
 :class:`BaselineStrategy`  Dijkstra, fast marching, heat, exact (:mod:`cvxgeodesic.baselines`)
 :class:`CoarseToFine`      two direct solves: a decimated mesh, then (with polish) the mesh itself
-:class:`Order2`            P2 elements for d² (:class:`~cvxgeodesic.elements_p2.Order2Strategy`)
+:class:`Order2`            P2 elements for d², with cutting planes on flat faces
 =========================  =====================================================================
 """
 
 from __future__ import annotations
 
+from .backend import Backend, ipm_available
 from .base import Callback, SolveConfig, SolveStrategy
 from .baseline import BaselineStrategy
 from .coarse_to_fine import CoarseToFine, default_target_faces, resolve_target
-from .direct import DirectStrategy, ipm_available
+from .direct import DirectStrategy
 from .order2 import Order2
 
 __all__ = [
-    "BaselineStrategy", "Callback", "CoarseToFine", "DirectStrategy", "Order2", "SolveConfig", "SolveStrategy",
+    "Backend", "BaselineStrategy", "Callback", "CoarseToFine", "DirectStrategy", "Order2", "SolveConfig",
+    "SolveStrategy",
     "default_target_faces", "ipm_available", "make_strategy", "resolve_target",
 ]
 

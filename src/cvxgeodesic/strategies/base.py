@@ -4,11 +4,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from typing import Any, Protocol
+from typing import Protocol
 
 from ..formulations import FORMULATIONS, smoothness_weight
 from ..mesh.trimesh import TriMesh
 from ..results import GeodesicResult
+from ..sources import SourceSet
 
 #: ``callback(iteration, info_dict)`` after every interior-point iteration.
 Callback = Callable[[int, dict], None]
@@ -48,6 +49,12 @@ class SolveConfig:
     max_iter: int = 200
     verbose: bool = False
     notes: tuple[str, ...] = field(default_factory=tuple)
+
+    @property
+    def stretch(self) -> str:
+        """Weights of the stretch term that go with the normalization of ``m``
+        (:func:`~cvxgeodesic.formulations.stretch_weights`): ``"area"``, or ``"calibrated"`` for ``"paper"``."""
+        return "area" if self.normalization == "area" else "calibrated"
 
     @property
     def energy(self) -> str | None:
@@ -94,6 +101,7 @@ class SolveStrategy(Protocol):
     notes: list[str]
     setup_time: float
 
-    def solve(self, sources: Any, *, callback: Callback | None = None) -> GeodesicResult:
-        """Distance field from ``sources`` (anything :meth:`GeodesicSolver.solve` takes) on the config's mesh."""
+    def solve(self, sources: SourceSet, *, callback: Callback | None = None) -> GeodesicResult:
+        """Distance field from ``sources``, resolved once by :meth:`GeodesicSolver.solve`
+        (:func:`~cvxgeodesic.sources.resolve_sources`), on the config's mesh."""
         ...

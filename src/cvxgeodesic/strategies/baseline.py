@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import time
-from typing import Any
 
 import numpy as np
 
 from ..baselines import BASELINES
 from ..errors import SourceError
 from ..results import GeodesicResult, SolveInfo
-from ..sources import resolve_sources
+from ..sources import SourceSet
 from .base import Callback, SolveConfig
 
 
@@ -36,9 +35,9 @@ class BaselineStrategy:
         self.notes: list[str] = list(config.notes)
         self.setup_time = time.perf_counter() - t0
 
-    def solve(self, sources: Any, *, callback: Callback | None = None) -> GeodesicResult:
-        """Distance field from ``sources``; ``callback`` is ignored (no iterations to report)."""
-        sset = resolve_sources(self.config.mesh, sources)
+    def solve(self, sources: SourceSet, *, callback: Callback | None = None) -> GeodesicResult:
+        """Distance field from resolved ``sources``; ``callback`` is ignored (no iterations to report)."""
+        sset = sources
         t0 = time.perf_counter()
         method = self.config.method
         if not sset.vertex_only:

@@ -30,7 +30,6 @@ coarse vertex near the sources.
 from __future__ import annotations
 
 import time
-from typing import Any
 
 import numpy as np
 
@@ -38,7 +37,7 @@ from ..errors import ParameterError, SourceError
 from ..mesh.decimate import simplify_mesh
 from ..mesh.transfer import SurfaceTransfer
 from ..results import GeodesicResult, SolveInfo
-from ..sources import resolve_sources
+from ..sources import SourceSet, resolve_sources
 from .base import Callback, SolveConfig
 from .direct import DirectStrategy
 
@@ -183,7 +182,7 @@ class CoarseToFine:
             "max_surface_distance": float(np.sqrt(self.transfer.sq_distance.max())),
         }
 
-    def solve(self, sources: Any, *, callback: Callback | None = None) -> GeodesicResult:
+    def solve(self, sources: SourceSet, *, callback: Callback | None = None) -> GeodesicResult:
         """Coarse solve, transfer and (with ``polish``) fine solve; a GeodesicResult on the fine mesh.
 
         Raises
@@ -196,20 +195,21 @@ class CoarseToFine:
             res.info.extra["multires"] = {"coarse_faces": self.config.mesh.n_faces, "polished": True,
                                           "skipped": "the mesh has no more faces than the multires target"}
             return res
-        sset = resolve_sources(self.config.mesh, sources)
+        sset = sources
         if not sset.vertex_only:
             raise SourceError("multires takes vertex sources only; solve point, curve and boundary sources "
                               "without multires")
-        return self._solve_vertices(sset.vertices, callback)
+        return self._solve_vertices(sset, callback)
 
-    def _solve_vertices(self, src: np.ndarray, callback: Callback | None) -> GeodesicResult:
+    def _solve_vertices(self, sset: SourceSet, callback: Callback | None) -> GeodesicResult:
         assert self.coarse is not None and self.transfer is not None
         t0 = time.perf_counter()
         cfg = self.config
         mesh = cfg.mesh
+        src = sset.vertices
         reach = mesh.connected_to(src) & mesh.referenced
         csrc, offset = self.transfer.nearest_vertex(mesh.V[src])
-        cres = self.coarse.solve(np.unique(csrc), callback=callback)
+        cres = self.coarse.solve(resolve_sources(self.coarse_mesh, np.unique(csrc)), callback=callback)
         t1 = time.perf_counter()
         d = self.transfer.apply(cres.distance, need=reach)
         d[~reach] = np.inf
@@ -226,7 +226,7 @@ class CoarseToFine:
             transfer_time=t2 - t1,
         )
         if self.fine is not None:  # polish
-            res = self.fine.solve(src, callback=callback)
+            res = self.fine.solve(sset, callback=callback)
             both = np.isfinite(res.distance) & np.isfinite(d)
             diff = float(np.abs(res.distance[both] - d[both]).max()) if both.any() else 0.0
             scale = float(res.distance[both].max()) if both.any() else 0.0

@@ -1,11 +1,8 @@
 """The direct strategy: one conic solve of a P1 formulation on the mesh, with the backend policy.
 
-The policy, every step of which is recorded in ``info.notes``:
+The policy (:class:`~cvxgeodesic.strategies.backend.Backend`: the structured solver, Clarabel as its fallback
+under ``solver="auto"``) and what this strategy adds, every step recorded in ``info.notes``:
 
-- ``solver="auto"`` uses the structured interior-point solver when it can be imported (it needs Numba),
-  else Clarabel;
-- under ``"auto"``, Clarabel retries an interior-point solve that failed or was only ``almost_optimal``
-  (an almost optimal iterate is kept when Clarabel fails too);
 - an optimum with negative distances is re-solved with the bounds ``d >= 0``;
 - a failed Hessian solve says that the curved Hessian energy can be indefinite.
 """
@@ -13,36 +10,20 @@ The policy, every step of which is recorded in ``info.notes``:
 from __future__ import annotations
 
 import time
-import warnings
 from typing import Any
 
 import numpy as np
 
-from ..errors import ParameterError, SolverError
+from ..errors import SolverError
 from ..formulations import MeshOperators, build_problem
 from ..mesh.trimesh import unit_mesh
 from ..results import GeodesicResult, SolveInfo
-from ..sources import resolve_sources
+from ..solvers.problem import BackendResult, ConicProblem
+from ..sources import SourceSet
+from .backend import Backend, ipm_available
 from .base import Callback, SolveConfig
 
-# frames between the warning and the caller of GeodesicSolver.solve: _clarabel_retry, _run_backend, _solve,
-# DirectStrategy.solve, GeodesicSolver.solve, the thread-limit wrapper
-_RETRY_STACKLEVEL = 7
-
-
-def ipm_available() -> bool:
-    """True when the structured interior-point solver (and so Numba) can be imported."""
-    try:
-        from ..solvers import ipm  # noqa: F401
-    except ImportError:
-        return False
-    return True
-
-
-def _solve_clarabel(problem: Any, config: SolveConfig) -> Any:
-    from ..solvers import solve_clarabel  # looked up at call time: tests replace it to simulate failures
-
-    return solve_clarabel(problem, tol=config.tol, max_iter=config.max_iter, verbose=config.verbose)
+__all__ = ["DirectStrategy", "ipm_available"]
 
 
 class DirectStrategy:
@@ -75,16 +56,9 @@ class DirectStrategy:
         self.ops = MeshOperators(unit)
         self.ops.notes[0:0] = list(config.notes)
         self.notes: list[str] = self.ops.notes  # the operators add their substitutions as they build
-        if config.solver == "auto":
-            self.backend = "ipm" if ipm_available() else "clarabel"
-            if self.backend == "clarabel":
-                self.notes.append("the interior-point solver is not available in this installation (it needs "
-                                  "Numba); solved with Clarabel")
-        else:
-            self.backend = config.solver
-        if self.backend == "ipm" and not ipm_available():
-            raise ParameterError("solver='ipm' is not available in this installation")
-        self.fallback_to_clarabel = config.solver == "auto"
+        self.policy = Backend(config.solver, config.tol, config.max_iter, config.verbose, config.mesh.name)
+        self.notes.extend(self.policy.notes)
+        self.backend = self.policy.name
         self.ipm: Any = None
         energy = config.energy
         self._analysis: tuple[Any, Any] | None = None  # (energy, the analysis made for it), see _analyse
@@ -118,15 +92,14 @@ class DirectStrategy:
         self._analysis = (Q, chol)
         return chol
 
-    def solve(self, sources: Any, *, callback: Callback | None = None) -> GeodesicResult:
-        """Distance field from ``sources`` (see :meth:`~cvxgeodesic.api.GeodesicSolver.solve`)."""
-        sset = resolve_sources(self.config.mesh, sources)
-        return self._solve(sset.vertices if sset.vertex_only else sset, time.perf_counter(), callback)
+    def solve(self, sources: SourceSet, *, callback: Callback | None = None) -> GeodesicResult:
+        """Distance field from resolved ``sources`` (see :meth:`~cvxgeodesic.api.GeodesicSolver.solve`)."""
+        return self._solve(sources, time.perf_counter(), callback)
 
-    def _solve(self, src: Any, t0: float, callback: Callback | None) -> GeodesicResult:
+    def _solve(self, src: SourceSet, t0: float, callback: Callback | None) -> GeodesicResult:
         cfg = self.config
         # on the mesh scaled by 1/s, the field d/s minimizes (objective)/s when lambda becomes lambda/s
-        stretch = "area" if cfg.normalization == "area" else "calibrated"
+        stretch = cfg.stretch
         problem = build_problem(self.ops, src, cfg.method, cfg.lam / self.scale, stretch=stretch)
         notes = list(self.notes)
         res = self._run_backend(problem, callback, notes)
@@ -143,8 +116,7 @@ class DirectStrategy:
             res.extra = {**extra, **res.extra}
         d = np.array(res.x, dtype=float) * self.scale
         d[problem.unreachable] = np.inf
-        vertices = src if isinstance(src, np.ndarray) else src.vertices
-        d[vertices] = 0.0
+        d[src.vertices] = 0.0
         info = SolveInfo(
             method=cfg.method, solver=res.solver, status=res.status, iterations=res.iterations,
             setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
@@ -153,33 +125,14 @@ class DirectStrategy:
             n_unreachable=int(problem.unreachable.sum()),
             notes=notes, extra=res.extra,
         )
-        return GeodesicResult(distance=d, info=info, sources=vertices,
-                              source_set=None if isinstance(src, np.ndarray) else src)
+        return GeodesicResult(distance=d, info=info, sources=src.vertices,
+                              source_set=None if src.vertex_only else src)
 
-    def _run_backend(self, problem: Any, callback: Callback | None, notes: list[str]) -> Any:
-        """Solve ``problem`` with the chosen backend; under ``solver="auto"`` Clarabel retries a failed or
-        ``almost_optimal`` IPM solve."""
+    def _run_backend(self, problem: ConicProblem, callback: Callback | None, notes: list[str]) -> BackendResult:
+        """Solve ``problem`` under the backend policy; a failed Hessian solve names the indefinite energy."""
         cfg = self.config
         try:
-            if self.backend != "ipm":
-                return _solve_clarabel(problem, cfg)
-            if cfg.verbose:
-                from .._verbose import ipm_log
-
-                callback = ipm_log(callback)
-            try:
-                res = self.ipm.solve(problem, tol=cfg.tol, max_iter=cfg.max_iter, callback=callback)
-            except SolverError as exc:
-                if not self.fallback_to_clarabel or exc.status in ("primal_infeasible", "dual_infeasible"):
-                    raise
-                return self._clarabel_retry(problem, exc.status, notes)
-            if res.status == "optimal" or not self.fallback_to_clarabel:
-                return res
-            try:  # "almost_optimal": Clarabel may reach the full accuracy; else keep the IPM's best iterate
-                return self._clarabel_retry(problem, res.status, notes)
-            except SolverError:
-                notes.append("Clarabel failed too; kept the interior-point solver's almost optimal iterate")
-                return res
+            return self.policy.solve(problem, self.ipm, callback, notes)
         except SolverError as exc:
             if cfg.energy != "hessian" or problem.P is None:
                 raise
@@ -191,12 +144,3 @@ class DirectStrategy:
                 f"corners, which makes {cfg.method!r} non-convex: try 'qcqp-laplacian' or 'qclp'",
                 solver=exc.solver, status=exc.status, info=exc.info,
             ) from exc
-
-    def _clarabel_retry(self, problem: Any, ipm_status: str, notes: list[str]) -> Any:
-        message = (f"the interior-point solver stopped with status {ipm_status!r} on {self.config.mesh.name}; "
-                   "solving with Clarabel instead")
-        warnings.warn(message, RuntimeWarning, stacklevel=_RETRY_STACKLEVEL)
-        notes.append(message)
-        res = _solve_clarabel(problem, self.config)
-        res.extra = dict(res.extra, ipm_failure=ipm_status)
-        return res

@@ -90,9 +90,11 @@ def evaluate(pr: Program, it: Iterate, iteration: int, step: float, elapsed: flo
     return Evaluation(info, rx, rz, ry, aux, Atz, Pfx, bz, qx, dual_scale, float(np.abs(xf).sum()))
 
 
-def converged(info: dict, tol: float) -> bool:
-    """``tol`` met by the residuals (both dual ones) and the gap (absolute or relative)."""
-    return (info["res_primal"] < tol and info["res_dual"] < tol and info["res_dual_plain"] < tol
+def converged(info: dict, tol: float, settings: IPMSettings) -> bool:
+    """``tol`` met by the residuals (the plain dual one at ``plain_dual_factor · tol``) and the gap (absolute or
+    relative)."""
+    return (info["res_primal"] < tol and info["res_dual"] < tol
+            and info["res_dual_plain"] < settings.plain_dual_factor * tol
             and (info["gap_abs"] < tol or info["gap_rel"] < tol))
 
 
@@ -100,7 +102,8 @@ def almost(info: dict, tol: float, settings: IPMSettings) -> bool:
     """The reduced tolerances on one iterate's ``info``: residuals and gap below ``reduced_factor · tol``, and
     the dual residual also relative to ``max(1, ‖q‖ + ‖x‖)`` alone (``res_dual_plain``)."""
     red = settings.reduced_factor * tol
-    return (info["res_primal"] < red and info["res_dual"] < red and info["res_dual_plain"] < red
+    return (info["res_primal"] < red and info["res_dual"] < red
+            and info["res_dual_plain"] < settings.plain_dual_factor * red
             and min(info["gap_abs"], info["gap_rel"]) < red)
 
 

@@ -127,6 +127,17 @@ class IPMSettings:
         fewer per QCQP solve. Default "graph". "guess" (the order-2 programs, :data:`ORDER2`): the program's own
         guess field scaled into the interior (:func:`.start.guess_primal`), the least-norm z with Mehrotra's shift
         of z alone; "mehrotra" without a guess.
+    plain_dual_factor : float
+        The dual residual relative to ``max(1, ‖q‖ + ‖x‖)`` alone (without ``‖z‖`` in its scale, the guard against a
+        dual blown up along a direction ``Aᵀ`` cancels, :mod:`.residuals`) is accepted at this multiple of ``tol``.
+        Default 1. The order-2 programs (:data:`ORDER2`) accept 1000: near their optimum ``Δz = W⁻²(…)`` magnifies
+        rounding by up to 1/μ and that residual stalls at 1e-7–1e-4 in ∞-norm while ``x`` has converged (bimba:
+        relative gap 3.4e-9, the residual scaled by ``‖z‖`` 1.7e-13, the plain one 2.2e-7; measured on a flat grid:
+        x within 5e-8 of Clarabel's optimum, relative to max φ, when the gap was 2e-8 and the plain residual 1e-7).
+    least_squares_cost : bool
+        The least-squares ``x`` of the starting point ("interior", "mehrotra") solves ``K x = Aᵀb̃ − q̃``; False
+        leaves the cost out (``K x = Aᵀb̃``), the order-2 solver's choice (:data:`ORDER2`), measured with it. Default
+        True.
     sigma_cap_guess : float
         After a "guess" start, Mehrotra's σ is capped at this. From a primal-feasible start the tail converged
         linearly with σ ≈ 0.3 at steps of 0.95 (order 2, bimba: the gap ÷ 2.5 per iteration over 15 iterations);
@@ -166,6 +177,8 @@ class IPMSettings:
     shift_factor: float = 1.5
     dual_floor: float = 1e-2
     sigma_cap_guess: float = 1.0
+    least_squares_cost: bool = True
+    plain_dual_factor: float = 1.0
 
     def correctors_for(self, pattern_nnz: int) -> int:
         """Centrality correctors per iteration for a Newton pattern of ``pattern_nnz`` stored entries (lower
@@ -207,4 +220,5 @@ class IPMSettings:
 #: separate ones, but the worst flat error 1.1e-6 against 3.5e-7), the guess start with σ capped at 0.1, and a
 #: static regularization relative to each diagonal entry of 1e-13 (relative to the largest entry it swamped the
 #: far-from-source rows, ~1e10 smaller near the optimum).
-ORDER2 = IPMSettings(max_correctors=4, separate_steps=False, init="guess", sigma_cap_guess=0.1, static_reg=1e-13)
+ORDER2 = IPMSettings(max_correctors=4, separate_steps=False, init="guess", sigma_cap_guess=0.1, static_reg=1e-13,
+                     least_squares_cost=False, plain_dual_factor=1000.0)

@@ -227,7 +227,8 @@ class InteriorPointSolver:
         except StartFailure as exc:
             raise run.fail("numerical_error", str(exc)) from exc
         sigma_cap = self.settings.sigma_cap_guess if start.from_guess else 1.0
-        run.counters["start"] = "guess" if start.from_guess else self.settings.init
+        # the "guess" start falls back to Mehrotra's without a usable guess
+        run.counters["start"] = "guess" if start.from_guess else self.settings.init.replace("guess", "mehrotra")
         it, status, _ = self._iterate(pr, run, start.iterate, tol, max_iter, callback, sigma_cap)
         info = run.info
         x = it.x
@@ -254,7 +255,7 @@ class InteriorPointSolver:
                 callback(k, dict(info))
             if not np.isfinite(info["res_primal"] + info["res_dual"] + info["gap_abs"] + info["mu"]):
                 return it, "numerical_error", step
-            if converged(info, tol):
+            if converged(info, tol, self.settings):
                 return it, "optimal", step
             if run.best.update(it.x, info, tol, self.settings):
                 return it, "stalled", step

@@ -138,14 +138,16 @@ def _least_norm_dual(pr: Program, ls: LinearSystem, f_y, x: np.ndarray, scalings
         return None
 
 
-def _least_squares_x(pr: Program, ls: LinearSystem, scalings) -> tuple[np.ndarray, object]:
+def _least_squares_x(pr: Program, ls: LinearSystem, st: IPMSettings, scalings) -> tuple[np.ndarray, object]:
     """``x`` of the ``W = I`` system and its factor (P-free when there is no P); :class:`StartFailure` when
     the system is singular or not finite."""
     try:
         f0 = ls.factorize(ls.assemble(scalings))
     except NotPositiveDefiniteError as exc:
         raise StartFailure("singular Newton matrix at the starting point") from exc
-    rhs0 = -(pr.q + pr.Px_fixed) + pr.At([b.b_tilde for b in pr.blocks])  # −q̃ + A_fᵀb̃
+    rhs0 = pr.At([b.b_tilde for b in pr.blocks])  # A_fᵀb̃ − q̃
+    if st.least_squares_cost:
+        rhs0 -= pr.q + pr.Px_fixed
     rhs0[pr.fixed] = 0.0
     try:
         x = ls.solve_refined(f0, rhs0, scalings, 1e-12 * max(1.0, float(np.abs(rhs0).max())),
@@ -180,7 +182,7 @@ def _primal(pr: Program, ls: LinearSystem, st: IPMSettings, scalings) -> tuple[n
         x_int = interior_primal(pr, xg, st.interior_fraction)
         if x_int is not None:
             return x_int, True, None  # no least-squares system to solve
-    x, f0 = _least_squares_x(pr, ls, scalings)
+    x, f0 = _least_squares_x(pr, ls, st, scalings)
     f_y = f0 if pr.P is None else None
     if st.init in ("interior", "graph") and (x_int := interior_primal(pr, x, st.interior_fraction)) is not None:
         return x_int, True, f_y

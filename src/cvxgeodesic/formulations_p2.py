@@ -1,0 +1,460 @@
+"""The order-2 program: P2 elements for the *squared* geodesic distance (``order=2``), as a :class:`ConicProblem`.
+
+The unknown is ``φ = d²`` in the continuous piecewise-quadratic space: one value per
+vertex and one per edge midpoint. ``|∇√φ| ≤ 1`` is the same as ``|∇φ|² ≤ 4φ``, which is
+a second-order cone in ``(φ, ∇φ)``::
+
+    ‖(∇φ, φ − 1)‖ ≤ φ + 1      ⇔      |∇φ|² ≤ 4φ
+
+Maximizing ``∫φ`` under that constraint with ``φ = 0`` at the sources has ``d²`` as its
+maximizer in the continuum (``√φ`` is 1-Lipschitz and vanishes at the sources, so
+``√φ ≤ d``). On a flat region ``d²`` is a quadratic polynomial, which P2 represents
+exactly, so flat distances come out exact on triangles of any shape.
+
+Discretization (choices and measurements in ``docs/order2.md``):
+
+* the cone is imposed at sample points of every face, by default its three corners and
+  three edge midpoints (:data:`SAMPLES`), with the cone centred near the expected ``φ``
+  (``‖(√a ∇φ, φ − a)‖ ≤ φ + a`` is the same cone for every ``a > 0``);
+* on *flat* faces, cutting planes: after a solve, a cone is added where ``|∇φ|² − 4φ`` is
+  largest on each violating face (:func:`max_violation`, exact) and the problem re-solved;
+* the objective is the mean of ``φ`` with lumped weights ``A/6`` per node of each face
+  (``weights="lumped"``; the consistent P2 weights, 0 at corners and ``A/3`` at midpoints,
+  are ``weights="p2"``);
+* a source vertex ``s`` gets ``φ_s = 0`` and zero derivative at ``s`` along each of its
+  edges (``4 φ_mid − φ_j = 0``), which is ``∇φ(s) = 0`` on every incident face without
+  redundant rows; the cones at ``s`` (degenerate there) are left out;
+* a source point inside a face or on an edge is inserted as a vertex
+  (:class:`~cvxgeodesic.mesh.split.SplitMesh`, by the strategy; imposing ``φ(p) = 0``, ``∇φ(p) = 0`` on the
+  unsplit face measured less accurate, docs/order2.md);
+* the equalities of two unknowns (the zero derivative along a source-star edge) are substituted into the cones
+  (:func:`eliminate_pair_equalities`), so the program keeps the face-clique pattern;
+* a degenerate face (:meth:`TriMesh.degenerate_faces`) gets no face cones; the 1-D cone
+  ``(∂φ/∂s)² ≤ 4φ`` along each of its edges (endpoints and midpoint) bounds its DOFs
+  whatever its shape;
+* non-manifold edges need nothing special: the edge DOF is shared by all its faces.
+
+Distances at vertices are ``√max(φ, 0)``; :class:`~cvxgeodesic.operators.p2.P2Field` evaluates the field inside
+faces. The space and its operators are in :mod:`cvxgeodesic.operators.p2`, the cutting-plane loop and the solve in
+:mod:`cvxgeodesic.strategies.order2`.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import dijkstra
+
+from .errors import DegenerateFacesWarning, MeshError, ParameterError
+from .mesh.trimesh import TriMesh
+from .operators.p2 import SAMPLES, P2Space, edge_basis, p2_basis
+from .solvers.problem import ConeGroup, ConicProblem, Equalities, PairInequalities
+
+__all__ = ["DEFAULT_SAMPLES", "DEFAULT_WEIGHTS", "ORDER2_CACHE_VERSION", "ORDER2_METHODS", "P2Builder", "P2Program",
+           "eliminate_pair_equalities"]
+
+#: Where the cone is imposed: "flat-nodes" = all six nodes on flat faces (:attr:`P2Space.flat_faces`), the three
+#: edge midpoints on the others. Measured 2026-12-01 against exact MMP, source 0, mean relative error all nodes →
+#: flat-nodes: bimba 0.22 → 0.11 %, bunny 0.099 → 0.058 %, lucy_20k 0.34 → 0.15 %, dragon_20k 0.62 → 0.32 %, spot
+#: 0.25 → 0.15 %; the 53 coarse CAD meshes: median ratio to P1 qclp 0.216 → 0.204, median error 0.85 → 0.95 %
+#: (29 better, 24 worse; docs/order2.md); flat meshes unchanged (all their faces are flat).
+DEFAULT_SAMPLES = "flat-nodes"
+#: Objective weights (:meth:`P2Space.weights`; docs/order2.md has the measurement behind the choice).
+DEFAULT_WEIGHTS = "lumped"
+#: The formulations with an order-2 program.
+ORDER2_METHODS = ("qclp",)
+#: Edges shorter than this fraction of the bounding-box diagonal get no 1-D cone (their DOF is tied linearly).
+MIN_EDGE = 1e-9
+#: Version of the order-2 fields, for caches keyed on the inputs only (``benchmarks/report_common.py``): bump it
+#: whenever a change moves an order-2 result beyond the solver tolerance (formulation, samples, weights, defaults),
+#: so that fields cached by older code are recomputed instead of silently reused. 1: 2026-12-02 (first version;
+#: the fields of the 2026-12-01 defaults, midpoints on curved faces).
+ORDER2_CACHE_VERSION = 1
+
+
+@dataclass
+class P2Program:
+    """One order-2 program and what turns its solution back into ``φ`` on every DOF.
+
+    Attributes
+    ----------
+    problem : ConicProblem
+        Over the P2 DOFs (vertices, then edge midpoints), the equalities of two unknowns substituted.
+    eliminated : tuple of (r,) int ndarray and (r, n) csr_matrix
+        ``x[elim] = M @ x`` restores the substituted DOFs from a solution.
+    unreachable_vertices : (n_vertices,) bool ndarray
+        Vertices in components without a source.
+    notes : list of str
+        The substitutions the builder made (degenerate faces, ...).
+    """
+
+    problem: ConicProblem
+    eliminated: tuple[np.ndarray, sp.csr_matrix]
+    unreachable_vertices: np.ndarray
+    notes: list[str]
+
+    def restore(self, x: np.ndarray) -> np.ndarray:
+        """The full ``φ`` from a solution ``x`` of :attr:`problem`."""
+        elim, M = self.eliminated
+        x = np.array(x, dtype=float)
+        x[elim] = M @ x
+        return x
+
+
+def _cone_rows(val: np.ndarray, grad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``G, h`` with ``h − G x = (φ + 1, ∇φ, φ − 1)``: val (k, 6), grad (k, 2, 6) or (k, 1, 6)."""
+    k = val.shape[0]
+    G = np.zeros((k, 4, 6))
+    G[:, 0] = -val
+    G[:, 1:1 + grad.shape[1]] = -grad
+    G[:, 3] = -val
+    h = np.tile([1.0, 0.0, 0.0, -1.0], (k, 1))
+    return G, h
+
+
+class P2Builder:
+    """Per-mesh part of the order-2 program (everything that does not depend on the sources).
+
+    Parameters
+    ----------
+    mesh : TriMesh
+        Already scaled to unit size by the caller.
+    samples : str
+        Key of :data:`~cvxgeodesic.operators.p2.SAMPLES`, or "flat-nodes" (:data:`DEFAULT_SAMPLES`).
+    weights : {"lumped", "p2", "mixed"}, optional
+        Objective weights (:meth:`P2Space.weights`); default :data:`DEFAULT_WEIGHTS`.
+    cone_scale : {"dijkstra", "unit"}
+        Centre of each cone: ``a`` = (Dijkstra distance at the sample)², floored at the squared
+        mean longest edge, or ``a = 1``.
+
+    Attributes
+    ----------
+    space : P2Space
+    notes : list of str
+        Substitutions made for every program of the mesh (degenerate faces).
+    """
+
+    def __init__(self, mesh: TriMesh, samples: str = DEFAULT_SAMPLES, weights: str | None = None,
+                 cone_scale: str = "dijkstra"):
+        weights = DEFAULT_WEIGHTS if weights is None else weights
+        if samples not in SAMPLES and samples != "flat-nodes":
+            raise ParameterError(f"samples must be 'flat-nodes' or one of {tuple(SAMPLES)}, got {samples!r}")
+        if cone_scale not in ("dijkstra", "unit"):
+            raise ParameterError(f"cone_scale must be 'dijkstra' or 'unit', got {cone_scale!r}")
+        self.cone_scale = cone_scale
+        self.mesh = mesh
+        self.space = sp_ = P2Space(mesh)
+        self.w = sp_.weights(weights)
+        good = np.flatnonzero(~sp_.degenerate)
+        if samples == "flat-nodes":
+            flat = sp_.flat_faces[good]
+            groups = [(good[flat], SAMPLES["nodes"]), (good[~flat], SAMPLES["midpoints"])]
+        else:
+            groups = [(good, SAMPLES[samples])]
+        parts = []
+        for faces, bary in groups:
+            val, grad = sp_.face_cones(bary)
+            parts.append(_cone_rows(np.tile(val, (faces.size, 1)), grad[faces].reshape(-1, 2, 6)))
+        Gf, hf = np.concatenate([g for g, _ in parts]), np.concatenate([h for _, h in parts])
+        self.notes: list[str] = []
+        Ge, he, e_face, e_samples = self._degenerate_edge_cones()
+        self.G = np.concatenate([Gf, Ge])
+        self.h = np.concatenate([hf, he])
+        self.cone_face = np.concatenate([*[np.repeat(f, b.shape[0]) for f, b in groups], e_face]).astype(np.int64)
+        # each cone's barycentric point (for dropping the cones on source vertices, :func:`_on_sources`)
+        self.cone_bary = np.concatenate([*[np.tile(b, (f.size, 1)) for f, b in groups], e_samples])
+
+    def _degenerate_edge_cones(self):
+        """The 1-D cones ``(dφ/ds)² ≤ 4φ`` along each edge of a degenerate face (each edge once), at its ends and
+        midpoint: ``(G, h, face, bary)``."""
+        mesh, sp_ = self.mesh, self.space
+        deg = np.flatnonzero(sp_.degenerate)
+        if not deg.size:
+            return np.zeros((0, 4, 6)), np.zeros((0, 4)), np.zeros(0, dtype=np.int64), np.zeros((0, 3))
+        fe = sp_.face_edges[deg]
+        ids, first = np.unique(fe.ravel(), return_index=True)
+        owner = deg[first // 3]
+        kloc = first % 3  # edge opposite local corner kloc of its owner face
+        L = mesh.edge_lengths[ids]
+        ok = L > MIN_EDGE * max(mesh.bbox_diagonal, 1e-300)
+        ids, owner, kloc, L = ids[ok], owner[ok], kloc[ok], L[ok]
+        t = np.array([0.0, 0.5, 1.0])
+        Nt, dNt = edge_basis(t)
+        rows_v, rows_g, fo, eb = [], [], [], []
+        r = np.arange(ids.size)
+        a, b = (kloc + 1) % 3, (kloc + 2) % 3
+        for j in range(3):
+            # edge opposite corner k runs from corner k+1 to corner k+2; local DOFs (k+1, 3+k, k+2)
+            val_e = np.zeros((ids.size, 6))
+            grd_e = np.zeros((ids.size, 1, 6))
+            for col, coeff_v, coeff_d in ((a, Nt[j, 0], dNt[j, 0]), (3 + kloc, Nt[j, 1], dNt[j, 1]),
+                                          (b, Nt[j, 2], dNt[j, 2])):
+                val_e[r, col] = coeff_v
+                grd_e[r, 0, col] = coeff_d / L
+            rows_v.append(val_e)
+            rows_g.append(grd_e)
+            fo.append(owner)
+            bb = np.zeros((ids.size, 3))
+            bb[r, a] = 1 - t[j]
+            bb[r, b] = t[j]
+            eb.append(bb)
+        Ge, he = _cone_rows(np.concatenate(rows_v), np.concatenate(rows_g))
+        self.notes.append(
+            f"{deg.size} degenerate face(s) carry no face cones; their {ids.size} edge(s) get the "
+            "1-D cone (dφ/ds)² ≤ 4φ instead")
+        warnings.warn(f"{mesh.name}: {deg.size} degenerate face(s) left out of the order-2 face cones "
+                      "(their edges carry 1-D cones)", DegenerateFacesWarning, stacklevel=4)
+        return Ge, he, np.concatenate(fo), np.concatenate(eb)
+
+    def _source_rows(self, vsrc: np.ndarray) -> tuple[list[int], list[int], list[float], int]:
+        """Zero derivative along every edge at a source vertex ``s``: ``4 φ_mid − φ_j − 3 φ_s = 0`` (``φ_s`` fixed
+        at 0), as COO rows ``(rows, cols, vals, count)``."""
+        n = self.mesh.n_vertices
+        E = self.mesh.edges
+        is_src = np.zeros(n, dtype=bool)
+        is_src[vsrc] = True
+        inc = np.flatnonzero(is_src[E[:, 0]] | is_src[E[:, 1]])
+        far = np.where(is_src[E[inc, 0]], E[inc, 1], E[inc, 0])
+        r = np.repeat(np.arange(inc.size), 2)
+        cols = np.column_stack([n + inc, far]).ravel()
+        vals = np.tile([4.0, -1.0], inc.size)
+        return r.tolist(), cols.tolist(), vals.tolist(), int(inc.size)
+
+    def _tie_loose_midpoints(self, dofs, G, c, E, fixed):
+        """A free midpoint DOF in no cone and no equality (the edge of a degenerate face too short for a 1-D cone,
+        :data:`MIN_EDGE`) would be unbounded: it is tied to the mean of its edge's ends, ``φ_m = (φ_a + φ_b)/2``, its
+        cost moved onto them. Returns ``(c, fixed, (elim, M))`` with ``x[elim] = M @ x``."""
+        n_v, n = self.mesh.n_vertices, self.space.n_dofs
+        used = np.zeros(n, dtype=bool)
+        used[dofs[np.abs(G).max(axis=1) > 0]] = True
+        used[sp.csr_matrix(E).indices] = True
+        loose = np.flatnonzero(~used[n_v:] & ~fixed[n_v:]) + n_v
+        if not loose.size:
+            return c, fixed, (np.zeros(0, dtype=np.int64), sp.csr_matrix((0, n)))
+        ends = self.mesh.edges[loose - n_v]
+        c, fixed = c.copy(), fixed.copy()
+        np.add.at(c, ends.ravel(), np.repeat(0.5 * c[loose], 2))
+        c[loose] = 0.0
+        fixed[loose] = True
+        c[fixed] = 0.0
+        M = sp.csr_matrix((np.full(2 * loose.size, 0.5), (np.repeat(np.arange(loose.size), 2), ends.ravel())),
+                          shape=(loose.size, n))
+        return c, fixed, (loose, M)
+
+    def build(self, vsrc: np.ndarray, extra: tuple[np.ndarray, np.ndarray] | None = None,
+              eliminate: bool = True) -> P2Program:
+        """The program for a set of source vertices.
+
+        Parameters
+        ----------
+        vsrc : (k,) int ndarray
+            Source vertices (source points are inserted as vertices first, by the caller).
+        extra : tuple (faces (k,) int ndarray, bary (k, 3) float ndarray), optional
+            Additional cone sample points (from :func:`~cvxgeodesic.operators.p2.max_violation`).
+        eliminate : bool
+            Substitute the equalities of two unknowns (:func:`eliminate_pair_equalities`); False keeps them as rows
+            of ``E`` (the interior-point solver then solves them through its Schur complement: the same optimum,
+            ``p`` more triangular solves per factorization).
+
+        Returns
+        -------
+        P2Program
+
+        Raises
+        ------
+        MeshError
+            Every face is degenerate.
+        """
+        mesh, space = self.mesh, self.space
+        vsrc = np.asarray(vsrc, dtype=np.int64)
+        G0, h0, cone_face, cone_bary = self.G, self.h, self.cone_face, self.cone_bary
+        if extra is not None and len(extra[0]):
+            ef, eb = np.asarray(extra[0], dtype=np.int64), np.asarray(extra[1], dtype=float)
+            ok = ~space.degenerate[ef]
+            ef, eb = ef[ok], eb[ok]
+            N, dN = p2_basis(eb)
+            Gx, hx = _cone_rows(N, np.einsum("kai,kci->kca", dN, space.lam_grad[ef]))
+            G0, h0 = np.concatenate([G0, Gx]), np.concatenate([h0, hx])
+            cone_face = np.concatenate([cone_face, ef])
+            cone_bary = np.concatenate([cone_bary, eb])
+        if mesh.n_faces == 0 or np.all(space.degenerate):
+            raise MeshError(f"{mesh.name}: every face is degenerate; order 2 needs at least one proper face")
+        reach_v = mesh.connected_to(vsrc) & mesh.referenced
+        reach_v[vsrc] = True
+        E = mesh.edges
+        reach = np.concatenate([reach_v, reach_v[E[:, 0]] & reach_v[E[:, 1]]])
+        fixed = ~reach
+        fixed[vsrc] = True
+        both = np.flatnonzero(np.isin(E, vsrc).all(axis=1))
+        # an edge joining two sources: the zero-derivative rows at both ends give φ_mid = 0, so fix it here (as an
+        # E row of one unknown it left its cone columns in place)
+        fixed[mesh.n_vertices + both] = True
+        keep = ~_on_sources(mesh.F[cone_face], cone_bary, vsrc)
+        keep &= reach[space.face_dofs[cone_face]].all(axis=1)
+        rows, cols, vals, r = self._source_rows(vsrc)
+        Emat = sp.csr_matrix((vals, (rows, cols)), shape=(r, space.n_dofs))
+        # fixed DOFs leave the equalities; drop rows that are then empty
+        Emat = (Emat @ sp.diags((~fixed).astype(float))).tocsr()
+        Emat.eliminate_zeros()
+        Emat = Emat[np.diff(Emat.indptr) > 0]
+        # the mean of φ, not its integral: the backends' absolute gap tolerance then means the same on any area
+        c = -self.w / max(self.w.sum(), 1e-300)
+        c[fixed] = 0.0
+        cf, cb = cone_face[keep], cone_bary[keep]
+        guess = None
+        with_guess = vsrc.size > 0 and not space.flat_faces.any()
+        if with_guess or (self.cone_scale == "dijkstra" and vsrc.size):
+            dv = dijkstra(mesh.vertex_adjacency, indices=vsrc, min_only=True)
+            dv = np.where(np.isfinite(dv), dv, 0.0)
+        if with_guess:
+            # a starting field for the structured solver: squared distance at the vertices, squared mean at the
+            # midpoints (on an edge at a source vertex that is ℓ²/4 = φ_j / 4, so it meets the zero-derivative
+            # equalities). Not on meshes with flat faces, where the sampled program's optimum is barely determined
+            # between the samples: from it a needle strip's solve stopped 7.6e-5 of the largest distance away
+            # from the optimum that Mehrotra's start reaches (7.9e-7)
+            guess = np.concatenate([dv**2, (0.5 * (dv[E[:, 0]] + dv[E[:, 1]]))**2])
+            guess[fixed] = 0.0
+        Gk, hk = G0[keep].copy(), h0[keep].copy()
+        if self.cone_scale == "dijkstra" and vsrc.size:
+            # ‖(√a ∇φ, φ − a)‖ ≤ φ + a is |∇φ|² ≤ 4φ for every a > 0; a ≈ φ at the sample centres the cone there
+            h2 = np.mean(mesh.face_longest_edges[cf]) ** 2
+            a = np.maximum(np.einsum("ki,ki->k", cb, dv[mesh.F[cf]]) ** 2, h2)
+            Gk[:, 1:3] *= np.sqrt(a)[:, None, None]
+            hk[:, 0] = a
+            hk[:, 3] = -a
+        dofs = space.face_dofs[cf]
+        # a fixed DOF is 0: its columns do not matter, but zero them so that backends need not know
+        Gk = np.where(fixed[dofs][:, None, :], 0.0, Gk)
+        if eliminate:
+            Gk, c, Emat, fixed, (elim, onto, alpha) = eliminate_pair_equalities(space.n_dofs, dofs, Gk, c, Emat,
+                                                                                 fixed)
+        else:
+            elim = onto = np.zeros(0, dtype=np.int64)
+            alpha = np.zeros(0)
+        c, fixed, (elim2, M2) = self._tie_loose_midpoints(dofs, Gk, c, Emat, fixed)
+        n_dofs = space.n_dofs
+        M1 = sp.csr_matrix((alpha, (np.arange(elim.size), onto)), shape=(elim.size, n_dofs))
+        # the pair-eliminated midpoints first: the tied ones may average them
+        eliminated = (np.concatenate([elim, elim2]), sp.vstack([M1, M2 @ _restore_matrix(elim, M1, n_dofs)]).tocsr())
+        unreachable = ~reach
+        problem = ConicProblem(
+            n=space.n_dofs, P=None, q=c, cones=[ConeGroup(dofs, Gk, hk)], ineq=PairInequalities(),
+            fixed_mask=fixed, fixed_values=np.zeros(space.n_dofs), unreachable=unreachable,
+            eq=Equalities(Emat, np.zeros(Emat.shape[0])) if Emat.shape[0] else None, method="qclp",
+            guess=None if guess is None else np.where(fixed, 0.0, guess), equilibrate=True,
+        )
+        return P2Program(problem, eliminated, ~reach_v, list(self.notes))
+
+
+def _restore_matrix(elim: np.ndarray, M: sp.csr_matrix, n: int) -> sp.csr_matrix:
+    """(n, n) ``R`` with ``R x`` the full vector after ``x[elim] = M @ x`` (identity elsewhere)."""
+    keep = np.ones(n)
+    keep[elim] = 0.0
+    P = sp.csr_matrix((np.ones(elim.size), (elim, np.arange(elim.size))), shape=(n, elim.size))
+    return (sp.diags(keep) + P @ M).tocsr()
+
+
+def _on_sources(corners: np.ndarray, bary: np.ndarray, vsrc: np.ndarray) -> np.ndarray:
+    """Which cone samples lie on source vertices only: at a source, on an edge joining two, or on a face of three.
+
+    With the zero-derivative rows at every source, ``φ`` and ``∇φ`` vanish there for every feasible ``φ`` (on a face
+    ``(s, t, x)`` with sources ``s, t`` the rows leave ``φ = φ_x λ_x²``, whose value and gradient are 0 on the edge
+    ``st``): such a cone sits at its apex, implied by the rows, and with it the program has no strictly feasible
+    point (the structured solver broke down on every pair of adjacent sources and Clarabel took over, docs/order2.md).
+
+    Parameters
+    ----------
+    corners : (k, 3) int ndarray
+        The vertices of each sample's face.
+    bary : (k, 3) float ndarray
+        The samples' barycentric coordinates in those faces.
+    vsrc : (p,) int ndarray
+        Source vertices.
+
+    Returns
+    -------
+    (k,) bool ndarray
+    """
+    return ((bary <= 0) | np.isin(corners, vsrc)).all(axis=1)
+
+
+
+def eliminate_pair_equalities(n: int, dofs: np.ndarray, G: np.ndarray, c: np.ndarray, E: sp.csr_matrix,
+                              fixed: np.ndarray):
+    """Substitute the source equalities of two unknowns, ``a x_m + b x_j = 0`` (the zero derivative along an edge
+    at a source vertex, ``4 φ_mid − φ_j = 0``), into the cones and the objective.
+
+    ``x_m = α x_j`` (``α = −b / a``) is eliminated where every cone on ``x_m`` also holds ``x_j`` (on a source-star
+    edge both are DOFs of each face of the edge), so the Newton matrix keeps its pattern: ``x_m`` becomes a fixed
+    DOF. Rows of one unknown (``x = 0``) fix it. Left in ``E``: rows of other shapes, an ``x_m`` in several rows or
+    on a cone without its ``x_j``.
+
+    Parameters
+    ----------
+    n : int
+        Number of DOFs.
+    dofs : (k, 6) int ndarray
+    G : (k, 4, 6) float ndarray
+        The cone blocks (``h − G x``).
+    c : (n,) float ndarray
+        The linear objective.
+    E : (r, n) sparse matrix
+        The equalities ``E x = 0``.
+    fixed : (n,) bool ndarray
+
+    Returns
+    -------
+    G, c, E, fixed
+        New arrays (the inputs are not changed).
+    (elim, onto, alpha) : ((r,) int, (r,) int, (r,) float)
+        ``x[elim] = alpha · x[onto]`` restores the eliminated unknowns from a solution.
+    """
+    E = sp.csr_matrix(E)
+    E.sum_duplicates()
+    n_row = np.diff(E.indptr)
+    col_count = np.bincount(E.indices, minlength=n)
+    fixed = fixed.copy()
+    ones = np.flatnonzero(n_row == 1)
+    fixed[E.indices[E.indptr[ones]]] = True
+    pairs = np.flatnonzero(n_row == 2)
+    c0, c1 = E.indices[E.indptr[pairs]], E.indices[E.indptr[pairs] + 1]
+    v0, v1 = E.data[E.indptr[pairs]], E.data[E.indptr[pairs] + 1]
+    m, j = np.maximum(c0, c1), np.minimum(c0, c1)  # the midpoint DOFs come after the vertices
+    vm, vj = np.where(c0 > c1, v0, v1), np.where(c0 > c1, v1, v0)
+    ok = (col_count[m] == 1) & ~fixed[m] & ~np.isin(m, j) & (vm != 0)
+    alpha = -vj / np.where(vm != 0, vm, 1.0)
+    onto_of = np.full(n, -1, dtype=np.int64)
+    onto_of[m[ok]] = j[ok]
+    kk, ii = np.nonzero(onto_of[dofs] >= 0)
+    target = onto_of[dofs[kk, ii]]
+    jj = np.argmax(dofs[kk] == target[:, None], axis=1)
+    lacking = np.unique(dofs[kk, ii][dofs[kk, jj] != target])  # x_m on a cone without x_j: keep its row
+    ok &= ~np.isin(m, lacking)
+    onto_of[lacking] = -1
+    keep = onto_of[dofs[kk, ii]] >= 0
+    kk, ii, jj = kk[keep], ii[keep], jj[keep]
+    a_of = np.zeros(n)
+    a_of[m[ok]] = alpha[ok]
+    G = G.copy()
+    np.add.at(G, (kk, slice(None), jj), a_of[dofs[kk, ii]][:, None] * G[kk, :, ii])
+    G[kk, :, ii] = 0.0
+    c = c.copy()
+    np.add.at(c, j[ok], alpha[ok] * c[m[ok]])
+    c[m[ok]] = 0.0
+    fixed[m[ok]] = True
+    # a DOF fixed by a row of one unknown keeps no cone columns (the Newton matrix gives fixed DOFs an identity row
+    # only; with their columns left in, x there drifted from 0 during the iterations)
+    G = np.where(fixed[dofs][:, None, :], 0.0, G)
+    c[fixed] = 0.0
+    rows_left = np.setdiff1d(np.arange(E.shape[0]), np.concatenate([ones, pairs[ok]]))
+    E = E[rows_left]
+    fx = np.flatnonzero(fixed)
+    if fx.size and E.nnz:
+        keep_cols = np.ones(n)
+        keep_cols[fx] = 0.0
+        E = (E @ sp.diags(keep_cols)).tocsr()
+        E.eliminate_zeros()
+    return G, c, E, fixed, (m[ok], j[ok], alpha[ok])
