@@ -7,6 +7,7 @@ import pytest
 
 import cvxgeodesic as cg
 from cvxgeodesic import strategies
+from cvxgeodesic.sources import resolve_sources
 from cvxgeodesic.strategies import BaselineStrategy, CoarseToFine, DirectStrategy, Order2, SolveConfig
 
 
@@ -32,7 +33,7 @@ def test_the_facade_picks_one_strategy_and_reports_its_backend(sphere, kwargs, k
 def test_a_strategy_alone_gives_the_facade_field(sphere):
     lam = cg.smoothness_weight(sphere, 1.0)
     direct = DirectStrategy(SolveConfig(mesh=sphere, method="qcqp-hessian", lam=lam, m=1.0))
-    res = direct.solve([0, 5])
+    res = direct.solve(resolve_sources(sphere, [0, 5]))
     ref = cg.GeodesicSolver(sphere).solve([0, 5])
     np.testing.assert_array_equal(res.distance, ref.distance)
     assert res.info.iterations == ref.info.iterations and res.info.lam == ref.info.lam
@@ -45,14 +46,15 @@ def test_coarse_to_fine_composes_two_direct_solves(sphere):
     assert c2f.coarse.config.mesh is c2f.coarse_mesh and c2f.fine.config.mesh is sphere
     assert c2f.coarse.config.lam == pytest.approx(solver.lam, rel=1e-12)  # "area": λ is a length on the surface
     res = solver.solve(3)
-    np.testing.assert_array_equal(res.distance, c2f.fine.solve(3).distance)  # the polish is the direct solve
+    fine = c2f.fine.solve(resolve_sources(sphere, 3))
+    np.testing.assert_array_equal(res.distance, fine.distance)  # the polish is the direct solve
     mr = res.info.extra["multires"]
     assert mr["coarse_faces"] == c2f.coarse_mesh.n_faces and mr["max_diff_to_coarse_transfer"] > 0
 
 
 def test_auto_falls_back_to_clarabel_and_says_why_when_the_ipm_is_missing(sphere, monkeypatch):
     ref = cg.GeodesicSolver(sphere, "qclp", solver="ipm").solve(0)
-    monkeypatch.setattr(strategies.direct, "ipm_available", lambda: False)
+    monkeypatch.setattr(strategies.backend, "ipm_available", lambda: False)
     solver = cg.GeodesicSolver(sphere, "qclp")
     assert solver.solver_name == "clarabel"
     res = solver.solve(0)
@@ -94,7 +96,7 @@ def test_the_hessian_psd_check_factors_in_the_solvers_own_analysis(sphere, monke
     monkeypatch.setattr(linalg.SymbolicCholesky, "__init__", counting)
     direct = _hessian_strategy(sphere)
     assert made == [direct.ipm.cholesky] and direct.ipm.cholesky.n_factorizations == 1
-    res = direct.solve([0])
+    res = direct.solve(resolve_sources(direct.config.mesh, [0]))
     assert res.info.status == "optimal" and len(made) == 1 and direct.ipm.n_analyses == 1
 
 
@@ -111,7 +113,7 @@ def test_an_indefinite_curved_energy_gets_an_analysis_of_the_planar_one():
     with pytest.warns(IndefiniteEnergyWarning):
         direct = _hessian_strategy(mesh)
     assert direct.ipm.cholesky.n_factorizations == 0  # not the one the check factored
-    res = direct.solve([0])
+    res = direct.solve(resolve_sources(direct.config.mesh, [0]))
     assert res.info.status == "optimal" and res.info.extra["new_analyses"] == 0
 
 
