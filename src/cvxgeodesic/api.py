@@ -21,6 +21,7 @@ from .formulations import ALIASES, FORMULATIONS, NORMALIZATIONS, canonical_metho
 from .mesh.io import as_trimesh
 from .mesh.trimesh import TriMesh
 from .results import GeodesicResult, SolveInfo
+from .solvers._interrupt import reporting_to
 from .strategies import SolveConfig, SolveStrategy, make_strategy, resolve_target
 from .validation import check_choice, check_count, check_number, validate_sources
 
@@ -255,8 +256,11 @@ class GeodesicSolver:
             or every boundary edge (``docs/sources.md``). With ``order=2``
             (P2 squared distance): vertices and points (SurfacePoints, ``(face, bary)``) only.
         callback : callable, optional
-            ``callback(iteration, info_dict)`` after every interior-point
-            iteration of the ``"ipm"`` backend (used for progress reports).
+            ``callback(iteration, info_dict)`` after every iteration of the convex solve,
+            for progress reports: of the structured interior-point solver and of Clarabel
+            (``info_dict["solver"] == "clarabel"``; also where ``solver="auto"`` retries
+            with it). Keys include ``gap_rel``, ``res_primal``, ``res_dual``, ``pcost``,
+            ``dcost``, ``mu``, ``step`` and ``time``. Not called by the baselines.
 
         Returns
         -------
@@ -273,7 +277,8 @@ class GeodesicSolver:
             The backend did not reach an optimal solution (for the Hessian energy the
             message adds that it can be indefinite on meshes with sharp corners).
         """
-        res = self._strategy.solve(sources, callback=callback)
+        with reporting_to(callback):  # Clarabel's iterations too, wherever a strategy runs it
+            res = self._strategy.solve(sources, callback=callback)
         res.info.setup_time = self.setup_time
         return res
 
