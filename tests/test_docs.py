@@ -27,7 +27,11 @@ def github_anchor(heading: str) -> str:
 
 
 def anchors(page: Path) -> set[str]:
-    text = FENCE.sub("", page.read_text(encoding="utf-8"))
+    text = page.read_text(encoding="utf-8")
+    included = re.match(r"```\{include\} (\S+)", text)  # a page that only includes another (docs/readme.md)
+    if included:
+        return anchors((page.parent / included.group(1)).resolve())
+    text = FENCE.sub("", text)
     seen: dict[str, int] = {}
     out = set()
     for m in re.finditer(r"^#{1,6}\s+(.*?)\s*$", text, flags=re.M):
