@@ -1,6 +1,7 @@
 # Two commands do everything on a fresh Debian machine with Python 3.11:
 #   make demo   set up .venv (Debian packages + pinned Python packages), run the demo
 #   make test   same set-up, then the test suite
+#   make docs   same set-up, then the HTML documentation in build/docs
 PYTHON ?= python3
 VENV   := .venv
 PY     := $(VENV)/bin/python
@@ -9,7 +10,7 @@ STAMP  := $(VENV)/.installed
 DEB_PACKAGES := libsuitesparse-dev libopenblas0-pthread libgomp1 libegl1 libegl-mesa0 libgl1-mesa-dri
 OUT ?= demo_output
 
-.PHONY: demo test test-all lint bench report clean setup
+.PHONY: demo test test-all docs lint bench report clean setup
 
 setup: $(STAMP)
 
@@ -34,6 +35,10 @@ test: $(STAMP)
 	$(VENV)/bin/ruff check .
 	$(VENV)/bin/mypy
 	$(PY) -m pytest -m "not slow" -q
+
+# the API reference (numpydoc docstrings) and the Markdown pages of docs/, as HTML; a warning fails the build
+docs: $(STAMP)
+	@$(PY) -m sphinx -W --keep-going -q -b html docs build/docs
 
 test-all: $(STAMP)
 	$(PY) -m pytest -q

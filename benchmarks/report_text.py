@@ -1045,7 +1045,7 @@ def _o2_against_stored(cad) -> tuple[str, bool]:
     worse = sum(1 for u, a in pairs if a > u + 0.001)
     better = sum(1 for u, a in pairs if a < u - 0.001)
     why = (" The stored run's order 1 is therefore QCLP with the uniform stretch `−(1/n) Σ d_i`, the default "
-           "before the area normalization of issue 12 ([method.md](method.md)); today's default order 1 weights the "
+           "before the area normalization ([method.md](method.md)); today's default order 1 weights the "
            f"stretch by area, and its mean error is more than 0.1 points higher than the uniform stretch's on {worse} "
            f"and lower on {better} of these {len(pairs)} meshes. Order 2 is unchanged." if uniform else "")
     return (f"Against the stored run of `benchmarks/order2.py` behind [order2.md](order2.md) (`{cad['stored_file']}`), "
@@ -1064,7 +1064,7 @@ def order2(r) -> tuple[str, list[str]]:
     if med is not None:
         tiny = [x for x in allst["worse"] if max(_both(x)) < 1e-6]
         verdict = (f"Over the {allst['n']} meshes the median ratio of order 2's mean error to order 1's is "
-                   f"**{med:.2f}** ({'meets' if med <= 0.5 else 'misses'} issue 17's target ≤ 0.5; against order 1 "
+                   f"**{med:.2f}** ({'within' if med <= 0.5 else 'above'} the goal of ≤ 0.5; against order 1 "
                    f"with the uniform stretch {allst['median_u']:.2f}); order 2 is at most half of order 1 on "
                    f"{allst['half']} and worse on {len(allst['worse'])}"
                    + (f", {len(tiny)} of them meshes that both solve exactly (mean errors below 1e-6)" if tiny else "")
@@ -1095,7 +1095,7 @@ def order2(r) -> tuple[str, list[str]]:
                     "this section" + ("; its order-1 column is order 1 with the uniform stretch (below)." if uniform
                                       else "."))
     f_cad, f_flat = (r["figures"] + [None, None])[:2]
-    text = f"""## 12. Order 2: second-order elements (issue 17, not in the paper)
+    text = f"""## 12. Order 2: second-order elements (not in the paper)
 
 **What was run.** `cg.GeodesicSolver(mesh, "qclp", order=2)` (P2 elements for the squared distance, see
 [order2.md](order2.md)) next to order 1 (`"qclp"`), the heat method and fast marching, each built and solved

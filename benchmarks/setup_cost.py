@@ -1,6 +1,6 @@
 """The set-up of a one-shot ``GeodesicSolver(mesh, method, solver="ipm").solve(0)``, piece by piece.
 
-Not a test: run it by hand (docs/performance.md, "Set-up cost")::
+Not a test: run it by hand (docs/dev/performance-log.md, "Set-up cost")::
 
     python benchmarks/setup_cost.py --meshes bimba horse armadillo --methods qcqp-hessian qclp --repeat 3
     python benchmarks/setup_cost.py --meshes /tmp/bunny_1m.npz --methods qcqp-hessian --no-solve

@@ -104,17 +104,36 @@ def test_matrix_rows_in_the_given_order_in_file_numbering(tmp_path):
 
 
 def test_demo_prints_one_aligned_table_and_writes_its_files(tmp_path, capsys):
-    from cvxgeodesic.demo import DEMO_METHODS
+    from cvxgeodesic.demo import DEMO_CASES
 
     assert main(["demo", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out.splitlines()
     head, rule = out[1], out[2]
-    rows = out[3: 3 + len(DEMO_METHODS) + 1]
+    rows = out[3: 3 + len(DEMO_CASES) + 1]
     assert head.split()[:2] == ["method", "solver"] and set(rule) == {"-", " "}
-    assert [r.split()[0] for r in rows] == [*DEMO_METHODS, "exact"]
+    assert [r[:head.index("solver")].strip() for r in rows] == [*(c[0] for c in DEMO_CASES), "exact"]
     # numbers are right-aligned under their headers: each ends where its header ends
     for title in ("time [s]", "iters", "mean rel err", "off-ridge err"):
         end = head.index(title) + len(title)
         assert all(r[end - 1] != " " and (len(r) == end or r[end] == " ") for r in rows), title
     assert rows[-1].split()[4:6] == ["0.000%", "0.00%"]  # the exact field against itself
     assert {p.name for p in tmp_path.iterdir()} == {"spot_qcqp-hessian.ply", "spot_qcqp-hessian.png"}
+    # under the table, which method to use for what, with this run's numbers
+    guide = out[out.index(next(ln for ln in out if ln.startswith("which method to use"))):]
+    assert [ln.split()[0] for ln in guide[1:5]] == ["smooth", "accuracy", "order-1", "speed"]
+    assert "the default, qcqp-hessian" in guide[1] and "qclp with order=2" in guide[2] and "heat:" in guide[4]
+
+
+def test_demo_guidance_quotes_the_rows():
+    from cvxgeodesic.demo import guidance
+
+    def row(method, t, err, ridge):
+        return {"method": method, "time_s": t, "rel_mean": err, "ridge_jump_p95": ridge}
+
+    rows = [row("qcqp-hessian", 0.2, 0.021, 0.49), row("qclp", 0.1, 0.020, 0.72),
+            row("qclp order=2", 0.9, 0.0015, 0.74), row("heat", 0.02, 0.017, 0.53), row("fmm", 0.03, 0.024, 0.69),
+            row("dijkstra", 0.001, 0.071, 0.87), row("exact", 0.07, 0.0, 0.72)]
+    text = guidance(rows)
+    assert "ridge 0.49 (heat 0.53, exact 0.72)" in text
+    assert "mean error 0.150%, 11x below the best" in text and "(heat), in 9x the time of qclp" in text
+    assert "heat: 0.020 s, mean error 1.70%" in text

@@ -1,4 +1,4 @@
-"""The set-up of a solve (docs/performance.md, "Set-up cost"): faster constructions give the same objects."""
+"""The set-up of a solve (docs/dev/performance-log.md, "Set-up cost"): faster constructions give the same objects."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 #!/bin/bash
-# Every mesh of docs/performance.md's fill section: PARDISO + CHOLMOD counts, 5 alternating factor timings, 2 threads.
+# Every mesh of docs/dev/performance-log.md's fill section: PARDISO + CHOLMOD counts, 5 alternating factor timings, 2 threads.
 # Run from the repository root: benchmarks/augmented_fill/run_all.sh OUTDIR (results and logs go to OUTDIR).
 set -e
 here=$(cd "$(dirname "$0")" && pwd)

@@ -21,6 +21,7 @@ from .formulations import ALIASES, FORMULATIONS, NORMALIZATIONS, canonical_metho
 from .mesh.io import as_trimesh
 from .mesh.trimesh import TriMesh
 from .results import GeodesicResult, SolveInfo
+from .solvers._interrupt import reporting_to
 from .sources import resolve_sources
 from .strategies import SolveConfig, SolveStrategy, make_strategy, resolve_target
 from .validation import check_choice, check_count, check_number, check_order, check_smoothness, validate_sources
@@ -253,8 +254,11 @@ class GeodesicSolver:
             (:func:`~cvxgeodesic.sources.resolve_sources`). With ``order=2`` (P2 squared distance):
             vertices, SurfacePoints and ``"boundary"``.
         callback : callable, optional
-            ``callback(iteration, info_dict)`` after every interior-point
-            iteration of the ``"ipm"`` backend (used for progress reports).
+            ``callback(iteration, info_dict)`` after every iteration of the convex solve,
+            for progress reports: of the structured interior-point solver and of Clarabel
+            (``info_dict["solver"] == "clarabel"``; also where ``solver="auto"`` retries
+            with it). Keys include ``gap_rel``, ``res_primal``, ``res_dual``, ``pcost``,
+            ``dcost``, ``mu``, ``step`` and ``time``. Not called by the baselines.
 
         Returns
         -------
@@ -271,7 +275,9 @@ class GeodesicSolver:
             The backend did not reach an optimal solution (for the Hessian energy the
             message adds that it can be indefinite on meshes with sharp corners).
         """
-        res = self._strategy.solve(resolve_sources(self.mesh, sources), callback=callback)
+        sset = resolve_sources(self.mesh, sources)
+        with reporting_to(callback):  # Clarabel's iterations too, wherever a strategy runs it
+            res = self._strategy.solve(sset, callback=callback)
         res.info.setup_time = self.setup_time
         return res
 

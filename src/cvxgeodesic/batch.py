@@ -360,11 +360,7 @@ def _run_on_cluster(todo, rows, sources, out, method, m, solver, multires, outpu
                                 key=f"cvxgeodesic-batch-{i}-{p.stem}-{os.getpid()}-{time.time_ns()}",
                                 pure=False, priority=size)  # biggest meshes first: better load balance
             futures[fut] = p
-        bar = None
-        if progress:
-            from tqdm import tqdm
-
-            bar = tqdm(total=len(futures), desc="meshes", unit="mesh", file=sys.stderr)
+        bar = _progress(len(futures)) if progress else None
         try:
             _collect(require_distributed()[1], futures, rows, bar)
         except KeyboardInterrupt:
@@ -374,6 +370,40 @@ def _run_on_cluster(todo, rows, sources, out, method, m, solver, multires, outpu
             raise
         if bar is not None:
             bar.close()
+
+
+class _LogLines:
+    """A batch's progress where stderr is no terminal (a log file, a pipe, CI): a plain line per finished mesh.
+
+    A tqdm bar redraws itself with carriage returns, which only a terminal turns back into one line: in a log,
+    every redraw stays, and each note lands on the same line as the bar drawn before it.
+    """
+
+    def __init__(self, total: int) -> None:
+        self.total, self.n = total, 0
+        self._line()  # the tasks are submitted: the batch is under way
+
+    def _line(self) -> None:
+        print(f"meshes: {self.n}/{self.total} done", file=sys.stderr, flush=True)
+
+    def update(self, k: int = 1) -> None:
+        self.n += k
+        self._line()
+
+    def write(self, text: str, file=None) -> None:
+        print(text, file=sys.stderr if file is None else file, flush=True)
+
+    def close(self) -> None:
+        pass
+
+
+def _progress(total: int):
+    """A tqdm bar on stderr in a terminal (notes go above it through ``bar.write``), else :class:`_LogLines`."""
+    if not getattr(sys.stderr, "isatty", lambda: False)():
+        return _LogLines(total)
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc="meshes", unit="mesh", file=sys.stderr)
 
 
 def _collect(distributed, futures: dict, rows: dict, bar) -> None:

@@ -10,11 +10,11 @@ from __future__ import annotations
 import argparse
 import sys
 import textwrap
-import time
 import traceback
 import warnings
 
 from . import __version__
+from ._verbose import progress_printer
 from .api import SOLVERS
 from .cli_sources import MESH_HELP, add_method_option, add_path_parser, add_source_options
 from .errors import ParameterError, SourceError
@@ -24,23 +24,6 @@ EXIT_USAGE = 2
 M_HELP = "smoothness multiplier m (default 1): λ = m·κ·√area, one rounding on the surface whatever the mesh"
 OUTPUT_HELP = (f"output file: {field_formats_help()} (trimesh and meshio: pip install 'cvxgeodesic[io]'); in the "
                "input file's vertex numbering, with its faces")
-
-
-def _progress_printer(stream, every: float = 0.5):
-    """IPM callback printing one line per iteration once a solve has run for ``every`` seconds."""
-    t0 = time.perf_counter()
-
-    def callback(iteration: int, info: dict) -> None:
-        if time.perf_counter() - t0 < every:
-            return
-        parts = [f"iter {iteration:3d}"]
-        for key, label in (("gap_rel", "gap"), ("res_primal", "primal res"), ("res_dual", "dual res")):
-            if key in info:
-                parts.append(f"{label} {info[key]:.2e}")
-        parts.append(f"{time.perf_counter() - t0:6.1f} s")
-        print("  " + "  ".join(parts), file=stream, flush=True)
-
-    return callback
 
 
 def _cmd_distance(args) -> int:
@@ -59,8 +42,7 @@ def _cmd_distance(args) -> int:
         print(f"{mesh.name}: {mesh.n_file_vertices} vertices, {mesh.n_faces} faces; method {args.method}", file=log)
     solver = GeodesicSolver(mesh, args.method, m=args.m, lam=args.lam, solver=args.solver,
                             normalization=args.normalization, order=args.order)
-    callback = None if args.quiet else _progress_printer(log)
-    res = solver.solve(sources, callback=callback)
+    res = solver.solve(sources, callback=None if args.quiet else progress_printer(log))
     for note in res.info.notes:
         args.notes.say(note)
     with output_set(*([args.output, args.png] if args.png else [args.output])) as tmp:
@@ -167,7 +149,10 @@ class _Notes:
         line = str(text).splitlines()[0] if str(text) else ""
         if line and line not in self.seen:
             self.seen.add(line)
-            print(f"cvxgeodesic: note: {line}", file=sys.stderr, flush=True)
+            from tqdm import tqdm
+
+            # above any progress bar on stderr (a rows bar of `matrix`), not after its last redraw
+            tqdm.write(f"cvxgeodesic: note: {line}", file=sys.stderr)
 
     def showwarning(self, message, category, filename, lineno, file=None, line=None) -> None:
         self.say(str(message))

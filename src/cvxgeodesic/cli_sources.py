@@ -7,6 +7,7 @@ import sys
 
 import numpy as np
 
+from ._verbose import progress_printer
 from .api import ALL_METHODS, SOLVERS
 from .errors import ParameterError, SourceError
 from .mesh.formats.registry import mesh_formats_help
@@ -166,7 +167,8 @@ def _cmd_path(args) -> int:
     mesh = load_mesh(args.mesh)
     sources, label = cli_sources(args, mesh)
     target = _target(args, mesh)
-    res = GeodesicSolver(mesh, args.method, m=args.m, solver=args.solver).solve(sources)
+    res = GeodesicSolver(mesh, args.method, m=args.m, solver=args.solver).solve(
+        sources, callback=None if args.quiet else progress_printer(sys.stderr))
     P, faces, bary = geodesic_path(mesh, res, target, return_surface_points=True)
     _write_path(args.output, P, faces, bary)
     if args.png:

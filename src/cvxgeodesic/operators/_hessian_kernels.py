@@ -5,7 +5,7 @@ Crouzeix–Raviart vector space (two unknowns per edge) and multiplies them,
 ``Q = Dᵀ M⁻¹ (L + K) M⁻¹ D``, in Eigen: four sparse–sparse products, single-threaded, with large
 temporaries. That was the largest piece of a one-shot QCQP-Hessian set-up (measured 2026-12-01,
 shared 2-core machine: 43–48 % of the set-up of bimba, horse, armadillo and of a 1.1M-face bunny,
-23 s there; docs/performance.md, "Set-up cost").
+23 s there; docs/dev/performance-log.md, "Set-up cost").
 
 The same matrix is a sum over faces. ``L + K`` couples only the edges of one face, and a row of
 ``G = M⁻¹ D`` (one edge unknown) involves only the four vertices of the edge's two faces, so

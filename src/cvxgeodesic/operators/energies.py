@@ -145,7 +145,7 @@ def curved_hessian_energy(mesh: TriMesh, *, compiled: bool | None = None) -> sp.
     compiled : bool, optional
         ``True``: the compiled face-by-face assembly of :mod:`._hessian_kernels` (needs Numba; the same
         matrix to rounding, 3e-16 of its largest entry; 4-8x faster, measured 2026-12-01 on bimba and a
-        1.1M-face bunny, docs/performance.md "Set-up cost");
+        1.1M-face bunny, docs/dev/performance-log.md "Set-up cost");
         ``False``: libigl's; ``None`` (default): compiled when Numba can be imported. libigl's is used anyway on a
         mesh that is not edge-manifold and where the compiled assembly has non-finite entries (degenerate faces).
 

@@ -1,0 +1,45 @@
+"""Make the tutorial's pictures: run the Python blocks of ``docs/tutorial.md`` and keep the PNGs they write.
+
+Run from the repository root (a minute at most; no other input)::
+
+    python docs/tutorial_figures.py
+
+The blocks run in order in a temporary folder, as ``tests/test_tutorial.py`` runs them; every
+``tutorial_*.png`` they write is reduced to a 256-colour palette (a third of the size, the same picture) and
+copied to ``docs/figures/``, where ``tutorial.md`` shows it.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+from PIL import Image
+
+DOCS = Path(__file__).resolve().parent
+
+
+def python_blocks(page: Path) -> list[str]:
+    """The ```python blocks of a Markdown page, in order."""
+    return re.findall(r"```python\n(.*?)```", page.read_text(encoding="utf-8"), flags=re.S)
+
+
+def main() -> None:
+    with tempfile.TemporaryDirectory() as tmp:
+        script = Path(tmp) / "tutorial.py"
+        script.write_text("\n".join(python_blocks(DOCS / "tutorial.md")), encoding="utf-8")
+        path = os.pathsep.join([str(DOCS.parent / "src"), os.environ.get("PYTHONPATH", "")])
+        env = {**os.environ, "PYTHONPATH": path}
+        subprocess.run([sys.executable, str(script)], cwd=tmp, env=env, check=True)
+        for png in sorted(Path(tmp).glob("tutorial_*.png")):
+            target = DOCS / "figures" / png.name
+            Image.open(png).convert("RGB").quantize(256).save(target, optimize=True)
+            print(f"wrote {target.relative_to(DOCS.parent)} ({target.stat().st_size // 1024} KiB)")
+
+
+if __name__ == "__main__":
+    main()
