@@ -266,7 +266,10 @@ class TetDijkstraBaseline(TetBaselineSolver):
         if src.points:
             # one extra node per point, joined to its tetrahedron's corners by straight segments; a point at a vertex
             # is that vertex (a zero-weight arc would vanish from the sparse graph)
-            rows, cols, w, virtual = [], [], [], []
+            rows: list[int] = []
+            cols: list[int] = []
+            w: list[float] = []
+            virtual: list[int] = []
             for p in src.points:
                 corners = p.vertices(mesh)
                 dist = np.linalg.norm(mesh.V[corners] - p.position(mesh), axis=1)
@@ -317,9 +320,10 @@ class TetHeatBaseline(TetBaselineSolver):
        underflowed far away, recorded in the notes).
     3. The Poisson equation ``L φ = Gᵀ diag(vol) X``. One source: solved with one pinned vertex per
        component (factored once in the set-up) and shifted so that the source is at 0 (a point
-       source: its interpolated value). Several sources or the boundary: solved with the exact
-       local values fixed (0 at vertex and boundary sources, ``|v − p|`` at a point's corners),
-       which factors the reduced matrix at every solve.
+       source: so that the mean of ``φ − |v − p|`` over its tetrahedron's corners is 0). Several
+       sources or the boundary: solved with the exact local values fixed (0 at vertex and
+       boundary sources, ``|v − p|`` at a point's corners), which factors the reduced matrix at
+       every solve.
 
     Degenerate tetrahedra (:meth:`~cvxgeodesic.mesh.tetmesh.TetMesh.degenerate_tets` at ``1e-3``)
     are left out of both operators, recorded in :attr:`notes`. Both factorizations go through
@@ -407,16 +411,34 @@ class TetHeatBaseline(TetBaselineSolver):
             if src.vertices.size:
                 phi -= phi[src.vertices[0]]
             else:
-                p = src.points[0]
-                phi -= float(p.bary @ phi[p.vertices(mesh)])
+                # the exact distances |v − p| at the point's corners fix the offset (mean): 7.4 % mean error against
+                # 10.3 % for φ(p) = 0 on a jittered 8³ box (the heat field is rounded off at its source)
+                corners, exact = src.local_values(mesh)
+                phi -= float(np.mean(phi[corners] - exact))
             mode = "neumann"
         else:
             fixed, values = src.local_values(mesh)
             phi = self._dirichlet(b, fixed, values)
             mode = "dirichlet"
+        phi = self._fill_idle(phi, notes)
         at = src.local_values(mesh)
         return phi, {"t_coef": self.t_coef, "t": self.t, "poisson": mode, "backend": self.backend, "notes": notes,
                      "max_abs_at_sources": float(np.abs(phi[at[0]] - at[1]).max())}
+
+    def _fill_idle(self, phi: np.ndarray, notes: list[str]) -> np.ndarray:
+        """Vertices of left-out tetrahedra only: the shortest edge step from a solved neighbour (one pass)."""
+        lone = np.flatnonzero(self._idle & self.mesh.referenced)
+        if lone.size == 0:
+            return phi
+        A = self.mesh.vertex_adjacency[lone].tocoo()
+        ok = ~self._idle[A.col]
+        best = np.full(lone.size, np.inf)
+        np.minimum.at(best, A.row[ok], phi[A.col[ok]] + A.data[ok])
+        phi = phi.copy()
+        phi[lone] = best
+        notes.append(f"{self.mesh.name}: heat method: {lone.size} vertices are only in left-out tetrahedra; their "
+                     "distance is the shortest edge from a neighbour")
+        return phi
 
     def _dirichlet(self, b: np.ndarray, fixed: np.ndarray, values: np.ndarray) -> np.ndarray:
         """``L φ = b`` with ``φ[fixed] = values`` (and one pin in each component without a fixed vertex)."""

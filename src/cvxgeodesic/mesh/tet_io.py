@@ -194,7 +194,8 @@ def read_tetgen(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray, list[s
         the header says, repeated point numbers, or an element naming an unknown point.
     """
     p = Path(path)
-    node, ele = p.with_suffix(".node"), p.with_suffix(".ele")
+    upper = p.suffix.isupper()
+    node, ele = (p.with_suffix(ext.upper() if upper else ext) for ext in (".node", ".ele"))
     recs = _records(node)
     if not recs:
         raise MeshFormatError(f"{node}: empty file")
@@ -280,7 +281,9 @@ def _read_meshio(path: Path) -> tuple[np.ndarray, np.ndarray, list[str]]:
     bad = ~np.isfinite(V).all(axis=1)
     if bad.any():
         raise MeshFormatError(f"{path}: point {int(np.flatnonzero(bad)[0])} has a non-finite coordinate")
-    parts, other, notes = [], {}, []
+    parts: list[np.ndarray] = []
+    other: dict[str, int] = {}
+    notes: list[str] = []
     for block in mm.cells:
         if block.type in ("tetra", "tetra10"):
             parts.append(np.asarray(block.data, dtype=np.int64)[:, :4])

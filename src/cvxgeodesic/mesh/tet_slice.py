@@ -29,7 +29,7 @@ def _cases() -> list[list[tuple[int, int, int]]]:
     def e(a: int, b: int) -> int:
         return edge_of[(min(a, b), max(a, b))]
 
-    out = []
+    out: list[list[tuple[int, int, int]]] = []
     for mask in range(16):
         below = [i for i in range(4) if mask >> i & 1]
         above = [i for i in range(4) if not mask >> i & 1]

@@ -281,8 +281,8 @@ class TetMesh:
     @cached_property
     def _boundary_slots(self) -> tuple[np.ndarray, np.ndarray]:
         """(tet, local vertex) of every face that belongs to a single tetrahedron."""
-        single = self.face_tet_counts[self.tet_faces] == 1
-        return np.nonzero(single)
+        t, i = np.nonzero(self.face_tet_counts[self.tet_faces] == 1)
+        return t, i
 
     @cached_property
     def boundary_faces(self) -> np.ndarray:

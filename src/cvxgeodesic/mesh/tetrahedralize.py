@@ -21,8 +21,12 @@ on import although it does not declare it.
 
 from __future__ import annotations
 
+import contextlib
 import importlib
+import os
+import sys
 import time
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -45,6 +49,29 @@ def _available(name: str) -> Any:
         return None
 
 
+@contextlib.contextmanager
+def _silent_native_output() -> Iterator[None]:
+    """Send what compiled code prints to the process's stdout and stderr to /dev/null (fTetWild prints its
+    progress with ``std::cout`` whatever its log level)."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = [os.dup(1), os.dup(2)]
+    try:
+        with open(os.devnull, "wb") as null:
+            os.dup2(null.fileno(), 1)
+            os.dup2(null.fileno(), 2)
+            yield
+    finally:
+        with contextlib.suppress(Exception):  # C stdio buffers still hold output meant for /dev/null
+            import ctypes
+
+            ctypes.CDLL(None).fflush(None)
+        os.dup2(saved[0], 1)
+        os.dup2(saved[1], 2)
+        os.close(saved[0])
+        os.close(saved[1])
+
+
 def tetrahedralize(surface: TriMesh | tuple, *, mesher: str = "auto", max_volume: float | None = None,
                    edge_length: float | None = None, quality: float = 1.5, threads: int = 1) -> TetMesh:
     """Fill a closed triangle surface with tetrahedra.
@@ -57,7 +84,9 @@ def tetrahedralize(surface: TriMesh | tuple, *, mesher: str = "auto", max_volume
     mesher : {"auto", "tetgen", "wildmeshing"}
         ``"auto"``: TetGen if installed, else wildmeshing (see the module's notes on licences).
     max_volume : float, optional
-        TetGen: largest tetrahedron volume (default: no bound beyond the quality refinement).
+        TetGen: target largest tetrahedron volume (``-a``; TetGen's mesh improvement after the
+        refinement leaves some up to about 1.1 × larger). Default: no bound beyond the quality
+        refinement.
     edge_length : float, optional
         wildmeshing: target edge length (default: 1/20 of the bounding-box diagonal, fTetWild's).
     quality : float
@@ -109,18 +138,20 @@ def tetrahedralize(surface: TriMesh | tuple, *, mesher: str = "auto", max_volume
                             "faces; repair it or use mesher='wildmeshing'")
         try:
             tg = lib.TetGen(np.asarray(mesh.V, dtype=np.float64), np.asarray(mesh.F, dtype=np.int32))
-            V, T, *_ = tg.tetrahedralize(quality=True, minratio=quality, maxvolume=max_volume or -1.0, quiet=True)
+            V, T, *_ = tg.tetrahedralize(quality=True, minratio=quality, maxvolume=max_volume or -1.0,
+                                         fixedvolume=max_volume is not None, quiet=True)
         except Exception as exc:
             raise MeshError(f"{mesh.name}: TetGen failed: {type(exc).__name__}: {exc}") from None
         params = f"minratio={quality:g}" + (f", maxvolume={max_volume:g}" if max_volume else "")
     else:
         try:
-            tz = lib.Tetrahedralizer(max_threads=int(threads), **(
-                {"edge_length_r": edge_length / mesh.bbox_diagonal} if edge_length else {}))
-            tz.set_log_level(6)
-            tz.set_mesh(np.asarray(mesh.V, dtype=np.float64), np.asarray(mesh.F, dtype=np.int32))
-            tz.tetrahedralize()
-            V, T, *_ = tz.get_tet_mesh()
+            with _silent_native_output():
+                tz = lib.Tetrahedralizer(max_threads=int(threads), **(
+                    {"edge_length_r": edge_length / mesh.bbox_diagonal} if edge_length else {}))
+                tz.set_log_level(6)
+                tz.set_mesh(np.asarray(mesh.V, dtype=np.float64), np.asarray(mesh.F, dtype=np.int32))
+                tz.tetrahedralize()
+                V, T, *_ = tz.get_tet_mesh()
         except Exception as exc:
             raise MeshError(f"{mesh.name}: fTetWild (wildmeshing) failed: {type(exc).__name__}: {exc}") from None
         params = f"edge_length={edge_length:g}" if edge_length else "edge_length=diagonal/20"
