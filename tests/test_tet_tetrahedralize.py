@@ -47,9 +47,11 @@ def test_tetgen_fills_a_sphere_and_keeps_its_surface():
 
 @pytest.mark.skipif("wildmeshing" not in INSTALLED, reason="wildmeshing is not installed")
 @pytest.mark.slow
-def test_wildmeshing_fills_a_sphere():
+def test_wildmeshing_fills_a_sphere(tmp_path, monkeypatch, capfd):
+    monkeypatch.chdir(tmp_path)
     s = icosphere(2)
     m = tetrahedralize(s, mesher="wildmeshing", edge_length=0.3)
+    assert list(tmp_path.iterdir()) == [] and capfd.readouterr() == ("", "")  # fTetWild's file and output
     assert m.is_manifold and (m.signed_volumes > 0).all()
     np.testing.assert_allclose(m.total_volume, 4 / 3 * np.pi, rtol=0.05)
 

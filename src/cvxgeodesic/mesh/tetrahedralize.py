@@ -13,7 +13,10 @@ Two meshers are supported, neither a dependency of cvxgeodesic:
     ``svgwrite``)
     fTetWild (Hu et al. 2020), MPL-2.0. Robust to imperfect input (holes, self-intersections:
     it works from the winding number), approximates the surface within an envelope (``epsilon``)
-    instead of keeping it, slower (spot: 8 s on one thread).
+    instead of keeping it, slower (spot: 8 to 17 s on one thread, depending on the load). It
+    writes a file into the working directory and prints with ``std::cout``: the call runs in a
+    temporary working directory with the process's stdout and stderr sent to /dev/null, so it
+    must not run beside other threads that depend on either.
 
 ``pytetwild`` (also fTetWild) was tried and left out: its 0.4.2 package imports PyVista (and VTK)
 on import although it does not declare it.
@@ -25,6 +28,7 @@ import contextlib
 import importlib
 import os
 import sys
+import tempfile
 import time
 from collections.abc import Iterator
 from typing import Any
@@ -70,6 +74,19 @@ def _silent_native_output() -> Iterator[None]:
         os.dup2(saved[1], 2)
         os.close(saved[0])
         os.close(saved[1])
+
+
+@contextlib.contextmanager
+def _in_temporary_directory() -> Iterator[None]:
+    """Run in a private temporary working directory (fTetWild's ``get_tet_mesh`` writes
+    ``__tracked_surface.stl`` into the working directory), then return and delete it."""
+    here = os.getcwd()
+    with tempfile.TemporaryDirectory(prefix="cvxgeodesic-tetwild-") as tmp:
+        os.chdir(tmp)
+        try:
+            yield
+        finally:
+            os.chdir(here)
 
 
 def tetrahedralize(surface: TriMesh | tuple, *, mesher: str = "auto", max_volume: float | None = None,
@@ -145,7 +162,7 @@ def tetrahedralize(surface: TriMesh | tuple, *, mesher: str = "auto", max_volume
         params = f"minratio={quality:g}" + (f", maxvolume={max_volume:g}" if max_volume else "")
     else:
         try:
-            with _silent_native_output():
+            with _silent_native_output(), _in_temporary_directory():
                 tz = lib.Tetrahedralizer(max_threads=int(threads), **(
                     {"edge_length_r": edge_length / mesh.bbox_diagonal} if edge_length else {}))
                 tz.set_log_level(6)
