@@ -1,0 +1,540 @@
+"""The validated tetrahedral-mesh model: distance *inside* a solid (issue 26).
+
+:class:`TetMesh` is the volume counterpart of :class:`~cvxgeodesic.mesh.trimesh.TriMesh`: immutable
+``V`` (n, 3) and ``T`` (k, 4) arrays checked once, and every derived quantity (volumes, edges, faces,
+the boundary surface, adjacency, quality measures) computed lazily and cached.
+
+Orientation: the four vertices of a tetrahedron may come in either order. ``T`` is kept as given
+(so the caller's numbering holds); :attr:`TetMesh.signed_volumes` keeps the sign and everything
+else uses :attr:`TetMesh.volumes` (absolute values) or :attr:`TetMesh.positive_tets` (each row
+reordered so its signed volume is positive).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import ArrayLike
+from scipy.sparse.csgraph import connected_components
+
+from ..errors import MeshError
+from .trimesh import TriMesh, _as_vertices
+
+__all__ = ["DEGENERATE_TET_TOL", "TET_EDGES", "TET_FACES", "TetMesh", "as_tetmesh", "unit_tetmesh"]
+
+#: Default of :meth:`TetMesh.degenerate_tets`: a tetrahedron whose smallest altitude (vertex to opposite
+#: face) is below ``DEGENERATE_TET_TOL`` times its longest edge (a sliver, needle, cap or wedge; exactly
+#: coplanar corners included) or below ``DEGENERATE_TET_TOL`` times the mean edge length of the mesh (a
+#: speck) is *degenerate*. The same rule and value as ``TriMesh.degenerate_faces`` (1e-3).
+DEGENERATE_TET_TOL = 1e-3
+#: Local vertex pairs of the six edges of a tetrahedron, the column order of :attr:`TetMesh.tet_edges`.
+TET_EDGES = np.array([[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]], dtype=np.int64)
+#: Local vertices of the face opposite vertex ``i`` (row ``i``), ordered so that the face's normal
+#: ``(b − a) × (c − a)`` points away from vertex ``i`` when the tetrahedron's signed volume is positive.
+TET_FACES = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]], dtype=np.int64)
+#: A fold is reported only when the opposite vertices of an interior face lie on the same side by more than
+#: this fraction of the face's longest edge (round-off on flat configurations is not a fold).
+FOLD_TOL = 1e-9
+
+
+class TetMesh:
+    """An immutable, validated tetrahedral mesh.
+
+    Parameters
+    ----------
+    V : (n, 3) array_like of float
+        Vertex positions. Must be finite (and within ``±1e150``, as for ``TriMesh``).
+    T : (k, 4) array_like of int
+        Tetrahedra as 0-based vertex indices, in any orientation. Every index must lie in
+        ``[0, n)`` and the four indices of a tetrahedron must be distinct.
+    vertex_map : (n,) array_like of int, optional
+        Index of each vertex in the file it was read from (default ``arange(n)``).
+    name : str, optional
+        Label used in messages (usually the file name).
+    file_index : (n_file,) array_like of int, optional
+        For each vertex of the file, its index in this mesh, or -1 for a vertex the reader dropped
+        (in no tetrahedron). Default ``arange(n)``.
+    dropped_vertices : (d, 3) array_like of float, optional
+        Positions of the file vertices with ``file_index == -1``, in file order.
+    notes : sequence of str, optional
+        One line per repair the reader made. :attr:`notes` adds the mesh's own findings.
+
+    Raises
+    ------
+    MeshError
+        An array of the wrong shape or type, empty, a non-finite or huge coordinate, an index out
+        of range or a tetrahedron repeating a vertex (the message names the parameter and the
+        first bad index).
+
+    Notes
+    -----
+    Degenerate (flat or tiny) tetrahedra, mixed orientations, folds and faces shared by more than
+    two tetrahedra are accepted and *reported*: :meth:`degenerate_tets`, :attr:`folded_faces`,
+    :attr:`nonmanifold_faces` and the lines of :attr:`notes`. Vertices in no tetrahedron are
+    allowed (their own components, infinite distance).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    >>> mesh = TetMesh(V, [[0, 2, 1, 3]])  # negatively oriented: accepted
+    >>> round(float(mesh.total_volume), 6), mesh.boundary_faces.shape, mesh.is_manifold
+    (0.166667, (4, 3), True)
+    """
+
+    def __init__(
+        self,
+        V: ArrayLike,
+        T: ArrayLike,
+        *,
+        vertex_map: ArrayLike | None = None,
+        name: str | None = None,
+        file_index: ArrayLike | None = None,
+        dropped_vertices: ArrayLike | None = None,
+        notes: Sequence[str] = (),
+    ) -> None:
+        self.name = name or "tetmesh"
+        self.V = _as_vertices(V, self.name)
+        self.T = _as_tets(T, self.V.shape[0], self.name)
+        n = self.V.shape[0]
+        self.vertex_map = _index_array(np.arange(n) if vertex_map is None else vertex_map, "vertex_map", self.name)
+        if self.vertex_map.shape != (n,):
+            raise MeshError(f"{self.name}: vertex_map must have shape ({n},), got {self.vertex_map.shape}")
+        self.file_index = _index_array(np.arange(n) if file_index is None else file_index, "file_index", self.name)
+        if self.file_index.ndim != 1 or np.any(self.file_index < -1) or np.any(self.file_index >= n):
+            raise MeshError(f"{self.name}: file_index must be a 1-D array of indices in [-1, {n})")
+        n_dropped = int(np.count_nonzero(self.file_index < 0))
+        dropped = (np.full((n_dropped, 3), np.nan) if dropped_vertices is None
+                   else np.array(dropped_vertices, dtype=np.float64).reshape(-1, 3))
+        if dropped.shape[0] != n_dropped:
+            raise MeshError(f"{self.name}: dropped_vertices must have {n_dropped} rows, got {dropped.shape[0]}")
+        dropped.setflags(write=False)
+        self.dropped_vertices = dropped
+        self._reader_notes: tuple[str, ...] = tuple(str(s) for s in notes)
+
+    def __repr__(self) -> str:
+        return f"TetMesh(name={self.name!r}, n_vertices={self.n_vertices}, n_tets={self.n_tets})"
+
+    # -- sizes ------------------------------------------------------------------------------------------------
+    @property
+    def n_vertices(self) -> int:
+        return int(self.V.shape[0])
+
+    @property
+    def n_tets(self) -> int:
+        return int(self.T.shape[0])
+
+    @property
+    def n_file_vertices(self) -> int:
+        """Number of vertices in the file the mesh was read from (``n_vertices`` when not from a file)."""
+        return int(self.file_index.shape[0])
+
+    # -- volumes and shape ------------------------------------------------------------------------------------
+    @cached_property
+    def signed_volumes(self) -> np.ndarray:
+        """(k,) float ndarray: ``det[v1 − v0, v2 − v0, v3 − v0] / 6``, the sign from the vertex order."""
+        V, T = self.V, self.T
+        a, b, c = (V[T[:, i]] - V[T[:, 0]] for i in (1, 2, 3))
+        return np.einsum("ij,ij->i", a, np.cross(b, c)) / 6.0
+
+    @cached_property
+    def volumes(self) -> np.ndarray:
+        """(k,) float ndarray: volume of each tetrahedron (``|signed_volumes|``)."""
+        return np.abs(self.signed_volumes)
+
+    @cached_property
+    def total_volume(self) -> float:
+        """Sum of :attr:`volumes` (overlapping tetrahedra of a folded mesh count twice)."""
+        return float(self.volumes.sum())
+
+    @cached_property
+    def positive_tets(self) -> np.ndarray:
+        """(k, 4) int64 ndarray: ``T`` with vertices 2 and 3 swapped on rows of negative signed volume."""
+        P = self.T.copy()
+        neg = self.signed_volumes < 0
+        P[neg, 2], P[neg, 3] = self.T[neg, 3], self.T[neg, 2]
+        P.setflags(write=False)
+        return P
+
+    @cached_property
+    def face_areas_by_tet(self) -> np.ndarray:
+        """(k, 4) float ndarray: area of the face opposite each local vertex."""
+        V, T = self.V, self.T
+        out = np.empty((self.n_tets, 4))
+        for i, (a, b, c) in enumerate(TET_FACES):
+            out[:, i] = 0.5 * np.linalg.norm(np.cross(V[T[:, b]] - V[T[:, a]], V[T[:, c]] - V[T[:, a]]), axis=1)
+        return out
+
+    @cached_property
+    def tet_longest_edges(self) -> np.ndarray:
+        """(k,) float ndarray: length of the longest edge of each tetrahedron."""
+        return self.edge_lengths[self.tet_edges].max(axis=1)
+
+    @cached_property
+    def tet_min_altitudes(self) -> np.ndarray:
+        """(k,) float ndarray: smallest vertex-to-opposite-face distance, ``3·volume / largest face area``.
+
+        The gradients of the four hat functions have lengths ``1 / altitude``, so this is the
+        length that decides how ill-conditioned the tetrahedron's gradient and stiffness are.
+        0 for a tetrahedron whose corners coincide.
+        """
+        largest = self.face_areas_by_tet.max(axis=1)
+        alt = np.zeros(self.n_tets)
+        np.divide(3.0 * self.volumes, largest, out=alt, where=largest > 0)
+        return alt
+
+    def degenerate_tets(self, tol: float = DEGENERATE_TET_TOL) -> np.ndarray:
+        """Tetrahedra too flat or too small for the gradient-based operators.
+
+        A tetrahedron is degenerate when its smallest altitude :attr:`tet_min_altitudes` is below
+        ``tol`` times its longest edge (slivers with four nearly coplanar corners, needles, caps,
+        wedges; zero volume included) or below ``tol`` times :attr:`mean_edge_length` (a speck).
+        The hat-function gradients of such a tetrahedron have entries of order ``1 / altitude``.
+        The measure is the one of :meth:`TriMesh.degenerate_faces` one dimension up; a regular
+        tetrahedron has altitude ``0.816 ×`` its edge, a Kuhn (cube-corner) tetrahedron ``0.408 ×``
+        its longest edge.
+
+        Parameters
+        ----------
+        tol : float
+            Relative threshold (default :data:`DEGENERATE_TET_TOL` = 1e-3); 0 selects only
+            tetrahedra of exactly zero volume.
+
+        Returns
+        -------
+        (d,) int64 ndarray
+            Sorted indices of the degenerate tetrahedra.
+        """
+        alt = self.tet_min_altitudes
+        bad = (alt <= tol * self.tet_longest_edges) | (alt <= tol * self.mean_edge_length)
+        return np.flatnonzero(bad).astype(np.int64)
+
+    # -- edges ------------------------------------------------------------------------------------------------
+    @cached_property
+    def _edge_data(self) -> tuple[np.ndarray, np.ndarray]:
+        n = np.int64(self.n_vertices)
+        E = self.T[:, TET_EDGES].reshape(-1, 2)
+        keys = np.minimum(E[:, 0], E[:, 1]) * n + np.maximum(E[:, 0], E[:, 1])
+        uniq, inv = np.unique(keys, return_inverse=True)
+        return np.column_stack([uniq // n, uniq % n]), inv.reshape(-1, 6).astype(np.int64)
+
+    @cached_property
+    def edges(self) -> np.ndarray:
+        """(e, 2) int64 ndarray: unique undirected edges, ``edges[:, 0] < edges[:, 1]``, sorted."""
+        return self._edge_data[0]
+
+    @cached_property
+    def tet_edges(self) -> np.ndarray:
+        """(k, 6) int64 ndarray: index into :attr:`edges` of each tetrahedron's edges, in :data:`TET_EDGES` order."""
+        return self._edge_data[1]
+
+    @cached_property
+    def edge_lengths(self) -> np.ndarray:
+        """(e,) float ndarray: Euclidean length of each edge of :attr:`edges`."""
+        E = self.edges
+        return np.linalg.norm(self.V[E[:, 0]] - self.V[E[:, 1]], axis=1)
+
+    @cached_property
+    def mean_edge_length(self) -> float:
+        """Mean length of the unique edges."""
+        return float(self.edge_lengths.mean())
+
+    @cached_property
+    def bbox_diagonal(self) -> float:
+        """Length of the diagonal of the axis-aligned bounding box."""
+        return float(np.linalg.norm(self.V.max(axis=0) - self.V.min(axis=0)))
+
+    # -- faces and the boundary -------------------------------------------------------------------------------
+    @cached_property
+    def _face_data(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        n = np.int64(self.n_vertices)
+        Fl = np.sort(self.T[:, TET_FACES].reshape(-1, 3), axis=1)
+        # one 1-D key per face: (a·n + b)·n + c fits in int64 while n < 2**21; beyond, sort rows instead
+        if self.n_vertices < 2**21:
+            keys = (Fl[:, 0] * n + Fl[:, 1]) * n + Fl[:, 2]
+            uniq, inv, counts = np.unique(keys, return_inverse=True, return_counts=True)
+            faces = np.column_stack([uniq // (n * n), (uniq // n) % n, uniq % n])
+        else:
+            faces, inv, counts = np.unique(Fl, axis=0, return_inverse=True, return_counts=True)
+        return faces.astype(np.int64), inv.reshape(-1, 4).astype(np.int64), counts.astype(np.int64)
+
+    @cached_property
+    def faces(self) -> np.ndarray:
+        """(f, 3) int64 ndarray: unique triangular faces (each row sorted), lexicographically sorted."""
+        return self._face_data[0]
+
+    @cached_property
+    def tet_faces(self) -> np.ndarray:
+        """(k, 4) int64 ndarray: index into :attr:`faces` of the face opposite each local vertex."""
+        return self._face_data[1]
+
+    @cached_property
+    def face_tet_counts(self) -> np.ndarray:
+        """(f,) int64 ndarray: number of tetrahedra sharing each face of :attr:`faces`."""
+        return self._face_data[2]
+
+    @cached_property
+    def _boundary_slots(self) -> tuple[np.ndarray, np.ndarray]:
+        """(tet, local vertex) of every face that belongs to a single tetrahedron."""
+        t, i = np.nonzero(self.face_tet_counts[self.tet_faces] == 1)
+        return t, i
+
+    @cached_property
+    def boundary_faces(self) -> np.ndarray:
+        """(b, 3) int64 ndarray: faces of a single tetrahedron, oriented with normals pointing out of it.
+
+        On a manifold mesh this is the closed boundary surface, outward oriented; faces shared by
+        more than two tetrahedra are not boundary faces (see :attr:`nonmanifold_faces`).
+        """
+        t, i = self._boundary_slots
+        return self.positive_tets[t[:, None], TET_FACES[i]].astype(np.int64)
+
+    @cached_property
+    def boundary_face_tets(self) -> np.ndarray:
+        """(b,) int64 ndarray: the tetrahedron of each row of :attr:`boundary_faces`."""
+        return self._boundary_slots[0].astype(np.int64)
+
+    @cached_property
+    def boundary_vertices(self) -> np.ndarray:
+        """(v,) int64 ndarray: sorted indices of the vertices of :attr:`boundary_faces`."""
+        return np.unique(self.boundary_faces).astype(np.int64)
+
+    @cached_property
+    def boundary_area(self) -> float:
+        """Total area of :attr:`boundary_faces`."""
+        V, B = self.V, self.boundary_faces
+        return float(0.5 * np.linalg.norm(np.cross(V[B[:, 1]] - V[B[:, 0]], V[B[:, 2]] - V[B[:, 0]]), axis=1).sum())
+
+    def boundary_mesh(self) -> TriMesh:
+        """The boundary surface as a :class:`TriMesh` on all of ``V`` (interior vertices unreferenced).
+
+        Returns
+        -------
+        TriMesh
+            Faces :attr:`boundary_faces` (outward), the same vertex numbering as this mesh.
+
+        Raises
+        ------
+        MeshError
+            If the mesh has no boundary face (every face shared: impossible for a finite manifold mesh).
+        """
+        if self.boundary_faces.shape[0] == 0:
+            raise MeshError(f"{self.name}: the mesh has no boundary faces")
+        return TriMesh(self.V, self.boundary_faces, name=f"{self.name} (boundary)")
+
+    @cached_property
+    def nonmanifold_faces(self) -> np.ndarray:
+        """(j,) int64 ndarray: indices into :attr:`faces` of faces shared by more than two tetrahedra."""
+        return np.flatnonzero(self.face_tet_counts > 2).astype(np.int64)
+
+    @cached_property
+    def is_manifold(self) -> bool:
+        """True when every face belongs to one (boundary) or two (interior) tetrahedra.
+
+        Tetrahedra that touch along an edge or at a vertex only are not detected by this test.
+        """
+        return self.nonmanifold_faces.size == 0
+
+    @cached_property
+    def folded_faces(self) -> np.ndarray:
+        """(j,) int64 ndarray: interior faces whose two tetrahedra lie on the same side of them.
+
+        On a valid mesh the two tetrahedra sharing a face are on opposite sides of it; when one of
+        them is inverted (e.g. a deformed mesh) they overlap. Independent of the vertex order of
+        the rows of ``T``. Only faces shared by exactly two tetrahedra are checked.
+        """
+        counts = self.face_tet_counts
+        slots = np.flatnonzero(counts[self.tet_faces.ravel()] == 2)
+        if slots.size == 0:
+            return np.empty(0, dtype=np.int64)
+        face = self.tet_faces.ravel()[slots]
+        order = np.argsort(face, kind="stable")
+        slots, face = slots[order], face[order]
+        t, i = slots // 4, slots % 4  # pairs: rows 2j and 2j + 1
+        V, T = self.V, self.T
+        F = self.faces[face[0::2]]
+        a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+        nrm = np.cross(b - a, c - a)
+        side1 = np.einsum("ij,ij->i", V[T[t[0::2], i[0::2]]] - a, nrm)
+        side2 = np.einsum("ij,ij->i", V[T[t[1::2], i[1::2]]] - a, nrm)
+        longest = np.max([np.linalg.norm(b - a, axis=1), np.linalg.norm(c - b, axis=1),
+                          np.linalg.norm(a - c, axis=1)], axis=0)
+        tol = FOLD_TOL * longest * np.linalg.norm(nrm, axis=1)
+        folded = ((side1 > tol) & (side2 > tol)) | ((side1 < -tol) & (side2 < -tol))
+        return np.sort(face[0::2][folded]).astype(np.int64)
+
+    # -- graph ------------------------------------------------------------------------------------------------
+    @cached_property
+    def vertex_adjacency(self) -> sp.csr_matrix:
+        """(n, n) sparse matrix with the edge lengths of the edge graph (symmetric)."""
+        n = self.n_vertices
+        E, w = self.edges, self.edge_lengths
+        A = sp.coo_matrix((np.r_[w, w], (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])), shape=(n, n))
+        return A.tocsr()
+
+    @cached_property
+    def component_labels(self) -> np.ndarray:
+        """(n,) int ndarray: connected-component label of each vertex (edge graph)."""
+        return connected_components(self.vertex_adjacency, directed=False)[1]
+
+    @cached_property
+    def n_components(self) -> int:
+        """Number of connected components of the edge graph (an unreferenced vertex is one)."""
+        return int(self.component_labels.max()) + 1
+
+    @cached_property
+    def referenced(self) -> np.ndarray:
+        """(n,) bool ndarray: vertices of at least one tetrahedron."""
+        mask = np.zeros(self.n_vertices, dtype=bool)
+        mask[self.T.ravel()] = True
+        return mask
+
+    def connected_to(self, sources: ArrayLike) -> np.ndarray:
+        """Vertices connected to at least one of ``sources`` through the edge graph.
+
+        Parameters
+        ----------
+        sources : (s,) int array_like
+            Valid vertex indices.
+
+        Returns
+        -------
+        (n,) bool ndarray
+            Includes the sources themselves.
+        """
+        labels = self.component_labels
+        return np.isin(labels, labels[np.asarray(sources, dtype=np.int64)])
+
+    # -- findings ---------------------------------------------------------------------------------------------
+    @cached_property
+    def notes(self) -> tuple[str, ...]:
+        """The reader's notes, then one line per finding: degenerate tetrahedra (at
+        :data:`DEGENERATE_TET_TOL`), mixed orientation, folds, non-manifold faces, unreferenced vertices.
+
+        Computed on first access (it needs the faces), then cached.
+        """
+        out = list(self._reader_notes)
+        deg = self.degenerate_tets()
+        if deg.size:
+            zero = int(np.count_nonzero(self.volumes[deg] == 0))
+            out.append(f"{self.name}: {deg.size} degenerate tetrahedra (smallest altitude below "
+                       f"{DEGENERATE_TET_TOL:g} of the longest edge or of the mean edge length; {zero} of zero "
+                       f"volume; first: tet {int(deg[0])})")
+        neg = int(np.count_nonzero(self.signed_volumes < 0))
+        pos = int(np.count_nonzero(self.signed_volumes > 0))
+        if neg and pos:
+            minority, sign = (neg, "negative") if neg <= pos else (pos, "positive")
+            first = int(np.flatnonzero(self.signed_volumes < 0 if sign == "negative" else self.signed_volumes > 0)[0])
+            out.append(f"{self.name}: {minority} of {self.n_tets} tetrahedra have {sign} orientation (first: tet "
+                       f"{first}); orientation is free, volumes are taken as absolute values")
+        fold = self.folded_faces
+        if fold.size:
+            out.append(f"{self.name}: {fold.size} interior faces have both their tetrahedra on the same side (the "
+                       f"mesh folds over itself: inverted tetrahedra; first: face {self.faces[fold[0]].tolist()})")
+        nm = self.nonmanifold_faces
+        if nm.size:
+            out.append(f"{self.name}: not manifold: {nm.size} faces are shared by more than two tetrahedra (first: "
+                       f"face {self.faces[nm[0]].tolist()}, {int(self.face_tet_counts[nm[0]])} tetrahedra)")
+        unref = np.flatnonzero(~self.referenced)
+        if unref.size:
+            out.append(f"{self.name}: {unref.size} vertices are in no tetrahedron (first: vertex {int(unref[0])}); "
+                       "they get an infinite distance")
+        return tuple(out)
+
+
+def _index_array(x: ArrayLike, what: str, name: str) -> np.ndarray:
+    try:
+        arr = np.array(x, dtype=np.int64)
+    except (TypeError, ValueError, OverflowError):
+        raise MeshError(f"{name}: {what} must be an integer array") from None
+    arr.setflags(write=False)
+    return arr
+
+
+def _as_tets(T: Any, n: int, name: str) -> np.ndarray:
+    try:
+        T_in = np.asarray(T)
+    except (TypeError, ValueError, OverflowError):  # ragged lists
+        raise MeshError(f"{name}: tetrahedra must be a (k, 4) integer array") from None
+    if T_in.ndim != 2 or T_in.shape[1] != 4:
+        raise MeshError(f"{name}: tetrahedra must have shape (k, 4), got {T_in.shape}")
+    if T_in.shape[0] == 0:
+        raise MeshError(f"{name}: the mesh has no tetrahedra")
+    if T_in.dtype.kind == "f":
+        if not np.all(np.isfinite(T_in)) or not np.all(T_in == np.round(T_in)):
+            raise MeshError(f"{name}: tetrahedron indices must be integers")
+    elif T_in.dtype.kind not in "iu":
+        raise MeshError(f"{name}: tetrahedron indices must be integers, got dtype {T_in.dtype}")
+    if T_in.dtype.kind == "u" and T_in.size and int(T_in.max()) >= 2**63:
+        raise MeshError(f"{name}: tetrahedron indices must be in [0, {n})")
+    Tm = np.array(T_in, dtype=np.int64, order="C")
+    out = (Tm < 0) | (Tm >= n)
+    if out.any():
+        t = int(np.flatnonzero(out.any(axis=1))[0])
+        raise MeshError(f"{name}: tetrahedron {t} has vertex index {Tm[t].tolist()} outside [0, {n})")
+    S = np.sort(Tm, axis=1)
+    rep = (S[:, 1:] == S[:, :-1]).any(axis=1)
+    if rep.any():
+        t = int(np.flatnonzero(rep)[0])
+        raise MeshError(f"{name}: tetrahedron {t} repeats a vertex {Tm[t].tolist()} ({int(rep.sum())} such "
+                        "tetrahedra); remove them first")
+    Tm.setflags(write=False)
+    return Tm
+
+
+def as_tetmesh(mesh: Any, name: str = "tetmesh") -> TetMesh:
+    """A :class:`TetMesh` from a TetMesh (returned as is) or a ``(V, T)`` pair with 4-column ``T``.
+
+    Parameters
+    ----------
+    mesh : TetMesh or (V, T) tuple
+        ``V`` (n, 3) float, ``T`` (k, 4) int.
+    name : str
+        Name of a mesh made from arrays.
+
+    Returns
+    -------
+    TetMesh
+
+    Raises
+    ------
+    MeshError
+        Anything else, or invalid arrays.
+    """
+    if isinstance(mesh, TetMesh):
+        return mesh
+    if isinstance(mesh, tuple | list) and len(mesh) == 2:
+        return TetMesh(mesh[0], mesh[1], name=name)
+    raise MeshError(f"expected a TetMesh or a (V, T) pair of arrays, got {type(mesh).__name__}")
+
+
+def unit_tetmesh(mesh: TetMesh) -> tuple[TetMesh, float]:
+    """The mesh divided by the power of two ``s`` that puts its bounding-box diagonal in [0.5, 1), and ``s``.
+
+    The volume counterpart of :func:`~cvxgeodesic.mesh.trimesh.unit_mesh` (same reasons: backend
+    tolerances mean the same on a mesh of any size, and the division by a power of two is exact).
+
+    Parameters
+    ----------
+    mesh : TetMesh
+
+    Returns
+    -------
+    unit : TetMesh
+        ``V / s`` with the same tetrahedra, vertex map, file index and name (``mesh`` itself when ``s == 1``).
+    s : float
+        A power of two (1.0 for a zero-size mesh).
+    """
+    diag = mesh.bbox_diagonal
+    if not (np.isfinite(diag) and diag > 0):
+        return mesh, 1.0
+    scale = math.ldexp(1.0, math.frexp(diag)[1])
+    if scale == 1.0:
+        return mesh, 1.0
+    return TetMesh(mesh.V / scale, mesh.T, vertex_map=mesh.vertex_map, name=mesh.name, file_index=mesh.file_index,
+                   dropped_vertices=mesh.dropped_vertices, notes=mesh._reader_notes), scale
