@@ -108,6 +108,8 @@ def test_auto_retries_an_almost_optimal_ipm_solve_with_clarabel(sphere, monkeypa
     with pytest.warns(RuntimeWarning):
         res = cg.GeodesicSolver(sphere, "qclp", solver="auto").solve(0)
     assert res.info.solver == "ipm" and res.info.status == "almost_optimal"
+    assert any("Clarabel failed too; kept the interior-point solver's almost optimal iterate" in n
+               for n in res.info.notes), res.info.notes
     res = cg.GeodesicSolver(sphere, "qclp", solver="ipm").solve(0)  # no retry with solver="ipm"
     assert res.info.solver == "ipm" and res.info.status == "almost_optimal"
 
