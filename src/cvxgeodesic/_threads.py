@@ -27,8 +27,9 @@ import functools
 import os
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from typing import Concatenate, ParamSpec, Protocol, TypeVar
 
 import numpy as np
 
@@ -203,15 +204,26 @@ def thread_limit(threads: int) -> Iterator[None]:
             numba.set_num_threads(nb_previous)
 
 
-def limited(method):
+class _HasThreads(Protocol):
+    threads: int
+
+
+_S = TypeVar("_S", bound=_HasThreads)
+_P = ParamSpec("_P")
+_R = TypeVar("_R")
+
+
+def limited(method: Callable[Concatenate[_S, _P], _R]) -> Callable[Concatenate[_S, _P], _R]:
     """Run a :class:`~cvxgeodesic.api.GeodesicSolver` method under the solver's thread limit.
 
     On ``__init__`` it resolves the ``threads`` keyword into ``self.threads`` first; a
-    result with an ``info`` gets ``info.extra["threads"]``.
+    result with an ``info`` gets ``info.extra["threads"]``. Typed so that the decorated
+    method keeps its signature and return type for type checkers (an untyped decorator
+    made the class and every result ``Any`` to mypy).
     """
 
     @functools.wraps(method)
-    def wrapper(self, *args, **kwargs):
+    def wrapper(self: _S, /, *args: _P.args, **kwargs: _P.kwargs) -> _R:
         if method.__name__ == "__init__":
             self.threads = resolve_threads(kwargs.get("threads"))
         with thread_limit(self.threads):

@@ -24,7 +24,8 @@ descent), and within 0.1 % of the exact polyhedral distance on the unit icospher
 from __future__ import annotations
 
 import numbers
-from typing import Any
+from collections.abc import Sequence
+from typing import Any, Literal, TypeAlias, overload
 
 import numpy as np
 import scipy.sparse as sp
@@ -33,11 +34,15 @@ from numpy.typing import ArrayLike
 from .errors import ParameterError, SolverError, SourceError
 from .mesh.io import as_trimesh
 from .mesh.trimesh import TriMesh
+from .results import GeodesicResult
 from .sources import BARY_SNAP, SourceSet, SurfacePoint, _barycentric, _incident_faces, resolve_sources
 from .validation import as_vertex_field, check_count
 
+#: A distance field as the functions here take it: the vertex values or the result they came from.
+Field: TypeAlias = ArrayLike | GeodesicResult
 
-def _field(mesh: TriMesh, distance) -> tuple[np.ndarray, object]:
+
+def _field(mesh: TriMesh, distance: Any) -> tuple[np.ndarray, Any]:
     """(n,) float field and the result object it came from (or None)."""
     result = None
     if hasattr(distance, "distance") and hasattr(distance, "info"):
@@ -57,9 +62,10 @@ def _as_points(mesh: TriMesh, points) -> tuple[list[SurfacePoint], bool]:
             X = np.asarray(points, dtype=float)
         except (TypeError, ValueError):
             raise SourceError("points must be SurfacePoints or (k, 3) positions") from None
-        pts = surface_point(mesh, X)
-        if isinstance(pts, SurfacePoint):
-            return [pts], True
+        found = surface_point(mesh, X)
+        if isinstance(found, SurfacePoint):
+            return [found], True
+        pts = found
     for k, p in enumerate(pts):
         if p.face >= mesh.n_faces:
             raise SourceError(f"point {k} {p!r}: face index {p.face} is out of range: the mesh has {mesh.n_faces} "
@@ -67,7 +73,15 @@ def _as_points(mesh: TriMesh, points) -> tuple[list[SurfacePoint], bool]:
     return pts, False
 
 
-def distance_at(mesh: Any, distance: ArrayLike, points: Any) -> np.ndarray:
+@overload
+def distance_at(mesh: Any, distance: Field, points: SurfacePoint) -> float: ...
+@overload
+def distance_at(mesh: Any, distance: Field, points: Sequence[SurfacePoint]) -> np.ndarray: ...
+@overload
+def distance_at(mesh: Any, distance: Field, points: ArrayLike) -> float | np.ndarray: ...
+
+
+def distance_at(mesh: Any, distance: Field, points: Any) -> float | np.ndarray:
     """Values of a distance field at surface points.
 
     A vertex field is interpolated linearly in each face; the result of an ``order=2`` solve
@@ -160,8 +174,9 @@ def _source_targets(mesh: TriMesh, ss: SourceSet | None):
     return per_face
 
 
-def _closest_on(x: np.ndarray, items) -> tuple[np.ndarray, float]:
-    best, bd = None, np.inf
+def _closest_on(x: np.ndarray, items) -> tuple[np.ndarray | None, float]:
+    best: np.ndarray | None = None
+    bd = np.inf
     for a, b in items:
         ab = b - a
         den = float(ab @ ab)
@@ -173,9 +188,23 @@ def _closest_on(x: np.ndarray, items) -> tuple[np.ndarray, float]:
     return best, bd
 
 
-def geodesic_path(mesh: Any, distance: ArrayLike, target: Any, *, sources: Any = None,
+@overload
+def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = None,
+                  return_surface_points: Literal[False] = False, straighten: bool = True,
+                  max_steps: int | None = None) -> np.ndarray: ...
+@overload
+def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = None,
+                  return_surface_points: Literal[True], straighten: bool = True,
+                  max_steps: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
+@overload
+def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = None,
                   return_surface_points: bool = False, straighten: bool = True,
-                  max_steps: int | None = None) -> Any:
+                  max_steps: int | None = None) -> np.ndarray | tuple[np.ndarray, np.ndarray, np.ndarray]: ...
+
+
+def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = None,
+                  return_surface_points: bool = False, straighten: bool = True,
+                  max_steps: int | None = None) -> np.ndarray | tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Path from ``target`` down the distance field to the nearest source.
 
     Parameters
@@ -239,9 +268,10 @@ def geodesic_path(mesh: Any, distance: ArrayLike, target: Any, *, sources: Any =
     walk = _Descent(mesh, geo, d, src_v, _source_targets(mesh, ss))
     state = walk.start(target)
     for _ in range(max_steps):
-        state = walk.from_vertex(state[1]) if state[0] == "v" else walk.from_face(state[1], state[2])
-        if state is None:
+        step = walk.from_vertex(state[1]) if state[0] == "v" else walk.from_face(state[1], state[2])
+        if step is None:
             break
+        state = step
     else:
         raise SolverError(f"geodesic_path: no source reached within max_steps={max_steps} steps",
                           solver="geodesic_path", status="max_steps")
@@ -332,7 +362,8 @@ class _Descent:
         fs = geo.faces_of_vertex(v)
         if any(self._finish_in_face(int(f), V[v], d[v]) for f in fs):
             return None
-        best, choice = 1e-14, None
+        best = 1e-14
+        choice: tuple | None = None
         for f in fs:
             g = self.grad[f]
             if not np.all(np.isfinite(g)):
@@ -468,7 +499,7 @@ def _exact_path(mesh: TriMesh, ss: SourceSet, target, return_surface_points: boo
     V2, F2, idx = (insert_points(mesh.V, mesh.F, extra) if len(extra) else (mesh.V, mesh.F, np.zeros(0, np.int64)))
     sources = np.unique(np.r_[ss.vertices, idx[: len(X)]]).astype(np.int64)
     t2 = int(idx[-1]) if isinstance(target, SurfacePoint) else int(target)
-    best = None
+    best: tuple | None = None
     if t2 in set(sources.tolist()):
         best = (0.0, np.array([V2[t2]]))
     with contextlib.redirect_stdout(io.StringIO()):
@@ -524,7 +555,7 @@ def _segment_face(geo: _Geometry, a, b) -> int | None:
     return int(shared[0]) if len(shared) else None
 
 
-def _fan(geo: _Geometry, v: int, start: int, goal: int) -> list[tuple[int, list[int]]]:
+def _fan(geo: _Geometry, v: int, start: int, goal: int) -> list[tuple[list[int], list[int]]]:
     """The two walks around vertex ``v`` from face ``start`` to face ``goal``: (edge ends, faces) each."""
     F = geo.F
     walks = []
@@ -578,7 +609,7 @@ def _open_vertices(mesh: TriMesh, geo: _Geometry, nodes: list) -> list:
             continue
 
         q0, q1 = _position(mesh, nodes[i - 1]), _position(mesh, nodes[i + 1])
-        ends, faces = min(walks, key=lambda w, v=v, q0=q0, q1=q1: _walk_angle(geo, v, w, q0, q1))
+        ends, faces = walks[int(np.argmin([_walk_angle(geo, v, w, q0, q1) for w in walks]))]
         for j, u in enumerate(ends):
             out.append(("e", v, u, faces[j], faces[j + 1], 0.7 * V[v] + 0.3 * V[u]))
     out.append(nodes[-1])
