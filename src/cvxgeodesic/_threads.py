@@ -1,7 +1,7 @@
 """How many threads a solve uses: the ``threads=`` parameter, ``CVXGEODESIC_THREADS`` and the default policy.
 
-A solve runs four thread pools: MKL PARDISO (GNU OpenMP), the Numba kernels of the
-interior-point solver (Numba's ``omp`` layer, the same GNU OpenMP runtime), OpenBLAS
+A solve runs four thread pools: MKL PARDISO (GNU OpenMP), the parallel Numba kernels (the
+order-2 solver's; Numba's ``omp`` layer, the same GNU OpenMP runtime), OpenBLAS
 (NumPy, SciPy, CHOLMOD) and OpenMP regions of other libraries (libigl). Every pool
 is bounded by :func:`thread_limit` for the whole construction of a solver and for
 each of its solves.
