@@ -44,8 +44,8 @@ if "NUMBA_THREADING_LAYER" not in os.environ and "NUMBA_THREADING_LAYER_PRIORITY
 
 # Serial, although the face and row loops are written with prange and have no conflicting writes: parallel=True
 # doubles these kernels' compile time (the first QCQP-Hessian set-up of spot after an install: 3.1 s serial
-# against 5.3-5.9 s), and the four loops take about 80 ms of a 1.2 s set-up of a 97K-face mesh at one thread
-# (face_blocks 23 ms, gather_rows 43 ms), so a second thread would save about 3 % of the set-up (2026-12-02)
+# against 5.3-5.9 s), and the four loops take about 80 ms of a 0.5 s set-up of a 97K-face mesh (face_blocks 23 ms,
+# gather_rows 43 ms; the same with 2 threads parallel on a 2-core machine shared with other jobs, 2026-12-02)
 _JIT = {"cache": True, "nogil": True, "error_model": "numpy"}
 
 

@@ -15,11 +15,13 @@ as in :class:`cvxgeodesic.solvers.ipm.cones._SocScaling`, whose formulas are CVX
 Loops without scatter (no two cones write the same entry) are written with ``prange`` but compiled
 serially: a ``parallel=True`` kernel takes 2-4x longer to compile (the first solve of spot after an install:
 qclp 4.6 s with parallel kernels, 2.6 s without; qcqp-hessian, with :mod:`cvxgeodesic.operators._hessian_kernels`,
-10.0 s against 5.5 s), and these loops are a few percent of an iteration (on a 97K-face mesh about 0.1 s of a
-3 s QCLP solve at one thread; the factorizations take the rest), so a second thread saves at most about 2 %
-(measured 2026-12-02, shared 2-core machine). Compiled code is cached on disk (``cache=True``): the first
-solve after an install compiles for a few seconds (announced by :mod:`cvxgeodesic._jit`), later processes load
-the cache in well under a second.
+10.0 s against 5.5 s), and these loops are short (about 1 ms per call at 300K cones) and a few percent of a
+solve: in QCLP solves with 2 threads of horse and armadillo (87-97K faces), all kernel calls took 0.21 s serial
+against 0.26-0.41 s parallel (waking the threads for each short loop costs more than it saves), of 1.1-1.9 s
+(measured 2026-12-02 on a 2-core machine shared with other jobs, load average about 2).
+
+Compiled code is cached on disk (``cache=True``): the first solve after an install compiles for a few seconds
+(announced by :mod:`cvxgeodesic._jit`), later processes load the cache in well under a second.
 """
 
 from __future__ import annotations
