@@ -45,7 +45,7 @@ if "NUMBA_THREADING_LAYER" not in os.environ and "NUMBA_THREADING_LAYER_PRIORITY
 # Serial, although the face and row loops are written with prange and have no conflicting writes: parallel=True
 # doubles these kernels' compile time (the first QCQP-Hessian set-up of spot after an install: 3.1 s serial
 # against 5.3-5.9 s), and the four loops take about 80 ms of a 0.5 s set-up of a 97K-face mesh (face_blocks 23 ms,
-# gather_rows 43 ms; the same with 2 threads parallel on a 2-core machine shared with other jobs, 2026-12-02)
+# gather_rows 43 ms; the same with 2 threads parallel on a 2-core machine shared with other jobs, 2026-12-02).
 # no_cfunc_wrapper: the kernels are called from Python and from each other, never through a C function pointer,
 # and the C wrapper Numba builds by default took about 5 % of the first compile (spot, qcqp-hessian: 5.1-5.2 s
 # against 5.4 s)
