@@ -173,3 +173,13 @@ def test_smoothed_fields_near_sources_stay_nonnegative_in_one_solve(name, source
     assert res.info.status == "optimal" and res.info.solver == "ipm"
     assert "resolved_nonnegative" not in res.info.extra, res.info.notes
     assert res.distance.min() >= 0.0
+
+
+@pytest.mark.parametrize(("method", "solver"), [("qclp", "ipm"), ("qclp", "clarabel"), ("heat", "auto"),
+                                                ("qcqp-hessian", "auto")])
+def test_setup_time_is_one_quantity_with_one_name(sphere, method, solver):
+    """``info.setup_time`` is the solver object's per-mesh work; no key of ``info.extra`` reuses the name for
+    another quantity (the IPM's part of a solve is ``program_time``, Clarabel's ``clarabel_setup_time``)."""
+    res = cg.GeodesicSolver(sphere, method, solver=solver).solve(0)
+    assert "setup_time" not in res.info.extra, sorted(res.info.extra)
+    assert res.info.setup_time > 0
