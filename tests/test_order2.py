@@ -106,6 +106,26 @@ def test_max_violation_finds_interior_maximum():
         assert vmax[0] <= v.max() + 1e-3 * (abs(v.max()) + 1)
 
 
+def test_violations_lists_every_local_maximum_above_the_tolerance():
+    from cvxgeodesic.operators.p2 import violations
+
+    mesh = cg.TriMesh(np.array([[0, 0, 0], [1, 0, 0], [0.2, 0.9, 0.0]]), np.array([[0, 1, 2]]))
+    space = P2Space(mesh)
+    rng = np.random.default_rng(7)
+    found_any = False
+    for _ in range(20):
+        x = rng.random(space.n_dofs)
+        vmax, bary, phi = max_violation(space, x)
+        faces, points = violations(space, x, -np.inf, np.array([0]))
+        assert (faces == 0).all() and points.shape == (faces.size, 3) and np.allclose(points.sum(axis=1), 1)
+        if vmax[0] > 0 and not np.isclose(bary.max(), 1.0):  # the maximum is not at a corner: it is listed
+            assert np.abs(points - bary).max(axis=1).min() < 1e-12
+            found_any = True
+        none, _ = violations(space, x, np.inf, np.array([0]))
+        assert none.size == 0
+    assert found_any
+
+
 # ---------------------------------------------------------------- flat meshes of any quality
 @pytest.mark.parametrize("src", [0, 200, 37])
 def test_flat_jittered_grid_vertex_sources(src):
