@@ -111,19 +111,19 @@ def test_violations_lists_every_local_maximum_above_the_tolerance():
 
     mesh = cg.TriMesh(np.array([[0, 0, 0], [1, 0, 0], [0.2, 0.9, 0.0]]), np.array([[0, 1, 2]]))
     space = P2Space(mesh)
-    rng = np.random.default_rng(7)
-    found_any = False
-    for _ in range(20):
-        x = rng.random(space.n_dofs)
-        vmax, bary, phi = max_violation(space, x)
+    E = mesh.edges
+    nodes = np.vstack([mesh.V, 0.5 * (mesh.V[E[:, 0]] + mesh.V[E[:, 1]])])
+    for c in ([0.4, 0.3, 0.0], [0.5, 0.02, 0.0], [0.2, 0.2, 0.0]):
+        # φ = ½|x − c|² − 0.1: v = |∇φ|² − 4φ = 0.4 − |x − c|², a maximum at c (inside the face or near an edge)
+        x = 0.5 * ((nodes - c) ** 2).sum(axis=1) - 0.1
+        vmax, bary, _ = max_violation(space, x)
         faces, points = violations(space, x, -np.inf, np.array([0]))
         assert (faces == 0).all() and points.shape == (faces.size, 3) and np.allclose(points.sum(axis=1), 1)
-        if vmax[0] > 0 and not np.isclose(bary.max(), 1.0):  # the maximum is not at a corner: it is listed
-            assert np.abs(points - bary).max(axis=1).min() < 1e-12
-            found_any = True
+        assert vmax[0] == pytest.approx(0.4, abs=1e-12)
+        assert np.abs(points - bary).max(axis=1).min() < 1e-12  # the worst point is among the listed ones
+        assert np.abs(points @ mesh.V - c).max(axis=1).min() < 1e-12
         none, _ = violations(space, x, np.inf, np.array([0]))
         assert none.size == 0
-    assert found_any
 
 
 # ---------------------------------------------------------------- flat meshes of any quality
