@@ -127,7 +127,7 @@ def summary(path: Path) -> int:
     for r in rows:
         groups[(r["mesh"], r["method"], r["order"])].append(r)
     print(f"{'mesh':28s} {'method':15s} ord {'n':>3s} {'ipm optimal':>11s} {'fallback':>8s} {'d>=0':>5s} "
-          f"{'worst/median':>12s}")
+          f"{'worst/median':>12s} {'it worst/med':>12s}")
     total = clean = 0
     worst_cases = []
     for (mesh, method, order), rs in sorted(groups.items()):
@@ -138,12 +138,14 @@ def summary(path: Path) -> int:
         fb = sum(bool(r.get("fallback")) for r in rs)
         nn = sum(bool(r.get("resolved_nonnegative")) for r in rs)
         ratio = float(times.max() / med) if med > 0 else 1.0
+        its = np.array([r.get("iterations") or 0 for r in rs], dtype=float)
+        it_ratio = float(its.max() / np.median(its)) if np.median(its) > 0 else 1.0
         total += len(rs)
         clean += len(ok)
         worst = max(rs, key=lambda r: r["time"])
         worst_cases.append((ratio, mesh, method, order, worst["source"], worst["status"], worst.get("iterations")))
         print(f"{mesh:28s} {method:15s} {order:3d} {len(rs):3d} {len(ok) / len(rs):11.1%} {fb:8d} {nn:5d} "
-              f"{ratio:12.2f}")
+              f"{ratio:12.2f} {it_ratio:12.2f}")
     print(f"\nstructured solver alone, optimal: {clean}/{total} = {clean / max(total, 1):.2%}")
     print("worst time / median of its mesh and method:")
     for ratio, mesh, method, order, source, status, iterations in sorted(worst_cases, reverse=True)[:10]:
