@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterable
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -185,7 +185,7 @@ class GeodesicSolver:
         threads: int | None = None,
     ) -> None:
         t0 = time.perf_counter()
-        self.mesh: Any = as_mesh(mesh)
+        self.mesh: Any = cast(Any, as_mesh(mesh))  # a TriMesh or a TetMesh, told apart by is_volume
         self.is_volume = isinstance(self.mesh, TetMesh)  # distance inside tetrahedra (strategies/tet.py)
         self._check_method_and_solver(method, solver)
         self.tol = check_number(tol, "tol", low=0, high=1, low_open=True, high_open=True)

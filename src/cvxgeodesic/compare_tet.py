@@ -156,7 +156,12 @@ def _write_csv(path: Path, rows: list[dict]) -> None:
     for row in rows:
         w.writerow(["" if row[k] is None else (f"{row[k]:.6g}" if isinstance(row[k], float) else row[k])
                     for k in TET_CSV_COLUMNS])
-    atomic_write(path, lambda fh: fh.write(buf.getvalue().encode("utf-8")))
+    data = buf.getvalue().encode("utf-8")
+
+    def write(fh) -> None:
+        fh.write(data)
+
+    atomic_write(path, write)
 
 
 def format_tet_table(rows: list[dict]) -> str:

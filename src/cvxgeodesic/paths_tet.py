@@ -14,7 +14,7 @@ box from the opposite corner, docs/volumes.md).
 from __future__ import annotations
 
 import numbers
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import scipy.sparse as sp
@@ -154,7 +154,7 @@ class _Descent:
         tets = vol.vertex_tets[v].indices
         if any(self._end_in(int(t), mesh.V[v], d[v]) for t in tets):
             return None
-        best, choice = 1e-14, None
+        best, choice = 1e-14, cast(tuple[Any, ...] | None, None)
         for t in tets:
             if not vol.ok[t]:
                 continue
@@ -296,7 +296,7 @@ def tet_geodesic_path(mesh: TetMesh, distance: Any, target: Any, *, sources: Any
         if not 0 <= int(target) < mesh.n_vertices:
             raise SourceError(f"target vertex {int(target)} is out of range: the mesh has {mesh.n_vertices} "
                               "vertices")
-        state: tuple | None = ("v", int(target))
+        state: tuple[Any, ...] | None = ("v", int(target))
         start_value = d[int(target)]
         walk.points.append(mesh.V[int(target)])
     else:

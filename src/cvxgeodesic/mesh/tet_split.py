@@ -65,7 +65,7 @@ class TetSplitMesh:
                 beta = np.zeros(4)
                 for c, b in zip(corners, p.bary[nz], strict=True):
                     beta[mesh.T[t] == c] = b
-                lst = []
+                lst: list[tuple[int, int, np.ndarray]] = []
                 for kk in np.flatnonzero(beta > 0).tolist():
                     tet = list(mesh.T[t])
                     tet[kk] = vid

@@ -137,8 +137,8 @@ def tet_max_violation(space: TetP2Space, x: np.ndarray) -> tuple[np.ndarray, np.
     cands = [np.broadcast_to(np.eye(4), (k, 4, 4))]
     scale = np.abs(Q).max(axis=(1, 2)) + 1e-300
     for size in (2, 3, 4):
-        for S in itertools.combinations(range(4), size):
-            S = list(S)
+        for subset in itertools.combinations(range(4), size):
+            S = list(subset)
             M = np.zeros((k, size + 1, size + 1))
             M[:, :size, :size] = 2 * Q[:, S][:, :, S] / scale[:, None, None]
             M[:, :size, size] = -1.0

@@ -16,7 +16,7 @@
 from __future__ import annotations
 
 import time
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -61,6 +61,11 @@ def make_tet_strategy(config: SolveConfig, *, baseline: bool, order: int = 1) ->
     return TetDirect(config)
 
 
+def _volume(config: SolveConfig) -> TetMesh:
+    """The config's mesh, a TetMesh here (SolveConfig is typed for the surface strategies)."""
+    return cast(TetMesh, config.mesh)
+
+
 def _info(config: SolveConfig, res: BackendResult, setup_time: float, t0: float, objective: float,
           n_unreachable: int, notes: list[str], extra: dict) -> SolveInfo:
     return SolveInfo(method=config.method, solver=res.solver, status=res.status, iterations=res.iterations,
@@ -88,7 +93,7 @@ class TetDirect:
     def __init__(self, config: SolveConfig) -> None:
         t0 = time.perf_counter()
         self.config = config
-        unit, self.scale = unit_tetmesh(config.mesh)
+        unit, self.scale = unit_tetmesh(_volume(config))
         self.ops = TetOperators(unit)
         self.policy = Backend(config.solver, config.tol, config.max_iter, config.verbose, config.mesh.name)
         self.notes: list[str] = [*config.notes, *self.ops.notes, *self.policy.notes]
@@ -129,7 +134,7 @@ class TetDirect:
             res = self.policy.solve(problem, self.ipm, callback, notes)
         d = np.array(res.x, dtype=float) * self.scale
         d[problem.unreachable] = np.inf
-        d[sources.fixed_vertices(cfg.mesh)] = 0.0
+        d[sources.fixed_vertices(_volume(cfg))] = 0.0
         info = _info(cfg, res, self.setup_time, t0, res.objective / problem.objective_scale * self.scale,
                      int(problem.unreachable.sum()), notes, {**extra, **res.extra})
         return GeodesicResult(distance=d, info=info, sources=sources.vertices,
@@ -160,7 +165,7 @@ class TetOrder2:
                                  f"{config.method!r}")
         self.config = config
         self.refine = int(refine)
-        unit, self.scale = unit_tetmesh(config.mesh)
+        unit, self.scale = unit_tetmesh(_volume(config))
         self.builder = TetP2Builder(unit)
         self.policy = Backend(config.solver, config.tol, config.max_iter, config.verbose, config.mesh.name)
         self.backend = self.policy.name
@@ -180,7 +185,7 @@ class TetOrder2:
     def solve(self, sources: TetSources, *, callback: Callback | None = None) -> GeodesicResult:
         """Distance field from vertex, point, face and boundary sources."""
         t0 = time.perf_counter()
-        mesh = self.config.mesh
+        mesh = _volume(self.config)
         builder, ipm, split = self.builder, self.ipm, None
         notes = list(self.notes)
         fixed = sources.fixed_vertices(mesh)
