@@ -19,12 +19,15 @@ from .api import SOLVERS
 from .cli_sources import MESH_HELP, add_method_option, add_path_parser, add_source_options, xyz
 from .errors import ParameterError, SourceError
 from .mesh.formats.registry import field_formats_help
+from .mesh.tet_io import MESHIO_TET_EXTENSIONS, TETGEN_EXTENSIONS
 from .mesh.tetmesh import TetMesh
 
 EXIT_USAGE = 2
 M_HELP = "smoothness multiplier m (default 1): λ = m·κ·√area, one rounding on the surface whatever the mesh"
 OUTPUT_HELP = (f"output file: {field_formats_help()} (trimesh and meshio: pip install 'cvxgeodesic[io]'); in the "
                "input file's vertex numbering, with its faces (a tetrahedral mesh: .vtu, .vtk or .npy)")
+VOLUME_HELP = (f"{MESH_HELP}; or tetrahedra, the distance inside the solid: {', '.join(MESHIO_TET_EXTENSIONS)} with "
+               f"meshio, {', '.join(TETGEN_EXTENSIONS)} (TetGen)")
 SLICE_HELP = "tetrahedral meshes: normal of the slice through the centre that --png (or view) shows (default 0,0,1)"
 
 
@@ -182,7 +185,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
 
     def common(p):
-        p.add_argument("mesh", help=MESH_HELP)
+        p.add_argument("mesh", help=VOLUME_HELP)
         add_source_options(p)
         p.add_argument("--m", type=float, default=1.0, help=M_HELP)
         p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")

@@ -13,8 +13,7 @@ from .errors import ParameterError, SourceError
 from .mesh.formats.registry import mesh_formats_help
 
 #: Help of every command's mesh argument: the formats of the registry.
-MESH_HELP = (f"mesh file: {mesh_formats_help()} (trimesh and meshio: pip install 'cvxgeodesic[io]'); tetrahedra "
-             "(the distance inside): .msh, .mesh, .inp, .vtu, .vtk with meshio, TetGen's .node/.ele")
+MESH_HELP = f"mesh file: {mesh_formats_help()} (trimesh and meshio: pip install 'cvxgeodesic[io]')"
 
 
 def xyz(text: str) -> tuple[float, float, float]:
