@@ -59,11 +59,23 @@ def test_max_violation_is_the_maximum_over_each_tetrahedron():
     m = tet_box(2, jitter=0.2, seed=4)
     space = TetP2Space(m)
     rng = np.random.default_rng(2)
-    x = rng.uniform(0.0, 1.0, space.n_dofs)  # a P2 field that is no squared distance
-    vmax, bary, phi_at = tet_max_violation(space, x)
+    E = m.edges
+    nodes = np.vstack([m.V, 0.5 * (m.V[E[:, 0]] + m.V[E[:, 1]])])
+    # a random field (v mostly convex: its maximum at corners), and half a squared distance from a point inside,
+    # whose v = −|x − x0|² + noise is concave: its maximum on faces, edges or inside
+    fields = [rng.uniform(0.0, 1.0, space.n_dofs),
+              0.5 * ((nodes - [0.4, 0.45, 0.55]) ** 2).sum(axis=1) + 1e-3 * rng.normal(size=space.n_dofs)]
     samples = rng.dirichlet(np.ones(4), 4000)
     samples = np.vstack([samples, TET_P2_NODES, np.eye(4)])
-    for t in range(m.n_tets):
+    inside = 0
+    for x in fields:
+        inside += _check_max(space, x, samples)
+    assert inside >= m.n_tets // 2  # the second field's maxima are away from the corners
+
+
+def _check_max(space, x, samples) -> int:
+    vmax, bary, phi_at = tet_max_violation(space, x)
+    for t in range(space.mesh.n_tets):
         val, gr = space.value_and_gradient_rows(np.full(len(samples), t), samples)
         xt = x[space.tet_dofs[t]]
         v = (np.einsum("pca,a->pc", gr, xt) ** 2).sum(axis=1) - 4 * val @ xt
@@ -73,6 +85,7 @@ def test_max_violation_is_the_maximum_over_each_tetrahedron():
         assert at == pytest.approx(vmax[t], abs=1e-9)  # reached where it says
         assert phi_at[t] == pytest.approx(float(vb_val[0] @ xt))
         assert bary[t].min() >= 0 and bary[t].sum() == pytest.approx(1.0)
+    return int(np.count_nonzero(bary.max(axis=1) < 1 - 1e-9))
 
 
 def test_split_mesh_keeps_the_volume_and_locates_points():
