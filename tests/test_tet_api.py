@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
-
 import numpy as np
 import pytest
 
@@ -16,6 +13,7 @@ from cvxgeodesic.mesh.tet_generate import l_prism_distance, tet_box, tet_l_prism
 from cvxgeodesic.mesh.tet_split import TetSplitMesh
 from cvxgeodesic.mesh.tetmesh import TetMesh
 from cvxgeodesic.operators.tet_p2 import TET_P2_NODES, TetP2Space, tet_max_violation, tet_p2_basis
+from test_viewer import _egl_works
 
 
 @pytest.fixture(scope="module")
@@ -224,15 +222,6 @@ def test_cli_compare_lists_heat_and_dijkstra(prism, tmp_path, capsys):
 
 
 # -- the viewer (off-screen) -----------------------------------------------------------------------------------
-def _egl_works(folder) -> bool:
-    code = "import polyscope as ps; ps.set_allow_headless_backends(True); ps.init('openGL3_egl')"
-    try:
-        res = subprocess.run([sys.executable, "-c", code], capture_output=True, timeout=60, cwd=folder)
-    except (OSError, subprocess.TimeoutExpired):
-        return False
-    return res.returncode == 0
-
-
 def test_view_draws_the_slice(prism, tmp_path):
     pytest.importorskip("polyscope", reason="polyscope not installed", exc_type=ImportError)
     if not _egl_works(tmp_path):

@@ -6,6 +6,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import SourceError
+from .split import piece_coordinates
 from .tetmesh import TetMesh
 
 __all__ = ["TetSplitMesh"]
@@ -82,25 +83,12 @@ class TetSplitMesh:
         self.n_original = n
 
     def locate(self, tets: np.ndarray, bary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Original ``(tets (p,), bary (p, 4))`` pairs → the pieces holding the points and their coordinates there.
-
-        In the piece that replaces corner ``k`` by the inserted point ``β``, a point ``λ`` has coordinate
-        ``λ_k / β_k`` on the new vertex and ``λ_i − (λ_k / β_k) β_i`` on the others: the piece with the smallest
-        ratio holds it.
-        """
+        """Original ``(tets (p,), bary (p, 4))`` pairs → the pieces holding the points and their coordinates there
+        (:func:`~cvxgeodesic.mesh.split.piece_coordinates`)."""
         tets = np.array(tets, dtype=np.int64)
         bary = np.array(bary, dtype=float)
         for r, t in enumerate(tets.tolist()):
             lst = self.pieces.get(t)
-            if not lst:
-                continue
-            lam = bary[r]
-            beta = lst[0][2]
-            ratios = [lam[kk] / beta[kk] for kk, _, _ in lst]
-            j = int(np.argmin(ratios))
-            kk, idx, _ = lst[j]
-            mu = lam - ratios[j] * beta
-            mu[kk] = ratios[j]
-            mu = np.clip(mu, 0.0, None)
-            tets[r], bary[r] = idx, mu / mu.sum()
+            if lst:
+                tets[r], bary[r] = piece_coordinates(bary[r], lst)
         return tets, bary
