@@ -11,6 +11,7 @@ from ._verbose import progress_printer
 from .api import ALL_METHODS, SOLVERS
 from .errors import ParameterError, SourceError
 from .mesh.formats.registry import mesh_formats_help
+from .mesh.trimesh import TriMesh
 
 #: Help of every command's mesh argument: the formats of the registry.
 MESH_HELP = f"mesh file: {mesh_formats_help()} (trimesh and meshio: pip install 'cvxgeodesic[io]')"
@@ -176,6 +177,9 @@ def _cmd_path(args) -> int:
     if args.png:
         check_output_path(args.png, (".png",))
     mesh = load_mesh(args.mesh)
+    if not isinstance(mesh, TriMesh):  # a TetMesh
+        raise ParameterError(f"{mesh.name} holds tetrahedra: the path command draws paths on surfaces; inside a "
+                             "solid use cg.geodesic_path(mesh, result, target) (docs/volumes.md)")
     sources, label = cli_sources(args, mesh)
     target = _target(args, mesh)
     res = GeodesicSolver(mesh, args.method, m=args.m, solver=args.solver).solve(
