@@ -59,6 +59,9 @@ def test_bad_parameters(sphere, kwargs, match):
 
 def test_bad_mesh_arrays():
     with pytest.raises(MeshError, match="triangles only"):
+        cg.geodesic_distance(([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [2, 2, 2]], [[0, 1, 2, 3, 4]]), 0)
+    # four columns are tetrahedra (issue 26): this one is flat
+    with pytest.raises(MeshError, match="all 1 tetrahedra are degenerate"):
         cg.geodesic_distance(([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], [[0, 1, 2, 3]]), 0)
     with pytest.raises(MeshError, match="outside"):
         cg.geodesic_distance(([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 3]]), 0)

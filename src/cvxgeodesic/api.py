@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterable
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -18,7 +18,8 @@ from ._threads import limited
 from .baselines import BASELINES
 from .errors import ParameterError, SourceError
 from .formulations import ALIASES, FORMULATIONS, NORMALIZATIONS, canonical_method, smoothness_weight
-from .mesh.io import as_trimesh
+from .mesh.convert import as_mesh
+from .mesh.tetmesh import TetMesh
 from .mesh.trimesh import TriMesh
 from .results import GeodesicResult, SolveInfo
 from .solvers._interrupt import reporting_to
@@ -51,13 +52,18 @@ class GeodesicSolver:
     Parameters
     ----------
     mesh : TriMesh, tuple (V, F), file path, trimesh.Trimesh, open3d TriangleMesh or meshio.Mesh
-        ``V`` (n, 3) float, ``F`` (m, 3) int (see :func:`~cvxgeodesic.mesh.io.as_trimesh`).
+        ``V`` (n, 3) float, ``F`` (m, 3) int (see :func:`~cvxgeodesic.mesh.io.as_trimesh`); or a tetrahedral
+        mesh: a :class:`~cvxgeodesic.mesh.tetmesh.TetMesh`, ``(V, T)`` with ``T`` (k, 4) int, a file holding
+        tetrahedra, a meshio.Mesh with ``tetra`` cells: the distance *inside* the solid (``docs/volumes.md``;
+        methods :data:`~cvxgeodesic.formulations_tet.TET_METHODS`, sources vertices, VolumePoints,
+        BoundaryFaces and ``"boundary"``, ``order=2`` for ``"qclp"``).
     method : str
         One of :data:`ALL_METHODS`: the eight convex formulations
         (``"lclp"``, ``"lcqp-dirichlet"``, ``"lcqp-laplacian"``, ``"lcqp-hessian"``
         (alias ``"qgdf"``), ``"qclp"``, ``"qcqp-dirichlet"``, ``"qcqp-laplacian"``,
         ``"qcqp-hessian"``) or a baseline (``"dijkstra"``, ``"fmm"``, ``"heat"``,
-        ``"exact"``). Default ``"qcqp-hessian"``, the paper's recommendation.
+        ``"exact"``). Default (None) ``"qcqp-hessian"``, the paper's recommendation; ``"qclp"`` on a
+        tetrahedral mesh, where the curved Hessian does not apply.
     m : float
         Smoothness multiplier (default 1; 0 is the LP without smoothing). With the
         default ``normalization="area"`` the objective is
@@ -166,7 +172,7 @@ class GeodesicSolver:
     def __init__(
         self,
         mesh: Any,
-        method: str = "qcqp-hessian",
+        method: str | None = None,
         *,
         m: float = 1.0,
         lam: float | None = None,
@@ -181,7 +187,8 @@ class GeodesicSolver:
         threads: int | None = None,
     ) -> None:
         t0 = time.perf_counter()
-        self.mesh: TriMesh = as_trimesh(mesh)
+        self.mesh: Any = cast(Any, as_mesh(mesh))  # a TriMesh or a TetMesh, told apart by is_volume
+        self.is_volume = isinstance(self.mesh, TetMesh)  # distance inside tetrahedra (strategies/tet.py)
         self._check_method_and_solver(method, solver)
         self.tol = check_number(tol, "tol", low=0, high=1, low_open=True, high_open=True)
         self.max_iter = check_count(max_iter, "max_iter")
@@ -193,6 +200,9 @@ class GeodesicSolver:
         if self.order == 2:  # P2 elements for d² (cvxgeodesic.formulations_p2, strategies/order2.py)
             if self.is_baseline or multires:
                 raise ParameterError("order=2 applies to the convex formulations without multires")
+        elif self.is_volume:
+            if multires:
+                raise ParameterError("multires applies to triangle meshes, not to tetrahedral ones")
         else:
             target = resolve_target(multires, self.mesh.n_faces)
             if target is not None and self.is_baseline:
@@ -209,9 +219,21 @@ class GeodesicSolver:
         self.setup_time = time.perf_counter() - t0
 
     def _check_method_and_solver(self, method: Any, solver: Any) -> None:
+        if method is None:
+            method = "qclp" if self.is_volume else "qcqp-hessian"
         if not isinstance(method, str):
             raise ParameterError(f"method must be a string, got {type(method).__name__}")
         key = method.lower()
+        if self.is_volume:
+            from .formulations_tet import TET_BASELINE_METHODS, check_tet_method
+
+            self.method = check_tet_method(method)
+            self._solver = check_choice(solver, "solver", SOLVERS)
+            self.is_baseline = self.method in TET_BASELINE_METHODS
+            if self.is_baseline and self._solver != "auto":
+                raise ParameterError(
+                    f"solver={self._solver!r} applies to the convex formulations, not to baseline {self.method!r}")
+            return
         if key in BASELINE_METHODS:
             self.method = key
         elif key not in FORMULATIONS and key not in ALIASES:
@@ -229,14 +251,21 @@ class GeodesicSolver:
         """``self.lam`` (λ in the mesh's units), ``self.m`` and ``self.energy`` from ``m`` or ``lam``: both checked
         here, λ computed once (0 without a smoothness energy)."""
         m_value, lam_value = check_smoothness(m, lam)
-        self.energy = None if self.is_baseline else FORMULATIONS[self.method][1]
+        weight: Any = smoothness_weight
+        if self.is_volume:
+            from .formulations_tet import TET_FORMULATIONS, tet_smoothness_weight
+
+            self.energy = None if self.is_baseline else TET_FORMULATIONS[self.method][1]
+            weight = tet_smoothness_weight
+        else:
+            self.energy = None if self.is_baseline else FORMULATIONS[self.method][1]
         self.m = None if lam_value is not None else m_value
         if self.energy is None:
             self.lam = 0.0
         elif lam_value is not None:
             self.lam = lam_value
         else:
-            self.lam = smoothness_weight(self.mesh, m_value, self.normalization, self.energy)
+            self.lam = weight(self.mesh, m_value, self.normalization, self.energy)
 
     def __repr__(self) -> str:
         return (
@@ -277,7 +306,12 @@ class GeodesicSolver:
             The backend did not reach an optimal solution (for the Hessian energy the
             message adds that it can be indefinite on meshes with sharp corners).
         """
-        sset = resolve_sources(self.mesh, sources)
+        if self.is_volume:
+            from .sources_tet import resolve_tet_sources
+
+            sset: Any = resolve_tet_sources(self.mesh, sources)
+        else:
+            sset = resolve_sources(self.mesh, sources)
         with reporting_to(callback):  # Clarabel's iterations too, wherever a strategy runs it
             res = self._strategy.solve(sset, callback=callback)
         res.info.setup_time = self.setup_time
@@ -366,7 +400,7 @@ def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | 
     if "sources" not in given:
         raise TypeError("geodesic_distance() missing the source vertices: geodesic_distance(mesh, sources)")
     sources = given["sources"]
-    method = given.get("method", "qcqp-hessian")
+    method = given.get("method")
     m = given.get("m", 1.0)
     solver = given.get("solver", "auto")
     solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter,
@@ -374,7 +408,7 @@ def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | 
     return solver_obj.solve(sources).distance
 
 
-def distance_matrix(mesh: Any, vertices: ArrayLike, method: str = "qcqp-hessian", m: float = 1.0, solver: str = "auto",
+def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m: float = 1.0, solver: str = "auto",
                     progress: bool = False, *, lam: float | None = None, tol: float = DEFAULT_TOL,
                     max_iter: int = 200, multires: bool | int = False, normalization: str = "area",
                     order: int = 1, threads: int | None = None, workers: int | None = None,
@@ -435,8 +469,10 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str = "qcqp-hessian"
     >>> D.shape, float(D[1, 5])
     ((3, 162), 0.0)
     """
-    mesh = as_trimesh(mesh)
+    mesh = as_mesh(mesh)
+    from .mesh.tet_locate import VolumePoint
     from .sources import SurfaceCurve, SurfacePoint
+    from .sources_tet import BoundaryFaces
 
     if workers is not None:
         check_count(workers, "workers", or_none=True)
@@ -450,11 +486,11 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str = "qcqp-hessian"
             from .rows import distributed_rows
 
             return distributed_rows(GeodesicSolver, mesh, items, options, scheduler=scheduler, workers=workers,
-                                    progress=progress, desc=str(method))
+                                    progress=progress, desc=str(method or "distance"))
         solver_obj = GeodesicSolver(mesh, **options)
         return np.stack([r.distance for r in solver_obj.solve_many(items, progress=progress)])
 
-    surface = (SurfacePoint, SurfaceCurve, str)
+    surface = (SurfacePoint, SurfaceCurve, str, VolumePoint, BoundaryFaces)
     if isinstance(vertices, surface) or (isinstance(vertices, list | tuple)
                                          and any(isinstance(v, surface) for v in vertices)):
         return rows_of([vertices] if isinstance(vertices, surface) else list(vertices))  # one row per item

@@ -16,14 +16,19 @@ import warnings
 from . import __version__
 from ._verbose import progress_printer
 from .api import SOLVERS
-from .cli_sources import MESH_HELP, add_method_option, add_path_parser, add_source_options
+from .cli_sources import MESH_HELP, add_method_option, add_path_parser, add_source_options, xyz
 from .errors import ParameterError, SourceError
 from .mesh.formats.registry import field_formats_help
+from .mesh.tet_io import MESHIO_TET_EXTENSIONS, TETGEN_EXTENSIONS
+from .mesh.tetmesh import TetMesh
 
 EXIT_USAGE = 2
 M_HELP = "smoothness multiplier m (default 1): λ = m·κ·√area, one rounding on the surface whatever the mesh"
 OUTPUT_HELP = (f"output file: {field_formats_help()} (trimesh and meshio: pip install 'cvxgeodesic[io]'); in the "
-               "input file's vertex numbering, with its faces")
+               "input file's vertex numbering, with its faces (a tetrahedral mesh: .vtu, .vtk or .npy)")
+VOLUME_HELP = (f"{MESH_HELP}; or tetrahedra, the distance inside the solid: {', '.join(MESHIO_TET_EXTENSIONS)} with "
+               f"meshio, {', '.join(TETGEN_EXTENSIONS)} (TetGen)")
+SLICE_HELP = "tetrahedral meshes: normal of the slice through the centre that --png (or view) shows (default 0,0,1)"
 
 
 def _cmd_distance(args) -> int:
@@ -36,6 +41,10 @@ def _cmd_distance(args) -> int:
     if args.png:
         check_output_path(args.png, (".png",))
     mesh = load_mesh(args.mesh)
+    if isinstance(mesh, TetMesh):
+        from .cli_tet import cmd_tet_distance
+
+        return cmd_tet_distance(args, mesh)
     sources, label = cli_sources(args, mesh)
     log = sys.stderr
     if not args.quiet:
@@ -66,6 +75,10 @@ def _cmd_compare(args) -> int:
     from .mesh.io import load_mesh
 
     mesh = load_mesh(args.mesh)
+    if isinstance(mesh, TetMesh):
+        from .cli_tet import cmd_tet_compare
+
+        return cmd_tet_compare(args, mesh)
     sources, _ = cli_sources(args, mesh)
     methods = [m.strip() for m in args.methods.split(",") if m.strip()]
     rows = run_compare(mesh, sources, methods, args.out, m=args.m, solver=args.solver, progress=not args.quiet)
@@ -95,6 +108,10 @@ def _cmd_view(args) -> int:
     from .viewer import show
 
     mesh = load_mesh(args.mesh)
+    if isinstance(mesh, TetMesh):
+        from .cli_tet import cmd_tet_view
+
+        return cmd_tet_view(args, mesh)
     given = args.source or args.source_point or args.boundary
     sources = cli_sources(args, mesh)[0] if given else 0  # a field to start from; clicks choose the next ones
     show(mesh, sources=sources, method=args.method, screenshot=args.screenshot, m=args.m, solver=args.solver)
@@ -168,7 +185,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
 
     def common(p):
-        p.add_argument("mesh", help=MESH_HELP)
+        p.add_argument("mesh", help=VOLUME_HELP)
         add_source_options(p)
         p.add_argument("--m", type=float, default=1.0, help=M_HELP)
         p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")
@@ -185,7 +202,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="2: second-order elements for the squared distance (qclp only; docs/order2.md)")
     p.add_argument("-o", "--output", required=True, help=OUTPUT_HELP)
     p.add_argument("--png", default=None,
-                   help="also render the field with isolines and the sources to this PNG (both files or neither)")
+                   help="also render the field with isolines and the sources to this PNG (both files or neither; "
+                        "a slice of a tetrahedral mesh)")
+    p.add_argument("--slice-normal", type=xyz, default=None, metavar="NX,NY,NZ", help=SLICE_HELP)
     p.set_defaults(func=_cmd_distance)
 
     from .compare import table_legend
@@ -236,6 +255,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_method_option(p)
     p.add_argument("--screenshot", default=None, metavar="OUT.png",
                    help="render one frame to this PNG without opening a window (works without a display)")
+    p.add_argument("--slice-normal", type=xyz, default=None, metavar="NX,NY,NZ", help=SLICE_HELP)
     p.set_defaults(func=_cmd_view)
 
     p = sub.add_parser("matrix", help="distance matrix: one row per source vertex (-s), in the given order")

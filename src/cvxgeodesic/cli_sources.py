@@ -11,12 +11,14 @@ from ._verbose import progress_printer
 from .api import ALL_METHODS, SOLVERS
 from .errors import ParameterError, SourceError
 from .mesh.formats.registry import mesh_formats_help
+from .mesh.trimesh import TriMesh
 
 #: Help of every command's mesh argument: the formats of the registry.
 MESH_HELP = f"mesh file: {mesh_formats_help()} (trimesh and meshio: pip install 'cvxgeodesic[io]')"
 
 
-def _xyz(text: str) -> tuple[float, float, float]:
+def xyz(text: str) -> tuple[float, float, float]:
+    """``"1,2,3"`` -> ``(1.0, 2.0, 3.0)``: an option's X,Y,Z value."""
     parts = [p for p in text.replace(" ", "").split(",") if p]
     try:
         vals = tuple(float(p) for p in parts)
@@ -48,15 +50,25 @@ def add_source_options(p: argparse.ArgumentParser,
         add_point_options(p)
 
 
+class _Given(argparse.Action):
+    """Stores the value and records that the option was given (``args.method_given``)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        setattr(namespace, self.dest, values)
+        namespace.method_given = True
+
+
 def add_method_option(p: argparse.ArgumentParser) -> None:
-    """``--method NAME``, any method of :data:`~cvxgeodesic.api.ALL_METHODS` (default qcqp-hessian)."""
-    p.add_argument("--method", default="qcqp-hessian", choices=ALL_METHODS, metavar="NAME",
-                   help=f"one of: {', '.join(ALL_METHODS)} (default qcqp-hessian)")
+    """``--method NAME``, any method of :data:`~cvxgeodesic.api.ALL_METHODS` (default qcqp-hessian; qclp on a
+    tetrahedral mesh, which ``args.method_given`` tells apart)."""
+    p.add_argument("--method", default="qcqp-hessian", choices=ALL_METHODS, metavar="NAME", action=_Given,
+                   help=f"one of: {', '.join(ALL_METHODS)} (default qcqp-hessian; qclp on a tetrahedral mesh)")
+    p.set_defaults(method_given=False)
 
 
 def add_point_options(p: argparse.ArgumentParser) -> None:
     """``--source-point X,Y,Z`` (repeatable) and ``--boundary``."""
-    p.add_argument("--source-point", type=_xyz, action="append", default=None, metavar="X,Y,Z",
+    p.add_argument("--source-point", type=xyz, action="append", default=None, metavar="X,Y,Z",
                    help="source at the surface point closest to X,Y,Z (repeat for several)")
     p.add_argument("--boundary", action="store_true", help="the mesh boundary (every boundary edge) is the source")
 
@@ -165,6 +177,9 @@ def _cmd_path(args) -> int:
     if args.png:
         check_output_path(args.png, (".png",))
     mesh = load_mesh(args.mesh)
+    if not isinstance(mesh, TriMesh):  # a TetMesh
+        raise ParameterError(f"{mesh.name} holds tetrahedra: the path command draws paths on surfaces; inside a "
+                             "solid use cg.geodesic_path(mesh, result, target) (docs/volumes.md)")
     sources, label = cli_sources(args, mesh)
     target = _target(args, mesh)
     res = GeodesicSolver(mesh, args.method, m=args.m, solver=args.solver).solve(
@@ -188,7 +203,7 @@ def add_path_parser(sub) -> None:
     p.add_argument("mesh", help=MESH_HELP)
     add_source_options(p)
     p.add_argument("--to", type=int, default=None, metavar="I", help="target vertex")
-    p.add_argument("--to-point", type=_xyz, default=None, metavar="X,Y,Z", help="target: the closest surface point")
+    p.add_argument("--to-point", type=xyz, default=None, metavar="X,Y,Z", help="target: the closest surface point")
     add_method_option(p)
     p.add_argument("--m", type=float, default=1.0, help="smoothness multiplier m (default 1)")
     p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")

@@ -32,7 +32,9 @@ import scipy.sparse as sp
 from numpy.typing import ArrayLike
 
 from .errors import ParameterError, SolverError, SourceError
+from .mesh.convert import as_mesh
 from .mesh.io import as_trimesh
+from .mesh.tetmesh import TetMesh
 from .mesh.trimesh import TriMesh
 from .results import GeodesicResult
 from .sources import BARY_SNAP, SourceSet, SurfacePoint, _barycentric, _incident_faces, resolve_sources
@@ -113,7 +115,14 @@ def distance_at(mesh: Any, distance: Field, points: Any) -> float | np.ndarray:
     >>> d = cg.geodesic_distance(mesh, 0, method="dijkstra")
     >>> round(cg.distance_at(mesh, d, cg.SurfacePoint(0, [1.0, 0.0, 0.0])), 6)
     0.0
+
+    On a tetrahedral mesh, ``points`` are VolumePoints or positions inside it
+    (:func:`~cvxgeodesic.paths_tet.tet_distance_at`).
     """
+    if isinstance(volume := as_mesh(mesh), TetMesh):
+        from .paths_tet import tet_distance_at
+
+        return tet_distance_at(volume, distance, points)
     mesh = as_trimesh(mesh)
     p2_field = getattr(getattr(distance, "info", None), "extra", {}).get("p2_field")
     if p2_field is not None:  # an order=2 result: its piecewise quadratic field, not the vertex values
@@ -253,7 +262,14 @@ def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = Non
     >>> path = cg.geodesic_path(mesh, d, 80)
     >>> path[0].tolist(), path[-1].tolist()
     ([1.0, 1.0, 0.0], [0.0, 0.0, 0.0])
+
+    On a tetrahedral mesh the path goes down the field inside the solid, tet by tet (a vertex, VolumePoint or
+    position as target; :func:`~cvxgeodesic.paths_tet.tet_geodesic_path`).
     """
+    if isinstance(volume := as_mesh(mesh), TetMesh):
+        from .paths_tet import tet_geodesic_path
+
+        return tet_geodesic_path(volume, distance, target, sources=sources, max_steps=max_steps)
     mesh = as_trimesh(mesh)
     d, result = _field(mesh, distance)
     ss, src_v = _path_sources(mesh, d, distance, result, sources)

@@ -17,12 +17,13 @@ from numpy.typing import ArrayLike
 
 from .errors import ParameterError
 
-__all__ = ["show"]
+__all__ = ["show", "show_volume"]
 
 INSTALL_HINT = "pip install 'cvxgeodesic[viewer]' (or pip install polyscope)"
 MESH_NAME = "surface"
 FIELD_NAME = "geodesic distance"
 SOURCES_NAME = "sources"
+VOLUME_NAME = "volume"
 ISOLINES_NAME = "isolines"
 #: isoline tube radius, and source sphere radius, per bounding-box diagonal
 ISOLINE_RADIUS = 0.0012
@@ -161,7 +162,7 @@ def show(
     distance: ArrayLike | None = None,
     *,
     sources: Any = None,
-    method: str = "qcqp-hessian",
+    method: str | None = None,
     screenshot: str | os.PathLike | None = None,
     isolines: bool = True,
     window_size: tuple[int, int] = (1024, 768),
@@ -172,14 +173,16 @@ def show(
     Parameters
     ----------
     mesh : TriMesh, (V, F) tuple or path
-        The surface, ``n`` vertices (anything :class:`~cvxgeodesic.GeodesicSolver` accepts).
+        The surface, ``n`` vertices (anything :class:`~cvxgeodesic.GeodesicSolver` accepts); a tetrahedral mesh
+        goes to :func:`show_volume` (default method ``"qclp"``).
     distance : (n,) array_like of float, optional
         The field to show (``inf`` where unreachable). Without it the field is solved from ``sources``.
     sources : optional
         Anything :meth:`GeodesicSolver.solve` takes. With ``distance``: only marked (default: the
         vertices where ``distance`` is 0). Without ``distance``: solved (default: vertex 0).
-    method : str
-        Method of the initial solve (when ``distance`` is None) and of the re-solves after a click.
+    method : str, optional
+        Method of the initial solve (when ``distance`` is None) and of the re-solves after a click (default
+        ``"qcqp-hessian"``).
     screenshot : str or path-like, optional
         Render one frame to this PNG and return without opening a window (works without a display).
     isolines : bool
@@ -202,36 +205,20 @@ def show(
         ``distance`` of the wrong shape, a bad ``window_size``, a bad ``screenshot`` path, or no display
         (or polyscope already started off-screen in this process) and no ``screenshot``.
     """
+    from .mesh.convert import as_mesh
     from .mesh.io import as_trimesh
+    from .mesh.tetmesh import TetMesh
     from .validation import as_vertex_field
 
+    if isinstance(volume := as_mesh(mesh), TetMesh):
+        return show_volume(volume, distance, sources=sources, method=method or "qclp", screenshot=screenshot,
+                           window_size=window_size, **solver_kwargs)
+    method = method or "qcqp-hessian"
     mesh = as_trimesh(mesh)
     n = mesh.n_vertices
-    try:
-        w, h = (int(x) for x in window_size)
-    except (TypeError, ValueError):
-        raise ParameterError(f"window_size must be (width, height), got {window_size!r}") from None
-    if w < 16 or h < 16:
-        raise ParameterError(f"window_size must be at least 16 x 16 pixels, got {window_size!r}")
     if distance is not None:
         d = as_vertex_field(distance, "distance", n)
-    headless = screenshot is not None or not _have_display()
-    if screenshot is None and headless:
-        raise ParameterError("no display (DISPLAY/WAYLAND_DISPLAY unset): render off-screen with "
-                             "screenshot='out.png' (CLI: --screenshot out.png)")
-    if screenshot is not None:  # before the solve: a bad path fails at once, not after it
-        from .validation import check_output_path
-
-        check_output_path(screenshot, (".png",))
-
-    ps = _polyscope()
-    _init(ps, headless)
-    if screenshot is None and ps.is_headless():
-        raise ParameterError("polyscope runs off-screen in this process (an earlier screenshot=, or no display "
-                             "when it started) and cannot open a window now: pass screenshot='out.png'")
-    ps.remove_all_structures()
-    ps.set_window_size(w, h)
-    ps.set_ground_plane_mode("none")
+    ps = _start(window_size, screenshot)
     viewer = _Viewer(ps, mesh, method=method, solver_kwargs=solver_kwargs, isolines=isolines)
     if distance is None:
         viewer.solve(0 if sources is None else sources)
@@ -244,7 +231,46 @@ def show(
             ss = resolve_sources(mesh, sources)
             marks = _source_positions(mesh, None if ss.vertex_only else ss, ss.vertices)
         viewer.set_field(d, marks)
+    _present(ps, screenshot, viewer.callback)
+    assert viewer.distance is not None
+    return viewer.distance
+
+
+def _start(window_size: tuple[int, int], screenshot: str | os.PathLike | None) -> Any:
+    """Checks, then polyscope started and emptied: the window size, a display or a screenshot path."""
+    try:
+        w, h = (int(x) for x in window_size)
+    except (TypeError, ValueError):
+        raise ParameterError(f"window_size must be (width, height), got {window_size!r}") from None
+    if w < 16 or h < 16:
+        raise ParameterError(f"window_size must be at least 16 x 16 pixels, got {window_size!r}")
+    headless = screenshot is not None or not _have_display()
+    if screenshot is None and headless:
+        raise ParameterError("no display (DISPLAY/WAYLAND_DISPLAY unset): render off-screen with "
+                             "screenshot='out.png' (CLI: --screenshot out.png)")
+    if screenshot is not None:  # before the solve: a bad path fails at once, not after it
+        from .validation import check_output_path
+
+        check_output_path(screenshot, (".png",))
+    ps = _polyscope()
+    _init(ps, headless)
+    if screenshot is None and ps.is_headless():
+        raise ParameterError("polyscope runs off-screen in this process (an earlier screenshot=, or no display "
+                             "when it started) and cannot open a window now: pass screenshot='out.png'")
+    ps.remove_all_structures()
+    ps.remove_all_slice_planes()
+    ps.set_window_size(w, h)
+    ps.set_ground_plane_mode("none")
+    return ps
+
+
+def _present(ps: Any, screenshot: str | os.PathLike | None, callback: Any,
+             camera: tuple[np.ndarray, np.ndarray] | None = None) -> None:
+    """One frame into ``screenshot``, or the interactive window with ``callback`` each frame; ``camera``:
+    (position, target), else polyscope's home view."""
     ps.reset_camera_to_home_view()
+    if camera is not None:
+        ps.look_at(tuple(float(c) for c in camera[0]), tuple(float(c) for c in camera[1]))
     try:
         if screenshot is not None:
             from ._atomic import output_set
@@ -252,9 +278,114 @@ def show(
             with output_set(screenshot) as tmp:  # polyscope reports a failed write only on stdout
                 ps.screenshot(str(tmp[0]), transparent_bg=False)
         else:
-            ps.set_user_callback(viewer.callback)
+            ps.set_user_callback(callback)
             ps.show()
     finally:
         ps.clear_user_callback()
-    assert viewer.distance is not None
-    return viewer.distance
+
+
+def show_volume(
+    mesh: Any,
+    distance: ArrayLike | None = None,
+    *,
+    sources: Any = None,
+    method: str = "qclp",
+    screenshot: str | os.PathLike | None = None,
+    origin: ArrayLike | None = None,
+    normal: ArrayLike = (0.0, 0.0, 1.0),
+    window_size: tuple[int, int] = (1024, 768),
+    **solver_kwargs: Any,
+) -> np.ndarray:
+    """Show a distance field inside a tetrahedral mesh (polyscope's volume mesh) cut by a slice plane.
+
+    The plane shows the field on the cut through the solid; in the window its widget moves and turns it.
+
+    Parameters
+    ----------
+    mesh : TetMesh, (V, T) tuple or path of a file holding tetrahedra
+    distance : (n,) array_like of float, optional
+        The field; without it the field is solved from ``sources`` (default vertex 0) with ``method``.
+    sources : optional
+        Anything :meth:`GeodesicSolver.solve` takes on a tetrahedral mesh; marked as red points.
+    method : str
+        Method of the solve when ``distance`` is None (default ``"qclp"``).
+    screenshot : str or path-like, optional
+        Render one frame to this PNG and return without opening a window.
+    origin : (3,) float array_like, optional
+        A point of the slice plane (default the centre of the bounding box, moved by 1 % of its diagonal along
+        ``normal``).
+    normal : (3,) float array_like
+        The plane's normal; the part on its positive side is cut away.
+    window_size : (int, int)
+    **solver_kwargs
+        Passed to :class:`GeodesicSolver` (``m``, ``solver``, ``order``, ...).
+
+    Returns
+    -------
+    (n,) float ndarray
+        The field shown.
+
+    Raises
+    ------
+    ImportError
+        polyscope is not installed.
+    ParameterError
+        As :func:`show`; a zero normal.
+    """
+    from .mesh.convert import as_mesh
+    from .mesh.tetmesh import TetMesh
+    from .validation import as_points, as_vertex_field
+
+    mesh = as_mesh(mesh)
+    if not isinstance(mesh, TetMesh):
+        raise ParameterError("show_volume takes a tetrahedral mesh; show() draws surfaces")
+    nrm = as_points(normal, "normal").reshape(3)
+    if not np.linalg.norm(nrm) > 0:
+        raise ParameterError(f"normal must be a nonzero vector, got {nrm.tolist()}")
+    unit = nrm / np.linalg.norm(nrm)
+    diag = float(mesh.bbox_diagonal) if mesh.bbox_diagonal > 0 else 1.0
+    # the default plane is nudged off the centre by 1 % of the diagonal: on a structured mesh the centre plane holds
+    # whole faces, and the renderer's depth test then draws the cut in stripes
+    centre = 0.5 * (mesh.V.min(axis=0) + mesh.V.max(axis=0)) + 0.01 * diag * unit
+    org = centre if origin is None else as_points(origin, "origin").reshape(3)
+    ps = _start(window_size, screenshot)
+    marks = np.zeros((0, 3))
+    if distance is None:
+        from .api import GeodesicSolver
+
+        res = GeodesicSolver(mesh, method, **solver_kwargs).solve(0 if sources is None else sources)
+        d = res.distance
+        ss = res.source_set
+    else:
+        d = as_vertex_field(distance, "distance", mesh.n_vertices)
+        ss = None
+        if sources is not None:
+            from .sources_tet import resolve_tet_sources
+
+            ss = resolve_tet_sources(mesh, sources)
+        res = None
+    if ss is not None:
+        marks = np.vstack([mesh.V[ss.fixed_vertices(mesh)], *[p.position(mesh)[None] for p in ss.points]])
+    elif res is not None:
+        marks = mesh.V[res.sources]
+    else:
+        marks = mesh.V[np.flatnonzero(d == 0)]
+    finite = np.isfinite(d)
+    shown = np.where(finite, d, float(d[finite].max()) if finite.any() else 1.0)
+    vol = ps.register_volume_mesh(VOLUME_NAME, mesh.V, tets=mesh.T, color=(0.8, 0.8, 0.8))
+    vol.add_scalar_quantity(FIELD_NAME, shown, defined_on="vertices", enabled=True, cmap="viridis",
+                            isolines_enabled=True)
+    if len(marks):
+        cloud = ps.register_point_cloud(SOURCES_NAME, marks.reshape(-1, 3), color=(0.9, 0.05, 0.05))
+        cloud.set_radius(SOURCE_RADIUS * diag, relative=False)
+    plane = ps.add_scene_slice_plane()
+    # polyscope keeps the side the normal points to: flip it so that the part on the positive side is cut away
+    plane.set_pose(tuple(org.tolist()), tuple((-nrm / np.linalg.norm(nrm)).tolist()))
+    plane.set_draw_plane(False)
+    plane.set_draw_widget(screenshot is None)
+    plane.set_volume_mesh_to_inspect(VOLUME_NAME)  # the cut through the tetrahedra, the field interpolated on it
+    # looking at the cut from the side that was cut away, a little off its normal so that the solid shows depth
+    side = np.cross(unit, [0.0, 0.0, 1.0] if abs(unit[2]) < 0.9 else [1.0, 0.0, 0.0])
+    eye = org + 1.6 * diag * unit + 0.35 * diag * side / np.linalg.norm(side)
+    _present(ps, screenshot, lambda: None, camera=(eye, org))
+    return d

@@ -7,7 +7,10 @@ be
 - vertex indices (an int or a sequence),
 - :class:`~cvxgeodesic.mesh.tet_locate.VolumePoint` objects (points inside tetrahedra), alone or
   mixed with vertex indices in one sequence,
-- the string ``"boundary"``: the distance to the boundary surface (wall distance).
+- the string ``"boundary"``: the distance to the boundary surface (wall distance);
+- :class:`~cvxgeodesic.sources_tet.BoundaryFaces`: the distance to part of the boundary surface.
+
+(:func:`~cvxgeodesic.sources_tet.resolve_tet_sources`, re-exported here.)
 
 Vertices not connected to any source get ``np.inf``.
 """
@@ -15,114 +18,24 @@ Vertices not connected to any source get ``np.inf``.
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components, dijkstra
 
-from ..errors import CvxGeodesicError, SolverError, SourceError
+from ..errors import CvxGeodesicError, SolverError
 from ..linalg import analyse
-from ..mesh.tet_locate import VolumePoint
-from ..mesh.tetmesh import DEGENERATE_TET_TOL, TetMesh, as_tetmesh
+from ..mesh.tetmesh import DEGENERATE_TET_TOL, as_tetmesh
 from ..operators.tet import tet_divergence, tet_gradient_blocks, tet_mass_matrix, tet_stiffness
-from ..validation import check_number, validate_sources
+from ..sources_tet import TetSources, resolve_tet_sources
+from ..validation import check_number
 
 __all__ = ["DEFAULT_TET_T_COEF", "TET_BASELINES", "TetBaselineSolver", "TetDijkstraBaseline", "TetHeatBaseline",
            "TetSources", "resolve_tet_sources"]
 
 #: Diffusion time of :class:`TetHeatBaseline` in units of the squared mean edge length (Crane et al.'s ``t = h²``).
 DEFAULT_TET_T_COEF = 1.0
-
-
-@dataclass(frozen=True)
-class TetSources:
-    """A validated source set of a tetrahedral mesh.
-
-    Attributes
-    ----------
-    vertices : (s,) int64 ndarray
-        Source vertices (unique).
-    points : tuple of VolumePoint
-        Points inside tetrahedra (checked against the mesh).
-    boundary : bool
-        The whole boundary surface is a source.
-    """
-
-    vertices: np.ndarray
-    points: tuple[VolumePoint, ...] = ()
-    boundary: bool = False
-
-    @property
-    def count(self) -> int:
-        """Number of sources (the boundary counts as one)."""
-        return int(self.vertices.size) + len(self.points) + int(self.boundary)
-
-    def seed_vertices(self, mesh: TetMesh) -> np.ndarray:
-        """(q,) int64 ndarray: vertices from which the field spreads (sources, points' corners, the boundary)."""
-        parts = [self.vertices] + [p.vertices(mesh) for p in self.points]
-        if self.boundary:
-            parts.append(mesh.boundary_vertices)
-        return np.unique(np.concatenate(parts)).astype(np.int64)
-
-    def local_values(self, mesh: TetMesh) -> tuple[np.ndarray, np.ndarray]:
-        """Vertices near the sources and their exact distances: 0 at source and boundary vertices,
-        ``|v − p|`` at the corners of a point's tetrahedron (the straight segment inside it), the minimum
-        over sources where several meet. Returns ``(vertices (q,), values (q,))``."""
-        idx = [self.vertices]
-        val = [np.zeros(self.vertices.size)]
-        for p in self.points:
-            corners = p.vertices(mesh)
-            idx.append(corners)
-            val.append(np.linalg.norm(mesh.V[corners] - p.position(mesh), axis=1))
-        if self.boundary:
-            idx.append(mesh.boundary_vertices)
-            val.append(np.zeros(mesh.boundary_vertices.size))
-        verts, vals = np.concatenate(idx), np.concatenate(val)
-        uniq, inv = np.unique(verts, return_inverse=True)
-        best = np.full(uniq.size, np.inf)
-        np.minimum.at(best, inv, vals)
-        return uniq.astype(np.int64), best
-
-
-def resolve_tet_sources(mesh: TetMesh, sources: Any) -> TetSources:
-    """Validate ``sources`` for ``mesh``: vertex indices, VolumePoints, a mix of both, or ``"boundary"``.
-
-    Parameters
-    ----------
-    mesh : TetMesh
-    sources : int, VolumePoint, "boundary", or sequence of int and VolumePoint
-
-    Returns
-    -------
-    TetSources
-
-    Raises
-    ------
-    SourceError
-        An unknown string, invalid or repeated vertex indices, a VolumePoint whose tetrahedron is
-        not in the mesh, an empty sequence, or ``"boundary"`` on a mesh without boundary faces.
-    """
-    if isinstance(sources, str):
-        if sources.strip().lower() != "boundary":
-            raise SourceError(f"unknown source {sources!r}: give vertex indices, VolumePoints or 'boundary'")
-        if mesh.boundary_faces.shape[0] == 0:
-            raise SourceError(f"{mesh.name}: source 'boundary' but the mesh has no boundary faces")
-        return TetSources(np.empty(0, dtype=np.int64), (), True)
-    if isinstance(sources, VolumePoint):
-        sources = [sources]
-    if isinstance(sources, Sequence) and any(isinstance(s, VolumePoint) for s in sources):
-        points = tuple(s for s in sources if isinstance(s, VolumePoint))
-        for p in points:
-            p.check(mesh)
-        rest = [s for s in sources if not isinstance(s, VolumePoint)]
-        if any(isinstance(s, str) for s in rest):
-            raise SourceError("'boundary' cannot be mixed with other sources")
-        verts = validate_sources(rest, mesh.n_vertices) if rest else np.empty(0, dtype=np.int64)
-        return TetSources(verts, points, False)
-    return TetSources(validate_sources(sources, mesh.n_vertices), (), False)
 
 
 class TetBaselineSolver:
@@ -259,9 +172,7 @@ class TetDijkstraBaseline(TetBaselineSolver):
 
     def _solve(self, src: TetSources) -> tuple[np.ndarray, dict]:
         mesh, n = self.mesh, self.mesh.n_vertices
-        starts = [src.vertices]
-        if src.boundary:
-            starts.append(mesh.boundary_vertices)
+        starts = [src.fixed_vertices(mesh)]
         graph = self._graph
         if src.points:
             # one extra node per point, joined to its tetrahedron's corners by straight segments; a point at a vertex
@@ -397,15 +308,15 @@ class TetHeatBaseline(TetBaselineSolver):
         u0[src.vertices] = 1.0
         for p in src.points:
             np.add.at(u0, p.vertices(mesh), p.bary)
-        if src.boundary:
-            B = mesh.boundary_faces
+        if src.faces.size:
+            B = src.face_triangles(mesh)
             area = 0.5 * np.linalg.norm(np.cross(mesh.V[B[:, 1]] - mesh.V[B[:, 0]], mesh.V[B[:, 2]] - mesh.V[B[:, 0]]),
                                         axis=1)
             np.add.at(u0, B.ravel(), np.repeat(area / 3.0, 3))
         u0[self._idle] = 0.0
         X = self._unit_field(u0, notes)
         b = tet_divergence(mesh, X, tets=self._keep, blocks=self._blocks)
-        if src.count == 1 and not src.boundary:
+        if src.count == 1 and not src.faces.size:
             b[self._pins] = 0.0
             phi = self._poisson(b)
             if src.vertices.size:

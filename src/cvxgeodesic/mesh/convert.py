@@ -1,4 +1,5 @@
-"""``as_trimesh``: the meshes of other libraries (and file paths) as a :class:`TriMesh`, by duck typing."""
+"""``as_trimesh``: the meshes of other libraries (and file paths) as a :class:`TriMesh`, by duck typing; ``as_mesh``:
+the same, or a :class:`~cvxgeodesic.mesh.tetmesh.TetMesh` for tetrahedra."""
 
 from __future__ import annotations
 
@@ -8,9 +9,49 @@ from typing import Any
 import numpy as np
 
 from ..errors import MeshError
+from .tetmesh import TetMesh
 from .trimesh import TriMesh
 
-__all__ = ["as_trimesh"]
+__all__ = ["as_mesh", "as_trimesh"]
+
+
+def _is_tet_pair(mesh: Any) -> bool:
+    """A ``(V, T)`` pair whose second array has four columns."""
+    if not (isinstance(mesh, tuple | list) and len(mesh) == 2):
+        return False
+    try:
+        return np.ndim(mesh[1]) == 2 and np.shape(mesh[1])[1] == 4
+    except ValueError:  # ragged
+        return False
+
+
+def as_mesh(mesh: Any, name: str = "mesh") -> TriMesh | TetMesh:
+    """``mesh`` as a :class:`TetMesh` when it holds tetrahedra, else as :func:`as_trimesh` takes it.
+
+    Tetrahedra: a :class:`TetMesh`, a ``(V, T)`` pair with a 4-column ``T``, a file that holds tetrahedra
+    (:func:`~cvxgeodesic.mesh.load.load_mesh`), a ``meshio.Mesh`` with ``tetra`` cells (``tetra10``: their
+    corners).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> as_mesh((np.eye(4, 3), [[0, 1, 2, 3]]))
+    TetMesh(name='mesh', n_vertices=4, n_tets=1)
+    """
+    if isinstance(mesh, TetMesh):
+        return mesh
+    if _is_tet_pair(mesh):
+        return TetMesh(mesh[0], mesh[1], name=name)
+    if isinstance(mesh, str | os.PathLike):
+        from .load import load_mesh
+
+        return load_mesh(mesh)
+    cells = getattr(mesh, "cells_dict", None) if hasattr(mesh, "points") else None
+    if isinstance(cells, dict) and ("tetra" in cells or "tetra10" in cells):
+        T = np.vstack([np.asarray(cells[k])[:, :4] for k in ("tetra", "tetra10") if k in cells])
+        label = getattr(mesh, "name", None)
+        return TetMesh(np.asarray(mesh.points)[:, :3], T, name=label if isinstance(label, str) and label else name)
+    return as_trimesh(mesh, name)
 
 
 def as_trimesh(mesh: Any, name: str = "mesh") -> TriMesh:
@@ -61,7 +102,15 @@ def as_trimesh(mesh: Any, name: str = "mesh") -> TriMesh:
     if isinstance(mesh, str | os.PathLike):
         from .load import load_mesh
 
-        return load_mesh(mesh)
+        loaded = load_mesh(mesh)
+        if isinstance(loaded, TetMesh):
+            raise MeshError(f"{loaded.name} holds tetrahedra, not a triangle surface: GeodesicSolver, "
+                            "geodesic_distance and distance_matrix take it as a volume; its surface is "
+                            "mesh.boundary_mesh()")
+        return loaded
+    if isinstance(mesh, TetMesh) or _is_tet_pair(mesh):
+        raise MeshError("a tetrahedral mesh is not a triangle surface: GeodesicSolver, geodesic_distance and "
+                        "distance_matrix take it as a volume; its surface is TetMesh.boundary_mesh()")
     if isinstance(mesh, tuple | list) and len(mesh) == 2:
         return TriMesh(mesh[0], mesh[1], name=name)
     label = getattr(mesh, "name", None)

@@ -19,12 +19,13 @@ from .._atomic import atomic_write
 from ..errors import ParameterError
 from ..validation import as_vertex_field
 from ..validation import check_output_path as _check_output_path
-from .convert import as_trimesh
+from .convert import as_mesh, as_trimesh
 from .fileorder import file_order_mesh, to_file_order
 from .formats import ply
 from .formats._common import FieldData, check_file, file_errors, format_error
 from .formats.registry import DISTANCE_EXTENSIONS, FORMATS, MESH_EXTENSIONS, field_reader
 from .load import load_mesh
+from .tetmesh import TetMesh
 from .trimesh import TriMesh
 
 __all__ = [
@@ -61,6 +62,10 @@ def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, na
       ``trimesh.load(path, process=False)`` puts in each geometry's ``vertex_attributes``;
       float32 (glTF has no float64), and ``inf`` is written as -1 (the format's JSON header
       cannot hold infinity).
+
+    A tetrahedral mesh (:class:`~cvxgeodesic.mesh.tetmesh.TetMesh`) is written as ``.vtu`` / ``.vtk`` with its
+    tetrahedra and the field as point data (:func:`~cvxgeodesic.mesh.tet_io.save_tet_distance`; ParaView opens
+    it), or as ``.npy``.
 
     The data is written to a temporary file in the target directory which then
     replaces ``path`` (``os.replace``); if anything fails, the temporary file is
@@ -111,6 +116,8 @@ def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, na
     p = check_output_path(path)
     fmt = FORMATS[p.suffix.lower()]
     assert fmt.write_field is not None  # check_output_path accepted only DISTANCE_EXTENSIONS
+    if isinstance(volume := as_mesh(mesh), TetMesh):
+        return _save_tet_distance(p, volume, distance, name, file_order)
     mesh = as_trimesh(mesh)
     d = as_vertex_field(distance, "distance", mesh.n_vertices)
     if not isinstance(name, str) or not _NAME_RE.match(name) or name in _RESERVED:
@@ -126,6 +133,28 @@ def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, na
     write = fmt.write_field
     atomic_write(p, lambda fh: write(fh, field))
     return p
+
+
+def _save_tet_distance(p: Path, mesh: TetMesh, distance: ArrayLike, name: str, file_order: bool) -> Path:
+    """:func:`save_distance` of a tetrahedral mesh: ``.vtu``/``.vtk`` (or ``.npy``), optionally in the file's
+    numbering (dropped vertices at their place, with ``inf``)."""
+    from .tet_io import TET_DISTANCE_EXTENSIONS, save_tet_distance
+
+    if p.suffix.lower() not in (*TET_DISTANCE_EXTENSIONS, ".npy"):
+        raise ParameterError(f"{p}: a field on a tetrahedral mesh is written as .vtu, .vtk or .npy, not "
+                             f"{p.suffix!r}")
+    d = as_vertex_field(distance, "distance", mesh.n_vertices)
+    if file_order and not np.array_equal(mesh.file_index, np.arange(mesh.n_vertices)):
+        V = np.empty((mesh.n_file_vertices, 3))
+        V[mesh.vertex_map] = mesh.V
+        V[mesh.file_index < 0] = mesh.dropped_vertices
+        df = np.full(mesh.n_file_vertices, np.inf)
+        df[mesh.vertex_map] = d
+        mesh, d = TetMesh(V, mesh.vertex_map[mesh.T], name=mesh.name), df
+    if p.suffix.lower() == ".npy":
+        atomic_write(p, lambda fh: np.save(fh, d))
+        return p
+    return save_tet_distance(p, mesh, d, name=name)
 
 
 def load_distance(path: str | os.PathLike, name: str = "distance") -> np.ndarray:

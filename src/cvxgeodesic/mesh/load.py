@@ -16,13 +16,15 @@ import numpy as np
 from ..errors import MeshRepairWarning
 from .formats._common import RawMesh, at_line, check_file, file_errors, format_error
 from .formats.registry import mesh_reader
+from .tetmesh import TetMesh
 from .trimesh import TriMesh
 
 __all__ = ["load_mesh"]
 
 
-def load_mesh(path: str | os.PathLike) -> TriMesh:
-    """Read a triangle mesh from an OBJ, OFF, PLY or STL file (glTF, GLB, 3MF, VTK, VTU with the ``io`` extra).
+def load_mesh(path: str | os.PathLike) -> TriMesh | TetMesh:
+    """Read a triangle mesh from an OBJ, OFF, PLY or STL file (glTF, GLB, 3MF, VTK, VTU with the ``io`` extra), or
+    a tetrahedral mesh from a file that holds tetrahedra.
 
     The format is chosen from the extension (case-insensitive; the list is
     :data:`~cvxgeodesic.mesh.formats.registry.MESH_EXTENSIONS`): ``.obj``, ``.off``,
@@ -36,9 +38,14 @@ def load_mesh(path: str | os.PathLike) -> TriMesh:
     path : str or os.PathLike
         The file to read.
 
+    Files holding tetrahedra give a :class:`~cvxgeodesic.mesh.tetmesh.TetMesh`
+    (:func:`~cvxgeodesic.mesh.tet_io.load_tet_mesh`): TetGen's ``.node``/``.ele``, and through meshio
+    ``.msh``, ``.mesh``, ``.inp``, ``.xdmf``, ``.med``, and ``.vtu``/``.vtk`` files with ``tetra`` cells (a VTK
+    file without them is read again as a surface).
+
     Returns
     -------
-    TriMesh
+    TriMesh or TetMesh
         The welded triangle mesh, named after the file's base name.
         ``mesh.vertex_map[i]`` is the 0-based index in the file of the (first)
         original vertex of vertex ``i``; for STL, whose vertices are the triangle
@@ -91,8 +98,15 @@ def load_mesh(path: str | os.PathLike) -> TriMesh:
     no_such_mesh.obj: no such file
     """
     p = Path(path)
+    from .tet_io import TET_MESH_EXTENSIONS, load_tet_mesh, read_volume
+
+    ext = p.suffix.lower()
+    if ext in TET_MESH_EXTENSIONS and ext not in (".vtu", ".vtk"):
+        return load_tet_mesh(p)
     read = mesh_reader(p)
-    check_file(p, "a mesh file")  # the same messages for missing, directory and empty files in every format
+    check_file(p, "a mesh file")
+    if ext in (".vtu", ".vtk") and (volume := read_volume(p)) is not None:
+        return volume  # the same messages for missing, directory and empty files in every format
     with file_errors(p):
         return _finish(p, read(p))
 

@@ -7,7 +7,7 @@ import numpy as np
 from ..errors import SourceError
 from .trimesh import TriMesh
 
-__all__ = ["SplitMesh"]
+__all__ = ["SplitMesh", "piece_coordinates"]
 
 
 class SplitMesh:
@@ -73,15 +73,24 @@ class SplitMesh:
         bary = bary.copy()
         for r, f in enumerate(faces.tolist()):
             lst = self.pieces.get(f)
-            if not lst:
-                continue
-            lam = bary[r]
-            beta = lst[0][2]
-            ratios = [lam[k] / beta[k] for k, _, _ in lst]
-            j = int(np.argmin(ratios))
-            k, idx, _ = lst[j]
-            mu = lam - ratios[j] * beta
-            mu[k] = ratios[j]  # corner k of the piece is the inserted point
-            mu = np.clip(mu, 0.0, None)
-            faces[r], bary[r] = idx, mu / mu.sum()
+            if lst:
+                faces[r], bary[r] = piece_coordinates(bary[r], lst)
         return faces, bary
+
+
+def piece_coordinates(lam: np.ndarray, pieces: list) -> tuple[int, np.ndarray]:
+    """The piece of a split simplex (triangle or tetrahedron) holding the point ``lam`` (barycentric in the
+    original), and the point's coordinates there.
+
+    ``pieces`` lists ``(k, piece, beta)``: the piece that replaces corner ``k`` by the inserted point ``beta``. In
+    it, ``lam`` has coordinate ``lam_k / beta_k`` on the new vertex and ``lam_i − (lam_k / beta_k) beta_i`` on the
+    others; the piece with the smallest ratio holds the point (all its coordinates are then >= 0).
+    """
+    beta = pieces[0][2]
+    ratios = [lam[k] / beta[k] for k, _, _ in pieces]
+    j = int(np.argmin(ratios))
+    k, idx, _ = pieces[j]
+    mu = lam - ratios[j] * beta
+    mu[k] = ratios[j]  # corner k of the piece is the inserted point
+    mu = np.clip(mu, 0.0, None)
+    return idx, mu / mu.sum()

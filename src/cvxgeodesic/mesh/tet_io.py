@@ -39,7 +39,7 @@ from ..validation import as_vertex_field, check_output_path
 from .tetmesh import TetMesh
 
 __all__ = ["MESHIO_TET_EXTENSIONS", "TETGEN_EXTENSIONS", "TET_DISTANCE_EXTENSIONS", "TET_MESH_EXTENSIONS",
-           "load_tet_mesh", "read_tetgen", "save_tet_distance"]
+           "load_tet_mesh", "read_tetgen", "read_volume", "save_tet_distance"]
 
 #: Files read through meshio (the ``io`` extra).
 MESHIO_TET_EXTENSIONS = (".msh", ".vtu", ".vtk", ".mesh", ".inp", ".xdmf", ".med")
@@ -109,6 +109,19 @@ def load_tet_mesh(path: str | os.PathLike) -> TetMesh:
         V, T, notes = _read_meshio(p)
         name = p.name
     return _finish(V, T, notes, name)
+
+
+def read_volume(path: str | os.PathLike) -> TetMesh | None:
+    """The tetrahedral mesh of a meshio file (VTK, VTU, ...), or None when it holds no tetrahedra.
+
+    Raises
+    ------
+    MeshFormatError
+        meshio is missing or cannot read the file.
+    """
+    p = Path(path)
+    V, T, notes = _read_meshio(p, allow_none=True)
+    return None if T is None else _finish(V, T, notes, p.name)
 
 
 def _finish(V: np.ndarray, T: np.ndarray, notes: list[str], name: str) -> TetMesh:
@@ -264,7 +277,7 @@ def read_tetgen(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray, list[s
 # ----------------------------------------------------------------------------------------------------------------------
 
 
-def _read_meshio(path: Path) -> tuple[np.ndarray, np.ndarray, list[str]]:
+def _read_meshio(path: Path, allow_none: bool = False) -> tuple[np.ndarray, Any, list[str]]:
     meshio = _meshio(f"{path}: reading {path.suffix} files", MeshFormatError)
     try:
         # meshio prints its own error and calls sys.exit(1) on some files it cannot parse
@@ -275,6 +288,8 @@ def _read_meshio(path: Path) -> tuple[np.ndarray, np.ndarray, list[str]]:
     except (Exception, SystemExit) as exc:
         detail = f"{type(exc).__name__}: {exc}" if not isinstance(exc, SystemExit) else "not a valid file"
         raise MeshFormatError(f"{path}: meshio cannot read the file ({detail})") from None
+    if allow_none and not any(block.type in ("tetra", "tetra10") for block in mm.cells):
+        return np.zeros((0, 3)), None, []
     V = np.asarray(mm.points, dtype=np.float64)
     if V.ndim != 2 or V.shape[1] != 3:
         raise MeshFormatError(f"{path}: points must be 3-D for a tetrahedral mesh, got shape {V.shape}")

@@ -43,7 +43,9 @@ from .trimesh import TriMesh
 __all__ = ["MESHERS", "tetrahedralize"]
 
 #: Mesher name → (import name, pip install line).
-MESHERS = {"tetgen": ("tetgen", "pip install tetgen"), "wildmeshing": ("wildmeshing", "pip install wildmeshing")}
+MESHERS = {"tetgen": ("tetgen", "pip install tetgen"),
+           "wildmeshing": ("wildmeshing", "pip install wildmeshing svgwrite (the tet extra: pip install "
+                                          "'cvxgeodesic[tet]')")}
 
 
 def _available(name: str) -> Any:
@@ -142,7 +144,8 @@ def tetrahedralize(surface: TriMesh | tuple, *, mesher: str = "auto", max_volume
         mesher = next((m for m in MESHERS if _available(m) is not None), "")
         if not mesher:
             raise ParameterError("tetrahedralize needs a mesher: pip install tetgen (fast; TetGen is AGPL-licensed) "
-                                 "or pip install wildmeshing (fTetWild, MPL-2.0)")
+                                 "or pip install wildmeshing svgwrite (fTetWild, MPL-2.0; the extra "
+                                 "'cvxgeodesic[tet]')")
     lib = _available(mesher)
     if lib is None:
         raise ParameterError(f"mesher {mesher!r} is not installed: {MESHERS[mesher][1]}")

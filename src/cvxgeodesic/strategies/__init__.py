@@ -9,6 +9,7 @@ and then answers ``strategy.solve(sources, callback=None) -> GeodesicResult``:
 :class:`BaselineStrategy`  Dijkstra, fast marching, heat, exact (:mod:`cvxgeodesic.baselines`)
 :class:`CoarseToFine`      two direct solves: a decimated mesh, then (with polish) the mesh itself
 :class:`Order2`            P2 elements for d², with cutting planes on flat faces
+:mod:`.tet`                inside tetrahedral meshes: order 1, order 2, Dijkstra and heat
 =========================  =====================================================================
 """
 
@@ -47,6 +48,12 @@ def make_strategy(config: SolveConfig, *, baseline: bool, order: int = 1, multir
     -------
     SolveStrategy
     """
+    from ..mesh.tetmesh import TetMesh
+
+    if isinstance(config.mesh, TetMesh):
+        from .tet import make_tet_strategy
+
+        return make_tet_strategy(config, baseline=baseline, order=order)
     if order == 2:
         return Order2(config)
     if baseline:

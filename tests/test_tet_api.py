@@ -1,0 +1,239 @@
+"""Volumes through the public API, files, the command line and the viewer (issue 26)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import cvxgeodesic as cg
+from cvxgeodesic.cli import main
+from cvxgeodesic.errors import MeshError, ParameterError
+from cvxgeodesic.mesh.convert import as_mesh
+from cvxgeodesic.mesh.tet_generate import l_prism_distance, tet_box, tet_l_prism
+from cvxgeodesic.mesh.tet_split import TetSplitMesh
+from cvxgeodesic.mesh.tetmesh import TetMesh
+from cvxgeodesic.operators.tet_p2 import TET_P2_NODES, TetP2Space, tet_max_violation, tet_p2_basis
+from test_viewer import _egl_works
+
+
+@pytest.fixture(scope="module")
+def prism():
+    return tet_l_prism(3, jitter=0.2, seed=1)
+
+
+def _msh(mesh, path):
+    meshio = pytest.importorskip("meshio")
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        meshio.write(str(path), meshio.Mesh(mesh.V, [("tetra", mesh.T)]), file_format="gmsh22", binary=False)
+    return path
+
+
+# -- the P2 tetrahedron -----------------------------------------------------------------------------------------
+def test_p2_reproduces_quadratics_and_their_gradients():
+    m = tet_box(2, jitter=0.2, seed=3)
+    space = TetP2Space(m)
+    rng = np.random.default_rng(1)
+    A, b, c = rng.normal(size=(3, 3)), rng.normal(size=3), 0.3
+    f = lambda X: np.einsum("pi,ij,pj->p", X, A, X) + X @ b + c  # noqa: E731
+    grad = lambda X: X @ (A + A.T) + b  # noqa: E731
+    E = m.edges
+    phi = np.concatenate([f(m.V), f(0.5 * (m.V[E[:, 0]] + m.V[E[:, 1]]))])
+    tets = rng.integers(0, m.n_tets, 40)
+    bary = rng.dirichlet(np.ones(4), 40)
+    X = np.einsum("pk,pkj->pj", bary, m.V[m.T[tets]])
+    val, gr = space.value_and_gradient_rows(tets, bary)
+    dofs = phi[space.tet_dofs[tets]]
+    np.testing.assert_allclose(np.einsum("pa,pa->p", val, dofs), f(X), atol=1e-12)
+    np.testing.assert_allclose(np.einsum("pca,pa->pc", gr, dofs), grad(X), atol=1e-10)
+    N, _ = tet_p2_basis(TET_P2_NODES)
+    np.testing.assert_allclose(N, np.eye(10), atol=1e-15)  # nodal basis
+    assert space.weights().sum() == pytest.approx(m.total_volume)
+
+
+def test_max_violation_is_the_maximum_over_each_tetrahedron():
+    m = tet_box(2, jitter=0.2, seed=4)
+    space = TetP2Space(m)
+    rng = np.random.default_rng(2)
+    E = m.edges
+    nodes = np.vstack([m.V, 0.5 * (m.V[E[:, 0]] + m.V[E[:, 1]])])
+    # a random field (v mostly convex: its maximum at corners), and half a squared distance from a point inside,
+    # whose v = −|x − x0|² + noise is concave: its maximum on faces, edges or inside
+    fields = [rng.uniform(0.0, 1.0, space.n_dofs),
+              0.5 * ((nodes - [0.4, 0.45, 0.55]) ** 2).sum(axis=1) + 1e-3 * rng.normal(size=space.n_dofs)]
+    samples = rng.dirichlet(np.ones(4), 4000)
+    samples = np.vstack([samples, TET_P2_NODES, np.eye(4)])
+    inside = 0
+    for x in fields:
+        inside += _check_max(space, x, samples)
+    assert inside >= m.n_tets // 2  # the second field's maxima are away from the corners
+
+
+def _check_max(space, x, samples) -> int:
+    vmax, bary, phi_at = tet_max_violation(space, x)
+    for t in range(space.mesh.n_tets):
+        val, gr = space.value_and_gradient_rows(np.full(len(samples), t), samples)
+        xt = x[space.tet_dofs[t]]
+        v = (np.einsum("pca,a->pc", gr, xt) ** 2).sum(axis=1) - 4 * val @ xt
+        assert vmax[t] >= v.max() - 1e-9  # never below a sample
+        vb_val, vb_gr = space.value_and_gradient_rows(np.array([t]), bary[t][None])
+        at = float((vb_gr[0] @ xt) @ (vb_gr[0] @ xt) - 4 * vb_val[0] @ xt)
+        assert at == pytest.approx(vmax[t], abs=1e-9)  # reached where it says
+        assert phi_at[t] == pytest.approx(float(vb_val[0] @ xt))
+        assert bary[t].min() >= 0 and bary[t].sum() == pytest.approx(1.0)
+    return int(np.count_nonzero(bary.max(axis=1) < 1 - 1e-9))
+
+
+def test_split_mesh_keeps_the_volume_and_locates_points():
+    m = tet_box(2, jitter=0.2, seed=5)
+    pts = [cg.VolumePoint(3, [0.1, 0.2, 0.3, 0.4]), cg.VolumePoint(20, [0.5, 0.5, 0.0, 0.0])]
+    split = TetSplitMesh(m, pts)
+    assert split.mesh.total_volume == pytest.approx(m.total_volume)
+    assert np.abs(split.mesh.signed_volumes).min() > 0
+    np.testing.assert_allclose(split.mesh.V[split.point_vertices], [p.position(m) for p in pts])
+    rng = np.random.default_rng(3)
+    tets = np.concatenate([[3] * 20, [20] * 20, rng.integers(0, m.n_tets, 20)])
+    bary = rng.dirichlet(np.ones(4), 60)
+    X = np.einsum("pk,pkj->pj", bary, m.V[m.T[tets]])
+    t2, b2 = split.locate(tets, bary)
+    assert b2.min() >= 0
+    np.testing.assert_allclose(np.einsum("pk,pkj->pj", b2, split.mesh.V[split.mesh.T[t2]]), X, atol=1e-12)
+
+
+# -- the API ----------------------------------------------------------------------------------------------------
+def test_every_way_of_giving_a_volume(prism):
+    d = cg.geodesic_distance(prism, 0, method="qclp")
+    np.testing.assert_array_equal(cg.geodesic_distance(prism.V, prism.T, 0, method="qclp"), d)
+    np.testing.assert_array_equal(cg.geodesic_distance((prism.V, prism.T), 0, method="qclp"), d)
+    meshio = pytest.importorskip("meshio")
+    mm = meshio.Mesh(prism.V, [("tetra", prism.T)])
+    assert isinstance(as_mesh(mm), TetMesh)
+    np.testing.assert_array_equal(cg.geodesic_distance(mm, 0, method="qclp"), d)
+    D = cg.distance_matrix(prism, [0, 7, 0], method="dijkstra")
+    assert D.shape == (3, prism.n_vertices) and D[1, 7] == 0 and np.array_equal(D[0], D[2])
+    rows = cg.distance_matrix(prism, [cg.volume_point(prism, [0.5, 0.5, 0.5]), "boundary"], method="heat")
+    assert rows.shape == (2, prism.n_vertices)
+    with pytest.raises(MeshError, match="tetrahedral mesh is not a triangle surface"):
+        cg.mesh.as_trimesh(prism)
+
+
+def test_heat_and_dijkstra_through_the_solver(prism):
+    c = int(np.argmin(np.linalg.norm(prism.V - [0.5, 1.5, 0.5], axis=1)))
+    ex = l_prism_distance(prism.V[c], prism.V)
+    for method in ("heat", "dijkstra"):
+        res = cg.GeodesicSolver(prism, method).solve(c)
+        assert res.info.method == method and res.info.status == "optimal"
+        assert np.all(np.isfinite(res.distance)) and res.distance[c] == 0
+    assert np.all(cg.geodesic_distance(prism, c, method="dijkstra") >= ex - 1e-9)  # an upper bound
+    with pytest.raises(ParameterError, match="applies to the convex formulations"):
+        cg.GeodesicSolver(prism, "heat", solver="clarabel")
+    with pytest.raises(ParameterError, match="order=2"):
+        cg.GeodesicSolver(prism, "heat", order=2)
+
+
+# -- files ------------------------------------------------------------------------------------------------------
+def test_load_mesh_returns_a_tetmesh_for_files_with_tetrahedra(prism, tmp_path):
+    meshio = pytest.importorskip("meshio")
+    for ext in (".msh", ".vtu", ".vtk", ".mesh"):
+        path = tmp_path / f"part{ext}"
+        if ext == ".msh":
+            _msh(prism, path)
+        else:
+            meshio.write(str(path), meshio.Mesh(prism.V, [("tetra", prism.T)]))
+        m = cg.load_mesh(path)
+        assert isinstance(m, TetMesh) and m.n_tets == prism.n_tets, ext
+    # a VTU without tetrahedra is still a surface
+    surf = tmp_path / "surface.vtu"
+    meshio.write(str(surf), meshio.Mesh(prism.V, [("triangle", prism.boundary_faces)]))
+    with pytest.warns(cg.MeshRepairWarning, match="dropped 32 vertices in no face"):  # the interior ones
+        assert isinstance(cg.load_mesh(surf), cg.TriMesh)
+    # TetGen's pair
+    (tmp_path / "t.node").write_text("5 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 1 1 1\n")
+    (tmp_path / "t.ele").write_text("2 4 0\n1 1 2 3 4\n2 2 3 4 5\n")
+    assert isinstance(cg.load_mesh(tmp_path / "t.ele"), TetMesh)
+    with pytest.raises(MeshError, match="holds tetrahedra"):
+        cg.mesh.as_trimesh(tmp_path / "t.node")
+
+
+def test_save_distance_writes_point_data_for_paraview(prism, tmp_path):
+    meshio = pytest.importorskip("meshio")
+    d = cg.geodesic_distance(prism, 0, method="qclp")
+    out = cg.save_distance(tmp_path / "d.vtu", prism, d)
+    mm = meshio.read(out)
+    np.testing.assert_allclose(mm.point_data["distance"], d)
+    assert mm.cells_dict["tetra"].shape == (prism.n_tets, 4)
+    with pytest.raises(ParameterError, match=r"written as \.vtu, \.vtk or \.npy"):
+        cg.save_distance(tmp_path / "d.ply", prism, d)
+    np.testing.assert_array_equal(np.load(cg.save_distance(tmp_path / "d.npy", prism, d)), d)
+
+
+def test_file_numbering_is_kept(tmp_path):
+    # a file with an unused point: the mesh drops it, the written field has it back (inf) in the file's place
+    (tmp_path / "t.node").write_text("6 3 0 0\n1 0 0 0\n2 9 9 9\n3 1 0 0\n4 0 1 0\n5 0 0 1\n6 1 1 1\n")
+    (tmp_path / "t.ele").write_text("2 4 0\n1 1 3 4 5\n2 3 4 5 6\n")
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        m = cg.load_mesh(tmp_path / "t.ele")
+    d = cg.geodesic_distance(m, 0, method="dijkstra")
+    out = np.load(cg.save_distance(tmp_path / "f.npy", m, d, file_order=True))
+    assert out.shape == (6,) and np.isinf(out[1]) and out[0] == 0 and out[5] == pytest.approx(1 + 2**0.5)  # two edges
+
+
+# -- command line ----------------------------------------------------------------------------------------------
+def test_cli_distance_png_order2_and_errors(prism, tmp_path, capsys):
+    path = _msh(prism, tmp_path / "part.msh")
+    assert main(["distance", str(path), "-s", "0", "-o", str(tmp_path / "d.vtu"), "--png", str(tmp_path / "s.png"),
+                 "-q"]) == 0
+    assert (tmp_path / "s.png").stat().st_size > 10_000
+    import meshio
+
+    d = meshio.read(tmp_path / "d.vtu").point_data["distance"]
+    np.testing.assert_allclose(d, cg.geodesic_distance(prism, 0, method="qclp"), atol=1e-12)
+    assert main(["distance", str(path), "-s", "0", "--order", "2", "-o", str(tmp_path / "d2.npy"), "-q"]) == 0
+    np.testing.assert_allclose(np.load(tmp_path / "d2.npy"), np.linalg.norm(prism.V - prism.V[0], axis=1),
+                               atol=1e-6)  # the L seen from its corner: every point is in sight
+    assert main(["distance", str(path), "--boundary", "-o", str(tmp_path / "b.npy"), "-q",
+                 "--png", str(tmp_path / "b.png"), "--slice-normal", "1,0,0"]) == 0
+    assert main(["distance", str(path), "--source-point", "0.5,0.5,0.5", "-o", str(tmp_path / "p.npy"), "-q"]) == 0
+    capsys.readouterr()
+    assert main(["distance", str(path), "-s", "0", "--method", "fmm", "-o", str(tmp_path / "x.vtu"), "-q"]) == 2
+    assert "does not apply to tetrahedral meshes" in capsys.readouterr().err
+    assert main(["distance", str(path), "-s", "0", "-o", str(tmp_path / "x.ply"), "-q"]) == 2
+    assert ".vtu, .vtk, .npy" in capsys.readouterr().err
+    assert main(["distance", str(path), "--source-point", "5,5,5", "-o", str(tmp_path / "x.vtu"), "-q"]) == 2
+    assert "outside" in capsys.readouterr().err
+
+
+def test_cli_compare_lists_heat_and_dijkstra(prism, tmp_path, capsys):
+    path = _msh(prism, tmp_path / "part.msh")
+    assert main(["compare", str(path), "-s", "5", "--methods", "qclp,heat,dijkstra", "--out", str(tmp_path / "c"),
+                 "-q"]) == 0
+    out = capsys.readouterr().out
+    for name in ("qclp", "heat", "dijkstra", "errors against: qclp order 2"):
+        assert name in out
+    csv = (tmp_path / "c" / "compare.csv").read_text().splitlines()
+    assert csv[0].startswith("method,order") and len(csv) == 5
+    assert sorted(p.name for p in (tmp_path / "c").glob("*.png")) == [
+        "slice_dijkstra.png", "slice_heat.png", "slice_qclp.png", "slice_qclp_order2.png"]
+
+
+# -- the viewer (off-screen) -----------------------------------------------------------------------------------
+def test_view_draws_the_slice(prism, tmp_path):
+    pytest.importorskip("polyscope", reason="polyscope not installed", exc_type=ImportError)
+    if not _egl_works(tmp_path):
+        pytest.skip("no off-screen OpenGL context (EGL/Mesa missing)")
+    import matplotlib.image as mpimg
+
+    path = _msh(prism, tmp_path / "part.msh")
+    assert main(["view", str(path), "-s", "0", "--screenshot", str(tmp_path / "v.png"), "-q"]) == 0
+    img = mpimg.imread(tmp_path / "v.png")[..., :3]
+    drawn = np.abs(img - 1.0).sum(axis=-1) > 0.05
+    assert drawn.mean() > 0.05
+    colours = img[drawn]
+    assert np.median(colours.max(axis=1) - colours.min(axis=1)) > 0.1  # the field in colour, not grey
+    d = cg.show(prism, sources=0, screenshot=tmp_path / "w.png", window_size=(200, 150))
+    np.testing.assert_array_equal(d, cg.geodesic_distance(prism, 0, method="qclp"))
