@@ -54,7 +54,7 @@ def _solve(mesh: Any, method: str, order: int, sources: Any, m: float, solver: s
 
     t0 = time.perf_counter()
     try:
-        kwargs = {} if method in ("heat", "dijkstra") else {"solver": solver, "order": order}
+        kwargs: dict[str, Any] = {} if method in ("heat", "dijkstra") else {"solver": solver, "order": order}
         res = GeodesicSolver(mesh, method, m=m, **kwargs).solve(sources)
         return res, time.perf_counter() - t0, None
     except Exception as exc:  # noqa: BLE001 - a failed method becomes a row
