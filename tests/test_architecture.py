@@ -274,6 +274,8 @@ def test_imports_and_solves_with_clarabel_without_numba_and_mkl(tmp_path):
     assert any("Clarabel" in n and "interior-point" in n and "not available" in n for n in info["notes"]), info
     mesh = cg.icosphere(2)
     # the optimum to a tighter tolerance: at tol = 1e-8 Clarabel's field and the interior-point solver's are each
-    # up to 8e-7 of the diagonal from it (measured 2026-12-01), on opposite sides
+    # up to 8e-7 of the diagonal from it (measured 2026-12-01), on opposite sides; 1.23e-6 for Clarabel's since the
+    # bounds d >= 0 next to the source (active there) are part of the smoothed program (2026-12-02; Clarabel at
+    # 1e-11: 7.9e-8)
     ref = cg.GeodesicSolver(mesh, tol=1e-11).solve(0).distance
-    np.testing.assert_allclose(np.load(out), ref, atol=1e-6 * mesh.bbox_diagonal)
+    np.testing.assert_allclose(np.load(out), ref, atol=2e-6 * mesh.bbox_diagonal)
