@@ -395,7 +395,7 @@ def check_cost(cost: Any, n: int, m: int) -> tuple[np.ndarray, str]:
     if bad.any():
         k = int(np.flatnonzero(bad)[0])
         at = "" if kind == "constant" else f"[{k}]"
-        raise ParameterError(f"cost{at} = {arr[k]!r} ({_where(kind, k)}) must be positive and finite")
+        raise ParameterError(f"cost{at} = {float(arr[k])!r} ({_where(kind, k)}) must be positive and finite")
     return arr, kind
 
 
