@@ -1142,12 +1142,76 @@ Each mesh of the set is one point per method: its mean error against order 1's (
 """
     return text, []
 
+def metric(r) -> tuple[str, list[str]]:
+    lin = md_table(["grid", "faces", "order 1 (qclp)", "order 2", "Dijkstra", "time order 1 / 2"],
+                   [[f"{x['nx']}×{x['nx']}", f"{x['faces']:,}",
+                     *(_mean_max_pct(x[t]) for t in ("p1", "p2", "dijkstra")),
+                     f"{x['p1']['time_s']:.2f} / {x['p2']['time_s']:.2f} s"] for x in r["linear"]])
+    lay = md_table(["order", "crossing x", "Snell's law", "error", "straight line would cross at"],
+                   [[str(x["order"]), f"{x['crossing']:.5f}", f"{x['analytic']:.5f}", f"{x['error']:.1e}",
+                     f"{x['straight']:.5f}"] for x in r["layers"]])
+    met = md_table(["grid", "order", "max error / largest distance", "mean relative error"],
+                   [[f"{x['nx']}×{x['nx']}", str(x["order"]), f"{x['max_over_largest']:.1e}", p2(x["rel_mean"])]
+                    for x in r["metric"]])
+    con = md_table(["mesh", "method", "order", "c", "max deviation from c × unweighted (relative)"],
+                   [[x["mesh"], x["method"], str(x["order"]), f"{x['c']:g}", f"{x['deviation']:.1e}"]
+                    for x in r["constant"]])
+    f_lin, f_lay = r["figures"]
+    finest = r["linear"][-1]
+    text = f"""## 13. Travel cost and metrics (not in the paper)
+
+**What was run.** `benchmarks/metric_cases.py` (see [metrics.md](metrics.md)): flat jittered Delaunay grids of the
+unit square with analytic travel times; every field is one `GeodesicSolver(...).solve(...)` with `cost=` or
+`metric=`. Load average at the end: {r.get('loadavg_1min', '?')}.
+
+### Linear velocity, v = 1 + 2y
+
+Per-vertex cost `1/v`, source near (0.5, 0.2); the exact travel time is
+`arccosh(1 + b²|x − x₀|² / (2 v(x) v(x₀))) / b`. Mean / max relative error over the vertices:
+
+{lin}
+
+{fig(f_lin, 'linear velocity: isolines and errors')}
+
+On the {finest['nx']}×{finest['nx']} grid order 1 is at {p2(finest['p1']['rel_mean'])} (goal ≤ 3 %) and order 2 at
+{p2(finest['p2']['rel_mean'])} (goal ≤ 0.3 %).
+
+### Two layers
+
+Cost 1 below y = 1/2 and 2 above (per face; the interface is made of edges); the path from (0.85, 0.9) to the source
+near (0.15, 0.1) by `geodesic_path`, against the crossing of Snell's law (goal: within 0.01):
+
+{lay}
+
+{fig(f_lay, 'two layers: paths and Snell crossing')}
+
+### Constant anisotropic metric
+
+`d = √((x − s)ᵀ M (x − s))` with eigenvalues 2.33 and 0.67 in the plane (goal at order 2: max error ≤ 1e-5 of the
+largest distance):
+
+{met}
+
+### Constant cost
+
+A constant cost is the mesh scaled by `c`:
+
+{con}
+"""
+    return text, []
+
+
+def _mean_max_pct(rec) -> str:
+    return f"{100 * rec['rel_mean']:.3f} % / {100 * rec['rel_max']:.2f} %"
+
+
 SECTION_TEXT = {"table2": table2, "fig2": fig2, "fig3": fig3, "fig4": fig4, "fig5": fig5, "fig6": fig6,
                 "fig7": fig7, "fig8": fig8, "fig9": fig9, "norm_resolution": norm_resolution,
-                "norm_remeshing": norm_remeshing, "order2": order2}
+                "norm_remeshing": norm_remeshing, "order2": order2, "metric": metric}
 SECTION_TITLE = {"table2": "Table 2", "fig2": "Fig. 2", "fig3": "Fig. 3", "fig4": "Fig. 4", "fig5": "Fig. 5",
                  "fig6": "Fig. 6", "fig7": "Fig. 7", "fig8": "Fig. 8", "fig9": "Fig. 9",
-                 "norm_resolution": "Resolution study", "norm_remeshing": "Remeshing study", "order2": "Order 2"}
+                 "norm_resolution": "Resolution study", "norm_remeshing": "Remeshing study", "order2": "Order 2",
+                 "metric": "Travel cost and metrics"}
 
 
 def render(results, env, timings, plan, helpers) -> str:

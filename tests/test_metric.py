@@ -374,3 +374,34 @@ def test_cli_cost_file_and_cost_field(tmp_path, capsys):
     assert main(["path", str(ply), "-s", "0", "--to", "100", "--method", "qclp", "--cost-field", "slowness", "-o",
                  str(tmp_path / "p.npy")]) == 0
     assert "travel time" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# the report's section
+# ---------------------------------------------------------------------------------------------------------------
+def test_report_section_runs_the_analytic_cases(tmp_path):
+    import importlib
+    import json
+    import sys
+    from pathlib import Path
+
+    bench = Path(__file__).resolve().parents[1] / "benchmarks"
+    if not (bench / "report.py").is_file():
+        pytest.skip("needs the source checkout")
+    sys.path.insert(0, str(bench))
+    try:
+        rep, rt, rc = (importlib.import_module(m) for m in ("report", "report_text", "report_common"))
+        ctx = rc.Context(shared=tmp_path, out=tmp_path, cache=tmp_path / "cache", quick=True)
+        ctx.setup()
+        data = rep.sec_metric(ctx, rep.Plan(quick=True))
+        data = json.loads(json.dumps(data))  # what the report caches
+        text, _ = rt.metric(data)
+    finally:
+        sys.path.remove(str(bench))
+    assert text.startswith("## 13. Travel cost and metrics") and all((tmp_path / "figures" / f).is_file()
+                                                                      for f in data["figures"])
+    assert all(x["error"] < 0.01 for x in data["layers"])
+    assert all(x["max_over_largest"] < 1e-5 for x in data["metric"] if x["order"] == 2)
+    assert all(x["deviation"] < SCALE_TOL for x in data["constant"])
+    lin = data["linear"]
+    assert lin[-1]["p2"]["rel_mean"] < lin[-1]["p1"]["rel_mean"] < lin[-1]["dijkstra"]["rel_mean"]

@@ -20,13 +20,20 @@ from .errors import ParameterError, SourceError
 from .formulations import ALIASES, FORMULATIONS, NORMALIZATIONS, canonical_method, smoothness_weight
 from .mesh.io import as_trimesh
 from .mesh.trimesh import TriMesh
+from .operators.metric import make_medium
 from .results import GeodesicResult, SolveInfo
 from .solvers._interrupt import reporting_to
 from .sources import resolve_sources
 from .strategies import SolveConfig, SolveStrategy, make_strategy, resolve_target
-from .operators.metric import make_medium
-from .validation import (check_choice, check_count, check_medium_method, check_number, check_order, check_smoothness,
-                         validate_sources)
+from .validation import (
+    check_choice,
+    check_count,
+    check_medium_method,
+    check_number,
+    check_order,
+    check_smoothness,
+    validate_sources,
+)
 
 __all__ = ["ALL_METHODS", "BASELINE_METHODS", "DEFAULT_TOL", "GeodesicResult", "GeodesicSolver", "SOLVERS",
            "SolveInfo", "distance_matrix", "geodesic_distance"]

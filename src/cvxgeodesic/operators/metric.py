@@ -27,6 +27,7 @@ the strategies multiply the field back by it (exactly, as it is a power of two).
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -103,7 +104,7 @@ class Medium:
         if check and self.metric is not None:
             self._check_positive()
         self.scale = self._normalization() if scale is None else float(scale)
-        self._cache: dict[str, np.ndarray] = {}
+        self._cache: dict[str, Any] = {}
         self.notes: list[str] = []
 
     # -- what it is ------------------------------------------------------------------------------------------
@@ -322,9 +323,12 @@ class Medium:
 
     def adjacency(self) -> sp.csr_matrix:
         """(n, n) csr_matrix: the edge graph weighted by :attr:`edge_lengths` (as ``mesh.vertex_adjacency``)."""
-        E, w = self.mesh.edges, np.maximum(self.edge_lengths, 1e-300)  # a zero weight would be no edge
-        n = self.mesh.n_vertices
-        return sp.coo_matrix((np.r_[w, w], (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])), shape=(n, n)).tocsr()
+        if "adjacency" not in self._cache:
+            E, w = self.mesh.edges, np.maximum(self.edge_lengths, 1e-300)  # a zero weight would be no edge
+            n = self.mesh.n_vertices
+            self._cache["adjacency"] = sp.coo_matrix((np.r_[w, w], (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])),
+                                                     shape=(n, n)).tocsr()
+        return self._cache["adjacency"]
 
     # -- totals in the user's units --------------------------------------------------------------------------
     @property
