@@ -25,15 +25,7 @@ from .results import GeodesicResult, SolveInfo
 from .solvers._interrupt import reporting_to
 from .sources import resolve_sources
 from .strategies import SolveConfig, SolveStrategy, make_strategy, resolve_target
-from .validation import (
-    check_choice,
-    check_count,
-    check_medium_method,
-    check_number,
-    check_order,
-    check_smoothness,
-    validate_sources,
-)
+from .validation import check_choice, check_count, check_number, check_order, check_smoothness, validate_sources
 
 __all__ = ["ALL_METHODS", "BASELINE_METHODS", "DEFAULT_TOL", "GeodesicResult", "GeodesicSolver", "SOLVERS",
            "SolveInfo", "distance_matrix", "geodesic_distance"]
@@ -203,6 +195,8 @@ class GeodesicSolver:
         # a travel cost or metric (operators/metric.py): validated here, once
         self.medium = make_medium(self.mesh, cost, metric)
         if self.medium is not None:
+            from .validation import check_medium_method
+
             check_medium_method(self.method, (*FORMULATIONS, "dijkstra"), multires=bool(multires))
         self.tol = check_number(tol, "tol", low=0, high=1, low_open=True, high_open=True)
         self.max_iter = check_count(max_iter, "max_iter")
