@@ -3,6 +3,7 @@
 Run from the repository root (a minute at most; no other input)::
 
     python docs/tutorial_figures.py
+    python docs/tutorial_figures.py docs/metrics.md    # another page: its ``metrics_*.png``
 
 The blocks run in order in a temporary folder, as ``tests/test_tutorial.py`` runs them; every
 ``tutorial_*.png`` they write is reduced to a 256-colour palette (a third of the size, the same picture) and
@@ -28,18 +29,18 @@ def python_blocks(page: Path) -> list[str]:
     return re.findall(r"```python\n(.*?)```", page.read_text(encoding="utf-8"), flags=re.S)
 
 
-def main() -> None:
+def main(page: Path = DOCS / "tutorial.md") -> None:
     with tempfile.TemporaryDirectory() as tmp:
-        script = Path(tmp) / "tutorial.py"
-        script.write_text("\n".join(python_blocks(DOCS / "tutorial.md")), encoding="utf-8")
+        script = Path(tmp) / f"{page.stem}.py"
+        script.write_text("\n".join(python_blocks(page)), encoding="utf-8")
         path = os.pathsep.join([str(DOCS.parent / "src"), os.environ.get("PYTHONPATH", "")])
         env = {**os.environ, "PYTHONPATH": path}
         subprocess.run([sys.executable, str(script)], cwd=tmp, env=env, check=True)
-        for png in sorted(Path(tmp).glob("tutorial_*.png")):
+        for png in sorted(Path(tmp).glob(f"{page.stem}_*.png")):
             target = DOCS / "figures" / png.name
             Image.open(png).convert("RGB").quantize(256).save(target, optimize=True)
             print(f"wrote {target.relative_to(DOCS.parent)} ({target.stat().st_size // 1024} KiB)")
 
 
 if __name__ == "__main__":
-    main()
+    main(*(Path(a).resolve() for a in sys.argv[1:2]))

@@ -405,3 +405,28 @@ def test_report_section_runs_the_analytic_cases(tmp_path):
     assert all(x["deviation"] < SCALE_TOL for x in data["constant"])
     lin = data["linear"]
     assert lin[-1]["p2"]["rel_mean"] < lin[-1]["p1"]["rel_mean"] < lin[-1]["dijkstra"]["rel_mean"]
+
+
+def test_docs_page_runs_and_prints_what_it_says(tmp_path):
+    import os
+    import re
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    page = Path(__file__).resolve().parents[1] / "docs" / "metrics.md"
+    if not page.is_file():
+        pytest.skip("needs the source checkout")
+    blocks = re.findall(r"```python\n(.*?)```", page.read_text(encoding="utf-8"), flags=re.S)
+    expected = [m.group(1).strip() for b in blocks for m in re.finditer(r"^print\(.*\)\s+# (.*)$", b, flags=re.M)]
+    assert len(expected) == 4
+    script = tmp_path / "metrics.py"
+    script.write_text("\n".join(blocks), encoding="utf-8")
+    src = str(Path(cg.__file__).parents[1])
+    env = {**os.environ, "CVXGEODESIC_THREADS": "1", "PYTHONWARNINGS": "ignore",
+           "PYTHONPATH": os.pathsep.join([src, os.environ.get("PYTHONPATH", "")])}
+    res = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=300,
+                         env=env)
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert res.stdout.splitlines() == expected
+    assert (tmp_path / "metrics_terrain.png").is_file() and (page.parent / "figures" / "metrics_terrain.png").is_file()
