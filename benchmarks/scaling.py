@@ -1,10 +1,11 @@
-"""Time and peak memory of QCQP-Hessian against face count: direct, coarse-to-fine, and the heat method.
+"""Time and peak memory against face count: QCQP-Hessian direct and coarse-to-fine, order 2, the heat method.
 
 Not a test: run it by hand::
 
     python benchmarks/scaling.py                                   # 10K .. 1.1M faces from bunny.obj
     python benchmarks/scaling.py --sizes 10000,50000,70000 --no-direct-above 100000
     python benchmarks/scaling.py --sizes 1100000 --methods multires,heat
+    python benchmarks/scaling.py --sizes 70000,1100000 --methods order2,heat    # P2 qclp
 
 Meshes: ``../shared/meshes/bunny.obj`` (69,630 faces; ``--mesh`` for another file),
 decimated with fast-simplification for the sizes below it and subdivided
@@ -27,6 +28,7 @@ Columns
                 ``"approximate"``), coarse mesh ``min(faces // 4, 50K)`` faces.
 ``err``         mean / max ``|d_multires − d_direct|`` over vertices, in % of the largest
                 direct distance (when the direct case ran).
+``order2``      ``GeodesicSolver(mesh, "qclp", order=2)`` set-up + ``solve(0)`` (P2 squared distance).
 ``heat``        potpourri3d heat method, set-up + solve, the ratio baseline.
 ``MiB``         peak resident memory of the case's process.
 
@@ -49,7 +51,7 @@ import numpy as np
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "meshes"
 DEFAULT_SIZES = [10_000, 50_000, 70_000, 280_000, 1_100_000]
-METHODS = ("direct", "multires", "heat")
+METHODS = ("direct", "multires", "order2", "heat")
 
 
 def peak_mib(with_children: bool) -> float:
@@ -82,6 +84,8 @@ def run_case(case: dict) -> dict:
         solver = cg.GeodesicSolver(mesh, "heat")
     elif case["method"] == "multires":
         solver = cg.GeodesicSolver(mesh, "qcqp-hessian", multires=case.get("multires_faces") or True)
+    elif case["method"] == "order2":
+        solver = cg.GeodesicSolver(mesh, "qclp", order=2)
     else:
         solver = cg.GeodesicSolver(mesh, "qcqp-hessian")
     t1 = time.perf_counter()
@@ -90,9 +94,10 @@ def run_case(case: dict) -> dict:
     info = res.info
     out.update(setup=t1 - t0, solve=t2 - t1, total=t2 - t0, iterations=info.iterations, status=info.status)
     extra = info.extra
-    if case["method"] == "direct":
+    if case["method"] in ("direct", "order2"):
         nfact = extra.get("factorizations") or extra.get("n_factorizations") or info.iterations
         out["fact"] = extra.get("factor_time", float("nan")) / max(1, nfact)
+    if case["method"] == "direct":
         np.save(case["direct_field"], res.distance)
     if case["method"] == "multires":
         mr = extra.get("multires", {})
@@ -239,18 +244,20 @@ def main(argv=None) -> int:
 def report(rows: list[dict]) -> None:
     """Print the table and the growth exponents."""
     head = ["faces", "vertices", "direct s", "it", "fact s", "MiB", "multires s", "coarse", "err mean/max %",
-            "MiB", "heat s", "MiB", "direct/heat", "multires/heat"]
+            "MiB", "order2 s", "it", "MiB", "heat s", "MiB", "direct/heat", "multires/heat", "order2/heat"]
     lines = [head]
     for row in rows:
-        d, mr, h = row.get("direct"), row.get("multires"), row.get("heat")
+        d, mr, o2, h = row.get("direct"), row.get("multires"), row.get("order2"), row.get("heat")
         ok = lambda r: r is not None and "total" in r  # noqa: E731
         err = (f"{100 * mr['err_mean']:.2f} / {100 * mr['err_max']:.1f}" if ok(mr) and "err_mean" in mr else "-")
         lines.append([
             str(row["faces"]), str(row["vertices"]), fmt_time(d), str(d["iterations"]) if ok(d) else "-",
             f"{d['fact']:.3f}" if ok(d) else "-", fmt_mem(d), fmt_time(mr),
-            str(mr.get("coarse_faces")) if ok(mr) else "-", err, fmt_mem(mr), fmt_time(h), fmt_mem(h),
+            str(mr.get("coarse_faces")) if ok(mr) else "-", err, fmt_mem(mr), fmt_time(o2),
+            str(o2["iterations"]) if ok(o2) else "-", fmt_mem(o2), fmt_time(h), fmt_mem(h),
             f"{d['total'] / h['total']:.1f}" if ok(d) and ok(h) else "-",
             f"{mr['total'] / h['total']:.1f}" if ok(mr) and ok(h) else "-",
+            f"{o2['total'] / h['total']:.1f}" if ok(o2) and ok(h) else "-",
         ])
     widths = [max(len(r[i]) for r in lines) for i in range(len(head))]
     print()
@@ -267,7 +274,8 @@ def report(rows: list[dict]) -> None:
     print()
     print("growth exponents (slope of log time vs log faces):")
     for label, ys in [("direct total", series("direct")), ("one factorization", series("direct", "fact")),
-                      ("multires total", series("multires")), ("heat total", series("heat"))]:
+                      ("multires total", series("multires")), ("order2 total", series("order2")),
+                      ("heat total", series("heat"))]:
         print(f"  {label:18s} {slope(faces, ys):.2f}")
 
 

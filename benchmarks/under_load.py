@@ -105,10 +105,12 @@ def stop(proc: subprocess.Popen) -> None:
 
 
 def measure(mesh, method, threads, kinds, args) -> dict:
-    """Best (time, threads used) per kind; the kinds take turns in every repetition, so that a change in the
-    rest of the machine's load hits them alike. A neighbour runs only during its own turn (SIGSTOP else)."""
+    """(best time, thread counts used in the repetitions) per kind; the kinds take turns in every repetition,
+    so that a change in the rest of the machine's load hits them alike. A neighbour runs only during its own
+    turn (SIGSTOP else)."""
     neighbours = {}
     best: dict = {}
+    used: dict = {}
     try:
         for kind in kinds:
             if kind != "alone":
@@ -125,11 +127,12 @@ def measure(mesh, method, threads, kinds, args) -> dict:
                 finally:
                     if proc is not None:
                         proc.send_signal(signal.SIGSTOP)
-                best[kind] = min(best.get(kind, run), run)
+                best[kind] = min(best.get(kind, run[0]), run[0])
+                used.setdefault(kind, []).append(run[1])
     finally:
         for proc in neighbours.values():
             stop(proc)
-    return best
+    return {kind: (best[kind], ",".join(map(str, used[kind]))) for kind in best}
 
 
 def main(argv=None) -> None:
@@ -155,7 +158,7 @@ def main(argv=None) -> None:
     for method in args.methods:
         solve_once(mesh, method, 1)  # warm-up: compiled kernels loaded, caches filled
     header = f"{'method':14s} {'threads':>8s} {'alone':>8s} {'beside solver':>14s} {'ratio':>6s} " \
-             f"{'beside busy':>12s} {'ratio':>6s}   threads used (alone/solver/busy)"
+             f"{'beside busy':>12s} {'ratio':>6s}   threads used per repetition (alone/solver/busy)"
     print(header)
     for method in args.methods:
         for policy in args.policies:

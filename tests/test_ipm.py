@@ -482,3 +482,17 @@ def test_positions_match_a_dense_lookup():
         for bad in ((0, m.n_vertices), (-1, 0), (0, far)):
             with pytest.raises(ValueError, match="not in the sparsity pattern"):
                 find(np.array([bad[0]]), np.array([bad[1]]))
+
+
+@pytest.mark.shared
+def test_a_dual_residual_at_its_rounding_floor_is_converged():
+    """Reliability sweep, 2026-12-02: on the medial-axis bug (non-manifold, near-degenerate faces) the curved
+    Hessian energy's diagonal spans 4.6e6 × its median; (P x)_i ≈ 3e8 cancels to a dual residual floor of 3e-8, so
+    every solve ended "almost_optimal" (then Clarabel). Scaled by ‖P x‖ too, as OSQP does, it is optimal."""
+    from cvxgeodesic import GeodesicSolver, load_mesh
+
+    mesh = load_mesh(shared_mesh_path("bug_medial_axis.obj"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = GeodesicSolver(mesh, "qcqp-hessian", solver="ipm").solve(1511)
+    assert res.info.status == "optimal" and res.info.iterations <= 20  # 15 (2026-12-02)

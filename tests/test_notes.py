@@ -32,6 +32,8 @@ def test_batch_json_carries_the_notes_and_the_worker_prints_nothing(tmp_path, ca
     assert row["status"] == "ok", row
     meta = json.loads((out / "sliver.json").read_text())
     assert any("1 degenerate face" in n for n in meta["notes"]), meta["notes"]
+    # SolveInfo.notes itself, not only the warnings batch merges into the row's notes
+    assert any("1 degenerate face" in n for n in meta["info"]["notes"]), meta["info"]["notes"]
     assert meta["notes"] == row["notes"] and len(set(meta["notes"])) == len(meta["notes"])
     assert isinstance(meta["info"]["notes"], list)  # SolveInfo.notes, as the solver filled it
     captured = capfd.readouterr()
@@ -85,3 +87,21 @@ def test_cli_prints_each_note_once(tmp_path, monkeypatch, capsys):
     assert err == ["cvxgeodesic: note: m.off: solving with Clarabel instead",
                    "cvxgeodesic: note: m.off: planar Hessian used"]
     assert np.load(tmp_path / "d.npy").shape == (42,)
+
+
+def test_results_of_both_orders_carry_the_loaders_and_the_builders_notes(tmp_path):
+    """The loader's repairs (welded and dropped vertices) and the formulation's (degenerate faces) reach
+    ``info.notes`` at order 1 and at order 2 alike."""
+    path = tmp_path / "sliver.obj"
+    lines = [f"v {x} {y} {z}" for x, y, z in SLIVER_V] + ["v 0 0 0", "v 9 9 9"]  # a duplicate and a loose vertex
+    lines += ["f " + " ".join(str(i + 1) for i in f) for f in SLIVER_F]
+    path.write_text("\n".join(lines) + "\n")
+    mesh = cg.load_mesh(path)
+    assert mesh.notes, "the loader records its repairs"
+    for order in (1, 2):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            notes = cg.GeodesicSolver(mesh, "qclp", order=order).solve(0).info.notes
+        for note in mesh.notes:
+            assert note in notes, (order, notes)
+        assert any("degenerate face" in n for n in notes), (order, notes)

@@ -106,6 +106,26 @@ def test_max_violation_finds_interior_maximum():
         assert vmax[0] <= v.max() + 1e-3 * (abs(v.max()) + 1)
 
 
+def test_violations_lists_every_local_maximum_above_the_tolerance():
+    from cvxgeodesic.operators.p2 import violations
+
+    mesh = cg.TriMesh(np.array([[0, 0, 0], [1, 0, 0], [0.2, 0.9, 0.0]]), np.array([[0, 1, 2]]))
+    space = P2Space(mesh)
+    E = mesh.edges
+    nodes = np.vstack([mesh.V, 0.5 * (mesh.V[E[:, 0]] + mesh.V[E[:, 1]])])
+    for c in ([0.4, 0.3, 0.0], [0.5, 0.02, 0.0], [0.2, 0.2, 0.0]):
+        # φ = ½|x − c|² − 0.1: v = |∇φ|² − 4φ = 0.4 − |x − c|², a maximum at c (inside the face or near an edge)
+        x = 0.5 * ((nodes - c) ** 2).sum(axis=1) - 0.1
+        vmax, bary, _ = max_violation(space, x)
+        faces, points = violations(space, x, -np.inf, np.array([0]))
+        assert (faces == 0).all() and points.shape == (faces.size, 3) and np.allclose(points.sum(axis=1), 1)
+        assert vmax[0] == pytest.approx(0.4, abs=1e-12)
+        assert np.abs(points - bary).max(axis=1).min() < 1e-12  # the worst point is among the listed ones
+        assert np.abs(points @ mesh.V - c).max(axis=1).min() < 1e-12
+        none, _ = violations(space, x, np.inf, np.array([0]))
+        assert none.size == 0
+
+
 # ---------------------------------------------------------------- flat meshes of any quality
 @pytest.mark.parametrize("src", [0, 200, 37])
 def test_flat_jittered_grid_vertex_sources(src):

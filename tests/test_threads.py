@@ -120,13 +120,134 @@ def test_default_policy(monkeypatch, no_env):
     assert _threads.default_threads() == 1
 
 
-def test_busy_neighbours_reads_procs_running(monkeypatch):
-    counts = iter([3, 1, 3, 3, 2])
-    monkeypatch.setattr(_threads, "_procs_running", lambda: next(counts))
-    assert _threads.busy_neighbours(samples=5, interval=0) == 2  # median 3, less this thread
-    monkeypatch.setattr(_threads, "_procs_running", lambda: None)
+KTHREAD = _threads._PF_KTHREAD
+
+
+def _stat_line(pid: int, name: str, state: str, flags: int = 0, threads: int = 1) -> str:
+    """A /proc/PID/stat line: fields after the name are state, ppid, ..., flags (9th), ..., num_threads (20th)."""
+    fields = [state, "1", str(pid), str(pid), "0", "-1", str(flags), *["0"] * 10, str(threads), *["0"] * 32]
+    return f"{pid} ({name}) {' '.join(fields)}\n"
+
+
+def fake_proc(root: Path, processes: dict[int, tuple[str, list[str], int]], procs_running: int = 1) -> Path:
+    """A /proc tree: ``{pid: (name, [state of each thread, main first], flags)}`` and /proc/stat."""
+    root.mkdir(parents=True, exist_ok=True)
+    (root / "stat").write_text(f"cpu  1 2 3 4\nprocs_running {procs_running}\nprocs_blocked 0\n")
+    for pid, (name, states, flags) in processes.items():
+        (root / str(pid) / "task").mkdir(parents=True)
+        (root / str(pid) / "stat").write_text(_stat_line(pid, name, states[0], flags, len(states)))
+        for k, state in enumerate(states):
+            tid = pid if k == 0 else pid * 100 + k
+            (root / str(pid) / "task" / str(tid)).mkdir()
+            (root / str(pid) / "task" / str(tid) / "stat").write_text(_stat_line(tid, name, state, flags, len(states)))
+    return root
+
+
+def idle_machine(root: Path, own: dict | None = None, **neighbours) -> Path:
+    """An idle machine as this VM showed it, with ``neighbours`` added: init and kthreadd asleep, a kernel thread
+    that is always runnable, sleeping user processes, and this process's own threads (spinning after import)."""
+    procs = {1: ("systemd", ["S"], 0), 2: ("kthreadd", ["S"], KTHREAD), 17: ("rcu_preempt", ["R"], KTHREAD),
+             311: ("sshd: user (priv)", ["S"], 0), 420: ("python3", ["S", "S", "S"], 0)}
+    procs[os.getpid()] = ("python", ["R", "R", "R", "S"], 0)  # main thread + two spinning OpenBLAS/OpenMP workers
+    procs.update(own or {})
+    procs.update({int(k[1:]): v for k, v in neighbours.items()})
+    return fake_proc(root, procs, procs_running=5)
+
+
+def test_busy_neighbours_idle_machine_is_idle(monkeypatch, tmp_path, no_env):
+    """Neither this process's runnable threads nor an always-runnable kernel thread count as a neighbour."""
+    monkeypatch.setattr(_threads, "_PROC", str(idle_machine(tmp_path / "proc")))
+    assert _threads.busy_neighbours(interval=0) == 0
+    for cores in (2, 8):
+        monkeypatch.setattr(_threads, "usable_cores", lambda cores=cores: cores)
+        assert _threads.default_threads() == cores
+
+
+@pytest.mark.parametrize(("neighbours", "busy"), [
+    ({"p500": ("python3", ["R"], 0)}, 1),  # a busy loop
+    ({"p500": ("a (b) c)", ["R"], 0)}, 1),  # parentheses and spaces in the name
+    ({"p500": ("python3", ["R", "R"], 0), "p501": ("make", ["R"], 0)}, 3),  # a 2-thread solver and a build
+    ({"p500": ("dask worker", ["S", "R", "S", "R"], 0)}, 2),  # the main thread waits while two threads work
+    ({"p500": ("kworker/0:1", ["R"], KTHREAD)}, 0),
+    ({"p500": ("zombie", ["Z"], 0), "p501": ("disk", ["D"], 0)}, 0),
+])
+def test_busy_neighbours_counts_other_processes_threads(monkeypatch, tmp_path, neighbours, busy):
+    monkeypatch.setattr(_threads, "_PROC", str(idle_machine(tmp_path / "proc", **neighbours)))
+    assert _threads.busy_neighbours(interval=0) == busy
+    monkeypatch.setattr(_threads, "usable_cores", lambda: 2)
+    assert _threads.default_threads() == max(1, 2 - busy)
+
+
+def test_busy_neighbours_without_a_full_view_of_proc(monkeypatch, tmp_path):
+    """hidepid (process 1 not visible): procs_running less this process's runnable threads; no /proc: 0."""
+    root = fake_proc(tmp_path / "proc", {os.getpid(): ("python", ["R", "R", "S"], 0)}, procs_running=5)
+    monkeypatch.setattr(_threads, "_PROC", str(root))
+    assert _threads.busy_neighbours(interval=0) == 3
+    monkeypatch.setattr(_threads, "_PROC", str(tmp_path / "nothing"))
     assert _threads.busy_neighbours(samples=3, interval=0) == 0
-    assert _threads._procs_running() is None or _threads._procs_running() >= 1  # the real file, where there is one
+
+
+def test_busy_neighbours_takes_the_median(monkeypatch):
+    counts = iter([0, 2, 0, 1, 3])
+    monkeypatch.setattr(_threads, "_other_runnable", lambda: next(counts))
+    assert _threads.busy_neighbours(samples=5, interval=0) == 1
+    monkeypatch.undo()
+    assert _threads._procs_running() is None or _threads._procs_running() >= 1  # the real files, where there are
+    assert _threads._other_runnable() is None or _threads._other_runnable() >= 0
+
+
+def _fresh_process_env() -> dict:
+    env = {k: v for k, v in os.environ.items() if k not in (_threads.ENV_VAR, "OMP_NUM_THREADS", "NUMBA_NUM_THREADS")}
+    env["PYTHONPATH"] = os.pathsep.join([str(Path(cg.__file__).parents[1]), env.get("PYTHONPATH", "")])
+    return env
+
+
+# a fresh process: import, then the machine as `root` shows it, but this process's own task states are the real
+# ones (the library's thread pools right after import, and after building a solver)
+FRESH = """
+import os, sys
+import cvxgeodesic as cg
+from cvxgeodesic import _threads
+root = sys.argv[1]
+os.symlink(f"/proc/{os.getpid()}", f"{root}/{os.getpid()}")
+_threads._PROC = root
+first = _threads.busy_neighbours()
+solver = cg.GeodesicSolver(cg.icosphere(2), "qclp")
+print(first, _threads.busy_neighbours(), solver.threads, _threads.usable_cores())
+"""
+
+
+def test_fresh_processes_on_an_idle_machine_use_every_core(tmp_path):
+    """In 20 of 20 fresh processes the default is every usable core: the machine is faked idle (other sessions
+    load the real one), the process's own threads are real."""
+    counts = []
+    for k in range(20):
+        root = idle_machine(tmp_path / f"proc{k}", own={})
+        (root / str(os.getpid())).rename(root / "this-test")  # the test process is a neighbour here, but asleep
+        out = subprocess.run([sys.executable, "-c", FRESH, str(root)], env=_fresh_process_env(),
+                             capture_output=True, text=True, timeout=120)
+        assert out.returncode == 0, out.stderr
+        counts.append(tuple(int(x) for x in out.stdout.split()))
+    assert all(c[:2] == (0, 0) and c[2] == c[3] for c in counts), counts
+
+
+def test_beside_a_busy_process_the_default_leaves_it_a_core(tmp_path):
+    """The real /proc: a spinning neighbour is always runnable, so a fresh process sees it and keeps to its share."""
+    spin = subprocess.Popen([sys.executable, "-c", "import time\nprint(flush=True)\nt = time.monotonic() + 60\n"
+                             "while time.monotonic() < t:\n    pass\n"], stdout=subprocess.PIPE)
+    try:
+        assert spin.stdout is not None and spin.stdout.readline() == b"\n"
+        code = ("from cvxgeodesic import _threads as t\n"
+                "print(t.busy_neighbours(), t.default_threads(), t.usable_cores())")
+        out = subprocess.run([sys.executable, "-c", code], env=_fresh_process_env(), capture_output=True, text=True,
+                             timeout=120)
+    finally:
+        spin.kill()
+        spin.wait()
+    assert out.returncode == 0, out.stderr
+    busy, threads, cores = (int(x) for x in out.stdout.split())
+    assert busy >= 1
+    assert threads == max(1, cores - busy) and (cores == 1 or threads < cores)
 
 
 def test_wait_policy_set_before_libgomp_loads(monkeypatch):

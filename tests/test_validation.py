@@ -162,3 +162,50 @@ def test_batch_uses_the_same_checks(tmp_path):
                          ({"n_workers": 0}, "^n_workers must be a positive integer, got 0")]:
         with pytest.raises(ParameterError, match=text):
             run_batch([mesh_path], 0, tmp_path / "out", **kwargs)
+
+
+# ---------------------------------------------------------------- both element orders: one verdict
+_INVALID = [
+    ("sources []", {}, []),
+    ("sources repeated", {}, [0, 0]),
+    ("sources out of range", {}, 99),
+    ("sources bool", {}, True),
+    ("sources fraction", {}, [0.5]),
+    ("sources string", {}, "nope"),
+    ("sources ragged", {}, [[0], [1, 2]]),
+    ("sources face tuple", {}, (3, [0.2, 0.3, 0.5])),
+    ("point face out of range", {}, "point-face"),
+    ("m negative", {"m": -5}, 0),
+    ("m nan", {"m": np.nan}, 0),
+    ("m bool", {"m": True}, 0),
+    ("lam negative", {"lam": -1.0}, 0),
+    ("tol", {"tol": 0}, 0),
+    ("max_iter", {"max_iter": 0}, 0),
+    ("threads", {"threads": 0}, 0),
+    ("normalization", {"normalization": "cotan"}, 0),
+    ("solver", {"solver": "IPM!"}, 0),
+]
+
+
+def _verdict(order: int, kwargs: dict, sources):
+    mesh = cg.icosphere(1)
+    if sources == "point-face":
+        sources = [cg.SurfacePoint(mesh.n_faces, [1.0, 0.0, 0.0])]
+    try:
+        cg.GeodesicSolver(mesh, "qclp", order=order, **kwargs).solve(sources)
+    except Exception as exc:  # the verdict: the error's type and message
+        return type(exc).__name__, str(exc)
+    return None
+
+
+@pytest.mark.parametrize(("case", "kwargs", "sources"), _INVALID, ids=[c[0] for c in _INVALID])
+def test_both_orders_give_the_same_verdict_on_invalid_input(case, kwargs, sources):
+    first, second = _verdict(1, kwargs, sources), _verdict(2, kwargs, sources)
+    assert first is not None and first[0] in ("ParameterError", "SourceError"), first
+    assert first == second
+
+
+def test_order_is_checked_like_every_parameter():
+    for bad in (0, 3, 1.5, True, "2", None):
+        with pytest.raises(ParameterError, match="^order must be 1 .* or 2 .*, got"):
+            cg.GeodesicSolver(cg.icosphere(1), "qclp", order=bad)

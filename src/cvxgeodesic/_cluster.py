@@ -16,8 +16,13 @@ from collections.abc import Iterator
 from contextlib import ExitStack
 from typing import Any
 
-__all__ = ["PROBE_TIMEOUT", "THREAD_VARIABLES", "check_scheduler", "local_worker_environ", "open_client",
+__all__ = ["LOCAL_HOST", "PROBE_TIMEOUT", "THREAD_VARIABLES", "check_scheduler", "local_worker_environ", "open_client",
            "require_distributed", "sigint_ignored", "stop_after_interrupt"]
+
+#: The one address a local cluster listens on (scheduler, workers, nannies and the scheduler's dashboard).
+#: Dask binds the dashboard of ``dashboard_address=":0"`` to every interface, so a job would be reachable
+#: from the network while it runs; on loopback it stays reachable from this machine (or an SSH tunnel).
+LOCAL_HOST = "127.0.0.1"
 
 #: Seconds :func:`check_scheduler` waits for the connection and for the scheduler's first bytes.
 PROBE_TIMEOUT = 4.0
@@ -167,7 +172,8 @@ def open_client(stack: ExitStack, scheduler: Any, n_workers: int, what: str = "c
         Closes the client and the local cluster this opens when the run ends.
     scheduler : None, str or distributed.Client
         None: a ``LocalCluster`` of ``n_workers`` worker processes with one Dask thread each and
-        :func:`local_worker_environ`'s thread budget; an address (probed by :func:`check_scheduler`
+        :func:`local_worker_environ`'s thread budget, every socket of it (dashboard included) on
+        :data:`LOCAL_HOST`; an address (probed by :func:`check_scheduler`
         first); or a connected client, used as it is (not closed).
     n_workers : int
         Workers of the local cluster.
@@ -192,7 +198,8 @@ def open_client(stack: ExitStack, scheduler: Any, n_workers: int, what: str = "c
         kept = _environ_kept((*THREAD_VARIABLES, MALLOC_TRIM))
         with dask.config.set(local_worker_environ(n_workers)), sigint_ignored(), kept:
             cluster = stack.enter_context(distributed.LocalCluster(
-                n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=":0"))
+                n_workers=n_workers, threads_per_worker=1, processes=True, host=LOCAL_HOST,
+                dashboard_address=f"{LOCAL_HOST}:0"))
         return stack.enter_context(distributed.Client(cluster)), cluster
     if isinstance(scheduler, distributed.Client):
         return scheduler, None

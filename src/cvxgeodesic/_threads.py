@@ -1,7 +1,7 @@
 """How many threads a solve uses: the ``threads=`` parameter, ``CVXGEODESIC_THREADS`` and the default policy.
 
-A solve runs four thread pools: MKL PARDISO (GNU OpenMP), the Numba kernels of the
-interior-point solver (Numba's ``omp`` layer, the same GNU OpenMP runtime), OpenBLAS
+A solve runs four thread pools: MKL PARDISO (GNU OpenMP), the parallel Numba kernels (the
+order-2 solver's; Numba's ``omp`` layer, the same GNU OpenMP runtime), OpenBLAS
 (NumPy, SciPy, CHOLMOD) and OpenMP regions of other libraries (libigl). Every pool
 is bounded by :func:`thread_limit` for the whole construction of a solver and for
 each of its solves.
@@ -14,11 +14,10 @@ time slice: measured on a 2-core machine, a solve beside another solving process
 took 14–17× its time alone (``DESIGN.md`` §9), and with one thread each 1.4×.
 
 The default (``threads=None``, no ``CVXGEODESIC_THREADS``) counts the cores this
-process may run on and the runnable tasks of other processes (``procs_running`` of
-``/proc/stat``, sampled a few times) when a solver is built, and uses the cores
-left free, at least one. The count is taken once per solver because PARDISO's
-thread count is fixed by its analysis (changing it afterwards crashes it, see
-:mod:`~cvxgeodesic.linalg.pardiso`).
+process may run on and the runnable threads of other processes (:func:`busy_neighbours`,
+sampled a few times) when a solver is built, and uses the cores left free, at least one.
+The count is taken once per solver because PARDISO's thread count is fixed by its
+analysis (changing it afterwards crashes it, see :mod:`~cvxgeodesic.linalg.pardiso`).
 """
 
 from __future__ import annotations
@@ -27,8 +26,9 @@ import functools
 import os
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from typing import Concatenate, ParamSpec, Protocol, TypeVar
 
 import numpy as np
 
@@ -107,9 +107,16 @@ def usable_cores() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+#: ``PF_KTHREAD`` of ``/proc/PID/stat``'s flags: a kernel thread (no process of anyone's)
+_PF_KTHREAD = 0x00200000
+#: where the task states are read (a fake tree in tests)
+_PROC = "/proc"
+
+
 def _procs_running() -> int | None:
+    """``procs_running`` of ``/proc/stat``: every runnable task of the machine, this process's included."""
     try:
-        with open("/proc/stat", "rb") as fh:
+        with open(f"{_PROC}/stat", "rb") as fh:
             for line in fh:
                 if line.startswith(b"procs_running"):
                     return int(line.split()[1])
@@ -118,19 +125,78 @@ def _procs_running() -> int | None:
     return None
 
 
-def busy_neighbours(samples: int = _SAMPLES, interval: float = _SAMPLE_INTERVAL) -> int:
-    """Runnable tasks of other processes: the median over ``samples`` reads of ``/proc/stat``, minus this thread.
+def _stat(path: str) -> tuple[bytes, int, int] | None:
+    """(state, flags, num_threads) of a ``/proc/.../stat`` file, None when it is gone or unreadable."""
+    try:
+        with open(path, "rb") as fh:
+            text = fh.read()
+        fields = text[text.rindex(b")") + 2:].split()  # the name in parentheses may hold spaces
+        return fields[0], int(fields[6]), int(fields[17])
+    except (OSError, ValueError, IndexError):
+        return None
 
-    0 where ``/proc/stat`` is not readable (not Linux).
+
+def _runnable_threads(pid: str) -> int:
+    """Threads of process ``pid`` in state R (running or waiting for a core)."""
+    try:
+        tids = os.listdir(f"{_PROC}/{pid}/task")
+    except OSError:
+        return 0
+    return sum(1 for tid in tids if (st := _stat(f"{_PROC}/{pid}/task/{tid}/stat")) is not None and st[0] == b"R")
+
+
+def _other_runnable() -> int | None:
+    """Runnable threads of other processes, kernel threads left out; None when ``/proc`` does not show them all.
+
+    ``procs_running`` counts more than neighbours' work: this process's own threads (OpenBLAS's and
+    OpenMP's workers spin for a while after every parallel region; right after ``import cvxgeodesic`` a
+    fresh process read 3 on an idle 2-core machine) and, on some virtual machines, a kernel thread that
+    is always runnable (an idle machine read as one busy core). Hence the scan of every task's state.
+    """
+    own = str(os.getpid())
+    try:
+        pids = [p for p in os.listdir(_PROC) if p.isdigit()]
+    except OSError:
+        return None
+    if _stat(f"{_PROC}/1/stat") is None:  # hidepid: others' processes are hidden and would look like an idle machine
+        return None
+    count = 0
+    for pid in pids:
+        if pid == own:
+            continue
+        st = _stat(f"{_PROC}/{pid}/stat")
+        if st is None or st[1] & _PF_KTHREAD:
+            continue
+        # the process's own stat is its main thread's state: other threads may run while it waits (a Dask worker)
+        count += (st[0] == b"R") if st[2] == 1 else _runnable_threads(pid)
+    return count
+
+
+def _fallback_runnable() -> int | None:
+    """``procs_running`` less this process's runnable threads (kernel threads cannot be told apart here)."""
+    n = _procs_running()
+    if n is None:
+        return None
+    return n - max(1, _runnable_threads(str(os.getpid())))
+
+
+def busy_neighbours(samples: int = _SAMPLES, interval: float = _SAMPLE_INTERVAL) -> int:
+    """Runnable threads of other processes: the median over ``samples`` reads of the task states in ``/proc``.
+
+    Neither this process's threads nor kernel threads count. Where ``/proc`` does not list every
+    process (``hidepid``), ``procs_running`` of ``/proc/stat`` less this process's runnable threads;
+    0 where neither is readable (not Linux). In a container only the processes it sees count.
     """
     counts = []
     for i in range(samples):
         if i:
             time.sleep(interval)
-        n = _procs_running()
+        n = _other_runnable()
+        if n is None:
+            n = _fallback_runnable()
         if n is None:
             return 0
-        counts.append(n - 1)  # this thread is running while it reads
+        counts.append(n)
     return max(0, int(np.median(counts)))
 
 
@@ -203,15 +269,26 @@ def thread_limit(threads: int) -> Iterator[None]:
             numba.set_num_threads(nb_previous)
 
 
-def limited(method):
+class _HasThreads(Protocol):
+    threads: int
+
+
+_S = TypeVar("_S", bound=_HasThreads)
+_P = ParamSpec("_P")
+_R = TypeVar("_R")
+
+
+def limited(method: Callable[Concatenate[_S, _P], _R]) -> Callable[Concatenate[_S, _P], _R]:
     """Run a :class:`~cvxgeodesic.api.GeodesicSolver` method under the solver's thread limit.
 
     On ``__init__`` it resolves the ``threads`` keyword into ``self.threads`` first; a
-    result with an ``info`` gets ``info.extra["threads"]``.
+    result with an ``info`` gets ``info.extra["threads"]``. Typed so that the decorated
+    method keeps its signature and return type for type checkers (an untyped decorator
+    made the class and every result ``Any`` to mypy).
     """
 
     @functools.wraps(method)
-    def wrapper(self, *args, **kwargs):
+    def wrapper(self: _S, /, *args: _P.args, **kwargs: _P.kwargs) -> _R:
         if method.__name__ == "__init__":
             self.threads = resolve_threads(kwargs.get("threads"))
         with thread_limit(self.threads):

@@ -169,6 +169,8 @@ class GeodesicSolver:
     ((642,), 'optimal')
     """
 
+    threads: int  # set by @limited before __init__'s body runs
+
     @limited
     def __init__(
         self,
@@ -459,7 +461,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str = "qcqp-hessian"
         check_count(workers, "workers", or_none=True)
         if scheduler is not None:
             raise ParameterError("give workers (a local Dask cluster) or scheduler (an existing one), not both")
-    options = {"method": method, "m": m, "lam": lam, "solver": solver, "tol": tol, "max_iter": max_iter,
+    options: dict[str, Any] = {"method": method, "m": m, "lam": lam, "solver": solver, "tol": tol, "max_iter": max_iter,
                "multires": multires, "normalization": normalization, "order": order, "threads": threads,
                "cost": cost, "metric": metric}
 

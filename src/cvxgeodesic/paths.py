@@ -24,7 +24,8 @@ descent), and within 0.1 % of the exact polyhedral distance on the unit icospher
 from __future__ import annotations
 
 import numbers
-from typing import Any
+from collections.abc import Sequence
+from typing import Any, Literal, TypeAlias, overload
 
 import numpy as np
 import scipy.sparse as sp
@@ -34,11 +35,15 @@ from .errors import ParameterError, SolverError, SourceError
 from .mesh.io import as_trimesh
 from .mesh.trimesh import TriMesh
 from .operators.metric import make_medium
+from .results import GeodesicResult
 from .sources import BARY_SNAP, SourceSet, SurfacePoint, _barycentric, _incident_faces, resolve_sources
 from .validation import as_vertex_field, check_count
 
+#: A distance field as the functions here take it: the vertex values or the result they came from.
+Field: TypeAlias = ArrayLike | GeodesicResult
 
-def _field(mesh: TriMesh, distance) -> tuple[np.ndarray, object]:
+
+def _field(mesh: TriMesh, distance: Any) -> tuple[np.ndarray, Any]:
     """(n,) float field and the result object it came from (or None)."""
     result = None
     if hasattr(distance, "distance") and hasattr(distance, "info"):
@@ -58,9 +63,10 @@ def _as_points(mesh: TriMesh, points) -> tuple[list[SurfacePoint], bool]:
             X = np.asarray(points, dtype=float)
         except (TypeError, ValueError):
             raise SourceError("points must be SurfacePoints or (k, 3) positions") from None
-        pts = surface_point(mesh, X)
-        if isinstance(pts, SurfacePoint):
-            return [pts], True
+        found = surface_point(mesh, X)
+        if isinstance(found, SurfacePoint):
+            return [found], True
+        pts = found
     for k, p in enumerate(pts):
         if p.face >= mesh.n_faces:
             raise SourceError(f"point {k} {p!r}: face index {p.face} is out of range: the mesh has {mesh.n_faces} "
@@ -68,7 +74,15 @@ def _as_points(mesh: TriMesh, points) -> tuple[list[SurfacePoint], bool]:
     return pts, False
 
 
-def distance_at(mesh: Any, distance: ArrayLike, points: Any) -> np.ndarray:
+@overload
+def distance_at(mesh: Any, distance: Field, points: SurfacePoint) -> float: ...
+@overload
+def distance_at(mesh: Any, distance: Field, points: Sequence[SurfacePoint]) -> np.ndarray: ...
+@overload
+def distance_at(mesh: Any, distance: Field, points: ArrayLike) -> float | np.ndarray: ...
+
+
+def distance_at(mesh: Any, distance: Field, points: Any) -> float | np.ndarray:
     """Values of a distance field at surface points.
 
     A vertex field is interpolated linearly in each face; the result of an ``order=2`` solve
@@ -163,8 +177,9 @@ def _source_targets(mesh: TriMesh, ss: SourceSet | None):
     return per_face
 
 
-def _closest_on(x: np.ndarray, items) -> tuple[np.ndarray, float]:
-    best, bd = None, np.inf
+def _closest_on(x: np.ndarray, items) -> tuple[np.ndarray | None, float]:
+    best: np.ndarray | None = None
+    bd = np.inf
     for a, b in items:
         ab = b - a
         den = float(ab @ ab)
@@ -176,9 +191,26 @@ def _closest_on(x: np.ndarray, items) -> tuple[np.ndarray, float]:
     return best, bd
 
 
-def geodesic_path(mesh: Any, distance: ArrayLike, target: Any, *, sources: Any = None,
+@overload
+def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = None,
+                  return_surface_points: Literal[False] = False, straighten: bool = True,
+                  max_steps: int | None = None, cost: Any = None, metric: Any = None) -> np.ndarray: ...
+@overload
+def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = None,
+                  return_surface_points: Literal[True], straighten: bool = True,
+                  max_steps: int | None = None, cost: Any = None,
+                  metric: Any = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
+@overload
+def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = None,
                   return_surface_points: bool = False, straighten: bool = True,
-                  max_steps: int | None = None, cost: Any = None, metric: Any = None) -> Any:
+                  max_steps: int | None = None, cost: Any = None,
+                  metric: Any = None) -> np.ndarray | tuple[np.ndarray, np.ndarray, np.ndarray]: ...
+
+
+def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = None,
+                  return_surface_points: bool = False, straighten: bool = True,
+                  max_steps: int | None = None, cost: Any = None,
+                  metric: Any = None) -> np.ndarray | tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Path from ``target`` down the distance field to the nearest source.
 
     In a travel cost or metric (``cost``/``metric``, or those of the solve when ``distance`` is a
@@ -255,9 +287,10 @@ def geodesic_path(mesh: Any, distance: ArrayLike, target: Any, *, sources: Any =
     walk = _Descent(mesh, geo, d, src_v, _source_targets(mesh, ss), medium)
     state = walk.start(target)
     for _ in range(max_steps):
-        state = walk.from_vertex(state[1]) if state[0] == "v" else walk.from_face(state[1], state[2])
-        if state is None:
+        step = walk.from_vertex(state[1]) if state[0] == "v" else walk.from_face(state[1], state[2])
+        if step is None:
             break
+        state = step
     else:
         raise SolverError(f"geodesic_path: no source reached within max_steps={max_steps} steps",
                           solver="geodesic_path", status="max_steps")
@@ -363,7 +396,8 @@ class _Descent:
         fs = geo.faces_of_vertex(v)
         if any(self._finish_in_face(int(f), V[v], d[v]) for f in fs):
             return None
-        best, choice = 1e-14, None
+        best = 1e-14
+        choice: tuple | None = None
         for f in fs:
             g = self.down[f]
             if not np.all(np.isfinite(g)):
@@ -458,7 +492,7 @@ def _finish_path(mesh: TriMesh, geo: _Geometry, nodes: list[tuple], straighten: 
     if straighten:
         nodes = _open_vertices(mesh, geo, nodes)
         for _ in range(64):
-            _straighten(mesh, nodes, None if medium is None else (medium.on(mesh), geo))
+            _straighten(mesh, nodes, None if medium is None else medium.on(mesh))
             nodes, switched = _switch_sides(mesh, geo, nodes)
             if not switched:
                 break
@@ -499,7 +533,7 @@ def _exact_path(mesh: TriMesh, ss: SourceSet, target, return_surface_points: boo
     V2, F2, idx = (insert_points(mesh.V, mesh.F, extra) if len(extra) else (mesh.V, mesh.F, np.zeros(0, np.int64)))
     sources = np.unique(np.r_[ss.vertices, idx[: len(X)]]).astype(np.int64)
     t2 = int(idx[-1]) if isinstance(target, SurfacePoint) else int(target)
-    best = None
+    best: tuple | None = None
     if t2 in set(sources.tolist()):
         best = (0.0, np.array([V2[t2]]))
     with contextlib.redirect_stdout(io.StringIO()):
@@ -555,7 +589,7 @@ def _segment_face(geo: _Geometry, a, b) -> int | None:
     return int(shared[0]) if len(shared) else None
 
 
-def _fan(geo: _Geometry, v: int, start: int, goal: int) -> list[tuple[int, list[int]]]:
+def _fan(geo: _Geometry, v: int, start: int, goal: int) -> list[tuple[list[int], list[int]]]:
     """The two walks around vertex ``v`` from face ``start`` to face ``goal``: (edge ends, faces) each."""
     F = geo.F
     walks = []
@@ -609,7 +643,7 @@ def _open_vertices(mesh: TriMesh, geo: _Geometry, nodes: list) -> list:
             continue
 
         q0, q1 = _position(mesh, nodes[i - 1]), _position(mesh, nodes[i + 1])
-        ends, faces = min(walks, key=lambda w, v=v, q0=q0, q1=q1: _walk_angle(geo, v, w, q0, q1))
+        ends, faces = walks[int(np.argmin([_walk_angle(geo, v, w, q0, q1) for w in walks]))]
         for j, u in enumerate(ends):
             out.append(("e", v, u, faces[j], faces[j + 1], 0.7 * V[v] + 0.3 * V[u]))
     out.append(nodes[-1])
@@ -798,60 +832,9 @@ def _straighten_chain(mesh: TriMesh, q0: np.ndarray, chain: list, q1: np.ndarray
     return out
 
 
-def _shortest_in_medium(mesh: TriMesh, medium: Any, geo: _Geometry, q0: np.ndarray, chain: list,
-                        q1: np.ndarray) -> list:
-    """The path of least length in the medium from ``q0`` through the chain's edges to ``q1``: a second-order cone
-    program in the crossings' edge parameters ``t_k ∈ [0, 1]`` (the length of each piece, ``‖Lᵀ u‖`` with the
-    face's tensor ``L Lᵀ`` at its centroid, is a norm of an affine function of them). The chain is returned
-    unchanged if Clarabel does not solve it."""
-    import clarabel
-
-    V = mesh.V
-    K = len(chain)
-    a_pt = np.array([V[nd[1]] for nd in chain])
-    dirs = np.array([V[nd[2]] - V[nd[1]] for nd in chain])
-    faces = np.array([chain[0][3], *(nd[4] for nd in chain)], dtype=np.int64)  # the face of each of K + 1 pieces
-    L = np.linalg.cholesky(medium.plane(faces, np.full(3, 1 / 3)))
-    R = np.stack([geo.ex[faces], geo.ey[faces]], 1)  # (K + 1, 2, 3): the face's frame
-    Mj = np.einsum("kji,kjl->kil", L, R)  # (K + 1, 2, 3): u -> Lᵀ (frame coordinates of u)
-    base = np.vstack([q0, a_pt, q1])
-    # piece j runs from point j to point j + 1 (point 0 = q0, point K + 1 = q1; points 1..K move along edges)
-    n_var = 2 * K + 1
-    rows, cols, vals, b = [], [], [], []
-    for j in range(K + 1):
-        r0 = 3 * j
-        rows.append(r0), cols.append(K + j), vals.append(-1.0), b.append(0.0)
-        w = Mj[j] @ (base[j + 1] - base[j])
-        for i in range(2):
-            b.append(float(w[i]))
-            if j + 1 <= K:  # + t_{j+1} dirs_{j+1}
-                rows.append(r0 + 1 + i), cols.append(j), vals.append(-float(Mj[j, i] @ dirs[j]))
-            if j >= 1:  # − t_j dirs_j
-                rows.append(r0 + 1 + i), cols.append(j - 1), vals.append(float(Mj[j, i] @ dirs[j - 1]))
-    n_soc = 3 * (K + 1)
-    for k in range(K):  # t_k >= 0 and 1 − t_k >= 0
-        rows += [n_soc + k, n_soc + K + k]
-        cols += [k, k]
-        vals += [-1.0, 1.0]
-    b = np.r_[b, np.zeros(K), np.ones(K)]
-    A = sp.csc_matrix((vals, (rows, cols)), shape=(n_soc + 2 * K, n_var))
-    q = np.r_[np.zeros(K), np.ones(K + 1)]
-    settings = clarabel.DefaultSettings()
-    settings.verbose = False
-    # the length is flat at its minimum: a gap of ε moves the crossings by about √ε (measured: the default 1e-8
-    # bowed a straight path by 6e-5)
-    settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = 1e-14
-    cones = [clarabel.SecondOrderConeT(3)] * (K + 1) + [clarabel.NonnegativeConeT(2 * K)]
-    sol = clarabel.DefaultSolver(sp.csc_matrix((n_var, n_var)), q, A, b, cones, settings).solve()
-    if str(sol.status) not in ("Solved", "AlmostSolved"):
-        return chain
-    t = np.clip(np.asarray(sol.x)[:K], 0.0, 1.0)
-    return [(*nd[:5], a_pt[k] + t[k] * dirs[k]) for k, nd in enumerate(chain)]
-
-
 def _straighten(mesh: TriMesh, nodes: list, medium: Any = None) -> None:
     """Move every chain of edge crossings between two fixed nodes to the shortest path through its faces
-    (in a medium ``(Medium, _Geometry)``: the path of least length in it, :func:`_shortest_in_medium`)."""
+    (in a medium: the path of least length in it, :meth:`~cvxgeodesic.operators.metric.Medium.least_crossings`)."""
     n = len(nodes)
     i = 1
     while i < n - 1:
@@ -866,5 +849,12 @@ def _straighten(mesh: TriMesh, nodes: list, medium: Any = None) -> None:
         if medium is None:
             nodes[i:j + 1] = _straighten_chain(mesh, q0, nodes[i:j + 1], q1)
         else:
-            nodes[i:j + 1] = _shortest_in_medium(mesh, medium[0], medium[1], q0, nodes[i:j + 1], q1)
+            chain = nodes[i:j + 1]
+            ends = np.array([nd[1:3] for nd in chain], dtype=np.int64)
+            faces = np.array([chain[0][3], *(nd[4] for nd in chain)], dtype=np.int64)  # of the K + 1 pieces
+            t = medium.least_crossings(q0, ends, faces, q1)
+            if t is not None:
+                V = mesh.V
+                nodes[i:j + 1] = [(*nd[:5], (1 - tk) * V[nd[1]] + tk * V[nd[2]]) for nd, tk in zip(chain, t,
+                                                                                                  strict=True)]
         i = j + 1

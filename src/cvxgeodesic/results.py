@@ -76,7 +76,24 @@ class SolveInfo:
         faces left out, another energy, a manifold cover, a Clarabel retry, the ``d ≥ 0``
         re-solve, ...). Empty when the problem was solved exactly as asked.
     extra : dict
-        Backend-specific details (timing breakdown, library parameters).
+        Details, by who produced the field (every time in seconds, each a part of ``solve_time``):
+
+        - every solve: ``threads`` (the thread limit it ran under);
+        - the interior-point solver (``solver == "ipm"``): ``program_time`` (the problem turned into blocks),
+          ``assembly_time``, ``factor_time``, ``linear_solve_time``, ``other_time`` (their sum is ``total_time``),
+          ``analyze_time`` (the once-per-mesh symbolic analysis, *not* part of ``solve_time``), ``new_analyses``,
+          ``backend`` (PARDISO, CHOLMOD or SciPy), ``start`` (the starting point), ``refinement_steps``,
+          ``correctors``, ``correctors_accepted``, ``max_correctors``, ``corrector_escalations``,
+          ``regularized`` (factorizations retried with a raised diagonal), ``mu``, ``gap_abs``; with
+          ``status == "almost_optimal"`` also ``stopped`` and ``best_iteration``;
+        - Clarabel: ``clarabel_setup_time``, ``clarabel_solve_time``; after a retry ``ipm_failure`` (the
+          interior-point status that caused it);
+        - the ``d ≥ 0`` re-solve: ``negative_min``, ``resolved_nonnegative``;
+        - ``order=2``: ``order``, ``p2_field`` (:class:`~cvxgeodesic.operators.p2.P2Field`), ``n_dofs``,
+          ``n_cones``, ``rounds`` (cutting-plane rounds), ``round_iterations`` (iterations of each round's solve;
+          ``iterations`` is their sum);
+        - ``multires``: ``multires`` (the coarse mesh and the transfer), ``coarse``;
+        - baselines: the library's own parameters (e.g. ``t_coef`` of the heat method).
     """
 
     method: str

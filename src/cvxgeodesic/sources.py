@@ -526,6 +526,10 @@ def resolve_sources(mesh: TriMesh, sources) -> SourceSet:
         return builder.build("boundary", f"boundary ({len(E)} edges)")
     if isinstance(sources, SurfacePoint | SurfaceCurve):
         sources = [sources]
+    if (isinstance(sources, tuple) and len(sources) == 2 and _is_int_like(sources[0])
+            and np.ndim(sources[1]) == 1 and np.size(sources[1]) == 3):
+        raise SourceError(f"sources = {sources!r} looks like a (face, bary) pair: give a point inside a face as "
+                          f"cg.SurfacePoint({sources[0]}, {list(sources[1])})")
     if isinstance(sources, list | tuple) and any(isinstance(s, SurfacePoint | SurfaceCurve | str) for s in sources):
         builder = _Builder(mesh)
         kinds = set()

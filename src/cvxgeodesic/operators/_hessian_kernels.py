@@ -33,13 +33,23 @@ import numba
 import numpy as np
 from numba import njit, prange
 
+from .._jit import watch_compiles
+
+watch_compiles()  # one line on stderr when a kernel compiles (a cold cache: the first run after installation)
+
 # the same threading layer as the solver's kernels (cvxgeodesic.solvers.ipm._kernels, which explains the choice),
 # for a process that builds an energy before it imports the solver
 if "NUMBA_THREADING_LAYER" not in os.environ and "NUMBA_THREADING_LAYER_PRIORITY" not in os.environ:
     numba.config.THREADING_LAYER_PRIORITY = ["omp", "tbb", "workqueue"]
 
-_JIT = {"cache": True, "nogil": True, "error_model": "numpy"}
-_PJIT = {**_JIT, "parallel": True}
+# Serial, although the face and row loops are written with prange and have no conflicting writes: parallel=True
+# doubles these kernels' compile time (the first QCQP-Hessian set-up of spot after an install: 3.1 s serial
+# against 5.3-5.9 s), and the four loops take about 80 ms of a 0.5 s set-up of a 97K-face mesh (face_blocks 23 ms,
+# gather_rows 43 ms; the same with 2 threads parallel on a 2-core machine shared with other jobs, 2026-12-02).
+# no_cfunc_wrapper: the kernels are called from Python and from each other, never through a C function pointer,
+# and the C wrapper Numba builds by default took about 5 % of the first compile (spot, qcqp-hessian: 5.1-5.2 s
+# against 5.4 s)
+_JIT = {"cache": True, "nogil": True, "error_model": "numpy", "no_cfunc_wrapper": True}
 
 
 @njit(**_JIT)
@@ -61,7 +71,7 @@ def twins(E, n_edges):
     return out
 
 
-@njit(**_PJIT)
+@njit(**_JIT)
 def face_geometry(V, F, lsq, dA, theta):
     """Squared edge lengths ``lsq`` (m, 3), double areas ``dA`` (m,) (Kahan's Heron formula, 0 where it has no
     real value) and corner angles ``theta`` (m, 3) of every face, from the edge lengths as libigl does."""
@@ -98,7 +108,7 @@ def _gradient_rows(F, lsq, dA, h):
 _CHUNK = 4096
 
 
-@njit(**_PJIT)
+@njit(**_JIT)
 def face_blocks(F, E, twin, lsq, dA, theta, minv, sk, blocks, verts):
     """Each face's 6 × 6 block ``G_fᵀ (L + K)_f G_f`` of ``Q`` (symmetrized) into ``blocks`` (m, 6, 6), on the
     vertices ``verts`` (m, 6): the corners, then the vertex across each edge (−1 on the boundary).
@@ -232,7 +242,7 @@ def _row_columns(u, verts, slot_ptr, slots, seen, cols):
     return k
 
 
-@njit(**_PJIT)
+@njit(**_JIT)
 def row_lengths(verts, slot_ptr, slots, width, length):
     """Number of distinct columns of each row of ``Q`` into ``length`` (n,); ``width`` bounds it."""
     n = slot_ptr.size - 1
@@ -244,7 +254,7 @@ def row_lengths(verts, slot_ptr, slots, width, length):
             length[u] = _row_columns(u, verts, slot_ptr, slots, seen, cols)
 
 
-@njit(**_PJIT)
+@njit(**_JIT)
 def gather_rows(verts, blocks, slot_ptr, slots, width, indptr, indices, data):
     """Row u of ``Q``: its sorted distinct columns into ``indices[indptr[u]:indptr[u+1]]`` and the sum of the
     blocks' entries into ``data``, in face order (rows are independent: parallel without conflicts)."""

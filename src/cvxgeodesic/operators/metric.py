@@ -330,6 +330,71 @@ class Medium:
                                                      shape=(n, n)).tocsr()
         return self._cache["adjacency"]
 
+    def least_crossings(self, q0: np.ndarray, ends: np.ndarray, faces: np.ndarray, q1: np.ndarray) -> np.ndarray | None:
+        """The polyline of least length in the medium from ``q0`` across a chain of edges to ``q1``.
+
+        A second-order cone program (Clarabel) in the crossings' parameters ``t_k ∈ [0, 1]`` along their edges:
+        each piece's length ``‖Lᵀ u‖`` (``L Lᵀ`` the face's :meth:`plane` at its centroid, ``u`` in its frame) is
+        the norm of an affine function of them.
+
+        Parameters
+        ----------
+        q0, q1 : (3,) float ndarray
+            The fixed ends: ``q0`` in ``faces[0]``, ``q1`` in ``faces[-1]``.
+        ends : (K, 2) int ndarray
+            The vertices ``(a, c)`` of each edge crossed: the crossing is ``(1 − t) V[a] + t V[c]``.
+        faces : (K + 1,) int ndarray
+            The face of each piece (piece ``k`` ends on edge ``k``).
+
+        Returns
+        -------
+        (K,) float ndarray or None
+            ``t``; None when Clarabel does not solve it.
+        """
+        import clarabel
+
+        V = self.mesh.V
+        K = len(ends)
+        a_pt, dirs = V[ends[:, 0]], V[ends[:, 1]] - V[ends[:, 0]]
+        L = np.linalg.cholesky(self.plane(faces, _CENTROID))
+        R = np.stack([self._ex[faces], self._ey[faces]], 1)  # (K + 1, 2, 3): the face's frame
+        Mj = np.einsum("kji,kjl->kil", L, R)  # (K + 1, 2, 3): u -> Lᵀ (u in the frame)
+        base = np.vstack([q0, a_pt, q1])
+        # variables (t_1..t_K, s_0..s_K); piece j from point j to j + 1: (s_j, Mj (x_{j+1} − x_j)) ∈ SOC(3)
+        n_var, n_soc = 2 * K + 1, 3 * (K + 1)
+        j = np.arange(K + 1)
+        w = np.einsum("kil,kl->ki", Mj, base[1:] - base[:-1])  # (K + 1, 2): the pieces at t = 0
+        rows = [3 * j]
+        cols = [K + j]
+        vals = [-np.ones(K + 1)]
+        for i in range(2):
+            nxt = j[:-1]  # + t_{j+1} Mj dirs_{j+1}: pieces 0..K-1
+            rows.append(3 * nxt + 1 + i)
+            cols.append(nxt)
+            vals.append(-np.einsum("kl,kl->k", Mj[nxt, i], dirs[nxt]))
+            prv = j[1:]  # − t_j Mj dirs_j: pieces 1..K
+            rows.append(3 * prv + 1 + i)
+            cols.append(prv - 1)
+            vals.append(np.einsum("kl,kl->k", Mj[prv, i], dirs[prv - 1]))
+        k = np.arange(K)  # t_k >= 0 and 1 − t_k >= 0
+        rows += [n_soc + k, n_soc + K + k]
+        cols += [k, k]
+        vals += [-np.ones(K), np.ones(K)]
+        rhs = np.r_[np.column_stack([np.zeros(K + 1), w]).ravel(), np.zeros(K), np.ones(K)]
+        A = sp.csc_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                          shape=(n_soc + 2 * K, n_var))
+        settings = clarabel.DefaultSettings()
+        settings.verbose = False
+        # the length is flat at its minimum: a gap of ε moves the crossings by about √ε (measured: the default
+        # 1e-8 bowed a straight path by 6e-5)
+        settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = 1e-14
+        cones = [clarabel.SecondOrderConeT(3)] * (K + 1) + [clarabel.NonnegativeConeT(2 * K)]
+        q = np.r_[np.zeros(K), np.ones(K + 1)]
+        sol = clarabel.DefaultSolver(sp.csc_matrix((n_var, n_var)), q, A, rhs, cones, settings).solve()
+        if str(sol.status) not in ("Solved", "AlmostSolved"):
+            return None
+        return np.clip(np.asarray(sol.x)[:K], 0.0, 1.0)
+
     # -- totals in the user's units --------------------------------------------------------------------------
     @property
     def surface_area(self) -> float:

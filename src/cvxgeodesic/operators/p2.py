@@ -18,7 +18,8 @@ from ..mesh.trimesh import TriMesh
 from .gradient import gradient_blocks
 from .metric import Medium
 
-__all__ = ["SAMPLES", "WEIGHTS", "P2Field", "P2Space", "SplitP2Field", "edge_basis", "max_violation", "p2_basis"]
+__all__ = ["SAMPLES", "WEIGHTS", "P2Field", "P2Space", "SplitP2Field", "edge_basis", "max_violation", "p2_basis",
+           "violations"]
 
 #: Barycentric sample points where the cone is imposed on each face (corners, then edge midpoints).
 SAMPLES = {
@@ -252,6 +253,35 @@ def max_violation(space: P2Space, x: np.ndarray) -> tuple[np.ndarray, np.ndarray
     phi_at : (m,) float ndarray
         ``φ`` there.
     """
+    C, vc, phi_c = _violation_candidates(space, x)
+    m = C.shape[0]
+    best = np.argmax(vc, axis=1)
+    r = np.arange(m)
+    vmax = vc[r, best]
+    vmax[space.degenerate] = 0.0
+    return vmax, C[r, best], phi_c[r, best]
+
+
+def violations(space: P2Space, x: np.ndarray, rel_tol: float, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every local maximum of ``v = |∇φ|² − 4φ`` on the given faces (its interior stationary point and the
+    stationary points of its three edges) where ``v > rel_tol · 4φ``: ``(faces (k,), bary (k, 3))``.
+
+    The cutting planes take them all in one round rather than each face's worst one: a long face whose
+    violation spans several local maxima then needs one round instead of one per maximum.
+    """
+    C, vc, phi_c = _violation_candidates(space, x)
+    C, vc, phi_c = C[:, 3:], vc[:, 3:], phi_c[:, 3:]  # the corners carry cones already on flat faces
+    sel = np.zeros(C.shape[0], dtype=bool)
+    sel[faces] = True
+    hit = sel[:, None] & (vc > rel_tol * np.maximum(4 * phi_c, 1e-300)) & (vc > 1e-15)
+    f, c = np.nonzero(hit)
+    return f.astype(np.int64), C[f, c]
+
+
+def _violation_candidates(space: P2Space, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The candidates for the maximum of ``v = |∇φ|² − 4φ`` on every face (corners, the interior stationary point,
+    the stationary points of the three edges): ``(bary (m, c, 3), v (m, c), φ (m, c))``, ``v = −inf`` at candidates
+    outside their face."""
     nodes = SAMPLES["nodes"]
     N, grad = space.face_cones(nodes)
     xf = x[space.face_dofs]
@@ -298,13 +328,8 @@ def max_violation(space: P2Space, x: np.ndarray) -> tuple[np.ndarray, np.ndarray
     Nc = at(C)  # (m, c, 6)
     vc = np.einsum("tca,ta->tc", Nc, v)
     vc[~inside] = -np.inf
-    best = np.argmax(vc, axis=1)
-    r = np.arange(m)
-    vmax = vc[r, best]
-    vmax[space.degenerate] = 0.0
-    bary = C[r, best]
-    phi_at = np.einsum("ta,ta->t", Nc[r, best], xf)
-    return vmax, bary, phi_at
+    vc[space.degenerate] = -np.inf
+    return C, vc, np.einsum("tca,ta->tc", Nc, xf)
 
 
 class P2Field:

@@ -58,6 +58,7 @@ class BaselineStrategy:
             method=method, solver=str(binfo.get("solver", method)), status=binfo.get("status", "optimal"),
             iterations=int(binfo.get("iterations", 0)), setup_time=self.setup_time,
             solve_time=time.perf_counter() - t0, n_unreachable=int(np.isinf(d).sum()), notes=list(self.notes),
-            extra={k: v for k, v in binfo.items() if k not in ("solver", "status", "iterations")},
+            # the library's set-up is part of info.setup_time: one name, one quantity
+            extra={k: v for k, v in binfo.items() if k not in ("solver", "status", "iterations", "setup_time")},
         )
         return GeodesicResult(distance=d, info=info, sources=src)

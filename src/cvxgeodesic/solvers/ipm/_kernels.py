@@ -12,9 +12,16 @@ cone t) and ``cv`` (k, 3) its vertices. The Nesterov–Todd scaling is stored as
 ``w`` (3, k) (the scaling point w̄), ``eta`` and ``inv_eta2`` (k,) (η and 1/η²),
 as in :class:`cvxgeodesic.solvers.ipm.cones._SocScaling`, whose formulas are CVXOPT's.
 
-Loops without scatter (no two cones write the same entry) run in parallel
-(``prange``). Compiled code is cached on disk (``cache=True``): the first solve after an install
-compiles for a few seconds, later processes load the cache in well under a second.
+Loops without scatter (no two cones write the same entry) are written with ``prange`` but compiled
+serially: a ``parallel=True`` kernel takes 2-4x longer to compile (the first solve of spot after an install:
+qclp 4.6 s with parallel kernels, 2.6 s without; qcqp-hessian, with :mod:`cvxgeodesic.operators._hessian_kernels`,
+10.0 s against 5.5 s), and these loops are short (about 1 ms per call at 300K cones) and a few percent of a
+solve: in QCLP solves with 2 threads of horse and armadillo (87-97K faces), all kernel calls took 0.21 s serial
+against 0.26-0.41 s parallel (waking the threads for each short loop costs more than it saves), of 1.1-1.9 s
+(measured 2026-12-02 on a 2-core machine shared with other jobs, load average about 2).
+
+Compiled code is cached on disk (``cache=True``): the first solve after an install compiles for a few seconds
+(announced by :mod:`cvxgeodesic._jit`), later processes load the cache in well under a second.
 """
 
 from __future__ import annotations
@@ -26,16 +33,24 @@ import numba
 import numpy as np
 from numba import njit, prange
 
-# The element-wise kernels run on all cores. OpenMP first: MKL PARDISO uses the GNU OpenMP runtime too, so both
-# share one thread pool instead of two pools spinning against each other on a small machine.
+from ..._jit import watch_compiles
+
+watch_compiles()  # one line on stderr when a kernel compiles (a cold cache: the first run after installation)
+
+# Numba's thread pool (the order-2 kernels run in parallel): OpenMP first, since MKL PARDISO uses the GNU OpenMP
+# runtime too, so both share one thread pool instead of two pools spinning against each other on a small machine.
 if "NUMBA_THREADING_LAYER" not in os.environ and "NUMBA_THREADING_LAYER_PRIORITY" not in os.environ:
     numba.config.THREADING_LAYER_PRIORITY = ["omp", "tbb", "workqueue"]
 
-_JIT = {"cache": True, "nogil": True, "error_model": "numpy"}
+# no_cfunc_wrapper: the kernels are called from Python and from each other, never through a C function pointer,
+# and the C wrapper Numba builds by default took about 5 % of the first compile (spot, qcqp-hessian: 5.1-5.2 s
+# against 5.4 s)
+_JIT = {"cache": True, "nogil": True, "error_model": "numpy", "no_cfunc_wrapper": True}
+# no kernel of this module is compiled in parallel (module docstring); the order-2 kernels import this
 _PJIT = {**_JIT, "parallel": True}
 
 
-@njit(**_PJIT)
+@njit(**_JIT)
 def nt_scaling(s, z, w, eta, inv_eta2, lam):
     """NT scaling of every pair (s_t, z_t) (both interior): fills ``w``, ``eta``, ``inv_eta2`` and ``λ = W z``."""
     for t in prange(s.shape[1]):
@@ -69,7 +84,7 @@ def _w_apply(w0, w1, w2, f, sign, v0, v1, v2):
     return (w0 * v0 + sign * w1v1) * f, (v1 + c * w1) * f, (v2 + c * w2) * f
 
 
-@njit(**_PJIT)
+@njit(**_JIT)
 def apply_w(w, eta, v, sign, out):
     """``out = W v`` (``sign`` = +1) or ``W⁻¹ v`` (``sign`` = −1)."""
     for t in prange(v.shape[1]):
@@ -77,7 +92,7 @@ def apply_w(w, eta, v, sign, out):
         out[0, t], out[1, t], out[2, t] = _w_apply(w[0, t], w[1, t], w[2, t], f, sign, v[0, t], v[1, t], v[2, t])
 
 
-@njit(**_PJIT)
+@njit(**_JIT)
 def apply_inv2(w, inv_eta2, v, out):
     """``out = W⁻² v = (2 v̂ (v̂ᵀv) − J v)/η²`` with ``v̂ = J w̄``."""
     for t in prange(v.shape[1]):
@@ -90,7 +105,7 @@ def apply_inv2(w, inv_eta2, v, out):
         out[2, t] = (v2 - a * w2) * f
 
 
-@njit(**_PJIT)
+@njit(**_JIT)
 def gather(B, cv, x, out):
     """``out[:, t] = B_t x[cv[t]]`` (2, k): the cone bodies of ``B x``."""
     for t in prange(cv.shape[0]):
@@ -153,7 +168,7 @@ def scatter_add(values, pos, data):
         data[pos[i]] += values[i]
 
 
-@njit(**_PJIT)
+@njit(**_JIT)
 def _soc_step_bounds(u, du, out):
     for t in prange(u.shape[1]):
         u0, u1, u2 = u[0, t], u[1, t], u[2, t]
@@ -194,7 +209,7 @@ def max_step_lp(u, du):
     return best
 
 
-@njit(**_PJIT)
+@njit(**_JIT)
 def newton_cones(g, w, inv_eta2, wu, wrc, rzc, dz, ds):
     """Cone parts of a Newton direction from ``g = B Δx``.
 
@@ -223,7 +238,7 @@ def _jdiv_winv(w0, w1, w2, inv_eta, l0, l1, l2, d0, d1, d2):
     return _w_apply(w0, w1, w2, inv_eta, -1.0, x0, x1, x2)
 
 
-@njit(**_PJIT)
+@njit(**_JIT)
 def mehrotra_cones(w, eta, lam, ds_a, dz_a, z, sigma_mu, out):
     """Combined-step term ``out = −z − W⁻¹(λ \\ ((W⁻¹Δs_a)∘(WΔz_a) − σμe))`` of every cone."""
     for t in prange(z.shape[1]):
@@ -240,7 +255,7 @@ def mehrotra_cones(w, eta, lam, ds_a, dz_a, z, sigma_mu, out):
         out[2, t] = -z[2, t] - r2
 
 
-@njit(**_PJIT)
+@njit(**_JIT)
 def gondzio_cones(w, eta, lam, s, ds, tp, z, dz, td, lo, hi, out):
     """Gondzio's corrector term ``out = W⁻¹(λ \\ c)`` of every cone.
 

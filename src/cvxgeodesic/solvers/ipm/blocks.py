@@ -224,6 +224,11 @@ class CliqueSOCBlock:
         G = self.G
         self.gjg = np.ascontiguousarray(np.einsum("ke,ke->ke", G[:, 0, ta], G[:, 0, tb])
                                         - np.einsum("kie,kie->ke", G[:, 1:, ta], G[:, 1:, tb]))
+        four = group.dim == 4  # SOC(4): the unrolled kernels
+        self._gather = _ck.gather4 if four else _ck.gather
+        self._scatter = _ck.scatter4 if four else _ck.scatter
+        self._kkt = _ck.kkt4 if four else _ck.kkt
+        self._assemble = _ck.assemble4 if four else _ck.assemble
         self.shift = self.Gx(x_fixed)
         self.b_tilde = self.h - self.shift
 
@@ -231,7 +236,7 @@ class CliqueSOCBlock:
         """(d, k): ``G_t x[dofs_t]`` for every cone."""
         out = np.empty((self.h.shape[0], self.count))
         if self.count:
-            _ck.gather(self.G, self.dofs, np.ascontiguousarray(x, dtype=np.float64), out)
+            self._gather(self.G, self.dofs, np.ascontiguousarray(x, dtype=np.float64), out)
         return out
 
     def slack(self, x, x_fixed):
@@ -255,15 +260,15 @@ class CliqueSOCBlock:
 
     def At_add(self, z, out) -> None:
         if self.count:
-            _ck.scatter(self.G, self.dofs, np.ascontiguousarray(z), 1.0, out)
+            self._scatter(self.G, self.dofs, np.ascontiguousarray(z), 1.0, out)
 
     def kkt_add(self, sc, v, out) -> None:
         if self.count:
-            _ck.kkt(self.G, self.dofs, sc.w, sc.inv_eta2, np.ascontiguousarray(v, dtype=np.float64), out)
+            self._kkt(self.G, self.dofs, sc.w, sc.inv_eta2, np.ascontiguousarray(v, dtype=np.float64), out)
 
     def assemble_add(self, sc, data) -> None:
         if self.count:
-            _ck.assemble(self.G, self.gjg, sc.w, sc.inv_eta2, self.tri_a, self.tri_b, self.pos, data)
+            self._assemble(self.G, self.gjg, sc.w, sc.inv_eta2, self.tri_a, self.tri_b, self.pos, data)
 
     def newton(self, dx, sc, wu, wr, rz):
         g = self.Gx(dx)

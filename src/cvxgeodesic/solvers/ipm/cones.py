@@ -150,14 +150,14 @@ class _SocScaling:
         if self._k3:
             _kern.nt_scaling(s, z, self.w, self.eta, self.inv_eta2, self.lam)
         else:
-            _ck.nt_scaling(_c(s), _c(z), self.w, self.eta, self.inv_eta2, self.lam)
+            (_ck.nt_scaling4 if d == 4 else _ck.nt_scaling)(_c(s), _c(z), self.w, self.eta, self.inv_eta2, self.lam)
 
     def _apply(self, v: np.ndarray, sign: float) -> np.ndarray:
         out = np.empty(v.shape)
         if self._k3:
             _kern.apply_w(self.w, self.eta, v, sign, out)
         else:
-            _ck.w_apply(self.w, self.eta, _c(v), sign, out)
+            (_ck.w_apply4 if v.shape[0] == 4 else _ck.w_apply)(self.w, self.eta, _c(v), sign, out)
         return out
 
     def apply_w(self, v: np.ndarray) -> np.ndarray:
@@ -174,7 +174,7 @@ class _SocScaling:
         if self._k3:
             _kern.apply_inv2(self.w, self.inv_eta2, v, out)
         else:
-            _ck.winv2_apply(self.w, self.inv_eta2, _c(v), out)
+            (_ck.winv2_apply4 if v.shape[0] == 4 else _ck.winv2_apply)(self.w, self.inv_eta2, _c(v), out)
         return out
 
     def body_to_inv2(self, g: np.ndarray) -> np.ndarray:
@@ -254,6 +254,8 @@ class SOC:
         out = np.empty(z.shape)
         if self.dim == 3:
             _kern.mehrotra_cones(sc.w, sc.eta, sc.lam, ds, dz, z, sigma_mu, out)
+        elif self.dim == 4:
+            _ck.mehrotra4(sc.w, sc.eta, sc.lam, _c(ds), _c(dz), _c(z), sigma_mu, out)
         else:
             _ck.mehrotra(sc.w, sc.eta, sc.lam, _c(ds), _c(dz), _c(z), sigma_mu, np.empty(z.shape), out)
         return out
@@ -262,6 +264,8 @@ class SOC:
         out = np.empty(z.shape)
         if self.dim == 3:
             _kern.gondzio_cones(sc.w, sc.eta, sc.lam, s, ds, tp, z, dz, td, lo, hi, out)
+        elif self.dim == 4:
+            _ck.gondzio4(sc.w, sc.eta, sc.lam, _c(s), _c(ds), tp, _c(z), _c(dz), td, lo, hi, out)
         else:
             _ck.gondzio(sc.w, sc.eta, sc.lam, _c(s), _c(ds), tp, _c(z), _c(dz), td, lo, hi, np.empty(z.shape), out)
         return out

@@ -75,12 +75,17 @@ def evaluate(pr: Program, it: Iterate, iteration: int, step: float, elapsed: flo
     norm_s = max([_amax(s) for s in it.s], default=0.0)
     norm_z = max([_amax(z) for z in it.z], default=0.0)
     res_p = max([_amax(r) for r in rz] + [_amax(ry)], default=0.0) / max(1.0, pr.norm_b + norm_x + norm_s)
-    dual_scale = max(1.0, pr.norm_q + norm_x + norm_z)
+    # ‖P x‖ as well: r_x = P x + q + Aᵀz sums terms of that size, so its rounding floor is eps·‖P x‖ (OSQP's
+    # scaling). On the medial-axis bug the curved Hessian energy of near-degenerate faces reaches 4.6e6 × its median
+    # diagonal entry: (P x)_i ≈ 3e8 cancelled to a residual floor of 3e-8, above tol, and every solve ended
+    # "almost_optimal" and went to Clarabel (reliability sweep, 2026-12-02)
+    norm_px = _amax(Pfx)
+    dual_scale = max(1.0, pr.norm_q + norm_x + norm_z, norm_px)
     res_d = _amax(rx) / dual_scale
     # the same residual without ‖z‖ in its scale: a dual blown up along a direction that Aᵀ cancels
     # (edge bounds that are equalities in disguise: ‖z‖ ≈ 1e13, |r_x| ≈ 0.9 with res_d ≈ 1e-12)
     # must not pass for convergence
-    res_d_plain = _amax(rx) / max(1.0, pr.norm_q + norm_x)
+    res_d_plain = _amax(rx) / max(1.0, pr.norm_q + norm_x, norm_px)
     mu = sum(b.cone.dot(s, z) for b, s, z in zip(pr.blocks, it.s, it.z, strict=True)) / max(pr.nu, 1)
     info = {
         "iterations": iteration, "pcost": pcost, "dcost": dcost, "gap_abs": gap_abs, "gap_rel": gap_rel,

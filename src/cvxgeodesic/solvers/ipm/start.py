@@ -55,19 +55,26 @@ def max_step(pr: Program, u: Sequence[np.ndarray], du: Sequence[np.ndarray]) -> 
 
 def interior_primal(pr: Program, x: np.ndarray, fraction: float) -> np.ndarray | None:
     """``x_F + α (x − x_F)`` with ``α = min(1, fraction · α_max)``, ``α_max`` the largest step from ``x_F`` (the
-    fixed values, free part 0) that keeps ``s = b̃ − A x`` in K; ``None`` when ``x_F`` itself is not strictly
-    feasible.
+    fixed values, free part 0) that keeps ``s = b̃ − A x`` strictly in K on all of ``(0, α_max)``; ``None`` when no
+    ``α > 0`` does.
 
     The least-squares ``x`` of the ``W = I`` system is usually infeasible (here: a few one-ring bounds next to
     the source), and shifting ``s`` into the cone then makes the primal residual as large as that violation.
-    On the mesh problems ``x_F`` (all distances 0 but the fixed ones) is strictly feasible, so the segment
-    gives a strictly feasible point with zero primal residual.
+    On the mesh problems ``x_F`` (all distances 0 but the fixed ones) is feasible, so the segment gives a strictly
+    feasible point with zero primal residual. ``x_F`` may lie on the cones' boundary (the order-2 cones at
+    ``φ = 0``, the bounds ``d ≥ 0`` next to the sources): the step is then the closed one
+    (:meth:`~.cones.Cone.max_step_closed`).
     """
     s0 = [b.b_tilde for b in pr.blocks]
-    if _min_eigenvalue(pr, s0) <= 0:
-        return None
-    step = x - pr.x_fixed  # zero on the fixed variables
-    alpha_max = max_step(pr, s0, [-b.A(step) for b in pr.blocks])
+    step = np.where(pr.fixed, 0.0, x - pr.x_fixed)
+    du = [-b.A(step) for b in pr.blocks]
+    if _min_eigenvalue(pr, s0) > 0:
+        alpha_max = max_step(pr, s0, du)
+    else:
+        alpha_max = min([float(b.cone.max_step_closed(u, d).min(initial=np.inf))
+                         for b, u, d in zip(pr.blocks, s0, du, strict=True)], default=np.inf)
+        if not alpha_max > 0:
+            return None
     return pr.x_fixed + min(1.0, fraction * alpha_max) * step
 
 
@@ -158,21 +165,14 @@ def _least_squares_x(pr: Program, ls: LinearSystem, st: IPMSettings, scalings) -
 
 
 def guess_primal(pr: Program, fraction: float) -> np.ndarray | None:
-    """``x_F + θ (g − x_F)`` for the program's guess ``g``, ``θ = min(1, fraction · θ_max)`` with ``θ_max`` the largest
-    ``θ`` keeping every slack strictly inside on all of ``(0, θ)`` (from ``x_F``, whose slacks may lie on the
-    cones' boundary: the order-2 cones at ``φ = 0``); ``None`` without a guess, when the guess breaks an equality,
-    or when no ``θ > 0`` is feasible."""
+    """:func:`interior_primal` towards the program's guess (order 2: the squared Dijkstra distance); ``None``
+    without a guess, when the guess breaks an equality, or when no step towards it is feasible."""
     g = pr.guess
     if g is None:
         return None
     if pr.p and np.abs(pr.eq_residual(g)).max() > 1e-9 * max(1.0, float(np.abs(g).max())):
         return None
-    step = np.where(pr.fixed, 0.0, g - pr.x_fixed)
-    theta = min([float(b.cone.max_step_closed(b.b_tilde, -b.A(step)).min(initial=np.inf)) for b in pr.blocks],
-                default=np.inf)
-    if not theta > 0:
-        return None
-    return pr.x_fixed + min(1.0, fraction * theta) * step
+    return interior_primal(pr, g, fraction)
 
 
 def _primal(pr: Program, ls: LinearSystem, st: IPMSettings, scalings) -> tuple[np.ndarray, bool, object]:
