@@ -898,11 +898,35 @@ def sec_volumes(ctx, plan):
     return {"rows": rows, "figures": []}
 
 
+# travel cost and metrics (issue 24; not in the paper)
+# ----------------------------------------------------------------------------------------------------------------------
+
+
+def sec_metric(ctx, plan):
+    """The analytic cases of travel cost and metrics (benchmarks/metric_cases.py): linear velocity, two layers,
+    a constant metric, a constant cost; generated meshes only."""
+    import metric_cases
+
+    data = metric_cases.run(plan.quick)
+    names = ["fig13_metric_linear.png", "fig13_metric_layers.png"]
+    metric_cases.figures(data, *(ctx.figures / n for n in names))
+    from PIL import Image
+
+    for n in names:  # 256 colours like the report's other figures
+        with Image.open(ctx.figures / n) as im:
+            rgb = im.convert("RGB")
+        save_png(rgb, ctx.figures / n)
+    data.pop("_fields")
+    data["figures"] = names
+    data["loadavg_1min"] = round(os.getloadavg()[0], 2)
+    return data
+
+
 SECTIONS = {
     "table2": sec_table2, "fig2": sec_fig2, "fig3": sec_fig3, "fig4": sec_fig4, "fig5": sec_fig5,
     "fig6": sec_fig6, "fig7": sec_fig7, "fig8": sec_fig8, "fig9": sec_fig9,
     "norm_resolution": sec_norm_resolution, "norm_remeshing": sec_norm_remeshing, "order2": sec_order2,
-    "volumes": sec_volumes,
+    "metric": sec_metric, "volumes": sec_volumes,
 }
 
 

@@ -1155,7 +1155,7 @@ def volumes(r) -> tuple[str, list[str]]:
     body = [[x["case"], f"{x['tets']:,}", *(cell(x[t], x["kind"]) for t in names), str(x["loadavg_1min"])]
             for x in r["rows"]]
     table = md_table(["case", "tetrahedra", *names.values(), "load"], body)
-    return f"""## 13. Volumes: distance inside tetrahedral meshes (not in the paper)
+    return f"""## 14. Volumes: distance inside tetrahedral meshes (not in the paper)
 
 **What was run.** `cg.GeodesicSolver(mesh, method, order=...)` on tetrahedral meshes generated in code (jittered Kuhn
 tetrahedra, jitter 0.2; `cg.tet_box`, `cg.tet_l_prism`, `cg.tet_ball`), against their analytic distances: the
@@ -1175,48 +1175,73 @@ refinement study and the limits: [volumes.md](volumes.md).
 """, []
 
 
+def metric(r) -> tuple[str, list[str]]:
+    lin = md_table(["grid", "faces", "order 1 (qclp)", "order 2", "Dijkstra", "time order 1 / 2"],
+                   [[f"{x['nx']}×{x['nx']}", f"{x['faces']:,}",
+                     *(_mean_max_pct(x[t]) for t in ("p1", "p2", "dijkstra")),
+                     f"{x['p1']['time_s']:.2f} / {x['p2']['time_s']:.2f} s"] for x in r["linear"]])
+    lay = md_table(["order", "crossing x", "Snell's law", "error", "straight line would cross at"],
+                   [[str(x["order"]), f"{x['crossing']:.5f}", f"{x['analytic']:.5f}", f"{x['error']:.1e}",
+                     f"{x['straight']:.5f}"] for x in r["layers"]])
+    met = md_table(["grid", "order", "max error / largest distance", "mean relative error"],
+                   [[f"{x['nx']}×{x['nx']}", str(x["order"]), f"{x['max_over_largest']:.1e}", p2(x["rel_mean"])]
+                    for x in r["metric"]])
+    con = md_table(["mesh", "method", "order", "c", "max deviation from c × unweighted (relative)"],
+                   [[x["mesh"], x["method"], str(x["order"]), f"{x['c']:g}", f"{x['deviation']:.1e}"]
+                    for x in r["constant"]])
+    f_lin, f_lay = r["figures"]
+    finest = r["linear"][-1]
+    text = f"""## 13. Travel cost and metrics (not in the paper)
+
+**What was run.** `benchmarks/metric_cases.py` (see [metrics.md](metrics.md)): flat jittered Delaunay grids of the
+unit square with analytic travel times; every field is one `GeodesicSolver(...).solve(...)` with `cost=` or
+`metric=`. Load average at the end: {r.get('loadavg_1min', '?')}.
+
+### Linear velocity, v = 1 + 2y
+
+Per-vertex cost `1/v`, source near (0.5, 0.2); the exact travel time is
+`arccosh(1 + b²|x − x₀|² / (2 v(x) v(x₀))) / b`. Mean / max relative error over the vertices:
+
+{lin}
+
+{fig(f_lin, 'linear velocity: isolines and errors')}
+
+On the {finest['nx']}×{finest['nx']} grid order 1 is at {p2(finest['p1']['rel_mean'])} (goal ≤ 3 %) and order 2 at
+{p2(finest['p2']['rel_mean'])} (goal ≤ 0.3 %).
+
+### Two layers
+
+Cost 1 below y = 1/2 and 2 above (per face; the interface is made of edges); the path from (0.85, 0.9) to the source
+near (0.15, 0.1) by `geodesic_path`, against the crossing of Snell's law (goal: within 0.01):
+
+{lay}
+
+{fig(f_lay, 'two layers: paths and Snell crossing')}
+
+### Constant anisotropic metric
+
+`d = √((x − s)ᵀ M (x − s))` with eigenvalues 2.33 and 0.67 in the plane (goal at order 2: max error ≤ 1e-5 of the
+largest distance):
+
+{met}
+
+### Constant cost
+
+A constant cost is the mesh scaled by `c`:
+
+{con}
+"""
+    return text, []
+
+
+def _mean_max_pct(rec) -> str:
+    return f"{100 * rec['rel_mean']:.3f} % / {100 * rec['rel_max']:.2f} %"
+
+
 SECTION_TEXT = {"table2": table2, "fig2": fig2, "fig3": fig3, "fig4": fig4, "fig5": fig5, "fig6": fig6,
                 "fig7": fig7, "fig8": fig8, "fig9": fig9, "norm_resolution": norm_resolution,
-                "norm_remeshing": norm_remeshing, "order2": order2, "volumes": volumes}
+                "norm_remeshing": norm_remeshing, "order2": order2, "metric": metric, "volumes": volumes}
 SECTION_TITLE = {"table2": "Table 2", "fig2": "Fig. 2", "fig3": "Fig. 3", "fig4": "Fig. 4", "fig5": "Fig. 5",
                  "fig6": "Fig. 6", "fig7": "Fig. 7", "fig8": "Fig. 8", "fig9": "Fig. 9",
                  "norm_resolution": "Resolution study", "norm_remeshing": "Remeshing study", "order2": "Order 2",
-                 "volumes": "Volumes"}
-
-
-def render(results, env, timings, plan, helpers) -> str:
-    global H, NOISE
-    H = helpers
-    loads = [t["loadavg_1min"] for t in timings.values() if "loadavg_1min" in t]
-    cores = env.get("cores") or 1
-    NOISE = ("The machine was overloaded during this run (1-minute load average up to "
-             f"{max(loads):.1f} on {cores} cores, from other jobs): wall-clock times are inflated and noisy; "
-             "repeated runs of this report under such load gave times differing by up to 2–3×. Compare the "
-             "methods' times within a row, not across runs."
-             if loads and max(loads) > cores else "")
-    parts = [header(env, plan, timings)]
-    findings = []
-    bodies = []
-    for name, fn in SECTION_TEXT.items():
-        if name not in results:
-            bodies.append(f"## {SECTION_TITLE[name]}\n\n*Not computed yet: run `make report`.*\n")
-            continue
-        body, f = fn(results[name])
-        bodies.append(body)
-        findings += f
-    parts.append("## Where our measurements disagree with the paper (or qualify it)\n\n"
-                 + "\n".join(f"- {x}" for x in findings) + "\n")
-    parts += bodies
-    trow = []
-    total = 0.0
-    for name in SECTION_TEXT:
-        t = timings.get(name)
-        if t:
-            total += t["wall_s"]
-            trow.append([SECTION_TITLE[name], f"{t['wall_s']:.0f}", t["finished"], str(t.get("loadavg_1min", "?"))])
-    parts.append("## How long the report took\n\nWall-clock seconds per section in the run that computed it (a "
-                 "section reuses distance fields computed by an earlier one, e.g. Fig. 6 and Fig. 9 reuse Table 2's,"
-                 " so its time is only its new work):\n\n"
-                 + md_table(["section", "seconds", "finished", "load average (1 min) at the end"],
-                            trow + [["total", f"{total:.0f}", "", ""]]) + "\n")
-    return "\n".join(parts)
+                 "metric": "Travel cost and metrics", "volumes": "Volumes"}

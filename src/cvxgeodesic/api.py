@@ -21,6 +21,7 @@ from .formulations import ALIASES, FORMULATIONS, NORMALIZATIONS, canonical_metho
 from .mesh.convert import as_mesh
 from .mesh.tetmesh import TetMesh
 from .mesh.trimesh import TriMesh
+from .operators.metric import make_medium
 from .results import GeodesicResult, SolveInfo
 from .solvers._interrupt import reporting_to
 from .sources import resolve_sources
@@ -125,6 +126,14 @@ class GeodesicSolver:
         ``None``: the environment variable ``CVXGEODESIC_THREADS``, else the cores
         that other processes leave free when the solver is built, at least one
         (``docs/performance.md``).
+    cost : float or (n,) or (m,) float array_like, optional
+        Travel cost (time per unit length, ``1/speed``; positive): the distance becomes the
+        travel time. Per vertex or per face (``docs/metrics.md``). The eight formulations at both
+        orders and ``"dijkstra"``; recorded in ``info.extra["cost"]``.
+    metric : (3, 3), (n, 3, 3) or (m, 3, 3) float array_like, optional
+        Riemannian metric: a tangent vector ``u`` is ``√(uᵀ M u)`` long (times the cost, with
+        both). Symmetric, positive definite in each face's plane. Recorded in
+        ``info.extra["metric"]``.
 
     Raises
     ------
@@ -185,11 +194,19 @@ class GeodesicSolver:
         normalization: str = "area",
         order: int = 1,
         threads: int | None = None,
+        cost: Any = None,
+        metric: Any = None,
     ) -> None:
         t0 = time.perf_counter()
         self.mesh: Any = cast(Any, as_mesh(mesh))  # a TriMesh or a TetMesh, told apart by is_volume
         self.is_volume = isinstance(self.mesh, TetMesh)  # distance inside tetrahedra (strategies/tet.py)
         self._check_method_and_solver(method, solver)
+        # a travel cost or metric (operators/metric.py): validated here, once
+        self.medium = make_medium(self.mesh, cost, metric)
+        if self.medium is not None:
+            from .validation import check_medium_method
+
+            check_medium_method(self.method, (*FORMULATIONS, "dijkstra"), multires=bool(multires))
         self.tol = check_number(tol, "tol", low=0, high=1, low_open=True, high_open=True)
         self.max_iter = check_count(max_iter, "max_iter")
         self.verbose = bool(verbose)
@@ -209,8 +226,8 @@ class GeodesicSolver:
                 raise ParameterError(f"multires applies to the convex formulations, not to baseline {self.method!r}")
         config = SolveConfig(mesh=self.mesh, method=self.method, lam=self.lam, m=self.m,
                              normalization=self.normalization, solver=self._solver, tol=self.tol,
-                             max_iter=self.max_iter, verbose=self.verbose,
-                             notes=tuple(getattr(self.mesh, "notes", ())))
+                             max_iter=self.max_iter, verbose=self.verbose, medium=self.medium,
+                             notes=(*getattr(self.mesh, "notes", ()), *getattr(self.medium, "notes", ())))
         self._strategy: SolveStrategy = make_strategy(config, baseline=self.is_baseline, order=self.order,
                                                       multires_target=target, polish=bool(multires_polish))
         self.solver_name = self._strategy.backend
@@ -265,7 +282,8 @@ class GeodesicSolver:
         elif lam_value is not None:
             self.lam = lam_value
         else:
-            self.lam = weight(self.mesh, m_value, self.normalization, self.energy)
+            medium = () if self.is_volume else (self.medium,)  # a cost or metric applies to surfaces
+            self.lam = weight(self.mesh, m_value, self.normalization, self.energy, *medium)
 
     def __repr__(self) -> str:
         return (
@@ -315,6 +333,8 @@ class GeodesicSolver:
         with reporting_to(callback):  # Clarabel's iterations too, wherever a strategy runs it
             res = self._strategy.solve(sset, callback=callback)
         res.info.setup_time = self.setup_time
+        if self.medium is not None:  # what the field measures: {"cost": "per-vertex", ...} and the medium itself
+            res.info.extra.update(self.medium.describe(), medium=self.medium)
         return res
 
     def solve_many(self, sources_list: Iterable[Any], *, progress: bool = False) -> list[GeodesicResult]:
@@ -341,7 +361,7 @@ class GeodesicSolver:
 def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | None = None, m: float | None = None,
                       solver: str | None = None, lam: float | None = None, tol: float = DEFAULT_TOL,
                       max_iter: int = 200, normalization: str = "area",
-                      order: int = 1, threads: int | None = None) -> np.ndarray:
+                      order: int = 1, threads: int | None = None, cost: Any = None, metric: Any = None) -> np.ndarray:
     """Geodesic distance field from source vertices (one-shot form of :class:`GeodesicSolver`).
 
     Two call forms, told apart by the second argument (sources are never a 2-D array):
@@ -360,7 +380,7 @@ def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | 
         positions, followed by ``F``, (m, 3) int triangles.
     sources : int or sequence of int
         Source vertex indices (positional after the mesh, or keyword), or surface sources.
-    method, m, solver, lam, tol, max_iter, normalization, threads
+    method, m, solver, lam, tol, max_iter, normalization, threads, cost, metric
         See :class:`GeodesicSolver` (defaults ``"qcqp-hessian"``, 1.0, ``"auto"``).
 
     Returns
@@ -404,7 +424,7 @@ def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | 
     m = given.get("m", 1.0)
     solver = given.get("solver", "auto")
     solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter,
-                                normalization=normalization, order=order, threads=threads)
+                                normalization=normalization, order=order, threads=threads, cost=cost, metric=metric)
     return solver_obj.solve(sources).distance
 
 
@@ -412,7 +432,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
                     progress: bool = False, *, lam: float | None = None, tol: float = DEFAULT_TOL,
                     max_iter: int = 200, multires: bool | int = False, normalization: str = "area",
                     order: int = 1, threads: int | None = None, workers: int | None = None,
-                    scheduler: Any = None) -> np.ndarray:
+                    scheduler: Any = None, cost: Any = None, metric: Any = None) -> np.ndarray:
     """Distance fields from several vertices, one row per vertex, with one :class:`GeodesicSolver`.
 
     The per-mesh work (operators, energy matrix, symbolic Cholesky analysis) is
@@ -431,7 +451,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
         ``V`` (n, 3) float vertex positions, ``F`` (m, 3) int triangles.
     vertices : int or (k,) sequence of int
         Source vertex of each row.
-    method, m, solver, lam, tol, max_iter, multires, normalization, threads
+    method, m, solver, lam, tol, max_iter, multires, normalization, threads, cost, metric
         See :class:`GeodesicSolver`. On a cluster, ``threads=None`` lets every worker's solver
         follow the worker's environment: ``cpu_count // workers`` threads on a local cluster.
     progress : bool
@@ -479,7 +499,8 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
         if scheduler is not None:
             raise ParameterError("give workers (a local Dask cluster) or scheduler (an existing one), not both")
     options: dict[str, Any] = {"method": method, "m": m, "lam": lam, "solver": solver, "tol": tol, "max_iter": max_iter,
-               "multires": multires, "normalization": normalization, "order": order, "threads": threads}
+               "multires": multires, "normalization": normalization, "order": order, "threads": threads,
+               "cost": cost, "metric": metric}
 
     def rows_of(items: list) -> np.ndarray:
         if workers is not None or scheduler is not None:

@@ -16,7 +16,7 @@ import warnings
 from . import __version__
 from ._verbose import progress_printer
 from .api import SOLVERS
-from .cli_sources import MESH_HELP, add_method_option, add_path_parser, add_source_options, xyz
+from .cli_sources import MESH_HELP, add_cost_options, add_method_option, add_path_parser, add_source_options, xyz
 from .errors import ParameterError, SourceError
 from .mesh.formats.registry import field_formats_help
 from .mesh.tet_io import MESHIO_TET_EXTENSIONS, TETGEN_EXTENSIONS
@@ -34,7 +34,7 @@ SLICE_HELP = "tetrahedral meshes: normal of the slice through the centre that --
 def _cmd_distance(args) -> int:
     from ._atomic import output_set
     from .api import GeodesicSolver
-    from .cli_sources import cli_sources
+    from .cli_sources import cli_cost, cli_sources
     from .mesh.io import check_output_path, load_mesh, save_distance
 
     check_output_path(args.output)
@@ -50,7 +50,7 @@ def _cmd_distance(args) -> int:
     if not args.quiet:
         print(f"{mesh.name}: {mesh.n_file_vertices} vertices, {mesh.n_faces} faces; method {args.method}", file=log)
     solver = GeodesicSolver(mesh, args.method, m=args.m, lam=args.lam, solver=args.solver,
-                            normalization=args.normalization, order=args.order)
+                            normalization=args.normalization, order=args.order, cost=cli_cost(args, mesh))
     res = solver.solve(sources, callback=None if args.quiet else progress_printer(log))
     for note in res.info.notes:
         args.notes.say(note)
@@ -200,6 +200,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="meaning of --m: 'area' (default) or the paper's λ = m·100·h/n")
     p.add_argument("--order", type=int, default=1, choices=(1, 2),
                    help="2: second-order elements for the squared distance (qclp only; docs/order2.md)")
+    add_cost_options(p)
     p.add_argument("-o", "--output", required=True, help=OUTPUT_HELP)
     p.add_argument("--png", default=None,
                    help="also render the field with isolines and the sources to this PNG (both files or neither; "

@@ -58,6 +58,56 @@ class _Given(argparse.Action):
         namespace.method_given = True
 
 
+def add_cost_options(p: argparse.ArgumentParser) -> None:
+    """``--cost FILE.npy`` and ``--cost-field NAME``: a travel cost (docs/metrics.md)."""
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--cost", default=None, metavar="FILE.npy",
+                   help="travel cost (time per unit length, > 0): a .npy of one value per vertex of the file, or "
+                        "one per triangle of the loaded mesh; the distance becomes the travel time")
+    g.add_argument("--cost-field", default=None, metavar="NAME",
+                   help="travel cost from the input file's per-vertex property NAME (PLY property, VTK/VTU point "
+                        "data)")
+
+
+def cli_cost(args, mesh) -> np.ndarray | None:
+    """The ``cost`` of :class:`~cvxgeodesic.api.GeodesicSolver` from ``--cost`` / ``--cost-field``, in the mesh's
+    numbering (None without either); notes go to ``args.notes``.
+
+    Raises
+    ------
+    ParameterError
+        A ``--cost`` file that is not a .npy array of one value per file vertex or per mesh triangle.
+    MeshFormatError
+        ``--cost-field`` on a format without per-vertex properties, or a property the file does not have.
+    """
+    from .mesh.fileorder import from_file_order
+
+    if getattr(args, "cost_field", None):
+        from .mesh.io import load_vertex_property
+
+        values = load_vertex_property(args.mesh, args.cost_field)
+        what = f"--cost-field {args.cost_field}"
+    elif getattr(args, "cost", None):
+        if not str(args.cost).lower().endswith(".npy"):
+            raise ParameterError(f"--cost {args.cost}: give a .npy file (one value per vertex or per triangle)")
+        try:
+            values = np.load(args.cost, allow_pickle=False)
+        except (OSError, ValueError) as exc:
+            raise ParameterError(f"--cost {args.cost}: cannot read it as a .npy array ({exc})") from None
+        what = f"--cost {args.cost}"
+        if values.shape == (mesh.n_faces,) and values.shape != (mesh.n_file_vertices,):
+            return values  # one per triangle of the loaded mesh
+        if values.shape != (mesh.n_file_vertices,):
+            raise ParameterError(f"{what}: an array of shape {values.shape}; give ({mesh.n_file_vertices},) (one value "
+                                 f"per vertex of the file) or ({mesh.n_faces},) (one per triangle of the loaded mesh)")
+    else:
+        return None
+    values, note = from_file_order(mesh, values, what)
+    if note:
+        args.notes.say(note)
+    return values
+
+
 def add_method_option(p: argparse.ArgumentParser) -> None:
     """``--method NAME``, any method of :data:`~cvxgeodesic.api.ALL_METHODS` (default qcqp-hessian; qclp on a
     tetrahedral mesh, which ``args.method_given`` tells apart)."""
@@ -168,6 +218,7 @@ def _cmd_path(args) -> int:
     from .api import GeodesicSolver
     from .mesh.io import load_mesh
     from .paths import geodesic_path
+    from .sources import SurfacePoint
 
     if not args.output.lower().endswith((".csv", ".npy", ".ply")):
         raise ParameterError(f"output {args.output!r}: the path is written as .csv, .npy or .ply")
@@ -182,7 +233,8 @@ def _cmd_path(args) -> int:
                              "solid use cg.geodesic_path(mesh, result, target) (docs/volumes.md)")
     sources, label = cli_sources(args, mesh)
     target = _target(args, mesh)
-    res = GeodesicSolver(mesh, args.method, m=args.m, solver=args.solver).solve(
+    cost = cli_cost(args, mesh)
+    res = GeodesicSolver(mesh, args.method, m=args.m, solver=args.solver, cost=cost).solve(
         sources, callback=None if args.quiet else progress_printer(sys.stderr))
     P, faces, bary = geodesic_path(mesh, res, target, return_surface_points=True)
     _write_path(args.output, P, faces, bary)
@@ -191,8 +243,11 @@ def _cmd_path(args) -> int:
 
         plot_field(mesh, res.distance, args.png, title=f"{res.info.method}, path to sources {label}", paths=[P])
     if not args.quiet:
+        from .paths import distance_at
+
         length = float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum())
-        print(f"{res.info.method}: path of {len(P)} points, length {length:.6g}; wrote {args.output}"
+        time = "" if cost is None else f", travel time {distance_at(mesh, res, SurfacePoint(faces[0], bary[0])):.6g}"
+        print(f"{res.info.method}: path of {len(P)} points, length {length:.6g}{time}; wrote {args.output}"
               + (f" and {args.png}" if args.png else ""), file=sys.stderr)
     return 0
 
@@ -207,6 +262,7 @@ def add_path_parser(sub) -> None:
     add_method_option(p)
     p.add_argument("--m", type=float, default=1.0, help="smoothness multiplier m (default 1)")
     p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")
+    add_cost_options(p)
     p.add_argument("-o", "--output", required=True, help="path file: .csv (x,y,z,face,b0,b1,b2), .npy or .ply")
     p.add_argument("--png", default=None, help="also draw the path on the field to this PNG")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress output")

@@ -60,6 +60,7 @@ import scipy.sparse as sp
 from .errors import DegenerateFacesWarning, MeshError, ParameterError
 from .mesh.trimesh import DEGENERATE_TOL, TriMesh
 from .operators import energy_matrix, gradient_blocks
+from .operators.metric import Medium
 from .solvers.problem import ConeGroup, ConicProblem, PairInequalities
 from .sources import SourceSet, source_constraints
 from .validation import check_choice, check_number
@@ -100,7 +101,7 @@ NORMALIZATIONS = ("area", "paper")
 KAPPA = {"hessian": 3.0e-6, "laplacian": 3.0e-6, "dirichlet": 1.3e-2}
 
 
-def stretch_weights(mesh: TriMesh, stretch: str = "area") -> np.ndarray:
+def stretch_weights(mesh: TriMesh, stretch: str = "area", area_ratio: np.ndarray | None = None) -> np.ndarray:
     """Per-vertex weights ``w`` of the stretch term ``E_stretch = −wᵀd``.
 
     Parameters
@@ -112,6 +113,9 @@ def stretch_weights(mesh: TriMesh, stretch: str = "area") -> np.ndarray:
         ``d`` over the surface, whatever the triangulation); ``"calibrated"``: ``10 / n`` (the paper
         normalization of this library); ``"mean"``: ``1 / n``; ``"sum"``: 1 (the paper's literal
         ``−Σ d_i``).
+    area_ratio : (m,) float ndarray, optional
+        With a metric (:attr:`~cvxgeodesic.operators.metric.Medium.area_ratio`): the areas of ``"area"`` are
+        measured in it.
 
     Returns
     -------
@@ -119,7 +123,8 @@ def stretch_weights(mesh: TriMesh, stretch: str = "area") -> np.ndarray:
     """
     n = mesh.n_vertices
     if stretch == "area":
-        mass = np.bincount(mesh.F.ravel(), weights=np.repeat(mesh.face_areas / 3.0, 3), minlength=n)
+        areas = mesh.face_areas if area_ratio is None else mesh.face_areas * area_ratio
+        mass = np.bincount(mesh.F.ravel(), weights=np.repeat(areas / 3.0, 3), minlength=n)
         total = mass.sum()
         if not total > 0:
             raise MeshError(f"{mesh.name}: the surface has zero area")
@@ -149,7 +154,8 @@ def check_normalization(normalization) -> str:
     return check_choice(normalization, "normalization", NORMALIZATIONS)
 
 
-def smoothness_weight(mesh: TriMesh, m: float, normalization: str = "area", energy: str = "hessian") -> float:
+def smoothness_weight(mesh: TriMesh, m: float, normalization: str = "area", energy: str = "hessian",
+                      medium: Medium | None = None) -> float:
     """The smoothness weight λ for a multiplier ``m``.
 
     Parameters
@@ -166,6 +172,9 @@ def smoothness_weight(mesh: TriMesh, m: float, normalization: str = "area", ener
         with the uniform stretch ``−(10/n) Σ d_i``: its rounding is a fixed number of edges wide.
     energy : {"hessian", "laplacian", "dirichlet"}
         Selects ``κ`` (``"area"`` only).
+    medium : Medium, optional
+        A travel cost or metric (:mod:`cvxgeodesic.operators.metric`): ``|S|`` and ``h`` are then measured in it,
+        so that a constant cost ``c`` gives ``c λ``, as the mesh scaled by ``c`` would.
 
     Returns
     -------
@@ -180,9 +189,11 @@ def smoothness_weight(mesh: TriMesh, m: float, normalization: str = "area", ener
     """
     normalization = check_normalization(normalization)
     if normalization == "paper":
-        return float(m) * 100.0 * mesh.mean_edge_length / mesh.n_vertices
+        h = mesh.mean_edge_length if medium is None else medium.mean_edge_length
+        return float(m) * 100.0 * h / mesh.n_vertices
     check_choice(energy, "energy", KAPPA, lower=False)
-    return float(m) * KAPPA[energy] * float(np.sqrt(mesh.face_areas.sum()))
+    area = float(mesh.face_areas.sum()) if medium is None else medium.surface_area
+    return float(m) * KAPPA[energy] * float(np.sqrt(area))
 
 
 @dataclass
@@ -207,6 +218,11 @@ class MeshOperators:
         Threshold of :meth:`TriMesh.degenerate_faces` (default
         :data:`~cvxgeodesic.mesh.trimesh.DEGENERATE_TOL`; 0 drops only faces of exactly
         zero area).
+    medium : Medium, optional
+        A travel cost or metric on ``mesh`` (:mod:`cvxgeodesic.operators.metric`): the gradient blocks are
+        multiplied by its :attr:`~cvxgeodesic.operators.metric.Medium.face_transforms` (the cones then bound
+        ``‖∇d‖_{M⁻¹} ≤ c``), the edge lengths, the stretch's areas and the energies are measured in it (the
+        Hessian energy only through its mean area ratio, :func:`~cvxgeodesic.operators.energy_matrix`).
 
     Attributes
     ----------
@@ -226,6 +242,7 @@ class MeshOperators:
 
     mesh: TriMesh
     degenerate_tol: float = DEGENERATE_TOL
+    medium: Medium | None = None
 
     def __post_init__(self):
         self._blocks = None
@@ -243,6 +260,10 @@ class MeshOperators:
                 f"{mesh.name}: all {n_bad} faces are degenerate (zero or near-zero area); the convex formulations "
                 "need proper triangles; use method='dijkstra' on this mesh"
             )
+        self._face_metric = None
+        if self.medium is not None:  # per-face transforms and area ratios of the energies' faces
+            keep = ~self.degenerate
+            self._face_metric = (self.medium.face_transforms[keep], self.medium.area_ratio[keep])
         if n_bad:
             self.degenerate_edges = np.unique(mesh.face_edges[self.degenerate])
             self._energy_mesh = TriMesh(mesh.V, mesh.F[~self.degenerate], name=mesh.name)
@@ -263,6 +284,9 @@ class MeshOperators:
         """(m, 2, 3) float ndarray: :func:`~cvxgeodesic.operators.gradient_blocks`, zero on degenerate faces."""
         if self._blocks is None:
             blocks = gradient_blocks(self.mesh)
+            if self.medium is not None:
+                with np.errstate(invalid="ignore"):
+                    blocks = np.einsum("tij,tjk->tik", self.medium.face_transforms, blocks)
             blocks[self.degenerate] = 0.0
             self._blocks = blocks
         return self._blocks
@@ -274,14 +298,21 @@ class MeshOperators:
         gives the PSD check of the Hessian energy the caller's symbolic analysis.
         """
         if name not in self._energies:
-            self._energies[name] = energy_matrix(self._energy_mesh, name, self.notes, analyse=analyse)
+            self._energies[name] = energy_matrix(self._energy_mesh, name, self.notes, analyse=analyse,
+                                                 face_metric=self._face_metric)
         return self._energies[name]
 
     def stretch_weights(self, stretch: str = "area") -> np.ndarray:
         """(n,) float ndarray: :func:`stretch_weights` of the mesh (cached)."""
         if stretch not in self._stretch:
-            self._stretch[stretch] = stretch_weights(self.mesh, stretch)
+            ratio = None if self.medium is None else self.medium.area_ratio
+            self._stretch[stretch] = stretch_weights(self.mesh, stretch, ratio)
         return self._stretch[stretch]
+
+    @property
+    def edge_lengths(self) -> np.ndarray:
+        """(e,) float ndarray: length of each edge of ``mesh.edges``, in the medium when there is one."""
+        return self.mesh.edge_lengths if self.medium is None else self.medium.edge_lengths
 
 
 class _Inequalities:
@@ -415,7 +446,7 @@ def build_problem(
     # keeps, e.g. 6e-16 on thingi_65395) are equalities in disguise: their slacks start at ~0 and the duals
     # grow to 1e13, which ruins the interior-point method's dual residual. A floor far below any tolerance
     # (MIN_EDGE_BOUND x the bounding-box diagonal) keeps them inequalities.
-    ell = np.maximum(mesh.edge_lengths, MIN_EDGE_BOUND * mesh.bbox_diagonal)
+    ell = np.maximum(ops.edge_lengths, MIN_EDGE_BOUND * mesh.bbox_diagonal)
     ineq = _Inequalities()
     if constraint == "qc":
         cone_vertices, cone_blocks = _qc_constraints(ops, sc, fixed_mask, ell, ineq)

@@ -50,7 +50,8 @@ from scipy.sparse.csgraph import dijkstra
 
 from .errors import DegenerateFacesWarning, MeshError, ParameterError
 from .mesh.trimesh import TriMesh
-from .operators.p2 import SAMPLES, P2Space, edge_basis, p2_basis
+from .operators.metric import Medium
+from .operators.p2 import SAMPLES, P2Space, edge_basis
 from .solvers.problem import ConeGroup, ConicProblem, Equalities, PairInequalities
 
 __all__ = ["DEFAULT_SAMPLES", "DEFAULT_WEIGHTS", "ORDER2_CACHE_VERSION", "ORDER2_METHODS", "P2Builder", "P2Program",
@@ -131,6 +132,11 @@ class P2Builder:
     cone_scale : {"dijkstra", "unit"}
         Centre of each cone: ``a`` = (Dijkstra distance at the sample)², floored at the squared
         mean longest edge, or ``a = 1``.
+    medium : Medium, optional
+        A travel cost or metric on ``mesh`` (:mod:`cvxgeodesic.operators.metric`): every cone bounds
+        ``|∇φ|²_{M⁻¹} ≤ 4c²φ`` with the medium at its sample point (:class:`~cvxgeodesic.operators.p2.P2Space`),
+        a degenerate face's 1-D cones take the derivative along the edge's length in the medium, and Dijkstra
+        (cone centres, start field) runs on the edge lengths in the medium.
 
     Attributes
     ----------
@@ -140,7 +146,7 @@ class P2Builder:
     """
 
     def __init__(self, mesh: TriMesh, samples: str = DEFAULT_SAMPLES, weights: str | None = None,
-                 cone_scale: str = "dijkstra"):
+                 cone_scale: str = "dijkstra", medium: Medium | None = None):
         weights = DEFAULT_WEIGHTS if weights is None else weights
         if samples not in SAMPLES and samples != "flat-nodes":
             raise ParameterError(f"samples must be 'flat-nodes' or one of {tuple(SAMPLES)}, got {samples!r}")
@@ -148,7 +154,7 @@ class P2Builder:
             raise ParameterError(f"cone_scale must be 'dijkstra' or 'unit', got {cone_scale!r}")
         self.cone_scale = cone_scale
         self.mesh = mesh
-        self.space = sp_ = P2Space(mesh)
+        self.space = sp_ = P2Space(mesh, medium)
         self.w = sp_.weights(weights)
         good = np.flatnonzero(~sp_.degenerate)
         if samples == "flat-nodes":
@@ -180,15 +186,16 @@ class P2Builder:
         ids, first = np.unique(fe.ravel(), return_index=True)
         owner = deg[first // 3]
         kloc = first % 3  # edge opposite local corner kloc of its owner face
-        L = mesh.edge_lengths[ids]
-        ok = L > MIN_EDGE * max(mesh.bbox_diagonal, 1e-300)
-        ids, owner, kloc, L = ids[ok], owner[ok], kloc[ok], L[ok]
+        ok = mesh.edge_lengths[ids] > MIN_EDGE * max(mesh.bbox_diagonal, 1e-300)
+        ids, owner, kloc = ids[ok], owner[ok], kloc[ok]
         t = np.array([0.0, 0.5, 1.0])
         Nt, dNt = edge_basis(t)
         rows_v, rows_g, fo, eb = [], [], [], []
         r = np.arange(ids.size)
         a, b = (kloc + 1) % 3, (kloc + 2) % 3
         for j in range(3):
+            # dφ/ds along the edge's length (in the medium: its rate of length per unit t at the sample)
+            L = mesh.edge_lengths[ids] if sp_.medium is None else sp_.medium.edge_speed(owner, a, b, t[j])
             # edge opposite corner k runs from corner k+1 to corner k+2; local DOFs (k+1, 3+k, k+2)
             val_e = np.zeros((ids.size, 6))
             grd_e = np.zeros((ids.size, 1, 6))
@@ -277,8 +284,7 @@ class P2Builder:
             ef, eb = np.asarray(extra[0], dtype=np.int64), np.asarray(extra[1], dtype=float)
             ok = ~space.degenerate[ef]
             ef, eb = ef[ok], eb[ok]
-            N, dN = p2_basis(eb)
-            Gx, hx = _cone_rows(N, np.einsum("kai,kci->kca", dN, space.lam_grad[ef]))
+            Gx, hx = _cone_rows(*space.sample_rows(ef, eb))
             G0, h0 = np.concatenate([G0, Gx]), np.concatenate([h0, hx])
             cone_face = np.concatenate([cone_face, ef])
             cone_bary = np.concatenate([cone_bary, eb])
@@ -309,7 +315,7 @@ class P2Builder:
         guess = None
         with_guess = vsrc.size > 0 and not space.flat_faces.any()
         if with_guess or (self.cone_scale == "dijkstra" and vsrc.size):
-            dv = dijkstra(mesh.vertex_adjacency, indices=vsrc, min_only=True)
+            dv = dijkstra(space.adjacency, indices=vsrc, min_only=True)
             dv = np.where(np.isfinite(dv), dv, 0.0)
         if with_guess:
             # a starting field for the structured solver: squared distance at the vertices, squared mean at the
@@ -322,7 +328,7 @@ class P2Builder:
         Gk, hk = G0[keep].copy(), h0[keep].copy()
         if self.cone_scale == "dijkstra" and vsrc.size:
             # ‖(√a ∇φ, φ − a)‖ ≤ φ + a is |∇φ|² ≤ 4φ for every a > 0; a ≈ φ at the sample centres the cone there
-            h2 = np.mean(mesh.face_longest_edges[cf]) ** 2
+            h2 = np.mean(space.face_longest_edges[cf]) ** 2
             a = np.maximum(np.einsum("ki,ki->k", cb, dv[mesh.F[cf]]) ** 2, h2)
             Gk[:, 1:3] *= np.sqrt(a)[:, None, None]
             hk[:, 0] = a

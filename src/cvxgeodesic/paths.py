@@ -36,6 +36,7 @@ from .mesh.convert import as_mesh
 from .mesh.io import as_trimesh
 from .mesh.tetmesh import TetMesh
 from .mesh.trimesh import TriMesh
+from .operators.metric import make_medium
 from .results import GeodesicResult
 from .sources import BARY_SNAP, SourceSet, SurfacePoint, _barycentric, _incident_faces, resolve_sources
 from .validation import as_vertex_field, check_count
@@ -153,7 +154,9 @@ class _Geometry:
 
         self.mesh = mesh
         V, F = mesh.V, mesh.F
-        ex, ey = triangle_frames(mesh)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            ex, ey = triangle_frames(mesh)
+        self.ex, self.ey = ex, ey
         B = gradient_blocks(mesh)  # (m, 2, 3)
         with np.errstate(invalid="ignore"):
             self.H = B[:, 0, :, None] * ex[:, None, :] + B[:, 1, :, None] * ey[:, None, :]  # (m, 3 corners, 3)
@@ -200,21 +203,31 @@ def _closest_on(x: np.ndarray, items) -> tuple[np.ndarray | None, float]:
 @overload
 def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = None,
                   return_surface_points: Literal[False] = False, straighten: bool = True,
-                  max_steps: int | None = None) -> np.ndarray: ...
+                  max_steps: int | None = None, cost: Any = None, metric: Any = None) -> np.ndarray: ...
 @overload
 def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = None,
                   return_surface_points: Literal[True], straighten: bool = True,
-                  max_steps: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
+                  max_steps: int | None = None, cost: Any = None,
+                  metric: Any = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
 @overload
 def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = None,
                   return_surface_points: bool = False, straighten: bool = True,
-                  max_steps: int | None = None) -> np.ndarray | tuple[np.ndarray, np.ndarray, np.ndarray]: ...
+                  max_steps: int | None = None, cost: Any = None,
+                  metric: Any = None) -> np.ndarray | tuple[np.ndarray, np.ndarray, np.ndarray]: ...
 
 
 def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = None,
                   return_surface_points: bool = False, straighten: bool = True,
-                  max_steps: int | None = None) -> np.ndarray | tuple[np.ndarray, np.ndarray, np.ndarray]:
+                  max_steps: int | None = None, cost: Any = None,
+                  metric: Any = None) -> np.ndarray | tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Path from ``target`` down the distance field to the nearest source.
+
+    In a travel cost or metric (``cost``/``metric``, or those of the solve when ``distance`` is a
+    :class:`~cvxgeodesic.api.GeodesicResult`) the descent follows the metric's gradient,
+    ``−M_t⁻¹ ∇d`` in each face (the cost does not turn it), and the straightening finds the path
+    of least length *in the medium* through the corridor (a small second-order cone program,
+    Clarabel; the medium constant on each face, read at its centroid): it bends at a change of
+    cost as Snell's law says (``docs/metrics.md``).
 
     Parameters
     ----------
@@ -235,6 +248,9 @@ def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = Non
         Replace the descent by the shortest path through its corridor of faces (module docstring).
     max_steps : int, optional
         Limit of descent steps (default ``3 · n_faces + 10``).
+    cost, metric : optional
+        The travel cost and metric the field was computed in (see :class:`~cvxgeodesic.api.GeodesicSolver`);
+        by default those of a :class:`~cvxgeodesic.api.GeodesicResult`, else none.
 
     Returns
     -------
@@ -273,6 +289,9 @@ def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = Non
     mesh = as_trimesh(mesh)
     d, result = _field(mesh, distance)
     ss, src_v = _path_sources(mesh, d, distance, result, sources)
+    medium = make_medium(mesh, cost, metric)
+    if medium is None and result is not None:
+        medium = result.info.extra.get("medium")
     if (result is not None and getattr(result.info, "method", None) == "exact" and ss is not None
             and not ss.segment_faces.size and _exact_target(mesh, target) and mesh.is_edge_manifold
             and mesh.referenced.all() and np.unique(mesh.component_labels).size == 1):
@@ -281,7 +300,7 @@ def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = Non
     if max_steps is None:
         max_steps = 3 * mesh.n_faces + 10
     check_count(max_steps, "max_steps")
-    walk = _Descent(mesh, geo, d, src_v, _source_targets(mesh, ss))
+    walk = _Descent(mesh, geo, d, src_v, _source_targets(mesh, ss), medium)
     state = walk.start(target)
     for _ in range(max_steps):
         step = walk.from_vertex(state[1]) if state[0] == "v" else walk.from_face(state[1], state[2])
@@ -291,7 +310,7 @@ def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = Non
     else:
         raise SolverError(f"geodesic_path: no source reached within max_steps={max_steps} steps",
                           solver="geodesic_path", status="max_steps")
-    return _finish_path(mesh, geo, walk.nodes, straighten, return_surface_points)
+    return _finish_path(mesh, geo, walk.nodes, straighten, return_surface_points, medium)
 
 
 def _path_sources(mesh: TriMesh, d: np.ndarray, distance: Any, result: Any,
@@ -323,13 +342,28 @@ class _Descent:
     position)``. Each step appends what it crossed and returns the next state, or None at a source.
     """
 
-    def __init__(self, mesh: TriMesh, geo: _Geometry, d: np.ndarray, src_v: np.ndarray, per_face: dict) -> None:
+    def __init__(self, mesh: TriMesh, geo: _Geometry, d: np.ndarray, src_v: np.ndarray, per_face: dict,
+                 medium: Any = None) -> None:
         self.mesh, self.geo, self.d, self.src_v, self.per_face = mesh, geo, d, src_v, per_face
         self.tol = 1e-12 * mesh.bbox_diagonal
         with np.errstate(invalid="ignore"):
             grad = np.einsum("fkj,fk->fj", geo.H, d[geo.F])  # (m, 3) gradient of the field in each face
         grad[~geo.ok] = np.nan
         self.grad = grad
+        # the direction of steepest descent and the rate of descent per unit length, both in the medium
+        self.adjacency = mesh.vertex_adjacency
+        if medium is None:
+            self.down, self.rate = -grad, np.linalg.norm(grad, axis=1)
+        else:
+            medium = medium.on(mesh)
+            self.adjacency = medium.adjacency()  # normalized, as the rates below
+            P = medium.plane(np.arange(mesh.n_faces), np.full(3, 1 / 3))
+            P[~geo.ok] = np.eye(2)
+            g2 = np.stack([np.einsum("fj,fj->f", grad, geo.ex), np.einsum("fj,fj->f", grad, geo.ey)], 1)
+            with np.errstate(invalid="ignore"):
+                step = -np.linalg.solve(P, g2[:, :, None])[:, :, 0]  # −M⁻¹∇d in the face's frame
+                self.down = step[:, :1] * geo.ex + step[:, 1:] * geo.ey
+                self.rate = np.sqrt(np.maximum(-np.einsum("fi,fi->f", g2, step), 0.0))
         self.nodes: list[tuple] = []
 
     def start(self, target: Any) -> tuple:
@@ -381,18 +415,18 @@ class _Descent:
         best = 1e-14
         choice: tuple | None = None
         for f in fs:
-            g = self.grad[f]
+            g = self.down[f]
             if not np.all(np.isfinite(g)):
                 continue
-            rate = float(np.linalg.norm(g))
+            rate = float(self.rate[f])
             if rate <= best:
                 continue
-            db = geo.H[f] @ (-g)
+            db = geo.H[f] @ g
             iv = int(np.flatnonzero(F[f] == v)[0])
             others = [j for j in range(3) if j != iv]
             if all(db[j] >= -1e-12 * np.abs(db).max() for j in others):
                 best, choice = rate, ("f", int(f), np.eye(3)[iv])
-        nb = sp.csr_matrix(self.mesh.vertex_adjacency)[v]
+        nb = sp.csr_matrix(self.adjacency)[v]
         for w, length in zip(nb.indices, nb.data, strict=True):
             if length <= 0 or not np.isfinite(d[w]):
                 continue
@@ -418,11 +452,11 @@ class _Descent:
         x = b @ V[F[f]]
         if self._finish_in_face(f, x, float(b @ d[F[f]])):
             return None
-        g = self.grad[f]
-        if not np.all(np.isfinite(g)) or np.linalg.norm(g) <= 1e-14:
+        g = self.down[f]
+        if not np.all(np.isfinite(g)) or self.rate[f] <= 1e-14:
             j = int(np.argmin(d[F[f]]))  # flat or degenerate face: to its lowest corner
             return self._to_vertex(int(F[f, j]))
-        db = geo.H[f] @ (-g)
+        db = geo.H[f] @ g
         scale = np.abs(db).max()
         out = db < -1e-12 * scale
         ts = np.where(out, b / np.where(out, -db, 1.0), np.inf)
@@ -457,24 +491,24 @@ class _Descent:
         """The face across edge ``(a, c)`` of ``f`` into which the descent continues, or None."""
         geo, F = self.geo, self.geo.F
         for h in (int(h) for h in geo.faces_of_edge(a, c) if h != f):
-            gh = self.grad[h]
+            gh = self.down[h]
             if not np.all(np.isfinite(gh)):
                 continue
             third = int(np.flatnonzero((F[h] != a) & (F[h] != c))[0])
-            dbh = geo.H[h] @ (-gh)
+            dbh = geo.H[h] @ gh
             if dbh[third] > 1e-12 * max(np.abs(dbh).max(), 1e-300):
                 return h
         return None
 
 
 def _finish_path(mesh: TriMesh, geo: _Geometry, nodes: list[tuple], straighten: bool,
-                 return_surface_points: bool) -> Any:
+                 return_surface_points: bool, medium: Any = None) -> Any:
     """Straighten the walk's nodes, drop duplicates and return positions (and faces, barycentric coordinates)."""
     tol = 1e-12 * mesh.bbox_diagonal
     if straighten:
         nodes = _open_vertices(mesh, geo, nodes)
         for _ in range(64):
-            _straighten(mesh, nodes)
+            _straighten(mesh, nodes, None if medium is None else medium.on(mesh))
             nodes, switched = _switch_sides(mesh, geo, nodes)
             if not switched:
                 break
@@ -814,8 +848,9 @@ def _straighten_chain(mesh: TriMesh, q0: np.ndarray, chain: list, q1: np.ndarray
     return out
 
 
-def _straighten(mesh: TriMesh, nodes: list) -> None:
-    """Move every chain of edge crossings between two fixed nodes to the shortest path through its faces."""
+def _straighten(mesh: TriMesh, nodes: list, medium: Any = None) -> None:
+    """Move every chain of edge crossings between two fixed nodes to the shortest path through its faces
+    (in a medium: the path of least length in it, :meth:`~cvxgeodesic.operators.metric.Medium.least_crossings`)."""
     n = len(nodes)
     i = 1
     while i < n - 1:
@@ -827,5 +862,15 @@ def _straighten(mesh: TriMesh, nodes: list) -> None:
                and nodes[j + 1][3] == nodes[j][4]):
             j += 1
         q0, q1 = _position(mesh, nodes[i - 1]), _position(mesh, nodes[j + 1])
-        nodes[i:j + 1] = _straighten_chain(mesh, q0, nodes[i:j + 1], q1)
+        if medium is None:
+            nodes[i:j + 1] = _straighten_chain(mesh, q0, nodes[i:j + 1], q1)
+        else:
+            chain = nodes[i:j + 1]
+            ends = np.array([nd[1:3] for nd in chain], dtype=np.int64)
+            faces = np.array([chain[0][3], *(nd[4] for nd in chain)], dtype=np.int64)  # of the K + 1 pieces
+            t = medium.least_crossings(q0, ends, faces, q1)
+            if t is not None:
+                V = mesh.V
+                nodes[i:j + 1] = [(*nd[:5], (1 - tk) * V[nd[1]] + tk * V[nd[2]]) for nd, tk in zip(chain, t,
+                                                                                                  strict=True)]
         i = j + 1

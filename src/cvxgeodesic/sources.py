@@ -599,14 +599,19 @@ class SourceConstraints:
     anchors: np.ndarray
 
 
-def _segment_distance(P: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """(k,) distances from points P to segments [A, B] (all (k, 3))."""
+def _segment_parameter(P: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """(k,) parameter ``t ∈ [0, 1]`` of the closest point ``A + t (B − A)`` to each point P (all (k, 3))."""
     ab = B - A
     den = np.einsum("ij,ij->i", ab, ab)
     with np.errstate(divide="ignore", invalid="ignore"):
         t = np.where(den > 0, np.einsum("ij,ij->i", P - A, ab) / den, 0.0)
-    t = np.clip(t, 0.0, 1.0)
-    return np.linalg.norm(P - (A + t[:, None] * ab), axis=1)
+    return np.clip(t, 0.0, 1.0)
+
+
+def _segment_distance(P: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """(k,) distances from points P to segments [A, B] (all (k, 3))."""
+    t = _segment_parameter(P, A, B)
+    return np.linalg.norm(P - (A + t[:, None] * (B - A)), axis=1)
 
 
 def _segment_ends(mesh: TriMesh, ss: SourceSet) -> tuple[np.ndarray, np.ndarray]:
@@ -614,13 +619,16 @@ def _segment_ends(mesh: TriMesh, ss: SourceSet) -> tuple[np.ndarray, np.ndarray]
     return (np.einsum("sk,skj->sj", ss.segment_bary[:, 0], T), np.einsum("sk,skj->sj", ss.segment_bary[:, 1], T))
 
 
-def vertex_bounds(mesh: TriMesh, ss: SourceSet) -> np.ndarray:
+def vertex_bounds(mesh: TriMesh, ss: SourceSet, medium: Any = None) -> np.ndarray:
     """Upper bounds of the distance at the vertices of the source faces.
 
     Parameters
     ----------
     mesh : TriMesh
     ss : SourceSet
+    medium : Medium, optional
+        A travel cost or metric (:mod:`cvxgeodesic.operators.metric`): the segments are measured in it (to a
+        curve piece: to its Euclidean closest point), normalized as its edge lengths.
 
     Returns
     -------
@@ -631,16 +639,26 @@ def vertex_bounds(mesh: TriMesh, ss: SourceSet) -> np.ndarray:
     """
     F, V = mesh.F, mesh.V
     bound = np.full(mesh.n_vertices, np.inf)
+    eye = np.eye(3)
     if ss.point_faces.size:
         X = ss.point_positions(mesh)
         Fv = F[ss.point_faces]  # (p, 3)
-        dist = np.linalg.norm(V[Fv] - X[:, None, :], axis=2)
+        if medium is None:
+            dist = np.linalg.norm(V[Fv] - X[:, None, :], axis=2)
+        else:
+            dist = np.stack([medium.segment_lengths(ss.point_faces, ss.point_bary, eye[i]) for i in range(3)], 1)
         np.minimum.at(bound, Fv.ravel(), dist.ravel())
     if ss.segment_faces.size:
         Fs = F[ss.segment_faces]
         A, B = _segment_ends(mesh, ss)
         for i in range(3):
-            np.minimum.at(bound, Fs[:, i], _segment_distance(V[Fs[:, i]], A, B))
+            if medium is None:
+                dist = _segment_distance(V[Fs[:, i]], A, B)
+            else:  # a path to the Euclidean closest point of the piece, measured in the medium
+                t = _segment_parameter(V[Fs[:, i]], A, B)[:, None]
+                closest = (1 - t) * ss.segment_bary[:, 0] + t * ss.segment_bary[:, 1]
+                dist = medium.segment_lengths(ss.segment_faces, closest, eye[i])
+            np.minimum.at(bound, Fs[:, i], dist)
     return bound
 
 
@@ -665,7 +683,8 @@ def source_constraints(ops, sources, min_edge_bound: float) -> SourceConstraints
     # the formulations' floor of the edge bounds, also for the vertex bounds next to a point that almost
     # touches a vertex: it keeps them inequalities
     floor = min_edge_bound * mesh.bbox_diagonal
-    ell = np.maximum(mesh.edge_lengths, floor)
+    ell = np.maximum(ops.edge_lengths, floor)
+    medium = getattr(ops, "medium", None)
     ss = sources if isinstance(sources, SourceSet) else None
     fixed = np.asarray(ss.vertices if ss is not None else sources, dtype=np.int64)
     is_source = np.zeros(n, dtype=bool)
@@ -680,7 +699,7 @@ def source_constraints(ops, sources, min_edge_bound: float) -> SourceConstraints
         return SourceConstraints(fixed, no_cone, o_end, s_end, star_rhs, empty, np.zeros(0), fixed)
 
     V = mesh.V
-    bound = vertex_bounds(mesh, ss)
+    bound = vertex_bounds(mesh, ss, medium)
     A, B = _segment_ends(mesh, ss)
     src_faces = ss.source_faces()
     no_cone[src_faces] = True
@@ -696,10 +715,14 @@ def source_constraints(ops, sources, min_edge_bound: float) -> SourceConstraints
         pts = [ss.point_positions(mesh), V[fixed]]
         if ss.segment_faces.size:  # the pieces' ends and midpoints stand in for the pieces here
             pts += [A, B, 0.5 * (A + B)]
-        tree = cKDTree(np.concatenate(pts))
+        P = np.concatenate(pts)
+        tree = cKDTree(P)
         fn = np.flatnonzero(near)
-        loc, _ = tree.query(V[F[fn]].reshape(-1, 3))
+        loc, nearest = tree.query(V[F[fn]].reshape(-1, 3))
         e = loc.reshape(-1, 3)
+        if medium is not None:  # the local field in the medium: the distance to the nearest point, in face fn's
+            U = V[F[fn]].reshape(-1, 3) - P[nearest]
+            e = medium.vector_lengths(np.repeat(fn, 3), U).reshape(-1, 3)
         g = np.einsum("tij,tj->ti", ops.gradient_blocks[fn], e)
         steep = fn[np.linalg.norm(g, axis=1) > 1.0 + 1e-9]
         no_cone[steep] = True

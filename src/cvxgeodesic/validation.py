@@ -26,8 +26,9 @@ from numpy.typing import ArrayLike
 from .errors import ParameterError, SourceError
 
 __all__ = [
-    "as_points", "as_vertex_field", "check_choice", "check_count", "check_number", "check_output_path", "check_type",
-    "is_integer", "is_real", "short_repr", "validate_sources", "vertex_indices", "vertex_mask",
+    "as_points", "as_vertex_field", "check_choice", "check_cost", "check_count", "check_medium_method", "check_metric",
+    "check_number", "check_output_path", "check_plane_metric", "check_type", "is_integer", "is_real", "short_repr",
+    "validate_sources", "vertex_indices", "vertex_mask",
 ]
 
 
@@ -347,3 +348,136 @@ def check_output_path(path: str | os.PathLike, extensions: tuple[str, ...]) -> P
     os.close(fd)
     os.unlink(probe)
     return p
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# travel cost and metric (cvxgeodesic.operators.metric)
+# ---------------------------------------------------------------------------------------------------------------
+def _where(kind: str, k: int) -> str:
+    return {"vertices": f"vertex {k}", "faces": f"face {k}"}.get(kind, "the constant")
+
+
+def check_cost(cost: Any, n: int, m: int) -> tuple[np.ndarray, str]:
+    """A travel cost (time per unit length, ``1/speed``) checked and classified.
+
+    Parameters
+    ----------
+    cost : float or (n,) or (m,) float array_like
+        One positive number, one per vertex or one per face. When ``n == m`` a 1-D array is read per vertex.
+    n, m : int
+        The mesh's vertex and face counts.
+
+    Returns
+    -------
+    values : (1,), (n,) or (m,) float64 ndarray
+    kind : {"constant", "vertices", "faces"}
+
+    Raises
+    ------
+    ParameterError
+        Not numeric, another shape, or a value that is not positive and finite (the message names the first one).
+    """
+    try:
+        arr = np.asarray(cost, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ParameterError(f"cost must be a positive number or an array of shape ({n},) (per vertex) or ({m},) "
+                             f"(per face), got {short_repr(cost)}") from None
+    if arr.ndim == 0:
+        kind, arr = "constant", arr.reshape(1)
+    elif arr.ndim == 1 and arr.shape[0] == n:
+        kind = "vertices"
+    elif arr.ndim == 1 and arr.shape[0] == m:
+        kind = "faces"
+    else:
+        raise ParameterError(f"cost must have shape ({n},) (one value per vertex) or ({m},) (one per face), "
+                             f"got shape {arr.shape}")
+    bad = ~(np.isfinite(arr) & (arr > 0))
+    if bad.any():
+        k = int(np.flatnonzero(bad)[0])
+        at = "" if kind == "constant" else f"[{k}]"
+        raise ParameterError(f"cost{at} = {float(arr[k])!r} ({_where(kind, k)}) must be positive and finite")
+    return arr, kind
+
+
+def check_metric(metric: Any, n: int, m: int) -> tuple[np.ndarray, str]:
+    """A Riemannian metric (symmetric 3×3 tensors) checked for shape, finiteness and symmetry, and classified.
+
+    Positive definiteness in each face's plane needs the mesh: :func:`check_plane_metric`.
+
+    Parameters
+    ----------
+    metric : (3, 3), (n, 3, 3) or (m, 3, 3) float array_like
+        One tensor, one per vertex or one per face (per vertex when ``n == m``).
+    n, m : int
+
+    Returns
+    -------
+    values : (1, 3, 3), (n, 3, 3) or (m, 3, 3) float64 ndarray
+    kind : {"constant", "vertices", "faces"}
+
+    Raises
+    ------
+    ParameterError
+        Not numeric, another shape, a non-finite entry or a tensor that is not symmetric (relative 1e-10), naming
+        the first.
+    """
+    try:
+        arr = np.asarray(metric, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ParameterError(f"metric must be a (3, 3), ({n}, 3, 3) or ({m}, 3, 3) array of symmetric tensors, "
+                             f"got {short_repr(metric)}") from None
+    if arr.shape == (3, 3):
+        kind, arr = "constant", arr.reshape(1, 3, 3)
+    elif arr.ndim == 3 and arr.shape[1:] == (3, 3) and arr.shape[0] == n:
+        kind = "vertices"
+    elif arr.ndim == 3 and arr.shape[1:] == (3, 3) and arr.shape[0] == m:
+        kind = "faces"
+    else:
+        raise ParameterError(f"metric must have shape (3, 3) (one tensor), ({n}, 3, 3) (per vertex) or ({m}, 3, 3) "
+                             f"(per face), got shape {arr.shape}")
+    at = (lambda k: "metric") if kind == "constant" else (lambda k: f"metric[{k}]")
+    finite = np.isfinite(arr).all(axis=(1, 2))
+    if not finite.all():
+        k = int(np.flatnonzero(~finite)[0])
+        raise ParameterError(f"{at(k)} ({_where(kind, k)}) has a non-finite entry: {arr[k].tolist()}")
+    scale = np.abs(arr).max(axis=(1, 2))
+    asym = np.abs(arr - arr.transpose(0, 2, 1)).max(axis=(1, 2)) > 1e-10 * scale
+    if asym.any():
+        k = int(np.flatnonzero(asym)[0])
+        raise ParameterError(f"{at(k)} ({_where(kind, k)}) is not symmetric: {arr[k].tolist()}")
+    return 0.5 * (arr + arr.transpose(0, 2, 1)), kind
+
+
+def check_plane_metric(M2: np.ndarray, owner: np.ndarray, face: np.ndarray, kind: str) -> None:
+    """Raise a ParameterError unless every metric restricted to a face's plane is positive definite.
+
+    Parameters
+    ----------
+    M2 : (k, 2, 2) float ndarray
+        Restricted tensors ``E_tᵀ M E_t`` (NaN rows, of faces without a plane, are skipped).
+    owner : (k,) int ndarray
+        Index of the tensor each row comes from (in the user's array).
+    face : (k,) int ndarray
+        The face whose plane each row is restricted to.
+    kind : {"constant", "vertices", "faces"}
+    """
+    a, b, c = M2[:, 0, 0], M2[:, 0, 1], M2[:, 1, 1]
+    with np.errstate(invalid="ignore"):
+        bad = (a <= 0) | (a * c - b * b <= 1e-12 * np.maximum(a * c, 1e-300))
+    bad &= np.isfinite(M2).all(axis=(1, 2))
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        k, t = int(owner[i]), int(face[i])
+        name = "metric" if kind == "constant" else f"metric[{k}] ({_where(kind, k)})"
+        ev = np.linalg.eigvalsh(M2[i])
+        raise ParameterError(f"{name} is not positive definite in the plane of face {t} (eigenvalues there "
+                             f"{ev[0]:.3g}, {ev[1]:.3g}); lengths along the surface need a positive definite metric")
+
+
+def check_medium_method(method: str, supported: Iterable[str], *, multires: bool = False) -> None:
+    """A ParameterError unless ``method`` takes a travel cost or metric (``supported`` lists those that do)."""
+    if method not in tuple(supported):
+        raise ParameterError(f"method {method!r} cannot take a travel cost or metric (its library computes Euclidean "
+                             f"distances); methods that can: {', '.join(supported)}")
+    if multires:
+        raise ParameterError("cost and metric are not implemented with multires; solve on the mesh itself")

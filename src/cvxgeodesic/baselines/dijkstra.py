@@ -25,6 +25,9 @@ class DijkstraBaseline(BaselineSolver):
     ----------
     mesh : TriMesh or (V, F) tuple
         ``V`` (n, 3) float, ``F`` (m, 3) int.
+    medium : Medium, optional
+        A travel cost or metric on the mesh (:mod:`cvxgeodesic.operators.metric`): the edges are weighted by
+        their lengths in it (:attr:`~cvxgeodesic.operators.metric.Medium.edge_lengths`).
 
     Examples
     --------
@@ -38,9 +41,16 @@ class DijkstraBaseline(BaselineSolver):
     library = "scipy.sparse.csgraph.dijkstra"
     supports_multiple_sources = True
 
+    def __init__(self, mesh, medium=None) -> None:
+        self.medium = medium
+        super().__init__(mesh)
+
     def _setup(self) -> None:
-        self._graph = self.mesh.vertex_adjacency
+        if self.medium is None:
+            self.graph = self.mesh.vertex_adjacency
+        else:
+            self.graph = self.medium.on(self.mesh).adjacency() * self.medium.scale
 
     def _solve(self, sources: np.ndarray) -> tuple[np.ndarray, dict]:
-        d = dijkstra(self._graph, directed=False, indices=sources, min_only=True)
+        d = dijkstra(self.graph, directed=False, indices=sources, min_only=True)
         return np.asarray(d, dtype=np.float64), {}

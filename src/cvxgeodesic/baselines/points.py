@@ -58,7 +58,8 @@ def solve_baseline_sources(baseline, ss: SourceSet) -> tuple[np.ndarray, dict]:
     name, mesh = baseline.name, baseline.mesh
     has_points = ss.point_faces.size > 0 or ss.kind in ("curve", "points", "mixed")
     if name == "dijkstra":
-        return _dijkstra(mesh, ss), {"solver": baseline.library, "sources": "virtual node with offsets"}
+        return (_dijkstra(mesh, ss, baseline.graph, getattr(baseline, "medium", None)),
+                {"solver": baseline.library, "sources": "virtual node with offsets"})
     if ss.kind == "boundary":  # the vertex baselines take the boundary's vertices
         d, info = baseline.solve(ss.vertices)
         info["sources"] = "boundary vertices"
@@ -72,13 +73,15 @@ def solve_baseline_sources(baseline, ss: SourceSet) -> tuple[np.ndarray, dict]:
     raise _cannot(name, "point or curve", "not supported")  # pragma: no cover
 
 
-def _dijkstra(mesh: TriMesh, ss: SourceSet) -> np.ndarray:
+def _dijkstra(mesh: TriMesh, ss: SourceSet, graph: sp.csr_matrix, medium=None) -> np.ndarray:
     n = mesh.n_vertices
-    bound = vertex_bounds(mesh, ss)
+    bound = vertex_bounds(mesh, ss, medium)
+    if medium is not None:
+        bound = bound * medium.scale
     bv = np.flatnonzero(np.isfinite(bound))
     # zero weights are "no edge" in scipy's sparse graphs: a vertex exactly on a point is a vertex source already
     w = np.maximum(bound[bv], 1e-300)
-    G = mesh.vertex_adjacency.tocoo()
+    G = graph.tocoo()
     virtual = np.full(len(bv), n)
     A = sp.coo_matrix((np.r_[G.data, w, w], (np.r_[G.row, virtual, bv], np.r_[G.col, bv, virtual])),
                       shape=(n + 1, n + 1)).tocsr()

@@ -17,7 +17,7 @@ from ..errors import ParameterError, SourceError
 from .convert import as_trimesh
 from .trimesh import TriMesh
 
-__all__ = ["file_order_mesh", "file_sources", "to_file_order"]
+__all__ = ["file_order_mesh", "file_sources", "from_file_order", "to_file_order"]
 
 
 def to_file_order(mesh: TriMesh, field: ArrayLike, *, fill: float = np.inf) -> np.ndarray:
@@ -67,6 +67,50 @@ def to_file_order(mesh: TriMesh, field: ArrayLike, *, fill: float = np.inf) -> n
     keep = idx >= 0
     out[..., keep] = values[..., idx[keep]]
     return out
+
+
+def from_file_order(mesh: TriMesh, values: ArrayLike, name: str) -> tuple[np.ndarray, str | None]:
+    """A per-vertex field given in the file's numbering, in the mesh's (the inverse of :func:`to_file_order`).
+
+    Parameters
+    ----------
+    mesh : TriMesh
+        A mesh from :func:`~cvxgeodesic.mesh.load.load_mesh`.
+    values : (n_file,) float array_like
+        One value per vertex of the file.
+    name : str
+        What the values are (for messages).
+
+    Returns
+    -------
+    (n,) float64 ndarray
+        File vertices welded into one mesh vertex give it their mean; vertices in no face are dropped.
+    note : str or None
+        Says so when welded vertices had different values.
+
+    Raises
+    ------
+    ParameterError
+        ``values`` is not one number per file vertex.
+    """
+    arr = np.asarray(values, dtype=np.float64)
+    idx = mesh.file_index
+    if arr.shape != (idx.size,):
+        raise ParameterError(f"{name} must have one value per vertex of {mesh.name} ({idx.size}), got shape "
+                             f"{arr.shape}")
+    keep = idx >= 0
+    total = np.bincount(idx[keep], weights=arr[keep], minlength=mesh.n_vertices)
+    count = np.bincount(idx[keep], minlength=mesh.n_vertices)
+    out = np.divide(total, count, out=np.ones(mesh.n_vertices), where=count > 0)
+    spread = np.abs(arr[keep] - out[idx[keep]])
+    with np.errstate(invalid="ignore"):
+        differ = spread > 1e-12 * np.maximum(np.abs(out[idx[keep]]), 1e-300)
+    note = None
+    if differ.any():
+        j = int(np.flatnonzero(keep)[np.flatnonzero(differ)[0]])
+        note = (f"{name}: vertices welded into one have different values (first: file vertex {j}); each mesh vertex "
+                "takes their mean")
+    return out, note
 
 
 def file_sources(mesh: TriMesh, sources: ArrayLike) -> np.ndarray:

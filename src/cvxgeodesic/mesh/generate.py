@@ -169,6 +169,41 @@ def delaunay_plane(k: int = 300, seed: int = 3) -> TriMesh:
     return TriMesh(np.c_[P, np.zeros(k)], Delaunay(P).simplices, name=f"random Delaunay ({k} points)")
 
 
+def delaunay_grid(nx: int = 60, jitter: float = 0.3, seed: int = 1, *, fix_rows: tuple[float, ...] = ()) -> TriMesh:
+    """The Delaunay triangulation of a jittered ``(nx + 1)²`` grid of the unit square (z = 0): faces of every
+    orientation, no preferred direction, no slivers (the analytic tests of ``docs/metrics.md``).
+
+    Parameters
+    ----------
+    nx : int
+        Cells along each side.
+    jitter : float
+        Interior points move by up to ``jitter`` cells in x and y (:func:`grid_plane`).
+    seed : int
+    fix_rows : tuple of float
+        Heights ``y`` (multiples of ``1/nx``) whose row of points keeps its height, so that the line ``y`` is made
+        of edges (an interface between two media).
+
+    Returns
+    -------
+    TriMesh
+        ``(nx + 1)²`` vertices.
+    """
+    from scipy.spatial import Delaunay
+
+    nx = check_count(nx, "nx", minimum=1)
+    V = grid_plane(nx, jitter=jitter, seed=seed).V.copy()
+    for y in fix_rows:
+        if not np.isclose(y * nx, np.round(y * nx)):
+            raise ValueError(f"fix_rows: {y} is not a multiple of 1/{nx}")
+        V[np.round(V[:, 1] * nx) == np.round(y * nx), 1] = y  # jitter moves a point by less than half a cell
+    F = Delaunay(V[:, :2]).simplices.astype(np.int64)
+    e1, e2 = V[F[:, 1], :2] - V[F[:, 0], :2], V[F[:, 2], :2] - V[F[:, 0], :2]
+    cw = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0] < 0
+    F[cw] = F[cw][:, [0, 2, 1]]  # every face counter-clockwise (+z)
+    return TriMesh(V, F, name=f"jittered Delaunay grid {nx}x{nx}")
+
+
 def fan_plate(k: int = 12) -> TriMesh:
     """A flat 2 × 1 CAD-style plate: ``k`` points on each long side, every face a fan from one of two corners.
 

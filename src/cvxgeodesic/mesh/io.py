@@ -23,14 +23,14 @@ from .convert import as_mesh, as_trimesh
 from .fileorder import file_order_mesh, to_file_order
 from .formats import ply
 from .formats._common import FieldData, check_file, file_errors, format_error
-from .formats.registry import DISTANCE_EXTENSIONS, FORMATS, MESH_EXTENSIONS, field_reader
+from .formats.registry import DISTANCE_EXTENSIONS, FORMATS, MESH_EXTENSIONS, field_reader, property_reader
 from .load import load_mesh
 from .tetmesh import TetMesh
 from .trimesh import TriMesh
 
 __all__ = [
     "as_trimesh", "check_output_path", "file_order_mesh", "load_distance", "load_distance_ply", "load_mesh",
-    "save_distance", "MESH_EXTENSIONS", "DISTANCE_EXTENSIONS",
+    "load_vertex_property", "save_distance", "MESH_EXTENSIONS", "DISTANCE_EXTENSIONS",
 ]
 
 _NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*\Z")
@@ -201,6 +201,33 @@ def load_distance(path: str | os.PathLike, name: str = "distance") -> np.ndarray
     p = Path(path)
     read = field_reader(p)
     check_file(p, "a distance file")
+    with file_errors(p):
+        return read(p, name)
+
+
+def load_vertex_property(path: str | os.PathLike, name: str) -> np.ndarray:
+    """A named per-vertex property of a mesh file (a PLY vertex property, VTK/VTU point data, a glTF attribute
+    ``_NAME``), one value per vertex of the file, in its order (:func:`~cvxgeodesic.mesh.fileorder.from_file_order`
+    turns it into the loaded mesh's).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    name : str
+
+    Returns
+    -------
+    (n_file,) float64 ndarray
+
+    Raises
+    ------
+    MeshFormatError
+        A format without named properties (the message lists those with), or no property ``name`` (the message
+        lists the file's).
+    """
+    p = Path(path)
+    read = property_reader(p)
+    check_file(p, "a mesh file")
     with file_errors(p):
         return read(p, name)
 

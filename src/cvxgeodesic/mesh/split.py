@@ -64,6 +64,10 @@ class SplitMesh:
                     lst.append((k, idx, beta))
                 self.pieces[f] = lst
         self.mesh = TriMesh(np.vstack(V), np.asarray(F, dtype=np.int64), name=mesh.name)
+        #: (m',) int64 ndarray: the original face each face of :attr:`mesh` is a piece of
+        self.face_parent = np.arange(len(F), dtype=np.int64)
+        for f, lst in self.pieces.items():
+            self.face_parent[[idx for _, idx, _ in lst]] = f
         self.point_vertices = np.asarray(new_ids, dtype=np.int64)
         self.n_original = n
 

@@ -13,6 +13,7 @@ from ..errors import IndefiniteEnergyWarning
 from ..linalg import SymbolicCholesky, is_positive_semidefinite
 from ..mesh.cover import manifold_cover, pull_back
 from ..mesh.trimesh import TriMesh
+from .gradient import gradient_blocks, gradient_matrix
 from .laplacian import cotan_stiffness, mass_matrix
 
 ENERGIES = ("dirichlet", "laplacian", "hessian")
@@ -201,13 +202,79 @@ def _padded_symmetric(Q, n: int) -> sp.csc_matrix:
     return sp.csc_matrix(0.5 * (Q + Q.T))
 
 
+def metric_stiffness(mesh: TriMesh, transforms: np.ndarray, area_ratio: np.ndarray) -> sp.csc_matrix:
+    """The stiffness matrix in a metric: ``dᵀ S d = Σ_t A^M_t ‖T_t ∇d|_t‖²`` (``A^M_t = A_t · area_ratio_t``).
+
+    Parameters
+    ----------
+    mesh : TriMesh
+    transforms : (m, 2, 2) float ndarray
+        :attr:`~cvxgeodesic.operators.metric.Medium.face_transforms` (``‖T g‖`` the gradient's norm in the metric).
+    area_ratio : (m,) float ndarray
+
+    Returns
+    -------
+    (n, n) scipy.sparse.csc_matrix, symmetric PSD
+        :func:`~cvxgeodesic.operators.cotan_stiffness` when the metric is a constant multiple of the identity (the
+        cotangent weights do not see a uniform scaling).
+    """
+    with np.errstate(invalid="ignore"):
+        B = np.einsum("tij,tjk->tik", transforms, gradient_blocks(mesh))
+    B = np.where(np.isfinite(B), B, 0.0)
+    G = gradient_matrix(mesh, B)
+    w = np.repeat(mesh.face_areas * area_ratio, 2)
+    S = G.T @ sp.diags(w) @ G
+    return sp.csc_matrix(0.5 * (S + S.T))
+
+
+def _metric_energy(mesh: TriMesh, energy: str, face_metric: tuple[np.ndarray, np.ndarray], notes: list[str],
+                   analyse: Callable[[sp.csc_matrix], SymbolicCholesky] | None) -> sp.csc_matrix:
+    """The named energy of the surface measured in a metric (a travel cost is the metric ``c² I``).
+
+    Dirichlet: the metric stiffness over the metric area. Laplacian: ``S_M M_M⁻¹ S_M`` with the mixed-Voronoi mass
+    times each vertex's mean area ratio (area-weighted over its faces). Hessian: the Euclidean curved Hessian energy
+    divided by the surface's mean area ratio (noted): exactly the energy of the surface scaled by ``c`` for a
+    constant cost ``c``, and a uniform stand-in otherwise. All three are then, for a constant cost, those of the
+    mesh scaled by ``c``, so the field is ``c`` times the unweighted one.
+    """
+    T, ratio = face_metric
+    A = mesh.face_areas
+    mean_ratio = float((A * ratio).sum() / A.sum())
+    if energy == "hessian":
+        notes.append(f"{mesh.name}: with a travel cost or metric, the Hessian energy is the Euclidean surface's "
+                     "divided by the mean area ratio of the medium (exact for a constant cost; the Dirichlet and "
+                     "Laplacian energies use the metric itself)")
+        Q = hessian_energy_matrix(mesh, notes, analyse=analyse)
+        Q = Q if isinstance(Q, sp.csc_matrix) else sp.csc_matrix(Q)
+        Q.data /= mean_ratio  # in place: a symbolic analysis ``analyse`` made for this very matrix stays its own
+        return Q
+    S = metric_stiffness(mesh, T, ratio)
+    if energy == "dirichlet":
+        return sp.csc_matrix(S / float((A * ratio).sum()))
+    n = mesh.n_vertices
+    num = np.bincount(mesh.F.ravel(), weights=np.repeat(A * ratio, 3), minlength=n)
+    den = np.bincount(mesh.F.ravel(), weights=np.repeat(A, 3), minlength=n)
+    vr = np.ones(n)
+    np.divide(num, den, out=vr, where=den > 0)
+    mass = mass_matrix(mesh).diagonal() * vr
+    inv = np.zeros_like(mass)
+    np.divide(1.0, mass, out=inv, where=mass > 0)
+    Q = S @ sp.diags(inv) @ S
+    return sp.csc_matrix(0.5 * (Q + Q.T))
+
+
 def energy_matrix(mesh: TriMesh, energy: str, notes: list[str] | None = None, *,
-                  analyse: Callable[[sp.csc_matrix], SymbolicCholesky] | None = None) -> sp.csc_matrix:
+                  analyse: Callable[[sp.csc_matrix], SymbolicCholesky] | None = None,
+                  face_metric: tuple[np.ndarray, np.ndarray] | None = None) -> sp.csc_matrix:
     """The matrix of a named energy (``"dirichlet"``, ``"laplacian"`` or ``"hessian"``).
 
     ``notes`` (optional list) gets one line per substitution made while building it; ``analyse`` is passed to
     :func:`hessian_energy_matrix` (the other energies are PSD by construction and have no check).
+    ``face_metric``, ``(transforms (m, 2, 2), area_ratio (m,))`` of a travel cost or metric
+    (:class:`~cvxgeodesic.operators.metric.Medium`), measures the energy in it (:func:`_metric_energy`).
     """
+    if face_metric is not None:
+        return _metric_energy(mesh, energy, face_metric, [] if notes is None else notes, analyse)
     if energy == "hessian":
         return hessian_energy_matrix(mesh, notes, analyse=analyse)
     return {"dirichlet": dirichlet_energy_matrix, "laplacian": laplacian_energy_matrix}[energy](mesh)

@@ -16,6 +16,7 @@ from ..errors import ParameterError
 from ..mesh.split import SplitMesh
 from ..mesh.trimesh import TriMesh
 from .gradient import gradient_blocks
+from .metric import Medium
 
 __all__ = ["SAMPLES", "WEIGHTS", "P2Field", "P2Space", "SplitP2Field", "edge_basis", "max_violation", "p2_basis",
            "violations"]
@@ -78,6 +79,11 @@ class P2Space:
     Parameters
     ----------
     mesh : TriMesh
+    medium : Medium, optional
+        A travel cost or metric on ``mesh`` (:mod:`cvxgeodesic.operators.metric`): the gradient rows of
+        :meth:`face_cones`, :meth:`sample_rows` and :meth:`point_rows` are multiplied by its transform at each
+        point (``|∇φ|`` is then the norm in the medium), the weights use its areas and :attr:`edge_lengths` its
+        lengths.
 
     Attributes
     ----------
@@ -93,8 +99,9 @@ class P2Space:
         Faces left out of the face cones.
     """
 
-    def __init__(self, mesh: TriMesh):
+    def __init__(self, mesh: TriMesh, medium: Medium | None = None):
         self.mesh = mesh
+        self.medium = medium
         n, F = mesh.n_vertices, mesh.F
         E = mesh.edges
         self.n_edges = int(E.shape[0])
@@ -109,6 +116,34 @@ class P2Space:
             g = gradient_blocks(mesh)
         g[deg] = 0.0
         self.lam_grad = g
+
+    @property
+    def edge_lengths(self) -> np.ndarray:
+        """(e,) float ndarray: lengths of ``mesh.edges`` (in the medium when there is one)."""
+        return self.mesh.edge_lengths if self.medium is None else self.medium.edge_lengths
+
+    @property
+    def face_longest_edges(self) -> np.ndarray:
+        """(m,) float ndarray: the longest of each face's :attr:`edge_lengths`."""
+        return self.mesh.face_longest_edges if self.medium is None else self.medium.face_longest_edges
+
+    @property
+    def adjacency(self):
+        """(n, n) csr_matrix: the edge graph weighted by :attr:`edge_lengths`."""
+        return self.mesh.vertex_adjacency if self.medium is None else self.medium.adjacency()
+
+    def _transformed(self, faces: np.ndarray, bary: np.ndarray, grad: np.ndarray) -> np.ndarray:
+        """Gradient rows ``grad`` (k, 2, 6) at points of faces, in the medium's norm (unchanged without one)."""
+        if self.medium is None:
+            return grad
+        T = self.medium.transforms(faces, bary)
+        T[self.degenerate[faces]] = 0.0
+        return np.einsum("kij,kja->kia", T, grad)
+
+    def sample_rows(self, faces: np.ndarray, bary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Value rows (k, 6) and gradient rows (k, 2, 6) of ``φ`` at points ``bary`` (k, 3) of ``faces`` (k,)."""
+        N, dN = p2_basis(bary)
+        return N, self._transformed(faces, bary, np.einsum("kai,kci->kca", dN, self.lam_grad[faces]))
 
     @property
     def flat_faces(self) -> np.ndarray:
@@ -142,7 +177,7 @@ class P2Space:
         -------
         (n_dofs,) float ndarray
         """
-        A = self.mesh.face_areas
+        A = self.mesh.face_areas if self.medium is None else self.mesh.face_areas * self.medium.area_ratio
         if kind == "lumped":
             per = np.repeat(A[:, None] / 6.0, 6, axis=1)
         elif kind == "p2":
@@ -165,6 +200,14 @@ class P2Space:
         """
         N, dN = p2_basis(samples)
         grad = np.einsum("sai,tci->tsca", dN, self.lam_grad)
+        if self.medium is not None:
+            m, s = grad.shape[:2]
+            if self.medium.varies_in_faces:
+                faces, bary = np.repeat(np.arange(m), s), np.tile(samples, (m, 1))
+                grad = self._transformed(faces, bary, grad.reshape(m * s, 2, 6)).reshape(m, s, 2, 6)
+            else:  # one transform per face
+                T = np.where(self.degenerate[:, None, None], 0.0, self.medium.face_transforms)
+                grad = np.einsum("tij,tsja->tsia", T, grad)
         return N, grad
 
     def hessian_rows(self, faces: np.ndarray) -> np.ndarray:
@@ -185,12 +228,15 @@ class P2Space:
 
     def point_rows(self, face: int, bary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Value row (6,) and gradient rows (2, 6) of ``φ`` at one point of one face."""
-        N, dN = p2_basis(np.asarray(bary, dtype=float)[None])
-        return N[0], np.einsum("ai,ci->ca", dN[0], self.lam_grad[face])
+        N, G = self.sample_rows(np.array([face]), np.asarray(bary, dtype=float).reshape(1, 3))
+        return N[0], G[0]
 
 
 def max_violation(space: P2Space, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Largest ``v = |∇φ|² − 4φ`` on each face, exactly (``v`` is itself a quadratic on the face).
+
+    With a medium (:attr:`P2Space.medium`) ``|∇φ|`` is the norm in it: exact for a medium constant on each face;
+    with per-vertex values, the quadratic through ``v``'s values at the six nodes (each with its own medium).
 
     Parameters
     ----------

@@ -8,6 +8,7 @@ from typing import Protocol
 
 from ..formulations import FORMULATIONS, smoothness_weight
 from ..mesh.trimesh import TriMesh
+from ..operators.metric import Medium
 from ..results import GeodesicResult
 from ..sources import SourceSet
 
@@ -37,6 +38,9 @@ class SolveConfig:
     verbose : bool
     notes : tuple of str
         Substitutions already made before any strategy ran (the loader's repairs of the mesh).
+    medium : Medium or None
+        A travel cost and/or metric on ``mesh`` (:mod:`cvxgeodesic.operators.metric`), validated; None for the
+        Euclidean distance.
     """
 
     mesh: TriMesh
@@ -49,6 +53,7 @@ class SolveConfig:
     max_iter: int = 200
     verbose: bool = False
     notes: tuple[str, ...] = field(default_factory=tuple)
+    medium: Medium | None = None
 
     @property
     def stretch(self) -> str:

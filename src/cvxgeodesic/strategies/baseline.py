@@ -30,7 +30,8 @@ class BaselineStrategy:
     def __init__(self, config: SolveConfig) -> None:
         t0 = time.perf_counter()
         self.config = config
-        self.baseline = BASELINES[config.method](config.mesh)
+        kwargs = {} if config.medium is None else {"medium": config.medium}  # dijkstra only (validated)
+        self.baseline = BASELINES[config.method](config.mesh, **kwargs)
         self.backend = config.method
         self.notes: list[str] = list(config.notes)
         self.setup_time = time.perf_counter() - t0

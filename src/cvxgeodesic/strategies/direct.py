@@ -39,7 +39,8 @@ class DirectStrategy:
     ops : MeshOperators
         Operators of the mesh divided by ``scale`` (:func:`~cvxgeodesic.mesh.trimesh.unit_mesh`).
     scale : float
-        The power of two the mesh was divided by.
+        The power of two the fields were divided by: the mesh's (:func:`~cvxgeodesic.mesh.trimesh.unit_mesh`) times
+        the medium's normalization (:attr:`~cvxgeodesic.operators.metric.Medium.scale`) when there is one.
     ipm : InteriorPointSolver or None
         The structured solver on the union sparsity pattern (analysed once), when ``backend == "ipm"``.
 
@@ -53,7 +54,10 @@ class DirectStrategy:
         t0 = time.perf_counter()
         self.config = config
         unit, self.scale = unit_mesh(config.mesh)
-        self.ops = MeshOperators(unit)
+        medium = None if config.medium is None else config.medium.on(unit)
+        if medium is not None:
+            self.scale *= medium.scale
+        self.ops = MeshOperators(unit, medium=medium)
         self.ops.notes[0:0] = list(config.notes)
         self.notes: list[str] = self.ops.notes  # the operators add their substitutions as they build
         self.policy = Backend(config.solver, config.tol, config.max_iter, config.verbose, config.mesh.name)

@@ -56,6 +56,9 @@ class Order2:
     ipm : InteriorPointSolver or None
     scale : float
         The power of two the mesh was divided by.
+    medium_scale : float
+        The medium's normalization (:attr:`~cvxgeodesic.operators.metric.Medium.scale`; 1 without one): the
+        program's distances are the field's divided by ``scale · medium_scale``.
 
     Raises
     ------
@@ -72,7 +75,9 @@ class Order2:
         self.config = config
         self.refine = int(refine)
         unit, self.scale = unit_mesh(config.mesh)
-        self.builder = P2Builder(unit)
+        medium = None if config.medium is None else config.medium.on(unit)
+        self.medium_scale = 1.0 if medium is None else medium.scale
+        self.builder = P2Builder(unit, medium=medium)
         self.policy = Backend(config.solver, config.tol, config.max_iter, config.verbose, config.mesh.name)
         self.backend = self.policy.name
         self.notes: list[str] = [*config.notes, *self.policy.notes]
@@ -110,7 +115,10 @@ class Order2:
             # ∇φ(p) = 0 on the unsplit face leaves 2–7e-3 errors on a flat grid; docs/order2.md)
             split = SplitMesh(mesh, points)
             sm = split.mesh  # the points lie in the mesh's faces: the bounding box and the unit scale do not change
-            builder = P2Builder(TriMesh(sm.V / self.scale, sm.F, name=sm.name) if self.scale != 1.0 else sm)
+            unit_sm = TriMesh(sm.V / self.scale, sm.F, name=sm.name) if self.scale != 1.0 else sm
+            medium = self.config.medium
+            builder = P2Builder(unit_sm, medium=None if medium is None else
+                                medium.split(sm, split.face_parent, points).on(unit_sm))
             ipm = self._ipm(builder)
             vsrc = np.concatenate([vsrc, split.point_vertices])
             notes.append(f"{len(points)} source point(s) inserted as vertices "
@@ -158,7 +166,8 @@ class Order2:
                 split: SplitMesh | None, sources: SourceSet, notes: list[str], t0: float) -> GeodesicResult:
         mesh = self.config.mesh
         problem = program.problem
-        phi = program.restore(res.x) * self.scale**2
+        unit2 = (self.scale * self.medium_scale) ** 2
+        phi = program.restore(res.x) * unit2
         phi[problem.unreachable] = np.inf
         fld = P2Field(mesh, phi, builder.space) if split is None else SplitP2Field(mesh, split, phi, builder.space)
         d = fld.vertex_distance.copy()
@@ -167,7 +176,7 @@ class Order2:
             method=self.config.method, solver=res.solver, status=res.status, iterations=int(sum(rounds)),
             setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
             primal_residual=res.primal_residual, dual_residual=res.dual_residual, gap=res.gap,
-            objective=res.objective * self.scale**2, lam=0.0, n_unreachable=int(np.isinf(d).sum()),
+            objective=res.objective * unit2, lam=0.0, n_unreachable=int(np.isinf(d).sum()),
             notes=notes, extra={**res.extra, "order": 2, "p2_field": fld, "n_dofs": problem.n,
                                 "n_cones": problem.n_cones, "rounds": len(rounds) - 1, "round_iterations": rounds},
         )

@@ -17,8 +17,8 @@ import numpy as np
 from . import csv, gltf, npy, obj, off, ply, stl, vtk
 from ._common import FieldData, RawMesh, format_error
 
-__all__ = ["DISTANCE_EXTENSIONS", "FORMATS", "Format", "MESH_EXTENSIONS", "field_formats_help", "field_reader",
-           "mesh_formats_help", "mesh_reader"]
+__all__ = ["DISTANCE_EXTENSIONS", "FORMATS", "Format", "MESH_EXTENSIONS", "PROPERTY_EXTENSIONS", "field_formats_help",
+           "field_reader", "mesh_formats_help", "mesh_reader", "property_reader"]
 
 
 @dataclass(frozen=True)
@@ -76,6 +76,21 @@ MESH_EXTENSIONS = tuple(e for e, f in FORMATS.items() if f.read_mesh is not None
 #: File extensions understood by :func:`~cvxgeodesic.mesh.io.save_distance` and
 #: :func:`~cvxgeodesic.mesh.io.load_distance` (compared case-insensitively).
 DISTANCE_EXTENSIONS = tuple(e for e, f in FORMATS.items() if f.write_field is not None)
+
+
+#: Mesh file extensions whose files carry named per-vertex properties (PLY properties, VTK point data, glTF
+#: attributes ``_NAME``): read by :func:`property_reader`.
+PROPERTY_EXTENSIONS = tuple(e for e, f in FORMATS.items() if f.read_mesh is not None and f.read_field is not None)
+
+
+def property_reader(path: Path) -> Callable[[Path, str], np.ndarray]:
+    """The reader of a named per-vertex property of a mesh file (in the file's vertex order), or a MeshFormatError
+    naming the formats that have them."""
+    fmt = FORMATS.get(path.suffix.lower())
+    if fmt is None or fmt.read_mesh is None or fmt.read_field is None:
+        raise format_error(path, f"{path.suffix or 'this file'} has no named per-vertex properties; mesh formats "
+                                 f"that do: {', '.join(PROPERTY_EXTENSIONS)}")
+    return fmt.read_field
 
 
 def mesh_reader(path: Path) -> Callable[[Path], RawMesh]:
