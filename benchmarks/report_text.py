@@ -1245,3 +1245,40 @@ SECTION_TITLE = {"table2": "Table 2", "fig2": "Fig. 2", "fig3": "Fig. 3", "fig4"
                  "fig6": "Fig. 6", "fig7": "Fig. 7", "fig8": "Fig. 8", "fig9": "Fig. 9",
                  "norm_resolution": "Resolution study", "norm_remeshing": "Remeshing study", "order2": "Order 2",
                  "metric": "Travel cost and metrics", "volumes": "Volumes"}
+
+def render(results, env, timings, plan, helpers) -> str:
+    global H, NOISE
+    H = helpers
+    loads = [t["loadavg_1min"] for t in timings.values() if "loadavg_1min" in t]
+    cores = env.get("cores") or 1
+    NOISE = ("The machine was overloaded during this run (1-minute load average up to "
+             f"{max(loads):.1f} on {cores} cores, from other jobs): wall-clock times are inflated and noisy; "
+             "repeated runs of this report under such load gave times differing by up to 2–3×. Compare the "
+             "methods' times within a row, not across runs."
+             if loads and max(loads) > cores else "")
+    parts = [header(env, plan, timings)]
+    findings = []
+    bodies = []
+    for name, fn in SECTION_TEXT.items():
+        if name not in results:
+            bodies.append(f"## {SECTION_TITLE[name]}\n\n*Not computed yet: run `make report`.*\n")
+            continue
+        body, f = fn(results[name])
+        bodies.append(body)
+        findings += f
+    parts.append("## Where our measurements disagree with the paper (or qualify it)\n\n"
+                 + "\n".join(f"- {x}" for x in findings) + "\n")
+    parts += bodies
+    trow = []
+    total = 0.0
+    for name in SECTION_TEXT:
+        t = timings.get(name)
+        if t:
+            total += t["wall_s"]
+            trow.append([SECTION_TITLE[name], f"{t['wall_s']:.0f}", t["finished"], str(t.get("loadavg_1min", "?"))])
+    parts.append("## How long the report took\n\nWall-clock seconds per section in the run that computed it (a "
+                 "section reuses distance fields computed by an earlier one, e.g. Fig. 6 and Fig. 9 reuse Table 2's,"
+                 " so its time is only its new work):\n\n"
+                 + md_table(["section", "seconds", "finished", "load average (1 min) at the end"],
+                            trow + [["total", f"{total:.0f}", "", ""]]) + "\n")
+    return "\n".join(parts)
