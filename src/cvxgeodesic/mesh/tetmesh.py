@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike
 from scipy.sparse.csgraph import connected_components
 
 from ..errors import MeshError
-from .trimesh import TriMesh, _as_vertices
+from .trimesh import TriMesh, _as_vertices, file_numbering
 
 __all__ = ["DEGENERATE_TET_TOL", "TET_EDGES", "TET_FACES", "TetMesh", "as_tetmesh", "unit_tetmesh"]
 
@@ -101,20 +101,8 @@ class TetMesh:
         self.name = name or "tetmesh"
         self.V = _as_vertices(V, self.name)
         self.T = _as_tets(T, self.V.shape[0], self.name)
-        n = self.V.shape[0]
-        self.vertex_map = _index_array(np.arange(n) if vertex_map is None else vertex_map, "vertex_map", self.name)
-        if self.vertex_map.shape != (n,):
-            raise MeshError(f"{self.name}: vertex_map must have shape ({n},), got {self.vertex_map.shape}")
-        self.file_index = _index_array(np.arange(n) if file_index is None else file_index, "file_index", self.name)
-        if self.file_index.ndim != 1 or np.any(self.file_index < -1) or np.any(self.file_index >= n):
-            raise MeshError(f"{self.name}: file_index must be a 1-D array of indices in [-1, {n})")
-        n_dropped = int(np.count_nonzero(self.file_index < 0))
-        dropped = (np.full((n_dropped, 3), np.nan) if dropped_vertices is None
-                   else np.array(dropped_vertices, dtype=np.float64).reshape(-1, 3))
-        if dropped.shape[0] != n_dropped:
-            raise MeshError(f"{self.name}: dropped_vertices must have {n_dropped} rows, got {dropped.shape[0]}")
-        dropped.setflags(write=False)
-        self.dropped_vertices = dropped
+        self.vertex_map, self.file_index, self.dropped_vertices = file_numbering(
+            self.V.shape[0], vertex_map, file_index, dropped_vertices, self.name)
         self._reader_notes: tuple[str, ...] = tuple(str(s) for s in notes)
 
     def __repr__(self) -> str:
@@ -445,15 +433,6 @@ class TetMesh:
             out.append(f"{self.name}: {unref.size} vertices are in no tetrahedron (first: vertex {int(unref[0])}); "
                        "they get an infinite distance")
         return tuple(out)
-
-
-def _index_array(x: ArrayLike, what: str, name: str) -> np.ndarray:
-    try:
-        arr = np.array(x, dtype=np.int64)
-    except (TypeError, ValueError, OverflowError):
-        raise MeshError(f"{name}: {what} must be an integer array") from None
-    arr.setflags(write=False)
-    return arr
 
 
 def _as_tets(T: Any, n: int, name: str) -> np.ndarray:

@@ -95,31 +95,10 @@ class TriMesh:
         self.name = name or "mesh"
         self.V = _as_vertices(V, self.name)
         self.F = _as_faces(F, self.V.shape[0], self.name)
-        if vertex_map is None:
-            vertex_map = np.arange(self.V.shape[0], dtype=np.int64)
-        vertex_map = np.asarray(vertex_map, dtype=np.int64)
-        if vertex_map.shape != (self.V.shape[0],):
-            raise MeshError(f"{self.name}: vertex_map must have shape ({self.V.shape[0]},), got {vertex_map.shape}")
-        vertex_map.setflags(write=False)
-        self.vertex_map = vertex_map
-        if file_index is None:
-            file_index = np.arange(self.V.shape[0], dtype=np.int64)
-        file_index = np.asarray(file_index, dtype=np.int64)
-        if file_index.ndim != 1 or np.any(file_index < -1) or np.any(file_index >= self.V.shape[0]):
-            raise MeshError(f"{self.name}: file_index must be a 1-D array of indices in [-1, {self.V.shape[0]})")
-        file_index.setflags(write=False)
-        self.file_index = file_index
-        n_dropped = int(np.count_nonzero(file_index < 0))
-        if dropped_vertices is None:
-            dropped = np.full((n_dropped, 3), np.nan)
-        else:
-            dropped = np.array(dropped_vertices, dtype=np.float64).reshape(-1, 3)
-        if dropped.shape[0] != n_dropped:
-            raise MeshError(f"{self.name}: dropped_vertices must have {n_dropped} rows, got {dropped.shape[0]}")
-        dropped.setflags(write=False)
-        self.dropped_vertices = dropped
+        self.vertex_map, self.file_index, self.dropped_vertices = file_numbering(
+            self.V.shape[0], vertex_map, file_index, dropped_vertices, self.name)
         self.notes: tuple[str, ...] = tuple(str(n) for n in notes)
-        self._file_faces = None if file_faces is None else _as_faces(file_faces, file_index.shape[0],
+        self._file_faces = None if file_faces is None else _as_faces(file_faces, self.file_index.shape[0],
                                                                       f"{self.name} (file faces)")
 
     def __repr__(self) -> str:
@@ -289,6 +268,45 @@ def _unique_edges(F: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
     E.sort(axis=1)
     keys, counts = np.unique(E[:, 0] * np.int64(n) + E[:, 1], return_counts=True)
     return np.column_stack([keys // n, keys % n]), counts
+
+
+def file_numbering(n: int, vertex_map: ArrayLike | None, file_index: ArrayLike | None,
+                   dropped_vertices: ArrayLike | None, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The checked file-numbering arrays of a mesh of ``n`` vertices (read-only; identity when not from a file).
+
+    Returns
+    -------
+    vertex_map : (n,) int64 ndarray
+    file_index : (n_file,) int64 ndarray
+        Each file vertex's mesh vertex, −1 for the dropped ones.
+    dropped_vertices : (n_dropped, 3) float ndarray
+        Positions of the dropped file vertices (NaN when not given).
+
+    Raises
+    ------
+    MeshError
+        Wrong shapes or indices, naming ``name``.
+    """
+    def as_index(x: ArrayLike, what: str) -> np.ndarray:
+        try:
+            return np.array(x, dtype=np.int64)
+        except (TypeError, ValueError, OverflowError):
+            raise MeshError(f"{name}: {what} must be an integer array") from None
+
+    vmap = as_index(np.arange(n) if vertex_map is None else vertex_map, "vertex_map")
+    if vmap.shape != (n,):
+        raise MeshError(f"{name}: vertex_map must have shape ({n},), got {vmap.shape}")
+    findex = as_index(np.arange(n) if file_index is None else file_index, "file_index")
+    if findex.ndim != 1 or np.any(findex < -1) or np.any(findex >= n):
+        raise MeshError(f"{name}: file_index must be a 1-D array of indices in [-1, {n})")
+    n_dropped = int(np.count_nonzero(findex < 0))
+    dropped = (np.full((n_dropped, 3), np.nan) if dropped_vertices is None
+               else np.array(dropped_vertices, dtype=np.float64).reshape(-1, 3))
+    if dropped.shape[0] != n_dropped:
+        raise MeshError(f"{name}: dropped_vertices must have {n_dropped} rows, got {dropped.shape[0]}")
+    for arr in (vmap, findex, dropped):
+        arr.setflags(write=False)
+    return vmap, findex, dropped
 
 
 def _as_vertices(V, name: str) -> np.ndarray:
