@@ -150,6 +150,7 @@ def test_interior_start_stays_inside_the_cones_next_to_a_nonzero_fixed_value(sph
     pr = ipm._prepare(p)
     ring = np.setdiff1d(m.F[(m.F == far).any(axis=1)], [far])
     x = pr.x_fixed.copy()
+    x[pr.free] = 1e-3 * m.mean_edge_length  # inside the bounds d >= 0 next to the source
     x[ring] = -v
     xi = interior_primal(pr, x, IPMSettings().interior_fraction)
     cones, ineqs = pr.blocks

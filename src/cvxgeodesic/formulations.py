@@ -37,10 +37,11 @@ to a source, the stars of neighbouring sources) gets the LC bound
 formulations keep every edge constraint (Lemma 1 then makes LCLP equal to
 Dijkstra).
 
-The smoothed formulations bound the vertices within :data:`NONNEGATIVE_HOPS` edges of the sources below by 0
-from the start: there, and only there, their optimum went negative (the source stars carry no cone, so nothing
-bounds their vertices from below, and the energy flattens the cone's tip into a dip: measured on beetle, max_planck
-and the medial-axis bug, −2.6e-4 to −0.51 at one or two edges from a source; docs/method.md). On request
+Every formulation bounds the vertices within :data:`NONNEGATIVE_HOPS` edges of the sources below by 0 from the
+start: there, and only there, optima went negative (the source stars carry no cone, so nothing bounds their
+vertices from below: the smoothing energy flattens the cone's tip into a dip, −2.6e-4 to −0.51 on beetle, max_planck
+and the medial-axis bug; QCLP's optimum is not unique on the medial axis's sheets that meet at a source, −0.76 to
+−5.2 there; docs/method.md). On request
 (``nonnegative=True``; the API re-solves with it when a solution still has negative values) every free vertex is
 bounded below by 0.
 
@@ -77,8 +78,8 @@ FORMULATIONS: dict[str, tuple[str, str | None]] = {
 }
 ALIASES = {"qgdf": "lcqp-hessian"}
 
-#: The smoothed formulations bound the vertices within this many edges of a source (of a source point's or curve's
-#: faces) below by 0 (module docstring).
+#: Every formulation bounds the vertices within this many edges of a source (of a source point's or curve's faces)
+#: below by 0 (module docstring).
 NONNEGATIVE_HOPS = 2
 #: Smallest right-hand side of an edge bound ``|d_i − d_j| ≤ l_ij``, as a fraction of the bounding-box diagonal.
 MIN_EDGE_BOUND = 1e-9
@@ -461,10 +462,8 @@ def build_problem(
         # bounds are inactive on ordinary meshes but cost the interior-point method 30-50 % more iterations
         # (2026-12-02: spot 11 -> 16, lucy_20k 14 -> 21, kitten 13 -> 17, qcqp-hessian)
         bounded = ~fixed_mask
-    elif energy is not None and lam > 0:
-        bounded = _near(mesh, sc.anchors, NONNEGATIVE_HOPS) & ~fixed_mask
     else:
-        bounded = np.zeros(n, dtype=bool)
+        bounded = _near(mesh, sc.anchors, NONNEGATIVE_HOPS) & ~fixed_mask
     if bounded.any():
         free_v = np.flatnonzero(bounded)
         ineq.add(np.column_stack([free_v, free_v]), [-1.0, 0.0], np.zeros(len(free_v)))
