@@ -236,7 +236,7 @@ class GeodesicSolver:
         elif lam_value is not None:
             self.lam = lam_value
         else:
-            self.lam = smoothness_weight(self.mesh, m_value, self.normalization, self.energy)
+            self.lam = smoothness_weight(self.mesh, m_value, self.normalization, self.energy, self.order)
 
     def __repr__(self) -> str:
         return (

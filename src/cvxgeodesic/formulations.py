@@ -98,6 +98,9 @@ NORMALIZATIONS = ("area", "paper")
 #: (ridge sharpness 0.24, 0.41 of the exact field's; Laplacian 0.241, Dirichlet 0.243); docs/method.md has
 #: the sweep and what other values of κ trade.
 KAPPA = {"hessian": 3.0e-6, "laplacian": 3.0e-6, "dirichlet": 1.3e-2}
+#: ``κ₂`` of ``λ = m · κ₂`` at order 2 (the energies of ``φ = d²``, :mod:`cvxgeodesic.operators.p2_energy`, have the
+#: units of the stretch term, so λ is dimensionless); docs/order2.md, "Smoothing at order 2", has the calibration.
+KAPPA_ORDER2 = {"hessian": 1.0e-4, "laplacian": 1.0e-4, "dirichlet": 1.0e-4}
 
 
 def stretch_weights(mesh: TriMesh, stretch: str = "area") -> np.ndarray:
@@ -149,7 +152,8 @@ def check_normalization(normalization) -> str:
     return check_choice(normalization, "normalization", NORMALIZATIONS)
 
 
-def smoothness_weight(mesh: TriMesh, m: float, normalization: str = "area", energy: str = "hessian") -> float:
+def smoothness_weight(mesh: TriMesh, m: float, normalization: str = "area", energy: str = "hessian",
+                      order: int = 1) -> float:
     """The smoothness weight λ for a multiplier ``m``.
 
     Parameters
@@ -166,6 +170,9 @@ def smoothness_weight(mesh: TriMesh, m: float, normalization: str = "area", ener
         with the uniform stretch ``−(10/n) Σ d_i``: its rounding is a fixed number of edges wide.
     energy : {"hessian", "laplacian", "dirichlet"}
         Selects ``κ`` (``"area"`` only).
+    order : {1, 2}
+        ``2``: the weight of the order-2 energies of ``φ = d²``, ``λ = m · κ₂`` (:data:`KAPPA_ORDER2`; dimensionless,
+        the same for both normalizations, since ``"paper"`` has no order-2 form).
 
     Returns
     -------
@@ -179,6 +186,9 @@ def smoothness_weight(mesh: TriMesh, m: float, normalization: str = "area", ener
     3e-06
     """
     normalization = check_normalization(normalization)
+    if order == 2:
+        check_choice(energy, "energy", KAPPA_ORDER2, lower=False)
+        return float(m) * KAPPA_ORDER2[energy]
     if normalization == "paper":
         return float(m) * 100.0 * mesh.mean_edge_length / mesh.n_vertices
     check_choice(energy, "energy", KAPPA, lower=False)

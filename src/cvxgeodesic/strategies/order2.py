@@ -68,22 +68,29 @@ class Order2:
         self.config = config
         self.refine = int(refine)
         unit, self.scale = unit_mesh(config.mesh)
-        self.builder = P2Builder(unit)
+        # λ is dimensionless at order 2 (the energy has the units of the mean of φ): the same on the unit mesh
+        self.energy = config.energy if config.lam > 0 else None
+        self.builder = self._builder(unit)
         self.policy = Backend(config.solver, config.tol, config.max_iter, config.verbose, config.mesh.name)
         self.backend = self.policy.name
         self.notes: list[str] = [*config.notes, *self.policy.notes]
         self.ipm = self._ipm(self.builder)
         self.setup_time = time.perf_counter() - t0
 
+    def _builder(self, mesh: TriMesh) -> P2Builder:
+        return P2Builder(mesh, energy=self.energy, lam=self.config.lam if self.energy else 0.0)
+
     def _ipm(self, builder: P2Builder) -> Any:
-        """The structured solver on ``builder``'s face-clique pattern (one symbolic analysis), or None."""
+        """The structured solver on ``builder``'s face-clique pattern (one symbolic analysis), or None; with a
+        smoothness energy the pattern holds the two faces of every interior edge too (the jump term couples them)."""
         if self.backend != "ipm":
             return None
         from ..solvers.ipm import InteriorPointSolver
         from ..solvers.ipm.settings import ORDER2
 
         space = builder.space
-        return InteriorPointSolver(clique_pattern(space.n_dofs, [space.face_dofs]), settings=ORDER2)
+        cliques = [space.face_dofs] if builder.energy is None else builder.energy.cliques
+        return InteriorPointSolver(clique_pattern(space.n_dofs, cliques), settings=ORDER2)
 
     def solve(self, sources: SourceSet, *, callback: Callback | None = None) -> GeodesicResult:
         """Distance field from vertex, point or boundary sources.
@@ -106,7 +113,7 @@ class Order2:
             # ∇φ(p) = 0 on the unsplit face leaves 2–7e-3 errors on a flat grid; docs/order2.md)
             split = SplitMesh(mesh, points)
             sm = split.mesh  # the points lie in the mesh's faces: the bounding box and the unit scale do not change
-            builder = P2Builder(TriMesh(sm.V / self.scale, sm.F, name=sm.name) if self.scale != 1.0 else sm)
+            builder = self._builder(TriMesh(sm.V / self.scale, sm.F, name=sm.name) if self.scale != 1.0 else sm)
             ipm = self._ipm(builder)
             vsrc = np.concatenate([vsrc, split.point_vertices])
             notes.append(f"{len(points)} source point(s) inserted as vertices "
@@ -160,7 +167,8 @@ class Order2:
             method=self.config.method, solver=res.solver, status=res.status, iterations=int(sum(rounds)),
             setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
             primal_residual=res.primal_residual, dual_residual=res.dual_residual, gap=res.gap,
-            objective=res.objective * self.scale**2, lam=0.0, n_unreachable=int(np.isinf(d).sum()),
+            objective=(res.objective + program.objective_constant) * self.scale**2, lam=self.config.lam,
+            n_unreachable=int(np.isinf(d).sum()),
             notes=notes, extra={**res.extra, "order": 2, "p2_field": fld, "n_dofs": problem.n,
                                 "n_cones": problem.n_cones, "rounds": len(rounds) - 1, "round_iterations": rounds},
         )
