@@ -45,13 +45,16 @@ import scipy.sparse as sp
 from ..errors import ParameterError
 from .p2 import P2Space, p2_basis
 
-__all__ = ["JUMP_SIGMA", "P2_ENERGIES", "P2Energy", "edge_pair_dofs", "interior_edge_pairs", "p2_energy"]
+__all__ = ["JUMPS", "JUMP_SIGMA", "P2_ENERGIES", "P2Energy", "edge_diamonds", "edge_pair_dofs", "face_hessian_energy",
+           "interior_edge_pairs", "jump_energy", "p2_energy", "vertex_jump_energy"]
 
 #: The order-2 energies by the formulation energy name they stand for (``"dirichlet"`` is the jump term alone).
 P2_ENERGIES = ("hessian", "laplacian", "dirichlet")
 #: ``σ`` of the jump penalty ``(σ / h_e) ∫_e J² ds``: 1/2 is the Hessian energy of a slope change spread evenly
 #: over the edge's two faces (module docstring). docs/order2.md, "Smoothing at order 2", has the measurements.
 JUMP_SIGMA = 0.5
+#: The two forms of the jump term (:func:`p2_energy`).
+JUMPS = ("vertex", "p2")
 
 
 @dataclass
@@ -117,6 +120,14 @@ def edge_pair_dofs(space: P2Space) -> np.ndarray:
     return np.column_stack([fd[faces[:, 0]], fd[t2, k2], fd[t2, 3 + (k2 + 1) % 3], fd[t2, 3 + (k2 + 2) % 3]])
 
 
+def edge_diamonds(space: P2Space) -> np.ndarray:
+    """(k, 4) int64 ndarray: the ends and the two opposite vertices of each edge of :func:`interior_edge_pairs`:
+    the cliques the vertex jump term couples."""
+    edges, faces, corners = interior_edge_pairs(space)
+    F = space.mesh.F
+    return np.column_stack([space.mesh.edges[edges], F[faces[:, 0], corners[:, 0]], F[faces[:, 1], corners[:, 1]]])
+
+
 def _conormal_rows(space: P2Space, faces: np.ndarray, corners: np.ndarray, ends: np.ndarray) -> np.ndarray:
     """(k, 3, 6): ``∂_ν φ`` on face ``faces[i]`` (``ν`` the outward unit conormal of its edge opposite local corner
     ``corners[i]``) at the edge's global endpoint ``ends[i, 0]``, the midpoint and ``ends[i, 1]``, as rows on the
@@ -147,7 +158,7 @@ def _assemble(dofs: np.ndarray, blocks: np.ndarray, n: int) -> sp.csr_matrix:
 
 
 def jump_energy(space: P2Space, sigma: float = JUMP_SIGMA) -> sp.csr_matrix:
-    """``Q_J`` with ``E_J(φ) = φᵀ Q_J φ`` (the module docstring's interior penalty).
+    """``Q_J`` with ``E_J(φ) = φᵀ Q_J φ``: the interior penalty on the P2 field's conormal jumps (``jump="p2"``).
 
     Parameters
     ----------
@@ -164,12 +175,65 @@ def jump_energy(space: P2Space, sigma: float = JUMP_SIGMA) -> sp.csr_matrix:
     ends = mesh.edges[edges]
     J = np.concatenate([_conormal_rows(space, faces[:, 0], corners[:, 0], ends),
                         _conormal_rows(space, faces[:, 1], corners[:, 1], ends)], axis=2)  # (k, 3, 12)
-    ell = mesh.edge_lengths[edges]
-    h = mesh.face_areas[faces].sum(axis=1) / ell
-    w = (sigma / h * ell / 6.0)[:, None] * np.array([1.0, 4.0, 1.0])  # Simpson's rule, exact for J² (J linear)
+    w = (_jump_weights(space, edges, faces, sigma) / 6.0)[:, None] * np.array([1.0, 4.0, 1.0])  # Simpson: exact (J linear)
     blocks = np.einsum("kp,kpa,kpb->kab", w, J, J)
     dofs = np.concatenate([space.face_dofs[faces[:, 0]], space.face_dofs[faces[:, 1]]], axis=1)
     return _assemble(dofs, blocks, space.n_dofs)
+
+
+def _jump_weights(space: P2Space, edges: np.ndarray, faces: np.ndarray, sigma: float = JUMP_SIGMA) -> np.ndarray:
+    """(k,) ``σ ℓ_e / h_e`` with ``h_e = (A_{t1} + A_{t2}) / ℓ_e``: the weight of ``J²`` (a constant jump) per edge."""
+    ell = space.mesh.edge_lengths[edges]
+    return sigma * ell**2 / space.mesh.face_areas[faces].sum(axis=1)
+
+
+def vertex_jump_energy(space: P2Space, sigma: float = JUMP_SIGMA) -> tuple[sp.csr_matrix, np.ndarray, float]:
+    """``(Q, g, c)`` of the jump penalty on the conormal derivatives *predicted from the vertex values*
+    (``jump="vertex"``, the default).
+
+    On face ``t`` the quadratic with Hessian ``2I`` through ``φ``'s three vertex values is ``φ̂_t = |x − o|² + ℓ_t``
+    (``ℓ_t`` the linear interpolant of ``φ − |x − o|²`` at the corners, ``o`` any point): its conormal derivative on
+    an edge is that of ``|x − o|²`` plus the constant ``ν·∇ℓ_t``. Unfolded about the edge, ``ν_{t2} = −ν_{t1}``, so
+    the ``|x − o|²`` parts cancel and the jump ``Ĵ_e = ν_{t1}·∇ℓ_{t1} + ν_{t2}·∇ℓ_{t2}`` is constant along the edge:
+    one linear function of the edge's four vertex values (its ends and the two opposite vertices), plus a constant
+    of the geometry. ``Ĵ_e = 0`` wherever both faces carry one ``|x − p|²`` (``φ̂_t`` is then exact), and where each
+    face carries its own (a kink along the edge) ``Ĵ_e`` is the true jump. The face term sees the rest (the field's
+    departure from ``φ̂_t``), so the two together vanish exactly where the P2 interior penalty does, while coupling
+    only vertex DOFs across an edge: the Newton matrix then keeps nearly the face-clique fill (docs/order2.md).
+
+    Parameters
+    ----------
+    space : P2Space
+    sigma : float
+        ``σ`` of ``Σ_e (σ/h_e) ℓ_e Ĵ_e²``.
+
+    Returns
+    -------
+    Q : (n_dofs, n_dofs) csr_matrix
+    g : (n_dofs,) float ndarray
+    c : float
+    """
+    edges, faces, corners = interior_edge_pairs(space)
+    mesh = space.mesh
+    ends = mesh.edges[edges]
+    o = mesh.V[ends].mean(axis=1)  # a point of the edge: distances to it are the same in both faces' planes
+    rows, offset, dofs = [], np.zeros(edges.size), []
+    for side in (0, 1):
+        t, k = faces[:, side], corners[:, side]
+        g = space.lam_grad[t]  # (k, 2, 3)
+        nu = -g[np.arange(t.size), :, k]
+        nu /= np.linalg.norm(nu, axis=1, keepdims=True)
+        row = np.einsum("kc,kcv->kv", nu, g)  # ν·∇λ_v of the face's corners: the P1 conormal derivative
+        q = ((mesh.V[mesh.F[t]] - o[:, None]) ** 2).sum(axis=2)  # |x − o|² at the corners
+        offset += np.einsum("kv,kv->k", row, q)
+        rows.append(row)
+        dofs.append(mesh.F[t])
+    J = np.concatenate(rows, axis=1)  # (k, 6) on the corners of both faces (the edge's ends twice)
+    D = np.concatenate(dofs, axis=1)
+    w = _jump_weights(space, edges, faces, sigma)
+    Q = _assemble(D, w[:, None, None] * np.einsum("ka,kb->kab", J, J), space.n_dofs)
+    g = np.bincount(D.ravel(), (-w * offset)[:, None].repeat(6, axis=1).ravel() * J.ravel(), minlength=space.n_dofs)
+    return Q, g, float(w @ offset**2)
 
 
 def face_hessian_energy(space: P2Space, kind: str = "hessian") -> tuple[sp.csr_matrix, np.ndarray, float]:
@@ -199,7 +263,7 @@ def face_hessian_energy(space: P2Space, kind: str = "hessian") -> tuple[sp.csr_m
     return _assemble(dofs, blocks, space.n_dofs), g, float(c)
 
 
-def p2_energy(space: P2Space, name: str, sigma: float = JUMP_SIGMA) -> P2Energy:
+def p2_energy(space: P2Space, name: str, sigma: float = JUMP_SIGMA, jump: str = "vertex") -> P2Energy:
     """A smoothness energy of the order-2 field by name.
 
     Parameters
@@ -210,6 +274,10 @@ def p2_energy(space: P2Space, name: str, sigma: float = JUMP_SIGMA) -> P2Energy:
         ``"dirichlet"``: ``E_J`` alone (module docstring).
     sigma : float
         ``σ`` of the jump term (:data:`JUMP_SIGMA`).
+    jump : {"vertex", "p2"}
+        ``"vertex"``: the jumps of the conormal derivatives predicted from the vertex values
+        (:func:`vertex_jump_energy`; couples four vertex DOFs per edge); ``"p2"``: the P2 field's own jumps
+        (:func:`jump_energy`; nine DOFs per edge, 2.7× the Cholesky fill on lucy_20k).
 
     Returns
     -------
@@ -233,12 +301,19 @@ def p2_energy(space: P2Space, name: str, sigma: float = JUMP_SIGMA) -> P2Energy:
         raise ParameterError(f"order-2 energy must be one of {P2_ENERGIES}, got {name!r}")
     if not (np.isfinite(sigma) and sigma > 0):
         raise ParameterError(f"sigma must be a finite number > 0, got {sigma!r}")
+    if jump not in JUMPS:
+        raise ParameterError(f"jump must be one of {JUMPS}, got {jump!r}")
     n = space.n_dofs
-    QJ = jump_energy(space, sigma)
-    if name == "dirichlet":
-        Q, g, c = QJ, np.zeros(n), 0.0
+    if jump == "p2":
+        QJ, gJ, cJ = jump_energy(space, sigma), np.zeros(n), 0.0
+        cliques = [space.face_dofs, edge_pair_dofs(space)]
     else:
-        QH, g, c = face_hessian_energy(space, name)
-        Q = (QH + QJ).tocsr()
+        QJ, gJ, cJ = vertex_jump_energy(space, sigma)
+        cliques = [space.face_dofs, edge_diamonds(space)]
+    if name == "dirichlet":
+        Q, g, c = QJ, gJ, cJ
+    else:
+        QH, gH, cH = face_hessian_energy(space, name)
+        Q, g, c = (QH + QJ).tocsr(), gH + gJ, cH + cJ
     Q.sum_duplicates()
-    return P2Energy(Q, g, c, [space.face_dofs, edge_pair_dofs(space)])
+    return P2Energy(Q, g, c, cliques)
