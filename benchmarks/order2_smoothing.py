@@ -8,6 +8,7 @@ Usage (``PYTHONPATH=src``; one thread each, other jobs state the load)::
     python benchmarks/order2_smoothing.py fine [--repeat=3] [mesh ...]   # bunny_7k, lucy_20k, bimba: error, time
     python benchmarks/order2_smoothing.py sphere                  # icosphere(3), one source: the issue's prototype
     python benchmarks/order2_smoothing.py ... --json=OUT.json     # also write the rows
+    python benchmarks/order2_smoothing.py fine --jump=p2 --m=2    # the alternative jump term (docs/order2.md)
 
 **Widths.** Two sources on the unit square, at the vertices nearest (0.25, 0.5) and (0.75, 0.5); the exact field
 is the distance to the nearer one. The rounding width is that of the parabolic rounding with the same deficit
@@ -159,7 +160,7 @@ def cad(names: list[str] | None = None) -> list[dict]:
     return rows
 
 
-def fine(names: list[str] | None = None, repeat: int = 3) -> list[dict]:
+def fine(names: list[str] | None = None, repeat: int = 3, m: float = 1.0) -> list[dict]:
     """Order-2 ``qclp`` against the smoothed order-2 methods (m = 1): errors, and set-up + solve times of
     ``qclp`` and ``qcqp-hessian`` in alternating runs (minimum of ``repeat``)."""
     solve(cg.icosphere(1), 0, "qcqp-hessian", 2)  # compile or load the kernels outside the timings
@@ -171,12 +172,12 @@ def fine(names: list[str] | None = None, repeat: int = 3) -> list[dict]:
         times: dict[str, list[float]] = {"qclp": [], "qcqp-hessian": []}
         for _ in range(repeat):
             for meth in times:
-                res, t = solve(mesh, 0, meth, 2)
+                res, t = solve(mesh, 0, meth, 2, m)
                 times[meth].append(t)
                 row[meth] = {"mean": rel_err(res.distance, de)[0], "max": rel_err(res.distance, de)[1],
                              "status": res.info.status, "iterations": res.info.iterations}
         for meth in ("qcqp-laplacian", "qcqp-dirichlet"):
-            res, t = solve(mesh, 0, meth, 2)
+            res, t = solve(mesh, 0, meth, 2, m)
             row[meth] = {"mean": rel_err(res.distance, de)[0], "max": rel_err(res.distance, de)[1],
                          "status": res.info.status, "time": t}
         for meth, ts in times.items():
@@ -188,7 +189,8 @@ def fine(names: list[str] | None = None, repeat: int = 3) -> list[dict]:
         rows.append(row)
         print(f"{nm:14s} {mesh.n_faces:6d}  qclp {100 * row['qclp']['mean']:.3f}% {row['qclp']['time']:.2f}s  "
               f"hessian {100 * row['qcqp-hessian']['mean']:.3f}% {row['qcqp-hessian']['time']:.2f}s  "
-              f"laplacian {100 * row['qcqp-laplacian']['mean']:.3f}%  dirichlet {100 * row['qcqp-dirichlet']['mean']:.3f}%"
+              f"laplacian {100 * row['qcqp-laplacian']['mean']:.3f}%  "
+              f"dirichlet {100 * row['qcqp-dirichlet']['mean']:.3f}%"
               f"  error ×{row['error_ratio']:.2f}  time ×{row['time_ratio']:.2f}  load "
               f"{row['load_before'][0]:.1f}–{row['load_after'][0]:.1f}", flush=True)
     return rows
@@ -211,10 +213,22 @@ def sphere(ms=(0.0, 1.0, 10.0, 100.0, 1000.0)) -> list[dict]:
     return rows
 
 
+def use_jump(jump: str) -> None:
+    """Build every order-2 energy with this form of the jump term (``p2_energy(..., jump=jump)``)."""
+    import functools
+
+    import cvxgeodesic.formulations_p2 as fp2
+    from cvxgeodesic.operators.p2_energy import p2_energy
+
+    fp2.p2_energy = functools.partial(p2_energy, jump=jump)
+
+
 def main(argv: list[str]) -> None:
     opts = {a.split("=", 1)[0]: a.split("=", 1)[1] for a in argv if a.startswith("--") and "=" in a}
     args = [a for a in argv if not a.startswith("--")]
     what = args.pop(0) if args else "widths"
+    if "--jump" in opts:
+        use_jump(opts["--jump"])
     print(f"{time.strftime('%Y-%m-%d %H:%M')}, load {' '.join(f'{x:.2f}' for x in os.getloadavg())}, "
           f"threads {os.environ.get('CVXGEODESIC_THREADS', 'default')}", flush=True)
     if what == "widths":
@@ -225,7 +239,7 @@ def main(argv: list[str]) -> None:
     elif what == "cad":
         rows = cad(args or None)
     elif what == "fine":
-        rows = fine(args or None, int(opts.get("--repeat", "3")))
+        rows = fine(args or None, int(opts.get("--repeat", "3")), float(opts.get("--m", "1")))
     elif what == "sphere":
         rows = sphere()
     else:

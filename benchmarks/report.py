@@ -874,10 +874,9 @@ def smooth_plane_case(plan) -> tuple[dict, list]:
     """The two-source plane: each run's rounding width and off-ridge error, and the fields at the P2 nodes."""
     import warnings
 
-    from order2_smoothing import BAND, plane, two_sources
-
     from cvxgeodesic.evaluation import ridge_deficit, rounding_width
     from cvxgeodesic.operators.p2 import P2Space
+    from order2_smoothing import BAND, plane, two_sources
 
     mesh = plane("jittered", plan.smooth_plane)
     s, exact, K = two_sources(mesh)

@@ -1162,8 +1162,8 @@ def order2_smoothing(r) -> tuple[str, list[str]]:
         cells = [row["mesh"]["name"], f"{row['mesh']['faces']:,}"]
         for t in tags:
             x = row[t]
-            cells.append((f"{p2(x.get('rel_mean'))}, {x['ridge_deficit']['deficit_mean']:.2e}, {secs(x.get('time_s'))}"
-                          if x.get("ok") else "failed"))
+            cells.append(f"{p2(x.get('rel_mean'))}, {x['ridge_deficit']['deficit_mean']:.2e}, {secs(x.get('time_s'))}"
+                          if x.get("ok") else "failed")
         rows.append(cells)
     t_mesh = md_table(["mesh", "faces", *[names[t] for t in tags]], rows)
     o2, o1 = "o2_hessian", "o1_hessian"

@@ -18,6 +18,7 @@ from .smoothness import (
 
 __all__ = [
     "cut_locus_band", "edge_gradient_jumps", "error_stats", "gradient_norm_histogram", "gradient_norm_stats",
-    "interior_edges", "mesh_anisotropy", "off_ridge_error", "percentile", "relative_error", "ridge_band", "ridge_deficit",
-    "ridge_sharpness", "rounding_width", "smoothness_report", "triangle_anisotropy", "triangle_gradients_3d",
+    "interior_edges", "mesh_anisotropy", "off_ridge_error", "percentile", "relative_error", "ridge_band",
+    "ridge_deficit", "ridge_sharpness", "rounding_width", "smoothness_report", "triangle_anisotropy",
+    "triangle_gradients_3d",
 ]

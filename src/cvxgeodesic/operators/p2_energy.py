@@ -175,7 +175,8 @@ def jump_energy(space: P2Space, sigma: float = JUMP_SIGMA) -> sp.csr_matrix:
     ends = mesh.edges[edges]
     J = np.concatenate([_conormal_rows(space, faces[:, 0], corners[:, 0], ends),
                         _conormal_rows(space, faces[:, 1], corners[:, 1], ends)], axis=2)  # (k, 3, 12)
-    w = (_jump_weights(space, edges, faces, sigma) / 6.0)[:, None] * np.array([1.0, 4.0, 1.0])  # Simpson: exact (J linear)
+    # Simpson's rule: exact for J² (J is linear along the edge)
+    w = (_jump_weights(space, edges, faces, sigma) / 6.0)[:, None] * np.array([1.0, 4.0, 1.0])
     blocks = np.einsum("kp,kpa,kpb->kab", w, J, J)
     dofs = np.concatenate([space.face_dofs[faces[:, 0]], space.face_dofs[faces[:, 1]]], axis=1)
     return _assemble(dofs, blocks, space.n_dofs)
