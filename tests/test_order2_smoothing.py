@@ -220,10 +220,12 @@ def test_smoothed_program_fits_the_strategy_pattern_and_matches_clarabel():
 @pytest.mark.parametrize("method", ["qcqp-hessian", "qcqp-laplacian", "qcqp-dirichlet"])
 def test_flat_plane_one_source_stays_exact_with_smoothing(method):
     mesh = grid(20, seed=2)
-    for src in (0, 137):
+    point = cg.SurfacePoint(300, (0.2, 0.3, 0.5))  # inserted as a vertex: a split mesh with its own energy
+    for src in (0, 137, point):
         res = solve(mesh, src, method, m=1.0)
         assert res.info.status == "optimal" and res.info.lam == KAPPA_ORDER2[FORMULATIONS_ENERGY[method]]
-        ex = np.linalg.norm(mesh.V - mesh.V[src], axis=1)
+        p = point.position(mesh) if src is point else mesh.V[src]
+        ex = np.linalg.norm(mesh.V - p, axis=1)
         assert np.abs(res.distance - ex).max() <= FLAT_TOL * ex.max()
 
 

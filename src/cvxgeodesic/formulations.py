@@ -100,6 +100,7 @@ NORMALIZATIONS = ("area", "paper")
 KAPPA = {"hessian": 3.0e-6, "laplacian": 3.0e-6, "dirichlet": 1.3e-2}
 #: ``κ₂`` of ``λ = m · κ₂`` at order 2 (the energies of ``φ = d²``, :mod:`cvxgeodesic.operators.p2_energy`, have the
 #: units of the stretch term, so λ is dimensionless); docs/order2.md, "Smoothing at order 2", has the calibration.
+#: Changing it changes every smoothed order-2 field: bump :data:`~cvxgeodesic.formulations_p2.ORDER2_CACHE_VERSION`.
 KAPPA_ORDER2 = {"hessian": 5.0e-7, "laplacian": 5.0e-7, "dirichlet": 5.0e-7}
 
 

@@ -82,7 +82,8 @@ class Order2:
 
     def _ipm(self, builder: P2Builder) -> Any:
         """The structured solver on ``builder``'s face-clique pattern (one symbolic analysis), or None; with a
-        smoothness energy the pattern holds the two faces of every interior edge too (the jump term couples them)."""
+        smoothness energy the pattern also couples the two vertices opposite each interior edge (the jump term,
+        :func:`~cvxgeodesic.operators.p2_energy.edge_diamonds`)."""
         if self.backend != "ipm":
             return None
         from ..solvers.ipm import InteriorPointSolver
