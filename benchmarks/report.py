@@ -950,7 +950,7 @@ def sec_order2_smoothing(ctx, plan):
         fine.append(row)
         if i == 0 and exact["ok"]:
             d_ex = exact["distance"]
-            sub, used, _ = ridge_crop(mesh, d_ex, SOURCE)
+            sub, used, _ = ridge_crop(mesh, d_ex, SOURCE, radius_frac=0.12)
             levels = np.linspace(float(d_ex[used].min()), float(d_ex[used].max()), 22)
             shown = {"exact": d_ex[used], **{t: r["distance"][used] for t, r in recs.items() if r["ok"]}}
             figs.append(_smooth_figure(ctx, mesh, shown, SMOOTH_TITLES, sub, "fig13_smoothing_mesh", levels, None))
