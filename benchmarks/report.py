@@ -76,6 +76,14 @@ ORDER2_QUICK_CAD = ["thingi_93703.stl", "thingi_96457.stl", "thingi10k_small/438
 ORDER2_STORED = "benchmarks/order2_results/cad_default.json"  # the run behind docs/order2.md's tables
 ORDER2_STORED_LOAD = "≈ 4"  # its 1-minute load average (2026-12-01 22:33 UTC, on 2 cores shared with two jobs)
 ORDER2_FIGURE_CASE = ("CAD plate of fans", 5)  # the flat case and vertex source of the error-map figure
+#: Smoothing at order 2 (issue 25): (tag, method, order, m) of the compared fields.
+SMOOTH_RUNS = (("o1_qclp", "qclp", 1, 1.0), ("o1_hessian", "qcqp-hessian", 1, 1.0), ("o2_qclp", "qclp", 2, 1.0),
+               ("o2_hessian", "qcqp-hessian", 2, 1.0), ("o2_hessian_30", "qcqp-hessian", 2, 30.0),
+               ("o2_hessian_300", "qcqp-hessian", 2, 300.0))
+SMOOTH_MESHES = ["bunny_7k.off", "lucy_20k.obj", "bimba.obj"]
+SMOOTH_CAD = ["thingi_243015.stl", "thingi_37881.stl", "thingi_47076.stl", "thingi_65395.stl", "thingi_96457.stl",
+              "thingi_93703.stl"]  # the coarse CAD set of issue 25 but thingi_32770 (38K faces, minutes per solve)
+SMOOTH_BAND = 0.05  # width of the band around the cut locus for the ridge deficit, in bounding-box diagonals
 MEDIAL_METHODS = ["exact", "fmm", "qcqp-hessian", "lcqp-hessian", "heat", "dijkstra", "qclp", "qcqp-laplacian",
                   "qcqp-dirichlet", "lclp"]
 
@@ -98,6 +106,9 @@ class Plan:
         self.res_targets = [1000, 3000] if quick else RES_TARGETS
         self.fig6 = "bunny_7k.off" if quick else "bunny.obj"
         self.sweep_m = [0.0, 1.0, 10.0] if quick else SWEEP_M
+        self.smooth_plane = 24 if quick else 48  # cells of the two-source plane of the smoothing section
+        self.smooth_meshes = ["spot.obj"] if quick else SMOOTH_MESHES  # the first one also gets a close-up
+        self.smooth_cad = SMOOTH_CAD[-2:] if quick else SMOOTH_CAD
 
 
 # ----------------------------------------------------------------------------------------------------------------------
@@ -922,11 +933,125 @@ def sec_metric(ctx, plan):
     return data
 
 
+# ----------------------------------------------------------------------------------------------------------------------
+# smoothing at order 2 (issue 25; not in the paper)
+# ----------------------------------------------------------------------------------------------------------------------
+
+
+def _p2_render_mesh(mesh, space):
+    """Each face split in four at its edge midpoints (vertices: the P2 nodes), so that a P2 field draws with its
+    values at the midpoints; returns the mesh."""
+    V = np.vstack([mesh.V, mesh.V[mesh.edges].mean(axis=1)])
+    a, b, c, m0, m1, m2 = space.face_dofs.T  # m0 opposite corner 0: on edge (b, c)
+    F = np.vstack([np.column_stack(t) for t in ((a, m2, m1), (b, m0, m2), (c, m1, m0), (m0, m1, m2))])
+    return cg.TriMesh(V, F, name=mesh.name)
+
+
+def smooth_plane_case(plan) -> tuple[dict, list]:
+    """The two-source plane: each run's rounding width and off-ridge error, and the fields at the P2 nodes."""
+    import warnings
+
+    from cvxgeodesic.evaluation import ridge_deficit, rounding_width
+    from cvxgeodesic.operators.p2 import P2Space
+    from order2_smoothing import BAND, plane, two_sources
+
+    mesh = plane("jittered", plan.smooth_plane)
+    s, exact, K = two_sources(mesh)
+    space = P2Space(mesh)
+    X = np.vstack([mesh.V, mesh.V[mesh.edges].mean(axis=1)])
+    exact_nodes = np.linalg.norm(X[:, None] - mesh.V[s], axis=2).min(axis=1)
+    rows, fields, base = {}, {"exact": exact_nodes}, {}
+    off = np.abs(mesh.V[:, 0] - 0.5) > 0.2
+    for tag, meth, order, m in SMOOTH_RUNS:
+        t0 = time.perf_counter()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            res = cg.GeodesicSolver(mesh, meth, order=order, m=m).solve(s)
+        wall = time.perf_counter() - t0
+        d = res.distance
+        I = ridge_deficit(mesh, d, exact, BAND, sources=s, exclude_radius=1.0)["deficit_integral"]
+        base.setdefault(order, I)  # qclp comes first at each order
+        rows[tag] = {"method": meth, "order": order, "m": m, "lam": res.info.lam, "time_s": wall,
+                     "status": res.info.status, "deficit_integral": I,
+                     "width": rounding_width(I - base[order], K) if meth != "qclp" else 0.0,
+                     "lowered_max": float(np.max(exact - d)),
+                     "off_ridge_max": float(np.abs(d - exact)[off].max() / exact.max())}
+        if order == 2:
+            fields[tag] = np.sqrt(np.maximum(res.info.extra["p2_field"].phi, 0.0))
+        else:
+            fields[tag] = np.concatenate([d, d[mesh.edges].mean(axis=1)])  # linear along the edges
+    return {"mesh": mesh.name, "faces": mesh.n_faces, "sources": s, "rows": rows}, [mesh, space, fields]
+
+
+def _smooth_figure(ctx, mesh, fields: dict, titles: dict, crop, name: str, levels, sources) -> str:
+    panels = []
+    for tag, d in fields.items():
+        panels.append(field_panel(ctx, crop, d, f"{name}_{tag}", titles[tag], vmin=float(levels[0]),
+                                  vmax=float(levels[-1]), levels=levels[1:-1], sources=sources))
+    return tile(panels, ctx.figures / f"{name}.png", ncols=4).name
+
+
+SMOOTH_TITLES = {"exact": "exact", "o1_qclp": "order 1, qclp", "o1_hessian": "order 1, qcqp-hessian m = 1",
+                 "o2_qclp": "order 2, qclp", "o2_hessian": "order 2, qcqp-hessian m = 1",
+                 "o2_hessian_30": "order 2, qcqp-hessian m = 30", "o2_hessian_300": "order 2, qcqp-hessian m = 300"}
+
+
+def sec_order2_smoothing(ctx, plan):
+    """Issue 25: order 1 vs order 2, smoothed vs not: the two-source plane, the fine meshes, the coarse CAD set."""
+    from cvxgeodesic.evaluation import ridge_deficit
+    from cvxgeodesic.formulations import KAPPA_ORDER2
+
+    plane_rec, (pm, space, pfields) = smooth_plane_case(plan)
+    fine = []
+    figs = []
+    # the plane, cut to the ridge's middle, drawn with the P2 fields' midpoint values
+    rm = _p2_render_mesh(pm, space)
+    cen = rm.V[rm.F].mean(axis=1)
+    keep = (np.abs(cen[:, 0] - 0.5) < 0.2) & (np.abs(cen[:, 1] - 0.5) < 0.3)
+    crop, used = submesh(rm, keep, f"{pm.name} (close-up)")
+    lo, hi = float(pfields["exact"][used].min()), float(pfields["exact"][used].max())
+    figs.append(_smooth_figure(ctx, rm, {t: v[used] for t, v in pfields.items()}, SMOOTH_TITLES, crop,
+                               "fig15_smoothing_plane", np.linspace(lo, hi, 24), None))
+    for i, name in enumerate(plan.smooth_meshes):
+        mesh = ctx.mesh(name)
+        log(f"  order-2 smoothing: {name} ({mesh.n_faces} faces)")
+        exact = solve(ctx, mesh, name, "exact", SOURCE)
+        row = {"mesh": mesh_row(mesh), "band": SMOOTH_BAND * mesh.bbox_diagonal}
+        recs = {}
+        for tag, meth, order, m in SMOOTH_RUNS:
+            rec = recs[tag] = solve(ctx, mesh, name, meth, SOURCE, m, order=order)
+            row[tag] = rec_row(rec, metrics(mesh, rec["distance"], exact["distance"], SOURCE) if rec["ok"] else None)
+            if rec["ok"]:
+                row[tag]["ridge_deficit"] = ridge_deficit(mesh, rec["distance"], exact["distance"], row["band"],
+                                                          sources=[SOURCE])
+        fine.append(row)
+        if i == 0 and exact["ok"]:
+            d_ex = exact["distance"]
+            sub, used, _ = ridge_crop(mesh, d_ex, SOURCE, radius_frac=0.12)
+            levels = np.linspace(float(d_ex[used].min()), float(d_ex[used].max()), 22)
+            shown = {"exact": d_ex[used], **{t: r["distance"][used] for t, r in recs.items() if r["ok"]}}
+            figs.append(_smooth_figure(ctx, mesh, shown, SMOOTH_TITLES, sub, "fig15_smoothing_mesh", levels, None))
+    cad = []
+    for name in plan.smooth_cad:
+        mesh = ctx.mesh(name)
+        key = f"o2_{name}"  # the order-2 section's fields
+        exact = solve(ctx, mesh, key, "exact", SOURCE)
+        if not exact["ok"]:
+            continue
+        log(f"  order-2 smoothing, CAD: {name} ({mesh.n_faces} faces)")
+        row = {"name": name, "faces": mesh.n_faces}
+        for tag, meth, order, m in SMOOTH_RUNS[:4]:
+            rec = solve(ctx, mesh, key, meth, SOURCE, m, order=order)
+            row[tag] = _order2_record(rec, exact, mesh)
+        cad.append(row)
+    return {"plane": plane_rec, "meshes": fine, "cad": cad, "figures": figs, "kappa": dict(KAPPA_ORDER2)}
+
+
 SECTIONS = {
     "table2": sec_table2, "fig2": sec_fig2, "fig3": sec_fig3, "fig4": sec_fig4, "fig5": sec_fig5,
     "fig6": sec_fig6, "fig7": sec_fig7, "fig8": sec_fig8, "fig9": sec_fig9,
     "norm_resolution": sec_norm_resolution, "norm_remeshing": sec_norm_remeshing, "order2": sec_order2,
-    "metric": sec_metric, "volumes": sec_volumes,
+    "metric": sec_metric, "volumes": sec_volumes, "order2_smoothing": sec_order2_smoothing,
 }
 
 
@@ -938,7 +1063,7 @@ SECTIONS = {
 def section_version(name: str) -> int | None:
     """The library code version a section's cached numbers depend on, or None: the order-2 section's
     (:data:`cvxgeodesic.formulations_p2.ORDER2_CACHE_VERSION`, as its fields' cache keys)."""
-    if name == "order2":
+    if name in ("order2", "order2_smoothing"):
         from cvxgeodesic.formulations_p2 import ORDER2_CACHE_VERSION
 
         return ORDER2_CACHE_VERSION

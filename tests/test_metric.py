@@ -57,13 +57,17 @@ def _mean_relative(d: np.ndarray, exact: np.ndarray) -> float:
 #: unweighted one, reached to the solver's tolerance (the bound of test_formulations.py::test_scale_equivariance,
 #: relative to the largest distance; measured up to 2e-6).
 SCALE_TOL = 1e-5
+#: For a power of two, rounding only: the metric's transforms (square roots of quadratic forms) are not bit-exact and
+#: the solver's last iterations amplify that; measured 2026-12-02 on icosphere(2), qclp: 7.1e-13 (cost), 1.6e-12
+#: (metric), with the bounds d ≥ 0 next to the source.
+POWER_OF_TWO_TOL = 1e-10
 
 
 @pytest.mark.parametrize("method", [*FORMULATIONS, "dijkstra"])
 def test_constant_cost_scales_every_formulation(method):
     mesh = cg.icosphere(2)
     d0 = cg.geodesic_distance(mesh, 0, method=method)
-    for c, tol in ((3.7, SCALE_TOL), (0.3, SCALE_TOL), (4.0, 1e-12)):
+    for c, tol in ((3.7, SCALE_TOL), (0.3, SCALE_TOL), (4.0, POWER_OF_TWO_TOL)):
         d1 = cg.geodesic_distance(mesh, 0, method=method, cost=c)
         d2 = cg.geodesic_distance(mesh, 0, method=method, metric=c**2 * np.eye(3))
         d3 = cg.geodesic_distance(mesh, 0, method=method, cost=np.full(mesh.n_faces, c))

@@ -274,7 +274,7 @@ def test_order_parameter_validation():
         with pytest.raises(ParameterError, match="order"):
             cg.GeodesicSolver(mesh, "qclp", order=bad)
     with pytest.raises(ParameterError, match="order=2"):
-        cg.GeodesicSolver(mesh, "qcqp-hessian", order=2)
+        cg.GeodesicSolver(mesh, "lcqp-hessian", order=2)
     with pytest.raises(ParameterError, match="order=2"):
         cg.GeodesicSolver(mesh, "heat", order=2)
 

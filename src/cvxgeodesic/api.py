@@ -114,12 +114,17 @@ class GeodesicSolver:
         transferred and the optimal field. The interior-point solver takes no
         warm start yet, so this costs a coarse solve *more* than a direct solve.
     order : {1, 2}
-        ``2``: second-order elements for the squared distance (``method="qclp"`` only;
-        :mod:`cvxgeodesic.formulations_p2`, ``docs/order2.md``): exact on flat regions whatever
+        ``2``: second-order elements for the squared distance (``method="qclp"`` and the ``qcqp``
+        methods; :mod:`cvxgeodesic.formulations_p2`, ``docs/order2.md``): exact on flat regions whatever
         the triangle shapes; sources may be vertices, SurfacePoints (at most one per face) and
         ``"boundary"``; ``info.extra["p2_field"].distance_at(faces, bary)`` evaluates the field
         inside faces. The same solvers and fallback as order 1. Not with ``multires`` or the
-        baselines.
+        baselines. The smoothed methods take energies of ``φ = d²`` that vanish on the exact
+        field of flat regions (:mod:`cvxgeodesic.operators.p2_energy`) with the dimensionless
+        ``λ = m · κ₂`` (:data:`~cvxgeodesic.formulations.KAPPA_ORDER2`): ``m = 1`` rounds the ridge
+        of two sources half a side apart on a unit square over about 1.2 % of the side, ``m = 30``
+        over 4 % (order 1's ``m = 1``); the width grows as ``m^(1/3)`` (docs/order2.md,
+        "Smoothing at order 2").
     threads : int, optional
         Threads of every pool the solver uses (PARDISO, the compiled kernels, BLAS),
         for its construction and each solve; recorded in ``info.extra["threads"]``.
@@ -128,8 +133,9 @@ class GeodesicSolver:
         (``docs/performance.md``).
     cost : float or (n,) or (m,) float array_like, optional
         Travel cost (time per unit length, ``1/speed``; positive): the distance becomes the
-        travel time. Per vertex or per face (``docs/metrics.md``). The eight formulations at both
-        orders and ``"dijkstra"``; recorded in ``info.extra["cost"]``.
+        travel time. Per vertex or per face (``docs/metrics.md``). The eight formulations at order 1,
+        ``"qclp"`` (or a smoothed method with ``m=0``) at order 2, and ``"dijkstra"``; recorded in
+        ``info.extra["cost"]``.
     metric : (3, 3), (n, 3, 3) or (m, 3, 3) float array_like, optional
         Riemannian metric: a tangent vector ``u`` is ``√(uᵀ M u)`` long (times the cost, with
         both). Symmetric, positive definite in each face's plane. Recorded in
@@ -213,6 +219,10 @@ class GeodesicSolver:
         self.normalization = check_choice(normalization, "normalization", NORMALIZATIONS)
         self.order = check_order(order)
         self._set_smoothness(m, lam)
+        if self.medium is not None and self.order == 2 and self.lam > 0:
+            raise ParameterError(
+                f"order=2 smoothing ({self.method!r}) takes no cost or metric: its energies vanish on the Euclidean "
+                "squared distance only; use method='qclp' (or m=0) at order 2, or order=1")
         target = None
         if self.order == 2:  # P2 elements for d² (cvxgeodesic.formulations_p2, strategies/order2.py)
             if self.is_baseline or multires:
@@ -282,8 +292,8 @@ class GeodesicSolver:
         elif lam_value is not None:
             self.lam = lam_value
         else:
-            medium = () if self.is_volume else (self.medium,)  # a cost or metric applies to surfaces
-            self.lam = weight(self.mesh, m_value, self.normalization, self.energy, *medium)
+            medium = {} if self.is_volume else {"medium": self.medium, "order": self.order}  # surfaces only
+            self.lam = weight(self.mesh, m_value, self.normalization, self.energy, **medium)
 
     def __repr__(self) -> str:
         return (

@@ -199,7 +199,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--normalization", default="area", choices=("area", "paper"),
                    help="meaning of --m: 'area' (default) or the paper's λ = m·100·h/n")
     p.add_argument("--order", type=int, default=1, choices=(1, 2),
-                   help="2: second-order elements for the squared distance (qclp only; docs/order2.md)")
+                   help="2: second-order elements for the squared distance (qclp and the qcqp methods; docs/order2.md)")
     add_cost_options(p)
     p.add_argument("-o", "--output", required=True, help=OUTPUT_HELP)
     p.add_argument("--png", default=None,

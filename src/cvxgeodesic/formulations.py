@@ -100,6 +100,10 @@ NORMALIZATIONS = ("area", "paper")
 #: (ridge sharpness 0.24, 0.41 of the exact field's; Laplacian 0.241, Dirichlet 0.243); docs/method.md has
 #: the sweep and what other values of κ trade.
 KAPPA = {"hessian": 3.0e-6, "laplacian": 3.0e-6, "dirichlet": 1.3e-2}
+#: ``κ₂`` of ``λ = m · κ₂`` at order 2 (the energies of ``φ = d²``, :mod:`cvxgeodesic.operators.p2_energy`, have the
+#: units of the stretch term, so λ is dimensionless); docs/order2.md, "Smoothing at order 2", has the calibration.
+#: Changing it changes every smoothed order-2 field: bump :data:`~cvxgeodesic.formulations_p2.ORDER2_CACHE_VERSION`.
+KAPPA_ORDER2 = {"hessian": 5.0e-7, "laplacian": 5.0e-7, "dirichlet": 5.0e-7}
 
 
 def stretch_weights(mesh: TriMesh, stretch: str = "area", area_ratio: np.ndarray | None = None) -> np.ndarray:
@@ -156,7 +160,7 @@ def check_normalization(normalization) -> str:
 
 
 def smoothness_weight(mesh: TriMesh, m: float, normalization: str = "area", energy: str = "hessian",
-                      medium: Medium | None = None) -> float:
+                      medium: Medium | None = None, order: int = 1) -> float:
     """The smoothness weight λ for a multiplier ``m``.
 
     Parameters
@@ -176,6 +180,9 @@ def smoothness_weight(mesh: TriMesh, m: float, normalization: str = "area", ener
     medium : Medium, optional
         A travel cost or metric (:mod:`cvxgeodesic.operators.metric`): ``|S|`` and ``h`` are then measured in it,
         so that a constant cost ``c`` gives ``c λ``, as the mesh scaled by ``c`` would.
+    order : {1, 2}
+        ``2``: the weight of the order-2 energies of ``φ = d²``, ``λ = m · κ₂`` (:data:`KAPPA_ORDER2`; dimensionless,
+        the same for both normalizations, since ``"paper"`` has no order-2 form).
 
     Returns
     -------
@@ -189,6 +196,9 @@ def smoothness_weight(mesh: TriMesh, m: float, normalization: str = "area", ener
     3e-06
     """
     normalization = check_normalization(normalization)
+    if order == 2:
+        check_choice(energy, "energy", KAPPA_ORDER2, lower=False)
+        return float(m) * KAPPA_ORDER2[energy]
     if normalization == "paper":
         h = mesh.mean_edge_length if medium is None else medium.mean_edge_length
         return float(m) * 100.0 * h / mesh.n_vertices

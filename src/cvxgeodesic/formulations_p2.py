@@ -52,6 +52,7 @@ from .errors import DegenerateFacesWarning, MeshError, ParameterError
 from .mesh.trimesh import TriMesh
 from .operators.metric import Medium
 from .operators.p2 import SAMPLES, P2Space, edge_basis
+from .operators.p2_energy import P2Energy, p2_energy
 from .solvers.problem import ConeGroup, ConicProblem, Equalities, PairInequalities
 
 __all__ = ["DEFAULT_SAMPLES", "DEFAULT_WEIGHTS", "ORDER2_CACHE_VERSION", "ORDER2_METHODS", "P2Builder", "P2Program",
@@ -65,8 +66,9 @@ __all__ = ["DEFAULT_SAMPLES", "DEFAULT_WEIGHTS", "ORDER2_CACHE_VERSION", "ORDER2
 DEFAULT_SAMPLES = "flat-nodes"
 #: Objective weights (:meth:`P2Space.weights`; docs/order2.md has the measurement behind the choice).
 DEFAULT_WEIGHTS = "lumped"
-#: The formulations with an order-2 program.
-ORDER2_METHODS = ("qclp",)
+#: The formulations with an order-2 program: ``qclp`` and the smoothed QC formulations, whose energies act on ``φ``
+#: (:mod:`cvxgeodesic.operators.p2_energy`; ``qcqp-dirichlet`` takes the edge-jump term alone).
+ORDER2_METHODS = ("qclp", "qcqp-hessian", "qcqp-laplacian", "qcqp-dirichlet")
 #: Edges shorter than this fraction of the bounding-box diagonal get no 1-D cone (their DOF is tied linearly).
 MIN_EDGE = 1e-9
 #: Version of the order-2 fields, for caches keyed on the inputs only (``benchmarks/report_common.py``): bump it
@@ -92,12 +94,15 @@ class P2Program:
         Vertices in components without a source.
     notes : list of str
         The substitutions the builder made (degenerate faces, ...).
+    objective_constant : float
+        ``λ c`` of the smoothness energy ``λ(φᵀQφ + 2gᵀφ + c)``, left out of :attr:`problem`'s objective.
     """
 
     problem: ConicProblem
     eliminated: tuple[np.ndarray, sp.csr_matrix]
     unreachable_vertices: np.ndarray
     notes: list[str]
+    objective_constant: float = 0.0
 
     def restore(self, x: np.ndarray) -> np.ndarray:
         """The full ``φ`` from a solution ``x`` of :attr:`problem`."""
@@ -137,17 +142,31 @@ class P2Builder:
         ``|∇φ|²_{M⁻¹} ≤ 4c²φ`` with the medium at its sample point (:class:`~cvxgeodesic.operators.p2.P2Space`),
         a degenerate face's 1-D cones take the derivative along the edge's length in the medium, and Dijkstra
         (cone centres, start field) runs on the edge lengths in the medium.
+    energy : {"hessian", "laplacian", "dirichlet"}, optional
+        Smoothness energy of ``φ`` (:func:`~cvxgeodesic.operators.p2_energy.p2_energy`); None: none (``qclp``).
+        Not with a ``medium``: the energies vanish on the squared *Euclidean* distance of flat regions (Hessian
+        ``2I``), which is not the exact field in a medium.
+    lam : float
+        Its weight λ (dimensionless: the energy has the units of the mean of ``φ``); 0: no energy.
 
     Attributes
     ----------
     space : P2Space
+    energy : P2Energy or None
+        The smoothness energy when ``energy`` is given and ``lam > 0``.
     notes : list of str
         Substitutions made for every program of the mesh (degenerate faces).
     """
 
     def __init__(self, mesh: TriMesh, samples: str = DEFAULT_SAMPLES, weights: str | None = None,
-                 cone_scale: str = "dijkstra", medium: Medium | None = None):
+                 cone_scale: str = "dijkstra", medium: Medium | None = None, energy: str | None = None,
+                 lam: float = 0.0):
         weights = DEFAULT_WEIGHTS if weights is None else weights
+        if not (np.isfinite(lam) and lam >= 0):
+            raise ParameterError(f"smoothness weight lambda must be finite and >= 0, got {lam}")
+        if medium is not None and energy is not None and lam > 0:
+            raise ParameterError("order-2 smoothing takes no cost or metric: its energies vanish on the Euclidean "
+                                 "squared distance only; use order=1 or method='qclp'")
         if samples not in SAMPLES and samples != "flat-nodes":
             raise ParameterError(f"samples must be 'flat-nodes' or one of {tuple(SAMPLES)}, got {samples!r}")
         if cone_scale not in ("dijkstra", "unit"):
@@ -156,6 +175,9 @@ class P2Builder:
         self.mesh = mesh
         self.space = sp_ = P2Space(mesh, medium)
         self.w = sp_.weights(weights)
+        self.lam = float(lam) if energy is not None else 0.0
+        self.energy_name = energy
+        self.energy: P2Energy | None = p2_energy(sp_, energy) if energy is not None and lam > 0 else None
         good = np.flatnonzero(~sp_.degenerate)
         if samples == "flat-nodes":
             flat = sp_.flat_faces[good]
@@ -348,13 +370,31 @@ class P2Builder:
         # the pair-eliminated midpoints first: the tied ones may average them
         eliminated = (np.concatenate([elim, elim2]), sp.vstack([M1, M2 @ _restore_matrix(elim, M1, n_dofs)]).tocsr())
         unreachable = ~reach
+        P, c = self._smoothing(c, fixed, eliminated)
         problem = ConicProblem(
-            n=space.n_dofs, P=None, q=c, cones=[ConeGroup(dofs, Gk, hk)], ineq=PairInequalities(),
+            n=space.n_dofs, P=P, q=c, cones=[ConeGroup(dofs, Gk, hk)], ineq=PairInequalities(),
             fixed_mask=fixed, fixed_values=np.zeros(space.n_dofs), unreachable=unreachable,
-            eq=Equalities(Emat, np.zeros(Emat.shape[0])) if Emat.shape[0] else None, method="qclp",
+            eq=Equalities(Emat, np.zeros(Emat.shape[0])) if Emat.shape[0] else None,
+            method="qclp" if P is None else f"qcqp-{self.energy_name}",
             guess=None if guess is None else np.where(fixed, 0.0, guess), equilibrate=True,
         )
-        return P2Program(problem, eliminated, ~reach_v, list(self.notes))
+        const = 0.0 if self.energy is None else self.lam * self.energy.c
+        return P2Program(problem, eliminated, ~reach_v, list(self.notes), const)
+
+    def _smoothing(self, c: np.ndarray, fixed: np.ndarray, eliminated: tuple[np.ndarray, sp.csr_matrix]):
+        """``(P, q)``: ``λ E(φ) = ½ φᵀ(2λQ)φ + (2λg)ᵀφ + λc`` added to the linear objective ``c``, on the reduced
+        unknowns: the substituted DOFs restored by ``φ = R x`` (``P ← RᵀPR``, ``q ← q + Rᵀ 2λg``), the fixed ones
+        (zero) left out of both. ``P`` is None without an energy."""
+        if self.energy is None:
+            return None, c
+        n = self.space.n_dofs
+        R = _restore_matrix(*eliminated, n)
+        keep = sp.diags((~fixed).astype(float))
+        R = (R @ keep).tocsr()
+        P = (R.T @ (2.0 * self.lam * self.energy.Q) @ R).tocsc()
+        P.eliminate_zeros()
+        q = c + R.T @ (2.0 * self.lam * self.energy.g)
+        return P, np.where(fixed, 0.0, q)
 
 
 def _restore_matrix(elim: np.ndarray, M: sp.csr_matrix, n: int) -> sp.csr_matrix:

@@ -27,7 +27,7 @@ class SolveConfig:
     method : str
         Canonical formulation name (a key of :data:`~cvxgeodesic.formulations.FORMULATIONS`) or baseline name.
     lam : float
-        Smoothness weight λ in the mesh's units (0 for LP formulations).
+        Smoothness weight λ in the mesh's units (0 for LP formulations; dimensionless at order 2).
     m : float or None
         The multiplier ``lam`` came from, or None when λ was given directly.
     normalization : {"area", "paper"}

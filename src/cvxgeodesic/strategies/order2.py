@@ -21,6 +21,7 @@ from ..errors import ParameterError, SolverError, SourceError
 from ..formulations_p2 import ORDER2_METHODS, P2Builder, P2Program
 from ..mesh.split import SplitMesh
 from ..mesh.trimesh import TriMesh, unit_mesh
+from ..operators.metric import Medium
 from ..operators.p2 import P2Field, SplitP2Field, violations
 from ..results import GeodesicResult, SolveInfo
 from ..solvers.problem import BackendResult, clique_pattern
@@ -77,22 +78,30 @@ class Order2:
         unit, self.scale = unit_mesh(config.mesh)
         medium = None if config.medium is None else config.medium.on(unit)
         self.medium_scale = 1.0 if medium is None else medium.scale
-        self.builder = P2Builder(unit, medium=medium)
+        # λ is dimensionless at order 2 (the energy has the units of the mean of φ): the same on the unit mesh
+        self.energy = config.energy if config.lam > 0 else None
+        self.builder = self._builder(unit, medium)
         self.policy = Backend(config.solver, config.tol, config.max_iter, config.verbose, config.mesh.name)
         self.backend = self.policy.name
         self.notes: list[str] = [*config.notes, *self.policy.notes]
         self.ipm = self._ipm(self.builder)
         self.setup_time = time.perf_counter() - t0
 
+    def _builder(self, mesh: TriMesh, medium: Medium | None) -> P2Builder:
+        return P2Builder(mesh, medium=medium, energy=self.energy, lam=self.config.lam if self.energy else 0.0)
+
     def _ipm(self, builder: P2Builder) -> Any:
-        """The structured solver on ``builder``'s face-clique pattern (one symbolic analysis), or None."""
+        """The structured solver on ``builder``'s face-clique pattern (one symbolic analysis), or None; with a
+        smoothness energy the pattern also couples the two vertices opposite each interior edge (the jump term,
+        :func:`~cvxgeodesic.operators.p2_energy.edge_diamonds`)."""
         if self.backend != "ipm":
             return None
         from ..solvers.ipm import InteriorPointSolver
         from ..solvers.ipm.settings import ORDER2
 
         space = builder.space
-        return InteriorPointSolver(clique_pattern(space.n_dofs, [space.face_dofs]), settings=ORDER2)
+        cliques = [space.face_dofs] if builder.energy is None else builder.energy.cliques
+        return InteriorPointSolver(clique_pattern(space.n_dofs, cliques), settings=ORDER2)
 
     def solve(self, sources: SourceSet, *, callback: Callback | None = None) -> GeodesicResult:
         """Distance field from vertex, point or boundary sources.
@@ -117,8 +126,8 @@ class Order2:
             sm = split.mesh  # the points lie in the mesh's faces: the bounding box and the unit scale do not change
             unit_sm = TriMesh(sm.V / self.scale, sm.F, name=sm.name) if self.scale != 1.0 else sm
             medium = self.config.medium
-            builder = P2Builder(unit_sm, medium=None if medium is None else
-                                medium.split(sm, split.face_parent, points).on(unit_sm))
+            builder = self._builder(unit_sm, None if medium is None else
+                                    medium.split(sm, split.face_parent, points).on(unit_sm))
             ipm = self._ipm(builder)
             vsrc = np.concatenate([vsrc, split.point_vertices])
             notes.append(f"{len(points)} source point(s) inserted as vertices "
@@ -176,7 +185,8 @@ class Order2:
             method=self.config.method, solver=res.solver, status=res.status, iterations=int(sum(rounds)),
             setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
             primal_residual=res.primal_residual, dual_residual=res.dual_residual, gap=res.gap,
-            objective=res.objective * unit2, lam=0.0, n_unreachable=int(np.isinf(d).sum()),
+            objective=(res.objective + program.objective_constant) * unit2, lam=self.config.lam,
+            n_unreachable=int(np.isinf(d).sum()),
             notes=notes, extra={**res.extra, "order": 2, "p2_field": fld, "n_dofs": problem.n,
                                 "n_cones": problem.n_cones, "rounds": len(rounds) - 1, "round_iterations": rounds},
         )
