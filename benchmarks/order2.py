@@ -3,9 +3,9 @@
 Usage: ``PYTHONPATH=src python benchmarks/order2.py [--weights=p2|lumped] OUT.json [mesh ...]``; meshes are names in
 ../shared/meshes (``thingi10k_small`` expands to its files).
 
-``PYTHONPATH=src python benchmarks/order2.py --speed [--repeat=N] [mesh ...]`` (default spot, bunny_7k) prints the
-order-2 time beside P1 qclp's (both the structured solver, setup included) in one process, with iteration counts and
-the load average. Source vertex 0; errors are relative,
+``PYTHONPATH=src python benchmarks/order2.py --speed [--repeat=N] [--json=PATH] [mesh ...]`` (default spot,
+bunny_7k) prints the order-2 times (qclp, qcqp-hessian) beside P1 qclp's, the heat method's and exact MMP's (set-up
+included) in one process, with the ratios, iteration counts and the load average. Source vertex 0; errors are relative,
 per vertex, sources excluded, against pygeodesic's exact MMP. Times are wall-clock on whatever
 machine runs it (state its load when you publish them).
 """
@@ -98,40 +98,65 @@ def run(name: str) -> dict:
     return out
 
 
-def _timed(mesh: cg.TriMesh, repeat: int, **kw) -> tuple[float, object]:
-    """Best wall-clock time of ``repeat`` solves from vertex 0, each with its setup (solver construction)."""
+def _timed(mesh: cg.TriMesh, repeat: int, method: str = "qclp", **kw) -> tuple[float, object]:
+    """Best wall-clock time of ``repeat`` solves from vertex 0, each with its setup (solver construction); ``(inf,
+    None)`` when the method cannot run on the mesh (the exact algorithm on a non-manifold one)."""
     best, res = np.inf, None
     for _ in range(repeat):
         t = time.perf_counter()
-        res = cg.GeodesicSolver(mesh, "qclp", **kw).solve(0)
+        try:
+            res = cg.GeodesicSolver(mesh, method, **kw).solve(0)
+        except Exception:  # noqa: BLE001 - a method that cannot run is a blank cell
+            return np.inf, None
         best = min(best, time.perf_counter() - t)
     return best, res
 
 
+#: The columns of ``--speed``: (label, method, keyword arguments).
+SPEED_RUNS = (("heat", "heat", {}), ("exact", "exact", {}), ("P1 qclp", "qclp", {}),
+              ("o2 qclp", "qclp", {"order": 2}), ("o2 hessian", "qcqp-hessian", {"order": 2}))
+
+
 def speed(argv: list[str]) -> list[dict]:
-    """``--speed``: order 2 against P1 qclp, one row per mesh (printed as it goes)."""
+    """``--speed [--repeat=N] [--json=PATH] [mesh ...]``: order 2 (qclp and qcqp-hessian) against P1 qclp, the heat
+    method and exact MMP, one row per mesh, printed as it goes: times (set-up + solve), order-2 iterations (all
+    cutting-plane rounds) and the ratios of issue 29 (order 2 / exact, order 2 / P1) and of issue 25 (smoothed /
+    plain order 2)."""
     import os
 
-    repeat = 1
-    if argv and argv[0].startswith("--repeat="):
-        repeat = int(argv.pop(0).split("=", 1)[1])
+    repeat, dest = 1, None
+    while argv and argv[0].startswith("--"):
+        key, _, value = argv.pop(0).partition("=")
+        if key == "--repeat":
+            repeat = int(value)
+        elif key == "--json":
+            dest = Path(value)
+        else:
+            raise SystemExit(f"unknown option {key}")
     names = argv or ["spot.obj", "bunny_7k.off"]
     warm = cg.icosphere(1)
-    _timed(warm, 1)  # compiles (or loads) the Numba kernels of both solvers outside the timings
-    _timed(warm, 1, order=2)
+    for _, method, kw in SPEED_RUNS:  # compiles (or loads) the Numba kernels outside the timings
+        _timed(warm, 1, method, **kw)
     rows = []
-    print(f"{'mesh':14s} {'faces':>6s} {'P1 qclp':>9s} {'it':>3s} {'order 2':>9s} {'it':>3s} {'ratio':>6s}  "
-          "load (1, 5, 15 min)")
+    print(f"{'mesh':22s} {'faces':>6s} " + " ".join(f"{lab:>10s}" for lab, _, _ in SPEED_RUNS)
+          + "  o2/exact  o2/P1  hess/o2  it(o2)  load (1, 5, 15 min)")
     for nm in names:
         mesh = cg.load_mesh(SHARED / nm)
-        t1, r1 = _timed(mesh, repeat)
-        t2, r2 = _timed(mesh, repeat, order=2)
-        row = {"mesh": nm, "faces": mesh.n_faces, "p1_time": t1, "p1_iterations": r1.info.iterations,
-               "p2_time": t2, "p2_iterations": r2.info.iterations, "p2_status": r2.info.status,
-               "load": os.getloadavg()}
+        row: dict = {"mesh": nm, "faces": mesh.n_faces, "date": time.strftime("%Y-%m-%d %H:%M")}
+        for label, method, kw in SPEED_RUNS:
+            t, r = _timed(mesh, repeat, method, **kw)
+            row[label] = {"time": t, "iterations": None if r is None else r.info.iterations,
+                          "status": None if r is None else r.info.status,
+                          "rounds": None if r is None else r.info.extra.get("rounds")}
+        row["load"] = os.getloadavg()
         rows.append(row)
-        print(f"{nm:14s} {mesh.n_faces:6d} {t1:8.2f}s {r1.info.iterations:3d} {t2:8.2f}s {r2.info.iterations:3d} "
-              f"{t2 / t1:5.1f}×  {' '.join(f'{x:.2f}' for x in row['load'])}", flush=True)
+        t = {lab: row[lab]["time"] for lab, _, _ in SPEED_RUNS}
+        print(f"{nm:22s} {mesh.n_faces:6d} " + " ".join(f"{t[lab]:9.2f}s" for lab, _, _ in SPEED_RUNS)
+              + f"  {t['o2 qclp'] / t['exact']:8.1f} {t['o2 qclp'] / t['P1 qclp']:6.1f} "
+              f"{t['o2 hessian'] / t['o2 qclp']:8.2f}  {row['o2 qclp']['iterations']:6d}  "
+              + " ".join(f"{x:.2f}" for x in row["load"]), flush=True)
+        if dest is not None:
+            dest.write_text(json.dumps(rows, indent=1, default=float))
     return rows
 
 

@@ -497,3 +497,19 @@ def test_a_dual_residual_at_its_rounding_floor_is_converged():
         warnings.simplefilter("ignore")
         res = GeodesicSolver(mesh, "qcqp-hessian", solver="ipm").solve(1511)
     assert res.info.status == "optimal" and res.info.iterations <= 20  # 15 (2026-12-02)
+
+
+@pytest.mark.shared
+@pytest.mark.parametrize("method", ["qclp", "qcqp-dirichlet"])
+def test_a_plain_dual_residual_at_its_end_game_floor_is_converged(method):
+    """Reliability sweep, 2026-12-02: thingi_32770 from vertex 3318. At μ ≈ 1e-13 the last step meets the gap
+    (4.5e-9) while refinement stalls the dual residual at 2.9e-9 of its scale and 1.1e-8 of the plain one (without
+    ‖z‖), just above tol: "almost_optimal", then Clarabel at 10× the time. The plain guard is meant for a dual
+    blown up along a direction Aᵀ cancels (residual ≈ 0.9); at 10 × tol it still catches that."""
+    from cvxgeodesic import GeodesicSolver, load_mesh
+
+    mesh = load_mesh(shared_mesh_path("thingi_32770.stl"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = GeodesicSolver(mesh, method, solver="ipm").solve(3318)
+    assert res.info.status == "optimal" and res.info.iterations <= 30  # 20 / 26 (2026-12-02)
