@@ -197,20 +197,38 @@ def test_field_inside_split_face_after_point_source():
     assert got[-1] < 1e-4
 
 
-def test_cutting_planes_are_needed_next_to_an_inserted_source():
-    # without the cutting planes the corner/midpoint cones let the field overshoot: it measured 3.7e-3
+def test_sampled_cones_need_cutting_planes_next_to_an_inserted_source():
+    # with the cone at the six nodes only ("flat-nodes", the default before the edge cones) the field overshoots
+    # between the samples: 3.7e-3 of the largest distance without the cutting planes
     mesh = cg.grid_plane(20, jitter=0.4, seed=1)
     ex = euclid_from(mesh, pt(37, (0.2, 0.3, 0.5)))
     s = cg.GeodesicSolver(mesh, "qclp", order=2)
-    s._strategy.refine = 0
+    s._strategy.refine, s._strategy.samples = 0, "flat-nodes"
     res = s.solve(pt(37, (0.2, 0.3, 0.5)))
     assert np.abs(res.distance - ex).max() / ex.max() > 1e-3
     assert res.info.extra["rounds"] == 0 and len(res.info.extra["round_iterations"]) == 1
 
 
+def test_edge_cones_make_a_flat_mesh_exact_in_one_solve():
+    # the Bernstein edge cones hold |∇φ|² ≤ 4φ on the whole of each flat face: no cutting plane is needed, from a
+    # vertex or from a point inside a face (measured 5e-9 of the largest distance)
+    mesh = cg.grid_plane(20, jitter=0.4, seed=1)
+    s = cg.GeodesicSolver(mesh, "qclp", order=2)
+    s._strategy.refine = 0
+    for src in (pt(37, (0.2, 0.3, 0.5)), 200):
+        ex = euclid_from(mesh, src if isinstance(src, int) else pt(37, (0.2, 0.3, 0.5)))
+        res = s.solve(src)
+        assert res.info.status == "optimal" and res.info.extra["rounds"] == 0
+        assert np.abs(res.distance - ex).max() / ex.max() < 1e-7
+    # and with the rounds allowed, none is run
+    assert len(order2(mesh, pt(37, (0.2, 0.3, 0.5))).info.extra["round_iterations"]) == 1
+
+
 def test_cutting_plane_rounds_are_counted_in_the_info():
     mesh = cg.grid_plane(20, jitter=0.4, seed=1)
-    res = order2(mesh, pt(37, (0.2, 0.3, 0.5)))
+    s = cg.GeodesicSolver(mesh, "qclp", order=2)
+    s._strategy.samples = "flat-nodes"
+    res = s.solve(pt(37, (0.2, 0.3, 0.5)))
     rounds = res.info.extra["round_iterations"]
     assert res.info.extra["rounds"] == len(rounds) - 1 >= 1
     assert res.info.iterations == sum(rounds)  # every round's solve, not the last one's
@@ -465,16 +483,16 @@ def test_clique_block_matches_the_general_sparse_block():
 
 def test_structured_ipm_iteration_counts():
     """Gondzio's correctors and the guess start took spot from 48 to 16 iterations and a jittered 20×20 grid
-    (Mehrotra's start: flat faces have no guess) from 27 to 14 (2026-12-01, counted then from 1; 2026-12-02 on the
-    generic solver: 16 and 14); a regression in the correctors, the start, the step or the scaling shows here
-    first."""
+    (Mehrotra's start then: flat faces had no guess) from 27 to 14 (2026-12-01, counted then from 1; 2026-12-02 on
+    the generic solver: 16 and 14; with the edge cones and the guess start on flat faces 15, in one solve); a
+    regression in the correctors, the start, the step or the scaling shows here first."""
     spot = cg.load_mesh(shared_mesh_path("spot.obj"))
     r = order2(spot, 0)
     assert r.info.solver == "ipm" and r.info.status == "optimal" and r.info.extra["start"] == "guess"
     assert r.info.iterations <= 17
     g = order2(cg.grid_plane(20, jitter=0.4, seed=1), 0)
-    assert g.info.status == "optimal" and g.info.extra["round_iterations"][0] <= 15
-    assert g.info.extra["start"] == "mehrotra"
+    assert g.info.status == "optimal" and g.info.extra["round_iterations"] == [g.info.iterations]
+    assert g.info.iterations <= 15 and g.info.extra["start"] == "guess"
 
 
 def _program(mesh, src, **kw):
@@ -495,12 +513,13 @@ def test_guess_start_is_strictly_feasible_and_meets_the_source_equalities():
     scaled, D = equilibrate(pr)
     chol = ipm_for(b).cholesky
     program = Program.from_problem(scaled, chol)
-    x = guess_primal(program, ORDER2.interior_fraction)
+    x, outside = guess_primal(program, ORDER2.interior_fraction)
+    assert not any(outside)  # a curved mesh: no edge cones, every block holds at x_F
     blk = program.blocks[0]
     s = blk.slack(x, program.x_fixed)
     assert (s[0] - np.linalg.norm(s[1:], axis=0)).min() > 0  # every cone strictly inside
     # the scaling θ is the largest that keeps every cone inside (× interior_fraction), not a timid one
-    x_full = guess_primal(program, 1.0)
+    x_full, _ = guess_primal(program, 1.0)
     s_full = blk.slack(x_full, program.x_fixed)
     assert (s_full[0] - np.linalg.norm(s_full[1:], axis=0)).min() < 1e-9 * np.abs(s_full).max() or \
         np.allclose(x_full, program.guess)
@@ -627,8 +646,11 @@ def test_flat_nodes_samples_all_nodes_on_flat_faces_and_midpoints_elsewhere():
     assert (per_face[flat] == 6).all() and (per_face[~flat] == 3).all()
     mid = b.cone_bary[np.isin(b.cone_face, np.flatnonzero(~flat))]
     assert np.isclose(mid.max(axis=1), 0.5).all()  # edge midpoints only
-    assert p2mod.DEFAULT_SAMPLES == "flat-nodes" and P2Builder(mesh).cone_face.size == b.cone_face.size
-    with pytest.raises(ParameterError, match="samples must be 'flat-nodes' or one of"):
+    # the default: the same samples, and three edge cones on each flat face
+    d = P2Builder(mesh)
+    assert p2mod.DEFAULT_SAMPLES == "flat-bernstein" and d.cone_face.size == b.cone_face.size
+    assert np.array_equal(np.sort(d.bernstein.face), np.repeat(np.flatnonzero(flat), 3))
+    with pytest.raises(ParameterError, match="samples must be 'flat-bernstein', 'flat-nodes' or one of"):
         P2Builder(mesh, samples="everywhere")
 
 
@@ -643,8 +665,32 @@ def test_order2_pardiso_follows_the_thread_setting(threads):
     assert chol.backend == "pardiso" and chol.numeric.threads == threads
 
 
-def test_no_guess_on_meshes_with_flat_faces():
-    assert _program(cg.grid_plane(6), [0])[1].problem.guess is None
+def test_guess_start_on_flat_faces_steps_over_the_cones_that_hold_at_zero():
+    # the edge cones do not hold at φ = 0 (T = −|e|² there): the segment from x_F towards the guess is bounded by
+    # the sampled cones alone, and the edge cones' slacks are shifted into their cone
+    from cvxgeodesic.solvers.ipm.equilibrate import equilibrate
+    from cvxgeodesic.solvers.ipm.program import Program
+    from cvxgeodesic.solvers.ipm.start import guess_primal, starting_point
+
+    b, prog = _program(cg.grid_plane(6, jitter=0.3, seed=2), [0])
+    pr = prog.problem
+    assert pr.guess is not None and [g.dim for g in pr.cones] == [4, 6]
+    scaled, _ = equilibrate(pr)
+    solver = ipm_for(b)
+    program = Program.from_problem(scaled, solver.cholesky)
+    x, outside = guess_primal(program, ORDER2.interior_fraction)
+    # exactly one block does not hold at x_F: the SOC(6) edge cones
+    assert [getattr(blk.cone, "dim", 0) for blk, out in zip(program.blocks, outside, strict=True) if out] == [6]
+    s4 = program.blocks[0].slack(x, program.x_fixed)
+    assert (s4[0] - np.linalg.norm(s4[1:], axis=0)).min() > 0
+    from cvxgeodesic.solvers.ipm.newton import LinearSystem
+
+    ls = LinearSystem(program, solver.cholesky, ORDER2, {"assembly_time": 0.0, "factor_time": 0.0,
+                                                         "linear_solve_time": 0.0}, {"refinement_steps": 0})
+    start = starting_point(program, ls, ORDER2)
+    assert start.from_guess
+    for blk, s in zip(program.blocks, start.iterate.s, strict=True):
+        assert s.size == 0 or blk.cone.min_eigenvalue(s) > 0  # every slack strictly inside its cone
 
 
 def test_order2_without_numba_solves_with_clarabel_and_says_so(tmp_path):
@@ -708,3 +754,59 @@ def test_a_point_source_in_a_face_of_a_vertex_source_is_solved_by_the_structured
     r = order2(mesh, [0, pt(f, (0.2, 0.3, 0.5))])
     assert r.info.solver == "ipm" and r.info.status == "optimal"
     assert not [n for n in r.info.notes if "Clarabel" in n] and r.info.iterations <= 16  # 14
+
+
+# ---------------------------------------------------------------- Bernstein edge cones
+def _triangle_and_nodes(rng):
+    V = np.column_stack([rng.uniform(-1, 1, (3, 2)), np.zeros(3)])
+    mesh = cg.TriMesh(V, np.array([[0, 1, 2]]))
+    b = P2Builder(mesh)
+    X = V[:, :2]
+    nodes = np.vstack([X, 0.5 * (X[[1, 2, 0]] + X[[2, 0, 1]])])  # local DOF order: corners, then the midpoint
+    return mesh, b, nodes  # opposite each corner
+
+
+def _edge_slacks(b, phi_face):
+    keep = np.ones(b.bernstein.face.size, dtype=bool)
+    G, h = b.bernstein.rows(keep, np.ones(keep.size))
+    s = h - G @ phi_face
+    return s[:, 0] - np.linalg.norm(s[:, 1:], axis=1)
+
+
+def test_edge_cones_are_tight_on_the_squared_distance_to_any_point():
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        _, b, nodes = _triangle_and_nodes(rng)
+        assert b.bernstein.face.size == 3
+        p = rng.uniform(-3, 3, 2)
+        phi = np.sum((nodes - p) ** 2, axis=1)
+        # the cone |w|² ≤ 4T holds with equality: its slack head − ‖body‖ is 0 up to rounding
+        np.testing.assert_allclose(_edge_slacks(b, phi), 0.0, atol=1e-10)
+        # lowered by 1e-3 it leaves every edge cone (T drops by 2e-3); raised, it is inside
+        assert (_edge_slacks(b, phi - 1e-3) < 0).all() and (_edge_slacks(b, phi + 1e-3) > 0).all()
+
+
+def test_edge_and_corner_cones_hold_the_gradient_bound_on_the_whole_face():
+    # every quadratic that meets the corner cones and the edge cones has |∇φ|² ≤ 4φ everywhere on the triangle
+    # (the Bernstein coefficients of |∇φ|² − 4φ are ≤ 0); perturbations of |x − p|², kept where the cones hold
+    rng = np.random.default_rng(1)
+    t = np.linspace(0, 1, 41)
+    l1, l2 = np.meshgrid(t, t)
+    bary = np.column_stack([l1.ravel(), l2.ravel(), 1 - l1.ravel() - l2.ravel()])
+    bary = bary[bary[:, 2] >= -1e-12]
+    N, dN = p2_basis(bary)
+    tried = accepted = 0
+    while accepted < 200:
+        mesh, b, nodes = _triangle_and_nodes(rng)
+        p = rng.uniform(-3, 3, 2)
+        phi = np.sum((nodes - p) ** 2, axis=1) * rng.uniform(0.9, 1.3) + rng.normal(0, 0.05, 6)
+        tried += 1
+        grad = np.einsum("sai,ci->sca", dN, b.space.lam_grad[0])  # (s, 2, 6)
+        _, gc = b.space.face_cones(np.eye(3))
+        corner_ok = np.all(np.sum((gc[0] @ phi) ** 2, axis=1) <= 4 * phi[:3])
+        if not (corner_ok and (_edge_slacks(b, phi) >= 0).all()):
+            continue
+        accepted += 1
+        v = np.sum((grad @ phi) ** 2, axis=1) - 4 * (N @ phi)
+        assert v.max() <= 1e-9 * np.abs(phi).max()
+    assert tried > accepted  # the filter rejects some: the test is not vacuous

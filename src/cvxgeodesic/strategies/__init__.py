@@ -8,7 +8,7 @@ and then answers ``strategy.solve(sources, callback=None) -> GeodesicResult``:
                            Clarabel retry under ``solver="auto"``, the ``d >= 0`` re-solve)
 :class:`BaselineStrategy`  Dijkstra, fast marching, heat, exact (:mod:`cvxgeodesic.baselines`)
 :class:`CoarseToFine`      two direct solves: a decimated mesh, then (with polish) the mesh itself
-:class:`Order2`            P2 elements for d², with cutting planes on flat faces
+:class:`Order2`            P2 elements for d², edge cones and cutting planes on flat faces
 :mod:`.tet`                inside tetrahedral meshes: order 1, order 2, Dijkstra and heat
 =========================  =====================================================================
 """

@@ -4,10 +4,11 @@ Per mesh: the mesh scaled to unit size, the program's per-mesh part (:class:`~cv
 and one :class:`~cvxgeodesic.solvers.ipm.InteriorPointSolver` on the face-clique pattern with the order-2 settings
 (:data:`~cvxgeodesic.solvers.ipm.settings.ORDER2`), under the backend policy every strategy shares
 (:class:`~cvxgeodesic.strategies.backend.Backend`). Per solve: source points inserted as vertices
-(:class:`~cvxgeodesic.mesh.split.SplitMesh`), the program built and solved, then cutting planes on flat faces: the
-corner and midpoint cones leave ``|∇φ|² ≤ 4φ`` free between the samples, and there ``d²`` is exactly quadratic, so
-a cone at each face's worst point (:func:`~cvxgeodesic.operators.p2.max_violation`, exact) closes the gap
-(docs/order2.md).
+(:class:`~cvxgeodesic.mesh.split.SplitMesh`), the program built and solved, then cutting planes on the flat faces
+the edge cones (:class:`~cvxgeodesic.formulations_p2.BernsteinEdgeCones`) do not cover (a source vertex's edges, a
+line of sources): the corner and midpoint cones leave ``|∇φ|² ≤ 4φ`` free between the samples, and there ``d²`` is
+exactly quadratic, so a cone at each face's worst point (:func:`~cvxgeodesic.operators.p2.max_violation`, exact)
+closes the gap (docs/order2.md).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError, SolverError, SourceError
-from ..formulations_p2 import ORDER2_METHODS, P2Builder, P2Program
+from ..formulations_p2 import DEFAULT_SAMPLES, ORDER2_METHODS, P2Builder, P2Program
 from ..mesh.split import SplitMesh
 from ..mesh.trimesh import TriMesh, unit_mesh
 from ..operators.metric import Medium
@@ -50,6 +51,8 @@ class Order2:
         ``config.method`` is one of :data:`~cvxgeodesic.formulations_p2.ORDER2_METHODS`.
     refine : int
         Cutting-plane rounds at most (:data:`REFINE_ROUNDS`).
+    samples : str
+        Where the cones are imposed (:data:`~cvxgeodesic.formulations_p2.DEFAULT_SAMPLES`, :class:`P2Builder`).
 
     Attributes
     ----------
@@ -67,7 +70,7 @@ class Order2:
         A method without an order-2 program; ``solver="ipm"`` without Numba.
     """
 
-    def __init__(self, config: SolveConfig, refine: int = REFINE_ROUNDS) -> None:
+    def __init__(self, config: SolveConfig, refine: int = REFINE_ROUNDS, samples: str = DEFAULT_SAMPLES) -> None:
         t0 = time.perf_counter()
         if config.method not in ORDER2_METHODS:
             raise ParameterError(
@@ -75,6 +78,7 @@ class Order2:
                 "(docs/order2.md)")
         self.config = config
         self.refine = int(refine)
+        self.samples = samples
         unit, self.scale = unit_mesh(config.mesh)
         medium = None if config.medium is None else config.medium.on(unit)
         self.medium_scale = 1.0 if medium is None else medium.scale
@@ -88,7 +92,8 @@ class Order2:
         self.setup_time = time.perf_counter() - t0
 
     def _builder(self, mesh: TriMesh, medium: Medium | None) -> P2Builder:
-        return P2Builder(mesh, medium=medium, energy=self.energy, lam=self.config.lam if self.energy else 0.0)
+        return P2Builder(mesh, samples=self.samples, medium=medium, energy=self.energy,
+                         lam=self.config.lam if self.energy else 0.0)
 
     def _ipm(self, builder: P2Builder) -> Any:
         """The structured solver on ``builder``'s face-clique pattern (one symbolic analysis), or None; with a

@@ -5,8 +5,9 @@
 same with the least-squares ``x`` of the ``W = I`` system (also the graph start's fallback); "mehrotra": the
 least-squares ``x`` and the same ``z`` with Mehrotra's uniform shifts; "cvxopt": ``z = A x − b`` shifted into
 the cone; "guess": the program's own guess field (:attr:`.program.Program.guess`, the order-2 programs' squared
-Dijkstra distance) scaled towards ``x_F`` into the interior, the least-norm ``z`` with Mehrotra's shift of ``z``
-alone ("mehrotra" without a guess). The equality duals start at 0.
+Dijkstra distance) scaled towards ``x_F`` into the interior of the blocks that hold at ``x_F`` (the slacks of the
+others, such as the order-2 edge cones, which do not hold at ``φ = 0``, shifted into their cone), the least-norm
+``z`` with Mehrotra's shift of ``z`` alone ("mehrotra" without a guess). The equality duals start at 0.
 """
 
 from __future__ import annotations
@@ -164,15 +165,27 @@ def _least_squares_x(pr: Program, ls: LinearSystem, st: IPMSettings, scalings) -
     return x, f0
 
 
-def guess_primal(pr: Program, fraction: float) -> np.ndarray | None:
-    """:func:`interior_primal` towards the program's guess (order 2: the squared Dijkstra distance); ``None``
-    without a guess, when the guess breaks an equality, or when no step towards it is feasible."""
+def guess_primal(pr: Program, fraction: float) -> tuple[np.ndarray, list[bool]] | None:
+    """:func:`interior_primal` towards the program's guess (order 2: the squared Dijkstra distance) over the
+    blocks that hold at ``x_F``: ``(x, outside)``, ``outside[b]`` when block ``b`` does not hold at ``x_F`` (its
+    slacks are left to a shift); ``None`` without a guess, when the guess breaks an equality, or when no step
+    towards it is feasible."""
     g = pr.guess
     if g is None:
         return None
     if pr.p and np.abs(pr.eq_residual(g)).max() > 1e-9 * max(1.0, float(np.abs(g).max())):
         return None
-    return interior_primal(pr, g, fraction)
+    s0 = [b.b_tilde for b in pr.blocks]
+    outside = [b.cone.min_eigenvalue(u) < -1e-12 * max(1.0, float(np.abs(u).max(initial=0.0)))
+               for b, u in zip(pr.blocks, s0, strict=True)]
+    if all(outside):
+        return None
+    step = np.where(pr.fixed, 0.0, g - pr.x_fixed)
+    alpha_max = min([float(b.cone.max_step_closed(u, -b.A(step)).min(initial=np.inf))
+                     for b, u, out in zip(pr.blocks, s0, outside, strict=True) if not out], default=np.inf)
+    if not alpha_max > 0:
+        return None
+    return pr.x_fixed + min(1.0, fraction * alpha_max) * step, outside
 
 
 def _primal(pr: Program, ls: LinearSystem, st: IPMSettings, scalings) -> tuple[np.ndarray, bool, object]:
@@ -193,8 +206,13 @@ def starting_point(pr: Program, ls: LinearSystem, st: IPMSettings) -> Start:
     """The starting iterate; :class:`StartFailure` when the ``W = I`` system is singular or not finite."""
     scalings = pr.identity_scalings()
     y0 = np.zeros(pr.p)
-    if st.init == "guess" and (x := guess_primal(pr, st.interior_fraction)) is not None:
+    if st.init == "guess" and (guess := guess_primal(pr, st.interior_fraction)) is not None:
+        x, outside = guess
         s = [b.slack(x, pr.x_fixed) for b in pr.blocks]
+        for i, b in enumerate(pr.blocks):
+            if outside[i]:  # Mehrotra's shift of s, on the blocks the segment from x_F could not keep
+                s[i] = b.cone.add_identity(s[i], max(-st.shift_factor * b.cone.min_eigenvalue(s[i]), 0.0)
+                                           + 1e-2 * max(float(np.abs(s[i]).max(initial=0.0)), 1e-12))
         y = _least_norm_dual(pr, ls, None, x, scalings)
         if y is not None:
             s, z = mehrotra_shift(pr, s, [b.A(y) for b in pr.blocks], st, shift_s=False)
