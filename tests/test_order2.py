@@ -817,3 +817,16 @@ def test_edge_and_corner_cones_hold_the_gradient_bound_on_the_whole_face():
         v = np.sum((grad @ phi) ** 2, axis=1) - 4 * (N @ phi)
         assert v.max() <= 1e-9 * np.abs(phi).max()
     assert tried > accepted  # the filter rejects some: the test is not vacuous
+
+
+def test_edge_cones_that_leave_no_feasible_program_are_replaced_by_samples():
+    # between two sources of one flat region the edge cones (tangent at the Hessian 2I) can exclude every field:
+    # thingi_243015 from vertices 1462 and 551 is infeasible with them; the strategy solves again with the midpoint
+    # samples and cutting planes, and says so
+    mesh = cg.load_mesh(shared_mesh_path("thingi_243015.stl"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = cg.GeodesicSolver(mesh, "qclp", order=2).solve([1462, 551])
+    assert res.info.status == "optimal" and res.info.solver == "ipm"
+    assert any("edge cones ended 'primal_infeasible'" in n for n in res.info.notes)
+    assert res.info.extra["rounds"] >= 1 and np.isfinite(res.distance).all() and res.distance.min() == 0.0

@@ -103,6 +103,8 @@ class P2Program:
         The substitutions the builder made (degenerate faces, ...).
     objective_constant : float
         ``λ c`` of the smoothness energy ``λ(φᵀQφ + 2gᵀφ + c)``, left out of :attr:`problem`'s objective.
+    has_edge_cones : bool
+        Whether the program holds :class:`BernsteinEdgeCones`.
     """
 
     problem: ConicProblem
@@ -110,6 +112,7 @@ class P2Program:
     unreachable_vertices: np.ndarray
     notes: list[str]
     objective_constant: float = 0.0
+    has_edge_cones: bool = False
 
     def restore(self, x: np.ndarray) -> np.ndarray:
         """The full ``φ`` from a solution ``x`` of :attr:`problem`."""
@@ -303,7 +306,7 @@ class P2Builder:
         return c, fixed, (loose, M)
 
     def build(self, vsrc: np.ndarray, extra: tuple[np.ndarray, np.ndarray] | None = None,
-              eliminate: bool = True) -> P2Program:
+              eliminate: bool = True, edge_cones: bool = True) -> P2Program:
         """The program for a set of source vertices.
 
         Parameters
@@ -316,6 +319,9 @@ class P2Builder:
             Substitute the equalities of two unknowns (:func:`eliminate_pair_equalities`); False keeps them as rows
             of ``E`` (the interior-point solver then solves them through its Schur complement: the same optimum,
             ``p`` more triangular solves per factorization).
+        edge_cones : bool
+            False: the flat faces keep their midpoint samples instead of the :class:`BernsteinEdgeCones` (the
+            strategy's fallback when the edge cones leave no feasible or solvable program).
 
         Returns
         -------
@@ -342,7 +348,7 @@ class P2Builder:
         fixed[mesh.n_vertices + both] = True
         # sources joined by an edge form a curve, whose squared distance is not a point's (Hessian 2nnᵀ, not 2I):
         # the edge cones would hold the field back there, so the sampled cones and the cutting planes take over
-        point_like = both.size == 0
+        point_like = both.size == 0 and edge_cones
         rows, cols, vals, r = self._source_rows(vsrc)
         Emat = sp.csr_matrix((vals, (rows, cols)), shape=(r, space.n_dofs))
         # fixed DOFs leave the equalities; drop rows that are then empty
@@ -394,7 +400,7 @@ class P2Builder:
             guess=None if guess is None else np.where(fixed, 0.0, guess), equilibrate=True,
         )
         const = 0.0 if self.energy is None else self.lam * self.energy.c
-        return P2Program(problem, eliminated, ~reach_v, list(self.notes), const)
+        return P2Program(problem, eliminated, ~reach_v, list(self.notes), const, bool(hb.shape[0]))
 
     def _cones(self, vsrc: np.ndarray, extra: tuple[np.ndarray, np.ndarray] | None, reach: np.ndarray,
                point_like: bool, dv: np.ndarray | None):

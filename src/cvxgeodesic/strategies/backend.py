@@ -74,9 +74,9 @@ class Backend:
         self.fallback_to_clarabel = solver == "auto"
 
     def solve(self, problem: ConicProblem, ipm: Any, callback: Callable[[int, dict], None] | None,
-              notes: list[str]) -> BackendResult:
+              notes: list[str], fallback: bool = True) -> BackendResult:
         """Solve ``problem`` with the chosen backend (``ipm``: the strategy's InteriorPointSolver), appending every
-        substitution to ``notes``.
+        substitution to ``notes``; ``fallback=False``: no Clarabel retry (the caller has another program to try).
 
         Raises
         ------
@@ -92,10 +92,10 @@ class Backend:
         try:
             res = ipm.solve(problem, tol=self.tol, max_iter=self.max_iter, callback=callback)
         except SolverError as exc:
-            if not self.fallback_to_clarabel or exc.status in ("primal_infeasible", "dual_infeasible"):
+            if not (self.fallback_to_clarabel and fallback) or exc.status in ("primal_infeasible", "dual_infeasible"):
                 raise
             return self._clarabel_retry(problem, exc.status, notes)
-        if res.status == "optimal" or not self.fallback_to_clarabel:
+        if res.status == "optimal" or not (self.fallback_to_clarabel and fallback):
             return res
         try:  # "almost_optimal": Clarabel may reach the full accuracy; else keep the IPM's best iterate
             return self._clarabel_retry(problem, res.status, notes)

@@ -144,9 +144,7 @@ class Order2:
                          notes: list[str]) -> tuple[P2Program, BackendResult, list[int]]:
         """The program solved, then re-solved with cutting planes on flat faces: ``(program, result, iterations of
         each round)``."""
-        program = builder.build(vsrc)
-        notes[len(self.notes):len(self.notes)] = program.notes
-        res = self.policy.solve(program.problem, ipm, callback, notes)
+        program, res = self._first_solve(builder, ipm, vsrc, callback, notes)
         rounds = [res.iterations]
         flat = builder.space.flat_faces
         extra_f, extra_b = np.zeros(0, dtype=np.int64), np.zeros((0, 3))
@@ -155,7 +153,8 @@ class Order2:
             add, bary = violations(builder.space, program.restore(res.x), REFINE_TOL, flat_ids)
             if add.size == 0:
                 break
-            cand = builder.build(vsrc, extra=(np.concatenate([extra_f, add]), np.concatenate([extra_b, bary])))
+            cand = builder.build(vsrc, extra=(np.concatenate([extra_f, add]), np.concatenate([extra_b, bary])),
+                                 edge_cones=program.has_edge_cones)
             # the last round's optimum, scaled into the new cones, is the next round's start: 25-30 % fewer
             # iterations in the later rounds, the same optimum (thingi_37881: rounds of 26, 25, 26, 28, 26 iterations
             # from Mehrotra's start, 26, 18, 19, 19, 18 from the last one; 2026-12-02)
@@ -175,6 +174,28 @@ class Order2:
         if len(rounds) > 1:
             notes.append(f"{len(rounds) - 1} cutting-plane round(s) on flat faces added {extra_f.size} cone(s)")
         return program, res, rounds
+
+    def _first_solve(self, builder: P2Builder, ipm: Any, vsrc: np.ndarray, callback: Callback | None,
+                     notes: list[str]) -> tuple[P2Program, BackendResult]:
+        """The program solved; when its flat faces' edge cones leave it infeasible or the solver short of optimal
+        (they are stricter than the gradient bound where the field is not a point's squared distance: between two
+        sources of one flat region, measured on thingi_243015), solved again with the midpoint samples in their
+        place, and the cutting planes after it, with a note."""
+        program = builder.build(vsrc)
+        notes[len(self.notes):len(self.notes)] = program.notes
+        if not program.has_edge_cones:
+            return program, self.policy.solve(program.problem, ipm, callback, notes)
+        try:
+            res = self.policy.solve(program.problem, ipm, callback, notes, fallback=False)
+            if res.status == "optimal":
+                return program, res
+            why = f"ended {res.status!r}"
+        except SolverError as exc:
+            why = f"ended {exc.status!r}"
+        notes.append(f"the program with the flat faces' edge cones {why}; solved again with the edge midpoints "
+                     "sampled instead, and cutting planes")
+        program = builder.build(vsrc, edge_cones=False)
+        return program, self.policy.solve(program.problem, ipm, callback, notes)
 
     def _result(self, program: P2Program, res: BackendResult, rounds: list[int], builder: P2Builder,
                 split: SplitMesh | None, sources: SourceSet, notes: list[str], t0: float) -> GeodesicResult:
