@@ -200,7 +200,6 @@ class P2Builder:
         if samples == "flat-bernstein" and medium is not None:
             # the tangent in bernstein_edge_cones is taken at the Euclidean Hessian 2I
             samples = "flat-nodes"
-        self.samples = samples
         flat_faces = np.zeros(0, dtype=np.int64)
         if samples in ("flat-nodes", "flat-bernstein"):
             flat = sp_.flat_faces[good]
@@ -358,13 +357,10 @@ class P2Builder:
         # the mean of φ, not its integral: the backends' absolute gap tolerance then means the same on any area
         c = -self.w / max(self.w.sum(), 1e-300)
         c[fixed] = 0.0
-        dv = None
-        with_guess = vsrc.size > 0
-        if with_guess or (self.cone_scale == "dijkstra" and vsrc.size):
+        dv = guess = None
+        if vsrc.size:
             dv = dijkstra(space.adjacency, indices=vsrc, min_only=True)
             dv = np.where(np.isfinite(dv), dv, 0.0)
-        guess = None
-        if with_guess:
             # a starting field for the structured solver: squared distance at the vertices, squared mean at the
             # midpoints (on an edge at a source vertex that is ℓ²/4 = φ_j / 4, so it meets the zero-derivative
             # equalities). With flat faces too since the edge cones (2026-12-02: fandisk 30 → 24 iterations,
@@ -487,35 +483,33 @@ class BernsteinEdgeCones:
         The edge is the one opposite this local corner (local DOFs ``corner + 1``, ``3 + corner``, ``corner + 2``).
     grad : (k, 4, 6) float ndarray
         ``(G_i, G_j)`` on the face's DOFs, in the face's 2-D frame.
-    tangent : (k, 2) float ndarray
-        ``u₀ = 2e`` in the face's frame.
+    e2 : (k,) float ndarray
+        ``|e|²``.
     """
 
     face: np.ndarray
     corner: np.ndarray
     grad: np.ndarray
-    tangent: np.ndarray
+    e2: np.ndarray
 
     def rows(self, keep: np.ndarray, a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``G`` (k, 6, 6) and ``h`` (k, 6) with ``h − G x = (T + a, √a G_i, √a G_j, T − a)`` for the cones ``keep``
         (a mask or indices), centred at ``a`` (k,) (``‖(√a w, T − a)‖ ≤ T + a`` is ``|w|² ≤ 4T`` for every
         ``a > 0``)."""
-        u0 = self.tangent[keep]
-        grad, corner = self.grad[keep], self.corner[keep]
+        grad, corner, e2 = self.grad[keep], self.corner[keep], self.e2[keep]
         k = grad.shape[0]
         r = np.arange(k)
-        T = 0.5 * np.einsum("ka,kac->kc", u0, grad[:, 2:] - grad[:, :2])
-        T[r, (corner + 1) % 3] -= 1.0
-        T[r, (corner + 2) % 3] -= 1.0
-        T[r, 3 + corner] += 4.0
-        const = -0.25 * np.einsum("ka,ka->k", u0, u0)
+        T = np.zeros((k, 6))  # T = 3φ_i + 3φ_j − 4φ_m − |e|²
+        T[r, (corner + 1) % 3] = 3.0
+        T[r, (corner + 2) % 3] = 3.0
+        T[r, 3 + corner] = -4.0
         G = np.zeros((k, 6, 6))
         G[:, 0] = -T
         G[:, 1:5] = -np.sqrt(a)[:, None, None] * grad
         G[:, 5] = -T
         h = np.zeros((k, 6))
-        h[:, 0] = a + const
-        h[:, 5] = -a + const
+        h[:, 0] = a - e2
+        h[:, 5] = -a - e2
         return G, h
 
 
@@ -523,18 +517,12 @@ def bernstein_edge_cones(space: P2Space, faces: np.ndarray) -> BernsteinEdgeCone
     """The :class:`BernsteinEdgeCones` of ``faces`` (k,) int ndarray (three per face, flat faces)."""
     faces = np.asarray(faces, dtype=np.int64)
     face, corner = np.repeat(faces, 3), np.tile(np.arange(3), faces.size)
-    i, j = (corner + 1) % 3, (corner + 2) % 3
     r = np.arange(face.size)
     _, grad = space.face_cones(SAMPLES["corners"])  # (m, 3, 2, 6)
     g = grad[face]  # (k, 3, 2, 6): the corners' gradient rows of each cone's face
-    grad_ij = np.concatenate([g[r, i], g[r, j]], axis=1)
-    # u₀ = 2e in the face's frame: the rows applied to |x − x₀|² at the face's nodes (P2 is exact on quadratics)
-    X = space.mesh.V[space.mesh.F[face]]
-    X = X - X[:, :1]
-    nodes = np.concatenate([X, 0.5 * (X[:, [1, 2, 0]] + X[:, [2, 0, 1]])], axis=1)
-    sq = np.einsum("knd,knd->kn", nodes, nodes)
-    u0 = np.einsum("kac,kc->ka", grad_ij[:, 2:] - grad_ij[:, :2], sq)
-    return BernsteinEdgeCones(face, corner, grad_ij, u0)
+    grad_ij = np.concatenate([g[r, (corner + 1) % 3], g[r, (corner + 2) % 3]], axis=1)
+    e2 = space.mesh.edge_lengths[space.face_edges[face, corner]] ** 2
+    return BernsteinEdgeCones(face, corner, grad_ij, e2)
 
 
 def _restore_matrix(elim: np.ndarray, M: sp.csr_matrix, n: int) -> sp.csr_matrix:

@@ -49,11 +49,6 @@ def _add_identity(pr: Program, u: Sequence[np.ndarray], d: float) -> list[np.nda
     return [b.cone.add_identity(ub, d) for b, ub in zip(pr.blocks, u, strict=True)]
 
 
-def max_step(pr: Program, u: Sequence[np.ndarray], du: Sequence[np.ndarray]) -> float:
-    """Largest ``α`` with ``u + α du`` in every block's cone (``inf`` when unbounded)."""
-    return min([b.cone.max_step(ub, dub) for b, ub, dub in zip(pr.blocks, u, du, strict=True)], default=np.inf)
-
-
 def interior_primal(pr: Program, x: np.ndarray, fraction: float) -> np.ndarray | None:
     """``x_F + α (x − x_F)`` with ``α = min(1, fraction · α_max)``, ``α_max`` the largest step from ``x_F`` (the
     fixed values, free part 0) that keeps ``s = b̃ − A x`` strictly in K on all of ``(0, α_max)``; ``None`` when no
@@ -66,17 +61,23 @@ def interior_primal(pr: Program, x: np.ndarray, fraction: float) -> np.ndarray |
     ``φ = 0``, the bounds ``d ≥ 0`` next to the sources): the step is then the closed one
     (:meth:`~.cones.Cone.max_step_closed`).
     """
-    s0 = [b.b_tilde for b in pr.blocks]
-    step = np.where(pr.fixed, 0.0, x - pr.x_fixed)
-    du = [-b.A(step) for b in pr.blocks]
-    if _min_eigenvalue(pr, s0) > 0:
-        alpha_max = max_step(pr, s0, du)
-    else:
-        alpha_max = min([float(b.cone.max_step_closed(u, d).min(initial=np.inf))
-                         for b, u, d in zip(pr.blocks, s0, du, strict=True)], default=np.inf)
-        if not alpha_max > 0:
-            return None
+    step, alpha_max = _segment(pr, x, [True] * len(pr.blocks))
+    if not alpha_max > 0:
+        return None
     return pr.x_fixed + min(1.0, fraction * alpha_max) * step
+
+
+def _segment(pr: Program, x: np.ndarray, bound: Sequence[bool]) -> tuple[np.ndarray, float]:
+    """``(x − x_F on the free variables, α_max)``: the largest step from ``x_F`` along it that keeps the slacks of
+    the blocks ``bound`` strictly in their cones (the closed step where ``x_F`` lies on a cone's boundary; not
+    positive when no step does)."""
+    blocks = [(b, b.b_tilde) for b, keep in zip(pr.blocks, bound, strict=True) if keep]
+    step = np.where(pr.fixed, 0.0, x - pr.x_fixed)
+    du = [-b.A(step) for b, _ in blocks]
+    if min([b.cone.min_eigenvalue(u) for b, u in blocks], default=np.inf) > 0:
+        return step, min([b.cone.max_step(u, d) for (b, u), d in zip(blocks, du, strict=True)], default=np.inf)
+    return step, min([float(b.cone.max_step_closed(u, d).min(initial=np.inf))
+                      for (b, u), d in zip(blocks, du, strict=True)], default=np.inf)
 
 
 def dual_shift_per_cone(pr: Program, z: Sequence[np.ndarray], st: IPMSettings) -> list[np.ndarray] | None:
@@ -175,24 +176,21 @@ PARTIAL_GUESS_MIN_STEP = 0.1
 
 
 def guess_primal(pr: Program, fraction: float) -> tuple[np.ndarray, list[bool]] | None:
-    """:func:`interior_primal` towards the program's guess (order 2: the squared Dijkstra distance) over the
-    blocks that hold at ``x_F``: ``(x, outside)``, ``outside[b]`` when block ``b`` does not hold at ``x_F`` (its
-    slacks are left to a shift); ``None`` without a guess, when the guess breaks an equality, when no step
-    towards it is feasible, or when some block does not hold at ``x_F`` and the step is below
+    """:func:`interior_primal` towards the program's guess (order 2: the squared Dijkstra distance), the step
+    bounded by the blocks that hold at ``x_F``: ``(x, outside)``, ``outside[b]`` when block ``b`` does not hold
+    at ``x_F`` (its slacks are left to a shift); ``None`` without a guess, when the guess breaks an equality,
+    when no step towards it is feasible, or when some block does not hold at ``x_F`` and the step is below
     :data:`PARTIAL_GUESS_MIN_STEP`."""
     g = pr.guess
     if g is None:
         return None
     if pr.p and np.abs(pr.eq_residual(g)).max() > 1e-9 * max(1.0, float(np.abs(g).max())):
         return None
-    s0 = [b.b_tilde for b in pr.blocks]
-    outside = [b.cone.min_eigenvalue(u) < -1e-12 * max(1.0, float(np.abs(u).max(initial=0.0)))
-               for b, u in zip(pr.blocks, s0, strict=True)]
+    outside = [b.cone.min_eigenvalue(b.b_tilde) < -1e-12 * max(1.0, float(np.abs(b.b_tilde).max(initial=0.0)))
+               for b in pr.blocks]
     if all(outside):
         return None
-    step = np.where(pr.fixed, 0.0, g - pr.x_fixed)
-    alpha_max = min([float(b.cone.max_step_closed(u, -b.A(step)).min(initial=np.inf))
-                     for b, u, out in zip(pr.blocks, s0, outside, strict=True) if not out], default=np.inf)
+    step, alpha_max = _segment(pr, g, [not out for out in outside])
     alpha = min(1.0, fraction * alpha_max)
     if not alpha > 0 or (any(outside) and alpha < PARTIAL_GUESS_MIN_STEP):
         return None
