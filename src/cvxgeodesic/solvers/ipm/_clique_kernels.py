@@ -280,9 +280,11 @@ def kkt(G, dofs, w, inv_eta2, v, out):
 @njit(**_JIT)
 def assemble(G, gjg, w, inv_eta2, tri_a, tri_b, pos, data):
     """``data[pos] += G_tᵀ W_t⁻² G_t = (2 (G_tᵀv̂)(G_tᵀv̂)ᵀ − G_tᵀJG_t)/η²`` (``v̂ = J w̄``) on each clique's lower
-    triangle: entry ``e`` = (``tri_a[e]``, ``tri_b[e]``) of cone ``t`` at ``pos[e·k + t]``; ``gjg`` (k, ne) holds
-    ``G_tᵀJG_t`` at those entries."""
+    triangle: entry ``e`` = (``tri_a[e]``, ``tri_b[e]``) of cone ``t`` at ``pos[t·ne + e]`` (each cone's positions
+    contiguous: with one position stream per entry the scattered writes took twice as long, 17.7 against 8.7 ms over
+    armadillo's 259K order-2 cones, 2026-12-02); ``gjg`` (k, ne) holds ``G_tᵀJG_t`` at those entries."""
     k, d, c = G.shape
+    ne = tri_a.shape[0]
     u = np.empty(c)
     for t in range(k):
         for j in range(c):
@@ -291,8 +293,8 @@ def assemble(G, gjg, w, inv_eta2, tri_a, tri_b, pos, data):
                 acc -= w[i, t] * G[t, i, j]
             u[j] = acc
         f = inv_eta2[t]
-        for e in range(tri_a.shape[0]):
-            data[pos[e * k + t]] += (2.0 * u[tri_a[e]] * u[tri_b[e]] - gjg[t, e]) * f
+        for e in range(ne):
+            data[pos[t * ne + e]] += (2.0 * u[tri_a[e]] * u[tri_b[e]] - gjg[t, e]) * f
 
 
 # ------------------------------------------------------------------------------ SOC(4), unrolled
@@ -462,11 +464,12 @@ def kkt4(G, dofs, w, inv_eta2, v, out):
 def assemble4(G, gjg, w, inv_eta2, tri_a, tri_b, pos, data):
     """:func:`assemble` for SOC(4) cones."""
     k, _, c = G.shape
+    ne = tri_a.shape[0]
     u = np.empty(c)
     for t in range(k):
         w0, w1, w2, w3 = w[0, t], w[1, t], w[2, t], w[3, t]
         for j in range(c):
             u[j] = w0 * G[t, 0, j] - w1 * G[t, 1, j] - w2 * G[t, 2, j] - w3 * G[t, 3, j]
         f = inv_eta2[t]
-        for e in range(tri_a.shape[0]):
-            data[pos[e * k + t]] += (2.0 * u[tri_a[e]] * u[tri_b[e]] - gjg[t, e]) * f
+        for e in range(ne):
+            data[pos[t * ne + e]] += (2.0 * u[tri_a[e]] * u[tri_b[e]] - gjg[t, e]) * f

@@ -220,7 +220,7 @@ class CliqueSOCBlock:
         ta, tb = np.tril_indices(group.clique)  # lower-triangle clique entries (a ≥ b)
         self.tri_a, self.tri_b = ta.astype(np.int64), tb.astype(np.int64)
         dofs = self.dofs
-        self.pos = _kern.positions(chol, dofs[:, ta].T.ravel(), dofs[:, tb].T.ravel()) if k else np.zeros(0, np.int64)
+        self.pos = _kern.positions(chol, dofs[:, ta].ravel(), dofs[:, tb].ravel()) if k else np.zeros(0, np.int64)
         G = self.G
         self.gjg = np.ascontiguousarray(np.einsum("ke,ke->ke", G[:, 0, ta], G[:, 0, tb])
                                         - np.einsum("kie,kie->ke", G[:, 1:, ta], G[:, 1:, tb]))
