@@ -190,6 +190,21 @@ def test_starting_point_shifts(cone):
     assert _inside(cone, shifted).all()
 
 
+@pytest.mark.parametrize("cone", CONES, ids=IDS)
+def test_shift_cones_moves_the_masked_cones_inside_and_leaves_the_others(cone):
+    rng = np.random.default_rng(7)
+    u = rng.normal(size=_interior(cone, rng).shape)  # about half of the cones outside
+    mask = rng.random(K) < 0.5
+    shifted = cone.shift_cones(u, mask, 1.5, 1e-2)
+    inside = _inside(cone, shifted)
+    assert inside[mask].all() and cone.min_eigenvalue(shifted[..., mask]) > 0  # strictly inside
+    assert np.abs(shifted[..., ~mask] - u[..., ~mask]).max() <= 1e-14 * np.abs(u).max()  # the others unchanged
+    if not isinstance(cone, Orthant):  # only the heads (the SOC's, in the rotated cone's own coordinates) move
+        moved = u if isinstance(cone, SOC) else _t(cone.dim) @ u
+        after = shifted if isinstance(cone, SOC) else _t(cone.dim) @ shifted
+        assert np.allclose(after[1:], moved[1:])
+
+
 # ---------------------------------------------------------------------------------------------------------------
 # A made-up program through the generic blocks, against Clarabel
 # ---------------------------------------------------------------------------------------------------------------

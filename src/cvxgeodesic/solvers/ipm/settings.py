@@ -125,8 +125,9 @@ class IPMSettings:
         never more. "graph" (2026-12-01, spot/bimba/horse/armadillo QCLP and QCQP-Hessian, 70K and 280K
         bunnies QCQP-Hessian): 154 → 153 iterations with 2 correctors, 146 → 143 with 4, and one factorization
         fewer per QCQP solve. Default "graph". "guess" (the order-2 programs, :data:`ORDER2`): the program's own
-        guess field scaled into the interior (:func:`.start.guess_primal`), the least-norm z with Mehrotra's shift
-        of z alone; "mehrotra" without a guess.
+        guess field scaled into the interior of the cones that allow a step of at least
+        :data:`.start.PARTIAL_GUESS_MIN_STEP` towards it, the others' slacks shifted (:func:`.start.guess_primal`),
+        the least-norm z with Mehrotra's shift of z alone; "mehrotra" without a guess.
     plain_dual_factor : float
         The dual residual relative to ``max(1, ‖q‖ + ‖x‖)`` alone (without ``‖z‖`` in its scale, the guard against a
         dual blown up along a direction ``Aᵀ`` cancels, :mod:`.residuals`) is accepted at this multiple of ``tol``.

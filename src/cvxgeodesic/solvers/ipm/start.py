@@ -166,35 +166,37 @@ def _least_squares_x(pr: Program, ls: LinearSystem, st: IPMSettings, scalings) -
     return x, f0
 
 
-#: A guess start with blocks that do not hold at ``x_F`` is taken only when it moves at least this fraction of the
-#: way to the guess: closer to ``x_F`` the other cones sit near their apex while the shifted ones are far from
-#: feasible, and Mehrotra's start did better. Measured 2026-12-02 (order 2, edge cones, source vertex 0): fandisk
-#: (step 0.23) 24 iterations from the guess against 30, bug_surface (0.22) 20 against 27; the subdivided bunny of
-#: 1.1M faces (0.01) 127 against 56, bunny_7k subdivided twice (0.011) 45 against 39, thingi_47076 (5e-5) 29
-#: against 22.
+#: The guess start's segment from ``x_F`` is bounded by the cones whose own largest step towards the guess is at
+#: least this: the others (those that do not hold at ``x_F``, step 0, and the few that the guess violates most)
+#: are left out, their slacks shifted cone by cone. Measured 2026-12-02 (order 2, source vertex 0): a handful of
+#: cones bounded the whole segment (armadillo: 36 of 259K cones below 0.1, the lowest 0.015, the median 0.93), so
+#: the start took 1.3 % of the way to the guess; leaving them out took it 9.6 % of the way and armadillo from 27 to
+#: 24 iterations, fandisk from 24 to 21. Before, a start that left out whole blocks (the edge cones) was declined
+#: below a step of 0.1, where it cost iterations (the 1.1M-face subdivided bunny 127 against 56).
 PARTIAL_GUESS_MIN_STEP = 0.1
+#: ... and each left-out cone's margin after its shift, relative to its largest slack entry.
+_LEFT_OUT_MARGIN = 1e-2
 
 
-def guess_primal(pr: Program, fraction: float) -> tuple[np.ndarray, list[bool]] | None:
-    """:func:`interior_primal` towards the program's guess (order 2: the squared Dijkstra distance), the step
-    bounded by the blocks that hold at ``x_F``: ``(x, outside)``, ``outside[b]`` when block ``b`` does not hold
-    at ``x_F`` (its slacks are left to a shift); ``None`` without a guess, when the guess breaks an equality,
-    when no step towards it is feasible, or when some block does not hold at ``x_F`` and the step is below
-    :data:`PARTIAL_GUESS_MIN_STEP`."""
+def guess_primal(pr: Program, fraction: float) -> tuple[np.ndarray, list[np.ndarray]] | None:
+    """The start towards the program's guess (order 2: the squared Dijkstra distance): ``(x, left_out)``,
+    ``x = x_F + α (guess − x_F)`` with ``α = min(1, fraction · α_max)``, ``α_max`` the largest step that keeps the
+    slacks of the cones that bound it strictly in their cones, ``left_out[b]`` (count,) bool the cones of block
+    ``b`` that do not bound it (their own step is below :data:`PARTIAL_GUESS_MIN_STEP`; their slacks are left to
+    a shift). ``None`` without a guess, when the guess breaks an equality, or when no cone reaches that step."""
     g = pr.guess
     if g is None:
         return None
     if pr.p and np.abs(pr.eq_residual(g)).max() > 1e-9 * max(1.0, float(np.abs(g).max())):
         return None
-    outside = [b.cone.min_eigenvalue(b.b_tilde) < -1e-12 * max(1.0, float(np.abs(b.b_tilde).max(initial=0.0)))
-               for b in pr.blocks]
-    if all(outside):
+    step = np.where(pr.fixed, 0.0, g - pr.x_fixed)
+    reach = [np.asarray(b.cone.max_step_closed(b.b_tilde, -b.A(step)), dtype=np.float64).reshape(b.count)
+             for b in pr.blocks]
+    left_out = [r < PARTIAL_GUESS_MIN_STEP for r in reach]
+    if all(out.all() for out in left_out):
         return None
-    step, alpha_max = _segment(pr, g, [not out for out in outside])
-    alpha = min(1.0, fraction * alpha_max)
-    if not alpha > 0 or (any(outside) and alpha < PARTIAL_GUESS_MIN_STEP):
-        return None
-    return pr.x_fixed + alpha * step, outside
+    alpha_max = min(float(r[~out].min(initial=np.inf)) for r, out in zip(reach, left_out, strict=True))
+    return pr.x_fixed + min(1.0, fraction * alpha_max) * step, left_out
 
 
 def _primal(pr: Program, ls: LinearSystem, st: IPMSettings, scalings) -> tuple[np.ndarray, bool, object]:
@@ -216,12 +218,10 @@ def starting_point(pr: Program, ls: LinearSystem, st: IPMSettings) -> Start:
     scalings = pr.identity_scalings()
     y0 = np.zeros(pr.p)
     if st.init == "guess" and (guess := guess_primal(pr, st.interior_fraction)) is not None:
-        x, outside = guess
+        x, left_out = guess
         s = [b.slack(x, pr.x_fixed) for b in pr.blocks]
-        for i, b in enumerate(pr.blocks):
-            if outside[i]:  # Mehrotra's shift of s, on the blocks the segment from x_F could not keep
-                s[i] = b.cone.add_identity(s[i], max(-st.shift_factor * b.cone.min_eigenvalue(s[i]), 0.0)
-                                           + 1e-2 * max(float(np.abs(s[i]).max(initial=0.0)), 1e-12))
+        s = [b.cone.shift_cones(sb, out, st.shift_factor, _LEFT_OUT_MARGIN) if out.any() else sb
+             for b, sb, out in zip(pr.blocks, s, left_out, strict=True)]
         y = _least_norm_dual(pr, ls, None, x, scalings)
         if y is not None:
             s, z = mehrotra_shift(pr, s, [b.A(y) for b in pr.blocks], st, shift_s=False)
