@@ -518,8 +518,9 @@ def bernstein_edge_cones(space: P2Space, faces: np.ndarray) -> BernsteinEdgeCone
     faces = np.asarray(faces, dtype=np.int64)
     face, corner = np.repeat(faces, 3), np.tile(np.arange(3), faces.size)
     r = np.arange(face.size)
-    _, grad = space.face_cones(SAMPLES["corners"])  # (m, 3, 2, 6)
-    g = grad[face]  # (k, 3, 2, 6): the corners' gradient rows of each cone's face
+    # the corners' gradient rows of each cone's face (k, 3, 2, 6), for these faces only
+    _, g = space.sample_rows(np.repeat(face, 3), np.tile(SAMPLES["corners"], (face.size, 1)))
+    g = g.reshape(face.size, 3, 2, 6)
     grad_ij = np.concatenate([g[r, (corner + 1) % 3], g[r, (corner + 2) % 3]], axis=1)
     e2 = space.mesh.edge_lengths[space.face_edges[face, corner]] ** 2
     return BernsteinEdgeCones(face, corner, grad_ij, e2)

@@ -89,13 +89,14 @@ class Backend:
             from .._verbose import ipm_log
 
             callback = ipm_log(callback)
+        retry = self.fallback_to_clarabel and fallback
         try:
             res = ipm.solve(problem, tol=self.tol, max_iter=self.max_iter, callback=callback)
         except SolverError as exc:
-            if not (self.fallback_to_clarabel and fallback) or exc.status in ("primal_infeasible", "dual_infeasible"):
+            if not retry or exc.status in ("primal_infeasible", "dual_infeasible"):
                 raise
             return self._clarabel_retry(problem, exc.status, notes)
-        if res.status == "optimal" or not (self.fallback_to_clarabel and fallback):
+        if res.status == "optimal" or not retry:
             return res
         try:  # "almost_optimal": Clarabel may reach the full accuracy; else keep the IPM's best iterate
             return self._clarabel_retry(problem, res.status, notes)

@@ -5,9 +5,10 @@
 same with the least-squares ``x`` of the ``W = I`` system (also the graph start's fallback); "mehrotra": the
 least-squares ``x`` and the same ``z`` with Mehrotra's uniform shifts; "cvxopt": ``z = A x − b`` shifted into
 the cone; "guess": the program's own guess field (:attr:`.program.Program.guess`, the order-2 programs' squared
-Dijkstra distance) scaled towards ``x_F`` into the interior of the blocks that hold at ``x_F`` (the slacks of the
-others, such as the order-2 edge cones, which do not hold at ``φ = 0``, shifted into their cone), the least-norm
-``z`` with Mehrotra's shift of ``z`` alone ("mehrotra" without a guess). The equality duals start at 0.
+Dijkstra distance) scaled towards ``x_F`` into the interior of the cones that allow a step of at least
+:data:`PARTIAL_GUESS_MIN_STEP` towards it (the slacks of the others, such as the order-2 edge cones, which do not
+hold at ``φ = 0``, shifted cone by cone into their cone), the least-norm ``z`` with Mehrotra's shift of ``z`` alone
+("mehrotra" without a guess). The equality duals start at 0.
 """
 
 from __future__ import annotations
@@ -61,23 +62,17 @@ def interior_primal(pr: Program, x: np.ndarray, fraction: float) -> np.ndarray |
     ``φ = 0``, the bounds ``d ≥ 0`` next to the sources): the step is then the closed one
     (:meth:`~.cones.Cone.max_step_closed`).
     """
-    step, alpha_max = _segment(pr, x, [True] * len(pr.blocks))
+    s0 = [b.b_tilde for b in pr.blocks]
+    step = np.where(pr.fixed, 0.0, x - pr.x_fixed)
+    du = [-b.A(step) for b in pr.blocks]
+    if _min_eigenvalue(pr, s0) > 0:
+        alpha_max = min([b.cone.max_step(u, d) for b, u, d in zip(pr.blocks, s0, du, strict=True)], default=np.inf)
+    else:
+        alpha_max = min([float(b.cone.max_step_closed(u, d).min(initial=np.inf))
+                         for b, u, d in zip(pr.blocks, s0, du, strict=True)], default=np.inf)
     if not alpha_max > 0:
         return None
     return pr.x_fixed + min(1.0, fraction * alpha_max) * step
-
-
-def _segment(pr: Program, x: np.ndarray, bound: Sequence[bool]) -> tuple[np.ndarray, float]:
-    """``(x − x_F on the free variables, α_max)``: the largest step from ``x_F`` along it that keeps the slacks of
-    the blocks ``bound`` strictly in their cones (the closed step where ``x_F`` lies on a cone's boundary; not
-    positive when no step does)."""
-    blocks = [(b, b.b_tilde) for b, keep in zip(pr.blocks, bound, strict=True) if keep]
-    step = np.where(pr.fixed, 0.0, x - pr.x_fixed)
-    du = [-b.A(step) for b, _ in blocks]
-    if min([b.cone.min_eigenvalue(u) for b, u in blocks], default=np.inf) > 0:
-        return step, min([b.cone.max_step(u, d) for (b, u), d in zip(blocks, du, strict=True)], default=np.inf)
-    return step, min([float(b.cone.max_step_closed(u, d).min(initial=np.inf))
-                      for (b, u), d in zip(blocks, du, strict=True)], default=np.inf)
 
 
 def dual_shift_per_cone(pr: Program, z: Sequence[np.ndarray], st: IPMSettings) -> list[np.ndarray] | None:
