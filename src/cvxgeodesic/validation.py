@@ -27,8 +27,8 @@ from .errors import ParameterError, SourceError
 
 __all__ = [
     "as_points", "as_vertex_field", "check_choice", "check_cost", "check_count", "check_medium_method", "check_metric",
-    "check_number", "check_output_path", "check_plane_metric", "check_type", "is_integer", "is_real", "short_repr",
-    "validate_sources", "vertex_indices", "vertex_mask",
+    "check_not_an_input", "check_number", "check_output_path", "check_plane_metric", "check_type", "is_integer",
+    "is_real", "short_repr", "validate_sources", "vertex_indices", "vertex_mask",
 ]
 
 
@@ -305,6 +305,40 @@ def validate_sources(sources: Any, n: int) -> np.ndarray:
     if (counts > 1).any():
         raise SourceError(f"source vertex {int(uniq[counts > 1][0])} is given more than once")
     return arr
+
+
+def check_not_an_input(path: str | os.PathLike, inputs, what: str = "output") -> None:
+    """Refuse an output path that names one of the input files (the same file, also through links).
+
+    Writing a result over the mesh it was computed from destroys the input; the atomic rename that
+    protects outputs would do it silently.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The output about to be written.
+    inputs : iterable of str or os.PathLike
+        The files the run reads.
+    what : str
+        The output's name in the message (``"-o"``, ``"--out"``).
+
+    Raises
+    ------
+    ParameterError
+        ``path`` and an input are the same file (same device and inode, or the same resolved path).
+    """
+    out = Path(os.fspath(path))
+    for source in inputs:
+        src = Path(os.fspath(source))
+        same = out.resolve() == src.resolve()
+        if not same and out.exists() and src.exists():
+            try:
+                same = os.path.samefile(out, src)
+            except OSError:
+                same = False
+        if same:
+            raise ParameterError(f"{what} {out} is the input file {src}: refusing to overwrite an input; "
+                                 "choose another output path")
 
 
 def check_output_path(path: str | os.PathLike, extensions: tuple[str, ...]) -> Path:
