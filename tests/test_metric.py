@@ -58,11 +58,11 @@ def _mean_relative(d: np.ndarray, exact: np.ndarray) -> float:
 #: relative to the largest distance; measured up to 2e-6).
 SCALE_TOL = 1e-5
 #: For a power of two, rounding only: the metric's transforms (square roots of quadratic forms) are not bit-exact and
-#: the solver's last iterations amplify that; measured 2026-12-02 on icosphere(2), qclp: 7.1e-13 (cost), 1.6e-12
-#: (metric), with the bounds d ≥ 0 next to the source; 1.62e-12 on an Intel Xeon (qcqp-laplacian, point sources: MKL
-#: and OpenBLAS pick other SIMD kernels there, so the rounding differs). Every power-of-two comparison uses this bound:
-#: 50x the largest rounding seen, and still 1e5 below SCALE_TOL, so a scale that is not carried through (a length,
-#: an area or λ left unscaled) still fails it.
+#: the solver's last iterations amplify that. Measured on icosphere(2): qclp 7.1e-13 (cost), 1.6e-12 (metric),
+#: 2026-12-02; qcqp-laplacian with point sources 1.62e-12 on an Intel Xeon (MKL and OpenBLAS take other SIMD kernels
+#: there) and 2.6e-12 here on 2026-12-03 under load. Every power-of-two comparison uses this bound: ~40x the largest
+#: rounding seen, and still 1e5 below SCALE_TOL, so a scale that is not carried through (a length, an area or λ left
+#: unscaled) still fails it.
 POWER_OF_TWO_TOL = 1e-10
 
 
