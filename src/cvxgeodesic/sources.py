@@ -35,6 +35,8 @@ from __future__ import annotations
 
 import math
 import numbers
+import threading
+import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -56,6 +58,18 @@ BARY_TOL = 1e-9
 ON_SURFACE_TOL = 1e-6
 #: Curve sampling step as a fraction of the mean edge length.
 CURVE_STEP = 1.0 / 8.0
+#: A position farther than this many bounding-box diagonals from the box's center is moved in along the ray from
+#: the center to that distance before its closest point is searched (:class:`ClosestPointIndex`): squares of its
+#: coordinates could overflow. Exactly, ``|x − p|² = s² − 2 s (p̃·u − |p̃|²/(2s))`` for ``x`` at distance ``s``
+#: along ``u`` and ``p̃ = p − center``, so the point closest at the moved distance ``R`` is farther than the
+#: closest one by at most ``diag² / (8 R)``: ``diag / 8e7`` here, while rounding at ``R`` costs about
+#: ``2e-16 R = 2e-9 diag``.
+FAR_QUERY = 1e7
+#: A mesh with a coordinate beyond this (or a bounding-box diagonal below its inverse) is searched for closest
+#: points in its unit frame (:class:`ClosestPointIndex`): the point-triangle distances and the barycentric
+#: coordinates take fourth powers of the coordinates, which overflow beyond 1e77 (measured: libigl finds other
+#: faces from 1e90 on). Other meshes are searched as they are, so their results do not change by a bit.
+UNIT_FRAME = 1e32
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -214,13 +228,106 @@ def _barycentric(T: np.ndarray, X: np.ndarray) -> np.ndarray:
     return clipped_barycentric(X, T[:, 0], T[:, 1], T[:, 2])
 
 
+class ClosestPointIndex:
+    """libigl's AABB tree over one mesh's faces, built once per mesh (:func:`closest_point_index`).
+
+    A query farther than :data:`FAR_QUERY` bounding-box diagonals from the box's center is moved in along the
+    ray from the center to that distance first: its squared distances then cannot overflow, and the point
+    found stays within ``diag / (8 FAR_QUERY)`` of being the closest (see :data:`FAR_QUERY`). A mesh with
+    coordinates beyond :data:`UNIT_FRAME` (or a diagonal below its inverse) is searched in its unit frame:
+    the box's center at the origin, scaled by a power of two to a diagonal in ``[0.5, 1)``; libigl's
+    point-triangle distances take fourth powers of the coordinates. Other meshes are searched as they are.
+
+    Parameters
+    ----------
+    mesh : TriMesh
+
+    Attributes
+    ----------
+    V : (n, 3) float ndarray
+        The vertices in the frame of the search: ``(mesh.V - shift) * scale``.
+    F : (m, 3) int64 ndarray
+    shift : (3,) float ndarray
+    scale : float
+    """
+
+    def __init__(self, mesh: TriMesh) -> None:
+        import igl
+
+        lo, hi = mesh.V.min(axis=0), mesh.V.max(axis=0)
+        self.center = 0.5 * (lo + hi)
+        diag = mesh.bbox_diagonal
+        self.shift, self.scale = np.zeros(3), 1.0
+        if float(np.abs(mesh.V).max()) > UNIT_FRAME or 0 < diag < 1.0 / UNIT_FRAME:
+            self.shift, self.scale = self.center, 2.0 ** -math.ceil(math.log2(diag))
+        self.V = np.ascontiguousarray((mesh.V - self.shift) * self.scale, dtype=np.float64)
+        self.F = np.ascontiguousarray(mesh.F, dtype=np.int64)
+        self.radius = FAR_QUERY * diag
+        self.tree = igl.AABB()
+        self.tree.init(self.V, self.F)
+
+    def query(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Closest face, closest point and distance of each position.
+
+        Parameters
+        ----------
+        X : (k, 3) float ndarray
+            Finite positions.
+
+        Returns
+        -------
+        faces : (k,) int64 ndarray
+        C : (k, 3) float ndarray
+            The closest points, in the frame of the search (as :attr:`V`).
+        dist : (k,) float ndarray
+            ``|X − C|`` in the mesh's units (``inf`` only where that exceeds the largest float).
+        """
+        Q = X - self.center
+        # a direction and a length without squaring the coordinates (they may exceed 1e154)
+        size = np.abs(Q).max(axis=1)
+        unit = Q / np.where(size > 0, size, 1.0)[:, None]
+        norm = np.linalg.norm(unit, axis=1)
+        with np.errstate(over="ignore"):
+            far = size * norm > self.radius
+        P = X
+        if far.any():
+            Q[far] = unit[far] * (self.radius / norm[far])[:, None]
+            P = Q + self.center
+        if self.scale != 1.0:
+            P = (P - self.shift) * self.scale
+        sqd, faces, C = self.tree.squared_distance(self.V, self.F, np.ascontiguousarray(P, dtype=np.float64))
+        C = np.asarray(C)
+        dist = np.sqrt(np.maximum(np.asarray(sqd), 0.0)) / self.scale
+        if far.any():  # the distance from the position itself, not from where it was moved
+            D = X[far] - (C[far] / self.scale + self.shift)
+            size = np.abs(D).max(axis=1)
+            with np.errstate(over="ignore"):
+                dist[far] = size * np.linalg.norm(D / size[:, None], axis=1)
+        return np.asarray(faces, dtype=np.int64), C, dist
+
+
+_INDEXES: weakref.WeakKeyDictionary[TriMesh, ClosestPointIndex] = weakref.WeakKeyDictionary()
+_INDEX_LOCK = threading.Lock()
+
+
+def closest_point_index(mesh: TriMesh) -> ClosestPointIndex:
+    """The mesh's :class:`ClosestPointIndex`, built on the first call for this mesh object and kept as long as
+    the mesh lives (beside it, not on it: the tree cannot be pickled, the mesh can)."""
+    with _INDEX_LOCK:
+        index = _INDEXES.get(mesh)
+        if index is None:
+            index = _INDEXES[mesh] = ClosestPointIndex(mesh)
+    return index
+
+
 def closest_points(mesh: TriMesh, X) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Closest surface points of positions.
+    """Closest surface points of positions (one search in the mesh's :func:`closest_point_index`).
 
     Parameters
     ----------
     mesh : TriMesh
     X : (k, 3) float array_like
+        Finite positions.
 
     Returns
     -------
@@ -229,15 +336,10 @@ def closest_points(mesh: TriMesh, X) -> tuple[np.ndarray, np.ndarray, np.ndarray
     dist : (k,) float ndarray
         Distance from each position to its closest point.
     """
-    import igl
-
     X = np.ascontiguousarray(np.asarray(X, dtype=np.float64).reshape(-1, 3))
-    V = np.ascontiguousarray(mesh.V, dtype=np.float64)
-    F = np.ascontiguousarray(mesh.F, dtype=np.int64)
-    sqd, faces, C = igl.point_mesh_squared_distance(X, V, F)
-    faces = np.asarray(faces, dtype=np.int64)
-    bary = _barycentric(V[F[faces]], np.asarray(C))
-    return faces, bary, np.sqrt(np.maximum(np.asarray(sqd), 0.0))
+    index = closest_point_index(mesh)
+    faces, C, dist = index.query(X)
+    return faces, _barycentric(index.V[index.F[faces]], C), dist  # in the search's frame: the same coordinates
 
 
 def surface_point(mesh: Any, xyz: ArrayLike) -> SurfacePoint | list[SurfacePoint]:
@@ -387,20 +489,24 @@ class _Builder:
 
     def add_point(self, p: SurfacePoint) -> None:
         """Snap to a vertex or an edge, else an interior point."""
+        self.add_bary(p.face, p.bary)
+
+    def add_bary(self, face: int, b: np.ndarray) -> None:
+        """:meth:`add_point` of a face and valid barycentric coordinates (``>= 0``, summing to 1)."""
         F = self.mesh.F
-        b = p.bary
         k = int(np.argmax(b))
         if b[k] >= 1.0 - BARY_SNAP:
-            self.vertices.append(int(F[p.face, k]))
+            self.vertices.append(int(F[face, k]))
             return
         zero = b <= BARY_SNAP
         if zero.any():
             b = np.where(zero, 0.0, b)
             b = b / b.sum()
             on = np.flatnonzero(~zero)  # exactly two corners: an edge point
-            va, vb = int(F[p.face, on[0]]), int(F[p.face, on[1]])
-            inc = _incident_faces(self.mesh)
-            shared = np.intersect1d(inc[va].indices, inc[vb].indices)
+            va, vb = int(F[face, on[0]]), int(F[face, on[1]])
+            inc = _incident_faces(self.mesh)  # the faces of a vertex: its row's indices (no sparse slicing)
+            shared = np.intersect1d(inc.indices[inc.indptr[va]:inc.indptr[va + 1]],
+                                    inc.indices[inc.indptr[vb]:inc.indptr[vb + 1]])
             for g in shared:
                 bg = np.zeros(3)
                 bg[F[g] == va] = b[on[0]]
@@ -408,7 +514,7 @@ class _Builder:
                 self.pf.append(int(g))
                 self.pb.append(bg)
             return
-        self.pf.append(p.face)
+        self.pf.append(int(face))
         self.pb.append(np.array(b, dtype=float))
 
     def add_piece(self, face: int, ba: np.ndarray, bb: np.ndarray) -> None:
@@ -427,57 +533,104 @@ class _Builder:
 
 
 def _curve_points(mesh: TriMesh, curve: SurfaceCurve, label: str) -> list[SurfacePoint]:
-    """The curve's points as SurfacePoints; positions are checked to lie on the surface."""
-    out = []
+    """The curve's points as SurfacePoints; positions are checked to lie on the surface (one search for all)."""
     tol = ON_SURFACE_TOL * mesh.bbox_diagonal
+    given = [k for k, p in enumerate(curve.points) if not isinstance(p, SurfacePoint)]
+    found = {}
+    if given:
+        faces, bary, dist = closest_points(mesh, np.stack([curve.points[k] for k in given]))
+        found = {k: (int(f), b, d) for k, f, b, d in zip(given, faces, bary, dist, strict=True)}
+    out = []
     for k, p in enumerate(curve.points):
         if isinstance(p, SurfacePoint):
             _check_face(p, mesh, f"{label} point {k}")
             out.append(p)
             continue
-        faces, bary, dist = closest_points(mesh, p[None, :])
-        if dist[0] > tol:
+        face, bc, d = found[k]
+        if d > tol:
             raise SourceError(
-                f"{label} point {k} at {np.round(p, 9).tolist()} is {dist[0]:.3g} from the surface, more than "
+                f"{label} point {k} at {[round(float(x), 9) for x in p]} is {d:.3g} from the surface, more than "
                 f"{ON_SURFACE_TOL:g} of the bounding-box diagonal ({tol:.3g}); project it with "
                 "surface_point(mesh, xyz) first")
-        out.append(SurfacePoint(int(faces[0]), bary[0]))
+        out.append(SurfacePoint(face, bc))
     return out
+
+
+def _curve_samples(mesh: TriMesh, pts: list[SurfacePoint]) -> tuple[np.ndarray, np.ndarray]:
+    """The curve's samples: its points, and between two of them the closest surface points of their chord at
+    :data:`CURVE_STEP` (all searched at once).
+
+    Returns
+    -------
+    faces : (s,) int64 ndarray
+    bary : (s, 3) float ndarray
+        The samples in order along the curve.
+    """
+    step = CURVE_STEP * mesh.mean_edge_length
+    X = np.stack([p.position(mesh) for p in pts])
+    counts = np.ones(len(pts) - 1, dtype=np.int64)
+    if step > 0:
+        counts = np.maximum(1, np.ceil(np.linalg.norm(np.diff(X, axis=0), axis=1) / step)).astype(np.int64)
+    # segment j's inner samples at t = i / counts[j], i = 1 .. counts[j] - 1, as np.linspace places them
+    seg = np.repeat(np.arange(len(counts)), counts - 1)
+    t = np.concatenate([np.linspace(0.0, 1.0, k + 1)[1:-1] for k in counts.tolist()] or [np.zeros(0)])[:, None]
+    inner_f, inner_b, _ = closest_points(mesh, (1 - t) * X[seg] + t * X[seg + 1])
+    # each point, then its segment's inner samples: point j sits after the samples of the segments before it
+    where = np.arange(len(pts)) + np.concatenate([[0], np.cumsum(counts - 1)])
+    faces = np.empty(len(pts) + len(seg), dtype=np.int64)
+    bary = np.empty((faces.size, 3))
+    inner = np.ones(faces.size, dtype=bool)
+    inner[where] = False
+    faces[where] = [p.face for p in pts]
+    bary[where] = [p.bary for p in pts]
+    faces[inner], bary[inner] = inner_f, inner_b
+    return faces, bary
 
 
 def _add_curve(builder: _Builder, mesh: TriMesh, curve: SurfaceCurve, label: str) -> None:
     pts = _curve_points(mesh, curve, label)
+    faces, bary = _curve_samples(mesh, pts)
+    # every sample as a SurfacePoint stores it (clipped to >= 0, summing to 1), then snapped
+    points = np.clip(bary, 0.0, None)
+    points /= points.sum(axis=1, keepdims=True)
+    for f, b in zip(faces.tolist(), points, strict=True):
+        builder.add_bary(f, b)
+    for f, ba, bb in _curve_pieces(mesh, faces, bary):
+        builder.add_piece(f, ba, bb)
+
+
+def _curve_pieces(mesh: TriMesh, faces: np.ndarray, bary: np.ndarray) -> list[tuple[int, np.ndarray, np.ndarray]]:
+    """The straight pieces between consecutive samples that lie in one face, in order.
+
+    Two samples in one face make a piece of that face; two samples in two faces make one when both lie in one of
+    the two faces (through a shared edge or vertex), expressed in it.
+
+    Returns
+    -------
+    list of (face, bary_a (3,), bary_b (3,))
+    """
     V, F = mesh.V, mesh.F
-    step = CURVE_STEP * mesh.mean_edge_length
-    samples_f: list[int] = [pts[0].face]
-    samples_b: list[np.ndarray] = [pts[0].bary]
-    for a, b in zip(pts[:-1], pts[1:], strict=True):
-        xa, xb = a.position(mesh), b.position(mesh)
-        k = max(1, math.ceil(np.linalg.norm(xb - xa) / step)) if step > 0 else 1
-        if k > 1:
-            t = np.linspace(0.0, 1.0, k + 1)[1:-1, None]
-            faces, bary, _ = closest_points(mesh, (1 - t) * xa + t * xb)
-            samples_f.extend(int(f) for f in faces)
-            samples_b.extend(bary)
-        samples_f.append(b.face)
-        samples_b.append(b.bary)
-    for f, bc in zip(samples_f, samples_b, strict=True):
-        builder.add_point(SurfacePoint(f, bc))
-    # consecutive samples in one face: the straight piece between them lies in that face
-    for i in range(len(samples_f) - 1):
-        fa, fb = samples_f[i], samples_f[i + 1]
-        if fa == fb:
-            builder.add_piece(fa, samples_b[i], samples_b[i + 1])
-        else:  # the two samples may share a face through an edge or vertex: express both in it
-            xa = samples_b[i] @ V[F[fa]]
-            xb = samples_b[i + 1] @ V[F[fb]]
-            for g in (fa, fb):
-                T = V[F[g]][None]
-                ba, bb = _barycentric(T, xa[None])[0], _barycentric(T, xb[None])[0]
-                if (np.linalg.norm(ba @ T[0] - xa) <= 1e-12 * mesh.bbox_diagonal
-                        and np.linalg.norm(bb @ T[0] - xb) <= 1e-12 * mesh.bbox_diagonal):
-                    builder.add_piece(g, ba, bb)
-                    break
+    fa, fb, ba, bb = faces[:-1], faces[1:], bary[:-1], bary[1:]
+    out: list = [None] * fa.size
+    for i in np.flatnonzero(fa == fb).tolist():
+        out[i] = (int(fa[i]), ba[i], bb[i])
+    cross = np.flatnonzero(fa != fb)
+    if cross.size:
+        def at(b, T):  # positions b @ T row by row (matmul: the same rounding as one point's b @ T)
+            return np.matmul(b[:, None, :], T)[:, 0, :]
+
+        xa, xb = at(ba[cross], V[F[fa[cross]]]), at(bb[cross], V[F[fb[cross]]])
+        tol = 1e-12 * mesh.bbox_diagonal
+        left = np.ones(cross.size, dtype=bool)
+        for g in (fa[cross], fb[cross]):  # the first face, then the second
+            T = V[F[g]]
+            ga, gb = _barycentric(T, xa), _barycentric(T, xb)
+            ok = (left & (np.linalg.norm(at(ga, T) - xa, axis=1) <= tol)
+                  & (np.linalg.norm(at(gb, T) - xb, axis=1) <= tol))
+            for j in np.flatnonzero(ok).tolist():
+                out[int(cross[j])] = (int(g[j]), ga[j], gb[j])
+            left &= ~ok
+    return [piece for piece in out if piece is not None]
 
 
 def _is_int_like(x) -> bool:
