@@ -272,7 +272,7 @@ def test_meshes_with_huge_or_tiny_coordinates(exponent):
     X = np.random.default_rng(9).standard_normal((40, 3))
     f0, b0, d0 = closest_points(small, X)
     f1, b1, d1 = closest_points(big, X * k)
-    assert sources.closest_point_index(big).scale != 1 and sources.closest_point_index(small).scale == 1
+    assert sources.closest_point_index(big).unit_frame and not sources.closest_point_index(small).unit_frame
     # the same points up to the rounding of the frame's shift (a few ulps of the diagonal); faces may differ where
     # the point is a vertex or on an edge (a tie)
     P0 = np.einsum("kj,kjd->kd", b0, small.V[small.F[f0]])

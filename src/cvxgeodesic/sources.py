@@ -235,7 +235,7 @@ class ClosestPointIndex:
     ray from the center to that distance first: its squared distances then cannot overflow, and the point
     found stays within ``diag / (8 FAR_QUERY)`` of being the closest (see :data:`FAR_QUERY`). A mesh with
     coordinates beyond :data:`UNIT_FRAME` (or a diagonal below its inverse) is searched in its unit frame:
-    the box's center at the origin, scaled by a power of two to a diagonal in ``[0.5, 1)``; libigl's
+    the box's center at the origin, scaled by a power of two to a diagonal in ``(0.5, 1]``; libigl's
     point-triangle distances take fourth powers of the coordinates. Other meshes are searched as they are.
 
     Parameters
@@ -247,8 +247,10 @@ class ClosestPointIndex:
     V : (n, 3) float ndarray
         The vertices in the frame of the search: ``(mesh.V - shift) * scale``.
     F : (m, 3) int64 ndarray
+    unit_frame : bool
     shift : (3,) float ndarray
     scale : float
+        The frame: zeros and 1 unless ``unit_frame``.
     """
 
     def __init__(self, mesh: TriMesh) -> None:
@@ -258,9 +260,11 @@ class ClosestPointIndex:
         self.center = 0.5 * (lo + hi)
         diag = mesh.bbox_diagonal
         self.shift, self.scale = np.zeros(3), 1.0
-        if float(np.abs(mesh.V).max()) > UNIT_FRAME or 0 < diag < 1.0 / UNIT_FRAME:
+        self.unit_frame = float(np.abs(mesh.V).max()) > UNIT_FRAME or 0 < diag < 1.0 / UNIT_FRAME
+        if self.unit_frame:
             self.shift, self.scale = self.center, 2.0 ** -math.ceil(math.log2(diag))
-        self.V = np.ascontiguousarray((mesh.V - self.shift) * self.scale, dtype=np.float64)
+        self.V = np.ascontiguousarray((mesh.V - self.shift) * self.scale if self.unit_frame else mesh.V,
+                                      dtype=np.float64)
         self.F = np.ascontiguousarray(mesh.F, dtype=np.int64)
         self.radius = FAR_QUERY * diag
         self.tree = igl.AABB()
@@ -293,7 +297,7 @@ class ClosestPointIndex:
         if far.any():
             Q[far] = unit[far] * (self.radius / norm[far])[:, None]
             P = Q + self.center
-        if self.scale != 1.0:
+        if self.unit_frame:
             P = (P - self.shift) * self.scale
         sqd, faces, C = self.tree.squared_distance(self.V, self.F, np.ascontiguousarray(P, dtype=np.float64))
         C = np.asarray(C)
@@ -357,7 +361,14 @@ def surface_point(mesh: Any, xyz: ArrayLike) -> SurfacePoint | list[SurfacePoint
     Raises
     ------
     SourceError
-        ``xyz`` is not one or several finite 3D positions.
+        ``xyz`` is not one or several finite 3D positions (NaN or infinite coordinates included).
+
+    Notes
+    -----
+    One search in the mesh's :func:`closest_point_index` (a libigl AABB tree built on the first search of the
+    mesh object). Any finite position is accepted: one farther than :data:`FAR_QUERY` bounding-box diagonals
+    from the box's center is moved in along the ray from the center first, which leaves the point found at most
+    ``diag / 8e7`` farther from it than the closest point.
 
     Examples
     --------
