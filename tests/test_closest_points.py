@@ -1,6 +1,6 @@
 """The closest-point search behind surface_point and curve sources (issues 34 and 36).
 
-One libigl AABB tree per mesh object (``sources.closest_point_index``) answers every search; these tests hold it
+One libigl AABB tree per mesh object (``cvxgeodesic.mesh.closest``) answers every search; these tests hold it
 to a brute-force reference computed here (every face of the mesh, in NumPy), to the pre-index search for curve
 sources (``igl.point_mesh_squared_distance`` per call, as the library did before), and to positions far beyond
 the mesh, whose squares overflow.
@@ -19,6 +19,7 @@ import cvxgeodesic as cg
 from conftest import shared_mesh_path
 from cvxgeodesic import sources
 from cvxgeodesic.errors import SourceError
+from cvxgeodesic.mesh import closest
 from cvxgeodesic.sources import closest_points, resolve_sources
 
 # Distances of the index and of the brute-force reference are computed by different formulas: each is within
@@ -192,12 +193,12 @@ def test_curve_sources_are_unchanged_by_the_index_on_bunny():
 def test_the_index_is_built_once_per_mesh(monkeypatch):
     builds = []
 
-    class Counting(sources.ClosestPointIndex):
+    class Counting(closest.ClosestPointIndex):
         def __init__(self, mesh):
             builds.append(mesh)
             super().__init__(mesh)
 
-    monkeypatch.setattr(sources, "ClosestPointIndex", Counting)
+    monkeypatch.setattr(closest, "ClosestPointIndex", Counting)
     mesh = cg.icosphere(3)
     curve = _curves(mesh, np.random.default_rng(7), count=1)[1]  # 25 positions, 24 segments
     solver = cg.GeodesicSolver(mesh, method="qclp")
@@ -248,7 +249,7 @@ DIRECTIONS = [np.eye(3)[i] * s for i in range(3) for s in (1, -1)] + [np.array([
 @pytest.mark.parametrize("u", DIRECTIONS, ids=lambda u: np.array2string(u, separator=","))
 def test_a_far_position_finds_the_farthest_vertex_in_its_direction(u, scale):
     """Brute force: seen from far along ``u``, the closest point of the mesh is its vertex farthest along ``u``
-    (unique here by far more than the search's bound ``diag / 8e7``, ``sources.FAR_QUERY``)."""
+    (unique here by far more than the search's bound ``diag / 8e7``, ``mesh.closest.FAR_QUERY``)."""
     mesh = _rotated_sphere()
     h = mesh.bbox_diagonal
     support = mesh.V @ u
@@ -272,7 +273,7 @@ def test_meshes_with_huge_or_tiny_coordinates(exponent):
     X = np.random.default_rng(9).standard_normal((40, 3))
     f0, b0, d0 = closest_points(small, X)
     f1, b1, d1 = closest_points(big, X * k)
-    assert sources.closest_point_index(big).unit_frame and not sources.closest_point_index(small).unit_frame
+    assert closest.closest_point_index(big).unit_frame and not closest.closest_point_index(small).unit_frame
     # the same points up to the rounding of the frame's shift (a few ulps of the diagonal); faces may differ where
     # the point is a vertex or on an edge (a tie)
     P0 = np.einsum("kj,kjd->kd", b0, small.V[small.F[f0]])
