@@ -334,15 +334,19 @@ class GeodesicSolver:
             The backend did not reach an optimal solution (for the Hessian energy the
             message adds that it can be indefinite on meshes with sharp corners).
         """
+        t0 = time.perf_counter()
         if self.is_volume:
             from .sources_tet import resolve_tet_sources
 
             sset: Any = resolve_tet_sources(self.mesh, sources)
         else:
             sset = resolve_sources(self.mesh, sources)
+        source_time = time.perf_counter() - t0  # closest points and curve samples: part of this solve
         with reporting_to(callback):  # Clarabel's iterations too, wherever a strategy runs it
             res = self._strategy.solve(sset, callback=callback)
         res.info.setup_time = self.setup_time
+        res.info.solve_time += source_time
+        res.info.extra["source_time"] = source_time
         if self.medium is not None:  # what the field measures: {"cost": "per-vertex", ...} and the medium itself
             res.info.extra.update(self.medium.describe(), medium=self.medium)
         return res

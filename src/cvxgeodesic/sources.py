@@ -33,7 +33,6 @@ none of them cuts the exact field off.
 
 from __future__ import annotations
 
-import math
 import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -44,6 +43,7 @@ import scipy.sparse as sp
 from numpy.typing import ArrayLike
 
 from .errors import SourceError
+from .mesh.closest import closest_point_index
 from .mesh.geometry import clipped_barycentric
 from .mesh.trimesh import TriMesh
 from .validation import as_points, validate_sources
@@ -215,12 +215,14 @@ def _barycentric(T: np.ndarray, X: np.ndarray) -> np.ndarray:
 
 
 def closest_points(mesh: TriMesh, X) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Closest surface points of positions.
+    """Closest surface points of positions (one search in the mesh's
+    :func:`~cvxgeodesic.mesh.closest.closest_point_index`).
 
     Parameters
     ----------
     mesh : TriMesh
     X : (k, 3) float array_like
+        Finite positions.
 
     Returns
     -------
@@ -229,15 +231,10 @@ def closest_points(mesh: TriMesh, X) -> tuple[np.ndarray, np.ndarray, np.ndarray
     dist : (k,) float ndarray
         Distance from each position to its closest point.
     """
-    import igl
-
     X = np.ascontiguousarray(np.asarray(X, dtype=np.float64).reshape(-1, 3))
-    V = np.ascontiguousarray(mesh.V, dtype=np.float64)
-    F = np.ascontiguousarray(mesh.F, dtype=np.int64)
-    sqd, faces, C = igl.point_mesh_squared_distance(X, V, F)
-    faces = np.asarray(faces, dtype=np.int64)
-    bary = _barycentric(V[F[faces]], np.asarray(C))
-    return faces, bary, np.sqrt(np.maximum(np.asarray(sqd), 0.0))
+    index = closest_point_index(mesh)
+    faces, C, dist = index.query(X)
+    return faces, _barycentric(index.V[index.F[faces]], C), dist  # in the search's frame: the same coordinates
 
 
 def surface_point(mesh: Any, xyz: ArrayLike) -> SurfacePoint | list[SurfacePoint]:
@@ -255,7 +252,15 @@ def surface_point(mesh: Any, xyz: ArrayLike) -> SurfacePoint | list[SurfacePoint
     Raises
     ------
     SourceError
-        ``xyz`` is not one or several finite 3D positions.
+        ``xyz`` is not one or several finite 3D positions (NaN or infinite coordinates included).
+
+    Notes
+    -----
+    One search in the mesh's :func:`~cvxgeodesic.mesh.closest.closest_point_index` (a libigl AABB tree built on
+    the first search of the mesh object). Any finite position is accepted: one farther than
+    :data:`~cvxgeodesic.mesh.closest.FAR_QUERY` (1e7) bounding-box diagonals
+    from the box's center is moved in along the ray from the center first, which leaves the point found at most
+    ``diag / 8e7`` farther from it than the closest point.
 
     Examples
     --------
@@ -387,20 +392,24 @@ class _Builder:
 
     def add_point(self, p: SurfacePoint) -> None:
         """Snap to a vertex or an edge, else an interior point."""
+        self.add_bary(p.face, p.bary)
+
+    def add_bary(self, face: int, b: np.ndarray) -> None:
+        """:meth:`add_point` of a face and valid barycentric coordinates (``>= 0``, summing to 1)."""
         F = self.mesh.F
-        b = p.bary
         k = int(np.argmax(b))
         if b[k] >= 1.0 - BARY_SNAP:
-            self.vertices.append(int(F[p.face, k]))
+            self.vertices.append(int(F[face, k]))
             return
         zero = b <= BARY_SNAP
         if zero.any():
             b = np.where(zero, 0.0, b)
             b = b / b.sum()
             on = np.flatnonzero(~zero)  # exactly two corners: an edge point
-            va, vb = int(F[p.face, on[0]]), int(F[p.face, on[1]])
-            inc = _incident_faces(self.mesh)
-            shared = np.intersect1d(inc[va].indices, inc[vb].indices)
+            va, vb = int(F[face, on[0]]), int(F[face, on[1]])
+            inc = _incident_faces(self.mesh)  # the faces of a vertex: its row's indices (no sparse slicing)
+            shared = np.intersect1d(inc.indices[inc.indptr[va]:inc.indptr[va + 1]],
+                                    inc.indices[inc.indptr[vb]:inc.indptr[vb + 1]])
             for g in shared:
                 bg = np.zeros(3)
                 bg[F[g] == va] = b[on[0]]
@@ -408,7 +417,7 @@ class _Builder:
                 self.pf.append(int(g))
                 self.pb.append(bg)
             return
-        self.pf.append(p.face)
+        self.pf.append(int(face))
         self.pb.append(np.array(b, dtype=float))
 
     def add_piece(self, face: int, ba: np.ndarray, bb: np.ndarray) -> None:
@@ -427,57 +436,104 @@ class _Builder:
 
 
 def _curve_points(mesh: TriMesh, curve: SurfaceCurve, label: str) -> list[SurfacePoint]:
-    """The curve's points as SurfacePoints; positions are checked to lie on the surface."""
-    out = []
+    """The curve's points as SurfacePoints; positions are checked to lie on the surface (one search for all)."""
     tol = ON_SURFACE_TOL * mesh.bbox_diagonal
+    given = [k for k, p in enumerate(curve.points) if not isinstance(p, SurfacePoint)]
+    found = {}
+    if given:
+        faces, bary, dist = closest_points(mesh, np.stack([curve.points[k] for k in given]))
+        found = {k: (int(f), b, d) for k, f, b, d in zip(given, faces, bary, dist, strict=True)}
+    out = []
     for k, p in enumerate(curve.points):
         if isinstance(p, SurfacePoint):
             _check_face(p, mesh, f"{label} point {k}")
             out.append(p)
             continue
-        faces, bary, dist = closest_points(mesh, p[None, :])
-        if dist[0] > tol:
+        face, bc, d = found[k]
+        if d > tol:
             raise SourceError(
-                f"{label} point {k} at {np.round(p, 9).tolist()} is {dist[0]:.3g} from the surface, more than "
+                f"{label} point {k} at {[round(float(x), 9) for x in p]} is {d:.3g} from the surface, more than "
                 f"{ON_SURFACE_TOL:g} of the bounding-box diagonal ({tol:.3g}); project it with "
                 "surface_point(mesh, xyz) first")
-        out.append(SurfacePoint(int(faces[0]), bary[0]))
+        out.append(SurfacePoint(face, bc))
     return out
+
+
+def _curve_samples(mesh: TriMesh, pts: list[SurfacePoint]) -> tuple[np.ndarray, np.ndarray]:
+    """The curve's samples: its points, and between two of them the closest surface points of their chord at
+    :data:`CURVE_STEP` (all searched at once).
+
+    Returns
+    -------
+    faces : (s,) int64 ndarray
+    bary : (s, 3) float ndarray
+        The samples in order along the curve.
+    """
+    step = CURVE_STEP * mesh.mean_edge_length
+    X = np.stack([p.position(mesh) for p in pts])
+    counts = np.ones(len(pts) - 1, dtype=np.int64)
+    if step > 0:
+        counts = np.maximum(1, np.ceil(np.linalg.norm(np.diff(X, axis=0), axis=1) / step)).astype(np.int64)
+    # segment j's inner samples at t = i / counts[j], i = 1 .. counts[j] - 1, as np.linspace places them
+    seg = np.repeat(np.arange(len(counts)), counts - 1)
+    t = np.concatenate([np.linspace(0.0, 1.0, k + 1)[1:-1] for k in counts.tolist()] or [np.zeros(0)])[:, None]
+    inner_f, inner_b, _ = closest_points(mesh, (1 - t) * X[seg] + t * X[seg + 1])
+    # each point, then its segment's inner samples: point j sits after the samples of the segments before it
+    where = np.arange(len(pts)) + np.concatenate([[0], np.cumsum(counts - 1)])
+    faces = np.empty(len(pts) + len(seg), dtype=np.int64)
+    bary = np.empty((faces.size, 3))
+    inner = np.ones(faces.size, dtype=bool)
+    inner[where] = False
+    faces[where] = [p.face for p in pts]
+    bary[where] = [p.bary for p in pts]
+    faces[inner], bary[inner] = inner_f, inner_b
+    return faces, bary
 
 
 def _add_curve(builder: _Builder, mesh: TriMesh, curve: SurfaceCurve, label: str) -> None:
     pts = _curve_points(mesh, curve, label)
+    faces, bary = _curve_samples(mesh, pts)
+    # every sample as a SurfacePoint stores it (clipped to >= 0, summing to 1), then snapped
+    points = np.clip(bary, 0.0, None)
+    points /= points.sum(axis=1, keepdims=True)
+    for f, b in zip(faces.tolist(), points, strict=True):
+        builder.add_bary(f, b)
+    for f, ba, bb in _curve_pieces(mesh, faces, bary):
+        builder.add_piece(f, ba, bb)
+
+
+def _curve_pieces(mesh: TriMesh, faces: np.ndarray, bary: np.ndarray) -> list[tuple[int, np.ndarray, np.ndarray]]:
+    """The straight pieces between consecutive samples that lie in one face, in order.
+
+    Two samples in one face make a piece of that face; two samples in two faces make one when both lie in one of
+    the two faces (through a shared edge or vertex), expressed in it.
+
+    Returns
+    -------
+    list of (face, bary_a (3,), bary_b (3,))
+    """
     V, F = mesh.V, mesh.F
-    step = CURVE_STEP * mesh.mean_edge_length
-    samples_f: list[int] = [pts[0].face]
-    samples_b: list[np.ndarray] = [pts[0].bary]
-    for a, b in zip(pts[:-1], pts[1:], strict=True):
-        xa, xb = a.position(mesh), b.position(mesh)
-        k = max(1, math.ceil(np.linalg.norm(xb - xa) / step)) if step > 0 else 1
-        if k > 1:
-            t = np.linspace(0.0, 1.0, k + 1)[1:-1, None]
-            faces, bary, _ = closest_points(mesh, (1 - t) * xa + t * xb)
-            samples_f.extend(int(f) for f in faces)
-            samples_b.extend(bary)
-        samples_f.append(b.face)
-        samples_b.append(b.bary)
-    for f, bc in zip(samples_f, samples_b, strict=True):
-        builder.add_point(SurfacePoint(f, bc))
-    # consecutive samples in one face: the straight piece between them lies in that face
-    for i in range(len(samples_f) - 1):
-        fa, fb = samples_f[i], samples_f[i + 1]
-        if fa == fb:
-            builder.add_piece(fa, samples_b[i], samples_b[i + 1])
-        else:  # the two samples may share a face through an edge or vertex: express both in it
-            xa = samples_b[i] @ V[F[fa]]
-            xb = samples_b[i + 1] @ V[F[fb]]
-            for g in (fa, fb):
-                T = V[F[g]][None]
-                ba, bb = _barycentric(T, xa[None])[0], _barycentric(T, xb[None])[0]
-                if (np.linalg.norm(ba @ T[0] - xa) <= 1e-12 * mesh.bbox_diagonal
-                        and np.linalg.norm(bb @ T[0] - xb) <= 1e-12 * mesh.bbox_diagonal):
-                    builder.add_piece(g, ba, bb)
-                    break
+    fa, fb, ba, bb = faces[:-1], faces[1:], bary[:-1], bary[1:]
+    out: list = [None] * fa.size
+    for i in np.flatnonzero(fa == fb).tolist():
+        out[i] = (int(fa[i]), ba[i], bb[i])
+    cross = np.flatnonzero(fa != fb)
+    if cross.size:
+        def at(b, T):  # positions b @ T row by row (matmul: the same rounding as one point's b @ T)
+            return np.matmul(b[:, None, :], T)[:, 0, :]
+
+        xa, xb = at(ba[cross], V[F[fa[cross]]]), at(bb[cross], V[F[fb[cross]]])
+        tol = 1e-12 * mesh.bbox_diagonal
+        left = np.ones(cross.size, dtype=bool)
+        for g in (fa[cross], fb[cross]):  # the first face, then the second
+            T = V[F[g]]
+            ga, gb = _barycentric(T, xa), _barycentric(T, xb)
+            ok = (left & (np.linalg.norm(at(ga, T) - xa, axis=1) <= tol)
+                  & (np.linalg.norm(at(gb, T) - xb, axis=1) <= tol))
+            for j in np.flatnonzero(ok).tolist():
+                out[int(cross[j])] = (int(g[j]), ga[j], gb[j])
+            left &= ~ok
+    return [piece for piece in out if piece is not None]
 
 
 def _is_int_like(x) -> bool:

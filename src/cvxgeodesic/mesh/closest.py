@@ -1,0 +1,125 @@
+"""Closest points of a triangle mesh: one libigl AABB tree per mesh object, for any finite query.
+
+:func:`closest_point_index` builds a :class:`ClosestPointIndex` on the first search of a mesh object and keeps it
+beside the mesh (not on it: the tree cannot be pickled, the mesh can) for as long as the mesh lives.
+:func:`cvxgeodesic.sources.closest_points` (surface points, curve sources, paths) searches in it.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import weakref
+
+import numpy as np
+
+from .trimesh import TriMesh
+
+#: A position farther than this many bounding-box diagonals from the box's center is moved in along the ray from
+#: the center to that distance before its closest point is searched (:class:`ClosestPointIndex`): squares of its
+#: coordinates could overflow. Exactly, ``|x − p|² = s² − 2 s (p̃·u − |p̃|²/(2s))`` for ``x`` at distance ``s``
+#: along ``u`` and ``p̃ = p − center``, so the point closest at the moved distance ``R`` is farther than the
+#: closest one by at most ``diag² / (8 R)``: ``diag / 8e7`` here, while rounding at ``R`` costs about
+#: ``2e-16 R = 2e-9 diag``.
+FAR_QUERY = 1e7
+#: A mesh with a coordinate beyond this (or a bounding-box diagonal below its inverse) is searched for closest
+#: points in its unit frame (:class:`ClosestPointIndex`): the point-triangle distances and the barycentric
+#: coordinates take fourth powers of the coordinates, which overflow beyond 1e77 (measured: libigl finds other
+#: faces from 1e90 on). Other meshes are searched as they are, so their results do not change by a bit.
+UNIT_FRAME = 1e32
+
+
+class ClosestPointIndex:
+    """libigl's AABB tree over one mesh's faces, built once per mesh (:func:`closest_point_index`).
+
+    A query farther than :data:`FAR_QUERY` bounding-box diagonals from the box's center is moved in along the
+    ray from the center to that distance first: its squared distances then cannot overflow, and the point
+    found stays within ``diag / (8 FAR_QUERY)`` of being the closest (see :data:`FAR_QUERY`). A mesh with
+    coordinates beyond :data:`UNIT_FRAME` (or a diagonal below its inverse) is searched in its unit frame:
+    the box's center at the origin, scaled by a power of two to a diagonal in ``(0.5, 1]``; libigl's
+    point-triangle distances take fourth powers of the coordinates. Other meshes are searched as they are.
+
+    Parameters
+    ----------
+    mesh : TriMesh
+
+    Attributes
+    ----------
+    V : (n, 3) float ndarray
+        The vertices in the frame of the search: ``(mesh.V - shift) * scale``.
+    F : (m, 3) int64 ndarray
+    unit_frame : bool
+    shift : (3,) float ndarray
+    scale : float
+        The frame: zeros and 1 unless ``unit_frame``.
+    """
+
+    def __init__(self, mesh: TriMesh) -> None:
+        import igl
+
+        lo, hi = mesh.V.min(axis=0), mesh.V.max(axis=0)
+        self.center = 0.5 * (lo + hi)
+        diag = mesh.bbox_diagonal
+        self.shift, self.scale = np.zeros(3), 1.0
+        self.unit_frame = float(np.abs(mesh.V).max()) > UNIT_FRAME or 0 < diag < 1.0 / UNIT_FRAME
+        if self.unit_frame:
+            self.shift, self.scale = self.center, 2.0 ** -math.ceil(math.log2(diag))
+        self.V = np.ascontiguousarray((mesh.V - self.shift) * self.scale if self.unit_frame else mesh.V,
+                                      dtype=np.float64)
+        self.F = np.ascontiguousarray(mesh.F, dtype=np.int64)
+        self.radius = FAR_QUERY * diag
+        self.tree = igl.AABB()
+        self.tree.init(self.V, self.F)
+
+    def query(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Closest face, closest point and distance of each position.
+
+        Parameters
+        ----------
+        X : (k, 3) float ndarray
+            Finite positions.
+
+        Returns
+        -------
+        faces : (k,) int64 ndarray
+        C : (k, 3) float ndarray
+            The closest points, in the frame of the search (as :attr:`V`).
+        dist : (k,) float ndarray
+            ``|X − C|`` in the mesh's units (``inf`` only where that exceeds the largest float).
+        """
+        Q = X - self.center
+        # a direction and a length without squaring the coordinates (they may exceed 1e154)
+        size = np.abs(Q).max(axis=1)
+        unit = Q / np.where(size > 0, size, 1.0)[:, None]
+        norm = np.linalg.norm(unit, axis=1)
+        with np.errstate(over="ignore"):
+            far = size * norm > self.radius
+        P = X
+        if far.any():
+            Q[far] = unit[far] * (self.radius / norm[far])[:, None]
+            P = Q + self.center
+        if self.unit_frame:
+            P = (P - self.shift) * self.scale
+        sqd, faces, C = self.tree.squared_distance(self.V, self.F, np.ascontiguousarray(P, dtype=np.float64))
+        C = np.asarray(C)
+        dist = np.sqrt(np.maximum(np.asarray(sqd), 0.0)) / self.scale
+        if far.any():  # the distance from the position itself, not from where it was moved
+            D = X[far] - (C[far] / self.scale + self.shift)
+            size = np.abs(D).max(axis=1)
+            with np.errstate(over="ignore"):
+                dist[far] = size * np.linalg.norm(D / size[:, None], axis=1)
+        return np.asarray(faces, dtype=np.int64), C, dist
+
+
+_INDEXES: weakref.WeakKeyDictionary[TriMesh, ClosestPointIndex] = weakref.WeakKeyDictionary()
+_INDEX_LOCK = threading.Lock()
+
+
+def closest_point_index(mesh: TriMesh) -> ClosestPointIndex:
+    """The mesh's :class:`ClosestPointIndex`, built on the first call for this mesh object and kept as long as
+    the mesh lives (beside it, not on it: the tree cannot be pickled, the mesh can)."""
+    with _INDEX_LOCK:
+        index = _INDEXES.get(mesh)
+        if index is None:
+            index = _INDEXES[mesh] = ClosestPointIndex(mesh)
+    return index
