@@ -118,11 +118,12 @@ def test_cli_exit_codes(cluster, meshes, tmp_path, capsys):
 
 
 def test_default_local_cluster(meshes, tmp_path, capsys):
+    """The CLI's own cluster (TLS with the run's certificate, tests/test_cluster_security.py) solves a batch."""
     good, _, _ = meshes
-    rc = main(["batch", str(good[1]), "-s", "0", "--method", "qclp", "--out", str(tmp_path / "local"),
-               "--workers", "1"])
-    assert rc == 0 and (tmp_path / "local" / "plane.ply").exists()
-    assert "1 solved" in capsys.readouterr().out
+    rc = main(["batch", str(good[0]), str(good[1]), "-s", "0", "--method", "qclp", "--out", str(tmp_path / "local"),
+               "--workers", "2"])
+    assert rc == 0 and (tmp_path / "local" / "plane.ply").exists() and (tmp_path / "local" / "sphere2.ply").exists()
+    assert "2 solved" in capsys.readouterr().out
 
 
 def test_usage_errors_before_any_work(meshes, tmp_path):
