@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import sys
 
 import numpy as np
@@ -151,3 +152,27 @@ def test_without_dask_names_the_package(meshes, tmp_path, monkeypatch, capsys):
         run_batch(good[:1], [0], tmp_path / "o", progress=False)
     assert main(["batch", str(good[0]), "-s", "0", "--out", str(tmp_path / "o")]) == 2
     assert "pip install 'dask[distributed]'" in capsys.readouterr().err
+
+
+def test_a_file_name_that_is_not_utf8_is_solved_with_the_others(cluster, meshes, tmp_path):
+    """A name from os.listdir with an undecodable byte (surrogate escape) once broke the submission of every task."""
+    good, _, _ = meshes
+    folder = tmp_path / "names"
+    folder.mkdir()
+    bad = folder / os.fsdecode(b"bad\xff.off")
+    try:
+        bad.write_bytes(good[1].read_bytes())
+    except (OSError, UnicodeEncodeError):  # a file system (or locale) that refuses such names
+        pytest.skip("this file system does not take a non-UTF-8 file name")
+    plain = folder / "plain.off"
+    plain.write_bytes(good[0].read_bytes())
+    out = tmp_path / "out"
+    rows = run_batch(expand_mesh_paths([str(folder / "*.off")]), [0], out, method="qclp",
+                     scheduler=cluster.scheduler_address, progress=False)
+    assert [r["status"] for r in rows] == ["ok", "ok"], rows
+    assert (out / os.fsdecode(b"bad\xff.ply")).is_file() and (out / "plain.ply").is_file()
+    meta = json.loads((out / os.fsdecode(b"bad\xff.json")).read_text())
+    assert meta["mesh"] == str(bad.resolve())  # the path round-trips (JSON escapes the surrogate)
+    table = format_summary(rows)
+    table.encode("utf-8")  # printable on a strict UTF-8 stdout: the byte is shown as \xff
+    assert "bad\\xff.off" in table and "2 solved" in table

@@ -349,6 +349,18 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
     return [rows[p] for p in paths]
 
 
+def _printable(text: str) -> str:
+    """``text`` with the undecodable bytes of file names (surrogate escapes, ``\\udcff``) as ``\\xff``.
+
+    A file name that is not UTF-8 comes out of ``os.listdir`` with such escapes; printed to a UTF-8
+    stream they raise UnicodeEncodeError.
+    """
+    try:
+        return text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+    except UnicodeEncodeError:  # a surrogate that no file name gave
+        return text.encode("utf-8", "backslashreplace").decode("utf-8")
+
+
 def _run_on_cluster(todo, rows, sources, out, method, m, solver, multires, output_format,
                     scheduler, n_workers, progress) -> None:
     with ExitStack() as stack:
@@ -357,7 +369,9 @@ def _run_on_cluster(todo, rows, sources, out, method, m, solver, multires, outpu
         for i, p in enumerate(todo):
             size = p.stat().st_size if p.exists() else 0
             fut = client.submit(solve_one, str(p), sources, str(out), method, m, solver, multires, output_format,
-                                key=f"cvxgeodesic-batch-{i}-{p.stem}-{os.getpid()}-{time.time_ns()}",
+                                # a key goes through msgpack, strict UTF-8: a non-UTF-8 file name would break
+                                # the message that submits every task of the batch, so its bytes are escaped
+                                key=f"cvxgeodesic-batch-{i}-{_printable(p.stem)}-{os.getpid()}-{time.time_ns()}",
                                 pure=False, priority=size)  # biggest meshes first: better load balance
             futures[fut] = p
         bar = _progress(len(futures)) if progress else None
@@ -420,9 +434,9 @@ def _collect(distributed, futures: dict, rows: dict, bar) -> None:
         if bar is not None:
             bar.update(1)
             for note in row.get("notes", []):
-                bar.write(f"cvxgeodesic: note: {_with_name(p.name, note)}", file=sys.stderr)
+                bar.write(_printable(f"cvxgeodesic: note: {_with_name(p.name, note)}"), file=sys.stderr)
             if row["status"] == "failed":
-                bar.write(f"FAILED {p}: {row['error']}", file=sys.stderr)
+                bar.write(_printable(f"FAILED {p}: {row['error']}"), file=sys.stderr)
 
 
 def _with_name(name: str, note: str) -> str:
@@ -439,11 +453,11 @@ def format_summary(rows: list[dict]) -> str:
         note = r["error"] if r["status"] == "failed" else (r["output"] or "")
         if r["status"] == "ok" and r.get("solve_status") not in (None, "optimal"):
             note = f"[{r['solve_status']}] {note}"
-        body.append((Path(r["mesh"]).name, r["status"],
+        body.append((_printable(Path(r["mesh"]).name), r["status"],
                      "" if r["n_vertices"] is None else str(r["n_vertices"]),
                      "" if r["n_faces"] is None else str(r["n_faces"]),
                      "" if r["iterations"] is None else str(r["iterations"]),
-                     "" if r["time_s"] is None else f"{r['time_s']:.2f}", note or ""))
+                     "" if r["time_s"] is None else f"{r['time_s']:.2f}", _printable(note or "")))
     widths = [max(len(h), *(len(b[i]) for b in body)) if body else len(h) for i, h in enumerate(head)]
     fmt = "  ".join(f"{{:<{w}}}" for w in widths[:-1]) + "  {}"
     lines = [fmt.format(*head), fmt.format(*("-" * w for w in widths[:-1]), "-" * len(head[-1]))]
