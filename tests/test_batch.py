@@ -176,3 +176,32 @@ def test_a_file_name_that_is_not_utf8_is_solved_with_the_others(cluster, meshes,
     table = format_summary(rows)
     table.encode("utf-8")  # printable on a strict UTF-8 stdout: the byte is shown as \xff
     assert "bad\\xff.off" in table and "2 solved" in table
+
+
+def test_out_folder_of_the_inputs_is_refused(meshes, tmp_path, monkeypatch, capsys):
+    """``batch 'in/*.ply' --out in`` would replace each mesh by its distance file: refused before any solve."""
+    good, _, _ = meshes
+    folder = tmp_path / "in"
+    folder.mkdir()
+    mesh = cg.icosphere(1)
+    ply = cg.save_distance(folder / "a.ply", mesh, np.zeros(mesh.n_vertices))
+    npy = folder / "b.npy"  # a plain file name is an input whatever its extension
+    np.save(npy, np.zeros(3))
+    before = {p: p.read_bytes() for p in (ply, npy)}
+    monkeypatch.setattr("cvxgeodesic.batch.open_client", _no_cluster)
+    with pytest.raises(ParameterError, match=r"--out .*a\.ply is the input file"):
+        run_batch([ply], [0], folder, progress=False)
+    with pytest.raises(ParameterError, match=r"--out .*b\.npy is the input file"):
+        run_batch([npy, good[1]], [0], folder, output_format="npy", progress=False)
+    assert main(["batch", str(folder / "*.ply"), "-s", "0", "--out", str(folder), "-q"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "a.ply is the input file" in err[0] and "--out" in err[0]
+    assert {p: p.read_bytes() for p in (ply, npy)} == before
+    assert sorted(p.name for p in folder.iterdir()) == ["a.ply", "b.npy"]
+    # the same folder is fine when no output is an input (.npy distances beside .ply meshes): on to the cluster
+    with pytest.raises(AssertionError, match="reached its cluster"):
+        run_batch([ply], [0], folder, output_format="npy", progress=False)
+
+
+def _no_cluster(*args, **kwargs):
+    raise AssertionError("the batch reached its cluster: the check must come before any solve")

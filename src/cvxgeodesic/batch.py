@@ -44,7 +44,7 @@ import numpy as np
 
 from ._cluster import open_client, require_distributed, stop_after_interrupt
 from .errors import ParameterError
-from .validation import check_choice, check_count, check_number
+from .validation import check_choice, check_count, check_not_an_input, check_number
 
 __all__ = ["OUTPUT_FORMATS", "expand_mesh_paths", "format_summary", "output_paths", "run_batch", "solve_one"]
 
@@ -327,6 +327,7 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
                                  "rename one or run them into different --out folders")
         stems[p.stem] = p
     out = Path(out_dir).expanduser().resolve()
+    _check_not_inputs(paths, out, output_format)
     if out.exists() and not out.is_dir():
         raise ParameterError(f"--out {out} exists and is not a directory")
     out.mkdir(parents=True, exist_ok=True)
@@ -347,6 +348,21 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
         _run_on_cluster(todo, rows, sources_list, out, method, m, solver, multires, output_format,
                         scheduler, n_workers, progress)
     return [rows[p] for p in paths]
+
+
+def _check_not_inputs(paths: list[Path], out: Path, output_format: str) -> None:
+    """ParameterError when an output of the batch (``OUT/<stem>.<format>`` or ``.json``) is one of its inputs.
+
+    ``batch 'in/*.ply' --out in`` would replace every mesh by its distance file. Distinct stems (checked
+    before) leave the same path and a file system that ignores case (``A.PLY``) as the ways an output can
+    be an input, so each output is compared with the inputs of the same stem, case folded.
+    """
+    by_stem: dict[str, list[Path]] = {}
+    for p in paths:
+        by_stem.setdefault(p.stem.casefold(), []).append(p)
+    for p in paths:
+        for target in output_paths(p, out, output_format):
+            check_not_an_input(target, by_stem[p.stem.casefold()], "--out")
 
 
 def _printable(text: str) -> str:
