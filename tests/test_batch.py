@@ -203,5 +203,25 @@ def test_out_folder_of_the_inputs_is_refused(meshes, tmp_path, monkeypatch, caps
         run_batch([ply], [0], folder, output_format="npy", progress=False)
 
 
+def test_unwritable_out_fails_before_any_solve(meshes, tmp_path, monkeypatch, capsys):
+    """An --out that cannot be created or written: exit 2, one line naming --out, no cluster started.
+
+    Permission bits do not stop root, so the cases are ones that fail for root too.
+    """
+    good, _, _ = meshes
+    monkeypatch.setattr("cvxgeodesic.batch.open_client", _no_cluster)
+    blocker = tmp_path / "somefile"
+    blocker.write_text("not a folder\n")
+    for out in (blocker, blocker / "sub"):
+        assert main(["batch", str(good[1]), "-s", "0", "--out", str(out), "-q"]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and f"--out {out}" in err[0], err
+    proc = f"/proc/{os.getpid()}"  # an existing folder in which no one, root included, creates files
+    if not os.path.isdir(proc):
+        pytest.skip("no /proc")
+    with pytest.raises(ParameterError, match=r"--out /proc/\d+: cannot create files in the folder"):
+        run_batch([good[1]], [0], proc, progress=False)
+
+
 def _no_cluster(*args, **kwargs):
     raise AssertionError("the batch reached its cluster: the check must come before any solve")

@@ -35,6 +35,7 @@ import math
 import os
 import socket
 import sys
+import tempfile
 import time
 import warnings
 from contextlib import ExitStack
@@ -328,9 +329,7 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
         stems[p.stem] = p
     out = Path(out_dir).expanduser().resolve()
     _check_not_inputs(paths, out, output_format)
-    if out.exists() and not out.is_dir():
-        raise ParameterError(f"--out {out} exists and is not a directory")
-    out.mkdir(parents=True, exist_ok=True)
+    _prepare_out(out)
     params = _params(sources_list, method, m, solver, multires, output_format)
 
     rows: dict[Path, dict] = {}
@@ -363,6 +362,32 @@ def _check_not_inputs(paths: list[Path], out: Path, output_format: str) -> None:
     for p in paths:
         for target in output_paths(p, out, output_format):
             check_not_an_input(target, by_stem[p.stem.casefold()], "--out")
+
+
+def _prepare_out(out: Path) -> None:
+    """Create the output folder ``out`` and check that files can be created in it, before any solve.
+
+    Raises
+    ------
+    ParameterError
+        ``out`` is a file, cannot be created (below a file, permissions, read-only file system), or no
+        file can be created in it (checked by creating and removing an empty temporary file, which also
+        holds for root, whom permission bits do not stop).
+    """
+    if out.exists() and not out.is_dir():
+        raise ParameterError(f"--out {_printable(str(out))} exists and is not a directory")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ParameterError(f"--out {_printable(str(out))}: cannot create the folder "
+                             f"({exc.strerror or exc})") from None
+    try:  # the outputs are written through temporary files in this folder: try exactly that
+        fd, probe = tempfile.mkstemp(prefix=".cvxgeodesic-", suffix=".probe", dir=out)
+    except OSError as exc:
+        raise ParameterError(f"--out {_printable(str(out))}: cannot create files in the folder "
+                             f"({exc.strerror or exc})") from None
+    os.close(fd)
+    os.unlink(probe)
 
 
 def _printable(text: str) -> str:
