@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import sys
 
 import numpy as np
@@ -118,11 +119,12 @@ def test_cli_exit_codes(cluster, meshes, tmp_path, capsys):
 
 
 def test_default_local_cluster(meshes, tmp_path, capsys):
+    """The CLI's own cluster (TLS with the run's certificate, tests/test_cluster_security.py) solves a batch."""
     good, _, _ = meshes
-    rc = main(["batch", str(good[1]), "-s", "0", "--method", "qclp", "--out", str(tmp_path / "local"),
-               "--workers", "1"])
-    assert rc == 0 and (tmp_path / "local" / "plane.ply").exists()
-    assert "1 solved" in capsys.readouterr().out
+    rc = main(["batch", str(good[0]), str(good[1]), "-s", "0", "--method", "qclp", "--out", str(tmp_path / "local"),
+               "--workers", "2"])
+    assert rc == 0 and (tmp_path / "local" / "plane.ply").exists() and (tmp_path / "local" / "sphere2.ply").exists()
+    assert "2 solved" in capsys.readouterr().out
 
 
 def test_usage_errors_before_any_work(meshes, tmp_path):
@@ -150,3 +152,76 @@ def test_without_dask_names_the_package(meshes, tmp_path, monkeypatch, capsys):
         run_batch(good[:1], [0], tmp_path / "o", progress=False)
     assert main(["batch", str(good[0]), "-s", "0", "--out", str(tmp_path / "o")]) == 2
     assert "pip install 'dask[distributed]'" in capsys.readouterr().err
+
+
+def test_a_file_name_that_is_not_utf8_is_solved_with_the_others(cluster, meshes, tmp_path):
+    """A name from os.listdir with an undecodable byte (surrogate escape) once broke the submission of every task."""
+    good, _, _ = meshes
+    folder = tmp_path / "names"
+    folder.mkdir()
+    bad = folder / os.fsdecode(b"bad\xff.off")
+    try:
+        bad.write_bytes(good[1].read_bytes())
+    except (OSError, UnicodeEncodeError):  # a file system (or locale) that refuses such names
+        pytest.skip("this file system does not take a non-UTF-8 file name")
+    plain = folder / "plain.off"
+    plain.write_bytes(good[0].read_bytes())
+    out = tmp_path / "out"
+    rows = run_batch(expand_mesh_paths([str(folder / "*.off")]), [0], out, method="qclp",
+                     scheduler=cluster.scheduler_address, progress=False)
+    assert [r["status"] for r in rows] == ["ok", "ok"], rows
+    assert (out / os.fsdecode(b"bad\xff.ply")).is_file() and (out / "plain.ply").is_file()
+    meta = json.loads((out / os.fsdecode(b"bad\xff.json")).read_text())
+    assert meta["mesh"] == str(bad.resolve())  # the path round-trips (JSON escapes the surrogate)
+    table = format_summary(rows)
+    table.encode("utf-8")  # printable on a strict UTF-8 stdout: the byte is shown as \xff
+    assert "bad\\xff.off" in table and "2 solved" in table
+
+
+def test_out_folder_of_the_inputs_is_refused(meshes, tmp_path, monkeypatch, capsys):
+    """``batch 'in/*.ply' --out in`` would replace each mesh by its distance file: refused before any solve."""
+    good, _, _ = meshes
+    folder = tmp_path / "in"
+    folder.mkdir()
+    mesh = cg.icosphere(1)
+    ply = cg.save_distance(folder / "a.ply", mesh, np.zeros(mesh.n_vertices))
+    npy = folder / "b.npy"  # a plain file name is an input whatever its extension
+    np.save(npy, np.zeros(3))
+    before = {p: p.read_bytes() for p in (ply, npy)}
+    monkeypatch.setattr("cvxgeodesic.batch.open_client", _no_cluster)
+    with pytest.raises(ParameterError, match=r"--out .*a\.ply is the input file"):
+        run_batch([ply], [0], folder, progress=False)
+    with pytest.raises(ParameterError, match=r"--out .*b\.npy is the input file"):
+        run_batch([npy, good[1]], [0], folder, output_format="npy", progress=False)
+    assert main(["batch", str(folder / "*.ply"), "-s", "0", "--out", str(folder), "-q"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "a.ply is the input file" in err[0] and "--out" in err[0]
+    assert {p: p.read_bytes() for p in (ply, npy)} == before
+    assert sorted(p.name for p in folder.iterdir()) == ["a.ply", "b.npy"]
+    # the same folder is fine when no output is an input (.npy distances beside .ply meshes): on to the cluster
+    with pytest.raises(AssertionError, match="reached its cluster"):
+        run_batch([ply], [0], folder, output_format="npy", progress=False)
+
+
+def test_unwritable_out_fails_before_any_solve(meshes, tmp_path, monkeypatch, capsys):
+    """An --out that cannot be created or written: exit 2, one line naming --out, no cluster started.
+
+    Permission bits do not stop root, so the cases are ones that fail for root too.
+    """
+    good, _, _ = meshes
+    monkeypatch.setattr("cvxgeodesic.batch.open_client", _no_cluster)
+    blocker = tmp_path / "somefile"
+    blocker.write_text("not a folder\n")
+    for out in (blocker, blocker / "sub"):
+        assert main(["batch", str(good[1]), "-s", "0", "--out", str(out), "-q"]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and f"--out {out}" in err[0], err
+    proc = f"/proc/{os.getpid()}"  # an existing folder in which no one, root included, creates files
+    if not os.path.isdir(proc):
+        pytest.skip("no /proc")
+    with pytest.raises(ParameterError, match=r"--out /proc/\d+: cannot create files in the folder"):
+        run_batch([good[1]], [0], proc, progress=False)
+
+
+def _no_cluster(*args, **kwargs):
+    raise AssertionError("the batch reached its cluster: the check must come before any solve")

@@ -1,16 +1,20 @@
 """A local Dask cluster listens on loopback only: nothing of a ``--workers`` job is reachable from the network.
 
 Dask's ``dashboard_address=":0"`` binds the scheduler's dashboard (an HTTP server that runs even without
-Bokeh) to every interface; ``_cluster.open_client`` binds every socket of its cluster to 127.0.0.1.
+Bokeh) to every interface; ``_cluster.open_client`` binds every socket of its cluster to 127.0.0.1. On
+loopback, every user of the machine reaches them: none may speak Dask in clear (it runs what a client
+submits); the cluster's TLS is tested in depth in tests/test_cluster_security.py.
 """
 
 from __future__ import annotations
 
 import ipaddress
 import os
+import socket
 import subprocess
 import sys
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -39,6 +43,20 @@ def _listening(pid: int) -> set[tuple[int, str, int]]:
     return found
 
 
+def _first_bytes(address: str, port: int) -> bytes:
+    """What a listener sends to a plain TCP connection that says nothing: a Dask comm in clear sends its handshake.
+
+    Empty when it sends nothing within a second (a TLS listener waits for the client's hello, an HTTP server for
+    the request) or is gone already; only a listener speaking plain Dask answers, at once.
+    """
+    try:
+        with socket.create_connection((address, port), timeout=1.0) as sock:
+            sock.settimeout(1.0)
+            return sock.recv(8)
+    except OSError:  # refused (the job ended), reset or timed out
+        return b""
+
+
 def test_cli_matrix_on_workers_listens_on_loopback_only(tmp_path: Path) -> None:
     mesh = cg.icosphere(3)
     path = cg.save_distance(tmp_path / "sphere.ply", mesh, np.zeros(mesh.n_vertices))
@@ -51,11 +69,17 @@ def test_cli_matrix_on_workers_listens_on_loopback_only(tmp_path: Path) -> None:
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env)
     seen: set[tuple[int, str, int]] = set()
     deadline = time.monotonic() + 300
-    while proc.poll() is None and time.monotonic() < deadline:
-        seen |= _listening(proc.pid)
-        time.sleep(0.05)
-    if proc.poll() is None:
-        proc.kill()
+    with ThreadPoolExecutor(8) as pool:
+        probes = {}
+        while proc.poll() is None and time.monotonic() < deadline:
+            for pid, ip, port in _listening(proc.pid) - seen:  # each listener once, as another user would
+                probes[(pid, ip, port)] = pool.submit(_first_bytes, "127.0.0.1" if ip in ("0.0.0.0", "::") else ip,
+                                                      port)
+                seen.add((pid, ip, port))
+            time.sleep(0.05)
+        if proc.poll() is None:
+            proc.kill()
+        spoken = {where: fut.result() for where, fut in probes.items()}
     output = proc.communicate()[0].decode(errors="replace")
     assert proc.returncode == 0, output
     assert np.load(out).shape == (6, mesh.n_vertices)
@@ -64,3 +88,5 @@ def test_cli_matrix_on_workers_listens_on_loopback_only(tmp_path: Path) -> None:
     assert any(pid != proc.pid for pid, _, _ in seen), seen
     exposed = sorted(s for s in seen if not ipaddress.ip_address(s[1]).is_loopback)
     assert exposed == [], f"listening beyond loopback: {exposed}"
+    in_clear = sorted(where for where, first in spoken.items() if first)
+    assert in_clear == [], f"speaking Dask in clear to any local user: {in_clear}"

@@ -1,7 +1,8 @@
 """Dask plumbing shared by everything that runs on a cluster (``batch`` meshes, ``distance_matrix`` rows).
 
 One place for: the optional import with an error that names the extra, the probe that fails fast on an
-address that is not a Dask scheduler, the thread budget of local workers, the client/cluster of a run,
+address that is not a Dask scheduler, the thread budget of local workers, the client/cluster of a run
+(a local cluster speaks TLS with credentials of its own: no other user of the machine can connect to it),
 and Ctrl-C (one line, no worker tracebacks). Dask (``pip install 'cvxgeodesic[cluster]'``) is imported
 only inside these functions.
 """
@@ -16,8 +17,8 @@ from collections.abc import Iterator
 from contextlib import ExitStack
 from typing import Any
 
-__all__ = ["LOCAL_HOST", "PROBE_TIMEOUT", "THREAD_VARIABLES", "check_scheduler", "local_worker_environ", "open_client",
-           "require_distributed", "sigint_ignored", "stop_after_interrupt"]
+__all__ = ["LOCAL_HOST", "PROBE_TIMEOUT", "THREAD_VARIABLES", "check_scheduler", "local_security",
+           "local_worker_environ", "open_client", "require_distributed", "sigint_ignored", "stop_after_interrupt"]
 
 #: The one address a local cluster listens on (scheduler, workers, nannies and the scheduler's dashboard).
 #: Dask binds the dashboard of ``dashboard_address=":0"`` to every interface, so a job would be reachable
@@ -147,6 +148,42 @@ def _environ_kept(names: tuple[str, ...]) -> Iterator[None]:
                 os.environ[k] = v
 
 
+def local_security(what: str = "cvxgeodesic batch") -> Any:
+    """TLS credentials for one local cluster: a fresh self-signed certificate and key, held in memory.
+
+    A Dask scheduler or worker on ``tcp://`` runs any function a client submits, and a loopback port is
+    open to every user of the machine: without credentials, anyone there could run code as the caller
+    while a job runs. With these, scheduler, workers and nannies listen on ``tls://`` and accept only a
+    peer that presents this certificate (Dask's TLS is mutual), which only the processes of the run hold:
+    the client of the run, and the workers, which get it from their nanny through the spawn pipe.
+
+    Parameters
+    ----------
+    what : str
+        What needs them, the subject of the ImportError.
+
+    Returns
+    -------
+    distributed.security.Security
+        With ``require_encryption=True``.
+
+    Raises
+    ------
+    ImportError
+        The ``cryptography`` package, which makes the certificate, is not installed.
+    """
+    from distributed.security import Security
+
+    try:
+        import cryptography  # noqa: F401  (Security.temporary's own message does not name the extra)
+    except ImportError as exc:
+        raise ImportError(
+            f"{what} on a local cluster needs the package cryptography (its workers talk TLS with a "
+            "certificate made for the run): pip install cryptography (or pip install 'cvxgeodesic[cluster]')"
+        ) from exc
+    return Security.temporary()
+
+
 @contextlib.contextmanager
 def sigint_ignored() -> Iterator[None]:
     """Ignore SIGINT while the block runs (processes started then inherit it); main thread only."""
@@ -173,8 +210,10 @@ def open_client(stack: ExitStack, scheduler: Any, n_workers: int, what: str = "c
     scheduler : None, str or distributed.Client
         None: a ``LocalCluster`` of ``n_workers`` worker processes with one Dask thread each and
         :func:`local_worker_environ`'s thread budget, every socket of it (dashboard included) on
-        :data:`LOCAL_HOST`; an address (probed by :func:`check_scheduler`
-        first); or a connected client, used as it is (not closed).
+        :data:`LOCAL_HOST`, scheduler, workers and nannies on ``tls://`` with :func:`local_security`'s
+        credentials (held by the returned client alone); an address (probed by :func:`check_scheduler`
+        first; a ``tls://`` one uses the Dask configuration's credentials); or a connected client,
+        used as it is (not closed).
     n_workers : int
         Workers of the local cluster.
     what : str
@@ -187,20 +226,21 @@ def open_client(stack: ExitStack, scheduler: Any, n_workers: int, what: str = "c
     Raises
     ------
     ImportError
-        Dask's ``distributed`` is not installed.
+        Dask's ``distributed`` is not installed, or (local cluster) ``cryptography``.
     ConnectionError
         ``scheduler`` is not a reachable Dask scheduler.
     """
     dask, distributed = require_distributed(what)
     if scheduler is None:
+        security = local_security(what)
         # Ctrl-C goes to the whole process group: worker processes started with SIGINT ignored keep
         # quiet (no tracebacks of their own) and this process alone stops them (stop_after_interrupt)
         kept = _environ_kept((*THREAD_VARIABLES, MALLOC_TRIM))
         with dask.config.set(local_worker_environ(n_workers)), sigint_ignored(), kept:
             cluster = stack.enter_context(distributed.LocalCluster(
-                n_workers=n_workers, threads_per_worker=1, processes=True, host=LOCAL_HOST,
-                dashboard_address=f"{LOCAL_HOST}:0"))
-        return stack.enter_context(distributed.Client(cluster)), cluster
+                n_workers=n_workers, threads_per_worker=1, processes=True, host=LOCAL_HOST, protocol="tls://",
+                security=security, dashboard_address=f"{LOCAL_HOST}:0"))
+        return stack.enter_context(distributed.Client(cluster, security=security)), cluster
     if isinstance(scheduler, distributed.Client):
         return scheduler, None
     check_scheduler(scheduler)

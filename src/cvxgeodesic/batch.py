@@ -35,6 +35,7 @@ import math
 import os
 import socket
 import sys
+import tempfile
 import time
 import warnings
 from contextlib import ExitStack
@@ -44,7 +45,7 @@ import numpy as np
 
 from ._cluster import open_client, require_distributed, stop_after_interrupt
 from .errors import ParameterError
-from .validation import check_choice, check_count, check_number
+from .validation import check_choice, check_count, check_not_an_input, check_number
 
 __all__ = ["OUTPUT_FORMATS", "expand_mesh_paths", "format_summary", "output_paths", "run_batch", "solve_one"]
 
@@ -327,9 +328,8 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
                                  "rename one or run them into different --out folders")
         stems[p.stem] = p
     out = Path(out_dir).expanduser().resolve()
-    if out.exists() and not out.is_dir():
-        raise ParameterError(f"--out {out} exists and is not a directory")
-    out.mkdir(parents=True, exist_ok=True)
+    _check_not_inputs(paths, out, output_format)
+    _prepare_out(out)
     params = _params(sources_list, method, m, solver, multires, output_format)
 
     rows: dict[Path, dict] = {}
@@ -349,6 +349,59 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
     return [rows[p] for p in paths]
 
 
+def _check_not_inputs(paths: list[Path], out: Path, output_format: str) -> None:
+    """ParameterError when an output of the batch (``OUT/<stem>.<format>`` or ``.json``) is one of its inputs.
+
+    ``batch 'in/*.ply' --out in`` would replace every mesh by its distance file. Distinct stems (checked
+    before) leave the same path and a file system that ignores case (``A.PLY``) as the ways an output can
+    be an input, so each output is compared with the inputs of the same stem, case folded.
+    """
+    by_stem: dict[str, list[Path]] = {}
+    for p in paths:
+        by_stem.setdefault(p.stem.casefold(), []).append(p)
+    for p in paths:
+        for target in output_paths(p, out, output_format):
+            check_not_an_input(target, by_stem[p.stem.casefold()], "--out")
+
+
+def _prepare_out(out: Path) -> None:
+    """Create the output folder ``out`` and check that files can be created in it, before any solve.
+
+    Raises
+    ------
+    ParameterError
+        ``out`` is a file, cannot be created (below a file, permissions, read-only file system), or no
+        file can be created in it (checked by creating and removing an empty temporary file, which also
+        holds for root, whom permission bits do not stop).
+    """
+    if out.exists() and not out.is_dir():
+        raise ParameterError(f"--out {_printable(str(out))} exists and is not a directory")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ParameterError(f"--out {_printable(str(out))}: cannot create the folder "
+                             f"({exc.strerror or exc})") from None
+    try:  # the outputs are written through temporary files in this folder: try exactly that
+        fd, probe = tempfile.mkstemp(prefix=".cvxgeodesic-", suffix=".probe", dir=out)
+    except OSError as exc:
+        raise ParameterError(f"--out {_printable(str(out))}: cannot create files in the folder "
+                             f"({exc.strerror or exc})") from None
+    os.close(fd)
+    os.unlink(probe)
+
+
+def _printable(text: str) -> str:
+    """``text`` with the undecodable bytes of file names (surrogate escapes, ``\\udcff``) as ``\\xff``.
+
+    A file name that is not UTF-8 comes out of ``os.listdir`` with such escapes; printed to a UTF-8
+    stream they raise UnicodeEncodeError.
+    """
+    try:
+        return text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+    except UnicodeEncodeError:  # a surrogate that no file name gave
+        return text.encode("utf-8", "backslashreplace").decode("utf-8")
+
+
 def _run_on_cluster(todo, rows, sources, out, method, m, solver, multires, output_format,
                     scheduler, n_workers, progress) -> None:
     with ExitStack() as stack:
@@ -357,7 +410,9 @@ def _run_on_cluster(todo, rows, sources, out, method, m, solver, multires, outpu
         for i, p in enumerate(todo):
             size = p.stat().st_size if p.exists() else 0
             fut = client.submit(solve_one, str(p), sources, str(out), method, m, solver, multires, output_format,
-                                key=f"cvxgeodesic-batch-{i}-{p.stem}-{os.getpid()}-{time.time_ns()}",
+                                # a key goes through msgpack, strict UTF-8: a non-UTF-8 file name would break
+                                # the message that submits every task of the batch, so its bytes are escaped
+                                key=f"cvxgeodesic-batch-{i}-{_printable(p.stem)}-{os.getpid()}-{time.time_ns()}",
                                 pure=False, priority=size)  # biggest meshes first: better load balance
             futures[fut] = p
         bar = _progress(len(futures)) if progress else None
@@ -420,9 +475,9 @@ def _collect(distributed, futures: dict, rows: dict, bar) -> None:
         if bar is not None:
             bar.update(1)
             for note in row.get("notes", []):
-                bar.write(f"cvxgeodesic: note: {_with_name(p.name, note)}", file=sys.stderr)
+                bar.write(_printable(f"cvxgeodesic: note: {_with_name(p.name, note)}"), file=sys.stderr)
             if row["status"] == "failed":
-                bar.write(f"FAILED {p}: {row['error']}", file=sys.stderr)
+                bar.write(_printable(f"FAILED {p}: {row['error']}"), file=sys.stderr)
 
 
 def _with_name(name: str, note: str) -> str:
@@ -439,11 +494,11 @@ def format_summary(rows: list[dict]) -> str:
         note = r["error"] if r["status"] == "failed" else (r["output"] or "")
         if r["status"] == "ok" and r.get("solve_status") not in (None, "optimal"):
             note = f"[{r['solve_status']}] {note}"
-        body.append((Path(r["mesh"]).name, r["status"],
+        body.append((_printable(Path(r["mesh"]).name), r["status"],
                      "" if r["n_vertices"] is None else str(r["n_vertices"]),
                      "" if r["n_faces"] is None else str(r["n_faces"]),
                      "" if r["iterations"] is None else str(r["iterations"]),
-                     "" if r["time_s"] is None else f"{r['time_s']:.2f}", note or ""))
+                     "" if r["time_s"] is None else f"{r['time_s']:.2f}", _printable(note or "")))
     widths = [max(len(h), *(len(b[i]) for b in body)) if body else len(h) for i, h in enumerate(head)]
     fmt = "  ".join(f"{{:<{w}}}" for w in widths[:-1]) + "  {}"
     lines = [fmt.format(*head), fmt.format(*("-" * w for w in widths[:-1]), "-" * len(head[-1]))]
