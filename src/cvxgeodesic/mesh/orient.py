@@ -97,14 +97,18 @@ def orient_faces(F: np.ndarray, n: int) -> Orientation:
     head = F[:, [1, 2, 0]].ravel()
     face = np.repeat(np.arange(m), 3)
     key = np.minimum(tail, head) * np.int64(n) + np.maximum(tail, head)
-    order = np.argsort(key, kind="stable")
+    order = np.argsort(key)
     k_sorted = key[order]
-    _, start, count = np.unique(k_sorted, return_index=True, return_counts=True)
+    start = np.flatnonzero(np.r_[True, k_sorted[1:] != k_sorted[:-1]])
+    count = np.diff(np.r_[start, k_sorted.size])
     first = order[start[count == 2]]
     second = order[start[count == 2] + 1]
-    t1, t2 = face[first], face[second]
     # the same direction in both faces: one of them must be reversed
     differ = (tail[first] == tail[second]).astype(np.int64)
+    if not differ.any():  # consistent already (hence orientable): the common case, one sort
+        none = np.zeros(m, dtype=bool)
+        return Orientation(F, none, none.copy())
+    t1, t2 = face[first], face[second]
     # state node of face t: t (as given) and m + t (reversed)
     rows = np.r_[t1, t1 + m]
     cols = np.r_[t2 + m * differ, t2 + m * (1 - differ)]
