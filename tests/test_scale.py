@@ -120,3 +120,17 @@ def test_the_coordinate_range_is_checked_when_a_file_is_loaded(tmp_path):
     path.write_text("v 0 0 0\nv 1e80 0 0\nv 0 1e80 0\nf 1 2 3\n")
     with pytest.raises(MeshError, match="huge.obj: vertex 1 has a coordinate beyond"):
         cg.load_mesh(path)
+
+
+@pytest.mark.parametrize("method", ["qcqp-laplacian", "dijkstra"])
+def test_costs_and_metrics_at_the_ends_of_their_ranges_on_meshes_at_the_ends_of_theirs(method):
+    """The corners of the supported ranges together: a mesh 1e±39 across, a cost of 1e±30 and a metric of 1e±60
+    (both: lengths scaled by 1e±60). Measured: 2.6e-11 (qcqp-laplacian: the solver's tolerance), 2.7e-16 (dijkstra)."""
+    mesh = cg.icosphere(1)
+    d = _quiet_solve(mesh, method)
+    for s in (1e-39, 1e39):
+        for c in (1e-30, 1e30):
+            scaled = cg.TriMesh(mesh.V * s, mesh.F)
+            for kwargs, factor in (({"cost": c}, c), ({"metric": np.eye(3) * c * c, "cost": c}, c * c)):
+                d_s = cg.GeodesicSolver(scaled, method, **kwargs).solve(0).distance
+                assert _rel(d_s, d, s * factor) < CONVEX_TOL, (s, c, list(kwargs))

@@ -644,7 +644,8 @@ def check_plane_metric(M2: np.ndarray, owner: np.ndarray, face: np.ndarray, kind
         # (1 + 1e-6): the smaller eigenvalue carries an error of about 1e-16 times the larger one, so the condition
         # number of diag(1e8, 1, 1) in a face's plane came back 1e8 (1 + 2e-8)
         (high > MAX_METRIC_CONDITION * (1 + 1e-6) * low, "is too anisotropic", limits),
-        ((low < MIN_COST**2) | (high > MAX_COST**2), "is outside the supported range", limits),
+        ((low < MIN_COST**2 * (1 - 1e-6)) | (high > MAX_COST**2 * (1 + 1e-6)), "is outside the supported range",
+         limits),
     ):
         if bad.any():
             i = int(np.flatnonzero(bad)[0])
