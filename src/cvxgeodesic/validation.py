@@ -480,7 +480,7 @@ MAX_METRIC_CONDITION = 1e8
 def check_real(value: Any, name: str) -> None:
     """A ParameterError naming ``name`` when ``value`` holds complex numbers (a conversion to float would drop their
     imaginary part silently) or, for a NumPy array, anything but real numbers (strings, records)."""
-    if isinstance(value, np.ndarray) and value.dtype.kind not in "biufc":
+    if isinstance(value, np.ndarray) and value.dtype.kind in "USVMm":  # strings, records, dates (object: scanned)
         raise ParameterError(f"{name} must hold real numbers, got an array of dtype {value.dtype}")
     try:
         arr = np.asarray(value)
