@@ -76,3 +76,67 @@ def test_readme_says_how_to_read_fields_back():
     assert "`_DISTANCE`" in glb and "float32" in glb
     assert 'vertex_attributes["_DISTANCE"]' in text
     assert "`vs\nexact`" in text or "`vs exact`" in text
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+# Issue 34: numbers outside the supported ranges are refused naming the parameter, its value and the range (before,
+# m=1e300 was reported as an indefinite Hessian energy, cost=1e300 as "DualInfeasible", cost=1e-300 as a zero area,
+# a very anisotropic metric as "not positive definite", and complex costs lost their imaginary part silently)
+# ---------------------------------------------------------------------------------------------------------------------
+SPHERE = cg.icosphere(1)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"method": "qcqp-hessian", "m": 1e300}, r"^m = 1e300 is outside the supported range \[0, 1e6\]"),
+    ({"method": "qclp", "m": 1e7}, r"^m = 1e7 is outside the supported range \[0, 1e6\]"),  # whatever the method
+    ({"method": "qcqp-hessian", "lam": 1e300}, r"^lam = 1e300 is outside the supported range \[0, [0-9.e-]+\] on this "
+                                               r"mesh \(the weight of m = 1e6; m = 1 is lam = "),
+    ({"method": "qclp", "cost": 1e300}, r"^cost = 1e300 is outside the supported range \[1e-30, 1e30\]"),
+    ({"method": "qclp", "cost": 1e-300}, r"^cost = 1e-300 is outside the supported range \[1e-30, 1e30\]"),
+    ({"method": "dijkstra", "cost": np.r_[1e31, np.ones(41)]}, r"^cost\[0\] \(vertex 0\) = 1e31 is outside the "
+                                                                r"supported range"),
+    ({"method": "qclp", "cost": np.r_[1e12, np.ones(41)]}, r"^cost varies by a factor 1e12 \(cost\[0\] \(vertex 0\) = "
+                                                           r"1e12, cost\[1\] \(vertex 1\) = 1\); the supported ratio "
+                                                           r"of the largest to the smallest cost is at most 1e6"),
+    ({"method": "qclp", "metric": np.diag([1e16, 1.0, 1.0])}, r"^metric is too anisotropic in the plane of face \d+ "
+                                                               r"\(eigenvalues there .*condition number .*\); "
+                                                               r"supported: eigenvalues in \[1e-60, 1e60\] with a "
+                                                               r"ratio up to 1e8"),
+    ({"method": "qclp", "metric": np.eye(3) * 1e70}, r"^metric is outside the supported range in the plane of face "
+                                                      r"\d+ .*eigenvalues in \[1e-60, 1e60\]"),
+    ({"method": "qclp", "metric": np.diag([0.0, 1.0, 1.0])}, r"^metric is not positive definite in the plane"),
+    ({"method": "qclp", "cost": np.ones(42) * (1 + 1j)}, r"^cost must hold real numbers, got complex values"),
+    ({"method": "qclp", "cost": 2 + 0j}, r"^cost must hold real numbers, got complex values"),
+    ({"method": "qclp", "cost": [1.0] * 41 + [1j]}, r"^cost must hold real numbers, got complex values"),
+    ({"method": "qclp", "metric": np.eye(3) * (1 + 0j)}, r"^metric must hold real numbers, got complex values"),
+])
+def test_numbers_outside_the_supported_ranges_are_refused_naming_the_parameter(kwargs, match):
+    with pytest.raises(cg.ParameterError, match=match):
+        cg.GeodesicSolver(SPHERE, **kwargs)
+
+
+def test_the_ends_of_the_supported_ranges_are_solved():
+    """m = 1e6, a cost ratio of 1e6 and a metric's condition number of 1e8 (measured solvable: validation.py)."""
+    ok = [cg.GeodesicSolver(SPHERE, "qcqp-hessian", m=1e6).solve(0),
+          cg.GeodesicSolver(SPHERE, "qclp", cost=np.r_[1e6, np.ones(41)]).solve(0),
+          cg.GeodesicSolver(SPHERE, "qclp", cost=1e30).solve(0),
+          cg.GeodesicSolver(SPHERE, "qclp", metric=np.diag([1e8, 1.0, 1.0])).solve(0)]
+    assert all(r.info.status == "optimal" and np.isfinite(r.distance).all() for r in ok)
+
+
+def test_a_complex_cost_file_is_refused_by_the_cli(plane_off, tmp_path, capsys):
+    cost = tmp_path / "cost.npy"
+    np.save(cost, np.ones(16) * (1 + 1j))  # one per vertex of the 4x4 grid
+    rc = main(["distance", str(plane_off), "-s", "0", "--method", "qclp", "--cost", str(cost), "-q",
+               "-o", str(tmp_path / "d.npy")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1, err
+    assert f"--cost {cost} must hold real numbers, got complex values" in err[0], err
+    assert not (tmp_path / "d.npy").exists()
+
+
+def test_a_huge_m_is_one_line_on_the_command_line(plane_off, tmp_path, capsys):
+    rc = main(["distance", str(plane_off), "-s", "0", "--m", "1e300", "-o", str(tmp_path / "d.npy")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1, err
+    assert "m = 1e300 is outside the supported range [0, 1e6]" in err[0], err

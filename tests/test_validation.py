@@ -209,3 +209,41 @@ def test_order_is_checked_like_every_parameter():
     for bad in (0, 3, 1.5, True, "2", None):
         with pytest.raises(ParameterError, match="^order must be 1 .* or 2 .*, got"):
             cg.GeodesicSolver(cg.icosphere(1), "qclp", order=bad)
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+# issue 34: real numbers and the supported ranges
+# ---------------------------------------------------------------------------------------------------------------------
+def test_check_real_refuses_complex_and_non_numeric_arrays():
+    from cvxgeodesic.validation import check_real
+
+    for ok in (1.0, 3, np.ones(3), np.arange(4), [1.0, 2.0], np.float32(2.0)):
+        check_real(ok, "x")
+    for bad, match in ((np.ones(3) * 1j, "complex values"), ([1.0, 2j], "complex values"), (1 + 0j, "complex"),
+                       (np.array(["1.0", "2.0"]), "dtype <U3"), (np.array([1 + 0j], dtype=object), "complex")):
+        with pytest.raises(ParameterError, match=r"^--cost c\.npy must hold real numbers"):
+            check_real(bad, "--cost c.npy")
+        with pytest.raises(ParameterError, match=match):
+            check_real(bad, "x")
+
+
+def test_check_lam_and_m_bounds():
+    from cvxgeodesic.validation import MAX_M, check_lam, check_smoothness
+
+    assert check_smoothness(MAX_M, None) == (MAX_M, None)
+    with pytest.raises(ParameterError, match=r"^m = 1\.5e6 is outside the supported range \[0, 1e6\]"):
+        check_smoothness(1.5e6, None)
+    assert check_lam(0.5, 1e-6) == 0.5 and check_lam(5.0, 0.0) == 5.0  # no smoothing weight: nothing to bound
+    with pytest.raises(ParameterError, match=r"^lam = 2 is outside the supported range \[0, 1\] on this mesh"):
+        check_lam(2.0, 1e-6)
+
+
+def test_check_coordinates_names_the_vertex_and_the_range():
+    from cvxgeodesic.errors import MeshError
+    from cvxgeodesic.validation import check_coordinates
+
+    check_coordinates(np.array([[0.0, 0, 0], [1e40, 0, 0]]), "m")
+    with pytest.raises(MeshError, match=r"^m: vertex 1 has a coordinate beyond ±1e\+40 \[0\.0, -2e\+40, 0\.0\]"):
+        check_coordinates(np.array([[0.0, 0, 0], [0, -2e40, 0]]), "m")
+    with pytest.raises(MeshError, match=r"^m: the mesh is only 5e-41 across"):
+        check_coordinates(np.array([[0.0, 0, 0], [5e-41, 0, 0]]), "m")

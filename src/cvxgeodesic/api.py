@@ -26,7 +26,15 @@ from .results import GeodesicResult, SolveInfo
 from .solvers._interrupt import reporting_to
 from .sources import resolve_sources
 from .strategies import SolveConfig, SolveStrategy, make_strategy, resolve_target
-from .validation import check_choice, check_count, check_number, check_order, check_smoothness, validate_sources
+from .validation import (
+    check_choice,
+    check_count,
+    check_lam,
+    check_number,
+    check_order,
+    check_smoothness,
+    validate_sources,
+)
 
 __all__ = ["ALL_METHODS", "BASELINE_METHODS", "DEFAULT_TOL", "GeodesicResult", "GeodesicSolver", "SOLVERS",
            "SolveInfo", "distance_matrix", "geodesic_distance"]
@@ -287,12 +295,12 @@ class GeodesicSolver:
         else:
             self.energy = None if self.is_baseline else FORMULATIONS[self.method][1]
         self.m = None if lam_value is not None else m_value
+        medium = {} if self.is_volume else {"medium": self.medium, "order": self.order}  # surfaces only
         if self.energy is None:
             self.lam = 0.0
-        elif lam_value is not None:
-            self.lam = lam_value
+        elif lam_value is not None:  # at most the weight of the largest m
+            self.lam = check_lam(lam_value, weight(self.mesh, 1.0, self.normalization, self.energy, **medium))
         else:
-            medium = {} if self.is_volume else {"medium": self.medium, "order": self.order}  # surfaces only
             self.lam = weight(self.mesh, m_value, self.normalization, self.energy, **medium)
 
     def __repr__(self) -> str:

@@ -287,12 +287,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _check_numbers(args) -> None:
     """``--m`` and ``--lam`` checked as the Python API checks them, before a command prints or reads anything."""
-    from .validation import check_number
+    from .validation import check_number, check_smoothness
 
     if getattr(args, "lam", None) is not None:
         check_number(args.lam, "lam", low=0)
     elif getattr(args, "m", None) is not None:
-        check_number(args.m, "m", low=0)
+        check_smoothness(args.m, None)  # its range too (validation.MAX_M)
 
 
 def main(argv=None) -> int:

@@ -12,6 +12,7 @@ from .api import ALL_METHODS, SOLVERS
 from .errors import ParameterError, SourceError
 from .mesh.formats.registry import mesh_formats_help
 from .mesh.trimesh import TriMesh
+from .validation import check_real
 
 #: Help of every command's mesh argument: the formats of the registry.
 MESH_HELP = f"mesh file: {mesh_formats_help()} (trimesh and meshio: pip install 'cvxgeodesic[io]')"
@@ -76,7 +77,7 @@ def cli_cost(args, mesh) -> np.ndarray | None:
     Raises
     ------
     ParameterError
-        A ``--cost`` file that is not a .npy array of one value per file vertex or per mesh triangle.
+        A ``--cost`` file that is not a .npy array of real numbers, one per file vertex or per mesh triangle.
     MeshFormatError
         ``--cost-field`` on a format without per-vertex properties, or a property the file does not have.
     """
@@ -95,6 +96,7 @@ def cli_cost(args, mesh) -> np.ndarray | None:
         except (OSError, ValueError) as exc:
             raise ParameterError(f"--cost {args.cost}: cannot read it as a .npy array ({exc})") from None
         what = f"--cost {args.cost}"
+        check_real(values, what)
         if values.shape == (mesh.n_faces,) and values.shape != (mesh.n_file_vertices,):
             return values  # one per triangle of the loaded mesh
         if values.shape != (mesh.n_file_vertices,):
@@ -102,6 +104,7 @@ def cli_cost(args, mesh) -> np.ndarray | None:
                                  f"per vertex of the file) or ({mesh.n_faces},) (one per triangle of the loaded mesh)")
     else:
         return None
+    check_real(values, what)  # before any conversion to float drops an imaginary part
     values, note = from_file_order(mesh, values, what)
     if note:
         args.notes.say(note)

@@ -67,7 +67,8 @@ class DegenerateFacesWarning(UserWarning):
 
 
 class MeshRepairWarning(UserWarning):
-    """``load_mesh`` changed the file's mesh: welded or dropped vertices, dropped faces (the message says which)."""
+    """``load_mesh`` changed the file's mesh: welded or dropped vertices, dropped faces; or a method reoriented faces
+    for a library that depends on their orientation (the message says which; also in ``info.notes``)."""
 
 
 class SolverError(CvxGeodesicError, RuntimeError):

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numbers
 import os
+import re
 import tempfile
 from collections.abc import Iterable
 from pathlib import Path
@@ -23,13 +24,24 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .errors import ParameterError, SourceError
+from .errors import MeshError, ParameterError, SourceError
 
 __all__ = [
-    "as_points", "as_vertex_field", "check_choice", "check_cost", "check_count", "check_medium_method", "check_metric",
-    "check_not_an_input", "check_number", "check_output_path", "check_plane_metric", "check_type", "is_integer",
-    "is_real", "short_repr", "validate_sources", "vertex_indices", "vertex_mask",
+    "MAX_COORDINATE", "MAX_COST", "MAX_COST_RATIO", "MAX_M", "MAX_METRIC_CONDITION", "MIN_COST", "MIN_EXTENT",
+    "as_points", "as_vertex_field", "check_choice", "check_coordinates", "check_cost", "check_count", "check_lam",
+    "check_medium_method", "check_metric", "check_not_an_input", "check_number", "check_output_path",
+    "check_plane_metric", "check_real", "check_type", "is_integer", "is_real", "short_repr", "validate_sources",
+    "vertex_indices", "vertex_mask",
 ]
+
+#: Largest accepted coordinate magnitude of a mesh, and :data:`MIN_EXTENT` the smallest nonzero size (largest side
+#: of its bounding box). Inside [1e-40, 1e40] every length, area and volume of a mesh, their squares (``np.linalg.norm``
+#: of a cross product squares an area) and cubes stay normal floating-point numbers, also for edges 1e-10 of the
+#: mesh's size: measured before this bound, areas overflowed from coordinates of about 1e77 (λ became inf) and the
+#: libraries' absolute tolerances broke pygeodesic below 1e-12. Every method is solved on the mesh divided by a power
+#: of two (exact), so inside the range a mesh scaled by ``s`` gives ``s`` times the distances.
+MAX_COORDINATE = 1e40
+MIN_EXTENT = 1e-40
 
 
 def is_real(value: Any) -> bool:
@@ -127,12 +139,40 @@ def check_order(order: Any) -> int:
     return int(order)
 
 
+#: Largest accepted smoothness multiplier ``m`` (and ``lam`` up to the weight of this ``m``). Measured 2026-12-03 on
+#: icosphere(2) and a jittered 8×8 grid, every order-1 and order-2 formulation: at m = 1e4 the smoothing already
+#: flattens a sphere's field to a fifth, at 1e6 to 1 %; the structured solver solved every case up to 1e8, the
+#: curved Hessian energy needed Clarabel from 1e10 and failed from 1e12 (reported as an indefinite energy).
+MAX_M = 1e6
+
+
 def check_smoothness(m: Any, lam: Any) -> tuple[float, float | None]:
-    """``(m, lam)`` checked: ``m`` a finite number ≥ 0 (always, even when ``lam`` is given or the method has no
-    smoothness term, so that every order and method gives the same verdict), ``lam`` None or a finite number ≥ 0."""
+    """``(m, lam)`` checked: ``m`` a number in ``[0, MAX_M]`` (always, even when ``lam`` is given or the method has no
+    smoothness term, so that every order and method gives the same verdict), ``lam`` None or a finite number ≥ 0
+    (its upper bound needs the mesh: :func:`check_lam`)."""
     m_value = check_number(m, "m", low=0)
+    if m_value > MAX_M:
+        raise ParameterError(f"m = {_g(m_value)} is outside the supported range [0, {_g(MAX_M)}]: beyond it the "
+                             "smoothing outweighs the distance a million times and the solvers fail")
     lam_value = None if lam is None else check_number(lam, "lam", low=0)
     return m_value, lam_value
+
+
+def check_lam(lam: float, unit: float) -> float:
+    """``lam`` unless it exceeds the weight of ``m = MAX_M``; a ParameterError naming both otherwise.
+
+    Parameters
+    ----------
+    lam : float
+        A finite λ ≥ 0 (:func:`check_smoothness`).
+    unit : float
+        The weight of ``m = 1`` on this mesh (``smoothness_weight(mesh, 1.0, ...)``).
+    """
+    if unit > 0 and lam > MAX_M * unit:
+        raise ParameterError(f"lam = {_g(lam)} is outside the supported range [0, {_g(MAX_M * unit)}] on this mesh "
+                             f"(the weight of m = {_g(MAX_M)}; m = 1 is lam = {_g(unit)}): beyond it the smoothing "
+                             "outweighs the distance a million times and the solvers fail")
+    return lam
 
 
 def as_vertex_field(values: ArrayLike, name: str, n: int | None = None, *, nan_ok: bool = True) -> np.ndarray:
@@ -307,6 +347,36 @@ def validate_sources(sources: Any, n: int) -> np.ndarray:
     return arr
 
 
+def check_coordinates(V: np.ndarray, name: str) -> None:
+    """Raise a :class:`~cvxgeodesic.errors.MeshError` unless finite vertex positions lie in the supported range.
+
+    Parameters
+    ----------
+    V : (n, 3) float ndarray
+        Finite coordinates.
+    name : str
+        The mesh's name, for the message.
+
+    Raises
+    ------
+    MeshError
+        A coordinate beyond ``±MAX_COORDINATE`` (the message names the first such vertex), or a mesh whose
+        largest bounding-box side is positive but below ``MIN_EXTENT`` (a mesh whose vertices all coincide is
+        accepted: it has no size to lose).
+    """
+    supported = (f"supported: |coordinates| <= {MAX_COORDINATE:g} and a mesh size (largest bounding-box side) "
+                 f">= {MIN_EXTENT:g}; rescale the mesh")
+    big = np.abs(V).max(axis=1) > MAX_COORDINATE
+    if big.any():
+        i = int(np.flatnonzero(big)[0])
+        raise MeshError(f"{name}: vertex {i} has a coordinate beyond ±{MAX_COORDINATE:g} {V[i].tolist()}; squared "
+                        f"lengths and areas would overflow ({supported})")
+    extent = float((V.max(axis=0) - V.min(axis=0)).max()) if V.size else 0.0
+    if 0.0 < extent < MIN_EXTENT:
+        raise MeshError(f"{name}: the mesh is only {extent:.3g} across (largest bounding-box side); areas would "
+                        f"underflow ({supported})")
+
+
 def check_not_an_input(path: str | os.PathLike, inputs, what: str = "output") -> None:
     """Refuse an output path that names one of the input files (the same file, also through links).
 
@@ -391,6 +461,42 @@ def _where(kind: str, k: int) -> str:
     return {"vertices": f"vertex {k}", "faces": f"face {k}"}.get(kind, "the constant")
 
 
+#: Supported travel costs (and length factors ``√λ`` of a metric's eigenvalues ``λ`` in a face's plane): a constant
+#: cost ``c`` only rescales the distance, so any range would do, but inside this one the medium's lengths, areas and
+#: their products (``c⁴ det M``) stay normal floats with coordinates up to :data:`MAX_COORDINATE`. Measured before
+#: the bound: ``cost=1e100`` was reported as an unbounded problem, ``1e-300`` as a surface of zero area.
+MIN_COST, MAX_COST = 1e-30, 1e30
+#: Largest accepted ratio of the largest to the smallest cost. Measured 2026-12-03 on a jittered 10×10 grid with
+#: two costs (per face, 1 and r): up to r = 1e6 the structured solver solved qclp (orders 1 and 2) and qcqp-hessian;
+#: from 1e8 order 2 and the Hessian fell back to Clarabel, at 1e12 Clarabel failed and at 1e16 every solver did.
+MAX_COST_RATIO = 1e6
+#: Largest accepted condition number of a metric in a face's plane (lengths differing by up to ``√1e8 = 1e4``
+#: between directions). Measured 2026-12-03 with ``diag(κ, 1, 1)`` on a jittered 10×10 grid and on icosphere(2):
+#: the structured solver solved qclp (orders 1 and 2) and qcqp-hessian up to κ = 1e8; from 1e10 order 2 failed
+#: (reported as an unbounded problem); from about 1e12 the old check called the tensor "not positive definite".
+MAX_METRIC_CONDITION = 1e8
+
+
+def check_real(value: Any, name: str) -> None:
+    """A ParameterError naming ``name`` when ``value`` holds complex numbers (a conversion to float would drop their
+    imaginary part silently) or, for a NumPy array, anything but real numbers (strings, records)."""
+    if isinstance(value, np.ndarray) and value.dtype.kind in "USVMm":  # strings, records, dates (object: scanned)
+        raise ParameterError(f"{name} must hold real numbers, got an array of dtype {value.dtype}")
+    try:
+        arr = np.asarray(value)
+    except (TypeError, ValueError):
+        return  # the caller's conversion reports it
+    if arr.dtype.kind == "c" or (arr.dtype == object and any(isinstance(v, complex) for v in arr.ravel())):
+        raise ParameterError(f"{name} must hold real numbers, got complex values (dtype {arr.dtype}): pass the real "
+                             "part explicitly if that is what you mean")
+
+
+def _g(x: float, digits: int = 6) -> str:
+    """``x`` for messages: ``1e6``, ``1e-30``, ``2.5`` (not ``1e+06``), to ``digits`` significant digits."""
+    return re.sub(r"e([+-])0*(\d)", lambda mt: "e" + ("-" if mt.group(1) == "-" else "") + mt.group(2),
+                  f"{x:.{digits}g}")
+
+
 def check_cost(cost: Any, n: int, m: int) -> tuple[np.ndarray, str]:
     """A travel cost (time per unit length, ``1/speed``) checked and classified.
 
@@ -409,8 +515,11 @@ def check_cost(cost: Any, n: int, m: int) -> tuple[np.ndarray, str]:
     Raises
     ------
     ParameterError
-        Not numeric, another shape, or a value that is not positive and finite (the message names the first one).
+        Complex or not numeric, another shape, a value that is not positive and finite or outside
+        ``[MIN_COST, MAX_COST]`` (the message names the first one), or values whose ratio max/min exceeds
+        ``MAX_COST_RATIO`` (the message names both).
     """
+    check_real(cost, "cost")
     try:
         arr = np.asarray(cost, dtype=np.float64)
     except (TypeError, ValueError):
@@ -430,7 +539,24 @@ def check_cost(cost: Any, n: int, m: int) -> tuple[np.ndarray, str]:
         k = int(np.flatnonzero(bad)[0])
         at = "" if kind == "constant" else f"[{k}]"
         raise ParameterError(f"cost{at} = {float(arr[k])!r} ({_where(kind, k)}) must be positive and finite")
+    _check_cost_range(arr, kind)
     return arr, kind
+
+
+def _check_cost_range(arr: np.ndarray, kind: str) -> None:
+    """A ParameterError unless positive costs lie in ``[MIN_COST, MAX_COST]`` with a ratio up to ``MAX_COST_RATIO``."""
+    at = (lambda k: "cost") if kind == "constant" else (lambda k: f"cost[{k}] ({_where(kind, k)})")
+    out = (arr < MIN_COST) | (arr > MAX_COST)
+    if out.any():
+        k = int(np.flatnonzero(out)[0])
+        raise ParameterError(f"{at(k)} = {_g(arr[k])} is outside the supported range [{_g(MIN_COST)}, "
+                             f"{_g(MAX_COST)}]; a constant factor only scales the distances: divide it out and "
+                             "multiply the result by it")
+    lo, hi = int(np.argmin(arr)), int(np.argmax(arr))
+    if arr[hi] > MAX_COST_RATIO * arr[lo]:
+        raise ParameterError(f"cost varies by a factor {_g(arr[hi] / arr[lo])} ({at(hi)} = {_g(arr[hi])}, "
+                             f"{at(lo)} = {_g(arr[lo])}); the supported ratio of the largest to the smallest cost is "
+                             f"at most {_g(MAX_COST_RATIO)} (beyond, the solvers fail)")
 
 
 def check_metric(metric: Any, n: int, m: int) -> tuple[np.ndarray, str]:
@@ -452,9 +578,10 @@ def check_metric(metric: Any, n: int, m: int) -> tuple[np.ndarray, str]:
     Raises
     ------
     ParameterError
-        Not numeric, another shape, a non-finite entry or a tensor that is not symmetric (relative 1e-10), naming
-        the first.
+        Complex or not numeric, another shape, a non-finite entry or a tensor that is not symmetric (relative 1e-10),
+        naming the first.
     """
+    check_real(metric, "metric")
     try:
         arr = np.asarray(metric, dtype=np.float64)
     except (TypeError, ValueError):
@@ -483,7 +610,8 @@ def check_metric(metric: Any, n: int, m: int) -> tuple[np.ndarray, str]:
 
 
 def check_plane_metric(M2: np.ndarray, owner: np.ndarray, face: np.ndarray, kind: str) -> None:
-    """Raise a ParameterError unless every metric restricted to a face's plane is positive definite.
+    """Raise a ParameterError unless every metric restricted to a face's plane is positive definite, with a condition
+    number up to ``MAX_METRIC_CONDITION`` and length factors ``√λ`` in ``[MIN_COST, MAX_COST]``.
 
     Parameters
     ----------
@@ -494,18 +622,37 @@ def check_plane_metric(M2: np.ndarray, owner: np.ndarray, face: np.ndarray, kind
     face : (k,) int ndarray
         The face whose plane each row is restricted to.
     kind : {"constant", "vertices", "faces"}
+
+    Raises
+    ------
+    ParameterError
+        Three messages: not positive definite (an eigenvalue ≤ 0), too anisotropic (the condition number) and out
+        of range (the eigenvalues); each names the tensor, the face and the eigenvalues there.
     """
-    a, b, c = M2[:, 0, 0], M2[:, 0, 1], M2[:, 1, 1]
-    with np.errstate(invalid="ignore"):
-        bad = (a <= 0) | (a * c - b * b <= 1e-12 * np.maximum(a * c, 1e-300))
-    bad &= np.isfinite(M2).all(axis=(1, 2))
-    if bad.any():
-        i = int(np.flatnonzero(bad)[0])
-        k, t = int(owner[i]), int(face[i])
-        name = "metric" if kind == "constant" else f"metric[{k}] ({_where(kind, k)})"
-        ev = np.linalg.eigvalsh(M2[i])
-        raise ParameterError(f"{name} is not positive definite in the plane of face {t} (eigenvalues there "
-                             f"{ev[0]:.3g}, {ev[1]:.3g}); lengths along the surface need a positive definite metric")
+    ok = np.isfinite(M2).all(axis=(1, 2))
+    ev = np.full((len(M2), 2), 1.0)
+    if ok.any():
+        ev[ok] = np.linalg.eigvalsh(M2[ok])
+    low, high = ev[:, 0], ev[:, 1]
+    limits = (f"supported: eigenvalues in [{_g(MIN_COST**2)}, {_g(MAX_COST**2)}] with a ratio up to "
+              f"{_g(MAX_METRIC_CONDITION)} (lengths differing by a factor up to {_g(MAX_METRIC_CONDITION**0.5)} "
+              "between directions); beyond, the solvers fail")
+    with np.errstate(invalid="ignore", divide="ignore"):
+        condition = high / low
+    for bad, what, why in (
+        (low <= 0, "is not positive definite", "lengths along the surface need a positive definite metric"),
+        # (1 + 1e-6): the smaller eigenvalue carries an error of about 1e-16 times the larger one, so the condition
+        # number of diag(1e8, 1, 1) in a face's plane came back 1e8 (1 + 2e-8)
+        (high > MAX_METRIC_CONDITION * (1 + 1e-6) * low, "is too anisotropic", limits),
+        ((low < MIN_COST**2 * (1 - 1e-6)) | (high > MAX_COST**2 * (1 + 1e-6)), "is outside the supported range",
+         limits),
+    ):
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            k, t = int(owner[i]), int(face[i])
+            name = "metric" if kind == "constant" else f"metric[{k}] ({_where(kind, k)})"
+            raise ParameterError(f"{name} {what} in the plane of face {t} (eigenvalues there {_g(low[i], 3)}, "
+                                 f"{_g(high[i], 3)}: condition number {_g(condition[i], 3)}); {why}")
 
 
 def check_medium_method(method: str, supported: Iterable[str], *, multires: bool = False) -> None:

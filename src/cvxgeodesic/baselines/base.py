@@ -19,20 +19,34 @@ library solver per connected component (a submesh with local indices), runs
 only the components that contain a source and scatters the result back.
 Vertices in components without a source, and unreferenced vertices (in no
 face; each is its own component), get ``np.inf``.
+
+Scale and orientation
+---------------------
+The libraries have absolute tolerances (pygeodesic returned infinite distances
+on a sphere of radius 1e-15 and 24x too small ones at 1e-30), so
+:class:`ComponentwiseSolver` hands them the coordinates divided by the power of
+two of :func:`~cvxgeodesic.mesh.trimesh.unit_scale` and multiplies the fields
+back: exact, so ``d(s V) = s d(V)`` for every ``s`` the mesh check accepts. A
+method whose library depends on the face orientation (``orient = True``: fast
+marching) gets the faces oriented consistently
+(:func:`~cvxgeodesic.mesh.orient.orient_faces`), recorded in :attr:`notes`
+with a :class:`~cvxgeodesic.errors.MeshRepairWarning`.
 """
 
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from ..errors import CvxGeodesicError, NonManifoldError, SolverError
+from ..errors import CvxGeodesicError, MeshError, MeshRepairWarning, NonManifoldError, SolverError
 from ..mesh.io import as_trimesh
-from ..mesh.trimesh import TriMesh
+from ..mesh.orient import Orientation, orient_faces
+from ..mesh.trimesh import TriMesh, unit_scale
 from ..validation import validate_sources
 
 
@@ -59,6 +73,8 @@ class BaselineSolver:
     mesh : TriMesh
     setup_time : float
         Seconds spent in the constructor.
+    notes : list of str
+        What the set-up changed for the library (the faces it reoriented), for ``info.notes``.
     """
 
     name: str = ""
@@ -67,6 +83,7 @@ class BaselineSolver:
 
     def __init__(self, mesh: TriMesh):
         self.mesh = as_trimesh(mesh)
+        self.notes: list[str] = []
         t0 = time.perf_counter()
         try:
             self._setup()
@@ -240,6 +257,21 @@ def require_manifold(mesh: TriMesh, method: str, alternatives: str = NON_MANIFOL
         )
 
 
+def require_orientable(mesh: TriMesh, method: str, orientation: Orientation) -> None:
+    """Raise :class:`~cvxgeodesic.errors.MeshError` when part of the mesh cannot be oriented consistently.
+
+    Measured on a Möbius strip (24 × 4 vertices): potpourri3d's fast marching was 11 % of the largest distance off
+    the exact field on average (1.3 % on the untwisted band of the same size), whatever the faces' orientation.
+    """
+    bad = orientation.non_orientable
+    if bad.any():
+        raise MeshError(
+            f"{mesh.name}: method {method!r} needs an orientable surface, but {int(bad.sum())} faces lie on a "
+            f"non-orientable piece (a Möbius strip or the like; first: face {int(np.flatnonzero(bad)[0])}); use "
+            "'exact', 'heat', 'dijkstra' or a convex formulation instead"
+        )
+
+
 @dataclass
 class _Part:
     """One connected component with faces, as a submesh with local vertex indices."""
@@ -254,28 +286,52 @@ class ComponentwiseSolver(BaselineSolver):
     """A baseline whose library is run separately on each connected component.
 
     Subclasses implement :meth:`_build` (library solver for one submesh) and
-    :meth:`_run` (distance on one submesh from local source indices).
+    :meth:`_run` (distance on one submesh from local source indices). The
+    library sees the coordinates divided by :attr:`scale` and, when ``orient``
+    is set, the faces of :attr:`orientation` (module docstring).
+
+    Attributes
+    ----------
+    scale : float
+        The power of two the library's coordinates were divided by (its fields are multiplied by it).
+    orientation : Orientation or None
+        The consistently oriented faces the library was given (``orient`` only).
     """
+
+    #: The library depends on the faces' orientation: give it consistently oriented faces.
+    orient: bool = False
 
     def _setup(self) -> None:
         mesh = self.mesh
+        self.scale = unit_scale(mesh)
+        V = mesh.V / self.scale  # exact: a power of two
+        F = mesh.F
+        self.orientation: Orientation | None = None
+        if self.orient:
+            self.orientation = orient_faces(mesh.F, mesh.n_vertices)
+            require_orientable(mesh, self.name, self.orientation)
+            note = self.orientation.note(mesh.name, f"{self.name!r} ({self.library})")
+            if note:
+                warnings.warn(note, MeshRepairWarning, stacklevel=4)
+                self.notes.append(note)
+            F = self.orientation.F
         labels = mesh.component_labels
-        face_label = labels[mesh.F[:, 0]]
+        face_label = labels[F[:, 0]]
         comp_ids = np.unique(face_label)
         self._parts: dict[int, _Part] = {}
-        if comp_ids.size == 1 and np.unique(mesh.F).size == mesh.n_vertices:
-            # the common case: one component, every vertex referenced -> no copy
-            part = _Part(np.arange(mesh.n_vertices), np.asarray(mesh.V), np.asarray(mesh.F))
+        if comp_ids.size == 1 and np.unique(F).size == mesh.n_vertices:
+            # the common case: one component, every vertex referenced -> no copy of the faces
+            part = _Part(np.arange(mesh.n_vertices), V, np.asarray(F))
             part.solver = self._build(part.V, part.F)
             self._parts[int(comp_ids[0])] = part
             return
         order = np.argsort(face_label, kind="stable")
         bounds = np.searchsorted(face_label[order], comp_ids, side="left").tolist() + [len(order)]
         for j, c in enumerate(comp_ids):
-            faces = mesh.F[order[bounds[j]:bounds[j + 1]]]
+            faces = F[order[bounds[j]:bounds[j + 1]]]
             verts = np.unique(faces)
             local = np.searchsorted(verts, faces)
-            part = _Part(verts, np.ascontiguousarray(mesh.V[verts]), np.ascontiguousarray(local, dtype=np.int64))
+            part = _Part(verts, np.ascontiguousarray(V[verts]), np.ascontiguousarray(local, dtype=np.int64))
             part.solver = self._build(part.V, part.F)
             self._parts[int(c)] = part
 
@@ -296,6 +352,6 @@ class ComponentwiseSolver(BaselineSolver):
                 d[src_c] = 0.0
                 continue
             local = np.searchsorted(part.vertices, src_c)
-            d[part.vertices] = self._run(part.solver, local)
+            d[part.vertices] = self._run(part.solver, local) * self.scale
             n_runs += 1
         return d, {"n_components": len(self._parts), "n_components_solved": n_runs}

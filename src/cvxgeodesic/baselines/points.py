@@ -173,8 +173,11 @@ def _fmm_points(baseline, ss: SourceSet) -> tuple[np.ndarray, dict]:
                       "the library's face indices are per component")
     solver = next(iter(parts.values())).solver
     pts = [(int(v), []) for v in ss.vertices]
-    pts += [(int(f), [float(x) for x in b]) for f, b in zip(ss.point_faces, ss.point_bary, strict=True)]
-    d = np.asarray(solver.compute_distance([pts], [], False), dtype=np.float64).reshape(-1)
+    bary = np.asarray(ss.point_bary, dtype=np.float64).reshape(-1, 3)
+    if baseline.orientation is not None:  # the library has the reoriented faces: their corners in its order
+        bary = baseline.orientation.bary(ss.point_faces, bary)
+    pts += [(int(f), [float(x) for x in b]) for f, b in zip(ss.point_faces, bary, strict=True)]
+    d = np.asarray(solver.compute_distance([pts], [], False), dtype=np.float64).reshape(-1) * baseline.scale
     if d.shape != (mesh.n_vertices,) or not np.all(np.isfinite(d)):
         raise SolverError("baseline 'fmm' returned a bad field for point sources", solver=baseline.library,
                           status="bad_output")

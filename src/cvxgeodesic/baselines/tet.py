@@ -26,7 +26,7 @@ from scipy.sparse.csgraph import connected_components, dijkstra
 
 from ..errors import CvxGeodesicError, SolverError
 from ..linalg import analyse
-from ..mesh.tetmesh import DEGENERATE_TET_TOL, as_tetmesh
+from ..mesh.tetmesh import DEGENERATE_TET_TOL, as_tetmesh, unit_tetmesh
 from ..operators.tet import tet_divergence, tet_gradient_blocks, tet_mass_matrix, tet_stiffness
 from ..sources_tet import TetSources, resolve_tet_sources
 from ..validation import check_number
@@ -243,6 +243,11 @@ class TetHeatBaseline(TetBaselineSolver):
     The field smooths the ridges (cut locus) and is not exact next to the sources; it converges
     under refinement (tested on a box against ``|x − s|`` and on a ball against ``1 − r``).
 
+    Everything is computed on the mesh divided by the power of two of
+    :func:`~cvxgeodesic.mesh.tetmesh.unit_tetmesh` and the field multiplied back (exact), so a mesh scaled
+    by ``s`` gives ``s`` times the field: measured before, the heat underflowed on a box 1e45 across and
+    the field came back 0.
+
     Parameters
     ----------
     mesh : TetMesh or (V, T) tuple
@@ -263,7 +268,8 @@ class TetHeatBaseline(TetBaselineSolver):
         super().__init__(mesh)
 
     def _setup(self) -> None:
-        mesh = self.mesh
+        mesh, self.scale = unit_tetmesh(self.mesh)
+        self._unit = mesh
         deg = mesh.degenerate_tets(DEGENERATE_TET_TOL)
         keep = np.ones(mesh.n_tets, dtype=bool)
         keep[deg] = False
@@ -275,7 +281,7 @@ class TetHeatBaseline(TetBaselineSolver):
         self._blocks[~keep] = 0.0
         L = tet_stiffness(mesh, tets=keep, blocks=self._blocks)
         mass = tet_mass_matrix(mesh, tets=keep).diagonal()
-        self.t = self.t_coef * mesh.mean_edge_length ** 2
+        self.t = self.t_coef * mesh.mean_edge_length ** 2  # on the unit mesh (info["t"] is in the mesh's units)
         idle = mass <= 0  # in no kept tetrahedron: u = 0 and φ = 0 there (d = inf: unreachable)
         self._L = L
         self._idle = idle
@@ -290,7 +296,7 @@ class TetHeatBaseline(TetBaselineSolver):
 
     def _unit_field(self, u0: np.ndarray, notes: list[str]) -> np.ndarray:
         u = self._heat(u0)
-        g = np.einsum("tij,tj->ti", self._blocks, u[self.mesh.T])
+        g = np.einsum("tij,tj->ti", self._blocks, u[self._unit.T])
         norm = np.linalg.norm(g, axis=1)
         ok = (norm > 0) & np.isfinite(norm) & self._keep
         X = np.zeros_like(g)
@@ -302,7 +308,7 @@ class TetHeatBaseline(TetBaselineSolver):
         return X
 
     def _solve(self, src: TetSources) -> tuple[np.ndarray, dict]:
-        mesh = self.mesh
+        mesh = self._unit  # the sources are indices and barycentric coordinates: the same on it
         notes: list[str] = []
         u0 = np.zeros(mesh.n_vertices)
         u0[src.vertices] = 1.0
@@ -333,15 +339,16 @@ class TetHeatBaseline(TetBaselineSolver):
             mode = "dirichlet"
         phi = self._fill_idle(phi, notes)
         at = src.local_values(mesh)
-        return phi, {"t_coef": self.t_coef, "t": self.t, "poisson": mode, "backend": self.backend, "notes": notes,
-                     "max_abs_at_sources": float(np.abs(phi[at[0]] - at[1]).max())}
+        return phi * self.scale, {"t_coef": self.t_coef, "t": self.t * self.scale**2, "poisson": mode,
+                                  "backend": self.backend, "notes": notes,
+                                  "max_abs_at_sources": float(np.abs(phi[at[0]] - at[1]).max()) * self.scale}
 
     def _fill_idle(self, phi: np.ndarray, notes: list[str]) -> np.ndarray:
         """Vertices of left-out tetrahedra only: the shortest edge step from a solved neighbour (one pass)."""
-        lone = np.flatnonzero(self._idle & self.mesh.referenced)
+        lone = np.flatnonzero(self._idle & self._unit.referenced)
         if lone.size == 0:
             return phi
-        A = self.mesh.vertex_adjacency[lone].tocoo()
+        A = self._unit.vertex_adjacency[lone].tocoo()
         ok = ~self._idle[A.col]
         best = np.full(lone.size, np.inf)
         np.minimum.at(best, A.row[ok], phi[A.col[ok]] + A.data[ok])

@@ -48,7 +48,7 @@ class TetMesh:
     Parameters
     ----------
     V : (n, 3) array_like of float
-        Vertex positions. Must be finite (and within ``±1e150``, as for ``TriMesh``).
+        Vertex positions. Must be finite, within ``±1e40`` and at least ``1e-40`` across, as for ``TriMesh``.
     T : (k, 4) array_like of int
         Tetrahedra as 0-based vertex indices, in any orientation. Every index must lie in
         ``[0, n)`` and the four indices of a tetrahedron must be distinct.

@@ -12,14 +12,14 @@ from numpy.typing import ArrayLike
 from scipy.sparse.csgraph import connected_components
 
 from ..errors import MeshError
+from ..validation import MAX_COORDINATE, MIN_EXTENT, check_coordinates
 
 #: Default of :meth:`TriMesh.degenerate_faces`: a face whose smallest altitude is below
 #: ``DEGENERATE_TOL`` times its longest edge (a needle or a cap; exactly collinear or
 #: coincident corners included) or below ``DEGENERATE_TOL`` times the mean edge length
 #: of the mesh (a speck) is *degenerate*. See the README, "Input meshes".
 DEGENERATE_TOL = 1e-3
-#: Largest accepted coordinate magnitude: squared edge lengths and areas must not overflow.
-MAX_COORDINATE = 1e150
+__all__ = ["DEGENERATE_TOL", "MAX_COORDINATE", "MIN_EXTENT", "TriMesh", "file_numbering", "unit_mesh", "unit_scale"]
 
 
 class TriMesh:
@@ -57,7 +57,8 @@ class TriMesh:
         If an array has the wrong shape or type (polygons with more than three
         vertices included: :func:`~cvxgeodesic.mesh.io.load_mesh` fan-triangulates
         them, ``TriMesh`` does not), is empty or ragged, a coordinate is not finite or
-        beyond ``±MAX_COORDINATE`` (1e150), an index is out of range, or a face
+        beyond ``±MAX_COORDINATE`` (1e40), a mesh smaller than ``MIN_EXTENT`` (1e-40;
+        :func:`~cvxgeodesic.validation.check_coordinates`), an index is out of range, or a face
         repeats a vertex.
 
     Notes
@@ -324,13 +325,7 @@ def _as_vertices(V, name: str) -> np.ndarray:
         raise MeshError(
             f"{name}: vertex {i} has a non-finite coordinate {V[i].tolist()} ({int(bad.sum())} such vertices)"
         )
-    big = np.abs(V).max(axis=1) > MAX_COORDINATE
-    if big.any():
-        i = int(np.flatnonzero(big)[0])
-        raise MeshError(
-            f"{name}: vertex {i} has a coordinate beyond ±{MAX_COORDINATE:g} {V[i].tolist()}; squared lengths "
-            "and areas would overflow: rescale the mesh"
-        )
+    check_coordinates(V, name)
     V.setflags(write=False)
     return V
 
@@ -370,13 +365,23 @@ def _as_faces(F, n: int, name: str) -> np.ndarray:
     return F
 
 
+def unit_scale(mesh: TriMesh) -> float:
+    """The power of two ``s`` that puts ``mesh``'s bounding-box diagonal in [0.5, 1) when divided by it (1.0 for a
+    zero-size mesh): :func:`unit_mesh`'s, for the methods that scale their own copy of the coordinates."""
+    diag = mesh.bbox_diagonal
+    if not (np.isfinite(diag) and diag > 0):
+        return 1.0
+    return math.ldexp(1.0, math.frexp(diag)[1])
+
+
 def unit_mesh(mesh: TriMesh) -> tuple[TriMesh, float]:
     """The mesh divided by the power of two ``s`` that puts its bounding-box diagonal in [0.5, 1), and ``s``.
 
-    The convex formulations are solved on this copy and the field is multiplied by ``s``:
-    the backends' absolute tolerances then mean the same thing on a mesh of any size
-    (without it a 1e-6-sized mesh lost three digits), and since ``s`` is a power of two
-    the division is exact, so ``d(2^k V) = 2^k d(V)`` to the last bit.
+    Every method is solved on this copy (the baselines on its coordinates, :func:`unit_scale`) and the field is
+    multiplied by ``s``: the backends' and libraries' absolute tolerances then mean the same thing on a mesh of any
+    size (without it a 1e-6-sized mesh lost three digits in the convex formulations, and pygeodesic returned
+    infinite or 24x too small distances below 1e-12), and since ``s`` is a power of two the division is exact, so
+    ``d(2^k V) = 2^k d(V)`` to the last bit.
 
     Parameters
     ----------
@@ -390,10 +395,7 @@ def unit_mesh(mesh: TriMesh) -> tuple[TriMesh, float]:
     s : float
         A power of two (1.0 for an empty or zero-size mesh).
     """
-    diag = mesh.bbox_diagonal
-    if not (np.isfinite(diag) and diag > 0):
-        return mesh, 1.0
-    scale = math.ldexp(1.0, math.frexp(diag)[1])
+    scale = unit_scale(mesh)
     if scale == 1.0:
         return mesh, 1.0
     return TriMesh(mesh.V / scale, mesh.F, vertex_map=mesh.vertex_map, name=mesh.name), scale

@@ -33,7 +33,8 @@ class BaselineStrategy:
         kwargs = {} if config.medium is None else {"medium": config.medium}  # dijkstra only (validated)
         self.baseline = BASELINES[config.method](config.mesh, **kwargs)
         self.backend = config.method
-        self.notes: list[str] = list(config.notes)
+        # the loader's repairs, then the baseline's own (the faces fast marching reoriented)
+        self.notes: list[str] = [*config.notes, *self.baseline.notes]
         self.setup_time = time.perf_counter() - t0
 
     def solve(self, sources: SourceSet, *, callback: Callback | None = None) -> GeodesicResult:
