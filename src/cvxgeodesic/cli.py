@@ -371,9 +371,10 @@ class _Signals:
 def main(argv=None) -> int:
     """Entry point of the ``cvxgeodesic`` console script; returns the exit code.
 
-    Ctrl-C (SIGINT) and SIGTERM at any moment after the first line of the console script, the imports of the
-    start-up included, end the command with one line on stderr (``cvxgeodesic: interrupted`` /
-    ``cvxgeodesic: terminated``), no partial output file, and exit code 130 / 143.
+    Ctrl-C (SIGINT) and SIGTERM at any moment of the command, the start-up's imports of NumPy, SciPy and Numba
+    included, end it with one line on stderr (``cvxgeodesic: interrupted`` / ``cvxgeodesic: terminated``), no
+    partial output file, and exit code 130 / 143. (Before this function runs, the console script imports only
+    the standard library's modules this one and the package's ``__init__`` need: tens of milliseconds.)
     """
     args = None
     with _Signals() as signals:
