@@ -3,6 +3,9 @@
 Every error a user can cause ends the program with exit code 2 and a one-line
 message on stderr; ``--debug`` shows the full traceback instead. ``batch``
 returns 1 when some meshes failed (each listed) and the others were solved.
+Ctrl-C ends it with 130 and SIGTERM with 143, one line each and no partial file.
+Outputs are checked before any work: never one of the inputs, and a read-only
+file only with ``--overwrite-read-only``.
 """
 
 from __future__ import annotations
