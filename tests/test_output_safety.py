@@ -375,6 +375,40 @@ def test_ctrl_c_during_the_start_up_imports_is_one_line_and_exit_130(big_grid, t
     assert os.listdir(tmp_path) == []
 
 
+def _interrupted_import(monkeypatch, then):
+    """build_parser's imports interrupted by a real SIGINT, which an extension module's import turns into ``then``."""
+    import cvxgeodesic.cli as cli
+
+    real = cli.build_parser
+
+    def build_parser():
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(5)  # the handler raises within it
+            raise AssertionError("SIGINT did not arrive")
+        except KeyboardInterrupt:
+            then()
+        return real()
+
+    monkeypatch.setattr(cli, "build_parser", build_parser)
+
+
+def test_an_interrupt_turned_into_an_import_error_is_still_an_interrupt(sphere_file, tmp_path, capsys, monkeypatch):
+    def import_error():
+        raise ImportError("Error importing numpy: PyCapsule_Import could not import module 'datetime'")
+
+    _interrupted_import(monkeypatch, import_error)
+    rc, err = run(["distance", sphere_file, "-s", "0", "--method", "dijkstra", "-q", "-o", tmp_path / "d.npy"], capsys)
+    assert rc == 130 and err == ["cvxgeodesic: interrupted"]
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # restored
+
+
+def test_an_interrupt_that_an_import_swallowed_still_stops_the_command(sphere_file, tmp_path, capsys, monkeypatch):
+    _interrupted_import(monkeypatch, lambda: None)  # `try: import optional; except ImportError: pass`
+    rc, err = run(["distance", sphere_file, "-s", "0", "--method", "dijkstra", "-q", "-o", tmp_path / "d.npy"], capsys)
+    assert rc == 130 and err == ["cvxgeodesic: interrupted"] and os.listdir(tmp_path) == []
+
+
 # ----------------------------------------------------------------------------------------------------------------
 # 6. bad arguments and unwritable folders before any solve
 # ----------------------------------------------------------------------------------------------------------------

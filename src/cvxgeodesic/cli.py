@@ -364,6 +364,12 @@ class _Signals:
         for signum, handler in self.previous.items():
             signal.signal(signum, handler)  # type: ignore[arg-type]
 
+    def check(self) -> None:
+        """``KeyboardInterrupt`` if a signal came and what it raised was lost (an optional import that an
+        extension module turned it into an ``ImportError``, which its caller then ignored)."""
+        if self.received is not None:
+            raise KeyboardInterrupt
+
     def stop_line(self) -> tuple[str, int]:
         """The message and the exit code of the signal received (Ctrl-C when none was recorded)."""
         if self.received == signal.SIGTERM:
@@ -383,6 +389,7 @@ def main(argv=None) -> int:
     with _Signals() as signals:
         try:
             parser = build_parser()  # the first heavy imports: inside the try
+            signals.check()
             args = parser.parse_args(argv)
             args.notes = _Notes()
             _check_numbers(args)
