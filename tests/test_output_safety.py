@@ -325,6 +325,30 @@ def test_path_writes_both_files_or_neither(sphere_file, tmp_path, capsys, monkey
     assert run(args, capsys)[0] == 0 and np.load(out).shape[1] == 3 and png.stat().st_size > 0
 
 
+@pytest.mark.parametrize("first_existed", [True, False])
+def test_a_failed_rename_puts_the_first_target_back(tmp_path, monkeypatch, first_existed):
+    a, b = tmp_path / "a.ply", tmp_path / "b.png"
+    if first_existed:
+        a.write_bytes(b"old a")
+    b.write_bytes(b"old b")
+    real, calls = os.replace, []
+
+    def replace(src, dst):
+        calls.append(dst)
+        if len(calls) == 2:  # the second target's rename: the disk went away
+            raise OSError(5, "Input/output error")
+        real(src, dst)
+
+    monkeypatch.setattr(atomic.os, "replace", replace)
+    with pytest.raises(OSError, match="Input/output error"):
+        with atomic.output_set(a, b) as (ta, tb):
+            ta.write_bytes(b"new a")
+            tb.write_bytes(b"new b")
+    assert b.read_bytes() == b"old b"
+    assert (a.read_bytes() == b"old a") if first_existed else not a.exists()
+    assert sorted(os.listdir(tmp_path)) == (["a.ply", "b.png"] if first_existed else ["b.png"])
+
+
 def test_tetrahedral_distance_writes_both_files_or_neither(tet_file, tmp_path, capsys, monkeypatch):
     out, png = tmp_path / "d.npy", tmp_path / "d.png"
     monkeypatch.setattr("cvxgeodesic.evaluation.tet_slice_plot.plot_tet_slice", _failing_png)

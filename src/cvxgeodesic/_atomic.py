@@ -150,9 +150,11 @@ def output_set(*targets: str | os.PathLike, overwrite_read_only: bool = False) -
     Yields one temporary path per target, next to it and with the same suffix (so writers
     that check the extension accept it). When the block ends normally, every temporary file
     is renamed over its target; when it raises (KeyboardInterrupt included), every
-    temporary file is removed and no target changes. A failure between two renames (the
-    disk vanishing) can still leave the first target replaced. Each replaced target's mode
-    (owner, group) carries over, as in :func:`atomic_write`.
+    temporary file is removed and no target changes. A rename that fails (or an interrupt
+    between two renames) puts the targets renamed before it back: the files they replaced are
+    kept as hard links until all renames are done (where the file system has none, such a
+    target keeps its new content). Each replaced target's mode (owner, group) carries over, as
+    in :func:`atomic_write`.
 
     Parameters
     ----------
@@ -187,13 +189,46 @@ def output_set(*targets: str | os.PathLike, overwrite_read_only: bool = False) -
                     _give_metadata(fd, st)
                 finally:
                     os.close(fd)
-        for final, tmp in zip(finals, tmps, strict=True):
-            os.replace(tmp, final)
+        _rename_all(finals, tmps)
     finally:
         for tmp in tmps:
             _PENDING.pop(tmp, None)
             try:
                 os.unlink(tmp)
+            except FileNotFoundError:
+                pass
+
+
+def _rename_all(finals: list[Path], tmps: list[Path]) -> None:
+    """Rename every ``tmps[i]`` over ``finals[i]``; on any failure, the finals renamed so far are put back."""
+    done: list[tuple[Path, Path | None]] = []  # (final, hard link to the file it replaced, or None: there was none)
+    backups: list[Path] = []
+    try:
+        for final, tmp in zip(finals, tmps, strict=True):
+            backup = None
+            if os.path.lexists(final):
+                backup = final.parent / f".{final.name}.{secrets.token_hex(4)}.old"
+                try:
+                    os.link(final, backup, follow_symlinks=False)  # a link stays a link
+                    backups.append(backup)
+                except OSError:  # no hard links here: this target cannot be put back
+                    backup = final
+            os.replace(tmp, final)
+            done.append((final, backup))
+    except BaseException:
+        for final, backup in reversed(done):
+            try:
+                if backup is None:
+                    os.unlink(final)
+                elif backup != final:
+                    os.replace(backup, final)
+            except OSError:  # pragma: no cover - the file system failing on the way back too
+                pass
+        raise
+    finally:
+        for backup in backups:
+            try:
+                os.unlink(backup)
             except FileNotFoundError:
                 pass
 
