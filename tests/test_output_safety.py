@@ -133,6 +133,7 @@ def test_output_set_keeps_modes_and_refuses_a_read_only_target_before_the_block(
     a.chmod(0o640)
     with atomic.output_set(a, b) as (ta, tb):
         atomic.atomic_write(ta, lambda fh: fh.write(b"new a"))  # through atomic_write, as save_distance does
+        assert mode(ta) == 0o640  # already while the block runs, not only once renamed
         tb.write_bytes(b"new b")  # directly, as polyscope's screenshot does
     assert (a.read_bytes(), mode(a), mode(b)) == (b"new a", 0o640, 0o644)
     b.chmod(0o400)
