@@ -105,6 +105,17 @@ def test_a_read_only_file_is_refused_unless_allowed_and_stays_read_only(tmp_path
     assert mode(target) == 0o444
 
 
+def test_another_users_file_is_refused_too(tmp_path, monkeypatch, umask_022):
+    # its owner may write it (644), this process may not, the folder lets it rename over it: os.access tells
+    target = tmp_path / "theirs.npy"
+    np.save(target, np.zeros(3))
+    monkeypatch.setattr(atomic.os, "access", lambda path, how: False)
+    with pytest.raises(ParameterError, match=re.escape(f"{target} is not writable by this user (-rw-r--r--): "
+                                                       "refusing to replace it; make it writable for you or allow "
+                                                       "it with overwrite_read_only=True")):
+        cg.save_distance(target, cg.icosphere(0), np.zeros(12))
+
+
 def test_a_tetrahedral_field_file_follows_the_same_rules(tmp_path):
     pytest.importorskip("meshio")
     box = cg.tet_box(1)

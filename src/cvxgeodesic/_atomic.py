@@ -65,11 +65,14 @@ def check_replaceable(target: str | os.PathLike, *, overwrite_read_only: bool = 
         return None
     if not stat.S_ISREG(st.st_mode) or overwrite_read_only:
         return st
-    if not st.st_mode & stat.S_IWUSR or not os.access(target, os.W_OK):
-        how = "make it writable (chmod u+w)" + (f" or allow it with {allow}" if allow else " first")
-        raise ParameterError(f"{os.fspath(target)} is read-only ({stat.filemode(st.st_mode)}): refusing to replace "
-                             f"it; {how}")
-    return st
+    if not st.st_mode & stat.S_IWUSR:
+        what, how = "is read-only", "make it writable (chmod u+w)"
+    elif not os.access(target, os.W_OK):  # another user's file in a folder this one may write to
+        what, how = "is not writable by this user", "make it writable for you"
+    else:
+        return st
+    how += f" or allow it with {allow}" if allow else " first"
+    raise ParameterError(f"{os.fspath(target)} {what} ({stat.filemode(st.st_mode)}): refusing to replace it; {how}")
 
 
 def _give_metadata(fd: int, st: os.stat_result | None) -> None:
