@@ -16,40 +16,49 @@ Inside a solid (tetrahedra; ``docs/volumes.md``)::
     wall = cg.geodesic_distance(part, "boundary", method="qclp")
 """
 
+from typing import TYPE_CHECKING
+
 from . import _threads  # noqa: F401  (first: it sets OpenMP's wait policy before a library loads the runtime)
-from .api import (
-    ALL_METHODS,
-    BASELINE_METHODS,
-    GeodesicResult,
-    GeodesicSolver,
-    SolveInfo,
-    distance_matrix,
-    geodesic_distance,
-)
-from .errors import (
-    CvxGeodesicError,
-    DegenerateFacesWarning,
-    IndefiniteEnergyWarning,
-    MeshError,
-    MeshFileNotFoundError,
-    MeshFormatError,
-    MeshRepairWarning,
-    NonManifoldError,
-    ParameterError,
-    SolverError,
-    SourceError,
-)
-from .formulations import FORMULATIONS, smoothness_weight
-from .mesh import TriMesh, cylinder, grid_plane, icosphere
-from .mesh.fileorder import to_file_order
-from .mesh.io import load_distance, load_mesh, save_distance
-from .mesh.tet_generate import tet_ball, tet_box, tet_l_prism
-from .mesh.tet_locate import VolumePoint, volume_point
-from .mesh.tetmesh import TetMesh
-from .mesh.tetrahedralize import tetrahedralize
-from .paths import distance_at, geodesic_path
-from .sources import SurfaceCurve, SurfacePoint, surface_point
-from .sources_tet import BoundaryFaces
+
+# The names below are imported on first use (PEP 562): ``import cvxgeodesic`` and ``import cvxgeodesic.cli`` load
+# no NumPy, SciPy or Numba, so the command line's Ctrl-C handling is in place before the heavy imports start.
+# Type checkers and IDEs read the same names from this block.
+if TYPE_CHECKING:
+    from .api import (
+        ALL_METHODS,
+        BASELINE_METHODS,
+        GeodesicResult,
+        GeodesicSolver,
+        SolveInfo,
+        distance_matrix,
+        geodesic_distance,
+    )
+    from .errors import (
+        CvxGeodesicError,
+        DegenerateFacesWarning,
+        IndefiniteEnergyWarning,
+        MeshError,
+        MeshFileNotFoundError,
+        MeshFormatError,
+        MeshRepairWarning,
+        NonManifoldError,
+        ParameterError,
+        SolverError,
+        SourceError,
+    )
+    from .formulations import FORMULATIONS, smoothness_weight
+    from .mesh import TriMesh, cylinder, grid_plane, icosphere
+    from .mesh.fileorder import to_file_order
+    from .mesh.io import load_distance, load_mesh, save_distance
+    from .mesh.tet_generate import tet_ball, tet_box, tet_l_prism
+    from .mesh.tet_locate import VolumePoint, volume_point
+    from .mesh.tetmesh import TetMesh
+    from .mesh.tetrahedralize import tetrahedralize
+    from .paths import distance_at, geodesic_path
+    from .plotting import plot_field
+    from .sources import SurfaceCurve, SurfacePoint, surface_point
+    from .sources_tet import BoundaryFaces
+    from .viewer import show
 
 __version__ = "0.1.0"
 
@@ -65,14 +74,43 @@ __all__ = [
 ]
 
 
+#: public name -> the module that defines it (relative to the package)
+_LAZY = {
+    **dict.fromkeys(("ALL_METHODS", "BASELINE_METHODS", "GeodesicResult", "GeodesicSolver", "SolveInfo",
+                     "distance_matrix", "geodesic_distance"), ".api"),
+    **dict.fromkeys(("CvxGeodesicError", "DegenerateFacesWarning", "IndefiniteEnergyWarning", "MeshError",
+                     "MeshFileNotFoundError", "MeshFormatError", "MeshRepairWarning", "NonManifoldError",
+                     "ParameterError", "SolverError", "SourceError"), ".errors"),
+    **dict.fromkeys(("FORMULATIONS", "smoothness_weight"), ".formulations"),
+    **dict.fromkeys(("TriMesh", "cylinder", "grid_plane", "icosphere"), ".mesh"),
+    "to_file_order": ".mesh.fileorder",
+    **dict.fromkeys(("load_distance", "load_mesh", "save_distance"), ".mesh.io"),
+    **dict.fromkeys(("tet_ball", "tet_box", "tet_l_prism"), ".mesh.tet_generate"),
+    **dict.fromkeys(("VolumePoint", "volume_point"), ".mesh.tet_locate"),
+    "TetMesh": ".mesh.tetmesh",
+    "tetrahedralize": ".mesh.tetrahedralize",
+    **dict.fromkeys(("distance_at", "geodesic_path"), ".paths"),
+    "plot_field": ".plotting",  # matplotlib costs ~0.3 s to import
+    **dict.fromkeys(("SurfaceCurve", "SurfacePoint", "surface_point"), ".sources"),
+    "BoundaryFaces": ".sources_tet",
+    "show": ".viewer",  # polyscope is an optional extra: imported when show() runs
+}
+
+
 def __getattr__(name: str) -> object:
-    # plot_field needs matplotlib, which costs ~0.3 s to import: only on first use
-    if name == "plot_field":
-        from .plotting import plot_field
+    import importlib
+    import importlib.util
 
-        return plot_field
-    if name == "show":  # polyscope is an optional extra: imported when show() runs
-        from .viewer import show
+    module = _LAZY.get(name)
+    if module is None:
+        # a submodule not imported yet (cvxgeodesic.api, .mesh, ...): the eager package had them all loaded
+        if not name.startswith("_") and importlib.util.find_spec(f"{__name__}.{name}") is not None:
+            return importlib.import_module(f"{__name__}.{name}")
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value  # once: later lookups do not come here
+    return value
 
-        return show
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *__all__})

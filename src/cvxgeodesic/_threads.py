@@ -30,10 +30,9 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Concatenate, ParamSpec, Protocol, TypeVar
 
-import numpy as np
-
+# nothing heavier than the standard library at import: the package imports this module first, and the command
+# line's start-up (before its Ctrl-C handling is in place) should not wait for NumPy
 from .errors import ParameterError
-from .validation import check_count
 
 __all__ = ["ENV_VAR", "check_threads", "default_threads", "resolve_threads", "thread_limit", "usable_cores"]
 
@@ -82,6 +81,8 @@ def check_threads(value, *, name: str = "threads") -> int | None:
     """``value`` as an int, or None; ParameterError unless it is None or a positive integer."""
     if value is None:
         return None
+    from .validation import check_count
+
     return check_count(value, name, or_none=True)
 
 
@@ -197,7 +198,9 @@ def busy_neighbours(samples: int = _SAMPLES, interval: float = _SAMPLE_INTERVAL)
         if n is None:
             return 0
         counts.append(n)
-    return max(0, int(np.median(counts)))
+    import statistics  # here: 8 ms of imports the package's start does not need
+
+    return max(0, int(statistics.median(counts)))
 
 
 def default_threads() -> int:

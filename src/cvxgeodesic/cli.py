@@ -3,43 +3,57 @@
 Every error a user can cause ends the program with exit code 2 and a one-line
 message on stderr; ``--debug`` shows the full traceback instead. ``batch``
 returns 1 when some meshes failed (each listed) and the others were solved.
+Ctrl-C ends it with 130 and SIGTERM with 143, one line each and no partial file.
+Outputs are checked before any work: never one of the inputs, and a read-only
+file only with ``--overwrite-read-only``.
 """
 
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 import textwrap
 import traceback
 import warnings
 
+# Only the standard library at import (the package's __init__ is lazy too): the console script imports this
+# module before main() runs, and main() must have its Ctrl-C handling in place before NumPy, SciPy and Numba load.
 from . import __version__
-from ._verbose import progress_printer
-from .api import SOLVERS
-from .cli_sources import MESH_HELP, add_cost_options, add_method_option, add_path_parser, add_source_options, xyz
 from .errors import ParameterError, SourceError
-from .mesh.formats.registry import field_formats_help
-from .mesh.tet_io import MESHIO_TET_EXTENSIONS, TETGEN_EXTENSIONS
-from .mesh.tetmesh import TetMesh
 
 EXIT_USAGE = 2
+EXIT_INTERRUPTED = 128 + signal.SIGINT  # 130, as a shell reports a process ended by Ctrl-C
+EXIT_TERMINATED = 128 + signal.SIGTERM  # 143: kill, systemd, a batch system's time limit
 M_HELP = "smoothness multiplier m (default 1): λ = m·κ·√area, one rounding on the surface whatever the mesh"
-OUTPUT_HELP = (f"output file: {field_formats_help()} (trimesh and meshio: pip install 'cvxgeodesic[io]'); in the "
-               "input file's vertex numbering, with its faces (a tetrahedral mesh: .vtu, .vtk or .npy)")
-VOLUME_HELP = (f"{MESH_HELP}; or tetrahedra, the distance inside the solid: {', '.join(MESHIO_TET_EXTENSIONS)} with "
-               f"meshio, {', '.join(TETGEN_EXTENSIONS)} (TetGen)")
 SLICE_HELP = "tetrahedral meshes: normal of the slice through the centre that --png (or view) shows (default 0,0,1)"
+
+
+def _output_help() -> str:
+    from .mesh.formats.registry import field_formats_help
+
+    return (f"output file: {field_formats_help()} (trimesh and meshio: pip install 'cvxgeodesic[io]'); in the "
+            "input file's vertex numbering, with its faces (a tetrahedral mesh: .vtu, .vtk or .npy)")
+
+
+def _volume_help() -> str:
+    from .cli_sources import MESH_HELP
+    from .mesh.tet_io import MESHIO_TET_EXTENSIONS, TETGEN_EXTENSIONS
+
+    return (f"{MESH_HELP}; or tetrahedra, the distance inside the solid: {', '.join(MESHIO_TET_EXTENSIONS)} with "
+            f"meshio, {', '.join(TETGEN_EXTENSIONS)} (TetGen)")
 
 
 def _cmd_distance(args) -> int:
     from ._atomic import output_set
+    from ._verbose import progress_printer
     from .api import GeodesicSolver
-    from .cli_sources import cli_cost, cli_sources
-    from .mesh.io import check_output_path, load_mesh, save_distance
+    from .cli_sources import check_outputs, cli_cost, cli_sources
+    from .mesh.formats.registry import DISTANCE_EXTENSIONS
+    from .mesh.io import load_mesh, save_distance
+    from .mesh.tetmesh import TetMesh
 
-    check_output_path(args.output)
-    if args.png:
-        check_output_path(args.png, (".png",))
+    check_outputs(args, ("-o", args.output, DISTANCE_EXTENSIONS), ("--png", args.png, (".png",)))
     mesh = load_mesh(args.mesh)
     if isinstance(mesh, TetMesh):
         from .cli_tet import cmd_tet_distance
@@ -54,7 +68,8 @@ def _cmd_distance(args) -> int:
     res = solver.solve(sources, callback=None if args.quiet else progress_printer(log))
     for note in res.info.notes:
         args.notes.say(note)
-    with output_set(*([args.output, args.png] if args.png else [args.output])) as tmp:
+    outputs = [args.output, args.png] if args.png else [args.output]
+    with output_set(*outputs, overwrite_read_only=args.overwrite_read_only) as tmp:
         # every file in the file's numbering and vertex count, so it joins the input by index
         save_distance(tmp[0], mesh, res.distance, file_order=True)
         if args.png:
@@ -70,10 +85,13 @@ def _cmd_distance(args) -> int:
 
 
 def _cmd_compare(args) -> int:
+    from ._atomic import check_output_dir
     from .cli_sources import cli_sources
     from .compare import format_table, run_compare
     from .mesh.io import load_mesh
+    from .mesh.tetmesh import TetMesh
 
+    check_output_dir(args.out, "--out")  # before the solves, not when their results are written
     mesh = load_mesh(args.mesh)
     if isinstance(mesh, TetMesh):
         from .cli_tet import cmd_tet_compare
@@ -103,10 +121,12 @@ def _cmd_batch(args) -> int:
 
 
 def _cmd_view(args) -> int:
-    from .cli_sources import cli_sources
+    from .cli_sources import check_outputs, cli_sources
     from .mesh.io import load_mesh
+    from .mesh.tetmesh import TetMesh
     from .viewer import show
 
+    check_outputs(args, ("--screenshot", args.screenshot, (".png",)))
     mesh = load_mesh(args.mesh)
     if isinstance(mesh, TetMesh):
         from .cli_tet import cmd_tet_view
@@ -114,7 +134,8 @@ def _cmd_view(args) -> int:
         return cmd_tet_view(args, mesh)
     given = args.source or args.source_point or args.boundary
     sources = cli_sources(args, mesh)[0] if given else 0  # a field to start from; clicks choose the next ones
-    show(mesh, sources=sources, method=args.method, screenshot=args.screenshot, m=args.m, solver=args.solver)
+    show(mesh, sources=sources, method=args.method, screenshot=args.screenshot, m=args.m, solver=args.solver,
+         overwrite_read_only=args.overwrite_read_only)
     if args.screenshot and not args.quiet:
         print(f"wrote {args.screenshot}", file=sys.stderr)
     return 0
@@ -150,8 +171,10 @@ def _cmd_matrix(args) -> int:
 
 
 def _cmd_demo(args) -> int:
+    from ._atomic import check_output_dir
     from .demo import run_demo
 
+    check_output_dir(args.out, "--out")  # before the six solves, not when their results are written
     run_demo(args.out, source=args.source)
     return 0
 
@@ -176,6 +199,11 @@ class _Notes:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from .api import SOLVERS
+    from .cli_sources import MESH_HELP, add_cost_options, add_method_option, add_path_parser, add_source_options, xyz
+    from .cli_sources import add_overwrite_option as add_overwrite
+
+    VOLUME_HELP, OUTPUT_HELP = _volume_help(), _output_help()  # noqa: N806  (the module constants they were)
     parser = argparse.ArgumentParser(
         prog="cvxgeodesic",
         description="Geodesic distance fields on triangle meshes by convex optimization.",
@@ -206,6 +234,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="also render the field with isolines and the sources to this PNG (both files or neither; "
                         "a slice of a tetrahedral mesh)")
     p.add_argument("--slice-normal", type=xyz, default=None, metavar="NX,NY,NZ", help=SLICE_HELP)
+    add_overwrite(p)
     p.set_defaults(func=_cmd_distance)
 
     from .compare import table_legend
@@ -257,6 +286,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--screenshot", default=None, metavar="OUT.png",
                    help="render one frame to this PNG without opening a window (works without a display)")
     p.add_argument("--slice-normal", type=xyz, default=None, metavar="NX,NY,NZ", help=SLICE_HELP)
+    add_overwrite(p)
     p.set_defaults(func=_cmd_view)
 
     p = sub.add_parser("matrix", help="distance matrix: one row per source vertex (-s), in the given order")
@@ -286,35 +316,101 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _check_numbers(args) -> None:
-    """``--m`` and ``--lam`` checked as the Python API checks them, before a command prints or reads anything."""
+    """``--m``, ``--lam`` and ``--slice-normal`` checked as the Python API checks them, before a command prints or
+    reads anything."""
     from .validation import check_number, check_smoothness
 
     if getattr(args, "lam", None) is not None:
         check_number(args.lam, "lam", low=0)
     elif getattr(args, "m", None) is not None:
         check_smoothness(args.m, None)  # its range too (validation.MAX_M)
+    normal = getattr(args, "slice_normal", None)
+    if normal is not None and not any(normal):  # the plane's normal: any direction, but a direction
+        raise ParameterError(f"--slice-normal {','.join(f'{c:g}' for c in normal)}: the normal of the slice must "
+                             "not be zero (e.g. 0,0,1)")
+
+
+class _Signals:
+    """Ctrl-C (SIGINT) and SIGTERM for the duration of a command: recorded, then ``KeyboardInterrupt``.
+
+    Both handlers raise ``KeyboardInterrupt``, so every ``finally`` that removes temporary files runs, and
+    record the signal: :func:`main` then prints the line and returns the code of the signal that came, also
+    when the interrupt surfaced as another error (an extension module's import that it broke turns it into
+    an ``ImportError``). During a Clarabel solve they run once the solve stopped (their mark,
+    :data:`cvxgeodesic.solvers._interrupt.STOPS_SOLVES`). A SIGINT that the process ignores (a background job
+    of a script) stays ignored.
+    """
+
+    def __init__(self) -> None:
+        self.received: int | None = None
+        self.previous: dict[int, object] = {}
+
+    def __enter__(self) -> _Signals:
+        import threading
+
+        def on_signal(signum: int, frame: object) -> None:
+            self.received = self.received or signum
+            raise KeyboardInterrupt
+
+        # named as solvers._interrupt.STOPS_SOLVES, which is not imported here: it loads Clarabel and SciPy
+        setattr(on_signal, "cvxgeodesic_stops_solves", True)  # noqa: B010
+        if threading.current_thread() is threading.main_thread():  # signal.signal works there only
+            if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+                self.previous[signal.SIGINT] = signal.signal(signal.SIGINT, on_signal)
+            self.previous[signal.SIGTERM] = signal.signal(signal.SIGTERM, on_signal)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        for signum, handler in self.previous.items():
+            signal.signal(signum, handler)  # type: ignore[arg-type]
+
+    def check(self) -> None:
+        """``KeyboardInterrupt`` if a signal came and what it raised was lost (an optional import that an
+        extension module turned it into an ``ImportError``, which its caller then ignored)."""
+        if self.received is not None:
+            raise KeyboardInterrupt
+
+    def stop_line(self) -> tuple[str, int]:
+        """The message and the exit code of the signal received (Ctrl-C when none was recorded)."""
+        if self.received == signal.SIGTERM:
+            return "cvxgeodesic: terminated", EXIT_TERMINATED
+        return "cvxgeodesic: interrupted", EXIT_INTERRUPTED
 
 
 def main(argv=None) -> int:
-    """Entry point of the ``cvxgeodesic`` console script; returns the exit code."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    args.notes = _Notes()
-    try:
-        _check_numbers(args)
-        with warnings.catch_warnings():
-            if not args.debug:  # "cvxgeodesic: note: <message>", once, instead of file:line + source
-                warnings.showwarning = args.notes.showwarning
-            return args.func(args)
-    except KeyboardInterrupt:
-        print("cvxgeodesic: interrupted", file=sys.stderr)
-        return 130
-    except Exception as exc:  # every failure becomes one line; --debug shows where it came from
-        if args.debug:
-            traceback.print_exc()
-        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        print(f"cvxgeodesic: error: {msg}", file=sys.stderr)
-        return EXIT_USAGE
+    """Entry point of the ``cvxgeodesic`` console script; returns the exit code.
+
+    Ctrl-C (SIGINT) and SIGTERM at any moment of the command, the start-up's imports of NumPy, SciPy and Numba
+    included, end it with one line on stderr (``cvxgeodesic: interrupted`` / ``cvxgeodesic: terminated``), no
+    partial output file, and exit code 130 / 143. (Before this function runs, the console script imports only
+    the standard library's modules this one and the package's ``__init__`` need: tens of milliseconds.)
+    """
+    args = None
+    with _Signals() as signals:
+        try:
+            parser = build_parser()  # the first heavy imports: inside the try
+            signals.check()
+            args = parser.parse_args(argv)
+            args.notes = _Notes()
+            _check_numbers(args)
+            with warnings.catch_warnings():
+                if not args.debug:  # "cvxgeodesic: note: <message>", once, instead of file:line + source
+                    warnings.showwarning = args.notes.showwarning
+                return args.func(args)
+        except KeyboardInterrupt:
+            line, code = signals.stop_line()
+            print(line, file=sys.stderr)
+            return code
+        except Exception as exc:  # every failure becomes one line; --debug shows where it came from
+            if signals.received is not None:  # the signal broke something on its way (an import)
+                line, code = signals.stop_line()
+                print(line, file=sys.stderr)
+                return code
+            if args is None or getattr(args, "debug", False):  # before the arguments are read: a bug
+                traceback.print_exc()
+            msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            print(f"cvxgeodesic: error: {msg}", file=sys.stderr)
+            return EXIT_USAGE
 
 
 if __name__ == "__main__":  # pragma: no cover

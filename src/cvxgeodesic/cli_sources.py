@@ -30,6 +30,40 @@ def xyz(text: str) -> tuple[float, float, float]:
     return vals
 
 
+#: The flag that lets a command replace read-only output files.
+OVERWRITE_READ_ONLY = "--overwrite-read-only"
+
+
+def add_overwrite_option(p: argparse.ArgumentParser) -> None:
+    """``--overwrite-read-only``: replace output files that are read-only (refused otherwise, before any work)."""
+    p.add_argument(OVERWRITE_READ_ONLY, action="store_true",
+                   help="replace an output file even when it is read-only (no write permission for its owner; it "
+                        "keeps its mode); without it such a file is refused before anything is computed")
+
+
+def check_outputs(args, *outputs: tuple[str, str | None, tuple[str, ...]]) -> None:
+    """Every output file of a command checked before any work, as ``(option, path or None, extensions)``.
+
+    Raises
+    ------
+    ParameterError
+        An unsupported extension, a missing or unwritable folder (:func:`~cvxgeodesic.validation.check_output_path`),
+        an output that is one of the command's input files (the mesh, ``--cost``;
+        :func:`~cvxgeodesic.validation.check_not_an_input`), or a read-only file without ``--overwrite-read-only``.
+    """
+    from ._atomic import check_replaceable
+    from .validation import check_not_an_input, check_output_path
+
+    inputs = [f for f in (getattr(args, "mesh", None), getattr(args, "cost", None)) if f]
+    for option, path, extensions in outputs:
+        if path is None:
+            continue
+        check_output_path(path, extensions)
+        check_not_an_input(path, inputs, option)
+        check_replaceable(path, overwrite_read_only=getattr(args, "overwrite_read_only", False),
+                          allow=OVERWRITE_READ_ONLY)
+
+
 def vertex_list(text: str) -> list[int]:
     """``"0,5"`` -> ``[0, 5]``: the value of one ``--source`` option."""
     try:
@@ -218,6 +252,7 @@ def _write_path(path: str, P: np.ndarray, faces: np.ndarray, bary: np.ndarray) -
 
 
 def _cmd_path(args) -> int:
+    from ._atomic import output_set
     from .api import GeodesicSolver
     from .mesh.io import load_mesh
     from .paths import geodesic_path
@@ -225,11 +260,7 @@ def _cmd_path(args) -> int:
 
     if not args.output.lower().endswith((".csv", ".npy", ".ply")):
         raise ParameterError(f"output {args.output!r}: the path is written as .csv, .npy or .ply")
-    from .mesh.io import check_output_path
-
-    check_output_path(args.output, (".csv", ".npy", ".ply"))
-    if args.png:
-        check_output_path(args.png, (".png",))
+    check_outputs(args, ("-o", args.output, (".csv", ".npy", ".ply")), ("--png", args.png, (".png",)))
     mesh = load_mesh(args.mesh)
     if not isinstance(mesh, TriMesh):  # a TetMesh
         raise ParameterError(f"{mesh.name} holds tetrahedra: the path command draws paths on surfaces; inside a "
@@ -240,11 +271,13 @@ def _cmd_path(args) -> int:
     res = GeodesicSolver(mesh, args.method, m=args.m, solver=args.solver, cost=cost).solve(
         sources, callback=None if args.quiet else progress_printer(sys.stderr))
     P, faces, bary = geodesic_path(mesh, res, target, return_surface_points=True)
-    _write_path(args.output, P, faces, bary)
-    if args.png:
-        from .plotting import plot_field
+    outputs = [args.output, args.png] if args.png else [args.output]
+    with output_set(*outputs, overwrite_read_only=args.overwrite_read_only) as tmp:  # both files or neither
+        _write_path(str(tmp[0]), P, faces, bary)
+        if args.png:
+            from .plotting import plot_field
 
-        plot_field(mesh, res.distance, args.png, title=f"{res.info.method}, path to sources {label}", paths=[P])
+            plot_field(mesh, res.distance, tmp[1], title=f"{res.info.method}, path to sources {label}", paths=[P])
     if not args.quiet:
         from .paths import distance_at
 
@@ -267,7 +300,8 @@ def add_path_parser(sub) -> None:
     p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")
     add_cost_options(p)
     p.add_argument("-o", "--output", required=True, help="path file: .csv (x,y,z,face,b0,b1,b2), .npy or .ply")
-    p.add_argument("--png", default=None, help="also draw the path on the field to this PNG")
+    p.add_argument("--png", default=None, help="also draw the path on the field to this PNG (both files or neither)")
+    add_overwrite_option(p)
     p.add_argument("--quiet", "-q", action="store_true", help="no progress output")
     p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
     p.set_defaults(func=_cmd_path)

@@ -73,7 +73,8 @@ def cmd_tet_distance(args: Any, mesh: TetMesh) -> int:
     res = solver.solve(sources, callback=None if args.quiet else progress_printer(log))
     for note in res.info.notes:
         args.notes.say(note)
-    with output_set(*([args.output, args.png] if args.png else [args.output])) as tmp:
+    outputs = [args.output, args.png] if args.png else [args.output]
+    with output_set(*outputs, overwrite_read_only=args.overwrite_read_only) as tmp:  # both files or neither
         save_distance(tmp[0], mesh, res.distance, file_order=True)
         if args.png:
             fixed = res.source_set.fixed_vertices(mesh) if res.source_set is not None else res.sources
@@ -106,7 +107,7 @@ def cmd_tet_view(args: Any, mesh: TetMesh) -> int:
     given = args.source or args.source_point or args.boundary
     sources = tet_sources(args, mesh)[0] if given else 0
     show_volume(mesh, sources=sources, method=tet_method(args), screenshot=args.screenshot, m=args.m,
-                solver=args.solver, normal=_slice_normal(args))
+                solver=args.solver, normal=_slice_normal(args), overwrite_read_only=args.overwrite_read_only)
     if args.screenshot and not args.quiet:
         print(f"wrote {args.screenshot}", file=sys.stderr)
     return 0

@@ -22,7 +22,6 @@ from __future__ import annotations
 import csv
 import io
 import math
-import os
 import sys
 import time
 from pathlib import Path
@@ -30,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from ._atomic import atomic_write
+from ._atomic import atomic_write, check_output_dir
 from .errors import CvxGeodesicError, ParameterError, SolverError
 from .tables import Column, text_table
 
@@ -116,7 +115,7 @@ def _atomic_write_text(path: Path, text: str) -> None:
     def write(fh) -> None:
         fh.write(text.encode("utf-8"))
 
-    atomic_write(path, write)
+    atomic_write(path, write, allow=None)  # a read-only file in the folder is refused: no override here
 
 
 def _error_message(exc: BaseException) -> str:
@@ -211,7 +210,7 @@ def run_compare(mesh, sources, methods, out_dir, *, m=1.0, solver="auto", progre
     sset = resolve_sources(mesh, sources)
     if not isinstance(solver, str) or solver.lower() not in SOLVERS:
         raise ParameterError(f"unknown solver {solver!r}; choose one of {', '.join(SOLVERS)}")
-    out = Path(os.fspath(out_dir))
+    out = check_output_dir(out_dir, "out_dir")  # a folder that cannot take files fails now, not after the solves
     out.mkdir(parents=True, exist_ok=True)
 
     def say(text: str) -> None:

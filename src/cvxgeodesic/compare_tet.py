@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from ._atomic import atomic_write
+from ._atomic import atomic_write, check_output_dir
 from .errors import CvxGeodesicError, ParameterError
 from .tables import Column, text_table
 
@@ -102,7 +102,7 @@ def run_tet_compare(mesh: Any, sources: Any, methods: Any, out_dir: str | os.Pat
         raise ParameterError("run_tet_compare takes a tetrahedral mesh; use run_compare for surfaces")
     names = _resolve(methods)
     src = resolve_tet_sources(mesh, sources)
-    out = Path(os.fspath(out_dir))
+    out = check_output_dir(out_dir, "out_dir")  # a folder that cannot take files fails now, not after the solves
     out.mkdir(parents=True, exist_ok=True)
     runs: list[tuple[str, int]] = [(n, 1) for n in names]
     ref_label = "given"
@@ -161,7 +161,7 @@ def _write_csv(path: Path, rows: list[dict]) -> None:
     def write(fh) -> None:
         fh.write(data)
 
-    atomic_write(path, write)
+    atomic_write(path, write, allow=None)  # a read-only file in the folder is refused: no override here
 
 
 def format_tet_table(rows: list[dict]) -> str:

@@ -48,11 +48,12 @@ def run_demo(out_dir: str | Path, *, source: int = 0, stream=None) -> list[dict]
         time_s, iterations, rel_mean, rel_max, ridge_jump_p95, off_ridge_rel_mean``, ...), whose
         ``method`` is the case's label (``"qclp order=2"``).
     """
+    from ._atomic import check_output_dir
     from .evaluation.summary import summarize
     from .plotting import plot_field
 
     stream = stream or sys.stdout
-    out = Path(out_dir)
+    out = check_output_dir(out_dir, "out_dir")  # a folder that cannot take files fails now, not after the solves
     out.mkdir(parents=True, exist_ok=True)
     mesh = demo_mesh()
     exact = GeodesicSolver(mesh, "exact").solve(source)

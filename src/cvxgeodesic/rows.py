@@ -192,11 +192,12 @@ def distributed_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any
         bar = _RowBar(len(items), desc) if progress else None
         if bar is not None:  # before the tasks start, so that no row's event is missed
             client.subscribe_topic(topic, bar.event)
-        mesh_future = client.scatter(mesh, broadcast=True, hash=False)
-        futures = [client.submit(solve_chunk, factory, mesh_future, items[s], options, topic,
-                                 key=f"cvxgeodesic-rows-{i}-{token}", pure=False)
-                   for i, s in enumerate(chunks)]
-        try:
+        futures: list = []
+        try:  # the scatter too: the workers import the package while they unpickle the mesh, seconds of it
+            mesh_future = client.scatter(mesh, broadcast=True, hash=False)
+            futures = [client.submit(solve_chunk, factory, mesh_future, items[s], options, topic,
+                                     key=f"cvxgeodesic-rows-{i}-{token}", pure=False)
+                       for i, s in enumerate(chunks)]
             parts = _gather(futures, chunks, bar)
         except KeyboardInterrupt:
             if bar is not None:

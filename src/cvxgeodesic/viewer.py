@@ -166,6 +166,7 @@ def show(
     screenshot: str | os.PathLike | None = None,
     isolines: bool = True,
     window_size: tuple[int, int] = (1024, 768),
+    overwrite_read_only: bool = False,
     **solver_kwargs: Any,
 ) -> np.ndarray:
     """Show a distance field in an interactive polyscope window; clicking a vertex re-solves from it.
@@ -189,6 +190,8 @@ def show(
         Draw isolines (20 over the field's range).
     window_size : (int, int)
         Width and height in pixels of the window or screenshot.
+    overwrite_read_only : bool, default False
+        Replace a read-only ``screenshot`` file (refused otherwise, before the solve); it keeps its mode.
     **solver_kwargs
         Passed to :class:`GeodesicSolver` (``m``, ``lam``, ``solver``, ...).
 
@@ -202,8 +205,9 @@ def show(
     ImportError
         polyscope is not installed (``pip install 'cvxgeodesic[viewer]'``).
     ParameterError
-        ``distance`` of the wrong shape, a bad ``window_size``, a bad ``screenshot`` path, or no display
-        (or polyscope already started off-screen in this process) and no ``screenshot``.
+        ``distance`` of the wrong shape, a bad ``window_size``, a bad ``screenshot`` path (or a read-only file
+        without ``overwrite_read_only``), or no display (or polyscope already started off-screen in this process)
+        and no ``screenshot``.
     """
     from .mesh.convert import as_mesh
     from .mesh.io import as_trimesh
@@ -212,13 +216,13 @@ def show(
 
     if isinstance(volume := as_mesh(mesh), TetMesh):
         return show_volume(volume, distance, sources=sources, method=method or "qclp", screenshot=screenshot,
-                           window_size=window_size, **solver_kwargs)
+                           window_size=window_size, overwrite_read_only=overwrite_read_only, **solver_kwargs)
     method = method or "qcqp-hessian"
     mesh = as_trimesh(mesh)
     n = mesh.n_vertices
     if distance is not None:
         d = as_vertex_field(distance, "distance", n)
-    ps = _start(window_size, screenshot)
+    ps = _start(window_size, screenshot, overwrite_read_only)
     viewer = _Viewer(ps, mesh, method=method, solver_kwargs=solver_kwargs, isolines=isolines)
     if distance is None:
         viewer.solve(0 if sources is None else sources)
@@ -231,12 +235,12 @@ def show(
             ss = resolve_sources(mesh, sources)
             marks = _source_positions(mesh, None if ss.vertex_only else ss, ss.vertices)
         viewer.set_field(d, marks)
-    _present(ps, screenshot, viewer.callback)
+    _present(ps, screenshot, viewer.callback, overwrite_read_only=overwrite_read_only)
     assert viewer.distance is not None
     return viewer.distance
 
 
-def _start(window_size: tuple[int, int], screenshot: str | os.PathLike | None) -> Any:
+def _start(window_size: tuple[int, int], screenshot: str | os.PathLike | None, overwrite_read_only: bool) -> Any:
     """Checks, then polyscope started and emptied: the window size, a display or a screenshot path."""
     try:
         w, h = (int(x) for x in window_size)
@@ -249,9 +253,11 @@ def _start(window_size: tuple[int, int], screenshot: str | os.PathLike | None) -
         raise ParameterError("no display (DISPLAY/WAYLAND_DISPLAY unset): render off-screen with "
                              "screenshot='out.png' (CLI: --screenshot out.png)")
     if screenshot is not None:  # before the solve: a bad path fails at once, not after it
+        from ._atomic import check_replaceable
         from .validation import check_output_path
 
         check_output_path(screenshot, (".png",))
+        check_replaceable(screenshot, overwrite_read_only=overwrite_read_only)
     ps = _polyscope()
     _init(ps, headless)
     if screenshot is None and ps.is_headless():
@@ -265,7 +271,7 @@ def _start(window_size: tuple[int, int], screenshot: str | os.PathLike | None) -
 
 
 def _present(ps: Any, screenshot: str | os.PathLike | None, callback: Any,
-             camera: tuple[np.ndarray, np.ndarray] | None = None) -> None:
+             camera: tuple[np.ndarray, np.ndarray] | None = None, *, overwrite_read_only: bool = False) -> None:
     """One frame into ``screenshot``, or the interactive window with ``callback`` each frame; ``camera``:
     (position, target), else polyscope's home view."""
     ps.reset_camera_to_home_view()
@@ -275,7 +281,8 @@ def _present(ps: Any, screenshot: str | os.PathLike | None, callback: Any,
         if screenshot is not None:
             from ._atomic import output_set
 
-            with output_set(screenshot) as tmp:  # polyscope reports a failed write only on stdout
+            # polyscope reports a failed write only on stdout: output_set sees the missing file
+            with output_set(screenshot, overwrite_read_only=overwrite_read_only) as tmp:
                 ps.screenshot(str(tmp[0]), transparent_bg=False)
         else:
             ps.set_user_callback(callback)
@@ -294,6 +301,7 @@ def show_volume(
     origin: ArrayLike | None = None,
     normal: ArrayLike = (0.0, 0.0, 1.0),
     window_size: tuple[int, int] = (1024, 768),
+    overwrite_read_only: bool = False,
     **solver_kwargs: Any,
 ) -> np.ndarray:
     """Show a distance field inside a tetrahedral mesh (polyscope's volume mesh) cut by a slice plane.
@@ -317,6 +325,8 @@ def show_volume(
     normal : (3,) float array_like
         The plane's normal; the part on its positive side is cut away.
     window_size : (int, int)
+    overwrite_read_only : bool, default False
+        Replace a read-only ``screenshot`` file (as :func:`show`).
     **solver_kwargs
         Passed to :class:`GeodesicSolver` (``m``, ``solver``, ``order``, ...).
 
@@ -348,7 +358,7 @@ def show_volume(
     # whole faces, and the renderer's depth test then draws the cut in stripes
     centre = 0.5 * (mesh.V.min(axis=0) + mesh.V.max(axis=0)) + 0.01 * diag * unit
     org = centre if origin is None else as_points(origin, "origin").reshape(3)
-    ps = _start(window_size, screenshot)
+    ps = _start(window_size, screenshot, overwrite_read_only)
     marks = np.zeros((0, 3))
     if distance is None:
         from .api import GeodesicSolver
@@ -387,5 +397,5 @@ def show_volume(
     # looking at the cut from the side that was cut away, a little off its normal so that the solid shows depth
     side = np.cross(unit, [0.0, 0.0, 1.0] if abs(unit[2]) < 0.9 else [1.0, 0.0, 0.0])
     eye = org + 1.6 * diag * unit + 0.35 * diag * side / np.linalg.norm(side)
-    _present(ps, screenshot, lambda: None, camera=(eye, org))
+    _present(ps, screenshot, lambda: None, camera=(eye, org), overwrite_read_only=overwrite_read_only)
     return d

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._atomic import atomic_write
+from .._atomic import atomic_write, check_replaceable
 from ..errors import ParameterError
 from ..validation import as_vertex_field
 from ..validation import check_output_path as _check_output_path
@@ -38,7 +38,7 @@ _RESERVED = ("x", "y", "z", "vertex", "file_vertex")
 
 
 def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, name: str = "distance",
-                  file_order: bool = False) -> Path:
+                  file_order: bool = False, overwrite_read_only: bool = False) -> Path:
     """Write a per-vertex distance field, atomically.
 
     The format follows the extension (case-insensitive; the list is
@@ -69,7 +69,9 @@ def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, na
 
     The data is written to a temporary file in the target directory which then
     replaces ``path`` (``os.replace``); if anything fails, the temporary file is
-    removed and ``path`` is left as it was.
+    removed and ``path`` is left as it was. A replaced file keeps its mode (and owner and
+    group where the process may set them); a read-only one (no write bit for its owner) is
+    refused unless ``overwrite_read_only=True``.
 
     Parameters
     ----------
@@ -90,6 +92,8 @@ def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, na
         file's own, :func:`~cvxgeodesic.mesh.fileorder.file_order_mesh`), so the output joins
         the input file by vertex index and has its connectivity. In the CSV, ``vertex`` is then
         the mesh index (-1 for dropped vertices). The command line always does this.
+    overwrite_read_only : bool, default False
+        Replace ``path`` even when it is read-only (it stays read-only: its mode is kept).
 
     Returns
     -------
@@ -100,7 +104,8 @@ def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, na
     ------
     ParameterError
         If the extension is unsupported, ``distance`` does not have shape (n,),
-        ``name`` is invalid, or the parent directory does not exist.
+        ``name`` is invalid, the parent directory does not exist, or ``path`` is a read-only
+        file and ``overwrite_read_only`` is False.
     OSError
         If writing fails (e.g. permission denied).
 
@@ -114,10 +119,11 @@ def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, na
     [0. 1. 2.]
     """
     p = check_output_path(path)
+    check_replaceable(p, overwrite_read_only=overwrite_read_only)  # before the work of formatting the data
     fmt = FORMATS[p.suffix.lower()]
     assert fmt.write_field is not None  # check_output_path accepted only DISTANCE_EXTENSIONS
     if isinstance(volume := as_mesh(mesh), TetMesh):
-        return _save_tet_distance(p, volume, distance, name, file_order)
+        return _save_tet_distance(p, volume, distance, name, file_order, overwrite_read_only)
     mesh = as_trimesh(mesh)
     d = as_vertex_field(distance, "distance", mesh.n_vertices)
     if not isinstance(name, str) or not _NAME_RE.match(name) or name in _RESERVED:
@@ -131,11 +137,12 @@ def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, na
     else:
         field = FieldData(mesh.V, mesh.F, d, name, np.arange(mesh.n_vertices), mesh.vertex_map, mesh.name)
     write = fmt.write_field
-    atomic_write(p, lambda fh: write(fh, field))
+    atomic_write(p, lambda fh: write(fh, field), overwrite_read_only=overwrite_read_only)
     return p
 
 
-def _save_tet_distance(p: Path, mesh: TetMesh, distance: ArrayLike, name: str, file_order: bool) -> Path:
+def _save_tet_distance(p: Path, mesh: TetMesh, distance: ArrayLike, name: str, file_order: bool,
+                       overwrite_read_only: bool) -> Path:
     """:func:`save_distance` of a tetrahedral mesh: ``.vtu``/``.vtk`` (or ``.npy``), optionally in the file's
     numbering (dropped vertices at their place, with ``inf``)."""
     from .tet_io import TET_DISTANCE_EXTENSIONS, save_tet_distance
@@ -152,9 +159,9 @@ def _save_tet_distance(p: Path, mesh: TetMesh, distance: ArrayLike, name: str, f
         df[mesh.vertex_map] = d
         mesh, d = TetMesh(V, mesh.vertex_map[mesh.T], name=mesh.name), df
     if p.suffix.lower() == ".npy":
-        atomic_write(p, lambda fh: np.save(fh, d))
+        atomic_write(p, lambda fh: np.save(fh, d), overwrite_read_only=overwrite_read_only)
         return p
-    return save_tet_distance(p, mesh, d, name=name)
+    return save_tet_distance(p, mesh, d, name=name, overwrite_read_only=overwrite_read_only)
 
 
 def load_distance(path: str | os.PathLike, name: str = "distance") -> np.ndarray:

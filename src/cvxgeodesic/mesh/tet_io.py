@@ -321,7 +321,7 @@ def _read_meshio(path: Path, allow_none: bool = False) -> tuple[np.ndarray, Any,
 
 
 def save_tet_distance(path: str | os.PathLike, mesh: TetMesh, distance: ArrayLike, *, name: str = "distance",
-                      fields: dict[str, ArrayLike] | None = None) -> Path:
+                      fields: dict[str, ArrayLike] | None = None, overwrite_read_only: bool = False) -> Path:
     """Write a tetrahedral mesh with a distance field as point data: ``.vtu`` (XML) or ``.vtk`` (legacy).
 
     The file holds ``mesh.V`` and ``mesh.T`` (this mesh's numbering) and one point array per field;
@@ -338,6 +338,8 @@ def save_tet_distance(path: str | os.PathLike, mesh: TetMesh, distance: ArrayLik
         Name of the point array.
     fields : dict of str to (n,) float array_like, optional
         More point arrays (e.g. a reference distance and the error).
+    overwrite_read_only : bool, default False
+        Replace ``path`` even when it is read-only (:func:`cvxgeodesic.mesh.io.save_distance`).
 
     Returns
     -------
@@ -365,5 +367,5 @@ def save_tet_distance(path: str | os.PathLike, mesh: TetMesh, distance: ArrayLik
             mm.write(f, file_format="vtu" if ext == ".vtu" else "vtk")
             fh.write(f.read_bytes())
 
-    atomic_write(out, write)
+    atomic_write(out, write, overwrite_read_only=overwrite_read_only)
     return out

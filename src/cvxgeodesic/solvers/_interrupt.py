@@ -23,6 +23,12 @@ from typing import Any
 
 IterationCallback = Callable[[int, dict], None]
 
+#: The attribute (set to True) of a Python signal handler that ends the program by raising, as the command line's
+#: SIGINT and SIGTERM handlers do (``cli._Signals`` sets it by this name: importing this module loads Clarabel).
+#: During a Clarabel solve such a handler is not run inside the solver's callback, where what it raises would not
+#: stop the solve: the signal stops the solve at its next iteration, as Ctrl-C does, and the handler runs then.
+STOPS_SOLVES = "cvxgeodesic_stops_solves"
+
 # a context variable rather than a parameter: Clarabel is reached through the solve strategies, which pass
 # a callback to the interior-point solver only, and through the order-2 solve's own fallback
 _progress: ContextVar[IterationCallback | None] = ContextVar("cvxgeodesic_clarabel_progress", default=None)
@@ -55,27 +61,36 @@ def clarabel_iteration_info(info: Any) -> dict:
 def interruptible(solver: Any) -> Iterator[None]:
     """Run a Clarabel ``solver.solve()`` inside this block to make it stop at Ctrl-C within an iteration.
 
-    Ctrl-C is honoured only in the main thread while SIGINT has Python's default handler (a caller
-    that handles SIGINT itself keeps doing so). Progress is reported to the callback of an enclosing
+    Ctrl-C is honoured only in the main thread while SIGINT has Python's default handler or one marked
+    :data:`STOPS_SOLVES` (a caller that handles SIGINT otherwise keeps doing so); a SIGTERM handler marked
+    so is honoured the same way. Progress is reported to the callback of an enclosing
     :func:`reporting_to` block, in any thread.
 
     Raises
     ------
     KeyboardInterrupt
-        When SIGINT arrived during the block (after the solver stopped).
+        When SIGINT arrived during the block (after the solver stopped), or what the marked handler of the
+        signal that arrived raises.
     Exception
         What the progress callback raised (the solve is stopped at that iteration).
     """
     progress = _progress.get()
-    catch_sigint = (threading.current_thread() is threading.main_thread()
-                    and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
-    if not hasattr(solver, "set_termination_callback") or not (catch_sigint or progress):
+    handlers: dict[int, Any] = {}  # signal -> the handler it had, for the signals this block catches
+    if threading.current_thread() is threading.main_thread():
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            handler = signal.getsignal(sig)
+            if (sig == signal.SIGINT and handler is signal.default_int_handler) or \
+                    getattr(handler, STOPS_SOLVES, False) is True:
+                handlers[sig] = handler
+    if not hasattr(solver, "set_termination_callback") or not (handlers or progress):
         yield
         return
     hit = threading.Event()
+    received: list[int] = []
     failed: list[BaseException] = []
 
-    def on_sigint(signum: int, frame: object) -> None:
+    def on_signal(signum: int, frame: object) -> None:
+        received.append(signum)
         hit.set()
 
     def each_iteration(info: Any) -> bool:
@@ -87,16 +102,19 @@ def interruptible(solver: Any) -> Iterator[None]:
         return hit.is_set() or bool(failed)
 
     solver.set_termination_callback(each_iteration)
-    previous = signal.signal(signal.SIGINT, on_sigint) if catch_sigint else None
+    for signum in handlers:
+        signal.signal(signum, on_signal)
     try:
         yield
     finally:
-        if catch_sigint:
-            signal.signal(signal.SIGINT, previous)
+        for signum, previous in handlers.items():
+            signal.signal(signum, previous)
         try:
             solver.unset_termination_callback()
         except Exception:  # pragma: no cover - older Clarabel: the solver is discarded anyway
             pass
+    if received and handlers[received[0]] is not signal.default_int_handler:
+        handlers[received[0]](received[0], None)  # the marked handler's turn, out of Clarabel's frames
     if hit.is_set():
         raise KeyboardInterrupt
     if failed:
