@@ -601,8 +601,6 @@ def _local_rows(mesh: Any, options: dict, max_distance: Any) -> tuple[Any, dict]
     if isinstance(mesh, TetMesh):
         raise ParameterError("max_distance is for triangle meshes (surfaces), not tetrahedral meshes")
     r = check_number(max_distance, "max_distance", low=0, low_open=True)
-    if not np.isfinite(r):
-        raise ParameterError(f"max_distance must be finite, got {max_distance!r} (leave it out for full rows)")
     for name in ("multires", "cost", "metric"):
         if options[name] if name == "multires" else options[name] is not None:
             raise ParameterError(f"max_distance does not take {name}= (a patch has no coarse mesh, cost or metric "

@@ -74,5 +74,5 @@ def ball_patch(mesh: TriMesh, source: int, radius: float) -> Patch:
     # a left-out face that touches the patch marks its patch vertices as the cut
     touching = mesh.F[~keep & inside.any(axis=1)].ravel()
     cut = np.unique(local[touching])
-    patch = TriMesh(mesh.V[vertices], local[faces], name=f"{mesh.name} patch at {source}")
+    patch = TriMesh(mesh.V[vertices], local[faces], name=mesh.name)  # a warning then reads the same on every patch
     return Patch(patch, vertices, int(local[source]), cut[cut >= 0], float(radius))
