@@ -186,3 +186,21 @@ def test_local_rows_on_a_scan_are_as_accurate_as_full_rows():
     full, local = _errors_inside(mesh, [6016, 4828, 8034], r, "qclp")
     # measured 0.81-0.92x per row (3 rows, kitten, c = 1.5): 1.05x is the issue's bound
     assert local <= 1.05 * full, (local, full)
+
+
+@pytest.mark.parametrize("max_distance", [None, 0.5])
+def test_the_rows_limit_the_thread_pools_once(max_distance, monkeypatch):
+    """threadpoolctl's library discovery (~10 ms) once per matrix, not twice per row (16 % of a local row)."""
+    import traceback
+
+    import threadpoolctl
+
+    calls = []
+    real = threadpoolctl.threadpool_limits
+    def counting(*args, **kwargs):
+        calls.append(traceback.extract_stack()[-2].filename)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(threadpoolctl, "threadpool_limits", counting)
+    cg.distance_matrix(cg.icosphere(3), [0, 5, 9], method="qclp", max_distance=max_distance, progress=False)
+    assert sum(name.endswith("_threads.py") for name in calls) == 1, calls  # the IPM's own limit is another
