@@ -18,6 +18,8 @@ What it measures, for ``--rows`` random distinct source vertices (``--seed``) of
 ``local rows``
     ``distance_matrix(..., max_distance=r)`` with ``r = --radius`` (default 0.1) times the bounding-box diagonal
     (the "diameter" of the issue): each row solved on the patch of faces within ``1.5 r`` on the edge graph.
+    ``--tol`` applies to the full and the local rows (``1e-5``: ~20 % fewer iterations, the same error against
+    MMP to 1e-4 relative, docs/performance.md).
 
 Each condition runs in a fresh process (spawned; the compiled kernels are loaded there by one tiny solve before
 the clock starts), with ``CVXGEODESIC_THREADS``/``OMP_NUM_THREADS`` = ``--threads``; its wall time and the peak
@@ -75,13 +77,13 @@ def _heat(name: str, rows: list[int]) -> tuple[float, np.ndarray, float]:
     return time.perf_counter() - t0, D, _peak_mb()
 
 
-def _rows(name: str, rows: list[int], method: str, r: float | None, workers: int | None = None):
+def _rows(name: str, rows: list[int], method: str, r: float | None, tol: float, workers: int | None = None):
     import cvxgeodesic as cg
 
     mesh = _mesh(name)
     _warm()
     t0 = time.perf_counter()
-    D = cg.distance_matrix(mesh, rows, method=method, max_distance=r, progress=False, workers=workers)
+    D = cg.distance_matrix(mesh, rows, method=method, max_distance=r, progress=False, workers=workers, tol=tol)
     return time.perf_counter() - t0, D, _peak_mb()
 
 
@@ -132,6 +134,7 @@ def main(argv=None) -> int:
     parser.add_argument("--method", default="qclp")
     parser.add_argument("--radius", type=float, default=0.1, help="max_distance over the bounding-box diagonal")
     parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--tol", type=float, default=1e-8, help="tol of the full and local rows (default 1e-8)")
     parser.add_argument("--exact-rows", type=int, default=10, help="rows compared with the exact distance")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--big", default=None, help="mesh of the large local matrix (e.g. horse.ply, 97K faces)")
@@ -147,10 +150,10 @@ def main(argv=None) -> int:
     rows = rng.choice(mesh.n_vertices, size=min(args.rows, mesh.n_vertices), replace=False).tolist()
     r = args.radius * mesh.bbox_diagonal
     print(f"{args.mesh}: {mesh.n_vertices} vertices, {mesh.n_faces} faces; {len(rows)} rows; method {args.method}; "
-          f"r = {args.radius:g} × diagonal = {r:.4g}", flush=True)
+          f"r = {args.radius:g} × diagonal = {r:.4g}; tol {args.tol:g}", flush=True)
     t_heat, D_heat, m_heat = _run(args.threads, _heat, args.mesh, rows)
-    t_full, D_full, m_full = _run(args.threads, _rows, args.mesh, rows, args.method, None)
-    t_local, L, m_local = _run(args.threads, _rows, args.mesh, rows, args.method, r)
+    t_full, D_full, m_full = _run(args.threads, _rows, args.mesh, rows, args.method, None, args.tol)
+    t_local, L, m_local = _run(args.threads, _rows, args.mesh, rows, args.method, r, args.tol)
     print(f"{'':<12} {'time':>9} {'per row':>9} {'× heat':>7} {'peak MB':>8}")
     for label, t, mem in (("heat loop", t_heat, m_heat), ("full rows", t_full, m_full),
                           ("local rows", t_local, m_local)):
@@ -169,11 +172,11 @@ def main(argv=None) -> int:
         rng = np.random.default_rng(args.seed)
         big_rows = rng.choice(big.n_vertices, size=min(args.big_rows, big.n_vertices), replace=False).tolist()
         rb = args.radius * big.bbox_diagonal
-        t, Lb, mem = _run(args.threads, _rows, args.big, big_rows, args.method, rb)
+        t, Lb, mem = _run(args.threads, _rows, args.big, big_rows, args.method, rb, args.tol)
         print(f"{args.big}: {big.n_faces} faces, {len(big_rows)} local rows (r = {rb:.4g}): {t:.1f} s "
               f"({t / len(big_rows) * 1e3:.0f} ms per row), peak {mem:.0f} MB, {Lb.nnz} stored entries", flush=True)
         if args.workers:
-            t, Lw, mem = _run(args.threads, _rows, args.big, big_rows, args.method, rb, args.workers)
+            t, Lw, mem = _run(args.threads, _rows, args.big, big_rows, args.method, rb, args.tol, args.workers)
             same = abs(Lw - Lb).max() if Lw.nnz == Lb.nnz else float("nan")
             print(f"  on a local Dask cluster of {args.workers} workers: {t:.1f} s, peak of the calling process "
                   f"{mem:.0f} MB (workers not counted), max difference to in-process {same:.1e}", flush=True)

@@ -204,3 +204,15 @@ def test_the_rows_limit_the_thread_pools_once(max_distance, monkeypatch):
     monkeypatch.setattr(threadpoolctl, "threadpool_limits", counting)
     cg.distance_matrix(cg.icosphere(3), [0, 5, 9], method="qclp", max_distance=max_distance, progress=False)
     assert sum(name.endswith("_threads.py") for name in calls) == 1, calls  # the IPM's own limit is another
+
+
+def test_local_rows_on_a_local_cluster_with_a_checkpoint(spot, tmp_path):
+    pytest.importorskip("distributed")
+    r = 0.1 * spot.bbox_diagonal
+    verts = [0, 500, 1000]
+    ref = cg.distance_matrix(spot, verts, method="qclp", max_distance=r, progress=False)
+    path = tmp_path / "c.npz"
+    L = cg.distance_matrix(spot, verts, method="qclp", max_distance=r, progress=False, workers=2, checkpoint=path)
+    assert sp.issparse(L) and L.nnz == ref.nnz and rows.checkpoint_rows(path) == (3, 3)
+    # the same solves in other processes: equal to round-off (thread counts may change the last digits)
+    np.testing.assert_allclose(_dense(L), _dense(ref), rtol=0, atol=1e-9 * spot.bbox_diagonal)
