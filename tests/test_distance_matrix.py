@@ -314,6 +314,8 @@ def test_a_checkpoint_of_other_parameters_is_refused(sphere, tmp_path):
         cg.distance_matrix(cg.icosphere(1), [0, 5], method="qclp", checkpoint=path)
     with pytest.raises(ParameterError, match="other parameters.*m: 1.0 there, 2.0 here"):
         cg.distance_matrix(sphere, [0, 5], method="qclp", m=2.0, checkpoint=path)
+    # another thread count changes at most the last digits: the checkpoint is the answer
+    cg.distance_matrix(sphere, [0, 5], method="qclp", threads=1, checkpoint=path)
     (tmp_path / "junk.npz").write_bytes(b"not a zip")
     with pytest.raises(ParameterError, match="junk.npz is not a distance_matrix checkpoint"):
         cg.distance_matrix(sphere, [0, 5], checkpoint=tmp_path / "junk.npz")

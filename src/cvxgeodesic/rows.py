@@ -60,6 +60,8 @@ PATCH_GROWTH = 1.5
 #: Seconds between two writes of a checkpoint; the finished rows are also written at the end, on Ctrl-C and
 #: when a row fails.
 SAVE_EVERY = 2.0
+#: Options a checkpoint may be resumed across: the thread count changes at most the last digits of a row.
+RESUMABLE_ACROSS = ("threads",)
 #: Version of the checkpoint file's layout.
 CHECKPOINT_FORMAT = 1
 
@@ -73,7 +75,8 @@ def fingerprint(mesh: Any, items: Sequence[Any], options: dict) -> dict[str, str
     items : sequence
         The distinct sources, one per row.
     options : dict
-        Every option of the rows (method, m, ..., max_distance); arrays are hashed, anything else is its ``repr``.
+        Every option of the rows (method, m, ..., max_distance); arrays are hashed, anything else is its ``repr``;
+        the options of :data:`RESUMABLE_ACROSS` are left out.
 
     Returns
     -------
@@ -90,6 +93,8 @@ def fingerprint(mesh: Any, items: Sequence[Any], options: dict) -> dict[str, str
     text = repr([int(i) if isinstance(i, int | np.integer) else repr(i) for i in items])
     out["sources"] = text if len(text) <= 60 else f"{len(items)} rows, {hashlib.sha256(text.encode()).hexdigest()[:16]}"
     for key, value in sorted(options.items()):
+        if key in RESUMABLE_ACROSS:
+            continue
         out[key] = f"array {digest(np.asarray(value))}" if isinstance(value, np.ndarray) else repr(value)
     return out
 
