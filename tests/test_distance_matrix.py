@@ -268,6 +268,11 @@ def test_ctrl_c_keeps_the_finished_rows_and_the_same_call_resumes(sphere, tmp_pa
     ref = cg.distance_matrix(sphere, verts, method="qclp", progress=False)
     path = tmp_path / "rows.npz"
     counter = _Counting(monkeypatch, stop=3)  # Ctrl-C during the third row: two are done
+    with pytest.raises(KeyboardInterrupt) as info:  # without a checkpoint the note says how to keep them
+        cg.distance_matrix(sphere, verts, method="qclp", progress=False)
+    assert info.value.__notes__ == ["distance_matrix: 2 of 5 rows were done; with checkpoint='rows.npz' they are "
+                                    "kept and the same call resumes"]
+    counter.calls = 0
     with pytest.raises(KeyboardInterrupt) as info:
         cg.distance_matrix(sphere, verts, method="qclp", progress=False, checkpoint=path)
     assert checkpoint_rows(path) == (2, 5)

@@ -395,9 +395,13 @@ def keeping(store: RowStore) -> Iterator[None]:
         yield
     except BaseException as exc:
         store.save()
-        if store.path is not None and store.done.any():
-            exc.add_note(f"distance_matrix: {int(store.done.sum())} of {store.shape[0]} rows kept in {store.path}; "
+        done = int(store.done.sum())
+        if store.path is not None and done:
+            exc.add_note(f"distance_matrix: {done} of {store.shape[0]} rows kept in {store.path}; "
                          "the same call resumes from there")
+        elif done and isinstance(exc, KeyboardInterrupt):
+            exc.add_note(f"distance_matrix: {done} of {store.shape[0]} rows were done; with checkpoint='rows.npz' "
+                         "they are kept and the same call resumes")
         raise
     store.save()
 
