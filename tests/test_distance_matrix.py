@@ -382,3 +382,28 @@ def test_cli_matrix_real_ctrl_c_keeps_rows_and_resumes(tmp_path):
     some = [0, 150, 319]  # rows before and after the interruption, against a fresh solve
     np.testing.assert_allclose(D[some], cg.distance_matrix(mesh, [2 * i for i in some], method="qclp",
                                                          progress=False), rtol=1e-12, atol=0)
+
+
+def test_checkpoint_writes_are_spaced_by_their_own_duration(tmp_path, monkeypatch):
+    """A slow write (a large dense matrix) is not repeated every SAVE_EVERY seconds: at most ~10 % of the time."""
+    from cvxgeodesic import rows
+
+    clock = {"t": 0.0}
+    monkeypatch.setattr(rows.time, "monotonic", lambda: clock["t"])
+    real, writes = rows.atomic_write, []
+
+    def slow_write(path, write):
+        writes.append(clock["t"])
+        clock["t"] += 3.0  # this write takes 3 s
+        return real(path, write)
+
+    monkeypatch.setattr(rows, "atomic_write", slow_write)
+    store = rows.RowStore(10, 4, sparse=False, path=tmp_path / "c.npz", parameters={})
+    for i, t in enumerate([1.0, 2.5, 10.0, 35.0, 36.0, 70.0, 80.0]):
+        clock["t"] = max(clock["t"], t)
+        store.put(i, np.zeros(4))
+        store.save(force=False)
+    # the first write once SAVE_EVERY (2 s) has passed, then only 10 × 3 s after the last one ended (5.5 s, 39 s)
+    assert writes == [2.5, 36.0, 70.0], writes
+    store.save()
+    assert len(writes) == 4 and rows.checkpoint_rows(tmp_path / "c.npz") == (7, 10)

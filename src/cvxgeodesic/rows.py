@@ -2,8 +2,9 @@
 
 - :class:`RowStore`: the rows found so far, and the checkpoint file that keeps them (``checkpoint=``, the CLI's
   partial file): written as rows finish, on Ctrl-C and on an error; a call with the same arguments resumes from it.
-- :func:`local_rows` / :class:`LocalRows`: rows within ``max_distance`` of their source, each solved on the patch
-  of the mesh around it (:func:`~cvxgeodesic.mesh.patch.ball_patch`), as sparse rows.
+- :func:`solve_rows`: the rows in this process, one solver, into a :class:`RowStore`, with a progress bar.
+- :class:`LocalRows`: a solver of rows within ``max_distance`` of their source, each solved on the patch of the
+  mesh around it (:func:`~cvxgeodesic.mesh.patch.ball_patch`), as sparse rows.
 - :func:`distributed_rows`: rows on a Dask cluster. The rows are split into contiguous chunks, one per worker
   thread of the cluster. Every chunk is one task that builds one solver (the per-mesh set-up, paid once per
   chunk) and solves its rows in turn; the mesh is scattered to the workers once, and the rows come back in the
@@ -51,15 +52,18 @@ WHAT = "distance_matrix on a Dask cluster (workers= or scheduler=, cvxgeodesic m
 #: Dijkstra's distance exceeds the geodesic one by at most 19 % on kitten (18.9K faces, 3 sources, vertices
 #: within 10 % of the diagonal), so 1.5 holds the ball with a margin of ~1.25 r. Measured on kitten, r = 10 % of the
 #: bounding-box diagonal, QCLP and QCQP-Hessian: the mean error against the exact distance inside r was 0.81–0.96×
-#: the full solve's for every factor in 1.1–3 (the boundary of the patch does not reach inside r); 1.5 costs
-#: 1.1–1.5× the faces and time of 1.25.
+#: the full solve's for every factor in 1.1–3 (the boundary of the patch does not reach inside r); 1.5 has
+#: 1.4–1.5× the faces of 1.25 for about the same time (a row's fixed costs dominate).
 PATCH_FACTOR = 1.5
 #: Growth of the patch radius when the solved field is within ``max_distance`` somewhere on the patch's cut
 #: (the ball may reach past the patch there).
 PATCH_GROWTH = 1.5
-#: Seconds between two writes of a checkpoint; the finished rows are also written at the end, on Ctrl-C and
-#: when a row fails.
+#: Seconds between two writes of a checkpoint, at least; the finished rows are also written at the end, on Ctrl-C
+#: and when a row fails.
 SAVE_EVERY = 2.0
+#: A checkpoint is written again only after SAVE_SHARE times its last write's duration: a large dense matrix
+#: (1,000 rows of 100K vertices are 800 MB) then costs at most ~10 % of the time in writes.
+SAVE_SHARE = 10.0
 #: Options a checkpoint may be resumed across: the thread count changes at most the last digits of a row.
 RESUMABLE_ACROSS = ("threads",)
 #: Version of the checkpoint file's layout.
@@ -129,6 +133,7 @@ class RowStore:
         self.rows: dict[int, Any] = {}
         self.resumed = 0
         self._saved_at = time.monotonic()
+        self._interval = SAVE_EVERY
         self._unsaved = False
         if self.path is not None and self.path.exists():
             self._load()
@@ -141,14 +146,17 @@ class RowStore:
         self._unsaved = True
 
     def save(self, *, force: bool = True) -> None:
-        """Write the finished rows to the checkpoint (atomically); unless ``force``, at most every SAVE_EVERY s."""
+        """Write the finished rows to the checkpoint (atomically); unless ``force``, only when the last write is
+        SAVE_EVERY seconds old and SAVE_SHARE times its own duration."""
         if self.path is None or not self._unsaved or not self.done.any():
             return
-        if not force and time.monotonic() - self._saved_at < SAVE_EVERY:
+        start = time.monotonic()
+        if not force and start - self._saved_at < self._interval:
             return
         arrays = self._arrays()
         atomic_write(self.path, lambda fh: np.savez(fh, **arrays))  # type: ignore[arg-type]
         self._saved_at = time.monotonic()
+        self._interval = max(SAVE_EVERY, SAVE_SHARE * (self._saved_at - start))
         self._unsaved = False
 
     def matrix(self, inverse: np.ndarray) -> np.ndarray | sp.csr_matrix:
