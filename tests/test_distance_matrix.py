@@ -324,6 +324,9 @@ def test_a_checkpoint_of_other_parameters_is_refused(sphere, tmp_path):
     (tmp_path / "junk.npz").write_bytes(b"not a zip")
     with pytest.raises(ParameterError, match="junk.npz is not a distance_matrix checkpoint"):
         cg.distance_matrix(sphere, [0, 5], checkpoint=tmp_path / "junk.npz")
+    np.savez(tmp_path / "other.npz", x=1)
+    with pytest.raises(ParameterError, match=r"other.npz is not a distance_matrix checkpoint \(no 'parameters' entry"):
+        cg.distance_matrix(sphere, [0, 5], checkpoint=tmp_path / "other.npz")
     with pytest.raises(ParameterError, match="unsupported output file extension '.npy'"):
         cg.distance_matrix(sphere, [0, 5], checkpoint=tmp_path / "rows.npy")
 

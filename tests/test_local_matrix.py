@@ -168,6 +168,9 @@ def test_cli_matrix_max_distance(tmp_path, capsys):
     assert "--max-distance writes a sparse matrix (scipy.sparse.save_npz): give -o FILE.npz" in capsys.readouterr().err
     assert main(["matrix", str(path), "-s", "1", "-o", str(tmp_path / "D.npz")]) == 2
     assert "a full matrix is written as .npy" in capsys.readouterr().err
+    assert main(["matrix", str(path), "-s", "1", "--max-distance", "0", "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["cvxgeodesic: error: --max-distance must be a finite number > 0, got 0.0"], err
 
 
 def test_sparse_file_order_keeps_zeros_and_welded_duplicates():

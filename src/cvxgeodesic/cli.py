@@ -140,6 +140,10 @@ def _cmd_matrix(args) -> int:
         raise ParameterError(f"{args.output}: a full matrix is written as .npy (or add --max-distance R for a "
                              "sparse .npz)")
     check_output_path(args.output, (".npz",) if local else (".npy",))
+    if local:
+        from .validation import check_number
+
+        check_number(args.max_distance, "--max-distance", low=0, low_open=True)  # before the mesh is read
     if args.workers is not None and args.scheduler is not None:
         raise ParameterError("give --workers (a local Dask cluster) or --scheduler (an existing one), not both")
     mesh = load_mesh(args.mesh)
@@ -171,14 +175,14 @@ def _cmd_matrix(args) -> int:
 
         S = sparse_to_file_order(mesh, D)  # columns in the file's numbering, like every other output
         atomic_write(args.output, lambda fh: sp.save_npz(fh, S))
-        shape, what = S.shape, f"{S.nnz} distances up to {args.max_distance:g}"
+        shape, what = S.shape, f"sparse, {S.nnz} distances up to {args.max_distance:g} stored"
     else:
         D = to_file_order(mesh, D)
         atomic_write(args.output, lambda fh: np.save(fh, D))
         shape, what = D.shape, "distances"
     partial.unlink(missing_ok=True)
     if not args.quiet:
-        print(f"wrote {args.output}: {shape[0]} × {shape[1]} {what}", file=sys.stderr)
+        print(f"wrote {args.output}: {shape[0]} × {shape[1]}, {what}", file=sys.stderr)
     return 0
 
 

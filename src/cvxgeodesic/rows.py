@@ -189,7 +189,8 @@ class RowStore:
             if int(data["format"]) != CHECKPOINT_FORMAT:
                 raise ValueError(f"format {int(data['format'])}, expected {CHECKPOINT_FORMAT}")
         except Exception as exc:  # any unreadable file: not a checkpoint of this function
-            raise ParameterError(f"checkpoint {self.path} is not a distance_matrix checkpoint ({exc}); "
+            why = f"no {exc} entry" if isinstance(exc, KeyError) else str(exc)
+            raise ParameterError(f"checkpoint {self.path} is not a distance_matrix checkpoint ({why}); "
                                  "delete it or give another path") from None
         differ = [k for k in sorted(set(theirs) | set(self.parameters)) if theirs.get(k) != self.parameters.get(k)]
         if differ or tuple(data["shape"]) != self.shape or bool(data["sparse"]) != self.sparse:
