@@ -545,7 +545,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
     factory: Any = GeodesicSolver
     if max_distance is not None:
         factory, options = _local_rows(mesh, options, max_distance)
-    from .rows import RowStore, distributed_rows, fingerprint, keeping, solve_rows
+    from .rows import RowStore, cluster_rows, fingerprint, solve_rows
 
     if checkpoint is not None:
         checkpoint = check_output_path(checkpoint, (".npz",))
@@ -553,17 +553,8 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
                      parameters=fingerprint(mesh, items, options) if checkpoint is not None else None)
     desc = str(method or "distance")
     if workers is not None or scheduler is not None:
-        todo = np.flatnonzero(~store.done)
-
-        def keep(chunk: slice, rows: Any) -> None:
-            for i, row in zip(todo[chunk], rows, strict=True):
-                store.put(int(i), row)
-            store.save()
-
-        if todo.size:
-            with keeping(store):
-                distributed_rows(factory, mesh, [items[i] for i in todo], options, scheduler=scheduler,
-                                 workers=workers, progress=progress, desc=desc, on_chunk=keep)
+        cluster_rows(factory, mesh, items, options, store, scheduler=scheduler, workers=workers, progress=progress,
+                     desc=desc)
     else:
         solve_rows(factory, mesh, items, options, store, progress=progress, desc=desc)
     return store.matrix(inverse)

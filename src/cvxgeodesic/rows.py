@@ -39,7 +39,7 @@ from ._threads import resolve_threads, thread_limit
 from .errors import ParameterError
 from .mesh.patch import ball_patch
 
-__all__ = ["LocalRows", "RowStore", "checkpoint_rows", "distributed_rows", "keeping", "solve_rows",
+__all__ = ["LocalRows", "RowStore", "checkpoint_rows", "cluster_rows", "distributed_rows", "keeping", "solve_rows",
            "sparse_to_file_order", "split_rows"]
 
 #: Seconds an existing cluster without workers is given to get one before the run fails.
@@ -395,6 +395,24 @@ def _solve_into(solver: Any, items: Sequence[Any], todo: np.ndarray, store: RowS
         store.put(int(i), solver.solve(items[int(i)]).distance)
         store.save(force=False)
         bar.update(1)
+
+
+def cluster_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any], options: dict, store: RowStore, *,
+                 scheduler: Any, workers: int | None, progress: bool | None, desc: str) -> None:
+    """:func:`solve_rows` on a Dask cluster (:func:`distributed_rows`): the rows ``store`` has not got, each chunk's
+    rows into ``store`` (and its checkpoint) as the chunk finishes."""
+    todo = np.flatnonzero(~store.done)
+    if todo.size == 0:
+        return
+
+    def keep(chunk: slice, rows: Any) -> None:
+        for i, row in zip(todo[chunk], rows, strict=True):
+            store.put(int(i), row)
+        store.save()
+
+    with keeping(store):
+        distributed_rows(factory, mesh, [items[i] for i in todo], options, scheduler=scheduler, workers=workers,
+                         progress=progress, desc=desc, on_chunk=keep)
 
 
 @contextlib.contextmanager
