@@ -315,6 +315,12 @@ def test_a_checkpoint_of_other_parameters_is_refused(sphere, tmp_path):
         cg.distance_matrix(sphere, [0, 5], method="dijkstra", checkpoint=path)
     with pytest.raises(ParameterError, match=r"other parameters \(sources: \[0, 5\] there, \[0, 6\] here\)"):
         cg.distance_matrix(sphere, [0, 6], method="qclp", checkpoint=path)
+    curve = [cg.SurfacePoint(0, [1, 0, 0]), cg.SurfacePoint(3, [0.2, 0.3, 0.5])]
+    cg.distance_matrix(sphere, [cg.SurfaceCurve(curve)], method="qclp", checkpoint=tmp_path / "curve.npz")
+    with pytest.raises(ParameterError, match=r"other parameters \(sources: \['SurfaceCurve [0-9a-f]+'\] there"):
+        cg.distance_matrix(sphere, [cg.SurfaceCurve(curve[::-1])], method="qclp", checkpoint=tmp_path / "curve.npz")
+    tet = cg.tet_l_prism(2)
+    cg.distance_matrix(tet, [0, 1], method="qclp", checkpoint=tmp_path / "tet.npz")
     with pytest.raises(ParameterError, match="other parameters.*mesh: 162 vertices"):
         cg.distance_matrix(cg.icosphere(1), [0, 5], method="qclp", checkpoint=path)
     with pytest.raises(ParameterError, match="other parameters.*m: 1.0 there, 2.0 here"):

@@ -21,6 +21,7 @@ import contextlib
 import hashlib
 import json
 import os
+import pickle
 import sys
 import threading
 import time
@@ -93,8 +94,11 @@ def fingerprint(mesh: Any, items: Sequence[Any], options: dict) -> dict[str, str
             h.update(np.ascontiguousarray(a).tobytes())
         return h.hexdigest()[:16]
 
-    out = {"mesh": f"{mesh.n_vertices} vertices, {mesh.n_faces} faces, {digest(mesh.V, mesh.F)}"}
-    text = repr([int(i) if isinstance(i, int | np.integer) else repr(i) for i in items])
+    cells = mesh.F if hasattr(mesh, "F") else mesh.T  # a TetMesh's tetrahedra
+    out = {"mesh": f"{mesh.n_vertices} vertices, {len(cells)} cells, {digest(mesh.V, cells)}"}
+    # a point or curve by its content (a curve's repr gives only its length)
+    text = repr([int(i) if isinstance(i, int | np.integer)
+                 else f"{type(i).__name__} {hashlib.sha256(pickle.dumps(i)).hexdigest()[:12]}" for i in items])
     out["sources"] = text if len(text) <= 60 else f"{len(items)} rows, {hashlib.sha256(text.encode()).hexdigest()[:16]}"
     for key, value in sorted(options.items()):
         if key in RESUMABLE_ACROSS:
