@@ -103,7 +103,9 @@ def fingerprint(mesh: Any, items: Sequence[Any], options: dict) -> dict[str, str
     for key, value in sorted(options.items()):
         if key in RESUMABLE_ACROSS:
             continue
-        out[key] = f"array {digest(np.asarray(value))}" if isinstance(value, np.ndarray) else repr(value)
+        text = f"array {digest(value)}" if isinstance(value, np.ndarray) else repr(value)
+        short = f"{type(value).__name__} {hashlib.sha256(text.encode()).hexdigest()[:12]}"
+        out[key] = text if len(text) <= 60 else short
     return out
 
 
