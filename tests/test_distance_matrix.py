@@ -241,3 +241,178 @@ def test_local_cluster_workers_share_the_cores(monkeypatch):
                                   for v in seen.values()), seen
     # Dask's nanny writes them into this process too: left there, they would pin the caller's later solves
     assert not any(name in os.environ for name in names), {k: os.environ.get(k) for k in names}
+
+
+# ---- rows that survive: checkpoint, resume, Ctrl-C, progress ----
+
+class _Counting:
+    """Counts GeodesicSolver.solve calls; raises KeyboardInterrupt at call ``stop`` (1-based) when given."""
+
+    def __init__(self, monkeypatch, stop=None):
+        self.calls, self.stop = 0, stop
+        solve = cg.GeodesicSolver.solve
+
+        def counting(solver, sources, **kw):
+            self.calls += 1
+            if self.stop is not None and self.calls == self.stop:
+                raise KeyboardInterrupt
+            return solve(solver, sources, **kw)
+
+        monkeypatch.setattr(cg.GeodesicSolver, "solve", counting)
+
+
+def test_ctrl_c_keeps_the_finished_rows_and_the_same_call_resumes(sphere, tmp_path, monkeypatch):
+    from cvxgeodesic.rows import checkpoint_rows
+
+    verts = [3, 0, 17, 100, 3, 42]  # 5 distinct rows
+    ref = cg.distance_matrix(sphere, verts, method="qclp", progress=False)
+    path = tmp_path / "rows.npz"
+    counter = _Counting(monkeypatch, stop=3)  # Ctrl-C during the third row: two are done
+    with pytest.raises(KeyboardInterrupt) as info:  # without a checkpoint the note says how to keep them
+        cg.distance_matrix(sphere, verts, method="qclp", progress=False)
+    assert info.value.__notes__ == ["distance_matrix: 2 of 5 rows were done; with checkpoint='rows.npz' they are "
+                                    "kept and the same call resumes"]
+    counter.calls = 0
+    with pytest.raises(KeyboardInterrupt) as info:
+        cg.distance_matrix(sphere, verts, method="qclp", progress=False, checkpoint=path)
+    assert checkpoint_rows(path) == (2, 5)
+    assert any("2 of 5 rows kept in" in note for note in info.value.__notes__)
+    assert not list(tmp_path.glob(".*.tmp"))
+    counter.calls, counter.stop = 0, None
+    D = cg.distance_matrix(sphere, verts, method="qclp", progress=False, checkpoint=path)
+    assert counter.calls == 3  # only the rows the checkpoint did not hold
+    # the same solves in the same order of operations: equal to rounding
+    np.testing.assert_allclose(D, ref, rtol=1e-12, atol=0)
+    assert checkpoint_rows(path) == (5, 5)
+    counter.calls = 0
+    np.testing.assert_array_equal(cg.distance_matrix(sphere, verts, method="qclp", progress=False, checkpoint=path), D)
+    assert counter.calls == 0  # a complete checkpoint is the answer
+
+
+def test_a_failing_row_keeps_the_rows_before_it(sphere, tmp_path, monkeypatch):
+    from cvxgeodesic.errors import SolverError
+    from cvxgeodesic.rows import checkpoint_rows
+
+    solve = cg.GeodesicSolver.solve
+
+    def failing(solver, sources, **kw):
+        if sources == 17:
+            raise SolverError("row 17 failed", solver="ipm", status="max_iter")
+        return solve(solver, sources, **kw)
+
+    monkeypatch.setattr(cg.GeodesicSolver, "solve", failing)
+    with pytest.raises(SolverError, match="row 17 failed"):
+        cg.distance_matrix(sphere, [0, 5, 17, 30], method="qclp", progress=False, checkpoint=tmp_path / "c.npz")
+    assert checkpoint_rows(tmp_path / "c.npz") == (2, 4)
+
+
+def test_a_checkpoint_of_other_parameters_is_refused(sphere, tmp_path):
+    from cvxgeodesic.errors import ParameterError
+
+    path = tmp_path / "rows.npz"
+    cg.distance_matrix(sphere, [0, 5], method="qclp", progress=False, checkpoint=path)
+    with pytest.raises(ParameterError, match=r"other parameters \(method: 'qclp' there, 'dijkstra' here\)"):
+        cg.distance_matrix(sphere, [0, 5], method="dijkstra", checkpoint=path)
+    with pytest.raises(ParameterError, match=r"other parameters \(sources: \[0, 5\] there, \[0, 6\] here\)"):
+        cg.distance_matrix(sphere, [0, 6], method="qclp", checkpoint=path)
+    curve = [cg.SurfacePoint(0, [1, 0, 0]), cg.SurfacePoint(3, [0.2, 0.3, 0.5])]
+    cg.distance_matrix(sphere, [cg.SurfaceCurve(curve)], method="qclp", checkpoint=tmp_path / "curve.npz")
+    with pytest.raises(ParameterError, match=r"other parameters \(sources: \['SurfaceCurve [0-9a-f]+'\] there"):
+        cg.distance_matrix(sphere, [cg.SurfaceCurve(curve[::-1])], method="qclp", checkpoint=tmp_path / "curve.npz")
+    tet = cg.tet_l_prism(2)
+    cg.distance_matrix(tet, [0, 1], method="qclp", checkpoint=tmp_path / "tet.npz")
+    with pytest.raises(ParameterError, match="other parameters.*mesh: 162 vertices"):
+        cg.distance_matrix(cg.icosphere(1), [0, 5], method="qclp", checkpoint=path)
+    with pytest.raises(ParameterError, match="other parameters.*m: 1.0 there, 2.0 here"):
+        cg.distance_matrix(sphere, [0, 5], method="qclp", m=2.0, checkpoint=path)
+    # another thread count changes at most the last digits: the checkpoint is the answer
+    cg.distance_matrix(sphere, [0, 5], method="qclp", threads=1, checkpoint=path)
+    (tmp_path / "junk.npz").write_bytes(b"not a zip")
+    with pytest.raises(ParameterError, match="junk.npz is not a distance_matrix checkpoint"):
+        cg.distance_matrix(sphere, [0, 5], checkpoint=tmp_path / "junk.npz")
+    np.savez(tmp_path / "other.npz", x=1)
+    with pytest.raises(ParameterError, match=r"other.npz is not a distance_matrix checkpoint \(no 'parameters' entry"):
+        cg.distance_matrix(sphere, [0, 5], checkpoint=tmp_path / "other.npz")
+    with pytest.raises(ParameterError, match="unsupported output file extension '.npy'"):
+        cg.distance_matrix(sphere, [0, 5], checkpoint=tmp_path / "rows.npy")
+
+
+def test_progress_shows_after_the_delay_by_default(sphere, monkeypatch, capsys):
+    from cvxgeodesic import _verbose
+
+    monkeypatch.setattr(_verbose, "PROGRESS_DELAY", 1e6)  # a fast matrix: silent
+    cg.distance_matrix(sphere, [0, 5, 9], method="dijkstra")
+    assert capsys.readouterr().err == ""
+    monkeypatch.setattr(_verbose, "PROGRESS_DELAY", 0.0)  # a slow one: the bar counts rows
+    cg.distance_matrix(sphere, [0, 5, 9], method="dijkstra")
+    assert "3/3" in capsys.readouterr().err
+    cg.distance_matrix(sphere, [0, 5, 9], method="dijkstra", progress=False)
+    assert capsys.readouterr().err == ""
+
+
+def test_cli_matrix_interrupted_then_resumed(tmp_path, monkeypatch, capsys):
+    mesh, path = sphere_file_with_a_loose_vertex(tmp_path)
+    out = tmp_path / "D.npy"
+    partial = tmp_path / "D.npy.partial.npz"
+    args = ["matrix", str(path), "-s", "6,1,30,9", "--method", "qclp", "-o", str(out)]
+    counter = _Counting(monkeypatch, stop=3)
+    assert main(args) == 130
+    err = capsys.readouterr().err
+    assert f"cvxgeodesic: 2 of 4 rows kept in {partial}; run the same command again to resume" in err, err
+    assert err.strip().splitlines()[-1] == "cvxgeodesic: interrupted"
+    assert partial.exists() and not out.exists()
+    counter.calls, counter.stop = 0, None
+    assert main(args) == 0
+    assert f"resuming from {partial}: 2 of 4 rows already done" in capsys.readouterr().err
+    assert counter.calls == 2 and not partial.exists()
+    expected = cg.distance_matrix(mesh, [5, 0, 29, 8], method="qclp", progress=False)
+    np.testing.assert_allclose(np.load(out)[:, 1:], expected, rtol=1e-12, atol=0)
+
+
+def test_cli_matrix_real_ctrl_c_keeps_rows_and_resumes(tmp_path):
+    """A real SIGINT once some rows are done (read from the bar), whatever the machine's speed."""
+    from cvxgeodesic.rows import checkpoint_rows
+
+    mesh = cg.icosphere(3)
+    path = cg.save_distance(tmp_path / "s.ply", mesh, np.zeros(mesh.n_vertices))
+    out = tmp_path / "D.npy"
+    partial = tmp_path / "D.npy.partial.npz"
+    rows = ",".join(str(v) for v in range(0, 640, 2))  # 320 rows of ~50 ms: far from done after the first
+    args = ["matrix", str(path), "-s", rows, "--method", "qclp", "-o", str(out)]
+    returncode, text, _ = interrupt_cli(args, lambda err: re.search(rb"\b[1-9]\d*/320\b", err) is not None,
+                                        settle=0.2)
+    assert returncode == 130, text
+    kept = checkpoint_rows(partial)
+    assert kept is not None and 1 <= kept[0] < 320 and kept[1] == 320, (kept, text)
+    assert f"{kept[0]} of 320 rows kept in" in text and "Traceback" not in text, text
+    assert not out.exists() and not list(tmp_path.glob(".*.tmp"))
+    assert main([*args[:3], ",".join(str(v) for v in range(0, 640, 2)), *args[4:], "-q"]) == 0
+    D = np.load(out)
+    some = [0, 150, 319]  # rows before and after the interruption, against a fresh solve
+    np.testing.assert_allclose(D[some], cg.distance_matrix(mesh, [2 * i for i in some], method="qclp",
+                                                         progress=False), rtol=1e-12, atol=0)
+
+
+def test_checkpoint_writes_are_spaced_by_their_own_duration(tmp_path, monkeypatch):
+    """A slow write (a large dense matrix) is not repeated every SAVE_EVERY seconds: at most ~10 % of the time."""
+    from cvxgeodesic import rows
+
+    clock = {"t": 0.0}
+    monkeypatch.setattr(rows.time, "monotonic", lambda: clock["t"])
+    real, writes = rows.atomic_write, []
+
+    def slow_write(path, write):
+        writes.append(clock["t"])
+        clock["t"] += 3.0  # this write takes 3 s
+        return real(path, write)
+
+    monkeypatch.setattr(rows, "atomic_write", slow_write)
+    store = rows.RowStore(10, 4, sparse=False, path=tmp_path / "c.npz", parameters={})
+    for i, t in enumerate([1.0, 2.5, 10.0, 35.0, 36.0, 70.0, 80.0]):
+        clock["t"] = max(clock["t"], t)
+        store.put(i, np.zeros(4))
+        store.save(force=False)
+    # the first write once SAVE_EVERY (2 s) has passed, then only 10 × 3 s after the last one ended (5.5 s, 39 s)
+    assert writes == [2.5, 36.0, 70.0], writes
+    store.save()
+    assert len(writes) == 4 and rows.checkpoint_rows(tmp_path / "c.npz") == (7, 10)

@@ -7,11 +7,13 @@ to it. The result types live in :mod:`cvxgeodesic.results` and are re-exported h
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Callable, Iterable
 from typing import Any, cast
 
 import numpy as np
+import scipy.sparse as sp
 from numpy.typing import ArrayLike
 
 from ._threads import limited
@@ -32,6 +34,7 @@ from .validation import (
     check_lam,
     check_number,
     check_order,
+    check_output_path,
     check_smoothness,
     validate_sources,
 )
@@ -451,16 +454,27 @@ def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | 
 
 
 def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m: float = 1.0, solver: str = "auto",
-                    progress: bool = False, *, lam: float | None = None, tol: float = DEFAULT_TOL,
+                    progress: bool | None = None, *, lam: float | None = None, tol: float = DEFAULT_TOL,
                     max_iter: int = 200, multires: bool | int = False, normalization: str = "area",
                     order: int = 1, threads: int | None = None, workers: int | None = None,
-                    scheduler: Any = None, cost: Any = None, metric: Any = None) -> np.ndarray:
+                    scheduler: Any = None, cost: Any = None, metric: Any = None, max_distance: float | None = None,
+                    checkpoint: str | os.PathLike | None = None) -> np.ndarray | sp.csr_matrix:
     """Distance fields from several vertices, one row per vertex, with one :class:`GeodesicSolver`.
 
     The per-mesh work (operators, energy matrix, symbolic Cholesky analysis) is
     done once; every row is one solve with a single source. A vertex listed
     twice is solved once and its row copied. ``vertices`` may also be a SurfacePoint, a
     SurfaceCurve, ``"boundary"`` or a list of them and ints: one row per item.
+
+    With ``max_distance`` the matrix is sparse and local: each row keeps the distances up to
+    ``max_distance`` and is solved on the patch of the mesh around its source, the faces within
+    ``1.5 · max_distance`` on the edge graph (:class:`~cvxgeodesic.rows.LocalRows`; docs/performance.md
+    "Rows of a distance matrix"), with the whole mesh's smoothness weight.
+
+    With ``checkpoint`` the finished rows are written to that ``.npz`` file as they come (every couple of
+    seconds, atomically, and when a row fails or Ctrl-C stops the call); the same call again resumes from
+    it, skipping the rows it holds, and returns the whole matrix once it has every row. A checkpoint made
+    with other arguments (mesh, sources, method, any option) is refused.
 
     With ``workers`` or ``scheduler`` the rows are solved on a Dask cluster
     (``pip install 'cvxgeodesic[cluster]'``; :mod:`cvxgeodesic.rows`): split into contiguous
@@ -476,8 +490,9 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
     method, m, solver, lam, tol, max_iter, multires, normalization, threads, cost, metric
         See :class:`GeodesicSolver`. On a cluster, ``threads=None`` lets every worker's solver
         follow the worker's environment: ``cpu_count // workers`` threads on a local cluster.
-    progress : bool
-        Show a tqdm progress bar (one step per distinct vertex) on stderr.
+    progress : bool or None
+        A progress bar counting rows on stderr: None (default) shows it once the rows have run
+        for 2 s (:data:`~cvxgeodesic._verbose.PROGRESS_DELAY`), True from the start, False never.
     workers : int, optional
         Solve on a ``LocalCluster`` of this many worker processes, started for this call and
         closed at the end. Default None: in this process, without Dask.
@@ -485,20 +500,29 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
         Solve on an existing Dask cluster: its scheduler's address (``"tcp://SCHEDULER:8786"``) or a
         connected client; its workers need cvxgeodesic installed (the mesh is sent to them).
         Not together with ``workers``.
+    max_distance : float, optional
+        Keep the distances up to this one (in the mesh's units, > 0): a sparse matrix of local rows.
+        Source vertices only; not with ``multires``, ``cost`` or ``metric``.
+    checkpoint : str or os.PathLike, optional
+        A ``.npz`` file that keeps the finished rows and resumes a call (see above).
 
     Returns
     -------
-    (k, n) float ndarray
+    (k, n) float ndarray, or (k, n) scipy.sparse.csr_matrix with ``max_distance``
         ``D[i, j]`` is the distance of vertex ``j`` from ``vertices[i]``
         (``inf`` where ``j`` is not connected to it). The matrix is not exactly
-        symmetric: every row is its own optimization problem.
+        symmetric: every row is its own optimization problem. Sparse: the entries are the
+        distances ``≤ max_distance``, the source's 0 included as a stored entry; a missing entry
+        is farther away.
 
     Raises
     ------
     SourceError
-        ``vertices`` is empty, not integers, or out of range.
+        ``vertices`` is empty, not integers, or out of range; not vertices with ``max_distance``.
     ParameterError
-        ``workers`` is not a positive integer, or both ``workers`` and ``scheduler`` are given.
+        ``workers`` is not a positive integer, or both ``workers`` and ``scheduler`` are given;
+        ``max_distance`` is not a positive number or comes with ``multires``, ``cost`` or ``metric``;
+        ``checkpoint`` is not a writable ``.npz`` path, is not a checkpoint, or was made with other arguments.
     ImportError
         ``workers`` or ``scheduler`` without Dask's ``distributed`` installed.
     ConnectionError
@@ -510,12 +534,11 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
     >>> D = cg.distance_matrix(cg.icosphere(2), [0, 5, 9], method="qclp")
     >>> D.shape, float(D[1, 5])
     ((3, 162), 0.0)
+    >>> L = cg.distance_matrix(cg.icosphere(3), [0, 5], method="qclp", max_distance=0.5)
+    >>> L.shape, L.nnz < 2 * 642, float(L[1].max()) <= 0.5
+    ((2, 642), True, True)
     """
     mesh = as_mesh(mesh)
-    from .mesh.tet_locate import VolumePoint
-    from .sources import SurfaceCurve, SurfacePoint
-    from .sources_tet import BoundaryFaces
-
     if workers is not None:
         check_count(workers, "workers", or_none=True)
         if scheduler is not None:
@@ -523,20 +546,38 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
     options: dict[str, Any] = {"method": method, "m": m, "lam": lam, "solver": solver, "tol": tol, "max_iter": max_iter,
                "multires": multires, "normalization": normalization, "order": order, "threads": threads,
                "cost": cost, "metric": metric}
+    items, inverse = _matrix_rows(mesh, vertices, local=max_distance is not None)
+    factory: Any = GeodesicSolver
+    if max_distance is not None:
+        factory, options = _local_rows(mesh, options, max_distance)
+    from .rows import RowStore, cluster_rows, fingerprint, solve_rows
 
-    def rows_of(items: list) -> np.ndarray:
-        if workers is not None or scheduler is not None:
-            from .rows import distributed_rows
+    if checkpoint is not None:
+        checkpoint = check_output_path(checkpoint, (".npz",))
+    store = RowStore(len(items), mesh.n_vertices, sparse=max_distance is not None, path=checkpoint,
+                     parameters=fingerprint(mesh, items, options) if checkpoint is not None else None)
+    desc = str(method or "distance")
+    if workers is not None or scheduler is not None:
+        cluster_rows(factory, mesh, items, options, store, scheduler=scheduler, workers=workers, progress=progress,
+                     desc=desc)
+    else:
+        solve_rows(factory, mesh, items, options, store, progress=progress, desc=desc)
+    return store.matrix(inverse)
 
-            return distributed_rows(GeodesicSolver, mesh, items, options, scheduler=scheduler, workers=workers,
-                                    progress=progress, desc=str(method or "distance"))
-        solver_obj = GeodesicSolver(mesh, **options)
-        return np.stack([r.distance for r in solver_obj.solve_many(items, progress=progress)])
+
+def _matrix_rows(mesh: Any, vertices: Any, *, local: bool) -> tuple[list, np.ndarray]:
+    """The distinct sources of ``distance_matrix``'s rows and, for each row asked for, its index among them."""
+    from .mesh.tet_locate import VolumePoint
+    from .sources import SurfaceCurve, SurfacePoint
+    from .sources_tet import BoundaryFaces
 
     surface = (SurfacePoint, SurfaceCurve, str, VolumePoint, BoundaryFaces)
     if isinstance(vertices, surface) or (isinstance(vertices, list | tuple)
                                          and any(isinstance(v, surface) for v in vertices)):
-        return rows_of([vertices] if isinstance(vertices, surface) else list(vertices))  # one row per item
+        if local:
+            raise SourceError("max_distance takes source vertices (ints), not points, curves or 'boundary'")
+        items = [vertices] if isinstance(vertices, surface) else list(vertices)
+        return items, np.arange(len(items))  # one row per item
     if isinstance(vertices, bool | np.bool_):
         raise SourceError(f"vertices must be vertex indices, got {vertices!r}")
     arr = np.atleast_1d(np.asarray(vertices))
@@ -546,5 +587,19 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
         raise SourceError("vertices is empty: give at least one source vertex")
     uniq, inverse = np.unique(arr, return_inverse=True)
     uniq = validate_sources(uniq, mesh.n_vertices)
-    return rows_of(uniq.tolist())[np.asarray(inverse).ravel()]
+    return uniq.tolist(), np.asarray(inverse).ravel()
 
+
+def _local_rows(mesh: Any, options: dict, max_distance: Any) -> tuple[Any, dict]:
+    """The factory and options of local rows (:class:`~cvxgeodesic.rows.LocalRows`), after their checks."""
+    from .rows import LocalRows
+
+    if isinstance(mesh, TetMesh):
+        raise ParameterError("max_distance is for triangle meshes (surfaces), not tetrahedral meshes")
+    r = check_number(max_distance, "max_distance", low=0, low_open=True)
+    for name in ("multires", "cost", "metric"):
+        if options[name] if name == "multires" else options[name] is not None:
+            raise ParameterError(f"max_distance does not take {name}= (a patch has no coarse mesh, cost or metric "
+                                 "of its own yet)")
+    rest = {k: v for k, v in options.items() if k not in ("multires", "cost", "metric")}
+    return LocalRows, {"max_distance": r, "factory": GeodesicSolver, **rest}

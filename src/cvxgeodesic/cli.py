@@ -142,31 +142,68 @@ def _cmd_view(args) -> int:
 
 
 def _cmd_matrix(args) -> int:
+    from pathlib import Path
+
     import numpy as np
 
     from ._atomic import atomic_write
     from .api import distance_matrix
     from .mesh.fileorder import file_sources, to_file_order
     from .mesh.io import check_output_path, load_mesh
+    from .rows import checkpoint_rows, sparse_to_file_order
 
-    check_output_path(args.output, (".npy",))
+    local = args.max_distance is not None
+    suffix = Path(args.output).suffix.lower()
+    if local and suffix != ".npz":
+        raise ParameterError(f"{args.output}: --max-distance writes a sparse matrix (scipy.sparse.save_npz): "
+                             "give -o FILE.npz")
+    if not local and suffix == ".npz":
+        raise ParameterError(f"{args.output}: a full matrix is written as .npy (or add --max-distance R for a "
+                             "sparse .npz)")
+    check_output_path(args.output, (".npz",) if local else (".npy",))
+    if local:
+        from .validation import check_number
+
+        check_number(args.max_distance, "--max-distance", low=0, low_open=True)  # before the mesh is read
     if args.workers is not None and args.scheduler is not None:
         raise ParameterError("give --workers (a local Dask cluster) or --scheduler (an existing one), not both")
     mesh = load_mesh(args.mesh)
     if not args.source:
         raise SourceError("give the source vertex of each row: -s I[,J...] (repeatable)")
     rows = [int(file_sources(mesh, [s])[0]) for s in args.source]  # one row per -s, in the given order
+    partial = Path(f"{args.output}.partial.npz")  # finished rows as they come; the same command resumes from it
     if not args.quiet:
         where = ("" if args.workers is None and args.scheduler is None
                  else f"; on {args.scheduler or f'a local cluster of {args.workers} worker processes'}")
-        print(f"{mesh.name}: {mesh.n_file_vertices} vertices, {len(rows)} rows; method {args.method}{where}",
+        within = f", distances up to {args.max_distance:g}" if local else ""
+        print(f"{mesh.name}: {mesh.n_file_vertices} vertices, {len(rows)} rows{within}; method {args.method}{where}",
               file=sys.stderr)
-    D = distance_matrix(mesh, rows, args.method, m=args.m, solver=args.solver, progress=not args.quiet,
-                        workers=args.workers, scheduler=args.scheduler)
-    D = to_file_order(mesh, D)  # columns in the file's numbering, like every other output
-    atomic_write(args.output, lambda fh: np.save(fh, D))
+        kept = checkpoint_rows(partial)
+        if kept:
+            print(f"resuming from {partial}: {kept[0]} of {kept[1]} rows already done", file=sys.stderr)
+    try:
+        D = distance_matrix(mesh, rows, args.method, m=args.m, solver=args.solver, progress=not args.quiet,
+                            workers=args.workers, scheduler=args.scheduler, max_distance=args.max_distance,
+                            checkpoint=partial)
+    except KeyboardInterrupt:
+        kept = checkpoint_rows(partial)
+        if kept:
+            print(f"cvxgeodesic: {kept[0]} of {kept[1]} rows kept in {partial}; run the same command again to "
+                  "resume", file=sys.stderr)
+        raise
+    if local:
+        import scipy.sparse as sp
+
+        S = sparse_to_file_order(mesh, D)  # columns in the file's numbering, like every other output
+        atomic_write(args.output, lambda fh: sp.save_npz(fh, S))
+        shape, what = S.shape, f"sparse, {S.nnz} distances up to {args.max_distance:g} stored"
+    else:
+        D = to_file_order(mesh, D)
+        atomic_write(args.output, lambda fh: np.save(fh, D))
+        shape, what = D.shape, "distances"
+    partial.unlink(missing_ok=True)
     if not args.quiet:
-        print(f"wrote {args.output}: {D.shape[0]} × {D.shape[1]} distances", file=sys.stderr)
+        print(f"wrote {args.output}: {shape[0]} × {shape[1]}, {what}", file=sys.stderr)
     return 0
 
 
@@ -297,7 +334,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--m", type=float, default=1.0, help=M_HELP)
     p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")
     p.add_argument("-o", "--output", required=True,
-                   help="output .npy: (rows, file vertices) float64, columns in the file's numbering")
+                   help="output .npy: (rows, file vertices) float64, columns in the file's numbering; with "
+                        "--max-distance a sparse .npz (scipy.sparse.load_npz). Finished rows are kept in "
+                        "OUTPUT.partial.npz as they come: after Ctrl-C or an error the same command resumes")
+    p.add_argument("--max-distance", type=float, default=None, metavar="R",
+                   help="keep the distances up to R (mesh units): a sparse matrix, each row solved on the patch "
+                        "of the mesh around its source (much faster for small R)")
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help="solve the rows on a local Dask cluster of N worker processes, cpu_count // N threads "
                         "each (default: in this process)")
