@@ -148,8 +148,9 @@ def _cmd_matrix(args) -> int:
 
     from ._atomic import atomic_write
     from .api import distance_matrix
+    from .cli_sources import check_outputs
     from .mesh.fileorder import file_sources, to_file_order
-    from .mesh.io import check_output_path, load_mesh
+    from .mesh.io import load_mesh
     from .rows import checkpoint_rows, sparse_to_file_order
 
     local = args.max_distance is not None
@@ -160,7 +161,8 @@ def _cmd_matrix(args) -> int:
     if not local and suffix == ".npz":
         raise ParameterError(f"{args.output}: a full matrix is written as .npy (or add --max-distance R for a "
                              "sparse .npz)")
-    check_output_path(args.output, (".npz",) if local else (".npy",))
+    # a full .npy or a sparse .npz, never the mesh, a read-only file only when asked: before anything is solved
+    check_outputs(args, ("-o", args.output, (".npz",) if local else (".npy",)))
     if local:
         from .validation import check_number
 
@@ -195,11 +197,11 @@ def _cmd_matrix(args) -> int:
         import scipy.sparse as sp
 
         S = sparse_to_file_order(mesh, D)  # columns in the file's numbering, like every other output
-        atomic_write(args.output, lambda fh: sp.save_npz(fh, S))
+        atomic_write(args.output, lambda fh: sp.save_npz(fh, S), overwrite_read_only=args.overwrite_read_only)
         shape, what = S.shape, f"sparse, {S.nnz} distances up to {args.max_distance:g} stored"
     else:
         D = to_file_order(mesh, D)
-        atomic_write(args.output, lambda fh: np.save(fh, D))
+        atomic_write(args.output, lambda fh: np.save(fh, D), overwrite_read_only=args.overwrite_read_only)
         shape, what = D.shape, "distances"
     partial.unlink(missing_ok=True)
     if not args.quiet:
@@ -346,6 +348,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="solve the rows on a running Dask cluster, e.g. tcp://SCHEDULER:8786")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+    add_overwrite(p)
     p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
     p.set_defaults(func=_cmd_matrix)
 
