@@ -1,0 +1,133 @@
+"""Hostile input and odd machines (issue 34): what the readers refuse before reading, the bounds on what they allocate,
+numbers out of range, and the thread cap. ``docs/input.md`` ("Limits") lists them."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import cvxgeodesic as cg
+from cvxgeodesic.errors import MeshFormatError
+from cvxgeodesic.mesh.tet_io import read_tetgen
+
+ROOT = Path(cg.__file__).parents[1]
+TETRA_NODE = "4 3\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n"
+TETRA_ELE = "1 4\n1 1 2 3 4\n"
+
+
+def _env() -> dict:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT), env.get("PYTHONPATH", "")])
+    return env
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+# Item 1: only regular files are read. Without the check a FIFO's open blocks and /dev/zero never ends (it fills the
+# memory), so the loads run in a subprocess with a memory limit and a timeout: a regression fails, it does not hang.
+# ---------------------------------------------------------------------------------------------------------------------
+LOAD_ALL = """
+import json, resource, sys, warnings
+resource.setrlimit(resource.RLIMIT_AS, (2 << 30, 2 << 30))  # /dev/zero read to the end fails here, not the machine
+warnings.simplefilter("ignore")
+import cvxgeodesic as cg
+out = {}
+for path in sys.argv[1:]:
+    load = cg.load_distance if path.endswith((".npy", ".csv")) else cg.load_mesh
+    try:
+        load(path)
+        out[path] = "loaded"
+    except Exception as exc:
+        out[path] = f"{type(exc).__name__}: {exc}"
+print(json.dumps(out))
+"""
+
+
+def _load_in_subprocess(paths: list[Path]) -> dict:
+    # 120 s: a few imports and stats on a loaded machine take seconds; a blocked open takes forever
+    out = subprocess.run([sys.executable, "-c", LOAD_ALL, *map(str, paths)], env=_env(), capture_output=True,
+                         text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    return json.loads(out.stdout)
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo") or not Path("/dev/zero").exists(), reason="needs FIFOs and /dev/zero")
+def test_fifos_and_devices_are_refused_before_they_are_opened(tmp_path):
+    # a TetGen pair whose .node is a FIFO (its .ele a real file), and a FIFO or a link to /dev/zero in every family
+    (tmp_path / "fifo.ele").write_text(TETRA_ELE)
+    fifos = [tmp_path / f"fifo{ext}" for ext in (".node", ".obj", ".msh", ".npy")]
+    for p in fifos:
+        os.mkfifo(p)
+    (tmp_path / "zero.node").write_text(TETRA_NODE)
+    zeros = [tmp_path / f"zero{ext}" for ext in (".ele", ".ply", ".vtu", ".gltf", ".mesh", ".csv")]
+    for p in zeros:
+        p.symlink_to("/dev/zero")
+    got = _load_in_subprocess([tmp_path / "fifo.ele", *fifos[1:], *zeros])
+    assert got[str(tmp_path / "fifo.ele")] == (f"MeshFormatError: {tmp_path / 'fifo.node'}: is a FIFO, not a TetGen "
+                                               "file (only regular files are read)")
+    for p in fifos[1:]:
+        assert got[str(p)].startswith(f"MeshFormatError: {p}: is a FIFO, not a "), got[str(p)]
+    for p in zeros:
+        assert got[str(p)].startswith(f"MeshFormatError: {p}: is a character device, not a "), got[str(p)]
+        assert got[str(p)].endswith("(only regular files are read)")
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs FIFOs")
+def test_the_command_line_refuses_a_fifo(tmp_path):
+    fifo = tmp_path / "mesh.obj"
+    os.mkfifo(fifo)
+    out = subprocess.run([sys.executable, "-m", "cvxgeodesic.cli", "distance", str(fifo), "-s", "0", "-o",
+                          str(tmp_path / "d.ply")], env=_env(), capture_output=True, text=True, timeout=120)
+    assert out.returncode == 2, out.stderr
+    assert f"{fifo}: is a FIFO, not a mesh file (only regular files are read)" in out.stderr
+    assert "Traceback" not in out.stderr
+
+
+def test_a_link_to_a_regular_file_is_read(tmp_path):
+    (tmp_path / "m.node").write_text(TETRA_NODE)
+    (tmp_path / "m.ele").write_text(TETRA_ELE)
+    (tmp_path / "link.node").symlink_to(tmp_path / "m.node")
+    (tmp_path / "link.ele").symlink_to(tmp_path / "m.ele")
+    assert cg.load_mesh(tmp_path / "link.ele").T.tolist() == [[0, 1, 2, 3]]
+    (tmp_path / "dangling.obj").symlink_to(tmp_path / "nothing.obj")
+    with pytest.raises(FileNotFoundError, match="dangling.obj: no such file"):
+        cg.load_mesh(tmp_path / "dangling.obj")
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+# Item 3: numbers out of range name the file and the line
+# ---------------------------------------------------------------------------------------------------------------------
+HUGE = "99999999999999999999"  # > 2**63: no int64 holds it
+
+
+@pytest.mark.parametrize("node, ele, match", [
+    (TETRA_NODE, f"1 4\n1 1 2 3 {HUGE}\n", rf"m.ele, line 2: point numbers: {HUGE} is out of range"),
+    (TETRA_NODE.replace("4 0 0 1", f"{HUGE} 0 0 1"), TETRA_ELE, rf"m.node, line 5: point numbers: {HUGE} is out of"),
+    (f"{HUGE} 3\n1 0 0 0\n", TETRA_ELE, rf"m.node, line 1: the header \(points, .*\): {HUGE} is out of range"),
+    (TETRA_NODE, f"{HUGE} 4\n1 1 2 3 4\n", rf"m.ele, line 1: the header \(tetrahedra, .*\): {HUGE} is out of"),
+    (TETRA_NODE, "1 4\n1 1 2 3 1e23\n", r"m.ele, line 2: point numbers must be integers, got '1 2 3 1e23'"),
+])
+def test_tetgen_numbers_out_of_range_name_file_and_line(tmp_path, node, ele, match):
+    (tmp_path / "m.node").write_text(node)
+    (tmp_path / "m.ele").write_text(ele)
+    with pytest.raises(MeshFormatError, match=match):
+        read_tetgen(tmp_path / "m.ele")
+
+
+@pytest.mark.parametrize("name, text, match", [
+    ("f.obj", f"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 {HUGE}\n", rf"line 4: face \('f'\) has a vertex index {HUGE} that"),
+    ("f.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 1e23\n", r"line 4: face \('f'\) has a non-integer vertex index '1e23'"),
+    ("f.off", f"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 {HUGE}\n", rf"line 6: face has a vertex index {HUGE} that"),
+    ("f.off", f"OFF\n{HUGE} 1 0\n0 0 0\n", rf"file ends after 1 of {HUGE} vertices"),
+    ("f.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 1e23\n", r"line 6: face has a non-integer vertex index '1e23'"),
+])
+def test_surface_text_readers_refuse_numbers_out_of_range(tmp_path, name, text, match):
+    # already guarded before issue 34 (parse_int_tokens): kept here so that the family stays covered
+    (tmp_path / name).write_text(text)
+    with pytest.raises(MeshFormatError, match=match):
+        cg.load_mesh(tmp_path / name)
+
