@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import json
 import os
+import re
+import struct
 import subprocess
 import sys
 from pathlib import Path
@@ -131,3 +133,36 @@ def test_surface_text_readers_refuse_numbers_out_of_range(tmp_path, name, text, 
     with pytest.raises(MeshFormatError, match=match):
         cg.load_mesh(tmp_path / name)
 
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+# Item 4: broken glTF JSON is a format error naming the JSON problem (trimesh reported it as a missing file)
+# ---------------------------------------------------------------------------------------------------------------------
+def _glb(json_bytes: bytes, declared: int | None = None) -> bytes:
+    chunk = struct.pack("<I4s", len(json_bytes) if declared is None else declared, b"JSON") + json_bytes
+    return b"glTF" + struct.pack("<II", 2, 12 + len(chunk)) + chunk
+
+
+@pytest.mark.parametrize("name, data, message", [
+    ("b.gltf", b'{"asset": {"version": "2.0"}, "meshes": [', "not valid glTF JSON (Expecting value at line 1, "
+                                                             "column 42)"),
+    ("b.gltf", b'{"asset": {"version": "2.0"},\n "meshes": [}]}', "not valid glTF JSON (Expecting value at line 2, "
+                                                                  "column 13)"),
+    ("b.gltf", b"[1, 2]", "not valid glTF JSON (a glTF file is a JSON object, this one is a list)"),
+    ("b.gltf", b'{"a": "\xff"}', "not valid glTF JSON (not UTF-8 text: byte 7)"),
+    ("b.glb", _glb(b'{"asset": '), "not valid glTF JSON (Expecting value at line 1, column 11)"),
+    ("b.glb", _glb(b'{"asset": {}}', declared=1000), "binary glTF (version 2) whose first chunk is not a complete "
+                                                     "JSON chunk"),
+    ("b.glb", b"GLTF" + bytes(40), "not a binary glTF file (it does not start with the GLB header 'glTF')"),
+])
+def test_broken_gltf_json_is_a_format_error_naming_the_problem(tmp_path, name, data, message):
+    pytest.importorskip("trimesh")
+    path = tmp_path / name
+    path.write_bytes(data)
+    with pytest.raises(MeshFormatError) as exc:
+        cg.load_mesh(path)
+    assert str(exc.value) == f"{path}: {message}"
+    assert not isinstance(exc.value, FileNotFoundError)
+    if name.endswith(".glb"):
+        with pytest.raises(MeshFormatError, match=re.escape(message)):
+            cg.load_distance(path)
