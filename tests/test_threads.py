@@ -42,12 +42,37 @@ def test_bad_environment_variable(monkeypatch, bad):
 
 def test_environment_variable_and_explicit_value(monkeypatch):
     mesh = cg.icosphere(2)
+    monkeypatch.setattr(_threads, "usable_cores", lambda: 4)  # not the cap (tested below): 3 stays 3 on any machine
     monkeypatch.setenv(_threads.ENV_VAR, "1")
     assert cg.GeodesicSolver(mesh, "qclp").solve(0).info.extra["threads"] == 1
     monkeypatch.setenv(_threads.ENV_VAR, " 3 ")
     assert cg.GeodesicSolver(mesh, "qclp").solve(0).info.extra["threads"] == 3
     assert cg.GeodesicSolver(mesh, "qclp", threads=2).solve(0).info.extra["threads"] == 2
     assert cg.GeodesicSolver(mesh, "heat", threads=2).solve(0).info.extra["threads"] == 2  # baselines too
+
+
+def test_a_count_above_the_cores_is_capped_and_noted(no_env):
+    cores = _threads.usable_cores()
+    note = f"threads=1000000 capped at {cores} (the cores available)"
+    # checked before any solve: without the cap the pools would be asked for a million threads (a hang)
+    assert _threads.resolve_threads_noted(10**6) == (cores, note)
+    assert _threads.resolve_threads(cores) == cores and _threads.resolve_threads_noted(cores)[1] is None
+    solver = cg.GeodesicSolver(cg.icosphere(1), "qclp", threads=10**6)
+    assert solver.threads == cores and note in solver.notes
+    res = solver.solve(0)
+    assert res.info.status == "optimal" and res.info.extra["threads"] == cores
+    assert res.info.notes.count(note) == 1
+    baseline = cg.GeodesicSolver(cg.icosphere(1), "dijkstra", threads=10**6).solve(0)
+    assert baseline.info.notes.count(note) == 1
+
+
+def test_the_environment_variable_is_capped_too(monkeypatch):
+    cores = _threads.usable_cores()
+    monkeypatch.setenv(_threads.ENV_VAR, str(cores + 1))
+    note = f"{_threads.ENV_VAR}={cores + 1} capped at {cores} (the cores available)"
+    assert _threads.resolve_threads_noted() == (cores, note)
+    res = cg.GeodesicSolver(cg.icosphere(1), "dijkstra").solve(0)
+    assert res.info.extra["threads"] == cores and note in res.info.notes
 
 
 def _pool_threads() -> dict:
