@@ -3,14 +3,19 @@ numbers out of range, and the thread cap. ``docs/input.md`` ("Limits") lists the
 
 from __future__ import annotations
 
+import base64
 import json
+import lzma
 import os
 import re
 import struct
 import subprocess
 import sys
+import tracemalloc
+import zlib
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import cvxgeodesic as cg
@@ -166,3 +171,121 @@ def test_broken_gltf_json_is_a_format_error_naming_the_problem(tmp_path, name, d
     if name.endswith(".glb"):
         with pytest.raises(MeshFormatError, match=re.escape(message)):
             cg.load_distance(path)
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+# Item 2: what meshio allocates is bounded by the file's size (mesh/formats/_limits.py, _vtu_limits.py)
+# ---------------------------------------------------------------------------------------------------------------------
+TET_POINTS = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=np.float64)
+
+
+def _vtk_blocks(raw: bytes, codec: str) -> tuple[bytes, bytes]:
+    """VTK's compressed layout: the header (blocks, block size, last block's size, compressed sizes) and the blocks."""
+    size = 1 << 20  # VTK writes 32 KB blocks; 1 MB ones make the 16 MB arrays below quick to write in LZMA
+    chunks = [raw[i:i + size] for i in range(0, len(raw), size)] or [b""]
+    packed = [zlib.compress(c) if codec == "zlib" else lzma.compress(c) for c in chunks]
+    return struct.pack(f"<{3 + len(packed)}I", len(packed), size, len(chunks[-1]), *map(len, packed)), b"".join(packed)
+
+
+def _write_vtu(path: Path, *, n_points: int = 4, points: bytes | None = None, layout: str = "inline",
+               codec: str = "zlib") -> Path:
+    """One tetrahedron as a compressed VTU, its arrays inline, appended in base64 or appended raw."""
+    arrays = [("Points", 'type="Float64" NumberOfComponents="3"', TET_POINTS.tobytes() if points is None else points),
+              ("Cells", 'type="Int64" Name="connectivity"', np.arange(4, dtype=np.int64).tobytes()),
+              ("Cells", 'type="Int64" Name="offsets"', np.array([4], dtype=np.int64).tobytes()),
+              ("Cells", 'type="UInt8" Name="types"', np.array([10], dtype=np.uint8).tobytes())]
+    tags, appended = {"Points": [], "Cells": []}, b""
+    for section, attrs, raw in arrays:
+        header, blocks = _vtk_blocks(raw, codec)
+        encoded = base64.b64encode(header) + base64.b64encode(blocks) if layout != "raw" else header + blocks
+        if layout == "inline":
+            tags[section].append(f'<DataArray {attrs} format="binary">'.encode() + encoded + b"</DataArray>")
+        else:
+            tags[section].append(f'<DataArray {attrs} format="appended" offset="{len(appended)}"/>'.encode())
+            appended += encoded
+    compressor = {"zlib": "vtkZLibDataCompressor", "lzma": "vtkLZMADataCompressor"}[codec]
+    text = (f'<?xml version="1.0"?>\n<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian" '
+            f'header_type="UInt32" compressor="{compressor}">\n<UnstructuredGrid>\n'
+            f'<Piece NumberOfPoints="{n_points}" NumberOfCells="1">\n').encode()
+    text += b"<Points>" + b"".join(tags["Points"]) + b"</Points>\n<Cells>" + b"".join(tags["Cells"]) + b"</Cells>\n"
+    text += b"</Piece>\n</UnstructuredGrid>\n"
+    if layout != "inline":
+        encoding = "raw" if layout == "raw" else "base64"
+        text += f'<AppendedData encoding="{encoding}">\n_'.encode() + appended + b"\n</AppendedData>\n"
+    path.write_bytes(text + b"</VTKFile>\n")
+    return path
+
+
+LAYOUTS = [(layout, codec) for layout in ("inline", "base64", "raw") for codec in ("zlib", "lzma")]
+
+
+@pytest.mark.parametrize("layout, codec", LAYOUTS)
+def test_a_genuine_compressed_vtu_passes_the_checks(tmp_path, layout, codec):
+    pytest.importorskip("meshio")
+    mesh = cg.load_mesh(_write_vtu(tmp_path / "t.vtu", layout=layout, codec=codec))
+    np.testing.assert_array_equal(mesh.V, TET_POINTS)
+    assert mesh.T.tolist() == [[0, 1, 2, 3]]
+
+
+@pytest.mark.parametrize("layout, codec", LAYOUTS)
+def test_a_compressed_array_larger_than_its_counts_is_refused_before_it_is_inflated(tmp_path, layout, codec):
+    pytest.importorskip("meshio")
+    # 32 MB of zeros in a few kB, declared as 4 points: meshio inflated it all (twice: blocks, then joined)
+    path = _write_vtu(tmp_path / "bomb.vtu", points=bytes(32 << 20), layout=layout, codec=codec)
+    tracemalloc.start()
+    try:
+        with pytest.raises(MeshFormatError) as exc:
+            cg.load_mesh(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert str(exc.value) == (f"{path}: DataArray 'Points' (piece 0) inflates to more than the 96 bytes "
+                              "NumberOfPoints 4 allows (4 × 3 component(s) × 8 bytes); refused before reading it")
+    # the check inflates 1 MB at a time (and LZMA's decoder holds its 8 MB dictionary: measured peaks 1.1 MB with zlib,
+    # 10.6 MB with LZMA); without the check meshio held the 32 MB at least once (numpy's allocations are traced too)
+    assert peak < 16 << 20, peak
+
+
+def test_vtu_counts_no_file_of_its_size_could_hold_are_refused(tmp_path):
+    pytest.importorskip("meshio")
+    path = _write_vtu(tmp_path / "huge.vtu", n_points=10**12)
+    size = path.stat().st_size
+    with pytest.raises(MeshFormatError) as exc:
+        cg.load_mesh(path)
+    assert str(exc.value) == (f"{path}: the header declares {10**12} points (NumberOfPoints of piece 0), more than a "
+                              f"file of {size} bytes can hold (at most {size * 1032 // 3}: 3 byte(s) each, compressed "
+                              "at most 1032:1)")
+
+
+MSH4_HEAD = b"$MeshFormat\n4.1 %d 8\n$EndMeshFormat\n"
+
+
+@pytest.mark.parametrize("name, text, declared", [
+    ("p.vtk", b"# vtk DataFile Version 4.2\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 100000000 double\n0 0 0\n",
+     "100000000 points (POINTS)"),
+    ("c.vtk", b"# vtk DataFile Version 4.2\nx\nBINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS 1 float\n" + bytes(12)
+     + b"\nCELLS 1 50000000\n", "50000000 entries (CELLS)"),
+    ("g.vtk", b"# vtk DataFile Version 4.2\nx\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 10000 10000 10000\n",
+     f"{10**12} grid points (DIMENSIONS)"),
+    ("v2.msh", b"$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n100000000\n1 0 0 0\n$EndNodes\n",
+     "100000000 nodes ($Nodes)"),
+    ("v4.msh", MSH4_HEAD % 0 + b"$Nodes\n1 100000000 1 100000000\n3 1 0 1\n1\n0 0 0\n$EndNodes\n",
+     "100000000 nodes ($Nodes)"),
+    ("v4b.msh", MSH4_HEAD % 1 + b"\x01\x00\x00\x00" + b"$Nodes\n" + struct.pack("<4Q", 1, 10**8, 1, 10**8),
+     "100000000 nodes ($Nodes)"),
+    ("tag.msh", MSH4_HEAD % 0 + b"$Nodes\n1 1 1 100000000000\n3 1 0 1\n100000000000\n0 0 0\n$EndNodes\n",
+     "100000000000 node tags ($Nodes: the largest tag)"),
+    ("e.msh", b"$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Elements\n100000000\n$EndElements\n",
+     "100000000 elements ($Elements)"),
+    ("m.mesh", b"MeshVersionFormatted 2\nDimension 3\nVertices\n100000000\n0 0 0 0\nEnd\n",
+     "100000000 vertices (Vertices)"),
+    ("t.mesh", b"MeshVersionFormatted 2\nDimension\n3\nTetrahedra 100000000\n1 2 3 4 0\nEnd\n",
+     "100000000 tetrahedra (Tetrahedra)"),
+])
+def test_header_counts_past_the_file_size_are_refused_before_meshio_reads(tmp_path, name, text, declared):
+    pytest.importorskip("meshio")
+    path = tmp_path / name
+    path.write_bytes(text)
+    with pytest.raises(MeshFormatError, match=re.escape(f"{path}: the header declares {declared}, more than a file of "
+                                                        f"{len(text)} bytes can hold")):
+        cg.load_mesh(path)

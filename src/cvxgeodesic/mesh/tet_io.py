@@ -37,6 +37,7 @@ from .._atomic import atomic_write
 from ..errors import MeshFormatError, MeshRepairWarning, ParameterError
 from ..validation import as_vertex_field, check_output_path
 from .formats._common import check_file
+from .formats._limits import check_limits
 from .tetmesh import TetMesh
 
 __all__ = ["MESHIO_TET_EXTENSIONS", "TETGEN_EXTENSIONS", "TET_DISTANCE_EXTENSIONS", "TET_MESH_EXTENSIONS",
@@ -287,6 +288,7 @@ def read_tetgen(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray, list[s
 
 def _read_meshio(path: Path, allow_none: bool = False) -> tuple[np.ndarray, Any, list[str]]:
     meshio = _meshio(f"{path}: reading {path.suffix} files", MeshFormatError)
+    check_limits(path)  # header counts and compressed arrays within the file's size: meshio allocates what they say
     try:
         # meshio prints its own error and calls sys.exit(1) on some files it cannot parse
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()), \
