@@ -112,13 +112,14 @@ def _check_vtk(path: Path, data: mmap.mmap) -> None:
 # ----------------------------------------------------------------------------------------------------------------------
 # Gmsh: $Nodes and $Elements start with their counts (ASCII; size_t values in binary MSH 4)
 # ----------------------------------------------------------------------------------------------------------------------
-def _section_head(data: mmap.mmap, name: bytes, version: int, binary: bool, size_t: int) -> list[int]:
-    start = data.find(b"$" + name)
-    if start < 0:
+def _section_head(data: mmap.mmap, name: bytes, items: int, size_t: int) -> list[int]:
+    """The counts that start section ``$<name>``: a line of ASCII numbers, or ``items`` binary size_t values."""
+    m = re.search(rb"^\$" + name + rb"\r?\n", data, re.M)
+    if m is None:
         return []
-    start = data.find(b"\n", start) + 1
-    if version >= 4 and binary:
-        raw = data[start:start + 4 * size_t]
+    start = m.end()
+    if items:
+        raw = data[start:start + items * size_t]
         return [int.from_bytes(raw[i:i + size_t], "little") for i in range(0, len(raw) - size_t + 1, size_t)]
     end = data.find(b"\n", start)
     return _ints(data[start:end if end >= 0 else len(data)])
@@ -128,14 +129,16 @@ def _check_msh(path: Path, data: mmap.mmap) -> None:
     fmt = re.search(rb"\$MeshFormat\s+([\d.]+)\s+(\d+)\s+(\d+)", data[:4096])
     if fmt is None:
         return  # not Gmsh's header: meshio says so
-    version, binary, size_t = int(float(fmt.group(1))), fmt.group(2) == b"1", int(fmt.group(3))
-    nodes = _section_head(data, b"Nodes", version, binary, size_t)
-    elements = _section_head(data, b"Elements", version, binary, size_t)
+    version, binary, size_t = float(fmt.group(1)), fmt.group(2) == b"1", int(fmt.group(3))
+    # MSH 4.1 starts $Nodes and $Elements with 4 numbers (binary: size_t), 4.0 with 2, MSH 2 with 1 (always ASCII)
+    items = (4 if version >= 4.1 else 2) if version >= 4 and binary else 0
+    nodes = _section_head(data, b"Nodes", items, size_t)
+    elements = _section_head(data, b"Elements", items, size_t)
     counts = []
     if version >= 4:  # numEntityBlocks numNodes minNodeTag maxNodeTag
         if len(nodes) >= 2:
             counts += [Count("node blocks ($Nodes)", nodes[0]), Count("nodes ($Nodes)", nodes[1], POINT_BYTES)]
-        if len(nodes) >= 4:  # meshio allocates a table indexed by node tag, 8 bytes a tag: held as if compressed
+        if len(nodes) >= 4 and version >= 4.1:  # meshio makes a table indexed by tag, 8 bytes a tag
             counts.append(Count("node tags ($Nodes: the largest tag)", nodes[3], 8, MAX_COMPRESSION))
         if len(elements) >= 2:
             counts += [Count("element blocks ($Elements)", elements[0]), Count("elements ($Elements)", elements[1])]
