@@ -257,7 +257,8 @@ def test_vtu_counts_no_file_of_its_size_could_hold_are_refused(tmp_path):
                               "at most 1032:1)")
 
 
-MSH4_HEAD = b"$MeshFormat\n4.1 %d 8\n$EndMeshFormat\n"
+MSH4_HEAD = b"$MeshFormat\n4.1 0 8\n$EndMeshFormat\n"
+MSH4_BINARY_HEAD = b"$MeshFormat\n4.1 1 8\n\x01\x00\x00\x00\n$EndMeshFormat\n"  # the 1 written in binary: byte order
 
 
 @pytest.mark.parametrize("name, text, declared", [
@@ -269,11 +270,11 @@ MSH4_HEAD = b"$MeshFormat\n4.1 %d 8\n$EndMeshFormat\n"
      f"{10**12} grid points (DIMENSIONS)"),
     ("v2.msh", b"$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n100000000\n1 0 0 0\n$EndNodes\n",
      "100000000 nodes ($Nodes)"),
-    ("v4.msh", MSH4_HEAD % 0 + b"$Nodes\n1 100000000 1 100000000\n3 1 0 1\n1\n0 0 0\n$EndNodes\n",
+    ("v4.msh", MSH4_HEAD + b"$Nodes\n1 100000000 1 100000000\n3 1 0 1\n1\n0 0 0\n$EndNodes\n",
      "100000000 nodes ($Nodes)"),
-    ("v4b.msh", MSH4_HEAD % 1 + b"\x01\x00\x00\x00" + b"$Nodes\n" + struct.pack("<4Q", 1, 10**8, 1, 10**8),
+    ("v4b.msh", MSH4_BINARY_HEAD + b"$Nodes\n" + struct.pack("<4Q", 1, 10**8, 1, 10**8),
      "100000000 nodes ($Nodes)"),
-    ("tag.msh", MSH4_HEAD % 0 + b"$Nodes\n1 1 1 100000000000\n3 1 0 1\n100000000000\n0 0 0\n$EndNodes\n",
+    ("tag.msh", MSH4_HEAD + b"$Nodes\n1 1 1 100000000000\n3 1 0 1\n100000000000\n0 0 0\n$EndNodes\n",
      "100000000000 node tags ($Nodes: the largest tag)"),
     ("e.msh", b"$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Elements\n100000000\n$EndElements\n",
      "100000000 elements ($Elements)"),
@@ -289,3 +290,18 @@ def test_header_counts_past_the_file_size_are_refused_before_meshio_reads(tmp_pa
     with pytest.raises(MeshFormatError, match=re.escape(f"{path}: the header declares {declared}, more than a file of "
                                                         f"{len(text)} bytes can hold")):
         cg.load_mesh(path)
+
+
+@pytest.mark.parametrize("ext, fmt, binary", [
+    (".msh", "gmsh", True), (".msh", "gmsh", False), (".msh", "gmsh22", True), (".vtk", "vtk42", True),
+    (".vtk", "vtk51", True), (".vtk", "vtk51", False), (".vtu", "vtu", True), (".mesh", "medit", None),
+])
+def test_genuine_meshio_files_pass_the_count_checks(tmp_path, ext, fmt, binary):
+    meshio = pytest.importorskip("meshio")
+    box = cg.mesh.tet_generate.tet_box(2, jitter=0.2, seed=3)
+    path = tmp_path / f"box{ext}"
+    kwargs = {} if binary is None else {"binary": binary}  # medit's writer has no binary option
+    meshio.Mesh(box.V, [("tetra", box.T)]).write(path, file_format=fmt, **kwargs)
+    mesh = cg.load_mesh(path)
+    np.testing.assert_allclose(mesh.V, box.V, atol=1e-12)  # every format here stores float64 (medit version 2)
+    np.testing.assert_array_equal(mesh.T, box.T)
