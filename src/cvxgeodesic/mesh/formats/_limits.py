@@ -1,4 +1,4 @@
-"""Bounds on what a file's header may make a reader allocate, checked before meshio reads the file (issue 34).
+"""Bounds on what a file's header may make a reader allocate, checked before meshio reads the file.
 
 The built-in readers (OBJ, OFF, PLY, STL) never trust a count: they slice the records the file holds and stop
 when a count runs past them. meshio (VTK, VTU, Gmsh, Medit) takes header counts as given, and a VTU's
