@@ -305,3 +305,17 @@ def test_genuine_meshio_files_pass_the_count_checks(tmp_path, ext, fmt, binary):
     mesh = cg.load_mesh(path)
     np.testing.assert_allclose(mesh.V, box.V, atol=1e-12)  # every format here stores float64 (medit version 2)
     np.testing.assert_array_equal(mesh.T, box.T)
+
+
+def test_the_checks_read_the_file_where_it_cannot_be_mapped(tmp_path, monkeypatch):
+    pytest.importorskip("meshio")
+    from cvxgeodesic.mesh.formats import _limits
+
+    def no_mmap(*args, **kwargs):
+        raise OSError("mmap: operation not supported")  # some FUSE and network file systems
+
+    monkeypatch.setattr(_limits.mmap, "mmap", no_mmap)
+    path = _write_vtu(tmp_path / "bomb.vtu", points=bytes(4 << 20))
+    with pytest.raises(MeshFormatError, match="DataArray 'Points' \\(piece 0\\) inflates to more than the 96 bytes"):
+        cg.load_mesh(path)
+    assert cg.load_mesh(_write_vtu(tmp_path / "ok.vtu")).T.tolist() == [[0, 1, 2, 3]]

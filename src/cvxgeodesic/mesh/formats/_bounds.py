@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
+import mmap
 from collections.abc import Iterable
 from pathlib import Path
-from typing import NamedTuple
+from typing import NamedTuple, TypeAlias
 
 from ._common import format_error
 
-__all__ = ["MAX_COMPRESSION", "POINT_BYTES", "Count", "check_counts"]
+__all__ = ["MAX_COMPRESSION", "POINT_BYTES", "Count", "FileBytes", "check_counts"]
+
+#: A file's bytes as the checks scan them: mapped (no copy), or read where the file system cannot map it.
+FileBytes: TypeAlias = mmap.mmap | bytes
 
 #: zlib's largest compression ratio, about 1032:1 (a deflate match of 258 bytes costs at least 2 bits, RFC 1951);
 #: the bound also applies to LZMA-compressed VTU files, whose ratio could be higher (zeros: 6800:1; no mesh is that).

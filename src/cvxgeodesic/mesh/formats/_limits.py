@@ -28,7 +28,7 @@ from contextlib import contextmanager
 from functools import lru_cache
 from pathlib import Path
 
-from ._bounds import MAX_COMPRESSION, POINT_BYTES, Count, check_counts
+from ._bounds import MAX_COMPRESSION, POINT_BYTES, Count, FileBytes, check_counts
 from ._vtu_limits import check_vtu
 
 __all__ = ["check_limits"]
@@ -58,10 +58,14 @@ def _check_cached(resolved: str, size: int, mtime_ns: int, ino: int, path: Path)
 
 
 @contextmanager
-def _mapped(path: Path) -> Iterator[mmap.mmap]:
-    """The file as read-only bytes, mapped: a scan costs no memory of the file's size."""
+def _mapped(path: Path) -> Iterator[FileBytes]:
+    """The file's bytes, mapped (a scan then costs no memory of the file's size), else read."""
     with path.open("rb") as fh:
-        data = mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ)
+        try:
+            data = mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ)
+        except (OSError, ValueError):  # a file system without mmap
+            yield fh.read()
+            return
         try:
             yield data
         finally:
@@ -86,7 +90,7 @@ def _ints(text: bytes) -> list[int]:
     return [int(t) for t in re.findall(rb"\d+", text)]
 
 
-def _vtk_counts(data: mmap.mmap) -> Iterator[Count]:
+def _vtk_counts(data: FileBytes) -> Iterator[Count]:
     for m in _VTK_SECTION.finditer(data):
         key, numbers = m.group(1).decode(), _ints(m.group(2))
         if not numbers:
@@ -102,7 +106,7 @@ def _vtk_counts(data: mmap.mmap) -> Iterator[Count]:
         yield Count("field values (FIELD)", int(m.group(1)) * int(m.group(2)))
 
 
-def _check_vtk(path: Path, data: mmap.mmap) -> None:
+def _check_vtk(path: Path, data: FileBytes) -> None:
     if data[:200].lstrip().startswith(b"<"):  # a .vtk holding XML: meshio reads it as VTU
         check_vtu(path, data)
         return
@@ -112,7 +116,7 @@ def _check_vtk(path: Path, data: mmap.mmap) -> None:
 # ----------------------------------------------------------------------------------------------------------------------
 # Gmsh: $Nodes and $Elements start with their counts (ASCII; size_t values in binary MSH 4)
 # ----------------------------------------------------------------------------------------------------------------------
-def _section_head(data: mmap.mmap, name: bytes, items: int, size_t: int) -> list[int]:
+def _section_head(data: FileBytes, name: bytes, items: int, size_t: int) -> list[int]:
     """The counts that start section ``$<name>``: a line of ASCII numbers, or ``items`` binary size_t values."""
     m = re.search(rb"^\$" + name + rb"\r?\n", data, re.M)
     if m is None:
@@ -125,7 +129,7 @@ def _section_head(data: mmap.mmap, name: bytes, items: int, size_t: int) -> list
     return _ints(data[start:end if end >= 0 else len(data)])
 
 
-def _check_msh(path: Path, data: mmap.mmap) -> None:
+def _check_msh(path: Path, data: FileBytes) -> None:
     fmt = re.search(rb"\$MeshFormat\s+([\d.]+)\s+(\d+)\s+(\d+)", data[:4096])
     if fmt is None:
         return  # not Gmsh's header: meshio says so
@@ -157,7 +161,7 @@ _MEDIT_SECTION = re.compile(rb"^[ \t]*(Vertices|Edges|Triangles|Quadrilaterals|T
                             rb"Identifier|Geometry)[ \t]*\r?\n?[ \t]*(\d+)", re.M)
 
 
-def _check_medit(path: Path, data: mmap.mmap) -> None:
+def _check_medit(path: Path, data: FileBytes) -> None:
     counts = (Count(f"{m.group(1).decode().lower()} ({m.group(1).decode()})", int(m.group(2)),
                     POINT_BYTES if m.group(1) == b"Vertices" else 1) for m in _MEDIT_SECTION.finditer(data))
     check_counts(path, len(data), counts)

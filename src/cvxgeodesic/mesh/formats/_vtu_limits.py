@@ -17,14 +17,13 @@ import base64
 import binascii
 import lzma
 import math
-import mmap
 import re
 import zlib
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Literal
 
-from ._bounds import MAX_COMPRESSION, POINT_BYTES, Count, check_counts
+from ._bounds import MAX_COMPRESSION, POINT_BYTES, Count, FileBytes, check_counts
 from ._common import format_error
 
 __all__ = ["check_vtu"]
@@ -53,7 +52,7 @@ def _int(value: str | None) -> int:
     return int(value) if value is not None and value.strip().isdigit() else 0
 
 
-def check_vtu(path: Path, data: mmap.mmap) -> None:
+def check_vtu(path: Path, data: FileBytes) -> None:
     """Check a VTU file's counts and compressed arrays (the module's docstring); MeshFormatError past a bound."""
     head = re.search(rb"<VTKFile\b([^>]*)>", data[:65536])
     if head is None:
@@ -97,7 +96,7 @@ def _limit(section: str, attrs: dict[str, str], n: int, c: int, budget: int) -> 
     return budget, f"the file's size allows (all arrays together at most {MAX_COMPRESSION} times its size)"
 
 
-def _appended(data: mmap.mmap) -> tuple[int, bool, int] | None:
+def _appended(data: FileBytes) -> tuple[int, bool, int] | None:
     """(first byte after the ``_`` that starts the appended data, raw encoding?, where ``<AppendedData`` starts)."""
     m = re.search(rb"<AppendedData\b([^>]*)>", data)
     if m is None:
@@ -111,7 +110,7 @@ def _chars(nbytes: int) -> int:
     return 4 * math.ceil(nbytes / 3)
 
 
-def _blocks(data: mmap.mmap, m: re.Match, attrs: dict[str, str], appended: tuple[int, bool, int] | None,
+def _blocks(data: FileBytes, m: re.Match, attrs: dict[str, str], appended: tuple[int, bool, int] | None,
             layout: tuple[int, _Order]) -> Iterator[bytes]:
     """The compressed blocks of one array: ``num_blocks, block size, last block size, sizes...``, then the blocks."""
     hs, order = layout
@@ -147,7 +146,7 @@ def _base64_blocks(text, hs: int, order: _Order) -> Iterator[bytes]:
     return _split(body, sizes)
 
 
-def _raw_blocks(data: mmap.mmap, start: int, hs: int, order: _Order) -> Iterator[bytes]:
+def _raw_blocks(data: FileBytes, start: int, hs: int, order: _Order) -> Iterator[bytes]:
     first = _header(data[start:start + hs], hs, order)
     nb = first[0] if first else 0
     if not first or start + (3 + nb) * hs > len(data):
