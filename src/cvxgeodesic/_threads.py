@@ -226,7 +226,7 @@ def resolve_threads_noted(threads=None) -> tuple[int, str | None]:
 
     A count above the cores this process may run on (``threads=`` or ``CVXGEODESIC_THREADS``) is capped
     at them: more threads than cores only wait for each other at every barrier, and a count like 10**6
-    made the thread pools try to start that many threads (a hang).
+    asked every thread pool for that many threads (reported to hang).
 
     Returns
     -------
