@@ -119,3 +119,46 @@ def test_notice_never_fails_a_compilation(monkeypatch):
         warnings.simplefilter("error")  # python -W error
         _jit._tell(_dispatcher("cvxgeodesic.solvers.ipm._kernels"))
     assert _jit._state["told"]
+
+
+# Numba finds no cache location: NUMBA_CACHE_DIR unset, the home folder and the package's __pycache__ not writable.
+# As root, chmod stops no write, so the locators are made to find nothing, as each does in that state.
+NO_LOCATOR = """
+from numba.core import caching
+for cls in caching.CacheImpl._locator_classes:
+    cls.from_function = classmethod(lambda cls, py_func, py_file: None)
+import cvxgeodesic as cg
+import cvxgeodesic.operators._hessian_kernels, cvxgeodesic.solvers.ipm._clique_kernels  # every kernel module decorated
+res = cg.GeodesicSolver(cg.icosphere(1), "qclp", threads=1).solve(0)
+print(res.info.status)
+"""
+
+
+def test_without_a_writable_cache_location_the_kernels_compile_uncached_and_say_so(tmp_path):
+    env = _env(tmp_path)
+    del env["NUMBA_CACHE_DIR"]
+    home = tmp_path / "home"
+    home.mkdir(mode=0o500)
+    env["HOME"] = str(home)
+    out = subprocess.run([sys.executable, "-c", NO_LOCATOR], env=env, cwd=tmp_path, capture_output=True, text=True,
+                         timeout=300)
+    assert out.returncode == 0, out.stderr  # before: RuntimeError: cannot cache function ...: no locator available
+    assert out.stdout.split() == ["optimal"]
+    assert out.stderr.count(_jit.NO_CACHE_NOTICE) == 1, out.stderr
+    assert _jit.NOTICE not in out.stderr  # "later runs load them from the cache" would not be true
+    assert "CompileNotice" in out.stderr
+
+
+def test_njit_compiles_without_cache_when_there_is_no_locator(monkeypatch):
+    from numba.core import caching
+
+    for cls in caching.CacheImpl._locator_classes:
+        monkeypatch.setattr(cls, "from_function", classmethod(lambda cls, py_func, py_file: None))
+    monkeypatch.setitem(_jit._state, "uncached", False)
+
+    @_jit.njit(cache=True)
+    def twice(x):
+        return 2 * x
+
+    assert twice(21) == 42 and _jit._state["uncached"]
+    assert _jit.njit(lambda x: x + 1)(1) == 2  # the bare decorator form

@@ -52,7 +52,7 @@ def test_tetgen_ten_node_elements_and_unused_points(tmp_path):
 
 
 @pytest.mark.parametrize("node, ele, match", [
-    ("", "1 4 0\n1 1 2 3 4\n", r"m.node: empty file"),
+    ("", "1 4 0\n1 1 2 3 4\n", r"m.node: file is empty"),
     ("4 2 0 0\n", "1 4 0\n", r"m.node, line 1: the header must be"),
     ("4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n", "1 4 0\n", r"announces 4 points, the file has 3"),
     ("4 3\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 x\n", "1 4 0\n", r"m.node, line 5: coordinates must be numbers"),

@@ -22,6 +22,12 @@ def no_env(monkeypatch):
     monkeypatch.delenv(_threads.ENV_VAR, raising=False)
 
 
+@pytest.fixture
+def four_cores(monkeypatch):
+    """Counts up to 4 pass uncapped, whatever the machine: for the tests of what a count reaches, not of the cap."""
+    monkeypatch.setattr(_threads, "usable_cores", lambda: 4)
+
+
 @pytest.mark.parametrize("bad", [0, -1, 1.5, True, "2", np.float64(2.0)])
 def test_bad_threads_parameter(bad):
     with pytest.raises(ParameterError, match="threads must be a positive integer"):
@@ -40,7 +46,7 @@ def test_bad_environment_variable(monkeypatch, bad):
     cg.GeodesicSolver(cg.icosphere(1), "qclp", threads=1)  # an explicit value does not read the variable
 
 
-def test_environment_variable_and_explicit_value(monkeypatch):
+def test_environment_variable_and_explicit_value(monkeypatch, four_cores):
     mesh = cg.icosphere(2)
     monkeypatch.setenv(_threads.ENV_VAR, "1")
     assert cg.GeodesicSolver(mesh, "qclp").solve(0).info.extra["threads"] == 1
@@ -48,6 +54,30 @@ def test_environment_variable_and_explicit_value(monkeypatch):
     assert cg.GeodesicSolver(mesh, "qclp").solve(0).info.extra["threads"] == 3
     assert cg.GeodesicSolver(mesh, "qclp", threads=2).solve(0).info.extra["threads"] == 2
     assert cg.GeodesicSolver(mesh, "heat", threads=2).solve(0).info.extra["threads"] == 2  # baselines too
+
+
+def test_a_count_above_the_cores_is_capped_and_noted(no_env):
+    cores = _threads.usable_cores()
+    note = f"threads=1000000 capped at {cores} (the cores available)"
+    # checked before any solve: without the cap the pools would be asked for a million threads (a hang)
+    assert _threads.resolve_threads_noted(10**6) == (cores, note)
+    assert _threads.resolve_threads(cores) == cores and _threads.resolve_threads_noted(cores)[1] is None
+    solver = cg.GeodesicSolver(cg.icosphere(1), "qclp", threads=10**6)
+    assert solver.threads == cores and note in solver.notes
+    res = solver.solve(0)
+    assert res.info.status == "optimal" and res.info.extra["threads"] == cores
+    assert res.info.notes.count(note) == 1
+    baseline = cg.GeodesicSolver(cg.icosphere(1), "dijkstra", threads=10**6).solve(0)
+    assert baseline.info.notes.count(note) == 1
+
+
+def test_the_environment_variable_is_capped_too(monkeypatch):
+    cores = _threads.usable_cores()
+    monkeypatch.setenv(_threads.ENV_VAR, str(cores + 1))
+    note = f"{_threads.ENV_VAR}={cores + 1} capped at {cores} (the cores available)"
+    assert _threads.resolve_threads_noted() == (cores, note)
+    res = cg.GeodesicSolver(cg.icosphere(1), "dijkstra").solve(0)
+    assert res.info.extra["threads"] == cores and note in res.info.notes
 
 
 def _pool_threads() -> dict:
@@ -64,7 +94,7 @@ def _pool_threads() -> dict:
 
 
 @pytest.mark.parametrize("threads", [1, 2])
-def test_limit_reaches_every_pool(threads):
+def test_limit_reaches_every_pool(threads, four_cores):
     """Inside a solve (at every interior-point iteration) each pool is bounded, and restored afterwards."""
     expected = min(threads, numba.config.NUMBA_NUM_THREADS)
     before = _pool_threads()
@@ -103,7 +133,7 @@ def test_multires_coarse_solver_inherits(no_env):
 
 
 @pytest.mark.parametrize("method", ["qcqp-hessian", "qclp"])
-def test_same_field_at_every_thread_count(method):
+def test_same_field_at_every_thread_count(method, four_cores):
     mesh = cg.icosphere(4)
     fields = [cg.geodesic_distance(mesh, 3, method=method, solver="ipm", threads=t) for t in (1, 2, 3)]
     for d in fields[1:]:

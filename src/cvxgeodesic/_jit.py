@@ -10,6 +10,14 @@ Numba announces every real compilation (a miss of its on-disk cache, after the c
 cache's index. :func:`watch_compiles` registers one (once per process, from each kernel module), and the first
 compilation of a kernel of this package issues :class:`CompileNotice`, once per process. The command line
 prints it as ``cvxgeodesic: note: ...``; a Python user sees it as a warning at the line that called the library.
+
+Where Numba finds no writable place for its cache (no ``NUMBA_CACHE_DIR``, the package's ``__pycache__`` and the
+home folder not writable: a read-only installation run by a user without a home), ``cache=True`` makes Numba
+refuse the decoration itself (``cannot cache function 'nt_scaling': no locator available``), so nothing would
+solve. :func:`njit` then compiles without a disk cache, and the one line says so instead (:data:`NO_CACHE_NOTICE`).
+Not a cache in a temporary folder: a fresh private folder is gone when the process ends, so it would save
+nothing over Numba's in-memory compiled code, and a fixed shared one (``/tmp/...``) would let another user plant
+the pickled code Numba loads from its cache.
 """
 
 from __future__ import annotations
@@ -17,19 +25,24 @@ from __future__ import annotations
 import sys
 import threading
 import warnings
+from collections.abc import Callable
 from types import FrameType
 from typing import Any
 
-__all__ = ["NOTICE", "CompileNotice", "watch_compiles"]
+__all__ = ["NOTICE", "NO_CACHE_NOTICE", "CompileNotice", "njit", "watch_compiles"]
 
 #: Measured 2026-12-02 on a shared 2-core machine, first solve on the bundled spot mesh with an empty cache:
 #: qclp 2.6 s, qcqp-hessian 5.5 s, order 2 (qclp) 5.7 s, against 0.4-0.8 s once the kernels are cached.
 NOTICE = ("compiling the solver's kernels (first run after installation, about 3-6 s; "
           "later runs load them from the cache)")
 
+#: The line instead of :data:`NOTICE` when Numba has no writable cache location (see the module's docstring).
+NO_CACHE_NOTICE = ("compiling the solver's kernels without a disk cache (about 3-6 s in every process): Numba found "
+                   "no writable cache location; set NUMBA_CACHE_DIR to a writable folder to keep them")
+
 _PACKAGE = __name__.rsplit(".", 1)[0]
 _lock = threading.Lock()
-_state = {"watching": False, "told": False}
+_state = {"watching": False, "told": False, "uncached": False}
 
 
 class CompileNotice(UserWarning):
@@ -59,7 +72,8 @@ def _tell(dispatcher: Any) -> None:
             return
         _state["told"] = True
     try:
-        warnings.warn(NOTICE, CompileNotice, stacklevel=_user_stacklevel())
+        warnings.warn(NO_CACHE_NOTICE if _state["uncached"] else NOTICE, CompileNotice,
+                      stacklevel=_user_stacklevel())
     except Warning:  # warnings turned into errors (-W error): a notice must never fail a compilation
         pass
 
@@ -80,3 +94,29 @@ def watch_compiles() -> None:
             pass
 
     event.register("numba:compile", _Listener())
+
+
+def njit(*args: Any, **options: Any) -> Any:
+    """``numba.njit`` (``@njit`` or ``@njit(**options)``), compiling without a disk cache where ``cache=True``
+    finds no writable cache location: then :class:`CompileNotice` says :data:`NO_CACHE_NOTICE`, once."""
+    if args and callable(args[0]):
+        return _jit(args[0], options)
+
+    def decorate(func: Callable) -> Any:
+        return _jit(func, options)
+
+    return decorate
+
+
+def _jit(func: Callable, options: dict) -> Any:
+    import numba
+
+    if options.get("cache"):
+        try:
+            return numba.njit(**options)(func)
+        except RuntimeError as exc:  # raised by the decoration, before anything compiles
+            if "no locator available" not in str(exc):
+                raise
+            _state["uncached"] = True
+            options = {**options, "cache": False}
+    return numba.njit(**options)(func)

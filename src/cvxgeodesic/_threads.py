@@ -34,7 +34,8 @@ from typing import Concatenate, ParamSpec, Protocol, TypeVar
 # line's start-up (before its Ctrl-C handling is in place) should not wait for NumPy
 from .errors import ParameterError
 
-__all__ = ["ENV_VAR", "check_threads", "default_threads", "resolve_threads", "thread_limit", "usable_cores"]
+__all__ = ["ENV_VAR", "check_threads", "default_threads", "resolve_threads", "resolve_threads_noted", "thread_limit",
+           "usable_cores"]
 
 ENV_VAR = "CVXGEODESIC_THREADS"
 
@@ -213,21 +214,43 @@ def default_threads() -> int:
 
 def resolve_threads(threads=None) -> int:
     """The thread count of a solver: ``threads``, else the enclosing solve's, else ``CVXGEODESIC_THREADS``,
-    else :func:`default_threads`.
+    else :func:`default_threads`; an explicit count is capped at :func:`usable_cores` (:func:`resolve_threads_noted`).
 
     Raises
     ------
     ParameterError
         ``threads`` or ``CVXGEODESIC_THREADS`` is not a positive integer.
     """
+    return resolve_threads_noted(threads)[0]
+
+
+def resolve_threads_noted(threads=None) -> tuple[int, str | None]:
+    """:func:`resolve_threads` and the note recording a cap (None when nothing was capped).
+
+    A count above the cores this process may run on (``threads=`` or ``CVXGEODESIC_THREADS``) is capped
+    at them: more threads than cores only wait for each other at every barrier, and a count like 10**6
+    asked every thread pool for that many threads (reported to hang).
+
+    Returns
+    -------
+    threads : int
+    note : str or None
+        ``"threads=1000000 capped at 2 (the cores available)"`` (or ``CVXGEODESIC_THREADS=...``).
+    """
     value = check_threads(threads)
-    if value is not None:
-        return value
-    current = getattr(_local, "limit", None)
-    if current is not None:
-        return current
-    value = env_threads()
-    return value if value is not None else default_threads()
+    source = f"threads={value}"
+    if value is None:
+        current = getattr(_local, "limit", None)
+        if current is not None:  # the enclosing solve's count, capped when it was resolved
+            return current, None
+        value = env_threads()
+        if value is None:
+            return default_threads(), None
+        source = f"{ENV_VAR}={value}"
+    cores = usable_cores()
+    if value > cores:
+        return cores, f"{source} capped at {cores} (the cores available)"
+    return value, None
 
 
 def _numba():
@@ -288,20 +311,30 @@ def limited(method: Callable[Concatenate[_S, _P], _R]) -> Callable[Concatenate[_
     """Run a :class:`~cvxgeodesic.api.GeodesicSolver` method under the solver's thread limit.
 
     On ``__init__`` it resolves the ``threads`` keyword into ``self.threads`` first; a
-    result with an ``info`` gets ``info.extra["threads"]``. Typed so that the decorated
-    method keeps its signature and return type for type checkers (an untyped decorator
-    made the class and every result ``Any`` to mypy).
+    result with an ``info`` gets ``info.extra["threads"]``, and the note of a capped count
+    (:func:`resolve_threads_noted`) in ``info.notes`` (and in the solver's ``notes``). Typed so
+    that the decorated method keeps its signature and return type for type checkers (an untyped
+    decorator made the class and every result ``Any`` to mypy).
     """
 
     @functools.wraps(method)
     def wrapper(self: _S, /, *args: _P.args, **kwargs: _P.kwargs) -> _R:
         if method.__name__ == "__init__":
-            self.threads = resolve_threads(kwargs.get("threads"))
+            self.threads, note = resolve_threads_noted(kwargs.get("threads"))
+            setattr(self, _NOTE, note)
         with thread_limit(self.threads):
             result = method(self, *args, **kwargs)
+        note = getattr(self, _NOTE, None)
+        for notes in (getattr(self, "notes", None), getattr(getattr(result, "info", None), "notes", None)):
+            if note and isinstance(notes, list) and note not in notes:
+                notes.append(note)
         info = getattr(result, "info", None)
         if info is not None and isinstance(getattr(info, "extra", None), dict):
             info.extra["threads"] = self.threads
         return result
 
     return wrapper
+
+
+#: the attribute of a solver that holds the note of its capped thread count
+_NOTE = "_threads_note"

@@ -36,6 +36,8 @@ from numpy.typing import ArrayLike
 from .._atomic import atomic_write
 from ..errors import MeshFormatError, MeshRepairWarning, ParameterError
 from ..validation import as_vertex_field, check_output_path
+from .formats._common import check_file
+from .formats._limits import check_limits
 from .tetmesh import TetMesh
 
 __all__ = ["MESHIO_TET_EXTENSIONS", "TETGEN_EXTENSIONS", "TET_DISTANCE_EXTENSIONS", "TET_MESH_EXTENSIONS",
@@ -104,8 +106,7 @@ def load_tet_mesh(path: str | os.PathLike) -> TetMesh:
         V, T, notes = read_tetgen(p)
         name = p.with_suffix("").name
     else:
-        if not p.is_file():
-            raise MeshFormatError(f"{p}: no such file")
+        check_file(p, "a mesh file")  # before meshio opens it: a FIFO or a device would block or never end
         V, T, notes = _read_meshio(p)
         name = p.name
     return _finish(V, T, notes, name)
@@ -162,10 +163,9 @@ def _finish(V: np.ndarray, T: np.ndarray, notes: list[str], name: str) -> TetMes
 
 def _records(path: Path) -> list[tuple[int, list[str]]]:
     """Non-empty lines of ``path`` without ``#`` comments, as (line number, tokens)."""
+    check_file(path, "a TetGen file")  # a FIFO named x.node would block the open below, a device never end
     try:
         text = path.read_text(encoding="utf-8", errors="replace")
-    except FileNotFoundError:
-        raise MeshFormatError(f"{path}: no such file") from None
     except OSError as exc:
         raise MeshFormatError(f"{path}: cannot read the file ({exc.strerror or exc})") from None
     out = []
@@ -176,11 +176,20 @@ def _records(path: Path) -> list[tuple[int, list[str]]]:
     return out
 
 
+#: TetGen's numbers (counts, point numbers) are stored as int64; larger ones cannot name anything in a file.
+_INT_LIMIT = 2**63
+
+
 def _ints(path: Path, line: int, toks: list[str], what: str) -> list[int]:
+    """``toks`` as integers that fit int64, or a MeshFormatError naming the file and line."""
     try:
-        return [int(t) for t in toks]
+        values = [int(t) for t in toks]
     except ValueError:
         raise MeshFormatError(f"{path}, line {line}: {what} must be integers, got {' '.join(toks)!r}") from None
+    for t, v in zip(toks, values, strict=True):
+        if not -_INT_LIMIT < v < _INT_LIMIT:
+            raise MeshFormatError(f"{path}, line {line}: {what}: {t} is out of range (at most 2**63 - 1)")
+    return values
 
 
 def read_tetgen(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray, list[str]]:
@@ -211,7 +220,7 @@ def read_tetgen(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray, list[s
     node, ele = (p.with_suffix(ext.upper() if upper else ext) for ext in (".node", ".ele"))
     recs = _records(node)
     if not recs:
-        raise MeshFormatError(f"{node}: empty file")
+        raise MeshFormatError(f"{node}: file is empty")
     ln, head = recs[0]
     h = _ints(node, ln, head[:4], "the header (points, dimension, attributes, markers)")
     if len(h) < 2 or h[0] < 1 or h[1] != 3:
@@ -242,7 +251,7 @@ def read_tetgen(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray, list[s
 
     recs = _records(ele)
     if not recs:
-        raise MeshFormatError(f"{ele}: empty file")
+        raise MeshFormatError(f"{ele}: file is empty")
     ln, head = recs[0]
     h = _ints(ele, ln, head[:3], "the header (tetrahedra, nodes per tetrahedron, attributes)")
     if len(h) < 2 or h[0] < 1 or h[1] not in (4, 10):
@@ -279,6 +288,7 @@ def read_tetgen(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray, list[s
 
 def _read_meshio(path: Path, allow_none: bool = False) -> tuple[np.ndarray, Any, list[str]]:
     meshio = _meshio(f"{path}: reading {path.suffix} files", MeshFormatError)
+    check_limits(path)  # header counts and compressed arrays within the file's size: meshio allocates what they say
     try:
         # meshio prints its own error and calls sys.exit(1) on some files it cannot parse
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()), \

@@ -31,9 +31,9 @@ import os
 
 import numba
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
-from .._jit import watch_compiles
+from .._jit import njit, watch_compiles  # njit: numba.njit, uncached where no cache location is writable
 
 watch_compiles()  # one line on stderr when a kernel compiles (a cold cache: the first run after installation)
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib
+import stat
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -104,25 +105,39 @@ def at_line(lines: Any, i: int) -> str:
 
 
 def check_file(p: Path, what: str) -> None:
-    """Raise unless ``p`` is an existing, non-empty file.
+    """Raise unless ``p`` is an existing, non-empty regular file (after following links).
+
+    Checked before anything opens the file: opening a FIFO blocks until someone writes to it, and a
+    device (``/dev/zero``, ``/dev/urandom``) never ends, so either would make a reader wait or read forever.
 
     Raises
     ------
     MeshFileNotFoundError
-        ``p`` does not exist (also a ``FileNotFoundError``).
+        ``p`` does not exist (also a ``FileNotFoundError``; a link to nothing counts as missing).
     MeshFormatError
-        ``p`` is a directory or has no bytes.
+        ``p`` is a directory, not a regular file (a FIFO, a device, a socket), or has no bytes.
     """
-    if not p.exists():
-        raise MeshFileNotFoundError(f"{p}: no such file", str(p))
-    if p.is_dir():
-        raise format_error(p, f"is a directory, not {what}")
     try:
-        size = p.stat().st_size
+        st = p.stat()  # follows links; never opens, so a FIFO cannot block here
+    except (FileNotFoundError, NotADirectoryError):
+        raise MeshFileNotFoundError(f"{p}: no such file", str(p)) from None
     except OSError as exc:
         raise format_error(p, f"cannot read file ({exc.strerror or exc})") from None
-    if size == 0:
+    if stat.S_ISDIR(st.st_mode):
+        raise format_error(p, f"is a directory, not {what}")
+    if not stat.S_ISREG(st.st_mode):
+        raise format_error(p, f"is {_file_kind(st.st_mode)}, not {what} (only regular files are read)")
+    if st.st_size == 0:
         raise format_error(p, "file is empty")
+
+
+def _file_kind(mode: int) -> str:
+    """What a non-regular file is, in words: ``"a FIFO"``, ``"a character device"``, ..."""
+    for test, kind in ((stat.S_ISFIFO, "a FIFO"), (stat.S_ISCHR, "a character device"),
+                       (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return kind
+    return "a special file"
 
 
 def read_bytes(p: Path, what: str) -> bytes:

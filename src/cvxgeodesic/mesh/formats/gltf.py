@@ -5,6 +5,8 @@ trimesh is imported only when such a file is read or written; without it the err
 
 from __future__ import annotations
 
+import json
+import struct
 from pathlib import Path
 from typing import BinaryIO
 
@@ -31,6 +33,7 @@ def read_mesh(path: Path) -> RawMesh:
         trimesh is missing (the message says what to install) or cannot read the file.
     """
     lib = optional_package("trimesh", f"{path}: reading {path.suffix} files", MeshFormatError)
+    check_json(path)
     try:
         # process=False: no merging or reordering, so indices stay the file's
         tm = lib.load(str(path), force="mesh", process=False)
@@ -42,6 +45,51 @@ def read_mesh(path: Path) -> RawMesh:
             detail += "; 3MF files need networkx too: pip install networkx"
         raise format_error(path, f"trimesh cannot read the file ({detail})") from None
     return RawMesh(V, F.ravel(), np.full(F.shape[0], 3, dtype=np.int64))
+
+
+def check_json(path: Path) -> None:
+    """Refuse a ``.gltf`` or ``.glb`` whose JSON does not parse, naming the JSON problem.
+
+    trimesh reports broken JSON as a missing file (``FileNotFoundError: model.gltf``: it then looks for the
+    JSON under another name), which sends a user looking for a file that is there. 3MF (a zip) is left to trimesh.
+
+    Raises
+    ------
+    MeshFormatError
+        ``"<path>: not valid glTF JSON (<problem> at line L, column C)"``, or a GLB whose header or first
+        chunk is not glTF's.
+    """
+    ext = path.suffix.lower()
+    if ext not in (".gltf", ".glb"):
+        return
+    try:
+        with path.open("rb") as fh:
+            data = _glb_json_chunk(path, fh) if ext == ".glb" else fh.read()
+    except OSError as exc:
+        raise format_error(path, f"cannot read file ({exc.strerror or exc})") from None
+    try:
+        doc = json.loads(data.decode("utf-8-sig"))
+    except UnicodeDecodeError as exc:
+        raise format_error(path, f"not valid glTF JSON (not UTF-8 text: byte {exc.start})") from None
+    except json.JSONDecodeError as exc:
+        raise format_error(path, f"not valid glTF JSON ({exc.msg} at line {exc.lineno}, column {exc.colno})") from None
+    if not isinstance(doc, dict):
+        raise format_error(path, f"not valid glTF JSON (a glTF file is a JSON object, this one is a "
+                                 f"{type(doc).__name__})")
+
+
+def _glb_json_chunk(path: Path, fh: BinaryIO) -> bytes:
+    """The JSON chunk of a GLB (only it is read): a 12-byte header (``glTF``, version, length), then the chunk's
+    length and type ``JSON``."""
+    head = fh.read(20)
+    if len(head) < 20 or head[:4] != b"glTF":
+        raise format_error(path, "not a binary glTF file (it does not start with the GLB header 'glTF')")
+    version, = struct.unpack_from("<I", head, 4)
+    length, kind = struct.unpack_from("<I4s", head, 12)
+    data = fh.read(length) if kind == b"JSON" else b""
+    if kind != b"JSON" or len(data) < length:
+        raise format_error(path, f"binary glTF (version {version}) whose first chunk is not a complete JSON chunk")
+    return data
 
 
 def glb_attribute_name(name: str) -> str:
@@ -95,6 +143,7 @@ def read_field(path: Path, name: str) -> np.ndarray:
         such attribute (the message lists the ones it has).
     """
     lib = optional_package("trimesh", f"{path}: reading fields from {path.suffix} files", MeshFormatError)
+    check_json(path)
     try:
         scene = lib.load(str(path), process=False)
     except Exception as exc:

@@ -15,6 +15,7 @@ import numpy as np
 
 from ...errors import MeshFormatError, ParameterError
 from ._common import FieldData, RawMesh, format_error, optional_package
+from ._limits import check_limits
 
 __all__ = ["read_field", "read_mesh", "write_field"]
 
@@ -22,6 +23,7 @@ __all__ = ["read_field", "read_mesh", "write_field"]
 def _read(path: Path, what: str) -> Any:
     """``meshio.read(path)``, every failure a MeshFormatError."""
     lib = optional_package("meshio", f"{path}: {what} {path.suffix} files", MeshFormatError)
+    check_limits(path)  # header counts and compressed arrays within the file's size: meshio allocates what they say
     try:
         # meshio prints its own error and calls sys.exit(1) on files it cannot parse
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):

@@ -20,7 +20,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from ..._jit import njit  # numba.njit, uncached where no cache location is writable
 
 # importing the SOC(3) kernels first selects Numba's threading layer (OpenMP, shared with MKL PARDISO)
 from ._kernels import _JIT

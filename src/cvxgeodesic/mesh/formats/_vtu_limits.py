@@ -1,0 +1,190 @@
+"""The bounds of :mod:`._limits` for VTU (VTK XML) files, checked before meshio reads one.
+
+- Each ``<Piece>``'s ``NumberOfPoints`` and ``NumberOfCells`` must fit the file (:func:`._bounds.check_counts`;
+  compressed files at :data:`._bounds.MAX_COMPRESSION`:1).
+- In a compressed file (``compressor="vtkZLibDataCompressor"`` or LZMA), every binary array, inline or appended
+  (base64 or raw), is inflated here once, block by block and :data:`_CHUNK` bytes at a time, and refused as soon
+  as it holds more than its counts allow: a point array (``Points``, ``PointData``) ``NumberOfPoints ×
+  components × item size`` bytes, a cell array (``CellData``, ``offsets``, ``types``, ``faceoffsets``)
+  ``NumberOfCells × components × item size``, any other (``connectivity``, ``faces``, ``FieldData``) what is
+  left of :data:`._bounds.MAX_COMPRESSION` times the file's size for all the arrays together. meshio inflates
+  every block whole and concatenates the blocks; this check needs the memory of one compressed array.
+"""
+
+from __future__ import annotations
+
+import base64
+import binascii
+import lzma
+import math
+import re
+import zlib
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Literal
+
+from ._bounds import MAX_COMPRESSION, POINT_BYTES, Count, FileBytes, check_counts
+from ._common import format_error
+
+__all__ = ["check_vtu"]
+
+_TAG = re.compile(rb"<(/?)(Piece|Points|Cells|PointData|CellData|FieldData|DataArray)\b([^>]*)>")
+_ATTR = re.compile(rb'([\w:]+)\s*=\s*"([^"]*)"')
+_ITEM = {"Int8": 1, "UInt8": 1, "Int16": 2, "UInt16": 2, "Int32": 4, "UInt32": 4, "Int64": 8, "UInt64": 8,
+         "Float32": 4, "Float64": 8}
+_CODECS = {"vtkZLibDataCompressor": "zlib", "vtkLZMADataCompressor": "lzma"}
+_CELL_ARRAYS = ("offsets", "types", "faceoffsets")
+#: bytes inflated at a time
+_CHUNK = 1 << 20
+
+_Order = Literal["little", "big"]
+
+
+class _Refused(Exception):
+    """An array past its bound (the message says why)."""
+
+
+def _attrs(text: bytes) -> dict[str, str]:
+    return {k.decode(): v.decode("latin-1") for k, v in _ATTR.findall(text)}
+
+
+def _int(value: str | None) -> int:
+    return int(value) if value is not None and value.strip().isdigit() else 0
+
+
+def check_vtu(path: Path, data: FileBytes) -> None:
+    """Check a VTU file's counts and compressed arrays (the module's docstring); MeshFormatError past a bound."""
+    head = re.search(rb"<VTKFile\b([^>]*)>", data[:65536])
+    if head is None:
+        return  # not a VTU: meshio says so
+    root = _attrs(head.group(1))
+    codec = _CODECS.get(root.get("compressor", ""))
+    order: _Order = "big" if root.get("byte_order") == "BigEndian" else "little"
+    layout = (8 if root.get("header_type") == "UInt64" else 4, order)
+    appended = _appended(data)
+    stop = appended[2] if appended else len(data)
+    size, budget = len(data), len(data) * MAX_COMPRESSION
+    section, n, c, piece = "", 0, 0, -1
+    for m in _TAG.finditer(data, 0, stop):
+        closing, tag, attrs = m.group(1), m.group(2).decode(), _attrs(m.group(3))
+        if tag == "DataArray":
+            if codec and not closing:
+                where = f"DataArray {attrs.get('Name', section)!r} (piece {piece})"
+                limit, why = _limit(section, attrs, n, c, budget)
+                try:
+                    budget -= _inflated(_blocks(data, m, attrs, appended, layout), codec, limit, why)
+                except _Refused as exc:
+                    raise format_error(path, f"{where} {exc}; refused before reading it") from None
+        elif closing:
+            section = ""
+        elif tag == "Piece":
+            piece, n, c = piece + 1, _int(attrs.get("NumberOfPoints")), _int(attrs.get("NumberOfCells"))
+            ratio = MAX_COMPRESSION if codec else 1
+            check_counts(path, size, [Count(f"points (NumberOfPoints of piece {piece})", n, POINT_BYTES, ratio),
+                                      Count(f"cells (NumberOfCells of piece {piece})", c, 1, ratio)])
+        else:
+            section = tag
+
+
+def _limit(section: str, attrs: dict[str, str], n: int, c: int, budget: int) -> tuple[int, str]:
+    """The most bytes an array may inflate to, and why (for the message)."""
+    item, nc = _ITEM.get(attrs.get("type", ""), 8), max(1, _int(attrs.get("NumberOfComponents", "1")))
+    if section in ("Points", "PointData"):
+        return n * nc * item, f"NumberOfPoints {n} allows ({n} × {nc} component(s) × {item} bytes)"
+    if section == "CellData" or (section == "Cells" and attrs.get("Name") in _CELL_ARRAYS):
+        return c * nc * item, f"NumberOfCells {c} allows ({c} × {nc} component(s) × {item} bytes)"
+    return budget, f"the file's size allows (all arrays together at most {MAX_COMPRESSION} times its size)"
+
+
+def _appended(data: FileBytes) -> tuple[int, bool, int] | None:
+    """(first byte after the ``_`` that starts the appended data, raw encoding?, where ``<AppendedData`` starts)."""
+    m = re.search(rb"<AppendedData\b([^>]*)>", data)
+    if m is None:
+        return None
+    start = data.find(b"_", m.end())
+    return (start + 1 if start >= 0 else len(data)), _attrs(m.group(1)).get("encoding") == "raw", m.start()
+
+
+def _chars(nbytes: int) -> int:
+    """base64 characters of ``nbytes`` bytes."""
+    return 4 * math.ceil(nbytes / 3)
+
+
+def _blocks(data: FileBytes, m: re.Match, attrs: dict[str, str], appended: tuple[int, bool, int] | None,
+            layout: tuple[int, _Order]) -> Iterator[bytes]:
+    """The compressed blocks of one array: ``num_blocks, block size, last block size, sizes...``, then the blocks."""
+    hs, order = layout
+    if attrs.get("format") == "binary":
+        if m.group(3).rstrip().endswith(b"/"):  # <DataArray .../>: no data
+            return iter(())
+        end = data.find(b"</DataArray>", m.end())
+        return _base64_blocks(data[m.end():end if end >= 0 else len(data)].strip(), hs, order)
+    if attrs.get("format") != "appended" or appended is None:
+        return iter(())
+    start = appended[0] + _int(attrs.get("offset"))
+    if appended[1]:
+        return _raw_blocks(data, start, hs, order)
+    return _base64_blocks(memoryview(data)[start:], hs, order)
+
+
+def _header(raw: bytes, hs: int, order: _Order) -> list[int]:
+    return [int.from_bytes(raw[i:i + hs], order) for i in range(0, len(raw) - hs + 1, hs)]
+
+
+def _base64_blocks(text, hs: int, order: _Order) -> Iterator[bytes]:
+    """Blocks of a base64 array (its header and its blocks are encoded apart, as VTK writes them)."""
+    try:
+        first = _header(base64.b64decode(bytes(text[:_chars(hs)])), hs, order)
+        nb = first[0] if first else 0
+        hc = _chars((3 + nb) * hs)
+        if not first or hc > len(text):
+            raise _Refused("has a compressed-block header cut short")
+        sizes = _header(base64.b64decode(bytes(text[:hc])), hs, order)[3:3 + nb]
+        body = base64.b64decode(bytes(text[hc:hc + _chars(sum(sizes))]))
+    except binascii.Error as exc:
+        raise _Refused(f"is not valid base64 ({exc})") from None
+    return _split(body, sizes)
+
+
+def _raw_blocks(data: FileBytes, start: int, hs: int, order: _Order) -> Iterator[bytes]:
+    first = _header(data[start:start + hs], hs, order)
+    nb = first[0] if first else 0
+    if not first or start + (3 + nb) * hs > len(data):
+        raise _Refused("has a compressed-block header cut short")
+    sizes = _header(data[start:start + (3 + nb) * hs], hs, order)[3:]
+    end = start + (3 + nb) * hs
+    return _split(data[end:end + sum(sizes)], sizes)
+
+
+def _split(body: bytes, sizes: list[int]) -> Iterator[bytes]:
+    if sum(sizes) > len(body):
+        raise _Refused("has compressed blocks cut short")
+    pos = 0
+    for s in sizes:
+        yield body[pos:pos + s]
+        pos += s
+
+
+def _inflated(blocks: Iterator[bytes], codec: str, limit: int, why: str) -> int:
+    """The bytes the blocks inflate to; _Refused as soon as they pass ``limit`` (``why``: the limit's reason)."""
+    total = 0
+    for block in blocks:
+        d = zlib.decompressobj() if codec == "zlib" else lzma.LZMADecompressor()
+        buf = block
+        try:
+            while True:
+                out = d.decompress(buf, _CHUNK)
+                total += len(out)
+                if total > limit:
+                    raise _Refused(f"inflates to more than the {limit} bytes {why}")
+                if codec == "zlib":
+                    buf = d.unconsumed_tail  # type: ignore[union-attr]
+                    if d.eof or (not buf and len(out) < _CHUNK):
+                        break
+                else:
+                    buf = b""
+                    if d.eof or d.needs_input:  # type: ignore[union-attr]
+                        break
+        except (zlib.error, lzma.LZMAError) as exc:
+            raise _Refused(f"has corrupt compressed data ({exc})") from None
+    return total
