@@ -94,6 +94,21 @@ def test_the_command_line_refuses_a_fifo(tmp_path):
     assert "Traceback" not in out.stderr
 
 
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs FIFOs")
+def test_a_fifo_as_the_cost_file_is_refused(tmp_path):
+    """--cost is read with np.load: a FIFO there blocked the command as the mesh FIFO did."""
+    from cvxgeodesic.cli import main
+
+    cg.save_distance(tmp_path / "m.ply", cg.icosphere(1), np.zeros(42))
+    os.mkfifo(tmp_path / "c.npy")
+    with pytest.raises(cg.MeshFormatError, match=r"c.npy: is a FIFO, not a .npy file \(--cost\)"):
+        from cvxgeodesic.cli_sources import cli_cost
+
+        cli_cost(type("Args", (), {"cost": str(tmp_path / "c.npy"), "cost_field": None})(), cg.icosphere(1))
+    assert main(["distance", str(tmp_path / "m.ply"), "-s", "0", "--method", "qclp", "--cost",
+                 str(tmp_path / "c.npy"), "-o", str(tmp_path / "d.npy"), "-q"]) == 2
+
+
 def test_a_link_to_a_regular_file_is_read(tmp_path):
     (tmp_path / "m.node").write_text(TETRA_NODE)
     (tmp_path / "m.ele").write_text(TETRA_ELE)

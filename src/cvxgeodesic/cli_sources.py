@@ -125,6 +125,11 @@ def cli_cost(args, mesh) -> np.ndarray | None:
     elif getattr(args, "cost", None):
         if not str(args.cost).lower().endswith(".npy"):
             raise ParameterError(f"--cost {args.cost}: give a .npy file (one value per vertex or per triangle)")
+        from pathlib import Path
+
+        from .mesh.formats._common import check_file
+
+        check_file(Path(args.cost), "a .npy file (--cost)")  # a FIFO or a device would block or never end
         try:
             values = np.load(args.cost, allow_pickle=False)
         except (OSError, ValueError) as exc:
