@@ -22,6 +22,7 @@ from cvxgeodesic.formulations import (
 from cvxgeodesic.mesh import cylinder, grid_plane, icosphere
 from cvxgeodesic.operators import gradient_norms
 from cvxgeodesic.solvers import solve_clarabel
+from cvxgeodesic.sources import resolve_sources
 
 GENERATED = [icosphere(2), grid_plane(8, jitter=0.3), cylinder(16, 6)]
 
@@ -315,3 +316,18 @@ def test_without_a_second_order_energy_the_bounds_reach_two_edges(method):
     problem = build_problem(MeshOperators(mesh), np.array([centre]), method, smoothness_weight(mesh, 20.0))
     hops = dijkstra(mesh.vertex_adjacency, indices=centre, unweighted=True)
     assert hops[_bounded_below(problem)].max() == NONNEGATIVE_HOPS
+
+
+def test_the_bounded_disc_of_a_constant_travel_cost_is_that_of_the_scaled_mesh():
+    # a constant cost c is the mesh scaled by c (docs/metrics.md): the smoothing length is measured in the medium,
+    # whose edge lengths and areas are normalized by its own power of two, as lambda is
+    def bounded(solver):
+        st = solver._strategy
+        src = resolve_sources(solver.mesh, [220])
+        return _bounded_below(build_problem(st.ops, src, "qcqp-hessian", st.config.lam / st.scale))
+
+    mesh = grid_plane(41)
+    scaled = cg.TriMesh(3.0 * mesh.V, mesh.F)
+    with_cost = bounded(cg.GeodesicSolver(mesh, "qcqp-hessian", m=20.0, cost=3.0))
+    np.testing.assert_array_equal(with_cost, bounded(cg.GeodesicSolver(scaled, "qcqp-hessian", m=20.0)))
+    assert with_cost.size > 20  # beyond the two edges' 19 vertices around an interior vertex: the disc decides

@@ -45,10 +45,10 @@ tip into a dip, −2.6e-4 to −0.51 on beetle, max_planck and the medial-axis b
 medial axis's sheets that meet at a source, −0.76 to −5.2 there (docs/method.md). The dip is as wide as the
 rounding, a length on the surface (``(m κ)^(1/3) √|S|``), not a number of edges: unbounded, it reached 1, 5 and 8
 edges from five sources on max_planck at 5K, 21K and 84K vertices, and with two edges bounded the 21K mesh still
-went negative three edges away and was solved twice (2026-12-03). On request (``nonnegative=True``; the API re-solves with it when a
-solution still has negative values, noted in ``info.notes``) every free vertex is bounded below by 0: bounds
-everywhere cost the interior-point method 20-35 % more iterations, which is why they are not the default
-(docs/dev/performance-log.md, "Negative distances in one solve").
+went negative three edges away and was solved twice (2026-12-03). On request (``nonnegative=True``; the API
+re-solves with it when a solution still has negative values, noted in ``info.notes``) every free vertex is bounded
+below by 0: bounds everywhere cost the interior-point method 20-35 % more iterations, which is why they are not the
+default (docs/dev/performance-log.md, "Negative distances in one solve").
 
 Vertices in connected components without a source are fixed and reported as
 ``inf``. Degenerate (zero or near-zero area) faces carry no cone and no energy
@@ -240,7 +240,8 @@ def smoothing_length(ops: MeshOperators, lam: float, stretch: str = "area") -> f
     -------
     float
     """
-    area = float(ops.mesh.face_areas.sum()) if ops.medium is None else ops.medium.surface_area
+    areas = ops.mesh.face_areas if ops.medium is None else ops.mesh.face_areas * ops.medium.area_ratio
+    area = float(areas.sum())  # in the medium's normalized units, as the edge lengths the radius is measured in
     total = float(ops.stretch_weights(stretch).sum())
     return float(np.cbrt(lam * area / total)) if total > 0 else 0.0
 
