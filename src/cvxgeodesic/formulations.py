@@ -423,6 +423,8 @@ def _within(mesh: TriMesh, ell: np.ndarray, seeds: np.ndarray, radius: float) ->
     """(n,) bool ndarray: the vertices whose shortest edge path to ``seeds`` (edge lengths ``ell``) is at most
     ``radius`` (Dijkstra stopped at ``radius``: the cost follows the ball, not the mesh)."""
     n = mesh.n_vertices
+    if not len(seeds) or not radius > 0:
+        return np.zeros(n, dtype=bool)
     E = mesh.edges
     graph = sp.csr_matrix((np.r_[ell, ell], (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])), shape=(n, n))
     dist = dijkstra(graph, directed=True, indices=np.unique(seeds), min_only=True, limit=radius)
