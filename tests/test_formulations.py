@@ -22,6 +22,7 @@ from cvxgeodesic.formulations import (
 from cvxgeodesic.mesh import cylinder, grid_plane, icosphere
 from cvxgeodesic.operators import gradient_norms
 from cvxgeodesic.solvers import solve_clarabel
+from cvxgeodesic.sources import resolve_sources
 
 GENERATED = [icosphere(2), grid_plane(8, jitter=0.3), cylinder(16, 6)]
 
@@ -268,3 +269,65 @@ def test_without_the_floor_the_solver_fails_loudly_rather_than_wrongly(monkeypat
     except SolverError:
         return
     np.testing.assert_allclose(res.distance, _dijkstra(mesh, 0), atol=1e-5 * mesh.bbox_diagonal)
+
+
+def _bounded_below(problem) -> np.ndarray:
+    """The vertices with a row ``-d_v <= 0`` (the bounds d >= 0)."""
+    rows = (problem.ineq.coeffs[:, 0] == -1.0) & (problem.ineq.coeffs[:, 1] == 0.0)
+    return np.unique(problem.ineq.vertices[rows, 0])
+
+
+def test_the_bounds_next_to_a_source_cover_one_surface_disc_at_every_resolution():
+    """The dip below 0 next to a source is as wide as the smoothing length, a length on the surface: max_planck
+    subdivided to 21K vertices went negative three edges from its sources, beyond the NONNEGATIVE_HOPS = 2 that
+    covered it at 5K (2026-12-03). The bounds reach NONNEGATIVE_RADIUS smoothing lengths along edges, whatever the
+    triangulation (m = 20 makes the disc wider than two edges of the finer grid, so the radius shows)."""
+    from cvxgeodesic.formulations import NONNEGATIVE_HOPS, NONNEGATIVE_RADIUS, smoothing_length
+
+    reach = {}
+    for n in (9, 41):
+        mesh = grid_plane(n)  # the unit square, the source at its centre
+        ops = MeshOperators(mesh)
+        lam = smoothness_weight(mesh, 20.0)
+        centre = int(np.argmin(np.linalg.norm(mesh.V[:, :2] - 0.5, axis=1)))
+        radius = NONNEGATIVE_RADIUS * smoothing_length(ops, lam)
+        # (20 · 3e-6)^(1/3) on the unit square: the formula of the area normalization
+        assert radius == pytest.approx(NONNEGATIVE_RADIUS * (20.0 * KAPPA["hessian"]) ** (1 / 3), rel=1e-9)
+        bounded = _bounded_below(build_problem(ops, np.array([centre]), "qcqp-hessian", lam))
+        path = dijkstra(mesh.vertex_adjacency, indices=centre)  # edge-path lengths, as the bounds measure them
+        hops = dijkstra(mesh.vertex_adjacency, indices=centre, unweighted=True)
+        inside = np.flatnonzero((path <= radius) | (hops <= NONNEGATIVE_HOPS))
+        np.testing.assert_array_equal(bounded, inside[inside != centre])
+        reach[n] = (float(path[bounded].max()), int(hops[bounded].max()), radius)
+    assert reach[9][1] == NONNEGATIVE_HOPS  # the coarse grid: two edges (0.25, 0.35 long) reach beyond the disc
+    far, deep, radius = reach[41]
+    assert deep > NONNEGATIVE_HOPS + 2  # the fine grid: the same disc is many edges wide ...
+    assert radius - 0.05 < far <= radius  # ... and filled to within a diagonal edge (0.035) of its radius
+
+
+@pytest.mark.parametrize("method", ["qclp", "lclp", "qcqp-dirichlet"])
+def test_without_a_second_order_energy_the_bounds_reach_two_edges(method):
+    # the smoothing length is that of the energies of second derivatives; QCLP's negative values (the medial-axis
+    # bug) and the Dirichlet energy's were all within NONNEGATIVE_HOPS edges
+    from cvxgeodesic.formulations import NONNEGATIVE_HOPS
+
+    mesh = grid_plane(41)
+    centre = int(np.argmin(np.linalg.norm(mesh.V[:, :2] - 0.5, axis=1)))
+    problem = build_problem(MeshOperators(mesh), np.array([centre]), method, smoothness_weight(mesh, 20.0))
+    hops = dijkstra(mesh.vertex_adjacency, indices=centre, unweighted=True)
+    assert hops[_bounded_below(problem)].max() == NONNEGATIVE_HOPS
+
+
+def test_the_bounded_disc_of_a_constant_travel_cost_is_that_of_the_scaled_mesh():
+    # a constant cost c is the mesh scaled by c (docs/metrics.md): the smoothing length is measured in the medium,
+    # whose edge lengths and areas are normalized by its own power of two, as lambda is
+    def bounded(solver):
+        st = solver._strategy
+        src = resolve_sources(solver.mesh, [220])
+        return _bounded_below(build_problem(st.ops, src, "qcqp-hessian", st.config.lam / st.scale))
+
+    mesh = grid_plane(41)
+    scaled = cg.TriMesh(3.0 * mesh.V, mesh.F)
+    with_cost = bounded(cg.GeodesicSolver(mesh, "qcqp-hessian", m=20.0, cost=3.0))
+    np.testing.assert_array_equal(with_cost, bounded(cg.GeodesicSolver(scaled, "qcqp-hessian", m=20.0)))
+    assert with_cost.size > 20  # beyond the two edges' 19 vertices around an interior vertex: the disc decides

@@ -38,12 +38,17 @@ formulations keep every edge constraint (Lemma 1 then makes LCLP equal to
 Dijkstra).
 
 Every formulation bounds the vertices within :data:`NONNEGATIVE_HOPS` edges of the sources below by 0 from the
-start: there, and only there, optima went negative (the source stars carry no cone, so nothing bounds their
-vertices from below: the smoothing energy flattens the cone's tip into a dip, −2.6e-4 to −0.51 on beetle, max_planck
-and the medial-axis bug; QCLP's optimum is not unique on the medial axis's sheets that meet at a source, −0.76 to
-−5.2 there; docs/method.md). On request
-(``nonnegative=True``; the API re-solves with it when a solution still has negative values) every free vertex is
-bounded below by 0.
+start, and with a second-order smoothness energy (Hessian, Laplacian) also those within :data:`NONNEGATIVE_RADIUS`
+smoothing lengths (:func:`smoothing_length`, measured along edges): there, and only there, optima went negative.
+The source stars carry no cone, so nothing bounds their vertices from below: the smoothing energy flattens the cone's
+tip into a dip, −2.6e-4 to −0.51 on beetle, max_planck and the medial-axis bug; QCLP's optimum is not unique on the
+medial axis's sheets that meet at a source, −0.76 to −5.2 there (docs/method.md). The dip is as wide as the
+rounding, a length on the surface (``(m κ)^(1/3) √|S|``), not a number of edges: unbounded, it reached 1, 5 and 8
+edges from five sources on max_planck at 5K, 21K and 84K vertices, and with two edges bounded the 21K mesh still
+went negative three edges away and was solved twice (2026-12-03). On request (``nonnegative=True``; the API
+re-solves with it when a solution still has negative values, noted in ``info.notes``) every free vertex is bounded
+below by 0: bounds everywhere cost the interior-point method 20-35 % more iterations, which is why they are not the
+default (docs/dev/performance-log.md, "Negative distances in one solve").
 
 Vertices in connected components without a source are fixed and reported as
 ``inf``. Degenerate (zero or near-zero area) faces carry no cone and no energy
@@ -57,6 +62,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.sparse.csgraph import dijkstra
 
 from .errors import DegenerateFacesWarning, MeshError, ParameterError
 from .mesh.trimesh import DEGENERATE_TOL, TriMesh
@@ -81,6 +87,9 @@ ALIASES = {"qgdf": "lcqp-hessian"}
 #: Every formulation bounds the vertices within this many edges of a source (of a source point's or curve's faces)
 #: below by 0 (module docstring).
 NONNEGATIVE_HOPS = 2
+#: ... and, with a second-order smoothness energy (Hessian, Laplacian), the vertices within this many smoothing lengths
+#: (:func:`smoothing_length`) of a source, measured along edges (module docstring).
+NONNEGATIVE_RADIUS = 4.0
 #: Smallest right-hand side of an edge bound ``|d_i − d_j| ≤ l_ij``, as a fraction of the bounding-box diagonal.
 MIN_EDGE_BOUND = 1e-9
 
@@ -95,6 +104,8 @@ SOLVER_SCALE = 10.0
 MIN_STRETCH_WEIGHT = 0.05
 #: The normalizations of ``m`` (:func:`smoothness_weight`): ``"area"`` (default), ``"paper"``.
 NORMALIZATIONS = ("area", "paper")
+#: The energies of second derivatives, whose rounding has the length :func:`smoothing_length`.
+SECOND_ORDER_ENERGIES = ("hessian", "laplacian")
 #: ``κ`` of ``λ = m · κ · √|S|`` per energy, normalization ``"area"``. Calibrated on bimba (46K faces,
 #: source vertex 0) so that ``m = 1`` rounds the ridge as the paper normalization's ``m = 1`` did there
 #: (ridge sharpness 0.24, 0.41 of the exact field's; Laplacian 0.241, Dirichlet 0.243); docs/method.md has
@@ -205,6 +216,34 @@ def smoothness_weight(mesh: TriMesh, m: float, normalization: str = "area", ener
     check_choice(energy, "energy", KAPPA, lower=False)
     area = float(mesh.face_areas.sum()) if medium is None else medium.surface_area
     return float(m) * KAPPA[energy] * float(np.sqrt(area))
+
+
+def smoothing_length(ops: MeshOperators, lam: float, stretch: str = "area") -> float:
+    """The length over which a second-order smoothness energy rounds the field: ``ℓ = (λ |S| / W)^(1/3)``.
+
+    Rounding a cone's tip (a source) or a crease over a disc of radius ``ℓ`` lowers the stretch term by about
+    ``(W / |S|) ℓ³`` (``W`` the sum of the stretch weights, spread over the surface area ``|S|``) and saves an energy
+    ``λ ∫ |∇²d|² dA`` of order ``λ`` (scale-free for second derivatives): the two balance at ``ℓ``. Under the area
+    normalization ``ℓ = (m κ)^(1/3) √|S|`` (0.0144 √|S| at ``m = 1``): a length on the surface, whatever the
+    triangulation. Measured 2026-12-03 without bounds: the optimum's dip below 0 reached 1.4 ℓ, 2.6 ℓ and 2.4 ℓ
+    from five sources on max_planck at 5K, 21K and 84K vertices, 1.2 ℓ from a source of the medial-axis bug.
+
+    Parameters
+    ----------
+    ops : MeshOperators
+    lam : float
+        The smoothness weight λ of the problem (in the units of ``ops.mesh``).
+    stretch : str
+        The stretch weights (:func:`stretch_weights`).
+
+    Returns
+    -------
+    float
+    """
+    areas = ops.mesh.face_areas if ops.medium is None else ops.mesh.face_areas * ops.medium.area_ratio
+    area = float(areas.sum())  # in the medium's normalized units, as the edge lengths the radius is measured in
+    total = float(ops.stretch_weights(stretch).sum())
+    return float(np.cbrt(lam * area / total)) if total > 0 else 0.0
 
 
 @dataclass
@@ -380,6 +419,18 @@ def _near(mesh: TriMesh, seeds: np.ndarray, hops: int) -> np.ndarray:
     return near
 
 
+def _within(mesh: TriMesh, ell: np.ndarray, seeds: np.ndarray, radius: float) -> np.ndarray:
+    """(n,) bool ndarray: the vertices whose shortest edge path to ``seeds`` (edge lengths ``ell``) is at most
+    ``radius`` (Dijkstra stopped at ``radius``: the cost follows the ball, not the mesh)."""
+    n = mesh.n_vertices
+    if not len(seeds) or not radius > 0:
+        return np.zeros(n, dtype=bool)
+    E = mesh.edges
+    graph = sp.csr_matrix((np.r_[ell, ell], (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])), shape=(n, n))
+    dist = dijkstra(graph, directed=True, indices=np.unique(seeds), min_only=True, limit=radius)
+    return np.isfinite(dist)
+
+
 def _uncovered_edges(mesh, cone_faces, face_free, fixed_mask, degenerate_edges, ell):
     """Edges between two free vertices that no cone covers, with their bounds: (k, 2) vertices, (k,) lengths.
 
@@ -474,6 +525,9 @@ def build_problem(
         bounded = ~fixed_mask
     else:
         bounded = _near(mesh, sc.anchors, NONNEGATIVE_HOPS) & ~fixed_mask
+        if energy in SECOND_ORDER_ENERGIES and lam > 0:
+            radius = NONNEGATIVE_RADIUS * smoothing_length(ops, lam, stretch)
+            bounded |= _within(mesh, ell, sc.anchors, radius) & ~fixed_mask
     if bounded.any():
         free_v = np.flatnonzero(bounded)
         ineq.add(np.column_stack([free_v, free_v]), [-1.0, 0.0], np.zeros(len(free_v)))
