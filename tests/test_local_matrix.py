@@ -219,3 +219,26 @@ def test_local_rows_on_a_local_cluster_with_a_checkpoint(spot, tmp_path):
     assert sp.issparse(L) and L.nnz == ref.nnz and rows.checkpoint_rows(path) == (3, 3)
     # the same solves in other processes: equal to round-off (thread counts may change the last digits)
     np.testing.assert_allclose(_dense(L), _dense(ref), rtol=0, atol=1e-9 * spot.bbox_diagonal)
+
+
+def test_local_rows_default_to_the_looser_tolerance_and_full_rows_do_not(spot, monkeypatch):
+    """tol=None: 1e-8 for full rows (the solve geodesic_distance makes), api.LOCAL_ROW_TOL for local rows; an
+    explicit tol is used for both."""
+    import cvxgeodesic.api as api
+
+    seen = []
+    real = api.GeodesicSolver
+
+    class Spy(real):  # type: ignore[misc, valid-type]
+        def __init__(self, mesh, *args, **kwargs):
+            seen.append(kwargs.get("tol"))
+            super().__init__(mesh, *args, **kwargs)
+
+    monkeypatch.setattr(api, "GeodesicSolver", Spy)
+    r = 0.1 * spot.bbox_diagonal
+    for kwargs, want in (({}, api.DEFAULT_TOL), ({"max_distance": r}, api.LOCAL_ROW_TOL),
+                         ({"max_distance": r, "tol": 1e-7}, 1e-7)):
+        seen.clear()
+        cg.distance_matrix(spot, [0], method="qclp", progress=False, **kwargs)
+        assert seen and set(seen) == {want}, kwargs  # every solver of the call (local rows: one per patch)
+    assert api.LOCAL_ROW_TOL == 1e-5 and api.DEFAULT_TOL == 1e-8
