@@ -505,3 +505,47 @@ def test_the_python_entry_points_check_their_folder_first(sphere_file, not_a_fol
         run_compare(cg.icosphere(1), 0, "dijkstra", not_a_folder)
     with pytest.raises(ParameterError, match="out_dir"):
         run_tet_compare(cg.tet_box(1), 0, "dijkstra", not_a_folder)
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# a Ctrl-C that a ctypes callback swallows (threadpoolctl's library discovery) still stops the command
+# ---------------------------------------------------------------------------------------------------------------
+def _swallowed_sigint() -> None:
+    """SIGINT delivered while a ctypes callback runs: its handler's KeyboardInterrupt is lost there."""
+    import ctypes
+    import signal as _signal
+
+    @ctypes.CFUNCTYPE(None)
+    def callback() -> None:
+        os.kill(os.getpid(), _signal.SIGINT)
+        for _ in range(1000):  # the handler runs at one of these bytecodes, inside the callback
+            pass
+
+    callback()
+
+
+def test_a_ctrl_c_swallowed_by_a_ctypes_callback_stops_the_matrix(tmp_path, monkeypatch, capsys):
+    """Seen in a loaded run: the interrupt landed in threadpoolctl's dl_iterate_phdr callback, was printed as
+    'Exception ignored on calling ctypes callback function', and the 320-row matrix ran to its end (exit 0)."""
+    import threadpoolctl
+
+    from cvxgeodesic.cli import main
+
+    mesh = cg.icosphere(2)
+    path = cg.save_distance(tmp_path / "s.ply", mesh, np.zeros(mesh.n_vertices))
+    calls = {"n": 0}
+    real = threadpoolctl.threadpool_limits
+
+    def limits_with_a_swallowed_interrupt(*args, **kwargs):
+        calls["n"] += 1
+        if calls["n"] == 1:  # the matrix's one thread limit, around all its rows
+            _swallowed_sigint()
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(threadpoolctl, "threadpool_limits", limits_with_a_swallowed_interrupt)
+    out = tmp_path / "D.npy"
+    code = main(["matrix", str(path), "-s", ",".join(map(str, range(0, 160, 4))), "--method", "dijkstra", "-o",
+                 str(out), "-q"])
+    assert calls["n"] >= 1
+    assert code == 130 and not out.exists()
+    assert capsys.readouterr().err.strip().endswith("cvxgeodesic: interrupted")

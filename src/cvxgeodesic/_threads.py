@@ -32,6 +32,7 @@ from typing import Concatenate, ParamSpec, Protocol, TypeVar
 
 # nothing heavier than the standard library at import: the package imports this module first, and the command
 # line's start-up (before its Ctrl-C handling is in place) should not wait for NumPy
+from . import _signals
 from .errors import ParameterError
 
 __all__ = ["ENV_VAR", "check_threads", "default_threads", "resolve_threads", "resolve_threads_noted", "thread_limit",
@@ -291,7 +292,9 @@ def thread_limit(threads: int) -> Iterator[None]:
         else:
             pardiso_available()  # loads MKL now, so that the limit covers it (threadpoolctl sees loaded libraries)
         with threadpool_limits(limits=threads):
+            _signals.check()  # a Ctrl-C that threadpoolctl's ctypes callbacks swallowed while finding the libraries
             yield
+        _signals.check()  # the same while it restored the limits
     finally:
         _local.limit = previous
         if nb_previous is not None:

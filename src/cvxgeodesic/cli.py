@@ -393,8 +393,11 @@ class _Signals:
     def __enter__(self) -> _Signals:
         import threading
 
+        from . import _signals
+
         def on_signal(signum: int, frame: object) -> None:
             self.received = self.received or signum
+            _signals.record(signum)  # raised again at the library's next check if a ctypes callback swallows it
             raise KeyboardInterrupt
 
         # named as solvers._interrupt.STOPS_SOLVES, which is not imported here: it loads Clarabel and SciPy
@@ -406,8 +409,11 @@ class _Signals:
         return self
 
     def __exit__(self, *exc: object) -> None:
+        from . import _signals
+
         for signum, handler in self.previous.items():
             signal.signal(signum, handler)  # type: ignore[arg-type]
+        _signals.clear()  # handled (main printed its line): a later command in this process starts afresh
 
     def check(self) -> None:
         """``KeyboardInterrupt`` if a signal came and what it raised was lost (an optional import that an

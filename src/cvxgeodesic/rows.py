@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
+from . import _signals
 from ._atomic import atomic_write
 from ._cluster import open_client, require_distributed, stop_after_interrupt
 from ._threads import resolve_threads, thread_limit
@@ -399,6 +400,7 @@ def solve_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any], opt
 def _solve_into(solver: Any, items: Sequence[Any], todo: np.ndarray, store: RowStore, bar: Any) -> None:
     for i in todo:
         store.put(int(i), solver.solve(items[int(i)]).distance)
+        _signals.check()  # a command-line Ctrl-C whose exception a ctypes callback swallowed during the row
         store.save(force=False)
         bar.update(1)
 

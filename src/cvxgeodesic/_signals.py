@@ -1,0 +1,38 @@
+"""A command-line signal whose ``KeyboardInterrupt`` was swallowed, raised again at the library's next safe point.
+
+The command line's SIGINT/SIGTERM handler (:class:`cvxgeodesic.cli._Signals`) raises ``KeyboardInterrupt``
+wherever the main thread is. Inside a ctypes callback that exception is lost: ctypes prints "Exception ignored on
+calling ctypes callback function" and the C call goes on. threadpoolctl finds the BLAS and OpenMP libraries
+through such a callback (``dl_iterate_phdr``) every time a solve limits its threads, so a Ctrl-C that landed there
+let a matrix of 320 rows run to its end (seen in a loaded test run, 2026-12-03). The handler therefore also records
+the signal here, and the places that call into ctypes, and the loops over rows, call :func:`check`.
+
+Only the command line records signals: in a Python session nothing is recorded, and :func:`check` does nothing.
+Standard library only (imported by the command line before NumPy).
+"""
+
+from __future__ import annotations
+
+__all__ = ["check", "clear", "record"]
+
+_pending: dict[str, int | None] = {"signum": None}
+
+
+def record(signum: int) -> None:
+    """Remember that ``signum`` came (its handler is about to raise ``KeyboardInterrupt``)."""
+    _pending["signum"] = signum
+
+
+def clear() -> None:
+    """Forget the signal: the command handled its ``KeyboardInterrupt``."""
+    _pending["signum"] = None
+
+
+def check() -> None:
+    """Raise ``KeyboardInterrupt`` if a recorded signal's own exception was lost on its way.
+
+    Call it on normal paths only (not in ``finally`` blocks): while the handler's exception propagates, the
+    signal is recorded too.
+    """
+    if _pending["signum"] is not None:
+        raise KeyboardInterrupt
