@@ -242,3 +242,14 @@ def test_local_rows_default_to_the_looser_tolerance_and_full_rows_do_not(spot, m
         cg.distance_matrix(spot, [0], method="qclp", progress=False, **kwargs)
         assert seen and set(seen) == {want}, kwargs  # every solver of the call (local rows: one per patch)
     assert api.LOCAL_ROW_TOL == 1e-5 and api.DEFAULT_TOL == 1e-8
+
+
+def test_a_small_patch_is_not_refused_for_the_whole_meshs_smoothness():
+    """λ on a patch is the whole mesh's scaled by the area ratio: past the weight of m = 1e6 *of the patch* for
+    patches under ~1e-4 m^(2/3) of the surface, which the range check of lam= refused (found in review: m = 100,
+    an 80-face patch). The range is checked once, on the whole mesh."""
+    sphere = cg.icosphere(4)
+    L = cg.distance_matrix(sphere, [0], method="qcqp-hessian", m=100, max_distance=0.05, progress=False)
+    assert L.nnz > 1 and L.data.max() <= 0.05
+    with pytest.raises(cg.ParameterError, match=r"lam = 1e9 is outside the supported range"):
+        cg.distance_matrix(sphere, [0], method="qcqp-hessian", lam=1e9, max_distance=0.05, progress=False)

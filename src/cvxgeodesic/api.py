@@ -193,6 +193,7 @@ class GeodesicSolver:
     """
 
     threads: int  # set by @limited before __init__'s body runs
+    _lam_checked: bool = False  # a lam= checked elsewhere already (the patches of local rows: _PatchSolver)
 
     @limited
     def __init__(
@@ -301,6 +302,8 @@ class GeodesicSolver:
         medium = {} if self.is_volume else {"medium": self.medium, "order": self.order}  # surfaces only
         if self.energy is None:
             self.lam = 0.0
+        elif lam_value is not None and self._lam_checked:  # checked on the whole mesh (a patch of local rows)
+            self.lam = lam_value
         elif lam_value is not None:  # at most the weight of the largest m
             self.lam = check_lam(lam_value, weight(self.mesh, 1.0, self.normalization, self.energy, **medium))
         else:
@@ -602,6 +605,14 @@ def _matrix_rows(mesh: Any, vertices: Any, *, local: bool) -> tuple[list, np.nda
     return uniq.tolist(), np.asarray(inverse).ravel()
 
 
+class _PatchSolver(GeodesicSolver):
+    """The solver of one local row's patch: its λ is the whole mesh's scaled by the area ratio, checked once on the
+    whole mesh (:func:`~cvxgeodesic.rows._whole_mesh_lambda`). On the patch it can exceed the weight of
+    ``m = MAX_M`` of the patch alone, which is no reason to refuse it: the patch's program is the whole one's."""
+
+    _lam_checked = True
+
+
 def _local_rows(mesh: Any, options: dict, max_distance: Any) -> tuple[Any, dict]:
     """The factory and options of local rows (:class:`~cvxgeodesic.rows.LocalRows`), after their checks."""
     from .rows import LocalRows
@@ -614,4 +625,4 @@ def _local_rows(mesh: Any, options: dict, max_distance: Any) -> tuple[Any, dict]
             raise ParameterError(f"max_distance does not take {name}= (a patch has no coarse mesh, cost or metric "
                                  "of its own yet)")
     rest = {k: v for k, v in options.items() if k not in ("multires", "cost", "metric")}
-    return LocalRows, {"max_distance": r, "factory": GeodesicSolver, **rest}
+    return LocalRows, {"max_distance": r, "factory": _PatchSolver, **rest}

@@ -361,9 +361,12 @@ def _whole_mesh_lambda(mesh: Any, options: dict) -> float | None:
     energy = FORMULATIONS[canonical_method(method)][1]
     if energy is None:
         return None
-    if lam is not None:
-        return lam
-    return smoothness_weight(mesh, m, options.get("normalization", "area"), energy, order=options.get("order", 1))
+    normalization, order = options.get("normalization", "area"), options.get("order", 1)
+    if lam is not None:  # its range on the whole mesh: each patch takes it scaled, unchecked (api._PatchSolver)
+        from .validation import check_lam
+
+        return check_lam(lam, smoothness_weight(mesh, 1.0, normalization, energy, order=order))
+    return smoothness_weight(mesh, m, normalization, energy, order=order)
 
 
 def solve_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any], options: dict, store: RowStore, *,
