@@ -549,3 +549,54 @@ def test_a_ctrl_c_swallowed_by_a_ctypes_callback_stops_the_matrix(tmp_path, monk
     assert calls["n"] >= 1
     assert code == 130 and not out.exists()
     assert capsys.readouterr().err.strip().endswith("cvxgeodesic: interrupted")
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# found in review: symbolic links, set-id bits, an ignored SIGTERM
+# ---------------------------------------------------------------------------------------------------------------
+def test_a_symlinked_output_is_replaced_without_its_targets_metadata(tmp_path):
+    """The rename replaces the link itself: the target's mode (here set-uid 4755) must not reach the new file."""
+    from cvxgeodesic._atomic import atomic_write
+
+    target = tmp_path / "program"
+    target.write_bytes(b"#!/bin/sh\n")
+    os.chmod(target, 0o4755)
+    link = tmp_path / "out.npy"
+    link.symlink_to(target)
+    atomic_write(link, lambda fh: fh.write(b"data"))
+    assert not link.is_symlink() and link.read_bytes() == b"data"
+    assert stat.S_IMODE(link.stat().st_mode) & 0o7000 == 0
+    assert target.read_bytes() == b"#!/bin/sh\n" and stat.S_IMODE(target.stat().st_mode) == 0o4755
+
+
+def test_set_id_bits_of_a_replaced_file_are_not_copied(tmp_path):
+    from cvxgeodesic._atomic import atomic_write
+
+    out = tmp_path / "d.npy"
+    out.write_bytes(b"old")
+    os.chmod(out, 0o6750)
+    atomic_write(out, lambda fh: fh.write(b"new"))
+    assert stat.S_IMODE(out.stat().st_mode) == 0o750
+
+
+def test_an_ignored_sigterm_stays_ignored():
+    import signal as _signal
+
+    from cvxgeodesic.cli import _Signals
+
+    previous = _signal.signal(_signal.SIGTERM, _signal.SIG_IGN)
+    try:
+        with _Signals():
+            assert _signal.getsignal(_signal.SIGTERM) is _signal.SIG_IGN
+    finally:
+        _signal.signal(_signal.SIGTERM, previous)
+
+
+def test_batch_checks_the_range_of_m_once_before_any_mesh(tmp_path):
+    """m above validation.MAX_M failed every mesh of a Python run_batch one by one (the CLI checked it)."""
+    from cvxgeodesic.batch import run_batch
+
+    path = cg.save_distance(tmp_path / "a.ply", cg.icosphere(1), np.zeros(42))
+    with pytest.raises(cg.ParameterError, match=r"m = 1e\+?7 is outside the supported range"):
+        run_batch([path], [0], tmp_path / "out", m=1e7, progress=False)
+    assert not (tmp_path / "out").exists()

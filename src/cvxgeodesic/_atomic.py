@@ -60,10 +60,14 @@ def check_replaceable(target: str | os.PathLike, *, overwrite_read_only: bool = 
         ``target`` is read-only and ``overwrite_read_only`` is False; the message names the file and its mode.
     """
     try:
-        st = os.stat(target)
+        st = os.lstat(target)
     except (FileNotFoundError, NotADirectoryError):
         return None
-    if not stat.S_ISREG(st.st_mode) or overwrite_read_only:
+    if not stat.S_ISREG(st.st_mode):
+        # a symbolic link is replaced by the new file, not followed: its target's mode and owner are not the
+        # replaced file's (copying them would let `-o x -> /usr/bin/passwd` give root's new file mode 4755)
+        return None
+    if overwrite_read_only:
         return st
     if not st.st_mode & stat.S_IWUSR:
         what, how = "is read-only", "make it writable (chmod u+w)"
@@ -86,7 +90,7 @@ def _give_metadata(fd: int, st: os.stat_result | None) -> None:
         except PermissionError:  # not root: the new file is the writer's, as with any editor's save
             pass
     try:  # after chown, which clears set-id bits
-        os.fchmod(fd, stat.S_IMODE(st.st_mode))
+        os.fchmod(fd, stat.S_IMODE(st.st_mode) & 0o777)  # permission bits only: never set-id or sticky bits
     except (AttributeError, PermissionError):  # pragma: no cover - no Unix modes (Windows, some mounts)
         pass
 
@@ -187,7 +191,7 @@ def output_set(*targets: str | os.PathLike, overwrite_read_only: bool = False) -
             raise RuntimeError(f"output_set: nothing was written for {', '.join(missing)}")
         for tmp, st in zip(tmps, stats, strict=True):  # writers that did not go through atomic_write
             if st is not None:
-                fd = os.open(tmp, os.O_RDONLY)
+                fd = os.open(tmp, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))  # our file, not a link put there
                 try:
                     _give_metadata(fd, st)
                 finally:

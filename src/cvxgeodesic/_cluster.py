@@ -2,7 +2,8 @@
 
 One place for: the optional import with an error that names the extra, the probe that fails fast on an
 address that is not a Dask scheduler, the thread budget of local workers, the client/cluster of a run
-(a local cluster speaks TLS with credentials of its own: no other user of the machine can connect to it),
+(a local cluster speaks TLS with credentials of its own: no other user of the machine can submit work to it;
+its HTTP endpoints, the dashboard and health pages, stay plain HTTP on 127.0.0.1: readable, not able to run code),
 and Ctrl-C (one line, no worker tracebacks). Dask (``pip install 'cvxgeodesic[cluster]'``) is imported
 only inside these functions.
 """

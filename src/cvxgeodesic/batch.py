@@ -45,7 +45,7 @@ import numpy as np
 
 from ._cluster import open_client, require_distributed, stop_after_interrupt
 from .errors import ParameterError
-from .validation import check_choice, check_count, check_not_an_input, check_number
+from .validation import check_choice, check_count, check_not_an_input, check_smoothness
 
 __all__ = ["OUTPUT_FORMATS", "expand_mesh_paths", "format_summary", "output_paths", "run_batch", "solve_one"]
 
@@ -315,7 +315,7 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
     sources_list = _source_spec(sources)
     method = check_choice(method, "method", ALL_METHODS)
     check_choice(solver, "solver", SOLVERS, lower=False)
-    check_number(m, "m", low=0)
+    check_smoothness(m, None)  # its range too (validation.MAX_M): once, not once per mesh
     if resolve_target(multires, 10**9) is not None and method in BASELINE_METHODS:
         raise ParameterError(f"multires applies to the convex formulations, not to baseline {method!r}")
     check_choice(output_format, "output_format", OUTPUT_FORMATS, lower=False)

@@ -382,8 +382,8 @@ class _Signals:
     record the signal: :func:`main` then prints the line and returns the code of the signal that came, also
     when the interrupt surfaced as another error (an extension module's import that it broke turns it into
     an ``ImportError``). During a Clarabel solve they run once the solve stopped (their mark,
-    :data:`cvxgeodesic.solvers._interrupt.STOPS_SOLVES`). A SIGINT that the process ignores (a background job
-    of a script) stays ignored.
+    :data:`cvxgeodesic.solvers._interrupt.STOPS_SOLVES`). A SIGINT or SIGTERM that the process ignores (a
+    background job of a script, a parent's choice) stays ignored.
     """
 
     def __init__(self) -> None:
@@ -405,7 +405,8 @@ class _Signals:
         if threading.current_thread() is threading.main_thread():  # signal.signal works there only
             if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
                 self.previous[signal.SIGINT] = signal.signal(signal.SIGINT, on_signal)
-            self.previous[signal.SIGTERM] = signal.signal(signal.SIGTERM, on_signal)
+            if signal.getsignal(signal.SIGTERM) is not signal.SIG_IGN:  # a parent's deliberate ignore stays
+                self.previous[signal.SIGTERM] = signal.signal(signal.SIGTERM, on_signal)
         return self
 
     def __exit__(self, *exc: object) -> None:
