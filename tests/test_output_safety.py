@@ -600,3 +600,18 @@ def test_batch_checks_the_range_of_m_once_before_any_mesh(tmp_path):
     with pytest.raises(cg.ParameterError, match=r"m = 1e\+?7 is outside the supported range"):
         run_batch([path], [0], tmp_path / "out", m=1e7, progress=False)
     assert not (tmp_path / "out").exists()
+
+
+def test_batch_refuses_a_read_only_output_before_any_solve(tmp_path):
+    """Found in review: a read-only OUT/<stem>.ply was refused only after its mesh was solved, with a message
+    naming a keyword batch does not take."""
+    from cvxgeodesic.batch import run_batch
+
+    path = cg.save_distance(tmp_path / "a.ply", cg.icosphere(1), np.zeros(42))
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "a.ply").write_bytes(b"kept")
+    os.chmod(out / "a.ply", 0o444)
+    with pytest.raises(cg.ParameterError, match=r"a.ply is read-only .*make it writable \(chmod u\+w\) first"):
+        run_batch([path], [0], out, method="dijkstra", progress=False, force=True)
+    assert (out / "a.ply").read_bytes() == b"kept" and not (out / "a.json").exists()

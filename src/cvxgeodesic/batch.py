@@ -43,6 +43,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ._atomic import check_replaceable
 from ._cluster import open_client, require_distributed, stop_after_interrupt
 from .errors import ParameterError
 from .validation import check_choice, check_count, check_not_an_input, check_smoothness
@@ -342,6 +343,8 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
                        "n_faces": None, "iterations": None, "solve_status": None, "time_s": None, "error": None,
                        "warnings": [], "notes": [], "worker": None}
         else:
+            for target in output_paths(p, out, output_format):  # a read-only output: refused now, not after its solve
+                check_replaceable(target, allow=None)
             todo.append(p)
     if todo:
         _run_on_cluster(todo, rows, sources_list, out, method, m, solver, multires, output_format,

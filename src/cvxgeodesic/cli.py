@@ -4,8 +4,10 @@ Every error a user can cause ends the program with exit code 2 and a one-line
 message on stderr; ``--debug`` shows the full traceback instead. ``batch``
 returns 1 when some meshes failed (each listed) and the others were solved.
 Ctrl-C ends it with 130 and SIGTERM with 143, one line each and no partial file.
-Outputs are checked before any work: never one of the inputs, and a read-only
-file only with ``--overwrite-read-only``.
+Output files are checked before any work: never one of the inputs, and a read-only
+one only with ``--overwrite-read-only`` (distance, path, view, matrix; batch refuses it
+before its solves). The folders of ``compare`` and ``demo`` are checked up front; a
+read-only file inside them is refused when it is written, after the solves.
 """
 
 from __future__ import annotations
