@@ -1,5 +1,7 @@
 """``distance_matrix(..., max_distance=r)``: sparse local rows, each solved on the patch around its source."""
 
+import os
+
 import numpy as np
 import pytest
 import scipy.sparse as sp
@@ -253,3 +255,31 @@ def test_a_small_patch_is_not_refused_for_the_whole_meshs_smoothness():
     assert L.nnz > 1 and L.data.max() <= 0.05
     with pytest.raises(cg.ParameterError, match=r"lam = 1e9 is outside the supported range"):
         cg.distance_matrix(sphere, [0], method="qcqp-hessian", lam=1e9, max_distance=0.05, progress=False)
+
+
+def test_a_read_only_checkpoint_is_refused_before_any_row(spot, tmp_path):
+    """Found in review: it failed at its first periodic write, and the save error hid the row's own error."""
+    path = tmp_path / "rows.npz"
+    cg.distance_matrix(spot, [0, 5], method="dijkstra", progress=False, checkpoint=path)
+    os.chmod(path, 0o444)
+    with pytest.raises(cg.ParameterError, match=r"rows.npz is read-only .*make it writable \(chmod u\+w\) first"):
+        cg.distance_matrix(spot, [0, 5, 9], method="dijkstra", progress=False, checkpoint=path)
+
+
+def test_a_failing_save_does_not_hide_the_rows_error(spot, tmp_path, monkeypatch):
+    def fail(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    real_solve, calls = cg.GeodesicSolver.solve, []
+
+    def second_row_fails(self, source, *args, **kwargs):
+        calls.append(source)
+        if len(calls) == 2:  # one finished row to save when the second fails
+            raise RuntimeError("row failed")
+        return real_solve(self, source, *args, **kwargs)
+
+    monkeypatch.setattr(rows, "atomic_write", fail)
+    monkeypatch.setattr(cg.GeodesicSolver, "solve", second_row_fails)
+    with pytest.raises(RuntimeError, match="row failed") as info:
+        cg.distance_matrix(spot, [0, 5], method="dijkstra", progress=False, checkpoint=tmp_path / "c.npz")
+    assert any("could not be written" in note for note in getattr(info.value, "__notes__", []))

@@ -135,6 +135,10 @@ class RowStore:
         self.shape = (int(n_rows), int(n_cols))
         self.sparse = sparse
         self.path = None if path is None else Path(path)
+        if self.path is not None:  # a read-only checkpoint is refused now, not at its first write after some rows
+            from ._atomic import check_replaceable
+
+            check_replaceable(self.path, allow=None)
         self.parameters = dict(parameters or {})
         self.done = np.zeros(n_rows, dtype=bool)
         self.rows: dict[int, Any] = {}
@@ -432,7 +436,11 @@ def keeping(store: RowStore) -> Iterator[None]:
     try:
         yield
     except BaseException as exc:
-        store.save()
+        try:
+            store.save()
+        except Exception as save_error:  # the row's error (or Ctrl-C) stays the one raised; the save's is a note
+            exc.add_note(f"distance_matrix: the finished rows could not be written to {store.path}: {save_error}")
+            raise exc from None
         done = int(store.done.sum())
         if store.path is not None and done:
             exc.add_note(f"distance_matrix: {done} of {store.shape[0]} rows kept in {store.path}; "
