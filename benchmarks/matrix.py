@@ -43,6 +43,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from multiprocessing import get_context
 from pathlib import Path
+from unittest import mock
 
 import numpy as np
 
@@ -99,17 +100,9 @@ def _run(threads: int, fn, *args):
     """``fn(*args)`` in a fresh spawned process with ``threads`` threads (its peak memory is its own)."""
     env = {k: str(threads) for k in ("CVXGEODESIC_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
                                      "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")}
-    old = {k: os.environ.get(k) for k in env}
-    os.environ.update(env)  # inherited by the spawned child
-    try:
+    with mock.patch.dict(os.environ, env):  # inherited by the spawned child, restored afterwards
         with ProcessPoolExecutor(max_workers=1, mp_context=get_context("spawn")) as pool:
             return pool.submit(fn, *args).result()
-    finally:
-        for k, v in old.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
 
 
 def _dense(L, n_cols: int) -> np.ndarray:

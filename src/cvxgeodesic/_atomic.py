@@ -23,7 +23,7 @@ from typing import BinaryIO
 
 from .errors import ParameterError
 
-__all__ = ["atomic_write", "check_output_dir", "check_replaceable", "output_set"]
+__all__ = ["atomic_write", "check_output_dir", "check_replaceable", "output_set", "probe_folder"]
 
 #: How the library names the permission in a refusal; the command line names its flag instead.
 ALLOW_IN_PYTHON = "overwrite_read_only=True"
@@ -240,6 +240,20 @@ def _rename_all(finals: list[Path], tmps: list[Path]) -> None:
                 pass
 
 
+def probe_folder(folder: str | os.PathLike, prefix: str = ".cvxgeodesic.") -> None:
+    """Create and remove an empty temporary file in ``folder``: what every output does first (the atomic writes
+    go through a temporary file there). Unlike the mode bits, this also stops root on a read-only file system.
+
+    Raises
+    ------
+    OSError
+        No file can be created in ``folder``; the caller turns it into a message naming its option.
+    """
+    fd, probe = tempfile.mkstemp(prefix=prefix, suffix=".probe", dir=folder)
+    os.close(fd)
+    os.unlink(probe)
+
+
 def check_output_dir(path: str | os.PathLike, what: str = "output folder") -> Path:
     """Check, without creating anything, that the folder ``path`` exists or can be created, and takes files.
 
@@ -271,10 +285,8 @@ def check_output_dir(path: str | os.PathLike, what: str = "output folder") -> Pa
         detail = "is a file, not a folder" if existing == p else f"cannot be created: {existing} is a file"
         raise ParameterError(f"{what} {p} {detail}")
     try:
-        fd, probe = tempfile.mkstemp(prefix=".cvxgeodesic.", suffix=".probe", dir=existing)
+        probe_folder(existing)
     except OSError as exc:
         verb = "cannot write files in it" if existing == p else f"cannot be created in {existing}"
         raise ParameterError(f"{what} {p}: {verb} ({exc.strerror or exc})") from None
-    os.close(fd)
-    os.unlink(probe)
     return p

@@ -35,7 +35,6 @@ import math
 import os
 import socket
 import sys
-import tempfile
 import time
 import warnings
 from contextlib import ExitStack
@@ -43,7 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._atomic import check_replaceable
+from ._atomic import check_replaceable, probe_folder
 from ._cluster import open_client, require_distributed, stop_after_interrupt
 from .errors import ParameterError
 from .validation import check_choice, check_count, check_not_an_input, check_smoothness
@@ -385,12 +384,10 @@ def _prepare_out(out: Path) -> None:
         raise ParameterError(f"--out {_printable(str(out))}: cannot create the folder "
                              f"({exc.strerror or exc})") from None
     try:  # the outputs are written through temporary files in this folder: try exactly that
-        fd, probe = tempfile.mkstemp(prefix=".cvxgeodesic-", suffix=".probe", dir=out)
+        probe_folder(out)
     except OSError as exc:
         raise ParameterError(f"--out {_printable(str(out))}: cannot create files in the folder "
                              f"({exc.strerror or exc})") from None
-    os.close(fd)
-    os.unlink(probe)
 
 
 def _printable(text: str) -> str:

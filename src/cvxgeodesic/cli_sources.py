@@ -135,7 +135,7 @@ def cli_cost(args, mesh) -> np.ndarray | None:
         except (OSError, ValueError) as exc:
             raise ParameterError(f"--cost {args.cost}: cannot read it as a .npy array ({exc})") from None
         what = f"--cost {args.cost}"
-        check_real(values, what)
+        check_real(values, what)  # before any conversion to float drops an imaginary part
         if values.shape == (mesh.n_faces,) and values.shape != (mesh.n_file_vertices,):
             return values  # one per triangle of the loaded mesh
         if values.shape != (mesh.n_file_vertices,):
@@ -143,7 +143,6 @@ def cli_cost(args, mesh) -> np.ndarray | None:
                                  f"per vertex of the file) or ({mesh.n_faces},) (one per triangle of the loaded mesh)")
     else:
         return None
-    check_real(values, what)  # before any conversion to float drops an imaginary part
     values, note = from_file_order(mesh, values, what)
     if note:
         args.notes.say(note)

@@ -601,11 +601,11 @@ def distributed_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any
         Label of the progress bar.
     on_chunk : callable, optional
         ``on_chunk(rows_slice, rows)`` as each chunk finishes (before the others): where ``distance_matrix``
-        keeps them.
+        keeps them. The rows are then not kept here (a matrix held once, not three times).
 
     Returns
     -------
-    (len(items), n) float ndarray, or CSR matrix (sparse rows)
+    (len(items), n) float ndarray, or CSR matrix (sparse rows); None with ``on_chunk``
 
     Raises
     ------
@@ -651,7 +651,7 @@ def distributed_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any
                 with contextlib.suppress(Exception):  # the connection may be gone after Ctrl-C
                     client.unsubscribe_topic(topic)
     _rewarn(w for _, ws in parts for w in ws)
-    return _stack([rows for rows, _ in parts])
+    return None if on_chunk is not None else _stack([rows for rows, _ in parts])
 
 
 def _delay(progress: bool | None) -> float:
@@ -672,6 +672,7 @@ def _gather(futures: list, chunks: list[slice], bar: _RowBar | None,
         parts[i] = fut.result()  # a chunk's error is raised here, as the solver raised it
         if on_chunk is not None:
             on_chunk(chunks[i], parts[i][0])
+            parts[i] = (None, parts[i][1])  # the rows are the caller's now: only the warnings stay
         if bar is not None:
             bar.chunk_done(chunks[i].stop - chunks[i].start)
     return parts

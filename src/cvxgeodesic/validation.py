@@ -16,7 +16,6 @@ from __future__ import annotations
 import numbers
 import os
 import re
-import tempfile
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
@@ -24,6 +23,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ._atomic import probe_folder
 from .errors import MeshError, ParameterError, SourceError
 
 __all__ = [
@@ -444,13 +444,11 @@ def check_output_path(path: str | os.PathLike, extensions: tuple[str, ...]) -> P
     if p.is_dir():
         raise ParameterError(f"cannot write {p}: it is a directory")
     try:  # the output is written to a temporary file in this directory: try exactly that
-        fd, probe = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".probe", dir=p.parent)
+        probe_folder(p.parent, prefix=f".{p.name}.")
     except OSError as exc:
         raise ParameterError(
             f"cannot write {p}: cannot create files in directory {p.parent} ({exc.strerror or exc})"
         ) from None
-    os.close(fd)
-    os.unlink(probe)
     return p
 
 
