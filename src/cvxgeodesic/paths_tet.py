@@ -102,7 +102,7 @@ class _Volume:
         if hasattr(fld, "split"):  # a field on the mesh with the source points inserted
             tt, bb = fld.split.locate(tt, bb)
         _, rows = fld.space.value_and_gradient_rows(tt, bb)
-        vals = fld.phi[fld.space.tet_dofs[tt[0]]]
+        vals = fld.phi[fld.space.cell_dofs[tt[0]]]
         if not np.all(np.isfinite(vals)):
             return np.zeros(3)
         return rows[0] @ vals
