@@ -5,7 +5,7 @@ continuous. A polyhedral surface is flat face by face and unfolding two faces ab
 isometry, so wherever the exact field is ``|x − p′|²`` (``p′`` a source unfolded along a window of faces) both
 hold there too. The energies below measure the departure from that, and are zero on such fields whatever the
 triangulation; they see the ridge's kink (where two fronts meet) and, on curved surfaces, the fronts bent around
-saddle vertices. With the P2 space of :mod:`cvxgeodesic.operators.p2`:
+saddle vertices. With the order-2 space of :mod:`cvxgeodesic.operators.lagrange`:
 
 * **Hessian** ``E_H(φ) = Σ_t A_t ‖H_t(φ) − 2I‖²_F + E_J(φ)`` (``H_t``: the Hessian of ``φ``, constant on each face,
   in the face's frame);
