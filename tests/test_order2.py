@@ -761,7 +761,7 @@ print(json.dumps({"solver": res.info.solver, "status": res.info.status, "notes":
 
 def test_cones_on_sources_only():
     corners = np.array([[0, 1, 2], [0, 1, 2], [0, 1, 2], [3, 0, 1], [3, 0, 1]])
-    # the cells' edges in LOCAL_EDGES order ((1, 2), (2, 0), (0, 1) locally): edge 0 joins the sources 0 and 1
+    # the cells' edges in CELL_EDGES order ((1, 2), (2, 0), (0, 1) locally): edge 0 joins the sources 0 and 1
     edges = np.array([[1, 2, 0], [1, 2, 0], [1, 2, 0], [0, 3, 4], [0, 3, 4]])
     bary = np.array([[1, 0, 0], [0.5, 0.5, 0], [0, 0.5, 0.5], [0, 0.5, 0.5], [0.2, 0.4, 0.4]])
     is_src = np.isin(np.arange(4), [0, 1])

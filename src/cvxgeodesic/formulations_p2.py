@@ -60,23 +60,27 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from .errors import DegenerateFacesWarning, MeshError, ParameterError
-from .operators.lagrange import LOCAL_EDGES, SAMPLES, LagrangeSpace, edge_basis, sample_points
+from .mesh.simplex import CELL_EDGES
+from .operators.lagrange import SAMPLES, LagrangeSpace, edge_basis, sample_points
 from .operators.metric import Medium
 from .operators.p2_energy import P2Energy, p2_energy
 from .solvers.problem import ConeGroup, ConicProblem, Equalities, PairInequalities
 
-__all__ = ["DEFAULT_SAMPLES", "DEFAULT_WEIGHTS", "ORDER2_CACHE_VERSION", "ORDER2_METHODS", "BernsteinEdgeCones",
+__all__ = ["DEFAULT_SAMPLES", "DEFAULT_VOLUME_SAMPLES", "DEFAULT_WEIGHTS", "ORDER2_CACHE_VERSION", "ORDER2_METHODS", "BernsteinEdgeCones",
            "P2Builder", "P2Program", "bernstein_edge_cones", "eliminate_pair_equalities", "source_edges"]
 
-#: Where the cone is imposed: "flat-bernstein" = the three corners and the three :class:`BernsteinEdgeCones` on flat
-#: faces (:attr:`LagrangeSpace.flat_cells`), the three edge midpoints on the others (since 2026-12-02: fandisk 4.1 → 1.1 s,
-#: thingi_32770 13 → 3.8 s, no cutting-plane round on the development set, the 53 coarse CAD meshes' median
-#: error 0.974 → 0.972 %; docs/order2.md); "flat-nodes" = all six nodes on flat faces, no edge cones (before).
+#: Where the cone is imposed on triangles: "flat-bernstein" = the three corners and the three
+#: :class:`BernsteinEdgeCones` on flat faces (:attr:`LagrangeSpace.flat_cells`), the three edge midpoints on the
+#: others (since 2026-12-02: fandisk 4.1 → 1.1 s, thingi_32770 13 → 3.8 s, no cutting-plane round on the
+#: development set, the 53 coarse CAD meshes' median error 0.974 → 0.972 %; docs/order2.md); "flat-nodes" = all six
+#: nodes on flat faces, no edge cones (before).
 #: Midpoints only on curved faces, measured 2026-12-01 against exact MMP, source 0, mean relative error all nodes →
 #: flat-nodes: bimba 0.22 → 0.11 %, bunny 0.099 → 0.058 %, lucy_20k 0.34 → 0.15 %, dragon_20k 0.62 → 0.32 %, spot
 #: 0.25 → 0.15 %; the 53 coarse CAD meshes: median ratio to P1 qclp 0.216 → 0.204, median error 0.85 → 0.95 %
 #: (29 better, 24 worse; docs/order2.md); flat meshes unchanged (all their faces are flat).
-DEFAULT_SAMPLES = "flat-bernstein"  # on triangles; tetrahedra take "flat-nodes" (every node)
+DEFAULT_SAMPLES = "flat-bernstein"
+#: ... and in tetrahedra: every node of every (flat) cell, the cutting planes between them.
+DEFAULT_VOLUME_SAMPLES = "flat-nodes"
 #: Objective weights (:meth:`LagrangeSpace.weights`; docs/order2.md has the measurement behind the choice).
 DEFAULT_WEIGHTS = "lumped"
 #: The formulations with an order-2 program: ``qclp`` and the smoothed QC formulations, whose energies act on ``φ``
@@ -221,7 +225,7 @@ class P2Builder:
                  cone_scale: str = "dijkstra", medium: Medium | None = None, energy: str | None = None,
                  lam: float = 0.0):
         self.dim = dim = int(mesh.dim)
-        samples = (DEFAULT_SAMPLES if dim == 2 else "flat-nodes") if samples is None else samples
+        samples = (DEFAULT_SAMPLES if dim == 2 else DEFAULT_VOLUME_SAMPLES) if samples is None else samples
         self._check(samples, cone_scale, medium, energy, lam)
         self.cone_scale = cone_scale
         self.mesh = mesh
@@ -292,7 +296,7 @@ class P2Builder:
         owner, local = deg[first // n_e], first % n_e
         ok = mesh.edge_lengths[ids] > MIN_EDGE * max(mesh.bbox_diagonal, 1e-300)
         ids, owner, local = ids[ok], owner[ok], local[ok]
-        a, b = LOCAL_EDGES[dim][local, 0], LOCAL_EDGES[dim][local, 1]
+        a, b = CELL_EDGES[dim][local, 0], CELL_EDGES[dim][local, 1]
         t = np.array([0.0, 0.5, 1.0])
         Nt, dNt = edge_basis(t)
         r = np.arange(ids.size)
@@ -616,7 +620,7 @@ def _on_sources(corners: np.ndarray, edges: np.ndarray, bary: np.ndarray, is_src
     corners : (p, dim + 1) int ndarray
         The vertices of each sample's cell.
     edges : (p, dim (dim + 1) / 2) int ndarray
-        Their edges (indices into ``mesh.edges``, :data:`~cvxgeodesic.operators.lagrange.LOCAL_EDGES` order).
+        Their edges (indices into ``mesh.edges``, :data:`~cvxgeodesic.mesh.simplex.CELL_EDGES` order).
     bary : (p, dim + 1) float ndarray
         The samples' barycentric coordinates in those cells.
     is_src : (n,) bool ndarray
@@ -629,7 +633,7 @@ def _on_sources(corners: np.ndarray, edges: np.ndarray, bary: np.ndarray, is_src
     (p,) bool ndarray
     """
     support = bary > 0
-    E = LOCAL_EDGES[corners.shape[1] - 1]
+    E = CELL_EDGES[corners.shape[1] - 1]
     need = support[:, E[:, 0]] & support[:, E[:, 1]]
     return (is_src[corners] | ~support).all(axis=1) & (zero_edges[edges] | ~need).all(axis=1)
 

@@ -20,17 +20,14 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError
+from ..mesh.simplex import CELL_EDGES
 from ..mesh.split import SplitMesh
-from ..mesh.tetmesh import TET_EDGES
 from .gradient import gradient_blocks
 from .metric import Medium
 
-__all__ = ["LOCAL_EDGES", "SAMPLES", "WEIGHTS", "LagrangeField", "LagrangeSpace", "SplitLagrangeField",
+__all__ = ["SAMPLES", "WEIGHTS", "LagrangeField", "LagrangeSpace", "SplitLagrangeField",
            "edge_basis", "lagrange_basis", "lagrange_nodes", "max_violation", "sample_points", "violations"]
 
-#: Local edges ``(a, b)`` of a cell, in the order of :attr:`SimplexMesh.cell_edges` and of the midpoint DOFs: on a
-#: triangle the edge opposite corner ``k`` (``(1, 2), (2, 0), (0, 1)``), on a tetrahedron :data:`TET_EDGES`.
-LOCAL_EDGES = {2: np.array([[1, 2], [2, 0], [0, 1]], dtype=np.int64), 3: TET_EDGES}
 #: Objective weights (:meth:`LagrangeSpace.weights`).
 WEIGHTS = ("lumped", "p2", "mixed")
 #: Names of the sample-point sets (:func:`sample_points`).
@@ -41,11 +38,11 @@ CELL_WORDS = {2: ("face", "faces"), 3: ("tetrahedron", "tets")}
 
 def lagrange_nodes(dim: int, order: int = 2) -> np.ndarray:
     """Barycentric coordinates of the nodes of a cell: the corners, then (order 2) the midpoints of
-    :data:`LOCAL_EDGES` (the local DOF order). Shape ``(n_local, dim + 1)``."""
+    :data:`~cvxgeodesic.mesh.simplex.CELL_EDGES` (the local DOF order). Shape ``(n_local, dim + 1)``."""
     corners = np.eye(dim + 1)
     if order == 1:
         return corners
-    E = LOCAL_EDGES[dim]
+    E = CELL_EDGES[dim]
     return np.vstack([corners, 0.5 * (corners[E[:, 0]] + corners[E[:, 1]])])
 
 
@@ -69,7 +66,7 @@ def lagrange_basis(bary: np.ndarray, order: int = 2) -> tuple[np.ndarray, np.nda
     """Lagrange shape functions of a simplex and their derivatives in the barycentric coordinates.
 
     Order 1: ``N_i = λ_i``. Order 2: ``N_i = λ_i (2λ_i − 1)`` at corner ``i``, then ``N_ab = 4 λ_a λ_b`` at the
-    midpoint of each edge ``(a, b)`` of :data:`LOCAL_EDGES`.
+    midpoint of each edge ``(a, b)`` of :data:`~cvxgeodesic.mesh.simplex.CELL_EDGES`.
 
     Parameters
     ----------
@@ -88,7 +85,7 @@ def lagrange_basis(bary: np.ndarray, order: int = 2) -> tuple[np.ndarray, np.nda
     s, c = lam.shape
     if order == 1:
         return lam.copy(), np.broadcast_to(np.eye(c), (s, c, c)).copy()
-    E = LOCAL_EDGES[c - 1]
+    E = CELL_EDGES[c - 1]
     N = np.empty((s, c + len(E)))
     dN = np.zeros((s, c + len(E), c))
     for k in range(c):
@@ -131,7 +128,7 @@ class LagrangeSpace:
     cell_dofs : (k, n_local) int64 ndarray
         Global DOFs of each cell in the local order of :func:`lagrange_basis`.
     cell_edges : (k, dim (dim + 1) / 2) int64 ndarray
-        Index into ``mesh.edges`` of each cell's edges, in :data:`LOCAL_EDGES` order.
+        Index into ``mesh.edges`` of each cell's edges, in :data:`~cvxgeodesic.mesh.simplex.CELL_EDGES` order.
     gbasis : (k, dim, dim + 1) float ndarray
         ``∇λ_i`` of each cell (:func:`~cvxgeodesic.operators.gradient.gradient_blocks`: in the face's 2-D frame on
         triangles, in world coordinates on tetrahedra), zero on degenerate cells.
@@ -172,9 +169,7 @@ class LagrangeSpace:
     @property
     def cell_longest_edges(self) -> np.ndarray:
         """(k,) float ndarray: the longest of each cell's :attr:`edge_lengths`."""
-        if self.medium is not None:
-            return self.medium.face_longest_edges
-        return self.mesh.edge_lengths[self.cell_edges].max(axis=1)
+        return self.mesh.cell_longest_edges if self.medium is None else self.medium.face_longest_edges
 
     @property
     def adjacency(self):
@@ -290,7 +285,7 @@ class LagrangeSpace:
             ``Hess φ|_t = H[t] @ φ[cell_dofs[t]]``.
         """
         c = self.dim + 1
-        E = LOCAL_EDGES[self.dim]
+        E = CELL_EDGES[self.dim]
         D2 = np.zeros((c + len(E), c, c))
         D2[range(c), range(c), range(c)] = 4.0
         D2[c + np.arange(len(E)), E[:, 0], E[:, 1]] = 4.0
@@ -366,7 +361,7 @@ def _violation_candidates(space: LagrangeSpace, x: np.ndarray) -> tuple[np.ndarr
     k = xt.shape[0]
     Q = np.zeros((k, c, c))
     Q[:, range(c), range(c)] = v[:, :c]
-    for e, (a, b) in enumerate(LOCAL_EDGES[space.dim]):
+    for e, (a, b) in enumerate(CELL_EDGES[space.dim]):
         Q[:, a, b] = Q[:, b, a] = 2 * v[:, c + e] - 0.5 * (v[:, a] + v[:, b])
     scale = np.abs(Q).max(axis=(1, 2)) + 1e-300
     cands = [np.broadcast_to(np.eye(c), (k, c, c))]

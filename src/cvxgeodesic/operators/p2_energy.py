@@ -28,8 +28,8 @@ dimensionless.
 **Edges.** Boundary edges carry no jump term. A non-manifold edge (three or more faces) carries none either: on
 such an edge the exact field of a front arriving through one face continues, unfolded, into every other face, so
 the conormal derivatives of two receiving faces do not cancel (they are equal) and a pairwise penalty would be
-wrong for the exact field. Degenerate faces (:attr:`LagrangeSpace.degenerate`) carry no face term and their edges no jump
-term (their shape-function derivatives grow like the inverse altitude).
+wrong for the exact field. Degenerate faces (:attr:`LagrangeSpace.degenerate`) carry no face term and their edges
+no jump term (their shape-function derivatives grow like the inverse altitude).
 
 Every energy is returned as the quadratic ``E(φ) = φᵀQφ + 2gᵀφ + c`` (:class:`P2Energy`); ``Q`` couples the DOFs
 of the two faces of each interior edge (:func:`edge_pair_dofs`: nine DOFs per edge).

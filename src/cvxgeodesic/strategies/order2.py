@@ -24,8 +24,8 @@ import numpy as np
 from ..errors import ParameterError, SolverError, SourceError
 from ..formulations_p2 import ORDER2_METHODS, P2Builder, P2Program, source_edges
 from ..formulations_tet import TET_ORDER2_METHODS
+from ..mesh.simplex import unit_mesh
 from ..mesh.split import SplitMesh
-from ..mesh.trimesh import unit_mesh
 from ..operators.lagrange import LagrangeField, SplitLagrangeField, violations
 from ..operators.metric import Medium
 from ..results import GeodesicResult, SolveInfo

@@ -19,7 +19,8 @@ import numpy as np
 
 from ..baselines.tet import TET_BASELINES
 from ..formulations_tet import TET_FORMULATIONS, TetOperators, build_tet_problem
-from ..mesh.tetmesh import TetMesh, unit_tetmesh
+from ..mesh.tetmesh import TetMesh
+from ..mesh.trimesh import unit_mesh
 from ..results import GeodesicResult, SolveInfo
 from ..solvers.problem import BackendResult, ConicProblem, clique_pattern
 from ..sources_tet import TetSources
@@ -77,7 +78,7 @@ class TetDirect:
     def __init__(self, config: SolveConfig) -> None:
         t0 = time.perf_counter()
         self.config = config
-        unit, self.scale = unit_tetmesh(_volume(config))
+        unit, self.scale = unit_mesh(_volume(config))
         self.ops = TetOperators(unit)
         self.policy = Backend(config.solver, config.tol, config.max_iter, config.verbose, config.mesh.name)
         self.notes: list[str] = [*config.notes, *self.ops.notes, *self.policy.notes]
