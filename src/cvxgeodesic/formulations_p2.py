@@ -66,8 +66,9 @@ from .operators.metric import Medium
 from .operators.p2_energy import P2Energy, p2_energy
 from .solvers.problem import ConeGroup, ConicProblem, Equalities, PairInequalities
 
-__all__ = ["DEFAULT_SAMPLES", "DEFAULT_VOLUME_SAMPLES", "DEFAULT_WEIGHTS", "ORDER2_CACHE_VERSION", "ORDER2_METHODS", "BernsteinEdgeCones",
-           "P2Builder", "P2Program", "bernstein_edge_cones", "eliminate_pair_equalities", "source_edges"]
+__all__ = ["DEFAULT_SAMPLES", "DEFAULT_VOLUME_SAMPLES", "DEFAULT_WEIGHTS", "ORDER2_CACHE_VERSION", "ORDER2_METHODS",
+           "BernsteinEdgeCones", "P2Builder", "P2Program", "bernstein_edge_cones", "eliminate_pair_equalities",
+           "source_edges"]
 
 #: Where the cone is imposed on triangles: "flat-bernstein" = the three corners and the three
 #: :class:`BernsteinEdgeCones` on flat faces (:attr:`LagrangeSpace.flat_cells`), the three edge midpoints on the
