@@ -870,3 +870,22 @@ def test_edge_cones_that_leave_no_feasible_program_are_replaced_by_samples():
     assert res.info.status == "optimal" and res.info.solver == "ipm"
     assert any("edge cones ended 'primal_infeasible'" in n for n in res.info.notes)
     assert res.info.extra["rounds"] >= 1 and np.isfinite(res.distance).all() and res.distance.min() == 0.0
+
+
+def test_surface_only_options_are_refused_on_tetrahedra():
+    # the edge cones, the smoothness energies, a medium and the consistent weights exist on triangles only
+    from cvxgeodesic.mesh.tet_generate import tet_box
+    from cvxgeodesic.operators.metric import make_medium
+
+    box = tet_box(2)
+    assert P2Builder(box).space.dim == 3  # the volume default: every node of every tetrahedron
+    for kw, what in (({"samples": "flat-bernstein"}, "samples='flat-bernstein'"),
+                     ({"energy": "hessian", "lam": 0.1}, "smoothness energy")):
+        with pytest.raises(ParameterError, match=f"on tetrahedra takes no {what} \\(surfaces only\\)"):
+            P2Builder(box, **kw)
+    with pytest.raises(ParameterError, match="weights='p2' is defined for order-2 triangles only"):
+        P2Builder(box, weights="p2")
+    grid = cg.grid_plane(4)
+    medium = make_medium(grid, cost=np.ones(grid.n_vertices))
+    with pytest.raises(ParameterError, match="defined on surfaces only"):
+        LagrangeSpace(box, medium=medium)

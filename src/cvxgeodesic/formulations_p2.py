@@ -278,8 +278,8 @@ class P2Builder:
             raise ParameterError(f"cone_scale must be 'dijkstra' or 'unit', got {cone_scale!r}")
         if self.dim == 3:
             surface_only = [name for name, given in (("samples='flat-bernstein'", samples == "flat-bernstein"),
-                                                     ("a smoothness energy", energy is not None and lam > 0),
-                                                     ("a cost or metric", medium is not None)) if given]
+                                                     ("smoothness energy", energy is not None and lam > 0),
+                                                     ("cost or metric", medium is not None)) if given]
             if surface_only:
                 raise ParameterError(f"the order-2 program on tetrahedra takes no {' and no '.join(surface_only)} "
                                      "(surfaces only)")
