@@ -57,7 +57,7 @@ class SplitMesh:
     def __init__(self, mesh: Any, points):
         n, cells = mesh.n_vertices, mesh.cells
         k, c = cells.shape
-        self.cells = cells.tolist()
+        self._cells = cells.tolist()
         V = [mesh.V]
         inc = sp.csr_matrix((np.ones(c * k), (cells.ravel(), np.repeat(np.arange(k), c))), shape=(n, k))
         #: cell -> [(local corner replaced, piece index, bary of the point in the cell)]
@@ -73,8 +73,9 @@ class SplitMesh:
             around = np.flatnonzero(np.asarray(inc[corners].sum(axis=0)).ravel() == nz.size)
             for t in around.tolist():
                 self._split_cell(t, n + i, cells[t], corners, p.bary[nz], mesh.dim)
-        self.mesh = type(mesh)(np.vstack(V), np.asarray(self.cells, dtype=np.int64), name=mesh.name)
-        self.cell_parent = np.arange(len(self.cells), dtype=np.int64)
+        self.mesh = type(mesh)(np.vstack(V), np.asarray(self._cells, dtype=np.int64), name=mesh.name)
+        self.cell_parent = np.arange(len(self._cells), dtype=np.int64)
+        del self._cells
         for t, lst in self.pieces.items():
             self.cell_parent[[idx for _, idx, _ in lst]] = t
         self.point_vertices = n + np.arange(len(points), dtype=np.int64)
@@ -94,11 +95,11 @@ class SplitMesh:
             piece = list(cell)
             piece[kk] = vid
             if not lst:
-                self.cells[t] = piece
+                self._cells[t] = piece
                 idx = t
             else:
-                self.cells.append(piece)
-                idx = len(self.cells) - 1
+                self._cells.append(piece)
+                idx = len(self._cells) - 1
             lst.append((kk, idx, beta))
         self.pieces[t] = lst
 

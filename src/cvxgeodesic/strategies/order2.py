@@ -136,6 +136,7 @@ class Order2:
         t0 = time.perf_counter()
         mesh = self.config.mesh
         fixed, vertex_sources, points, facets = _source_geometry(sources, mesh)
+        source_fixed = fixed
         builder, ipm, split = self.builder, self.ipm, None
         notes = list(self.notes)
         if points:
@@ -155,7 +156,7 @@ class Order2:
                          "this solve)")
         zero = source_edges(builder.mesh, vertex_sources, facets)
         program, res, rounds = self._solve_with_cuts(builder, ipm, fixed, zero, callback, notes)
-        return self._result(program, res, rounds, builder, split, sources, notes, t0)
+        return self._result(program, res, rounds, builder, split, sources, source_fixed, notes, t0)
 
     def _solve_with_cuts(self, builder: P2Builder, ipm: Any, fixed: np.ndarray, zero: np.ndarray,
                          callback: Callback | None, notes: list[str]) -> tuple[P2Program, BackendResult, list[int]]:
@@ -222,7 +223,8 @@ class Order2:
         return program, self.policy.solve(program.problem, ipm, callback, notes)
 
     def _result(self, program: P2Program, res: BackendResult, rounds: list[int], builder: P2Builder,
-                split: SplitMesh | None, sources: Any, notes: list[str], t0: float) -> GeodesicResult:
+                split: SplitMesh | None, sources: Any, source_fixed: np.ndarray, notes: list[str],
+                t0: float) -> GeodesicResult:
         mesh = self.config.mesh
         problem = program.problem
         unit2 = (self.scale * self.medium_scale) ** 2
@@ -231,7 +233,7 @@ class Order2:
         fld = (LagrangeField(mesh, phi, builder.space) if split is None
                else SplitLagrangeField(mesh, split, phi, builder.space))
         d = fld.vertex_distance.copy()
-        d[_source_geometry(sources, mesh)[0]] = 0.0
+        d[source_fixed] = 0.0
         info = SolveInfo(
             method=self.config.method, solver=res.solver, status=res.status, iterations=int(sum(rounds)),
             setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
