@@ -52,6 +52,7 @@ the solve in :mod:`cvxgeodesic.strategies.order2`.
 
 from __future__ import annotations
 
+import itertools
 import warnings
 from dataclasses import dataclass
 
@@ -148,18 +149,19 @@ def _cone_rows(val: np.ndarray, grad: np.ndarray, dim: int) -> tuple[np.ndarray,
 
 def source_edges(mesh, vertices: np.ndarray, facets: np.ndarray | None = None) -> np.ndarray:
     """(e,) bool ndarray over ``mesh.edges``: the edges whose midpoint is 0 (no derivative row along them): those
-    joining two source vertices, and the edges of source faces.
+    joining two source vertices, and the edges of source facets.
 
     An edge joining two vertices of a source wall *through* a solid is no such edge unless both ends are vertex
-    sources: pass the wall's vertices as ``facets``, not as ``vertices``.
+    sources: pass the wall as ``facets``, not its vertices as ``vertices``. (A surface's ``"boundary"`` passes its
+    vertices: every edge joining two of them is a source edge there.)
 
     Parameters
     ----------
     mesh : TriMesh or TetMesh
     vertices : (s,) int ndarray
         Vertex sources (points inserted as vertices included).
-    facets : (f, 3) int ndarray, optional
-        Source faces (of a tetrahedral mesh's wall).
+    facets : (f, dim) int ndarray, optional
+        Source facets: boundary edges of a surface, faces of a solid's wall.
     """
     E = mesh.edges
     is_src = np.zeros(mesh.n_vertices, dtype=bool)
@@ -168,7 +170,8 @@ def source_edges(mesh, vertices: np.ndarray, facets: np.ndarray | None = None) -
     if facets is not None and len(facets):
         n = np.int64(mesh.n_vertices)
         F = np.sort(np.asarray(facets, dtype=np.int64), axis=1)
-        keys = np.unique(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [0, 2]]]) @ np.array([n, 1]))
+        pairs = np.concatenate([F[:, [i, j]] for i, j in itertools.combinations(range(F.shape[1]), 2)])
+        keys = np.unique(pairs @ np.array([n, 1]))
         out |= np.isin(E @ np.array([n, 1]), keys)
     return out
 
