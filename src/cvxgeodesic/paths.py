@@ -638,9 +638,9 @@ def _finish_path(geo: _Cells, nodes: list[tuple], straighten: bool, return_point
     P = np.array([_position(geo, nd) for nd in nodes])
     # consecutive duplicates (a valley that starts at a crossing, a point that was already on its source)
     keep = np.r_[True, np.linalg.norm(np.diff(P, axis=0), axis=1) > tol]
-    keep[-1] = True  # the end is the source itself: a crossing that sits on it goes instead
-    if len(P) > 1 and np.linalg.norm(P[-1] - P[np.flatnonzero(keep[:-1])[-1]]) <= tol and keep[:-1].sum() > 1:
-        keep[np.flatnonzero(keep[:-1])[-1]] = False
+    if not keep[-1]:  # the end is the source itself: the point it repeats goes instead (a target on its source:
+        keep[np.flatnonzero(keep)[-1]] = False  # the path is that one point)
+        keep[-1] = True
     nodes = [nd for nd, kp in zip(nodes, keep, strict=True) if kp]
     P = P[keep]
     if not return_points:
