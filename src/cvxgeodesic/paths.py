@@ -40,6 +40,7 @@ from numpy.typing import ArrayLike
 from .errors import ParameterError, SolverError, SourceError
 from .mesh.convert import as_mesh
 from .mesh.corridor import straighten_corridor
+from .mesh.simplex import CELL_FACETS
 from .mesh.tet_locate import VolumePoint, volume_point
 from .operators.metric import make_medium
 from .results import GeodesicResult, remembered_sources
@@ -449,7 +450,7 @@ class _Descent:
         y = nb @ geo.V[corners]
         zero = np.flatnonzero(nb <= 1e-10)
         if zero.size == 1:  # through the facet opposite that corner
-            facet = tuple(int(u) for u in corners[(zero[0] + 1 + np.arange(len(corners) - 1)) % len(corners)])
+            facet = tuple(int(u) for u in corners[CELL_FACETS[geo.mesh.dim][zero[0]]])
             if frozenset(facet) in self.ends.facets:  # a source face of the volume: the path ends on it
                 self.nodes.append(("p", c, y))
                 return None
