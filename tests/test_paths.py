@@ -253,8 +253,9 @@ def test_targets_positions_and_points_of_cells(dim):
         P, cells, bary = cg.geodesic_path(mesh, res, target, return_surface_points=True, straighten=False)
         _inside(mesh, P, cells, bary)
         np.testing.assert_array_equal(P[-1], mesh.V[0])
-    with pytest.raises(SourceError, match=f"target must be a vertex index, a {kind.__name__} or a \\(3,\\) position"):
-        cg.geodesic_path(mesh, res, "corner")
+    for bad in ("corner", [0.5, np.nan, 0.5], True):
+        with pytest.raises(SourceError, match=f"target must be a vertex index, a {kind.__name__} or a finite "):
+            cg.geodesic_path(mesh, res, bad)
     with pytest.raises(SourceError, match="index 9999 is out of range"):
         cg.geodesic_path(mesh, res, kind(9999, np.full(dim + 1, 1 / (dim + 1))))
 

@@ -499,14 +499,12 @@ def _as_target(mesh: Any, target: Any) -> int | MeshPoint:
             raise SourceError(f"target vertex {int(target)} is out of range: the mesh has {mesh.n_vertices} "
                               "vertices")
         return int(target)
-    wrong = f"target must be a vertex index, a {kind.__name__} or a (3,) position, got {target!r}"
-    if isinstance(target, bool | np.bool_ | str):
-        raise SourceError(wrong)
+    wrong = f"target must be a vertex index, a {kind.__name__} or a finite (3,) position, got {target!r}"
     try:
         X = np.asarray(target, dtype=float)
     except (TypeError, ValueError):
         raise SourceError(wrong) from None
-    if X.shape != (3,):
+    if X.shape != (3,) or not np.all(np.isfinite(X)):
         raise SourceError(wrong)
     return _at_positions(mesh, X)  # one position: one point
 
