@@ -26,7 +26,8 @@ from scipy.sparse.csgraph import connected_components, dijkstra
 
 from ..errors import CvxGeodesicError, SolverError
 from ..linalg import analyse
-from ..mesh.tetmesh import DEGENERATE_TET_TOL, as_tetmesh, unit_tetmesh
+from ..mesh.tetmesh import DEGENERATE_TET_TOL, as_tetmesh
+from ..mesh.trimesh import unit_mesh
 from ..operators.tet import tet_divergence, tet_gradient_blocks, tet_mass_matrix, tet_stiffness
 from ..sources_tet import TetSources, resolve_tet_sources
 from ..validation import check_number
@@ -268,7 +269,7 @@ class TetHeatBaseline(TetBaselineSolver):
         super().__init__(mesh)
 
     def _setup(self) -> None:
-        mesh, self.scale = unit_tetmesh(self.mesh)
+        mesh, self.scale = unit_mesh(self.mesh)
         self._unit = mesh
         deg = mesh.degenerate_tets(DEGENERATE_TET_TOL)
         keep = np.ones(mesh.n_tets, dtype=bool)
