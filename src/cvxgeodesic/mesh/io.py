@@ -131,8 +131,7 @@ def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, na
     fmt = FORMATS[p.suffix.lower()]
     assert fmt.write_field is not None  # check_output_path accepted only DISTANCE_EXTENSIONS
     mesh = as_mesh(mesh)
-    volume = isinstance(mesh, TetMesh)
-    if volume and 3 not in fmt.dims:
+    if mesh.dim not in fmt.dims:  # every format holds surfaces: only a volume's field can be refused here
         *first, last = VOLUME_DISTANCE_EXTENSIONS
         raise ParameterError(f"{p}: a field on a tetrahedral mesh is written as {', '.join(first)} or {last}, not "
                              f"{p.suffix!r}")
@@ -141,24 +140,22 @@ def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, na
         raise ParameterError(
             f"invalid field name {name!r}: use letters, digits, '_', '.', '-' (not x, y, z, vertex, file_vertex)"
         )
-    if volume:
-        field = _volume_field(mesh, d, name, file_order)
-    elif file_order:
+    if not file_order:
+        field = FieldData(mesh.V, mesh.cells, d, name, np.arange(mesh.n_vertices), mesh.vertex_map, mesh.name)
+    elif mesh.dim == 2:
         out = file_order_mesh(mesh)
         field = FieldData(out.V, out.F, to_file_order(mesh, d), name, mesh.file_index, np.arange(out.n_vertices),
                           mesh.name)
     else:
-        field = FieldData(mesh.V, mesh.F, d, name, np.arange(mesh.n_vertices), mesh.vertex_map, mesh.name)
+        field = _volume_in_file_order(mesh, d, name)
     write = fmt.write_field
     atomic_write(p, lambda fh: write(fh, field), overwrite_read_only=overwrite_read_only)
     return p
 
 
-def _volume_field(mesh: TetMesh, d: np.ndarray, name: str, file_order: bool) -> FieldData:
-    """The field on a tetrahedral mesh, in its numbering or in its file's (no welding there: the file's vertices
-    in no tetrahedron come back at their place, with ``inf``)."""
-    if not file_order:
-        return FieldData(mesh.V, mesh.T, d, name, np.arange(mesh.n_vertices), mesh.vertex_map, mesh.name)
+def _volume_in_file_order(mesh: TetMesh, d: np.ndarray, name: str) -> FieldData:
+    """A field on a tetrahedral mesh in its file's numbering: nothing is welded in a volume, so the file's vertices
+    are the mesh's and those in no tetrahedron, back at their place with ``inf``."""
     n_file = mesh.n_file_vertices
     V = np.empty((n_file, 3))
     V[mesh.vertex_map] = mesh.V
