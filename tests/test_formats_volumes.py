@@ -225,8 +225,9 @@ def test_save_distance_on_a_volume_refuses(tmp_path):
         with pytest.raises(ParameterError, match=rf"x{ext}: a field on a tetrahedral mesh is written as \.npy, \.vtk "
                                                  rf"or \.vtu, not '{ext}'"):
             save_distance(tmp_path / f"x{ext}", mesh, d)
-    with pytest.raises(ParameterError, match="invalid field name 'x'"):  # the surfaces' rule: a name a file can hold
-        save_distance(tmp_path / "x.vtu", mesh, d, name="x")
+    for name in ("x", "a b"):  # the surfaces' rule: a name every format can hold, not a coordinate's
+        with pytest.raises(ParameterError, match=f"invalid field name '{name}'"):
+            save_distance(tmp_path / "x.vtu", mesh, d, name=name)
     assert not list(tmp_path.iterdir())
 
 
