@@ -942,7 +942,7 @@ def _p2_render_mesh(mesh, space):
     """Each face split in four at its edge midpoints (vertices: the P2 nodes), so that a P2 field draws with its
     values at the midpoints; returns the mesh."""
     V = np.vstack([mesh.V, mesh.V[mesh.edges].mean(axis=1)])
-    a, b, c, m0, m1, m2 = space.face_dofs.T  # m0 opposite corner 0: on edge (b, c)
+    a, b, c, m0, m1, m2 = space.cell_dofs.T  # m0 opposite corner 0: on edge (b, c)
     F = np.vstack([np.column_stack(t) for t in ((a, m2, m1), (b, m0, m2), (c, m1, m0), (m0, m1, m2))])
     return cg.TriMesh(V, F, name=mesh.name)
 
@@ -952,12 +952,12 @@ def smooth_plane_case(plan) -> tuple[dict, list]:
     import warnings
 
     from cvxgeodesic.evaluation import ridge_deficit, rounding_width
-    from cvxgeodesic.operators.p2 import P2Space
+    from cvxgeodesic.operators.lagrange import LagrangeSpace
     from order2_smoothing import BAND, plane, two_sources
 
     mesh = plane("jittered", plan.smooth_plane)
     s, exact, K = two_sources(mesh)
-    space = P2Space(mesh)
+    space = LagrangeSpace(mesh)
     X = np.vstack([mesh.V, mesh.V[mesh.edges].mean(axis=1)])
     exact_nodes = np.linalg.norm(X[:, None] - mesh.V[s], axis=2).min(axis=1)
     rows, fields, base = {}, {"exact": exact_nodes}, {}

@@ -1,4 +1,4 @@
-"""Order 2: P2 elements for d² (``operators/p2.py``, ``formulations_p2.py``, ``strategies/order2.py``)."""
+"""Order 2: P2 elements for d² (``operators/lagrange.py``, ``formulations_p2.py``, ``strategies/order2.py``)."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from cvxgeodesic.formulations_p2 import P2Builder
 from cvxgeodesic.mesh.generate import delaunay_plane as delaunay_mesh
 from cvxgeodesic.mesh.generate import fan_plate, needle_strip
 from cvxgeodesic.mesh.trimesh import unit_mesh
-from cvxgeodesic.operators.p2 import P2Space, max_violation, p2_basis
+from cvxgeodesic.operators.lagrange import LagrangeSpace, lagrange_basis, max_violation
 from cvxgeodesic.solvers import solve_clarabel
 from cvxgeodesic.solvers.ipm import InteriorPointSolver
 from cvxgeodesic.solvers.ipm.settings import ORDER2
@@ -40,7 +40,7 @@ def pt(face, bary) -> cg.SurfacePoint:
 def ipm_for(builder: P2Builder) -> InteriorPointSolver:
     """The order-2 strategy's structured solver for ``builder``'s mesh."""
     space = builder.space
-    return InteriorPointSolver(clique_pattern(space.n_dofs, [space.face_dofs]), settings=ORDER2)
+    return InteriorPointSolver(clique_pattern(space.n_dofs, [space.cell_dofs]), settings=ORDER2)
 
 
 def order2(mesh, src, **kw):
@@ -59,17 +59,17 @@ def flat_error(mesh, src) -> float:
 # ---------------------------------------------------------------- elements
 def test_p2_basis_partition_of_unity_and_nodal():
     nodes = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [0, .5, .5], [.5, 0, .5], [.5, .5, 0]])
-    N, dN = p2_basis(nodes)
+    N, dN = lagrange_basis(nodes)
     np.testing.assert_allclose(N, np.eye(6), atol=1e-15)
     lam = np.random.default_rng(0).dirichlet([1, 1, 1], 20)
-    N, dN = p2_basis(lam)
+    N, dN = lagrange_basis(lam)
     np.testing.assert_allclose(N.sum(axis=1), 1.0, atol=1e-14)
 
 
 def test_p2_weights_integrate_quadratics_exactly():
     # ∫∫_{[0,1]²} (x² + y²) = 2/3 ; the consistent P2 weights are exact for quadratics on any triangulation
     mesh = cg.grid_plane(5, jitter=0.3, seed=2)
-    space = P2Space(mesh)
+    space = LagrangeSpace(mesh)
     E = mesh.edges
     P = np.vstack([mesh.V, 0.5 * (mesh.V[E[:, 0]] + mesh.V[E[:, 1]])])
     phi = (P[:, :2] ** 2).sum(axis=1)
@@ -80,7 +80,7 @@ def test_p2_weights_integrate_quadratics_exactly():
 
 def test_gradient_of_exact_square_distance_on_a_face():
     mesh = delaunay_mesh(30)
-    space = P2Space(mesh)
+    space = LagrangeSpace(mesh)
     E = mesh.edges
     P = np.vstack([mesh.V, 0.5 * (mesh.V[E[:, 0]] + mesh.V[E[:, 1]])])
     p = np.array([0.3, 0.4, 0.0])
@@ -92,25 +92,25 @@ def test_gradient_of_exact_square_distance_on_a_face():
 def test_max_violation_finds_interior_maximum():
     # a hand-built quadratic on one face: v = |∇φ|² − 4φ, compare with dense sampling
     mesh = cg.TriMesh(np.array([[0, 0, 0], [1, 0, 0], [0.2, 0.9, 0.0]]), np.array([[0, 1, 2]]))
-    space = P2Space(mesh)
+    space = LagrangeSpace(mesh)
     rng = np.random.default_rng(1)
     for _ in range(5):
         x = rng.random(space.n_dofs)
         vmax, bary, _ = max_violation(space, x)
         g = np.linspace(0, 1, 81)
         B = np.array([[1 - a - b, a, b] for a in g for b in g if a + b <= 1 + 1e-12])
-        N, dN = p2_basis(B)
-        grad = np.einsum("sai,ci->sca", dN, space.lam_grad[0]) @ x[space.face_dofs[0]]
-        v = (grad**2).sum(axis=1) - 4 * N @ x[space.face_dofs[0]]
+        N, dN = lagrange_basis(B)
+        grad = np.einsum("sai,ci->sca", dN, space.gbasis[0]) @ x[space.cell_dofs[0]]
+        v = (grad**2).sum(axis=1) - 4 * N @ x[space.cell_dofs[0]]
         assert vmax[0] >= v.max() - 1e-12
         assert vmax[0] <= v.max() + 1e-3 * (abs(v.max()) + 1)
 
 
 def test_violations_lists_every_local_maximum_above_the_tolerance():
-    from cvxgeodesic.operators.p2 import violations
+    from cvxgeodesic.operators.lagrange import violations
 
     mesh = cg.TriMesh(np.array([[0, 0, 0], [1, 0, 0], [0.2, 0.9, 0.0]]), np.array([[0, 1, 2]]))
-    space = P2Space(mesh)
+    space = LagrangeSpace(mesh)
     E = mesh.edges
     nodes = np.vstack([mesh.V, 0.5 * (mesh.V[E[:, 0]] + mesh.V[E[:, 1]])])
     for c in ([0.4, 0.3, 0.0], [0.5, 0.02, 0.0], [0.2, 0.2, 0.0]):
@@ -674,15 +674,15 @@ def test_flat_nodes_samples_all_nodes_on_flat_faces_and_midpoints_elsewhere():
     V[40, 2] += 0.2  # a bump: the faces around vertex 40 and their neighbours are no longer flat
     mesh = cg.TriMesh(V, g.F)
     b = P2Builder(mesh, samples="flat-nodes")
-    flat = b.space.flat_faces
+    flat = b.space.flat_cells
     assert 0 < flat.sum() < mesh.n_faces
-    per_face = np.bincount(b.cone_face, minlength=mesh.n_faces)
+    per_face = np.bincount(b.cone_cell, minlength=mesh.n_faces)
     assert (per_face[flat] == 6).all() and (per_face[~flat] == 3).all()
-    mid = b.cone_bary[np.isin(b.cone_face, np.flatnonzero(~flat))]
+    mid = b.cone_bary[np.isin(b.cone_cell, np.flatnonzero(~flat))]
     assert np.isclose(mid.max(axis=1), 0.5).all()  # edge midpoints only
     # the default: the same samples, and three edge cones on each flat face
     d = P2Builder(mesh)
-    assert p2mod.DEFAULT_SAMPLES == "flat-bernstein" and d.cone_face.size == b.cone_face.size
+    assert p2mod.DEFAULT_SAMPLES == "flat-bernstein" and d.cone_cell.size == b.cone_cell.size
     assert np.array_equal(np.sort(d.bernstein.face), np.repeat(np.flatnonzero(flat), 3))
     with pytest.raises(ParameterError, match="samples must be 'flat-bernstein', 'flat-nodes' or one of"):
         P2Builder(mesh, samples="everywhere")
@@ -761,9 +761,16 @@ print(json.dumps({"solver": res.info.solver, "status": res.info.status, "notes":
 
 def test_cones_on_sources_only():
     corners = np.array([[0, 1, 2], [0, 1, 2], [0, 1, 2], [3, 0, 1], [3, 0, 1]])
+    # the cells' edges in CELL_EDGES order ((1, 2), (2, 0), (0, 1) locally): edge 0 joins the sources 0 and 1
+    edges = np.array([[1, 2, 0], [1, 2, 0], [1, 2, 0], [0, 3, 4], [0, 3, 4]])
     bary = np.array([[1, 0, 0], [0.5, 0.5, 0], [0, 0.5, 0.5], [0, 0.5, 0.5], [0.2, 0.4, 0.4]])
-    np.testing.assert_array_equal(p2mod._on_sources(corners, bary, np.array([0, 1])),
+    is_src = np.isin(np.arange(4), [0, 1])
+    zero = np.array([True, False, False, False, False])
+    np.testing.assert_array_equal(p2mod._on_sources(corners, edges, bary, is_src, zero),
                                   [True, True, False, True, False])
+    # two sources joined by an edge that is no source edge (a chord of a solid's source wall): its midpoint is free
+    np.testing.assert_array_equal(p2mod._on_sources(corners, edges, bary, is_src, ~zero),
+                                  [True, False, False, False, False])
 
 
 @pytest.mark.parametrize("which", ["edge", "face"])
@@ -778,7 +785,7 @@ def test_adjacent_sources_are_solved_by_the_structured_solver(which, monkeypatch
     assert r.info.solver == "ipm" and r.info.status == "optimal" and not r.info.notes
     assert r.info.iterations <= 13  # 11 and 12 (2026-12-02); 10 from one source
     # the optimum with the apex cones kept, solved by Clarabel: the cones were redundant
-    monkeypatch.setattr(p2mod, "_on_sources", lambda c, b, v: (b == 1).any(axis=1) & ((b <= 0) | np.isin(c, v)).all(1))
+    monkeypatch.setattr(p2mod, "_on_sources", lambda c, e, b, s, z: (b == 1).any(axis=1) & ((b <= 0) | s[c]).all(1))
     unit, scale = unit_mesh(mesh)
     full = P2Builder(unit).build(np.array(src))
     x = full.restore(solve_clarabel(full.problem, tol=1e-10).x)
@@ -834,15 +841,15 @@ def test_edge_and_corner_cones_hold_the_gradient_bound_on_the_whole_face():
     l1, l2 = np.meshgrid(t, t)
     bary = np.column_stack([l1.ravel(), l2.ravel(), 1 - l1.ravel() - l2.ravel()])
     bary = bary[bary[:, 2] >= -1e-12]
-    N, dN = p2_basis(bary)
+    N, dN = lagrange_basis(bary)
     tried = accepted = 0
     while accepted < 200:
         mesh, b, nodes = _triangle_and_nodes(rng)
         p = rng.uniform(-3, 3, 2)
         phi = np.sum((nodes - p) ** 2, axis=1) * rng.uniform(0.9, 1.3) + rng.normal(0, 0.05, 6)
         tried += 1
-        grad = np.einsum("sai,ci->sca", dN, b.space.lam_grad[0])  # (s, 2, 6)
-        _, gc = b.space.face_cones(np.eye(3))
+        grad = np.einsum("sai,ci->sca", dN, b.space.gbasis[0])  # (s, 2, 6)
+        _, gc = b.space.cell_cones(np.eye(3))
         corner_ok = np.all(np.sum((gc[0] @ phi) ** 2, axis=1) <= 4 * phi[:3])
         if not (corner_ok and (_edge_slacks(b, phi) >= 0).all()):
             continue
@@ -863,3 +870,22 @@ def test_edge_cones_that_leave_no_feasible_program_are_replaced_by_samples():
     assert res.info.status == "optimal" and res.info.solver == "ipm"
     assert any("edge cones ended 'primal_infeasible'" in n for n in res.info.notes)
     assert res.info.extra["rounds"] >= 1 and np.isfinite(res.distance).all() and res.distance.min() == 0.0
+
+
+def test_surface_only_options_are_refused_on_tetrahedra():
+    # the edge cones, the smoothness energies, a medium and the consistent weights exist on triangles only
+    from cvxgeodesic.mesh.tet_generate import tet_box
+    from cvxgeodesic.operators.metric import make_medium
+
+    box = tet_box(2)
+    assert P2Builder(box).space.dim == 3  # the volume default: every node of every tetrahedron
+    for kw, what in (({"samples": "flat-bernstein"}, "samples='flat-bernstein'"),
+                     ({"energy": "hessian", "lam": 0.1}, "smoothness energy")):
+        with pytest.raises(ParameterError, match=f"on tetrahedra takes no {what} \\(surfaces only\\)"):
+            P2Builder(box, **kw)
+    with pytest.raises(ParameterError, match="weights='p2' is defined for order-2 triangles only"):
+        P2Builder(box, weights="p2")
+    grid = cg.grid_plane(4)
+    medium = make_medium(grid, cost=np.ones(grid.n_vertices))
+    with pytest.raises(ParameterError, match="defined on surfaces only"):
+        LagrangeSpace(box, medium=medium)

@@ -16,7 +16,7 @@ from cvxgeodesic.evaluation import cut_locus_band, ridge_deficit, rounding_width
 from cvxgeodesic.formulations import KAPPA_ORDER2, smoothness_weight
 from cvxgeodesic.formulations_p2 import P2Builder, _restore_matrix
 from cvxgeodesic.mesh.trimesh import unit_mesh
-from cvxgeodesic.operators.p2 import P2Space
+from cvxgeodesic.operators.lagrange import LagrangeSpace
 from cvxgeodesic.operators.p2_energy import (
     JUMP_SIGMA,
     JUMPS,
@@ -84,7 +84,7 @@ def solve(mesh, src, method="qcqp-hessian", **kw):
 @pytest.mark.parametrize("name", P2_ENERGIES)
 def test_energy_vanishes_on_flat_squared_distance(name, jump):
     mesh = grid(10)
-    space = P2Space(mesh)
+    space = LagrangeSpace(mesh)
     E = p2_energy(space, name, jump=jump)
     phi = ((nodes(mesh) - [0.31, 0.27, 0.0]) ** 2).sum(axis=1)
     scale = magnitude(E, phi)
@@ -101,7 +101,7 @@ def test_energy_vanishes_on_the_unfolded_field_of_a_folded_strip(name, jump):
     """The jump term compares conormal derivatives in each face's own plane: zero across a bent edge for the
     field unfolded across it, not for the squared 3-D distance."""
     mesh, phi = folded_strip()
-    E = p2_energy(P2Space(mesh), name, jump=jump)
+    E = p2_energy(LagrangeSpace(mesh), name, jump=jump)
     assert abs(E(phi)) <= 1e-10 * magnitude(E, phi)
     chord = ((nodes(mesh) - [0.3, 0.4, 0.0]) ** 2).sum(axis=1)
     assert E(chord) > 0.1
@@ -109,7 +109,7 @@ def test_energy_vanishes_on_the_unfolded_field_of_a_folded_strip(name, jump):
 
 @pytest.mark.parametrize("mesh", [grid(5), cg.icosphere(1), folded_strip()[0]], ids=["grid", "sphere", "fold"])
 def test_energies_are_positive_semidefinite(mesh):
-    space = P2Space(mesh)
+    space = LagrangeSpace(mesh)
     for name, jump in itertools.product(P2_ENERGIES, JUMPS):
         Q = p2_energy(space, name, jump=jump).Q.toarray()
         assert np.abs(Q - Q.T).max() <= 1e-12 * np.abs(Q).max()
@@ -124,14 +124,14 @@ def test_energies_of_hand_computed_fields():
     one = cg.TriMesh(np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]]), np.array([[0, 1, 2]]))
     x, y = nodes(one)[:, 0], nodes(one)[:, 1]
     phi = x**2 + x * y + 3 * y**2
-    space = P2Space(one)
+    space = LagrangeSpace(one)
     assert p2_energy(space, "hessian")(phi) == pytest.approx(9.0, rel=1e-12)
     assert p2_energy(space, "laplacian")(phi) == pytest.approx(8.0, rel=1e-12)
     assert p2_energy(space, "dirichlet")(phi) == pytest.approx(0.0, abs=1e-12)
     two = cg.TriMesh(np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]), np.array([[0, 1, 3], [1, 2, 3]]))
     X = nodes(two)
     kink = np.maximum(X[:, 0] + X[:, 1] - 1, 0.0)
-    space = P2Space(two)
+    space = LagrangeSpace(two)
     for jump in JUMPS:  # both faces linear: the jump predicted from the vertices is the true one
         assert p2_energy(space, "dirichlet", jump=jump)(kink) == pytest.approx(4 * JUMP_SIGMA, rel=1e-12)
         assert p2_energy(space, "dirichlet", sigma=2.0, jump=jump)(kink) == pytest.approx(8.0, rel=1e-12)
@@ -155,7 +155,7 @@ def test_no_jump_term_on_boundary_or_non_manifold_edges():
     V = np.array([[0.0, 0, 0], [0, 1, 0], [-1, 0.5, 0], [1, 0.5, 0], [0.3, 0.5, 0.9]])
     F = np.array([[0, 1, 2], [1, 0, 3], [1, 0, 4]])
     mesh = cg.TriMesh(V, F)
-    space = P2Space(mesh)
+    space = LagrangeSpace(mesh)
     assert interior_edge_pairs(space)[0].size == 0
     src = np.array([-0.8, 0.3, 0.0])  # in page 0; unfolded into each other page, mirrored across the edge x = 0
     X = nodes(mesh)
@@ -164,7 +164,7 @@ def test_no_jump_term_on_boundary_or_non_manifold_edges():
         own = np.unique(F[f])
         u = np.linalg.norm(X[:, [0, 2]], axis=1)
         phi_f = (u + 0.8) ** 2 + (X[:, 1] - 0.3) ** 2
-        on = np.isin(np.arange(len(X)), np.concatenate([own, mesh.n_vertices + space.face_edges[f]]))
+        on = np.isin(np.arange(len(X)), np.concatenate([own, mesh.n_vertices + space.cell_edges[f]]))
         phi[on] = phi_f[on]
     for name in P2_ENERGIES:
         E = p2_energy(space, name)
@@ -172,7 +172,7 @@ def test_no_jump_term_on_boundary_or_non_manifold_edges():
 
 
 def test_bad_energy_arguments():
-    space = P2Space(grid(3))
+    space = LagrangeSpace(grid(3))
     with pytest.raises(ParameterError, match="energy"):
         p2_energy(space, "biharmonic")
     with pytest.raises(ParameterError, match="sigma"):
@@ -212,7 +212,7 @@ def test_smoothed_program_fits_the_strategy_pattern_and_matches_clarabel():
     assert pr.objective(ri.x) == pytest.approx(pr.objective(rc.x), rel=1e-7)
     assert np.abs(ri.x - rc.x).max() <= 1e-5 * rc.x.max()
     # the face cliques alone do not hold the jump term's coupling: a new analysis
-    ipm_faces = InteriorPointSolver(clique_pattern(space.n_dofs, [space.face_dofs]), settings=ORDER2)
+    ipm_faces = InteriorPointSolver(clique_pattern(space.n_dofs, [space.cell_dofs]), settings=ORDER2)
     assert ipm_faces.solve(pr).extra["new_analyses"] == 1
 
 
@@ -283,7 +283,7 @@ def test_smoothed_solves_reuse_one_analysis_and_report_the_objective():
         res = solver.solve(src)
         assert res.info.extra["new_analyses"] == 0
     phi = res.info.extra["p2_field"].phi
-    space = P2Space(mesh)
+    space = LagrangeSpace(mesh)
     w = space.weights("lumped")
     want = -(w @ phi) / w.sum() + res.info.lam * p2_energy(space, "hessian")(phi)
     assert res.info.objective == pytest.approx(want, rel=1e-6, abs=1e-9)

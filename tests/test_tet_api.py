@@ -9,10 +9,8 @@ import cvxgeodesic as cg
 from cvxgeodesic.cli import main
 from cvxgeodesic.errors import MeshError, ParameterError
 from cvxgeodesic.mesh.convert import as_mesh
-from cvxgeodesic.mesh.tet_generate import l_prism_distance, tet_box, tet_l_prism
-from cvxgeodesic.mesh.tet_split import TetSplitMesh
+from cvxgeodesic.mesh.tet_generate import l_prism_distance, tet_l_prism
 from cvxgeodesic.mesh.tetmesh import TetMesh
-from cvxgeodesic.operators.tet_p2 import TET_P2_NODES, TetP2Space, tet_max_violation, tet_p2_basis
 from test_viewer import _egl_works
 
 
@@ -29,77 +27,6 @@ def _msh(mesh, path):
         warnings.simplefilter("ignore")
         meshio.write(str(path), meshio.Mesh(mesh.V, [("tetra", mesh.T)]), file_format="gmsh22", binary=False)
     return path
-
-
-# -- the P2 tetrahedron -----------------------------------------------------------------------------------------
-def test_p2_reproduces_quadratics_and_their_gradients():
-    m = tet_box(2, jitter=0.2, seed=3)
-    space = TetP2Space(m)
-    rng = np.random.default_rng(1)
-    A, b, c = rng.normal(size=(3, 3)), rng.normal(size=3), 0.3
-    f = lambda X: np.einsum("pi,ij,pj->p", X, A, X) + X @ b + c  # noqa: E731
-    grad = lambda X: X @ (A + A.T) + b  # noqa: E731
-    E = m.edges
-    phi = np.concatenate([f(m.V), f(0.5 * (m.V[E[:, 0]] + m.V[E[:, 1]]))])
-    tets = rng.integers(0, m.n_tets, 40)
-    bary = rng.dirichlet(np.ones(4), 40)
-    X = np.einsum("pk,pkj->pj", bary, m.V[m.T[tets]])
-    val, gr = space.value_and_gradient_rows(tets, bary)
-    dofs = phi[space.tet_dofs[tets]]
-    np.testing.assert_allclose(np.einsum("pa,pa->p", val, dofs), f(X), atol=1e-12)
-    np.testing.assert_allclose(np.einsum("pca,pa->pc", gr, dofs), grad(X), atol=1e-10)
-    N, _ = tet_p2_basis(TET_P2_NODES)
-    np.testing.assert_allclose(N, np.eye(10), atol=1e-15)  # nodal basis
-    assert space.weights().sum() == pytest.approx(m.total_volume)
-
-
-def test_max_violation_is_the_maximum_over_each_tetrahedron():
-    m = tet_box(2, jitter=0.2, seed=4)
-    space = TetP2Space(m)
-    rng = np.random.default_rng(2)
-    E = m.edges
-    nodes = np.vstack([m.V, 0.5 * (m.V[E[:, 0]] + m.V[E[:, 1]])])
-    # a random field (v mostly convex: its maximum at corners), and half a squared distance from a point inside,
-    # whose v = −|x − x0|² + noise is concave: its maximum on faces, edges or inside
-    fields = [rng.uniform(0.0, 1.0, space.n_dofs),
-              0.5 * ((nodes - [0.4, 0.45, 0.55]) ** 2).sum(axis=1) + 1e-3 * rng.normal(size=space.n_dofs)]
-    samples = rng.dirichlet(np.ones(4), 4000)
-    samples = np.vstack([samples, TET_P2_NODES, np.eye(4)])
-    inside = 0
-    for x in fields:
-        inside += _check_max(space, x, samples)
-    assert inside >= m.n_tets // 2  # the second field's maxima are away from the corners
-
-
-def _check_max(space, x, samples) -> int:
-    vmax, bary, phi_at = tet_max_violation(space, x)
-    for t in range(space.mesh.n_tets):
-        val, gr = space.value_and_gradient_rows(np.full(len(samples), t), samples)
-        xt = x[space.tet_dofs[t]]
-        v = (np.einsum("pca,a->pc", gr, xt) ** 2).sum(axis=1) - 4 * val @ xt
-        assert vmax[t] >= v.max() - 1e-9  # never below a sample
-        vb_val, vb_gr = space.value_and_gradient_rows(np.array([t]), bary[t][None])
-        at = float((vb_gr[0] @ xt) @ (vb_gr[0] @ xt) - 4 * vb_val[0] @ xt)
-        assert at == pytest.approx(vmax[t], abs=1e-9)  # reached where it says
-        assert phi_at[t] == pytest.approx(float(vb_val[0] @ xt))
-        assert bary[t].min() >= 0 and bary[t].sum() == pytest.approx(1.0)
-    return int(np.count_nonzero(bary.max(axis=1) < 1 - 1e-9))
-
-
-def test_split_mesh_keeps_the_volume_and_locates_points():
-    m = tet_box(2, jitter=0.2, seed=5)
-    pts = [cg.VolumePoint(3, [0.1, 0.2, 0.3, 0.4]), cg.VolumePoint(20, [0.5, 0.5, 0.0, 0.0])]
-    split = TetSplitMesh(m, pts)
-    assert split.mesh.total_volume == pytest.approx(m.total_volume)
-    assert np.abs(split.mesh.signed_volumes).min() > 0
-    np.testing.assert_allclose(split.mesh.V[split.point_vertices], [p.position(m) for p in pts])
-    rng = np.random.default_rng(3)
-    tets = np.concatenate([[3] * 20, [20] * 20, rng.integers(0, m.n_tets, 20)])
-    bary = rng.dirichlet(np.ones(4), 60)
-    X = np.einsum("pk,pkj->pj", bary, m.V[m.T[tets]])
-    t2, b2 = split.locate(tets, bary)
-    assert b2.min() >= 0
-    np.testing.assert_allclose(np.einsum("pk,pkj->pj", b2, split.mesh.V[split.mesh.T[t2]]), X, atol=1e-12)
 
 
 # -- the API ----------------------------------------------------------------------------------------------------

@@ -296,6 +296,23 @@ def test_degenerate_tets_are_left_out_with_a_note():
         cg.GeodesicSolver(TetMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], [[0, 1, 2, 3]]), "qclp")
 
 
+def test_a_midpoint_in_no_cone_is_tied_to_its_edge_in_a_solid():
+    """As on surfaces (test_order2.py): a degenerate tetrahedron's edge shorter than MIN_EDGE gets no 1-D cone, and
+    its midpoint, in no cone and no equality, is tied to the mean of its ends instead of left unbounded."""
+    m = tet_box(2)
+    B = m.boundary_faces[0]
+    V = np.vstack([m.V, m.V[B[0]] + 1e-12 * (m.V[B[1]] - m.V[B[0]])])  # a new vertex 1e-12 from corner B[0]
+    mesh = TetMesh(V, np.vstack([m.T, [[*B, m.n_vertices]]]))
+    src = int(np.argmax(np.linalg.norm(V - V[B[0]], axis=1)))  # off the tiny edge: no source row holds it
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DegenerateFacesWarning)
+        res = cg.GeodesicSolver(mesh, "qclp", order=2).solve(src)
+    assert res.info.status == "optimal" and src not in B
+    e = int(np.flatnonzero((mesh.edges == np.sort([B[0], m.n_vertices])).all(axis=1))[0])
+    phi = res.info.extra["p2_field"].phi
+    assert phi[mesh.n_vertices + e] == pytest.approx(0.5 * (phi[B[0]] + phi[m.n_vertices]), rel=1e-12)
+
+
 def test_nonmanifold_mesh_is_noted_and_finite():
     m = tet_box(2)
     # a third tetrahedron on an interior face (two already share it): the face is no longer manifold

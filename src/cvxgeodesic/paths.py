@@ -252,7 +252,7 @@ class _Slope:
         if hasattr(fld, "split"):  # a field on the mesh with the source points inserted
             tt, bb = fld.split.locate(tt, bb)
         _, rows = fld.space.value_and_gradient_rows(tt, bb)
-        vals = fld.phi[fld.space.tet_dofs[tt[0]]]
+        vals = fld.phi[fld.space.cell_dofs[tt[0]]]
         g = rows[0] @ vals if np.all(np.isfinite(vals)) else np.zeros(3)
         return -g, float(np.linalg.norm(g))
 

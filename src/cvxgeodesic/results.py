@@ -91,7 +91,7 @@ class SolveInfo:
         - Clarabel: ``clarabel_setup_time``, ``clarabel_solve_time``; after a retry ``ipm_failure`` (the
           interior-point status that caused it);
         - the ``d ≥ 0`` re-solve: ``negative_min``, ``resolved_nonnegative``;
-        - ``order=2``: ``order``, ``p2_field`` (:class:`~cvxgeodesic.operators.p2.P2Field`), ``n_dofs``,
+        - ``order=2``: ``order``, ``p2_field`` (:class:`~cvxgeodesic.operators.lagrange.LagrangeField`), ``n_dofs``,
           ``n_cones``, ``rounds`` (cutting-plane rounds), ``round_iterations`` (iterations of each round's solve;
           ``iterations`` is their sum);
         - ``multires``: ``multires`` (the coarse mesh and the transfer), ``coarse``;

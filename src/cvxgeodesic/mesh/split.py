@@ -1,85 +1,118 @@
-"""A mesh with source points inserted as vertices (the order-2 solve of a point source)."""
+"""A simplex mesh with source points inserted as vertices (the order-2 solve of a point source)."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
+import scipy.sparse as sp
 
 from ..errors import SourceError
-from .trimesh import TriMesh
 
 __all__ = ["SplitMesh", "piece_coordinates"]
 
+#: (a cell, a preposition) for messages, by simplex dimension.
+_WORDS = {2: ("face", "on"), 3: ("tetrahedron", "in")}
+
 
 class SplitMesh:
-    """A mesh with source points inserted as vertices (each face holding one is split into 2 or 3 faces).
+    """A triangle or tetrahedral mesh with points inserted as vertices (the conforming splits).
 
-    Face ``f`` of the original mesh keeps its index for its first piece; the other pieces are appended.
-    Original vertices keep their indices; point ``i`` becomes vertex ``n + i``.
+    A point inside a cell splits it into ``dim + 1`` pieces; a point on a facet or an edge splits every cell around
+    that facet or edge (each into as many pieces as the point has nonzero coordinates). Cell ``t`` of the original
+    mesh keeps its index for its first piece; the other pieces are appended. Original vertices keep their indices;
+    point ``i`` becomes vertex ``n + i``.
 
     Parameters
     ----------
-    mesh : TriMesh
-    points : list of objects with ``face`` and normalized ``bary`` (on an edge or inside a face)
+    mesh : TriMesh or TetMesh
+    points : sequence of objects with ``bary`` (normalized) and ``face`` (surfaces) or ``tet`` (volumes)
+        Not at a vertex (a coordinate of exactly 0 means the point lies on the opposite facet).
+
+    Attributes
+    ----------
+    mesh : TriMesh or TetMesh
+        The split mesh (same type as the original).
+    cell_parent : (k',) int64 ndarray
+        The original cell each cell of :attr:`mesh` is a piece of.
+    point_vertices : (p,) int64 ndarray
+        The vertices the points became.
+    n_original : int
+        The original mesh's vertex count.
 
     Raises
     ------
     SourceError
-        Two points on one face.
+        Two points in one cell (order 2 takes at most one per cell), or a point at a vertex.
+
+    Examples
+    --------
+    >>> from cvxgeodesic.mesh.tet_generate import tet_box
+    >>> from cvxgeodesic.mesh.tet_locate import VolumePoint
+    >>> split = SplitMesh(tet_box(1), [VolumePoint(0, [0.25, 0.25, 0.25, 0.25])])
+    >>> split.mesh.n_tets, split.point_vertices.tolist()
+    (9, [8])
     """
 
-    def __init__(self, mesh: TriMesh, points):
-        n = mesh.n_vertices
-        F = [row for row in mesh.F.tolist()]
+    def __init__(self, mesh: Any, points):
+        n, cells = mesh.n_vertices, mesh.cells
+        k, c = cells.shape
+        self._cells = cells.tolist()
         V = [mesh.V]
-        self.pieces: dict[int, list[tuple[int, int, np.ndarray]]] = {}  # face -> [(corner k, piece, bary)]
-        new_ids = []
+        inc = sp.csr_matrix((np.ones(c * k), (cells.ravel(), np.repeat(np.arange(k), c))), shape=(n, k))
+        #: cell -> [(local corner replaced, piece index, bary of the point in the cell)]
+        self.pieces: dict[int, list[tuple[int, int, np.ndarray]]] = {}
         for i, p in enumerate(points):
-            vid = n + i
-            new_ids.append(vid)
-            V.append((p.bary @ mesh.V[mesh.F[p.face]])[None])
+            t0 = int(p.face if mesh.dim == 2 else p.tet)
+            V.append((p.bary @ mesh.V[cells[t0]])[None])
             nz = np.flatnonzero(p.bary > 0)
-            corners = mesh.F[p.face, nz]
-            if nz.size == 2:
-                fs = np.flatnonzero((mesh.F == corners[0]).any(axis=1) & (mesh.F == corners[1]).any(axis=1))
-            else:
-                fs = np.array([p.face])
-            for f in fs.tolist():
-                if f in self.pieces:
-                    raise SourceError(f"two source points on face {f}: order 2 takes at most one per face")
-                beta = np.zeros(3)
-                for kk in range(3):
-                    hit = np.flatnonzero(corners == mesh.F[f, kk])
-                    if hit.size:
-                        beta[kk] = p.bary[nz[hit[0]]]
-                lst = []
-                for k in np.flatnonzero(beta > 0).tolist():
-                    tri = list(mesh.F[f])
-                    tri[k] = vid
-                    if not lst:
-                        F[f] = tri
-                        idx = f
-                    else:
-                        F.append(tri)
-                        idx = len(F) - 1
-                    lst.append((k, idx, beta))
-                self.pieces[f] = lst
-        self.mesh = TriMesh(np.vstack(V), np.asarray(F, dtype=np.int64), name=mesh.name)
-        #: (m',) int64 ndarray: the original face each face of :attr:`mesh` is a piece of
-        self.face_parent = np.arange(len(F), dtype=np.int64)
-        for f, lst in self.pieces.items():
-            self.face_parent[[idx for _, idx, _ in lst]] = f
-        self.point_vertices = np.asarray(new_ids, dtype=np.int64)
+            if nz.size < 2:
+                raise SourceError(f"{p!r} lies at a vertex: give the vertex index instead")
+            corners = cells[t0, nz]
+            # every cell holding the point's edge, facet or itself: those with all its support corners
+            around = np.flatnonzero(np.asarray(inc[corners].sum(axis=0)).ravel() == nz.size)
+            for t in around.tolist():
+                self._split_cell(t, n + i, cells[t], corners, p.bary[nz], mesh.dim)
+        self.mesh = type(mesh)(np.vstack(V), np.asarray(self._cells, dtype=np.int64), name=mesh.name)
+        self.cell_parent = np.arange(len(self._cells), dtype=np.int64)
+        del self._cells
+        for t, lst in self.pieces.items():
+            self.cell_parent[[idx for _, idx, _ in lst]] = t
+        self.point_vertices = n + np.arange(len(points), dtype=np.int64)
         self.n_original = n
 
-    def locate(self, faces: np.ndarray, bary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Original (face, bary) pairs → (piece, bary in the piece)."""
-        faces = faces.copy()
-        bary = bary.copy()
-        for r, f in enumerate(faces.tolist()):
-            lst = self.pieces.get(f)
+    def _split_cell(self, t: int, vid: int, cell: np.ndarray, corners: np.ndarray, weights: np.ndarray,
+                    dim: int) -> None:
+        """Replace cell ``t`` by its pieces around the new vertex ``vid`` (at ``weights`` on ``corners``)."""
+        if t in self.pieces:
+            one, prep = _WORDS[dim]
+            raise SourceError(f"two source points {prep} {one} {t}: order 2 takes at most one per {one}")
+        beta = np.zeros(cell.size)
+        for corner, b in zip(corners, weights, strict=True):
+            beta[cell == corner] = b
+        lst: list[tuple[int, int, np.ndarray]] = []
+        for kk in np.flatnonzero(beta > 0).tolist():
+            piece = list(cell)
+            piece[kk] = vid
+            if not lst:
+                self._cells[t] = piece
+                idx = t
+            else:
+                self._cells.append(piece)
+                idx = len(self._cells) - 1
+            lst.append((kk, idx, beta))
+        self.pieces[t] = lst
+
+    def locate(self, cells: np.ndarray, bary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Original ``(cells (p,), bary (p, dim + 1))`` pairs → the pieces holding the points and their coordinates
+        there (:func:`piece_coordinates`)."""
+        cells = np.array(cells, dtype=np.int64)
+        bary = np.array(bary, dtype=float)
+        for r, t in enumerate(cells.tolist()):
+            lst = self.pieces.get(t)
             if lst:
-                faces[r], bary[r] = piece_coordinates(bary[r], lst)
-        return faces, bary
+                cells[r], bary[r] = piece_coordinates(bary[r], lst)
+        return cells, bary
 
 
 def piece_coordinates(lam: np.ndarray, pieces: list) -> tuple[int, np.ndarray]:

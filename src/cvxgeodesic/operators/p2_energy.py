@@ -5,7 +5,7 @@ continuous. A polyhedral surface is flat face by face and unfolding two faces ab
 isometry, so wherever the exact field is ``|x − p′|²`` (``p′`` a source unfolded along a window of faces) both
 hold there too. The energies below measure the departure from that, and are zero on such fields whatever the
 triangulation; they see the ridge's kink (where two fronts meet) and, on curved surfaces, the fronts bent around
-saddle vertices. With the P2 space of :mod:`cvxgeodesic.operators.p2`:
+saddle vertices. With the order-2 space of :mod:`cvxgeodesic.operators.lagrange`:
 
 * **Hessian** ``E_H(φ) = Σ_t A_t ‖H_t(φ) − 2I‖²_F + E_J(φ)`` (``H_t``: the Hessian of ``φ``, constant on each face,
   in the face's frame);
@@ -28,8 +28,8 @@ dimensionless.
 **Edges.** Boundary edges carry no jump term. A non-manifold edge (three or more faces) carries none either: on
 such an edge the exact field of a front arriving through one face continues, unfolded, into every other face, so
 the conormal derivatives of two receiving faces do not cancel (they are equal) and a pairwise penalty would be
-wrong for the exact field. Degenerate faces (:attr:`P2Space.degenerate`) carry no face term and their edges no jump
-term (their shape-function derivatives grow like the inverse altitude).
+wrong for the exact field. Degenerate faces (:attr:`LagrangeSpace.degenerate`) carry no face term and their edges
+no jump term (their shape-function derivatives grow like the inverse altitude).
 
 Every energy is returned as the quadratic ``E(φ) = φᵀQφ + 2gᵀφ + c`` (:class:`P2Energy`); ``Q`` couples the DOFs
 of the two faces of each interior edge (:func:`edge_pair_dofs`: nine DOFs per edge).
@@ -43,7 +43,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import ParameterError
-from .p2 import P2Space, p2_basis
+from .lagrange import LagrangeSpace, lagrange_basis
 
 __all__ = ["JUMPS", "JUMP_SIGMA", "P2_ENERGIES", "P2Energy", "edge_diamonds", "edge_pair_dofs", "face_hessian_energy",
            "interior_edge_pairs", "jump_energy", "p2_energy", "vertex_jump_energy"]
@@ -83,12 +83,12 @@ class P2Energy:
         return float(phi @ (self.Q @ phi) + 2.0 * self.g @ phi + self.c)
 
 
-def interior_edge_pairs(space: P2Space) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def interior_edge_pairs(space: LagrangeSpace) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The edges that carry a jump term: exactly two incident faces, neither degenerate.
 
     Parameters
     ----------
-    space : P2Space
+    space : LagrangeSpace
 
     Returns
     -------
@@ -99,7 +99,7 @@ def interior_edge_pairs(space: P2Space) -> tuple[np.ndarray, np.ndarray, np.ndar
     corners : (k, 2) int64 ndarray
         The local corner of each face opposite the edge (the edge is local edge ``corners`` of its face).
     """
-    fe = space.face_edges.ravel()  # face f, local corner k at position 3f + k
+    fe = space.cell_edges.ravel()  # face f, local corner k at position 3f + k
     order = np.argsort(fe, kind="stable")
     counts = np.bincount(fe, minlength=space.n_edges)
     starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
@@ -111,16 +111,16 @@ def interior_edge_pairs(space: P2Space) -> tuple[np.ndarray, np.ndarray, np.ndar
     return two[ok].astype(np.int64), faces[ok], corners[ok]
 
 
-def edge_pair_dofs(space: P2Space) -> np.ndarray:
+def edge_pair_dofs(space: LagrangeSpace) -> np.ndarray:
     """(k, 9) int64 ndarray: the DOFs of the two faces of each edge of :func:`interior_edge_pairs` (the first face's
     six, then the second face's opposite vertex and its two other midpoints): the cliques the jump term couples."""
     _, faces, corners = interior_edge_pairs(space)
-    fd = space.face_dofs
+    fd = space.cell_dofs
     t2, k2 = faces[:, 1], corners[:, 1]
     return np.column_stack([fd[faces[:, 0]], fd[t2, k2], fd[t2, 3 + (k2 + 1) % 3], fd[t2, 3 + (k2 + 2) % 3]])
 
 
-def edge_diamonds(space: P2Space) -> np.ndarray:
+def edge_diamonds(space: LagrangeSpace) -> np.ndarray:
     """(k, 4) int64 ndarray: the ends and the two opposite vertices of each edge of :func:`interior_edge_pairs`:
     the cliques the vertex jump term couples."""
     edges, faces, corners = interior_edge_pairs(space)
@@ -128,7 +128,7 @@ def edge_diamonds(space: P2Space) -> np.ndarray:
     return np.column_stack([space.mesh.edges[edges], F[faces[:, 0], corners[:, 0]], F[faces[:, 1], corners[:, 1]]])
 
 
-def _conormal_rows(space: P2Space, faces: np.ndarray, corners: np.ndarray, ends: np.ndarray) -> np.ndarray:
+def _conormal_rows(space: LagrangeSpace, faces: np.ndarray, corners: np.ndarray, ends: np.ndarray) -> np.ndarray:
     """(k, 3, 6): ``∂_ν φ`` on face ``faces[i]`` (``ν`` the outward unit conormal of its edge opposite local corner
     ``corners[i]``) at the edge's global endpoint ``ends[i, 0]``, the midpoint and ``ends[i, 1]``, as rows on the
     face's six DOFs."""
@@ -141,8 +141,8 @@ def _conormal_rows(space: P2Space, faces: np.ndarray, corners: np.ndarray, ends:
     bary[r, 0, loc_a] = 1.0
     bary[r, 1, loc_a] = bary[r, 1, loc_b] = 0.5
     bary[r, 2, loc_b] = 1.0
-    _, dN = p2_basis(bary.reshape(-1, 3))
-    g = space.lam_grad[faces]  # (k, 2, 3)
+    _, dN = lagrange_basis(bary.reshape(-1, 3))
+    g = space.gbasis[faces]  # (k, 2, 3)
     grad = np.einsum("kpai,kci->kpca", dN.reshape(k, 3, 6, 3), g)
     nu = -g[r, :, corners]  # λ_corner grows towards the corner: its gradient points into the face
     nu /= np.linalg.norm(nu, axis=1, keepdims=True)
@@ -157,12 +157,12 @@ def _assemble(dofs: np.ndarray, blocks: np.ndarray, n: int) -> sp.csr_matrix:
     return sp.csr_matrix((blocks.ravel(), (rows, cols)), shape=(n, n))
 
 
-def jump_energy(space: P2Space, sigma: float = JUMP_SIGMA) -> sp.csr_matrix:
+def jump_energy(space: LagrangeSpace, sigma: float = JUMP_SIGMA) -> sp.csr_matrix:
     """``Q_J`` with ``E_J(φ) = φᵀ Q_J φ``: the interior penalty on the P2 field's conormal jumps (``jump="p2"``).
 
     Parameters
     ----------
-    space : P2Space
+    space : LagrangeSpace
     sigma : float
         ``σ`` (:data:`JUMP_SIGMA`).
 
@@ -178,17 +178,17 @@ def jump_energy(space: P2Space, sigma: float = JUMP_SIGMA) -> sp.csr_matrix:
     # Simpson's rule: exact for J² (J is linear along the edge)
     w = (_jump_weights(space, edges, faces, sigma) / 6.0)[:, None] * np.array([1.0, 4.0, 1.0])
     blocks = np.einsum("kp,kpa,kpb->kab", w, J, J)
-    dofs = np.concatenate([space.face_dofs[faces[:, 0]], space.face_dofs[faces[:, 1]]], axis=1)
+    dofs = np.concatenate([space.cell_dofs[faces[:, 0]], space.cell_dofs[faces[:, 1]]], axis=1)
     return _assemble(dofs, blocks, space.n_dofs)
 
 
-def _jump_weights(space: P2Space, edges: np.ndarray, faces: np.ndarray, sigma: float = JUMP_SIGMA) -> np.ndarray:
+def _jump_weights(space: LagrangeSpace, edges: np.ndarray, faces: np.ndarray, sigma: float = JUMP_SIGMA) -> np.ndarray:
     """(k,) ``σ ℓ_e / h_e`` with ``h_e = (A_{t1} + A_{t2}) / ℓ_e``: the weight of ``J²`` (a constant jump) per edge."""
     ell = space.mesh.edge_lengths[edges]
     return sigma * ell**2 / space.mesh.face_areas[faces].sum(axis=1)
 
 
-def vertex_jump_energy(space: P2Space, sigma: float = JUMP_SIGMA) -> tuple[sp.csr_matrix, np.ndarray, float]:
+def vertex_jump_energy(space: LagrangeSpace, sigma: float = JUMP_SIGMA) -> tuple[sp.csr_matrix, np.ndarray, float]:
     """``(Q, g, c)`` of the jump penalty on the conormal derivatives *predicted from the vertex values*
     (``jump="vertex"``, the default).
 
@@ -204,7 +204,7 @@ def vertex_jump_energy(space: P2Space, sigma: float = JUMP_SIGMA) -> tuple[sp.cs
 
     Parameters
     ----------
-    space : P2Space
+    space : LagrangeSpace
     sigma : float
         ``σ`` of ``Σ_e (σ/h_e) ℓ_e Ĵ_e²``.
 
@@ -221,7 +221,7 @@ def vertex_jump_energy(space: P2Space, sigma: float = JUMP_SIGMA) -> tuple[sp.cs
     rows, offset, dofs = [], np.zeros(edges.size), []
     for side in (0, 1):
         t, k = faces[:, side], corners[:, side]
-        g = space.lam_grad[t]  # (k, 2, 3)
+        g = space.gbasis[t]  # (k, 2, 3)
         nu = -g[np.arange(t.size), :, k]
         nu /= np.linalg.norm(nu, axis=1, keepdims=True)
         row = np.einsum("kc,kcv->kv", nu, g)  # ν·∇λ_v of the face's corners: the P1 conormal derivative
@@ -237,7 +237,7 @@ def vertex_jump_energy(space: P2Space, sigma: float = JUMP_SIGMA) -> tuple[sp.cs
     return Q, g, float(w @ offset**2)
 
 
-def face_hessian_energy(space: P2Space, kind: str = "hessian") -> tuple[sp.csr_matrix, np.ndarray, float]:
+def face_hessian_energy(space: LagrangeSpace, kind: str = "hessian") -> tuple[sp.csr_matrix, np.ndarray, float]:
     """``(Q, g, c)`` of ``Σ_t A_t ‖H_t − 2I‖²_F`` (``kind="hessian"``) or ``Σ_t A_t (tr H_t − 4)²``
     (``"laplacian"``) over the proper faces.
 
@@ -259,17 +259,17 @@ def face_hessian_energy(space: P2Space, kind: str = "hessian") -> tuple[sp.csr_m
         gf, c = -4.0 * A[:, None] * T, 16.0 * A.sum()  # (tr H − 4)² = (tr H)² − 8 tr H + 16
     else:
         raise ParameterError(f"kind must be 'hessian' or 'laplacian', got {kind!r}")
-    dofs = space.face_dofs[faces]
+    dofs = space.cell_dofs[faces]
     g = np.bincount(dofs.ravel(), gf.ravel(), minlength=space.n_dofs)
     return _assemble(dofs, blocks, space.n_dofs), g, float(c)
 
 
-def p2_energy(space: P2Space, name: str, sigma: float = JUMP_SIGMA, jump: str = "vertex") -> P2Energy:
+def p2_energy(space: LagrangeSpace, name: str, sigma: float = JUMP_SIGMA, jump: str = "vertex") -> P2Energy:
     """A smoothness energy of the order-2 field by name.
 
     Parameters
     ----------
-    space : P2Space
+    space : LagrangeSpace
     name : {"hessian", "laplacian", "dirichlet"}
         ``"hessian"``: ``Σ_t A_t ‖H_t − 2I‖² + E_J``; ``"laplacian"``: ``Σ_t A_t (tr H_t − 4)² + E_J``;
         ``"dirichlet"``: ``E_J`` alone (module docstring).
@@ -290,9 +290,9 @@ def p2_energy(space: P2Space, name: str, sigma: float = JUMP_SIGMA, jump: str = 
 
     >>> import numpy as np
     >>> import cvxgeodesic as cg
-    >>> from cvxgeodesic.operators.p2 import P2Space
+    >>> from cvxgeodesic.operators.lagrange import LagrangeSpace
     >>> mesh = cg.grid_plane(6, jitter=0.3)
-    >>> space = P2Space(mesh)
+    >>> space = LagrangeSpace(mesh)
     >>> X = np.vstack([mesh.V, mesh.V[mesh.edges].mean(axis=1)])
     >>> E = p2_energy(space, "hessian")
     >>> abs(E(((X - [0.3, 0.2, 0.0]) ** 2).sum(axis=1))) < 1e-10
@@ -307,10 +307,10 @@ def p2_energy(space: P2Space, name: str, sigma: float = JUMP_SIGMA, jump: str = 
     n = space.n_dofs
     if jump == "p2":
         QJ, gJ, cJ = jump_energy(space, sigma), np.zeros(n), 0.0
-        cliques = [space.face_dofs, edge_pair_dofs(space)]
+        cliques = [space.cell_dofs, edge_pair_dofs(space)]
     else:
         QJ, gJ, cJ = vertex_jump_energy(space, sigma)
-        cliques = [space.face_dofs, edge_diamonds(space)]
+        cliques = [space.cell_dofs, edge_diamonds(space)]
     if name == "dirichlet":
         Q, g, c = QJ, gJ, cJ
     else:

@@ -347,5 +347,5 @@ def warm_up() -> None:
         InteriorPointSolver(kkt_pattern(mesh.n_vertices, mesh.F, mesh.edges, p.P)).solve(p)
     builder = P2Builder(mesh)  # order 2: the SOC(4) clique kernels
     space = builder.space
-    InteriorPointSolver(clique_pattern(space.n_dofs, [space.face_dofs]), settings=ORDER2).solve(
+    InteriorPointSolver(clique_pattern(space.n_dofs, [space.cell_dofs]), settings=ORDER2).solve(
         builder.build(np.array([0])).problem)
