@@ -10,7 +10,11 @@
 - ``fmm``: potpourri3d's fast marching takes ``(face, [b0, b1, b2])`` points natively; a curve is
   its samples; ``"boundary"`` is the boundary vertices. Single-component meshes only.
 - ``heat``: potpourri3d's heat method takes vertices only; points and curves raise
-  :class:`~cvxgeodesic.errors.SourceError`, ``"boundary"`` is the boundary vertices.
+  :class:`~cvxgeodesic.errors.SourceError` (from :func:`cvxgeodesic.capabilities.check`, the one table of
+  what each method takes), ``"boundary"`` is the boundary vertices.
+
+Inside a volume the baselines take every kind of volume source themselves
+(:meth:`~cvxgeodesic.baselines.base.BaselineSolver.solve`).
 """
 
 from __future__ import annotations
@@ -20,20 +24,12 @@ import io
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.csgraph import dijkstra
 
+from ..capabilities import check, methods_for
 from ..errors import SolverError, SourceError
 from ..mesh.trimesh import TriMesh
 from ..sources import BARY_SNAP, SourceSet, closest_points, vertex_bounds
-
-#: Methods that take every kind of source (the eight formulations, then the baselines that take points).
-POINT_METHODS = ("lclp", "lcqp-dirichlet", "lcqp-laplacian", "lcqp-hessian", "qclp", "qcqp-dirichlet",
-                 "qcqp-laplacian", "qcqp-hessian", "dijkstra", "exact", "fmm")
-
-
-def _cannot(method: str, what: str, why: str) -> SourceError:
-    return SourceError(f"method {method!r} cannot take {what} sources ({why}); methods that can: "
-                       f"{', '.join(m for m in POINT_METHODS if m != method)}")
+from .dijkstra import graph_distance
 
 
 def solve_baseline_sources(baseline, ss: SourceSet) -> tuple[np.ndarray, dict]:
@@ -57,6 +53,8 @@ def solve_baseline_sources(baseline, ss: SourceSet) -> tuple[np.ndarray, dict]:
     """
     name, mesh = baseline.name, baseline.mesh
     has_points = ss.point_faces.size > 0 or ss.kind in ("curve", "points", "mixed")
+    if has_points and ss.kind != "boundary":
+        check(name, dim=2, sources=["curve"] if ss.segment_faces.size else ["point"])
     if name == "dijkstra":
         return (_dijkstra(mesh, ss, baseline.graph, getattr(baseline, "medium", None)),
                 {"solver": baseline.library, "sources": "virtual node with offsets"})
@@ -64,30 +62,17 @@ def solve_baseline_sources(baseline, ss: SourceSet) -> tuple[np.ndarray, dict]:
         d, info = baseline.solve(ss.vertices)
         info["sources"] = "boundary vertices"
         return d, info
-    if name == "heat" and has_points:
-        raise _cannot(name, "point or curve", "potpourri3d's heat method takes vertex sources only")
     if name == "exact":
         return _exact_inserted(mesh, ss)
-    if name == "fmm":
-        return _fmm_points(baseline, ss)
-    raise _cannot(name, "point or curve", "not supported")  # pragma: no cover
+    return _fmm_points(baseline, ss)
 
 
 def _dijkstra(mesh: TriMesh, ss: SourceSet, graph: sp.csr_matrix, medium=None) -> np.ndarray:
-    n = mesh.n_vertices
     bound = vertex_bounds(mesh, ss, medium)
     if medium is not None:
         bound = bound * medium.scale
-    bv = np.flatnonzero(np.isfinite(bound))
-    # zero weights are "no edge" in scipy's sparse graphs: a vertex exactly on a point is a vertex source already
-    w = np.maximum(bound[bv], 1e-300)
-    G = graph.tocoo()
-    virtual = np.full(len(bv), n)
-    A = sp.coo_matrix((np.r_[G.data, w, w], (np.r_[G.row, virtual, bv], np.r_[G.col, bv, virtual])),
-                      shape=(n + 1, n + 1)).tocsr()
-    idx = np.r_[ss.vertices, n] if bv.size else ss.vertices
-    d = dijkstra(A, directed=False, indices=idx, min_only=True)
-    return np.asarray(d[:n], dtype=float)
+    near = np.flatnonzero(np.isfinite(bound))
+    return graph_distance(graph, ss.vertices, near, bound[near])
 
 
 def _unique_points(mesh: TriMesh, ss: SourceSet) -> np.ndarray:
@@ -169,8 +154,10 @@ def _fmm_points(baseline, ss: SourceSet) -> tuple[np.ndarray, dict]:
     mesh = baseline.mesh
     parts = baseline._parts
     if len(parts) != 1 or next(iter(parts.values())).vertices.size != mesh.n_vertices:
-        raise _cannot("fmm", "point or curve", "on a mesh with several components or unreferenced vertices; "
-                      "the library's face indices are per component")
+        can = [m for m in methods_for(2, source="point") if m != "fmm"]
+        raise SourceError("method 'fmm' cannot take point or curve sources on a mesh with several components or "
+                          "unreferenced vertices (the library's face indices are per component); methods that can: "
+                          + ", ".join(can))
     solver = next(iter(parts.values())).solver
     pts = [(int(v), []) for v in ss.vertices]
     bary = np.asarray(ss.point_bary, dtype=np.float64).reshape(-1, 3)

@@ -7,7 +7,7 @@
   settings, source points inserted as vertices, then cutting planes: a solid is flat, ``d²`` is exactly quadratic
   where the source is visible, so a cone at each tetrahedron's worst point
   (:func:`~cvxgeodesic.operators.tet_p2.tet_max_violation`) closes the gap between the node samples;
-- :class:`TetBaselineStrategy`: Dijkstra on the edges and the heat method (:mod:`cvxgeodesic.baselines.tet`).
+- the baselines (Dijkstra, heat): :class:`~cvxgeodesic.strategies.baseline.BaselineStrategy`, as on surfaces.
 
 :func:`make_tet_strategy` chooses; :func:`~cvxgeodesic.strategies.make_strategy` calls it for a
 :class:`~cvxgeodesic.mesh.tetmesh.TetMesh`.
@@ -20,7 +20,6 @@ from typing import Any, cast
 
 import numpy as np
 
-from ..baselines.tet import TET_BASELINES
 from ..errors import ParameterError, SolverError
 from ..formulations_p2 import P2Program
 from ..formulations_tet import TET_FORMULATIONS, TET_ORDER2_METHODS, TetOperators, build_tet_problem
@@ -35,7 +34,7 @@ from .backend import Backend
 from .base import Callback, SolveConfig
 from .order2 import REFINE_ROUNDS, REFINE_TOL
 
-__all__ = ["REFINE_STALL", "TetBaselineStrategy", "TetDirect", "TetOrder2", "make_tet_strategy"]
+__all__ = ["REFINE_STALL", "TetDirect", "TetOrder2", "make_tet_strategy"]
 
 #: The cutting-plane rounds stop after a round that moved no vertex distance by more than this fraction of the
 #: largest. Where the source is hidden (behind an edge) ``d²`` is not quadratic and the cones are violated between
@@ -57,7 +56,9 @@ def make_tet_strategy(config: SolveConfig, *, baseline: bool, order: int = 1) ->
     if order == 2:
         return TetOrder2(config)
     if baseline:
-        return TetBaselineStrategy(config)
+        from .baseline import BaselineStrategy
+
+        return BaselineStrategy(config)
     return TetDirect(config)
 
 
@@ -253,27 +254,3 @@ class TetOrder2:
         if len(rounds) > 1:
             notes.append(f"{len(rounds) - 1} cutting-plane round(s) added {extra_t.size} cone(s)")
         return program, res, rounds
-
-
-class TetBaselineStrategy:
-    """Dijkstra or the heat method inside a tetrahedral mesh (:data:`~cvxgeodesic.baselines.tet.TET_BASELINES`)."""
-
-    def __init__(self, config: SolveConfig) -> None:
-        t0 = time.perf_counter()
-        self.config = config
-        self.baseline = TET_BASELINES[config.method](config.mesh)
-        self.backend = config.method
-        self.notes: list[str] = [*config.notes, *self.baseline.notes]
-        self.setup_time = time.perf_counter() - t0
-
-    def solve(self, sources: TetSources, *, callback: Callback | None = None) -> GeodesicResult:
-        """Distance field from resolved sources; ``callback`` is ignored (no iterations)."""
-        t0 = time.perf_counter()
-        d, binfo = self.baseline.solve(sources)
-        notes = [*self.config.notes, *binfo.pop("notes", [])]
-        info = SolveInfo(method=self.config.method, solver=str(binfo.pop("solver")), status=binfo.pop("status"),
-                         setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
-                         n_unreachable=int(np.isinf(d).sum()), notes=notes,
-                         extra={k: v for k, v in binfo.items() if k not in ("method", "iterations")})
-        return GeodesicResult(distance=d, info=info, sources=sources.vertices,
-                              source_set=None if sources.vertex_only else sources)
