@@ -236,9 +236,11 @@ def test_source_errors():
 
 def test_methods_that_do_not_apply_name_those_that_do():
     m = tet_box(2)
-    for method in ("qcqp-hessian", "qgdf", "fmm", "exact", "nonsense"):
+    for method in ("qcqp-hessian", "qgdf", "fmm", "exact"):
         with pytest.raises(ParameterError, match="does not apply to tetrahedral meshes.*qclp.*heat"):
             cg.GeodesicSolver(m, method)
+    with pytest.raises(ParameterError, match="unknown method 'nonsense'; choose one of .*qclp.*heat .on tetrahedral"):
+        cg.GeodesicSolver(m, "nonsense")
     with pytest.raises(ParameterError, match="order=2 is implemented for qclp"):
         cg.GeodesicSolver(m, "qcqp-laplacian", order=2)
     with pytest.raises(ParameterError, match="multires"):

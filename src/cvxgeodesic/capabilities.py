@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import Any
 
 from .errors import ParameterError, SourceError
 
@@ -178,7 +179,8 @@ def check(method: str, *, dim: int, order: int = 1, medium: str = "none", source
     SourceError
         A kind of source the method cannot take there (the message names the methods that can).
     """
-    cell = {"dim": dim, "order": order, "medium": medium, "multires": multires, "smoothing": smoothing}
+    cell: dict[str, Any] = {"dim": dim, "order": order, "medium": medium, "multires": multires,
+                            "smoothing": smoothing}
     rule = refusal(method, **cell)
     if rule is not None:
         raise ParameterError(_message(rule, method, **cell))

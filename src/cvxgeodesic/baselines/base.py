@@ -200,9 +200,9 @@ class _LibraryErrors:
     def __enter__(self) -> _LibraryErrors:
         return self
 
-    def __exit__(self, kind, exc, tb) -> bool:
+    def __exit__(self, kind, exc, tb) -> None:
         if exc is None or isinstance(exc, CvxGeodesicError) or not isinstance(exc, Exception):
-            return False
+            return
         s = self.solver
         raise SolverError(f"baseline {s.name!r}: {self.what} {s.mesh.name}: {type(exc).__name__}: {exc}",
                           solver=s.library, status="error") from exc
