@@ -336,6 +336,8 @@ class GeodesicSolver:
             message adds that it can be indefinite on meshes with sharp corners).
         """
         t0 = time.perf_counter()
+        # a curve in a volume, boundary faces on a surface: refused with the table's reason before any resolution
+        check_capability(self.method, sources=_object_kinds(sources), **self._cell)
         if self.is_volume:
             from .sources_tet import resolve_tet_sources
 
@@ -591,6 +593,16 @@ def _matrix_rows(mesh: Any, vertices: Any, *, local: bool) -> tuple[list, np.nda
     uniq, inverse = np.unique(arr, return_inverse=True)
     uniq = validate_sources(uniq, mesh.n_vertices)
     return uniq.tolist(), np.asarray(inverse).ravel()
+
+
+def _object_kinds(sources: Any) -> set[str]:
+    """The kinds of source that a raw ``sources`` value names by its type alone: curves and boundary faces."""
+    from .sources import SurfaceCurve
+    from .sources_tet import BoundaryFaces
+
+    items = sources if isinstance(sources, list | tuple) else [sources]
+    return ({"curve"} if any(isinstance(s, SurfaceCurve) for s in items) else set()) | (
+        {"boundary faces"} if any(isinstance(s, BoundaryFaces) for s in items) else set())
 
 
 def _source_kinds(sset: Any) -> set[str]:
