@@ -230,8 +230,9 @@ def _cell(method: str, dim: int, column: str, notes: dict[str, int]) -> str:
     def note(rule: Rule) -> str:
         return f"[{notes.setdefault(rule.reason, len(notes) + 1)}]"
 
-    if refusal(method, dim=dim) is not None:
-        return "—"
+    rule = refusal(method, dim=dim)
+    if rule is not None:  # the method does not apply to the dimension: said once, in its first column
+        return f"no {note(rule)}" if column == "order 1" else "—"
     orders = [o for o in ORDERS if supported(method, dim=dim, order=o)]
     if column in ("order 1", "order 2"):
         rule = refusal(method, dim=dim, order=int(column[-1]))
@@ -267,7 +268,7 @@ def markdown_table() -> str:
                 "| method | " + " | ".join(_COLUMNS) + " |", "|---" * (len(_COLUMNS) + 1) + "|"]
         out += [f"| `{m}` | " + " | ".join(_cell(m, dim, c, notes) for c in _COLUMNS) + " |" for m in METHODS]
         out.append("")
-    out += ["—: the method does not apply to these meshes (its row's first refusal below says why).", ""]
+    out += ['—: the method does not apply to these meshes (its column "order 1" says why).', ""]
     for rule in RULES:  # the rules without a cell of their own (a method's dimension, multires' sources) close it
         notes.setdefault(rule.reason, len(notes) + 1)
     out += [f"{k}. {reason}" for reason, k in sorted(notes.items(), key=lambda kv: kv[1])]
