@@ -331,9 +331,13 @@ class ComponentwiseSolver(BaselineSolver):
 
     #: The library depends on the faces' orientation: give it consistently oriented faces.
     orient: bool = False
+    #: The library needs an edge- and vertex-manifold mesh (:func:`require_manifold`, checked before it is loaded).
+    manifold: bool = False
 
     def _setup(self) -> None:
         mesh = self.mesh
+        if self.manifold:
+            require_manifold(mesh, self.name)  # the message names the methods that solve non-manifold meshes
         self.scale = unit_scale(mesh)
         V = mesh.V / self.scale  # exact: a power of two
         F = mesh.F
@@ -385,4 +389,5 @@ class ComponentwiseSolver(BaselineSolver):
             local = np.searchsorted(part.vertices, src_c)
             d[part.vertices] = self._run(part.solver, local) * self.scale
             n_runs += 1
-        return d, {"n_components": len(self._parts), "n_components_solved": n_runs}
+        # every library here solves several sources in one run
+        return d, {"n_components": len(self._parts), "n_components_solved": n_runs, "multisource": "native"}

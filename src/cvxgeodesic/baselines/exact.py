@@ -8,7 +8,7 @@ import io
 import numpy as np
 
 from ..errors import SolverError
-from .base import ComponentwiseSolver, require_manifold
+from .base import ComponentwiseSolver
 
 
 class ExactBaseline(ComponentwiseSolver):
@@ -46,8 +46,9 @@ class ExactBaseline(ComponentwiseSolver):
     library = "pygeodesic.geodesic.PyGeodesicAlgorithmExact"
     supports_multiple_sources = True
 
+    manifold = True
+
     def _setup(self) -> None:
-        require_manifold(self.mesh, self.name)  # the message names the methods that solve non-manifold meshes
         from pygeodesic import geodesic
 
         self._geodesic = geodesic
@@ -74,8 +75,3 @@ class ExactBaseline(ComponentwiseSolver):
         d = np.asarray(d, dtype=np.float64).reshape(-1)
         d[d >= 1e99] = np.inf  # GEODESIC_INF = 1e100 marks unreached vertices
         return d
-
-    def _solve(self, sources: np.ndarray) -> tuple[np.ndarray, dict]:
-        d, info = super()._solve(sources)
-        info["multisource"] = "native"
-        return d, info

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import ComponentwiseSolver, require_manifold
+from .base import ComponentwiseSolver
 
 
 class FastMarchingBaseline(ComponentwiseSolver):
@@ -49,9 +49,9 @@ class FastMarchingBaseline(ComponentwiseSolver):
     library = "potpourri3d.MeshFastMarchingDistanceSolver"
     supports_multiple_sources = True
     orient = True
+    manifold = True
 
     def _setup(self) -> None:
-        require_manifold(self.mesh, self.name)  # the message names the methods that solve non-manifold meshes
         import potpourri3d as pp3d
 
         self._pp3d = pp3d
@@ -63,8 +63,3 @@ class FastMarchingBaseline(ComponentwiseSolver):
     def _run(self, solver, local_sources: np.ndarray) -> np.ndarray:
         points = [[(int(s), []) for s in local_sources]]
         return np.asarray(solver.compute_distance(points, [], False), dtype=np.float64).reshape(-1)
-
-    def _solve(self, sources: np.ndarray) -> tuple[np.ndarray, dict]:
-        d, info = super()._solve(sources)
-        info["multisource"] = "native"
-        return d, info

@@ -116,8 +116,7 @@ class HeatBaseline(ComponentwiseSolver):
         if self.dim == 3:
             return self._volume.solve(sources)
         d, info = super()._solve(sources)
-        info.update(t_coef=self.t_coef, use_robust=self.use_robust, multisource="native",
-                    max_abs_at_sources=float(np.abs(d[sources]).max()))
+        info.update(t_coef=self.t_coef, use_robust=self.use_robust, max_abs_at_sources=float(np.abs(d[sources]).max()))
         return d, info
 
 
