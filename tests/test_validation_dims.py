@@ -162,3 +162,16 @@ def test_unknown_methods_name_the_methods_of_the_dimension():
                                              r"lcqp-laplacian, qclp, qcqp-dirichlet, qcqp-laplacian, dijkstra, heat "
                                              r"\(on tetrahedral meshes\)$"):
         cg.GeodesicSolver(MESHES[3], "bogus")
+
+
+def test_kinds_of_source_are_checked_at_the_api_edge_with_the_tables_reason():
+    # the strategies keep their own checks for direct users; through GeodesicSolver the table answers first
+    sphere, curve = MESHES[2], _sources("curve", 2)
+    with pytest.raises(SourceError, match=r"^method 'qclp' cannot take curve sources on a surface at order 2 \(solve "
+                                          r"curves at order 1\)"):
+        cg.GeodesicSolver(sphere, "qclp", order=2).solve(curve)
+    with pytest.raises(SourceError, match=r"^multires cannot take point, curve or boundary sources \(multires takes "
+                                          r"vertex sources only"):
+        cg.GeodesicSolver(sphere, "qclp", multires=100).solve(_sources("point", 2))
+    with pytest.raises(SourceError, match=r"^method 'heat' cannot take point or curve sources on a surface"):
+        cg.GeodesicSolver(sphere, "heat").solve([0, curve])
