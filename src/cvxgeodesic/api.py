@@ -69,8 +69,8 @@ class GeodesicSolver:
         ``V`` (n, 3) float, ``F`` (m, 3) int (see :func:`~cvxgeodesic.mesh.io.as_trimesh`); or a tetrahedral
         mesh: a :class:`~cvxgeodesic.mesh.tetmesh.TetMesh`, ``(V, T)`` with ``T`` (k, 4) int, a file holding
         tetrahedra, a meshio.Mesh with ``tetra`` cells: the distance *inside* the solid (``docs/volumes.md``;
-        methods :data:`~cvxgeodesic.formulations_tet.TET_METHODS`, sources vertices, VolumePoints,
-        BoundaryFaces and ``"boundary"``, ``order=2`` for ``"qclp"``).
+        sources vertices, VolumePoints, BoundaryFaces and ``"boundary"``). Which method takes which mesh,
+        order, medium and source: :mod:`cvxgeodesic.capabilities` (``docs/capabilities.md``).
     method : str
         One of :data:`ALL_METHODS`: the eight convex formulations
         (``"lclp"``, ``"lcqp-dirichlet"``, ``"lcqp-laplacian"``, ``"lcqp-hessian"``
@@ -164,7 +164,9 @@ class GeodesicSolver:
         energy on a manifold cover instead, see ``info.notes``).
     ParameterError
         Unknown method or solver, invalid ``m``, ``lam``, ``tol``, ``max_iter`` or ``threads``
-        (or ``CVXGEODESIC_THREADS``).
+        (or ``CVXGEODESIC_THREADS``); a method, order, medium or ``multires`` that
+        :func:`cvxgeodesic.capabilities.check` refuses on this mesh (the message says why and names
+        what is supported).
     TypeError
         ``mesh`` is none of the accepted kinds.
 
