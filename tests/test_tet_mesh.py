@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 from cvxgeodesic.errors import MeshError
+from cvxgeodesic.mesh.simplex import unit_mesh
 from cvxgeodesic.mesh.tet_generate import kuhn_tets, tet_ball, tet_box, tet_l_prism
-from cvxgeodesic.mesh.tetmesh import TET_FACES, TetMesh, as_tetmesh, unit_tetmesh
+from cvxgeodesic.mesh.tetmesh import TET_FACES, TetMesh, as_tetmesh
 
 CORNER = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
 
@@ -163,10 +164,10 @@ def test_notes_keep_the_readers_notes_first():
 # -- scaling ------------------------------------------------------------------------------------------------------
 def test_unit_tetmesh_scales_by_a_power_of_two():
     m = tet_box(2, size=5.0)
-    u, s = unit_tetmesh(m)
+    u, s = unit_mesh(m)
     assert s == 16.0 and 0.5 <= u.bbox_diagonal < 1
     np.testing.assert_array_equal(u.V * s, m.V)
-    assert unit_tetmesh(u) == (u, 1.0)
+    assert unit_mesh(u) == (u, 1.0)
 
 
 def test_kuhn_tets_are_positive_on_a_cube():

@@ -222,7 +222,7 @@ class GeodesicSolver:
         t0 = time.perf_counter()
         self.mesh: Any = cast(Any, as_mesh(mesh))  # a TriMesh or a TetMesh, told apart by is_volume
         self.is_volume = isinstance(self.mesh, TetMesh)  # distance inside tetrahedra (strategies/tet.py)
-        self.dim = 3 if self.is_volume else 2
+        self.dim = self.mesh.dim
         self._check_method_and_solver(method, solver)
         self.order = check_order(order)
         target = resolve_target(multires, 0 if self.is_volume else self.mesh.n_faces)

@@ -48,7 +48,6 @@ from ..capabilities import check
 from ..errors import CvxGeodesicError, MeshError, MeshRepairWarning, NonManifoldError, SolverError
 from ..mesh.convert import as_mesh
 from ..mesh.orient import Orientation, orient_faces
-from ..mesh.tetmesh import TetMesh
 from ..mesh.trimesh import TriMesh, unit_scale
 from ..sources_tet import resolve_tet_sources
 from ..validation import validate_sources
@@ -98,7 +97,7 @@ class BaselineSolver:
 
     def __init__(self, mesh: Any):
         self.mesh: Any = as_mesh(mesh)
-        self.dim = 3 if isinstance(self.mesh, TetMesh) else 2
+        self.dim = self.mesh.dim
         check(self.name, dim=self.dim)
         if self.dim == 3 and self.volume_library:
             self.library = self.volume_library

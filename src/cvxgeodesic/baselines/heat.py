@@ -10,7 +10,8 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from ..linalg import analyse
-from ..mesh.tetmesh import DEGENERATE_TET_TOL, TetMesh, unit_tetmesh
+from ..mesh.simplex import unit_mesh
+from ..mesh.tetmesh import DEGENERATE_TET_TOL, TetMesh
 from ..operators.tet import tet_divergence, tet_gradient_blocks, tet_mass_matrix, tet_stiffness
 from ..sources_tet import TetSources
 from ..validation import check_number
@@ -143,7 +144,7 @@ class _VolumeHeat:
 
     def __init__(self, mesh: TetMesh, t_coef: float, notes: list[str]) -> None:
         self.mesh, self.t_coef = mesh, t_coef
-        mesh, self.scale = unit_tetmesh(mesh)
+        mesh, self.scale = unit_mesh(mesh)
         self._unit = mesh
         deg = mesh.degenerate_tets(DEGENERATE_TET_TOL)
         keep = np.ones(mesh.n_tets, dtype=bool)

@@ -12,20 +12,18 @@ reordered so its signed volume is positive).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from functools import cached_property
 from typing import Any
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import ArrayLike
-from scipy.sparse.csgraph import connected_components
 
 from ..errors import MeshError
+from .simplex import CELL_EDGES, CELL_FACETS, SimplexMesh
 from .trimesh import TriMesh, _as_vertices, file_numbering
 
-__all__ = ["DEGENERATE_TET_TOL", "TET_EDGES", "TET_FACES", "TetMesh", "as_tetmesh", "unit_tetmesh"]
+__all__ = ["DEGENERATE_TET_TOL", "TET_EDGES", "TET_FACES", "TetMesh", "as_tetmesh"]
 
 #: Default of :meth:`TetMesh.degenerate_tets`: a tetrahedron whose smallest altitude (vertex to opposite
 #: face) is below ``DEGENERATE_TET_TOL`` times its longest edge (a sliver, needle, cap or wedge; exactly
@@ -33,16 +31,16 @@ __all__ = ["DEGENERATE_TET_TOL", "TET_EDGES", "TET_FACES", "TetMesh", "as_tetmes
 #: speck) is *degenerate*. The same rule and value as ``TriMesh.degenerate_faces`` (1e-3).
 DEGENERATE_TET_TOL = 1e-3
 #: Local vertex pairs of the six edges of a tetrahedron, the column order of :attr:`TetMesh.tet_edges`.
-TET_EDGES = np.array([[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]], dtype=np.int64)
+TET_EDGES = CELL_EDGES[3]
 #: Local vertices of the face opposite vertex ``i`` (row ``i``), ordered so that the face's normal
 #: ``(b − a) × (c − a)`` points away from vertex ``i`` when the tetrahedron's signed volume is positive.
-TET_FACES = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]], dtype=np.int64)
+TET_FACES = CELL_FACETS[3]
 #: A fold is reported only when the opposite vertices of an interior face lie on the same side by more than
 #: this fraction of the face's longest edge (round-off on flat configurations is not a fold).
 FOLD_TOL = 1e-9
 
 
-class TetMesh:
+class TetMesh(SimplexMesh):
     """An immutable, validated tetrahedral mesh.
 
     Parameters
@@ -87,6 +85,8 @@ class TetMesh:
     (0.166667, (4, 3), True)
     """
 
+    dim = 3
+
     def __init__(
         self,
         V: ArrayLike,
@@ -110,17 +110,8 @@ class TetMesh:
 
     # -- sizes ------------------------------------------------------------------------------------------------
     @property
-    def n_vertices(self) -> int:
-        return int(self.V.shape[0])
-
-    @property
     def n_tets(self) -> int:
         return int(self.T.shape[0])
-
-    @property
-    def n_file_vertices(self) -> int:
-        """Number of vertices in the file the mesh was read from (``n_vertices`` when not from a file)."""
-        return int(self.file_index.shape[0])
 
     # -- volumes and shape ------------------------------------------------------------------------------------
     @cached_property
@@ -159,22 +150,26 @@ class TetMesh:
         return out
 
     @cached_property
-    def tet_longest_edges(self) -> np.ndarray:
-        """(k,) float ndarray: length of the longest edge of each tetrahedron."""
-        return self.edge_lengths[self.tet_edges].max(axis=1)
+    def cell_facet_measures(self) -> np.ndarray:
+        """(k, 4) float ndarray: area of the face opposite each local vertex (:attr:`face_areas_by_tet`)."""
+        return self.face_areas_by_tet
 
-    @cached_property
-    def tet_min_altitudes(self) -> np.ndarray:
-        """(k,) float ndarray: smallest vertex-to-opposite-face distance, ``3·volume / largest face area``.
+    tet_longest_edges = property(lambda self: self.cell_longest_edges, doc="(k,) float: longest edge of each tet.")
+    tet_min_altitudes = property(lambda self: self.cell_min_altitudes,
+                                 doc="(k,) float: smallest vertex-to-opposite-face distance.")
+    tet_edges = property(lambda self: self.cell_edges, doc="(k, 6) int64: edges in TET_EDGES order.")
 
-        The gradients of the four hat functions have lengths ``1 / altitude``, so this is the
-        length that decides how ill-conditioned the tetrahedron's gradient and stiffness are.
-        0 for a tetrahedron whose corners coincide.
-        """
-        largest = self.face_areas_by_tet.max(axis=1)
-        alt = np.zeros(self.n_tets)
-        np.divide(3.0 * self.volumes, largest, out=alt, where=largest > 0)
-        return alt
+    @property
+    def cells(self) -> np.ndarray:
+        return self.T
+
+    @property
+    def cell_measures(self) -> np.ndarray:
+        return self.volumes
+
+    def _with_vertices(self, V: np.ndarray) -> TetMesh:
+        return TetMesh(V, self.T, vertex_map=self.vertex_map, name=self.name, file_index=self.file_index,
+                       dropped_vertices=self.dropped_vertices, notes=self._reader_notes)
 
     def degenerate_tets(self, tol: float = DEGENERATE_TET_TOL) -> np.ndarray:
         """Tetrahedra too flat or too small for the gradient-based operators.
@@ -198,44 +193,7 @@ class TetMesh:
         (d,) int64 ndarray
             Sorted indices of the degenerate tetrahedra.
         """
-        alt = self.tet_min_altitudes
-        bad = (alt <= tol * self.tet_longest_edges) | (alt <= tol * self.mean_edge_length)
-        return np.flatnonzero(bad).astype(np.int64)
-
-    # -- edges ------------------------------------------------------------------------------------------------
-    @cached_property
-    def _edge_data(self) -> tuple[np.ndarray, np.ndarray]:
-        n = np.int64(self.n_vertices)
-        E = self.T[:, TET_EDGES].reshape(-1, 2)
-        keys = np.minimum(E[:, 0], E[:, 1]) * n + np.maximum(E[:, 0], E[:, 1])
-        uniq, inv = np.unique(keys, return_inverse=True)
-        return np.column_stack([uniq // n, uniq % n]), inv.reshape(-1, 6).astype(np.int64)
-
-    @cached_property
-    def edges(self) -> np.ndarray:
-        """(e, 2) int64 ndarray: unique undirected edges, ``edges[:, 0] < edges[:, 1]``, sorted."""
-        return self._edge_data[0]
-
-    @cached_property
-    def tet_edges(self) -> np.ndarray:
-        """(k, 6) int64 ndarray: index into :attr:`edges` of each tetrahedron's edges, in :data:`TET_EDGES` order."""
-        return self._edge_data[1]
-
-    @cached_property
-    def edge_lengths(self) -> np.ndarray:
-        """(e,) float ndarray: Euclidean length of each edge of :attr:`edges`."""
-        E = self.edges
-        return np.linalg.norm(self.V[E[:, 0]] - self.V[E[:, 1]], axis=1)
-
-    @cached_property
-    def mean_edge_length(self) -> float:
-        """Mean length of the unique edges."""
-        return float(self.edge_lengths.mean())
-
-    @cached_property
-    def bbox_diagonal(self) -> float:
-        """Length of the diagonal of the axis-aligned bounding box."""
-        return float(np.linalg.norm(self.V.max(axis=0) - self.V.min(axis=0)))
+        return self.degenerate_cells(tol)
 
     # -- faces and the boundary -------------------------------------------------------------------------------
     @cached_property
@@ -281,6 +239,8 @@ class TetMesh:
         """
         t, i = self._boundary_slots
         return self.positive_tets[t[:, None], TET_FACES[i]].astype(np.int64)
+
+    boundary_facets = property(lambda self: self.boundary_faces, doc="(b, 3) int64: :attr:`boundary_faces`.")
 
     @cached_property
     def boundary_face_tets(self) -> np.ndarray:
@@ -355,48 +315,6 @@ class TetMesh:
         tol = FOLD_TOL * longest * np.linalg.norm(nrm, axis=1)
         folded = ((side1 > tol) & (side2 > tol)) | ((side1 < -tol) & (side2 < -tol))
         return np.sort(face[0::2][folded]).astype(np.int64)
-
-    # -- graph ------------------------------------------------------------------------------------------------
-    @cached_property
-    def vertex_adjacency(self) -> sp.csr_matrix:
-        """(n, n) sparse matrix with the edge lengths of the edge graph (symmetric)."""
-        n = self.n_vertices
-        E, w = self.edges, self.edge_lengths
-        A = sp.coo_matrix((np.r_[w, w], (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])), shape=(n, n))
-        return A.tocsr()
-
-    @cached_property
-    def component_labels(self) -> np.ndarray:
-        """(n,) int ndarray: connected-component label of each vertex (edge graph)."""
-        return connected_components(self.vertex_adjacency, directed=False)[1]
-
-    @cached_property
-    def n_components(self) -> int:
-        """Number of connected components of the edge graph (an unreferenced vertex is one)."""
-        return int(self.component_labels.max()) + 1
-
-    @cached_property
-    def referenced(self) -> np.ndarray:
-        """(n,) bool ndarray: vertices of at least one tetrahedron."""
-        mask = np.zeros(self.n_vertices, dtype=bool)
-        mask[self.T.ravel()] = True
-        return mask
-
-    def connected_to(self, sources: ArrayLike) -> np.ndarray:
-        """Vertices connected to at least one of ``sources`` through the edge graph.
-
-        Parameters
-        ----------
-        sources : (s,) int array_like
-            Valid vertex indices.
-
-        Returns
-        -------
-        (n,) bool ndarray
-            Includes the sources themselves.
-        """
-        labels = self.component_labels
-        return np.isin(labels, labels[np.asarray(sources, dtype=np.int64)])
 
     # -- findings ---------------------------------------------------------------------------------------------
     @cached_property
@@ -490,30 +408,3 @@ def as_tetmesh(mesh: Any, name: str = "tetmesh") -> TetMesh:
     if isinstance(mesh, tuple | list) and len(mesh) == 2:
         return TetMesh(mesh[0], mesh[1], name=name)
     raise MeshError(f"expected a TetMesh or a (V, T) pair of arrays, got {type(mesh).__name__}")
-
-
-def unit_tetmesh(mesh: TetMesh) -> tuple[TetMesh, float]:
-    """The mesh divided by the power of two ``s`` that puts its bounding-box diagonal in [0.5, 1), and ``s``.
-
-    The volume counterpart of :func:`~cvxgeodesic.mesh.trimesh.unit_mesh` (same reasons: backend
-    tolerances mean the same on a mesh of any size, and the division by a power of two is exact).
-
-    Parameters
-    ----------
-    mesh : TetMesh
-
-    Returns
-    -------
-    unit : TetMesh
-        ``V / s`` with the same tetrahedra, vertex map, file index and name (``mesh`` itself when ``s == 1``).
-    s : float
-        A power of two (1.0 for a zero-size mesh).
-    """
-    diag = mesh.bbox_diagonal
-    if not (np.isfinite(diag) and diag > 0):
-        return mesh, 1.0
-    scale = math.ldexp(1.0, math.frexp(diag)[1])
-    if scale == 1.0:
-        return mesh, 1.0
-    return TetMesh(mesh.V / scale, mesh.T, vertex_map=mesh.vertex_map, name=mesh.name, file_index=mesh.file_index,
-                   dropped_vertices=mesh.dropped_vertices, notes=mesh._reader_notes), scale

@@ -2,17 +2,15 @@
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from functools import cached_property
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import ArrayLike
-from scipy.sparse.csgraph import connected_components
 
 from ..errors import MeshError
 from ..validation import MAX_COORDINATE, MIN_EXTENT, check_coordinates
+from .simplex import SimplexMesh, unit_mesh, unit_scale
 
 #: Default of :meth:`TriMesh.degenerate_faces`: a face whose smallest altitude is below
 #: ``DEGENERATE_TOL`` times its longest edge (a needle or a cap; exactly collinear or
@@ -22,7 +20,7 @@ DEGENERATE_TOL = 1e-3
 __all__ = ["DEGENERATE_TOL", "MAX_COORDINATE", "MIN_EXTENT", "TriMesh", "file_numbering", "unit_mesh", "unit_scale"]
 
 
-class TriMesh:
+class TriMesh(SimplexMesh):
     """An immutable, validated triangle mesh.
 
     Parameters
@@ -78,6 +76,7 @@ class TriMesh:
     numbering (the command line does that for every file it writes).
     """
 
+    dim = 2
     #: Set on the coarse meshes of :func:`~cvxgeodesic.mesh.decimate.simplify_mesh` only: the method used.
     simplifier: str
 
@@ -106,17 +105,8 @@ class TriMesh:
         return f"TriMesh(name={self.name!r}, n_vertices={self.n_vertices}, n_faces={self.n_faces})"
 
     @property
-    def n_vertices(self) -> int:
-        return int(self.V.shape[0])
-
-    @property
     def n_faces(self) -> int:
         return int(self.F.shape[0])
-
-    @property
-    def n_file_vertices(self) -> int:
-        """Number of vertices in the file the mesh was read from (``n_vertices`` when not from a file)."""
-        return int(self.file_index.shape[0])
 
     @property
     def file_faces(self) -> np.ndarray:
@@ -141,80 +131,44 @@ class TriMesh:
         """(m,) float ndarray: triangle areas."""
         return 0.5 * np.linalg.norm(self.face_normals_unnormalized, axis=1)
 
-    @cached_property
-    def face_longest_edges(self) -> np.ndarray:
-        """(m,) float ndarray: length of the longest edge of each face."""
-        V, F = self.V, self.F
-        return np.max([np.linalg.norm(V[F[:, i]] - V[F[:, (i + 1) % 3]], axis=1) for i in range(3)], axis=0)
+    # the names of the surface vocabulary for the shared ones (:class:`~cvxgeodesic.mesh.simplex.SimplexMesh`)
+    face_longest_edges = property(lambda self: self.cell_longest_edges, doc="(m,) float: longest edge of each face.")
+    face_min_altitudes = property(lambda self: self.cell_min_altitudes, doc="(m,) float: smallest altitude.")
+    face_edges = property(lambda self: self.cell_edges, doc="(m, 3) int64: the edge opposite each corner.")
+    edge_face_counts = property(lambda self: self.edge_cell_counts, doc="(e,) int64: faces per edge.")
+
+    @property
+    def cells(self) -> np.ndarray:
+        return self.F
+
+    @property
+    def cell_measures(self) -> np.ndarray:
+        return self.face_areas
 
     @cached_property
-    def face_min_altitudes(self) -> np.ndarray:
-        """(m,) float ndarray: smallest altitude of each face, ``2·area / longest edge`` (0 if all corners coincide)."""
-        longest = self.face_longest_edges
-        alt = np.zeros(self.n_faces)
-        np.divide(2.0 * self.face_areas, longest, out=alt, where=longest > 0)
-        return alt
+    def cell_facet_measures(self) -> np.ndarray:
+        """(m, 3) float ndarray: the length of the edge opposite each corner."""
+        return self.edge_lengths[self.face_edges]
+
+    def _with_vertices(self, V: np.ndarray) -> TriMesh:
+        return TriMesh(V, self.F, vertex_map=self.vertex_map, name=self.name)
 
     def degenerate_faces(self, tol: float = DEGENERATE_TOL) -> np.ndarray:
-        """Faces too thin or too small for the gradient-based operators.
+        """Faces too thin or too small for the gradient-based operators (:meth:`SimplexMesh.degenerate_cells`).
 
-        A face is degenerate when its smallest altitude ``2·area / longest edge`` is below
-        ``tol`` times its longest edge (a sliver: zero area, collinear or coincident corners,
-        needles and caps) or below ``tol`` times :attr:`mean_edge_length` (a speck). The
-        gradient of such a face has entries of order ``1 / altitude``, which makes the cone
-        constraint and the cotangent and Hessian energies numerically singular; the convex
-        formulations therefore leave these faces out (see
-        :class:`~cvxgeodesic.formulations.MeshOperators`).
+        Left out of the convex formulations (:class:`~cvxgeodesic.formulations.MeshOperators`).
 
         Parameters
         ----------
         tol : float
-            Relative threshold (default :data:`DEGENERATE_TOL`); 0 selects only faces of
-            exactly zero area.
+            Relative threshold (default :data:`DEGENERATE_TOL`); 0 selects only faces of exactly zero area.
 
         Returns
         -------
         (k,) int64 ndarray
             Sorted indices of the degenerate faces.
         """
-        alt = self.face_min_altitudes
-        bad = (alt <= tol * self.face_longest_edges) | (alt <= tol * self.mean_edge_length)
-        return np.flatnonzero(bad).astype(np.int64)
-
-    @cached_property
-    def edges(self) -> np.ndarray:
-        """(e, 2) int64 ndarray: unique undirected edges, ``edges[:, 0] < edges[:, 1]``."""
-        return _unique_edges(self.F, self.n_vertices)[0]
-
-    @cached_property
-    def face_edges(self) -> np.ndarray:
-        """(m, 3) int64 ndarray: index into :attr:`edges` of each face's edge opposite corner ``k``."""
-        n = np.int64(self.n_vertices)
-        E = self.edges
-        keys = E[:, 0] * n + E[:, 1]  # edges are sorted, so their keys are too
-        a, b = self.F[:, [1, 2, 0]], self.F[:, [2, 0, 1]]
-        return np.searchsorted(keys, np.minimum(a, b) * n + np.maximum(a, b)).astype(np.int64)
-
-    @cached_property
-    def edge_lengths(self) -> np.ndarray:
-        """(e,) float ndarray: Euclidean length of each edge of :attr:`edges`."""
-        E = self.edges
-        return np.linalg.norm(self.V[E[:, 0]] - self.V[E[:, 1]], axis=1)
-
-    @cached_property
-    def mean_edge_length(self) -> float:
-        """Mean length of the unique edges (``h`` in the paper's λ formula)."""
-        return float(self.edge_lengths.mean()) if len(self.edge_lengths) else 0.0
-
-    @cached_property
-    def bbox_diagonal(self) -> float:
-        """Length of the diagonal of the axis-aligned bounding box."""
-        return float(np.linalg.norm(self.V.max(axis=0) - self.V.min(axis=0)))
-
-    @cached_property
-    def edge_face_counts(self) -> np.ndarray:
-        """(e,) int ndarray: number of faces incident to each edge of :attr:`edges`."""
-        return _unique_edges(self.F, self.n_vertices)[1]
+        return self.degenerate_cells(tol)
 
     @cached_property
     def is_edge_manifold(self) -> bool:
@@ -222,53 +176,9 @@ class TriMesh:
         return bool(np.all(self.edge_face_counts <= 2))
 
     @cached_property
-    def vertex_adjacency(self) -> sp.csr_matrix:
-        """(n, n) sparse matrix with the edge lengths of the edge graph (symmetric)."""
-        n = self.n_vertices
-        E, w = self.edges, self.edge_lengths
-        A = sp.coo_matrix((np.r_[w, w], (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])), shape=(n, n))
-        return A.tocsr()
-
-    @cached_property
-    def component_labels(self) -> np.ndarray:
-        """(n,) int ndarray: connected-component label of each vertex (edge graph)."""
-        _, labels = connected_components(self.vertex_adjacency, directed=False)
-        return labels
-
-    @cached_property
-    def referenced(self) -> np.ndarray:
-        """(n,) bool ndarray: vertices used by at least one face."""
-        mask = np.zeros(self.n_vertices, dtype=bool)
-        mask[self.F.ravel()] = True
-        return mask
-
-    def connected_to(self, sources: ArrayLike) -> np.ndarray:
-        """Vertices connected to at least one of ``sources`` through the edge graph.
-
-        Parameters
-        ----------
-        sources : (k,) int array_like
-            Valid vertex indices.
-
-        Returns
-        -------
-        (n,) bool ndarray
-            Includes the sources themselves (an unreferenced source is its own component).
-        """
-        labels = self.component_labels
-        return np.isin(labels, labels[np.asarray(sources, dtype=np.int64)])
-
-
-def _unique_edges(F: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Unique undirected edges of ``F`` in lexicographic order, ``(e, 2)`` with ``i < j``, and face counts.
-
-    Same result as ``np.unique(sorted_edges, axis=0, return_counts=True)``, but one 1-D sort of
-    ``i·n + j`` keys, about 10× faster on million-face meshes.
-    """
-    E = np.concatenate([F[:, [1, 2]], F[:, [2, 0]], F[:, [0, 1]]])
-    E.sort(axis=1)
-    keys, counts = np.unique(E[:, 0] * np.int64(n) + E[:, 1], return_counts=True)
-    return np.column_stack([keys // n, keys % n]), counts
+    def boundary_facets(self) -> np.ndarray:
+        """(b, 2) int64 ndarray: the edges of a single face (the boundary of an open surface)."""
+        return self.edges[self.edge_face_counts == 1]
 
 
 def file_numbering(n: int, vertex_map: ArrayLike | None, file_index: ArrayLike | None,
@@ -363,39 +273,3 @@ def _as_faces(F, n: int, name: str) -> np.ndarray:
         )
     F.setflags(write=False)
     return F
-
-
-def unit_scale(mesh: TriMesh) -> float:
-    """The power of two ``s`` that puts ``mesh``'s bounding-box diagonal in [0.5, 1) when divided by it (1.0 for a
-    zero-size mesh): :func:`unit_mesh`'s, for the methods that scale their own copy of the coordinates."""
-    diag = mesh.bbox_diagonal
-    if not (np.isfinite(diag) and diag > 0):
-        return 1.0
-    return math.ldexp(1.0, math.frexp(diag)[1])
-
-
-def unit_mesh(mesh: TriMesh) -> tuple[TriMesh, float]:
-    """The mesh divided by the power of two ``s`` that puts its bounding-box diagonal in [0.5, 1), and ``s``.
-
-    Every method is solved on this copy (the baselines on its coordinates, :func:`unit_scale`) and the field is
-    multiplied by ``s``: the backends' and libraries' absolute tolerances then mean the same thing on a mesh of any
-    size (without it a 1e-6-sized mesh lost three digits in the convex formulations, and pygeodesic returned
-    infinite or 24x too small distances below 1e-12), and since ``s`` is a power of two the division is exact, so
-    ``d(2^k V) = 2^k d(V)`` to the last bit.
-
-    Parameters
-    ----------
-    mesh : TriMesh
-        ``n`` vertices ``V`` (n, 3).
-
-    Returns
-    -------
-    unit : TriMesh
-        ``V / s`` with the same faces, vertex map and name (``mesh`` itself when ``s == 1``).
-    s : float
-        A power of two (1.0 for an empty or zero-size mesh).
-    """
-    scale = unit_scale(mesh)
-    if scale == 1.0:
-        return mesh, 1.0
-    return TriMesh(mesh.V / scale, mesh.F, vertex_map=mesh.vertex_map, name=mesh.name), scale

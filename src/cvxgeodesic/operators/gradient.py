@@ -1,10 +1,11 @@
-"""Per-triangle gradient of piecewise-linear vertex functions (paper eq. 2)."""
+"""Per-cell gradient of piecewise-linear vertex functions on triangles and tetrahedra (paper eq. 2)."""
 
 from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
 
+from ..mesh.simplex import CELL_FACETS, SimplexMesh
 from ..mesh.trimesh import TriMesh
 
 
@@ -27,74 +28,108 @@ def triangle_frames(mesh: TriMesh) -> tuple[np.ndarray, np.ndarray]:
     return ex, ey
 
 
-def gradient_blocks(mesh: TriMesh) -> np.ndarray:
-    """Gradient of each triangle's linear interpolant in its local 2D frame.
+def local_coordinates(mesh: SimplexMesh) -> np.ndarray:
+    """The corners of each cell in an orthonormal frame of its affine hull.
 
-    For triangle t with vertex values ``d_t = d[F[t]]`` the gradient is
-    ``blocks[t] @ d_t``, expressed in the frame of :func:`triangle_frames`:
-    ``∇d|_t = (1 / 2A) Σ_i d_i (n̂ × e_i)`` with ``e_i`` the edge opposite vertex i.
-
-    Parameters
-    ----------
-    mesh : TriMesh
+    Triangles: the 2-D frame of :func:`triangle_frames`, corner 0 at the origin; tetrahedra: world coordinates
+    (a solid needs no frame).
 
     Returns
     -------
-    blocks : (m, 2, 3) float ndarray
-        Rows are the x and y components of the gradient of the three hat functions.
-        Entries are ``inf``/``nan`` on zero-area triangles.
+    (k, dim + 1, dim) float ndarray
+        NaN on faces of zero area (their frame is undefined).
     """
-    V, F = mesh.V, mesh.F
+    X = mesh.V[mesh.cells]
+    if mesh.dim == 3:
+        return X
     ex, ey = triangle_frames(mesh)
-    p = [V[F[:, k]] - V[F[:, 0]] for k in range(3)]
-    # 2D coordinates of the three corners in the local frame (corner 0 at the origin)
-    P2 = np.stack(
-        [np.stack([np.einsum("ij,ij->i", pk, ex), np.einsum("ij,ij->i", pk, ey)], axis=1) for pk in p], axis=1
-    )
-    e_opp = np.stack([P2[:, 2] - P2[:, 1], P2[:, 0] - P2[:, 2], P2[:, 1] - P2[:, 0]], axis=1)  # (m, 3, 2)
-    twice_area = 2.0 * mesh.face_areas
-    with np.errstate(divide="ignore", invalid="ignore"):
-        rot = np.stack([-e_opp[:, :, 1], e_opp[:, :, 0]], axis=1)  # (m, 2, 3): rotate each edge by +90°
-        return rot / twice_area[:, None, None]
+    rel = X - X[:, :1]
+    return np.stack([np.einsum("kvx,kx->kv", rel, ex), np.einsum("kvx,kx->kv", rel, ey)], axis=2)
 
 
-def gradient_matrix(mesh: TriMesh, blocks: np.ndarray | None = None) -> sp.csr_matrix:
-    """Sparse per-triangle gradient operator.
+def _facet_normal(P: np.ndarray, facet: np.ndarray) -> np.ndarray:
+    """(k, dim) normals of the facet of local corners ``facet`` (dim of them) of each cell, any length."""
+    a = P[:, facet[0]]
+    if len(facet) == 2:  # an edge in the plane: rotated by 90°
+        e = P[:, facet[1]] - a
+        return np.stack([-e[:, 1], e[:, 0]], axis=1)
+    return np.cross(P[:, facet[1]] - a, P[:, facet[2]] - a)
+
+
+def gradient_blocks(mesh: SimplexMesh) -> np.ndarray:
+    """Gradient of each cell's linear interpolant as a linear map of its corner values, for any simplex.
+
+    Column ``i`` of ``blocks[t]`` is ``∇λ_i``, the gradient of the barycentric coordinate of local corner ``i``:
+    the normal of the facet opposite ``i``, pointing towards ``i``, of length ``1 / h_i`` (``h_i`` the altitude
+    from ``i``), in the frame of :func:`local_coordinates`. The corner order does not matter.
 
     Parameters
     ----------
-    mesh : TriMesh
-    blocks : (m, 2, 3) float ndarray, optional
+    mesh : TriMesh or TetMesh
+        ``k`` cells of ``dim + 1`` corners.
+
+    Returns
+    -------
+    blocks : (k, dim, dim + 1) float ndarray
+        ``∇d|_t = blocks[t] @ d[cells[t]]``; columns sum to 0 (a constant has no gradient). ``inf``/``nan`` on
+        cells of zero measure.
+
+    Examples
+    --------
+    >>> import cvxgeodesic as cg
+    >>> mesh = cg.tet_box(2)
+    >>> B = gradient_blocks(mesh)
+    >>> (B[0] @ (mesh.V[mesh.T[0]] @ [1.0, 2.0, 3.0])).round(12).tolist()  # the gradient of a linear function
+    [1.0, 2.0, 3.0]
+    """
+    P = local_coordinates(mesh)
+    out = np.empty((mesh.n_cells, mesh.dim, mesh.dim + 1))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for i, facet in enumerate(CELL_FACETS[mesh.dim]):
+            nrm = _facet_normal(P, facet)
+            # ∇λ_i ∥ nrm and ∇λ_i · (p_i − p_a) = 1
+            out[:, :, i] = nrm / np.einsum("ij,ij->i", nrm, P[:, i] - P[:, facet[0]])[:, None]
+    return out
+
+
+def gradient_matrix(mesh: SimplexMesh, blocks: np.ndarray | None = None) -> sp.csr_matrix:
+    """Sparse per-cell gradient operator.
+
+    Parameters
+    ----------
+    mesh : TriMesh or TetMesh
+        ``k`` cells, ``n`` vertices.
+    blocks : (k, dim, dim + 1) float ndarray, optional
         Precomputed :func:`gradient_blocks`.
 
     Returns
     -------
-    G : (2m, n) scipy.sparse.csr_matrix
-        Rows ``2t`` and ``2t+1`` give the local-frame gradient on triangle t,
-        so ``Gᵀ diag(A ⊗ 1₂) G`` is the cotangent stiffness matrix.
+    G : (dim·k, n) scipy.sparse.csr_matrix
+        Rows ``dim·t … dim·t + dim − 1`` give the gradient on cell ``t`` (in the frame of
+        :func:`local_coordinates`), so ``Gᵀ diag(measure ⊗ 1_dim) G`` is the cotangent stiffness matrix.
     """
     if blocks is None:
         blocks = gradient_blocks(mesh)
-    m = mesh.n_faces
-    rows = np.repeat(np.arange(2 * m), 3)
-    cols = np.repeat(mesh.F, 2, axis=0).ravel()
-    return sp.csr_matrix((blocks.reshape(-1), (rows, cols)), shape=(2 * m, mesh.n_vertices))
+    k, d = mesh.n_cells, mesh.dim
+    rows = np.repeat(np.arange(d * k), d + 1)
+    cols = np.repeat(mesh.cells, d, axis=0).ravel()
+    return sp.csr_matrix((blocks.reshape(-1), (rows, cols)), shape=(d * k, mesh.n_vertices))
 
 
-def gradient_norms(mesh: TriMesh, d: np.ndarray, blocks: np.ndarray | None = None) -> np.ndarray:
-    """Per-triangle gradient norm ``‖∇d|_t‖`` of a vertex field.
+def gradient_norms(mesh: SimplexMesh, d: np.ndarray, blocks: np.ndarray | None = None) -> np.ndarray:
+    """Per-cell gradient norm ``‖∇d|_t‖`` of a vertex field.
 
     Parameters
     ----------
-    mesh : TriMesh
-    d : (n,) float ndarray
-    blocks : (m, 2, 3) float ndarray, optional
+    mesh : TriMesh or TetMesh
+    d : (n,) float array_like
+    blocks : (k, dim, dim + 1) float ndarray, optional
 
     Returns
     -------
-    (m,) float ndarray
+    (k,) float ndarray
     """
     if blocks is None:
         blocks = gradient_blocks(mesh)
-    g = np.einsum("tij,tj->ti", blocks, np.asarray(d, dtype=float)[mesh.F])
+    g = np.einsum("tij,tj->ti", blocks, np.asarray(d, dtype=float)[mesh.cells])
     return np.linalg.norm(g, axis=1)

@@ -25,7 +25,8 @@ from ..formulations_p2 import P2Program
 from ..formulations_tet import TET_FORMULATIONS, TET_ORDER2_METHODS, TetOperators, build_tet_problem
 from ..formulations_tet_p2 import TetP2Builder, source_edges
 from ..mesh.tet_split import TetSplitMesh
-from ..mesh.tetmesh import TetMesh, unit_tetmesh
+from ..mesh.tetmesh import TetMesh
+from ..mesh.trimesh import unit_mesh
 from ..operators.tet_p2 import SplitTetP2Field, TetP2Field, tet_max_violation
 from ..results import GeodesicResult, SolveInfo
 from ..solvers.problem import BackendResult, ConicProblem, clique_pattern
@@ -94,7 +95,7 @@ class TetDirect:
     def __init__(self, config: SolveConfig) -> None:
         t0 = time.perf_counter()
         self.config = config
-        unit, self.scale = unit_tetmesh(_volume(config))
+        unit, self.scale = unit_mesh(_volume(config))
         self.ops = TetOperators(unit)
         self.policy = Backend(config.solver, config.tol, config.max_iter, config.verbose, config.mesh.name)
         self.notes: list[str] = [*config.notes, *self.ops.notes, *self.policy.notes]
@@ -166,7 +167,7 @@ class TetOrder2:
                                  f"{config.method!r}")
         self.config = config
         self.refine = int(refine)
-        unit, self.scale = unit_tetmesh(_volume(config))
+        unit, self.scale = unit_mesh(_volume(config))
         self.builder = TetP2Builder(unit)
         self.policy = Backend(config.solver, config.tol, config.max_iter, config.verbose, config.mesh.name)
         self.backend = self.policy.name
