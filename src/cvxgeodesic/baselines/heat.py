@@ -12,7 +12,8 @@ from scipy.sparse.csgraph import connected_components
 from ..linalg import analyse
 from ..mesh.simplex import unit_mesh
 from ..mesh.tetmesh import DEGENERATE_TET_TOL, TetMesh
-from ..operators.tet import tet_divergence, tet_gradient_blocks, tet_mass_matrix, tet_stiffness
+from ..operators.gradient import gradient_blocks
+from ..operators.tet import tet_divergence, tet_mass_matrix, tet_stiffness
 from ..sources_tet import TetSources
 from ..validation import check_number
 from .base import ComponentwiseSolver
@@ -61,7 +62,7 @@ class HeatBaseline(ComponentwiseSolver):
        boundary sources, ``|v − p|`` at a point's corners), which factors the reduced matrix at
        every solve.
 
-    Degenerate tetrahedra (:meth:`~cvxgeodesic.mesh.tetmesh.TetMesh.degenerate_tets` at ``1e-3``)
+    Degenerate tetrahedra (:meth:`~cvxgeodesic.mesh.simplex.SimplexMesh.degenerate_cells` at ``1e-3``)
     are left out of both operators, recorded in :attr:`notes`. Both factorizations go through
     :mod:`cvxgeodesic.linalg` (PARDISO, CHOLMOD or SuperLU, whichever is available). The field
     converges under refinement (tested on a box against ``|x − s|`` and on a ball against ``1 − r``).
@@ -146,14 +147,14 @@ class _VolumeHeat:
         self.mesh, self.t_coef = mesh, t_coef
         mesh, self.scale = unit_mesh(mesh)
         self._unit = mesh
-        deg = mesh.degenerate_tets(DEGENERATE_TET_TOL)
+        deg = mesh.degenerate_cells(DEGENERATE_TET_TOL)
         keep = np.ones(mesh.n_tets, dtype=bool)
         keep[deg] = False
         if deg.size:
             notes.append(f"{mesh.name}: heat method: left out {deg.size} degenerate tetrahedra (smallest altitude "
                          f"below {DEGENERATE_TET_TOL:g} of the longest edge; first: tet {int(deg[0])})")
         self._keep = keep
-        self._blocks = tet_gradient_blocks(mesh)
+        self._blocks = gradient_blocks(mesh)
         self._blocks[~keep] = 0.0
         L = tet_stiffness(mesh, tets=keep, blocks=self._blocks)
         mass = tet_mass_matrix(mesh, tets=keep).diagonal()
