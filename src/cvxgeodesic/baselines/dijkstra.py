@@ -96,7 +96,6 @@ class DijkstraBaseline(BaselineSolver):
 
     name = "dijkstra"
     library = "scipy.sparse.csgraph.dijkstra"
-    supports_multiple_sources = True
 
     def __init__(self, mesh: Any, medium: Any = None) -> None:
         self.medium = medium

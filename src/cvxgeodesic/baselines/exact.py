@@ -44,8 +44,6 @@ class ExactBaseline(ComponentwiseSolver):
 
     name = "exact"
     library = "pygeodesic.geodesic.PyGeodesicAlgorithmExact"
-    supports_multiple_sources = True
-
     manifold = True
 
     def _setup(self) -> None:

@@ -47,7 +47,6 @@ class FastMarchingBaseline(ComponentwiseSolver):
 
     name = "fmm"
     library = "potpourri3d.MeshFastMarchingDistanceSolver"
-    supports_multiple_sources = True
     orient = True
     manifold = True
 

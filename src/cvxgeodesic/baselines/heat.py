@@ -88,7 +88,6 @@ class HeatBaseline(ComponentwiseSolver):
     name = "heat"
     library = "potpourri3d.MeshHeatMethodDistanceSolver"
     volume_library = "cvxgeodesic heat method (P1 tetrahedra)"
-    supports_multiple_sources = True
 
     def __init__(self, mesh: Any, *, t_coef: float = DEFAULT_T_COEF, use_robust: bool = True):
         self.t_coef = check_number(t_coef, "t_coef", low=0, low_open=True)

@@ -9,7 +9,6 @@ from typing import Any
 import numpy as np
 
 from ..baselines import BASELINES
-from ..errors import SourceError
 from ..results import GeodesicResult, SolveInfo
 from ..sources import SourceSet
 from .base import Callback, SolveConfig
@@ -52,11 +51,8 @@ class BaselineStrategy:
             from ..baselines.points import solve_baseline_sources
 
             d, binfo = solve_baseline_sources(self.baseline, sources)
-        else:
-            src = sources.vertices if isinstance(sources, SourceSet) else sources
-            if isinstance(src, np.ndarray) and len(src) > 1 and not self.baseline.supports_multiple_sources:
-                raise SourceError(f"method {method!r} supports a single source only")
-            d, binfo = self.baseline.solve(src)
+        else:  # vertices on a surface; any volume source
+            d, binfo = self.baseline.solve(sources.vertices if isinstance(sources, SourceSet) else sources)
         d = np.asarray(d, dtype=float)
         info = SolveInfo(
             method=method, solver=str(binfo.get("solver", method)), status=binfo.get("status", "optimal"),
