@@ -101,3 +101,19 @@ def test_graph_distance_starts_at_zero_offsets_and_joins_the_others_through_one_
     # a source between 2 and 3 (offsets 0.25 and 0.75), and one exactly on vertex 1 (offset 0: a start, d = 0 exactly)
     d = graph_distance(G, np.zeros(0, dtype=np.int64), np.array([2, 3, 1]), np.array([0.25, 0.75, 0.0]))
     np.testing.assert_array_equal(d, [1.0, 0.0, 0.25, 0.75])
+
+
+@pytest.mark.parametrize("name", ["dijkstra", "fmm", "exact"])
+def test_a_surface_baseline_takes_points_curves_and_the_boundary_itself(name):
+    # one interface: solve() takes the dimension's sources, as inside a volume; the same field as the solver's
+    plane = cg.grid_plane(6)
+    point = cg.SurfacePoint(7, [0.2, 0.3, 0.5])
+    curve = cg.SurfaceCurve([point, cg.SurfacePoint(30, [0.6, 0.2, 0.2])])
+    baseline = BASELINES[name](plane)
+    for sources in (point, [point, 3], curve, "boundary"):
+        d, info = baseline.solve(sources)
+        np.testing.assert_array_equal(d, cg.GeodesicSolver(plane, name).solve(sources).distance)
+        assert info["method"] == name and info["status"] == "optimal" and "sources" in info
+    with pytest.raises(cg.SourceError, match="^method 'heat' cannot take point or curve sources on a surface"):
+        HeatBaseline(plane).solve(point)
+    assert HeatBaseline(plane).solve("boundary")[1]["sources"] == "boundary vertices"

@@ -49,8 +49,8 @@ from ..errors import CvxGeodesicError, MeshError, MeshRepairWarning, NonManifold
 from ..mesh.convert import as_mesh
 from ..mesh.orient import Orientation, orient_faces
 from ..mesh.trimesh import TriMesh, unit_scale
+from ..sources import SourceSet, resolve_sources
 from ..sources_tet import resolve_tet_sources
-from ..validation import validate_sources
 
 
 class BaselineSolver:
@@ -125,10 +125,10 @@ class BaselineSolver:
 
         Parameters
         ----------
-        sources : int or (k,) int array_like; inside a volume also VolumePoint, BoundaryFaces, "boundary"
-            On a surface: source vertex indices, unique, in ``[0, n)``, ``k >= 1``
-            (:func:`~cvxgeodesic.validation.validate_sources`; surface points and curves:
-            :func:`~cvxgeodesic.baselines.points.solve_baseline_sources`). Inside a volume: anything
+        sources : int, (k,) int array_like, or the dimension's other sources
+            Source vertex indices (unique, in ``[0, n)``, ``k >= 1``) or, on a surface, anything
+            :func:`~cvxgeodesic.sources.resolve_sources` takes (SurfacePoints, SurfaceCurves, ``"boundary"``:
+            where the library can, :mod:`~cvxgeodesic.baselines.points`); inside a volume anything
             :func:`~cvxgeodesic.sources_tet.resolve_tet_sources` takes.
 
         Returns
@@ -148,15 +148,15 @@ class BaselineSolver:
             If the library fails or returns non-finite values where a source is
             reachable.
         """
-        if self.dim == 3:
-            src: Any = resolve_tet_sources(self.mesh, sources)
-            seeds, count = src.seed_vertices(self.mesh), src.count
-        else:
-            src = seeds = validate_sources(sources, self.mesh.n_vertices)
-            count = int(src.size)
+        src, seeds, count = self._resolve(sources)
         t0 = time.perf_counter()
         with _LibraryErrors(self, "failed on"):
-            d, extra = self._solve(src)
+            if isinstance(src, SourceSet):  # points, curves, the boundary of a surface: where the library can
+                from .points import solve_baseline_sources
+
+                d, extra = solve_baseline_sources(self, src)
+            else:
+                d, extra = self._solve(src)
         solve_time = time.perf_counter() - t0
         d = np.array(d, dtype=np.float64).reshape(-1)
         if d.shape != (self.mesh.n_vertices,):
@@ -187,6 +187,20 @@ class BaselineSolver:
         }
         info.update(extra)
         return d, info
+
+
+    def _resolve(self, sources: Any) -> tuple[Any, np.ndarray, int]:
+        """The validated sources (vertex indices, a surface's SourceSet of points, curves or boundary, a volume's
+        TetSources), the vertices the field spreads from, and how many sources there are."""
+        if self.dim == 3:
+            src = resolve_tet_sources(self.mesh, sources)
+            return src, src.seed_vertices(self.mesh), src.count
+        ss = resolve_sources(self.mesh, sources)
+        if ss.vertex_only:
+            return ss.vertices, ss.vertices, int(ss.vertices.size)
+        F = self.mesh.F
+        seeds = np.unique(np.concatenate([ss.vertices, F[ss.point_faces].ravel(), F[ss.segment_faces].ravel()]))
+        return ss, seeds.astype(np.int64), int(ss.vertices.size + ss.point_faces.size)
 
 
 class _LibraryErrors:

@@ -26,14 +26,15 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..capabilities import check, methods_for
-from ..errors import SolverError, SourceError
+from ..errors import SourceError
 from ..mesh.trimesh import TriMesh
 from ..sources import BARY_SNAP, SourceSet, closest_points, vertex_bounds
 from .dijkstra import graph_distance
 
 
 def solve_baseline_sources(baseline, ss: SourceSet) -> tuple[np.ndarray, dict]:
-    """Distance field of a baseline from a non-vertex source set.
+    """Distance field of a surface baseline from a non-vertex source set (its ``_solve`` for such sets:
+    :meth:`~cvxgeodesic.baselines.base.BaselineSolver.solve` calls it and checks the field).
 
     Parameters
     ----------
@@ -43,8 +44,8 @@ def solve_baseline_sources(baseline, ss: SourceSet) -> tuple[np.ndarray, dict]:
     Returns
     -------
     d : (n,) float ndarray
-    info : dict
-        ``solver`` and method-specific keys (``sources`` says how the set was passed).
+    extra : dict
+        Method-specific keys (``sources`` says how the set was passed).
 
     Raises
     ------
@@ -57,11 +58,10 @@ def solve_baseline_sources(baseline, ss: SourceSet) -> tuple[np.ndarray, dict]:
         check(name, dim=2, sources=["curve"] if ss.segment_faces.size else ["point"])
     if name == "dijkstra":
         return (_dijkstra(mesh, ss, baseline.graph, getattr(baseline, "medium", None)),
-                {"solver": baseline.library, "sources": "virtual node with offsets"})
+                {"sources": "virtual node with offsets"})
     if ss.kind == "boundary":  # the vertex baselines take the boundary's vertices
-        d, info = baseline.solve(ss.vertices)
-        info["sources"] = "boundary vertices"
-        return d, info
+        d, extra = baseline._solve(ss.vertices)
+        return d, {**extra, "sources": "boundary vertices"}
     if name == "exact":
         return _exact_inserted(mesh, ss)
     return _fmm_points(baseline, ss)
@@ -144,10 +144,9 @@ def _exact_inserted(mesh: TriMesh, ss: SourceSet) -> tuple[np.ndarray, dict]:
     solver = ExactBaseline(TriMesh(V2, F2, name=mesh.name))
     src = np.unique(np.r_[ss.vertices, idx]).astype(np.int64)
     with contextlib.redirect_stdout(io.StringIO()):
-        d, info = solver.solve(src)
-    info = {"solver": info["solver"], "sources": f"{len(X)} point(s) inserted into the mesh",
-            "inserted_vertices": int(len(V2) - mesh.n_vertices)}
-    return np.asarray(d[: mesh.n_vertices], dtype=float), info
+        d, _ = solver.solve(src)
+    return np.asarray(d[: mesh.n_vertices], dtype=float), {
+        "sources": f"{len(X)} point(s) inserted into the mesh", "inserted_vertices": int(len(V2) - mesh.n_vertices)}
 
 
 def _fmm_points(baseline, ss: SourceSet) -> tuple[np.ndarray, dict]:
@@ -165,7 +164,4 @@ def _fmm_points(baseline, ss: SourceSet) -> tuple[np.ndarray, dict]:
         bary = baseline.orientation.bary(ss.point_faces, bary)
     pts += [(int(f), [float(x) for x in b]) for f, b in zip(ss.point_faces, bary, strict=True)]
     d = np.asarray(solver.compute_distance([pts], [], False), dtype=np.float64).reshape(-1) * baseline.scale
-    if d.shape != (mesh.n_vertices,) or not np.all(np.isfinite(d)):
-        raise SolverError("baseline 'fmm' returned a bad field for point sources", solver=baseline.library,
-                          status="bad_output")
-    return d, {"solver": baseline.library, "sources": "potpourri3d surface points"}
+    return d, {"sources": "potpourri3d surface points"}

@@ -10,7 +10,6 @@ import numpy as np
 
 from ..baselines import BASELINES
 from ..results import GeodesicResult, SolveInfo
-from ..sources import SourceSet
 from .base import Callback, SolveConfig
 
 #: Keys of a baseline's info that :class:`SolveInfo` holds in its own fields (not repeated in ``extra``).
@@ -43,22 +42,14 @@ class BaselineStrategy:
         self.setup_time = time.perf_counter() - t0
 
     def solve(self, sources: Any, *, callback: Callback | None = None) -> GeodesicResult:
-        """Distance field from resolved sources (a surface's ``SourceSet``, a volume's ``TetSources``);
-        ``callback`` is ignored (no iterations to report)."""
+        """Distance field from resolved sources (a surface's ``SourceSet``, a volume's ``TetSources``: the
+        baseline takes either); ``callback`` is ignored (no iterations to report)."""
         t0 = time.perf_counter()
-        method = self.config.method
-        if isinstance(sources, SourceSet) and not sources.vertex_only:  # surface points, curves, boundary
-            from ..baselines.points import solve_baseline_sources
-
-            d, binfo = solve_baseline_sources(self.baseline, sources)
-        else:  # vertices on a surface; any volume source
-            d, binfo = self.baseline.solve(sources.vertices if isinstance(sources, SourceSet) else sources)
-        d = np.asarray(d, dtype=float)
+        d, binfo = self.baseline.solve(sources)
         info = SolveInfo(
-            method=method, solver=str(binfo.get("solver", method)), status=binfo.get("status", "optimal"),
-            iterations=int(binfo.get("iterations", 0)), setup_time=self.setup_time,
-            solve_time=time.perf_counter() - t0, n_unreachable=int(np.isinf(d).sum()),
-            notes=[*self.config.notes, *binfo.get("notes", self.baseline.notes)],
+            method=self.config.method, solver=binfo["solver"], status=binfo["status"],
+            iterations=binfo["iterations"], setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
+            n_unreachable=int(np.isinf(d).sum()), notes=[*self.config.notes, *binfo["notes"]],
             # the library's set-up is part of info.setup_time: one name, one quantity
             extra={k: v for k, v in binfo.items() if k not in _OWN_FIELDS},
         )
