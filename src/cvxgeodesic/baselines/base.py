@@ -1,13 +1,18 @@
-"""Common interface of the baseline distance methods.
+"""Common interface of the baseline distance methods, on triangle and tetrahedral meshes.
 
 Every baseline is a stateful class: the constructor does all per-mesh
 precomputation (and records its duration in ``setup_time``), ``solve`` computes
-the distance from a set of source vertices. The convex-optimization methods of
-the library expose the same shape of result, so evaluation code treats every
-method alike::
+the distance from the sources the mesh's dimension takes (vertices; points,
+curves and the boundary of a surface where the library can; volume points and
+boundary faces inside a volume) and checks the field. The convex-optimization
+methods of the library expose the same shape of result, so evaluation code
+treats every method alike::
 
     solver = BASELINES["exact"](mesh)
     d, info = solver.solve(np.array([0]))
+
+The surface libraries are wrapped as below; inside a volume Dijkstra runs on the
+edge graph and the heat method on the library's own P1 operators.
 
 Components
 ----------
