@@ -19,10 +19,11 @@ Vertices not connected to any source get ``np.inf`` with every method.
 """
 
 from .base import BaselineSolver, ComponentwiseSolver, nonmanifold_vertices, reachable_mask, require_manifold
-from .dijkstra import DijkstraBaseline, graph_distance
+from .dijkstra import DijkstraBaseline
 from .exact import ExactBaseline
 from .fmm import FastMarchingBaseline
 from .heat import DEFAULT_T_COEF, HeatBaseline
+from .points import graph_distance
 
 BASELINES: dict[str, type[BaselineSolver]] = {
     cls.name: cls for cls in (DijkstraBaseline, FastMarchingBaseline, HeatBaseline, ExactBaseline)

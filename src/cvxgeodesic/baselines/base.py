@@ -124,6 +124,15 @@ class BaselineSolver:
         :class:`~cvxgeodesic.sources_tet.TetSources` inside a volume. Returns ``(d, extra_info)``."""
         raise NotImplementedError
 
+    def _solve_sources(self, ss: SourceSet) -> tuple[np.ndarray, dict]:
+        """Distance from a surface's points, curves or boundary (validated): the boundary's vertices here, after
+        the capability table's check; the classes whose library takes points override it
+        (:mod:`~cvxgeodesic.baselines.points`)."""
+        kind = "boundary" if ss.kind == "boundary" else "curve" if ss.segment_faces.size else "point"
+        check(self.name, dim=2, sources=[kind])
+        d, extra = self._solve(ss.vertices)
+        return d, {**extra, "sources": "boundary vertices"}
+
     # -- public -----------------------------------------------------------------------------------------------
     def solve(self, sources: Any) -> tuple[np.ndarray, dict]:
         """Geodesic distance from the nearest of ``sources`` to every vertex.
@@ -156,12 +165,7 @@ class BaselineSolver:
         src, seeds, count = self._resolve(sources)
         t0 = time.perf_counter()
         with _LibraryErrors(self, "failed on"):
-            if isinstance(src, SourceSet):  # points, curves, the boundary of a surface: where the library can
-                from .points import solve_baseline_sources
-
-                d, extra = solve_baseline_sources(self, src)
-            else:
-                d, extra = self._solve(src)
+            d, extra = self._solve_sources(src) if isinstance(src, SourceSet) else self._solve(src)
         solve_time = time.perf_counter() - t0
         d = np.array(d, dtype=np.float64).reshape(-1)
         if d.shape != (self.mesh.n_vertices,):

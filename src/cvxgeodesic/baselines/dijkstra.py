@@ -6,53 +6,10 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import dijkstra
 
+from ..sources import SourceSet
 from .base import BaselineSolver
-
-
-def graph_distance(graph: sp.spmatrix, starts: np.ndarray, near: np.ndarray | None = None,
-                   offsets: np.ndarray | None = None) -> np.ndarray:
-    """Shortest paths on ``graph`` from the ``starts`` (at 0) and from vertices reached at a known offset.
-
-    The offsets are the straight segments from a source inside a cell (a point, a curve piece) to the cell's
-    corners: one virtual node is joined to each vertex of ``near`` by an edge as long as its offset, so the result
-    is exactly the minimum over the sources of single runs.
-
-    Parameters
-    ----------
-    graph : (n, n) sparse matrix
-        Edge lengths (symmetric).
-    starts : (s,) int ndarray
-        Vertices at distance 0.
-    near : (q,) int ndarray, optional
-        Distinct vertices next to a source that is not a vertex.
-    offsets : (q,) float ndarray, optional
-        Their distances to that source (finite, ≥ 0). An offset of 0 makes the vertex a start: a zero weight is
-        no edge in SciPy's sparse graphs.
-
-    Returns
-    -------
-    (n,) float64 ndarray
-        ``np.inf`` where no source is reachable.
-    """
-    n = graph.shape[0]
-    starts = np.asarray(starts, dtype=np.int64)
-    if near is None or offsets is None or not len(near):
-        d = dijkstra(graph, directed=False, indices=starts, min_only=True)
-        return np.asarray(d, dtype=np.float64)
-    near, offsets = np.asarray(near, dtype=np.int64), np.asarray(offsets, dtype=np.float64)
-    zero = offsets == 0.0
-    starts = np.unique(np.concatenate([starts, near[zero]]))
-    near, w = near[~zero], offsets[~zero]
-    G = sp.coo_matrix(graph)
-    virtual = np.full(near.size, n)
-    A = sp.coo_matrix((np.r_[G.data, w, w], (np.r_[G.row, virtual, near], np.r_[G.col, near, virtual])),
-                      shape=(n + 1, n + 1)).tocsr()
-    idx = np.r_[starts, n] if near.size else starts
-    d = dijkstra(A, directed=False, indices=idx, min_only=True)
-    return np.asarray(d[:n], dtype=np.float64)
+from .points import dijkstra_sources, graph_distance
 
 
 class DijkstraBaseline(BaselineSolver):
@@ -71,8 +28,8 @@ class DijkstraBaseline(BaselineSolver):
     get ``inf``) and natively supports several sources (``min_only=True``): exactly
     the minimum of single runs. Inside a volume a point source is joined to the
     corners of its tetrahedron by straight segments and a boundary source starts
-    from the vertices of its faces; on a surface, points and curves go through
-    :func:`~cvxgeodesic.baselines.points.solve_baseline_sources`.
+    from the vertices of its faces; on a surface, a point or curve is joined to the corners of
+    its faces (:func:`~cvxgeodesic.baselines.points.dijkstra_sources`).
 
     Parameters
     ----------
@@ -113,3 +70,6 @@ class DijkstraBaseline(BaselineSolver):
         # the source vertices and faces' vertices at 0, the corners of a point's tetrahedron at |v − p|
         near, offsets = sources.local_values(self.mesh)
         return graph_distance(self.graph, np.zeros(0, dtype=np.int64), near, offsets), {}
+
+    def _solve_sources(self, ss: SourceSet) -> tuple[np.ndarray, dict]:
+        return dijkstra_sources(self.mesh, ss, self.graph, self.medium), {"sources": "virtual node with offsets"}

@@ -8,7 +8,9 @@ import io
 import numpy as np
 
 from ..errors import SolverError
+from ..sources import SourceSet
 from .base import ComponentwiseSolver
+from .points import exact_inserted
 
 
 class ExactBaseline(ComponentwiseSolver):
@@ -51,6 +53,9 @@ class ExactBaseline(ComponentwiseSolver):
 
         self._geodesic = geodesic
         super()._setup()
+
+    def _solve_sources(self, ss: SourceSet) -> tuple[np.ndarray, dict]:
+        return super()._solve_sources(ss) if ss.kind == "boundary" else exact_inserted(type(self), self.mesh, ss)
 
     def _build(self, V: np.ndarray, F: np.ndarray) -> object:
         out = io.StringIO()

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..sources import SourceSet
 from .base import ComponentwiseSolver
+from .points import fmm_points
 
 
 class FastMarchingBaseline(ComponentwiseSolver):
@@ -55,6 +57,9 @@ class FastMarchingBaseline(ComponentwiseSolver):
 
         self._pp3d = pp3d
         super()._setup()
+
+    def _solve_sources(self, ss: SourceSet) -> tuple[np.ndarray, dict]:
+        return super()._solve_sources(ss) if ss.kind == "boundary" else fmm_points(self, ss)
 
     def _build(self, V: np.ndarray, F: np.ndarray) -> object:
         return self._pp3d.MeshFastMarchingDistanceSolver(V, F)

@@ -13,8 +13,10 @@
   :class:`~cvxgeodesic.errors.SourceError` (from :func:`cvxgeodesic.capabilities.check`, the one table of
   what each method takes), ``"boundary"`` is the boundary vertices.
 
-Inside a volume the baselines take every kind of volume source themselves
-(:meth:`~cvxgeodesic.baselines.base.BaselineSolver.solve`).
+Each class calls its function here from ``_solve_sources``
+(:meth:`~cvxgeodesic.baselines.base.BaselineSolver.solve`, which checks the field); inside a volume the
+baselines take every kind of volume source themselves. :func:`graph_distance` is Dijkstra with offsets, for
+both dimensions.
 """
 
 from __future__ import annotations
@@ -24,50 +26,60 @@ import io
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.sparse.csgraph import dijkstra
 
-from ..capabilities import check, methods_for
+from ..capabilities import methods_for
 from ..errors import SourceError
 from ..mesh.trimesh import TriMesh
 from ..sources import BARY_SNAP, SourceSet, closest_points, vertex_bounds
-from .dijkstra import graph_distance
 
 
-def solve_baseline_sources(baseline, ss: SourceSet) -> tuple[np.ndarray, dict]:
-    """Distance field of a surface baseline from a non-vertex source set (its ``_solve`` for such sets:
-    :meth:`~cvxgeodesic.baselines.base.BaselineSolver.solve` calls it and checks the field).
+def graph_distance(graph: sp.spmatrix, starts: np.ndarray, near: np.ndarray | None = None,
+                   offsets: np.ndarray | None = None) -> np.ndarray:
+    """Shortest paths on ``graph`` from the ``starts`` (at 0) and from vertices reached at a known offset.
+
+    The offsets are the straight segments from a source inside a cell (a point, a curve piece) to the cell's
+    corners: one virtual node is joined to each vertex of ``near`` by an edge as long as its offset, so the result
+    is exactly the minimum over the sources of single runs.
 
     Parameters
     ----------
-    baseline : BaselineSolver
-    ss : SourceSet
+    graph : (n, n) sparse matrix
+        Edge lengths (symmetric).
+    starts : (s,) int ndarray
+        Vertices at distance 0.
+    near : (q,) int ndarray, optional
+        Distinct vertices next to a source that is not a vertex.
+    offsets : (q,) float ndarray, optional
+        Their distances to that source (finite, ≥ 0). An offset of 0 makes the vertex a start: a zero weight is
+        no edge in SciPy's sparse graphs.
 
     Returns
     -------
-    d : (n,) float ndarray
-    extra : dict
-        Method-specific keys (``sources`` says how the set was passed).
-
-    Raises
-    ------
-    SourceError
-        The method cannot take this kind of source; the message names the methods that can.
+    (n,) float64 ndarray
+        ``np.inf`` where no source is reachable.
     """
-    name, mesh = baseline.name, baseline.mesh
-    has_points = ss.point_faces.size > 0 or ss.kind in ("curve", "points", "mixed")
-    if has_points and ss.kind != "boundary":
-        check(name, dim=2, sources=["curve"] if ss.segment_faces.size else ["point"])
-    if name == "dijkstra":
-        return (_dijkstra(mesh, ss, baseline.graph, getattr(baseline, "medium", None)),
-                {"sources": "virtual node with offsets"})
-    if ss.kind == "boundary":  # the vertex baselines take the boundary's vertices
-        d, extra = baseline._solve(ss.vertices)
-        return d, {**extra, "sources": "boundary vertices"}
-    if name == "exact":
-        return _exact_inserted(mesh, ss)
-    return _fmm_points(baseline, ss)
+    n = graph.shape[0]
+    starts = np.asarray(starts, dtype=np.int64)
+    if near is None or offsets is None or not len(near):
+        d = dijkstra(graph, directed=False, indices=starts, min_only=True)
+        return np.asarray(d, dtype=np.float64)
+    near, offsets = np.asarray(near, dtype=np.int64), np.asarray(offsets, dtype=np.float64)
+    zero = offsets == 0.0
+    starts = np.unique(np.concatenate([starts, near[zero]]))
+    near, w = near[~zero], offsets[~zero]
+    G = sp.coo_matrix(graph)
+    virtual = np.full(near.size, n)
+    A = sp.coo_matrix((np.r_[G.data, w, w], (np.r_[G.row, virtual, near], np.r_[G.col, near, virtual])),
+                      shape=(n + 1, n + 1)).tocsr()
+    idx = np.r_[starts, n] if near.size else starts
+    d = dijkstra(A, directed=False, indices=idx, min_only=True)
+    return np.asarray(d[:n], dtype=np.float64)
 
 
-def _dijkstra(mesh: TriMesh, ss: SourceSet, graph: sp.csr_matrix, medium=None) -> np.ndarray:
+def dijkstra_sources(mesh: TriMesh, ss: SourceSet, graph: sp.csr_matrix, medium=None) -> np.ndarray:
+    """Dijkstra's field from a surface's points, curves or boundary: each vertex of a source face starts at
+    :func:`~cvxgeodesic.sources.vertex_bounds` (in ``medium`` when given)."""
     bound = vertex_bounds(mesh, ss, medium)
     if medium is not None:
         bound = bound * medium.scale
@@ -136,12 +148,12 @@ def insert_points(V: np.ndarray, F: np.ndarray, X: np.ndarray) -> tuple[np.ndarr
     return Vc, F2, index
 
 
-def _exact_inserted(mesh: TriMesh, ss: SourceSet) -> tuple[np.ndarray, dict]:
-    from .exact import ExactBaseline
-
+def exact_inserted(cls: type, mesh: TriMesh, ss: SourceSet) -> tuple[np.ndarray, dict]:
+    """The exact field of ``cls`` (:class:`~cvxgeodesic.baselines.exact.ExactBaseline`) from the points of ``ss``
+    inserted into the mesh as vertices (a curve: its samples)."""
     X = _unique_points(mesh, ss)
     V2, F2, idx = insert_points(mesh.V, mesh.F, X)
-    solver = ExactBaseline(TriMesh(V2, F2, name=mesh.name))
+    solver = cls(TriMesh(V2, F2, name=mesh.name))
     src = np.unique(np.r_[ss.vertices, idx]).astype(np.int64)
     with contextlib.redirect_stdout(io.StringIO()):
         d, _ = solver.solve(src)
@@ -149,7 +161,8 @@ def _exact_inserted(mesh: TriMesh, ss: SourceSet) -> tuple[np.ndarray, dict]:
         "sources": f"{len(X)} point(s) inserted into the mesh", "inserted_vertices": int(len(V2) - mesh.n_vertices)}
 
 
-def _fmm_points(baseline, ss: SourceSet) -> tuple[np.ndarray, dict]:
+def fmm_points(baseline, ss: SourceSet) -> tuple[np.ndarray, dict]:
+    """potpourri3d's fast marching from the points of ``ss`` (a curve: its samples), on a mesh of one component."""
     mesh = baseline.mesh
     parts = baseline._parts
     if len(parts) != 1 or next(iter(parts.values())).vertices.size != mesh.n_vertices:
