@@ -95,3 +95,20 @@ def test_help_text_lists_each_dimension():
     assert "triangle meshes: methods lclp," in text and "exact" in text
     assert "tetrahedral meshes: methods lclp, lcqp-dirichlet, lcqp-laplacian, qclp, qcqp-dirichlet, qcqp-laplacian, " \
            "dijkstra, heat; order 2: qclp; cost/metric: none" in text
+
+
+def test_source_kinds_of_resolved_sets_in_both_dimensions():
+    import cvxgeodesic as cg
+    from cvxgeodesic.mesh.tet_generate import tet_box
+    from cvxgeodesic.mesh.tet_locate import VolumePoint
+    from cvxgeodesic.sources import resolve_sources
+    from cvxgeodesic.sources_tet import BoundaryFaces, resolve_tet_sources
+
+    plane, box = cg.grid_plane(4), tet_box(2)
+    p = cg.SurfacePoint(3, [0.2, 0.3, 0.5])
+    for sources, kinds in [(0, {"vertex"}), ([p, 2], {"point", "vertex"}), ("boundary", {"boundary"}),
+                           (cg.SurfaceCurve([p, cg.SurfacePoint(9, [0.3, 0.3, 0.4])]), {"curve"})]:
+        assert cap.source_kinds(resolve_sources(plane, sources)) == kinds
+    for sources, kinds in [([0, 4], {"vertex"}), ([VolumePoint(0, [0.25] * 4), 3], {"point", "vertex"}),
+                           ("boundary", {"boundary"}), (BoundaryFaces([0, 1]), {"boundary faces"})]:
+        assert cap.source_kinds(resolve_tet_sources(box, sources)) == kinds

@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 from ._threads import limited
 from .baselines import BASELINES
 from .capabilities import check as check_capability
-from .capabilities import methods_for
+from .capabilities import methods_for, source_kinds
 from .errors import ParameterError, SourceError
 from .formulations import ALIASES, FORMULATIONS, NORMALIZATIONS, smoothness_weight
 from .mesh.convert import as_mesh
@@ -346,7 +346,7 @@ class GeodesicSolver:
             sset: Any = resolve_tet_sources(self.mesh, sources)
         else:
             sset = resolve_sources(self.mesh, sources)
-        check_capability(self.method, sources=_source_kinds(sset), **self._cell)
+        check_capability(self.method, sources=source_kinds(sset), **self._cell)
         source_time = time.perf_counter() - t0  # closest points and curve samples: part of this solve
         with reporting_to(callback):  # Clarabel's iterations too, wherever a strategy runs it
             res = self._strategy.solve(sset, callback=callback)
@@ -605,20 +605,6 @@ def _object_kinds(sources: Any) -> set[str]:
     items = sources if isinstance(sources, list | tuple) else [sources]
     return ({"curve"} if any(isinstance(s, SurfaceCurve) for s in items) else set()) | (
         {"boundary faces"} if any(isinstance(s, BoundaryFaces) for s in items) else set())
-
-
-def _source_kinds(sset: Any) -> set[str]:
-    """The kinds of source (:data:`~cvxgeodesic.capabilities.SOURCE_KINDS`) of a resolved surface or volume set."""
-    if sset.vertex_only:
-        return {"vertex"}
-    if getattr(sset, "kind", None) == "boundary" or getattr(sset, "boundary", False):
-        return {"boundary"}
-    if hasattr(sset, "points"):  # a volume's TetSources
-        kinds = ({"point"} if sset.points else set()) | ({"boundary faces"} if sset.faces.size else set())
-        return kinds | ({"vertex"} if sset.vertices.size else set())
-    # a curve's samples are point sources too: a set with segments has a curve
-    kinds = {"curve"} if sset.segment_faces.size else {"point"} if sset.point_faces.size else set()
-    return kinds | ({"vertex"} if sset.vertices.size else set())
 
 
 class _PatchSolver(GeodesicSolver):

@@ -20,8 +20,8 @@ from typing import Any
 from .errors import ParameterError, SourceError
 
 __all__ = ["BASELINE_METHODS", "DIMS", "FORMULATION_METHODS", "MEDIA", "METHODS", "ORDERS", "RULES", "Rule",
-           "SOURCE_KINDS", "check", "help_text", "markdown_table", "methods_for", "refusal", "source_phrase",
-           "supported"]
+           "SOURCE_KINDS", "check", "help_text", "markdown_table", "methods_for", "refusal", "source_kinds",
+           "source_phrase", "supported"]
 
 #: The eight convex formulations.
 FORMULATION_METHODS = ("lclp", "lcqp-dirichlet", "lcqp-laplacian", "lcqp-hessian", "qclp", "qcqp-dirichlet",
@@ -151,6 +151,22 @@ def methods_for(dim: int, order: int = 1, medium: str = "none", source: str | No
     """The methods that support a cell, in the order of :data:`METHODS` (a smoothed solve)."""
     return tuple(m for m in METHODS if supported(m, dim=dim, order=order, medium=medium, source=source,
                                                  multires=multires))
+
+
+def source_kinds(sources: Any) -> set[str]:
+    """The kinds of source (:data:`SOURCE_KINDS`) of a resolved source set: a surface's
+    :class:`~cvxgeodesic.sources.SourceSet` or a volume's :class:`~cvxgeodesic.sources_tet.TetSources` (read by
+    their attributes: this module imports neither)."""
+    vertices = {"vertex"} if sources.vertices.size else set()
+    if sources.vertex_only:
+        return vertices
+    if getattr(sources, "kind", None) == "boundary" or getattr(sources, "boundary", False):
+        return {"boundary"}
+    if hasattr(sources, "points"):  # a volume's set
+        return vertices | ({"point"} if sources.points else set()) | ({"boundary faces"} if sources.faces.size
+                                                                     else set())
+    # a curve's samples are point sources too: a set with segments has a curve
+    return vertices | ({"curve"} if sources.segment_faces.size else {"point"})
 
 
 def source_phrase(kinds: Iterable[str]) -> str:

@@ -49,7 +49,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from ..capabilities import check
+from ..capabilities import check, source_kinds
 from ..errors import CvxGeodesicError, MeshError, MeshRepairWarning, NonManifoldError, SolverError
 from ..mesh.convert import as_mesh
 from ..mesh.orient import Orientation, orient_faces
@@ -128,8 +128,7 @@ class BaselineSolver:
         """Distance from a surface's points, curves or boundary (validated): the boundary's vertices here, after
         the capability table's check; the classes whose library takes points override it
         (:mod:`~cvxgeodesic.baselines.points`)."""
-        kind = "boundary" if ss.kind == "boundary" else "curve" if ss.segment_faces.size else "point"
-        check(self.name, dim=2, sources=[kind])
+        check(self.name, dim=2, sources=source_kinds(ss))
         d, extra = self._solve(ss.vertices)
         return d, {**extra, "sources": "boundary vertices"}
 
