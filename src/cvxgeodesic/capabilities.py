@@ -200,21 +200,23 @@ def check(method: str, *, dim: int, order: int = 1, medium: str = "none", source
     rule = refusal(method, **cell)
     if rule is not None:
         raise ParameterError(_message(rule, method, **cell))
-    kinds = [k for k in SOURCE_KINDS if k in set(sources)]
-    refused = [(k, r) for k in kinds if (r := refusal(method, source=k, **cell)) is not None]
+    refused = [(k, r) for k in SOURCE_KINDS if k in set(sources) and (r := refusal(method, source=k, **cell))]
     if refused:
-        kind, rule = refused[0]
-        # every kind of this dimension refused for the same reason goes in one message ("point or curve")
-        same = [k for k in SOURCE_KINDS if k == kind or (refusal(method, source=k, **cell) == rule
-                                                         and methods_for(dim, source=k))]
-        what = source_phrase(same)
-        if rule.axis == "multires":
-            raise SourceError(f"multires cannot take {what} sources ({rule.reason})")
-        can = methods_for(dim, order, medium, kind, multires=multires)
-        raise SourceError(f"method {method!r} cannot take {what} sources {_ON[dim]}"
-                          f"{' at order 2' if order == 2 else ''} ({rule.reason}); "
-                          + (f"methods that can: {', '.join(m for m in can if m != method)}" if can else
-                             "no method can there"))
+        raise SourceError(_source_message(method, *refused[0], cell))
+
+
+def _source_message(method: str, kind: str, rule: Rule, cell: dict[str, Any]) -> str:
+    """The message of a refused kind of source, with every kind of the dimension refused for the same reason
+    ("point or curve") and the methods that take it."""
+    dim = cell["dim"]
+    same = [k for k in SOURCE_KINDS if k == kind or (refusal(method, source=k, **cell) == rule
+                                                     and methods_for(dim, source=k))]
+    what = source_phrase(same)
+    if rule.axis == "multires":
+        return f"multires cannot take {what} sources ({rule.reason})"
+    can = [m for m in methods_for(dim, cell["order"], cell["medium"], kind, multires=cell["multires"]) if m != method]
+    return (f"method {method!r} cannot take {what} sources {_ON[dim]}{' at order 2' if cell['order'] == 2 else ''} "
+            f"({rule.reason}); " + (f"methods that can: {', '.join(can)}" if can else "no method can there"))
 
 
 def _message(rule: Rule, method: str, *, dim: int, order: int, medium: str, multires: bool,
@@ -242,7 +244,7 @@ _COLUMNS = ("order 1", "order 2", "cost, metric", "multires", *SOURCE_KINDS)
 
 
 def _cell(method: str, dim: int, column: str, notes: dict[str, int]) -> str:
-    """One cell of :func:`markdown_table`: "yes", "no ⁽ᵏ⁾", or the orders / condition where it holds."""
+    """One cell of :func:`markdown_table`: "yes", "no [k]", or the orders / condition where it holds."""
     def note(rule: Rule) -> str:
         return f"[{notes.setdefault(rule.reason, len(notes) + 1)}]"
 
