@@ -22,7 +22,8 @@ PACKAGE = Path(cvxgeodesic.__file__).resolve().parent
 #: Layers from the bottom up (docs/architecture.md); a module belongs to the layer of its longest matching
 #: prefix. A module may import its own layer and the layers below it.
 LAYERS: list[tuple[str, tuple[str, ...]]] = [
-    ("leaf", ("errors", "_atomic", "_threads", "_cluster", "_jit", "_signals", "validation", "results", "tables")),
+    ("leaf", ("errors", "_atomic", "_threads", "_cluster", "_jit", "_signals", "validation", "results", "tables",
+              "capabilities")),
     # the file formats know nothing of TriMesh or of each other's callers: load_mesh, io and the CLI use them
     ("mesh formats", ("mesh.formats",)),
     ("mesh", ("mesh",)),

@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 import cvxgeodesic as cg
-from cvxgeodesic.baselines.tet import TetDijkstraBaseline
+from cvxgeodesic.baselines import DijkstraBaseline
 from cvxgeodesic.errors import DegenerateFacesWarning, MeshError, ParameterError, SourceError
 from cvxgeodesic.formulations_tet import TetOperators, build_tet_problem, tet_smoothness_weight
 from cvxgeodesic.mesh.tet_generate import l_prism_distance, tet_ball, tet_box, tet_l_prism
@@ -102,11 +102,11 @@ def test_order1_and_clarabel_agree_and_lclp_is_dijkstra():
     assert np.abs(ipm.distance - cla.distance).max() <= 1e-5
     for solver in ("ipm", "clarabel"):
         d = cg.geodesic_distance(m, [c, 0], method="lclp", solver=solver)
-        dj, _ = TetDijkstraBaseline(m).solve([c, 0])
+        dj, _ = DijkstraBaseline(m).solve([c, 0])
         assert np.abs(d - dj).max() <= 1e-6  # Lemma 1 in 3-D
     # qclp is below Dijkstra (every cone bounds the derivative along each edge)
     d = cg.geodesic_distance(m, c, method="qclp")
-    assert np.all(d <= TetDijkstraBaseline(m).solve(c)[0] + 1e-6)
+    assert np.all(d <= DijkstraBaseline(m).solve(c)[0] + 1e-6)
 
 
 @pytest.mark.parametrize("method", ["qcqp-dirichlet", "qcqp-laplacian", "lcqp-dirichlet"])
@@ -236,9 +236,11 @@ def test_source_errors():
 
 def test_methods_that_do_not_apply_name_those_that_do():
     m = tet_box(2)
-    for method in ("qcqp-hessian", "qgdf", "fmm", "exact", "nonsense"):
+    for method in ("qcqp-hessian", "qgdf", "fmm", "exact"):
         with pytest.raises(ParameterError, match="does not apply to tetrahedral meshes.*qclp.*heat"):
             cg.GeodesicSolver(m, method)
+    with pytest.raises(ParameterError, match="unknown method 'nonsense'; choose one of .*qclp.*heat .on tetrahedral"):
+        cg.GeodesicSolver(m, "nonsense")
     with pytest.raises(ParameterError, match="order=2 is implemented for qclp"):
         cg.GeodesicSolver(m, "qcqp-laplacian", order=2)
     with pytest.raises(ParameterError, match="multires"):
@@ -291,7 +293,7 @@ def test_degenerate_tets_are_left_out_with_a_note():
     assert any("get the 1-D cone" in s for s in res[("qclp", 2)].info.notes)
     assert any("heat method: left out 1 degenerate" in s for s in res[("heat", 1)].info.notes)
     # the flat tetrahedron's vertex gets a finite distance bounded by its edges
-    assert res[("qclp", 2)].distance[-1] <= TetDijkstraBaseline(flat).solve(0)[0][-1] + 1e-6
+    assert res[("qclp", 2)].distance[-1] <= DijkstraBaseline(flat).solve(0)[0][-1] + 1e-6
     with pytest.raises(MeshError, match="all 1 tetrahedra are degenerate"):
         cg.GeodesicSolver(TetMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], [[0, 1, 2, 3]]), "qclp")
 

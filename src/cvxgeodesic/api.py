@@ -18,8 +18,10 @@ from numpy.typing import ArrayLike
 
 from ._threads import limited
 from .baselines import BASELINES
+from .capabilities import check as check_capability
+from .capabilities import methods_for, source_kinds
 from .errors import ParameterError, SourceError
-from .formulations import ALIASES, FORMULATIONS, NORMALIZATIONS, canonical_method, smoothness_weight
+from .formulations import ALIASES, FORMULATIONS, NORMALIZATIONS, smoothness_weight
 from .mesh.convert import as_mesh
 from .mesh.tetmesh import TetMesh
 from .mesh.trimesh import TriMesh
@@ -67,8 +69,8 @@ class GeodesicSolver:
         ``V`` (n, 3) float, ``F`` (m, 3) int (see :func:`~cvxgeodesic.mesh.io.as_trimesh`); or a tetrahedral
         mesh: a :class:`~cvxgeodesic.mesh.tetmesh.TetMesh`, ``(V, T)`` with ``T`` (k, 4) int, a file holding
         tetrahedra, a meshio.Mesh with ``tetra`` cells: the distance *inside* the solid (``docs/volumes.md``;
-        methods :data:`~cvxgeodesic.formulations_tet.TET_METHODS`, sources vertices, VolumePoints,
-        BoundaryFaces and ``"boundary"``, ``order=2`` for ``"qclp"``).
+        sources vertices, VolumePoints, BoundaryFaces and ``"boundary"``). Which method takes which mesh,
+        order, medium and source: :mod:`cvxgeodesic.capabilities` (``docs/capabilities.md``).
     method : str
         One of :data:`ALL_METHODS`: the eight convex formulations
         (``"lclp"``, ``"lcqp-dirichlet"``, ``"lcqp-laplacian"``, ``"lcqp-hessian"``
@@ -162,7 +164,9 @@ class GeodesicSolver:
         energy on a manifold cover instead, see ``info.notes``).
     ParameterError
         Unknown method or solver, invalid ``m``, ``lam``, ``tol``, ``max_iter`` or ``threads``
-        (or ``CVXGEODESIC_THREADS``).
+        (or ``CVXGEODESIC_THREADS``); a method, order, medium or ``multires`` that
+        :func:`cvxgeodesic.capabilities.check` refuses on this mesh (the message says why and names
+        what is supported).
     TypeError
         ``mesh`` is none of the accepted kinds.
 
@@ -218,34 +222,20 @@ class GeodesicSolver:
         t0 = time.perf_counter()
         self.mesh: Any = cast(Any, as_mesh(mesh))  # a TriMesh or a TetMesh, told apart by is_volume
         self.is_volume = isinstance(self.mesh, TetMesh)  # distance inside tetrahedra (strategies/tet.py)
+        self.dim = self.mesh.dim
         self._check_method_and_solver(method, solver)
+        self.order = check_order(order)
+        target = resolve_target(multires, 0 if self.is_volume else self.mesh.n_faces)
+        self._cell: dict[str, Any] = {"dim": self.dim, "order": self.order, "multires": target is not None,
+                      "medium": "none" if cost is None and metric is None else "cost" if cost is not None else "metric"}
+        self._check_capabilities(m, lam)
         # a travel cost or metric (operators/metric.py): validated here, once
         self.medium = make_medium(self.mesh, cost, metric)
-        if self.medium is not None:
-            from .validation import check_medium_method
-
-            check_medium_method(self.method, (*FORMULATIONS, "dijkstra"), multires=bool(multires))
         self.tol = check_number(tol, "tol", low=0, high=1, low_open=True, high_open=True)
         self.max_iter = check_count(max_iter, "max_iter")
         self.verbose = bool(verbose)
         self.normalization = check_choice(normalization, "normalization", NORMALIZATIONS)
-        self.order = check_order(order)
         self._set_smoothness(m, lam)
-        if self.medium is not None and self.order == 2 and self.lam > 0:
-            raise ParameterError(
-                f"order=2 smoothing ({self.method!r}) takes no cost or metric: its energies vanish on the Euclidean "
-                "squared distance only; use method='qclp' (or m=0) at order 2, or order=1")
-        target = None
-        if self.order == 2:  # P2 elements for d² (cvxgeodesic.formulations_p2, strategies/order2.py)
-            if self.is_baseline or multires:
-                raise ParameterError("order=2 applies to the convex formulations without multires")
-        elif self.is_volume:
-            if multires:
-                raise ParameterError("multires applies to triangle meshes, not to tetrahedral ones")
-        else:
-            target = resolve_target(multires, self.mesh.n_faces)
-            if target is not None and self.is_baseline:
-                raise ParameterError(f"multires applies to the convex formulations, not to baseline {self.method!r}")
         config = SolveConfig(mesh=self.mesh, method=self.method, lam=self.lam, m=self.m,
                              normalization=self.normalization, solver=self._solver, tol=self.tol,
                              max_iter=self.max_iter, verbose=self.verbose, medium=self.medium,
@@ -262,29 +252,28 @@ class GeodesicSolver:
             method = "qclp" if self.is_volume else "qcqp-hessian"
         if not isinstance(method, str):
             raise ParameterError(f"method must be a string, got {type(method).__name__}")
-        key = method.lower()
-        if self.is_volume:
-            from .formulations_tet import TET_BASELINE_METHODS, check_tet_method
-
-            self.method = check_tet_method(method)
-            self._solver = check_choice(solver, "solver", SOLVERS)
-            self.is_baseline = self.method in TET_BASELINE_METHODS
-            if self.is_baseline and self._solver != "auto":
-                raise ParameterError(
-                    f"solver={self._solver!r} applies to the convex formulations, not to baseline {self.method!r}")
-            return
-        if key in BASELINE_METHODS:
-            self.method = key
-        elif key not in FORMULATIONS and key not in ALIASES:
-            raise ParameterError(f"unknown method {method!r}; choose one of {', '.join(ALL_METHODS)}")
-        else:
-            self.method = canonical_method(method)
+        key = ALIASES.get(method.lower(), method.lower())
+        if key not in ALL_METHODS:
+            known = ALL_METHODS if not self.is_volume else methods_for(self.dim)
+            raise ParameterError(f"unknown method {method!r}; choose one of {', '.join(known)}"
+                                 + (" (on tetrahedral meshes)" if self.is_volume else ""))
+        check_capability(key, dim=self.dim)  # a surface method on a volume: the message says why
+        self.method = key
         self._solver = check_choice(solver, "solver", SOLVERS)
         self.is_baseline = self.method in BASELINE_METHODS
         if self.is_baseline and self._solver != "auto":
             raise ParameterError(
                 f"solver={self._solver!r} applies to the convex formulations, not to baseline {self.method!r}"
             )
+
+    def _check_capabilities(self, m: Any, lam: Any) -> None:
+        """Raise when the capability table (:mod:`cvxgeodesic.capabilities`) refuses the method on this mesh, at this
+        order, with this medium and multires; ``m`` and ``lam`` are checked first (a smoothed order-2 solve takes no
+        medium)."""
+        m_value, lam_value = check_smoothness(m, lam)
+        energy = FORMULATIONS.get(self.method, ("", None))[1]
+        self._cell["smoothing"] = energy is not None and (m_value > 0 if lam_value is None else lam_value > 0)
+        check_capability(self.method, **self._cell)
 
     def _set_smoothness(self, m: Any, lam: Any) -> None:
         """``self.lam`` (λ in the mesh's units), ``self.m`` and ``self.energy`` from ``m`` or ``lam``: both checked
@@ -349,12 +338,15 @@ class GeodesicSolver:
             message adds that it can be indefinite on meshes with sharp corners).
         """
         t0 = time.perf_counter()
+        # a curve in a volume, boundary faces on a surface: refused with the table's reason before any resolution
+        check_capability(self.method, sources=_object_kinds(sources), **self._cell)
         if self.is_volume:
             from .sources_tet import resolve_tet_sources
 
             sset: Any = resolve_tet_sources(self.mesh, sources)
         else:
             sset = resolve_sources(self.mesh, sources)
+        check_capability(self.method, sources=source_kinds(sset), **self._cell)
         source_time = time.perf_counter() - t0  # closest points and curve samples: part of this solve
         with reporting_to(callback):  # Clarabel's iterations too, wherever a strategy runs it
             res = self._strategy.solve(sset, callback=callback)
@@ -603,6 +595,16 @@ def _matrix_rows(mesh: Any, vertices: Any, *, local: bool) -> tuple[list, np.nda
     uniq, inverse = np.unique(arr, return_inverse=True)
     uniq = validate_sources(uniq, mesh.n_vertices)
     return uniq.tolist(), np.asarray(inverse).ravel()
+
+
+def _object_kinds(sources: Any) -> set[str]:
+    """The kinds of source that a raw ``sources`` value names by its type alone: curves and boundary faces."""
+    from .sources import SurfaceCurve
+    from .sources_tet import BoundaryFaces
+
+    items = sources if isinstance(sources, list | tuple) else [sources]
+    return ({"curve"} if any(isinstance(s, SurfaceCurve) for s in items) else set()) | (
+        {"boundary faces"} if any(isinstance(s, BoundaryFaces) for s in items) else set())
 
 
 class _PatchSolver(GeodesicSolver):

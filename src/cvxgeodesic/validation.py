@@ -29,7 +29,7 @@ from .errors import MeshError, ParameterError, SourceError
 __all__ = [
     "MAX_COORDINATE", "MAX_COST", "MAX_COST_RATIO", "MAX_M", "MAX_METRIC_CONDITION", "MIN_COST", "MIN_EXTENT",
     "as_points", "as_vertex_field", "check_choice", "check_coordinates", "check_cost", "check_count", "check_lam",
-    "check_medium_method", "check_metric", "check_not_an_input", "check_number", "check_output_path",
+    "check_metric", "check_not_an_input", "check_number", "check_output_path",
     "check_plane_metric", "check_real", "check_type", "is_integer", "is_real", "short_repr", "validate_sources",
     "vertex_indices", "vertex_mask",
 ]
@@ -651,12 +651,3 @@ def check_plane_metric(M2: np.ndarray, owner: np.ndarray, face: np.ndarray, kind
             name = "metric" if kind == "constant" else f"metric[{k}] ({_where(kind, k)})"
             raise ParameterError(f"{name} {what} in the plane of face {t} (eigenvalues there {_g(low[i], 3)}, "
                                  f"{_g(high[i], 3)}: condition number {_g(condition[i], 3)}); {why}")
-
-
-def check_medium_method(method: str, supported: Iterable[str], *, multires: bool = False) -> None:
-    """A ParameterError unless ``method`` takes a travel cost or metric (``supported`` lists those that do)."""
-    if method not in tuple(supported):
-        raise ParameterError(f"method {method!r} cannot take a travel cost or metric (its library computes Euclidean "
-                             f"distances); methods that can: {', '.join(supported)}")
-    if multires:
-        raise ParameterError("cost and metric are not implemented with multires; solve on the mesh itself")

@@ -1,16 +1,18 @@
-"""Baseline geodesic-distance methods behind one interface.
+"""Baseline geodesic-distance methods behind one interface, on triangle and tetrahedral meshes.
 
 Every class takes a mesh in its constructor (all per-mesh precomputation,
 timed as ``setup_time``) and has ``solve(sources) -> (d, info)``; see
-:class:`~cvxgeodesic.baselines.base.BaselineSolver`.
+:class:`~cvxgeodesic.baselines.base.BaselineSolver`. Which method takes which
+mesh, medium and source is in :mod:`cvxgeodesic.capabilities`.
 
-- ``dijkstra``: ``scipy.sparse.csgraph.dijkstra`` on the edge graph; any mesh; several
+- ``dijkstra``: ``scipy.sparse.csgraph.dijkstra`` on the edge graph; any surface or volume; several
   sources natively (exactly the minimum of single-source runs).
-- ``fmm``: ``potpourri3d.MeshFastMarchingDistanceSolver``; manifold meshes only; several
+- ``fmm``: ``potpourri3d.MeshFastMarchingDistanceSolver``; manifold surfaces only; several
   sources natively (fronts marched together, slightly below the minimum of single runs).
-- ``heat``: ``potpourri3d.MeshHeatMethodDistanceSolver`` (``t_coef = 1``); any mesh (intrinsic
-  tufted cover); several sources natively (diffused together, not the minimum of single runs).
-- ``exact``: ``pygeodesic.geodesic.PyGeodesicAlgorithmExact`` (MMP); manifold meshes only;
+- ``heat``: on a surface ``potpourri3d.MeshHeatMethodDistanceSolver`` (``t_coef = 1``; any mesh:
+  intrinsic tufted cover); inside a volume the library's own P1 stiffness and mass; several sources
+  natively (diffused together, not the minimum of single runs).
+- ``exact``: ``pygeodesic.geodesic.PyGeodesicAlgorithmExact`` (MMP); manifold surfaces only;
   several sources natively (exactly the minimum of single-source runs).
 
 Vertices not connected to any source get ``np.inf`` with every method.
@@ -21,6 +23,7 @@ from .dijkstra import DijkstraBaseline
 from .exact import ExactBaseline
 from .fmm import FastMarchingBaseline
 from .heat import DEFAULT_T_COEF, HeatBaseline
+from .points import graph_distance
 
 BASELINES: dict[str, type[BaselineSolver]] = {
     cls.name: cls for cls in (DijkstraBaseline, FastMarchingBaseline, HeatBaseline, ExactBaseline)
@@ -29,5 +32,6 @@ BASELINES: dict[str, type[BaselineSolver]] = {
 
 __all__ = [
     "BASELINES", "BaselineSolver", "ComponentwiseSolver", "DEFAULT_T_COEF", "DijkstraBaseline", "ExactBaseline",
-    "FastMarchingBaseline", "HeatBaseline", "nonmanifold_vertices", "reachable_mask", "require_manifold",
+    "FastMarchingBaseline", "HeatBaseline", "graph_distance", "nonmanifold_vertices", "reachable_mask",
+    "require_manifold",
 ]

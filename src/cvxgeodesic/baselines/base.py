@@ -1,13 +1,18 @@
-"""Common interface of the baseline distance methods.
+"""Common interface of the baseline distance methods, on triangle and tetrahedral meshes.
 
 Every baseline is a stateful class: the constructor does all per-mesh
 precomputation (and records its duration in ``setup_time``), ``solve`` computes
-the distance from a set of source vertices. The convex-optimization methods of
-the library expose the same shape of result, so evaluation code treats every
-method alike::
+the distance from the sources the mesh's dimension takes (vertices; points,
+curves and the boundary of a surface where the library can; volume points and
+boundary faces inside a volume) and checks the field. The convex-optimization
+methods of the library expose the same shape of result, so evaluation code
+treats every method alike::
 
     solver = BASELINES["exact"](mesh)
     d, info = solver.solve(np.array([0]))
+
+The surface libraries are wrapped as below; inside a volume Dijkstra runs on the
+edge graph and the heat method on the library's own P1 operators.
 
 Components
 ----------
@@ -38,63 +43,73 @@ from __future__ import annotations
 import time
 import warnings
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
+from ..capabilities import check, source_kinds
 from ..errors import CvxGeodesicError, MeshError, MeshRepairWarning, NonManifoldError, SolverError
-from ..mesh.io import as_trimesh
+from ..mesh.convert import as_mesh
 from ..mesh.orient import Orientation, orient_faces
 from ..mesh.trimesh import TriMesh, unit_scale
-from ..validation import validate_sources
+from ..sources import SourceSet, resolve_sources
+from ..sources_tet import resolve_tet_sources
 
 
 class BaselineSolver:
-    """Base class of the baseline distance methods.
+    """Base class of the baseline distance methods, on triangle and tetrahedral meshes.
 
-    Subclasses implement :meth:`_setup` (per-mesh precomputation) and
-    :meth:`_solve` (one distance computation).
+    Subclasses implement :meth:`_setup` (per-mesh precomputation) and :meth:`_solve` (one distance
+    computation). Which dimensions a method takes is in :mod:`cvxgeodesic.capabilities`.
 
     Parameters
     ----------
-    mesh : TriMesh or (V, F) tuple
-        The surface. ``V`` is (n, 3) float, ``F`` is (m, 3) int.
+    mesh : TriMesh, TetMesh, or (V, F) / (V, T) tuple
+        ``V`` (n, 3) float, ``F`` (m, 3) int triangles or ``T`` (k, 4) int tetrahedra
+        (:func:`~cvxgeodesic.mesh.convert.as_mesh`).
 
     Attributes
     ----------
     name : str
         Method name used as key of :data:`cvxgeodesic.baselines.BASELINES`.
     library : str
-        The library function doing the work (reported as ``info["solver"]``).
+        The library function doing the work (reported as ``info["solver"]``); inside a volume
+        ``volume_library`` where a class sets it (the heat method's own P1 operators).
     supports_multiple_sources : bool
         Whether the library computes the distance to a set of sources in one
         run (otherwise the class takes the minimum over single-source runs).
-    mesh : TriMesh
+    mesh : TriMesh or TetMesh
+    dim : {2, 3}
+        The simplex dimension of ``mesh``.
     setup_time : float
         Seconds spent in the constructor.
     notes : list of str
-        What the set-up changed for the library (the faces it reoriented), for ``info.notes``.
+        What the set-up changed or left out (the faces it reoriented, the degenerate tetrahedra it left out),
+        copied into every ``info["notes"]``.
+
+    Raises
+    ------
+    ParameterError
+        The method does not apply to the mesh's dimension (``"fmm"``, ``"exact"`` inside a volume).
     """
 
     name: str = ""
     library: str = ""
+    volume_library: str = ""
     supports_multiple_sources: bool = True
 
-    def __init__(self, mesh: TriMesh):
-        self.mesh = as_trimesh(mesh)
+    def __init__(self, mesh: Any):
+        self.mesh: Any = as_mesh(mesh)
+        self.dim = self.mesh.dim
+        check(self.name, dim=self.dim)
+        if self.dim == 3 and self.volume_library:
+            self.library = self.volume_library
         self.notes: list[str] = []
         t0 = time.perf_counter()
-        try:
+        with _LibraryErrors(self, "setup failed on"):
             self._setup()
-        except CvxGeodesicError:
-            raise
-        except Exception as exc:  # a library failure: never let it escape bare
-            raise SolverError(
-                f"baseline {self.name!r}: setup failed on {self.mesh.name}: {type(exc).__name__}: {exc}",
-                solver=self.library,
-                status="error",
-            ) from exc
         self.setup_time = time.perf_counter() - t0
 
     def __repr__(self) -> str:
@@ -104,19 +119,30 @@ class BaselineSolver:
     def _setup(self) -> None:
         """Per-mesh precomputation (called once by the constructor)."""
 
-    def _solve(self, sources: np.ndarray) -> tuple[np.ndarray, dict]:
-        """Distance from ``sources`` (validated). Returns ``(d, extra_info)``."""
+    def _solve(self, sources: Any) -> tuple[np.ndarray, dict]:
+        """Distance from validated sources: a (k,) int64 array of vertices on a surface, a
+        :class:`~cvxgeodesic.sources_tet.TetSources` inside a volume. Returns ``(d, extra_info)``."""
         raise NotImplementedError
 
+    def _solve_sources(self, ss: SourceSet) -> tuple[np.ndarray, dict]:
+        """Distance from a surface's points, curves or boundary (validated): the boundary's vertices here, after
+        the capability table's check; the classes whose library takes points override it
+        (:mod:`~cvxgeodesic.baselines.points`)."""
+        check(self.name, dim=2, sources=source_kinds(ss))
+        d, extra = self._solve(ss.vertices)
+        return d, {**extra, "sources": "boundary vertices"}
+
     # -- public -----------------------------------------------------------------------------------------------
-    def solve(self, sources: np.ndarray) -> tuple[np.ndarray, dict]:
+    def solve(self, sources: Any) -> tuple[np.ndarray, dict]:
         """Geodesic distance from the nearest of ``sources`` to every vertex.
 
         Parameters
         ----------
-        sources : int or (k,) int array_like
-            Source vertex indices: unique, in ``[0, n)``, ``k >= 1``
-            (:func:`~cvxgeodesic.validation.validate_sources`).
+        sources : int, (k,) int array_like, or the dimension's other sources
+            Source vertex indices (unique, in ``[0, n)``, ``k >= 1``) or, on a surface, anything
+            :func:`~cvxgeodesic.sources.resolve_sources` takes (SurfacePoints, SurfaceCurves, ``"boundary"``:
+            where the library can, :mod:`~cvxgeodesic.baselines.points`); inside a volume anything
+            :func:`~cvxgeodesic.sources_tet.resolve_tet_sources` takes.
 
         Returns
         -------
@@ -125,37 +151,30 @@ class BaselineSolver:
         info : dict
             ``solver`` (library used), ``status`` (``"optimal"``), ``iterations``
             (0: not iterative), ``solve_time`` and ``setup_time`` (seconds),
-            ``method``, ``n_sources``, plus method-specific keys.
+            ``method``, ``n_sources``, ``notes`` (list of str), plus method-specific keys.
 
         Raises
         ------
         SourceError
-            Invalid source indices.
+            Invalid sources.
         SolverError
             If the library fails or returns non-finite values where a source is
             reachable.
         """
-        sources = validate_sources(sources, self.mesh.n_vertices)
+        src, seeds, count = self._resolve(sources)
         t0 = time.perf_counter()
-        try:
-            d, extra = self._solve(sources)
-        except CvxGeodesicError:
-            raise
-        except Exception as exc:
-            raise SolverError(
-                f"baseline {self.name!r} failed on {self.mesh.name}: {type(exc).__name__}: {exc}",
-                solver=self.library,
-                status="error",
-            ) from exc
+        with _LibraryErrors(self, "failed on"):
+            d, extra = self._solve_sources(src) if isinstance(src, SourceSet) else self._solve(src)
         solve_time = time.perf_counter() - t0
-        d = np.asarray(d, dtype=np.float64).reshape(-1)
+        d = np.array(d, dtype=np.float64).reshape(-1)
         if d.shape != (self.mesh.n_vertices,):
             raise SolverError(
                 f"baseline {self.name!r} returned {d.shape[0]} values for {self.mesh.n_vertices} vertices",
                 solver=self.library,
                 status="bad_output",
             )
-        reach = reachable_mask(self.mesh, sources)
+        reach = self.mesh.connected_to(seeds)
+        d[~reach] = np.inf
         bad = reach & ~np.isfinite(d)
         if bad.any():
             raise SolverError(
@@ -171,10 +190,43 @@ class BaselineSolver:
             "iterations": 0,
             "solve_time": solve_time,
             "setup_time": self.setup_time,
-            "n_sources": int(sources.size),
+            "n_sources": count,
+            "notes": [*self.notes, *extra.pop("notes", [])],
         }
         info.update(extra)
         return d, info
+
+
+    def _resolve(self, sources: Any) -> tuple[Any, np.ndarray, int]:
+        """The validated sources (vertex indices, a surface's SourceSet of points, curves or boundary, a volume's
+        TetSources), the vertices the field spreads from, and how many sources there are."""
+        if self.dim == 3:
+            src = resolve_tet_sources(self.mesh, sources)
+            return src, src.seed_vertices(self.mesh), src.count
+        ss = resolve_sources(self.mesh, sources)
+        if ss.vertex_only:
+            return ss.vertices, ss.vertices, int(ss.vertices.size)
+        F = self.mesh.F
+        seeds = np.unique(np.concatenate([ss.vertices, F[ss.point_faces].ravel(), F[ss.segment_faces].ravel()]))
+        return ss, seeds.astype(np.int64), int(ss.vertices.size + ss.point_faces.size)
+
+
+class _LibraryErrors:
+    """Turn any failure but the library's own errors into a :class:`SolverError` naming the baseline and the mesh:
+    a library's exception never escapes bare."""
+
+    def __init__(self, solver: BaselineSolver, what: str):
+        self.solver, self.what = solver, what
+
+    def __enter__(self) -> _LibraryErrors:
+        return self
+
+    def __exit__(self, kind, exc, tb) -> None:
+        if exc is None or isinstance(exc, CvxGeodesicError) or not isinstance(exc, Exception):
+            return
+        s = self.solver
+        raise SolverError(f"baseline {s.name!r}: {self.what} {s.mesh.name}: {type(exc).__name__}: {exc}",
+                          solver=s.library, status="error") from exc
 
 
 def reachable_mask(mesh: TriMesh, sources: np.ndarray) -> np.ndarray:
@@ -300,9 +352,13 @@ class ComponentwiseSolver(BaselineSolver):
 
     #: The library depends on the faces' orientation: give it consistently oriented faces.
     orient: bool = False
+    #: The library needs an edge- and vertex-manifold mesh (:func:`require_manifold`, checked before it is loaded).
+    manifold: bool = False
 
     def _setup(self) -> None:
         mesh = self.mesh
+        if self.manifold:
+            require_manifold(mesh, self.name)  # the message names the methods that solve non-manifold meshes
         self.scale = unit_scale(mesh)
         V = mesh.V / self.scale  # exact: a power of two
         F = mesh.F
@@ -354,4 +410,5 @@ class ComponentwiseSolver(BaselineSolver):
             local = np.searchsorted(part.vertices, src_c)
             d[part.vertices] = self._run(part.solver, local) * self.scale
             n_runs += 1
-        return d, {"n_components": len(self._parts), "n_components_solved": n_runs}
+        # every library here solves several sources in one run
+        return d, {"n_components": len(self._parts), "n_components_solved": n_runs, "multisource": "native"}

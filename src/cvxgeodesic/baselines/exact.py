@@ -8,7 +8,9 @@ import io
 import numpy as np
 
 from ..errors import SolverError
-from .base import ComponentwiseSolver, require_manifold
+from ..sources import SourceSet
+from .base import ComponentwiseSolver
+from .points import exact_inserted
 
 
 class ExactBaseline(ComponentwiseSolver):
@@ -44,14 +46,16 @@ class ExactBaseline(ComponentwiseSolver):
 
     name = "exact"
     library = "pygeodesic.geodesic.PyGeodesicAlgorithmExact"
-    supports_multiple_sources = True
+    manifold = True
 
     def _setup(self) -> None:
-        require_manifold(self.mesh, self.name)  # the message names the methods that solve non-manifold meshes
         from pygeodesic import geodesic
 
         self._geodesic = geodesic
         super()._setup()
+
+    def _solve_sources(self, ss: SourceSet) -> tuple[np.ndarray, dict]:
+        return super()._solve_sources(ss) if ss.kind == "boundary" else exact_inserted(type(self), self.mesh, ss)
 
     def _build(self, V: np.ndarray, F: np.ndarray) -> object:
         out = io.StringIO()
@@ -74,8 +78,3 @@ class ExactBaseline(ComponentwiseSolver):
         d = np.asarray(d, dtype=np.float64).reshape(-1)
         d[d >= 1e99] = np.inf  # GEODESIC_INF = 1e100 marks unreached vertices
         return d
-
-    def _solve(self, sources: np.ndarray) -> tuple[np.ndarray, dict]:
-        d, info = super()._solve(sources)
-        info["multisource"] = "native"
-        return d, info

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import ComponentwiseSolver, require_manifold
+from ..sources import SourceSet
+from .base import ComponentwiseSolver
+from .points import fmm_points
 
 
 class FastMarchingBaseline(ComponentwiseSolver):
@@ -47,15 +49,17 @@ class FastMarchingBaseline(ComponentwiseSolver):
 
     name = "fmm"
     library = "potpourri3d.MeshFastMarchingDistanceSolver"
-    supports_multiple_sources = True
     orient = True
+    manifold = True
 
     def _setup(self) -> None:
-        require_manifold(self.mesh, self.name)  # the message names the methods that solve non-manifold meshes
         import potpourri3d as pp3d
 
         self._pp3d = pp3d
         super()._setup()
+
+    def _solve_sources(self, ss: SourceSet) -> tuple[np.ndarray, dict]:
+        return super()._solve_sources(ss) if ss.kind == "boundary" else fmm_points(self, ss)
 
     def _build(self, V: np.ndarray, F: np.ndarray) -> object:
         return self._pp3d.MeshFastMarchingDistanceSolver(V, F)
@@ -63,8 +67,3 @@ class FastMarchingBaseline(ComponentwiseSolver):
     def _run(self, solver, local_sources: np.ndarray) -> np.ndarray:
         points = [[(int(s), []) for s in local_sources]]
         return np.asarray(solver.compute_distance(points, [], False), dtype=np.float64).reshape(-1)
-
-    def _solve(self, sources: np.ndarray) -> tuple[np.ndarray, dict]:
-        d, info = super()._solve(sources)
-        info["multisource"] = "native"
-        return d, info

@@ -10,7 +10,13 @@
 - ``fmm``: potpourri3d's fast marching takes ``(face, [b0, b1, b2])`` points natively; a curve is
   its samples; ``"boundary"`` is the boundary vertices. Single-component meshes only.
 - ``heat``: potpourri3d's heat method takes vertices only; points and curves raise
-  :class:`~cvxgeodesic.errors.SourceError`, ``"boundary"`` is the boundary vertices.
+  :class:`~cvxgeodesic.errors.SourceError` (from :func:`cvxgeodesic.capabilities.check`, the one table of
+  what each method takes), ``"boundary"`` is the boundary vertices.
+
+Each class calls its function here from ``_solve_sources``
+(:meth:`~cvxgeodesic.baselines.base.BaselineSolver.solve`, which checks the field); inside a volume the
+baselines take every kind of volume source themselves. :func:`graph_distance` is Dijkstra with offsets, for
+both dimensions.
 """
 
 from __future__ import annotations
@@ -22,72 +28,63 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
-from ..errors import SolverError, SourceError
+from ..capabilities import methods_for
+from ..errors import SourceError
 from ..mesh.trimesh import TriMesh
 from ..sources import BARY_SNAP, SourceSet, closest_points, vertex_bounds
 
-#: Methods that take every kind of source (the eight formulations, then the baselines that take points).
-POINT_METHODS = ("lclp", "lcqp-dirichlet", "lcqp-laplacian", "lcqp-hessian", "qclp", "qcqp-dirichlet",
-                 "qcqp-laplacian", "qcqp-hessian", "dijkstra", "exact", "fmm")
 
+def graph_distance(graph: sp.spmatrix, starts: np.ndarray, near: np.ndarray | None = None,
+                   offsets: np.ndarray | None = None) -> np.ndarray:
+    """Shortest paths on ``graph`` from the ``starts`` (at 0) and from vertices reached at a known offset.
 
-def _cannot(method: str, what: str, why: str) -> SourceError:
-    return SourceError(f"method {method!r} cannot take {what} sources ({why}); methods that can: "
-                       f"{', '.join(m for m in POINT_METHODS if m != method)}")
-
-
-def solve_baseline_sources(baseline, ss: SourceSet) -> tuple[np.ndarray, dict]:
-    """Distance field of a baseline from a non-vertex source set.
+    The offsets are the straight segments from a source inside a cell (a point, a curve piece) to the cell's
+    corners: one virtual node is joined to each vertex of ``near`` by an edge as long as its offset, so the result
+    is exactly the minimum over the sources of single runs.
 
     Parameters
     ----------
-    baseline : BaselineSolver
-    ss : SourceSet
+    graph : (n, n) sparse matrix
+        Edge lengths (symmetric).
+    starts : (s,) int ndarray
+        Vertices at distance 0.
+    near : (q,) int ndarray, optional
+        Distinct vertices next to a source that is not a vertex.
+    offsets : (q,) float ndarray, optional
+        Their distances to that source (finite, ≥ 0). An offset of 0 makes the vertex a start: a zero weight is
+        no edge in SciPy's sparse graphs.
 
     Returns
     -------
-    d : (n,) float ndarray
-    info : dict
-        ``solver`` and method-specific keys (``sources`` says how the set was passed).
-
-    Raises
-    ------
-    SourceError
-        The method cannot take this kind of source; the message names the methods that can.
+    (n,) float64 ndarray
+        ``np.inf`` where no source is reachable.
     """
-    name, mesh = baseline.name, baseline.mesh
-    has_points = ss.point_faces.size > 0 or ss.kind in ("curve", "points", "mixed")
-    if name == "dijkstra":
-        return (_dijkstra(mesh, ss, baseline.graph, getattr(baseline, "medium", None)),
-                {"solver": baseline.library, "sources": "virtual node with offsets"})
-    if ss.kind == "boundary":  # the vertex baselines take the boundary's vertices
-        d, info = baseline.solve(ss.vertices)
-        info["sources"] = "boundary vertices"
-        return d, info
-    if name == "heat" and has_points:
-        raise _cannot(name, "point or curve", "potpourri3d's heat method takes vertex sources only")
-    if name == "exact":
-        return _exact_inserted(mesh, ss)
-    if name == "fmm":
-        return _fmm_points(baseline, ss)
-    raise _cannot(name, "point or curve", "not supported")  # pragma: no cover
+    n = graph.shape[0]
+    starts = np.asarray(starts, dtype=np.int64)
+    if near is None or offsets is None or not len(near):
+        d = dijkstra(graph, directed=False, indices=starts, min_only=True)
+        return np.asarray(d, dtype=np.float64)
+    near, offsets = np.asarray(near, dtype=np.int64), np.asarray(offsets, dtype=np.float64)
+    zero = offsets == 0.0
+    starts = np.unique(np.concatenate([starts, near[zero]]))
+    near, w = near[~zero], offsets[~zero]
+    G = sp.coo_matrix(graph)
+    virtual = np.full(near.size, n)
+    A = sp.coo_matrix((np.r_[G.data, w, w], (np.r_[G.row, virtual, near], np.r_[G.col, near, virtual])),
+                      shape=(n + 1, n + 1)).tocsr()
+    idx = np.r_[starts, n] if near.size else starts
+    d = dijkstra(A, directed=False, indices=idx, min_only=True)
+    return np.asarray(d[:n], dtype=np.float64)
 
 
-def _dijkstra(mesh: TriMesh, ss: SourceSet, graph: sp.csr_matrix, medium=None) -> np.ndarray:
-    n = mesh.n_vertices
+def dijkstra_sources(mesh: TriMesh, ss: SourceSet, graph: sp.csr_matrix, medium=None) -> np.ndarray:
+    """Dijkstra's field from a surface's points, curves or boundary: each vertex of a source face starts at
+    :func:`~cvxgeodesic.sources.vertex_bounds` (in ``medium`` when given)."""
     bound = vertex_bounds(mesh, ss, medium)
     if medium is not None:
         bound = bound * medium.scale
-    bv = np.flatnonzero(np.isfinite(bound))
-    # zero weights are "no edge" in scipy's sparse graphs: a vertex exactly on a point is a vertex source already
-    w = np.maximum(bound[bv], 1e-300)
-    G = graph.tocoo()
-    virtual = np.full(len(bv), n)
-    A = sp.coo_matrix((np.r_[G.data, w, w], (np.r_[G.row, virtual, bv], np.r_[G.col, bv, virtual])),
-                      shape=(n + 1, n + 1)).tocsr()
-    idx = np.r_[ss.vertices, n] if bv.size else ss.vertices
-    d = dijkstra(A, directed=False, indices=idx, min_only=True)
-    return np.asarray(d[:n], dtype=float)
+    near = np.flatnonzero(np.isfinite(bound))
+    return graph_distance(graph, ss.vertices, near, bound[near])
 
 
 def _unique_points(mesh: TriMesh, ss: SourceSet) -> np.ndarray:
@@ -151,26 +148,28 @@ def insert_points(V: np.ndarray, F: np.ndarray, X: np.ndarray) -> tuple[np.ndarr
     return Vc, F2, index
 
 
-def _exact_inserted(mesh: TriMesh, ss: SourceSet) -> tuple[np.ndarray, dict]:
-    from .exact import ExactBaseline
-
+def exact_inserted(cls: type, mesh: TriMesh, ss: SourceSet) -> tuple[np.ndarray, dict]:
+    """The exact field of ``cls`` (:class:`~cvxgeodesic.baselines.exact.ExactBaseline`) from the points of ``ss``
+    inserted into the mesh as vertices (a curve: its samples)."""
     X = _unique_points(mesh, ss)
     V2, F2, idx = insert_points(mesh.V, mesh.F, X)
-    solver = ExactBaseline(TriMesh(V2, F2, name=mesh.name))
+    solver = cls(TriMesh(V2, F2, name=mesh.name))
     src = np.unique(np.r_[ss.vertices, idx]).astype(np.int64)
     with contextlib.redirect_stdout(io.StringIO()):
-        d, info = solver.solve(src)
-    info = {"solver": info["solver"], "sources": f"{len(X)} point(s) inserted into the mesh",
-            "inserted_vertices": int(len(V2) - mesh.n_vertices)}
-    return np.asarray(d[: mesh.n_vertices], dtype=float), info
+        d, _ = solver.solve(src)
+    return np.asarray(d[: mesh.n_vertices], dtype=float), {
+        "sources": f"{len(X)} point(s) inserted into the mesh", "inserted_vertices": int(len(V2) - mesh.n_vertices)}
 
 
-def _fmm_points(baseline, ss: SourceSet) -> tuple[np.ndarray, dict]:
+def fmm_points(baseline, ss: SourceSet) -> tuple[np.ndarray, dict]:
+    """potpourri3d's fast marching from the points of ``ss`` (a curve: its samples), on a mesh of one component."""
     mesh = baseline.mesh
     parts = baseline._parts
     if len(parts) != 1 or next(iter(parts.values())).vertices.size != mesh.n_vertices:
-        raise _cannot("fmm", "point or curve", "on a mesh with several components or unreferenced vertices; "
-                      "the library's face indices are per component")
+        can = [m for m in methods_for(2, source="point") if m != "fmm"]
+        raise SourceError("method 'fmm' cannot take point or curve sources on a mesh with several components or "
+                          "unreferenced vertices (the library's face indices are per component); methods that can: "
+                          + ", ".join(can))
     solver = next(iter(parts.values())).solver
     pts = [(int(v), []) for v in ss.vertices]
     bary = np.asarray(ss.point_bary, dtype=np.float64).reshape(-1, 3)
@@ -178,7 +177,4 @@ def _fmm_points(baseline, ss: SourceSet) -> tuple[np.ndarray, dict]:
         bary = baseline.orientation.bary(ss.point_faces, bary)
     pts += [(int(f), [float(x) for x in b]) for f, b in zip(ss.point_faces, bary, strict=True)]
     d = np.asarray(solver.compute_distance([pts], [], False), dtype=np.float64).reshape(-1) * baseline.scale
-    if d.shape != (mesh.n_vertices,) or not np.all(np.isfinite(d)):
-        raise SolverError("baseline 'fmm' returned a bad field for point sources", solver=baseline.library,
-                          status="bad_output")
-    return d, {"solver": baseline.library, "sources": "potpourri3d surface points"}
+    return d, {"sources": "potpourri3d surface points"}

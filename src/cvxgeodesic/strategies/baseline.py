@@ -1,16 +1,19 @@
-"""The baseline strategy: Dijkstra, fast marching, heat or exact MMP (:mod:`cvxgeodesic.baselines`)."""
+"""The baseline strategy: Dijkstra, fast marching, heat or exact MMP (:mod:`cvxgeodesic.baselines`), on surfaces
+and inside volumes."""
 
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import numpy as np
 
 from ..baselines import BASELINES
-from ..errors import SourceError
 from ..results import GeodesicResult, SolveInfo
-from ..sources import SourceSet
 from .base import Callback, SolveConfig
+
+#: Keys of a baseline's info that :class:`SolveInfo` holds in its own fields (not repeated in ``extra``).
+_OWN_FIELDS = ("method", "solver", "status", "iterations", "setup_time", "notes")
 
 
 class BaselineStrategy:
@@ -19,7 +22,8 @@ class BaselineStrategy:
     Parameters
     ----------
     config : SolveConfig
-        ``config.method`` is a key of :data:`~cvxgeodesic.baselines.BASELINES`.
+        ``config.method`` is a key of :data:`~cvxgeodesic.baselines.BASELINES`; ``config.mesh`` a TriMesh or a
+        TetMesh.
 
     Raises
     ------
@@ -33,33 +37,21 @@ class BaselineStrategy:
         kwargs = {} if config.medium is None else {"medium": config.medium}  # dijkstra only (validated)
         self.baseline = BASELINES[config.method](config.mesh, **kwargs)
         self.backend = config.method
-        # the loader's repairs, then the baseline's own (the faces fast marching reoriented)
+        # the loader's repairs, then the baseline's own (the faces fast marching reoriented, tetrahedra left out)
         self.notes: list[str] = [*config.notes, *self.baseline.notes]
         self.setup_time = time.perf_counter() - t0
 
-    def solve(self, sources: SourceSet, *, callback: Callback | None = None) -> GeodesicResult:
-        """Distance field from resolved ``sources``; ``callback`` is ignored (no iterations to report)."""
-        sset = sources
+    def solve(self, sources: Any, *, callback: Callback | None = None) -> GeodesicResult:
+        """Distance field from resolved sources (a surface's ``SourceSet``, a volume's ``TetSources``: the
+        baseline takes either); ``callback`` is ignored (no iterations to report)."""
         t0 = time.perf_counter()
-        method = self.config.method
-        if not sset.vertex_only:
-            from ..baselines.points import solve_baseline_sources
-
-            d, binfo = solve_baseline_sources(self.baseline, sset)
-            info = SolveInfo(method=method, solver=str(binfo.pop("solver")), status="optimal",
-                             setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
-                             n_unreachable=int(np.isinf(d).sum()), notes=list(self.notes), extra=binfo)
-            return GeodesicResult(distance=d, info=info, sources=sset.vertices, source_set=sset)
-        src = sset.vertices
-        if len(src) > 1 and not self.baseline.supports_multiple_sources:
-            raise SourceError(f"method {method!r} supports a single source only")
-        d, binfo = self.baseline.solve(src)
-        d = np.asarray(d, dtype=float)
+        d, binfo = self.baseline.solve(sources)
         info = SolveInfo(
-            method=method, solver=str(binfo.get("solver", method)), status=binfo.get("status", "optimal"),
-            iterations=int(binfo.get("iterations", 0)), setup_time=self.setup_time,
-            solve_time=time.perf_counter() - t0, n_unreachable=int(np.isinf(d).sum()), notes=list(self.notes),
+            method=self.config.method, solver=binfo["solver"], status=binfo["status"],
+            iterations=binfo["iterations"], setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
+            n_unreachable=int(np.isinf(d).sum()), notes=[*self.config.notes, *binfo["notes"]],
             # the library's set-up is part of info.setup_time: one name, one quantity
-            extra={k: v for k, v in binfo.items() if k not in ("solver", "status", "iterations", "setup_time")},
+            extra={k: v for k, v in binfo.items() if k not in _OWN_FIELDS},
         )
-        return GeodesicResult(distance=d, info=info, sources=src)
+        return GeodesicResult(distance=d, info=info, sources=sources.vertices,
+                              source_set=None if sources.vertex_only else sources)

@@ -4,7 +4,7 @@
   under the backend policy every strategy shares (:class:`~cvxgeodesic.strategies.backend.Backend`), on the
   tetrahedron-clique pattern (one symbolic analysis per mesh), the ``d ≥ 0`` re-solve when needed;
 - order 2: :class:`~cvxgeodesic.strategies.order2.Order2`, the one order-2 strategy of both dimensions;
-- :class:`TetBaselineStrategy`: Dijkstra on the edges and the heat method (:mod:`cvxgeodesic.baselines.tet`).
+- the baselines (Dijkstra, heat): :class:`~cvxgeodesic.strategies.baseline.BaselineStrategy`, as on surfaces.
 
 :func:`make_tet_strategy` chooses; :func:`~cvxgeodesic.strategies.make_strategy` calls it for a
 :class:`~cvxgeodesic.mesh.tetmesh.TetMesh`.
@@ -17,7 +17,6 @@ from typing import Any, cast
 
 import numpy as np
 
-from ..baselines.tet import TET_BASELINES
 from ..formulations_tet import TET_FORMULATIONS, TetOperators, build_tet_problem
 from ..mesh.tetmesh import TetMesh
 from ..mesh.trimesh import unit_mesh
@@ -28,7 +27,7 @@ from .backend import Backend
 from .base import Callback, SolveConfig
 from .order2 import Order2
 
-__all__ = ["TetBaselineStrategy", "TetDirect", "make_tet_strategy"]
+__all__ = ["TetDirect", "make_tet_strategy"]
 
 
 def make_tet_strategy(config: SolveConfig, *, baseline: bool, order: int = 1) -> Any:
@@ -42,7 +41,9 @@ def make_tet_strategy(config: SolveConfig, *, baseline: bool, order: int = 1) ->
     if order == 2:
         return Order2(config)
     if baseline:
-        return TetBaselineStrategy(config)
+        from .baseline import BaselineStrategy
+
+        return BaselineStrategy(config)
     return TetDirect(config)
 
 
@@ -122,29 +123,5 @@ class TetDirect:
         d[sources.fixed_vertices(_volume(cfg))] = 0.0
         info = _info(cfg, res, self.setup_time, t0, res.objective / problem.objective_scale * self.scale,
                      int(problem.unreachable.sum()), notes, {**extra, **res.extra})
-        return GeodesicResult(distance=d, info=info, sources=sources.vertices,
-                              source_set=None if sources.vertex_only else sources)
-
-
-class TetBaselineStrategy:
-    """Dijkstra or the heat method inside a tetrahedral mesh (:data:`~cvxgeodesic.baselines.tet.TET_BASELINES`)."""
-
-    def __init__(self, config: SolveConfig) -> None:
-        t0 = time.perf_counter()
-        self.config = config
-        self.baseline = TET_BASELINES[config.method](config.mesh)
-        self.backend = config.method
-        self.notes: list[str] = [*config.notes, *self.baseline.notes]
-        self.setup_time = time.perf_counter() - t0
-
-    def solve(self, sources: TetSources, *, callback: Callback | None = None) -> GeodesicResult:
-        """Distance field from resolved sources; ``callback`` is ignored (no iterations)."""
-        t0 = time.perf_counter()
-        d, binfo = self.baseline.solve(sources)
-        notes = [*self.config.notes, *binfo.pop("notes", [])]
-        info = SolveInfo(method=self.config.method, solver=str(binfo.pop("solver")), status=binfo.pop("status"),
-                         setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
-                         n_unreachable=int(np.isinf(d).sum()), notes=notes,
-                         extra={k: v for k, v in binfo.items() if k not in ("method", "iterations")})
         return GeodesicResult(distance=d, info=info, sources=sources.vertices,
                               source_set=None if sources.vertex_only else sources)
