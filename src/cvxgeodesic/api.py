@@ -67,7 +67,7 @@ class GeodesicSolver:
         ``V`` (n, 3) float, ``F`` (m, 3) int (see :func:`~cvxgeodesic.mesh.io.as_trimesh`); or a tetrahedral
         mesh: a :class:`~cvxgeodesic.mesh.tetmesh.TetMesh`, ``(V, T)`` with ``T`` (k, 4) int, a file holding
         tetrahedra, a meshio.Mesh with ``tetra`` cells: the distance *inside* the solid (``docs/volumes.md``;
-        methods :data:`~cvxgeodesic.formulations_tet.TET_METHODS`, sources vertices, VolumePoints,
+        methods :data:`~cvxgeodesic.formulations.TET_METHODS`, sources vertices, VolumePoints,
         BoundaryFaces and ``"boundary"``, ``order=2`` for ``"qclp"``).
     method : str
         One of :data:`ALL_METHODS`: the eight convex formulations
@@ -264,7 +264,7 @@ class GeodesicSolver:
             raise ParameterError(f"method must be a string, got {type(method).__name__}")
         key = method.lower()
         if self.is_volume:
-            from .formulations_tet import TET_BASELINE_METHODS, check_tet_method
+            from .formulations import TET_BASELINE_METHODS, check_tet_method
 
             self.method = check_tet_method(method)
             self._solver = check_choice(solver, "solver", SOLVERS)
@@ -291,15 +291,9 @@ class GeodesicSolver:
         here, λ computed once (0 without a smoothness energy)."""
         m_value, lam_value = check_smoothness(m, lam)
         weight: Any = smoothness_weight
-        if self.is_volume:
-            from .formulations_tet import TET_FORMULATIONS, tet_smoothness_weight
-
-            self.energy = None if self.is_baseline else TET_FORMULATIONS[self.method][1]
-            weight = tet_smoothness_weight
-        else:
-            self.energy = None if self.is_baseline else FORMULATIONS[self.method][1]
+        self.energy = None if self.is_baseline else FORMULATIONS[self.method][1]
         self.m = None if lam_value is not None else m_value
-        medium = {} if self.is_volume else {"medium": self.medium, "order": self.order}  # surfaces only
+        medium = {"medium": self.medium, "order": self.order}
         if self.energy is None:
             self.lam = 0.0
         elif lam_value is not None and self._lam_checked:  # checked on the whole mesh (a patch of local rows)
@@ -349,12 +343,7 @@ class GeodesicSolver:
             message adds that it can be indefinite on meshes with sharp corners).
         """
         t0 = time.perf_counter()
-        if self.is_volume:
-            from .sources_tet import resolve_tet_sources
-
-            sset: Any = resolve_tet_sources(self.mesh, sources)
-        else:
-            sset = resolve_sources(self.mesh, sources)
+        sset = resolve_sources(self.mesh, sources)
         source_time = time.perf_counter() - t0  # closest points and curve samples: part of this solve
         with reporting_to(callback):  # Clarabel's iterations too, wherever a strategy runs it
             res = self._strategy.solve(sset, callback=callback)
@@ -582,9 +571,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
 
 def _matrix_rows(mesh: Any, vertices: Any, *, local: bool) -> tuple[list, np.ndarray]:
     """The distinct sources of ``distance_matrix``'s rows and, for each row asked for, its index among them."""
-    from .mesh.tet_locate import VolumePoint
-    from .sources import SurfaceCurve, SurfacePoint
-    from .sources_tet import BoundaryFaces
+    from .sources import BoundaryFaces, SurfaceCurve, SurfacePoint, VolumePoint
 
     surface = (SurfacePoint, SurfaceCurve, str, VolumePoint, BoundaryFaces)
     if isinstance(vertices, surface) or (isinstance(vertices, list | tuple)

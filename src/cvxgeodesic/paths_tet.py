@@ -20,10 +20,11 @@ import numpy as np
 import scipy.sparse as sp
 
 from .errors import ParameterError, SolverError, SourceError
-from .mesh.tet_locate import VolumePoint, volume_point
 from .mesh.tetmesh import TET_FACES, TetMesh
-from .operators.tet import tet_gradient_blocks
-from .sources_tet import TetSources, point_triangle_distance, resolve_tet_sources
+from .operators.gradient import gradient_blocks as tet_gradient_blocks
+from .sources import SourceSet as TetSources
+from .sources import VolumePoint, point_triangle_distance, volume_point
+from .sources import resolve_sources as resolve_tet_sources
 from .validation import as_vertex_field, check_count
 
 __all__ = ["tet_distance_at", "tet_geodesic_path"]

@@ -370,7 +370,7 @@ def show_volume(
         d = as_vertex_field(distance, "distance", mesh.n_vertices)
         ss = None
         if sources is not None:
-            from .sources_tet import resolve_tet_sources
+            from .sources import resolve_sources as resolve_tet_sources
 
             ss = resolve_tet_sources(mesh, sources)
         res = None

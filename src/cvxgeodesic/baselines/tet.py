@@ -28,8 +28,12 @@ from ..errors import CvxGeodesicError, SolverError
 from ..linalg import analyse
 from ..mesh.tetmesh import DEGENERATE_TET_TOL, as_tetmesh
 from ..mesh.trimesh import unit_mesh
-from ..operators.tet import tet_divergence, tet_gradient_blocks, tet_mass_matrix, tet_stiffness
-from ..sources_tet import TetSources, resolve_tet_sources
+from ..operators.gradient import gradient_blocks as tet_gradient_blocks
+from ..operators.laplacian import barycentric_mass as tet_mass_matrix
+from ..operators.laplacian import cotan_stiffness as tet_stiffness
+from ..operators.laplacian import divergence as tet_divergence
+from ..sources import SourceSet as TetSources
+from ..sources import resolve_sources as resolve_tet_sources
 from ..validation import check_number
 
 __all__ = ["DEFAULT_TET_T_COEF", "TET_BASELINES", "TetBaselineSolver", "TetDijkstraBaseline", "TetHeatBaseline",
@@ -280,8 +284,8 @@ class TetHeatBaseline(TetBaselineSolver):
         self._keep = keep
         self._blocks = tet_gradient_blocks(mesh)
         self._blocks[~keep] = 0.0
-        L = tet_stiffness(mesh, tets=keep, blocks=self._blocks)
-        mass = tet_mass_matrix(mesh, tets=keep).diagonal()
+        L = tet_stiffness(mesh, cells=keep, blocks=self._blocks)
+        mass = tet_mass_matrix(mesh, cells=keep).diagonal()
         self.t = self.t_coef * mesh.mean_edge_length ** 2  # on the unit mesh (info["t"] is in the mesh's units)
         idle = mass <= 0  # in no kept tetrahedron: u = 0 and φ = 0 there (d = inf: unreachable)
         self._L = L
@@ -322,7 +326,7 @@ class TetHeatBaseline(TetBaselineSolver):
             np.add.at(u0, B.ravel(), np.repeat(area / 3.0, 3))
         u0[self._idle] = 0.0
         X = self._unit_field(u0, notes)
-        b = tet_divergence(mesh, X, tets=self._keep, blocks=self._blocks)
+        b = tet_divergence(mesh, X, cells=self._keep, blocks=self._blocks)
         if src.count == 1 and not src.faces.size:
             b[self._pins] = 0.0
             phi = self._poisson(b)

@@ -34,7 +34,7 @@ class TetSplitMesh:
     Examples
     --------
     >>> from cvxgeodesic.mesh.tet_generate import tet_box
-    >>> from cvxgeodesic.mesh.tet_locate import VolumePoint
+    >>> from cvxgeodesic.sources import VolumePoint
     >>> split = TetSplitMesh(tet_box(1), [VolumePoint(0, [0.25, 0.25, 0.25, 0.25])])
     >>> split.mesh.n_tets, split.point_vertices.tolist()
     (9, [8])

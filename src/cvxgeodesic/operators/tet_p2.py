@@ -17,7 +17,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..mesh.tet_split import TetSplitMesh
 from ..mesh.tetmesh import TET_EDGES, TetMesh
-from .tet import tet_gradient_blocks
+from .gradient import gradient_blocks as tet_gradient_blocks
 
 __all__ = ["TET_P2_NODES", "SplitTetP2Field", "TetP2Field", "TetP2Space", "tet_max_violation", "tet_p2_basis"]
 

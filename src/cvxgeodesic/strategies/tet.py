@@ -1,8 +1,6 @@
 """The strategies inside tetrahedral meshes (issue 26): order 1, order 2 and the baselines.
 
-- :class:`TetDirect`: one order-1 program (:mod:`cvxgeodesic.formulations_tet`) on the mesh scaled to unit size,
-  under the backend policy every strategy shares (:class:`~cvxgeodesic.strategies.backend.Backend`), on the
-  tetrahedron-clique pattern (one symbolic analysis per mesh), the ``d ≥ 0`` re-solve when needed;
+- order 1: :class:`~cvxgeodesic.strategies.direct.DirectStrategy`, the surfaces' (one program over ``mesh.cells``);
 - :class:`TetOrder2`: the P2 squared-distance program (:mod:`cvxgeodesic.formulations_tet_p2`) with the order-2
   settings, source points inserted as vertices, then cutting planes: a solid is flat, ``d²`` is exactly quadratic
   where the source is visible, so a cone at each tetrahedron's worst point
@@ -23,20 +21,21 @@ import numpy as np
 from ..baselines.tet import TET_BASELINES
 from ..errors import ParameterError, SolverError
 from ..formulations_p2 import P2Program
-from ..formulations_tet import TET_FORMULATIONS, TET_ORDER2_METHODS, TetOperators, build_tet_problem
+from ..formulations import TET_ORDER2_METHODS
 from ..formulations_tet_p2 import TetP2Builder, source_edges
 from ..mesh.tet_split import TetSplitMesh
 from ..mesh.tetmesh import TetMesh
 from ..mesh.trimesh import unit_mesh
 from ..operators.tet_p2 import SplitTetP2Field, TetP2Field, tet_max_violation
 from ..results import GeodesicResult, SolveInfo
-from ..solvers.problem import BackendResult, ConicProblem, clique_pattern
-from ..sources_tet import TetSources
+from ..solvers.problem import BackendResult, clique_pattern
+from ..sources import SourceSet as TetSources
 from .backend import Backend
 from .base import Callback, SolveConfig
+from .direct import DirectStrategy
 from .order2 import REFINE_ROUNDS, REFINE_TOL
 
-__all__ = ["REFINE_STALL", "TetBaselineStrategy", "TetDirect", "TetOrder2", "make_tet_strategy"]
+__all__ = ["REFINE_STALL", "TetBaselineStrategy", "TetOrder2", "make_tet_strategy"]
 
 #: The cutting-plane rounds stop after a round that moved no vertex distance by more than this fraction of the
 #: largest. Where the source is hidden (behind an edge) ``d²`` is not quadratic and the cones are violated between
@@ -53,13 +52,13 @@ def make_tet_strategy(config: SolveConfig, *, baseline: bool, order: int = 1) ->
     Raises
     ------
     ParameterError
-        ``order=2`` with a method other than :data:`~cvxgeodesic.formulations_tet.TET_ORDER2_METHODS`.
+        ``order=2`` with a method other than :data:`~cvxgeodesic.formulations.TET_ORDER2_METHODS`.
     """
     if order == 2:
         return TetOrder2(config)
     if baseline:
         return TetBaselineStrategy(config)
-    return TetDirect(config)
+    return DirectStrategy(config)
 
 
 def _volume(config: SolveConfig) -> TetMesh:
@@ -75,80 +74,13 @@ def _info(config: SolveConfig, res: BackendResult, setup_time: float, t0: float,
                      objective=objective, lam=config.lam, n_unreachable=n_unreachable, notes=notes, extra=extra)
 
 
-class TetDirect:
-    """An order-1 formulation solved inside a tetrahedral mesh.
-
-    Parameters
-    ----------
-    config : SolveConfig
-        ``config.mesh`` a TetMesh, ``config.method`` a key of :data:`~cvxgeodesic.formulations_tet.TET_FORMULATIONS`.
-
-    Attributes
-    ----------
-    ops : TetOperators
-        Of the mesh divided by ``scale`` (:func:`~cvxgeodesic.mesh.tetmesh.unit_tetmesh`).
-    scale : float
-    ipm : InteriorPointSolver or None
-    """
-
-    def __init__(self, config: SolveConfig) -> None:
-        t0 = time.perf_counter()
-        self.config = config
-        unit, self.scale = unit_mesh(_volume(config))
-        self.ops = TetOperators(unit)
-        self.policy = Backend(config.solver, config.tol, config.max_iter, config.verbose, config.mesh.name)
-        self.notes: list[str] = [*config.notes, *self.ops.notes, *self.policy.notes]
-        self.backend = self.policy.name
-        self.ipm: Any = None
-        energy = TET_FORMULATIONS[config.method][1]
-        P = self.ops.energy(energy) if energy is not None else None
-        if self.backend == "ipm":
-            from ..solvers.ipm import InteriorPointSolver
-
-            pattern = clique_pattern(unit.n_vertices, [unit.T])
-            if P is not None:
-                pattern = pattern + abs(P).astype(bool).astype(float)
-                pattern.data[:] = 1.0
-                pattern.sort_indices()
-            self.ipm = InteriorPointSolver(pattern.tocsc())
-        self.setup_time = time.perf_counter() - t0
-
-    def _problem(self, src: TetSources, nonnegative: bool) -> ConicProblem:
-        cfg = self.config
-        return build_tet_problem(self.ops, src, cfg.method, cfg.lam / self.scale, stretch=cfg.stretch,
-                                 nonnegative=nonnegative)
-
-    def solve(self, sources: TetSources, *, callback: Callback | None = None) -> GeodesicResult:
-        """Distance field from resolved sources (:func:`~cvxgeodesic.sources_tet.resolve_tet_sources`)."""
-        t0 = time.perf_counter()
-        cfg = self.config
-        notes = list(self.notes)
-        problem = self._problem(sources, False)
-        res = self.policy.solve(problem, self.ipm, callback, notes)
-        negative_min = np.min(res.x[~problem.fixed_mask], initial=0.0)
-        extra: dict = {}
-        if negative_min < -1e-9 * cfg.mesh.bbox_diagonal / self.scale:
-            extra = {"negative_min": float(negative_min * self.scale), "resolved_nonnegative": True}
-            notes.append(f"the optimum had negative distances (down to {negative_min * self.scale:.3g}); "
-                         "re-solved with the bounds d >= 0")
-            problem = self._problem(sources, True)
-            res = self.policy.solve(problem, self.ipm, callback, notes)
-        d = np.array(res.x, dtype=float) * self.scale
-        d[problem.unreachable] = np.inf
-        d[sources.fixed_vertices(_volume(cfg))] = 0.0
-        info = _info(cfg, res, self.setup_time, t0, res.objective / problem.objective_scale * self.scale,
-                     int(problem.unreachable.sum()), notes, {**extra, **res.extra})
-        return GeodesicResult(distance=d, info=info, sources=sources.vertices,
-                              source_set=None if sources.vertex_only else sources)
-
-
 class TetOrder2:
     """P2 squared-distance solves inside a tetrahedral mesh (``order=2``).
 
     Parameters
     ----------
     config : SolveConfig
-        ``config.method`` in :data:`~cvxgeodesic.formulations_tet.TET_ORDER2_METHODS`.
+        ``config.method`` in :data:`~cvxgeodesic.formulations.TET_ORDER2_METHODS`.
     refine : int
         Cutting-plane rounds at most.
 
