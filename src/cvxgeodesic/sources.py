@@ -955,12 +955,11 @@ def resolve_sources(mesh: SimplexMesh, sources: Any) -> SourceSet:
                 except SourceError as exc:
                     raise SourceError(f"{label}: {exc}") from None
                 kinds.add("vertices")
-            elif isinstance(s, str):
-                raise SourceError(f"{label}: 'boundary' cannot be mixed with other sources (it must be given alone"
-                                  + ("; give BoundaryFaces for part of the wall)" if dim == 3 else ")"))
             else:
                 names = " or ".join(t.__name__ for t in accepted)
-                raise SourceError(f"{label} must be a vertex index, a {names}, got {s!r}")
+                raise SourceError(f"{label} must be a vertex index, a {names}, got {s!r}" + (
+                    "" if not isinstance(s, str) else ": 'boundary' cannot be mixed with other sources (it must be "
+                    "given alone" + ("; give BoundaryFaces for part of the wall)" if dim == 3 else ")")))
         kind = kinds.pop() if len(kinds) == 1 else "mixed"
         return builder.build(kind, _describe(sources))
     src = validate_sources(sources, n)
