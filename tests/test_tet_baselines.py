@@ -29,8 +29,8 @@ from cvxgeodesic.baselines.tet import (
 )
 from cvxgeodesic.errors import ParameterError, SourceError
 from cvxgeodesic.mesh.tet_generate import l_prism_distance, tet_ball, tet_box, tet_l_prism
-from cvxgeodesic.sources import VolumePoint, volume_point
 from cvxgeodesic.mesh.tetmesh import TetMesh
+from cvxgeodesic.sources import VolumePoint, volume_point
 
 
 def _centre_source(n, jitter=0.2):

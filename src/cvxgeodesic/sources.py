@@ -91,7 +91,7 @@ class CellPoint:
         f = cell
         if isinstance(f, bool | np.bool_) or not isinstance(f, numbers.Integral):
             if isinstance(f, numbers.Real) and not isinstance(f, bool | np.bool_) and float(f).is_integer():
-                f = int(f)
+                f = int(float(f))
             else:
                 raise SourceError(f"{name} {self._field} must be {self._index_of} (int), got {f!r}")
         f = int(f)
@@ -276,7 +276,7 @@ class SurfaceCurve:
             pts = [row for row in pts]
         if isinstance(pts, SurfacePoint | str) or not isinstance(pts, Sequence | np.ndarray):
             raise SourceError(f"SurfaceCurve points must be a sequence of SurfacePoints or positions, got {pts!r}")
-        items = []
+        items: list[Any] = []
         for k, p in enumerate(pts):
             if isinstance(p, SurfacePoint):
                 items.append(p)
@@ -631,7 +631,7 @@ class SourceSet:
                 out.append(p)
         return out
 
-    def face_triangles(self, mesh: SimplexMesh) -> np.ndarray:
+    def face_triangles(self, mesh: Any) -> np.ndarray:
         """(f, dim) int64 ndarray: the source facets' vertices."""
         return mesh.boundary_facets[self.facets]
 
@@ -669,14 +669,14 @@ class SourceSet:
         return uniq.astype(np.int64), best
 
 
-def _incident_faces(mesh: TriMesh) -> sp.csr_matrix:
+def _incident_faces(mesh: Any) -> sp.csr_matrix:
     """(n, m) csr_matrix with a 1 where a vertex belongs to a face (cached on the mesh object)."""
-    cached = getattr(mesh, "_cg_vertex_faces", None)
+    cached = mesh.__dict__.get("_cg_vertex_faces")
     if cached is None:
         m = mesh.n_faces
         cached = sp.csr_matrix((np.ones(3 * m), (mesh.F.ravel(), np.repeat(np.arange(m), 3))),
                                shape=(mesh.n_vertices, m))
-        mesh._cg_vertex_faces = cached
+        mesh.__dict__["_cg_vertex_faces"] = cached  # the mesh is immutable: a cache like its cached properties
     return cached
 
 
@@ -702,7 +702,7 @@ def boundary_edges(mesh: TriMesh) -> tuple[np.ndarray, np.ndarray]:
 class _Builder:
     """Accumulates vertices, points, pieces and facets while resolving, with snapping."""
 
-    def __init__(self, mesh: SimplexMesh):
+    def __init__(self, mesh: Any):
         self.mesh = mesh
         self.vertices: list[int] = []
         self.pf: list[int] = []
@@ -873,7 +873,7 @@ def _is_int_like(x) -> bool:
 SOURCE_TYPES: dict[int, tuple[type, ...]] = {2: (SurfacePoint, SurfaceCurve), 3: (VolumePoint, BoundaryFaces)}
 
 
-def _named_source(mesh: SimplexMesh, name: str) -> SourceSet:
+def _named_source(mesh: Any, name: str) -> SourceSet:
     """The one named source, ``"boundary"``: every boundary edge of a surface, every boundary face of a solid."""
     if name.strip().lower() != "boundary":
         kinds = ", ".join(f"{t.__name__}s" if t is not BoundaryFaces else t.__name__ for t in SOURCE_TYPES[mesh.dim])
@@ -897,7 +897,7 @@ def _named_source(mesh: SimplexMesh, name: str) -> SourceSet:
     return builder.build("boundary", f"boundary ({len(E)} edges)")
 
 
-def resolve_sources(mesh: SimplexMesh, sources: Any) -> SourceSet:
+def resolve_sources(mesh: Any, sources: Any) -> SourceSet:
     """Normalize any accepted ``sources`` value against ``mesh``.
 
     Parameters
@@ -1068,7 +1068,7 @@ def _nearest_triangle_distance(mesh: TetMesh, tri: np.ndarray, X: np.ndarray) ->
     return np.sqrt(np.maximum(np.asarray(sqd, dtype=float).reshape(-1), 0.0))
 
 
-def vertex_bounds(mesh: SimplexMesh, ss: SourceSet, medium: Any = None) -> np.ndarray:
+def vertex_bounds(mesh: Any, ss: SourceSet, medium: Any = None) -> np.ndarray:
     """Upper bounds of the distance at the vertices of the cells of the sources.
 
     Parameters

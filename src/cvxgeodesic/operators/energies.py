@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Callable
+from typing import Any
 
 import igl
 import numpy as np
 import scipy.sparse as sp
-
 from numpy.typing import ArrayLike
 
 from ..errors import IndefiniteEnergyWarning, MeshRepairWarning, ParameterError
@@ -309,7 +309,7 @@ def check_energy(mesh: SimplexMesh, energy: str) -> str:
     return energy
 
 
-def energy_matrix(mesh: SimplexMesh, energy: str, notes: list[str] | None = None, *,
+def energy_matrix(mesh: Any, energy: str, notes: list[str] | None = None, *,
                   analyse: Callable[[sp.csc_matrix], SymbolicCholesky] | None = None,
                   face_metric: tuple[np.ndarray, np.ndarray] | None = None,
                   cells: ArrayLike | None = None) -> sp.csc_matrix:

@@ -20,8 +20,8 @@ import numpy as np
 
 from ..baselines.tet import TET_BASELINES
 from ..errors import ParameterError, SolverError
-from ..formulations_p2 import P2Program
 from ..formulations import TET_ORDER2_METHODS
+from ..formulations_p2 import P2Program
 from ..formulations_tet_p2 import TetP2Builder, source_edges
 from ..mesh.tet_split import TetSplitMesh
 from ..mesh.tetmesh import TetMesh
