@@ -1,34 +1,38 @@
-"""Sources anywhere on the surface: points in faces or on edges, curves, the boundary.
+"""Sources of a distance field on a surface (triangles) or inside a solid (tetrahedra), one module for both.
 
-A source of a distance field may be
+A source may be
 
 - a vertex index (or several);
-- a :class:`SurfacePoint`: a face and barycentric coordinates;
-- a :class:`SurfaceCurve`: a polyline of surface points (the distance is to the whole curve);
-- the string ``"boundary"``: every boundary edge (edges with a single face).
+- a point located in a cell (:class:`CellPoint`): a :class:`SurfacePoint` (a face and 3 barycentric coordinates,
+  :func:`surface_point` finds the closest one) or a :class:`VolumePoint` (a tetrahedron and 4,
+  :func:`volume_point` finds the containing one); a point within ``1e-9`` (barycentric) of a vertex is that vertex;
+- on a surface a :class:`SurfaceCurve`: a polyline of surface points (the distance is to the whole curve);
+- the string ``"boundary"``: every boundary edge of a surface, every boundary face of a solid (the wall distance);
+- in a solid :class:`BoundaryFaces`: some faces of the boundary surface (part of the wall).
 
 :func:`resolve_sources` turns any of these (or a list mixing them) into one normalized
 :class:`SourceSet`; :func:`source_constraints` turns a source set into the constraints the
-convex formulations add (``docs/sources.md`` explains and measures each choice):
+convex formulations add (``docs/sources.md`` and ``docs/volumes.md`` explain and measure each choice):
 
-- vertex sources are fixed at 0, their incident faces carry no cone and each star edge bounds
-  its other end by its length (as before);
-- a point ``p`` inside face ``t`` bounds each vertex of ``t`` by ``|v_i − p|`` (the straight
-  segment inside the flat face is a surface path, so this is an upper bound of the geodesic
-  distance) and ``t`` carries no cone. A point on an edge does this in both faces of the edge;
-  a point within ``1e-9`` (barycentric) of a vertex is that vertex.
-- a face next to a point source whose local field ``min_k |v − p_k|`` is steeper than 1 when
-  interpolated linearly (the piecewise-linear trace of a cone whose apex is close to the face)
-  carries no cone either; the vertices it leaves free are bounded through the edges to the
-  source face's vertices, ``d_w ≤ d_v + ℓ_vw`` (a triangle inequality).
+- vertex sources and the vertices of source faces are fixed at 0; the cells incident to a source vertex carry no
+  cone; on a surface each star edge bounds its other end by its length;
+- a point ``p`` in cell ``t`` bounds each vertex of ``t`` by ``|v_i − p|`` (the straight segment inside the flat
+  cell is a path, so this is an upper bound of the geodesic distance) and ``t`` carries no cone. On a surface a
+  point on an edge does this in both faces of the edge;
+- a cell next to the sources whose local field (the distance to the nearest source vertex, point, curve piece or
+  source face) is steeper than 1 when interpolated linearly (the trace of a cone whose apex is close to the cell)
+  carries no cone either. On a surface the vertices it leaves free are bounded through the edges to the source
+  face's vertices, ``d_w ≤ d_v + ℓ_vw`` (a triangle inequality); in a solid every edge of a tetrahedron without a
+  cone gets ``|d_i − d_j| ≤ ℓ_ij`` (:func:`~cvxgeodesic.formulations.build_problem`);
 - a curve is sampled along each segment at an eighth of the mean edge length (plus its given
   points); every sample is a point source, and two consecutive samples in the same face add the
-  bound by the distance to the segment between them (straight in that face).
-- ``"boundary"`` fixes every boundary vertex at 0 and bounds the third vertex of each boundary
-  face by its distance to the boundary edge.
+  bound by the distance to the segment between them (straight in that face);
+- the boundary of a surface fixes every boundary vertex at 0 and bounds the third vertex of each boundary
+  face by its distance to the boundary edge; a source face of a solid bounds the fourth vertex of its tetrahedron
+  by its distance to the (closed) triangle.
 
-Every bound is an upper bound of the exact polyhedral distance (tested against pygeodesic), so
-none of them cuts the exact field off.
+Every bound is an upper bound of the exact distance (tested against pygeodesic on surfaces), so none of them cuts
+the exact field off.
 """
 
 from __future__ import annotations
@@ -40,208 +44,37 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
-from numpy.typing import ArrayLike
 
-from .errors import ParameterError, SourceError
-from .mesh.closest import closest_point_index
-from .mesh.geometry import clipped_barycentric
-from .mesh.locate import locate_points
+from .errors import SourceError
+from .mesh.closest import nearest_triangle_distance, point_triangle_distance, segment_distance, segment_parameter
+from .mesh.locate import (
+    BARY_TOL,
+    POINT_TYPES,
+    CellPoint,
+    SurfacePoint,
+    VolumePoint,
+    _barycentric,
+    closest_points,
+    interpolate_at,
+    surface_point,
+    volume_point,
+)
 from .mesh.simplex import SimplexMesh
 from .mesh.tetmesh import TetMesh
 from .mesh.trimesh import TriMesh
-from .validation import as_points, as_vertex_field, validate_sources
+from .validation import validate_sources
+
+__all__ = ["BARY_SNAP", "BARY_TOL", "CURVE_STEP", "ON_SURFACE_TOL", "BoundaryFaces", "CellPoint", "SourceConstraints",
+           "SourceSet", "SurfaceCurve", "SurfacePoint", "VolumePoint", "boundary_edges", "closest_points",
+           "interpolate_at", "point_triangle_distance", "resolve_sources", "source_constraints", "surface_point",
+           "vertex_bounds", "volume_point"]
 
 #: A barycentric coordinate this close to 0 (or 1) counts as exactly 0 (1): the point is on an edge (a vertex).
 BARY_SNAP = 1e-9
-#: Tolerance of the barycentric checks of :class:`SurfacePoint` (negative coordinates, sum ≠ 1).
-BARY_TOL = 1e-9
 #: A curve point given as a position must lie this close to the surface (fraction of the bounding-box diagonal).
 ON_SURFACE_TOL = 1e-6
 #: Curve sampling step as a fraction of the mean edge length.
 CURVE_STEP = 1.0 / 8.0
-
-
-# ---------------------------------------------------------------------------------------------------------------
-# user-facing types
-# ---------------------------------------------------------------------------------------------------------------
-class CellPoint:
-    """A point of a mesh located in one of its cells: a cell index and ``dim + 1`` barycentric coordinates.
-
-    The base of :class:`SurfacePoint` (a face of a triangle mesh, attribute ``face``) and :class:`VolumePoint` (a
-    tetrahedron, attribute ``tet``); built through those. Immutable, hashable, equal when the cell and the
-    coordinates are.
-
-    Attributes
-    ----------
-    cell : int
-    bary : (dim + 1,) float ndarray, read-only
-        Each ``>= 0``, summing to 1.
-    """
-
-    #: The attribute naming the cell, its description in messages, the coordinate count, where the cell is counted.
-    _field, _index_of, _n_bary, _cells, _word = "cell", "a cell index", 0, "cells", "cell"
-    #: The hint of a negative coordinate.
-    _outside = "outside the cell"
-    __slots__ = ("bary", "cell")
-    cell: int
-    bary: np.ndarray
-
-    def __init__(self, cell: Any, bary: ArrayLike) -> None:
-        name = type(self).__name__
-        f = cell
-        if isinstance(f, bool | np.bool_) or not isinstance(f, numbers.Integral):
-            if isinstance(f, numbers.Real) and not isinstance(f, bool | np.bool_) and float(f).is_integer():
-                f = int(float(f))
-            else:
-                raise SourceError(f"{name} {self._field} must be {self._index_of} (int), got {f!r}")
-        f = int(f)
-        if f < 0:
-            raise SourceError(f"{name} {self._field} index {f} is negative")
-        where, k = f"{name}({self._field}={f}", self._n_bary
-        try:
-            b = np.asarray(bary, dtype=float).reshape(-1).copy()
-        except (TypeError, ValueError):
-            raise SourceError(f"{where}): bary must be {k} numbers, got {bary!r}") from None
-        if b.shape != (k,):
-            raise SourceError(f"{where}): bary must have {k} coordinates, got {b.size}")
-        if not np.all(np.isfinite(b)):
-            raise SourceError(f"{where}, bary={b.tolist()}): barycentric coordinates must be finite")
-        if b.min() < -BARY_TOL:
-            raise SourceError(f"{where}, bary={b.tolist()}): barycentric coordinates must be >= 0 (a negative one is "
-                              f"{self._outside})")
-        if abs(b.sum() - 1.0) > BARY_TOL:
-            raise SourceError(f"{where}, bary={b.tolist()}): barycentric coordinates must sum to 1, they sum to "
-                              f"{b.sum():.12g}")
-        b = np.clip(b, 0.0, None)
-        b /= b.sum()
-        b.setflags(write=False)
-        object.__setattr__(self, "cell", f)
-        object.__setattr__(self, "bary", b)
-
-    @classmethod
-    def _exact(cls, cell: int, bary: np.ndarray):
-        """A point of coordinates already checked and normalized, kept to the last bit (no renormalization)."""
-        p = object.__new__(cls)
-        b = np.array(bary, dtype=float)
-        b.setflags(write=False)
-        object.__setattr__(p, "cell", int(cell))
-        object.__setattr__(p, "bary", b)
-        return p
-
-    def __setattr__(self, name: str, value: Any) -> None:
-        raise AttributeError(f"{type(self).__name__} is immutable")
-
-    def __reduce__(self):
-        return (type(self)._exact, (self.cell, np.array(self.bary)))
-
-    def __getattr__(self, name: str) -> Any:
-        if name == self._field:  # face / tet
-            return self.cell
-        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
-
-    def __repr__(self) -> str:
-        return f"{type(self).__name__}({self._field}={self.cell}, bary=[{', '.join(f'{x:.6g}' for x in self.bary)}])"
-
-    def __eq__(self, other) -> bool:
-        if type(other) is not type(self):
-            return NotImplemented
-        return self.cell == other.cell and bool(np.array_equal(self.bary, other.bary))
-
-    def __hash__(self) -> int:
-        return hash((self.cell, self.bary.tobytes()))
-
-    def check(self, mesh: Any, label: str | None = None) -> None:
-        """Raise :class:`SourceError` unless the cell is one of ``mesh``'s (``label`` starts the message)."""
-        k = mesh.n_cells
-        if self.cell >= k:
-            head = f"{label} {self!r}" if label else repr(self)
-            raise SourceError(f"{head}: {self._word} index {self.cell} is out of range: {mesh.name} has {k} "
-                              f"{self._cells} (0..{k - 1})")
-
-    def vertices(self, mesh: Any) -> np.ndarray:
-        """(dim + 1,) int64 ndarray: the vertices of the point's cell (the order of ``bary``)."""
-        self.check(mesh)
-        return mesh.cells[self.cell].copy()
-
-    def position(self, mesh: Any) -> np.ndarray:
-        """(3,) float ndarray: the point's position on ``mesh``."""
-        self.check(mesh)
-        return self.bary @ mesh.V[mesh.cells[self.cell]]
-
-
-class SurfacePoint(CellPoint):
-    """A point of the surface: a face index and barycentric coordinates.
-
-    Parameters
-    ----------
-    face : int
-        Face index (checked against the mesh when the point is used).
-    bary : (3,) float array_like
-        Barycentric coordinates with respect to ``F[face]``: each ``>= 0`` and summing to 1
-        (to ``1e-9``; tiny negative round-off is clipped and the sum renormalized).
-
-    Raises
-    ------
-    SourceError
-        A face that is not a non-negative integer; ``bary`` not 3 finite numbers, with a
-        negative coordinate, or not summing to 1.
-
-    Examples
-    --------
-    >>> import cvxgeodesic as cg
-    >>> p = cg.SurfacePoint(10, [0.2, 0.3, 0.5])
-    >>> p.face, p.bary.tolist()
-    (10, [0.2, 0.3, 0.5])
-    """
-
-    _field, _index_of, _n_bary, _cells, _word = "face", "a face index", 3, "faces", "face"
-    _outside = "outside the face; use surface_point(mesh, xyz) for the closest point"
-    __slots__ = ()
-    face: int
-
-    def __init__(self, face: Any, bary: ArrayLike) -> None:
-        super().__init__(face, bary)
-
-    def position(self, mesh: Any) -> np.ndarray:
-        """(3,) float ndarray: the point's position on ``mesh`` (a TriMesh or ``(V, F)``)."""
-        return super().position(_mesh(mesh))
-
-
-class VolumePoint(CellPoint):
-    """A point inside a tetrahedral mesh: a tetrahedron index and four barycentric coordinates.
-
-    Parameters
-    ----------
-    tet : int
-        Tetrahedron index (checked against the mesh when the point is used).
-    bary : (4,) float array_like
-        Barycentric coordinates with respect to ``T[tet]``: each ``>= 0`` and summing to 1 (to
-        ``1e-9``; tiny negative round-off is clipped and the sum renormalized).
-
-    Raises
-    ------
-    SourceError
-        A tetrahedron index that is not a non-negative integer; ``bary`` not 4 finite numbers,
-        with a negative coordinate, or not summing to 1.
-
-    Examples
-    --------
-    >>> p = VolumePoint(3, [0.25, 0.25, 0.25, 0.25])
-    >>> p.tet, p.bary.tolist()
-    (3, [0.25, 0.25, 0.25, 0.25])
-    """
-
-    _field, _index_of, _n_bary, _cells, _word = "tet", "a tetrahedron index", 4, "tetrahedra", "tetrahedron"
-    _outside = "outside the tetrahedron; use volume_point(mesh, xyz) to find the containing one"
-    __slots__ = ()
-    tet: int
-
-    def __init__(self, tet: Any, bary: ArrayLike) -> None:
-        super().__init__(tet, bary)
-
-
-#: The point type of each simplex dimension.
-POINT_TYPES: dict[int, type[CellPoint]] = {2: SurfacePoint, 3: VolumePoint}
 
 
 @dataclass(frozen=True, eq=False)
@@ -371,168 +204,6 @@ class BoundaryFaces:
             k = int(np.flatnonzero(rows < 0)[0])
             raise SourceError(f"BoundaryFaces: face {self.faces[k].tolist()} is not a boundary face of {mesh.name}")
         return np.unique(rows)
-
-
-def _mesh(mesh) -> TriMesh:
-    from .mesh.io import as_trimesh
-
-    return as_trimesh(mesh)
-
-
-# ---------------------------------------------------------------------------------------------------------------
-# closest points
-# ---------------------------------------------------------------------------------------------------------------
-def _barycentric(T: np.ndarray, X: np.ndarray) -> np.ndarray:
-    """(k, 3) barycentric coordinates of points ``X`` (k, 3) in triangles ``T`` (k, 3, 3), clipped to the face."""
-    return clipped_barycentric(X, T[:, 0], T[:, 1], T[:, 2])
-
-
-def closest_points(mesh: TriMesh, X) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Closest surface points of positions (one search in the mesh's
-    :func:`~cvxgeodesic.mesh.closest.closest_point_index`).
-
-    Parameters
-    ----------
-    mesh : TriMesh
-    X : (k, 3) float array_like
-        Finite positions.
-
-    Returns
-    -------
-    faces : (k,) int64 ndarray
-    bary : (k, 3) float ndarray
-    dist : (k,) float ndarray
-        Distance from each position to its closest point.
-    """
-    X = np.ascontiguousarray(np.asarray(X, dtype=np.float64).reshape(-1, 3))
-    index = closest_point_index(mesh)
-    faces, C, dist = index.query(X)
-    return faces, _barycentric(index.V[index.F[faces]], C), dist  # in the search's frame: the same coordinates
-
-
-def surface_point(mesh: Any, xyz: ArrayLike) -> SurfacePoint | list[SurfacePoint]:
-    """The closest :class:`SurfacePoint` of a 3D position (or of each of ``k`` positions).
-
-    Parameters
-    ----------
-    mesh : TriMesh or tuple (V, F)
-    xyz : (3,) or (k, 3) float array_like
-
-    Returns
-    -------
-    SurfacePoint, or list of SurfacePoint for a ``(k, 3)`` input
-
-    Raises
-    ------
-    SourceError
-        ``xyz`` is not one or several finite 3D positions (NaN or infinite coordinates included).
-
-    Notes
-    -----
-    One search in the mesh's :func:`~cvxgeodesic.mesh.closest.closest_point_index` (a libigl AABB tree built on
-    the first search of the mesh object). Any finite position is accepted: one farther than
-    :data:`~cvxgeodesic.mesh.closest.FAR_QUERY` (1e7) bounding-box diagonals
-    from the box's center is moved in along the ray from the center first, which leaves the point found at most
-    ``diag / 8e7`` farther from it than the closest point.
-
-    Examples
-    --------
-    >>> import cvxgeodesic as cg
-    >>> mesh = cg.grid_plane(4)
-    >>> p = cg.surface_point(mesh, [0.3, 0.6, 0.1])
-    >>> p.position(mesh).round(6).tolist()
-    [0.3, 0.6, 0.0]
-    """
-    mesh = _mesh(mesh)
-    X = as_points(xyz, "xyz", error=SourceError)
-    single = X.ndim == 1
-    faces, bary, _ = closest_points(mesh, X.reshape(-1, 3))
-    pts = [SurfacePoint(int(f), b) for f, b in zip(faces, bary, strict=True)]
-    return pts[0] if single else pts
-
-
-def volume_point(mesh: TetMesh, xyz: ArrayLike) -> VolumePoint | list[VolumePoint]:
-    """The :class:`VolumePoint` (or points) at position(s) ``xyz`` inside ``mesh``
-    (:func:`~cvxgeodesic.mesh.locate.locate_points`).
-
-    Parameters
-    ----------
-    mesh : TetMesh
-    xyz : (3,) or (p, 3) float array_like
-
-    Returns
-    -------
-    VolumePoint for one position (3,), list of VolumePoint for (p, 3).
-
-    Raises
-    ------
-    SourceError
-        A position that is not finite, or outside the mesh (the message names the first such
-        point, its coordinates and how far it is from the nearest vertex).
-
-    Examples
-    --------
-    >>> from cvxgeodesic.mesh.tet_generate import tet_box
-    >>> p = volume_point(tet_box(2), [0.3, 0.4, 0.2])
-    >>> bool(abs(p.position(tet_box(2)) - [0.3, 0.4, 0.2]).max() < 1e-12)
-    True
-    """
-    X = as_points(xyz, "xyz", error=SourceError)
-    tets, bary = locate_points(mesh, X.reshape(-1, 3))
-    out = np.flatnonzero(tets < 0)
-    if out.size:
-        k = int(out[0])
-        x = X.reshape(-1, 3)[k]
-        gap = float(np.linalg.norm(mesh.V - x, axis=1).min())
-        where = "xyz" if X.ndim == 1 else f"xyz[{k}]"
-        more = f" ({out.size} such points)" if out.size > 1 else ""
-        raise SourceError(f"{where} = {x.tolist()} is outside {mesh.name} (in no tetrahedron; the nearest vertex is "
-                          f"{gap:.6g} away){more}")
-    points = [VolumePoint(int(t), b) for t, b in zip(tets, bary, strict=True)]
-    return points[0] if X.ndim == 1 else points
-
-
-def interpolate_at(mesh: TetMesh, values: ArrayLike, points: Any) -> np.ndarray:
-    """A vertex field's linear interpolant at points inside a tetrahedral mesh.
-
-    Parameters
-    ----------
-    mesh : TetMesh
-    values : (n,) float array_like
-        One value per vertex (``inf`` allowed: unreachable vertices).
-    points : (p, 3) float array_like, VolumePoint or sequence of VolumePoint
-
-    Returns
-    -------
-    (p,) float ndarray
-        NaN for positions outside the mesh.
-
-    Raises
-    ------
-    ParameterError
-        ``values`` of the wrong length or ``points`` not positions.
-    SourceError
-        A VolumePoint whose tetrahedron is not in the mesh.
-    """
-    d = as_vertex_field(values, "values", mesh.n_vertices)
-    if isinstance(points, VolumePoint):
-        points = [points]
-    if isinstance(points, list | tuple) and points and all(isinstance(p, VolumePoint) for p in points):
-        for p in points:
-            p.check(mesh)
-        tets = np.array([p.tet for p in points], dtype=np.int64)
-        bary = np.array([p.bary for p in points])
-    elif isinstance(points, list | tuple) and any(isinstance(p, VolumePoint) for p in points):
-        raise ParameterError("points must be all VolumePoints or all positions, not a mix")
-    else:
-        tets, bary = locate_points(mesh, points)
-    out = np.full(len(tets), np.nan)
-    inside = tets >= 0
-    vals = d[mesh.T[tets[inside]]]
-    with np.errstate(invalid="ignore"):  # inf · 0 where an unreachable vertex has coordinate 0
-        w = bary[inside]
-        out[inside] = np.where(w > 0, vals * w, 0.0).sum(axis=1)
-    return out
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -1009,63 +680,9 @@ class SourceConstraints:
     anchors: np.ndarray
 
 
-def _segment_parameter(P: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """(k,) parameter ``t ∈ [0, 1]`` of the closest point ``A + t (B − A)`` to each point P (all (k, 3))."""
-    ab = B - A
-    den = np.einsum("ij,ij->i", ab, ab)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(den > 0, np.einsum("ij,ij->i", P - A, ab) / den, 0.0)
-    return np.clip(t, 0.0, 1.0)
-
-
-def _segment_distance(P: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """(k,) distances from points P to segments [A, B] (all (k, 3))."""
-    t = _segment_parameter(P, A, B)
-    return np.linalg.norm(P - (A + t[:, None] * (B - A)), axis=1)
-
-
 def _segment_ends(mesh: TriMesh, ss: SourceSet) -> tuple[np.ndarray, np.ndarray]:
     T = mesh.V[mesh.F[ss.segment_faces]]
     return (np.einsum("sk,skj->sj", ss.segment_bary[:, 0], T), np.einsum("sk,skj->sj", ss.segment_bary[:, 1], T))
-
-
-def point_triangle_distance(P: np.ndarray, A: np.ndarray, B: np.ndarray, C: np.ndarray) -> np.ndarray:
-    """(k,) distances from points ``P`` to the closed triangles ``(A, B, C)`` (all (k, 3)).
-
-    The closest point by the Voronoi regions of the triangle's corners, edges and face (Ericson, *Real-Time
-    Collision Detection*, §5.1.5); a degenerate triangle gives the distance to its nearest edge.
-    """
-    P, A, B, C = (np.asarray(x, dtype=float).reshape(-1, 3) for x in (P, A, B, C))
-    dot = lambda u, v: np.einsum("ij,ij->i", u, v)  # noqa: E731
-
-    def seg(a, b):
-        ab = b - a
-        den = dot(ab, ab)
-        t = np.clip(np.divide(dot(P - a, ab), den, out=np.zeros(len(P)), where=den > 0), 0.0, 1.0)
-        return np.linalg.norm(P - (a + t[:, None] * ab), axis=1)
-
-    edges = np.minimum(np.minimum(seg(A, B), seg(B, C)), seg(C, A))
-    nrm = np.cross(B - A, C - A)
-    nn = dot(nrm, nrm)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        # barycentric coordinates of the projection onto the plane; inside when all are >= 0
-        u = dot(np.cross(C - B, P - B), nrm) / nn
-        v = dot(np.cross(A - C, P - C), nrm) / nn
-        plane = np.abs(dot(P - A, nrm)) / np.sqrt(nn)
-    inside = (nn > 0) & (u >= 0) & (v >= 0) & (u + v <= 1)
-    return np.where(inside, plane, edges)
-
-
-def _nearest_triangle_distance(mesh: TetMesh, tri: np.ndarray, X: np.ndarray) -> np.ndarray:
-    """(p,) distance from each row of ``X`` to the nearest of the triangles ``tri`` (f, 3) of ``mesh``."""
-    import igl
-
-    if not len(X) or not len(tri):
-        return np.full(len(X), np.inf)
-    sqd, _, _ = igl.point_mesh_squared_distance(np.ascontiguousarray(X, dtype=np.float64),
-                                               np.ascontiguousarray(mesh.V, dtype=np.float64),
-                                               np.ascontiguousarray(tri, dtype=np.int64))
-    return np.sqrt(np.maximum(np.asarray(sqd, dtype=float).reshape(-1), 0.0))
 
 
 def vertex_bounds(mesh: Any, ss: SourceSet, medium: Any = None) -> np.ndarray:
@@ -1102,9 +719,9 @@ def vertex_bounds(mesh: Any, ss: SourceSet, medium: Any = None) -> np.ndarray:
         A, B = _segment_ends(mesh, ss)
         for i in range(3):
             if medium is None:
-                dist = _segment_distance(V[Fs[:, i]], A, B)
+                dist = segment_distance(V[Fs[:, i]], A, B)
             else:  # a path to the Euclidean closest point of the piece, measured in the medium
-                t = _segment_parameter(V[Fs[:, i]], A, B)[:, None]
+                t = segment_parameter(V[Fs[:, i]], A, B)[:, None]
                 closest = (1 - t) * ss.segment_bary[:, 0] + t * ss.segment_bary[:, 1]
                 dist = medium.segment_lengths(ss.segment_faces, closest, eye[i])
             np.minimum.at(bound, Fs[:, i], dist)
@@ -1138,7 +755,7 @@ def _steep_cells(ops: Any, ss: SourceSet, near: np.ndarray, medium: Any) -> np.n
     if medium is not None:  # the local field in the medium: the distance to the nearest point, in cell cand's
         local = medium.vector_lengths(np.repeat(cand, C.shape[1]), V[corners] - P[nearest])
     if ss.facets.size:
-        local = np.minimum(local, _nearest_triangle_distance(mesh, ss.face_triangles(mesh), V[corners]))
+        local = np.minimum(local, nearest_triangle_distance(mesh, ss.face_triangles(mesh), V[corners]))
         local[np.isin(corners, ss.fixed_vertices(mesh))] = 0.0
     g = np.einsum("tij,tj->ti", ops.gradient_blocks[cand], local.reshape(len(cand), -1))
     return cand[np.linalg.norm(g, axis=1) > 1.0 + 1e-9]
