@@ -163,3 +163,23 @@ def test_one_newton_pattern_for_both_dimensions():
     clique.data[:] = 1.0
     clique.sort_indices()
     assert (edges != clique.tocsc()).nnz == 0
+
+
+@pytest.mark.parametrize("cls, field, bary", [(SurfacePoint, "face", [0.2, 0.3, 0.5]),
+                                              (VolumePoint, "tet", [0.1, 0.2, 0.3, 0.4])])
+def test_one_point_type_located_in_a_cell(cls, field, bary):
+    """SurfacePoint and VolumePoint are one CellPoint(cell, bary) under their public names and attributes."""
+    import pickle
+
+    from cvxgeodesic.sources import CellPoint
+
+    p = cls(**{field: 3, "bary": bary})
+    assert isinstance(p, CellPoint) and getattr(p, field) == p.cell == 3
+    assert repr(p) == f"{cls.__name__}({field}=3, bary=[{', '.join(f'{x:.6g}' for x in bary)}])"
+    assert pickle.loads(pickle.dumps(p)) == p and hash(pickle.loads(pickle.dumps(p))) == hash(p)
+    other = SurfacePoint(3, [0.2, 0.3, 0.5]) if cls is VolumePoint else VolumePoint(3, [0.25] * 4)
+    assert p != cls(3, bary[::-1]) and p != other
+    with pytest.raises(AttributeError, match="immutable"):
+        p.bary = np.zeros(len(bary))
+    with pytest.raises(cg.SourceError, match=f"{cls.__name__} {field} must be"):
+        cls(1.5, bary)

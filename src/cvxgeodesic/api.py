@@ -290,18 +290,18 @@ class GeodesicSolver:
         """``self.lam`` (λ in the mesh's units), ``self.m`` and ``self.energy`` from ``m`` or ``lam``: both checked
         here, λ computed once (0 without a smoothness energy)."""
         m_value, lam_value = check_smoothness(m, lam)
-        weight: Any = smoothness_weight
         self.energy = None if self.is_baseline else FORMULATIONS[self.method][1]
         self.m = None if lam_value is not None else m_value
-        medium = {"medium": self.medium, "order": self.order}
+        medium = {"medium": self.medium, "order": self.order}  # one weight for surfaces and volumes (mesh.dim)
         if self.energy is None:
             self.lam = 0.0
         elif lam_value is not None and self._lam_checked:  # checked on the whole mesh (a patch of local rows)
             self.lam = lam_value
         elif lam_value is not None:  # at most the weight of the largest m
-            self.lam = check_lam(lam_value, weight(self.mesh, 1.0, self.normalization, self.energy, **medium))
+            self.lam = check_lam(lam_value, smoothness_weight(self.mesh, 1.0, self.normalization, self.energy,
+                                                              **medium))
         else:
-            self.lam = weight(self.mesh, m_value, self.normalization, self.energy, **medium)
+            self.lam = smoothness_weight(self.mesh, m_value, self.normalization, self.energy, **medium)
 
     def __repr__(self) -> str:
         return (
