@@ -292,16 +292,14 @@ class GeodesicSolver:
         m_value, lam_value = check_smoothness(m, lam)
         self.energy = None if self.is_baseline else FORMULATIONS[self.method][1]
         self.m = None if lam_value is not None else m_value
-        medium = {"medium": self.medium, "order": self.order}  # one weight for surfaces and volumes (mesh.dim)
         if self.energy is None:
             self.lam = 0.0
         elif lam_value is not None and self._lam_checked:  # checked on the whole mesh (a patch of local rows)
             self.lam = lam_value
-        elif lam_value is not None:  # at most the weight of the largest m
-            self.lam = check_lam(lam_value, smoothness_weight(self.mesh, 1.0, self.normalization, self.energy,
-                                                              **medium))
-        else:
-            self.lam = smoothness_weight(self.mesh, m_value, self.normalization, self.energy, **medium)
+        else:  # one weight for surfaces and volumes (mesh.dim); a given λ is at most the weight of the largest m
+            weight = smoothness_weight(self.mesh, 1.0 if lam_value is not None else m_value, self.normalization,
+                                       self.energy, medium=self.medium, order=self.order)
+            self.lam = check_lam(lam_value, weight) if lam_value is not None else weight
 
     def __repr__(self) -> str:
         return (
