@@ -40,7 +40,7 @@ def _output_help() -> str:
 
 def _volume_help() -> str:
     from .cli_sources import MESH_HELP
-    from .mesh.tet_io import MESHIO_TET_EXTENSIONS, TETGEN_EXTENSIONS
+    from .mesh.formats.registry import MESHIO_TET_EXTENSIONS, TETGEN_EXTENSIONS
 
     return (f"{MESH_HELP}; or tetrahedra, the distance inside the solid: {', '.join(MESHIO_TET_EXTENSIONS)} with "
             f"meshio, {', '.join(TETGEN_EXTENSIONS)} (TetGen)")
