@@ -29,11 +29,10 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("mesh", ("mesh",)),
     ("linalg", ("linalg",)),
     ("operators", ("operators",)),
-    ("problems", ("formulations", "formulations_p2", "formulations_tet", "formulations_tet_p2", "sources",
-                  "sources_tet", "solvers.problem")),
+    ("problems", ("formulations", "formulations_p2", "sources", "solvers.problem")),
     ("solvers", ("solvers",)),
     ("baselines", ("baselines",)),
-    ("api", ("api", "rows", "strategies", "paths", "paths_tet", "_verbose")),
+    ("api", ("api", "rows", "strategies", "paths", "_verbose")),
     ("evaluation/pictures", ("evaluation", "plotting", "viewer")),
     ("applications", ("cli", "cli_sources", "cli_tet", "compare", "compare_tet", "batch", "demo",
                       "")),  # "": the package __init__

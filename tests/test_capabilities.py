@@ -11,9 +11,8 @@ import pytest
 from cvxgeodesic import capabilities as cap
 from cvxgeodesic.baselines import BASELINES
 from cvxgeodesic.errors import ParameterError, SourceError
-from cvxgeodesic.formulations import FORMULATIONS
+from cvxgeodesic.formulations import FORMULATIONS, TET_METHODS, TET_ORDER2_METHODS
 from cvxgeodesic.formulations_p2 import ORDER2_METHODS
-from cvxgeodesic.formulations_tet import TET_METHODS, TET_ORDER2_METHODS
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "capabilities.md"
 
@@ -100,9 +99,8 @@ def test_help_text_lists_each_dimension():
 def test_source_kinds_of_resolved_sets_in_both_dimensions():
     import cvxgeodesic as cg
     from cvxgeodesic.mesh.tet_generate import tet_box
-    from cvxgeodesic.mesh.tet_locate import VolumePoint
-    from cvxgeodesic.sources import resolve_sources
-    from cvxgeodesic.sources_tet import BoundaryFaces, resolve_tet_sources
+    from cvxgeodesic.sources import BoundaryFaces, VolumePoint, resolve_sources
+    from cvxgeodesic.sources import resolve_sources as resolve_tet_sources
 
     plane, box = cg.grid_plane(4), tet_box(2)
     p = cg.SurfacePoint(3, [0.2, 0.3, 0.5])

@@ -15,8 +15,7 @@ import pytest
 
 import cvxgeodesic as cg
 from cvxgeodesic.errors import MeshError
-from cvxgeodesic.formulations import FORMULATIONS
-from cvxgeodesic.formulations_tet import TET_FORMULATIONS, TET_ORDER2_METHODS
+from cvxgeodesic.formulations import FORMULATIONS, TET_FORMULATIONS, TET_ORDER2_METHODS
 from cvxgeodesic.mesh.tet_generate import tet_box
 from cvxgeodesic.mesh.tetmesh import TetMesh
 from cvxgeodesic.validation import MAX_COORDINATE, MIN_EXTENT

@@ -24,11 +24,10 @@ import pytest
 import cvxgeodesic as cg
 from cvxgeodesic.baselines import DijkstraBaseline
 from cvxgeodesic.errors import DegenerateFacesWarning, MeshError, ParameterError, SourceError
-from cvxgeodesic.formulations_tet import TetOperators, build_tet_problem, tet_smoothness_weight
+from cvxgeodesic.formulations import MeshOperators, build_problem, smoothness_weight
 from cvxgeodesic.mesh.tet_generate import l_prism_distance, tet_ball, tet_box, tet_l_prism
-from cvxgeodesic.mesh.tet_locate import VolumePoint, volume_point
 from cvxgeodesic.mesh.tetmesh import TetMesh
-from cvxgeodesic.sources_tet import BoundaryFaces, resolve_tet_sources
+from cvxgeodesic.sources import BoundaryFaces, VolumePoint, resolve_sources, volume_point
 
 
 def _mean_rel(d, ex):
@@ -124,9 +123,9 @@ def test_smoothing_is_scale_invariant(method):
 
 def test_lambda_is_volume_normalized():
     m = tet_box(2)
-    assert tet_smoothness_weight(m, 2.0, energy="dirichlet") == pytest.approx(2 * 1.3e-2)
-    assert tet_smoothness_weight(tet_box(2, size=8.0), 1.0, energy="laplacian") == pytest.approx(8 * 3e-6)
-    assert tet_smoothness_weight(m, 1.0, "paper") == pytest.approx(100 * m.mean_edge_length / m.n_vertices)
+    assert smoothness_weight(m, 2.0, energy="dirichlet") == pytest.approx(2 * 1.3e-2)
+    assert smoothness_weight(tet_box(2, size=8.0), 1.0, energy="laplacian") == pytest.approx(8 * 3e-6)
+    assert smoothness_weight(m, 1.0, "paper") == pytest.approx(100 * m.mean_edge_length / m.n_vertices)
 
 
 # -- L-shaped prism ----------------------------------------------------------------------------------------------
@@ -222,16 +221,16 @@ def test_point_source_order1_bounds_and_errors():
 def test_source_errors():
     m = tet_box(2)
     with pytest.raises(SourceError, match="not a boundary face"):
-        resolve_tet_sources(m, BoundaryFaces([[0, 1, 13]]))
+        resolve_sources(m, BoundaryFaces([[0, 1, 13]]))
     with pytest.raises(SourceError, match="out of range"):
-        resolve_tet_sources(m, BoundaryFaces([999]))
+        resolve_sources(m, BoundaryFaces([999]))
     with pytest.raises(SourceError, match="cannot be mixed"):
-        resolve_tet_sources(m, ["boundary", 3])
-    with pytest.raises(SourceError, match="more than once"):
-        resolve_tet_sources(m, [VolumePoint(0, [1, 0, 0, 0]), int(m.T[0, 0])])
+        resolve_sources(m, ["boundary", 3])
+    # a point on a vertex given with that vertex is the vertex once, as on surfaces (tests/test_order1_dims.py)
+    assert resolve_sources(m, [VolumePoint(0, [1, 0, 0, 0]), int(m.T[0, 0])]).vertices.tolist() == [int(m.T[0, 0])]
     with pytest.raises(SourceError, match="at most one per"):
         cg.GeodesicSolver(m, "qclp", order=2).solve([VolumePoint(0, [0.25] * 4), VolumePoint(0, [0.4, 0.2, 0.2, 0.2])])
-    assert resolve_tet_sources(m, VolumePoint(0, [1, 0, 0, 0])).vertices.tolist() == [int(m.T[0, 0])]
+    assert resolve_sources(m, VolumePoint(0, [1, 0, 0, 0])).vertices.tolist() == [int(m.T[0, 0])]
 
 
 def test_methods_that_do_not_apply_name_those_that_do():
@@ -289,7 +288,7 @@ def test_degenerate_tets_are_left_out_with_a_note():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DegenerateFacesWarning)
         res = _solve_all(flat)
-    assert any("are left out of the cones and energies" in s for s in res[("qclp", 1)].info.notes)
+    assert any("are left out of the cone constraints and energies" in s for s in res[("qclp", 1)].info.notes)
     assert any("get the 1-D cone" in s for s in res[("qclp", 2)].info.notes)
     assert any("heat method: left out 1 degenerate" in s for s in res[("heat", 1)].info.notes)
     # the flat tetrahedron's vertex gets a finite distance bounded by its edges
@@ -340,8 +339,8 @@ def test_unreachable_component_is_inf():
 
 def test_problem_shape():
     m = tet_box(3)
-    ops = TetOperators(m)
-    pb = build_tet_problem(ops, resolve_tet_sources(m, 0), "qclp", 0.0)
+    ops = MeshOperators(m)
+    pb = build_problem(ops, resolve_sources(m, 0), "qclp", 0.0)
     (group,) = pb.cones
     assert group.dim == 4 and group.clique == 4
     # the source's tetrahedra carry no cone; every other one does

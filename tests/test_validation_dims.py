@@ -15,8 +15,7 @@ from cvxgeodesic import capabilities
 from cvxgeodesic.errors import ParameterError, SourceError
 from cvxgeodesic.formulations import ALIASES
 from cvxgeodesic.mesh.tet_generate import tet_box
-from cvxgeodesic.mesh.tet_locate import VolumePoint
-from cvxgeodesic.sources_tet import BoundaryFaces
+from cvxgeodesic.sources import BoundaryFaces, VolumePoint
 
 MESHES = {2: cg.icosphere(2), 3: tet_box(2)}
 

@@ -51,13 +51,11 @@ if TYPE_CHECKING:
     from .mesh.fileorder import to_file_order
     from .mesh.io import load_distance, load_mesh, save_distance
     from .mesh.tet_generate import tet_ball, tet_box, tet_l_prism
-    from .mesh.tet_locate import VolumePoint, volume_point
     from .mesh.tetmesh import TetMesh
     from .mesh.tetrahedralize import tetrahedralize
     from .paths import distance_at, geodesic_path
     from .plotting import plot_field
-    from .sources import SurfaceCurve, SurfacePoint, surface_point
-    from .sources_tet import BoundaryFaces
+    from .sources import BoundaryFaces, SurfaceCurve, SurfacePoint, VolumePoint, surface_point, volume_point
     from .viewer import show
 
 __version__ = "0.1.0"
@@ -86,13 +84,12 @@ _LAZY = {
     "to_file_order": ".mesh.fileorder",
     **dict.fromkeys(("load_distance", "load_mesh", "save_distance"), ".mesh.io"),
     **dict.fromkeys(("tet_ball", "tet_box", "tet_l_prism"), ".mesh.tet_generate"),
-    **dict.fromkeys(("VolumePoint", "volume_point"), ".mesh.tet_locate"),
     "TetMesh": ".mesh.tetmesh",
     "tetrahedralize": ".mesh.tetrahedralize",
     **dict.fromkeys(("distance_at", "geodesic_path"), ".paths"),
     "plot_field": ".plotting",  # matplotlib costs ~0.3 s to import
-    **dict.fromkeys(("SurfaceCurve", "SurfacePoint", "surface_point"), ".sources"),
-    "BoundaryFaces": ".sources_tet",
+    **dict.fromkeys(("BoundaryFaces", "SurfaceCurve", "SurfacePoint", "VolumePoint", "surface_point", "volume_point"),
+                    ".sources"),
     "show": ".viewer",  # polyscope is an optional extra: imported when show() runs
 }
 

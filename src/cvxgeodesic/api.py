@@ -221,7 +221,7 @@ class GeodesicSolver:
     ) -> None:
         t0 = time.perf_counter()
         self.mesh: Any = cast(Any, as_mesh(mesh))  # a TriMesh or a TetMesh, told apart by is_volume
-        self.is_volume = isinstance(self.mesh, TetMesh)  # distance inside tetrahedra (strategies/tet.py)
+        self.is_volume = isinstance(self.mesh, TetMesh)  # distance inside tetrahedra
         self.dim = self.mesh.dim
         self._check_method_and_solver(method, solver)
         self.order = check_order(order)
@@ -279,24 +279,16 @@ class GeodesicSolver:
         """``self.lam`` (λ in the mesh's units), ``self.m`` and ``self.energy`` from ``m`` or ``lam``: both checked
         here, λ computed once (0 without a smoothness energy)."""
         m_value, lam_value = check_smoothness(m, lam)
-        weight: Any = smoothness_weight
-        if self.is_volume:
-            from .formulations_tet import TET_FORMULATIONS, tet_smoothness_weight
-
-            self.energy = None if self.is_baseline else TET_FORMULATIONS[self.method][1]
-            weight = tet_smoothness_weight
-        else:
-            self.energy = None if self.is_baseline else FORMULATIONS[self.method][1]
+        self.energy = None if self.is_baseline else FORMULATIONS[self.method][1]
         self.m = None if lam_value is not None else m_value
-        medium = {} if self.is_volume else {"medium": self.medium, "order": self.order}  # surfaces only
         if self.energy is None:
             self.lam = 0.0
         elif lam_value is not None and self._lam_checked:  # checked on the whole mesh (a patch of local rows)
             self.lam = lam_value
-        elif lam_value is not None:  # at most the weight of the largest m
-            self.lam = check_lam(lam_value, weight(self.mesh, 1.0, self.normalization, self.energy, **medium))
-        else:
-            self.lam = weight(self.mesh, m_value, self.normalization, self.energy, **medium)
+        else:  # one weight for surfaces and volumes (mesh.dim); a given λ is at most the weight of the largest m
+            weight = smoothness_weight(self.mesh, 1.0 if lam_value is not None else m_value, self.normalization,
+                                       self.energy, medium=self.medium, order=self.order)
+            self.lam = check_lam(lam_value, weight) if lam_value is not None else weight
 
     def __repr__(self) -> str:
         return (
@@ -340,12 +332,7 @@ class GeodesicSolver:
         t0 = time.perf_counter()
         # a curve in a volume, boundary faces on a surface: refused with the table's reason before any resolution
         check_capability(self.method, sources=_object_kinds(sources), **self._cell)
-        if self.is_volume:
-            from .sources_tet import resolve_tet_sources
-
-            sset: Any = resolve_tet_sources(self.mesh, sources)
-        else:
-            sset = resolve_sources(self.mesh, sources)
+        sset = resolve_sources(self.mesh, sources)
         check_capability(self.method, sources=source_kinds(sset), **self._cell)
         source_time = time.perf_counter() - t0  # closest points and curve samples: part of this solve
         with reporting_to(callback):  # Clarabel's iterations too, wherever a strategy runs it
@@ -574,9 +561,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
 
 def _matrix_rows(mesh: Any, vertices: Any, *, local: bool) -> tuple[list, np.ndarray]:
     """The distinct sources of ``distance_matrix``'s rows and, for each row asked for, its index among them."""
-    from .mesh.tet_locate import VolumePoint
-    from .sources import SurfaceCurve, SurfacePoint
-    from .sources_tet import BoundaryFaces
+    from .sources import BoundaryFaces, SurfaceCurve, SurfacePoint, VolumePoint
 
     surface = (SurfacePoint, SurfaceCurve, str, VolumePoint, BoundaryFaces)
     if isinstance(vertices, surface) or (isinstance(vertices, list | tuple)
@@ -599,8 +584,7 @@ def _matrix_rows(mesh: Any, vertices: Any, *, local: bool) -> tuple[list, np.nda
 
 def _object_kinds(sources: Any) -> set[str]:
     """The kinds of source that a raw ``sources`` value names by its type alone: curves and boundary faces."""
-    from .sources import SurfaceCurve
-    from .sources_tet import BoundaryFaces
+    from .sources import BoundaryFaces, SurfaceCurve
 
     items = sources if isinstance(sources, list | tuple) else [sources]
     return ({"curve"} if any(isinstance(s, SurfaceCurve) for s in items) else set()) | (

@@ -154,9 +154,9 @@ def methods_for(dim: int, order: int = 1, medium: str = "none", source: str | No
 
 
 def source_kinds(sources: Any) -> set[str]:
-    """The kinds of source (:data:`SOURCE_KINDS`) of a resolved source set: a surface's
-    :class:`~cvxgeodesic.sources.SourceSet` or a volume's :class:`~cvxgeodesic.sources_tet.TetSources` (read by
-    their attributes: this module imports neither)."""
+    """The kinds of source (:data:`SOURCE_KINDS`) of a resolved source set:
+    :class:`~cvxgeodesic.sources.SourceSet` of either dimension (read by its attributes: this module does not import
+    it)."""
     vertices = {"vertex"} if sources.vertices.size else set()
     if sources.vertex_only:
         return vertices

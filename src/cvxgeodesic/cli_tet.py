@@ -31,7 +31,7 @@ def tet_sources(args: Any, mesh: TetMesh) -> tuple[Any, str]:
     """The sources from ``--source`` (file vertex numbers), ``--source-point`` (inside the solid), ``--boundary``,
     and a label."""
     from .mesh.fileorder import file_sources
-    from .mesh.tet_locate import volume_point
+    from .sources import volume_point
 
     vertices = list(args.source or [])
     points = list(getattr(args, "source_point", None) or [])

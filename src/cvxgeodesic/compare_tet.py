@@ -34,7 +34,7 @@ REFERENCE = ("qclp", 2)
 
 
 def _resolve(methods: Any) -> list[str]:
-    from .formulations_tet import TET_METHODS, check_tet_method
+    from .formulations import TET_METHODS, check_tet_method
 
     if isinstance(methods, str):
         methods = methods.split(",")
@@ -95,7 +95,7 @@ def run_tet_compare(mesh: Any, sources: Any, methods: Any, out_dir: str | os.Pat
     from .evaluation.tet_slice_plot import plot_tet_slice
     from .mesh.convert import as_mesh
     from .mesh.tetmesh import TetMesh
-    from .sources_tet import resolve_tet_sources
+    from .sources import resolve_sources as resolve_tet_sources
 
     mesh = as_mesh(mesh)
     if not isinstance(mesh, TetMesh):

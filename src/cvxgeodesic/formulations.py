@@ -1,4 +1,5 @@
-"""Assemble the paper's eight convex formulations (Table 1) as :class:`ConicProblem` s.
+"""Assemble the paper's eight convex formulations (Table 1) as :class:`ConicProblem` s, on a surface (triangles)
+or inside a solid (tetrahedra): the simplex dimension ``mesh.dim`` is a parameter of every function here.
 
 =================  ===========================  =================
 name               constraints                  smoothness energy
@@ -53,6 +54,14 @@ default (docs/dev/performance-log.md, "Negative distances in one solve").
 Vertices in connected components without a source are fixed and reported as
 ``inf``. Degenerate (zero or near-zero area) faces carry no cone and no energy
 term; their edges get the LC constraint instead (:class:`MeshOperators`).
+
+Inside a tetrahedral mesh (``docs/volumes.md``) the same programs hold one dimension up: the field is linear in each
+tetrahedron, the cone ``‖B_t d_t‖ ≤ 1`` is an SOC(4), ``|S|`` becomes the volume ``|Ω|`` (the stretch is the mean of
+``d`` over the solid, ``λ = m · κ · |Ω|^(1/3)``), and the energies are the Dirichlet and the squared-Laplacian ones
+(the curved Hessian energy is a surface notion: its formulations are refused, :data:`FORMULATIONS_BY_DIM`). The
+sources fix vertices and source faces, and the edges of every tetrahedron without a cone get the edge bounds
+(:mod:`cvxgeodesic.sources`); the near-source bounds ``d ≥ 0`` are the surface's, with :func:`smoothing_length`
+measured in the volume.
 """
 
 from __future__ import annotations
@@ -65,8 +74,9 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from .errors import DegenerateFacesWarning, MeshError, ParameterError
-from .mesh.trimesh import DEGENERATE_TOL, TriMesh
-from .operators import energy_matrix, gradient_blocks
+from .mesh.simplex import SimplexMesh
+from .mesh.trimesh import DEGENERATE_TOL
+from .operators import ENERGIES_BY_DIM, check_energy, energy_matrix, gradient_blocks
 from .operators.metric import Medium
 from .solvers.problem import ConeGroup, ConicProblem, PairInequalities
 from .sources import SourceSet, source_constraints
@@ -83,6 +93,17 @@ FORMULATIONS: dict[str, tuple[str, str | None]] = {
     "qcqp-hessian": ("qc", "hessian"),
 }
 ALIASES = {"qgdf": "lcqp-hessian"}
+#: The formulations of each simplex dimension: those whose energy is defined there (:data:`ENERGIES_BY_DIM`).
+FORMULATIONS_BY_DIM = {dim: tuple(k for k, (_, e) in FORMULATIONS.items() if e is None or e in energies)
+                       for dim, energies in ENERGIES_BY_DIM.items()}
+#: The formulations inside tetrahedral meshes.
+TET_FORMULATIONS = {k: FORMULATIONS[k] for k in FORMULATIONS_BY_DIM[3]}
+#: The baselines on tetrahedra (:mod:`cvxgeodesic.baselines`).
+TET_BASELINE_METHODS = ("dijkstra", "heat")
+#: Every method a tetrahedral mesh takes.
+TET_METHODS = (*TET_FORMULATIONS, *TET_BASELINE_METHODS)
+#: The formulations with an order-2 program on tetrahedra (:mod:`cvxgeodesic.formulations_p2`).
+TET_ORDER2_METHODS = ("qclp",)
 
 #: Every formulation bounds the vertices within this many edges of a source (of a source point's or curve's faces)
 #: below by 0 (module docstring).
@@ -115,20 +136,45 @@ KAPPA = {"hessian": 3.0e-6, "laplacian": 3.0e-6, "dirichlet": 1.3e-2}
 #: units of the stretch term, so λ is dimensionless); docs/order2.md, "Smoothing at order 2", has the calibration.
 #: Changing it changes every smoothed order-2 field: bump :data:`~cvxgeodesic.formulations_p2.ORDER2_CACHE_VERSION`.
 KAPPA_ORDER2 = {"hessian": 5.0e-7, "laplacian": 5.0e-7, "dirichlet": 5.0e-7}
+#: The root of the measure in ``λ = m · κ · |Ω|^(1/dim)``: a length on a surface and in a solid alike. On volumes κ
+#: keeps the surface values (not calibrated there; measurements in ``docs/volumes.md``).
+MEASURE_ROOT = {2: np.sqrt, 3: np.cbrt}
+#: What a cell is called in messages, singular and counted.
+CELL_WORDS = {2: ("face", "face(s)"), 3: ("tet", "tetrahedra")}
 
 
-def stretch_weights(mesh: TriMesh, stretch: str = "area", area_ratio: np.ndarray | None = None) -> np.ndarray:
+def check_tet_method(method: str) -> str:
+    """The lower-case name of a method that applies to tetrahedral meshes; ParameterError naming those that do.
+
+    Raises
+    ------
+    ParameterError
+        Not a string, or a method without a volume counterpart (the curved Hessian formulations, ``"fmm"``,
+        ``"exact"``) or unknown.
+    """
+    if not isinstance(method, str):
+        raise ParameterError(f"method must be a string, got {type(method).__name__}")
+    name = ALIASES.get(method.lower(), method.lower())
+    if name not in TET_METHODS:
+        why = ("the curved Hessian energy is defined on surfaces" if "hessian" in name
+               else "it is a surface algorithm" if name in ("fmm", "exact") else "unknown method")
+        raise ParameterError(f"method {method!r} does not apply to tetrahedral meshes ({why}); on a volume use one "
+                             f"of {', '.join(TET_METHODS)}")
+    return name
+
+
+def stretch_weights(mesh: SimplexMesh, stretch: str = "area", area_ratio: np.ndarray | None = None) -> np.ndarray:
     """Per-vertex weights ``w`` of the stretch term ``E_stretch = −wᵀd``.
 
     Parameters
     ----------
-    mesh : TriMesh
+    mesh : TriMesh or TetMesh
     stretch : {"area", "calibrated", "mean", "sum"}
-        ``"area"``: ``w_i = M_i / |S|`` with ``M_i`` a third of the area of the faces around
-        vertex ``i`` (the exact integral of the piecewise linear field, so ``wᵀd`` is the mean of
-        ``d`` over the surface, whatever the triangulation); ``"calibrated"``: ``10 / n`` (the paper
-        normalization of this library); ``"mean"``: ``1 / n``; ``"sum"``: 1 (the paper's literal
-        ``−Σ d_i``).
+        ``"area"``: ``w_i = M_i / |Ω|`` with ``M_i`` a third of the area of the faces around vertex ``i`` (a
+        quarter of the volume of its tetrahedra): the exact integral of the piecewise linear field, so ``wᵀd`` is
+        the mean of ``d`` over the surface (solid), whatever the mesh; floored at :data:`MIN_STRETCH_WEIGHT` of the
+        mean. ``"calibrated"``: ``10 / n`` (the paper normalization of this library); ``"mean"``: ``1 / n``;
+        ``"sum"``: 1 (the paper's literal ``−Σ d_i``).
     area_ratio : (m,) float ndarray, optional
         With a metric (:attr:`~cvxgeodesic.operators.metric.Medium.area_ratio`): the areas of ``"area"`` are
         measured in it.
@@ -136,15 +182,21 @@ def stretch_weights(mesh: TriMesh, stretch: str = "area", area_ratio: np.ndarray
     Returns
     -------
     (n,) float ndarray
+
+    Raises
+    ------
+    MeshError
+        ``"area"`` on a mesh of zero area (volume).
     """
     n = mesh.n_vertices
     if stretch == "area":
-        areas = mesh.face_areas if area_ratio is None else mesh.face_areas * area_ratio
-        mass = np.bincount(mesh.F.ravel(), weights=np.repeat(areas / 3.0, 3), minlength=n)
+        measures = mesh.cell_measures if area_ratio is None else mesh.cell_measures * area_ratio
+        w = mesh.dim + 1
+        mass = np.bincount(mesh.cells.ravel(), weights=np.repeat(measures / w, w), minlength=n)
         total = mass.sum()
         if not total > 0:
-            raise MeshError(f"{mesh.name}: the surface has zero area")
-        # A vertex whose faces have (almost) no area would get (almost) no weight: the optimum is then (almost)
+            raise MeshError(f"{mesh.name}: the {'surface has zero area' if mesh.dim == 2 else 'mesh has zero volume'}")
+        # A vertex whose cells have (almost) no measure would get (almost) no weight: the optimum is then (almost)
         # not unique there, and the solvers stop anywhere in its feasible range (measured: LCLP 3e-4 of the
         # diagonal off Dijkstra on Thingi10K slivers). The floor changes no vertex of an ordinary mesh.
         floor = MIN_STRETCH_WEIGHT * total / max(int(mesh.referenced.sum()), 1)
@@ -170,27 +222,27 @@ def check_normalization(normalization) -> str:
     return check_choice(normalization, "normalization", NORMALIZATIONS)
 
 
-def smoothness_weight(mesh: TriMesh, m: float, normalization: str = "area", energy: str = "hessian",
+def smoothness_weight(mesh: SimplexMesh, m: float, normalization: str = "area", energy: str = "hessian",
                       medium: Medium | None = None, order: int = 1) -> float:
     """The smoothness weight λ for a multiplier ``m``.
 
     Parameters
     ----------
-    mesh : TriMesh
+    mesh : TriMesh or TetMesh
     m : float
         Dimensionless multiplier; ``m = 1`` is the default rounding (docs/method.md).
     normalization : {"area", "paper"}
-        ``"area"`` (default): ``λ = m · κ · √|S|`` (``|S|`` the surface area, ``κ`` =
-        :data:`KAPPA` of the energy), paired with the area-weighted stretch ``−(1/|S|) ∫ d dA``:
-        the discretization of one continuous problem, so one ``m`` means one rounding, measured on
-        the surface, on every triangulation and at every scale. ``"paper"``: the paper's
-        ``λ = m · 10² · h / n`` (§4.2.3; ``h`` the mean edge length, ``n`` the vertex count), paired
-        with the uniform stretch ``−(10/n) Σ d_i``: its rounding is a fixed number of edges wide.
+        ``"area"`` (default): ``λ = m · κ · |Ω|^(1/dim)`` (``|Ω|`` the surface area or the volume, ``κ`` =
+        :data:`KAPPA` of the energy), paired with the measure-weighted stretch ``−(1/|Ω|) ∫ d``: the
+        discretization of one continuous problem, so one ``m`` means one rounding, measured on the surface (in
+        the solid), on every mesh and at every scale. ``"paper"``: the paper's ``λ = m · 10² · h / n`` (§4.2.3;
+        ``h`` the mean edge length, ``n`` the vertex count), paired with the uniform stretch ``−(10/n) Σ d_i``:
+        its rounding is a fixed number of edges wide.
     energy : {"hessian", "laplacian", "dirichlet"}
-        Selects ``κ`` (``"area"`` only).
+        Selects ``κ`` (``"area"`` only); ``"hessian"`` on triangles only.
     medium : Medium, optional
-        A travel cost or metric (:mod:`cvxgeodesic.operators.metric`): ``|S|`` and ``h`` are then measured in it,
-        so that a constant cost ``c`` gives ``c λ``, as the mesh scaled by ``c`` would.
+        A travel cost or metric (:mod:`cvxgeodesic.operators.metric`, surfaces): ``|S|`` and ``h`` are then
+        measured in it, so that a constant cost ``c`` gives ``c λ``, as the mesh scaled by ``c`` would.
     order : {1, 2}
         ``2``: the weight of the order-2 energies of ``φ = d²``, ``λ = m · κ₂`` (:data:`KAPPA_ORDER2`; dimensionless,
         the same for both normalizations, since ``"paper"`` has no order-2 form).
@@ -199,12 +251,19 @@ def smoothness_weight(mesh: TriMesh, m: float, normalization: str = "area", ener
     -------
     float
 
+    Raises
+    ------
+    ParameterError
+        An unknown normalization, or an energy not defined on the mesh's dimension.
+
     Examples
     --------
     >>> import cvxgeodesic as cg
     >>> sphere = cg.icosphere(3)
     >>> round(cg.smoothness_weight(sphere, 1.0) / sphere.face_areas.sum() ** 0.5, 9)
     3e-06
+    >>> round(cg.smoothness_weight(cg.tet_box(2, size=2.0), 1.0, energy="dirichlet") / 1.3e-2, 12)
+    2.0
     """
     normalization = check_normalization(normalization)
     if order == 2:
@@ -214,12 +273,13 @@ def smoothness_weight(mesh: TriMesh, m: float, normalization: str = "area", ener
         h = mesh.mean_edge_length if medium is None else medium.mean_edge_length
         return float(m) * 100.0 * h / mesh.n_vertices
     check_choice(energy, "energy", KAPPA, lower=False)
-    area = float(mesh.face_areas.sum()) if medium is None else medium.surface_area
-    return float(m) * KAPPA[energy] * float(np.sqrt(area))
+    check_energy(mesh, energy)
+    measure = mesh.total_measure if medium is None else medium.surface_area
+    return float(m) * KAPPA[energy] * float(MEASURE_ROOT[mesh.dim](measure))
 
 
 def smoothing_length(ops: MeshOperators, lam: float, stretch: str = "area") -> float:
-    """The length over which a second-order smoothness energy rounds the field: ``ℓ = (λ |S| / W)^(1/3)``.
+    """The length over which a second-order smoothness energy rounds the field: ``ℓ = (λ |Ω|^(2/dim) / W)^(1/3)``.
 
     Rounding a cone's tip (a source) or a crease over a disc of radius ``ℓ`` lowers the stretch term by about
     ``(W / |S|) ℓ³`` (``W`` the sum of the stretch weights, spread over the surface area ``|S|``) and saves an energy
@@ -227,6 +287,9 @@ def smoothing_length(ops: MeshOperators, lam: float, stretch: str = "area") -> f
     normalization ``ℓ = (m κ)^(1/3) √|S|`` (0.0144 √|S| at ``m = 1``): a length on the surface, whatever the
     triangulation. Measured 2026-12-03 without bounds: the optimum's dip below 0 reached 1.4 ℓ, 2.6 ℓ and 2.4 ℓ
     from five sources on max_planck at 5K, 21K and 84K vertices, 1.2 ℓ from a source of the medial-axis bug.
+    In a solid a ball of radius ``ℓ`` lowers the stretch by ``(W / |Ω|) ℓ⁴`` and saves ``λ ℓ / |Ω|^(1/3)`` (the
+    volume's Laplacian energy is divided by ``|Ω|^(1/3)``, :func:`~cvxgeodesic.operators.energy_matrix`):
+    ``ℓ³ = λ |Ω|^(2/3) / W``, ``(m κ)^(1/3) |Ω|^(1/3)`` under the area normalization, again a length in the solid.
 
     Parameters
     ----------
@@ -240,57 +303,56 @@ def smoothing_length(ops: MeshOperators, lam: float, stretch: str = "area") -> f
     -------
     float
     """
-    areas = ops.mesh.face_areas if ops.medium is None else ops.mesh.face_areas * ops.medium.area_ratio
-    area = float(areas.sum())  # in the medium's normalized units, as the edge lengths the radius is measured in
+    mesh = ops.mesh
+    measures = mesh.cell_measures if ops.medium is None else mesh.cell_measures * ops.medium.area_ratio
+    measure = float(measures.sum())  # in the medium's normalized units, as the edge lengths the radius is measured in
     total = float(ops.stretch_weights(stretch).sum())
-    return float(np.cbrt(lam * area / total)) if total > 0 else 0.0
+    return float(np.cbrt(lam * measure ** (2.0 / mesh.dim) / total)) if total > 0 else 0.0
 
 
 @dataclass
 class MeshOperators:
-    """Per-mesh data shared by every solve: gradient blocks and energy matrices (built lazily).
+    """Per-mesh data shared by every solve: gradient blocks and energy matrices (built lazily), on triangles or
+    tetrahedra.
 
-    Degenerate faces (:meth:`TriMesh.degenerate_faces`: zero or near-zero area, needles,
-    caps, specks) are left out of the cone constraints and of the smoothness energies:
-    their gradient has entries of order ``1 / altitude`` and would make both numerically
-    singular. Every edge of such a face gets the edge constraint ``|d_i − d_j| ≤ ℓ_ij``
-    instead (valid for the exact distance, and it keeps every vertex bounded and the
-    QC fields below Dijkstra). Their area is negligible by definition; measured on a grid
-    with a zero-area split, QCLP moved by at most 0.2 % of the bounding-box diagonal
-    against the unsplit grid, the Laplacian and Hessian fields by up to 2.3 % (they see
-    one vertex more). A :class:`~cvxgeodesic.errors.DegenerateFacesWarning` says how
-    many faces were left out.
+    Degenerate cells (:meth:`~cvxgeodesic.mesh.simplex.SimplexMesh.degenerate_cells`: zero or near-zero measure,
+    needles, caps, slivers, specks) are left out of the cone constraints and of the smoothness energies: their
+    gradient has entries of order ``1 / altitude`` and would make both numerically singular. Every edge of such a
+    cell gets the edge constraint ``|d_i − d_j| ≤ ℓ_ij`` instead (valid for the exact distance, and it keeps every
+    vertex bounded and the QC fields below Dijkstra). Their measure is negligible by definition; measured on a grid
+    with a zero-area split, QCLP moved by at most 0.2 % of the bounding-box diagonal against the unsplit grid, the
+    Laplacian and Hessian fields by up to 2.3 % (they see one vertex more). A
+    :class:`~cvxgeodesic.errors.DegenerateFacesWarning` says how many cells were left out.
 
     Parameters
     ----------
-    mesh : TriMesh
+    mesh : TriMesh or TetMesh
     degenerate_tol : float
-        Threshold of :meth:`TriMesh.degenerate_faces` (default
-        :data:`~cvxgeodesic.mesh.trimesh.DEGENERATE_TOL`; 0 drops only faces of exactly
-        zero area).
+        Threshold of :meth:`~cvxgeodesic.mesh.simplex.SimplexMesh.degenerate_cells` (default
+        :data:`~cvxgeodesic.mesh.trimesh.DEGENERATE_TOL`; 0 drops only cells of exactly zero measure).
     medium : Medium, optional
-        A travel cost or metric on ``mesh`` (:mod:`cvxgeodesic.operators.metric`): the gradient blocks are
+        A travel cost or metric on a surface (:mod:`cvxgeodesic.operators.metric`): the gradient blocks are
         multiplied by its :attr:`~cvxgeodesic.operators.metric.Medium.face_transforms` (the cones then bound
         ``‖∇d‖_{M⁻¹} ≤ c``), the edge lengths, the stretch's areas and the energies are measured in it (the
         Hessian energy only through its mean area ratio, :func:`~cvxgeodesic.operators.energy_matrix`).
 
     Attributes
     ----------
-    degenerate : (m,) bool ndarray
-        The faces left out.
-    degenerate_edges : (k,) int64 ndarray
-        Indices into ``mesh.edges`` of the edges of degenerate faces.
+    degenerate : (k,) bool ndarray
+        The cells left out.
+    degenerate_edges : (q,) int64 ndarray
+        Indices into ``mesh.edges`` of the edges of degenerate cells.
     notes : list of str
-        One line per substitution made while building the operators (degenerate faces left
-        out, a manifold cover or the planar Hessian energy), copied into every ``SolveInfo``.
+        One line per substitution made while building the operators (degenerate cells left out, a manifold cover
+        or the planar Hessian energy), copied into every ``SolveInfo``.
 
     Raises
     ------
     MeshError
-        Every face of the mesh is degenerate.
+        Every cell of the mesh is degenerate.
     """
 
-    mesh: TriMesh
+    mesh: SimplexMesh
     degenerate_tol: float = DEGENERATE_TOL
     medium: Medium | None = None
 
@@ -302,36 +364,37 @@ class MeshOperators:
         mesh = self.mesh
         tol = self.degenerate_tol
         check_number(tol, "degenerate_tol", low=0, high=1, high_open=True)
-        self.degenerate = np.zeros(mesh.n_faces, dtype=bool)
-        self.degenerate[mesh.degenerate_faces(tol)] = True
+        self.degenerate = np.zeros(mesh.n_cells, dtype=bool)
+        self.degenerate[mesh.degenerate_cells(tol)] = True
         n_bad = int(self.degenerate.sum())
-        if n_bad == mesh.n_faces:
+        word, counted = CELL_WORDS[mesh.dim]
+        if n_bad == mesh.n_cells:
+            proper = "triangles" if mesh.dim == 2 else "tetrahedra"
             raise MeshError(
-                f"{mesh.name}: all {n_bad} faces are degenerate (zero or near-zero area); the convex formulations "
-                "need proper triangles; use method='dijkstra' on this mesh"
+                f"{mesh.name}: all {n_bad} {counted.replace('(s)', 's')} are degenerate (zero or near-zero "
+                f"{'area' if mesh.dim == 2 else 'volume'}); the convex formulations need proper {proper}; use "
+                "method='dijkstra' on this mesh"
             )
         self._face_metric = None
         if self.medium is not None:  # per-face transforms and area ratios of the energies' faces
             keep = ~self.degenerate
             self._face_metric = (self.medium.face_transforms[keep], self.medium.area_ratio[keep])
+        self._energy_cells = None if not n_bad else ~self.degenerate
+        self.degenerate_edges = np.unique(mesh.cell_edges[self.degenerate]).astype(np.int64)
         if n_bad:
-            self.degenerate_edges = np.unique(mesh.face_edges[self.degenerate])
-            self._energy_mesh = TriMesh(mesh.V, mesh.F[~self.degenerate], name=mesh.name)
             f = int(np.flatnonzero(self.degenerate)[0])
             message = (
-                f"{mesh.name}: {n_bad} degenerate face(s) (smallest altitude below {tol:g} of the face's longest "
-                f"edge or of the mean edge length; first: face {f} {mesh.F[f].tolist()}) are left out of the cone "
-                "constraints and energies; their edges are constrained by |d_i - d_j| <= edge length instead"
+                f"{mesh.name}: {n_bad} degenerate {counted} (smallest altitude below {tol:g} of the {word}'s longest "
+                f"edge or of the mean edge length; first: {word} {f} {mesh.cells[f].tolist()}) are left out of the "
+                "cone constraints and energies; their edges are constrained by |d_i - d_j| <= edge length instead"
             )
             warnings.warn(message, DegenerateFacesWarning, stacklevel=3)
             self.notes.append(message)
-        else:
-            self.degenerate_edges = np.zeros(0, dtype=np.int64)
-            self._energy_mesh = mesh
 
     @property
     def gradient_blocks(self) -> np.ndarray:
-        """(m, 2, 3) float ndarray: :func:`~cvxgeodesic.operators.gradient_blocks`, zero on degenerate faces."""
+        """(k, dim, dim + 1) float ndarray: :func:`~cvxgeodesic.operators.gradient_blocks`, zero on degenerate
+        cells."""
         if self._blocks is None:
             blocks = gradient_blocks(self.mesh)
             if self.medium is not None:
@@ -342,14 +405,19 @@ class MeshOperators:
         return self._blocks
 
     def energy(self, name: str, *, analyse=None) -> sp.csc_matrix:
-        """(n, n) csc_matrix of a named energy, assembled on the non-degenerate faces (cached).
+        """(n, n) csc_matrix of a named energy, assembled on the non-degenerate cells (cached).
 
         ``analyse`` (used when the energy is built, see :func:`~cvxgeodesic.operators.hessian_energy_matrix`)
         gives the PSD check of the Hessian energy the caller's symbolic analysis.
+
+        Raises
+        ------
+        ParameterError
+            An energy not defined on the mesh's dimension (the Hessian energy on tetrahedra).
         """
         if name not in self._energies:
-            self._energies[name] = energy_matrix(self._energy_mesh, name, self.notes, analyse=analyse,
-                                                 face_metric=self._face_metric)
+            self._energies[name] = energy_matrix(self.mesh, name, self.notes, analyse=analyse,
+                                                 face_metric=self._face_metric, cells=self._energy_cells)
         return self._energies[name]
 
     def stretch_weights(self, stretch: str = "area") -> np.ndarray:
@@ -391,24 +459,33 @@ class _Inequalities:
 
 
 def _qc_constraints(ops: MeshOperators, sc, fixed_mask: np.ndarray, ell: np.ndarray, ineq: _Inequalities):
-    """The QC formulations' cones (F[keep], gradient blocks) and their linear bounds, added to ``ineq``."""
+    """The QC formulations' cones (cells, gradient blocks) and the edge bounds where cells carry none, added to
+    ``ineq``."""
     mesh = ops.mesh
-    face_free = ~fixed_mask[mesh.F].all(axis=1)
-    # faces incident to a source (and the faces of point and curve sources, sources.py) carry no cone
-    keep = face_free & ~sc.no_cone & ~ops.degenerate
+    cells, E = mesh.cells, mesh.edges
+    cell_free = ~fixed_mask[cells].all(axis=1)
+    # cells incident to a source (and the cells of point and curve sources, sources.py) carry no cone
+    keep = cell_free & ~sc.no_cone & ~ops.degenerate
+    if mesh.dim == 3:
+        # every edge of a tetrahedron without a cone (next to a source, a point's, degenerate) gets |d_i - d_j| <=
+        # l_ij: a tetrahedron's cone does not cover all the edges its neighbours share with it
+        lc = np.unique(mesh.cell_edges[cell_free & ~keep])
+        lc = lc[~fixed_mask[E[lc]].all(axis=1)]
+        ineq.both_ways(E[lc], ell[lc])
+        return np.ascontiguousarray(cells[keep]), np.ascontiguousarray(ops.gradient_blocks[keep])
     # d_j - d_s <= |v_j - v_s| on the source stars; with d_s fixed at 0 this is a bound on d_j
     ineq.add(np.column_stack([sc.star_other, sc.star_source]), [1.0, -1.0], sc.star_rhs)
     if ops.degenerate_edges.size:
         # degenerate faces carry no cone: their edges get |d_i - d_j| <= l_ij (both directions)
-        Ed, ld = mesh.edges[ops.degenerate_edges], ell[ops.degenerate_edges]
+        Ed, ld = E[ops.degenerate_edges], ell[ops.degenerate_edges]
         ineq.both_ways(Ed, ld, ~fixed_mask[Ed].all(axis=1))
-    Eu, lu = _uncovered_edges(mesh, keep, face_free, fixed_mask, ops.degenerate_edges, ell)
+    Eu, lu = _uncovered_edges(mesh, keep, cell_free, fixed_mask, ops.degenerate_edges, ell)
     if len(Eu):
         ineq.both_ways(Eu, lu)
-    return np.ascontiguousarray(mesh.F[keep]), np.ascontiguousarray(ops.gradient_blocks[keep])
+    return np.ascontiguousarray(cells[keep]), np.ascontiguousarray(ops.gradient_blocks[keep])
 
 
-def _near(mesh: TriMesh, seeds: np.ndarray, hops: int) -> np.ndarray:
+def _near(mesh: SimplexMesh, seeds: np.ndarray, hops: int) -> np.ndarray:
     """(n,) bool ndarray: the vertices at most ``hops`` edges from ``seeds``."""
     near = np.zeros(mesh.n_vertices, dtype=bool)
     near[seeds] = True
@@ -419,7 +496,7 @@ def _near(mesh: TriMesh, seeds: np.ndarray, hops: int) -> np.ndarray:
     return near
 
 
-def _within(mesh: TriMesh, ell: np.ndarray, seeds: np.ndarray, radius: float) -> np.ndarray:
+def _within(mesh: SimplexMesh, ell: np.ndarray, seeds: np.ndarray, radius: float) -> np.ndarray:
     """(n,) bool ndarray: the vertices whose shortest edge path to ``seeds`` (edge lengths ``ell``) is at most
     ``radius`` (Dijkstra stopped at ``radius``: the cost follows the ball, not the mesh)."""
     n = mesh.n_vertices
@@ -442,10 +519,10 @@ def _uncovered_edges(mesh, cone_faces, face_free, fixed_mask, degenerate_edges, 
     there are none, so the problem is unchanged. Degenerate faces' edges are bounded separately.
     """
     covered = np.zeros(len(mesh.edges), dtype=bool)
-    covered[mesh.face_edges[cone_faces].ravel()] = True
+    covered[mesh.cell_edges[cone_faces].ravel()] = True
     covered[degenerate_edges] = True
     candidate = np.zeros(len(mesh.edges), dtype=bool)
-    candidate[mesh.face_edges[face_free].ravel()] = True
+    candidate[mesh.cell_edges[face_free].ravel()] = True
     E = mesh.edges
     # an edge with a fixed end is a source-star edge (bounded by the star bound) or lies outside the problem
     pick = candidate & ~covered & ~fixed_mask[E].any(axis=1)
@@ -461,16 +538,18 @@ def build_problem(
     stretch: str = "area",
     nonnegative: bool = False,
 ) -> ConicProblem:
-    """Assemble one formulation for given sources.
+    """Assemble one formulation for given sources, on a surface or inside a solid.
 
     Parameters
     ----------
     ops : MeshOperators
     sources : (k,) int64 ndarray or SourceSet
         Validated source vertices, or any source set of :func:`cvxgeodesic.sources.resolve_sources`
-        (points, curves, the boundary; their constraints are in :func:`cvxgeodesic.sources.source_constraints`).
+        (points, curves, the boundary, source faces; their constraints are in
+        :func:`cvxgeodesic.sources.source_constraints`).
     method : str
-        A name of :data:`FORMULATIONS` (aliases allowed).
+        A name of :data:`FORMULATIONS` (aliases allowed) defined on the mesh's dimension
+        (:data:`FORMULATIONS_BY_DIM`).
     lam : float
         Smoothness weight λ (ignored by lclp / qclp).
     stretch : {"area", "calibrated", "mean", "sum"}
@@ -484,10 +563,19 @@ def build_problem(
     Returns
     -------
     ConicProblem
+        Over the vertex values; one :class:`ConeGroup` of SOC(dim + 1) cones on cells (QC), pair inequalities.
+
+    Raises
+    ------
+    ParameterError
+        An unknown method, one not defined on the mesh's dimension, or λ negative or not finite.
     """
     mesh = ops.mesh
     n = mesh.n_vertices
-    constraint, energy = FORMULATIONS[canonical_method(method)]
+    name = canonical_method(method)
+    if name not in FORMULATIONS_BY_DIM[mesh.dim]:
+        check_tet_method(name)  # names the methods that apply
+    constraint, energy = FORMULATIONS[name]
     if not np.isfinite(lam) or lam < 0:
         raise ParameterError(f"smoothness weight lambda must be finite and >= 0, got {lam}")
 
@@ -513,7 +601,8 @@ def build_problem(
     if constraint == "qc":
         cone_vertices, cone_blocks = _qc_constraints(ops, sc, fixed_mask, ell, ineq)
     else:
-        cone_vertices, cone_blocks = np.zeros((0, 3), dtype=np.int64), np.zeros((0, 2, 3))
+        d = mesh.dim
+        cone_vertices, cone_blocks = np.zeros((0, d + 1), dtype=np.int64), np.zeros((0, d, d + 1))
         ineq.both_ways(mesh.edges, ell, ~fixed_mask[mesh.edges].all(axis=1))
     if sc.bound_vertices.size:  # point and curve sources: d_v <= (a surface path to the source)
         ineq.add(np.column_stack([sc.bound_vertices] * 2), [1.0, 0.0], sc.bound_rhs)
@@ -542,5 +631,5 @@ def build_problem(
         cones=[ConeGroup.norm_bound(cone_vertices, cone_blocks)],
         ineq=PairInequalities(ineq_vertices, ineq_coeffs, ineq_rhs),
         fixed_mask=fixed_mask, fixed_values=fixed_values, unreachable=unreachable,
-        method=canonical_method(method), objective_scale=objective_scale,
+        method=name, objective_scale=objective_scale,
     )

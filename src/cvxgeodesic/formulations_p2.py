@@ -700,7 +700,7 @@ def eliminate_pair_equalities(n: int, dofs: np.ndarray, G: np.ndarray, c: np.nda
     a_of = np.zeros(n)
     a_of[m[ok]] = alpha[ok]
     G = G.copy()
-    np.add.at(G, (kk, slice(None), jj), a_of[dofs[kk, ii]][:, None] * G[kk, :, ii])
+    np.add.at(G, (kk, slice(None), jj), a_of[dofs[kk, ii]][:, None] * G[kk, :, ii])  # type: ignore[arg-type]
     G[kk, :, ii] = 0.0
     c = c.copy()
     np.add.at(c, j[ok], alpha[ok] * c[m[ok]])

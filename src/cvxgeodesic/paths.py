@@ -41,11 +41,9 @@ from .errors import ParameterError, SolverError, SourceError
 from .mesh.convert import as_mesh
 from .mesh.corridor import straighten_corridor
 from .mesh.simplex import CELL_FACETS
-from .mesh.tet_locate import VolumePoint, volume_point
 from .operators.metric import make_medium
 from .results import GeodesicResult, remembered_sources
-from .sources import BARY_SNAP, SourceSet, SurfacePoint, resolve_sources, surface_point
-from .sources_tet import resolve_tet_sources
+from .sources import BARY_SNAP, SourceSet, SurfacePoint, VolumePoint, resolve_sources, surface_point, volume_point
 from .validation import as_vertex_field, check_count
 
 #: A distance field as the functions here take it: the vertex values or the result they came from.
@@ -318,11 +316,10 @@ class _Ends:
 
 def _source_set(mesh: Any, distance: Any, result: Any, sources: Any) -> Any:
     """The field's normalized sources: given, from the result, remembered by the array; None when unknown."""
-    resolve = resolve_tet_sources if mesh.dim == 3 else resolve_sources
     if sources is not None:
-        return resolve(mesh, sources)
+        return resolve_sources(mesh, sources)
     if result is not None:
-        return result.source_set if result.source_set is not None else resolve(mesh, result.sources)
+        return result.source_set if result.source_set is not None else resolve_sources(mesh, result.sources)
     return remembered_sources(distance)  # an array returned by geodesic_distance
 
 

@@ -1,34 +1,38 @@
-"""Sources anywhere on the surface: points in faces or on edges, curves, the boundary.
+"""Sources of a distance field on a surface (triangles) or inside a solid (tetrahedra), one module for both.
 
-A source of a distance field may be
+A source may be
 
 - a vertex index (or several);
-- a :class:`SurfacePoint`: a face and barycentric coordinates;
-- a :class:`SurfaceCurve`: a polyline of surface points (the distance is to the whole curve);
-- the string ``"boundary"``: every boundary edge (edges with a single face).
+- a point located in a cell (:class:`CellPoint`): a :class:`SurfacePoint` (a face and 3 barycentric coordinates,
+  :func:`surface_point` finds the closest one) or a :class:`VolumePoint` (a tetrahedron and 4,
+  :func:`volume_point` finds the containing one); a point within ``1e-9`` (barycentric) of a vertex is that vertex;
+- on a surface a :class:`SurfaceCurve`: a polyline of surface points (the distance is to the whole curve);
+- the string ``"boundary"``: every boundary edge of a surface, every boundary face of a solid (the wall distance);
+- in a solid :class:`BoundaryFaces`: some faces of the boundary surface (part of the wall).
 
 :func:`resolve_sources` turns any of these (or a list mixing them) into one normalized
 :class:`SourceSet`; :func:`source_constraints` turns a source set into the constraints the
-convex formulations add (``docs/sources.md`` explains and measures each choice):
+convex formulations add (``docs/sources.md`` and ``docs/volumes.md`` explain and measure each choice):
 
-- vertex sources are fixed at 0, their incident faces carry no cone and each star edge bounds
-  its other end by its length (as before);
-- a point ``p`` inside face ``t`` bounds each vertex of ``t`` by ``|v_i − p|`` (the straight
-  segment inside the flat face is a surface path, so this is an upper bound of the geodesic
-  distance) and ``t`` carries no cone. A point on an edge does this in both faces of the edge;
-  a point within ``1e-9`` (barycentric) of a vertex is that vertex.
-- a face next to a point source whose local field ``min_k |v − p_k|`` is steeper than 1 when
-  interpolated linearly (the piecewise-linear trace of a cone whose apex is close to the face)
-  carries no cone either; the vertices it leaves free are bounded through the edges to the
-  source face's vertices, ``d_w ≤ d_v + ℓ_vw`` (a triangle inequality).
+- vertex sources and the vertices of source faces are fixed at 0; the cells incident to a source vertex carry no
+  cone; on a surface each star edge bounds its other end by its length;
+- a point ``p`` in cell ``t`` bounds each vertex of ``t`` by ``|v_i − p|`` (the straight segment inside the flat
+  cell is a path, so this is an upper bound of the geodesic distance) and ``t`` carries no cone. On a surface a
+  point on an edge does this in both faces of the edge;
+- a cell next to the sources whose local field (the distance to the nearest source vertex, point, curve piece or
+  source face) is steeper than 1 when interpolated linearly (the trace of a cone whose apex is close to the cell)
+  carries no cone either. On a surface the vertices it leaves free are bounded through the edges to the source
+  face's vertices, ``d_w ≤ d_v + ℓ_vw`` (a triangle inequality); in a solid every edge of a tetrahedron without a
+  cone gets ``|d_i − d_j| ≤ ℓ_ij`` (:func:`~cvxgeodesic.formulations.build_problem`);
 - a curve is sampled along each segment at an eighth of the mean edge length (plus its given
   points); every sample is a point source, and two consecutive samples in the same face add the
-  bound by the distance to the segment between them (straight in that face).
-- ``"boundary"`` fixes every boundary vertex at 0 and bounds the third vertex of each boundary
-  face by its distance to the boundary edge.
+  bound by the distance to the segment between them (straight in that face);
+- the boundary of a surface fixes every boundary vertex at 0 and bounds the third vertex of each boundary
+  face by its distance to the boundary edge; a source face of a solid bounds the fourth vertex of its tetrahedron
+  by its distance to the (closed) triangle.
 
-Every bound is an upper bound of the exact polyhedral distance (tested against pygeodesic), so
-none of them cuts the exact field off.
+Every bound is an upper bound of the exact distance (tested against pygeodesic on surfaces), so none of them cuts
+the exact field off.
 """
 
 from __future__ import annotations
@@ -40,104 +44,37 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
-from numpy.typing import ArrayLike
 
 from .errors import SourceError
-from .mesh.closest import closest_point_index
-from .mesh.geometry import clipped_barycentric
+from .mesh.closest import nearest_triangle_distance, point_triangle_distance, segment_distance, segment_parameter
+from .mesh.locate import (
+    BARY_TOL,
+    POINT_TYPES,
+    CellPoint,
+    SurfacePoint,
+    VolumePoint,
+    _barycentric,
+    closest_points,
+    interpolate_at,
+    surface_point,
+    volume_point,
+)
+from .mesh.simplex import SimplexMesh
+from .mesh.tetmesh import TetMesh
 from .mesh.trimesh import TriMesh
-from .validation import as_points, validate_sources
+from .validation import validate_sources
+
+__all__ = ["BARY_SNAP", "BARY_TOL", "CURVE_STEP", "ON_SURFACE_TOL", "BoundaryFaces", "CellPoint", "SourceConstraints",
+           "SourceSet", "SurfaceCurve", "SurfacePoint", "VolumePoint", "boundary_edges", "closest_points",
+           "interpolate_at", "point_triangle_distance", "resolve_sources", "source_constraints", "surface_point",
+           "vertex_bounds", "volume_point"]
 
 #: A barycentric coordinate this close to 0 (or 1) counts as exactly 0 (1): the point is on an edge (a vertex).
 BARY_SNAP = 1e-9
-#: Tolerance of the barycentric checks of :class:`SurfacePoint` (negative coordinates, sum ≠ 1).
-BARY_TOL = 1e-9
 #: A curve point given as a position must lie this close to the surface (fraction of the bounding-box diagonal).
 ON_SURFACE_TOL = 1e-6
 #: Curve sampling step as a fraction of the mean edge length.
 CURVE_STEP = 1.0 / 8.0
-
-
-# ---------------------------------------------------------------------------------------------------------------
-# user-facing types
-# ---------------------------------------------------------------------------------------------------------------
-@dataclass(frozen=True, eq=False)
-class SurfacePoint:
-    """A point of the surface: a face index and barycentric coordinates.
-
-    Parameters
-    ----------
-    face : int
-        Face index (checked against the mesh when the point is used).
-    bary : (3,) float array_like
-        Barycentric coordinates with respect to ``F[face]``: each ``>= 0`` and summing to 1
-        (to ``1e-9``; tiny negative round-off is clipped and the sum renormalized).
-
-    Raises
-    ------
-    SourceError
-        A face that is not a non-negative integer; ``bary`` not 3 finite numbers, with a
-        negative coordinate, or not summing to 1.
-
-    Examples
-    --------
-    >>> import cvxgeodesic as cg
-    >>> p = cg.SurfacePoint(10, [0.2, 0.3, 0.5])
-    >>> p.face, p.bary.tolist()
-    (10, [0.2, 0.3, 0.5])
-    """
-
-    face: int
-    bary: np.ndarray = field(repr=False)
-
-    def __post_init__(self):
-        f = self.face
-        if isinstance(f, bool | np.bool_) or not isinstance(f, numbers.Integral):
-            if isinstance(f, numbers.Real) and not isinstance(f, bool | np.bool_) and float(f).is_integer():
-                f = int(f)
-            else:
-                raise SourceError(f"SurfacePoint face must be a face index (int), got {f!r}")
-        f = int(f)
-        if f < 0:
-            raise SourceError(f"SurfacePoint face index {f} is negative")
-        try:
-            b = np.asarray(self.bary, dtype=float).reshape(-1).copy()
-        except (TypeError, ValueError):
-            raise SourceError(f"SurfacePoint(face={f}): bary must be 3 numbers, got {self.bary!r}") from None
-        if b.shape != (3,):
-            raise SourceError(f"SurfacePoint(face={f}): bary must have 3 coordinates, got {b.size}")
-        if not np.all(np.isfinite(b)):
-            raise SourceError(f"SurfacePoint(face={f}, bary={b.tolist()}): barycentric coordinates must be finite")
-        if b.min() < -BARY_TOL:
-            raise SourceError(
-                f"SurfacePoint(face={f}, bary={b.tolist()}): barycentric coordinates must be >= 0 (a negative one "
-                "is outside the face; use surface_point(mesh, xyz) for the closest point)")
-        if abs(b.sum() - 1.0) > BARY_TOL:
-            raise SourceError(
-                f"SurfacePoint(face={f}, bary={b.tolist()}): barycentric coordinates must sum to 1, "
-                f"they sum to {b.sum():.12g}")
-        b = np.clip(b, 0.0, None)
-        b /= b.sum()
-        b.setflags(write=False)
-        object.__setattr__(self, "face", f)
-        object.__setattr__(self, "bary", b)
-
-    def __repr__(self) -> str:
-        return f"SurfacePoint(face={self.face}, bary=[{', '.join(f'{x:.6g}' for x in self.bary)}])"
-
-    def __eq__(self, other) -> bool:
-        if not isinstance(other, SurfacePoint):
-            return NotImplemented
-        return self.face == other.face and bool(np.array_equal(self.bary, other.bary))
-
-    def __hash__(self) -> int:
-        return hash((self.face, self.bary.tobytes()))
-
-    def position(self, mesh: Any) -> np.ndarray:
-        """(3,) float ndarray: the point's position on ``mesh`` (a TriMesh or ``(V, F)``)."""
-        mesh = _mesh(mesh)
-        _check_face(self, mesh, "point")
-        return self.bary @ mesh.V[mesh.F[self.face]]
 
 
 @dataclass(frozen=True, eq=False)
@@ -172,7 +109,7 @@ class SurfaceCurve:
             pts = [row for row in pts]
         if isinstance(pts, SurfacePoint | str) or not isinstance(pts, Sequence | np.ndarray):
             raise SourceError(f"SurfaceCurve points must be a sequence of SurfacePoints or positions, got {pts!r}")
-        items = []
+        items: list[Any] = []
         for k, p in enumerate(pts):
             if isinstance(p, SurfacePoint):
                 items.append(p)
@@ -194,88 +131,79 @@ class SurfaceCurve:
         return f"SurfaceCurve({len(self.points)} points)"
 
 
-def _mesh(mesh) -> TriMesh:
-    from .mesh.io import as_trimesh
-
-    return as_trimesh(mesh)
-
-
-def _check_face(p: SurfacePoint, mesh: TriMesh, label: str) -> None:
-    if p.face >= mesh.n_faces:
-        raise SourceError(f"{label} {p!r}: face index {p.face} is out of range: the mesh has {mesh.n_faces} faces "
-                          f"(0..{mesh.n_faces - 1})")
-
-
-# ---------------------------------------------------------------------------------------------------------------
-# closest points
-# ---------------------------------------------------------------------------------------------------------------
-def _barycentric(T: np.ndarray, X: np.ndarray) -> np.ndarray:
-    """(k, 3) barycentric coordinates of points ``X`` (k, 3) in triangles ``T`` (k, 3, 3), clipped to the face."""
-    return clipped_barycentric(X, T[:, 0], T[:, 1], T[:, 2])
-
-
-def closest_points(mesh: TriMesh, X) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Closest surface points of positions (one search in the mesh's
-    :func:`~cvxgeodesic.mesh.closest.closest_point_index`).
+@dataclass(frozen=True, eq=False)
+class BoundaryFaces:
+    """Some faces of the boundary surface of a tetrahedral mesh, used as one source (part of the wall).
 
     Parameters
     ----------
-    mesh : TriMesh
-    X : (k, 3) float array_like
-        Finite positions.
-
-    Returns
-    -------
-    faces : (k,) int64 ndarray
-    bary : (k, 3) float ndarray
-    dist : (k,) float ndarray
-        Distance from each position to its closest point.
-    """
-    X = np.ascontiguousarray(np.asarray(X, dtype=np.float64).reshape(-1, 3))
-    index = closest_point_index(mesh)
-    faces, C, dist = index.query(X)
-    return faces, _barycentric(index.V[index.F[faces]], C), dist  # in the search's frame: the same coordinates
-
-
-def surface_point(mesh: Any, xyz: ArrayLike) -> SurfacePoint | list[SurfacePoint]:
-    """The closest :class:`SurfacePoint` of a 3D position (or of each of ``k`` positions).
-
-    Parameters
-    ----------
-    mesh : TriMesh or tuple (V, F)
-    xyz : (3,) or (k, 3) float array_like
-
-    Returns
-    -------
-    SurfacePoint, or list of SurfacePoint for a ``(k, 3)`` input
-
-    Raises
-    ------
-    SourceError
-        ``xyz`` is not one or several finite 3D positions (NaN or infinite coordinates included).
-
-    Notes
-    -----
-    One search in the mesh's :func:`~cvxgeodesic.mesh.closest.closest_point_index` (a libigl AABB tree built on
-    the first search of the mesh object). Any finite position is accepted: one farther than
-    :data:`~cvxgeodesic.mesh.closest.FAR_QUERY` (1e7) bounding-box diagonals
-    from the box's center is moved in along the ray from the center first, which leaves the point found at most
-    ``diag / 8e7`` farther from it than the closest point.
+    faces : (k,) int array_like or (k, 3) int array_like
+        Rows of :attr:`TetMesh.boundary_faces <cvxgeodesic.mesh.tetmesh.TetMesh.boundary_faces>` (indices), or
+        the faces' three vertices (any order); checked against the mesh when used.
 
     Examples
     --------
-    >>> import cvxgeodesic as cg
-    >>> mesh = cg.grid_plane(4)
-    >>> p = cg.surface_point(mesh, [0.3, 0.6, 0.1])
-    >>> p.position(mesh).round(6).tolist()
-    [0.3, 0.6, 0.0]
+    The bottom of a unit box, found by the faces' centroids:
+
+    >>> import numpy as np
+    >>> from cvxgeodesic.mesh.tet_generate import tet_box
+    >>> mesh = tet_box(2)
+    >>> bottom = np.flatnonzero(mesh.V[mesh.boundary_faces].mean(axis=1)[:, 2] == 0)
+    >>> BoundaryFaces(bottom).resolve(mesh).size
+    8
     """
-    mesh = _mesh(mesh)
-    X = as_points(xyz, "xyz", error=SourceError)
-    single = X.ndim == 1
-    faces, bary, _ = closest_points(mesh, X.reshape(-1, 3))
-    pts = [SurfacePoint(int(f), b) for f, b in zip(faces, bary, strict=True)]
-    return pts[0] if single else pts
+
+    faces: np.ndarray = field(repr=False)
+
+    def __post_init__(self):
+        try:
+            arr = np.asarray(self.faces)
+        except (TypeError, ValueError):
+            raise SourceError(f"BoundaryFaces takes (k,) face indices or (k, 3) vertex triples, got {self.faces!r}") \
+                from None
+        if arr.dtype.kind == "f" and np.all(np.isfinite(arr)) and np.all(arr == np.round(arr)):
+            arr = arr.astype(np.int64)
+        if arr.dtype.kind not in "iu" or arr.ndim not in (1, 2) or (arr.ndim == 2 and arr.shape[1] != 3):
+            raise SourceError(f"BoundaryFaces takes (k,) face indices or (k, 3) vertex triples, got an array of "
+                              f"shape {arr.shape} and dtype {arr.dtype}")
+        if arr.shape[0] == 0:
+            raise SourceError("BoundaryFaces is empty: give at least one face")
+        arr = arr.astype(np.int64)
+        arr.setflags(write=False)
+        object.__setattr__(self, "faces", arr)
+
+    def __repr__(self) -> str:
+        return f"BoundaryFaces({self.faces.shape[0]} faces)"
+
+    def resolve(self, mesh: TetMesh) -> np.ndarray:
+        """(k,) int64 ndarray: sorted unique rows of ``mesh.boundary_faces``.
+
+        Raises
+        ------
+        SourceError
+            An index out of range, or a vertex triple that is no boundary face of ``mesh``.
+        """
+        B = mesh.boundary_faces
+        if self.faces.ndim == 1:
+            bad = (self.faces < 0) | (self.faces >= B.shape[0])
+            if bad.any():
+                raise SourceError(f"BoundaryFaces: face index {int(self.faces[bad][0])} is out of range: "
+                                  f"{mesh.name} has {B.shape[0]} boundary faces (0..{B.shape[0] - 1})")
+            return np.unique(self.faces)
+        bad = (self.faces < 0) | (self.faces >= mesh.n_vertices)
+        if bad.any():
+            raise SourceError(f"BoundaryFaces: vertex index {int(self.faces[bad][0])} is out of range: {mesh.name} "
+                              f"has {mesh.n_vertices} vertices")
+        # one id per distinct sorted triple, shared by the boundary faces and the given ones
+        _, ids = np.unique(np.sort(np.vstack([B, self.faces]), axis=1), axis=0, return_inverse=True)
+        ids = ids.ravel()
+        row_of = np.full(ids.max() + 1, -1, dtype=np.int64)
+        row_of[ids[:B.shape[0]]] = np.arange(B.shape[0])
+        rows = row_of[ids[B.shape[0]:]]
+        if (rows < 0).any():
+            k = int(np.flatnonzero(rows < 0)[0])
+            raise SourceError(f"BoundaryFaces: face {self.faces[k].tolist()} is not a boundary face of {mesh.name}")
+        return np.unique(rows)
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -283,24 +211,30 @@ def surface_point(mesh: Any, xyz: ArrayLike) -> SurfacePoint | list[SurfacePoint
 # ---------------------------------------------------------------------------------------------------------------
 @dataclass
 class SourceSet:
-    """Any accepted ``sources`` value, normalized against one mesh.
+    """Any accepted ``sources`` value, normalized against one mesh (a surface or a solid).
 
     Attributes
     ----------
     vertices : (k,) int64 ndarray
-        Vertex sources (fixed at 0), including points that lie on a vertex and boundary vertices.
+        Vertex sources (fixed at 0, unique), including points that lie on a vertex and boundary vertices.
     point_faces : (p,) int64 ndarray
-        Face of each point source; a point on an edge appears once per face of the edge.
-    point_bary : (p, 3) float ndarray
-        Its barycentric coordinates in that face.
+        Cell (face, tetrahedron) of each point source; on a surface a point on an edge appears once per face of the
+        edge.
+    point_bary : (p, dim + 1) float ndarray
+        Its barycentric coordinates in that cell.
     segment_faces : (s,) int64 ndarray
-        Face of each curve (or boundary) piece that is straight within one face.
+        Face of each curve (or boundary) piece that is straight within one face (surfaces).
     segment_bary : (s, 2, 3) float ndarray
         Barycentric coordinates of the piece's two ends in that face.
     kind : str
-        ``"vertices"``, ``"points"``, ``"curve"``, ``"boundary"`` or ``"mixed"``.
+        ``"vertices"``, ``"points"``, ``"curve"``, ``"boundary"``, ``"faces"`` or ``"mixed"``.
     description : str
         Short text for messages and plot titles.
+    facets : (f,) int64 ndarray
+        Source facets, sorted rows of ``mesh.boundary_facets`` (volumes: ``"boundary"`` and :class:`BoundaryFaces`;
+        their vertices are fixed at 0).
+    dim : int
+        The simplex dimension of the mesh (2 or 3).
     """
 
     vertices: np.ndarray
@@ -310,53 +244,110 @@ class SourceSet:
     segment_bary: np.ndarray
     kind: str
     description: str
+    facets: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    dim: int = 2
 
     @property
     def vertex_only(self) -> bool:
         """True when every source is a vertex (the classic problem)."""
-        return self.point_faces.size == 0 and self.segment_faces.size == 0
+        return self.point_faces.size == 0 and self.segment_faces.size == 0 and self.facets.size == 0
 
-    def point_positions(self, mesh: TriMesh) -> np.ndarray:
-        """(p, 3) float ndarray: positions of the point sources on ``mesh``."""
+    @property
+    def points(self) -> tuple[CellPoint, ...]:
+        """The point sources as :class:`SurfacePoint` or :class:`VolumePoint` objects (see :attr:`point_faces`)."""
+        kind = POINT_TYPES[self.dim]
+        return tuple(kind._exact(c, b) for c, b in zip(self.point_faces.tolist(), self.point_bary, strict=True))
+
+    @property
+    def boundary(self) -> bool:
+        """True when the source is the whole boundary."""
+        return self.kind == "boundary"
+
+    @property
+    def faces(self) -> np.ndarray:
+        """(f,) int64 ndarray: :attr:`facets` (the source faces of a volume)."""
+        return self.facets
+
+    @property
+    def count(self) -> int:
+        """Number of sources: vertices, point entries, and one for the facets or curve pieces together."""
+        return int(self.vertices.size) + int(self.point_faces.size) + int(self.facets.size > 0
+                                                                          or self.segment_faces.size > 0)
+
+    def point_positions(self, mesh: SimplexMesh) -> np.ndarray:
+        """(p, 3) float ndarray: positions of the point sources on (in) ``mesh``."""
         if not self.point_faces.size:
             return np.zeros((0, 3))
-        return np.einsum("pk,pkj->pj", self.point_bary, mesh.V[mesh.F[self.point_faces]])
+        return np.einsum("pk,pkj->pj", self.point_bary, mesh.V[mesh.cells[self.point_faces]])
 
     def source_faces(self) -> np.ndarray:
-        """(q,) int64 ndarray: faces that contain a point source or a curve piece (sorted, unique)."""
+        """(q,) int64 ndarray: cells that contain a point source or a curve piece (sorted, unique)."""
         return np.unique(np.concatenate([self.point_faces, self.segment_faces])).astype(np.int64)
 
-    def distinct_points(self, mesh: TriMesh) -> list[SurfacePoint]:
+    def distinct_points(self, mesh: SimplexMesh) -> list[CellPoint]:
         """The point sources once each: a point on an edge, listed here once per face of the edge, comes back once
         (in its first face).
 
         Returns
         -------
-        list of SurfacePoint
+        list of SurfacePoint or VolumePoint
         """
-        out: list[SurfacePoint] = []
+        out: list[CellPoint] = []
         seen: set[tuple] = set()
-        for f, b in zip(self.point_faces.tolist(), self.point_bary, strict=True):
-            nz = np.flatnonzero(b > 0)
-            key = tuple(sorted(zip(mesh.F[f, nz].tolist(), b[nz].tolist(), strict=True)))
+        for p in self.points:
+            nz = np.flatnonzero(p.bary > 0)
+            key = tuple(sorted(zip(mesh.cells[p.cell, nz].tolist(), p.bary[nz].tolist(), strict=True)))
             if key not in seen:
                 seen.add(key)
-                out.append(SurfacePoint(f, b))
+                out.append(p)
         return out
 
-    def anchor_vertices(self, mesh: TriMesh) -> np.ndarray:
+    def face_triangles(self, mesh: Any) -> np.ndarray:
+        """(f, dim) int64 ndarray: the source facets' vertices."""
+        return mesh.boundary_facets[self.facets]
+
+    def face_slots(self, mesh: TetMesh) -> tuple[np.ndarray, np.ndarray]:
+        """The tetrahedron of each source face and the local index of its corner opposite the face:
+        ``(tets (f,), local (f,))`` (``mesh.tet_faces[tets, local]`` are the faces' rows of ``mesh.faces``)."""
+        tets = mesh.boundary_face_tets[self.facets]
+        on_face = (mesh.T[tets][:, :, None] == self.face_triangles(mesh)[:, None, :]).any(axis=2)
+        return tets, np.argmin(on_face, axis=1)
+
+    def fixed_vertices(self, mesh: SimplexMesh) -> np.ndarray:
+        """(q,) int64 ndarray: vertices where the distance is 0 (source vertices, vertices of source facets)."""
+        return np.unique(np.concatenate([self.vertices, self.face_triangles(mesh).ravel()])).astype(np.int64)
+
+    def seed_vertices(self, mesh: SimplexMesh) -> np.ndarray:
+        """(q,) int64 ndarray: vertices from which the field spreads (the fixed ones and the points' corners)."""
+        parts = [self.fixed_vertices(mesh), mesh.cells[self.point_faces].ravel()]
+        return np.unique(np.concatenate(parts)).astype(np.int64)
+
+    def anchor_vertices(self, mesh: SimplexMesh) -> np.ndarray:
         """(r,) int64 ndarray: vertices whose connected components contain a source."""
-        return np.unique(np.concatenate([self.vertices, mesh.F[self.source_faces()].ravel()])).astype(np.int64)
+        return np.unique(np.concatenate([self.fixed_vertices(mesh), mesh.cells[self.source_faces()].ravel()])
+                         ).astype(np.int64)
+
+    def local_values(self, mesh: SimplexMesh) -> tuple[np.ndarray, np.ndarray]:
+        """Vertices at or next to the sources and their exact distances: 0 at fixed vertices, ``|v − p|`` at the
+        corners of a point's cell (the minimum where several meet). Returns ``(vertices (q,), values (q,))``."""
+        fixed = self.fixed_vertices(mesh)
+        corners = mesh.cells[self.point_faces]
+        dist = np.linalg.norm(mesh.V[corners] - self.point_positions(mesh)[:, None, :], axis=2)
+        verts, vals = np.concatenate([fixed, corners.ravel()]), np.concatenate([np.zeros(fixed.size), dist.ravel()])
+        uniq, inv = np.unique(verts, return_inverse=True)
+        best = np.full(uniq.size, np.inf)
+        np.minimum.at(best, inv, vals)
+        return uniq.astype(np.int64), best
 
 
-def _incident_faces(mesh: TriMesh) -> sp.csr_matrix:
+def _incident_faces(mesh: Any) -> sp.csr_matrix:
     """(n, m) csr_matrix with a 1 where a vertex belongs to a face (cached on the mesh object)."""
-    cached = getattr(mesh, "_cg_vertex_faces", None)
+    cached = mesh.__dict__.get("_cg_vertex_faces")
     if cached is None:
         m = mesh.n_faces
         cached = sp.csr_matrix((np.ones(3 * m), (mesh.F.ravel(), np.repeat(np.arange(m), 3))),
                                shape=(mesh.n_vertices, m))
-        mesh._cg_vertex_faces = cached
+        mesh.__dict__["_cg_vertex_faces"] = cached  # the mesh is immutable: a cache like its cached properties
     return cached
 
 
@@ -380,44 +371,51 @@ def boundary_edges(mesh: TriMesh) -> tuple[np.ndarray, np.ndarray]:
 
 
 class _Builder:
-    """Accumulates vertices, points and pieces while resolving, with snapping."""
+    """Accumulates vertices, points, pieces and facets while resolving, with snapping."""
 
-    def __init__(self, mesh: TriMesh):
+    def __init__(self, mesh: Any):
         self.mesh = mesh
         self.vertices: list[int] = []
         self.pf: list[int] = []
         self.pb: list[np.ndarray] = []
         self.sf: list[int] = []
         self.sb: list[np.ndarray] = []
+        self.facets: list[np.ndarray] = []
 
-    def add_point(self, p: SurfacePoint) -> None:
-        """Snap to a vertex or an edge, else an interior point."""
-        self.add_bary(p.face, p.bary)
+    def add_point(self, p: CellPoint) -> None:
+        """Snap to a vertex or a facet (an edge), else an interior point."""
+        self.add_bary(p.cell, p.bary)
 
-    def add_bary(self, face: int, b: np.ndarray) -> None:
-        """:meth:`add_point` of a face and valid barycentric coordinates (``>= 0``, summing to 1)."""
-        F = self.mesh.F
+    def add_bary(self, cell: int, b: np.ndarray) -> None:
+        """:meth:`add_point` of a cell and valid barycentric coordinates (``>= 0``, summing to 1).
+
+        A point within :data:`BARY_SNAP` of a vertex is that vertex; coordinates that small become 0. On a surface a
+        point on an edge is then listed in each face of the edge (its bounds hold in both); in a solid it stays in
+        its tetrahedron.
+        """
+        C = self.mesh.cells
         k = int(np.argmax(b))
         if b[k] >= 1.0 - BARY_SNAP:
-            self.vertices.append(int(F[face, k]))
+            self.vertices.append(int(C[cell, k]))
             return
         zero = b <= BARY_SNAP
         if zero.any():
             b = np.where(zero, 0.0, b)
             b = b / b.sum()
+        if zero.any() and self.mesh.dim == 2:
             on = np.flatnonzero(~zero)  # exactly two corners: an edge point
-            va, vb = int(F[face, on[0]]), int(F[face, on[1]])
+            va, vb = int(C[cell, on[0]]), int(C[cell, on[1]])
             inc = _incident_faces(self.mesh)  # the faces of a vertex: its row's indices (no sparse slicing)
             shared = np.intersect1d(inc.indices[inc.indptr[va]:inc.indptr[va + 1]],
                                     inc.indices[inc.indptr[vb]:inc.indptr[vb + 1]])
             for g in shared:
                 bg = np.zeros(3)
-                bg[F[g] == va] = b[on[0]]
-                bg[F[g] == vb] = b[on[1]]
+                bg[C[g] == va] = b[on[0]]
+                bg[C[g] == vb] = b[on[1]]
                 self.pf.append(int(g))
                 self.pb.append(bg)
             return
-        self.pf.append(int(face))
+        self.pf.append(int(cell))
         self.pb.append(np.array(b, dtype=float))
 
     def add_piece(self, face: int, ba: np.ndarray, bb: np.ndarray) -> None:
@@ -425,13 +423,15 @@ class _Builder:
         self.sb.append(np.stack([ba, bb]))
 
     def build(self, kind: str, description: str) -> SourceSet:
+        w = self.mesh.dim + 1
+        facets = np.unique(np.concatenate(self.facets)) if self.facets else np.zeros(0)
         return SourceSet(
             vertices=np.unique(np.asarray(self.vertices, dtype=np.int64)),
             point_faces=np.asarray(self.pf, dtype=np.int64),
-            point_bary=np.asarray(self.pb, dtype=float).reshape(-1, 3),
+            point_bary=np.asarray(self.pb, dtype=float).reshape(-1, w),
             segment_faces=np.asarray(self.sf, dtype=np.int64),
             segment_bary=np.asarray(self.sb, dtype=float).reshape(-1, 2, 3),
-            kind=kind, description=description,
+            kind=kind, description=description, facets=facets.astype(np.int64), dim=self.mesh.dim,
         )
 
 
@@ -446,7 +446,7 @@ def _curve_points(mesh: TriMesh, curve: SurfaceCurve, label: str) -> list[Surfac
     out = []
     for k, p in enumerate(curve.points):
         if isinstance(p, SurfacePoint):
-            _check_face(p, mesh, f"{label} point {k}")
+            p.check(mesh, f"{label} point {k}")
             out.append(p)
             continue
         face, bc, d = found[k]
@@ -540,14 +540,44 @@ def _is_int_like(x) -> bool:
     return isinstance(x, numbers.Integral) and not isinstance(x, bool | np.bool_)
 
 
-def resolve_sources(mesh: TriMesh, sources) -> SourceSet:
+#: The source objects each simplex dimension takes besides vertex indices.
+SOURCE_TYPES: dict[int, tuple[type, ...]] = {2: (SurfacePoint, SurfaceCurve), 3: (VolumePoint, BoundaryFaces)}
+
+
+def _named_source(mesh: Any, name: str) -> SourceSet:
+    """The one named source, ``"boundary"``: every boundary edge of a surface, every boundary face of a solid."""
+    if name.strip().lower() != "boundary":
+        kinds = ", ".join(f"{t.__name__}s" if t is not BoundaryFaces else t.__name__ for t in SOURCE_TYPES[mesh.dim])
+        raise SourceError(f"unknown source {name!r}: sources must be integer vertex indices, {kinds} or 'boundary' "
+                          "(the only named source)")
+    builder = _Builder(mesh)
+    if mesh.dim == 3:  # the facets are the source: their vertices are fixed, the cells' fourth corners bounded
+        nb = mesh.boundary_facets.shape[0]
+        if nb == 0:
+            raise SourceError(f"sources='boundary' but {mesh.name} has no boundary faces")
+        builder.facets.append(np.arange(nb, dtype=np.int64))
+        return builder.build("boundary", f"boundary ({nb} faces)")
+    E, faces = boundary_edges(mesh)
+    if not len(E):
+        raise SourceError(f"sources='boundary' but {mesh.name} is closed: it has no boundary edge "
+                          "(an edge with a single face)")
+    builder.vertices.extend(np.unique(E).tolist())
+    F = mesh.F
+    for (a, b), f in zip(E, faces, strict=True):
+        builder.add_piece(int(f), (F[f] == a).astype(float), (F[f] == b).astype(float))
+    return builder.build("boundary", f"boundary ({len(E)} edges)")
+
+
+def resolve_sources(mesh: Any, sources: Any) -> SourceSet:
     """Normalize any accepted ``sources`` value against ``mesh``.
 
     Parameters
     ----------
-    mesh : TriMesh
-    sources : int, sequence of int, SurfacePoint, SurfaceCurve, "boundary", or a list mixing ints,
-        SurfacePoints and SurfaceCurves
+    mesh : TriMesh or TetMesh
+    sources : int, sequence of int, "boundary", a SourceSet, or
+        on a surface: SurfacePoint, SurfaceCurve, or a list mixing ints, SurfacePoints and SurfaceCurves;
+        in a solid: VolumePoint, BoundaryFaces, or a list mixing ints, VolumePoints and BoundaryFaces.
+        A point on a vertex is that vertex (given with the vertex itself, it counts once).
 
     Returns
     -------
@@ -557,47 +587,39 @@ def resolve_sources(mesh: TriMesh, sources) -> SourceSet:
     ------
     SourceError
         Anything else, naming the offending item: invalid vertex indices (see
-        :func:`~cvxgeodesic.validation.validate_sources`), a face index out of range, a curve
-        point off the surface, ``"boundary"`` on a closed mesh, an unknown string.
+        :func:`~cvxgeodesic.validation.validate_sources`), a cell index out of range, a curve
+        point off the surface, a face that is no boundary face, ``"boundary"`` on a mesh without boundary or mixed
+        with other sources, an unknown string.
     """
-
     if isinstance(sources, SourceSet):
         return sources
-    n = mesh.n_vertices
+    n, dim = mesh.n_vertices, mesh.dim
+    accepted = SOURCE_TYPES[dim]
     if isinstance(sources, str):
-        if sources.lower() != "boundary":
-            raise SourceError(f"unknown source {sources!r}: sources must be integer vertex indices, SurfacePoints, "
-                              "SurfaceCurves or 'boundary' (the only named source)")
-        E, faces = boundary_edges(mesh)
-        if not len(E):
-            raise SourceError(f"sources='boundary' but {mesh.name} is closed: it has no boundary edge "
-                              "(an edge with a single face)")
-        builder = _Builder(mesh)
-        builder.vertices.extend(np.unique(E).tolist())
-        F = mesh.F
-        for (a, b), f in zip(E, faces, strict=True):
-            ba = (F[f] == a).astype(float)
-            bb = (F[f] == b).astype(float)
-            builder.add_piece(int(f), ba, bb)
-        return builder.build("boundary", f"boundary ({len(E)} edges)")
-    if isinstance(sources, SurfacePoint | SurfaceCurve):
+        return _named_source(mesh, sources)
+    if isinstance(sources, CellPoint | SurfaceCurve | BoundaryFaces):
         sources = [sources]
     if (isinstance(sources, tuple) and len(sources) == 2 and _is_int_like(sources[0])
-            and np.ndim(sources[1]) == 1 and np.size(sources[1]) == 3):
-        raise SourceError(f"sources = {sources!r} looks like a (face, bary) pair: give a point inside a face as "
-                          f"cg.SurfacePoint({sources[0]}, {list(sources[1])})")
-    if isinstance(sources, list | tuple) and any(isinstance(s, SurfacePoint | SurfaceCurve | str) for s in sources):
+            and np.ndim(sources[1]) == 1 and np.size(sources[1]) == dim + 1):
+        kind = POINT_TYPES[dim].__name__
+        raise SourceError(f"sources = {sources!r} looks like a (cell, bary) pair: give a point inside a cell as "
+                          f"cg.{kind}({sources[0]}, {list(sources[1])})")
+    if isinstance(sources, list | tuple) and any(isinstance(s, CellPoint | SurfaceCurve | BoundaryFaces | str)
+                                                 for s in sources):
         builder = _Builder(mesh)
         kinds = set()
         for k, s in enumerate(sources):
             label = f"source {k}"
-            if isinstance(s, SurfacePoint):
-                _check_face(s, mesh, label)
+            if isinstance(s, CellPoint) and isinstance(s, accepted):
+                s.check(mesh, label)
                 builder.add_point(s)
                 kinds.add("points")
-            elif isinstance(s, SurfaceCurve):
+            elif isinstance(s, SurfaceCurve) and isinstance(s, accepted):
                 _add_curve(builder, mesh, s, f"{label} (SurfaceCurve)")
                 kinds.add("curve")
+            elif isinstance(s, BoundaryFaces) and isinstance(s, accepted):
+                builder.facets.append(s.resolve(mesh))
+                kinds.add("faces")
             elif _is_int_like(s) or (isinstance(s, float | np.floating) and float(s).is_integer()):
                 try:
                     builder.vertices.append(int(validate_sources(s, n)[0]))
@@ -605,19 +627,21 @@ def resolve_sources(mesh: TriMesh, sources) -> SourceSet:
                     raise SourceError(f"{label}: {exc}") from None
                 kinds.add("vertices")
             else:
-                raise SourceError(f"{label} must be a vertex index, a SurfacePoint or a SurfaceCurve, got {s!r}"
-                                  + (" ('boundary' must be given alone)" if isinstance(s, str) else ""))
+                names = " or ".join(t.__name__ for t in accepted)
+                raise SourceError(f"{label} must be a vertex index, a {names}, got {s!r}" + (
+                    "" if not isinstance(s, str) else ": 'boundary' cannot be mixed with other sources (it must be "
+                    "given alone" + ("; give BoundaryFaces for part of the wall)" if dim == 3 else ")")))
         kind = kinds.pop() if len(kinds) == 1 else "mixed"
         return builder.build(kind, _describe(sources))
     src = validate_sources(sources, n)
-    return SourceSet(vertices=src, point_faces=np.zeros(0, np.int64), point_bary=np.zeros((0, 3)),
+    return SourceSet(vertices=src, point_faces=np.zeros(0, np.int64), point_bary=np.zeros((0, dim + 1)),
                      segment_faces=np.zeros(0, np.int64), segment_bary=np.zeros((0, 2, 3)), kind="vertices",
-                     description=f"vertices {src.tolist()}" if src.size <= 8 else f"{src.size} vertices")
+                     description=f"vertices {src.tolist()}" if src.size <= 8 else f"{src.size} vertices", dim=dim)
 
 
 def _describe(items) -> str:
     parts = []
-    for s in items[:4]:
+    for s in list(items)[:4]:
         parts.append(repr(s) if not _is_int_like(s) else f"vertex {int(s)}")
     return ", ".join(parts) + (f" and {len(items) - 4} more" if len(items) > 4 else "")
 
@@ -634,9 +658,10 @@ class SourceConstraints:
     fixed : (k,) int64 ndarray
         Vertices fixed at 0.
     no_cone : (m,) bool ndarray
-        Faces that carry no cone.
+        Cells that carry no cone.
     star_other, star_source : (e,) int64 ndarray
-        Edge bounds ``d[star_other] − d[star_source] ≤ star_rhs``.
+        Edge bounds ``d[star_other] − d[star_source] ≤ star_rhs`` (surfaces; in a solid the edges of every
+        tetrahedron without a cone are bounded by the formulation).
     star_rhs : (e,) float ndarray
     bound_vertices : (b,) int64 ndarray
         Vertex bounds ``d[bound_vertices] ≤ bound_rhs`` (free vertices only, one per vertex).
@@ -655,76 +680,102 @@ class SourceConstraints:
     anchors: np.ndarray
 
 
-def _segment_parameter(P: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """(k,) parameter ``t ∈ [0, 1]`` of the closest point ``A + t (B − A)`` to each point P (all (k, 3))."""
-    ab = B - A
-    den = np.einsum("ij,ij->i", ab, ab)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(den > 0, np.einsum("ij,ij->i", P - A, ab) / den, 0.0)
-    return np.clip(t, 0.0, 1.0)
-
-
-def _segment_distance(P: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """(k,) distances from points P to segments [A, B] (all (k, 3))."""
-    t = _segment_parameter(P, A, B)
-    return np.linalg.norm(P - (A + t[:, None] * (B - A)), axis=1)
-
-
 def _segment_ends(mesh: TriMesh, ss: SourceSet) -> tuple[np.ndarray, np.ndarray]:
     T = mesh.V[mesh.F[ss.segment_faces]]
     return (np.einsum("sk,skj->sj", ss.segment_bary[:, 0], T), np.einsum("sk,skj->sj", ss.segment_bary[:, 1], T))
 
 
-def vertex_bounds(mesh: TriMesh, ss: SourceSet, medium: Any = None) -> np.ndarray:
-    """Upper bounds of the distance at the vertices of the source faces.
+def vertex_bounds(mesh: Any, ss: SourceSet, medium: Any = None) -> np.ndarray:
+    """Upper bounds of the distance at the vertices of the cells of the sources.
 
     Parameters
     ----------
-    mesh : TriMesh
+    mesh : TriMesh or TetMesh
     ss : SourceSet
     medium : Medium, optional
-        A travel cost or metric (:mod:`cvxgeodesic.operators.metric`): the segments are measured in it (to a
-        curve piece: to its Euclidean closest point), normalized as its edge lengths.
+        A travel cost or metric on a surface (:mod:`cvxgeodesic.operators.metric`): the segments are measured in
+        it (to a curve piece: to its Euclidean closest point), normalized as its edge lengths.
 
     Returns
     -------
     (n,) float ndarray
-        ``min |v − p|`` over the point sources ``p`` in a face of ``v`` and the distance to the curve
-        pieces in a face of ``v`` (straight segments within one flat face, so each is the length of a
-        surface path); ``inf`` at other vertices.
+        ``min |v − p|`` over the point sources ``p`` in a cell of ``v``, the distance to the curve pieces in a face
+        of ``v`` and, at the corner of a tetrahedron opposite a source face, the distance to that face (straight
+        segments within one flat cell, so each is the length of a path in the mesh); ``inf`` at other vertices.
     """
-    F, V = mesh.F, mesh.V
+    C, V = mesh.cells, mesh.V
     bound = np.full(mesh.n_vertices, np.inf)
     eye = np.eye(3)
     if ss.point_faces.size:
         X = ss.point_positions(mesh)
-        Fv = F[ss.point_faces]  # (p, 3)
+        Cv = C[ss.point_faces]  # (p, dim + 1)
         if medium is None:
-            dist = np.linalg.norm(V[Fv] - X[:, None, :], axis=2)
+            dist = np.linalg.norm(V[Cv] - X[:, None, :], axis=2)
         else:
             dist = np.stack([medium.segment_lengths(ss.point_faces, ss.point_bary, eye[i]) for i in range(3)], 1)
-        np.minimum.at(bound, Fv.ravel(), dist.ravel())
+        np.minimum.at(bound, Cv.ravel(), dist.ravel())
     if ss.segment_faces.size:
-        Fs = F[ss.segment_faces]
+        Fs = C[ss.segment_faces]
         A, B = _segment_ends(mesh, ss)
         for i in range(3):
             if medium is None:
-                dist = _segment_distance(V[Fs[:, i]], A, B)
+                dist = segment_distance(V[Fs[:, i]], A, B)
             else:  # a path to the Euclidean closest point of the piece, measured in the medium
-                t = _segment_parameter(V[Fs[:, i]], A, B)[:, None]
+                t = segment_parameter(V[Fs[:, i]], A, B)[:, None]
                 closest = (1 - t) * ss.segment_bary[:, 0] + t * ss.segment_bary[:, 1]
                 dist = medium.segment_lengths(ss.segment_faces, closest, eye[i])
             np.minimum.at(bound, Fs[:, i], dist)
+    if ss.facets.size:  # the fourth corner of each source face's tetrahedron: its distance to the face
+        tri = ss.face_triangles(mesh)
+        t_of, local = ss.face_slots(mesh)
+        other = C[t_of, local]
+        np.minimum.at(bound, other, point_triangle_distance(V[other], V[tri[:, 0]], V[tri[:, 1]], V[tri[:, 2]]))
     return bound
 
 
-def source_constraints(ops, sources, min_edge_bound: float) -> SourceConstraints:
-    """Constraints of a source set (or of validated source vertices) for one mesh.
+def _steep_cells(ops: Any, ss: SourceSet, near: np.ndarray, medium: Any) -> np.ndarray:
+    """(q,) int64 ndarray: the cells of ``near`` where the linear interpolant of the local exact field is steeper
+    than 1: the distance to the nearest source vertex, point, curve piece (its ends and midpoint stand in for it) or
+    source face. There the exact field violates the cone too (an apex close to the cell's facet or corner)."""
+    from scipy.spatial import cKDTree
+
+    mesh = ops.mesh
+    V, C = mesh.V, mesh.cells
+    cand = np.flatnonzero(near)
+    corners = C[cand].reshape(-1)
+    pts = [ss.point_positions(mesh), V[ss.vertices]]
+    if ss.segment_faces.size:
+        A, B = _segment_ends(mesh, ss)
+        pts += [A, B, 0.5 * (A + B)]
+    P = np.concatenate(pts)
+    local = np.full(corners.size, np.inf)
+    nearest = np.zeros(corners.size, dtype=np.int64)
+    if len(P):
+        local, nearest = cKDTree(P).query(V[corners])
+    if medium is not None:  # the local field in the medium: the distance to the nearest point, in cell cand's
+        local = medium.vector_lengths(np.repeat(cand, C.shape[1]), V[corners] - P[nearest])
+    if ss.facets.size:
+        local = np.minimum(local, nearest_triangle_distance(mesh, ss.face_triangles(mesh), V[corners]))
+        local[np.isin(corners, ss.fixed_vertices(mesh))] = 0.0
+    g = np.einsum("tij,tj->ti", ops.gradient_blocks[cand], local.reshape(len(cand), -1))
+    return cand[np.linalg.norm(g, axis=1) > 1.0 + 1e-9]
+
+
+def source_constraints(ops: Any, sources: Any, min_edge_bound: float) -> SourceConstraints:
+    """Constraints of a source set (or of validated source vertices) for one mesh, a surface or a solid.
+
+    Vertex sources and the vertices of source faces are fixed at 0 and the cells incident to a source vertex carry no
+    cone (the interpolated cone of ``|x − s|`` is steeper than 1 on each). A point bounds the corners of its cell by
+    their distance to it, a curve piece the corners of its face, a source face the fourth corner of its tetrahedron
+    (:func:`vertex_bounds`); the cells of points and curve pieces carry no cone, nor do the cells next to the
+    sources where the local field is steeper than 1 (:func:`_steep_cells`). On a surface each star edge bounds its
+    other end by its length, and the edges around cone-free faces get edge bounds here; in a solid the formulation
+    bounds every edge of a tetrahedron without a cone.
 
     Parameters
     ----------
     ops : MeshOperators
-        The mesh (possibly the solver's rescaled copy), its gradient blocks and degenerate faces.
+        The mesh (possibly the solver's rescaled copy), its gradient blocks and degenerate cells.
     sources : (k,) int64 ndarray or SourceSet
     min_edge_bound : float
         The formulations' floor of the edge bounds (:data:`~cvxgeodesic.formulations.MIN_EDGE_BOUND`),
@@ -735,73 +786,65 @@ def source_constraints(ops, sources, min_edge_bound: float) -> SourceConstraints
     SourceConstraints
     """
     mesh = ops.mesh
-    n, F, E = mesh.n_vertices, mesh.F, mesh.edges
+    n, C, E = mesh.n_vertices, mesh.cells, mesh.edges
     # the formulations' floor of the edge bounds, also for the vertex bounds next to a point that almost
     # touches a vertex: it keeps them inequalities
     floor = min_edge_bound * mesh.bbox_diagonal
     ell = np.maximum(ops.edge_lengths, floor)
     medium = getattr(ops, "medium", None)
     ss = sources if isinstance(sources, SourceSet) else None
-    fixed = np.asarray(ss.vertices if ss is not None else sources, dtype=np.int64)
+    vertices = np.asarray(ss.vertices if ss is not None else sources, dtype=np.int64)
+    fixed = ss.fixed_vertices(mesh) if ss is not None and ss.facets.size else vertices
     is_source = np.zeros(n, dtype=bool)
+    is_source[vertices] = True
+    no_cone = is_source[C].any(axis=1)
     is_source[fixed] = True
-    no_cone = is_source[F].any(axis=1)
     star = is_source[E[:, 0]] ^ is_source[E[:, 1]]
-    s_end = np.where(is_source[E[star, 0]], E[star, 0], E[star, 1])
-    o_end = np.where(is_source[E[star, 0]], E[star, 1], E[star, 0])
-    star_rhs = ell[star]
     empty = np.zeros(0, dtype=np.int64)
-    if ss is None or (not ss.point_faces.size and not ss.segment_faces.size):
+    if mesh.dim == 2:
+        s_end = np.where(is_source[E[star, 0]], E[star, 0], E[star, 1])
+        o_end = np.where(is_source[E[star, 0]], E[star, 1], E[star, 0])
+        star_rhs = ell[star]
+    else:  # the formulation bounds the edges of every tetrahedron without a cone
+        s_end, o_end, star_rhs = empty, empty, np.zeros(0)
+    if ss is None or (mesh.dim == 2 and ss.vertex_only):
         return SourceConstraints(fixed, no_cone, o_end, s_end, star_rhs, empty, np.zeros(0), fixed)
 
-    V = mesh.V
     bound = vertex_bounds(mesh, ss, medium)
-    A, B = _segment_ends(mesh, ss)
     src_faces = ss.source_faces()
     no_cone[src_faces] = True
-    src_verts = np.zeros(n, dtype=bool)
-    src_verts[F[src_faces].ravel()] = True
-
-    # faces next to the source faces where the cone of the local field min_k |v - p_k| is steeper than 1 once
-    # interpolated linearly (an apex close to their edge or corner): the exact field violates their cone too
-    near = src_verts[F].any(axis=1) & ~no_cone & ~ops.degenerate
+    src_verts = is_source.copy()
+    src_verts[C[src_faces].ravel()] = True
+    near = src_verts[C].any(axis=1) & ~no_cone & ~ops.degenerate
     if near.any():
-        from scipy.spatial import cKDTree
+        no_cone[_steep_cells(ops, ss, near, medium)] = True
+    bv = np.flatnonzero(np.isfinite(bound) & ~is_source)
+    anchors = np.unique(np.concatenate([fixed, C[src_faces].ravel()])).astype(np.int64)
+    if mesh.dim == 2:
+        o_end, s_end, star_rhs = _surface_edge_bounds(mesh, ops, ell, is_source, src_verts & ~is_source, no_cone,
+                                                      (o_end, s_end, star_rhs))
+    return SourceConstraints(fixed=fixed, no_cone=no_cone, star_other=o_end.astype(np.int64),
+                             star_source=s_end.astype(np.int64), star_rhs=star_rhs, bound_vertices=bv.astype(np.int64),
+                             bound_rhs=np.maximum(bound[bv], floor), anchors=anchors)
 
-        pts = [ss.point_positions(mesh), V[fixed]]
-        if ss.segment_faces.size:  # the pieces' ends and midpoints stand in for the pieces here
-            pts += [A, B, 0.5 * (A + B)]
-        P = np.concatenate(pts)
-        tree = cKDTree(P)
-        fn = np.flatnonzero(near)
-        loc, nearest = tree.query(V[F[fn]].reshape(-1, 3))
-        e = loc.reshape(-1, 3)
-        if medium is not None:  # the local field in the medium: the distance to the nearest point, in face fn's
-            U = V[F[fn]].reshape(-1, 3) - P[nearest]
-            e = medium.vector_lengths(np.repeat(fn, 3), U).reshape(-1, 3)
-        g = np.einsum("tij,tj->ti", ops.gradient_blocks[fn], e)
-        steep = fn[np.linalg.norm(g, axis=1) > 1.0 + 1e-9]
-        no_cone[steep] = True
-    # every edge from a source-face vertex to a free vertex outside them bounds that vertex (triangle inequality);
-    # this keeps the vertices of steep faces bounded and costs nothing elsewhere
+
+def _surface_edge_bounds(mesh: TriMesh, ops: Any, ell: np.ndarray, is_source: np.ndarray, src_verts: np.ndarray,
+                         no_cone: np.ndarray, star: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The star bounds ``star`` followed by the edge bounds around the cone-free faces of points and curves.
+
+    Every edge from a source-face vertex to a free vertex outside them bounds that vertex (triangle inequality);
+    this keeps the vertices of steep faces bounded and costs nothing elsewhere. The edges of every face left without a
+    cone keep ``|d_i − d_j| ≤ l_ij`` (both ways; true of every distance field): without them an edge between two
+    free vertices of two such faces is unconstrained and the field can climb above Dijkstra's (measured on a
+    jittered grid with the boundary as source: +0.034 at one vertex).
+    """
+    E = mesh.edges
     a_src, b_src = src_verts[E[:, 0]], src_verts[E[:, 1]]
     one = (a_src ^ b_src) & ~is_source[E[:, 0]] & ~is_source[E[:, 1]]
     s2 = np.where(a_src[one], E[one, 0], E[one, 1])
     o2 = np.where(a_src[one], E[one, 1], E[one, 0])
-    # the edges of every face left without a cone keep |d_i - d_j| <= l_ij (both ways; true of every distance
-    # field): without them an edge between two free vertices of two such faces is unconstrained and the field
-    # can climb above Dijkstra's (measured on a jittered grid with the boundary as source: +0.034 at one vertex)
     ei = np.unique(mesh.face_edges[no_cone & ~ops.degenerate])
     ei = ei[~is_source[E[ei, 0]] & ~is_source[E[ei, 1]]]
-    o2 = np.concatenate([o2, E[ei, 0], E[ei, 1]])
-    s2 = np.concatenate([s2, E[ei, 1], E[ei, 0]])
-    rhs2 = np.concatenate([ell[one], ell[ei], ell[ei]])
-    bv = np.flatnonzero(np.isfinite(bound) & ~is_source)
-    anchors = np.unique(np.concatenate([fixed, F[src_faces].ravel()])).astype(np.int64)
-    return SourceConstraints(
-        fixed=fixed, no_cone=no_cone,
-        star_other=np.concatenate([o_end, o2]).astype(np.int64),
-        star_source=np.concatenate([s_end, s2]).astype(np.int64),
-        star_rhs=np.concatenate([star_rhs, rhs2]),
-        bound_vertices=bv.astype(np.int64), bound_rhs=np.maximum(bound[bv], floor), anchors=anchors,
-    )
+    o_end, s_end, star_rhs = star
+    return (np.concatenate([o_end, o2, E[ei, 0], E[ei, 1]]), np.concatenate([s_end, s2, E[ei, 1], E[ei, 0]]),
+            np.concatenate([star_rhs, ell[one], ell[ei], ell[ei]]))

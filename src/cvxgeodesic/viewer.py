@@ -370,9 +370,9 @@ def show_volume(
         d = as_vertex_field(distance, "distance", mesh.n_vertices)
         ss = None
         if sources is not None:
-            from .sources_tet import resolve_tet_sources
+            from .sources import resolve_sources
 
-            ss = resolve_tet_sources(mesh, sources)
+            ss = resolve_sources(mesh, sources)
         res = None
     if ss is not None:
         marks = np.vstack([mesh.V[ss.fixed_vertices(mesh)], *[p.position(mesh)[None] for p in ss.points]])

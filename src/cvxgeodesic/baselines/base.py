@@ -55,7 +55,6 @@ from ..mesh.convert import as_mesh
 from ..mesh.orient import Orientation, orient_faces
 from ..mesh.trimesh import TriMesh, unit_scale
 from ..sources import SourceSet, resolve_sources
-from ..sources_tet import resolve_tet_sources
 
 
 class BaselineSolver:
@@ -121,7 +120,7 @@ class BaselineSolver:
 
     def _solve(self, sources: Any) -> tuple[np.ndarray, dict]:
         """Distance from validated sources: a (k,) int64 array of vertices on a surface, a
-        :class:`~cvxgeodesic.sources_tet.TetSources` inside a volume. Returns ``(d, extra_info)``."""
+        :class:`~cvxgeodesic.sources.SourceSet` inside a volume. Returns ``(d, extra_info)``."""
         raise NotImplementedError
 
     def _solve_sources(self, ss: SourceSet) -> tuple[np.ndarray, dict]:
@@ -142,7 +141,7 @@ class BaselineSolver:
             Source vertex indices (unique, in ``[0, n)``, ``k >= 1``) or, on a surface, anything
             :func:`~cvxgeodesic.sources.resolve_sources` takes (SurfacePoints, SurfaceCurves, ``"boundary"``:
             where the library can, :mod:`~cvxgeodesic.baselines.points`); inside a volume anything
-            :func:`~cvxgeodesic.sources_tet.resolve_tet_sources` takes.
+            :func:`~cvxgeodesic.sources.resolve_sources` takes.
 
         Returns
         -------
@@ -199,9 +198,9 @@ class BaselineSolver:
 
     def _resolve(self, sources: Any) -> tuple[Any, np.ndarray, int]:
         """The validated sources (vertex indices, a surface's SourceSet of points, curves or boundary, a volume's
-        TetSources), the vertices the field spreads from, and how many sources there are."""
+        SourceSet), the vertices the field spreads from, and how many sources there are."""
         if self.dim == 3:
-            src = resolve_tet_sources(self.mesh, sources)
+            src = resolve_sources(self.mesh, sources)
             return src, src.seed_vertices(self.mesh), src.count
         ss = resolve_sources(self.mesh, sources)
         if ss.vertex_only:

@@ -13,8 +13,8 @@ from ..linalg import analyse
 from ..mesh.simplex import unit_mesh
 from ..mesh.tetmesh import DEGENERATE_TET_TOL, TetMesh
 from ..operators.gradient import gradient_blocks
-from ..operators.tet import tet_divergence, tet_mass_matrix, tet_stiffness
-from ..sources_tet import TetSources
+from ..operators.laplacian import barycentric_mass, cotan_stiffness, divergence
+from ..sources import SourceSet
 from ..validation import check_number
 from .base import ComponentwiseSolver
 
@@ -47,7 +47,7 @@ class HeatBaseline(ComponentwiseSolver):
     (the library alone returns finite garbage on unreached components).
 
     **Inside a volume**: the library's own P1 operators
-    (:mod:`cvxgeodesic.operators.tet`; ``info["solver"]`` is
+    (:mod:`cvxgeodesic.operators.laplacian`; ``info["solver"]`` is
     :attr:`volume_library`), every kind of volume source:
 
     1. Heat flow for ``t``, one backward Euler step: ``(M + t L) u = u₀`` with the lumped mass ``M`` and
@@ -155,8 +155,8 @@ class _VolumeHeat:
         self._keep = keep
         self._blocks = gradient_blocks(mesh)
         self._blocks[~keep] = 0.0
-        L = tet_stiffness(mesh, tets=keep, blocks=self._blocks)
-        mass = tet_mass_matrix(mesh, tets=keep).diagonal()
+        L = cotan_stiffness(mesh, cells=keep, blocks=self._blocks)
+        mass = barycentric_mass(mesh, cells=keep).diagonal()
         self.t = self.t_coef * mesh.mean_edge_length ** 2  # on the unit mesh (info["t"] is in the mesh's units)
         idle = mass <= 0  # in no kept tetrahedron: u = 0 and φ = 0 there (d = inf: unreachable)
         self._L = L
@@ -183,7 +183,7 @@ class _VolumeHeat:
                          "far from the sources, or unreached components); their unit field is set to 0")
         return X
 
-    def solve(self, src: TetSources) -> tuple[np.ndarray, dict]:
+    def solve(self, src: SourceSet) -> tuple[np.ndarray, dict]:
         mesh = self._unit  # the sources are indices and barycentric coordinates: the same on it
         notes: list[str] = []
         u0 = np.zeros(mesh.n_vertices)
@@ -197,7 +197,7 @@ class _VolumeHeat:
             np.add.at(u0, B.ravel(), np.repeat(area / 3.0, 3))
         u0[self._idle] = 0.0
         X = self._unit_field(u0, notes)
-        b = tet_divergence(mesh, X, tets=self._keep, blocks=self._blocks)
+        b = divergence(mesh, X, cells=self._keep, blocks=self._blocks)
         if src.count == 1 and not src.faces.size:
             b[self._pins] = 0.0
             phi = self._poisson(b)

@@ -2,7 +2,8 @@
 
 :func:`closest_point_index` builds a :class:`ClosestPointIndex` on the first search of a mesh object and keeps it
 beside the mesh (not on it: the tree cannot be pickled, the mesh can) for as long as the mesh lives.
-:func:`cvxgeodesic.sources.closest_points` (surface points, curve sources, paths) searches in it.
+:func:`cvxgeodesic.mesh.locate.closest_points` (surface points, curve sources, paths) searches in it. Below it,
+the distances from points to segments and triangles that the sources' bounds use.
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ from __future__ import annotations
 import math
 import threading
 import weakref
+from typing import Any
 
 import numpy as np
 
@@ -123,3 +125,50 @@ def closest_point_index(mesh: TriMesh) -> ClosestPointIndex:
         if index is None:
             index = _INDEXES[mesh] = ClosestPointIndex(mesh)
     return index
+
+
+def segment_parameter(P: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """(k,) parameter ``t ∈ [0, 1]`` of the closest point ``A + t (B − A)`` to each point P (all (k, 3))."""
+    ab = B - A
+    den = np.einsum("ij,ij->i", ab, ab)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(den > 0, np.einsum("ij,ij->i", P - A, ab) / den, 0.0)
+    return np.clip(t, 0.0, 1.0)
+
+
+def segment_distance(P: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """(k,) distances from points P to segments [A, B] (all (k, 3))."""
+    t = segment_parameter(P, A, B)
+    return np.linalg.norm(P - (A + t[:, None] * (B - A)), axis=1)
+
+
+def point_triangle_distance(P: np.ndarray, A: np.ndarray, B: np.ndarray, C: np.ndarray) -> np.ndarray:
+    """(k,) distances from points ``P`` to the closed triangles ``(A, B, C)`` (all (k, 3)).
+
+    The closest point by the Voronoi regions of the triangle's corners, edges and face (Ericson, *Real-Time
+    Collision Detection*, §5.1.5); a degenerate triangle gives the distance to its nearest edge.
+    """
+    P, A, B, C = (np.asarray(x, dtype=float).reshape(-1, 3) for x in (P, A, B, C))
+    dot = lambda u, v: np.einsum("ij,ij->i", u, v)  # noqa: E731
+    edges = np.minimum(np.minimum(segment_distance(P, A, B), segment_distance(P, B, C)), segment_distance(P, C, A))
+    nrm = np.cross(B - A, C - A)
+    nn = dot(nrm, nrm)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # barycentric coordinates of the projection onto the plane; inside when all are >= 0
+        u = dot(np.cross(C - B, P - B), nrm) / nn
+        v = dot(np.cross(A - C, P - C), nrm) / nn
+        plane = np.abs(dot(P - A, nrm)) / np.sqrt(nn)
+    inside = (nn > 0) & (u >= 0) & (v >= 0) & (u + v <= 1)
+    return np.where(inside, plane, edges)
+
+
+def nearest_triangle_distance(mesh: Any, tri: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """(p,) distance from each row of ``X`` to the nearest of the triangles ``tri`` (f, 3) of ``mesh``."""
+    import igl
+
+    if not len(X) or not len(tri):
+        return np.full(len(X), np.inf)
+    sqd, _, _ = igl.point_mesh_squared_distance(np.ascontiguousarray(X, dtype=np.float64),
+                                               np.ascontiguousarray(mesh.V, dtype=np.float64),
+                                               np.ascontiguousarray(tri, dtype=np.int64))
+    return np.sqrt(np.maximum(np.asarray(sqd, dtype=float).reshape(-1), 0.0))

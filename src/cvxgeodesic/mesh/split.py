@@ -48,7 +48,7 @@ class SplitMesh:
     Examples
     --------
     >>> from cvxgeodesic.mesh.tet_generate import tet_box
-    >>> from cvxgeodesic.mesh.tet_locate import VolumePoint
+    >>> from cvxgeodesic.mesh.locate import VolumePoint
     >>> split = SplitMesh(tet_box(1), [VolumePoint(0, [0.25, 0.25, 0.25, 0.25])])
     >>> split.mesh.n_tets, split.point_vertices.tolist()
     (9, [8])

@@ -4,46 +4,68 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Callable
+from typing import Any
 
 import igl
 import numpy as np
 import scipy.sparse as sp
+from numpy.typing import ArrayLike
 
-from ..errors import IndefiniteEnergyWarning, MeshRepairWarning
+from ..errors import IndefiniteEnergyWarning, MeshRepairWarning, ParameterError
 from ..linalg import SymbolicCholesky, is_positive_semidefinite
 from ..mesh.cover import manifold_cover, pull_back
 from ..mesh.orient import orient_faces
+from ..mesh.simplex import SimplexMesh
 from ..mesh.trimesh import TriMesh
 from .gradient import gradient_blocks, gradient_matrix
-from .laplacian import cotan_stiffness, mass_matrix
+from .laplacian import barycentric_mass, cotan_stiffness, mass_matrix, selected_cells
 
 ENERGIES = ("dirichlet", "laplacian", "hessian")
+#: The energies defined on each simplex dimension: the curved Hessian energy is a surface notion.
+ENERGIES_BY_DIM = {2: ENERGIES, 3: ("dirichlet", "laplacian")}
 
 
-def dirichlet_energy_matrix(mesh: TriMesh) -> sp.csc_matrix:
-    """Area-normalized Dirichlet energy (paper eq. 16).
+def _measure(mesh: SimplexMesh, cells: ArrayLike | None) -> float:
+    """The area (volume) of the assembled cells: every cell's, or those of ``cells``."""
+    return mesh.total_measure if cells is None else float(mesh.cell_measures[selected_cells(mesh, cells)].sum())
 
-    ``E(d) = Σ_t A_t ‖∇d|_t‖² / Σ_t A_t = dᵀ Q d`` with ``Q = S / area``.
+
+def dirichlet_energy_matrix(mesh: SimplexMesh, *, cells: ArrayLike | None = None) -> sp.csc_matrix:
+    """Measure-normalized Dirichlet energy (paper eq. 16).
+
+    ``E(d) = Σ_t |t| ‖∇d|_t‖² / Σ_t |t| = dᵀ Q d`` with ``Q = S / |Ω|`` (``E = 1`` for a field of unit gradient).
+
+    Parameters
+    ----------
+    mesh : TriMesh or TetMesh
+    cells : (s,) int or (k,) bool array_like, optional
+        Cells to assemble (:func:`~.laplacian.cotan_stiffness`).
 
     Returns
     -------
     (n, n) scipy.sparse.csc_matrix, symmetric PSD
     """
-    return sp.csc_matrix(cotan_stiffness(mesh) / mesh.face_areas.sum())
+    return sp.csc_matrix(cotan_stiffness(mesh, cells=cells) / _measure(mesh, cells))
 
 
-def laplacian_energy_matrix(mesh: TriMesh) -> sp.csc_matrix:
+def laplacian_energy_matrix(mesh: SimplexMesh, *, cells: ArrayLike | None = None) -> sp.csc_matrix:
     """Squared-Laplacian energy (paper eq. 17): ``Q = S M⁻¹ S``.
 
-    ``S`` is the cotangent stiffness matrix and ``M`` the mixed-Voronoi mass.
-    Vertices with zero mass (unreferenced) get no contribution.
+    ``S`` is the cotangent stiffness matrix and ``M`` the lumped mass (:func:`~.laplacian.mass_matrix`, or the
+    barycentric mass of ``cells``). Vertices with zero mass (unreferenced) get no contribution.
+
+    Parameters
+    ----------
+    mesh : TriMesh or TetMesh
+    cells : (s,) int or (k,) bool array_like, optional
+        Cells to assemble.
 
     Returns
     -------
     (n, n) scipy.sparse.csc_matrix, symmetric PSD
     """
-    S = cotan_stiffness(mesh)
-    mass = mass_matrix(mesh).diagonal()
+    S = cotan_stiffness(mesh, cells=cells)
+    mass = (mass_matrix(mesh) if cells is None else barycentric_mass(mesh, cells=cells)).diagonal()
     inv = np.zeros_like(mass)
     np.divide(1.0, mass, out=inv, where=mass > 0)
     Q = S @ sp.diags(inv) @ S
@@ -278,18 +300,42 @@ def _metric_energy(mesh: TriMesh, energy: str, face_metric: tuple[np.ndarray, np
     return sp.csc_matrix(0.5 * (Q + Q.T))
 
 
-def energy_matrix(mesh: TriMesh, energy: str, notes: list[str] | None = None, *,
+def check_energy(mesh: SimplexMesh, energy: str) -> str:
+    """``energy`` when it is defined on ``mesh``'s dimension (:data:`ENERGIES_BY_DIM`); ParameterError otherwise."""
+    allowed = ENERGIES_BY_DIM[mesh.dim]
+    if energy not in allowed:
+        where = "tetrahedral meshes" if mesh.dim == 3 else "triangle meshes"
+        raise ParameterError(f"energy {energy!r} does not apply to {where}; use {' or '.join(map(repr, allowed))}")
+    return energy
+
+
+def energy_matrix(mesh: Any, energy: str, notes: list[str] | None = None, *,
                   analyse: Callable[[sp.csc_matrix], SymbolicCholesky] | None = None,
-                  face_metric: tuple[np.ndarray, np.ndarray] | None = None) -> sp.csc_matrix:
-    """The matrix of a named energy (``"dirichlet"``, ``"laplacian"`` or ``"hessian"``).
+                  face_metric: tuple[np.ndarray, np.ndarray] | None = None,
+                  cells: ArrayLike | None = None) -> sp.csc_matrix:
+    """The matrix of a named energy (``"dirichlet"``, ``"laplacian"`` or, on triangles, ``"hessian"``).
 
     ``notes`` (optional list) gets one line per substitution made while building it; ``analyse`` is passed to
     :func:`hessian_energy_matrix` (the other energies are PSD by construction and have no check).
     ``face_metric``, ``(transforms (m, 2, 2), area_ratio (m,))`` of a travel cost or metric
-    (:class:`~cvxgeodesic.operators.metric.Medium`), measures the energy in it (:func:`_metric_energy`).
+    (:class:`~cvxgeodesic.operators.metric.Medium`, surfaces only), measures the energy in it
+    (:func:`_metric_energy`). ``cells`` (indices or mask) assembles the energy on those cells only. On tetrahedra
+    the Laplacian energy is divided by ``|Ω|^(1/3)``: ``∫ (Δd)² dV`` has the units of a length there (in 2-D it is
+    dimensionless), so that one smoothness weight means one rounding at every scale.
+
+    Raises
+    ------
+    ParameterError
+        An energy not defined on the mesh's dimension (:func:`check_energy`).
     """
+    check_energy(mesh, energy)
+    if cells is not None and mesh.dim == 2:  # libigl's operators take a mesh: the one of the kept triangles
+        mesh, cells = TriMesh(mesh.V, mesh.cells[selected_cells(mesh, cells)], name=mesh.name), None
     if face_metric is not None:
         return _metric_energy(mesh, energy, face_metric, [] if notes is None else notes, analyse)
     if energy == "hessian":
         return hessian_energy_matrix(mesh, notes, analyse=analyse)
-    return {"dirichlet": dirichlet_energy_matrix, "laplacian": laplacian_energy_matrix}[energy](mesh)
+    if energy == "dirichlet":
+        return dirichlet_energy_matrix(mesh, cells=cells)
+    Q = laplacian_energy_matrix(mesh, cells=cells)
+    return sp.csc_matrix(Q / np.cbrt(_measure(mesh, cells))) if mesh.dim == 3 else Q

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import cast
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -42,7 +44,7 @@ def local_coordinates(mesh: SimplexMesh) -> np.ndarray:
     X = mesh.V[mesh.cells]
     if mesh.dim == 3:
         return X
-    ex, ey = triangle_frames(mesh)
+    ex, ey = triangle_frames(cast(TriMesh, mesh))
     rel = X - X[:, :1]
     return np.stack([np.einsum("kvx,kx->kv", rel, ex), np.einsum("kvx,kx->kv", rel, ey)], axis=2)
 

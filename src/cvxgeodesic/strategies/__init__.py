@@ -1,7 +1,8 @@
 """Solve strategies behind :class:`~cvxgeodesic.api.GeodesicSolver`, all with one signature.
 
-Each strategy is built once per solver object from a validated :class:`SolveConfig` (the per-mesh work)
-and then answers ``strategy.solve(sources, callback=None) -> GeodesicResult``:
+Every strategy solves on surfaces and inside tetrahedral meshes alike (``config.mesh.dim``; what each dimension
+supports is :mod:`cvxgeodesic.capabilities`). Each strategy is built once per solver object from a validated
+:class:`SolveConfig` (the per-mesh work) and then answers ``strategy.solve(sources, callback=None) -> GeodesicResult``:
 
 =========================  =====================================================================
 :class:`DirectStrategy`    one conic solve of a P1 formulation, with the backend policy (IPM,
@@ -9,7 +10,6 @@ and then answers ``strategy.solve(sources, callback=None) -> GeodesicResult``:
 :class:`BaselineStrategy`  Dijkstra, fast marching, heat, exact (:mod:`cvxgeodesic.baselines`)
 :class:`CoarseToFine`      two direct solves: a decimated mesh, then (with polish) the mesh itself
 :class:`Order2`            P2 elements for d², edge cones and cutting planes on flat faces
-:mod:`.tet`                inside tetrahedral meshes: order 1, order 2, Dijkstra and heat
 =========================  =====================================================================
 """
 
@@ -48,12 +48,6 @@ def make_strategy(config: SolveConfig, *, baseline: bool, order: int = 1, multir
     -------
     SolveStrategy
     """
-    from ..mesh.tetmesh import TetMesh
-
-    if isinstance(config.mesh, TetMesh):
-        from .tet import make_tet_strategy
-
-        return make_tet_strategy(config, baseline=baseline, order=order)
     if order == 2:
         return Order2(config)
     if baseline:

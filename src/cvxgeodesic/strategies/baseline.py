@@ -42,8 +42,8 @@ class BaselineStrategy:
         self.setup_time = time.perf_counter() - t0
 
     def solve(self, sources: Any, *, callback: Callback | None = None) -> GeodesicResult:
-        """Distance field from resolved sources (a surface's ``SourceSet``, a volume's ``TetSources``: the
-        baseline takes either); ``callback`` is ignored (no iterations to report)."""
+        """Distance field from a resolved ``SourceSet`` of either dimension; ``callback`` is ignored (no iterations
+        to report)."""
         t0 = time.perf_counter()
         d, binfo = self.baseline.solve(sources)
         info = SolveInfo(

@@ -1,4 +1,5 @@
-"""The direct strategy: one conic solve of a P1 formulation on the mesh, with the backend policy.
+"""The direct strategy: one conic solve of a P1 formulation on the mesh (triangles or tetrahedra), with the backend
+policy.
 
 The policy (:class:`~cvxgeodesic.strategies.backend.Backend`: the structured solver, Clarabel as its fallback
 under ``solver="auto"``) and what this strategy adds, every step recorded in ``info.notes``:
@@ -17,7 +18,7 @@ import numpy as np
 
 from ..errors import SolverError
 from ..formulations import MeshOperators, build_problem
-from ..mesh.trimesh import unit_mesh
+from ..mesh.simplex import unit_mesh
 from ..results import GeodesicResult, SolveInfo
 from ..solvers.problem import BackendResult, ConicProblem
 from ..sources import SourceSet
@@ -28,19 +29,19 @@ __all__ = ["DirectStrategy", "ipm_available"]
 
 
 class DirectStrategy:
-    """A P1 formulation solved on the mesh itself (no coarse mesh).
+    """A P1 formulation solved on the mesh itself (no coarse mesh), a surface or a solid.
 
     Parameters
     ----------
     config : SolveConfig
-        A convex formulation (not a baseline).
+        A convex formulation (not a baseline) defined on the mesh's dimension.
 
     Attributes
     ----------
     ops : MeshOperators
-        Operators of the mesh divided by ``scale`` (:func:`~cvxgeodesic.mesh.trimesh.unit_mesh`).
+        Operators of the mesh divided by ``scale`` (:func:`~cvxgeodesic.mesh.simplex.unit_mesh`).
     scale : float
-        The power of two the fields were divided by: the mesh's (:func:`~cvxgeodesic.mesh.trimesh.unit_mesh`) times
+        The power of two the fields were divided by: the mesh's (:func:`~cvxgeodesic.mesh.simplex.unit_mesh`) times
         the medium's normalization (:attr:`~cvxgeodesic.operators.metric.Medium.scale`) when there is one.
     ipm : InteriorPointSolver or None
         The structured solver on the union sparsity pattern (analysed once), when ``backend == "ipm"``.
@@ -83,9 +84,10 @@ class DirectStrategy:
     def _pattern(self, P: Any) -> Any:
         from ..solvers.problem import kkt_pattern
 
-        # the unit mesh's edge table: the operators built it already (the mesh's own would be a second one)
+        # the unit mesh's edge table: the operators built it already (the mesh's own would be a second one); the
+        # edges of a tetrahedron are all its pairs, so the same pattern is its clique's
         mesh = self.ops.mesh
-        return kkt_pattern(mesh.n_vertices, mesh.F, mesh.edges, P)
+        return kkt_pattern(mesh.n_vertices, mesh.cells, mesh.edges, P)
 
     def _analyse(self, Q: Any) -> Any:
         """``analyse(Q)`` for :meth:`MeshOperators.energy`: the analysis of the mesh's Newton pattern with ``Q``,
@@ -122,7 +124,7 @@ class DirectStrategy:
             res.extra = {**extra, **res.extra}
         d = np.array(res.x, dtype=float) * self.scale
         d[problem.unreachable] = np.inf
-        d[src.vertices] = 0.0
+        d[src.fixed_vertices(cfg.mesh)] = 0.0
         info = SolveInfo(
             method=cfg.method, solver=res.solver, status=res.status, iterations=res.iterations,
             setup_time=self.setup_time, solve_time=time.perf_counter() - t0,

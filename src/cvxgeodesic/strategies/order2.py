@@ -22,8 +22,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError, SolverError, SourceError
+from ..formulations import TET_ORDER2_METHODS
 from ..formulations_p2 import ORDER2_METHODS, P2Builder, P2Program, source_edges
-from ..formulations_tet import TET_ORDER2_METHODS
 from ..mesh.simplex import unit_mesh
 from ..mesh.split import SplitMesh
 from ..operators.lagrange import LagrangeField, SplitLagrangeField, violations
@@ -65,7 +65,7 @@ class Order2:
     ----------
     config : SolveConfig
         ``config.method`` is one of :data:`~cvxgeodesic.formulations_p2.ORDER2_METHODS` (surfaces) or
-        :data:`~cvxgeodesic.formulations_tet.TET_ORDER2_METHODS` (volumes).
+        :data:`~cvxgeodesic.formulations.TET_ORDER2_METHODS` (volumes).
     refine : int
         Cutting-plane rounds at most (:data:`REFINE_ROUNDS`).
     samples : str, optional

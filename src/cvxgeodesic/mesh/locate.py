@@ -1,0 +1,449 @@
+"""Points located in the cells of a mesh: the point types, closest points on a surface, containing tetrahedra.
+
+A point of a mesh is a cell and its barycentric coordinates (:class:`CellPoint`): a :class:`SurfacePoint` in a face
+of a triangle mesh, a :class:`VolumePoint` in a tetrahedron. :func:`surface_point` finds the closest surface point
+of a position (the AABB tree of :mod:`cvxgeodesic.mesh.closest`); :func:`volume_point` the tetrahedron containing a
+position (:func:`locate_points`): a k-d tree on the tetrahedra's centroids gives, for each point, every tetrahedron
+whose circumscribing ball around its centroid (radius: its farthest vertex) holds the point, and the barycentric
+coordinates of those candidates decide. No Delaunay triangulation of the vertices is involved, so non-convex meshes
+(an L-shaped prism) and meshes with holes work.
+"""
+
+from __future__ import annotations
+
+import numbers
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy.spatial import cKDTree
+
+from ..errors import ParameterError, SourceError
+from ..validation import as_points, as_vertex_field
+from .closest import closest_point_index
+from .geometry import clipped_barycentric
+from .tetmesh import TET_FACES, TetMesh
+from .trimesh import TriMesh
+
+__all__ = ["BARY_TOL", "INSIDE_TOL", "POINT_TYPES", "CellPoint", "SurfacePoint", "VolumePoint", "closest_points",
+           "interpolate_at", "locate_points", "surface_point", "volume_point"]
+
+#: Tolerance of the barycentric checks of :class:`SurfacePoint` (negative coordinates, sum ≠ 1).
+BARY_TOL = 1e-9
+
+#: A point counts as inside a tetrahedron when its smallest barycentric coordinate is ``>= -INSIDE_TOL``
+#: (points on a shared face or on the boundary surface, up to round-off).
+INSIDE_TOL = 1e-9
+
+
+def _tet_barycentric(mesh: TetMesh, tets: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """(p, 4) barycentric coordinates of ``X[j]`` in ``T[tets[j]]``; NaN rows for tetrahedra of zero volume."""
+    V, T = mesh.V, mesh.T[tets]
+    out = np.empty((len(tets), 4))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for i, (a, b, c) in enumerate(TET_FACES):
+            pa = V[T[:, a]]
+            nrm = np.cross(V[T[:, b]] - pa, V[T[:, c]] - pa)
+            out[:, i] = np.einsum("ij,ij->i", nrm, X - pa) / np.einsum("ij,ij->i", nrm, V[T[:, i]] - pa)
+    return out
+
+
+class _Locator:
+    """The k-d tree of one mesh's tetrahedron centroids (built once per mesh, cached on it)."""
+
+    def __init__(self, mesh: TetMesh):
+        P = mesh.V[mesh.T]  # (k, 4, 3)
+        self.centroids = P.mean(axis=1)
+        self.radius = float(np.linalg.norm(P - self.centroids[:, None], axis=2).max()) * (1 + 1e-9)
+        self.tree = cKDTree(self.centroids)
+
+
+def _locator(mesh: TetMesh) -> _Locator:
+    loc = mesh.__dict__.get("_tet_locator")
+    if loc is None:
+        loc = _Locator(mesh)
+        mesh.__dict__["_tet_locator"] = loc  # TetMesh is immutable: a cache like its cached properties
+    return loc
+
+
+def locate_points(mesh: TetMesh, points: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """The tetrahedron containing each point, and the point's barycentric coordinates in it.
+
+    Parameters
+    ----------
+    mesh : TetMesh
+    points : (p, 3) or (3,) float array_like
+
+    Returns
+    -------
+    tets : (p,) int64 ndarray
+        Index of the containing tetrahedron, ``-1`` for a point outside the mesh. A point on a
+        shared face (or edge, vertex) gets the tetrahedron where it is deepest inside (largest
+        smallest coordinate), so the answer is deterministic.
+    bary : (p, 4) float ndarray
+        Barycentric coordinates (clipped at 0 and renormalized); NaN rows for points outside.
+
+    Raises
+    ------
+    ParameterError
+        ``points`` not finite positions.
+    """
+    X = as_points(points, "points").reshape(-1, 3)
+    loc = _locator(mesh)
+    cand = loc.tree.query_ball_point(X, loc.radius, return_sorted=False)
+    counts = np.fromiter((len(c) for c in cand), dtype=np.int64, count=len(cand))
+    point_of = np.repeat(np.arange(len(X)), counts)
+    tet_of = np.fromiter((t for c in cand for t in c), dtype=np.int64, count=int(counts.sum()))
+    tets = np.full(len(X), -1, dtype=np.int64)
+    bary = np.full((len(X), 4), np.nan)
+    if tet_of.size:
+        B = _tet_barycentric(mesh, tet_of, X[point_of])
+        depth = np.where(np.isnan(B).any(axis=1), -np.inf, B.min(axis=1))
+        # best candidate per point: sort by (point, -depth) and take the first of each point
+        order = np.lexsort((-depth, point_of))
+        first = order[np.r_[True, point_of[order][1:] != point_of[order][:-1]]]
+        ok = depth[first] >= -INSIDE_TOL
+        p = point_of[first][ok]
+        tets[p] = tet_of[first][ok]
+        b = np.clip(B[first][ok], 0.0, None)
+        bary[p] = b / b.sum(axis=1, keepdims=True)
+    return tets, bary
+
+
+class CellPoint:
+    """A point of a mesh located in one of its cells: a cell index and ``dim + 1`` barycentric coordinates.
+
+    The base of :class:`SurfacePoint` (a face of a triangle mesh, attribute ``face``) and :class:`VolumePoint` (a
+    tetrahedron, attribute ``tet``); built through those. Immutable, hashable, equal when the cell and the
+    coordinates are.
+
+    Attributes
+    ----------
+    cell : int
+    bary : (dim + 1,) float ndarray, read-only
+        Each ``>= 0``, summing to 1.
+    """
+
+    #: The attribute naming the cell, its description in messages, the coordinate count, where the cell is counted.
+    _field, _index_of, _n_bary, _cells, _word = "cell", "a cell index", 0, "cells", "cell"
+    #: The hint of a negative coordinate.
+    _outside = "outside the cell"
+    __slots__ = ("bary", "cell")
+    cell: int
+    bary: np.ndarray
+
+    def __init__(self, cell: Any, bary: ArrayLike) -> None:
+        name = type(self).__name__
+        f = cell
+        if isinstance(f, bool | np.bool_) or not isinstance(f, numbers.Integral):
+            if isinstance(f, numbers.Real) and not isinstance(f, bool | np.bool_) and float(f).is_integer():
+                f = int(float(f))
+            else:
+                raise SourceError(f"{name} {self._field} must be {self._index_of} (int), got {f!r}")
+        f = int(f)
+        if f < 0:
+            raise SourceError(f"{name} {self._field} index {f} is negative")
+        where, k = f"{name}({self._field}={f}", self._n_bary
+        try:
+            b = np.asarray(bary, dtype=float).reshape(-1).copy()
+        except (TypeError, ValueError):
+            raise SourceError(f"{where}): bary must be {k} numbers, got {bary!r}") from None
+        if b.shape != (k,):
+            raise SourceError(f"{where}): bary must have {k} coordinates, got {b.size}")
+        if not np.all(np.isfinite(b)):
+            raise SourceError(f"{where}, bary={b.tolist()}): barycentric coordinates must be finite")
+        if b.min() < -BARY_TOL:
+            raise SourceError(f"{where}, bary={b.tolist()}): barycentric coordinates must be >= 0 (a negative one is "
+                              f"{self._outside})")
+        if abs(b.sum() - 1.0) > BARY_TOL:
+            raise SourceError(f"{where}, bary={b.tolist()}): barycentric coordinates must sum to 1, they sum to "
+                              f"{b.sum():.12g}")
+        b = np.clip(b, 0.0, None)
+        b /= b.sum()
+        b.setflags(write=False)
+        object.__setattr__(self, "cell", f)
+        object.__setattr__(self, "bary", b)
+
+    @classmethod
+    def _exact(cls, cell: int, bary: np.ndarray):
+        """A point of coordinates already checked and normalized, kept to the last bit (no renormalization)."""
+        p = object.__new__(cls)
+        b = np.array(bary, dtype=float)
+        b.setflags(write=False)
+        object.__setattr__(p, "cell", int(cell))
+        object.__setattr__(p, "bary", b)
+        return p
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError(f"{type(self).__name__} is immutable")
+
+    def __reduce__(self):
+        return (type(self)._exact, (self.cell, np.array(self.bary)))
+
+    def __getattr__(self, name: str) -> Any:
+        if name == self._field:  # face / tet
+            return self.cell
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self._field}={self.cell}, bary=[{', '.join(f'{x:.6g}' for x in self.bary)}])"
+
+    def __eq__(self, other) -> bool:
+        if type(other) is not type(self):
+            return NotImplemented
+        return self.cell == other.cell and bool(np.array_equal(self.bary, other.bary))
+
+    def __hash__(self) -> int:
+        return hash((self.cell, self.bary.tobytes()))
+
+    def check(self, mesh: Any, label: str | None = None) -> None:
+        """Raise :class:`SourceError` unless the cell is one of ``mesh``'s (``label`` starts the message)."""
+        k = mesh.n_cells
+        if self.cell >= k:
+            head = f"{label} {self!r}" if label else repr(self)
+            raise SourceError(f"{head}: {self._word} index {self.cell} is out of range: {mesh.name} has {k} "
+                              f"{self._cells} (0..{k - 1})")
+
+    def vertices(self, mesh: Any) -> np.ndarray:
+        """(dim + 1,) int64 ndarray: the vertices of the point's cell (the order of ``bary``)."""
+        self.check(mesh)
+        return mesh.cells[self.cell].copy()
+
+    def position(self, mesh: Any) -> np.ndarray:
+        """(3,) float ndarray: the point's position on ``mesh``."""
+        self.check(mesh)
+        return self.bary @ mesh.V[mesh.cells[self.cell]]
+
+
+class SurfacePoint(CellPoint):
+    """A point of the surface: a face index and barycentric coordinates.
+
+    Parameters
+    ----------
+    face : int
+        Face index (checked against the mesh when the point is used).
+    bary : (3,) float array_like
+        Barycentric coordinates with respect to ``F[face]``: each ``>= 0`` and summing to 1
+        (to ``1e-9``; tiny negative round-off is clipped and the sum renormalized).
+
+    Raises
+    ------
+    SourceError
+        A face that is not a non-negative integer; ``bary`` not 3 finite numbers, with a
+        negative coordinate, or not summing to 1.
+
+    Examples
+    --------
+    >>> import cvxgeodesic as cg
+    >>> p = cg.SurfacePoint(10, [0.2, 0.3, 0.5])
+    >>> p.face, p.bary.tolist()
+    (10, [0.2, 0.3, 0.5])
+    """
+
+    _field, _index_of, _n_bary, _cells, _word = "face", "a face index", 3, "faces", "face"
+    _outside = "outside the face; use surface_point(mesh, xyz) for the closest point"
+    __slots__ = ()
+    face: int
+
+    def __init__(self, face: Any, bary: ArrayLike) -> None:
+        super().__init__(face, bary)
+
+    def position(self, mesh: Any) -> np.ndarray:
+        """(3,) float ndarray: the point's position on ``mesh`` (a TriMesh or ``(V, F)``)."""
+        return super().position(_mesh(mesh))
+
+
+class VolumePoint(CellPoint):
+    """A point inside a tetrahedral mesh: a tetrahedron index and four barycentric coordinates.
+
+    Parameters
+    ----------
+    tet : int
+        Tetrahedron index (checked against the mesh when the point is used).
+    bary : (4,) float array_like
+        Barycentric coordinates with respect to ``T[tet]``: each ``>= 0`` and summing to 1 (to
+        ``1e-9``; tiny negative round-off is clipped and the sum renormalized).
+
+    Raises
+    ------
+    SourceError
+        A tetrahedron index that is not a non-negative integer; ``bary`` not 4 finite numbers,
+        with a negative coordinate, or not summing to 1.
+
+    Examples
+    --------
+    >>> p = VolumePoint(3, [0.25, 0.25, 0.25, 0.25])
+    >>> p.tet, p.bary.tolist()
+    (3, [0.25, 0.25, 0.25, 0.25])
+    """
+
+    _field, _index_of, _n_bary, _cells, _word = "tet", "a tetrahedron index", 4, "tetrahedra", "tetrahedron"
+    _outside = "outside the tetrahedron; use volume_point(mesh, xyz) to find the containing one"
+    __slots__ = ()
+    tet: int
+
+    def __init__(self, tet: Any, bary: ArrayLike) -> None:
+        super().__init__(tet, bary)
+
+
+#: The point type of each simplex dimension.
+POINT_TYPES: dict[int, type[CellPoint]] = {2: SurfacePoint, 3: VolumePoint}
+
+
+def _mesh(mesh) -> TriMesh:
+    from .io import as_trimesh
+
+    return as_trimesh(mesh)
+
+
+def _barycentric(T: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """(k, 3) barycentric coordinates of points ``X`` (k, 3) in triangles ``T`` (k, 3, 3), clipped to the face."""
+    return clipped_barycentric(X, T[:, 0], T[:, 1], T[:, 2])
+
+
+def closest_points(mesh: TriMesh, X) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Closest surface points of positions (one search in the mesh's
+    :func:`~cvxgeodesic.mesh.closest.closest_point_index`).
+
+    Parameters
+    ----------
+    mesh : TriMesh
+    X : (k, 3) float array_like
+        Finite positions.
+
+    Returns
+    -------
+    faces : (k,) int64 ndarray
+    bary : (k, 3) float ndarray
+    dist : (k,) float ndarray
+        Distance from each position to its closest point.
+    """
+    X = np.ascontiguousarray(np.asarray(X, dtype=np.float64).reshape(-1, 3))
+    index = closest_point_index(mesh)
+    faces, C, dist = index.query(X)
+    return faces, _barycentric(index.V[index.F[faces]], C), dist  # in the search's frame: the same coordinates
+
+
+def surface_point(mesh: Any, xyz: ArrayLike) -> SurfacePoint | list[SurfacePoint]:
+    """The closest :class:`SurfacePoint` of a 3D position (or of each of ``k`` positions).
+
+    Parameters
+    ----------
+    mesh : TriMesh or tuple (V, F)
+    xyz : (3,) or (k, 3) float array_like
+
+    Returns
+    -------
+    SurfacePoint, or list of SurfacePoint for a ``(k, 3)`` input
+
+    Raises
+    ------
+    SourceError
+        ``xyz`` is not one or several finite 3D positions (NaN or infinite coordinates included).
+
+    Notes
+    -----
+    One search in the mesh's :func:`~cvxgeodesic.mesh.closest.closest_point_index` (a libigl AABB tree built on
+    the first search of the mesh object). Any finite position is accepted: one farther than
+    :data:`~cvxgeodesic.mesh.closest.FAR_QUERY` (1e7) bounding-box diagonals
+    from the box's center is moved in along the ray from the center first, which leaves the point found at most
+    ``diag / 8e7`` farther from it than the closest point.
+
+    Examples
+    --------
+    >>> import cvxgeodesic as cg
+    >>> mesh = cg.grid_plane(4)
+    >>> p = cg.surface_point(mesh, [0.3, 0.6, 0.1])
+    >>> p.position(mesh).round(6).tolist()
+    [0.3, 0.6, 0.0]
+    """
+    mesh = _mesh(mesh)
+    X = as_points(xyz, "xyz", error=SourceError)
+    single = X.ndim == 1
+    faces, bary, _ = closest_points(mesh, X.reshape(-1, 3))
+    pts = [SurfacePoint(int(f), b) for f, b in zip(faces, bary, strict=True)]
+    return pts[0] if single else pts
+
+
+def volume_point(mesh: TetMesh, xyz: ArrayLike) -> VolumePoint | list[VolumePoint]:
+    """The :class:`VolumePoint` (or points) at position(s) ``xyz`` inside ``mesh``
+    (:func:`~cvxgeodesic.mesh.locate.locate_points`).
+
+    Parameters
+    ----------
+    mesh : TetMesh
+    xyz : (3,) or (p, 3) float array_like
+
+    Returns
+    -------
+    VolumePoint for one position (3,), list of VolumePoint for (p, 3).
+
+    Raises
+    ------
+    SourceError
+        A position that is not finite, or outside the mesh (the message names the first such
+        point, its coordinates and how far it is from the nearest vertex).
+
+    Examples
+    --------
+    >>> from cvxgeodesic.mesh.tet_generate import tet_box
+    >>> p = volume_point(tet_box(2), [0.3, 0.4, 0.2])
+    >>> bool(abs(p.position(tet_box(2)) - [0.3, 0.4, 0.2]).max() < 1e-12)
+    True
+    """
+    X = as_points(xyz, "xyz", error=SourceError)
+    tets, bary = locate_points(mesh, X.reshape(-1, 3))
+    out = np.flatnonzero(tets < 0)
+    if out.size:
+        k = int(out[0])
+        x = X.reshape(-1, 3)[k]
+        gap = float(np.linalg.norm(mesh.V - x, axis=1).min())
+        where = "xyz" if X.ndim == 1 else f"xyz[{k}]"
+        more = f" ({out.size} such points)" if out.size > 1 else ""
+        raise SourceError(f"{where} = {x.tolist()} is outside {mesh.name} (in no tetrahedron; the nearest vertex is "
+                          f"{gap:.6g} away){more}")
+    points = [VolumePoint(int(t), b) for t, b in zip(tets, bary, strict=True)]
+    return points[0] if X.ndim == 1 else points
+
+
+def interpolate_at(mesh: TetMesh, values: ArrayLike, points: Any) -> np.ndarray:
+    """A vertex field's linear interpolant at points inside a tetrahedral mesh.
+
+    Parameters
+    ----------
+    mesh : TetMesh
+    values : (n,) float array_like
+        One value per vertex (``inf`` allowed: unreachable vertices).
+    points : (p, 3) float array_like, VolumePoint or sequence of VolumePoint
+
+    Returns
+    -------
+    (p,) float ndarray
+        NaN for positions outside the mesh.
+
+    Raises
+    ------
+    ParameterError
+        ``values`` of the wrong length or ``points`` not positions.
+    SourceError
+        A VolumePoint whose tetrahedron is not in the mesh.
+    """
+    d = as_vertex_field(values, "values", mesh.n_vertices)
+    if isinstance(points, VolumePoint):
+        points = [points]
+    if isinstance(points, list | tuple) and points and all(isinstance(p, VolumePoint) for p in points):
+        for p in points:
+            p.check(mesh)
+        tets = np.array([p.tet for p in points], dtype=np.int64)
+        bary = np.array([p.bary for p in points])
+    elif isinstance(points, list | tuple) and any(isinstance(p, VolumePoint) for p in points):
+        raise ParameterError("points must be all VolumePoints or all positions, not a mix")
+    else:
+        tets, bary = locate_points(mesh, points)
+    out = np.full(len(tets), np.nan)
+    inside = tets >= 0
+    vals = d[mesh.T[tets[inside]]]
+    with np.errstate(invalid="ignore"):  # inf · 0 where an unreachable vertex has coordinate 0
+        w = bary[inside]
+        out[inside] = np.where(w > 0, vals * w, 0.0).sum(axis=1)
+    return out
