@@ -217,8 +217,10 @@ def test_cli_compare_lists_heat_and_dijkstra(prism, tmp_path, capsys):
         assert name in out
     csv = (tmp_path / "c" / "compare.csv").read_text().splitlines()
     assert csv[0].startswith("method,order") and len(csv) == 5
-    assert sorted(p.name for p in (tmp_path / "c").glob("*.png")) == [
-        "slice_dijkstra.png", "slice_heat.png", "slice_qclp.png", "slice_qclp_order2.png"]
+    # the surface's pictures: each field and its error on the slice, the gradient histogram
+    runs = ["dijkstra", "heat", "qclp", "qclp_order2"]
+    assert sorted(p.name for p in (tmp_path / "c").glob("*.png")) == sorted(
+        [f"field_{r}.png" for r in runs] + [f"error_{r}.png" for r in runs] + ["gradient_histogram.png"])
 
 
 # -- the viewer (off-screen) -----------------------------------------------------------------------------------

@@ -1,0 +1,106 @@
+"""``cvxgeodesic path``: the geodesic path from a target down the field to the nearest source, on a surface."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+from ..errors import ParameterError, SourceError
+from ._common import add_overwrite_option, check_outputs
+from ._options import add_cost_options, add_solve_options, add_source_options, cli_cost, cli_sources, mesh_help, xyz
+
+#: The formats of a path file.
+PATH_EXTENSIONS = (".csv", ".npy", ".ply")
+
+
+def add_parser(sub: Any) -> None:
+    """The ``path`` sub-command."""
+    p = sub.add_parser("path", help="geodesic path from a target down the distance field to the nearest source")
+    p.add_argument("mesh", help=mesh_help())
+    add_source_options(p)
+    p.add_argument("--to", type=int, default=None, metavar="I", help="target vertex")
+    p.add_argument("--to-point", type=xyz, default=None, metavar="X,Y,Z", help="target: the closest surface point")
+    add_solve_options(p, m_help="smoothness multiplier m (default 1)")
+    add_cost_options(p)
+    p.add_argument("-o", "--output", required=True, help="path file: .csv (x,y,z,face,b0,b1,b2), .npy or .ply")
+    p.add_argument("--png", default=None, help="also draw the path on the field to this PNG (both files or neither)")
+    add_overwrite_option(p)
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress output")
+    p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
+    p.set_defaults(func=run)
+
+
+def _target(args: argparse.Namespace, mesh: Any) -> Any:
+    from ..sources import surface_point
+
+    if (args.to is None) == (args.to_point is None):
+        raise ParameterError("give exactly one target: --to I or --to-point X,Y,Z")
+    if args.to is not None:
+        if not 0 <= args.to < mesh.n_vertices:
+            raise SourceError(f"target vertex {args.to} is out of range: the mesh has {mesh.n_vertices} vertices "
+                              f"(0..{mesh.n_vertices - 1})")
+        return args.to
+    return surface_point(mesh, list(args.to_point))
+
+
+def _path_writer(path: str, P: Any, faces: Any, bary: Any) -> Any:
+    """The function that writes the path into an open binary file, by the extension of ``path``."""
+    import io
+
+    import numpy as np
+
+    lower = path.lower()
+    if lower.endswith(".npy"):
+        return lambda fh: np.save(fh, P)
+    if lower.endswith(".csv"):
+        buf = io.StringIO()
+        buf.write("x,y,z,face,b0,b1,b2\n")
+        for x, f, b in zip(P, faces, bary, strict=True):
+            buf.write(",".join([*(repr(float(c)) for c in x), str(int(f)), *(repr(float(c)) for c in b)]) + "\n")
+        return lambda fh: fh.write(buf.getvalue().encode())
+    k = len(P)
+    head = (f"ply\nformat ascii 1.0\ncomment geodesic path (cvxgeodesic)\nelement vertex {k}\n"
+            f"property double x\nproperty double y\nproperty double z\nelement edge {max(k - 1, 0)}\n"
+            "property int vertex1\nproperty int vertex2\nend_header\n")
+    body = "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in P.tolist()) + "".join(f"{i} {i + 1}\n" for i in range(k - 1))
+    return lambda fh: fh.write((head + body).encode())
+
+
+def run(args: argparse.Namespace) -> int:
+    """``cvxgeodesic path``: returns the exit code."""
+    import numpy as np
+
+    from .._atomic import atomic_write, output_set
+    from .._verbose import progress_printer
+    from ..api import GeodesicSolver
+    from ..mesh.io import load_mesh
+    from ..paths import distance_at, geodesic_path
+    from ..sources import SurfacePoint
+
+    if not args.output.lower().endswith(PATH_EXTENSIONS):
+        raise ParameterError(f"output {args.output!r}: the path is written as .csv, .npy or .ply")
+    check_outputs(args, ("-o", args.output, PATH_EXTENSIONS), ("--png", args.png, (".png",)))
+    mesh = load_mesh(args.mesh)
+    if mesh.dim != 2:
+        raise ParameterError(f"{mesh.name} holds tetrahedra: the path command draws paths on surfaces; inside a "
+                             "solid use cg.geodesic_path(mesh, result, target) (docs/volumes.md)")
+    sources, label = cli_sources(args, mesh)
+    target = _target(args, mesh)
+    cost = cli_cost(args, mesh)
+    res = GeodesicSolver(mesh, args.method, m=args.m, solver=args.solver, cost=cost).solve(
+        sources, callback=None if args.quiet else progress_printer(sys.stderr))
+    P, faces, bary = geodesic_path(mesh, res, target, return_surface_points=True)
+    outputs = [args.output, args.png] if args.png else [args.output]
+    with output_set(*outputs, overwrite_read_only=args.overwrite_read_only) as tmp:  # both files or neither
+        atomic_write(tmp[0], _path_writer(str(tmp[0]), P, faces, bary))
+        if args.png:
+            from ..plotting import plot_field
+
+            plot_field(mesh, res.distance, tmp[1], title=f"{res.info.method}, path to sources {label}", paths=[P])
+    if not args.quiet:
+        length = float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum())
+        time = "" if cost is None else f", travel time {distance_at(mesh, res, SurfacePoint(faces[0], bary[0])):.6g}"
+        print(f"{res.info.method}: path of {len(P)} points, length {length:.6g}{time}; wrote {args.output}"
+              + (f" and {args.png}" if args.png else ""), file=sys.stderr)
+    return 0
