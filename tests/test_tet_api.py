@@ -206,6 +206,12 @@ def test_cli_distance_png_order2_and_errors(prism, tmp_path, capsys):
     assert ".vtu, .vtk, .npy" in capsys.readouterr().err
     assert main(["distance", str(path), "--source-point", "5,5,5", "-o", str(tmp_path / "x.vtu"), "-q"]) == 2
     assert "outside" in capsys.readouterr().err
+    # a travel cost was ignored without a word inside a solid (the field solved without it): refused
+    np.save(tmp_path / "c.npy", np.ones(prism.n_vertices))
+    for option in (["--cost", str(tmp_path / "c.npy")], ["--cost-field", "speed"]):
+        assert main(["distance", str(path), "-s", "0", *option, "-o", str(tmp_path / "x.npy"), "-q"]) == 2
+        assert f"{option[0]}: a travel cost applies to triangle meshes" in capsys.readouterr().err
+    assert not (tmp_path / "x.npy").exists()
 
 
 def test_cli_compare_lists_heat_and_dijkstra(prism, tmp_path, capsys):

@@ -86,7 +86,7 @@ def xyz(text: str) -> tuple[float, float, float]:
         raise argparse.ArgumentTypeError(f"expected X,Y,Z (three numbers), got {text!r}") from None
     if len(vals) != 3 or not all(math.isfinite(v) for v in vals):
         raise argparse.ArgumentTypeError(f"expected X,Y,Z (three finite numbers), got {text!r}")
-    return vals  # type: ignore[return-value]  # three, checked above
+    return vals
 
 
 def vertex_list(text: str) -> list[int]:

@@ -69,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
     from ..rows import checkpoint_rows
 
     local = _check(args)
-    mesh = load_mesh(args.mesh)
+    mesh: Any = load_mesh(args.mesh)  # a TriMesh or a TetMesh: both have the file's numbering
     if not args.source:
         raise SourceError("give the source vertex of each row: -s I[,J...] (repeatable)")
     rows = [int(file_sources(mesh, [s])[0]) for s in args.source]  # one row per -s, in the given order
