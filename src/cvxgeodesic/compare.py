@@ -74,16 +74,6 @@ Run = tuple[str, int]
 Outcome = tuple[Any, float, BaseException | None]
 
 
-def _methods_of(dim: int) -> tuple[str, ...]:
-    from .api import ALL_METHODS
-
-    if dim == 2:
-        return tuple(ALL_METHODS)
-    from .formulations_tet import TET_METHODS
-
-    return tuple(TET_METHODS)
-
-
 def resolve_methods(methods: Any, dim: int = 2) -> list[str]:
     """Normalize a method list: lower case, ``"all"`` expanded, duplicates removed, names checked.
 
@@ -108,6 +98,7 @@ def resolve_methods(methods: Any, dim: int = 2) -> list[str]:
     """
     from .api import ALL_METHODS
     from .formulations import ALIASES
+    from .formulations_tet import TET_METHODS, check_tet_method
 
     if isinstance(methods, str):
         methods = methods.split(",")
@@ -120,13 +111,11 @@ def resolve_methods(methods: Any, dim: int = 2) -> list[str]:
         raise ParameterError("methods is empty: give at least one method name (or 'all')")
     out: list[str] = []
     for name in names:
-        for g in (_methods_of(dim) if name == "all" else [name]):
+        for g in ((ALL_METHODS if dim == 2 else TET_METHODS) if name == "all" else [name]):
             if g not in ALL_METHODS:
                 raise ParameterError(f"unknown method {g!r}; choose from: all, {', '.join(ALL_METHODS)}")
             if dim == 3:
-                from .formulations_tet import check_tet_method
-
-                check_tet_method(g)
+                check_tet_method(g)  # the message names the methods that apply
             if g not in out:
                 out.append(g)
     if "all" in names:

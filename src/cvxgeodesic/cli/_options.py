@@ -23,34 +23,19 @@ SLICE_HELP = "tetrahedral meshes: normal of the slice through the centre that --
 
 @dataclass(frozen=True)
 class Space:
-    """What the command line does differently on a surface and in a volume.
+    """What the command line does differently on a surface and in a volume."""
 
-    Attributes
-    ----------
-    cells : str
-        The cells in messages (``"faces"``, ``"tetrahedra"``).
-    cell : str
-        One of them (``"triangle"``, ``"tetrahedron"``).
-    default_method : str
-        ``--method`` when not given.
-    outputs : tuple of str or None
-        Extensions of a distance file; None: every format of the registry.
-    where : str
-        Where a ``--source-point`` lies, for messages.
-    """
-
-    cells: str
-    cell: str
-    default_method: str
-    outputs: tuple[str, ...] | None
-    where: str
+    cells: str  # the cells in messages
+    default_method: str  # --method when not given
+    outputs: tuple[str, ...] | None  # extensions of a distance file (None: every format of the registry)
+    where: str  # where a --source-point lies, for messages
 
 
 #: By simplex dimension (``mesh.dim``).
 SPACES = {
-    2: Space("faces", "triangle", "qcqp-hessian", None, ""),
+    2: Space("faces", "qcqp-hessian", None, ""),
     # the curved Hessian energy exists on surfaces only; the formats that carry tetrahedra (or a bare array)
-    3: Space("tetrahedra", "tetrahedron", "qclp", (".vtu", ".vtk", ".npy"), " (inside the solid)"),
+    3: Space("tetrahedra", "qclp", (".vtu", ".vtk", ".npy"), " (inside the solid)"),
 }
 
 
@@ -113,16 +98,12 @@ def add_source_options(p: argparse.ArgumentParser,
         p.add_argument("--boundary", action="store_true", help="the mesh boundary (every boundary edge) is the source")
 
 
-def add_solve_options(p: argparse.ArgumentParser, *, m_help: str = M_HELP) -> None:
-    """``--method``, ``--m`` and ``--solver``."""
-    add_method_option(p)
-    add_smoothness_options(p, m_help=m_help)
-
-
-def add_smoothness_options(p: argparse.ArgumentParser, *, m_help: str = M_HELP) -> None:
-    """``--m`` and ``--solver``."""
+def add_solve_options(p: argparse.ArgumentParser, *, method: bool = True, m_help: str = M_HELP) -> None:
+    """``--method`` (with ``method``), ``--m`` and ``--solver``."""
     from ..api import SOLVERS
 
+    if method:
+        add_method_option(p)
     p.add_argument("--m", type=float, default=1.0, help=m_help)
     p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")
 

@@ -32,7 +32,6 @@ def add_parser(sub: Any) -> None:
                    help="worker processes of the local cluster, one thread each (default 2)")
     p.add_argument("--force", action="store_true", help="recompute meshes whose outputs already exist")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar (failures still in the summary)")
-    p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
     p.set_defaults(func=run)
 
 

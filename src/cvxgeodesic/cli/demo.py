@@ -11,7 +11,6 @@ def add_parser(sub: Any) -> None:
     p = sub.add_parser("demo", help="QCQP-Hessian on the bundled Spot mesh; writes PLY + PNG, prints a table")
     p.add_argument("--out", default="demo_output", help="output folder (default demo_output)")
     p.add_argument("--source", type=int, default=0, help="source vertex (default 0)")
-    p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
     p.set_defaults(func=run)
 
 

@@ -10,20 +10,8 @@ import argparse
 import sys
 from typing import Any
 
+from . import _options as opt
 from ._common import add_overwrite_option, check_outputs
-from ._options import (
-    SLICE_HELP,
-    SPACES,
-    add_cost_options,
-    add_solve_options,
-    add_source_options,
-    cli_cost,
-    cli_sources,
-    method_for,
-    output_help,
-    volume_help,
-    xyz,
-)
 
 
 def add_parser(sub: Any) -> None:
@@ -35,8 +23,8 @@ def add_parser(sub: Any) -> None:
                    help="meaning of --m: 'area' (default) or the paper's λ = m·100·h/n")
     p.add_argument("--order", type=int, default=1, choices=(1, 2),
                    help="2: second-order elements for the squared distance (qclp and the qcqp methods; docs/order2.md)")
-    add_cost_options(p)
-    p.add_argument("-o", "--output", required=True, help=output_help())
+    opt.add_cost_options(p)
+    p.add_argument("-o", "--output", required=True, help=opt.output_help())
     p.add_argument("--png", default=None,
                    help="also render the field with isolines and the sources to this PNG (both files or neither; "
                         "a slice of a tetrahedral mesh)")
@@ -46,23 +34,17 @@ def add_parser(sub: Any) -> None:
 
 
 def add_common_options(p: argparse.ArgumentParser, *, method: bool = True) -> None:
-    """The mesh (a surface or tetrahedra), the sources, ``--method``, ``--m``, ``--solver``, ``--quiet``, ``--debug``:
-    what ``distance``, ``compare`` and ``view`` share."""
-    from ._options import add_smoothness_options
-
-    p.add_argument("mesh", help=volume_help())
-    add_source_options(p)
-    if method:
-        add_solve_options(p)
-    else:
-        add_smoothness_options(p)
+    """The mesh (a surface or tetrahedra), the sources, ``--method``, ``--m``, ``--solver`` and ``--quiet``: what
+    ``distance``, ``compare`` and ``view`` share."""
+    p.add_argument("mesh", help=opt.volume_help())
+    opt.add_source_options(p)
+    opt.add_solve_options(p, method=method)
     p.add_argument("--quiet", "-q", action="store_true", help="no progress output")
-    p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
 
 
 def add_slice_option(p: argparse.ArgumentParser) -> None:
     """``--slice-normal NX,NY,NZ``."""
-    p.add_argument("--slice-normal", type=xyz, default=None, metavar="NX,NY,NZ", help=SLICE_HELP)
+    p.add_argument("--slice-normal", type=opt.xyz, default=None, metavar="NX,NY,NZ", help=opt.SLICE_HELP)
 
 
 def slice_normal(args: argparse.Namespace) -> tuple[float, float, float]:
@@ -81,17 +63,17 @@ def run(args: argparse.Namespace) -> int:
 
     check_outputs(args, ("-o", args.output, DISTANCE_EXTENSIONS), ("--png", args.png, (".png",)))
     mesh = load_mesh(args.mesh)
-    space = SPACES[mesh.dim]
+    space = opt.SPACES[mesh.dim]
     if space.outputs is not None:
         check_output_path(args.output, space.outputs)
-    sources, label = cli_sources(args, mesh)
-    method = method_for(args, mesh)
+    sources, label = opt.cli_sources(args, mesh)
+    method = opt.method_for(args, mesh)
     log = sys.stderr
     if not args.quiet:
         print(f"{mesh.name}: {mesh.n_file_vertices} vertices, {mesh.n_cells} {space.cells}; method {method}"
               + (f", order {args.order}" if args.order != 1 else ""), file=log)
     solver = GeodesicSolver(mesh, method, m=args.m, lam=args.lam, solver=args.solver,
-                            normalization=args.normalization, order=args.order, cost=cli_cost(args, mesh))
+                            normalization=args.normalization, order=args.order, cost=opt.cli_cost(args, mesh))
     res = solver.solve(sources, callback=None if args.quiet else progress_printer(log))
     for note in res.info.notes:
         args.notes.say(note)

@@ -32,7 +32,6 @@ def add_parser(sub: Any) -> None:
                    help="solve the rows on a running Dask cluster, e.g. tcp://SCHEDULER:8786")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     add_overwrite_option(p)
-    p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
     p.set_defaults(func=run)
 
 
@@ -63,10 +62,11 @@ def run(args: argparse.Namespace) -> int:
     """``cvxgeodesic matrix``: returns the exit code."""
     from pathlib import Path
 
+    from .._atomic import atomic_write
     from ..api import distance_matrix
-    from ..mesh.fileorder import file_sources
+    from ..mesh.fileorder import file_sources, to_file_order
     from ..mesh.io import load_mesh
-    from ..rows import checkpoint_rows
+    from ..rows import checkpoint_rows, sparse_to_file_order
 
     local = _check(args)
     mesh: Any = load_mesh(args.mesh)  # a TriMesh or a TetMesh: both have the file's numbering
@@ -93,27 +93,19 @@ def run(args: argparse.Namespace) -> int:
             print(f"cvxgeodesic: {kept[0]} of {kept[1]} rows kept in {partial}; run the same command again to "
                   "resume", file=sys.stderr)
         raise
-    shape, what = _write(args, mesh, D, local)
-    partial.unlink(missing_ok=True)
-    if not args.quiet:
-        print(f"wrote {args.output}: {shape[0]} × {shape[1]}, {what}", file=sys.stderr)
-    return 0
-
-
-def _write(args: argparse.Namespace, mesh: Any, D: Any, local: bool) -> tuple[tuple[int, int], str]:
-    """The matrix into ``-o``, columns in the file's numbering, like every other output; its shape and a word."""
-    from .._atomic import atomic_write
-    from ..mesh.fileorder import to_file_order
-    from ..rows import sparse_to_file_order
-
     if local:
         import scipy.sparse as sp
 
-        S = sparse_to_file_order(mesh, D)
-        atomic_write(args.output, lambda fh: sp.save_npz(fh, S), overwrite_read_only=args.overwrite_read_only)
-        return S.shape, f"sparse, {S.nnz} distances up to {args.max_distance:g} stored"
-    import numpy as np
+        D = sparse_to_file_order(mesh, D)  # columns in the file's numbering, like every other output
+        atomic_write(args.output, lambda fh: sp.save_npz(fh, D), overwrite_read_only=args.overwrite_read_only)
+        what = f"sparse, {D.nnz} distances up to {args.max_distance:g} stored"
+    else:
+        import numpy as np
 
-    F = to_file_order(mesh, D)
-    atomic_write(args.output, lambda fh: np.save(fh, F), overwrite_read_only=args.overwrite_read_only)
-    return F.shape, "distances"
+        D = to_file_order(mesh, D)
+        atomic_write(args.output, lambda fh: np.save(fh, D), overwrite_read_only=args.overwrite_read_only)
+        what = "distances"
+    partial.unlink(missing_ok=True)
+    if not args.quiet:
+        print(f"wrote {args.output}: {D.shape[0]} × {D.shape[1]}, {what}", file=sys.stderr)
+    return 0

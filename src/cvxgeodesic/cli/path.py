@@ -27,7 +27,6 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--png", default=None, help="also draw the path on the field to this PNG (both files or neither)")
     add_overwrite_option(p)
     p.add_argument("--quiet", "-q", action="store_true", help="no progress output")
-    p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
     p.set_defaults(func=run)
 
 
