@@ -245,3 +245,23 @@ def test_volume_compare_takes_a_given_reference(tmp_path):
     with pytest.raises(ParameterError, match="does not apply to tetrahedral meshes"):
         run_compare(mesh, 0, "fmm", tmp_path / "c", progress=False)
     assert not (tmp_path / "b").exists() and not (tmp_path / "c").exists()
+
+
+def test_surface_compare_takes_a_given_reference(tmp_path, monkeypatch):
+    """What the volume comparison had, surfaces have too: a reference field of the caller's (the exact method then
+    never runs), named in the rows."""
+    calls = []
+    real_solve = GeodesicSolver.solve
+
+    def counting_solve(self, sources, **kwargs):
+        calls.append(self.method)
+        return real_solve(self, sources, **kwargs)
+
+    mesh = icosphere(1)
+    exact = GeodesicSolver(mesh, "exact").solve(0).distance
+    monkeypatch.setattr(GeodesicSolver, "solve", counting_solve)
+    rows = run_compare(mesh, 0, ["dijkstra"], tmp_path, reference=exact, progress=False)
+    assert calls == ["dijkstra"]
+    (row,) = rows
+    assert row["reference"] == "given" and row["order"] == 1 and row["rel_mean"] > 0
+    assert row["ridge_jump_ratio"] is not None  # measured against the given field's ridge
