@@ -16,8 +16,7 @@ import pytest
 import cvxgeodesic as cg
 from cvxgeodesic.cli import build_parser
 from cvxgeodesic.errors import MeshFileNotFoundError, MeshFormatError, ParameterError
-from cvxgeodesic.mesh.formats.registry import DISTANCE_EXTENSIONS, FORMATS, MESH_EXTENSIONS
-from cvxgeodesic.mesh.tet_io import TET_MESH_EXTENSIONS
+from cvxgeodesic.mesh.formats.registry import DISTANCE_EXTENSIONS, FORMATS, MESH_EXTENSIONS, VOLUME_EXTENSIONS
 
 SPHERE = cg.icosphere(2)  # 162 vertices
 EXT_RE = re.compile(r"(?<![\w/])\.[a-z0-9]+\b")  # ".obj", not "data/*.obj" or "cvxgeodesic[io]"
@@ -57,7 +56,7 @@ def test_every_mesh_argument_lists_exactly_the_registry_formats():
             if action.dest in ("mesh", "meshes"):
                 found = _extensions(action.help)
                 # the commands that take a volume list the tetrahedral files too (issue 26)
-                volume = TET_MESH_EXTENSIONS if command in ("distance", "compare", "view") else ()
+                volume = VOLUME_EXTENSIONS if command in ("distance", "compare", "view") else ()
                 assert sorted(set(found)) == sorted({*MESH_EXTENSIONS, *volume}), (command, action.help)
                 checked.append(command)
     assert sorted(checked) == ["batch", "compare", "distance", "matrix", "path", "view"]
@@ -72,7 +71,8 @@ def test_the_distance_output_lists_exactly_the_registry_formats():
 
 
 def test_the_extension_lists_come_from_the_registry():
-    assert MESH_EXTENSIONS == tuple(e for e, f in FORMATS.items() if f.read_mesh)
+    assert MESH_EXTENSIONS == tuple(e for e, f in FORMATS.items() if f.read_mesh and 2 in f.dims)
+    assert VOLUME_EXTENSIONS == tuple(e for e, f in FORMATS.items() if f.read_mesh and 3 in f.dims)
     assert set(DISTANCE_EXTENSIONS) == {".ply", ".npy", ".csv", ".glb", ".vtk", ".vtu"}
     for ext in DISTANCE_EXTENSIONS:  # every file save_distance writes, load_distance reads
         assert FORMATS[ext].read_field is not None, ext
@@ -163,7 +163,7 @@ def test_load_distance_errors(tmp_path):
 # ----------------------------------------------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("ext", MESH_EXTENSIONS)
+@pytest.mark.parametrize("ext", sorted({*MESH_EXTENSIONS, *VOLUME_EXTENSIONS}))
 def test_missing_mesh_file_is_a_file_not_found_error(tmp_path, ext):
     path = tmp_path / f"none{ext}"
     with pytest.raises(FileNotFoundError) as info:

@@ -20,7 +20,7 @@ import pytest
 
 import cvxgeodesic as cg
 from cvxgeodesic.errors import MeshFormatError
-from cvxgeodesic.mesh.tet_io import read_tetgen
+from cvxgeodesic.mesh.formats import tetgen
 
 ROOT = Path(cg.__file__).parents[1]
 TETRA_NODE = "4 3\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n"
@@ -137,7 +137,7 @@ def test_tetgen_numbers_out_of_range_name_file_and_line(tmp_path, node, ele, mat
     (tmp_path / "m.node").write_text(node)
     (tmp_path / "m.ele").write_text(ele)
     with pytest.raises(MeshFormatError, match=match):
-        read_tetgen(tmp_path / "m.ele")
+        tetgen.read_mesh(tmp_path / "m.ele")
 
 
 @pytest.mark.parametrize("name, text, match", [

@@ -1,4 +1,4 @@
-"""distance_at and geodesic_path (issue 15)."""
+"""distance_at and geodesic_path (issue 15), on surfaces and in volumes (issue 35)."""
 
 from __future__ import annotations
 
@@ -151,3 +151,167 @@ def test_plain_array_from_geodesic_distance_remembers_its_sources():
     P = cg.geodesic_path(mesh, d.copy(), 150)
     assert int(np.argmin(np.linalg.norm(mesh.V - P[-1], axis=1))) in mesh.F[100]
     np.testing.assert_allclose(cg.geodesic_path(mesh, d.copy(), 150, sources=src)[-1], src.position(mesh), atol=1e-12)
+
+
+# -- the same walk on surfaces and in volumes (issue 35): every guard and behaviour in both dimensions --------------
+def _flat(dim):
+    """A jittered unit square (dim 2) or cube (dim 3) and its point type."""
+    mesh = cg.grid_plane(8, jitter=0.2) if dim == 2 else cg.tet_box(3, jitter=0.2, seed=1)
+    return mesh, (cg.SurfacePoint if dim == 2 else cg.VolumePoint)
+
+
+def _cells(mesh):
+    return mesh.F if isinstance(mesh, cg.TriMesh) else mesh.T
+
+
+def _point(mesh, cell, bary):
+    return (cg.SurfacePoint if isinstance(mesh, cg.TriMesh) else cg.VolumePoint)(cell, bary)
+
+
+def _inside(mesh, P, cells, bary):
+    """Every path point is the barycentric combination of its cell's corners (to rounding)."""
+    assert cells.shape == (len(P),) and bary.shape == (len(P), _cells(mesh).shape[1])
+    assert np.all(bary >= 0) and np.allclose(bary.sum(axis=1), 1.0)
+    np.testing.assert_allclose(np.einsum("kj,kji->ki", bary, mesh.V[_cells(mesh)[cells]]), P, atol=1e-12)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_target_on_its_source_is_a_one_point_path(dim):
+    """Was two equal rows on surfaces (the straightening repeated the only node)."""
+    mesh, _ = _flat(dim)
+    d = cg.geodesic_distance(mesh, 0, method="dijkstra")
+    np.testing.assert_array_equal(cg.geodesic_path(mesh, d, 0), mesh.V[:1])
+    src = _point(mesh, 5, np.full(dim + 1, 1 / (dim + 1)))
+    res = cg.GeodesicSolver(mesh, "qclp").solve(src)
+    for straighten in (True, False):
+        P = cg.geodesic_path(mesh, res, src, straighten=straighten)
+        np.testing.assert_allclose(P, src.position(mesh)[None], atol=1e-12)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_target_that_no_source_reaches_is_refused(dim):
+    mesh, _ = _flat(dim)
+    d = np.linalg.norm(mesh.V - mesh.V[0], axis=1)
+    d[-1] = np.inf  # as in another component
+    with pytest.raises(ParameterError, match="infinite at the target: no source is reachable"):
+        cg.geodesic_path(mesh, d, mesh.n_vertices - 1, sources=0)
+    corner = int(np.flatnonzero((_cells(mesh) == mesh.n_vertices - 1).any(axis=1))[0])
+    bary = np.where(_cells(mesh)[corner] == mesh.n_vertices - 1, 0.5, 0.5 / dim)
+    with pytest.raises(ParameterError, match="infinite at the target"):
+        cg.geodesic_path(mesh, d, _point(mesh, corner, bary), sources=0)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_max_steps_and_false_minima(dim):
+    mesh, _ = _flat(dim)
+    d = np.linalg.norm(mesh.V - mesh.V[0], axis=1)
+    far = int(np.argmax(d))
+    with pytest.raises(SolverError, match="no source reached within max_steps=2 steps"):
+        cg.geodesic_path(mesh, d, far, sources=0, max_steps=2)
+    with pytest.raises(ParameterError, match="max_steps must be a positive integer, got 0"):
+        cg.geodesic_path(mesh, d, far, sources=0, max_steps=0)
+    inner = int(np.argmin(np.linalg.norm(mesh.V - 0.5, axis=1)))
+    d[inner] = 0.0  # a pit that is no source, and no source cell next to it
+    with pytest.raises(SolverError, match=f"local minimum at vertex {inner} .* which is no source"):
+        cg.geodesic_path(mesh, d, inner, sources=0)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_field_below_its_point_source_ends_on_the_point(dim):
+    """A smoothed field can dip below the straight distance next to its source: a vertex with no way down, in a
+    cell of the source point, ends on the point (was a 'local minimum' error in volumes)."""
+    mesh, _ = _flat(dim)
+    src = _point(mesh, 5, np.full(dim + 1, 1 / (dim + 1)))
+    x = src.position(mesh)
+    d = np.linalg.norm(mesh.V - x, axis=1)
+    v = int(_cells(mesh)[5, 0])
+    d[v] = 0.0
+    P = cg.geodesic_path(mesh, d, v, sources=src, straighten=False)
+    np.testing.assert_allclose(P, [mesh.V[v], x], atol=1e-12)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_an_array_from_geodesic_distance_ends_on_its_point_source(dim):
+    """The array remembers its sources in volumes too (the path ended at a corner of the point's cell)."""
+    mesh, _ = _flat(dim)
+    src = _point(mesh, 5, [0.2, 0.3, 0.5] if dim == 2 else [0.1, 0.2, 0.3, 0.4])
+    d = cg.geodesic_distance(mesh, src, method="qclp")
+    far = int(np.argmax(d))
+    np.testing.assert_allclose(cg.geodesic_path(mesh, d, far)[-1], src.position(mesh), atol=1e-12)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_targets_positions_and_points_of_cells(dim):
+    """A position is its closest surface point (the point inside the volume); on both, the path's cells and
+    barycentric coordinates (return_surface_points) hold its points."""
+    mesh, kind = _flat(dim)
+    res = cg.GeodesicSolver(mesh, "qclp").solve(0)
+    xyz = [0.7, 0.6, 0.0] if dim == 2 else [0.7, 0.6, 0.5]
+    p = cg.surface_point(mesh, xyz) if dim == 2 else cg.volume_point(mesh, xyz)
+    np.testing.assert_array_equal(cg.geodesic_path(mesh, res, xyz), cg.geodesic_path(mesh, res, p))
+    for target in (xyz, p, mesh.n_vertices - 1):
+        P, cells, bary = cg.geodesic_path(mesh, res, target, return_surface_points=True, straighten=False)
+        _inside(mesh, P, cells, bary)
+        np.testing.assert_array_equal(P[-1], mesh.V[0])
+    for bad in ("corner", [0.5, np.nan, 0.5], True):
+        with pytest.raises(SourceError, match=f"target must be a vertex index, a {kind.__name__} or a finite "):
+            cg.geodesic_path(mesh, res, bad)
+    with pytest.raises(SourceError, match="index 9999 is out of range"):
+        cg.geodesic_path(mesh, res, kind(9999, np.full(dim + 1, 1 / (dim + 1))))
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_point_source_on_a_shared_facet_is_reached_from_both_sides(dim):
+    """A point on an edge (a face between two tetrahedra) is the source of both cells: the path from the other
+    cell goes straight to it (in volumes it went on through the shared face and around: 4 points)."""
+    mesh, _ = _flat(dim)
+    C = _cells(mesh)
+    c = 5
+    bary = np.r_[0.0, np.full(dim, 1 / dim)]  # on the facet opposite corner 0
+    h = next(h for h in range(len(C)) if h != c and np.isin(C[c, 1:], C[h]).all())
+    res = cg.GeodesicSolver(mesh, "qclp").solve(_point(mesh, c, bary))
+    target = _point(mesh, h, np.full(dim + 1, 1 / (dim + 1)))
+    P = cg.geodesic_path(mesh, res, target, straighten=False)
+    assert len(P) == 2
+    np.testing.assert_allclose(P[-1], _point(mesh, c, bary).position(mesh), atol=1e-12)
+
+
+def test_a_volume_path_takes_no_cost_or_metric():
+    """Was silently ignored."""
+    mesh = cg.tet_box(2)
+    d = cg.geodesic_distance(mesh, 0, method="dijkstra")
+    for kw in ({"cost": 2.0}, {"metric": np.eye(3)}):
+        with pytest.raises(ParameterError, match="cost and metric apply to paths on triangle meshes"):
+            cg.geodesic_path(mesh, d, 5, **kw)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_distance_at_in_both_dimensions(dim):
+    mesh, kind = _flat(dim)
+    C = _cells(mesh)
+    d = np.linalg.norm(mesh.V - mesh.V[0], axis=1)
+    b = np.full(dim + 1, 1 / (dim + 1))
+    assert cg.distance_at(mesh, d, kind(3, b)) == pytest.approx(b @ d[C[3]], rel=1e-15)
+    assert cg.distance_at(mesh, d, []).shape == (0,)  # was an error in volumes
+    d[C[3, 0]] = np.inf  # an unreachable corner counts only where its weight is not 0
+    b0 = np.r_[0.0, np.full(dim, 1 / dim)]
+    np.testing.assert_allclose(cg.distance_at(mesh, d, [kind(3, b0), kind(3, b)]), [b0 @ np.nan_to_num(d[C[3]]),
+                                                                                     np.inf])
+    with pytest.raises(SourceError, match=f"points must be {kind.__name__}s or \\(k, 3\\) positions"):
+        cg.distance_at(mesh, d, [object()])
+    with pytest.raises(SourceError, match="point 1 .* index 9999 is out of range"):
+        cg.distance_at(mesh, d, [kind(3, b), kind(9999, b)])
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_the_raw_descent_never_climbs(dim):
+    mesh, kind = _flat(dim)
+    src = _point(mesh, 5, [0.2, 0.3, 0.5] if dim == 2 else [0.1, 0.2, 0.3, 0.4])
+    res = cg.GeodesicSolver(mesh, "qclp").solve(src)
+    for target in (mesh.n_vertices - 1, int(np.argmax(res.distance))):
+        P, cells, bary = cg.geodesic_path(mesh, res, target, return_surface_points=True, straighten=False)
+        _inside(mesh, P, cells, bary)
+        vals = cg.distance_at(mesh, res, [kind(int(c), b) for c, b in zip(cells, bary, strict=True)])
+        # the last point is the source itself, where the interpolant is not 0; 1e-9: rounding of the crossings
+        assert np.all(np.diff(vals[:-1]) <= 1e-9)
+        np.testing.assert_allclose(P[-1], src.position(mesh), atol=1e-12)

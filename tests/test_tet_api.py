@@ -164,7 +164,7 @@ def test_save_distance_writes_point_data_for_paraview(prism, tmp_path):
     mm = meshio.read(out)
     np.testing.assert_allclose(mm.point_data["distance"], d)
     assert mm.cells_dict["tetra"].shape == (prism.n_tets, 4)
-    with pytest.raises(ParameterError, match=r"written as \.vtu, \.vtk or \.npy"):
+    with pytest.raises(ParameterError, match=r"written as \.npy, \.vtk or \.vtu"):
         cg.save_distance(tmp_path / "d.ply", prism, d)
     np.testing.assert_array_equal(np.load(cg.save_distance(tmp_path / "d.npy", prism, d)), d)
 

@@ -1,31 +1,37 @@
-"""Reading a distance field on the surface: values at surface points, geodesic paths.
+"""Reading a distance field on a mesh: values at points, geodesic paths, on a surface or inside a volume.
 
-:func:`geodesic_path` follows the steepest descent of the piecewise-linear field: inside a face
-along ``−∇d|_t`` to the exact crossing with the face's boundary; across an edge into the next face
-when that face's descent direction enters it, else along the edge (a valley) to its lower end; at a
-vertex into the incident face or along the incident edge of steepest descent. It stops at a
-source vertex, or goes straight to the source once it reaches a face that contains a point or curve
-source (a straight segment inside a flat face is the geodesic there). For a field of
-``method="exact"`` (a :class:`~cvxgeodesic.api.GeodesicResult`) from vertex or point sources to a
-vertex or a point, the path is pygeodesic's exact (MMP) path instead (on the mesh with the points
-inserted as vertices).
+:func:`geodesic_path` follows the steepest descent of the piecewise-linear field cell by cell, on triangles
+and tetrahedra alike: inside a cell along ``−∇d|_t`` (constant there) to the exact crossing with its boundary;
+across a facet (an edge of a triangle, a face of a tetrahedron) into the next cell when that cell's descent
+direction enters it, else (a valley, or the mesh's boundary) along the facet to its lowest corner; at a vertex
+into the incident cell or along the incident edge of steepest descent. It stops at a source vertex, or goes
+straight to the source once it reaches a cell that holds a source point, a piece of a source curve or a source
+face (a straight segment inside a flat triangle or a tetrahedron is the geodesic there); a descent that crosses
+a source face of a volume ends on it. For an order-2 field inside a volume the direction is ``−∇φ`` of its
+quadratic ``φ = d²``, read at the current point.
 
-With ``straighten=True`` (default) the descent only chooses the corridor: the faces it crossed,
-plus, at each vertex it passed through, the fan of faces around that vertex on the side of the
-smaller angle. The corridor is unfolded into the plane edge by edge and the shortest path through
-it is found exactly (funnel algorithm). Where that path still wraps around a corridor vertex
-and the angle on the vertex's other side is smaller, the corridor goes around the other side and
-the path is recomputed (at most 64 times). The result is a locally shortest path: straight on a
-plane (measured 2e-16 from the chord on a jittered grid, against 6e-3 .. 7e-2 for the raw
-descent), and within 0.1 % of the exact polyhedral distance on the unit icosphere (subdivision 4).
-``straighten=False`` returns the raw descent.
+On a surface the descent then only chooses the corridor (``straighten=True``, default): the faces it crossed,
+plus, at each vertex it passed through, the fan of faces around that vertex on the side of the smaller angle.
+The corridor is unfolded into the plane edge by edge and the shortest path through it is found exactly (funnel
+algorithm). Where that path still wraps around a corridor vertex and the angle on the vertex's other side is
+smaller, the corridor goes around the other side and the path is recomputed (at most 64 times). The result is a
+locally shortest path: straight on a plane (measured 2e-16 from the chord on a jittered grid, against 6e-3 ..
+7e-2 for the raw descent), and within 0.1 % of the exact polyhedral distance on the unit icosphere (subdivision
+4). ``straighten=False`` returns the raw descent. For a field of ``method="exact"`` (a
+:class:`~cvxgeodesic.api.GeodesicResult`) from vertex or point sources to a vertex or a point, the surface path
+is pygeodesic's exact (MMP) path instead (on the mesh with the points inserted as vertices).
+
+Inside a volume the path is the raw descent, not shortened: a polyline that follows the field, whose length
+exceeds the distance by a few per cent where the field's gradient turns (measured: 1.1 % on a jittered box from
+the opposite corner, docs/volumes.md).
 """
 
 from __future__ import annotations
 
+import functools
 import numbers
 from collections.abc import Sequence
-from typing import Any, Literal, TypeAlias, overload
+from typing import Any, Literal, TypeAlias, cast, overload
 
 import numpy as np
 import scipy.sparse as sp
@@ -33,19 +39,22 @@ from numpy.typing import ArrayLike
 
 from .errors import ParameterError, SolverError, SourceError
 from .mesh.convert import as_mesh
-from .mesh.io import as_trimesh
-from .mesh.tetmesh import TetMesh
-from .mesh.trimesh import TriMesh
+from .mesh.corridor import straighten_corridor
+from .mesh.simplex import CELL_FACETS
+from .mesh.tet_locate import VolumePoint, volume_point
 from .operators.metric import make_medium
-from .results import GeodesicResult
-from .sources import BARY_SNAP, SourceSet, SurfacePoint, _barycentric, _incident_faces, resolve_sources
+from .results import GeodesicResult, remembered_sources
+from .sources import BARY_SNAP, SourceSet, SurfacePoint, resolve_sources, surface_point
+from .sources_tet import resolve_tet_sources
 from .validation import as_vertex_field, check_count
 
 #: A distance field as the functions here take it: the vertex values or the result they came from.
 Field: TypeAlias = ArrayLike | GeodesicResult
+#: A point of a mesh's cells: on a surface, or inside a volume.
+MeshPoint: TypeAlias = SurfacePoint | VolumePoint
 
 
-def _field(mesh: TriMesh, distance: Any) -> tuple[np.ndarray, Any]:
+def _field(mesh: Any, distance: Any) -> tuple[np.ndarray, Any]:
     """(n,) float field and the result object it came from (or None)."""
     result = None
     if hasattr(distance, "distance") and hasattr(distance, "info"):
@@ -53,59 +62,90 @@ def _field(mesh: TriMesh, distance: Any) -> tuple[np.ndarray, Any]:
     return as_vertex_field(distance, "distance", mesh.n_vertices, nan_ok=False), result
 
 
-def _as_points(mesh: TriMesh, points) -> tuple[list[SurfacePoint], bool]:
-    from .sources import surface_point
+# -- points of the cells: SurfacePoint on triangles, VolumePoint in tetrahedra ------------------------------------
+def _point_type(mesh: Any) -> type:
+    return VolumePoint if mesh.dim == 3 else SurfacePoint
 
-    if isinstance(points, SurfacePoint):
-        return [points], True
-    if isinstance(points, list | tuple) and all(isinstance(p, SurfacePoint) for p in points):
-        pts = list(points)
+
+def _cell_of(p: MeshPoint) -> int:
+    return p.tet if isinstance(p, VolumePoint) else p.face
+
+
+def _check_point(mesh: Any, p: MeshPoint, label: str) -> None:
+    """A SourceError naming ``label`` when the point's cell is not one of the mesh."""
+    cell, n = _cell_of(p), mesh.n_cells
+    if cell >= n:
+        what, plural = ("tetrahedron", "tetrahedra") if mesh.dim == 3 else ("face", "faces")
+        raise SourceError(f"{label} {p!r}: {what} index {cell} is out of range: the mesh has {n} {plural} "
+                          f"(0..{n - 1})")
+
+
+def _at_positions(mesh: Any, X: np.ndarray) -> Any:
+    """The points at positions: the closest surface points, or the containing tetrahedra (outside: SourceError)."""
+    return volume_point(mesh, X) if mesh.dim == 3 else surface_point(mesh, X)
+
+
+def _as_points(mesh: Any, points: Any) -> tuple[np.ndarray, np.ndarray, bool]:
+    """(cells (k,), bary (k, dim + 1), single) of points of the mesh's kind or of positions."""
+    kind = _point_type(mesh)
+    if isinstance(points, kind):
+        pts: list[Any] = [points]
+        single = True
+    elif isinstance(points, list | tuple) and all(isinstance(p, kind) for p in points):
+        pts, single = list(points), False
     else:
         try:
             X = np.asarray(points, dtype=float)
         except (TypeError, ValueError):
-            raise SourceError("points must be SurfacePoints or (k, 3) positions") from None
-        found = surface_point(mesh, X)
-        if isinstance(found, SurfacePoint):
-            return [found], True
-        pts = found
+            raise SourceError(f"points must be {kind.__name__}s or (k, 3) positions") from None
+        found = _at_positions(mesh, X)
+        single = isinstance(found, kind)
+        pts = [found] if single else list(found)
     for k, p in enumerate(pts):
-        if p.face >= mesh.n_faces:
-            raise SourceError(f"point {k} {p!r}: face index {p.face} is out of range: the mesh has {mesh.n_faces} "
-                              "faces")
-    return pts, False
+        _check_point(mesh, p, f"point {k}")
+    cells = np.array([_cell_of(p) for p in pts], dtype=np.int64)
+    return cells, np.array([p.bary for p in pts]).reshape(-1, mesh.dim + 1), single
+
+
+def _interpolate(Dv: np.ndarray, bary: np.ndarray) -> np.ndarray:
+    """(k,) ``Σ_i b_i d_i`` of corner values ``Dv`` (k, s) at ``bary`` (k, s); a corner of weight 0 does not count
+    (``inf · 0`` is NaN: a point whose cell touches an unreachable vertex takes the other corners' value)."""
+    with np.errstate(invalid="ignore"):
+        return np.where(bary > 0, bary * Dv, 0.0).sum(axis=1)
 
 
 @overload
-def distance_at(mesh: Any, distance: Field, points: SurfacePoint) -> float: ...
+def distance_at(mesh: Any, distance: Field, points: MeshPoint) -> float: ...
 @overload
-def distance_at(mesh: Any, distance: Field, points: Sequence[SurfacePoint]) -> np.ndarray: ...
+def distance_at(mesh: Any, distance: Field, points: Sequence[MeshPoint]) -> np.ndarray: ...
 @overload
 def distance_at(mesh: Any, distance: Field, points: ArrayLike) -> float | np.ndarray: ...
 
 
 def distance_at(mesh: Any, distance: Field, points: Any) -> float | np.ndarray:
-    """Values of a distance field at surface points.
+    """Values of a distance field at points of a surface or inside a volume.
 
-    A vertex field is interpolated linearly in each face; the result of an ``order=2`` solve
-    (a :class:`~cvxgeodesic.api.GeodesicResult`) is evaluated as its piecewise quadratic squared
-    distance, ``√φ``.
+    A vertex field is interpolated linearly in each cell (face or tetrahedron); the result of an ``order=2``
+    solve (a :class:`~cvxgeodesic.api.GeodesicResult`) is evaluated as its piecewise quadratic squared distance,
+    ``√φ``.
 
     Parameters
     ----------
-    mesh : TriMesh or tuple (V, F)
+    mesh : TriMesh, TetMesh, or tuple (V, F) / (V, T)
     distance : (n,) float array_like or GeodesicResult
-    points : SurfacePoint, sequence of SurfacePoint, or (3,) / (k, 3) positions (closest points are used)
+    points : SurfacePoint (VolumePoint in a TetMesh), a sequence of them, or (3,) / (k, 3) positions
+        On a surface the closest points of positions are used; in a volume positions must lie inside it.
 
     Returns
     -------
     float for one point, else (k,) float ndarray
-        ``Σ_i b_i d[F[face, i]]``.
+        ``Σ_i b_i d[cells[cell, i]]``.
 
     Raises
     ------
     SourceError
-        A face index out of range, or points that are neither SurfacePoints nor positions.
+        A face (tetrahedron) index out of range, a position outside the volume, or points that are neither
+        points of the mesh's kind nor positions.
     ParameterError
         ``distance`` of the wrong length or with NaN.
 
@@ -116,88 +156,357 @@ def distance_at(mesh: Any, distance: Field, points: Any) -> float | np.ndarray:
     >>> d = cg.geodesic_distance(mesh, 0, method="dijkstra")
     >>> round(cg.distance_at(mesh, d, cg.SurfacePoint(0, [1.0, 0.0, 0.0])), 6)
     0.0
-
-    On a tetrahedral mesh, ``points`` are VolumePoints or positions inside it
-    (:func:`~cvxgeodesic.paths_tet.tet_distance_at`).
     """
-    if isinstance(volume := as_mesh(mesh), TetMesh):
-        from .paths_tet import tet_distance_at
-
-        return tet_distance_at(volume, distance, points)
-    mesh = as_trimesh(mesh)
+    mesh = as_mesh(mesh)
+    cells, bary, single = _as_points(mesh, points)
     p2_field = getattr(getattr(distance, "info", None), "extra", {}).get("p2_field")
     if p2_field is not None:  # an order=2 result: its piecewise quadratic field, not the vertex values
-        pts, single = _as_points(mesh, points)
-        faces = np.array([p.face for p in pts], dtype=np.int64)
-        vals = p2_field.distance_at(faces, np.array([p.bary for p in pts]).reshape(-1, 3))
-        return float(vals[0]) if single else vals
-    d, _ = _field(mesh, distance)
-    pts, single = _as_points(mesh, points)
-    faces = np.array([p.face for p in pts], dtype=np.int64)
-    bary = np.array([p.bary for p in pts]).reshape(-1, 3)
-    with np.errstate(invalid="ignore"):
-        vals = np.einsum("kj,kj->k", bary, d[mesh.F[faces]])
-    # inf * 0 is NaN: a point whose face touches an unreachable vertex with weight 0 takes the others' value
-    bad = np.isnan(vals)
-    if bad.any():
-        Dv = d[mesh.F[faces[bad]]]
-        vals[bad] = np.where(np.any((bary[bad] > 0) & np.isinf(Dv), axis=1), np.inf,
-                             np.nansum(np.where(bary[bad] > 0, bary[bad] * Dv, 0.0), axis=1))
+        vals = p2_field.distance_at(cells, bary)
+    else:
+        d, _ = _field(mesh, distance)
+        vals = _interpolate(d[mesh.cells[cells]], bary)
     return float(vals[0]) if single else vals
 
 
-class _Geometry:
-    """Per-mesh data of the descent: 3D hat-function gradients and edge-to-face maps."""
+# -- the descent's view of the mesh --------------------------------------------------------------------------------
+def _hat_gradients(mesh: Any) -> np.ndarray:
+    """(k, dim + 1, 3) world-coordinate gradients of each cell's barycentric coordinates (NaN/inf on degenerate
+    cells): a surface's blocks are in each face's 2D frame and go back to 3D; a volume's are 3D already."""
+    from .operators.gradient import gradient_blocks, triangle_frames
 
-    def __init__(self, mesh: TriMesh):
-        from .operators.gradient import gradient_blocks, triangle_frames
+    with np.errstate(invalid="ignore", divide="ignore"):
+        B = gradient_blocks(mesh)  # (k, dim, dim + 1)
+        if mesh.dim == 3:
+            return np.ascontiguousarray(B.transpose(0, 2, 1))
+        ex, ey = triangle_frames(mesh)
+        return B[:, 0, :, None] * ex[:, None, :] + B[:, 1, :, None] * ey[:, None, :]
 
-        self.mesh = mesh
-        V, F = mesh.V, mesh.F
-        with np.errstate(invalid="ignore", divide="ignore"):
-            ex, ey = triangle_frames(mesh)
-        self.ex, self.ey = ex, ey
-        B = gradient_blocks(mesh)  # (m, 2, 3)
+
+class _Cells:
+    """Per-mesh data of the descent: hat-function gradients, the cells it may step through, vertex → cells."""
+
+    def __init__(self, mesh: Any):
+        self.mesh, self.V, self.C = mesh, mesh.V, mesh.cells
+        k, s = self.C.shape
+        self.H = _hat_gradients(mesh)
         with np.errstate(invalid="ignore"):
-            self.H = B[:, 0, :, None] * ex[:, None, :] + B[:, 1, :, None] * ey[:, None, :]  # (m, 3 corners, 3)
-        self.ok = np.all(np.isfinite(self.H.reshape(len(F), -1)), axis=1) & ~np.isin(
-            np.arange(len(F)), mesh.degenerate_faces())
-        self.inc = _incident_faces(mesh)
-        self.V, self.F = V, F
+            self.ok = np.isfinite(self.H).all(axis=(1, 2)) & ~np.isin(np.arange(k), mesh.degenerate_cells())
+        self.inc = sp.csr_matrix((np.ones(s * k), (self.C.ravel(), np.repeat(np.arange(k), s))),
+                                 shape=(mesh.n_vertices, k))
 
-    def faces_of_edge(self, a: int, c: int) -> np.ndarray:
-        return np.intersect1d(self.inc[a].indices, self.inc[c].indices)
-
-    def faces_of_vertex(self, v: int) -> np.ndarray:
+    def cells_of_vertex(self, v: int) -> np.ndarray:
         return self.inc[v].indices
 
+    def cells_of(self, verts: Sequence[int]) -> np.ndarray:
+        """The cells that contain all of ``verts`` (the cells around an edge or a face)."""
+        return functools.reduce(np.intersect1d, [self.inc[int(v)].indices for v in verts])
 
-def _source_targets(mesh: TriMesh, ss: SourceSet | None):
-    """Per source face, the source points and pieces in it; and the set of source vertices."""
-    per_face: dict[int, list[tuple[np.ndarray, np.ndarray]]] = {}
-    if ss is None:
-        return per_face
-    X = ss.point_positions(mesh)
-    for f, x in zip(ss.point_faces, X, strict=True):
-        per_face.setdefault(int(f), []).append((x, x))
-    T = mesh.V[mesh.F[ss.segment_faces]]
-    for f, ba, t in zip(ss.segment_faces, ss.segment_bary, T, strict=True):
-        per_face.setdefault(int(f), []).append((ba[0] @ t, ba[1] @ t))
-    return per_face
+    def bary(self, c: int, x: np.ndarray) -> np.ndarray:
+        """Barycentric coordinates of ``x`` in cell ``c``, clipped to it (least squares: any cell shape)."""
+        A = np.vstack([self.V[self.C[c]].T, np.ones(self.C.shape[1])])
+        b = np.clip(np.linalg.lstsq(A, np.r_[x, 1.0], rcond=None)[0], 0.0, None)
+        return b / b.sum()
 
 
-def _closest_on(x: np.ndarray, items) -> tuple[np.ndarray | None, float]:
-    best: np.ndarray | None = None
-    bd = np.inf
-    for a, b in items:
-        ab = b - a
+class _Slope:
+    """The direction of steepest descent and its rate per unit length.
+
+    Piecewise linear: constant in a cell, ``−∇d`` and ``|∇d|`` (in a medium on a surface ``−M⁻¹∇d`` and
+    ``√(∇dᵀM⁻¹∇d)``); an order-2 field in a volume: ``−∇φ`` at the point (``φ = d²`` is quadratic where the source
+    is visible, so ``−∇φ`` points straight at it) and the rate ``|∇φ| / 2d``. NaN in cells the walk skips.
+    """
+
+    def __init__(self, geo: _Cells, d: np.ndarray, medium: Any = None, p2_field: Any = None):
+        mesh = geo.mesh
+        self.geo, self.p2 = geo, p2_field
+        with np.errstate(invalid="ignore"):
+            grad = np.einsum("kij,ki->kj", geo.H, d[geo.C])  # (k, 3) gradient of the field in each cell
+        grad[~geo.ok] = np.nan
+        self.adjacency = sp.csr_matrix(mesh.vertex_adjacency)
+        if medium is None:
+            self.down, self.rate = -grad, np.linalg.norm(grad, axis=1)
+        else:
+            self._in_medium(geo, grad, medium.on(mesh))
+
+    def _in_medium(self, geo: _Cells, grad: np.ndarray, medium: Any) -> None:
+        """``−M_t⁻¹∇d`` and its rate in each face of a surface (the medium read at the face's centroid)."""
+        from .operators.gradient import triangle_frames
+
+        self.adjacency = sp.csr_matrix(medium.adjacency())  # edge lengths in the medium, as the rates
+        with np.errstate(invalid="ignore", divide="ignore"):
+            ex, ey = triangle_frames(geo.mesh)
+        P = medium.plane(np.arange(geo.mesh.n_faces), np.full(3, 1 / 3))
+        P[~geo.ok] = np.eye(2)
+        g2 = np.stack([np.einsum("fj,fj->f", grad, ex), np.einsum("fj,fj->f", grad, ey)], 1)
+        with np.errstate(invalid="ignore"):
+            step = -np.linalg.solve(P, g2[:, :, None])[:, :, 0]  # −M⁻¹∇d in the face's frame
+            self.down = step[:, :1] * ex + step[:, 1:] * ey
+            self.rate = np.sqrt(np.maximum(-np.einsum("fi,fi->f", g2, step), 0.0))
+
+    def at(self, c: int, b: np.ndarray) -> tuple[np.ndarray, float]:
+        """(3,) descent direction and its rate (``|∇φ|`` for an order-2 field) at barycentric ``b`` of cell ``c``."""
+        if self.p2 is None or not self.geo.ok[c]:
+            return self.down[c], float(self.rate[c])
+        fld = self.p2
+        tt, bb = np.array([c]), b[None]
+        if hasattr(fld, "split"):  # a field on the mesh with the source points inserted
+            tt, bb = fld.split.locate(tt, bb)
+        _, rows = fld.space.value_and_gradient_rows(tt, bb)
+        vals = fld.phi[fld.space.tet_dofs[tt[0]]]
+        g = rows[0] @ vals if np.all(np.isfinite(vals)) else np.zeros(3)
+        return -g, float(np.linalg.norm(g))
+
+    def per_length(self, rate: float, dv: float) -> float:
+        """The rate of decrease of ``d`` itself from a vertex at ``d = dv``: ``|∇φ| / 2d`` for an order-2 field."""
+        return rate / (2 * dv) if self.p2 is not None else rate
+
+
+# -- the sources as the walk ends on them ------------------------------------------------------------------------
+class _Ends:
+    """Where the walk stops: ``vertices`` (n,) bool; ``items`` {cell: [(q, 3) simplex]} — the source points
+    (q = 1), curve pieces (2) and faces (3) in each cell, gone to straight from inside it; ``facets``, the
+    source faces of a volume (frozensets of vertices), on which a crossing ends; ``ss``, the source set."""
+
+    def __init__(self, mesh: Any, geo: _Cells, d: np.ndarray, distance: Any, result: Any, sources: Any):
+        self.ss = _source_set(mesh, distance, result, sources)
+        self.vertices = np.zeros(mesh.n_vertices, dtype=bool)
+        self.items: dict[int, list[np.ndarray]] = {}
+        self.facets: set[frozenset[int]] = set()
+        if self.ss is None:  # unknown: the vertices where the field takes its minimum
+            finite = d[np.isfinite(d)]
+            self.vertices = d <= (finite.min() if finite.size else 0.0) + 1e-12 * mesh.bbox_diagonal
+        elif mesh.dim == 3:
+            self._volume_sources(mesh, geo, self.ss)
+        else:
+            self._surface_sources(mesh, self.ss)
+
+    def _add(self, cell: int, simplex: np.ndarray) -> None:
+        self.items.setdefault(int(cell), []).append(simplex)
+
+    def _surface_sources(self, mesh: Any, ss: SourceSet) -> None:
+        """Source vertices; points and curve pieces in their faces (a point on an edge in each of its faces)."""
+        self.vertices[ss.vertices] = True
+        for f, x in zip(ss.point_faces, ss.point_positions(mesh), strict=True):
+            self._add(f, x[None])
+        T = mesh.V[mesh.F[ss.segment_faces]]
+        for f, ba, t in zip(ss.segment_faces, ss.segment_bary, T, strict=True):
+            self._add(f, np.stack([ba[0] @ t, ba[1] @ t]))
+
+    def _volume_sources(self, mesh: Any, geo: _Cells, ss: Any) -> None:
+        """Fixed vertices; each point in every tetrahedron that holds it (one on a face or an edge: all around
+        it); each source face in its tetrahedron, and as a wall on which the walk ends."""
+        self.vertices[ss.fixed_vertices(mesh)] = True
+        for p in ss.points:
+            for t in geo.cells_of(mesh.T[p.tet][p.bary > 0]):
+                self._add(t, p.position(mesh)[None])
+        tris = ss.face_triangles(mesh)
+        for f, t in zip(tris, mesh.boundary_face_tets[ss.faces], strict=True):
+            self._add(t, mesh.V[f])
+            self.facets.add(frozenset(f.tolist()))
+
+    def closest(self, cell: int, x: np.ndarray) -> tuple[np.ndarray | None, float]:
+        """The source point nearest to ``x`` among those of ``cell``, and its distance."""
+        best: np.ndarray | None = None
+        bd = np.inf
+        for S in self.items.get(cell, ()):
+            y = _closest_on_simplex(x, S)
+            dist = float(np.linalg.norm(x - y))
+            if dist < bd:
+                best, bd = y, dist
+        return best, bd
+
+
+def _source_set(mesh: Any, distance: Any, result: Any, sources: Any) -> Any:
+    """The field's normalized sources: given, from the result, remembered by the array; None when unknown."""
+    resolve = resolve_tet_sources if mesh.dim == 3 else resolve_sources
+    if sources is not None:
+        return resolve(mesh, sources)
+    if result is not None:
+        return result.source_set if result.source_set is not None else resolve(mesh, result.sources)
+    return remembered_sources(distance)  # an array returned by geodesic_distance
+
+
+def _closest_on_simplex(x: np.ndarray, S: np.ndarray) -> np.ndarray:
+    """The point of the simplex ``S`` (a point (1, 3), a segment (2, 3) or a triangle (3, 3)) closest to ``x``."""
+    if len(S) == 1:
+        return S[0]
+    if len(S) == 2:
+        ab = S[1] - S[0]
         den = float(ab @ ab)
-        t = 0.0 if den == 0 else float(np.clip((x - a) @ ab / den, 0.0, 1.0))
-        y = a + t * ab
-        dist = float(np.linalg.norm(x - y))
-        if dist < bd:
-            best, bd = y, dist
-    return best, bd
+        return S[0] + (0.0 if den == 0 else float(np.clip((x - S[0]) @ ab / den, 0.0, 1.0))) * ab
+    a, b, c = S
+    cands = [_closest_on_simplex(x, S[[i, (i + 1) % 3]]) for i in range(3)]
+    nrm = np.cross(b - a, c - a)
+    nn = float(nrm @ nrm)
+    if nn > 0:  # the foot of the perpendicular, when it lies inside
+        foot = x - ((x - a) @ nrm) / nn * nrm
+        lam = [np.cross(c - b, foot - b) @ nrm / nn, np.cross(a - c, foot - c) @ nrm / nn]
+        if min(lam) >= 0 and sum(lam) <= 1:
+            cands.append(foot)
+    return min(cands, key=lambda y: float(np.linalg.norm(x - y)))
+
+
+# -- the walk ----------------------------------------------------------------------------------------------------
+class _Descent:
+    """The steepest-descent walk of :func:`geodesic_path`: a state ``("v", vertex)`` or ``("c", cell, bary)``.
+
+    ``nodes`` collects the path: ``("v", vertex) | ("e", facet, cell_in, cell_out, position) | ("p", cell,
+    position)``, ``facet`` the vertices of the edge (face) crossed or slid along. Each step appends what it
+    crossed and returns the next state, or None at a source.
+    """
+
+    def __init__(self, geo: _Cells, d: np.ndarray, ends: _Ends, slope: _Slope) -> None:
+        self.geo, self.d, self.ends, self.slope = geo, d, ends, slope
+        self.tol = 1e-12 * geo.mesh.bbox_diagonal
+        self.nodes: list[tuple] = []
+
+    def start(self, target: Any) -> tuple:
+        """The first state, from a vertex index, a point of the mesh's kind or a position (validated)."""
+        geo, d = self.geo, self.d
+        p = _as_target(geo.mesh, target)
+        if isinstance(p, int):
+            state: tuple = ("v", p)
+            value = d[p]
+        elif p.bary.max() >= 1 - BARY_SNAP:  # on a vertex
+            state = ("v", int(geo.C[_cell_of(p), np.argmax(p.bary)]))
+            value = d[state[1]]
+        else:
+            c = _cell_of(p)
+            state = ("c", c, np.where(p.bary <= BARY_SNAP, 0.0, p.bary))
+            value = _interpolate(d[geo.C[c]][None], p.bary[None])[0]
+            self.nodes.append(("p", c, p.bary @ geo.V[geo.C[c]]))
+        if state[0] == "v":
+            self.nodes.append(state)
+        if not np.isfinite(value):
+            raise ParameterError("the distance is infinite at the target: no source is reachable from it")
+        return state
+
+    def _finish_in(self, c: int, x: np.ndarray, dx: float) -> bool:
+        """Go straight to a source of cell ``c`` unless another source is nearer through the field."""
+        y, dist = self.ends.closest(c, x)
+        if y is None or dist > dx + 1e-9 * self.geo.mesh.bbox_diagonal + 1e-6 * dx:
+            return False
+        self.nodes.append(("p", c, y))
+        return True
+
+    def from_vertex(self, v: int) -> tuple | None:
+        """Step from vertex ``v``: into the steepest cell or along the steepest edge."""
+        geo, d, V = self.geo, self.d, self.geo.V
+        if self.ends.vertices[v]:
+            return None
+        cells = geo.cells_of_vertex(v)
+        if any(self._finish_in(int(c), V[v], d[v]) for c in cells):
+            return None
+        best, choice = 1e-14, cast(tuple | None, None)
+        for c in cells:
+            iv = int(np.flatnonzero(geo.C[c] == v)[0])
+            corner = np.eye(geo.C.shape[1])[iv]
+            down, rate = self.slope.at(int(c), corner)
+            if not np.all(np.isfinite(down)) or (rate := self.slope.per_length(rate, d[v])) <= best:
+                continue
+            db = geo.H[c] @ down  # change of the barycentric coordinates per unit step
+            if all(db[j] >= -1e-12 * np.abs(db).max() for j in range(len(db)) if j != iv):
+                best, choice = rate, ("c", int(c), corner)
+        nb = self.slope.adjacency[v]
+        for w, length in zip(nb.indices, nb.data, strict=True):
+            if length > 0 and np.isfinite(d[w]) and (d[v] - d[w]) / length > best:
+                best, choice = (d[v] - d[w]) / length, ("v", int(w))
+        if choice is None:
+            self._stuck_at(v, cells)
+            return None
+        if choice[0] == "v":
+            self.nodes.append(choice)
+        return choice
+
+    def _stuck_at(self, v: int, cells: np.ndarray) -> None:
+        """No way down from ``v``: a smoothed field can sit below the straight distance next to its source, then
+        the path ends on the nearest source of the cells around; else the field has a false minimum."""
+        near = [(*self.ends.closest(int(c), self.geo.V[v]), int(c)) for c in cells if int(c) in self.ends.items]
+        if not near:
+            raise SolverError(f"geodesic_path: the field has a local minimum at vertex {v} (d = {self.d[v]:.6g}), "
+                              "which is no source", solver="geodesic_path", status="local_minimum")
+        y, _, c = min(near, key=lambda e: e[1])
+        self.nodes.append(("p", c, y))
+
+    def from_cell(self, c: int, b: np.ndarray) -> tuple | None:
+        """Step from barycentric ``b`` inside (or on the boundary of) cell ``c`` to where the descent leaves it."""
+        geo, d = self.geo, self.d
+        corners = geo.C[c]
+        x = b @ geo.V[corners]
+        if self._finish_in(c, x, float(b @ d[corners])):
+            return None
+        down, rate = self.slope.at(c, b)
+        if not np.all(np.isfinite(down)) or rate <= 1e-14:  # flat or degenerate cell: to its lowest corner
+            return self._to_vertex(int(corners[np.argmin(d[corners])]))
+        db = geo.H[c] @ down
+        out = db < -1e-12 * np.abs(db).max()
+        ts = np.where(out, b / np.where(out, -db, 1.0), np.inf)
+        step = float(ts.min())
+        nb = np.clip(b + step * db, 0.0, None)
+        nb[ts <= step * (1 + 1e-9)] = 0.0  # every coordinate that reaches 0 there: a facet, or an edge of one
+        nb /= nb.sum()
+        if np.count_nonzero(nb > 1e-10) <= 1:
+            return self._to_vertex(int(corners[np.argmax(nb)]))
+        y = nb @ geo.V[corners]
+        zero = np.flatnonzero(nb <= 1e-10)
+        if zero.size == 1:  # through the facet opposite that corner
+            facet = tuple(int(u) for u in corners[CELL_FACETS[geo.mesh.dim][zero[0]]])
+            if frozenset(facet) in self.ends.facets:  # a source face of the volume: the path ends on it
+                self.nodes.append(("p", c, y))
+                return None
+            entered = self._cell_across(c, facet, nb)
+            if entered is not None:
+                self.nodes.append(("e", facet, c, entered[1], y))
+                return entered
+        else:
+            facet = tuple(int(u) for u in corners[nb > 1e-10])
+        # a valley along the facet (or an edge of it), or the mesh's boundary: slide to its lowest corner
+        w = facet[int(np.argmin(d[list(facet)]))]
+        if np.linalg.norm(y - geo.V[w]) > self.tol and step > 0:
+            self.nodes.append(("e", facet, c, c, y))
+        return self._to_vertex(w)
+
+    def _cell_across(self, c: int, facet: tuple[int, ...], b: np.ndarray) -> tuple | None:
+        """The state in the cell across ``facet`` of ``c`` into which the descent continues, or None."""
+        geo = self.geo
+        for h in (int(h) for h in geo.cells_of(facet) if h != c):
+            bh = np.zeros(geo.C.shape[1])
+            for j, u in enumerate(geo.C[c]):
+                bh[geo.C[h] == u] = b[j]
+            down, _ = self.slope.at(h, bh)
+            if not geo.ok[h] or not np.all(np.isfinite(down)):
+                continue
+            dbh = geo.H[h] @ down
+            opp = int(np.flatnonzero(~np.isin(geo.C[h], facet))[0])
+            if dbh[opp] > 1e-12 * max(np.abs(dbh).max(), 1e-300):
+                return ("c", h, bh)
+        return None
+
+    def _to_vertex(self, v: int) -> tuple:
+        state = ("v", v)
+        self.nodes.append(state)
+        return state
+
+
+def _as_target(mesh: Any, target: Any) -> int | MeshPoint:
+    """A vertex index or a point of the mesh's kind (a position: the closest surface point, the point inside)."""
+    kind = _point_type(mesh)
+    if isinstance(target, SurfacePoint | VolumePoint) and isinstance(target, kind):
+        _check_point(mesh, target, "target")
+        return target
+    if isinstance(target, numbers.Integral) and not isinstance(target, bool | np.bool_):
+        if not 0 <= int(target) < mesh.n_vertices:
+            raise SourceError(f"target vertex {int(target)} is out of range: the mesh has {mesh.n_vertices} "
+                              "vertices")
+        return int(target)
+    wrong = f"target must be a vertex index, a {kind.__name__} or a finite (3,) position, got {target!r}"
+    try:
+        X = np.asarray(target, dtype=float)
+    except (TypeError, ValueError):
+        raise SourceError(wrong) from None
+    if X.shape != (3,) or not np.all(np.isfinite(X)):
+        raise SourceError(wrong)
+    return _at_positions(mesh, X)  # one position: one point
 
 
 @overload
@@ -220,9 +529,9 @@ def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = Non
                   return_surface_points: bool = False, straighten: bool = True,
                   max_steps: int | None = None, cost: Any = None,
                   metric: Any = None) -> np.ndarray | tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Path from ``target`` down the distance field to the nearest source.
+    """Path from ``target`` down the distance field to the nearest source, on a surface or inside a volume.
 
-    In a travel cost or metric (``cost``/``metric``, or those of the solve when ``distance`` is a
+    In a travel cost or metric on a surface (``cost``/``metric``, or those of the solve when ``distance`` is a
     :class:`~cvxgeodesic.api.GeodesicResult`) the descent follows the metric's gradient,
     ``−M_t⁻¹ ∇d`` in each face (the cost does not turn it), and the straightening finds the path
     of least length *in the medium* through the corridor (a small second-order cone program,
@@ -231,42 +540,45 @@ def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = Non
 
     Parameters
     ----------
-    mesh : TriMesh or tuple (V, F)
+    mesh : TriMesh, TetMesh, or tuple (V, F) / (V, T)
     distance : (n,) float array_like or GeodesicResult
         The field. A :class:`~cvxgeodesic.api.GeodesicResult` also gives its sources.
-    target : int or SurfacePoint
-        A vertex index or a surface point.
+    target : int, SurfacePoint (VolumePoint in a TetMesh) or (3,) position
+        A vertex index or a point; a position stands for its closest surface point (the point inside the volume).
     sources : optional
         The field's sources (anything :meth:`GeodesicSolver.solve` takes), needed to end a path on a
-        point or curve source when ``distance`` is a plain array that did not come from this
+        point, curve or face source when ``distance`` is a plain array that did not come from this
         library (an array returned by :func:`geodesic_distance` or ``GeodesicResult.distance``
         remembers its sources). Without them, the sources are the vertices where ``distance``
         takes its minimum (0 for vertex sources).
     return_surface_points : bool
-        Also return the face and barycentric coordinates of every path point.
+        Also return the cell (face, or tetrahedron) and barycentric coordinates of every path point.
     straighten : bool
-        Replace the descent by the shortest path through its corridor of faces (module docstring).
+        On a surface, replace the descent by the shortest path through its corridor of faces (module
+        docstring); inside a volume the path is always the descent.
     max_steps : int, optional
-        Limit of descent steps (default ``3 · n_faces + 10``).
+        Limit of descent steps (default ``(dim + 1) · n_cells + 10``: ``3 · n_faces + 10``, ``4 · n_tets + 10``).
     cost, metric : optional
-        The travel cost and metric the field was computed in (see :class:`~cvxgeodesic.api.GeodesicSolver`);
-        by default those of a :class:`~cvxgeodesic.api.GeodesicResult`, else none.
+        The travel cost and metric the field was computed in on a surface (see
+        :class:`~cvxgeodesic.api.GeodesicSolver`); by default those of a
+        :class:`~cvxgeodesic.api.GeodesicResult`, else none.
 
     Returns
     -------
     path : (k, 3) float ndarray
         From the target (first row) to the source (last row).
     faces : (k,) int64 ndarray
-        Only with ``return_surface_points``: a face containing each point.
-    bary : (k, 3) float ndarray
-        Only with ``return_surface_points``: the point's barycentric coordinates in that face.
+        Only with ``return_surface_points``: a face (tetrahedron) containing each point.
+    bary : (k, 3) or (k, 4) float ndarray
+        Only with ``return_surface_points``: the point's barycentric coordinates in that cell.
 
     Raises
     ------
     SourceError
-        Invalid target (vertex or face out of range) or sources.
+        Invalid target (vertex or cell out of range, a position outside the volume) or sources.
     ParameterError
-        ``distance`` of the wrong length, with NaN, or infinite at the target.
+        ``distance`` of the wrong length, with NaN, or infinite at the target (a target in another component
+        than the sources); a cost or metric with a tetrahedral mesh.
     SolverError
         The descent stopped at a local minimum that is no source, or ran past ``max_steps``.
 
@@ -278,262 +590,98 @@ def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = Non
     >>> path = cg.geodesic_path(mesh, d, 80)
     >>> path[0].tolist(), path[-1].tolist()
     ([1.0, 1.0, 0.0], [0.0, 0.0, 0.0])
-
-    On a tetrahedral mesh the path goes down the field inside the solid, tet by tet (a vertex, VolumePoint or
-    position as target; :func:`~cvxgeodesic.paths_tet.tet_geodesic_path`).
     """
-    if isinstance(volume := as_mesh(mesh), TetMesh):
-        from .paths_tet import tet_geodesic_path
-
-        return tet_geodesic_path(volume, distance, target, sources=sources, max_steps=max_steps)
-    mesh = as_trimesh(mesh)
+    mesh = as_mesh(mesh)
     d, result = _field(mesh, distance)
-    ss, src_v = _path_sources(mesh, d, distance, result, sources)
-    medium = make_medium(mesh, cost, metric)
-    if medium is None and result is not None:
-        medium = result.info.extra.get("medium")
-    if (result is not None and getattr(result.info, "method", None) == "exact" and ss is not None
-            and not ss.segment_faces.size and _exact_target(mesh, target) and mesh.is_edge_manifold
-            and mesh.referenced.all() and np.unique(mesh.component_labels).size == 1):
-        return _exact_path(mesh, ss, target, return_surface_points)
-    geo = _Geometry(mesh)
-    if max_steps is None:
-        max_steps = 3 * mesh.n_faces + 10
-    check_count(max_steps, "max_steps")
-    walk = _Descent(mesh, geo, d, src_v, _source_targets(mesh, ss), medium)
-    state = walk.start(target)
+    geo = _Cells(mesh)
+    ends = _Ends(mesh, geo, d, distance, result, sources)
+    medium = _path_medium(mesh, result, cost, metric)
+    if _exact_applies(mesh, result, ends.ss, target):
+        return _exact_path(mesh, ends.ss, target, return_surface_points)
+    max_steps = check_count((mesh.dim + 1) * mesh.n_cells + 10 if max_steps is None else max_steps, "max_steps")
+    p2_field = getattr(getattr(result, "info", None), "extra", {}).get("p2_field") if mesh.dim == 3 else None
+    walk = _Descent(geo, d, ends, _Slope(geo, d, medium, p2_field))
+    state: tuple | None = walk.start(target)
     for _ in range(max_steps):
-        step = walk.from_vertex(state[1]) if state[0] == "v" else walk.from_face(state[1], state[2])
-        if step is None:
+        assert state is not None
+        state = walk.from_vertex(state[1]) if state[0] == "v" else walk.from_cell(state[1], state[2])
+        if state is None:
             break
-        state = step
     else:
         raise SolverError(f"geodesic_path: no source reached within max_steps={max_steps} steps",
                           solver="geodesic_path", status="max_steps")
-    return _finish_path(mesh, geo, walk.nodes, straighten, return_surface_points, medium)
+    return _finish_path(geo, walk.nodes, straighten, return_surface_points, medium)
 
 
-def _path_sources(mesh: TriMesh, d: np.ndarray, distance: Any, result: Any,
-                  sources: Any) -> tuple[SourceSet | None, np.ndarray]:
-    """The field's source set (None when unknown) and the (n,) bool mask of its source vertices."""
-    ss = None
-    if sources is not None:
-        ss = resolve_sources(mesh, sources)
-    elif result is not None:
-        ss = result.source_set if result.source_set is not None else resolve_sources(mesh, result.sources)
-    else:
-        from .results import remembered_sources
-
-        ss = remembered_sources(distance)  # an array returned by geodesic_distance from surface sources
-    if ss is not None:
-        src_v = np.zeros(mesh.n_vertices, dtype=bool)
-        src_v[ss.vertices] = True
-    else:
-        finite = d[np.isfinite(d)]
-        zero = (finite.min() if finite.size else 0.0) + 1e-12 * mesh.bbox_diagonal
-        src_v = d <= zero
-    return ss, src_v
-
-
-class _Descent:
-    """The steepest-descent walk of :func:`geodesic_path`: a state ``("v", vertex)`` or ``("f", face, bary)``.
-
-    ``nodes`` collects the path: ``("v", vertex) | ("e", a, c, face_in, face_out, position) | ("p", face,
-    position)``. Each step appends what it crossed and returns the next state, or None at a source.
-    """
-
-    def __init__(self, mesh: TriMesh, geo: _Geometry, d: np.ndarray, src_v: np.ndarray, per_face: dict,
-                 medium: Any = None) -> None:
-        self.mesh, self.geo, self.d, self.src_v, self.per_face = mesh, geo, d, src_v, per_face
-        self.tol = 1e-12 * mesh.bbox_diagonal
-        with np.errstate(invalid="ignore"):
-            grad = np.einsum("fkj,fk->fj", geo.H, d[geo.F])  # (m, 3) gradient of the field in each face
-        grad[~geo.ok] = np.nan
-        self.grad = grad
-        # the direction of steepest descent and the rate of descent per unit length, both in the medium
-        self.adjacency = mesh.vertex_adjacency
-        if medium is None:
-            self.down, self.rate = -grad, np.linalg.norm(grad, axis=1)
-        else:
-            medium = medium.on(mesh)
-            self.adjacency = medium.adjacency()  # normalized, as the rates below
-            P = medium.plane(np.arange(mesh.n_faces), np.full(3, 1 / 3))
-            P[~geo.ok] = np.eye(2)
-            g2 = np.stack([np.einsum("fj,fj->f", grad, geo.ex), np.einsum("fj,fj->f", grad, geo.ey)], 1)
-            with np.errstate(invalid="ignore"):
-                step = -np.linalg.solve(P, g2[:, :, None])[:, :, 0]  # −M⁻¹∇d in the face's frame
-                self.down = step[:, :1] * geo.ex + step[:, 1:] * geo.ey
-                self.rate = np.sqrt(np.maximum(-np.einsum("fi,fi->f", g2, step), 0.0))
-        self.nodes: list[tuple] = []
-
-    def start(self, target: Any) -> tuple:
-        """The first state, from a vertex index or a SurfacePoint (validated)."""
-        mesh, F, V = self.mesh, self.geo.F, self.geo.V
-        if isinstance(target, SurfacePoint):
-            if target.face >= mesh.n_faces:
-                raise SourceError(f"target {target!r}: face index {target.face} is out of range: the mesh has "
-                                  f"{mesh.n_faces} faces")
-            b = target.bary
-            k = int(np.argmax(b))
-            if b[k] >= 1 - BARY_SNAP:
-                state: tuple = ("v", int(F[target.face, k]))
-                self.nodes.append(state)
-            else:
-                self.nodes.append(("p", target.face, b @ V[F[target.face]]))
-                state = ("f", target.face, np.where(b <= BARY_SNAP, 0.0, b))
-        else:
-            if isinstance(target, bool | np.bool_) or not isinstance(target, numbers.Integral):
-                raise SourceError(f"target must be a vertex index or a SurfacePoint, got {target!r}")
-            if not 0 <= int(target) < mesh.n_vertices:
-                raise SourceError(f"target vertex {int(target)} is out of range: the mesh has {mesh.n_vertices} "
-                                  "vertices")
-            state = ("v", int(target))
-            self.nodes.append(state)
-        t_val = distance_at(mesh, self.d, SurfacePoint(*_locate(mesh, self.geo, self.nodes[0])))
-        if not np.isfinite(t_val):
-            raise ParameterError("the distance is infinite at the target: no source is reachable from it")
-        return state
-
-    def _finish_in_face(self, f: int, x: np.ndarray, dx: float) -> bool:
-        items = self.per_face.get(f)
-        if not items:
-            return False
-        y, dist = _closest_on(x, items)
-        if dist > dx + 1e-9 * self.mesh.bbox_diagonal + 1e-6 * dx:
-            return False  # another source is nearer: keep descending
-        self.nodes.append(("p", f, y))
-        return True
-
-    def from_vertex(self, v: int) -> tuple | None:
-        """Step from vertex ``v``: into the steepest face or along the steepest edge."""
-        geo, d, F, V = self.geo, self.d, self.geo.F, self.geo.V
-        if self.src_v[v]:
-            return None
-        fs = geo.faces_of_vertex(v)
-        if any(self._finish_in_face(int(f), V[v], d[v]) for f in fs):
-            return None
-        best = 1e-14
-        choice: tuple | None = None
-        for f in fs:
-            g = self.down[f]
-            if not np.all(np.isfinite(g)):
-                continue
-            rate = float(self.rate[f])
-            if rate <= best:
-                continue
-            db = geo.H[f] @ g
-            iv = int(np.flatnonzero(F[f] == v)[0])
-            others = [j for j in range(3) if j != iv]
-            if all(db[j] >= -1e-12 * np.abs(db).max() for j in others):
-                best, choice = rate, ("f", int(f), np.eye(3)[iv])
-        nb = sp.csr_matrix(self.adjacency)[v]
-        for w, length in zip(nb.indices, nb.data, strict=True):
-            if length <= 0 or not np.isfinite(d[w]):
-                continue
-            rate = (d[v] - d[w]) / length
-            if rate > best:
-                best, choice = rate, ("v", int(w))
-        if choice is None and any(int(f) in self.per_face for f in fs):
-            # a smoothed field can sit below the straight distance next to its source: end there
-            ends = [(*_closest_on(V[v], self.per_face[int(f)]), int(f)) for f in fs if int(f) in self.per_face]
-            y, _, f_end = min(ends, key=lambda e: e[1])
-            self.nodes.append(("p", f_end, y))
-            return None
-        if choice is None:
-            raise SolverError(f"geodesic_path: the field has a local minimum at vertex {v} (d = {d[v]:.6g}), "
-                              "which is no source", solver="geodesic_path", status="local_minimum")
-        if choice[0] == "v":
-            self.nodes.append(choice)
-        return choice
-
-    def from_face(self, f: int, b: np.ndarray) -> tuple | None:
-        """Step from barycentric ``b`` inside (or on the boundary of) face ``f`` to where the descent leaves it."""
-        geo, d, F, V = self.geo, self.d, self.geo.F, self.geo.V
-        x = b @ V[F[f]]
-        if self._finish_in_face(f, x, float(b @ d[F[f]])):
-            return None
-        g = self.down[f]
-        if not np.all(np.isfinite(g)) or self.rate[f] <= 1e-14:
-            j = int(np.argmin(d[F[f]]))  # flat or degenerate face: to its lowest corner
-            return self._to_vertex(int(F[f, j]))
-        db = geo.H[f] @ g
-        scale = np.abs(db).max()
-        out = db < -1e-12 * scale
-        ts = np.where(out, b / np.where(out, -db, 1.0), np.inf)
-        t = float(ts.min())
-        nb_ = np.clip(b + t * db, 0.0, None)
-        nb_[int(np.argmin(ts))] = 0.0
-        nb_ /= nb_.sum()
-        k = int(np.argmax(nb_))
-        if nb_[k] >= 1 - 1e-10:
-            return self._to_vertex(int(F[f, k]))
-        i = int(np.argmin(nb_))  # the exit edge is opposite corner i
-        a, c = int(F[f, (i + 1) % 3]), int(F[f, (i + 2) % 3])
-        y = nb_ @ V[F[f]]
-        entered = self._face_across(f, a, c)
-        if entered is None:  # a valley along the edge (or the boundary): slide to its lower end
-            w = a if d[a] <= d[c] else c
-            if np.linalg.norm(y - V[w]) > self.tol and t > 0:
-                self.nodes.append(("e", a, c, f, f, y))
-            return self._to_vertex(w)
-        bh = np.zeros(3)
-        bh[F[entered] == a] = nb_[(i + 1) % 3]
-        bh[F[entered] == c] = nb_[(i + 2) % 3]
-        self.nodes.append(("e", a, c, f, entered, y))
-        return ("f", entered, bh)
-
-    def _to_vertex(self, v: int) -> tuple:
-        state = ("v", v)
-        self.nodes.append(state)
-        return state
-
-    def _face_across(self, f: int, a: int, c: int) -> int | None:
-        """The face across edge ``(a, c)`` of ``f`` into which the descent continues, or None."""
-        geo, F = self.geo, self.geo.F
-        for h in (int(h) for h in geo.faces_of_edge(a, c) if h != f):
-            gh = self.down[h]
-            if not np.all(np.isfinite(gh)):
-                continue
-            third = int(np.flatnonzero((F[h] != a) & (F[h] != c))[0])
-            dbh = geo.H[h] @ gh
-            if dbh[third] > 1e-12 * max(np.abs(dbh).max(), 1e-300):
-                return h
+def _path_medium(mesh: Any, result: Any, cost: Any, metric: Any) -> Any:
+    """The surface's travel cost or metric (given, else the result's); a volume's paths are Euclidean."""
+    if mesh.dim == 3:
+        if cost is not None or metric is not None:
+            raise ParameterError("cost and metric apply to paths on triangle meshes; inside a tetrahedral mesh "
+                                 "the path follows the Euclidean distance")
         return None
+    medium = make_medium(mesh, cost, metric)
+    if medium is None and result is not None:
+        medium = result.info.extra.get("medium")
+    return medium
 
 
-def _finish_path(mesh: TriMesh, geo: _Geometry, nodes: list[tuple], straighten: bool,
-                 return_surface_points: bool, medium: Any = None) -> Any:
-    """Straighten the walk's nodes, drop duplicates and return positions (and faces, barycentric coordinates)."""
+def _finish_path(geo: _Cells, nodes: list[tuple], straighten: bool, return_points: bool,
+                 medium: Any = None) -> Any:
+    """Straighten the walk's nodes on a surface, drop duplicates and return positions (and cells, barycentric
+    coordinates)."""
+    mesh = geo.mesh
     tol = 1e-12 * mesh.bbox_diagonal
-    if straighten:
-        nodes = _open_vertices(mesh, geo, nodes)
-        for _ in range(64):
-            _straighten(mesh, nodes, None if medium is None else medium.on(mesh))
-            nodes, switched = _switch_sides(mesh, geo, nodes)
-            if not switched:
-                break
-    P = np.array([_position(mesh, nd) for nd in nodes])
+    if straighten and mesh.dim == 2:  # the shortest path through the corridor of faces
+        nodes = straighten_corridor(geo, nodes, None if medium is None else medium.on(mesh))
+    P = np.array([_position(geo, nd) for nd in nodes])
     # consecutive duplicates (a valley that starts at a crossing, a point that was already on its source)
     keep = np.r_[True, np.linalg.norm(np.diff(P, axis=0), axis=1) > tol]
-    keep[-1] = True  # the end is the source itself: a crossing that sits on it goes instead
-    if len(P) > 1 and np.linalg.norm(P[-1] - P[np.flatnonzero(keep[:-1])[-1]]) <= tol and keep[:-1].sum() > 1:
-        keep[np.flatnonzero(keep[:-1])[-1]] = False
+    if not keep[-1]:  # the end is the source itself: the point it repeats goes instead (a target on its source:
+        keep[np.flatnonzero(keep)[-1]] = False  # the path is that one point)
+        keep[-1] = True
     nodes = [nd for nd, kp in zip(nodes, keep, strict=True) if kp]
     P = P[keep]
-    if not return_surface_points:
+    if not return_points:
         return P
-    fb = [_locate(mesh, geo, nd) for nd in nodes]
-    return P, np.array([f for f, _ in fb], dtype=np.int64), np.array([b for _, b in fb]).reshape(-1, 3)
+    located = [_locate(geo, nd) for nd in nodes]
+    return (P, np.array([c for c, _ in located], dtype=np.int64),
+            np.array([b for _, b in located]).reshape(-1, mesh.dim + 1))
 
 
-def _exact_target(mesh: TriMesh, target) -> bool:
+def _position(geo: _Cells, node) -> np.ndarray:
+    return geo.V[node[1]] if node[0] == "v" else node[-1]
+
+
+def _locate(geo: _Cells, node) -> tuple[int, np.ndarray]:
+    """A cell containing the node and the node's barycentric coordinates in it."""
+    if node[0] == "v":
+        c = int(geo.cells_of_vertex(node[1])[0])
+        return c, (geo.C[c] == node[1]).astype(float)
+    c = node[3] if node[0] == "e" else node[1]
+    b = geo.bary(c, node[-1])
+    if node[0] == "e":  # exactly on the facet
+        b[~np.isin(geo.C[c], node[1])] = 0.0
+        b /= b.sum()
+    return int(c), b
+
+
+# -- surfaces: the exact path of method="exact" -------------------------------------------------------------------
+def _exact_applies(mesh: Any, result: Any, ss: Any, target: Any) -> bool:
+    """pygeodesic's path applies: an exact field on a surface, vertex or point sources, a vertex or point target,
+    one manifold component."""
+    if mesh.dim != 2 or result is None or getattr(result.info, "method", None) != "exact" or ss is None:
+        return False
     if isinstance(target, SurfacePoint):
-        return target.face < mesh.n_faces
-    return (isinstance(target, numbers.Integral) and not isinstance(target, bool | np.bool_)
-            and 0 <= int(target) < mesh.n_vertices)
+        on_mesh = target.face < mesh.n_faces
+    else:
+        on_mesh = (isinstance(target, numbers.Integral) and not isinstance(target, bool | np.bool_)
+                   and 0 <= int(target) < mesh.n_vertices)
+    return (on_mesh and not ss.segment_faces.size and mesh.is_edge_manifold and mesh.referenced.all()
+            and np.unique(mesh.component_labels).size == 1)
 
 
-def _exact_path(mesh: TriMesh, ss: SourceSet, target, return_surface_points: bool):
+def _exact_path(mesh: Any, ss: SourceSet, target, return_surface_points: bool):
     """pygeodesic's exact (MMP) path from ``target`` to the nearest source (points inserted as vertices)."""
     import contextlib
     import io
@@ -568,309 +716,3 @@ def _exact_path(mesh: TriMesh, ss: SourceSet, target, return_surface_points: boo
         return P
     faces, bary, _ = closest_points(mesh, P)
     return P, faces, bary
-
-
-def _position(mesh: TriMesh, node) -> np.ndarray:
-    if node[0] == "v":
-        return mesh.V[node[1]]
-    return node[-1]
-
-
-def _locate(mesh: TriMesh, geo: _Geometry, node) -> tuple[int, np.ndarray]:
-    """A face containing the node and the node's barycentric coordinates in it."""
-    F, V = mesh.F, mesh.V
-    if node[0] == "v":
-        f = int(geo.faces_of_vertex(node[1])[0])
-        return f, (F[f] == node[1]).astype(float)
-    f = node[4] if node[0] == "e" else node[1]
-    b = _barycentric(V[F[f]][None], node[-1][None])[0]
-    if node[0] == "e":  # exactly on the edge (a, c)
-        a, c = node[1], node[2]
-        b[(F[f] != a) & (F[f] != c)] = 0.0
-        b /= b.sum()
-    return int(f), b
-
-
-def _segment_face(geo: _Geometry, a, b) -> int | None:
-    """A face that contains the path segment between nodes ``a`` and ``b``."""
-    if b[0] == "e":
-        return b[3]
-    if a[0] == "e":
-        return a[4]
-    if a[0] == "p":
-        return a[1]
-    if b[0] == "p":
-        return b[1]
-    shared = geo.faces_of_edge(a[1], b[1])  # an edge walk
-    return int(shared[0]) if len(shared) else None
-
-
-def _fan(geo: _Geometry, v: int, start: int, goal: int) -> list[tuple[list[int], list[int]]]:
-    """The two walks around vertex ``v`` from face ``start`` to face ``goal``: (edge ends, faces) each."""
-    F = geo.F
-    walks = []
-    for first in range(2):
-        f = start
-        others = [int(u) for u in F[f] if u != v]
-        u = others[first]
-        faces, ends = [f], []
-        ok = False
-        for _ in range(64):
-            across = [int(h) for h in geo.faces_of_edge(v, u) if h != f]
-            if len(across) != 1:
-                break  # the boundary, or a non-manifold edge
-            ends.append(u)
-            f = across[0]
-            faces.append(f)
-            if f == goal:
-                ok = True
-                break
-            u = next(int(w) for w in F[f] if w != v and w != u)
-        if ok:
-            walks.append((ends, faces))
-    return walks
-
-
-def _open_vertices(mesh: TriMesh, geo: _Geometry, nodes: list) -> list:
-    """Replace each vertex the descent passed through by crossings of the edges around it.
-
-    The crossings start at the vertex; :func:`_straighten` may then pull them off it, on the side of the
-    smaller angle (where the straight line between the path's neighbours runs on a flat surface).
-    """
-    V = mesh.V
-    # the start of a valley (a point on an edge from which the descent slid along it) is in the face of the
-    # crossing before it together with the vertex after it: the straight segment between those replaces it
-    nodes = [nd for i, nd in enumerate(nodes) if i in (0, len(nodes) - 1) or not (nd[0] == "e" and nd[3] == nd[4])]
-    out = [nodes[0]]
-    for i in range(1, len(nodes) - 1):
-        nd = nodes[i]
-        if nd[0] != "v":
-            out.append(nd)
-            continue
-        v = nd[1]
-        f_in = _segment_face(geo, nodes[i - 1], nd)
-        f_out = _segment_face(geo, nd, nodes[i + 1])
-        if f_in is None or f_out is None or f_in == f_out:
-            out.append(nd)
-            continue
-        walks = _fan(geo, v, f_in, f_out)
-        if not walks:
-            out.append(nd)
-            continue
-
-        q0, q1 = _position(mesh, nodes[i - 1]), _position(mesh, nodes[i + 1])
-        ends, faces = walks[int(np.argmin([_walk_angle(geo, v, w, q0, q1) for w in walks]))]
-        for j, u in enumerate(ends):
-            out.append(("e", v, u, faces[j], faces[j + 1], 0.7 * V[v] + 0.3 * V[u]))
-    out.append(nodes[-1])
-    return out
-
-
-def _corner(V, u, p, q) -> float:
-    a, b = V[p] - V[u] if np.ndim(p) == 0 else p - V[u], V[q] - V[u] if np.ndim(q) == 0 else q - V[u]
-    na, nb = np.linalg.norm(a), np.linalg.norm(b)
-    if na == 0 or nb == 0:
-        return 0.0
-    return float(np.arccos(np.clip(a @ b / (na * nb), -1.0, 1.0)))
-
-
-def _walk_angle(geo: _Geometry, u: int, walk, q0: np.ndarray, q1: np.ndarray) -> float:
-    """Angle at ``u`` swept by a walk around it from the direction of ``q0`` to that of ``q1``."""
-    V, F = geo.V, geo.F
-    ends, faces = walk
-    total = _corner(V, u, q0, V[ends[0]]) + _corner(V, u, V[ends[-1]], q1)
-    for f in faces[1:-1]:
-        a, b = [int(w) for w in F[f] if w != u]
-        total += _corner(V, u, a, b)
-    return total
-
-
-def _switch_sides(mesh: TriMesh, geo: _Geometry, nodes: list) -> tuple[list, bool]:
-    """Where the straightened path is held at a vertex, go around it on the side of the smaller angle.
-
-    A run of crossings that all sit on one vertex means the shortest path through the current faces wraps
-    around that vertex; if the angle on the other side is smaller, the path through the faces there is
-    shorter (on a flat surface it is the straight line), so the run is replaced by the walk on that side.
-    """
-    V = mesh.V
-    tol = 1e-12 * mesh.bbox_diagonal
-
-    def held(nd):
-        if nd[0] != "e" or nd[3] == nd[4]:
-            return None
-        for w in (nd[1], nd[2]):
-            if np.linalg.norm(nd[5] - V[w]) <= tol:
-                return int(w)
-        return None
-
-    out, switched, i, n = [nodes[0]], False, 1, len(nodes)
-    while i < n - 1:
-        u = held(nodes[i])
-        if u is None:
-            out.append(nodes[i])
-            i += 1
-            continue
-        j = i
-        while j + 1 < n - 1 and held(nodes[j + 1]) == u:
-            j += 1
-        run = nodes[i:j + 1]
-        f_in, f_out = run[0][3], run[-1][4]
-        current = [run[0][3], *(r[4] for r in run)]
-        q0, q1 = _position(mesh, out[-1]), _position(mesh, nodes[j + 1])
-        walks = [w for w in _fan(geo, u, f_in, f_out) if w[1] != current] if f_in != f_out else []
-        if walks and np.linalg.norm(q0 - V[u]) > tol and np.linalg.norm(q1 - V[u]) > tol:
-            cur_walk = ([r[2] if r[1] == u else r[1] for r in run], current)
-            other = walks[0]
-            if _walk_angle(geo, u, other, q0, q1) < _walk_angle(geo, u, cur_walk, q0, q1) - 1e-9:
-                ends, faces = other
-                out.extend(("e", u, w, faces[k], faces[k + 1], 0.7 * V[u] + 0.3 * V[w]) for k, w in enumerate(ends))
-                switched = True
-                i = j + 1
-                continue
-        out.extend(run)
-        i = j + 1
-    out.append(nodes[-1])
-    return out, switched
-
-
-def _cross(u, v) -> float:
-    return float(u[0] * v[1] - u[1] * v[0])
-
-
-def _unfold_third(pa, pc, la, lc, side_ref) -> np.ndarray:
-    """2D position of the third corner at distances ``la`` from ``pa`` and ``lc`` from ``pc``, on the side of
-    the line (pa, pc) opposite to ``side_ref``."""
-    e = pc - pa
-    L = float(np.hypot(*e))
-    ex = e / L
-    ey = np.array([-ex[1], ex[0]])
-    x = (la * la - lc * lc + L * L) / (2 * L)
-    y = np.sqrt(max(la * la - x * x, 0.0))
-    if _cross(e, side_ref - pa) > 0:
-        y = -y
-    return pa + x * ex + y * ey
-
-
-def _funnel(start, portals, end) -> tuple[list[np.ndarray], list[int]]:
-    """Shortest path in a simple polygon strip (the 'simple stupid funnel algorithm').
-
-    ``portals`` are (left, right) 2D pairs in travel order. Returns the path's corners (start, portal
-    endpoints, end) and, for each corner, the index of its portal (0 for start, len(portals) + 1 for end).
-    """
-    P = [(start, start), *portals, (end, end)]
-    apex, pl, pr = start, start, start
-    ia = il = ir = 0
-    path, idx = [start], [0]
-    i = 1
-    while i < len(P):
-        left, right = P[i]
-        corner = None
-        if _cross(pr - apex, right - apex) >= 0:  # tightens the right side
-            if np.array_equal(apex, pr) or _cross(pl - apex, right - apex) < 0:
-                pr, ir = right, i
-            else:  # crosses the left side: the left point becomes a corner
-                corner, ic = pl, il
-        if corner is None and _cross(pl - apex, left - apex) <= 0:  # tightens the left side
-            if np.array_equal(apex, pl) or _cross(pr - apex, left - apex) > 0:
-                pl, il = left, i
-            else:  # crosses the right side: the right point becomes a corner
-                corner, ic = pr, ir
-        if corner is not None:  # the funnel closed: restart it at the new corner
-            path.append(corner)
-            idx.append(ic)
-            apex, ia = corner, ic
-            pl = pr = apex
-            il = ir = ia
-            i = ia + 1
-            continue
-        i += 1
-    if not np.array_equal(path[-1], end) or idx[-1] != len(P) - 1:
-        path.append(end)
-        idx.append(len(P) - 1)
-    return path, idx
-
-
-def _straighten_chain(mesh: TriMesh, q0: np.ndarray, chain: list, q1: np.ndarray) -> list:
-    """Shortest path from ``q0`` (in the first face) through the chain's edges to ``q1`` (in the last face)."""
-    V, F = mesh.V, mesh.F
-    f0 = chain[0][3]
-    tri = V[F[f0]]
-    # 2D frame of the first face
-    ex = tri[1] - tri[0]
-    ex = ex / np.linalg.norm(ex)
-    nrm = np.cross(tri[1] - tri[0], tri[2] - tri[0])
-    ey = np.cross(nrm / np.linalg.norm(nrm), ex)
-    pos2 = {int(F[f0, k]): np.array([(tri[k] - tri[0]) @ ex, (tri[k] - tri[0]) @ ey]) for k in range(3)}
-    start = np.array([(q0 - tri[0]) @ ex, (q0 - tri[0]) @ ey])
-    portals, ends = [], []
-    prev_face = f0
-    for nd in chain:
-        a, c, f_out = nd[1], nd[2], nd[4]
-        pa, pc = pos2[a], pos2[c]
-        o_prev = next(int(w) for w in F[prev_face] if w != a and w != c)
-        ref = pos2[o_prev]
-        o = next(int(w) for w in F[f_out] if w != a and w != c)
-        po = _unfold_third(pa, pc, float(np.linalg.norm(V[o] - V[a])), float(np.linalg.norm(V[o] - V[c])), ref)
-        pos2 = {a: pa, c: pc, o: po}
-        # left / right as seen when entering f_out from prev_face
-        if _cross(pc - ref, pa - ref) > 0:
-            portals.append((pa, pc))
-            ends.append((a, c))
-        else:
-            portals.append((pc, pa))
-            ends.append((c, a))
-        prev_face = f_out
-    # the end point, in the last face's unfolded position (barycentric coordinates carry over)
-    fl = chain[-1][4]
-    b = _barycentric(V[F[fl]][None], q1[None])[0]
-    end = sum(b[k] * pos2[int(F[fl, k])] for k in range(3))
-    corners, idx = _funnel(start, portals, end)
-    out = []
-    k = 0
-    for j, nd in enumerate(chain, start=1):
-        while idx[k + 1] < j:
-            k += 1
-        (lft, rgt), (vl, vr) = portals[j - 1], ends[j - 1]
-        if idx[k] == j:  # the path bends at an endpoint of this edge
-            t = 0.0 if np.array_equal(corners[k], lft) else 1.0
-        else:
-            A, B = corners[k], corners[k + 1]
-            d = B - A
-            den = _cross(d, rgt - lft)
-            if abs(den) <= 1e-14 * (np.hypot(*d) * np.hypot(*(rgt - lft)) + 1e-300):
-                # a corner repeated (zero-length segment) or a segment along the edge: the nearest edge point
-                w = rgt - lft
-                t = float(np.clip((A - lft) @ w / (w @ w), 0.0, 1.0))
-            else:
-                t = float(np.clip(_cross(lft - A, d) / den, 0.0, 1.0))
-        x = (1 - t) * V[vl] + t * V[vr]
-        out.append((*nd[:5], x))
-    return out
-
-
-def _straighten(mesh: TriMesh, nodes: list, medium: Any = None) -> None:
-    """Move every chain of edge crossings between two fixed nodes to the shortest path through its faces
-    (in a medium: the path of least length in it, :meth:`~cvxgeodesic.operators.metric.Medium.least_crossings`)."""
-    n = len(nodes)
-    i = 1
-    while i < n - 1:
-        if not (nodes[i][0] == "e" and nodes[i][3] != nodes[i][4]):
-            i += 1
-            continue
-        j = i
-        while (j + 1 < n - 1 and nodes[j + 1][0] == "e" and nodes[j + 1][3] != nodes[j + 1][4]
-               and nodes[j + 1][3] == nodes[j][4]):
-            j += 1
-        q0, q1 = _position(mesh, nodes[i - 1]), _position(mesh, nodes[j + 1])
-        if medium is None:
-            nodes[i:j + 1] = _straighten_chain(mesh, q0, nodes[i:j + 1], q1)
-        else:
-            chain = nodes[i:j + 1]
-            ends = np.array([nd[1:3] for nd in chain], dtype=np.int64)
-            faces = np.array([chain[0][3], *(nd[4] for nd in chain)], dtype=np.int64)  # of the K + 1 pieces
-            t = medium.least_crossings(q0, ends, faces, q1)
-            if t is not None:
-                V = mesh.V
-                nodes[i:j + 1] = [(*nd[:5], (1 - tk) * V[nd[1]] + tk * V[nd[2]]) for nd, tk in zip(chain, t,
-                                                                                                  strict=True)]
-        i = j + 1

@@ -48,7 +48,7 @@ def mesh_help() -> str:
 
 def volume_help() -> str:
     """Help of the mesh argument of the commands that take tetrahedra too."""
-    from ..mesh.tet_io import MESHIO_TET_EXTENSIONS, TETGEN_EXTENSIONS
+    from ..mesh.formats.registry import MESHIO_TET_EXTENSIONS, TETGEN_EXTENSIONS
 
     return (f"{mesh_help()}; or tetrahedra, the distance inside the solid: {', '.join(MESHIO_TET_EXTENSIONS)} with "
             f"meshio, {', '.join(TETGEN_EXTENSIONS)} (TetGen)")

@@ -23,7 +23,14 @@ from .convert import as_mesh, as_trimesh
 from .fileorder import file_order_mesh, to_file_order
 from .formats import ply
 from .formats._common import FieldData, check_file, file_errors, format_error
-from .formats.registry import DISTANCE_EXTENSIONS, FORMATS, MESH_EXTENSIONS, field_reader, property_reader
+from .formats.registry import (
+    DISTANCE_EXTENSIONS,
+    FORMATS,
+    MESH_EXTENSIONS,
+    VOLUME_DISTANCE_EXTENSIONS,
+    field_reader,
+    property_reader,
+)
 from .load import load_mesh
 from .tetmesh import TetMesh
 from .trimesh import TriMesh
@@ -63,9 +70,9 @@ def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, na
       float32 (glTF has no float64), and ``inf`` is written as -1 (the format's JSON header
       cannot hold infinity).
 
-    A tetrahedral mesh (:class:`~cvxgeodesic.mesh.tetmesh.TetMesh`) is written as ``.vtu`` / ``.vtk`` with its
-    tetrahedra and the field as point data (:func:`~cvxgeodesic.mesh.tet_io.save_tet_distance`; ParaView opens
-    it), or as ``.npy``.
+    A field on a tetrahedral mesh (:class:`~cvxgeodesic.mesh.tetmesh.TetMesh`) is written as ``.vtu`` / ``.vtk``
+    with the tetrahedra (ParaView opens it: slices, clips, contours), or as ``.npy``
+    (:data:`~cvxgeodesic.mesh.formats.registry.VOLUME_DISTANCE_EXTENSIONS`).
 
     The data is written to a temporary file in the target directory which then
     replaces ``path`` (``os.replace``); if anything fails, the temporary file is
@@ -77,9 +84,9 @@ def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, na
     ----------
     path : str or os.PathLike
         Output file; its directory must exist.
-    mesh : TriMesh or tuple (V, F)
+    mesh : TriMesh, TetMesh or tuple (V, F) or (V, T)
         The mesh the field lives on, with ``n`` vertices (anything
-        :func:`~cvxgeodesic.mesh.convert.as_trimesh` takes).
+        :func:`~cvxgeodesic.mesh.convert.as_mesh` takes).
     distance : (n,) array_like of float
         One value per vertex (``inf`` allowed, e.g. for unreachable vertices).
     name : str, optional
@@ -91,7 +98,8 @@ def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, na
         welded duplicates share a value, vertices in no face get ``inf``; the faces are the
         file's own, :func:`~cvxgeodesic.mesh.fileorder.file_order_mesh`), so the output joins
         the input file by vertex index and has its connectivity. In the CSV, ``vertex`` is then
-        the mesh index (-1 for dropped vertices). The command line always does this.
+        the mesh index (-1 for dropped vertices). A volume's file vertices in no tetrahedron are
+        written at their place, with ``inf``. The command line always does this.
     overwrite_read_only : bool, default False
         Replace ``path`` even when it is read-only (it stays read-only: its mode is kept).
 
@@ -103,7 +111,7 @@ def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, na
     Raises
     ------
     ParameterError
-        If the extension is unsupported, ``distance`` does not have shape (n,),
+        If the extension is unsupported (for the mesh's kind), ``distance`` does not have shape (n,),
         ``name`` is invalid, the parent directory does not exist, or ``path`` is a read-only
         file and ``overwrite_read_only`` is False.
     OSError
@@ -122,46 +130,39 @@ def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, na
     check_replaceable(p, overwrite_read_only=overwrite_read_only)  # before the work of formatting the data
     fmt = FORMATS[p.suffix.lower()]
     assert fmt.write_field is not None  # check_output_path accepted only DISTANCE_EXTENSIONS
-    if isinstance(volume := as_mesh(mesh), TetMesh):
-        return _save_tet_distance(p, volume, distance, name, file_order, overwrite_read_only)
-    mesh = as_trimesh(mesh)
+    mesh = as_mesh(mesh)
+    if mesh.dim not in fmt.dims:  # every format holds surfaces: only a volume's field can be refused here
+        *first, last = VOLUME_DISTANCE_EXTENSIONS
+        raise ParameterError(f"{p}: a field on a tetrahedral mesh is written as {', '.join(first)} or {last}, not "
+                             f"{p.suffix!r}")
     d = as_vertex_field(distance, "distance", mesh.n_vertices)
     if not isinstance(name, str) or not _NAME_RE.match(name) or name in _RESERVED:
         raise ParameterError(
             f"invalid field name {name!r}: use letters, digits, '_', '.', '-' (not x, y, z, vertex, file_vertex)"
         )
-    if file_order:
+    if not file_order:
+        field = FieldData(mesh.V, mesh.cells, d, name, np.arange(mesh.n_vertices), mesh.vertex_map, mesh.name)
+    elif mesh.dim == 2:
         out = file_order_mesh(mesh)
         field = FieldData(out.V, out.F, to_file_order(mesh, d), name, mesh.file_index, np.arange(out.n_vertices),
                           mesh.name)
     else:
-        field = FieldData(mesh.V, mesh.F, d, name, np.arange(mesh.n_vertices), mesh.vertex_map, mesh.name)
+        field = _volume_in_file_order(mesh, d, name)
     write = fmt.write_field
     atomic_write(p, lambda fh: write(fh, field), overwrite_read_only=overwrite_read_only)
     return p
 
 
-def _save_tet_distance(p: Path, mesh: TetMesh, distance: ArrayLike, name: str, file_order: bool,
-                       overwrite_read_only: bool) -> Path:
-    """:func:`save_distance` of a tetrahedral mesh: ``.vtu``/``.vtk`` (or ``.npy``), optionally in the file's
-    numbering (dropped vertices at their place, with ``inf``)."""
-    from .tet_io import TET_DISTANCE_EXTENSIONS, save_tet_distance
-
-    if p.suffix.lower() not in (*TET_DISTANCE_EXTENSIONS, ".npy"):
-        raise ParameterError(f"{p}: a field on a tetrahedral mesh is written as .vtu, .vtk or .npy, not "
-                             f"{p.suffix!r}")
-    d = as_vertex_field(distance, "distance", mesh.n_vertices)
-    if file_order and not np.array_equal(mesh.file_index, np.arange(mesh.n_vertices)):
-        V = np.empty((mesh.n_file_vertices, 3))
-        V[mesh.vertex_map] = mesh.V
-        V[mesh.file_index < 0] = mesh.dropped_vertices
-        df = np.full(mesh.n_file_vertices, np.inf)
-        df[mesh.vertex_map] = d
-        mesh, d = TetMesh(V, mesh.vertex_map[mesh.T], name=mesh.name), df
-    if p.suffix.lower() == ".npy":
-        atomic_write(p, lambda fh: np.save(fh, d), overwrite_read_only=overwrite_read_only)
-        return p
-    return save_tet_distance(p, mesh, d, name=name, overwrite_read_only=overwrite_read_only)
+def _volume_in_file_order(mesh: TetMesh, d: np.ndarray, name: str) -> FieldData:
+    """A field on a tetrahedral mesh in its file's numbering: nothing is welded in a volume, so the file's vertices
+    are the mesh's and those in no tetrahedron, back at their place with ``inf``."""
+    n_file = mesh.n_file_vertices
+    V = np.empty((n_file, 3))
+    V[mesh.vertex_map] = mesh.V
+    V[mesh.file_index < 0] = mesh.dropped_vertices
+    d_file = np.full(n_file, np.inf)
+    d_file[mesh.vertex_map] = d
+    return FieldData(V, mesh.vertex_map[mesh.T], d_file, name, mesh.file_index, np.arange(n_file), mesh.name)
 
 
 def load_distance(path: str | os.PathLike, name: str = "distance") -> np.ndarray:

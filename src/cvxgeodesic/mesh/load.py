@@ -1,4 +1,5 @@
-"""``load_mesh``: read a mesh file through the format registry, then check, triangulate and weld it.
+"""``load_mesh``: read a mesh file through the format registry, then check it and build a surface (triangulated,
+welded) or, from a file holding tetrahedra, a volume.
 
 Every problem with a file is reported as a :class:`~cvxgeodesic.errors.MeshFormatError` whose message
 names the file and, for text formats, the line (a missing file as a
@@ -13,9 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import MeshRepairWarning
+from ..errors import MeshFormatError, MeshRepairWarning
 from .formats._common import RawMesh, at_line, check_file, file_errors, format_error
-from .formats.registry import mesh_reader
+from .formats.registry import mesh_format
 from .tetmesh import TetMesh
 from .trimesh import TriMesh
 
@@ -38,10 +39,12 @@ def load_mesh(path: str | os.PathLike) -> TriMesh | TetMesh:
     path : str or os.PathLike
         The file to read.
 
-    Files holding tetrahedra give a :class:`~cvxgeodesic.mesh.tetmesh.TetMesh`
-    (:func:`~cvxgeodesic.mesh.tet_io.load_tet_mesh`): TetGen's ``.node``/``.ele``, and through meshio
-    ``.msh``, ``.mesh``, ``.inp``, ``.xdmf``, ``.med``, and ``.vtu``/``.vtk`` files with ``tetra`` cells (a VTK
-    file without them is read again as a surface).
+    Files holding tetrahedra give a :class:`~cvxgeodesic.mesh.tetmesh.TetMesh` (the list is
+    :data:`~cvxgeodesic.mesh.formats.registry.VOLUME_EXTENSIONS`): TetGen's ``.node``/``.ele`` pair (either
+    name; named after the stem), and through meshio ``.msh``, ``.mesh``, ``.inp``, ``.xdmf``, ``.med``, and
+    ``.vtu``/``.vtk`` files with ``tetra`` cells (a VTK file without them is a surface). ``tetra10`` cells
+    give their corners; the file's other cells are ignored (noted). Tetrahedra repeating a vertex, exact
+    duplicates and vertices in no tetrahedron are dropped (noted); nothing is welded.
 
     Returns
     -------
@@ -61,9 +64,11 @@ def load_mesh(path: str | os.PathLike) -> TriMesh | TetMesh:
     MeshFileNotFoundError
         If the file does not exist (a ``MeshFormatError`` and a ``FileNotFoundError``).
     MeshFormatError
-        If the file is a directory, has an unsupported extension, is empty or malformed
-        (the message names the line for text formats), has a face index out of range
-        (the message names the face and the index), a non-finite coordinate, or no faces.
+        If the file is a directory or not a regular file, has an unsupported extension, is empty or malformed
+        (the message names the line for text formats), has a face or tetrahedron index out of range
+        (the message names the cell and the index), a non-finite coordinate, or no faces (no tetrahedra, for
+        a format only volumes have), or needs meshio or trimesh that is not installed (the message says what
+        to install).
 
     Warns
     -----
@@ -71,7 +76,7 @@ def load_mesh(path: str | os.PathLike) -> TriMesh | TetMesh:
         (a ``UserWarning``) When faces that became degenerate by welding (a repeated
         vertex) or exact duplicate faces (the same vertex set as an earlier face) are
         dropped, and when welding or dropping vertices makes the mesh's vertex count
-        differ from the file's; the message says how many.
+        differ from the file's; the message says how many. For a volume, every note.
 
     Notes
     -----
@@ -98,17 +103,69 @@ def load_mesh(path: str | os.PathLike) -> TriMesh | TetMesh:
     no_such_mesh.obj: no such file
     """
     p = Path(path)
-    from .tet_io import TET_MESH_EXTENSIONS, load_tet_mesh, read_volume
-
-    ext = p.suffix.lower()
-    if ext in TET_MESH_EXTENSIONS and ext not in (".vtu", ".vtk"):
-        return load_tet_mesh(p)
-    read = mesh_reader(p)
-    check_file(p, "a mesh file")
-    if ext in (".vtu", ".vtk") and (volume := read_volume(p)) is not None:
-        return volume  # the same messages for missing, directory and empty files in every format
+    fmt = mesh_format(p)
+    check_file(p, "a mesh file")  # the same messages for missing, directory and empty files in every format
+    assert fmt.read_mesh is not None  # mesh_format returns formats with a reader
     with file_errors(p):
-        return _finish(p, read(p))
+        raw = fmt.read_mesh(p)
+    if raw.tets is not None and raw.tets.size:
+        return _finish_volume(p, raw)
+    cell_types = ", ".join(sorted(raw.other_cells or {})) or "none"
+    if 2 not in fmt.dims:
+        raise format_error(p, f"no tetrahedra (cell types: {cell_types})")
+    if raw.other_cells is not None and raw.sizes.size == 0:
+        raise format_error(p, f"no triangle or quad cells (cell types: {cell_types})")
+    with file_errors(p):
+        return _finish(p, raw)
+
+
+def _finish_volume(path: Path, raw: RawMesh) -> TetMesh:
+    """Check the points and tetrahedra of a file; drop tetrahedra repeating a vertex, duplicates and vertices in
+    no tetrahedron (each noted and warned); build the :class:`TetMesh` that remembers the file's numbering."""
+    V, T = np.asarray(raw.V, dtype=np.float64), np.asarray(raw.tets, dtype=np.int64)
+    n, name, notes = V.shape[0], raw.name or path.name, list(raw.notes)
+    bad = ~np.isfinite(V).all(axis=1)
+    if bad.any():
+        raise format_error(path, f"point {int(np.flatnonzero(bad)[0])} has a non-finite coordinate")
+    out = (T < 0) | (T >= n)
+    if out.any():
+        k = int(np.flatnonzero(out.any(axis=1))[0])
+        raise format_error(path, f"tetrahedron {k} has point index {T[k].tolist()} outside [0, {n})")
+    if raw.other_cells:
+        notes.append(f"{path.name}: ignored cells other than tetrahedra: "
+                     + ", ".join(f"{c} {t}" for t, c in sorted(raw.other_cells.items())))
+    T = _unique_tets(T, name, notes)
+    used = np.zeros(n, dtype=bool)
+    used[T.ravel()] = True
+    vertex_map = np.flatnonzero(used)
+    file_index = np.full(n, -1, dtype=np.int64)
+    file_index[vertex_map] = np.arange(vertex_map.size)
+    if vertex_map.size < n:
+        notes.append(f"{name}: dropped {n - vertex_map.size} vertices in no tetrahedron (first: file vertex "
+                     f"{int(np.flatnonzero(~used)[0])}); mesh indices differ from the file's, file_index maps them")
+    for msg in notes:
+        warnings.warn(msg, MeshRepairWarning, stacklevel=3)
+    return TetMesh(V[vertex_map], file_index[T], vertex_map=vertex_map, name=name, file_index=file_index,
+                   dropped_vertices=V[~used], notes=notes)
+
+
+def _unique_tets(T: np.ndarray, name: str, notes: list[str]) -> np.ndarray:
+    """``T`` without the tetrahedra that repeat a vertex and the exact duplicates (same four vertices as an earlier
+    one), each noted; a MeshFormatError when none is left."""
+    S = np.sort(T, axis=1)
+    rep = (S[:, 1:] == S[:, :-1]).any(axis=1)
+    if rep.any():
+        notes.append(f"{name}: dropped {int(rep.sum())} tetrahedra that repeat a vertex (first: tet "
+                     f"{int(np.flatnonzero(rep)[0])} of the file)")
+        T, S = T[~rep], S[~rep]
+    if T.shape[0] == 0:
+        raise MeshFormatError(f"{name}: no tetrahedra left after dropping those that repeat a vertex")
+    _, first = np.unique(S, axis=0, return_index=True)
+    if first.size < T.shape[0]:
+        notes.append(f"{name}: dropped {T.shape[0] - first.size} duplicate tetrahedra (same vertices as an earlier "
+                     "one)")
+        T = T[np.sort(first)]
+    return T
 
 
 def _finish(path: Path, raw: RawMesh) -> TriMesh:

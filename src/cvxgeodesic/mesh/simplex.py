@@ -64,6 +64,7 @@ class SimplexMesh:
     dim: int
     V: np.ndarray
     name: str
+    file_index: np.ndarray
 
     @property
     def cells(self) -> np.ndarray:
@@ -91,6 +92,11 @@ class SimplexMesh:
     @property
     def n_cells(self) -> int:
         return int(self.cells.shape[0])
+
+    @property
+    def n_file_vertices(self) -> int:
+        """Number of vertices in the file the mesh was read from (``n_vertices`` when not from a file)."""
+        return int(self.file_index.shape[0])
 
     @cached_property
     def total_measure(self) -> float:

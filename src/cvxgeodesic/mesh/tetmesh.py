@@ -113,11 +113,6 @@ class TetMesh(SimplexMesh):
     def n_tets(self) -> int:
         return int(self.T.shape[0])
 
-    @property
-    def n_file_vertices(self) -> int:
-        """Number of vertices in the file the mesh was read from (``n_vertices`` when not from a file)."""
-        return int(self.file_index.shape[0])
-
     # -- volumes and shape ------------------------------------------------------------------------------------
     @cached_property
     def signed_volumes(self) -> np.ndarray:

@@ -109,11 +109,6 @@ class TriMesh(SimplexMesh):
         return int(self.F.shape[0])
 
     @property
-    def n_file_vertices(self) -> int:
-        """Number of vertices in the file the mesh was read from (``n_vertices`` when not from a file)."""
-        return int(self.file_index.shape[0])
-
-    @property
     def file_faces(self) -> np.ndarray:
         """(k, 3) int64 ndarray: the file's triangles in the file's vertex numbering.
 

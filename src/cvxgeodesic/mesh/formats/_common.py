@@ -1,4 +1,4 @@
-"""What the format modules share: the polygon soup a reader returns, the field a writer takes, file checks."""
+"""What the format modules share: the cells a reader returns, the field a writer takes, file checks."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import importlib
 import stat
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -23,7 +23,7 @@ INSTALL_HINT = "pip install 'cvxgeodesic[io]' (or pip install {pkg})"
 
 @dataclass
 class RawMesh:
-    """Polygon mesh as read from a file, before validation and welding.
+    """The cells a file holds, as read, before validation and welding: polygons and/or tetrahedra.
 
     Attributes
     ----------
@@ -37,6 +37,15 @@ class RawMesh:
         1-based line number of each vertex / polygon (text formats only).
     raw_idx : (k,) int64 ndarray or None
         The indices as written in the file (for messages), when they differ from ``idx``.
+    tets : (t, 4) int64 ndarray or None
+        0-based corners of the file's tetrahedra (not yet range-checked); None or empty: it holds none.
+    other_cells : dict of str to int or None
+        For formats whose cells are typed: the file's cells other than tetrahedra, by type (meshio's names:
+        ``"triangle"``, ``"line"``, ...) with their counts; what a volume ignores, named in its notes.
+    notes : list of str
+        What the reader changed in what it returns (10-node tetrahedra reduced to their corners).
+    name : str or None
+        The mesh's name when it is not the file's name (TetGen's pair: the common stem).
     """
 
     V: np.ndarray
@@ -45,6 +54,10 @@ class RawMesh:
     v_lines: Any = None
     f_lines: Any = None
     raw_idx: np.ndarray | None = None
+    tets: np.ndarray | None = None
+    other_cells: dict[str, int] | None = None
+    notes: list[str] = field(default_factory=list)
+    name: str | None = None
 
 
 @dataclass(frozen=True)
@@ -54,7 +67,8 @@ class FieldData:
     Attributes
     ----------
     V : (n, 3) float64 ndarray
-    F : (m, 3) int64 ndarray
+    cells : (m, 3) or (m, 4) int64 ndarray
+        The triangles of a surface or the tetrahedra of a volume, as indices into ``V``.
     d : (n,) float64 ndarray
         The field (``inf`` allowed).
     name : str
@@ -68,7 +82,7 @@ class FieldData:
     """
 
     V: np.ndarray
-    F: np.ndarray
+    cells: np.ndarray
     d: np.ndarray
     name: str
     vertex: np.ndarray

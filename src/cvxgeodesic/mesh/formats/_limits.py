@@ -36,8 +36,8 @@ __all__ = ["check_limits"]
 def check_limits(path: Path) -> None:
     """Check the header counts of a file meshio is about to read (formats without counts: nothing to check).
 
-    A file already checked and unchanged (same size, time and inode) is not checked again: ``load_mesh`` hands a
-    VTU to meshio twice (volume, then surface).
+    A file already checked and unchanged (same size, time and inode) is not checked again: a mesh file is often
+    read again for its point data (``load_vertex_property``, ``load_distance``).
 
     Raises
     ------

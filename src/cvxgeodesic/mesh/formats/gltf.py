@@ -122,7 +122,8 @@ def write_field(fh: BinaryIO, field: FieldData) -> None:
         trimesh is not installed (the message says what to install).
     """
     trimesh = optional_package("trimesh", "writing .glb files", ParameterError)
-    mesh = trimesh.Trimesh(np.asarray(field.V, dtype=np.float64), np.asarray(field.F, dtype=np.int64), process=False)
+    V, F = np.asarray(field.V, dtype=np.float64), np.asarray(field.cells, dtype=np.int64)
+    mesh = trimesh.Trimesh(V, F, process=False)
     values = np.where(np.isfinite(field.d), field.d, GLB_NO_DISTANCE).astype(np.float32)
     mesh.vertex_attributes[glb_attribute_name(field.name)] = values
     data = mesh.export(file_type="glb")

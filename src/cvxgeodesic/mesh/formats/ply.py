@@ -355,7 +355,7 @@ def _mesh_parts(path: Path, values: dict[str, dict[str, Any]], line_nos: dict[st
 
 def write_field(fh: BinaryIO, field: FieldData) -> None:
     """Binary little-endian PLY: ``double`` ``x, y, z`` and the field; faces as ``list uchar int vertex_indices``."""
-    n, m = field.V.shape[0], field.F.shape[0]
+    n, m = field.V.shape[0], field.cells.shape[0]
     header = (
         "ply\n"
         "format binary_little_endian 1.0\n"
@@ -376,5 +376,5 @@ def write_field(fh: BinaryIO, field: FieldData) -> None:
     fh.write(vert.tobytes())
     face = np.empty(m, dtype=[("c", "u1"), ("i", "<i4", (3,))])
     face["c"] = 3
-    face["i"] = field.F
+    face["i"] = field.cells
     fh.write(face.tobytes())

@@ -1,7 +1,9 @@
 """The one table of file formats: it drives ``load_mesh``, ``save_distance``, ``load_distance`` and the CLI's help.
 
 Adding a format is a module in this package and a line in :data:`FORMATS`; the extension lists, the
-dispatch and every command-line help text that lists formats follow.
+dispatch and every command-line help text that lists formats follow. A format says which meshes it holds
+(``dims``: 2 for triangle surfaces, 3 for tetrahedral volumes); one reader serves both where a file may
+hold either (VTK, VTU), and ``load_mesh`` builds what the file has.
 """
 
 from __future__ import annotations
@@ -14,11 +16,12 @@ from typing import BinaryIO
 
 import numpy as np
 
-from . import csv, gltf, npy, obj, off, ply, stl, vtk
+from . import csv, gltf, npy, obj, off, ply, stl, tetgen, via_meshio
 from ._common import FieldData, RawMesh, format_error
 
-__all__ = ["DISTANCE_EXTENSIONS", "FORMATS", "Format", "MESH_EXTENSIONS", "PROPERTY_EXTENSIONS", "field_formats_help",
-           "field_reader", "mesh_formats_help", "mesh_reader", "property_reader"]
+__all__ = ["DISTANCE_EXTENSIONS", "FORMATS", "Format", "MESHIO_TET_EXTENSIONS", "MESH_EXTENSIONS",
+           "PROPERTY_EXTENSIONS", "TETGEN_EXTENSIONS", "VOLUME_DISTANCE_EXTENSIONS", "VOLUME_EXTENSIONS",
+           "field_formats_help", "field_reader", "mesh_format", "mesh_formats_help", "property_reader"]
 
 
 @dataclass(frozen=True)
@@ -33,13 +36,16 @@ class Format:
     package : str or None
         The optional package (the ``io`` extra) that reads and writes it, None when built in.
     read_mesh : callable ``(path) -> RawMesh`` or None
-        For :func:`~cvxgeodesic.mesh.load.load_mesh`.
+        For :func:`~cvxgeodesic.mesh.load.load_mesh`: the polygons and/or tetrahedra of the file.
     write_field : callable ``(fh, FieldData) -> None`` or None
-        For :func:`~cvxgeodesic.mesh.io.save_distance`.
+        For :func:`~cvxgeodesic.mesh.io.save_distance`: a field on a mesh of one of ``dims``.
     read_field : callable ``(path, name) -> (n,) float64 ndarray`` or None
         For :func:`~cvxgeodesic.mesh.io.load_distance`; every format with a writer has one.
     field_note : str
         What a field file of this format holds (command-line help).
+    dims : tuple of int
+        The simplex dimensions of the meshes it holds, read or written: 2, triangle surfaces; 3, tetrahedral
+        volumes.
     """
 
     extension: str
@@ -49,6 +55,7 @@ class Format:
     write_field: Callable[[BinaryIO, FieldData], None] | None = None
     read_field: Callable[[Path, str], np.ndarray] | None = None
     field_note: str = ""
+    dims: tuple[int, ...] = (2,)
 
 
 #: Every format, keyed by extension; the order is the order of the extension lists and help texts.
@@ -58,24 +65,40 @@ FORMATS: dict[str, Format] = {f.extension: f for f in (
     Format(".ply", "PLY (ASCII or binary)", read_mesh=ply.read_mesh, write_field=ply.write_field,
            read_field=ply.read_field, field_note="mesh + field, float64"),
     Format(".stl", "STL (ASCII or binary)", read_mesh=stl.read_mesh),
-    Format(".npy", "NumPy array", write_field=npy.write_field, read_field=npy.read_field, field_note="field only"),
+    Format(".npy", "NumPy array", write_field=npy.write_field, read_field=npy.read_field, field_note="field only",
+           dims=(2, 3)),
     Format(".csv", "CSV table", write_field=csv.write_field, read_field=csv.read_field,
            field_note="vertex,file_vertex,x,y,z,distance"),
     Format(".glb", "binary glTF", "trimesh", gltf.read_mesh, gltf.write_field, gltf.read_field,
            field_note="vertex attribute _DISTANCE, float32"),
     Format(".gltf", "glTF", "trimesh", gltf.read_mesh),
     Format(".3mf", "3MF", "trimesh", gltf.read_mesh),
-    Format(".vtk", "legacy VTK", "meshio", vtk.read_mesh, partial(vtk.write_field, ext=".vtk"), vtk.read_field,
-           field_note="ParaView"),
-    Format(".vtu", "VTK XML unstructured grid", "meshio", vtk.read_mesh, partial(vtk.write_field, ext=".vtu"),
-           vtk.read_field, field_note="ParaView"),
+    Format(".vtk", "legacy VTK", "meshio", via_meshio.read_mesh, partial(via_meshio.write_field, ext=".vtk"),
+           via_meshio.read_field, field_note="ParaView", dims=(2, 3)),
+    Format(".vtu", "VTK XML unstructured grid", "meshio", via_meshio.read_mesh,
+           partial(via_meshio.write_field, ext=".vtu"), via_meshio.read_field, field_note="ParaView", dims=(2, 3)),
+    Format(".msh", "Gmsh", "meshio", via_meshio.read_mesh, dims=(3,)),
+    Format(".mesh", "Medit", "meshio", via_meshio.read_mesh, dims=(3,)),
+    Format(".inp", "Abaqus", "meshio", via_meshio.read_mesh, dims=(3,)),
+    Format(".xdmf", "XDMF", "meshio", via_meshio.read_mesh, dims=(3,)),
+    Format(".med", "Salome MED", "meshio", via_meshio.read_mesh, dims=(3,)),
+    Format(".node", "TetGen points (and the .ele beside it)", read_mesh=tetgen.read_mesh, dims=(3,)),
+    Format(".ele", "TetGen tetrahedra (and the .node beside it)", read_mesh=tetgen.read_mesh, dims=(3,)),
 )}
 
-#: File extensions understood by :func:`~cvxgeodesic.mesh.load.load_mesh` (compared case-insensitively).
-MESH_EXTENSIONS = tuple(e for e, f in FORMATS.items() if f.read_mesh is not None)
+#: Surface files understood by :func:`~cvxgeodesic.mesh.load.load_mesh` (compared case-insensitively).
+MESH_EXTENSIONS = tuple(e for e, f in FORMATS.items() if f.read_mesh is not None and 2 in f.dims)
+#: Files holding tetrahedra understood by :func:`~cvxgeodesic.mesh.load.load_mesh` (a VTK or VTU file without
+#: tetrahedra is a surface).
+VOLUME_EXTENSIONS = tuple(e for e, f in FORMATS.items() if f.read_mesh is not None and 3 in f.dims)
+#: The volume files read through meshio, and TetGen's pair (command-line help).
+MESHIO_TET_EXTENSIONS = tuple(e for e in VOLUME_EXTENSIONS if FORMATS[e].package == "meshio")
+TETGEN_EXTENSIONS = tuple(e for e in VOLUME_EXTENSIONS if FORMATS[e].read_mesh is tetgen.read_mesh)
 #: File extensions understood by :func:`~cvxgeodesic.mesh.io.save_distance` and
 #: :func:`~cvxgeodesic.mesh.io.load_distance` (compared case-insensitively).
 DISTANCE_EXTENSIONS = tuple(e for e, f in FORMATS.items() if f.write_field is not None)
+#: The distance files :func:`~cvxgeodesic.mesh.io.save_distance` writes for a field on a tetrahedral mesh.
+VOLUME_DISTANCE_EXTENSIONS = tuple(e for e in DISTANCE_EXTENSIONS if 3 in FORMATS[e].dims)
 
 
 #: Mesh file extensions whose files carry named per-vertex properties (PLY properties, VTK point data, glTF
@@ -93,13 +116,15 @@ def property_reader(path: Path) -> Callable[[Path, str], np.ndarray]:
     return fmt.read_field
 
 
-def mesh_reader(path: Path) -> Callable[[Path], RawMesh]:
-    """The mesh reader for ``path``'s extension, or a MeshFormatError listing the supported ones."""
+def mesh_format(path: Path) -> Format:
+    """The format of the mesh file ``path`` (it has a ``read_mesh``), or a MeshFormatError listing the supported
+    extensions: the surfaces', then those only volumes have."""
     fmt = FORMATS.get(path.suffix.lower())
     if fmt is None or fmt.read_mesh is None:
+        volumes = [e for e in VOLUME_EXTENSIONS if e not in MESH_EXTENSIONS]
         raise format_error(path, f"unsupported mesh file extension {path.suffix!r}; supported: "
-                                 f"{', '.join(MESH_EXTENSIONS)} (any case)")
-    return fmt.read_mesh
+                                 f"{', '.join(MESH_EXTENSIONS)} (any case), and for tetrahedra {', '.join(volumes)}")
+    return fmt
 
 
 def field_reader(path: Path) -> Callable[[Path, str], np.ndarray]:

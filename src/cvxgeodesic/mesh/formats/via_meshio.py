@@ -1,4 +1,6 @@
-"""VTK (legacy ``.vtk``) and VTU (XML ``.vtu``) through meshio (the ``io`` extra): meshes in, fields out as point data.
+"""The formats read and written through meshio (the ``io`` extra): VTK (legacy ``.vtk``), VTU (XML ``.vtu``), Gmsh
+``.msh``, Medit ``.mesh``, Abaqus ``.inp``, XDMF, MED. Meshes in (triangles, quads and tetrahedra), fields out
+as point data (VTK, VTU).
 
 meshio is imported only when such a file is read or written; without it the error names the extra to install.
 """
@@ -8,6 +10,7 @@ from __future__ import annotations
 import contextlib
 import io
 import tempfile
+import warnings
 from pathlib import Path
 from typing import Any, BinaryIO
 
@@ -19,14 +22,23 @@ from ._limits import check_limits
 
 __all__ = ["read_field", "read_mesh", "write_field"]
 
+#: meshio's cell types of tetrahedra; ``tetra10`` (quadratic) ones are read as their 4 corners.
+_TETS = ("tetra", "tetra10")
+#: meshio's cell types of faces, read as polygons.
+_FACES = ("triangle", "quad")
+#: meshio's name of each kind of cell written: a surface's triangles, a volume's tetrahedra.
+_CELL_TYPE = {3: "triangle", 4: "tetra"}
+
 
 def _read(path: Path, what: str) -> Any:
     """``meshio.read(path)``, every failure a MeshFormatError."""
     lib = optional_package("meshio", f"{path}: {what} {path.suffix} files", MeshFormatError)
     check_limits(path)  # header counts and compressed arrays within the file's size: meshio allocates what they say
     try:
-        # meshio prints its own error and calls sys.exit(1) on files it cannot parse
-        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        # meshio prints its own error and calls sys.exit(1) on files it cannot parse, and warns about what it skips
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()), \
+                warnings.catch_warnings():
+            warnings.simplefilter("ignore")
             return lib.read(str(path))
     except (Exception, SystemExit) as exc:  # anything from KeyError to their own ReadError, and meshio's exit
         detail = f"{type(exc).__name__}: {exc}" if not isinstance(exc, SystemExit) else "not a valid file"
@@ -34,32 +46,45 @@ def _read(path: Path, what: str) -> Any:
 
 
 def read_mesh(path: Path) -> RawMesh:
-    """The triangle and quad cells of a VTK/VTU file (other cell types are ignored; 2-D points get z = 0).
+    """The triangles, quads and tetrahedra of a file meshio reads; the other cells are only counted.
+
+    2-D points get z = 0 in a file without tetrahedra.
 
     Raises
     ------
     MeshFormatError
-        meshio is missing (the message says what to install), cannot read the file, or the file
-        has no triangles or quads.
+        meshio is missing (the message says what to install) or cannot read the file, or the file has
+        tetrahedra and its points are not 3-D.
     """
     mm = _read(path, "reading")
     V = np.asarray(mm.points, dtype=np.float64)
+    other: dict[str, int] = {}
+    faces, sizes, tets, notes = [], [], [], []
+    for block in mm.cells:
+        if block.type not in _TETS:
+            other[block.type] = other.get(block.type, 0) + len(block.data)
+        if block.type in _FACES:
+            data = np.asarray(block.data, dtype=np.int64)
+            faces.append(data.ravel())
+            sizes.append(np.full(data.shape[0], data.shape[1], dtype=np.int64))
+        elif block.type in _TETS:
+            tets.append(np.asarray(block.data, dtype=np.int64)[:, :4])
+            if block.type == "tetra10":
+                notes.append(f"{path.name}: {len(block.data)} 10-node (quadratic) tetrahedra: their 4 corners are "
+                             "used")
+    if tets and (V.ndim != 2 or V.shape[1] != 3):
+        raise MeshFormatError(f"{path}: points must be 3-D for a tetrahedral mesh, got shape {V.shape}")
     if V.ndim == 2 and V.shape[1] == 2:
         V = np.column_stack([V, np.zeros(V.shape[0])])
-    parts, sizes = [], []
-    for block in mm.cells:
-        if block.type in ("triangle", "quad"):
-            data = np.asarray(block.data, dtype=np.int64)
-            parts.append(data.ravel())
-            sizes.append(np.full(data.shape[0], data.shape[1], dtype=np.int64))
-    if not parts:
-        types = ", ".join(sorted({b.type for b in mm.cells})) or "none"
-        raise MeshFormatError(f"{path}: no triangle or quad cells (cell types: {types})")
-    return RawMesh(V, np.concatenate(parts), np.concatenate(sizes))
+    idx = np.concatenate(faces) if faces else np.zeros(0, dtype=np.int64)
+    n_sides = np.concatenate(sizes) if sizes else np.zeros(0, dtype=np.int64)
+    return RawMesh(V, idx, n_sides, tets=np.vstack(tets) if tets else None, other_cells=other,
+                   notes=notes)
 
 
 def write_field(fh: BinaryIO, field: FieldData, ext: str) -> None:
-    """VTU (XML, binary; ``ext=".vtu"``) or legacy VTK (binary; ``".vtk"``) with the field as point data ``field.name``.
+    """VTU (XML, binary; ``ext=".vtu"``) or legacy VTK (binary; ``".vtk"``): the triangles or tetrahedra, with the
+    field as point data ``field.name`` (ParaView opens it: slices, clips, contours of a volume).
 
     Raises
     ------
@@ -67,7 +92,8 @@ def write_field(fh: BinaryIO, field: FieldData, ext: str) -> None:
         meshio is not installed (the message says what to install).
     """
     meshio = optional_package("meshio", f"writing {ext} files", ParameterError)
-    mesh = meshio.Mesh(np.asarray(field.V, dtype=np.float64), [("triangle", np.asarray(field.F, dtype=np.int64))],
+    cells = np.asarray(field.cells, dtype=np.int64)
+    mesh = meshio.Mesh(np.asarray(field.V, dtype=np.float64), [(_CELL_TYPE[cells.shape[1]], cells)],
                        point_data={field.name: np.asarray(field.d, dtype=np.float64)})
     # meshio writes to paths only: write into a private temporary folder, then copy into ``fh``
     with tempfile.TemporaryDirectory(prefix="cvxgeodesic-") as tmp:
