@@ -229,6 +229,23 @@ def test_cli_compare_lists_heat_and_dijkstra(prism, tmp_path, capsys):
         [f"field_{r}.png" for r in runs] + [f"error_{r}.png" for r in runs] + ["gradient_histogram.png"])
 
 
+def test_cli_path_inside_a_volume(prism, tmp_path, capsys):
+    """One path command for both dimensions: inside a solid it was refused (only the Python API drew it)."""
+    path = _msh(prism, tmp_path / "part.msh")
+    target = int(np.argmax(np.linalg.norm(prism.V - prism.V[0], axis=1)))
+    assert main(["path", str(path), "-s", "0", "--to", str(target), "-o", str(tmp_path / "p.csv"),
+                 "--png", str(tmp_path / "p.png"), "--slice-normal", "0,1,0"]) == 0
+    assert "qclp: path of" in capsys.readouterr().err  # the volume's default method
+    lines = (tmp_path / "p.csv").read_text().splitlines()
+    assert lines[0] == "x,y,z,tet,b0,b1,b2,b3"
+    P = np.array([[float(c) for c in line.split(",")[:3]] for line in lines[1:]])
+    expected = cg.geodesic_path(prism, cg.GeodesicSolver(prism, "qclp").solve(0), target)
+    np.testing.assert_array_equal(P, expected)  # the same solve and descent, written with repr()
+    assert (tmp_path / "p.png").stat().st_size > 10_000
+    assert main(["path", str(path), "-s", "0", "--to-point", "0.5,1.5,0.5", "-o", str(tmp_path / "q.npy"), "-q"]) == 0
+    np.testing.assert_allclose(np.load(tmp_path / "q.npy")[0], [0.5, 1.5, 0.5], atol=1e-12)  # starts at the target
+
+
 # -- the viewer (off-screen) -----------------------------------------------------------------------------------
 def test_view_draws_the_slice(prism, tmp_path):
     pytest.importorskip("polyscope", reason="polyscope not installed", exc_type=ImportError)
