@@ -246,6 +246,19 @@ def test_cli_path_inside_a_volume(prism, tmp_path, capsys):
     np.testing.assert_allclose(np.load(tmp_path / "q.npy")[0], [0.5, 1.5, 0.5], atol=1e-12)  # starts at the target
 
 
+def test_cli_matrix_of_a_volume(prism, tmp_path):
+    path = _msh(prism, tmp_path / "part.msh")
+    assert main(["matrix", str(path), "-s", "7,0", "-o", str(tmp_path / "D.npy"), "-q"]) == 0  # qclp by default
+    np.testing.assert_array_equal(np.load(tmp_path / "D.npy"), cg.distance_matrix(prism, [7, 0], method="qclp"))
+    # the file's numbering: a point in no tetrahedron is back at its place, unreached (to_file_order on volumes)
+    (tmp_path / "t.node").write_text("6 3 0 0\n1 0 0 0\n2 9 9 9\n3 1 0 0\n4 0 1 0\n5 0 0 1\n6 1 1 1\n")
+    (tmp_path / "t.ele").write_text("2 4 0\n1 1 3 4 5\n2 3 4 5 6\n")
+    assert main(["matrix", str(tmp_path / "t.ele"), "-s", "5", "--method", "dijkstra", "-o", str(tmp_path / "E.npy"),
+                 "-q"]) == 0
+    E = np.load(tmp_path / "E.npy")
+    assert E.shape == (1, 6) and np.isinf(E[0, 1]) and E[0, 5] == 0 and E[0, 0] == pytest.approx(1 + 2**0.5)
+
+
 # -- the viewer (off-screen) -----------------------------------------------------------------------------------
 def test_view_draws_the_slice(prism, tmp_path):
     pytest.importorskip("polyscope", reason="polyscope not installed", exc_type=ImportError)

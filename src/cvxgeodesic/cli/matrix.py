@@ -8,13 +8,13 @@ from typing import Any
 
 from ..errors import ParameterError, SourceError
 from ._common import add_overwrite_option, check_outputs
-from ._options import add_solve_options, add_source_options, mesh_help
+from ._options import add_solve_options, add_source_options, method_for, volume_help
 
 
 def add_parser(sub: Any) -> None:
     """The ``matrix`` sub-command."""
     p = sub.add_parser("matrix", help="distance matrix: one row per source vertex (-s), in the given order")
-    p.add_argument("mesh", help=mesh_help())
+    p.add_argument("mesh", help=volume_help())
     add_source_options(p, "source vertex of a row, in the file's numbering (repeat, or give a list: -s 0,5,9)",
                        points=False)
     add_solve_options(p)
@@ -73,18 +73,19 @@ def run(args: argparse.Namespace) -> int:
     if not args.source:
         raise SourceError("give the source vertex of each row: -s I[,J...] (repeatable)")
     rows = [int(file_sources(mesh, [s])[0]) for s in args.source]  # one row per -s, in the given order
+    method = method_for(args, mesh)
     partial = Path(f"{args.output}.partial.npz")  # finished rows as they come; the same command resumes from it
     if not args.quiet:
         where = ("" if args.workers is None and args.scheduler is None
                  else f"; on {args.scheduler or f'a local cluster of {args.workers} worker processes'}")
         within = f", distances up to {args.max_distance:g}" if local else ""
-        print(f"{mesh.name}: {mesh.n_file_vertices} vertices, {len(rows)} rows{within}; method {args.method}{where}",
+        print(f"{mesh.name}: {mesh.n_file_vertices} vertices, {len(rows)} rows{within}; method {method}{where}",
               file=sys.stderr)
         kept = checkpoint_rows(partial)
         if kept:
             print(f"resuming from {partial}: {kept[0]} of {kept[1]} rows already done", file=sys.stderr)
     try:
-        D = distance_matrix(mesh, rows, args.method, m=args.m, solver=args.solver, progress=not args.quiet,
+        D = distance_matrix(mesh, rows, method, m=args.m, solver=args.solver, progress=not args.quiet,
                             workers=args.workers, scheduler=args.scheduler, max_distance=args.max_distance,
                             checkpoint=partial)
     except KeyboardInterrupt:
