@@ -95,7 +95,8 @@ def add_source_options(p: argparse.ArgumentParser,
         p.add_argument("--source-point", type=xyz, action="append", default=None, metavar="X,Y,Z",
                        help="source at the surface point closest to X,Y,Z, in a tetrahedral mesh the point X,Y,Z "
                             "inside the solid (repeat for several)")
-        p.add_argument("--boundary", action="store_true", help="the mesh boundary (every boundary edge) is the source")
+        p.add_argument("--boundary", action="store_true",
+                       help="the mesh boundary (every boundary edge; of a volume, every boundary face) is the source")
 
 
 def add_solve_options(p: argparse.ArgumentParser, *, method: bool = True, m_help: str = M_HELP) -> None:
