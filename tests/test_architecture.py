@@ -34,7 +34,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("baselines", ("baselines",)),
     ("api", ("api", "rows", "strategies", "paths", "_verbose")),
     ("evaluation/pictures", ("evaluation", "plotting", "viewer")),
-    ("applications", ("cli", "cli_sources", "cli_tet", "compare", "compare_tet", "batch", "demo",
+    ("applications", ("cli", "compare", "batch", "demo",
                       "")),  # "": the package __init__
 ]
 

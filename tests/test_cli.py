@@ -88,6 +88,22 @@ def test_unknown_method_is_usage_error(sphere_file):
     assert proc.returncode == 2 and "invalid choice" in proc.stderr
 
 
+def test_importing_the_cli_loads_the_standard_library_only():
+    """The console script imports cvxgeodesic.cli before main() installs its Ctrl-C handler: nothing heavy may load
+    then (a Ctrl-C during NumPy's import would be a traceback), whichever command module the package holds."""
+    code = ("import sys, cvxgeodesic.cli, cvxgeodesic.cli._common, cvxgeodesic.cli._options\n"
+            "for name in cvxgeodesic.cli.COMMANDS:\n"
+            "    __import__(f'cvxgeodesic.cli.{name}')\n"
+            "print(sorted(m for m in ('numpy', 'scipy', 'numba', 'matplotlib', 'tqdm') if m in sys.modules))")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert proc.stdout.strip() == "[]", proc.stdout + proc.stderr
+
+
+def test_python_m_runs_the_package():
+    proc = subprocess.run([sys.executable, "-m", "cvxgeodesic.cli", "--version"], capture_output=True, text=True)
+    assert proc.returncode == 0 and proc.stdout.startswith("cvxgeodesic ")
+
+
 def test_matrix_rows_in_the_given_order_in_file_numbering(tmp_path):
     """`cvxgeodesic matrix`: one row per -s in the given order (repeats allowed), columns in the file's numbering."""
     mesh, path = sphere_file_with_a_loose_vertex(tmp_path)  # file vertex 0 is in no face

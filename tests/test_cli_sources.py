@@ -125,7 +125,7 @@ def test_batch_task_with_positions_and_boundary(plane_file, tmp_path):
 def test_batch_source_options_and_spec():
     from cvxgeodesic.batch import _source_spec
     from cvxgeodesic.cli import build_parser
-    from cvxgeodesic.cli_sources import batch_sources
+    from cvxgeodesic.cli._options import batch_sources
     from cvxgeodesic.errors import ParameterError, SourceError
 
     args = build_parser().parse_args(["batch", "x.obj", "-s", "3", "--source-point", "0.1,0.2,0.3", "--out", "o"])

@@ -191,3 +191,77 @@ def test_rows_are_the_evaluation_summary(sphere_run):
         for key in ("rel_mean", "rel_max", "rel_p99", "abs_max", "ridge_jump_p95", "ridge_jump_ratio",
                     "off_ridge_rel_mean"):
             assert row[key] == pytest.approx(rec[key], rel=1e-6, abs=1e-9), (row["method"], key)
+
+
+# -- inside a tetrahedral mesh: the same comparison, against qclp at order 2 --------------------------------------
+@pytest.fixture(scope="module")
+def box_run(tmp_path_factory):
+    from cvxgeodesic.mesh.tet_generate import tet_box
+
+    out = tmp_path_factory.mktemp("cmp_tet")
+    mesh = tet_box(3)
+    rows = run_compare(mesh, 0, ["qclp", "dijkstra"], out, progress=False)
+    return mesh, out, rows
+
+
+def test_volume_rows_are_the_evaluation_summary(box_run):
+    """The drift item: compare_tet measured its own three numbers; a volume row is now summarize's record, as on
+    surfaces (rel_p99 was missing), against the reference that the row before it is."""
+    from cvxgeodesic.evaluation.summary import summarize
+
+    mesh, out, rows = box_run
+    assert [(r["method"], r["order"]) for r in rows] == [("qclp", 2), ("qclp", 1), ("dijkstra", 1)]
+    assert {r["reference"] for r in rows} == {"qclp order 2"}
+    ref = GeodesicSolver(mesh, "qclp", order=2).solve(0)
+    for row in rows:
+        res = ref if row["order"] == 2 else GeodesicSolver(mesh, row["method"]).solve(0)
+        rec = summarize(mesh, res, ref.distance, gradient=False)
+        for key in ("rel_mean", "rel_max", "rel_p99", "abs_max"):
+            # the same solve twice: equal to rounding (1e-9 relative covers a differently ordered sum)
+            assert row[key] == pytest.approx(rec[key], rel=1e-9, abs=1e-12), (row["method"], key)
+        assert row["rel_p99"] is not None
+        assert row["ridge_jump_p95"] is None  # the ridge is a surface measure
+    assert rows[0]["rel_max"] == 0.0 and rows[2]["rel_mean"] > rows[1]["rel_mean"] > 0  # Dijkstra zigzags
+    header, records = _read_csv(out / "compare.csv")
+    assert header == list(CSV_COLUMNS) and [r["order"] for r in records] == ["2", "1", "1"]
+    stems = ("qclp_order2", "qclp", "dijkstra")
+    assert {p.name for p in out.iterdir()} == {"compare.csv", "gradient_histogram.png",
+                                              *(f"field_{s}.png" for s in stems), *(f"error_{s}.png" for s in stems)}
+    assert format_table(rows).splitlines()[2].split()[:2] == ["qclp", "2"]  # the order column
+
+
+def test_volume_compare_takes_a_given_reference(tmp_path):
+    from cvxgeodesic.mesh.tet_generate import tet_box
+
+    mesh = tet_box(2)
+    exact = np.linalg.norm(mesh.V - mesh.V[0], axis=1)  # a convex box: the straight line
+    rows = run_compare(mesh, 0, "all", tmp_path, reference=exact, progress=False)
+    assert "qclp" in [r["method"] for r in rows] and "fmm" not in [r["method"] for r in rows]
+    assert all(r["order"] == 1 and r["reference"] == "given" for r in rows)
+    by = {r["method"]: r for r in rows}
+    assert 0 < by["qclp"]["rel_mean"] < by["dijkstra"]["rel_mean"]  # measured against the given field
+    with pytest.raises(ParameterError, match="reference"):
+        run_compare(mesh, 0, "qclp", tmp_path / "b", reference=exact[:-1], progress=False)
+    with pytest.raises(ParameterError, match="does not apply to tetrahedral meshes"):
+        run_compare(mesh, 0, "fmm", tmp_path / "c", progress=False)
+    assert not (tmp_path / "b").exists() and not (tmp_path / "c").exists()
+
+
+def test_surface_compare_takes_a_given_reference(tmp_path, monkeypatch):
+    """What the volume comparison had, surfaces have too: a reference field of the caller's (the exact method then
+    never runs), named in the rows."""
+    calls = []
+    real_solve = GeodesicSolver.solve
+
+    def counting_solve(self, sources, **kwargs):
+        calls.append(self.method)
+        return real_solve(self, sources, **kwargs)
+
+    mesh = icosphere(1)
+    exact = GeodesicSolver(mesh, "exact").solve(0).distance
+    monkeypatch.setattr(GeodesicSolver, "solve", counting_solve)
+    rows = run_compare(mesh, 0, ["dijkstra"], tmp_path, reference=exact, progress=False)
+    assert calls == ["dijkstra"]
+    (row,) = rows
+    assert row["reference"] == "given" and row["order"] == 1 and row["rel_mean"] > 0
+    assert row["ridge_jump_ratio"] is not None  # measured against the given field's ridge

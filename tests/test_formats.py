@@ -56,7 +56,7 @@ def test_every_mesh_argument_lists_exactly_the_registry_formats():
             if action.dest in ("mesh", "meshes"):
                 found = _extensions(action.help)
                 # the commands that take a volume list the tetrahedral files too (issue 26)
-                volume = VOLUME_EXTENSIONS if command in ("distance", "compare", "view") else ()
+                volume = VOLUME_EXTENSIONS if command in ("distance", "compare", "view", "path", "matrix") else ()
                 assert sorted(set(found)) == sorted({*MESH_EXTENSIONS, *volume}), (command, action.help)
                 checked.append(command)
     assert sorted(checked) == ["batch", "compare", "distance", "matrix", "path", "view"]

@@ -102,7 +102,7 @@ def test_a_fifo_as_the_cost_file_is_refused(tmp_path):
     cg.save_distance(tmp_path / "m.ply", cg.icosphere(1), np.zeros(42))
     os.mkfifo(tmp_path / "c.npy")
     with pytest.raises(cg.MeshFormatError, match=r"c.npy: is a FIFO, not a .npy file \(--cost\)"):
-        from cvxgeodesic.cli_sources import cli_cost
+        from cvxgeodesic.cli._options import cli_cost
 
         cli_cost(type("Args", (), {"cost": str(tmp_path / "c.npy"), "cost_field": None})(), cg.icosphere(1))
     assert main(["distance", str(tmp_path / "m.ply"), "-s", "0", "--method", "qclp", "--cost",

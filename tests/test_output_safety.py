@@ -363,7 +363,7 @@ def test_a_failed_rename_puts_the_first_target_back(tmp_path, monkeypatch, first
 
 def test_tetrahedral_distance_writes_both_files_or_neither(tet_file, tmp_path, capsys, monkeypatch):
     out, png = tmp_path / "d.npy", tmp_path / "d.png"
-    monkeypatch.setattr("cvxgeodesic.evaluation.tet_slice_plot.plot_tet_slice", _failing_png)
+    monkeypatch.setattr("cvxgeodesic.evaluation.slice_plot.plot_slice", _failing_png)
     rc, err = run(["distance", tet_file, "-s", "0", "--method", "dijkstra", "-q", "-o", out, "--png", png], capsys)
     assert rc == 2 and "No space left on device" in err[0]
     assert os.listdir(tmp_path) == []
@@ -496,7 +496,6 @@ def test_a_folder_that_takes_no_files_is_refused_before_solving(sphere_file, tet
 
 def test_the_python_entry_points_check_their_folder_first(sphere_file, not_a_folder, no_solve):
     from cvxgeodesic.compare import run_compare
-    from cvxgeodesic.compare_tet import run_tet_compare
     from cvxgeodesic.demo import run_demo
 
     with pytest.raises(ParameterError, match=re.escape(f"out_dir {not_a_folder} cannot be created")):
@@ -504,7 +503,7 @@ def test_the_python_entry_points_check_their_folder_first(sphere_file, not_a_fol
     with pytest.raises(ParameterError, match="out_dir"):
         run_compare(cg.icosphere(1), 0, "dijkstra", not_a_folder)
     with pytest.raises(ParameterError, match="out_dir"):
-        run_tet_compare(cg.tet_box(1), 0, "dijkstra", not_a_folder)
+        run_compare(cg.tet_box(1), 0, "dijkstra", not_a_folder)
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -582,7 +581,7 @@ def test_set_id_bits_of_a_replaced_file_are_not_copied(tmp_path):
 def test_an_ignored_sigterm_stays_ignored():
     import signal as _signal
 
-    from cvxgeodesic.cli import _Signals
+    from cvxgeodesic.cli._common import Signals as _Signals
 
     previous = _signal.signal(_signal.SIGTERM, _signal.SIG_IGN)
     try:

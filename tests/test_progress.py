@@ -14,7 +14,8 @@ import pytest
 import cvxgeodesic as cg
 import cvxgeodesic._verbose as verbose
 import cvxgeodesic.batch as batch
-from cvxgeodesic.cli import _Notes, main
+from cvxgeodesic.cli import main
+from cvxgeodesic.cli._common import Notes as _Notes
 
 LINE = re.compile(r"^  iteration +(\d+)  gap \S+  residuals \S+ / \S+ +\d+\.\d s(  \((\w+)\))?$")
 

@@ -133,6 +133,12 @@ def test_cli_distance_png_order2_and_errors(prism, tmp_path, capsys):
     assert ".vtu, .vtk, .npy" in capsys.readouterr().err
     assert main(["distance", str(path), "--source-point", "5,5,5", "-o", str(tmp_path / "x.vtu"), "-q"]) == 2
     assert "outside" in capsys.readouterr().err
+    # a travel cost was ignored without a word inside a solid (the field solved without it): refused
+    np.save(tmp_path / "c.npy", np.ones(prism.n_vertices))
+    for option in (["--cost", str(tmp_path / "c.npy")], ["--cost-field", "speed"]):
+        assert main(["distance", str(path), "-s", "0", *option, "-o", str(tmp_path / "x.npy"), "-q"]) == 2
+        assert f"{option[0]}: a travel cost applies to triangle meshes" in capsys.readouterr().err
+    assert not (tmp_path / "x.npy").exists()
 
 
 def test_cli_compare_lists_heat_and_dijkstra(prism, tmp_path, capsys):
@@ -144,8 +150,40 @@ def test_cli_compare_lists_heat_and_dijkstra(prism, tmp_path, capsys):
         assert name in out
     csv = (tmp_path / "c" / "compare.csv").read_text().splitlines()
     assert csv[0].startswith("method,order") and len(csv) == 5
-    assert sorted(p.name for p in (tmp_path / "c").glob("*.png")) == [
-        "slice_dijkstra.png", "slice_heat.png", "slice_qclp.png", "slice_qclp_order2.png"]
+    # the surface's pictures: each field and its error on the slice, the gradient histogram
+    runs = ["dijkstra", "heat", "qclp", "qclp_order2"]
+    assert sorted(p.name for p in (tmp_path / "c").glob("*.png")) == sorted(
+        [f"field_{r}.png" for r in runs] + [f"error_{r}.png" for r in runs] + ["gradient_histogram.png"])
+
+
+def test_cli_path_inside_a_volume(prism, tmp_path, capsys):
+    """One path command for both dimensions: inside a solid it was refused (only the Python API drew it)."""
+    path = _msh(prism, tmp_path / "part.msh")
+    target = int(np.argmax(np.linalg.norm(prism.V - prism.V[0], axis=1)))
+    assert main(["path", str(path), "-s", "0", "--to", str(target), "-o", str(tmp_path / "p.csv"),
+                 "--png", str(tmp_path / "p.png"), "--slice-normal", "0,1,0"]) == 0
+    assert "qclp: path of" in capsys.readouterr().err  # the volume's default method
+    lines = (tmp_path / "p.csv").read_text().splitlines()
+    assert lines[0] == "x,y,z,tet,b0,b1,b2,b3"
+    P = np.array([[float(c) for c in line.split(",")[:3]] for line in lines[1:]])
+    expected = cg.geodesic_path(prism, cg.GeodesicSolver(prism, "qclp").solve(0), target)
+    np.testing.assert_array_equal(P, expected)  # the same solve and descent, written with repr()
+    assert (tmp_path / "p.png").stat().st_size > 10_000
+    assert main(["path", str(path), "-s", "0", "--to-point", "0.5,1.5,0.5", "-o", str(tmp_path / "q.npy"), "-q"]) == 0
+    np.testing.assert_allclose(np.load(tmp_path / "q.npy")[0], [0.5, 1.5, 0.5], atol=1e-12)  # starts at the target
+
+
+def test_cli_matrix_of_a_volume(prism, tmp_path):
+    path = _msh(prism, tmp_path / "part.msh")
+    assert main(["matrix", str(path), "-s", "7,0", "-o", str(tmp_path / "D.npy"), "-q"]) == 0  # qclp by default
+    np.testing.assert_array_equal(np.load(tmp_path / "D.npy"), cg.distance_matrix(prism, [7, 0], method="qclp"))
+    # the file's numbering: a point in no tetrahedron is back at its place, unreached (to_file_order on volumes)
+    (tmp_path / "t.node").write_text("6 3 0 0\n1 0 0 0\n2 9 9 9\n3 1 0 0\n4 0 1 0\n5 0 0 1\n6 1 1 1\n")
+    (tmp_path / "t.ele").write_text("2 4 0\n1 1 3 4 5\n2 3 4 5 6\n")
+    assert main(["matrix", str(tmp_path / "t.ele"), "-s", "5", "--method", "dijkstra", "-o", str(tmp_path / "E.npy"),
+                 "-q"]) == 0
+    E = np.load(tmp_path / "E.npy")
+    assert E.shape == (1, 6) and np.isinf(E[0, 1]) and E[0, 5] == 0 and E[0, 0] == pytest.approx(1 + 2**0.5)
 
 
 # -- the viewer (off-screen) -----------------------------------------------------------------------------------

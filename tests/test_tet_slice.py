@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from cvxgeodesic.errors import ParameterError
-from cvxgeodesic.evaluation.tet_slice_plot import plot_tet_slice
+from cvxgeodesic.evaluation.slice_plot import plot_slice
 from cvxgeodesic.mesh.tet_generate import tet_ball, tet_box, tet_l_prism
 from cvxgeodesic.mesh.tet_slice import plane_frame, slice_tets
 
@@ -70,7 +70,7 @@ def test_plot_writes_a_png(tmp_path):
     m = tet_box(6)
     d = np.linalg.norm(m.V - 0.5, axis=1)
     d[0] = np.inf
-    out = plot_tet_slice(m, d, tmp_path / "s.png", origin=[0.5, 0.5, 0.02], title="t", points=[[0.5, 0.5, 0.5]],
+    out = plot_slice(m, d, tmp_path / "s.png", origin=[0.5, 0.5, 0.02], title="t", points=[[0.5, 0.5, 0.5]],
                          colorbar_label="distance", dpi=40)
     data = out.read_bytes()
     assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 1000
@@ -79,8 +79,8 @@ def test_plot_writes_a_png(tmp_path):
     img = imread(out)
     assert img.shape[:2] == (round(5.4 * 40), round(6.4 * 40))
     with pytest.raises(ParameterError, match="misses"):
-        plot_tet_slice(m, d, tmp_path / "t.png", origin=[0, 0, 5])
+        plot_slice(m, d, tmp_path / "t.png", origin=[0, 0, 5])
     with pytest.raises(ParameterError, match="png"):
-        plot_tet_slice(m, d, tmp_path / "t.jpg")
+        plot_slice(m, d, tmp_path / "t.jpg")
     with pytest.raises(ParameterError, match="values"):
-        plot_tet_slice(m, d[:-1], tmp_path / "t.png")
+        plot_slice(m, d[:-1], tmp_path / "t.png")

@@ -157,16 +157,17 @@ def source_kinds(sources: Any) -> set[str]:
     """The kinds of source (:data:`SOURCE_KINDS`) of a resolved source set:
     :class:`~cvxgeodesic.sources.SourceSet` of either dimension (read by its attributes: this module does not import
     it)."""
-    vertices = {"vertex"} if sources.vertices.size else set()
-    if sources.vertex_only:
-        return vertices
-    if getattr(sources, "kind", None) == "boundary" or getattr(sources, "boundary", False):
+    kinds = {"vertex"} if sources.vertices.size else set()
+    if sources.boundary:
         return {"boundary"}
-    if hasattr(sources, "points"):  # a volume's set
-        return vertices | ({"point"} if sources.points else set()) | ({"boundary faces"} if sources.faces.size
-                                                                     else set())
-    # a curve's samples are point sources too: a set with segments has a curve
-    return vertices | ({"curve"} if sources.segment_faces.size else {"point"})
+    # a curve's samples are point sources too: a set with segments (surfaces) has a curve
+    if sources.segment_faces.size:
+        kinds.add("curve")
+    elif sources.point_faces.size:
+        kinds.add("point")
+    if sources.facets.size:
+        kinds.add("boundary faces")
+    return kinds
 
 
 def source_phrase(kinds: Iterable[str]) -> str:

@@ -1,20 +1,25 @@
-"""Side-by-side comparison of methods on one mesh: the engine behind ``cvxgeodesic compare``.
+"""Side-by-side comparison of methods on one mesh, a surface or a volume: the engine behind ``cvxgeodesic compare``.
 
-:func:`run_compare` solves the same sources with every requested method,
-measures each field against the exact polyhedral distance (MMP, method
-``"exact"``, computed once and reused), and writes into an output folder
+:func:`run_compare` solves the same sources with every requested method, measures each field against a reference
+(computed once and reused) with the one evaluation record of the library
+(:func:`cvxgeodesic.evaluation.summary.summarize`), and writes into an output folder
 
 * ``compare.csv``: one row per method (columns in :data:`CSV_COLUMNS`);
-* ``field_<method>.png``: the field with isolines (:func:`~cvxgeodesic.plotting.plot_field`),
-  all methods on the colour range and isoline levels of the exact field, so the pictures compare;
-* ``error_<method>.png``: the relative error (:func:`~cvxgeodesic.plotting.plot_error_map`),
+* ``field_<method>.png``: the field with isolines (:func:`~cvxgeodesic.plotting.plot_field`; inside a tetrahedral
+  mesh its slice through the centre, :func:`~cvxgeodesic.evaluation.slice_plot.plot_slice`), all methods on the
+  colour range and isoline levels of the reference, so the pictures compare (``field_qclp_order2.png``: order 2);
+* ``error_<method>.png``: the relative error (:func:`~cvxgeodesic.plotting.plot_error_map`, or on the slice),
   all methods on one colour scale (the median of their 99th percentiles);
-* ``gradient_histogram.png``: area-weighted histograms of ``‖∇d|_t‖`` of every
-  method next to the exact field's (:func:`~cvxgeodesic.plotting.plot_gradient_histogram`).
+* ``gradient_histogram.png``: area- (volume-) weighted histograms of the per-cell ``‖∇d|_t‖`` of every method
+  next to the reference's (:func:`~cvxgeodesic.plotting.plot_gradient_histogram`).
 
-A method that raises gets a row whose ``status`` is the error message, and no
-PNGs; the other methods go on. :func:`format_table` turns the rows into the
-aligned text table the command line prints.
+The reference (:data:`REFERENCES`) is the exact polyhedral distance (MMP, method ``"exact"``) on a surface; inside
+a solid, where no exact algorithm exists, the most accurate field the library computes, ``qclp`` at order 2 (exact
+wherever the source is visible, docs/volumes.md), or a field the caller gives (an analytic one). A reference that
+no method name asks for (order 2) is listed first.
+
+A method that raises gets a row whose ``status`` is the error message, and no PNGs; the other methods go on.
+:func:`format_table` turns the rows into the aligned text table the command line prints.
 """
 
 from __future__ import annotations
@@ -22,6 +27,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+import os
 import sys
 import time
 from pathlib import Path
@@ -34,40 +40,51 @@ from .errors import CvxGeodesicError, ParameterError, SolverError
 from .tables import Column, text_table
 
 __all__ = [
-    "COLUMN_HELP", "CSV_COLUMNS", "TABLE_COLUMNS", "evaluate_methods", "format_table", "resolve_methods", "run_compare",
-    "solve_methods", "table_legend", "write_csv", "write_pictures",
+    "COLUMN_HELP", "CSV_COLUMNS", "REFERENCES", "TABLE_COLUMNS", "evaluate_methods", "format_table", "resolve_methods",
+    "run_compare", "solve_methods", "table_legend", "write_csv", "write_pictures",
 ]
 
 #: Columns of ``compare.csv`` (and keys of every row returned by :func:`run_compare`), in order.
 #:
-#: ``time_s`` is set-up plus solve (wall-clock seconds, what one call costs);
-#: ``setup_s`` the per-mesh part of it, paid once per solver object; ``solve_s`` the per-source part.
-#: ``rel_*`` / ``abs_max`` compare with the exact field (sources excluded; see
-#: :func:`cvxgeodesic.evaluation.error_stats`). ``ridge_jump_p95`` is the 95th percentile of the
-#: normal-derivative jump across edges in the band around the exact ridge, ``ridge_jump_ratio`` the
-#: same divided by the exact field's (< 1: smoother than exact at the ridge), ``off_ridge_rel_mean``
-#: the mean relative error outside that band (see :func:`cvxgeodesic.evaluation.smoothness_report`).
+#: ``order`` is the element order of the run (2: the volume reference). ``time_s`` is set-up plus solve (seconds,
+#: what one call costs); ``setup_s`` the per-mesh part of it, paid once per solver object; ``solve_s`` the
+#: per-source part. ``rel_*`` / ``abs_max`` compare with the reference (sources excluded; see
+#: :func:`cvxgeodesic.evaluation.error_stats`). ``ridge_jump_p95`` is the 95th percentile of the normal-derivative
+#: jump across edges in the band around the reference's ridge, ``ridge_jump_ratio`` the same divided by the
+#: reference's (< 1: smoother than it at the ridge), ``off_ridge_rel_mean`` the mean relative error outside that band
+#: (see :func:`cvxgeodesic.evaluation.smoothness_report`; surfaces only). ``reference`` names the reference;
 #: ``status`` is the solver status (``"optimal"``, ...) or the error message of a failed method.
 CSV_COLUMNS = (
-    "method", "solver", "time_s", "setup_s", "solve_s", "iterations",
+    "method", "order", "solver", "time_s", "setup_s", "solve_s", "iterations",
     "rel_mean", "rel_max", "rel_p99", "abs_max",
-    "ridge_jump_p95", "ridge_jump_ratio", "off_ridge_rel_mean", "status",
+    "ridge_jump_p95", "ridge_jump_ratio", "off_ridge_rel_mean", "reference", "status",
 )
 
-_ERROR_KEYS = ("rel_mean", "rel_max", "rel_p99", "abs_max")
-_SMOOTH_KEYS = ("ridge_jump_p95", "ridge_jump_ratio", "off_ridge_rel_mean")
+#: The reference of each simplex dimension (``mesh.dim``): ``(method, order)``.
+REFERENCES = {2: ("exact", 1), 3: ("qclp", 2)}
+
+_RUN_KEYS = ("solver", "time_s", "setup_s", "solve_s", "iterations", "status")
+_MEASURED_KEYS = ("rel_mean", "rel_max", "rel_p99", "abs_max", "ridge_jump_p95", "ridge_jump_ratio",
+                  "off_ridge_rel_mean")
+
+#: One run of the comparison: ``(method name, element order)``.
+Run = tuple[str, int]
+#: What :func:`solve_methods` keeps of one run: the result (None if it failed), the wall-clock seconds, and the
+#: exception (None if it did not fail).
+Outcome = tuple[Any, float, BaseException | None]
 
 
-def resolve_methods(methods) -> list[str]:
+def resolve_methods(methods: Any, dim: int = 2) -> list[str]:
     """Normalize a method list: lower case, ``"all"`` expanded, duplicates removed, names checked.
 
     Parameters
     ----------
     methods : str or sequence of str
-        Method names of :data:`cvxgeodesic.api.ALL_METHODS` (a comma-separated
-        string is accepted too); ``"all"`` stands for all of them. When ``"all"``
-        is expanded, the alias ``"qgdf"`` is left out if ``"lcqp-hessian"`` is in
-        the list (it is the same formulation).
+        Method names of :data:`cvxgeodesic.api.ALL_METHODS` (a comma-separated string is accepted too); ``"all"``
+        stands for all of those that apply to the mesh. When ``"all"`` is expanded, the alias ``"qgdf"`` is left
+        out if ``"lcqp-hessian"`` is in the list (it is the same formulation).
+    dim : {2, 3}
+        The simplex dimension of the mesh: 3 takes the methods that apply to tetrahedral meshes only.
 
     Returns
     -------
@@ -77,13 +94,14 @@ def resolve_methods(methods) -> list[str]:
     Raises
     ------
     ParameterError
-        Empty list or an unknown name.
+        Empty list, an unknown name, or a method that does not apply to volumes (the message names those that do).
     """
     from .api import ALL_METHODS
+    from .capabilities import check, methods_for
     from .formulations import ALIASES
 
     if isinstance(methods, str):
-        methods = [m for m in methods.split(",")]
+        methods = methods.split(",")
     try:
         names = [str(m).strip().lower() for m in methods]
     except TypeError:
@@ -92,30 +110,36 @@ def resolve_methods(methods) -> list[str]:
     if not names:
         raise ParameterError("methods is empty: give at least one method name (or 'all')")
     out: list[str] = []
-    expanded_all = "all" in names
     for name in names:
-        group = list(ALL_METHODS) if name == "all" else [name]
-        for g in group:
+        for g in ((ALL_METHODS if dim == 2 else methods_for(3)) if name == "all" else [name]):
             if g not in ALL_METHODS:
                 raise ParameterError(f"unknown method {g!r}; choose from: all, {', '.join(ALL_METHODS)}")
+            check(ALIASES.get(g, g), dim=dim)  # a surface method on a volume: the message names those that apply
             if g not in out:
                 out.append(g)
-    if expanded_all:
+    if "all" in names:
         out = [m for m in out if not (m in ALIASES and ALIASES[m] in out)]
     return out
 
 
-def _canonical(method: str) -> str:
+def _key(run: Run) -> Run:
+    """The run an alias stands for (``qgdf`` is ``lcqp-hessian``): solved once, reported under both names."""
     from .formulations import ALIASES
 
-    return ALIASES.get(method, method)
+    return ALIASES.get(run[0], run[0]), run[1]
 
 
-def _atomic_write_text(path: Path, text: str) -> None:
-    def write(fh) -> None:
-        fh.write(text.encode("utf-8"))
+def _label(run: Run) -> str:
+    return run[0] if run[1] == 1 else f"{run[0]} order {run[1]}"
 
-    atomic_write(path, write, allow=None)  # a read-only file in the folder is refused: no override here
+
+def _stem(run: Run) -> str:
+    return run[0] if run[1] == 1 else f"{run[0]}_order{run[1]}"
+
+
+def _source_vertices(mesh: Any, sset: Any) -> np.ndarray:
+    """The vertices where every field is 0: marked in the pictures, left out of the histograms."""
+    return sset.vertices if mesh.dim == 2 else sset.fixed_vertices(mesh)
 
 
 def _error_message(exc: BaseException) -> str:
@@ -125,91 +149,70 @@ def _error_message(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {msg}" if msg else type(exc).__name__
 
 
-def _solve(mesh, method: str, sources: np.ndarray, m: float, solver: str):
-    from .api import BASELINE_METHODS, GeodesicSolver
-
-    t0 = time.perf_counter()
-    if method in BASELINE_METHODS:
-        gs = GeodesicSolver(mesh, method=method, m=m)
-    else:
-        gs = GeodesicSolver(mesh, method=method, m=m, solver=solver)
-    res = gs.solve(sources)
-    return res, time.perf_counter() - t0
-
-
-def _empty_row(method: str) -> dict:
-    row: dict[str, Any] = dict.fromkeys(CSV_COLUMNS)
-    row["method"] = method
-    return row
-
-
-def _fmt_csv(v) -> str:
-    if v is None:
-        return ""
-    if isinstance(v, float):
-        return repr(v) if not math.isfinite(v) else f"{v:.6g}"
-    return str(v)
-
-
-def _finite_or_none(x):
-    return None if x is None or not np.isfinite(x) else float(x)
-
-
-def run_compare(mesh, sources, methods, out_dir, *, m=1.0, solver="auto", progress=True) -> list[dict]:
-    """Solve with several methods, compare each with the exact distance, write a CSV and PNGs.
+def run_compare(mesh: Any, sources: Any, methods: Any, out_dir: str | os.PathLike, *, m: float = 1.0,
+                solver: str = "auto", reference: Any = None, progress: bool = True) -> list[dict]:
+    """Solve with several methods, compare each with the reference, write a CSV and PNGs.
 
     Parameters
     ----------
-    mesh : TriMesh or (V, F) tuple
-        The surface, ``n`` vertices.
-    sources : int, sequence of int, SurfacePoint, SurfaceCurve, "boundary", or a list mixing them
-        As for :meth:`cvxgeodesic.GeodesicSolver.solve`; methods that cannot take the kind of source
-        get a failed row naming the methods that can.
+    mesh : TriMesh, TetMesh, or a (V, F) / (V, T) tuple
+        ``n`` vertices.
+    sources : anything :meth:`cvxgeodesic.GeodesicSolver.solve` takes on this mesh
+        Methods that cannot take the kind of source get a failed row naming the methods that can.
     methods : sequence of str or str
-        Method names (see :func:`resolve_methods`); ``"all"`` means every method.
+        Method names (see :func:`resolve_methods`); ``"all"`` means every method that applies to the mesh.
     out_dir : str or os.PathLike
         Output folder, created if missing. Existing files of the same names are replaced.
     m : float, default 1.0
         Smoothness multiplier of the quadratic formulations (ignored by the others).
     solver : {"auto", "ipm", "clarabel"}, default "auto"
         Backend of the convex formulations (baselines use their own library).
+    reference : (n,) float array_like, optional
+        The field to compare with (e.g. an analytic one); default the one of :data:`REFERENCES`, solved here.
     progress : bool, default True
         Print one line per method (name, time, status) to stderr.
 
     Returns
     -------
     list of dict
-        One row per method, in the order of ``methods``, keys :data:`CSV_COLUMNS`.
-        Numbers are Python floats / ints; a value that does not apply (a failed
-        method, or no exact reference) is None (an empty cell in the CSV).
+        One row per run, keys :data:`CSV_COLUMNS`: the methods in the order of ``methods``, after the reference
+        when it is a run no name asks for (``qclp`` at order 2 in a volume). Numbers are Python floats / ints; a
+        value that does not apply (a failed method, no reference, the ridge in a volume) is None (an empty cell).
 
     Raises
     ------
     ParameterError
-        Unknown method or solver name, or an empty method list.
+        Unknown method or solver name, a method that does not apply to the mesh, an empty method list, a
+        ``reference`` of the wrong shape.
     SourceError
-        Invalid source indices (checked before anything is solved).
+        Invalid sources (checked before anything is solved).
 
     Notes
     -----
-    Three steps, each a function of its own: :func:`solve_methods` (the exact field first, once,
-    whether or not ``"exact"`` is in ``methods``: only then does it get a row and PNGs),
-    :func:`evaluate_methods` (the rows, measured with
-    :func:`cvxgeodesic.evaluation.summary.summarize_field`), :func:`write_csv` and
-    :func:`write_pictures`. If the exact field cannot be computed (e.g. a non-manifold mesh), the
-    error columns stay empty, no ``error_*.png`` is drawn and a warning goes to stderr. A method
-    named twice under an alias (``"qgdf"`` and ``"lcqp-hessian"``) is solved once and reported
-    under both names.
+    Steps, each a function of its own: :func:`solve_methods` (the reference first, once, whether or not it is
+    one of ``methods``), :func:`evaluate_methods` (the rows, measured with
+    :func:`cvxgeodesic.evaluation.summary.summarize`), :func:`write_csv` and :func:`write_pictures`. If the
+    reference cannot be computed (e.g. ``exact`` on a non-manifold mesh), the error columns stay empty, no
+    ``error_*.png`` is drawn and a warning goes to stderr. A method named twice under an alias (``"qgdf"`` and
+    ``"lcqp-hessian"``) is solved once and reported under both names.
     """
     from .api import SOLVERS
-    from .mesh.io import as_trimesh
+    from .mesh.convert import as_mesh
     from .sources import resolve_sources
 
-    mesh = as_trimesh(mesh)
-    names = resolve_methods(methods)
+    mesh = as_mesh(mesh)
+    names = resolve_methods(methods, mesh.dim)
     sset = resolve_sources(mesh, sources)
     if not isinstance(solver, str) or solver.lower() not in SOLVERS:
         raise ParameterError(f"unknown solver {solver!r}; choose one of {', '.join(SOLVERS)}")
+    runs: list[Run] = [(n, 1) for n in names]
+    ref_run: Run | None = REFERENCES[mesh.dim]
+    if reference is not None:
+        from .validation import as_vertex_field
+
+        reference, ref_run = as_vertex_field(reference, "reference", mesh.n_vertices), None
+    elif REFERENCES[mesh.dim][1] != 1:  # no method name asks for it: listed first
+        runs.insert(0, REFERENCES[mesh.dim])
     out = check_output_dir(out_dir, "out_dir")  # a folder that cannot take files fails now, not after the solves
     out.mkdir(parents=True, exist_ok=True)
 
@@ -217,68 +220,72 @@ def run_compare(mesh, sources, methods, out_dir, *, m=1.0, solver="auto", progre
         if progress:
             print(text, file=sys.stderr, flush=True)
 
-    results = solve_methods(mesh, sset, names, m=m, solver=solver, say=say)
-    rows, rel_errors = evaluate_methods(mesh, sset.vertices, names, results)
+    results = solve_methods(mesh, sset, runs, reference=ref_run, m=m, solver=solver, say=say)
+    if ref_run is not None:
+        ref_result = results[_key(ref_run)][0]
+        reference = ref_result.distance if ref_result is not None else None
+    rows, rel_errors = evaluate_methods(mesh, runs, results, reference, "given" if ref_run is None else _label(ref_run))
     write_csv(out / "compare.csv", rows)  # the numbers first: they matter more than the pictures
     t_png = time.perf_counter()
-    write_pictures(out, mesh, sset, names, results, rows, rel_errors)
+    write_pictures(out, mesh, sset, runs, results, rows, rel_errors, reference)
     say(f"wrote {out / 'compare.csv'} and {sum(1 for _ in out.glob('*.png'))} PNGs in {out} "
         f"({time.perf_counter() - t_png:.1f} s for the pictures)")
     return rows
 
 
-#: What :func:`solve_methods` keeps of one method: the result (None if it failed), the wall-clock
-#: seconds, and the exception (None if it did not fail).
-Outcome = tuple[Any, float, BaseException | None]  # (GeodesicResult or None, seconds, exception or None)
+def _attempt(mesh: Any, run: Run, sources: Any, m: float, solver: str) -> Outcome:
+    from .api import BASELINE_METHODS, GeodesicSolver
 
-
-def _attempt(mesh, method: str, sources, m: float, solver: str) -> Outcome:
     t0 = time.perf_counter()
+    method, order = run
     try:
-        return (*_solve(mesh, method, sources, m, solver), None)
+        options: dict[str, Any] = {} if method in BASELINE_METHODS else {"solver": solver, "order": order}
+        return GeodesicSolver(mesh, method=method, m=m, **options).solve(sources), time.perf_counter() - t0, None
     except Exception as exc:  # noqa: BLE001 - a failed method becomes a row, never the end of the comparison
         return None, time.perf_counter() - t0, exc
 
 
-def solve_methods(mesh, sset, names, *, m: float = 1.0, solver: str = "auto", say=None) -> dict[str, Outcome]:
-    """Solve the exact reference and every method once; a failure is kept, not raised.
+def solve_methods(mesh: Any, sset: Any, runs: list[Run], *, reference: Run | None = None, m: float = 1.0,
+                  solver: str = "auto", say: Any = None) -> dict[Run, Outcome]:
+    """Solve the reference and every run once; a failure is kept, not raised.
 
     Parameters
     ----------
-    mesh : TriMesh
-        The surface.
-    sset : SourceSet
-        The resolved sources (:func:`cvxgeodesic.sources.resolve_sources`).
-    names : list of str
-        Method names as :func:`resolve_methods` returns them.
+    mesh : TriMesh or TetMesh
+    sset : SourceSet or TetSources
+        The resolved sources.
+    runs : list of (str, int)
+        ``(method, order)``, the method names as :func:`resolve_methods` returns them.
+    reference : (str, int), optional
+        The reference run, solved first (None: the caller has the reference field).
     m : float, default 1.0
         Smoothness multiplier.
     solver : str, default "auto"
         Backend of the convex formulations.
     say : callable, optional
-        Receives one progress line per method (and a warning when there is no exact reference).
+        Receives one progress line per run (and a warning when the reference failed).
 
     Returns
     -------
     dict
-        Canonical method name (aliases resolved) → ``(result or None, wall seconds, exception or None)``;
-        always has ``"exact"``.
+        ``(method, order)`` with aliases resolved → ``(result or None, wall seconds, exception or None)``.
     """
     say = say or (lambda text: None)
     solve_src = sset.vertices if sset.vertex_only else sset
-    width = max(len(n) for n in [*names, "exact"])
-    results: dict[str, Outcome] = {"exact": _attempt(mesh, "exact", solve_src, m, solver)}
-    _, ref_wall, ref_err = results["exact"]
-    if ref_err is not None:
-        say(f"warning: no exact reference, errors are not computed ({_error_message(ref_err)})")
-    elif "exact" not in names:
-        say(f"{'exact':<{width}}  {ref_wall:8.2f} s  (reference)")
-    for i, name in enumerate(names, 1):
-        key = _canonical(name)
-        if key not in results:
-            results[key] = _attempt(mesh, key, solve_src, m, solver)
-        res, wall, err = results[key]
-        tag = f"[{i}/{len(names)}] {name:<{width}}"
+    width = max(len(_label(r)) for r in [*runs, *([reference] if reference else [])])
+    results: dict[Run, Outcome] = {}
+    if reference is not None:
+        results[_key(reference)] = _attempt(mesh, reference, solve_src, m, solver)
+        _, ref_wall, ref_err = results[_key(reference)]
+        if ref_err is not None:
+            say(f"warning: no {_label(reference)} reference, errors are not computed ({_error_message(ref_err)})")
+        elif reference not in runs:
+            say(f"{_label(reference):<{width}}  {ref_wall:8.2f} s  (reference)")
+    for i, run in enumerate(runs, 1):
+        if _key(run) not in results:
+            results[_key(run)] = _attempt(mesh, _key(run), solve_src, m, solver)
+        res, wall, err = results[_key(run)]
+        tag = f"[{i}/{len(runs)}] {_label(run):<{width}}"
         if err is None:
             say(f"{tag}  {wall:8.2f} s  {res.info.status}, {res.info.iterations} it")
         else:
@@ -295,53 +302,62 @@ def _failed_row(row: dict, wall: float, err: BaseException) -> None:
         row["iterations"] = int(it) if isinstance(it, int | np.integer) else None
 
 
-def evaluate_methods(mesh, src, names, results) -> tuple[list[dict], dict[str, np.ndarray]]:
-    """The rows of the comparison: each method's solve record and its errors against the exact field.
+def evaluate_methods(mesh: Any, runs: list[Run], results: dict[Run, Outcome], reference: np.ndarray | None,
+                     reference_label: str = "exact") -> tuple[list[dict], dict[Run, np.ndarray]]:
+    """The rows of the comparison: each run's record of :func:`cvxgeodesic.evaluation.summary.summarize`.
 
     Parameters
     ----------
-    mesh : TriMesh
-        The surface, ``n`` vertices.
-    src : (k,) int ndarray
-        Source vertices, left out of the errors (none for point sources).
-    names : list of str
-        Method names, one row each, in this order.
+    mesh : TriMesh or TetMesh
+        ``n`` vertices.
+    runs : list of (str, int)
+        One row each, in this order.
     results : dict
         As :func:`solve_methods` returns it.
+    reference : (n,) float ndarray or None
+        The reference field; None: nothing is measured.
+    reference_label : str
+        The ``reference`` column.
 
     Returns
     -------
     rows : list of dict
         Keys :data:`CSV_COLUMNS`; None where a value does not apply.
     rel_errors : dict
-        Method name → (n,) per-vertex relative error, for the methods that were measured.
+        Run → (n,) per-vertex relative error, for the runs that were measured.
     """
     from .evaluation import relative_error
-    from .evaluation.summary import summarize_field, summarize_run
+    from .evaluation.summary import summarize, summarize_run
 
-    ref = results["exact"][0]
-    d_exact = ref.distance if ref is not None else None
     rows: list[dict] = []
-    rel_errors: dict[str, np.ndarray] = {}
-    for name in names:
-        res, wall, err = results[_canonical(name)]
-        row = _empty_row(name)
+    rel_errors: dict[Run, np.ndarray] = {}
+    for run in runs:
+        res, wall, err = results[_key(run)]
+        row: dict[str, Any] = dict.fromkeys(CSV_COLUMNS)
+        row.update(method=run[0], order=run[1], reference=reference_label)
         rows.append(row)
         if err is not None:
             _failed_row(row, wall, err)
             continue
-        run = summarize_run(res.info)
-        row.update({k: run[k] for k in ("solver", "time_s", "setup_s", "solve_s", "iterations", "status")})
-        if d_exact is None:
+        row.update({k: v for k, v in summarize_run(res.info).items() if k in _RUN_KEYS})
+        if reference is None:
             continue
         try:
-            summary = summarize_field(mesh, res.distance, d_exact, src, gradient=False)
-            rel_errors[name] = relative_error(res.distance, d_exact, src)
+            record = summarize(mesh, res, reference, gradient=False)
+            rel_errors[run] = relative_error(res.distance, reference, res.sources)
         except Exception as exc:  # noqa: BLE001
             row["status"] = f"{row['status']}; evaluation failed: {_error_message(exc)}"
             continue
-        row.update({k: summary[k] for k in _ERROR_KEYS + _SMOOTH_KEYS})
+        row.update({k: record[k] for k in _MEASURED_KEYS})
     return rows, rel_errors
+
+
+def _fmt_csv(v: Any) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, float):
+        return repr(v) if not math.isfinite(v) else f"{v:.6g}"
+    return str(v)
 
 
 def write_csv(path: Path, rows: list[dict]) -> None:
@@ -351,14 +367,19 @@ def write_csv(path: Path, rows: list[dict]) -> None:
     writer.writeheader()
     for row in rows:
         writer.writerow({k: _fmt_csv(row[k]) for k in CSV_COLUMNS})
-    _atomic_write_text(path, buf.getvalue())
+    data = buf.getvalue().encode("utf-8")
+
+    def write(fh: Any) -> None:
+        fh.write(data)
+
+    atomic_write(path, write, allow=None)  # a read-only file in the folder is refused: no override here
 
 
-def _field_scale(results, names, d_exact):
-    """Colour range and isoline levels shared by every field picture: the exact field's, else the first result's."""
-    field_ref = d_exact
+def _field_scale(results: dict[Run, Outcome], runs: list[Run], reference: np.ndarray | None) -> tuple[Any, Any]:
+    """Colour range and isoline levels shared by every field picture: the reference's, else the first result's."""
+    field_ref = reference
     if field_ref is None:
-        ok = [results[_canonical(n)][0] for n in names if results[_canonical(n)][0] is not None]
+        ok = [results[_key(r)][0] for r in runs if results[_key(r)][0] is not None]
         field_ref = ok[0].distance if ok else None
     vmax_field: float | None = None
     levels: int | np.ndarray = 20
@@ -370,59 +391,78 @@ def _field_scale(results, names, d_exact):
     return vmax_field, levels
 
 
-def write_pictures(out: Path, mesh, sset, names, results, rows, rel_errors) -> None:
+def write_pictures(out: Path, mesh: Any, sset: Any, runs: list[Run], results: dict[Run, Outcome], rows: list[dict],
+                   rel_errors: dict[Run, np.ndarray], reference: np.ndarray | None) -> None:
     """Write ``field_<method>.png``, ``error_<method>.png`` and ``gradient_histogram.png`` into ``out``.
 
     Parameters
     ----------
     out : Path
         The output folder (must exist).
-    mesh, sset, names
+    mesh, sset, runs
         As for :func:`solve_methods`.
     results, rows, rel_errors
         What :func:`solve_methods` and :func:`evaluate_methods` returned.
+    reference : (n,) float ndarray or None
+        The reference field: the colour range and the isolines of every field picture.
     """
-    from .plotting import plot_error_map, plot_field
-
-    src = sset.vertices
-    ref = results["exact"][0]
-    d_exact = ref.distance if ref is not None else None
-    vmax_field, levels = _field_scale(results, names, d_exact)
-    # one colour scale for every error map: the median of the methods' 99th percentiles (the exact field's 0 aside),
+    src = _source_vertices(mesh, sset)
+    vmax_field, levels = _field_scale(results, runs, reference)
+    # one colour scale for every error map: the median of the methods' 99th percentiles (the reference's 0 aside),
     # so one very bad method does not wash out the others; the colour bar shows an arrow where it clips
-    p99s = [p for p in (_finite_or_none(r["rel_p99"]) for r in rows) if p]
+    p99s = [p for p in (r["rel_p99"] for r in rows) if p is not None and np.isfinite(p) and p > 0]
     vmax_err = float(np.median(p99s)) if p99s else None
     src_txt = ", ".join(str(int(s)) for s in src[:5]) + (", ..." if len(src) > 5 else "")
     if not sset.vertex_only:
         src_txt = sset.description
-    for name, row in zip(names, rows, strict=True):
-        res = results[_canonical(name)][0]
+    for run, row in zip(runs, rows, strict=True):
+        res = results[_key(run)][0]
         if res is None:
             continue
-        title = f"{name} on {mesh.name} (source {src_txt})"
-        plot_field(mesh, res.distance, out / f"field_{name}.png", isolines=levels, title=title,
-                   vmin=0.0 if vmax_field is not None else None, vmax=vmax_field, colorbar_label="distance",
-                   sources=src)
-        if name in rel_errors:
+        title = f"{_label(run)} on {mesh.name} (source {src_txt})"
+        _draw(mesh, res.distance, out / f"field_{_stem(run)}.png", src, title=title, levels=levels,
+              vmin=0.0 if vmax_field is not None else None, vmax=vmax_field, label="distance")
+        if run in rel_errors:
             rm = row["rel_mean"]
             mean_txt = f" (mean {100 * rm:.2f}%)" if rm is not None and np.isfinite(rm) else ""
-            etitle = f"{name}: relative error{mean_txt}"
-            plot_error_map(mesh, rel_errors[name], out / f"error_{name}.png", title=etitle, vmax=vmax_err, sources=src)
-    _write_histograms(out, mesh, src, names, results, d_exact)
+            _draw(mesh, rel_errors[run], out / f"error_{_stem(run)}.png", src, error=True, vmax=vmax_err,
+                  title=f"{_label(run)}: relative error{mean_txt}")
+    _write_histograms(out, mesh, src, runs, results, reference, rows[0]["reference"] if rows else "")
 
 
-def _write_histograms(out: Path, mesh, src, names, results, d_exact) -> None:
-    """Gradient-norm histograms: the exact field first (the reference), then every successful method."""
+def _draw(mesh: Any, values: np.ndarray, path: Path, src: np.ndarray, *, title: str, levels: Any = None,
+          vmin: float | None = 0.0, vmax: float | None = None, label: str = "", error: bool = False) -> None:
+    """A field (or, ``error``, a relative error) on the surface, or on the slice of a volume through its centre."""
+    if mesh.dim == 3:
+        from .evaluation.slice_plot import plot_slice
+
+        plot_slice(mesh, values, path, vmin=vmin if not error else 0.0, vmax=vmax, title=title, points=mesh.V[src],
+                   isolines=None if error else levels, cmap="inferno_r" if error else "viridis",
+                   colorbar_label="relative error" if error else label)
+    elif error:
+        from .plotting import plot_error_map
+
+        plot_error_map(mesh, values, path, title=title, vmax=vmax, sources=src)
+    else:
+        from .plotting import plot_field
+
+        plot_field(mesh, values, path, isolines=levels, title=title, vmin=vmin, vmax=vmax, colorbar_label=label,
+                   sources=src)
+
+
+def _write_histograms(out: Path, mesh: Any, src: np.ndarray, runs: list[Run], results: dict[Run, Outcome],
+                      reference: np.ndarray | None, reference_label: str) -> None:
+    """Gradient-norm histograms: the reference first, then every successful method."""
     from .evaluation import gradient_norm_histogram
     from .plotting import plot_gradient_histogram
 
     hist_fields = {}
-    if d_exact is not None:
-        hist_fields["exact"] = d_exact
-    for name in names:
-        res = results[_canonical(name)][0]
-        if res is not None and name not in hist_fields:
-            hist_fields[name] = res.distance
+    if reference is not None:
+        hist_fields[reference_label] = reference
+    for run in runs:
+        res = results[_key(run)][0]
+        if res is not None and _label(run) not in hist_fields:
+            hist_fields[_label(run)] = res.distance
     if not hist_fields:
         return
     edges = np.linspace(0.0, 2.0, 161)
@@ -431,10 +471,9 @@ def _write_histograms(out: Path, mesh, src, names, results, d_exact) -> None:
     last = max((int(nz[-1]) for nz in nonzero if nz.size), default=len(edges) - 2)
     cut = min(max(last + 2, int(np.searchsorted(edges, 1.5))), len(edges) - 1)  # show at least [0, 1.5]
     hists = {k: (c[:cut], e[: cut + 1]) for k, (c, e) in hists.items()}
-    plot_gradient_histogram(
-        hists, out / "gradient_histogram.png",
-        title=f"‖∇d‖ per triangle on {mesh.name} (area-weighted, source triangles excluded)",
-    )
+    cell, weight = ("triangle", "area") if mesh.dim == 2 else ("tetrahedron", "volume")
+    plot_gradient_histogram(hists, out / "gradient_histogram.png",
+                            title=f"‖∇d‖ per {cell} on {mesh.name} ({weight}-weighted, source {cell}s excluded)")
 
 
 # ----------------------------------------------------------------------------------------------------------------------
@@ -444,6 +483,7 @@ def _write_histograms(out: Path, mesh, src, names, results, d_exact) -> None:
 #: The columns of :func:`format_table`.
 TABLE_COLUMNS = (
     Column("method", "method", align="left"),
+    Column("order", "order", lambda v: f"{int(v)}"),
     Column("time s", "time_s", lambda v: f"{v:.2f}"),
     Column("setup s", "setup_s", lambda v: f"{v:.2f}"),
     Column("iters", "iterations", lambda v: f"{int(v)}"),
@@ -460,13 +500,15 @@ TABLE_COLUMNS = (
 #: What each column of :func:`format_table` means, by header (``cvxgeodesic compare --help`` prints it).
 COLUMN_HELP = {
     "method": "the method",
+    "order": "its element order (2: the reference inside a tetrahedral mesh, qclp at order 2)",
     "time s": "set-up + solve, wall-clock seconds",
     "setup s": "the per-mesh part of it, paid once per solver",
     "iters": "solver iterations",
-    "rel mean %": "mean of |d - exact| / exact over the vertices (sources excluded)",
+    "rel mean %": "mean of |d - ref| / ref over the vertices (sources excluded); ref: the exact distance on a "
+                  "surface, qclp at order 2 inside a tetrahedral mesh",
     "rel max %": "its largest value",
     "rel p99 %": "its 99th percentile",
-    "off-ridge %": "rel mean away from the ridge (cut locus) of the exact field",
+    "off-ridge %": "rel mean away from the ridge (cut locus) of the exact field (surfaces)",
     "ridge jump p95": "95th percentile of the jump of the normal derivative across the edges near that ridge "
                       "(how sharp the field's crease is there)",
     "vs exact": "ridge jump p95 divided by the exact field's: below 1 the field is smoother than the exact "
@@ -485,7 +527,7 @@ def table_legend() -> str:
     return "\n".join(f"{c.header}: {COLUMN_HELP[c.header]}" for c in TABLE_COLUMNS)
 
 
-def format_table(rows) -> str:
+def format_table(rows: list[dict]) -> str:
     """Aligned plain-text table of :func:`run_compare` rows (what ``cvxgeodesic compare`` prints).
 
     Parameters
@@ -496,8 +538,8 @@ def format_table(rows) -> str:
     Returns
     -------
     str
-        Header, a rule and one line per row; numbers right-aligned, errors in
-        percent, times in seconds. Long status messages are shortened to 60
-        characters (the CSV keeps them whole). Laid out by :func:`cvxgeodesic.tables.text_table`.
+        Header, a rule and one line per row; numbers right-aligned, errors in percent, times in seconds. Long
+        status messages are shortened to 60 characters (the CSV keeps them whole). Laid out by
+        :func:`cvxgeodesic.tables.text_table`.
     """
     return text_table(rows, TABLE_COLUMNS)

@@ -1,9 +1,9 @@
-"""Statistics of the per-triangle gradient norm ``‖∇d|_t‖`` (paper Fig. 2).
+"""Statistics of the per-cell gradient norm ``‖∇d|_t‖`` (paper Fig. 2), on triangles or tetrahedra.
 
 A true distance field has ``‖∇d‖ = 1`` almost everywhere. The linear
 interpolant of the exact distance has norms near 1 on most triangles and below
 1 on the triangles the ridge (cut locus) crosses. Every statistic here is
-area-weighted and ignores triangles with a non-finite vertex value or zero area.
+weighted by the cells' areas (volumes) and ignores cells with a non-finite vertex value or zero measure.
 """
 
 from __future__ import annotations
@@ -15,16 +15,16 @@ from ._validate import check_mesh, vertex_field, vertex_indices
 
 
 def _norms_and_weights(mesh, d, sources):
-    mesh = check_mesh(mesh)
+    mesh = check_mesh(mesh, volumes=True)
     d = vertex_field(d, "d", mesh.n_vertices)
     finite_v = np.isfinite(d)
-    valid = finite_v[mesh.F].all(axis=1) & (mesh.face_areas > 0)
+    valid = finite_v[mesh.cells].all(axis=1) & (mesh.cell_measures > 0)
     if sources is not None:
         src = np.zeros(mesh.n_vertices, dtype=bool)
         src[vertex_indices(sources, "sources", mesh.n_vertices)] = True
-        valid &= ~src[mesh.F].any(axis=1)
+        valid &= ~src[mesh.cells].any(axis=1)
     norms = gradient_norms(mesh, np.where(finite_v, d, 0.0))[valid]
-    area = mesh.face_areas[valid]
+    area = mesh.cell_measures[valid]
     return norms, area
 
 
@@ -33,7 +33,7 @@ def gradient_norm_stats(mesh, d, *, sources=None, band: tuple[float, float] = (0
 
     Parameters
     ----------
-    mesh : TriMesh
+    mesh : TriMesh or TetMesh
     d : (n,) float ndarray
         Vertex values of a distance field.
     sources : (k,) int ndarray, optional
@@ -75,7 +75,7 @@ def gradient_norm_histogram(mesh, d, bins=50, *, range=None, sources=None) -> tu
 
     Parameters
     ----------
-    mesh : TriMesh
+    mesh : TriMesh or TetMesh
     d : (n,) float ndarray
     bins : int or (b + 1,) float ndarray
         As in :func:`numpy.histogram`.

@@ -24,14 +24,15 @@ __all__ = [
 
 #: Errors against the reference (sources and vertices it does not reach left out, see
 #: :func:`~cvxgeodesic.evaluation.error_stats`): relative ``rel_mean, rel_max, rel_p99``, absolute
-#: ``abs_max`` (mesh units), ``area_rel_mean`` (relative error averaged over the surface, each vertex
-#: weighted by a third of the area of its faces), ``n_compared``, ``n_nonfinite``.
+#: ``abs_max`` (mesh units), ``area_rel_mean`` (relative error averaged over the mesh, each vertex
+#: weighted by a third of the area of its faces, a quarter of the volume of its tetrahedra), ``n_compared``,
+#: ``n_nonfinite``.
 ACCURACY_KEYS = ("rel_mean", "rel_max", "rel_p99", "abs_max", "area_rel_mean", "n_compared", "n_nonfinite")
-#: Per-triangle ``‖∇d‖``, area-weighted, source triangles left out (see
+#: Per-cell ``‖∇d‖``, weighted by area (volume), source cells left out (see
 #: :func:`~cvxgeodesic.evaluation.gradient_norm_stats`): ``grad_mean``, ``grad_max``, and
 #: ``grad_unit_share``, the area share with ``0.9 ≤ ‖∇d‖ ≤ 1.1``.
 GRADIENT_KEYS = ("grad_mean", "grad_max", "grad_unit_share")
-#: Ridge sharpness (see :func:`~cvxgeodesic.evaluation.smoothness_report`): the 95th percentile of
+#: Ridge sharpness, surfaces only (see :func:`~cvxgeodesic.evaluation.smoothness_report`): the 95th percentile of
 #: the normal-derivative jump in the band around the reference's ridge (``ridge_jump_p95``), the
 #: reference's own (``exact_ridge_jump_p95``), their ratio (``ridge_jump_ratio``, < 1: smoother than
 #: the reference), the mean relative error off and on that band, and the band's size in vertices.
@@ -45,8 +46,11 @@ SUMMARY_KEYS = RUN_KEYS + ACCURACY_KEYS + GRADIENT_KEYS + SMOOTHNESS_KEYS
 
 
 def _vertex_areas(mesh) -> np.ndarray:
-    third = np.repeat(mesh.face_areas / 3.0, 3)
-    return np.bincount(mesh.F.ravel(), weights=third, minlength=mesh.n_vertices)
+    """(n,) float ndarray: each vertex's share of the cells around it (a third of a triangle, a quarter of a
+    tetrahedron)."""
+    k = mesh.cells.shape[1]
+    share = np.repeat(mesh.cell_measures / k, k)
+    return np.bincount(mesh.cells.ravel(), weights=share, minlength=mesh.n_vertices)
 
 
 def _area_rel_mean(mesh, d, d_exact, sources) -> float:
@@ -66,8 +70,8 @@ def summarize_field(mesh, d, d_exact, sources, *, smoothness: bool = True, gradi
 
     Parameters
     ----------
-    mesh : TriMesh
-        The surface, ``n`` vertices.
+    mesh : TriMesh or TetMesh
+        ``n`` vertices.
     d : (n,) float array_like
         The field to measure.
     d_exact : (n,) float array_like
@@ -75,7 +79,8 @@ def summarize_field(mesh, d, d_exact, sources, *, smoothness: bool = True, gradi
     sources : (k,) int array_like
         Source vertices (left out of the errors and the gradient statistics).
     smoothness : bool, default True
-        Measure the ridge (:data:`SMOOTHNESS_KEYS`); the costliest part, off leaves them None.
+        Measure the ridge (:data:`SMOOTHNESS_KEYS`; surfaces only: None in a volume); the costliest part, off
+        leaves them None.
     gradient : bool, default True
         Measure the gradient norms (:data:`GRADIENT_KEYS`); off leaves them None.
 
@@ -90,7 +95,7 @@ def summarize_field(mesh, d, d_exact, sources, *, smoothness: bool = True, gradi
     ValueError
         A field whose shape is not ``(n,)``, or a source index out of range (the message names it).
     """
-    mesh = check_mesh(mesh)
+    mesh = check_mesh(mesh, volumes=True)
     st = error_stats(d, d_exact, sources)
     out: dict[str, Any] = {k: st[k] for k in ("rel_mean", "rel_max", "rel_p99", "abs_max", "n_compared",
                                               "n_nonfinite")}
@@ -99,7 +104,7 @@ def summarize_field(mesh, d, d_exact, sources, *, smoothness: bool = True, gradi
     if gradient:
         g = gradient_norm_stats(mesh, d, sources=sources)
         out.update(grad_mean=g["mean"], grad_max=g["max"], grad_unit_share=g["share_0.9_1.1"])
-    if smoothness:
+    if smoothness and mesh.dim == 2:  # the jump of the normal derivative across edges: a surface measure
         sm = smoothness_report(mesh, d, d_exact, sources)
         out.update({k: sm[k] for k in SMOOTHNESS_KEYS})
     return {k: (float(v) if isinstance(v, float | np.floating) else int(v) if isinstance(v, np.integer) else v)
@@ -133,8 +138,8 @@ def summarize(mesh, result, d_exact, *, time_s: float | None = None, smoothness:
 
     Parameters
     ----------
-    mesh : TriMesh
-        The surface the result was computed on.
+    mesh : TriMesh or TetMesh
+        The mesh the result was computed on.
     result : GeodesicResult
         ``distance`` ((n,) floats), ``sources`` and ``info``.
     d_exact : (n,) float array_like

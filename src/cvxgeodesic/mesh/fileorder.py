@@ -14,18 +14,19 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import ParameterError, SourceError
-from .convert import as_trimesh
+from .convert import as_mesh
+from .tetmesh import TetMesh
 from .trimesh import TriMesh
 
 __all__ = ["file_order_mesh", "file_sources", "from_file_order", "to_file_order"]
 
 
-def to_file_order(mesh: TriMesh, field: ArrayLike, *, fill: float = np.inf) -> np.ndarray:
+def to_file_order(mesh: TriMesh | TetMesh, field: ArrayLike, *, fill: float = np.inf) -> np.ndarray:
     """A per-vertex field in the numbering of the file ``mesh`` was read from.
 
     Parameters
     ----------
-    mesh : TriMesh
+    mesh : TriMesh or TetMesh
         A mesh from :func:`~cvxgeodesic.mesh.load.load_mesh` (any other mesh is its own
         file: the field comes back unchanged, as a copy).
     field : (..., n) array_like of float
@@ -53,7 +54,7 @@ def to_file_order(mesh: TriMesh, field: ArrayLike, *, fill: float = np.inf) -> n
     >>> cg.to_file_order(mesh, cg.geodesic_distance(mesh, 0, method="dijkstra")).shape
     (42,)
     """
-    mesh = as_trimesh(mesh)
+    mesh = as_mesh(mesh)  # a volume has a file numbering too (its vertices in no tetrahedron dropped)
     try:
         values = np.asarray(field, dtype=np.float64)
     except (TypeError, ValueError) as exc:

@@ -19,7 +19,7 @@ from ..mesh.tetmesh import TetMesh, as_tetmesh
 from ..plotting import PLOT_EXTENSIONS, _finite_range, _isolevels, _new_figure, _save_atomic
 from ..validation import check_number, check_output_path
 
-__all__ = ["plot_tet_slice"]
+__all__ = ["plot_slice"]
 
 _AXES = "xyz"
 
@@ -31,7 +31,7 @@ def _axis_label(e: np.ndarray) -> str:
     return "(" + ", ".join(f"{x:.2f}" for x in e) + ")"
 
 
-def plot_tet_slice(
+def plot_slice(
     mesh: TetMesh | tuple,
     values: ArrayLike,
     path: str | os.PathLike,
@@ -87,7 +87,7 @@ def plot_tet_slice(
     --------
     >>> from cvxgeodesic.mesh.tet_generate import tet_box
     >>> mesh = tet_box(6)
-    >>> plot_tet_slice(mesh, mesh.V[:, 0], "/tmp/slice.png", origin=[0.5, 0.5, 0.5])  # doctest: +SKIP
+    >>> plot_slice(mesh, mesh.V[:, 0], "/tmp/slice.png", origin=[0.5, 0.5, 0.5])  # doctest: +SKIP
     """
     from matplotlib import colormaps
     from matplotlib.cm import ScalarMappable

@@ -1,0 +1,7 @@
+"""``python -m cvxgeodesic.cli``: the ``cvxgeodesic`` command."""
+
+import sys
+
+from . import main
+
+sys.exit(main())

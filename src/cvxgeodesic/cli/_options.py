@@ -1,0 +1,272 @@
+"""The options several commands share and what they become: sources, method, travel cost, help texts.
+
+A surface (``mesh.dim == 2``) and a volume (``mesh.dim == 3``) take the same options; what differs between the two
+is data, :data:`SPACES`: the word for the cells, the default method, the output formats of a field and where a
+``--source-point`` goes (the closest surface point, or the point itself inside the solid).
+
+Only the standard library at import, as the whole :mod:`cvxgeodesic.cli` package (see its ``__init__``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from dataclasses import dataclass
+from typing import Any
+
+from ..errors import ParameterError, SourceError
+
+M_HELP = "smoothness multiplier m (default 1): λ = m·κ·√area, one rounding on the surface whatever the mesh"
+SLICE_HELP = "tetrahedral meshes: normal of the slice through the centre that --png (or view) shows (default 0,0,1)"
+
+
+@dataclass(frozen=True)
+class Space:
+    """What the command line does differently on a surface and in a volume."""
+
+    cells: str  # the cells in messages
+    default_method: str  # --method when not given
+    outputs: tuple[str, ...] | None  # extensions of a distance file (None: every format of the registry)
+    where: str  # where a --source-point lies, for messages
+
+
+#: By simplex dimension (``mesh.dim``).
+SPACES = {
+    2: Space("faces", "qcqp-hessian", None, ""),
+    # the curved Hessian energy exists on surfaces only; the formats that carry tetrahedra (or a bare array)
+    3: Space("tetrahedra", "qclp", (".vtu", ".vtk", ".npy"), " (inside the solid)"),
+}
+
+
+def mesh_help() -> str:
+    """Help of the mesh argument of the surface-only commands: the formats of the registry."""
+    from ..mesh.formats.registry import mesh_formats_help
+
+    return f"mesh file: {mesh_formats_help()} (trimesh and meshio: pip install 'cvxgeodesic[io]')"
+
+
+def volume_help() -> str:
+    """Help of the mesh argument of the commands that take tetrahedra too."""
+    from ..mesh.formats.registry import MESHIO_TET_EXTENSIONS, TETGEN_EXTENSIONS
+
+    return (f"{mesh_help()}; or tetrahedra, the distance inside the solid: {', '.join(MESHIO_TET_EXTENSIONS)} with "
+            f"meshio, {', '.join(TETGEN_EXTENSIONS)} (TetGen)")
+
+
+def output_help() -> str:
+    """Help of ``distance -o``."""
+    from ..mesh.formats.registry import field_formats_help
+
+    return (f"output file: {field_formats_help()} (trimesh and meshio: pip install 'cvxgeodesic[io]'); in the "
+            "input file's vertex numbering, with its faces (a tetrahedral mesh: .vtu, .vtk or .npy)")
+
+
+def xyz(text: str) -> tuple[float, float, float]:
+    """``"1,2,3"`` -> ``(1.0, 2.0, 3.0)``: an option's X,Y,Z value."""
+    parts = [p for p in text.replace(" ", "").split(",") if p]
+    try:
+        vals = tuple(float(p) for p in parts)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected X,Y,Z (three numbers), got {text!r}") from None
+    if len(vals) != 3 or not all(math.isfinite(v) for v in vals):
+        raise argparse.ArgumentTypeError(f"expected X,Y,Z (three finite numbers), got {text!r}")
+    return vals
+
+
+def vertex_list(text: str) -> list[int]:
+    """``"0,5"`` -> ``[0, 5]``: the value of one ``--source`` option."""
+    try:
+        values = [int(t) for t in text.split(",") if t.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"invalid vertex index list {text!r}: give integers like 0 or 0,5") from None
+    if not values:
+        raise argparse.ArgumentTypeError("empty vertex index list")
+    return values
+
+
+def add_source_options(p: argparse.ArgumentParser,
+                       help_text: str = "source vertex index in the file's numbering (repeat, or give a list: -s 0,5)",
+                       *, points: bool = True) -> None:
+    """``--source/-s I[,J...]`` (file vertex indices) and, with ``points``, ``--source-point`` and ``--boundary``."""
+    p.add_argument("--source", "-s", type=vertex_list, action="extend", default=None, metavar="I[,J...]",
+                   help=help_text)
+    if points:
+        p.add_argument("--source-point", type=xyz, action="append", default=None, metavar="X,Y,Z",
+                       help="source at the surface point closest to X,Y,Z, in a tetrahedral mesh the point X,Y,Z "
+                            "inside the solid (repeat for several)")
+        p.add_argument("--boundary", action="store_true",
+                       help="the mesh boundary (every boundary edge; of a volume, every boundary face) is the source")
+
+
+def add_solve_options(p: argparse.ArgumentParser, *, method: bool = True, m_help: str = M_HELP) -> None:
+    """``--method`` (with ``method``), ``--m`` and ``--solver``."""
+    from ..api import SOLVERS
+
+    if method:
+        add_method_option(p)
+    p.add_argument("--m", type=float, default=1.0, help=m_help)
+    p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")
+
+
+class _Given(argparse.Action):
+    """Stores the value and records that the option was given (``args.method_given``)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        setattr(namespace, self.dest, values)
+        namespace.method_given = True
+
+
+def add_method_option(p: argparse.ArgumentParser) -> None:
+    """``--method NAME``, any method of :data:`~cvxgeodesic.api.ALL_METHODS` (default: :attr:`Space.default_method`
+    of the mesh, which ``args.method_given`` tells apart)."""
+    from ..api import ALL_METHODS
+
+    p.add_argument("--method", default=SPACES[2].default_method, choices=ALL_METHODS, metavar="NAME", action=_Given,
+                   help=f"one of: {', '.join(ALL_METHODS)} (default {SPACES[2].default_method}; "
+                        f"{SPACES[3].default_method} on a tetrahedral mesh)")
+    p.set_defaults(method_given=False)
+
+
+def method_for(args: argparse.Namespace, mesh: Any) -> str:
+    """``--method`` when given, else the default of the mesh's :data:`SPACES` entry."""
+    return args.method if getattr(args, "method_given", False) else SPACES[mesh.dim].default_method
+
+
+def add_cost_options(p: argparse.ArgumentParser) -> None:
+    """``--cost FILE.npy`` and ``--cost-field NAME``: a travel cost (docs/metrics.md)."""
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--cost", default=None, metavar="FILE.npy",
+                   help="travel cost (time per unit length, > 0): a .npy of one value per vertex of the file, or "
+                        "one per triangle of the loaded mesh; the distance becomes the travel time")
+    g.add_argument("--cost-field", default=None, metavar="NAME",
+                   help="travel cost from the input file's per-vertex property NAME (PLY property, VTK/VTU point "
+                        "data)")
+
+
+def cli_cost(args: argparse.Namespace, mesh: Any) -> Any:
+    """The ``cost`` of :class:`~cvxgeodesic.api.GeodesicSolver` from ``--cost`` / ``--cost-field``, in the mesh's
+    numbering (None without either); notes go to ``args.notes``.
+
+    Returns
+    -------
+    (n,) or (k,) float ndarray or None
+        Per vertex of the mesh, or per triangle of the loaded mesh.
+
+    Raises
+    ------
+    ParameterError
+        A ``--cost`` file that is not a .npy array of real numbers, one per file vertex or per mesh triangle; a
+        cost on a tetrahedral mesh (the volume formulations take none).
+    MeshFormatError
+        ``--cost-field`` on a format without per-vertex properties, or a property the file does not have.
+    """
+    from ..mesh.fileorder import from_file_order
+
+    given = "--cost-field" if getattr(args, "cost_field", None) else "--cost" if getattr(args, "cost", None) else None
+    if given is None:
+        return None
+    if mesh.dim != 2:  # before: ignored without a word, the field solved without the cost
+        raise ParameterError(f"{given}: a travel cost applies to triangle meshes; {mesh.name} holds tetrahedra")
+    if given == "--cost-field":
+        from ..mesh.io import load_vertex_property
+
+        values = load_vertex_property(args.mesh, args.cost_field)
+        what = f"--cost-field {args.cost_field}"
+    else:
+        values = _load_cost(args.cost)
+        what = f"--cost {args.cost}"
+        if values.shape == (mesh.n_cells,) and values.shape != (mesh.n_file_vertices,):
+            return values  # one per triangle of the loaded mesh
+        if values.shape != (mesh.n_file_vertices,):
+            raise ParameterError(f"{what}: an array of shape {values.shape}; give ({mesh.n_file_vertices},) (one value "
+                                 f"per vertex of the file) or ({mesh.n_cells},) (one per triangle of the loaded mesh)")
+    values, note = from_file_order(mesh, values, what)
+    if note:
+        args.notes.say(note)
+    return values
+
+
+def _load_cost(path: str) -> Any:
+    """The array of a ``--cost`` file, checked to be real."""
+    from pathlib import Path
+
+    import numpy as np
+
+    from ..mesh.formats._common import check_file
+    from ..validation import check_real
+
+    if not str(path).lower().endswith(".npy"):
+        raise ParameterError(f"--cost {path}: give a .npy file (one value per vertex or per triangle)")
+    check_file(Path(path), "a .npy file (--cost)")  # a FIFO or a device would block or never end
+    try:
+        values = np.load(path, allow_pickle=False)
+    except (OSError, ValueError) as exc:
+        raise ParameterError(f"--cost {path}: cannot read it as a .npy array ({exc})") from None
+    check_real(values, f"--cost {path}")  # before any conversion to float drops an imaginary part
+    return values
+
+
+def _given_sources(args: argparse.Namespace, where: str = "") -> tuple[list[int], list[tuple[float, ...]], bool]:
+    """``(vertices, points, boundary)`` of the options, checked: some source, and ``--boundary`` alone."""
+    vertices = list(args.source or [])
+    points = list(getattr(args, "source_point", None) or [])
+    boundary = bool(getattr(args, "boundary", False))
+    if boundary and (vertices or points):
+        raise SourceError("--boundary is a source on its own: do not combine it with --source/--source-point")
+    if not (vertices or points or boundary):
+        raise SourceError(f"give a source: --source I, --source-point X,Y,Z{where} or --boundary")
+    return vertices, points, boundary
+
+
+def cli_sources(args: argparse.Namespace, mesh: Any) -> tuple[Any, str]:
+    """The ``sources`` value for :meth:`GeodesicSolver.solve` from the options, and a label for titles.
+
+    ``--source`` are vertex numbers of the file; ``--source-point`` the closest surface point on a surface (a
+    note when it is off the surface), the point itself inside a solid.
+
+    Raises
+    ------
+    SourceError
+        No source option, ``--boundary`` together with other sources, a point outside the solid.
+    """
+    import numpy as np
+
+    from ..mesh.fileorder import file_sources
+
+    vertices, points, boundary = _given_sources(args, SPACES[mesh.dim].where)
+    if boundary:
+        return "boundary", "boundary"
+    if vertices:  # vertex indices of the file (load_mesh may weld or drop vertices)
+        vertices = file_sources(mesh, vertices).tolist()
+    pts: list[Any] = []
+    if points:
+        X = np.array(points, dtype=float)
+        pts = _surface_points(mesh, X, points) if mesh.dim == 2 else _volume_points(mesh, X)
+    label = ", ".join([*(str(v) for v in vertices), *("(" + ",".join(f"{c:g}" for c in x) + ")" for x in points)])
+    return [*vertices, *pts], label
+
+
+def _surface_points(mesh: Any, X: Any, points: list) -> list:
+    from ..sources import ON_SURFACE_TOL, closest_points, surface_point
+
+    _, _, dist = closest_points(mesh, X)
+    for x, dd in zip(points, dist, strict=True):
+        if dd > ON_SURFACE_TOL * mesh.bbox_diagonal:
+            print(f"cvxgeodesic: note: --source-point {','.join(f'{c:g}' for c in x)} is {dd:.3g} from the surface; "
+                  "using the closest surface point", file=sys.stderr)
+    return list(surface_point(mesh, X))  # a list for (p, 3) positions
+
+
+def _volume_points(mesh: Any, X: Any) -> list:
+    from ..mesh.locate import volume_point
+
+    return list(volume_point(mesh, X))  # a list for (p, 3) positions
+
+
+def batch_sources(args: argparse.Namespace) -> Any:
+    """The ``sources`` of :func:`~cvxgeodesic.batch.run_batch` from the options (positions stay positions)."""
+    vertices, points, boundary = _given_sources(args)
+    if boundary:
+        return "boundary"
+    return [*vertices, *(list(x) for x in points)] if points else vertices

@@ -1,0 +1,110 @@
+"""``cvxgeodesic distance``: one distance field, written in the input file's numbering (and ``--png``).
+
+On a surface the picture is the field with isolines; in a tetrahedral mesh it is a slice through the centre
+(``--slice-normal``). Both files or neither.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+from . import _options as opt
+from ._common import add_overwrite_option, check_outputs
+
+
+def add_parser(sub: Any) -> None:
+    """The ``distance`` sub-command."""
+    p = sub.add_parser("distance", help="compute one distance field and write it")
+    add_common_options(p)
+    p.add_argument("--lam", type=float, default=None, help="give λ directly (overrides --m)")
+    p.add_argument("--normalization", default="area", choices=("area", "paper"),
+                   help="meaning of --m: 'area' (default) or the paper's λ = m·100·h/n")
+    p.add_argument("--order", type=int, default=1, choices=(1, 2),
+                   help="2: second-order elements for the squared distance (qclp and the qcqp methods; docs/order2.md)")
+    opt.add_cost_options(p)
+    p.add_argument("-o", "--output", required=True, help=opt.output_help())
+    p.add_argument("--png", default=None,
+                   help="also render the field with isolines and the sources to this PNG (both files or neither; "
+                        "a slice of a tetrahedral mesh)")
+    add_slice_option(p)
+    add_overwrite_option(p)
+    p.set_defaults(func=run)
+
+
+def add_common_options(p: argparse.ArgumentParser, *, method: bool = True) -> None:
+    """The mesh (a surface or tetrahedra), the sources, ``--method``, ``--m``, ``--solver`` and ``--quiet``: what
+    ``distance``, ``compare`` and ``view`` share."""
+    p.add_argument("mesh", help=opt.volume_help())
+    opt.add_source_options(p)
+    opt.add_solve_options(p, method=method)
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress output")
+
+
+def add_slice_option(p: argparse.ArgumentParser) -> None:
+    """``--slice-normal NX,NY,NZ``."""
+    p.add_argument("--slice-normal", type=opt.xyz, default=None, metavar="NX,NY,NZ", help=opt.SLICE_HELP)
+
+
+def slice_normal(args: argparse.Namespace) -> tuple[float, float, float]:
+    """``--slice-normal``, default ``z``."""
+    return getattr(args, "slice_normal", None) or (0.0, 0.0, 1.0)
+
+
+def run(args: argparse.Namespace) -> int:
+    """``cvxgeodesic distance``: returns the exit code."""
+    from .._atomic import output_set
+    from .._verbose import progress_printer
+    from ..api import GeodesicSolver
+    from ..mesh.formats.registry import DISTANCE_EXTENSIONS
+    from ..mesh.io import load_mesh, save_distance
+    from ..validation import check_output_path
+
+    check_outputs(args, ("-o", args.output, DISTANCE_EXTENSIONS), ("--png", args.png, (".png",)))
+    mesh = load_mesh(args.mesh)
+    space = opt.SPACES[mesh.dim]
+    if space.outputs is not None:
+        check_output_path(args.output, space.outputs)
+    sources, label = opt.cli_sources(args, mesh)
+    method = opt.method_for(args, mesh)
+    log = sys.stderr
+    if not args.quiet:
+        print(f"{mesh.name}: {mesh.n_file_vertices} vertices, {mesh.n_cells} {space.cells}; method {method}"
+              + (f", order {args.order}" if args.order != 1 else ""), file=log)
+    solver = GeodesicSolver(mesh, method, m=args.m, lam=args.lam, solver=args.solver,
+                            normalization=args.normalization, order=args.order, cost=opt.cli_cost(args, mesh))
+    res = solver.solve(sources, callback=None if args.quiet else progress_printer(log))
+    for note in res.info.notes:
+        args.notes.say(note)
+    outputs = [args.output, args.png] if args.png else [args.output]
+    with output_set(*outputs, overwrite_read_only=args.overwrite_read_only) as tmp:  # both files or neither
+        # every file in the file's numbering and vertex count, so it joins the input by index
+        save_distance(tmp[0], mesh, res.distance, file_order=True)
+        if args.png:
+            draw_field(mesh, res, tmp[1], title=f"{solver.method}, sources {label}", normal=slice_normal(args))
+    if not args.quiet:
+        i = res.info
+        print(f"{i.method} via {i.solver}: {i.status}, {i.iterations} iterations, set-up {i.setup_time:.2f} s, "
+              f"solve {i.solve_time:.2f} s; wrote {args.output}" + (f" and {args.png}" if args.png else ""), file=log)
+    return 0
+
+
+def draw_field(mesh: Any, res: Any, path: Any, *, title: str, normal: tuple[float, float, float]) -> None:
+    """The field of ``res`` and its sources into a PNG: on the surface, or on the slice of a volume by the plane
+    through the centre with this normal."""
+    if mesh.dim == 2:
+        from ..plotting import plot_field
+
+        plot_field(mesh, res.distance, path, title=title, sources=res.sources, colorbar_label="geodesic distance")
+        return
+    import numpy as np
+
+    from ..evaluation.slice_plot import plot_slice
+
+    sset = res.source_set
+    marks = [mesh.V[sset.fixed_vertices(mesh) if sset is not None else res.sources]]
+    if sset is not None and sset.points:
+        marks.append(np.array([p.position(mesh) for p in sset.points]))
+    plot_slice(mesh, res.distance, path, normal=normal, points=np.vstack(marks), title=title,
+               colorbar_label="geodesic distance")

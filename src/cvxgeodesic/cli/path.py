@@ -1,0 +1,126 @@
+"""``cvxgeodesic path``: the geodesic path from a target down the field to the nearest source, on a surface or
+inside a tetrahedral mesh (:func:`cvxgeodesic.paths.geodesic_path`)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+from ..errors import ParameterError, SourceError
+from . import _options as opt
+from ._common import add_overwrite_option, check_outputs
+from .distance import add_slice_option, slice_normal
+
+#: The formats of a path file.
+PATH_EXTENSIONS = (".csv", ".npy", ".ply")
+
+
+def add_parser(sub: Any) -> None:
+    """The ``path`` sub-command."""
+    p = sub.add_parser("path", help="geodesic path from a target down the distance field to the nearest source")
+    p.add_argument("mesh", help=opt.volume_help())
+    opt.add_source_options(p)
+    p.add_argument("--to", type=int, default=None, metavar="I", help="target vertex")
+    p.add_argument("--to-point", type=opt.xyz, default=None, metavar="X,Y,Z",
+                   help="target: the closest surface point (in a tetrahedral mesh: the point inside the solid)")
+    opt.add_solve_options(p, m_help="smoothness multiplier m (default 1)")
+    opt.add_cost_options(p)
+    p.add_argument("-o", "--output", required=True,
+                   help="path file: .csv (x,y,z,face,b0,b1,b2; in a tetrahedral mesh x,y,z,tet,b0,b1,b2,b3), .npy or "
+                        ".ply")
+    p.add_argument("--png", default=None, help="also draw the path on the field to this PNG (both files or neither; "
+                                               "in a tetrahedral mesh its points on the slice)")
+    add_slice_option(p)
+    add_overwrite_option(p)
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress output")
+    p.set_defaults(func=run)
+
+
+def _target(args: argparse.Namespace, mesh: Any) -> Any:
+    import numpy as np
+
+    from ..sources import surface_point
+
+    if (args.to is None) == (args.to_point is None):
+        raise ParameterError("give exactly one target: --to I or --to-point X,Y,Z")
+    if args.to is not None:
+        if not 0 <= args.to < mesh.n_vertices:
+            raise SourceError(f"target vertex {args.to} is out of range: the mesh has {mesh.n_vertices} vertices "
+                              f"(0..{mesh.n_vertices - 1})")
+        return args.to
+    X = np.array(args.to_point)
+    # a SurfacePoint, so that an exact field's path is pygeodesic's; inside a solid the position itself
+    return surface_point(mesh, X) if mesh.dim == 2 else X
+
+
+def _path_writer(path: str, P: Any, cells: Any, bary: Any, cell: str) -> Any:
+    """The function that writes the path into an open binary file, by the extension of ``path``; ``cell`` names
+    the column of the cell that holds each point (``face``, ``tet``)."""
+    import io
+
+    import numpy as np
+
+    lower = path.lower()
+    if lower.endswith(".npy"):
+        return lambda fh: np.save(fh, P)
+    if lower.endswith(".csv"):
+        buf = io.StringIO()
+        buf.write(",".join(["x", "y", "z", cell, *(f"b{i}" for i in range(bary.shape[1]))]) + "\n")
+        for x, f, b in zip(P, cells, bary, strict=True):
+            buf.write(",".join([*(repr(float(c)) for c in x), str(int(f)), *(repr(float(c)) for c in b)]) + "\n")
+        return lambda fh: fh.write(buf.getvalue().encode())
+    k = len(P)
+    head = (f"ply\nformat ascii 1.0\ncomment geodesic path (cvxgeodesic)\nelement vertex {k}\n"
+            f"property double x\nproperty double y\nproperty double z\nelement edge {max(k - 1, 0)}\n"
+            "property int vertex1\nproperty int vertex2\nend_header\n")
+    body = "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in P.tolist()) + "".join(f"{i} {i + 1}\n" for i in range(k - 1))
+    return lambda fh: fh.write((head + body).encode())
+
+
+def run(args: argparse.Namespace) -> int:
+    """``cvxgeodesic path``: returns the exit code."""
+    import numpy as np
+
+    from .._atomic import atomic_write, output_set
+    from .._verbose import progress_printer
+    from ..api import GeodesicSolver
+    from ..mesh.io import load_mesh
+    from ..paths import distance_at, geodesic_path
+    from ..sources import SurfacePoint
+
+    if not args.output.lower().endswith(PATH_EXTENSIONS):
+        raise ParameterError(f"output {args.output!r}: the path is written as .csv, .npy or .ply")
+    check_outputs(args, ("-o", args.output, PATH_EXTENSIONS), ("--png", args.png, (".png",)))
+    mesh = load_mesh(args.mesh)
+    sources, label = opt.cli_sources(args, mesh)
+    target = _target(args, mesh)
+    cost = opt.cli_cost(args, mesh)
+    res = GeodesicSolver(mesh, opt.method_for(args, mesh), m=args.m, solver=args.solver, cost=cost).solve(
+        sources, callback=None if args.quiet else progress_printer(sys.stderr))
+    P, cells, bary = geodesic_path(mesh, res, target, return_surface_points=True)
+    outputs = [args.output, args.png] if args.png else [args.output]
+    with output_set(*outputs, overwrite_read_only=args.overwrite_read_only) as tmp:  # both files or neither
+        atomic_write(tmp[0], _path_writer(str(tmp[0]), P, cells, bary, "face" if mesh.dim == 2 else "tet"))
+        if args.png:
+            _draw_path(mesh, res.distance, P, tmp[1], title=f"{res.info.method}, path to sources {label}",
+                       normal=slice_normal(args))
+    if not args.quiet:
+        length = float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum())
+        # a cost applies to surfaces only (cli_cost)
+        time = "" if cost is None else f", travel time {distance_at(mesh, res, SurfacePoint(cells[0], bary[0])):.6g}"
+        print(f"{res.info.method}: path of {len(P)} points, length {length:.6g}{time}; wrote {args.output}"
+              + (f" and {args.png}" if args.png else ""), file=sys.stderr)
+    return 0
+
+
+def _draw_path(mesh: Any, d: Any, P: Any, path: Any, *, title: str, normal: tuple[float, float, float]) -> None:
+    """The field with the path: on the surface, or its points projected onto the slice of a volume."""
+    if mesh.dim == 2:
+        from ..plotting import plot_field
+
+        plot_field(mesh, d, path, title=title, paths=[P])
+    else:
+        from ..evaluation.slice_plot import plot_slice
+
+        plot_slice(mesh, d, path, normal=normal, points=P, title=title, colorbar_label="geodesic distance")
