@@ -163,7 +163,9 @@ class BaselineSolver:
         src, seeds, count = self._resolve(sources)
         t0 = time.perf_counter()
         with _LibraryErrors(self, "failed on"):
-            d, extra = self._solve_sources(src) if isinstance(src, SourceSet) else self._solve(src)
+            # a surface's points, curves or boundary go through the library's point support; a volume's SourceSet is
+            # what its _solve takes
+            d, extra = self._solve_sources(src) if self.dim == 2 and isinstance(src, SourceSet) else self._solve(src)
         solve_time = time.perf_counter() - t0
         d = np.array(d, dtype=np.float64).reshape(-1)
         if d.shape != (self.mesh.n_vertices,):
