@@ -10,7 +10,7 @@ from typing import Any
 from ..errors import ParameterError, SourceError
 from . import _options as opt
 from ._common import add_overwrite_option, check_outputs
-from .distance import add_slice_option, slice_normal
+from .distance import add_slice_option, draw_field, slice_normal
 
 #: The formats of a path file.
 PATH_EXTENSIONS = (".csv", ".npy", ".ply")
@@ -103,8 +103,8 @@ def run(args: argparse.Namespace) -> int:
     with output_set(*outputs, overwrite_read_only=args.overwrite_read_only) as tmp:  # both files or neither
         atomic_write(tmp[0], _path_writer(str(tmp[0]), P, cells, bary, "face" if mesh.dim == 2 else "tet"))
         if args.png:
-            _draw_path(mesh, res.distance, P, tmp[1], title=f"{res.info.method}, path to sources {label}",
-                       normal=slice_normal(args))
+            draw_field(mesh, res, tmp[1], title=f"{res.info.method}, path to sources {label}",
+                       normal=slice_normal(args), line=P)
     if not args.quiet:
         length = float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum())
         # a cost applies to surfaces only (cli_cost)
@@ -113,14 +113,3 @@ def run(args: argparse.Namespace) -> int:
               + (f" and {args.png}" if args.png else ""), file=sys.stderr)
     return 0
 
-
-def _draw_path(mesh: Any, d: Any, P: Any, path: Any, *, title: str, normal: tuple[float, float, float]) -> None:
-    """The field with the path: on the surface, or its points projected onto the slice of a volume."""
-    if mesh.dim == 2:
-        from ..plotting import plot_field
-
-        plot_field(mesh, d, path, title=title, paths=[P])
-    else:
-        from ..evaluation.slice_plot import plot_slice
-
-        plot_slice(mesh, d, path, normal=normal, points=P, title=title, colorbar_label="geodesic distance")
