@@ -89,8 +89,6 @@ def run(args: argparse.Namespace) -> int:
     from ..paths import distance_at, geodesic_path
     from ..sources import SurfacePoint
 
-    if not args.output.lower().endswith(PATH_EXTENSIONS):
-        raise ParameterError(f"output {args.output!r}: the path is written as .csv, .npy or .ply")
     check_outputs(args, ("-o", args.output, PATH_EXTENSIONS), ("--png", args.png, (".png",)))
     mesh = load_mesh(args.mesh)
     sources, label = opt.cli_sources(args, mesh)
