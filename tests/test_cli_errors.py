@@ -111,6 +111,15 @@ def test_bad_output_exits_2_before_solving(files, tmp_path, capsys, monkeypatch,
     assert not solved  # checked before the (possibly long) solve
 
 
+def test_path_bad_output_extension_exits_2_before_solving(files, tmp_path, capsys, monkeypatch):
+    solved = []
+    monkeypatch.setattr(cg.GeodesicSolver, "solve", lambda *a, **k: solved.append(1))
+    rc, err = run_cli(["path", files["ok"], "-s", "0", "--to", "1", "-q", "-o", tmp_path / "p.txt"], capsys)
+    assert rc == 2 and len(err) == 1, err
+    assert "unsupported output file extension '.txt'; supported: .csv, .npy, .ply" in err[0]  # validation's message
+    assert not solved and not list(tmp_path.iterdir())
+
+
 def test_write_failure_is_one_line_and_leaves_no_partial_file(files, tmp_path, capsys, monkeypatch):
     import cvxgeodesic._atomic as atomic
 

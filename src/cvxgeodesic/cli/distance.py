@@ -90,13 +90,18 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def draw_field(mesh: Any, res: Any, path: Any, *, title: str, normal: tuple[float, float, float]) -> None:
+def draw_field(mesh: Any, res: Any, path: Any, *, title: str, normal: tuple[float, float, float],
+               line: Any = None) -> None:
     """The field of ``res`` and its sources into a PNG: on the surface, or on the slice of a volume by the plane
-    through the centre with this normal."""
+    through the centre with this normal. With ``line`` ((k, 3) points of a geodesic path), the path instead of the
+    sources (in a volume its points projected onto the slice)."""
     if mesh.dim == 2:
         from ..plotting import plot_field
 
-        plot_field(mesh, res.distance, path, title=title, sources=res.sources, colorbar_label="geodesic distance")
+        if line is not None:
+            plot_field(mesh, res.distance, path, title=title, paths=[line])
+        else:
+            plot_field(mesh, res.distance, path, title=title, sources=res.sources, colorbar_label="geodesic distance")
         return
     import numpy as np
 
@@ -106,5 +111,5 @@ def draw_field(mesh: Any, res: Any, path: Any, *, title: str, normal: tuple[floa
     marks = [mesh.V[sset.fixed_vertices(mesh) if sset is not None else res.sources]]
     if sset is not None and sset.points:
         marks.append(np.array([p.position(mesh) for p in sset.points]))
-    plot_slice(mesh, res.distance, path, normal=normal, points=np.vstack(marks), title=title,
-               colorbar_label="geodesic distance")
+    plot_slice(mesh, res.distance, path, normal=normal, points=np.vstack(marks) if line is None else line,
+               title=title, colorbar_label="geodesic distance")

@@ -10,7 +10,7 @@ from typing import Any
 from ..errors import ParameterError, SourceError
 from . import _options as opt
 from ._common import add_overwrite_option, check_outputs
-from .distance import add_slice_option, slice_normal
+from .distance import add_slice_option, draw_field, slice_normal
 
 #: The formats of a path file.
 PATH_EXTENSIONS = (".csv", ".npy", ".ply")
@@ -89,8 +89,6 @@ def run(args: argparse.Namespace) -> int:
     from ..paths import distance_at, geodesic_path
     from ..sources import SurfacePoint
 
-    if not args.output.lower().endswith(PATH_EXTENSIONS):
-        raise ParameterError(f"output {args.output!r}: the path is written as .csv, .npy or .ply")
     check_outputs(args, ("-o", args.output, PATH_EXTENSIONS), ("--png", args.png, (".png",)))
     mesh = load_mesh(args.mesh)
     sources, label = opt.cli_sources(args, mesh)
@@ -103,8 +101,8 @@ def run(args: argparse.Namespace) -> int:
     with output_set(*outputs, overwrite_read_only=args.overwrite_read_only) as tmp:  # both files or neither
         atomic_write(tmp[0], _path_writer(str(tmp[0]), P, cells, bary, "face" if mesh.dim == 2 else "tet"))
         if args.png:
-            _draw_path(mesh, res.distance, P, tmp[1], title=f"{res.info.method}, path to sources {label}",
-                       normal=slice_normal(args))
+            draw_field(mesh, res, tmp[1], title=f"{res.info.method}, path to sources {label}",
+                       normal=slice_normal(args), line=P)
     if not args.quiet:
         length = float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum())
         # a cost applies to surfaces only (cli_cost)
@@ -113,14 +111,3 @@ def run(args: argparse.Namespace) -> int:
               + (f" and {args.png}" if args.png else ""), file=sys.stderr)
     return 0
 
-
-def _draw_path(mesh: Any, d: Any, P: Any, path: Any, *, title: str, normal: tuple[float, float, float]) -> None:
-    """The field with the path: on the surface, or its points projected onto the slice of a volume."""
-    if mesh.dim == 2:
-        from ..plotting import plot_field
-
-        plot_field(mesh, d, path, title=title, paths=[P])
-    else:
-        from ..evaluation.slice_plot import plot_slice
-
-        plot_slice(mesh, d, path, normal=normal, points=P, title=title, colorbar_label="geodesic distance")
