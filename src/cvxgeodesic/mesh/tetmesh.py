@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike
 
 from ..errors import MeshError
 from .simplex import CELL_EDGES, CELL_FACETS, SimplexMesh
-from .trimesh import TriMesh, _as_vertices, file_numbering
+from .trimesh import TriMesh, _as_cells, _as_vertices, file_numbering
 
 __all__ = ["DEGENERATE_TET_TOL", "TET_EDGES", "TET_FACES", "TetMesh", "as_tetmesh"]
 
@@ -100,7 +100,7 @@ class TetMesh(SimplexMesh):
     ) -> None:
         self.name = name or "tetmesh"
         self.V = _as_vertices(V, self.name)
-        self.T = _as_tets(T, self.V.shape[0], self.name)
+        self.T = _as_cells(T, self.V.shape[0], self.name, 3)
         self.vertex_map, self.file_index, self.dropped_vertices = file_numbering(
             self.V.shape[0], vertex_map, file_index, dropped_vertices, self.name)
         self._reader_notes: tuple[str, ...] = tuple(str(s) for s in notes)
@@ -351,37 +351,6 @@ class TetMesh(SimplexMesh):
             out.append(f"{self.name}: {unref.size} vertices are in no tetrahedron (first: vertex {int(unref[0])}); "
                        "they get an infinite distance")
         return tuple(out)
-
-
-def _as_tets(T: Any, n: int, name: str) -> np.ndarray:
-    try:
-        T_in = np.asarray(T)
-    except (TypeError, ValueError, OverflowError):  # ragged lists
-        raise MeshError(f"{name}: tetrahedra must be a (k, 4) integer array") from None
-    if T_in.ndim != 2 or T_in.shape[1] != 4:
-        raise MeshError(f"{name}: tetrahedra must have shape (k, 4), got {T_in.shape}")
-    if T_in.shape[0] == 0:
-        raise MeshError(f"{name}: the mesh has no tetrahedra")
-    if T_in.dtype.kind == "f":
-        if not np.all(np.isfinite(T_in)) or not np.all(T_in == np.round(T_in)):
-            raise MeshError(f"{name}: tetrahedron indices must be integers")
-    elif T_in.dtype.kind not in "iu":
-        raise MeshError(f"{name}: tetrahedron indices must be integers, got dtype {T_in.dtype}")
-    if T_in.dtype.kind == "u" and T_in.size and int(T_in.max()) >= 2**63:
-        raise MeshError(f"{name}: tetrahedron indices must be in [0, {n})")
-    Tm = np.array(T_in, dtype=np.int64, order="C")
-    out = (Tm < 0) | (Tm >= n)
-    if out.any():
-        t = int(np.flatnonzero(out.any(axis=1))[0])
-        raise MeshError(f"{name}: tetrahedron {t} has vertex index {Tm[t].tolist()} outside [0, {n})")
-    S = np.sort(Tm, axis=1)
-    rep = (S[:, 1:] == S[:, :-1]).any(axis=1)
-    if rep.any():
-        t = int(np.flatnonzero(rep)[0])
-        raise MeshError(f"{name}: tetrahedron {t} repeats a vertex {Tm[t].tolist()} ({int(rep.sum())} such "
-                        "tetrahedra); remove them first")
-    Tm.setflags(write=False)
-    return Tm
 
 
 def as_tetmesh(mesh: Any, name: str = "tetmesh") -> TetMesh:

@@ -94,12 +94,12 @@ class TriMesh(SimplexMesh):
     ) -> None:
         self.name = name or "mesh"
         self.V = _as_vertices(V, self.name)
-        self.F = _as_faces(F, self.V.shape[0], self.name)
+        self.F = _as_cells(F, self.V.shape[0], self.name, 2)
         self.vertex_map, self.file_index, self.dropped_vertices = file_numbering(
             self.V.shape[0], vertex_map, file_index, dropped_vertices, self.name)
         self.notes: tuple[str, ...] = tuple(str(n) for n in notes)
-        self._file_faces = None if file_faces is None else _as_faces(file_faces, self.file_index.shape[0],
-                                                                      f"{self.name} (file faces)")
+        self._file_faces = None if file_faces is None else _as_cells(file_faces, self.file_index.shape[0],
+                                                                      f"{self.name} (file faces)", 2)
 
     def __repr__(self) -> str:
         return f"TriMesh(name={self.name!r}, n_vertices={self.n_vertices}, n_faces={self.n_faces})"
@@ -240,36 +240,42 @@ def _as_vertices(V, name: str) -> np.ndarray:
     return V
 
 
-def _as_faces(F, n: int, name: str) -> np.ndarray:
+# per simplex dimension: (cell, cells, shape, hint after the shape, remedy for a repeated vertex)
+_CELL_WORDS = {
+    2: ("face", "faces", "(m, 3)", " (triangles only; load_mesh fan-triangulates polygons)",
+        "remove degenerate faces first"),
+    3: ("tetrahedron", "tetrahedra", "(k, 4)", "", "remove them first"),
+}
+
+
+def _as_cells(C, n: int, name: str, dim: int) -> np.ndarray:
+    """(k, dim + 1) read-only int64 cells checked against ``n`` vertices; a MeshError naming the first bad cell."""
+    one, many, shape, hint, remedy = _CELL_WORDS[dim]
     try:
-        F_in = np.asarray(F)
+        C_in = np.asarray(C)
     except (TypeError, ValueError, OverflowError):  # ragged lists (polygons of several sizes), ...
-        raise MeshError(
-            f"{name}: faces must be an (m, 3) integer array (triangles only; load_mesh fan-triangulates polygons)"
-        ) from None
-    if F_in.ndim != 2 or F_in.shape[1] != 3:
-        raise MeshError(
-            f"{name}: faces must have shape (m, 3) (triangles only; load_mesh fan-triangulates polygons), "
-            f"got {F_in.shape}"
-        )
-    if F_in.shape[0] == 0:
-        raise MeshError(f"{name}: the mesh has no faces")
-    if F_in.dtype.kind == "f":
-        if not np.all(np.isfinite(F_in)) or not np.all(F_in == np.round(F_in)):
-            raise MeshError(f"{name}: face indices must be integers")
-    elif F_in.dtype.kind not in "iu":
-        raise MeshError(f"{name}: face indices must be integers, got dtype {F_in.dtype}")
-    F = np.array(F_in, dtype=np.int64, order="C")
-    out = (F < 0) | (F >= n)
+        raise MeshError(f"{name}: {many} must be an {shape} integer array{hint}") from None
+    if C_in.ndim != 2 or C_in.shape[1] != dim + 1:
+        raise MeshError(f"{name}: {many} must have shape {shape}{hint}, got {C_in.shape}")
+    if C_in.shape[0] == 0:
+        raise MeshError(f"{name}: the mesh has no {many}")
+    if C_in.dtype.kind == "f":
+        if not np.all(np.isfinite(C_in)) or not np.all(C_in == np.round(C_in)):
+            raise MeshError(f"{name}: {one} indices must be integers")
+    elif C_in.dtype.kind not in "iu":
+        raise MeshError(f"{name}: {one} indices must be integers, got dtype {C_in.dtype}")
+    if dim == 3 and C_in.dtype.kind == "u" and int(C_in.max()) >= 2**63:
+        raise MeshError(f"{name}: {one} indices must be in [0, {n})")
+    cells = np.array(C_in, dtype=np.int64, order="C")
+    out = (cells < 0) | (cells >= n)
     if out.any():
-        f = int(np.flatnonzero(out.any(axis=1))[0])
-        raise MeshError(f"{name}: face {f} has vertex index {F[f].tolist()} outside [0, {n})")
-    rep = (F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 0] == F[:, 2])
+        c = int(np.flatnonzero(out.any(axis=1))[0])
+        raise MeshError(f"{name}: {one} {c} has vertex index {cells[c].tolist()} outside [0, {n})")
+    S = np.sort(cells, axis=1)
+    rep = (S[:, 1:] == S[:, :-1]).any(axis=1)
     if rep.any():
-        f = int(np.flatnonzero(rep)[0])
-        raise MeshError(
-            f"{name}: face {f} repeats a vertex {F[f].tolist()} ({int(rep.sum())} such faces); "
-            "remove degenerate faces first"
-        )
-    F.setflags(write=False)
-    return F
+        c = int(np.flatnonzero(rep)[0])
+        raise MeshError(f"{name}: {one} {c} repeats a vertex {cells[c].tolist()} ({int(rep.sum())} such {many}); "
+                        f"{remedy}")
+    cells.setflags(write=False)
+    return cells
