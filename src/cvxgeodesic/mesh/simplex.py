@@ -104,15 +104,36 @@ class SimplexMesh:
         return float(self.cell_measures.sum())
 
     # -- edges ----------------------------------------------------------------------------------------------------
+    def _sub_simplices(self, local: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The unique sub-simplices of the cells whose local corners are the rows of ``local`` (l, s).
+
+        Returns
+        -------
+        unique : (u, s) int64 ndarray
+            Each row sorted, rows in lexicographic order.
+        per_cell : (k, l) int64 ndarray
+            Index into ``unique`` of each cell's sub-simplices, in the order of ``local``.
+        counts : (u,) int64 ndarray
+            How many cells share each one.
+        """
+        rows = np.sort(self.cells[:, local].reshape(-1, local.shape[1]), axis=1)
+        n, s = self.n_vertices, rows.shape[1]
+        if n ** s < 2**62:  # one 1-D key per row: ~10x faster than np.unique(axis=0) on million-cell meshes
+            keys = rows[:, 0].copy()
+            for j in range(1, s):
+                keys = keys * np.int64(n) + rows[:, j]
+            uniq, inv, counts = np.unique(keys, return_inverse=True, return_counts=True)
+            unique = np.empty((uniq.size, s), dtype=np.int64)
+            for j in reversed(range(s)):
+                unique[:, j] = uniq % n
+                uniq = uniq // n
+        else:
+            unique, inv, counts = np.unique(rows, axis=0, return_inverse=True, return_counts=True)
+        return unique.astype(np.int64), inv.reshape(self.n_cells, -1).astype(np.int64), counts.astype(np.int64)
+
     @cached_property
     def _edge_data(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        # one 1-D sort of i·n + j keys: ~10x faster than np.unique(axis=0) on million-cell meshes
-        n = np.int64(self.n_vertices)
-        E = self.cells[:, CELL_EDGES[self.dim]].reshape(-1, 2)
-        keys = np.minimum(E[:, 0], E[:, 1]) * n + np.maximum(E[:, 0], E[:, 1])
-        uniq, inv, counts = np.unique(keys, return_inverse=True, return_counts=True)
-        cell_edges = inv.reshape(self.n_cells, -1).astype(np.int64)
-        return np.column_stack([uniq // n, uniq % n]), cell_edges, counts
+        return self._sub_simplices(CELL_EDGES[self.dim])
 
     @cached_property
     def edges(self) -> np.ndarray:

@@ -198,16 +198,7 @@ class TetMesh(SimplexMesh):
     # -- faces and the boundary -------------------------------------------------------------------------------
     @cached_property
     def _face_data(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        n = np.int64(self.n_vertices)
-        Fl = np.sort(self.T[:, TET_FACES].reshape(-1, 3), axis=1)
-        # one 1-D key per face: (a·n + b)·n + c fits in int64 while n < 2**21; beyond, sort rows instead
-        if self.n_vertices < 2**21:
-            keys = (Fl[:, 0] * n + Fl[:, 1]) * n + Fl[:, 2]
-            uniq, inv, counts = np.unique(keys, return_inverse=True, return_counts=True)
-            faces = np.column_stack([uniq // (n * n), (uniq // n) % n, uniq % n])
-        else:
-            faces, inv, counts = np.unique(Fl, axis=0, return_inverse=True, return_counts=True)
-        return faces.astype(np.int64), inv.reshape(-1, 4).astype(np.int64), counts.astype(np.int64)
+        return self._sub_simplices(TET_FACES)
 
     @cached_property
     def faces(self) -> np.ndarray:
