@@ -110,3 +110,12 @@ def test_source_kinds_of_resolved_sets_in_both_dimensions():
     for sources, kinds in [([0, 4], {"vertex"}), ([VolumePoint(0, [0.25] * 4), 3], {"point", "vertex"}),
                            ("boundary", {"boundary"}), (BoundaryFaces([0, 1]), {"boundary faces"})]:
         assert cap.source_kinds(resolve_tet_sources(box, sources)) == kinds
+
+
+def test_the_command_line_help_shows_the_table_of_each_dimension(capsys):
+    # the CLI's top-level help reads the capability table, not a copy of it
+    from cvxgeodesic.cli import build_parser
+
+    text = build_parser().format_help()
+    assert cap.help_text() in text
+    assert "triangle meshes: methods" in text and "tetrahedral meshes: methods" in text

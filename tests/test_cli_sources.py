@@ -84,7 +84,7 @@ def test_path_takes_a_source_list_like_every_command(plane_file, tmp_path):
 @pytest.mark.parametrize("args, message", [
     (["distance", "{mesh}", "-o", "{tmp}/x.npy"], "give a source"),
     (["distance", "{mesh}", "--boundary", "-s", "0", "-o", "{tmp}/x.npy"], "on its own"),
-    (["path", "{mesh}", "-s", "0", "--to", "5", "-o", "{tmp}/x.txt"], "csv, .npy or .ply"),
+    (["path", "{mesh}", "-s", "0", "--to", "5", "-o", "{tmp}/x.txt"], "supported: .csv, .npy, .ply"),
     (["path", "{mesh}", "-s", "0", "-o", "{tmp}/x.csv"], "exactly one target"),
     (["path", "{mesh}", "-s", "0", "--to", "9999", "-o", "{tmp}/x.csv"], "out of range"),
     (["distance", "{mesh}", "--source-point", "1,2", "-o", "{tmp}/x.npy"], None),

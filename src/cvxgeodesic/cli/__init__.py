@@ -33,9 +33,13 @@ def build_parser() -> argparse.ArgumentParser:
     """The parser of every command (imports NumPy and the formats' registry for the help texts)."""
     import importlib
 
+    from ..capabilities import help_text
+
     parser = argparse.ArgumentParser(
         prog="cvxgeodesic",
         description="Geodesic distance fields on triangle and tetrahedral meshes by convex optimization.",
+        epilog=help_text(),  # what each dimension supports, from the one capability table
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     parser.add_argument("--debug", action="store_true", help="show full tracebacks on errors")
