@@ -11,7 +11,7 @@ import pytest
 from cvxgeodesic import capabilities as cap
 from cvxgeodesic.baselines import BASELINES
 from cvxgeodesic.errors import ParameterError, SourceError
-from cvxgeodesic.formulations import FORMULATIONS, TET_METHODS, TET_ORDER2_METHODS
+from cvxgeodesic.formulations import FORMULATIONS, FORMULATIONS_BY_DIM
 from cvxgeodesic.formulations_p2 import ORDER2_METHODS
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "capabilities.md"
@@ -30,9 +30,9 @@ def test_the_table_names_the_solvers_methods():
     assert cap.BASELINE_METHODS == tuple(BASELINES)
     # what the solvers implement today, read from their own constants
     assert set(cap.methods_for(2)) == set(cap.METHODS)
-    assert cap.methods_for(3) == TET_METHODS
+    assert cap.methods_for(3) == (*FORMULATIONS_BY_DIM[3], "dijkstra", "heat")
     assert set(cap.methods_for(2, 2)) == set(ORDER2_METHODS)
-    assert cap.methods_for(3, 2) == TET_ORDER2_METHODS
+    assert cap.methods_for(3, 2) == ("qclp",)
     assert cap.methods_for(2, 1, "cost") == (*FORMULATIONS, "dijkstra")
 
 

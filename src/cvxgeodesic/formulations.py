@@ -73,6 +73,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
+from . import capabilities
 from .errors import DegenerateFacesWarning, MeshError, ParameterError
 from .mesh.simplex import SimplexMesh
 from .mesh.trimesh import DEGENERATE_TOL
@@ -96,15 +97,6 @@ ALIASES = {"qgdf": "lcqp-hessian"}
 #: The formulations of each simplex dimension: those whose energy is defined there (:data:`ENERGIES_BY_DIM`).
 FORMULATIONS_BY_DIM = {dim: tuple(k for k, (_, e) in FORMULATIONS.items() if e is None or e in energies)
                        for dim, energies in ENERGIES_BY_DIM.items()}
-#: The formulations inside tetrahedral meshes.
-TET_FORMULATIONS = {k: FORMULATIONS[k] for k in FORMULATIONS_BY_DIM[3]}
-#: The baselines on tetrahedra (:mod:`cvxgeodesic.baselines`).
-TET_BASELINE_METHODS = ("dijkstra", "heat")
-#: Every method a tetrahedral mesh takes.
-TET_METHODS = (*TET_FORMULATIONS, *TET_BASELINE_METHODS)
-#: The formulations with an order-2 program on tetrahedra (:mod:`cvxgeodesic.formulations_p2`).
-TET_ORDER2_METHODS = ("qclp",)
-
 #: Every formulation bounds the vertices within this many edges of a source (of a source point's or curve's faces)
 #: below by 0 (module docstring).
 NONNEGATIVE_HOPS = 2
@@ -141,26 +133,6 @@ KAPPA_ORDER2 = {"hessian": 5.0e-7, "laplacian": 5.0e-7, "dirichlet": 5.0e-7}
 MEASURE_ROOT = {2: np.sqrt, 3: np.cbrt}
 #: What a cell is called in messages, singular and counted.
 CELL_WORDS = {2: ("face", "face(s)"), 3: ("tet", "tetrahedra")}
-
-
-def check_tet_method(method: str) -> str:
-    """The lower-case name of a method that applies to tetrahedral meshes; ParameterError naming those that do.
-
-    Raises
-    ------
-    ParameterError
-        Not a string, or a method without a volume counterpart (the curved Hessian formulations, ``"fmm"``,
-        ``"exact"``) or unknown.
-    """
-    if not isinstance(method, str):
-        raise ParameterError(f"method must be a string, got {type(method).__name__}")
-    name = ALIASES.get(method.lower(), method.lower())
-    if name not in TET_METHODS:
-        why = ("the curved Hessian energy is defined on surfaces" if "hessian" in name
-               else "it is a surface algorithm" if name in ("fmm", "exact") else "unknown method")
-        raise ParameterError(f"method {method!r} does not apply to tetrahedral meshes ({why}); on a volume use one "
-                             f"of {', '.join(TET_METHODS)}")
-    return name
 
 
 def stretch_weights(mesh: SimplexMesh, stretch: str = "area", area_ratio: np.ndarray | None = None) -> np.ndarray:
@@ -574,7 +546,7 @@ def build_problem(
     n = mesh.n_vertices
     name = canonical_method(method)
     if name not in FORMULATIONS_BY_DIM[mesh.dim]:
-        check_tet_method(name)  # names the methods that apply
+        capabilities.check(name, dim=mesh.dim)  # names the methods that apply
     constraint, energy = FORMULATIONS[name]
     if not np.isfinite(lam) or lam < 0:
         raise ParameterError(f"smoothness weight lambda must be finite and >= 0, got {lam}")

@@ -21,9 +21,9 @@ from typing import Any
 
 import numpy as np
 
+from ..capabilities import methods_for
 from ..errors import ParameterError, SolverError, SourceError
-from ..formulations import TET_ORDER2_METHODS
-from ..formulations_p2 import ORDER2_METHODS, P2Builder, P2Program, source_edges
+from ..formulations_p2 import P2Builder, P2Program, source_edges
 from ..mesh.simplex import unit_mesh
 from ..mesh.split import SplitMesh
 from ..operators.lagrange import LagrangeField, SplitLagrangeField, violations
@@ -64,8 +64,7 @@ class Order2:
     Parameters
     ----------
     config : SolveConfig
-        ``config.method`` is one of :data:`~cvxgeodesic.formulations_p2.ORDER2_METHODS` (surfaces) or
-        :data:`~cvxgeodesic.formulations.TET_ORDER2_METHODS` (volumes).
+        ``config.method`` is one of :func:`~cvxgeodesic.capabilities.methods_for` of the mesh's dimension at order 2.
     refine : int
         Cutting-plane rounds at most (:data:`REFINE_ROUNDS`).
     samples : str, optional
@@ -89,7 +88,7 @@ class Order2:
 
     def __init__(self, config: SolveConfig, refine: int = REFINE_ROUNDS, samples: str | None = None) -> None:
         t0 = time.perf_counter()
-        methods = ORDER2_METHODS if config.mesh.dim == 2 else TET_ORDER2_METHODS
+        methods = methods_for(config.mesh.dim, order=2)
         if config.method not in methods:
             raise ParameterError(
                 f"order=2 is implemented for {', '.join(methods)}, not for {config.method!r} (docs/order2.md)")
