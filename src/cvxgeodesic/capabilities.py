@@ -283,7 +283,7 @@ def markdown_table() -> str:
     notes: dict[str, int] = {}
     out = []
     for dim in DIMS:
-        out += [f"### {DIM_NAMES[dim].capitalize()}", "",
+        out += [f"## {DIM_NAMES[dim].capitalize()}", "",
                 "| method | " + " | ".join(_COLUMNS) + " |", "|---" * (len(_COLUMNS) + 1) + "|"]
         out += [f"| `{m}` | " + " | ".join(_cell(m, dim, c, notes) for c in _COLUMNS) + " |" for m in METHODS]
         out.append("")
