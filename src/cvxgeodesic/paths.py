@@ -39,11 +39,12 @@ from numpy.typing import ArrayLike
 
 from .errors import ParameterError, SolverError, SourceError
 from .mesh.convert import as_mesh
-from .mesh.corridor import straighten_corridor
+from .mesh.corridor import node_position, straighten_corridor
+from .mesh.locate import POINT_AT, POINT_TYPES, CellPoint, SurfacePoint, VolumePoint
 from .mesh.simplex import CELL_FACETS
 from .operators.metric import make_medium
 from .results import GeodesicResult, remembered_sources
-from .sources import BARY_SNAP, SourceSet, SurfacePoint, VolumePoint, resolve_sources, surface_point, volume_point
+from .sources import BARY_SNAP, SourceSet, incident_cells, resolve_sources
 from .validation import as_vertex_field, check_count
 
 #: A distance field as the functions here take it: the vertex values or the result they came from.
@@ -61,31 +62,9 @@ def _field(mesh: Any, distance: Any) -> tuple[np.ndarray, Any]:
 
 
 # -- points of the cells: SurfacePoint on triangles, VolumePoint in tetrahedra ------------------------------------
-def _point_type(mesh: Any) -> type:
-    return VolumePoint if mesh.dim == 3 else SurfacePoint
-
-
-def _cell_of(p: MeshPoint) -> int:
-    return p.tet if isinstance(p, VolumePoint) else p.face
-
-
-def _check_point(mesh: Any, p: MeshPoint, label: str) -> None:
-    """A SourceError naming ``label`` when the point's cell is not one of the mesh."""
-    cell, n = _cell_of(p), mesh.n_cells
-    if cell >= n:
-        what, plural = ("tetrahedron", "tetrahedra") if mesh.dim == 3 else ("face", "faces")
-        raise SourceError(f"{label} {p!r}: {what} index {cell} is out of range: the mesh has {n} {plural} "
-                          f"(0..{n - 1})")
-
-
-def _at_positions(mesh: Any, X: np.ndarray) -> Any:
-    """The points at positions: the closest surface points, or the containing tetrahedra (outside: SourceError)."""
-    return volume_point(mesh, X) if mesh.dim == 3 else surface_point(mesh, X)
-
-
 def _as_points(mesh: Any, points: Any) -> tuple[np.ndarray, np.ndarray, bool]:
     """(cells (k,), bary (k, dim + 1), single) of points of the mesh's kind or of positions."""
-    kind = _point_type(mesh)
+    kind = POINT_TYPES[mesh.dim]
     if isinstance(points, kind):
         pts: list[Any] = [points]
         single = True
@@ -96,12 +75,12 @@ def _as_points(mesh: Any, points: Any) -> tuple[np.ndarray, np.ndarray, bool]:
             X = np.asarray(points, dtype=float)
         except (TypeError, ValueError):
             raise SourceError(f"points must be {kind.__name__}s or (k, 3) positions") from None
-        found = _at_positions(mesh, X)
+        found = POINT_AT[mesh.dim](mesh, X)
         single = isinstance(found, kind)
         pts = [found] if single else list(found)
     for k, p in enumerate(pts):
-        _check_point(mesh, p, f"point {k}")
-    cells = np.array([_cell_of(p) for p in pts], dtype=np.int64)
+        p.check(mesh, f"point {k}")
+    cells = np.array([p.cell for p in pts], dtype=np.int64)
     return cells, np.array([p.bary for p in pts]).reshape(-1, mesh.dim + 1), single
 
 
@@ -185,12 +164,10 @@ class _Cells:
 
     def __init__(self, mesh: Any):
         self.mesh, self.V, self.C = mesh, mesh.V, mesh.cells
-        k, s = self.C.shape
         self.H = _hat_gradients(mesh)
         with np.errstate(invalid="ignore"):
-            self.ok = np.isfinite(self.H).all(axis=(1, 2)) & ~np.isin(np.arange(k), mesh.degenerate_cells())
-        self.inc = sp.csr_matrix((np.ones(s * k), (self.C.ravel(), np.repeat(np.arange(k), s))),
-                                 shape=(mesh.n_vertices, k))
+            self.ok = np.isfinite(self.H).all(axis=(1, 2)) & ~np.isin(np.arange(len(self.C)), mesh.degenerate_cells())
+        self.inc = incident_cells(mesh)
 
     def cells_of_vertex(self, v: int) -> np.ndarray:
         return self.inc[v].indices
@@ -365,10 +342,10 @@ class _Descent:
             state: tuple = ("v", p)
             value = d[p]
         elif p.bary.max() >= 1 - BARY_SNAP:  # on a vertex
-            state = ("v", int(geo.C[_cell_of(p), np.argmax(p.bary)]))
+            state = ("v", int(geo.C[p.cell, np.argmax(p.bary)]))
             value = d[state[1]]
         else:
-            c = _cell_of(p)
+            c = p.cell
             state = ("c", c, np.where(p.bary <= BARY_SNAP, 0.0, p.bary))
             value = _interpolate(d[geo.C[c]][None], p.bary[None])[0]
             self.nodes.append(("p", c, p.bary @ geo.V[geo.C[c]]))
@@ -485,11 +462,11 @@ class _Descent:
         return state
 
 
-def _as_target(mesh: Any, target: Any) -> int | MeshPoint:
+def _as_target(mesh: Any, target: Any) -> int | CellPoint:
     """A vertex index or a point of the mesh's kind (a position: the closest surface point, the point inside)."""
-    kind = _point_type(mesh)
-    if isinstance(target, SurfacePoint | VolumePoint) and isinstance(target, kind):
-        _check_point(mesh, target, "target")
+    kind = POINT_TYPES[mesh.dim]
+    if isinstance(target, kind):
+        target.check(mesh, "target")
         return target
     if isinstance(target, numbers.Integral) and not isinstance(target, bool | np.bool_):
         if not 0 <= int(target) < mesh.n_vertices:
@@ -503,7 +480,7 @@ def _as_target(mesh: Any, target: Any) -> int | MeshPoint:
         raise SourceError(wrong) from None
     if X.shape != (3,) or not np.all(np.isfinite(X)):
         raise SourceError(wrong)
-    return _at_positions(mesh, X)  # one position: one point
+    return cast(CellPoint, POINT_AT[mesh.dim](mesh, X))  # one position: one point
 
 
 @overload
@@ -631,7 +608,7 @@ def _finish_path(geo: _Cells, nodes: list[tuple], straighten: bool, return_point
     tol = 1e-12 * mesh.bbox_diagonal
     if straighten and mesh.dim == 2:  # the shortest path through the corridor of faces
         nodes = straighten_corridor(geo, nodes, None if medium is None else medium.on(mesh))
-    P = np.array([_position(geo, nd) for nd in nodes])
+    P = np.array([node_position(geo, nd) for nd in nodes])
     # consecutive duplicates (a valley that starts at a crossing, a point that was already on its source)
     keep = np.r_[True, np.linalg.norm(np.diff(P, axis=0), axis=1) > tol]
     if not keep[-1]:  # the end is the source itself: the point it repeats goes instead (a target on its source:
@@ -644,10 +621,6 @@ def _finish_path(geo: _Cells, nodes: list[tuple], straighten: bool, return_point
     located = [_locate(geo, nd) for nd in nodes]
     return (P, np.array([c for c, _ in located], dtype=np.int64),
             np.array([b for _, b in located]).reshape(-1, mesh.dim + 1))
-
-
-def _position(geo: _Cells, node) -> np.ndarray:
-    return geo.V[node[1]] if node[0] == "v" else node[-1]
 
 
 def _locate(geo: _Cells, node) -> tuple[int, np.ndarray]:

@@ -340,14 +340,14 @@ class SourceSet:
         return uniq.astype(np.int64), best
 
 
-def _incident_faces(mesh: Any) -> sp.csr_matrix:
-    """(n, m) csr_matrix with a 1 where a vertex belongs to a face (cached on the mesh object)."""
-    cached = mesh.__dict__.get("_cg_vertex_faces")
+def incident_cells(mesh: Any) -> sp.csr_matrix:
+    """(n, k) csr_matrix with a 1 where a vertex belongs to a cell (cached on the mesh object)."""
+    cached = mesh.__dict__.get("_cg_vertex_cells")
     if cached is None:
-        m = mesh.n_faces
-        cached = sp.csr_matrix((np.ones(3 * m), (mesh.F.ravel(), np.repeat(np.arange(m), 3))),
-                               shape=(mesh.n_vertices, m))
-        mesh.__dict__["_cg_vertex_faces"] = cached  # the mesh is immutable: a cache like its cached properties
+        k, s = mesh.cells.shape
+        cached = sp.csr_matrix((np.ones(s * k), (mesh.cells.ravel(), np.repeat(np.arange(k), s))),
+                               shape=(mesh.n_vertices, k))
+        mesh.__dict__["_cg_vertex_cells"] = cached  # the mesh is immutable: a cache like its cached properties
     return cached
 
 
@@ -405,7 +405,7 @@ class _Builder:
         if zero.any() and self.mesh.dim == 2:
             on = np.flatnonzero(~zero)  # exactly two corners: an edge point
             va, vb = int(C[cell, on[0]]), int(C[cell, on[1]])
-            inc = _incident_faces(self.mesh)  # the faces of a vertex: its row's indices (no sparse slicing)
+            inc = incident_cells(self.mesh)  # the faces of a vertex: its row's indices (no sparse slicing)
             shared = np.intersect1d(inc.indices[inc.indptr[va]:inc.indptr[va + 1]],
                                     inc.indices[inc.indptr[vb]:inc.indptr[vb + 1]])
             for g in shared:
@@ -799,15 +799,13 @@ def source_constraints(ops: Any, sources: Any, min_edge_bound: float) -> SourceC
     is_source[vertices] = True
     no_cone = is_source[C].any(axis=1)
     is_source[fixed] = True
-    star = is_source[E[:, 0]] ^ is_source[E[:, 1]]
+    # on a surface each star edge bounds its other end; in a solid the formulation bounds the edges of every
+    # tetrahedron without a cone
+    star = (is_source[E[:, 0]] ^ is_source[E[:, 1]]) & (mesh.dim == 2)
+    o_end, s_end = _edge_ends(E, star, is_source)
+    star_rhs = ell[star]
     empty = np.zeros(0, dtype=np.int64)
-    if mesh.dim == 2:
-        s_end = np.where(is_source[E[star, 0]], E[star, 0], E[star, 1])
-        o_end = np.where(is_source[E[star, 0]], E[star, 1], E[star, 0])
-        star_rhs = ell[star]
-    else:  # the formulation bounds the edges of every tetrahedron without a cone
-        s_end, o_end, star_rhs = empty, empty, np.zeros(0)
-    if ss is None or (mesh.dim == 2 and ss.vertex_only):
+    if ss is None or ss.vertex_only:
         return SourceConstraints(fixed, no_cone, o_end, s_end, star_rhs, empty, np.zeros(0), fixed)
 
     bound = vertex_bounds(mesh, ss, medium)
@@ -819,13 +817,18 @@ def source_constraints(ops: Any, sources: Any, min_edge_bound: float) -> SourceC
     if near.any():
         no_cone[_steep_cells(ops, ss, near, medium)] = True
     bv = np.flatnonzero(np.isfinite(bound) & ~is_source)
-    anchors = np.unique(np.concatenate([fixed, C[src_faces].ravel()])).astype(np.int64)
     if mesh.dim == 2:
         o_end, s_end, star_rhs = _surface_edge_bounds(mesh, ops, ell, is_source, src_verts & ~is_source, no_cone,
                                                       (o_end, s_end, star_rhs))
     return SourceConstraints(fixed=fixed, no_cone=no_cone, star_other=o_end.astype(np.int64),
                              star_source=s_end.astype(np.int64), star_rhs=star_rhs, bound_vertices=bv.astype(np.int64),
-                             bound_rhs=np.maximum(bound[bv], floor), anchors=anchors)
+                             bound_rhs=np.maximum(bound[bv], floor), anchors=ss.anchor_vertices(mesh))
+
+
+def _edge_ends(E: np.ndarray, mask: np.ndarray, first: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(other end, first end) of the edges ``E[mask]`` (each with exactly one end where ``first`` is True)."""
+    a = first[E[mask, 0]]
+    return np.where(a, E[mask, 1], E[mask, 0]), np.where(a, E[mask, 0], E[mask, 1])
 
 
 def _surface_edge_bounds(mesh: TriMesh, ops: Any, ell: np.ndarray, is_source: np.ndarray, src_verts: np.ndarray,
@@ -839,10 +842,8 @@ def _surface_edge_bounds(mesh: TriMesh, ops: Any, ell: np.ndarray, is_source: np
     jittered grid with the boundary as source: +0.034 at one vertex).
     """
     E = mesh.edges
-    a_src, b_src = src_verts[E[:, 0]], src_verts[E[:, 1]]
-    one = (a_src ^ b_src) & ~is_source[E[:, 0]] & ~is_source[E[:, 1]]
-    s2 = np.where(a_src[one], E[one, 0], E[one, 1])
-    o2 = np.where(a_src[one], E[one, 1], E[one, 0])
+    one = (src_verts[E[:, 0]] ^ src_verts[E[:, 1]]) & ~is_source[E[:, 0]] & ~is_source[E[:, 1]]
+    o2, s2 = _edge_ends(E, one, src_verts)
     ei = np.unique(mesh.face_edges[no_cone & ~ops.degenerate])
     ei = ei[~is_source[E[ei, 0]] & ~is_source[E[ei, 1]]]
     o_end, s_end, star_rhs = star

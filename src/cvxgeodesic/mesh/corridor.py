@@ -46,7 +46,8 @@ def straighten_corridor(geo: Any, nodes: list[tuple], medium: Any = None) -> lis
     return nodes
 
 
-def _position(geo: Any, node: tuple) -> np.ndarray:
+def node_position(geo: Any, node: tuple) -> np.ndarray:
+    """(3,) float ndarray: the position of a node of the path (module docstring)."""
     return geo.V[node[1]] if node[0] == "v" else node[-1]
 
 
@@ -117,7 +118,7 @@ def _open_vertices(geo: Any, nodes: list) -> list:
             out.append(nd)
             continue
 
-        q0, q1 = _position(geo, nodes[i - 1]), _position(geo, nodes[i + 1])
+        q0, q1 = node_position(geo, nodes[i - 1]), node_position(geo, nodes[i + 1])
         ends, faces = walks[int(np.argmin([_walk_angle(geo, v, w, q0, q1) for w in walks]))]
         for j, u in enumerate(ends):
             out.append(("e", (v, u), faces[j], faces[j + 1], 0.7 * V[v] + 0.3 * V[u]))
@@ -175,7 +176,7 @@ def _switch_sides(geo: Any, nodes: list) -> tuple[list, bool]:
         run = nodes[i:j + 1]
         f_in, f_out = run[0][2], run[-1][3]
         current = [run[0][2], *(r[3] for r in run)]
-        q0, q1 = _position(geo, out[-1]), _position(geo, nodes[j + 1])
+        q0, q1 = node_position(geo, out[-1]), node_position(geo, nodes[j + 1])
         walks = [w for w in _fan(geo, u, f_in, f_out) if w[1] != current] if f_in != f_out else []
         if walks and np.linalg.norm(q0 - V[u]) > tol and np.linalg.norm(q1 - V[u]) > tol:
             cur_walk = ([r[1][1] if r[1][0] == u else r[1][0] for r in run], current)
@@ -320,7 +321,7 @@ def _straighten(geo: Any, nodes: list, medium: Any = None) -> None:
         while (j + 1 < n - 1 and nodes[j + 1][0] == "e" and nodes[j + 1][2] != nodes[j + 1][3]
                and nodes[j + 1][2] == nodes[j][3]):
             j += 1
-        q0, q1 = _position(geo, nodes[i - 1]), _position(geo, nodes[j + 1])
+        q0, q1 = node_position(geo, nodes[i - 1]), node_position(geo, nodes[j + 1])
         if medium is None:
             nodes[i:j + 1] = _straighten_chain(geo, q0, nodes[i:j + 1], q1)
         else:

@@ -25,8 +25,8 @@ from .geometry import clipped_barycentric
 from .tetmesh import TET_FACES, TetMesh
 from .trimesh import TriMesh
 
-__all__ = ["BARY_TOL", "INSIDE_TOL", "POINT_TYPES", "CellPoint", "SurfacePoint", "VolumePoint", "closest_points",
-           "interpolate_at", "locate_points", "surface_point", "volume_point"]
+__all__ = ["BARY_TOL", "INSIDE_TOL", "POINT_AT", "POINT_TYPES", "CellPoint", "SurfacePoint", "VolumePoint",
+           "closest_points", "interpolate_at", "locate_points", "surface_point", "volume_point"]
 
 #: Tolerance of the barycentric checks of :class:`SurfacePoint` (negative coordinates, sum ≠ 1).
 BARY_TOL = 1e-9
@@ -404,6 +404,11 @@ def volume_point(mesh: TetMesh, xyz: ArrayLike) -> VolumePoint | list[VolumePoin
                           f"{gap:.6g} away){more}")
     points = [VolumePoint(int(t), b) for t, b in zip(tets, bary, strict=True)]
     return points[0] if X.ndim == 1 else points
+
+
+#: The point (or points) of each simplex dimension at positions: the closest surface point, the containing
+#: tetrahedron (a position outside the mesh: SourceError).
+POINT_AT = {2: surface_point, 3: volume_point}
 
 
 def interpolate_at(mesh: TetMesh, values: ArrayLike, points: Any) -> np.ndarray:
