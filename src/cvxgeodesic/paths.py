@@ -29,7 +29,6 @@ the opposite corner, docs/volumes.md).
 from __future__ import annotations
 
 import functools
-import numbers
 from collections.abc import Sequence
 from typing import Any, Literal, TypeAlias, cast, overload
 
@@ -40,11 +39,11 @@ from numpy.typing import ArrayLike
 from .errors import ParameterError, SolverError, SourceError
 from .mesh.convert import as_mesh
 from .mesh.corridor import node_position, straighten_corridor
-from .mesh.locate import POINT_AT, POINT_TYPES, CellPoint, SurfacePoint, VolumePoint
+from .mesh.locate import POINT_AT, POINT_TYPES, CellPoint, SurfacePoint, VolumePoint, corner_interpolant
 from .mesh.simplex import CELL_FACETS
 from .operators.metric import make_medium
 from .results import GeodesicResult, remembered_sources
-from .sources import BARY_SNAP, SourceSet, incident_cells, resolve_sources
+from .sources import BARY_SNAP, SourceSet, _is_int_like, incident_cells, resolve_sources
 from .validation import as_vertex_field, check_count
 
 #: A distance field as the functions here take it: the vertex values or the result they came from.
@@ -82,13 +81,6 @@ def _as_points(mesh: Any, points: Any) -> tuple[np.ndarray, np.ndarray, bool]:
         p.check(mesh, f"point {k}")
     cells = np.array([p.cell for p in pts], dtype=np.int64)
     return cells, np.array([p.bary for p in pts]).reshape(-1, mesh.dim + 1), single
-
-
-def _interpolate(Dv: np.ndarray, bary: np.ndarray) -> np.ndarray:
-    """(k,) ``Σ_i b_i d_i`` of corner values ``Dv`` (k, s) at ``bary`` (k, s); a corner of weight 0 does not count
-    (``inf · 0`` is NaN: a point whose cell touches an unreachable vertex takes the other corners' value)."""
-    with np.errstate(invalid="ignore"):
-        return np.where(bary > 0, bary * Dv, 0.0).sum(axis=1)
 
 
 @overload
@@ -141,7 +133,7 @@ def distance_at(mesh: Any, distance: Field, points: Any) -> float | np.ndarray:
         vals = p2_field.distance_at(cells, bary)
     else:
         d, _ = _field(mesh, distance)
-        vals = _interpolate(d[mesh.cells[cells]], bary)
+        vals = corner_interpolant(d[mesh.cells[cells]], bary)
     return float(vals[0]) if single else vals
 
 
@@ -347,7 +339,7 @@ class _Descent:
         else:
             c = p.cell
             state = ("c", c, np.where(p.bary <= BARY_SNAP, 0.0, p.bary))
-            value = _interpolate(d[geo.C[c]][None], p.bary[None])[0]
+            value = corner_interpolant(d[geo.C[c]][None], p.bary[None])[0]
             self.nodes.append(("p", c, p.bary @ geo.V[geo.C[c]]))
         if state[0] == "v":
             self.nodes.append(state)
@@ -468,7 +460,7 @@ def _as_target(mesh: Any, target: Any) -> int | CellPoint:
     if isinstance(target, kind):
         target.check(mesh, "target")
         return target
-    if isinstance(target, numbers.Integral) and not isinstance(target, bool | np.bool_):
+    if _is_int_like(target):
         if not 0 <= int(target) < mesh.n_vertices:
             raise SourceError(f"target vertex {int(target)} is out of range: the mesh has {mesh.n_vertices} "
                               "vertices")
@@ -645,8 +637,7 @@ def _exact_applies(mesh: Any, result: Any, ss: Any, target: Any) -> bool:
     if isinstance(target, SurfacePoint):
         on_mesh = target.face < mesh.n_faces
     else:
-        on_mesh = (isinstance(target, numbers.Integral) and not isinstance(target, bool | np.bool_)
-                   and 0 <= int(target) < mesh.n_vertices)
+        on_mesh = _is_int_like(target) and 0 <= int(target) < mesh.n_vertices
     return (on_mesh and not ss.segment_faces.size and mesh.is_edge_manifold and mesh.referenced.all()
             and np.unique(mesh.component_labels).size == 1)
 

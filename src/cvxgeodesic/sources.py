@@ -47,13 +47,13 @@ import scipy.sparse as sp
 
 from .errors import SourceError
 from .mesh.closest import nearest_triangle_distance, point_triangle_distance, segment_distance, segment_parameter
+from .mesh.geometry import clipped_barycentric
 from .mesh.locate import (
     BARY_TOL,
     POINT_TYPES,
     CellPoint,
     SurfacePoint,
     VolumePoint,
-    _barycentric,
     closest_points,
     interpolate_at,
     surface_point,
@@ -352,7 +352,7 @@ def incident_cells(mesh: Any) -> sp.csr_matrix:
 
 
 def boundary_edges(mesh: TriMesh) -> tuple[np.ndarray, np.ndarray]:
-    """Edges with a single face.
+    """Edges with a single face (:attr:`TriMesh.boundary_facets <cvxgeodesic.mesh.trimesh.TriMesh.boundary_facets>`).
 
     Returns
     -------
@@ -360,14 +360,10 @@ def boundary_edges(mesh: TriMesh) -> tuple[np.ndarray, np.ndarray]:
     faces : (b,) int64 ndarray
         The face of each boundary edge.
     """
-    F = mesh.F
-    n = mesh.n_vertices
-    E = np.sort(np.concatenate([F[:, [1, 2]], F[:, [2, 0]], F[:, [0, 1]]]), axis=1)
-    face_of = np.tile(np.arange(mesh.n_faces), 3)
-    keys = E[:, 0] * n + E[:, 1]
-    uniq, idx, counts = np.unique(keys, return_index=True, return_counts=True)
-    one = idx[counts == 1]
-    return E[one].astype(np.int64), face_of[one].astype(np.int64)
+    one = mesh.edge_face_counts == 1
+    face_of = np.empty(len(one), dtype=np.int64)
+    face_of[mesh.face_edges.ravel()] = np.repeat(np.arange(mesh.n_faces), 3)  # exact where an edge has one face
+    return mesh.boundary_facets.copy(), face_of[one]
 
 
 class _Builder:
@@ -527,7 +523,8 @@ def _curve_pieces(mesh: TriMesh, faces: np.ndarray, bary: np.ndarray) -> list[tu
         left = np.ones(cross.size, dtype=bool)
         for g in (fa[cross], fb[cross]):  # the first face, then the second
             T = V[F[g]]
-            ga, gb = _barycentric(T, xa), _barycentric(T, xb)
+            corners = T[:, 0], T[:, 1], T[:, 2]
+            ga, gb = clipped_barycentric(xa, *corners), clipped_barycentric(xb, *corners)
             ok = (left & (np.linalg.norm(at(ga, T) - xa, axis=1) <= tol)
                   & (np.linalg.norm(at(gb, T) - xb, axis=1) <= tol))
             for j in np.flatnonzero(ok).tolist():
@@ -762,15 +759,10 @@ def _steep_cells(ops: Any, ss: SourceSet, near: np.ndarray, medium: Any) -> np.n
 
 
 def source_constraints(ops: Any, sources: Any, min_edge_bound: float) -> SourceConstraints:
-    """Constraints of a source set (or of validated source vertices) for one mesh, a surface or a solid.
-
-    Vertex sources and the vertices of source faces are fixed at 0 and the cells incident to a source vertex carry no
-    cone (the interpolated cone of ``|x − s|`` is steeper than 1 on each). A point bounds the corners of its cell by
-    their distance to it, a curve piece the corners of its face, a source face the fourth corner of its tetrahedron
-    (:func:`vertex_bounds`); the cells of points and curve pieces carry no cone, nor do the cells next to the
-    sources where the local field is steeper than 1 (:func:`_steep_cells`). On a surface each star edge bounds its
-    other end by its length, and the edges around cone-free faces get edge bounds here; in a solid the formulation
-    bounds every edge of a tetrahedron without a cone.
+    """Constraints of a source set (or of validated source vertices) for one mesh, a surface or a solid: those the
+    module docstring lists (the bounds at the corners of the sources' cells: :func:`vertex_bounds`; the cells next to
+    the sources where the local field is steeper than 1: :func:`_steep_cells`; the edge bounds around cone-free faces
+    of a surface: :func:`_surface_edge_bounds`).
 
     Parameters
     ----------
