@@ -637,9 +637,7 @@ def resolve_sources(mesh: Any, sources: Any) -> SourceSet:
 
 
 def _describe(items) -> str:
-    parts = []
-    for s in list(items)[:4]:
-        parts.append(repr(s) if not _is_int_like(s) else f"vertex {int(s)}")
+    parts = [repr(s) if not _is_int_like(s) else f"vertex {int(s)}" for s in list(items)[:4]]
     return ", ".join(parts) + (f" and {len(items) - 4} more" if len(items) > 4 else "")
 
 
