@@ -64,19 +64,16 @@ def _field(mesh: Any, distance: Any) -> tuple[np.ndarray, Any]:
 def _as_points(mesh: Any, points: Any) -> tuple[np.ndarray, np.ndarray, bool]:
     """(cells (k,), bary (k, dim + 1), single) of points of the mesh's kind or of positions."""
     kind = POINT_TYPES[mesh.dim]
-    if isinstance(points, kind):
-        pts: list[Any] = [points]
-        single = True
-    elif isinstance(points, list | tuple) and all(isinstance(p, kind) for p in points):
-        pts, single = list(points), False
-    else:
+    found = points
+    if not isinstance(points, kind) and not (isinstance(points, list | tuple)
+                                             and all(isinstance(p, kind) for p in points)):
         try:
             X = np.asarray(points, dtype=float)
         except (TypeError, ValueError):
             raise SourceError(f"points must be {kind.__name__}s or (k, 3) positions") from None
         found = POINT_AT[mesh.dim](mesh, X)
-        single = isinstance(found, kind)
-        pts = [found] if single else list(found)
+    single = isinstance(found, kind)
+    pts: list[CellPoint] = [found] if single else list(found)
     for k, p in enumerate(pts):
         p.check(mesh, f"point {k}")
     cells = np.array([p.cell for p in pts], dtype=np.int64)
@@ -161,11 +158,8 @@ class _Cells:
             self.ok = np.isfinite(self.H).all(axis=(1, 2)) & ~np.isin(np.arange(len(self.C)), mesh.degenerate_cells())
         self.inc = incident_cells(mesh)
 
-    def cells_of_vertex(self, v: int) -> np.ndarray:
-        return self.inc[v].indices
-
     def cells_of(self, verts: Sequence[int]) -> np.ndarray:
-        """The cells that contain all of ``verts`` (the cells around an edge or a face)."""
+        """The cells that contain all of ``verts`` (the cells around a vertex, an edge or a face)."""
         return functools.reduce(np.intersect1d, [self.inc[int(v)].indices for v in verts])
 
     def bary(self, c: int, x: np.ndarray) -> np.ndarray:
@@ -360,7 +354,7 @@ class _Descent:
         geo, d, V = self.geo, self.d, self.geo.V
         if self.ends.vertices[v]:
             return None
-        cells = geo.cells_of_vertex(v)
+        cells = geo.cells_of((v,))
         if any(self._finish_in(int(c), V[v], d[v]) for c in cells):
             return None
         best, choice = 1e-14, cast(tuple | None, None)
@@ -618,7 +612,7 @@ def _finish_path(geo: _Cells, nodes: list[tuple], straighten: bool, return_point
 def _locate(geo: _Cells, node) -> tuple[int, np.ndarray]:
     """A cell containing the node and the node's barycentric coordinates in it."""
     if node[0] == "v":
-        c = int(geo.cells_of_vertex(node[1])[0])
+        c = int(geo.cells_of((node[1],))[0])
         return c, (geo.C[c] == node[1]).astype(float)
     c = node[3] if node[0] == "e" else node[1]
     b = geo.bary(c, node[-1])

@@ -47,21 +47,16 @@ def _tet_barycentric(mesh: TetMesh, tets: np.ndarray, X: np.ndarray) -> np.ndarr
     return out
 
 
-class _Locator:
-    """The k-d tree of one mesh's tetrahedron centroids (built once per mesh, cached on it)."""
-
-    def __init__(self, mesh: TetMesh):
-        P = mesh.V[mesh.T]  # (k, 4, 3)
-        self.centroids = P.mean(axis=1)
-        self.radius = float(np.linalg.norm(P - self.centroids[:, None], axis=2).max()) * (1 + 1e-9)
-        self.tree = cKDTree(self.centroids)
-
-
-def _locator(mesh: TetMesh) -> _Locator:
+def _locator(mesh: TetMesh) -> tuple[cKDTree, float]:
+    """The k-d tree of the tetrahedra's centroids and the largest distance from a centroid to its tetrahedron's
+    vertices (built once per mesh, cached on it)."""
     loc = mesh.__dict__.get("_tet_locator")
     if loc is None:
-        loc = _Locator(mesh)
-        mesh.__dict__["_tet_locator"] = loc  # TetMesh is immutable: a cache like its cached properties
+        P = mesh.V[mesh.T]  # (k, 4, 3)
+        centroids = P.mean(axis=1)
+        radius = float(np.linalg.norm(P - centroids[:, None], axis=2).max()) * (1 + 1e-9)
+        # TetMesh is immutable: a cache like its cached properties
+        loc = mesh.__dict__["_tet_locator"] = (cKDTree(centroids), radius)
     return loc
 
 
@@ -88,8 +83,8 @@ def locate_points(mesh: TetMesh, points: ArrayLike) -> tuple[np.ndarray, np.ndar
         ``points`` not finite positions.
     """
     X = as_points(points, "points").reshape(-1, 3)
-    loc = _locator(mesh)
-    cand = loc.tree.query_ball_point(X, loc.radius, return_sorted=False)
+    tree, radius = _locator(mesh)
+    cand = tree.query_ball_point(X, radius, return_sorted=False)
     counts = np.fromiter((len(c) for c in cand), dtype=np.int64, count=len(cand))
     point_of = np.repeat(np.arange(len(X)), counts)
     tet_of = np.fromiter((t for c in cand for t in c), dtype=np.int64, count=int(counts.sum()))
