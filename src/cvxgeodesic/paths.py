@@ -236,32 +236,29 @@ class _Ends:
         if self.ss is None:  # unknown: the vertices where the field takes its minimum
             finite = d[np.isfinite(d)]
             self.vertices = d <= (finite.min() if finite.size else 0.0) + 1e-12 * mesh.bbox_diagonal
-        elif mesh.dim == 3:
-            self._volume_sources(mesh, geo, self.ss)
         else:
-            self._surface_sources(mesh, self.ss)
+            self._sources(mesh, geo, self.ss)
 
     def _add(self, cell: int, simplex: np.ndarray) -> None:
         self.items.setdefault(int(cell), []).append(simplex)
 
-    def _surface_sources(self, mesh: Any, ss: SourceSet) -> None:
-        """Source vertices; points and curve pieces in their faces (a point on an edge in each of its faces)."""
-        self.vertices[ss.vertices] = True
-        for f, x in zip(ss.point_faces, ss.point_positions(mesh), strict=True):
-            self._add(f, x[None])
-        T = mesh.V[mesh.F[ss.segment_faces]]
+    def _sources(self, mesh: Any, geo: _Cells, ss: SourceSet) -> None:
+        """Fixed vertices; each point in the cells that hold it (on a surface the source set lists a point on an
+        edge in both faces; in a volume one on a face or an edge goes to every tetrahedron around it); curve pieces
+        in their faces; each source face in its tetrahedron, and as a wall on which the walk ends."""
+        self.vertices[ss.fixed_vertices(mesh)] = True
+        if mesh.dim == 2:
+            for f, x in zip(ss.point_faces, ss.point_positions(mesh), strict=True):
+                self._add(f, x[None])
+        else:
+            for p in ss.points:
+                for t in geo.cells_of(mesh.T[p.tet][p.bary > 0]):
+                    self._add(t, p.position(mesh)[None])
+        T = mesh.V[mesh.cells[ss.segment_faces]]
         for f, ba, t in zip(ss.segment_faces, ss.segment_bary, T, strict=True):
             self._add(f, np.stack([ba[0] @ t, ba[1] @ t]))
-
-    def _volume_sources(self, mesh: Any, geo: _Cells, ss: Any) -> None:
-        """Fixed vertices; each point in every tetrahedron that holds it (one on a face or an edge: all around
-        it); each source face in its tetrahedron, and as a wall on which the walk ends."""
-        self.vertices[ss.fixed_vertices(mesh)] = True
-        for p in ss.points:
-            for t in geo.cells_of(mesh.T[p.tet][p.bary > 0]):
-                self._add(t, p.position(mesh)[None])
-        tris = ss.face_triangles(mesh)
-        for f, t in zip(tris, mesh.boundary_face_tets[ss.faces], strict=True):
+        for f, t in zip(ss.face_triangles(mesh), mesh.boundary_face_tets[ss.facets] if ss.facets.size else (),
+                        strict=True):  # a volume's source faces
             self._add(t, mesh.V[f])
             self.facets.add(frozenset(f.tolist()))
 
