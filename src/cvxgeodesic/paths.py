@@ -28,7 +28,6 @@ the opposite corner, docs/volumes.md).
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Sequence
 from typing import Any, Literal, TypeAlias, cast, overload
 
@@ -43,7 +42,7 @@ from .mesh.locate import POINT_AT, POINT_TYPES, CellPoint, SurfacePoint, VolumeP
 from .mesh.simplex import CELL_FACETS
 from .operators.metric import make_medium
 from .results import GeodesicResult, remembered_sources
-from .sources import BARY_SNAP, SourceSet, _is_int_like, incident_cells, resolve_sources
+from .sources import BARY_SNAP, SourceSet, _is_int_like, cells_around, resolve_sources
 from .validation import as_vertex_field, check_count
 
 #: A distance field as the functions here take it: the vertex values or the result they came from.
@@ -156,11 +155,10 @@ class _Cells:
         self.H = _hat_gradients(mesh)
         with np.errstate(invalid="ignore"):
             self.ok = np.isfinite(self.H).all(axis=(1, 2)) & ~np.isin(np.arange(len(self.C)), mesh.degenerate_cells())
-        self.inc = incident_cells(mesh)
 
     def cells_of(self, verts: Sequence[int]) -> np.ndarray:
         """The cells that contain all of ``verts`` (the cells around a vertex, an edge or a face)."""
-        return functools.reduce(np.intersect1d, [self.inc[int(v)].indices for v in verts])
+        return cells_around(self.mesh, verts)
 
     def bary(self, c: int, x: np.ndarray) -> np.ndarray:
         """Barycentric coordinates of ``x`` in cell ``c``, clipped to it (least squares: any cell shape)."""

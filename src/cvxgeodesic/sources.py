@@ -37,6 +37,7 @@ the exact field off.
 
 from __future__ import annotations
 
+import functools
 import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -340,15 +341,19 @@ class SourceSet:
         return uniq.astype(np.int64), best
 
 
-def incident_cells(mesh: Any) -> sp.csr_matrix:
-    """(n, k) csr_matrix with a 1 where a vertex belongs to a cell (cached on the mesh object)."""
-    cached = mesh.__dict__.get("_cg_vertex_cells")
-    if cached is None:
+def cells_around(mesh: Any, verts: Sequence[int]) -> np.ndarray:
+    """(q,) int32 ndarray: the cells that contain all of ``verts`` (around a vertex, an edge or a face), sorted.
+
+    Read from the rows of a vertex-cell incidence matrix (cached on the mesh object: it is immutable) by their
+    index pointers, not by sparse slicing.
+    """
+    inc = mesh.__dict__.get("_cg_vertex_cells")
+    if inc is None:
         k, s = mesh.cells.shape
-        cached = sp.csr_matrix((np.ones(s * k), (mesh.cells.ravel(), np.repeat(np.arange(k), s))),
-                               shape=(mesh.n_vertices, k))
-        mesh.__dict__["_cg_vertex_cells"] = cached  # the mesh is immutable: a cache like its cached properties
-    return cached
+        inc = sp.csr_matrix((np.ones(s * k), (mesh.cells.ravel(), np.repeat(np.arange(k), s))),
+                            shape=(mesh.n_vertices, k))
+        mesh.__dict__["_cg_vertex_cells"] = inc
+    return functools.reduce(np.intersect1d, [inc.indices[inc.indptr[v]:inc.indptr[v + 1]] for v in map(int, verts)])
 
 
 def boundary_edges(mesh: TriMesh) -> tuple[np.ndarray, np.ndarray]:
@@ -401,10 +406,7 @@ class _Builder:
         if zero.any() and self.mesh.dim == 2:
             on = np.flatnonzero(~zero)  # exactly two corners: an edge point
             va, vb = int(C[cell, on[0]]), int(C[cell, on[1]])
-            inc = incident_cells(self.mesh)  # the faces of a vertex: its row's indices (no sparse slicing)
-            shared = np.intersect1d(inc.indices[inc.indptr[va]:inc.indptr[va + 1]],
-                                    inc.indices[inc.indptr[vb]:inc.indptr[vb + 1]])
-            for g in shared:
+            for g in cells_around(self.mesh, (va, vb)):
                 bg = np.zeros(3)
                 bg[C[g] == va] = b[on[0]]
                 bg[C[g] == vb] = b[on[1]]
