@@ -20,6 +20,7 @@ from conftest import shared_mesh_path
 from cvxgeodesic import sources
 from cvxgeodesic.errors import SourceError
 from cvxgeodesic.mesh import closest
+from cvxgeodesic.mesh.geometry import clipped_barycentric
 from cvxgeodesic.sources import closest_points, resolve_sources
 
 # Distances of the index and of the brute-force reference are computed by different formulas: each is within
@@ -111,7 +112,8 @@ def _search_before_the_index(mesh, X):
     F = np.ascontiguousarray(mesh.F, dtype=np.int64)
     sqd, faces, C = igl.point_mesh_squared_distance(X, V, F)
     faces = np.asarray(faces, dtype=np.int64)
-    bary = sources._barycentric(V[F[faces]], np.asarray(C))
+    T = V[F[faces]]
+    bary = clipped_barycentric(np.asarray(C), T[:, 0], T[:, 1], T[:, 2])
     return faces, bary, np.sqrt(np.maximum(np.asarray(sqd), 0.0))
 
 
@@ -166,7 +168,8 @@ def _curve_before_the_index(mesh, curve):
         xa, xb = samples_b[i] @ V[F[fa]], samples_b[i + 1] @ V[F[fb]]
         for g in (fa, fb):
             T = V[F[g]][None]
-            ba, bb = sources._barycentric(T, xa[None])[0], sources._barycentric(T, xb[None])[0]
+            ba = clipped_barycentric(xa[None], T[:, 0], T[:, 1], T[:, 2])[0]
+            bb = clipped_barycentric(xb[None], T[:, 0], T[:, 1], T[:, 2])[0]
             if np.linalg.norm(ba @ T[0] - xa) <= 1e-12 * h and np.linalg.norm(bb @ T[0] - xb) <= 1e-12 * h:
                 builder.add_piece(g, ba, bb)
                 break

@@ -77,6 +77,21 @@ def test_boundary_source(mesh):
     assert np.all(d <= dij + 1e-9)
 
 
+@pytest.mark.parametrize("mesh", [PLANE, cg.cylinder(16, 6), cg.TriMesh(
+    [[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [0, 0, 1]], [[0, 1, 2], [1, 3, 2], [0, 1, 4]])],
+    ids=["plane", "cylinder", "fin"])
+def test_boundary_edges_and_their_faces(mesh):
+    # brute force: every face's edges, counted; an edge of one face is a boundary edge, in that face
+    count: dict[tuple, list] = {}
+    for f, tri in enumerate(mesh.F.tolist()):
+        for a, b in ((tri[1], tri[2]), (tri[2], tri[0]), (tri[0], tri[1])):
+            count.setdefault((min(a, b), max(a, b)), []).append(f)
+    expected = sorted((e, fs[0]) for e, fs in count.items() if len(fs) == 1)
+    E, faces = boundary_edges(mesh)
+    assert E.dtype == faces.dtype == np.int64
+    assert [(tuple(e), f) for e, f in zip(E.tolist(), faces.tolist(), strict=True)] == expected
+
+
 def test_boundary_on_closed_mesh_raises():
     with pytest.raises(SourceError, match="closed"):
         cg.geodesic_distance(cg.icosphere(1), "boundary", method="qclp")

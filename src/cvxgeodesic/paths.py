@@ -28,8 +28,6 @@ the opposite corner, docs/volumes.md).
 
 from __future__ import annotations
 
-import functools
-import numbers
 from collections.abc import Sequence
 from typing import Any, Literal, TypeAlias, cast, overload
 
@@ -39,11 +37,12 @@ from numpy.typing import ArrayLike
 
 from .errors import ParameterError, SolverError, SourceError
 from .mesh.convert import as_mesh
-from .mesh.corridor import straighten_corridor
+from .mesh.corridor import node_position, straighten_corridor
+from .mesh.locate import POINT_AT, POINT_TYPES, CellPoint, SurfacePoint, VolumePoint, corner_interpolant
 from .mesh.simplex import CELL_FACETS
 from .operators.metric import make_medium
 from .results import GeodesicResult, remembered_sources
-from .sources import BARY_SNAP, SourceSet, SurfacePoint, VolumePoint, resolve_sources, surface_point, volume_point
+from .sources import BARY_SNAP, SourceSet, _is_int_like, cells_around, resolve_sources
 from .validation import as_vertex_field, check_count
 
 #: A distance field as the functions here take it: the vertex values or the result they came from.
@@ -61,55 +60,23 @@ def _field(mesh: Any, distance: Any) -> tuple[np.ndarray, Any]:
 
 
 # -- points of the cells: SurfacePoint on triangles, VolumePoint in tetrahedra ------------------------------------
-def _point_type(mesh: Any) -> type:
-    return VolumePoint if mesh.dim == 3 else SurfacePoint
-
-
-def _cell_of(p: MeshPoint) -> int:
-    return p.tet if isinstance(p, VolumePoint) else p.face
-
-
-def _check_point(mesh: Any, p: MeshPoint, label: str) -> None:
-    """A SourceError naming ``label`` when the point's cell is not one of the mesh."""
-    cell, n = _cell_of(p), mesh.n_cells
-    if cell >= n:
-        what, plural = ("tetrahedron", "tetrahedra") if mesh.dim == 3 else ("face", "faces")
-        raise SourceError(f"{label} {p!r}: {what} index {cell} is out of range: the mesh has {n} {plural} "
-                          f"(0..{n - 1})")
-
-
-def _at_positions(mesh: Any, X: np.ndarray) -> Any:
-    """The points at positions: the closest surface points, or the containing tetrahedra (outside: SourceError)."""
-    return volume_point(mesh, X) if mesh.dim == 3 else surface_point(mesh, X)
-
-
 def _as_points(mesh: Any, points: Any) -> tuple[np.ndarray, np.ndarray, bool]:
     """(cells (k,), bary (k, dim + 1), single) of points of the mesh's kind or of positions."""
-    kind = _point_type(mesh)
-    if isinstance(points, kind):
-        pts: list[Any] = [points]
-        single = True
-    elif isinstance(points, list | tuple) and all(isinstance(p, kind) for p in points):
-        pts, single = list(points), False
-    else:
+    kind = POINT_TYPES[mesh.dim]
+    found = points
+    if not isinstance(points, kind) and not (isinstance(points, list | tuple)
+                                             and all(isinstance(p, kind) for p in points)):
         try:
             X = np.asarray(points, dtype=float)
         except (TypeError, ValueError):
             raise SourceError(f"points must be {kind.__name__}s or (k, 3) positions") from None
-        found = _at_positions(mesh, X)
-        single = isinstance(found, kind)
-        pts = [found] if single else list(found)
+        found = POINT_AT[mesh.dim](mesh, X)
+    single = isinstance(found, kind)
+    pts: list[CellPoint] = [found] if single else list(found)
     for k, p in enumerate(pts):
-        _check_point(mesh, p, f"point {k}")
-    cells = np.array([_cell_of(p) for p in pts], dtype=np.int64)
+        p.check(mesh, f"point {k}")
+    cells = np.array([p.cell for p in pts], dtype=np.int64)
     return cells, np.array([p.bary for p in pts]).reshape(-1, mesh.dim + 1), single
-
-
-def _interpolate(Dv: np.ndarray, bary: np.ndarray) -> np.ndarray:
-    """(k,) ``Σ_i b_i d_i`` of corner values ``Dv`` (k, s) at ``bary`` (k, s); a corner of weight 0 does not count
-    (``inf · 0`` is NaN: a point whose cell touches an unreachable vertex takes the other corners' value)."""
-    with np.errstate(invalid="ignore"):
-        return np.where(bary > 0, bary * Dv, 0.0).sum(axis=1)
 
 
 @overload
@@ -162,7 +129,7 @@ def distance_at(mesh: Any, distance: Field, points: Any) -> float | np.ndarray:
         vals = p2_field.distance_at(cells, bary)
     else:
         d, _ = _field(mesh, distance)
-        vals = _interpolate(d[mesh.cells[cells]], bary)
+        vals = corner_interpolant(d[mesh.cells[cells]], bary)
     return float(vals[0]) if single else vals
 
 
@@ -185,19 +152,13 @@ class _Cells:
 
     def __init__(self, mesh: Any):
         self.mesh, self.V, self.C = mesh, mesh.V, mesh.cells
-        k, s = self.C.shape
         self.H = _hat_gradients(mesh)
         with np.errstate(invalid="ignore"):
-            self.ok = np.isfinite(self.H).all(axis=(1, 2)) & ~np.isin(np.arange(k), mesh.degenerate_cells())
-        self.inc = sp.csr_matrix((np.ones(s * k), (self.C.ravel(), np.repeat(np.arange(k), s))),
-                                 shape=(mesh.n_vertices, k))
-
-    def cells_of_vertex(self, v: int) -> np.ndarray:
-        return self.inc[v].indices
+            self.ok = np.isfinite(self.H).all(axis=(1, 2)) & ~np.isin(np.arange(len(self.C)), mesh.degenerate_cells())
 
     def cells_of(self, verts: Sequence[int]) -> np.ndarray:
-        """The cells that contain all of ``verts`` (the cells around an edge or a face)."""
-        return functools.reduce(np.intersect1d, [self.inc[int(v)].indices for v in verts])
+        """The cells that contain all of ``verts`` (the cells around a vertex, an edge or a face)."""
+        return cells_around(self.mesh, verts)
 
     def bary(self, c: int, x: np.ndarray) -> np.ndarray:
         """Barycentric coordinates of ``x`` in cell ``c``, clipped to it (least squares: any cell shape)."""
@@ -273,32 +234,29 @@ class _Ends:
         if self.ss is None:  # unknown: the vertices where the field takes its minimum
             finite = d[np.isfinite(d)]
             self.vertices = d <= (finite.min() if finite.size else 0.0) + 1e-12 * mesh.bbox_diagonal
-        elif mesh.dim == 3:
-            self._volume_sources(mesh, geo, self.ss)
         else:
-            self._surface_sources(mesh, self.ss)
+            self._sources(mesh, geo, self.ss)
 
     def _add(self, cell: int, simplex: np.ndarray) -> None:
         self.items.setdefault(int(cell), []).append(simplex)
 
-    def _surface_sources(self, mesh: Any, ss: SourceSet) -> None:
-        """Source vertices; points and curve pieces in their faces (a point on an edge in each of its faces)."""
-        self.vertices[ss.vertices] = True
-        for f, x in zip(ss.point_faces, ss.point_positions(mesh), strict=True):
-            self._add(f, x[None])
-        T = mesh.V[mesh.F[ss.segment_faces]]
+    def _sources(self, mesh: Any, geo: _Cells, ss: SourceSet) -> None:
+        """Fixed vertices; each point in the cells that hold it (on a surface the source set lists a point on an
+        edge in both faces; in a volume one on a face or an edge goes to every tetrahedron around it); curve pieces
+        in their faces; each source face in its tetrahedron, and as a wall on which the walk ends."""
+        self.vertices[ss.fixed_vertices(mesh)] = True
+        if mesh.dim == 2:
+            for f, x in zip(ss.point_faces, ss.point_positions(mesh), strict=True):
+                self._add(f, x[None])
+        else:
+            for p in ss.points:
+                for t in geo.cells_of(mesh.T[p.tet][p.bary > 0]):
+                    self._add(t, p.position(mesh)[None])
+        T = mesh.V[mesh.cells[ss.segment_faces]]
         for f, ba, t in zip(ss.segment_faces, ss.segment_bary, T, strict=True):
             self._add(f, np.stack([ba[0] @ t, ba[1] @ t]))
-
-    def _volume_sources(self, mesh: Any, geo: _Cells, ss: Any) -> None:
-        """Fixed vertices; each point in every tetrahedron that holds it (one on a face or an edge: all around
-        it); each source face in its tetrahedron, and as a wall on which the walk ends."""
-        self.vertices[ss.fixed_vertices(mesh)] = True
-        for p in ss.points:
-            for t in geo.cells_of(mesh.T[p.tet][p.bary > 0]):
-                self._add(t, p.position(mesh)[None])
-        tris = ss.face_triangles(mesh)
-        for f, t in zip(tris, mesh.boundary_face_tets[ss.faces], strict=True):
+        for f, t in zip(ss.face_triangles(mesh), mesh.boundary_face_tets[ss.facets] if ss.facets.size else (),
+                        strict=True):  # a volume's source faces
             self._add(t, mesh.V[f])
             self.facets.add(frozenset(f.tolist()))
 
@@ -365,12 +323,12 @@ class _Descent:
             state: tuple = ("v", p)
             value = d[p]
         elif p.bary.max() >= 1 - BARY_SNAP:  # on a vertex
-            state = ("v", int(geo.C[_cell_of(p), np.argmax(p.bary)]))
+            state = ("v", int(geo.C[p.cell, np.argmax(p.bary)]))
             value = d[state[1]]
         else:
-            c = _cell_of(p)
+            c = p.cell
             state = ("c", c, np.where(p.bary <= BARY_SNAP, 0.0, p.bary))
-            value = _interpolate(d[geo.C[c]][None], p.bary[None])[0]
+            value = corner_interpolant(d[geo.C[c]][None], p.bary[None])[0]
             self.nodes.append(("p", c, p.bary @ geo.V[geo.C[c]]))
         if state[0] == "v":
             self.nodes.append(state)
@@ -391,7 +349,7 @@ class _Descent:
         geo, d, V = self.geo, self.d, self.geo.V
         if self.ends.vertices[v]:
             return None
-        cells = geo.cells_of_vertex(v)
+        cells = geo.cells_of((v,))
         if any(self._finish_in(int(c), V[v], d[v]) for c in cells):
             return None
         best, choice = 1e-14, cast(tuple | None, None)
@@ -485,13 +443,13 @@ class _Descent:
         return state
 
 
-def _as_target(mesh: Any, target: Any) -> int | MeshPoint:
+def _as_target(mesh: Any, target: Any) -> int | CellPoint:
     """A vertex index or a point of the mesh's kind (a position: the closest surface point, the point inside)."""
-    kind = _point_type(mesh)
-    if isinstance(target, SurfacePoint | VolumePoint) and isinstance(target, kind):
-        _check_point(mesh, target, "target")
+    kind = POINT_TYPES[mesh.dim]
+    if isinstance(target, kind):
+        target.check(mesh, "target")
         return target
-    if isinstance(target, numbers.Integral) and not isinstance(target, bool | np.bool_):
+    if _is_int_like(target):
         if not 0 <= int(target) < mesh.n_vertices:
             raise SourceError(f"target vertex {int(target)} is out of range: the mesh has {mesh.n_vertices} "
                               "vertices")
@@ -503,7 +461,7 @@ def _as_target(mesh: Any, target: Any) -> int | MeshPoint:
         raise SourceError(wrong) from None
     if X.shape != (3,) or not np.all(np.isfinite(X)):
         raise SourceError(wrong)
-    return _at_positions(mesh, X)  # one position: one point
+    return cast(CellPoint, POINT_AT[mesh.dim](mesh, X))  # one position: one point
 
 
 @overload
@@ -631,7 +589,7 @@ def _finish_path(geo: _Cells, nodes: list[tuple], straighten: bool, return_point
     tol = 1e-12 * mesh.bbox_diagonal
     if straighten and mesh.dim == 2:  # the shortest path through the corridor of faces
         nodes = straighten_corridor(geo, nodes, None if medium is None else medium.on(mesh))
-    P = np.array([_position(geo, nd) for nd in nodes])
+    P = np.array([node_position(geo, nd) for nd in nodes])
     # consecutive duplicates (a valley that starts at a crossing, a point that was already on its source)
     keep = np.r_[True, np.linalg.norm(np.diff(P, axis=0), axis=1) > tol]
     if not keep[-1]:  # the end is the source itself: the point it repeats goes instead (a target on its source:
@@ -646,14 +604,10 @@ def _finish_path(geo: _Cells, nodes: list[tuple], straighten: bool, return_point
             np.array([b for _, b in located]).reshape(-1, mesh.dim + 1))
 
 
-def _position(geo: _Cells, node) -> np.ndarray:
-    return geo.V[node[1]] if node[0] == "v" else node[-1]
-
-
 def _locate(geo: _Cells, node) -> tuple[int, np.ndarray]:
     """A cell containing the node and the node's barycentric coordinates in it."""
     if node[0] == "v":
-        c = int(geo.cells_of_vertex(node[1])[0])
+        c = int(geo.cells_of((node[1],))[0])
         return c, (geo.C[c] == node[1]).astype(float)
     c = node[3] if node[0] == "e" else node[1]
     b = geo.bary(c, node[-1])
@@ -672,8 +626,7 @@ def _exact_applies(mesh: Any, result: Any, ss: Any, target: Any) -> bool:
     if isinstance(target, SurfacePoint):
         on_mesh = target.face < mesh.n_faces
     else:
-        on_mesh = (isinstance(target, numbers.Integral) and not isinstance(target, bool | np.bool_)
-                   and 0 <= int(target) < mesh.n_vertices)
+        on_mesh = _is_int_like(target) and 0 <= int(target) < mesh.n_vertices
     return (on_mesh and not ss.segment_faces.size and mesh.is_edge_manifold and mesh.referenced.all()
             and np.unique(mesh.component_labels).size == 1)
 

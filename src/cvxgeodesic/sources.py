@@ -37,6 +37,7 @@ the exact field off.
 
 from __future__ import annotations
 
+import functools
 import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -47,13 +48,13 @@ import scipy.sparse as sp
 
 from .errors import SourceError
 from .mesh.closest import nearest_triangle_distance, point_triangle_distance, segment_distance, segment_parameter
+from .mesh.geometry import clipped_barycentric
 from .mesh.locate import (
     BARY_TOL,
     POINT_TYPES,
     CellPoint,
     SurfacePoint,
     VolumePoint,
-    _barycentric,
     closest_points,
     interpolate_at,
     surface_point,
@@ -340,19 +341,23 @@ class SourceSet:
         return uniq.astype(np.int64), best
 
 
-def _incident_faces(mesh: Any) -> sp.csr_matrix:
-    """(n, m) csr_matrix with a 1 where a vertex belongs to a face (cached on the mesh object)."""
-    cached = mesh.__dict__.get("_cg_vertex_faces")
-    if cached is None:
-        m = mesh.n_faces
-        cached = sp.csr_matrix((np.ones(3 * m), (mesh.F.ravel(), np.repeat(np.arange(m), 3))),
-                               shape=(mesh.n_vertices, m))
-        mesh.__dict__["_cg_vertex_faces"] = cached  # the mesh is immutable: a cache like its cached properties
-    return cached
+def cells_around(mesh: Any, verts: Sequence[int]) -> np.ndarray:
+    """(q,) int32 ndarray: the cells that contain all of ``verts`` (around a vertex, an edge or a face), sorted.
+
+    Read from the rows of a vertex-cell incidence matrix (cached on the mesh object: it is immutable) by their
+    index pointers, not by sparse slicing.
+    """
+    inc = mesh.__dict__.get("_cg_vertex_cells")
+    if inc is None:
+        k, s = mesh.cells.shape
+        inc = sp.csr_matrix((np.ones(s * k), (mesh.cells.ravel(), np.repeat(np.arange(k), s))),
+                            shape=(mesh.n_vertices, k))
+        mesh.__dict__["_cg_vertex_cells"] = inc
+    return functools.reduce(np.intersect1d, [inc.indices[inc.indptr[v]:inc.indptr[v + 1]] for v in map(int, verts)])
 
 
 def boundary_edges(mesh: TriMesh) -> tuple[np.ndarray, np.ndarray]:
-    """Edges with a single face.
+    """Edges with a single face (:attr:`TriMesh.boundary_facets <cvxgeodesic.mesh.trimesh.TriMesh.boundary_facets>`).
 
     Returns
     -------
@@ -360,14 +365,10 @@ def boundary_edges(mesh: TriMesh) -> tuple[np.ndarray, np.ndarray]:
     faces : (b,) int64 ndarray
         The face of each boundary edge.
     """
-    F = mesh.F
-    n = mesh.n_vertices
-    E = np.sort(np.concatenate([F[:, [1, 2]], F[:, [2, 0]], F[:, [0, 1]]]), axis=1)
-    face_of = np.tile(np.arange(mesh.n_faces), 3)
-    keys = E[:, 0] * n + E[:, 1]
-    uniq, idx, counts = np.unique(keys, return_index=True, return_counts=True)
-    one = idx[counts == 1]
-    return E[one].astype(np.int64), face_of[one].astype(np.int64)
+    one = mesh.edge_face_counts == 1
+    face_of = np.empty(len(one), dtype=np.int64)
+    face_of[mesh.face_edges.ravel()] = np.repeat(np.arange(mesh.n_faces), 3)  # exact where an edge has one face
+    return mesh.boundary_facets.copy(), face_of[one]
 
 
 class _Builder:
@@ -405,10 +406,7 @@ class _Builder:
         if zero.any() and self.mesh.dim == 2:
             on = np.flatnonzero(~zero)  # exactly two corners: an edge point
             va, vb = int(C[cell, on[0]]), int(C[cell, on[1]])
-            inc = _incident_faces(self.mesh)  # the faces of a vertex: its row's indices (no sparse slicing)
-            shared = np.intersect1d(inc.indices[inc.indptr[va]:inc.indptr[va + 1]],
-                                    inc.indices[inc.indptr[vb]:inc.indptr[vb + 1]])
-            for g in shared:
+            for g in cells_around(self.mesh, (va, vb)):
                 bg = np.zeros(3)
                 bg[C[g] == va] = b[on[0]]
                 bg[C[g] == vb] = b[on[1]]
@@ -527,7 +525,8 @@ def _curve_pieces(mesh: TriMesh, faces: np.ndarray, bary: np.ndarray) -> list[tu
         left = np.ones(cross.size, dtype=bool)
         for g in (fa[cross], fb[cross]):  # the first face, then the second
             T = V[F[g]]
-            ga, gb = _barycentric(T, xa), _barycentric(T, xb)
+            corners = T[:, 0], T[:, 1], T[:, 2]
+            ga, gb = clipped_barycentric(xa, *corners), clipped_barycentric(xb, *corners)
             ok = (left & (np.linalg.norm(at(ga, T) - xa, axis=1) <= tol)
                   & (np.linalg.norm(at(gb, T) - xb, axis=1) <= tol))
             for j in np.flatnonzero(ok).tolist():
@@ -640,9 +639,7 @@ def resolve_sources(mesh: Any, sources: Any) -> SourceSet:
 
 
 def _describe(items) -> str:
-    parts = []
-    for s in list(items)[:4]:
-        parts.append(repr(s) if not _is_int_like(s) else f"vertex {int(s)}")
+    parts = [repr(s) if not _is_int_like(s) else f"vertex {int(s)}" for s in list(items)[:4]]
     return ", ".join(parts) + (f" and {len(items) - 4} more" if len(items) > 4 else "")
 
 
@@ -762,15 +759,10 @@ def _steep_cells(ops: Any, ss: SourceSet, near: np.ndarray, medium: Any) -> np.n
 
 
 def source_constraints(ops: Any, sources: Any, min_edge_bound: float) -> SourceConstraints:
-    """Constraints of a source set (or of validated source vertices) for one mesh, a surface or a solid.
-
-    Vertex sources and the vertices of source faces are fixed at 0 and the cells incident to a source vertex carry no
-    cone (the interpolated cone of ``|x − s|`` is steeper than 1 on each). A point bounds the corners of its cell by
-    their distance to it, a curve piece the corners of its face, a source face the fourth corner of its tetrahedron
-    (:func:`vertex_bounds`); the cells of points and curve pieces carry no cone, nor do the cells next to the
-    sources where the local field is steeper than 1 (:func:`_steep_cells`). On a surface each star edge bounds its
-    other end by its length, and the edges around cone-free faces get edge bounds here; in a solid the formulation
-    bounds every edge of a tetrahedron without a cone.
+    """Constraints of a source set (or of validated source vertices) for one mesh, a surface or a solid: those the
+    module docstring lists (the bounds at the corners of the sources' cells: :func:`vertex_bounds`; the cells next to
+    the sources where the local field is steeper than 1: :func:`_steep_cells`; the edge bounds around cone-free faces
+    of a surface: :func:`_surface_edge_bounds`).
 
     Parameters
     ----------
@@ -799,15 +791,13 @@ def source_constraints(ops: Any, sources: Any, min_edge_bound: float) -> SourceC
     is_source[vertices] = True
     no_cone = is_source[C].any(axis=1)
     is_source[fixed] = True
-    star = is_source[E[:, 0]] ^ is_source[E[:, 1]]
+    # on a surface each star edge bounds its other end; in a solid the formulation bounds the edges of every
+    # tetrahedron without a cone
+    star = (is_source[E[:, 0]] ^ is_source[E[:, 1]]) & (mesh.dim == 2)
+    o_end, s_end = _edge_ends(E, star, is_source)
+    star_rhs = ell[star]
     empty = np.zeros(0, dtype=np.int64)
-    if mesh.dim == 2:
-        s_end = np.where(is_source[E[star, 0]], E[star, 0], E[star, 1])
-        o_end = np.where(is_source[E[star, 0]], E[star, 1], E[star, 0])
-        star_rhs = ell[star]
-    else:  # the formulation bounds the edges of every tetrahedron without a cone
-        s_end, o_end, star_rhs = empty, empty, np.zeros(0)
-    if ss is None or (mesh.dim == 2 and ss.vertex_only):
+    if ss is None or ss.vertex_only:
         return SourceConstraints(fixed, no_cone, o_end, s_end, star_rhs, empty, np.zeros(0), fixed)
 
     bound = vertex_bounds(mesh, ss, medium)
@@ -819,13 +809,18 @@ def source_constraints(ops: Any, sources: Any, min_edge_bound: float) -> SourceC
     if near.any():
         no_cone[_steep_cells(ops, ss, near, medium)] = True
     bv = np.flatnonzero(np.isfinite(bound) & ~is_source)
-    anchors = np.unique(np.concatenate([fixed, C[src_faces].ravel()])).astype(np.int64)
     if mesh.dim == 2:
         o_end, s_end, star_rhs = _surface_edge_bounds(mesh, ops, ell, is_source, src_verts & ~is_source, no_cone,
                                                       (o_end, s_end, star_rhs))
     return SourceConstraints(fixed=fixed, no_cone=no_cone, star_other=o_end.astype(np.int64),
                              star_source=s_end.astype(np.int64), star_rhs=star_rhs, bound_vertices=bv.astype(np.int64),
-                             bound_rhs=np.maximum(bound[bv], floor), anchors=anchors)
+                             bound_rhs=np.maximum(bound[bv], floor), anchors=ss.anchor_vertices(mesh))
+
+
+def _edge_ends(E: np.ndarray, mask: np.ndarray, first: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(other end, first end) of the edges ``E[mask]`` (each with exactly one end where ``first`` is True)."""
+    a = first[E[mask, 0]]
+    return np.where(a, E[mask, 1], E[mask, 0]), np.where(a, E[mask, 0], E[mask, 1])
 
 
 def _surface_edge_bounds(mesh: TriMesh, ops: Any, ell: np.ndarray, is_source: np.ndarray, src_verts: np.ndarray,
@@ -839,10 +834,8 @@ def _surface_edge_bounds(mesh: TriMesh, ops: Any, ell: np.ndarray, is_source: np
     jittered grid with the boundary as source: +0.034 at one vertex).
     """
     E = mesh.edges
-    a_src, b_src = src_verts[E[:, 0]], src_verts[E[:, 1]]
-    one = (a_src ^ b_src) & ~is_source[E[:, 0]] & ~is_source[E[:, 1]]
-    s2 = np.where(a_src[one], E[one, 0], E[one, 1])
-    o2 = np.where(a_src[one], E[one, 1], E[one, 0])
+    one = (src_verts[E[:, 0]] ^ src_verts[E[:, 1]]) & ~is_source[E[:, 0]] & ~is_source[E[:, 1]]
+    o2, s2 = _edge_ends(E, one, src_verts)
     ei = np.unique(mesh.face_edges[no_cone & ~ops.degenerate])
     ei = ei[~is_source[E[ei, 0]] & ~is_source[E[ei, 1]]]
     o_end, s_end, star_rhs = star

@@ -1,8 +1,8 @@
 """Closest points of a triangle mesh: one libigl AABB tree per mesh object, for any finite query.
 
 :func:`closest_point_index` builds a :class:`ClosestPointIndex` on the first search of a mesh object and keeps it
-beside the mesh (not on it: the tree cannot be pickled, the mesh can) for as long as the mesh lives.
-:func:`cvxgeodesic.mesh.locate.closest_points` (surface points, curve sources, paths) searches in it. Below it,
+beside the mesh (not on it: the tree cannot be pickled, the mesh can) for as long as the mesh lives;
+:func:`cvxgeodesic.mesh.locate.closest_points` (surface points, curve sources, paths) is its search. Below it,
 the distances from points to segments and triangles that the sources' bounds use.
 """
 
@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from .geometry import clipped_barycentric
 from .trimesh import TriMesh
 
 #: A position farther than this many bounding-box diagonals from the box's center is moved in along the ray from
@@ -34,12 +35,9 @@ UNIT_FRAME = 1e32
 class ClosestPointIndex:
     """libigl's AABB tree over one mesh's faces, built once per mesh (:func:`closest_point_index`).
 
-    A query farther than :data:`FAR_QUERY` bounding-box diagonals from the box's center is moved in along the
-    ray from the center to that distance first: its squared distances then cannot overflow, and the point
-    found stays within ``diag / (8 FAR_QUERY)`` of being the closest (see :data:`FAR_QUERY`). A mesh with
-    coordinates beyond :data:`UNIT_FRAME` (or a diagonal below its inverse) is searched in its unit frame:
-    the box's center at the origin, scaled by a power of two to a diagonal in ``(0.5, 1]``; libigl's
-    point-triangle distances take fourth powers of the coordinates. Other meshes are searched as they are.
+    A far query is moved in first (:data:`FAR_QUERY`); a mesh of huge or tiny coordinates is searched in its unit
+    frame (:data:`UNIT_FRAME`): the box's center at the origin, scaled by a power of two to a diagonal in
+    ``(0.5, 1]``.
 
     Parameters
     ----------
@@ -84,10 +82,12 @@ class ClosestPointIndex:
         Returns
         -------
         faces : (k,) int64 ndarray
-        C : (k, 3) float ndarray
-            The closest points, in the frame of the search (as :attr:`V`).
+        bary : (k, 3) float ndarray
+            The closest points' barycentric coordinates in their faces (found in the frame of the search: the same
+            coordinates).
         dist : (k,) float ndarray
-            ``|X − C|`` in the mesh's units (``inf`` only where that exceeds the largest float).
+            Distance from each position to its closest point, in the mesh's units (``inf`` only where that exceeds
+            the largest float).
         """
         Q = X - self.center
         # a direction and a length without squaring the coordinates (they may exceed 1e154)
@@ -110,7 +110,9 @@ class ClosestPointIndex:
             size = np.abs(D).max(axis=1)
             with np.errstate(over="ignore"):
                 dist[far] = size * np.linalg.norm(D / size[:, None], axis=1)
-        return np.asarray(faces, dtype=np.int64), C, dist
+        faces = np.asarray(faces, dtype=np.int64)
+        T = self.V[self.F[faces]]
+        return faces, clipped_barycentric(C, T[:, 0], T[:, 1], T[:, 2]), dist
 
 
 _INDEXES: weakref.WeakKeyDictionary[TriMesh, ClosestPointIndex] = weakref.WeakKeyDictionary()

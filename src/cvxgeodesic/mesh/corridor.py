@@ -46,7 +46,8 @@ def straighten_corridor(geo: Any, nodes: list[tuple], medium: Any = None) -> lis
     return nodes
 
 
-def _position(geo: Any, node: tuple) -> np.ndarray:
+def node_position(geo: Any, node: tuple) -> np.ndarray:
+    """(3,) float ndarray: the position of a node of the path (module docstring)."""
     return geo.V[node[1]] if node[0] == "v" else node[-1]
 
 
@@ -96,33 +97,30 @@ def _open_vertices(geo: Any, nodes: list) -> list:
     The crossings start at the vertex; :func:`_straighten` may then pull them off it, on the side of the
     smaller angle (where the straight line between the path's neighbours runs on a flat surface).
     """
-    V = geo.V
     # the start of a valley (a point on an edge from which the descent slid along it) is in the face of the
     # crossing before it together with the vertex after it: the straight segment between those replaces it
     nodes = [nd for i, nd in enumerate(nodes) if i in (0, len(nodes) - 1) or not (nd[0] == "e" and nd[2] == nd[3])]
     out = [nodes[0]]
     for i in range(1, len(nodes) - 1):
-        nd = nodes[i]
-        if nd[0] != "v":
-            out.append(nd)
-            continue
-        v = nd[1]
-        f_in = _segment_face(geo, nodes[i - 1], nd)
-        f_out = _segment_face(geo, nd, nodes[i + 1])
-        if f_in is None or f_out is None or f_in == f_out:
-            out.append(nd)
-            continue
-        walks = _fan(geo, v, f_in, f_out)
+        nd, walks = nodes[i], []
+        if nd[0] == "v":
+            f_in, f_out = _segment_face(geo, nodes[i - 1], nd), _segment_face(geo, nd, nodes[i + 1])
+            if f_in is not None and f_out is not None and f_in != f_out:
+                walks = _fan(geo, nd[1], f_in, f_out)
         if not walks:
             out.append(nd)
             continue
-
-        q0, q1 = _position(geo, nodes[i - 1]), _position(geo, nodes[i + 1])
-        ends, faces = walks[int(np.argmin([_walk_angle(geo, v, w, q0, q1) for w in walks]))]
-        for j, u in enumerate(ends):
-            out.append(("e", (v, u), faces[j], faces[j + 1], 0.7 * V[v] + 0.3 * V[u]))
+        q0, q1 = node_position(geo, nodes[i - 1]), node_position(geo, nodes[i + 1])
+        angles = [_walk_angle(geo, nd[1], w, q0, q1) for w in walks]
+        out.extend(_crossings(geo, nd[1], walks[int(np.argmin(angles))]))
     out.append(nodes[-1])
     return out
+
+
+def _crossings(geo: Any, u: int, walk: tuple[list[int], list[int]]) -> list[tuple]:
+    """The edge crossings of a walk around vertex ``u``, placed near it (:func:`_straighten` moves them)."""
+    ends, faces = walk
+    return [("e", (u, w), faces[k], faces[k + 1], 0.7 * geo.V[u] + 0.3 * geo.V[w]) for k, w in enumerate(ends)]
 
 
 def _corner(V, u, p, q) -> float:
@@ -175,14 +173,13 @@ def _switch_sides(geo: Any, nodes: list) -> tuple[list, bool]:
         run = nodes[i:j + 1]
         f_in, f_out = run[0][2], run[-1][3]
         current = [run[0][2], *(r[3] for r in run)]
-        q0, q1 = _position(geo, out[-1]), _position(geo, nodes[j + 1])
+        q0, q1 = node_position(geo, out[-1]), node_position(geo, nodes[j + 1])
         walks = [w for w in _fan(geo, u, f_in, f_out) if w[1] != current] if f_in != f_out else []
         if walks and np.linalg.norm(q0 - V[u]) > tol and np.linalg.norm(q1 - V[u]) > tol:
             cur_walk = ([r[1][1] if r[1][0] == u else r[1][0] for r in run], current)
             other = walks[0]
             if _walk_angle(geo, u, other, q0, q1) < _walk_angle(geo, u, cur_walk, q0, q1) - 1e-9:
-                ends, faces = other
-                out.extend(("e", (u, w), faces[k], faces[k + 1], 0.7 * V[u] + 0.3 * V[w]) for k, w in enumerate(ends))
+                out.extend(_crossings(geo, u, other))
                 switched = True
                 i = j + 1
                 continue
@@ -320,7 +317,7 @@ def _straighten(geo: Any, nodes: list, medium: Any = None) -> None:
         while (j + 1 < n - 1 and nodes[j + 1][0] == "e" and nodes[j + 1][2] != nodes[j + 1][3]
                and nodes[j + 1][2] == nodes[j][3]):
             j += 1
-        q0, q1 = _position(geo, nodes[i - 1]), _position(geo, nodes[j + 1])
+        q0, q1 = node_position(geo, nodes[i - 1]), node_position(geo, nodes[j + 1])
         if medium is None:
             nodes[i:j + 1] = _straighten_chain(geo, q0, nodes[i:j + 1], q1)
         else:

@@ -21,12 +21,11 @@ from scipy.spatial import cKDTree
 from ..errors import ParameterError, SourceError
 from ..validation import as_points, as_vertex_field
 from .closest import closest_point_index
-from .geometry import clipped_barycentric
 from .tetmesh import TET_FACES, TetMesh
 from .trimesh import TriMesh
 
-__all__ = ["BARY_TOL", "INSIDE_TOL", "POINT_TYPES", "CellPoint", "SurfacePoint", "VolumePoint", "closest_points",
-           "interpolate_at", "locate_points", "surface_point", "volume_point"]
+__all__ = ["BARY_TOL", "INSIDE_TOL", "POINT_AT", "POINT_TYPES", "CellPoint", "SurfacePoint", "VolumePoint",
+           "closest_points", "interpolate_at", "locate_points", "surface_point", "volume_point"]
 
 #: Tolerance of the barycentric checks of :class:`SurfacePoint` (negative coordinates, sum ≠ 1).
 BARY_TOL = 1e-9
@@ -48,21 +47,16 @@ def _tet_barycentric(mesh: TetMesh, tets: np.ndarray, X: np.ndarray) -> np.ndarr
     return out
 
 
-class _Locator:
-    """The k-d tree of one mesh's tetrahedron centroids (built once per mesh, cached on it)."""
-
-    def __init__(self, mesh: TetMesh):
-        P = mesh.V[mesh.T]  # (k, 4, 3)
-        self.centroids = P.mean(axis=1)
-        self.radius = float(np.linalg.norm(P - self.centroids[:, None], axis=2).max()) * (1 + 1e-9)
-        self.tree = cKDTree(self.centroids)
-
-
-def _locator(mesh: TetMesh) -> _Locator:
+def _locator(mesh: TetMesh) -> tuple[cKDTree, float]:
+    """The k-d tree of the tetrahedra's centroids and the largest distance from a centroid to its tetrahedron's
+    vertices (built once per mesh, cached on it)."""
     loc = mesh.__dict__.get("_tet_locator")
     if loc is None:
-        loc = _Locator(mesh)
-        mesh.__dict__["_tet_locator"] = loc  # TetMesh is immutable: a cache like its cached properties
+        P = mesh.V[mesh.T]  # (k, 4, 3)
+        centroids = P.mean(axis=1)
+        radius = float(np.linalg.norm(P - centroids[:, None], axis=2).max()) * (1 + 1e-9)
+        # TetMesh is immutable: a cache like its cached properties
+        loc = mesh.__dict__["_tet_locator"] = (cKDTree(centroids), radius)
     return loc
 
 
@@ -89,8 +83,8 @@ def locate_points(mesh: TetMesh, points: ArrayLike) -> tuple[np.ndarray, np.ndar
         ``points`` not finite positions.
     """
     X = as_points(points, "points").reshape(-1, 3)
-    loc = _locator(mesh)
-    cand = loc.tree.query_ball_point(X, loc.radius, return_sorted=False)
+    tree, radius = _locator(mesh)
+    cand = tree.query_ball_point(X, radius, return_sorted=False)
     counts = np.fromiter((len(c) for c in cand), dtype=np.int64, count=len(cand))
     point_of = np.repeat(np.arange(len(X)), counts)
     tet_of = np.fromiter((t for c in cand for t in c), dtype=np.int64, count=int(counts.sum()))
@@ -114,8 +108,10 @@ class CellPoint:
     """A point of a mesh located in one of its cells: a cell index and ``dim + 1`` barycentric coordinates.
 
     The base of :class:`SurfacePoint` (a face of a triangle mesh, attribute ``face``) and :class:`VolumePoint` (a
-    tetrahedron, attribute ``tet``); built through those. Immutable, hashable, equal when the cell and the
-    coordinates are.
+    tetrahedron, attribute ``tet``); built through those, whose checks are these: the cell a non-negative integer
+    (checked against the mesh when the point is used); the coordinates finite, each ``>= 0`` and summing to 1 (to
+    :data:`BARY_TOL`; tiny negative round-off is clipped and the sum renormalized), else :class:`SourceError`.
+    Immutable, hashable, equal when the cell and the coordinates are.
 
     Attributes
     ----------
@@ -124,13 +120,17 @@ class CellPoint:
         Each ``>= 0``, summing to 1.
     """
 
-    #: The attribute naming the cell, its description in messages, the coordinate count, where the cell is counted.
-    _field, _index_of, _n_bary, _cells, _word = "cell", "a cell index", 0, "cells", "cell"
-    #: The hint of a negative coordinate.
-    _outside = "outside the cell"
+    #: The attribute naming the cell, the coordinate count, the cell and its plural in messages, the hint of a
+    #: negative coordinate (set by each point type's class keywords).
+    _field, _n_bary, _word, _cells, _outside = "cell", 0, "cell", "cells", "outside the cell"
     __slots__ = ("bary", "cell")
     cell: int
     bary: np.ndarray
+
+    def __init_subclass__(cls, *, field: str, n_bary: int, word: str, cells: str, hint: str) -> None:
+        super().__init_subclass__()
+        cls._field, cls._n_bary, cls._word, cls._cells = field, n_bary, word, cells
+        cls._outside = f"outside the {word}; {hint}"
 
     def __init__(self, cell: Any, bary: ArrayLike) -> None:
         name = type(self).__name__
@@ -139,7 +139,7 @@ class CellPoint:
             if isinstance(f, numbers.Real) and not isinstance(f, bool | np.bool_) and float(f).is_integer():
                 f = int(float(f))
             else:
-                raise SourceError(f"{name} {self._field} must be {self._index_of} (int), got {f!r}")
+                raise SourceError(f"{name} {self._field} must be a {self._word} index (int), got {f!r}")
         f = int(f)
         if f < 0:
             raise SourceError(f"{name} {self._field} index {f} is negative")
@@ -215,22 +215,16 @@ class CellPoint:
         return self.bary @ mesh.V[mesh.cells[self.cell]]
 
 
-class SurfacePoint(CellPoint):
-    """A point of the surface: a face index and barycentric coordinates.
+class SurfacePoint(CellPoint, field="face", n_bary=3, word="face", cells="faces",
+                   hint="use surface_point(mesh, xyz) for the closest point"):
+    """A point of the surface: a face index and barycentric coordinates (checks: :class:`CellPoint`).
 
     Parameters
     ----------
     face : int
-        Face index (checked against the mesh when the point is used).
+        Face index.
     bary : (3,) float array_like
-        Barycentric coordinates with respect to ``F[face]``: each ``>= 0`` and summing to 1
-        (to ``1e-9``; tiny negative round-off is clipped and the sum renormalized).
-
-    Raises
-    ------
-    SourceError
-        A face that is not a non-negative integer; ``bary`` not 3 finite numbers, with a
-        negative coordinate, or not summing to 1.
+        Barycentric coordinates with respect to ``F[face]``.
 
     Examples
     --------
@@ -240,8 +234,6 @@ class SurfacePoint(CellPoint):
     (10, [0.2, 0.3, 0.5])
     """
 
-    _field, _index_of, _n_bary, _cells, _word = "face", "a face index", 3, "faces", "face"
-    _outside = "outside the face; use surface_point(mesh, xyz) for the closest point"
     __slots__ = ()
     face: int
 
@@ -253,32 +245,30 @@ class SurfacePoint(CellPoint):
         return super().position(_mesh(mesh))
 
 
-class VolumePoint(CellPoint):
-    """A point inside a tetrahedral mesh: a tetrahedron index and four barycentric coordinates.
+class VolumePoint(CellPoint, field="tet", n_bary=4, word="tetrahedron", cells="tetrahedra",
+                  hint="use volume_point(mesh, xyz) to find the containing one"):
+    """A point inside a tetrahedral mesh: a tetrahedron index and four barycentric coordinates (checks:
+    :class:`CellPoint`).
 
     Parameters
     ----------
     tet : int
-        Tetrahedron index (checked against the mesh when the point is used).
+        Tetrahedron index.
     bary : (4,) float array_like
-        Barycentric coordinates with respect to ``T[tet]``: each ``>= 0`` and summing to 1 (to
-        ``1e-9``; tiny negative round-off is clipped and the sum renormalized).
-
-    Raises
-    ------
-    SourceError
-        A tetrahedron index that is not a non-negative integer; ``bary`` not 4 finite numbers,
-        with a negative coordinate, or not summing to 1.
+        Barycentric coordinates with respect to ``T[tet]``: the point is ``bary @ V[T[tet]]``
+        (:meth:`~CellPoint.position`).
 
     Examples
     --------
+    >>> from cvxgeodesic.mesh.tet_generate import tet_box
+    >>> mesh = tet_box(2)
     >>> p = VolumePoint(3, [0.25, 0.25, 0.25, 0.25])
     >>> p.tet, p.bary.tolist()
     (3, [0.25, 0.25, 0.25, 0.25])
+    >>> p.vertices(mesh).tolist() == mesh.T[3].tolist()
+    True
     """
 
-    _field, _index_of, _n_bary, _cells, _word = "tet", "a tetrahedron index", 4, "tetrahedra", "tetrahedron"
-    _outside = "outside the tetrahedron; use volume_point(mesh, xyz) to find the containing one"
     __slots__ = ()
     tet: int
 
@@ -296,32 +286,11 @@ def _mesh(mesh) -> TriMesh:
     return as_trimesh(mesh)
 
 
-def _barycentric(T: np.ndarray, X: np.ndarray) -> np.ndarray:
-    """(k, 3) barycentric coordinates of points ``X`` (k, 3) in triangles ``T`` (k, 3, 3), clipped to the face."""
-    return clipped_barycentric(X, T[:, 0], T[:, 1], T[:, 2])
-
-
-def closest_points(mesh: TriMesh, X) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Closest surface points of positions (one search in the mesh's
-    :func:`~cvxgeodesic.mesh.closest.closest_point_index`).
-
-    Parameters
-    ----------
-    mesh : TriMesh
-    X : (k, 3) float array_like
-        Finite positions.
-
-    Returns
-    -------
-    faces : (k,) int64 ndarray
-    bary : (k, 3) float ndarray
-    dist : (k,) float ndarray
-        Distance from each position to its closest point.
-    """
-    X = np.ascontiguousarray(np.asarray(X, dtype=np.float64).reshape(-1, 3))
-    index = closest_point_index(mesh)
-    faces, C, dist = index.query(X)
-    return faces, _barycentric(index.V[index.F[faces]], C), dist  # in the search's frame: the same coordinates
+def closest_points(mesh: TriMesh, X: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Closest surface points of positions ``X`` (k, 3): ``faces (k,), bary (k, 3), dist (k,)``, one search in the
+    mesh's :func:`~cvxgeodesic.mesh.closest.closest_point_index` (see
+    :meth:`~cvxgeodesic.mesh.closest.ClosestPointIndex.query`)."""
+    return closest_point_index(mesh).query(np.ascontiguousarray(np.asarray(X, dtype=np.float64).reshape(-1, 3)))
 
 
 def surface_point(mesh: Any, xyz: ArrayLike) -> SurfacePoint | list[SurfacePoint]:
@@ -406,6 +375,11 @@ def volume_point(mesh: TetMesh, xyz: ArrayLike) -> VolumePoint | list[VolumePoin
     return points[0] if X.ndim == 1 else points
 
 
+#: The point (or points) of each simplex dimension at positions: the closest surface point, the containing
+#: tetrahedron (a position outside the mesh: SourceError).
+POINT_AT = {2: surface_point, 3: volume_point}
+
+
 def interpolate_at(mesh: TetMesh, values: ArrayLike, points: Any) -> np.ndarray:
     """A vertex field's linear interpolant at points inside a tetrahedral mesh.
 
@@ -442,8 +416,12 @@ def interpolate_at(mesh: TetMesh, values: ArrayLike, points: Any) -> np.ndarray:
         tets, bary = locate_points(mesh, points)
     out = np.full(len(tets), np.nan)
     inside = tets >= 0
-    vals = d[mesh.T[tets[inside]]]
-    with np.errstate(invalid="ignore"):  # inf · 0 where an unreachable vertex has coordinate 0
-        w = bary[inside]
-        out[inside] = np.where(w > 0, vals * w, 0.0).sum(axis=1)
+    out[inside] = corner_interpolant(d[mesh.T[tets[inside]]], bary[inside])
     return out
+
+
+def corner_interpolant(Dv: np.ndarray, bary: np.ndarray) -> np.ndarray:
+    """(k,) ``Σ_i b_i d_i`` of corner values ``Dv`` (k, s) at ``bary`` (k, s); a corner of weight 0 does not count
+    (``inf · 0`` is NaN: a point whose cell touches an unreachable vertex takes the other corners' value)."""
+    with np.errstate(invalid="ignore"):
+        return np.where(bary > 0, bary * Dv, 0.0).sum(axis=1)
