@@ -33,7 +33,7 @@ from numpy.typing import ArrayLike
 
 from ._atomic import atomic_write
 from .mesh.io import as_trimesh
-from .validation import as_vertex_field, check_number, check_output_path, vertex_indices
+from .validation import as_vertex_field, check_count, check_number, check_output_path, vertex_indices
 
 __all__ = ["plot_field", "plot_error_map", "plot_gradient_histogram", "isoline_segments"]
 
@@ -50,10 +50,12 @@ _SEGMENT_BLOCK = 400_000  # (triangle, level) pairs processed at once by the mar
 # ----------------------------------------------------------------------------------------------------------------------
 
 
-def _check_marks(sources, n: int) -> np.ndarray:
-    if sources is None:
-        return np.empty(0, dtype=np.int64)
-    return vertex_indices(sources, "sources", n)
+def _surface_inputs(mesh, values, name: str, sources, path, dpi) -> tuple[Any, np.ndarray, np.ndarray, Path, float]:
+    """The checked inputs of a surface picture: ``(mesh, values (n,), marked vertices (k,), path, dpi)``."""
+    mesh = as_trimesh(mesh)
+    vals = as_vertex_field(values, name, mesh.n_vertices)
+    marks = np.empty(0, dtype=np.int64) if sources is None else vertex_indices(sources, "sources", mesh.n_vertices)
+    return mesh, vals, marks, check_output_path(path, PLOT_EXTENSIONS), check_number(dpi, "dpi", low=10, high=2000)
 
 
 def _new_figure(dpi: float, figsize=_FIGSIZE):
@@ -517,11 +519,7 @@ def plot_field(
     from matplotlib.cm import ScalarMappable
     from matplotlib.colors import Colormap, Normalize
 
-    mesh = as_trimesh(mesh)
-    vals = as_vertex_field(values, "values", mesh.n_vertices)
-    marks = _check_marks(sources, mesh.n_vertices)
-    p = check_output_path(path, PLOT_EXTENSIONS)
-    dpi = check_number(dpi, "dpi", low=10, high=2000)
+    mesh, vals, marks, p, dpi = _surface_inputs(mesh, values, "values", sources, path, dpi)
     cm = cmap if isinstance(cmap, Colormap) else colormaps[cmap]
     lo, hi = _finite_range(vals, vmin, vmax)
     levels = _isolevels(isolines, lo, hi)
@@ -580,11 +578,7 @@ def plot_error_map(mesh, rel_error, path, *, title=None, vmax=None, view=None, d
     from matplotlib.colors import Normalize
     from matplotlib.ticker import PercentFormatter
 
-    mesh = as_trimesh(mesh)
-    err = as_vertex_field(rel_error, "rel_error", mesh.n_vertices)
-    marks = _check_marks(sources, mesh.n_vertices)
-    p = check_output_path(path, PLOT_EXTENSIONS)
-    dpi = check_number(dpi, "dpi", low=10, high=2000)
+    mesh, err, marks, p, dpi = _surface_inputs(mesh, rel_error, "rel_error", sources, path, dpi)
     fin = err[np.isfinite(err)]
     if vmax is None:
         vmax = float(np.percentile(fin, 99.0)) if fin.size else 1.0
@@ -679,8 +673,7 @@ def plot_gradient_histogram(norms_by_label, path, *, weights=None, title=None, b
         raise ValueError("norms_by_label must be a non-empty dict {label: norms or (counts, edges)}")
     p = check_output_path(path, PLOT_EXTENSIONS)
     dpi = check_number(dpi, "dpi", low=10, high=2000)
-    if isinstance(bins, bool) or not isinstance(bins, int | np.integer) or bins < 1:
-        raise ValueError(f"bins must be a positive integer, got {bins!r}")
+    bins = check_count(bins, "bins")
     entries = {str(k): _as_hist_entry(k, v, weights) for k, v in norms_by_label.items()}
 
     raw_all = [e[1] for e in entries.values() if e[0] == "raw" and e[1].size]

@@ -85,6 +85,7 @@ def check_number(value: Any, name: str, *, low: float | None = None, high: float
     Returns
     -------
     float
+        ``value`` converted.
 
     Raises
     ------
@@ -495,6 +496,27 @@ def _g(x: float, digits: int = 6) -> str:
                   f"{x:.{digits}g}")
 
 
+def _per_item(value: Any, name: str, n: int, m: int, item: tuple[int, ...], *, what: str,
+              shapes: str) -> tuple[np.ndarray, str]:
+    """``value`` (a cost or a metric) as a float64 array of ``item``-shaped entries, and whose they are.
+
+    Returns ``(values, kind)``: one entry (1, *item) ``"constant"``, one per vertex (n, *item) ``"vertices"`` or one
+    per face (m, *item) ``"faces"`` (per vertex when ``n == m``). The ParameterErrors name ``name`` and say it must
+    be ``what`` (not numeric) or have one of the ``shapes``; complex values are refused by :func:`check_real`.
+    """
+    check_real(value, name)
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be {what}, got {short_repr(value)}") from None
+    if arr.shape == item:
+        return arr.reshape(1, *item), "constant"
+    for kind, count in (("vertices", n), ("faces", m)):
+        if arr.shape == (count, *item):
+            return arr, kind
+    raise ParameterError(f"{name} must have shape {shapes}, got shape {arr.shape}")
+
+
 def check_cost(cost: Any, n: int, m: int) -> tuple[np.ndarray, str]:
     """A travel cost (time per unit length, ``1/speed``) checked and classified.
 
@@ -517,21 +539,8 @@ def check_cost(cost: Any, n: int, m: int) -> tuple[np.ndarray, str]:
         ``[MIN_COST, MAX_COST]`` (the message names the first one), or values whose ratio max/min exceeds
         ``MAX_COST_RATIO`` (the message names both).
     """
-    check_real(cost, "cost")
-    try:
-        arr = np.asarray(cost, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ParameterError(f"cost must be a positive number or an array of shape ({n},) (per vertex) or ({m},) "
-                             f"(per face), got {short_repr(cost)}") from None
-    if arr.ndim == 0:
-        kind, arr = "constant", arr.reshape(1)
-    elif arr.ndim == 1 and arr.shape[0] == n:
-        kind = "vertices"
-    elif arr.ndim == 1 and arr.shape[0] == m:
-        kind = "faces"
-    else:
-        raise ParameterError(f"cost must have shape ({n},) (one value per vertex) or ({m},) (one per face), "
-                             f"got shape {arr.shape}")
+    arr, kind = _per_item(cost, "cost", n, m, (), what=f"a positive number or an array of shape ({n},) (per vertex) "
+                          f"or ({m},) (per face)", shapes=f"({n},) (one value per vertex) or ({m},) (one per face)")
     bad = ~(np.isfinite(arr) & (arr > 0))
     if bad.any():
         k = int(np.flatnonzero(bad)[0])
@@ -579,21 +588,9 @@ def check_metric(metric: Any, n: int, m: int) -> tuple[np.ndarray, str]:
         Complex or not numeric, another shape, a non-finite entry or a tensor that is not symmetric (relative 1e-10),
         naming the first.
     """
-    check_real(metric, "metric")
-    try:
-        arr = np.asarray(metric, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ParameterError(f"metric must be a (3, 3), ({n}, 3, 3) or ({m}, 3, 3) array of symmetric tensors, "
-                             f"got {short_repr(metric)}") from None
-    if arr.shape == (3, 3):
-        kind, arr = "constant", arr.reshape(1, 3, 3)
-    elif arr.ndim == 3 and arr.shape[1:] == (3, 3) and arr.shape[0] == n:
-        kind = "vertices"
-    elif arr.ndim == 3 and arr.shape[1:] == (3, 3) and arr.shape[0] == m:
-        kind = "faces"
-    else:
-        raise ParameterError(f"metric must have shape (3, 3) (one tensor), ({n}, 3, 3) (per vertex) or ({m}, 3, 3) "
-                             f"(per face), got shape {arr.shape}")
+    arr, kind = _per_item(metric, "metric", n, m, (3, 3),
+                          what=f"a (3, 3), ({n}, 3, 3) or ({m}, 3, 3) array of symmetric tensors",
+                          shapes=f"(3, 3) (one tensor), ({n}, 3, 3) (per vertex) or ({m}, 3, 3) (per face)")
     at = (lambda k: "metric") if kind == "constant" else (lambda k: f"metric[{k}]")
     finite = np.isfinite(arr).all(axis=(1, 2))
     if not finite.all():

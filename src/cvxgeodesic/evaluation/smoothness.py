@@ -64,6 +64,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from ..operators.gradient import gradient_blocks, gradient_norms, triangle_frames
+from ..validation import check_count, check_number
 from ._validate import check_mesh, vertex_field, vertex_indices, vertex_mask
 from .errors import error_stats, percentile
 
@@ -117,8 +118,7 @@ def ridge_band(mesh, d_exact, rings: int = 2, *, sources=None, threshold: float 
     """
     mesh = check_mesh(mesh)
     d_exact = vertex_field(d_exact, "d_exact", mesh.n_vertices)
-    if isinstance(rings, bool) or not isinstance(rings, int | np.integer) or rings < 0:
-        raise ValueError(f"rings must be an integer >= 0, got {rings!r}")
+    rings = check_count(rings, "rings", minimum=0)
     if not exclude_radius >= 0:
         raise ValueError(f"exclude_radius must be a number >= 0, got {exclude_radius!r}")
     if sources is None:
@@ -137,7 +137,7 @@ def ridge_band(mesh, d_exact, rings: int = 2, *, sources=None, threshold: float 
     with np.errstate(invalid="ignore"):
         crease = (jumps < -jump_threshold) & ~near_src[edges[:, 0]] & ~near_src[edges[:, 1]]
     seeds[edges[crease].ravel()] = True
-    return _ring_dilate(mesh, seeds, int(rings)) & finite
+    return _ring_dilate(mesh, seeds, rings) & finite
 
 
 def interior_edges(mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -157,20 +157,15 @@ def interior_edges(mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         The vertex of each face opposite the edge.
     """
     mesh = check_mesh(mesh)
-    F = mesh.F
-    m = F.shape[0]
-    E = np.concatenate([F[:, [1, 2]], F[:, [2, 0]], F[:, [0, 1]]])
-    E.sort(axis=1)
-    face = np.tile(np.arange(m), 3)
-    opp = np.concatenate([F[:, 0], F[:, 1], F[:, 2]])
-    uniq, inv, counts = np.unique(E, axis=0, return_inverse=True, return_counts=True)
-    inv = inv.reshape(-1)
-    order = np.argsort(inv, kind="stable")
+    # the mesh's edge table (face_edges: the edge opposite each corner), one row per (corner, face), corner-major
+    face = np.tile(np.arange(mesh.n_faces), 3)
+    opp = mesh.F.T.ravel()
+    order = np.argsort(mesh.face_edges.T.ravel(), kind="stable")
+    counts = mesh.edge_face_counts
     starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
     two = np.flatnonzero(counts == 2)
     first, second = order[starts[two]], order[starts[two] + 1]
-    return (uniq[two].astype(np.int64), np.column_stack([face[first], face[second]]),
-            np.column_stack([opp[first], opp[second]]))
+    return mesh.edges[two], np.column_stack([face[first], face[second]]), np.column_stack([opp[first], opp[second]])
 
 
 def triangle_gradients_3d(mesh, d) -> np.ndarray:
@@ -358,8 +353,7 @@ def cut_locus_band(mesh, d_exact, width: float, *, sources=None, threshold: floa
     -------
     (n,) bool ndarray
     """
-    if not (np.isfinite(width) and width > 0):
-        raise ValueError(f"width must be a finite number > 0, got {width!r}")
+    width = check_number(width, "width", low=0, low_open=True)
     seeds = ridge_band(mesh, d_exact, 0, sources=sources, threshold=threshold, jump_threshold=jump_threshold,
                        exclude_radius=exclude_radius)
     if not seeds.any():
