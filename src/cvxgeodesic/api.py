@@ -228,14 +228,14 @@ class GeodesicSolver:
         target = resolve_target(multires, 0 if self.is_volume else self.mesh.n_faces)
         self._cell: dict[str, Any] = {"dim": self.dim, "order": self.order, "multires": target is not None,
                       "medium": "none" if cost is None and metric is None else "cost" if cost is not None else "metric"}
-        self._check_capabilities(m, lam)
+        m_value, lam_value = self._check_capabilities(m, lam)
         # a travel cost or metric (operators/metric.py): validated here, once
         self.medium = make_medium(self.mesh, cost, metric)
         self.tol = check_number(tol, "tol", low=0, high=1, low_open=True, high_open=True)
         self.max_iter = check_count(max_iter, "max_iter")
         self.verbose = bool(verbose)
         self.normalization = check_choice(normalization, "normalization", NORMALIZATIONS)
-        self._set_smoothness(m, lam)
+        self._set_smoothness(m_value, lam_value)
         config = SolveConfig(mesh=self.mesh, method=self.method, lam=self.lam, m=self.m,
                              normalization=self.normalization, solver=self._solver, tol=self.tol,
                              max_iter=self.max_iter, verbose=self.verbose, medium=self.medium,
@@ -266,20 +266,19 @@ class GeodesicSolver:
                 f"solver={self._solver!r} applies to the convex formulations, not to baseline {self.method!r}"
             )
 
-    def _check_capabilities(self, m: Any, lam: Any) -> None:
+    def _check_capabilities(self, m: Any, lam: Any) -> tuple[float, float | None]:
         """Raise when the capability table (:mod:`cvxgeodesic.capabilities`) refuses the method on this mesh, at this
         order, with this medium and multires; ``m`` and ``lam`` are checked first (a smoothed order-2 solve takes no
-        medium)."""
+        medium) and returned, and ``self.energy`` set (None: no smoothness term)."""
         m_value, lam_value = check_smoothness(m, lam)
-        energy = FORMULATIONS.get(self.method, ("", None))[1]
-        self._cell["smoothing"] = energy is not None and (m_value > 0 if lam_value is None else lam_value > 0)
+        self.energy = FORMULATIONS.get(self.method, ("", None))[1]
+        self._cell["smoothing"] = self.energy is not None and (m_value > 0 if lam_value is None else lam_value > 0)
         check_capability(self.method, **self._cell)
+        return m_value, lam_value
 
-    def _set_smoothness(self, m: Any, lam: Any) -> None:
-        """``self.lam`` (λ in the mesh's units), ``self.m`` and ``self.energy`` from ``m`` or ``lam``: both checked
-        here, λ computed once (0 without a smoothness energy)."""
-        m_value, lam_value = check_smoothness(m, lam)
-        self.energy = None if self.is_baseline else FORMULATIONS[self.method][1]
+    def _set_smoothness(self, m_value: float, lam_value: float | None) -> None:
+        """``self.lam`` (λ in the mesh's units) and ``self.m`` from the checked ``m`` or ``lam``
+        (:meth:`_check_capabilities`): λ computed once (0 without a smoothness energy)."""
         self.m = None if lam_value is not None else m_value
         if self.energy is None:
             self.lam = 0.0
@@ -570,15 +569,8 @@ def _matrix_rows(mesh: Any, vertices: Any, *, local: bool) -> tuple[list, np.nda
             raise SourceError("max_distance takes source vertices (ints), not points, curves or 'boundary'")
         items = [vertices] if isinstance(vertices, surface) else list(vertices)
         return items, np.arange(len(items))  # one row per item
-    if isinstance(vertices, bool | np.bool_):
-        raise SourceError(f"vertices must be vertex indices, got {vertices!r}")
-    arr = np.atleast_1d(np.asarray(vertices))
-    if arr.ndim != 1:
-        raise SourceError(f"vertices must be an int or a 1-D sequence of ints, got shape {arr.shape}")
-    if arr.size == 0:
-        raise SourceError("vertices is empty: give at least one source vertex")
-    uniq, inverse = np.unique(arr, return_inverse=True)
-    uniq = validate_sources(uniq, mesh.n_vertices)
+    uniq, inverse = np.unique(validate_sources(vertices, mesh.n_vertices, name="vertices", repeats=True),
+                              return_inverse=True)
     return uniq.tolist(), np.asarray(inverse).ravel()
 
 

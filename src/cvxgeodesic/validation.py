@@ -292,7 +292,7 @@ def vertex_mask(x: ArrayLike, name: str, n: int) -> np.ndarray:
     return arr
 
 
-def validate_sources(sources: Any, n: int) -> np.ndarray:
+def validate_sources(sources: Any, n: int, *, name: str = "sources", repeats: bool = False) -> np.ndarray:
     """Check and normalize source vertex indices.
 
     Parameters
@@ -302,6 +302,11 @@ def validate_sources(sources: Any, n: int) -> np.ndarray:
         (including NumPy bool arrays) are not.
     n : int
         Number of vertices.
+    name : str
+        The parameter's name in the messages about its type, shape and emptiness (``distance_matrix``:
+        ``"vertices"``).
+    repeats : bool
+        Accept an index given more than once (``distance_matrix`` solves it once).
 
     Returns
     -------
@@ -312,18 +317,18 @@ def validate_sources(sources: Any, n: int) -> np.ndarray:
     ------
     SourceError
         Empty, ragged, nested, non-integer (bool, float with a fraction, NaN, string,
-        ``None``), negative, out-of-range or duplicated indices.
+        ``None``), negative, out-of-range or (unless ``repeats``) duplicated indices.
     """
     if isinstance(sources, bool | np.bool_):
-        raise SourceError(f"sources must be vertex indices, got {sources!r}")
+        raise SourceError(f"{name} must be vertex indices, got {sources!r}")
     try:
         arr = np.atleast_1d(np.asarray(sources))
     except (ValueError, TypeError, OverflowError):  # ragged nesting and the like
-        raise SourceError(f"sources must be an int or a 1-D sequence of ints, got {short_repr(sources)}") from None
+        raise SourceError(f"{name} must be an int or a 1-D sequence of ints, got {short_repr(sources)}") from None
     if arr.ndim != 1:
-        raise SourceError(f"sources must be an int or a 1-D sequence of ints, got shape {arr.shape}")
+        raise SourceError(f"{name} must be an int or a 1-D sequence of ints, got shape {arr.shape}")
     if arr.size == 0:
-        raise SourceError("sources is empty: give at least one source vertex")
+        raise SourceError(f"{name} is empty: give at least one source vertex")
     out_of_range = "is out of range: the mesh has {n} vertices (0..{last})"
     if arr.dtype == object and all(isinstance(v, int) and not isinstance(v, bool) for v in arr):
         # Python ints too large for int64
@@ -335,7 +340,7 @@ def validate_sources(sources: Any, n: int) -> np.ndarray:
             raise SourceError(f"source index {arr[big][0]:g} " + out_of_range.format(n=n, last=n - 1))
         arr = arr.astype(np.int64)
     if arr.dtype.kind not in "iu":
-        raise SourceError(f"sources must be integer vertex indices, got {short_repr(sources)}")
+        raise SourceError(f"{name} must be integer vertex indices, got {short_repr(sources)}")
     if arr.dtype.kind == "u" and arr.max() >= 2**63:
         raise SourceError(f"source index {int(arr.max())} " + out_of_range.format(n=n, last=n - 1))
     arr = arr.astype(np.int64)
@@ -343,7 +348,7 @@ def validate_sources(sources: Any, n: int) -> np.ndarray:
     if bad.any():
         raise SourceError(f"source index {int(arr[bad][0])} " + out_of_range.format(n=n, last=n - 1))
     uniq, counts = np.unique(arr, return_counts=True)
-    if (counts > 1).any():
+    if not repeats and (counts > 1).any():
         raise SourceError(f"source vertex {int(uniq[counts > 1][0])} is given more than once")
     return arr
 

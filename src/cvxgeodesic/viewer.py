@@ -228,15 +228,13 @@ def show(
         and no ``screenshot``.
     """
     from .mesh.convert import as_mesh
-    from .mesh.io import as_trimesh
     from .mesh.tetmesh import TetMesh
     from .validation import as_vertex_field
 
-    if isinstance(volume := as_mesh(mesh), TetMesh):
-        return show_volume(volume, distance, sources=sources, method=method or "qclp", screenshot=screenshot,
+    if isinstance(mesh := as_mesh(mesh), TetMesh):
+        return show_volume(mesh, distance, sources=sources, method=method or "qclp", screenshot=screenshot,
                            window_size=window_size, overwrite_read_only=overwrite_read_only, **solver_kwargs)
     method = method or "qcqp-hessian"
-    mesh = as_trimesh(mesh)
     n = mesh.n_vertices
     if distance is not None:
         d = as_vertex_field(distance, "distance", n)
