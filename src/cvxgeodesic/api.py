@@ -425,13 +425,10 @@ def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | 
             given[key] = value
     if "sources" not in given:
         raise TypeError("geodesic_distance() missing the source vertices: geodesic_distance(mesh, sources)")
-    sources = given["sources"]
-    method = given.get("method")
-    m = given.get("m", 1.0)
-    solver = given.get("solver", "auto")
-    solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter,
+    solver_obj = GeodesicSolver(mesh, given.get("method"), m=given.get("m", 1.0), lam=lam,
+                                solver=given.get("solver", "auto"), tol=tol, max_iter=max_iter,
                                 normalization=normalization, order=order, threads=threads, cost=cost, metric=metric)
-    return solver_obj.solve(sources).distance
+    return solver_obj.solve(given["sources"]).distance
 
 
 #: The default tolerance of local rows (``distance_matrix(..., max_distance=r)``): see its ``tol``.

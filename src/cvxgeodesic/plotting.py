@@ -99,14 +99,14 @@ def _isolevels(levels, lo: float, hi: float) -> np.ndarray:
 def _marching_triangles(V: np.ndarray, F: np.ndarray, values: np.ndarray, levels: np.ndarray):
     """Segments where the piecewise-linear field crosses each level.
 
-    Returns ``(segments (s, 2, 3), face index (s,), level index (s,))``. A vertex
+    Returns ``(segments (s, 2, 3), face index (s,))``. A vertex
     counts as *above* a level when its value is strictly greater, so a triangle
     with a vertex exactly at a level gives a segment through that vertex, and
     an edge lying on a level is emitted once (by the triangle on the upper side).
     Zero-length segments are dropped; triangles with a non-finite value give none.
     """
     levels = np.sort(np.asarray(levels, dtype=np.float64).ravel())
-    empty = (np.empty((0, 2, 3)), np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64))
+    empty = (np.empty((0, 2, 3)), np.empty(0, dtype=np.int64))
     if levels.size == 0 or F.shape[0] == 0:
         return empty
     fval = values[F]
@@ -121,15 +121,13 @@ def _marching_triangles(V: np.ndarray, F: np.ndarray, values: np.ndarray, levels
     if total == 0:
         return empty
     offsets = np.cumsum(counts) - counts
-    seg_out, face_out, lev_out = [], [], []
+    seg_out, face_out = [], []
     # process (face, level) pairs in blocks of faces to bound the temporaries
     cum = np.cumsum(counts)
     block_edges = np.searchsorted(cum, np.arange(_SEGMENT_BLOCK, total, _SEGMENT_BLOCK), side="left")
     bounds = np.r_[0, block_edges + 1, len(faces)]
-    bounds = np.unique(np.clip(bounds, 0, len(faces)))
+    bounds = np.unique(np.clip(bounds, 0, len(faces)))  # strictly increasing: no empty block
     for b0, b1 in zip(bounds[:-1], bounds[1:], strict=False):
-        if b1 <= b0:
-            continue
         cnt = counts[b0:b1]
         n_pairs = int(cnt.sum())
         local = np.repeat(np.arange(b0, b1), cnt)
@@ -149,8 +147,7 @@ def _marching_triangles(V: np.ndarray, F: np.ndarray, values: np.ndarray, levels
         nonzero = np.any(seg[:, 0] != seg[:, 1], axis=1)
         seg_out.append(seg[nonzero])
         face_out.append(faces[local][nonzero])
-        lev_out.append(lev[nonzero])
-    return np.concatenate(seg_out), np.concatenate(face_out), np.concatenate(lev_out)
+    return np.concatenate(seg_out), np.concatenate(face_out)
 
 
 def isoline_segments(mesh, values, levels) -> np.ndarray:
@@ -308,8 +305,7 @@ def _gouraud_artist_class():
     return _GouraudTriangles
 
 
-def _render_surface(ax, mesh, values, *, cmap, norm, levels, view, line_width=0.45, ambient=0.38, marks=None,
-                    paths=()):
+def _render_surface(ax, mesh, values, *, cmap, norm, levels, view, marks, ambient=0.38, paths=()):
     """Draw the shaded, colour-mapped surface, its isolines and marked vertices into ``ax``."""
     from matplotlib.collections import LineCollection
 
@@ -322,15 +318,11 @@ def _render_surface(ax, mesh, values, *, cmap, norm, levels, view, line_width=0.
         if vol < 0:
             fn = -fn
     vnorm = _vertex_normals(V, F, fn)
-    marks = np.empty(0, dtype=np.int64) if marks is None else marks
     focus = vnorm[marks[0]] if marks.size and np.any(vnorm[marks[0]]) else None
     R = _camera(V, view, focus)
     P = (V - V.mean(axis=0)) @ R.T  # (n, 3): screen x, screen y, depth (towards the viewer)
     facing = fn @ R[2]
-    if closed:
-        vis = np.flatnonzero(facing > 0)
-    else:
-        vis = np.arange(F.shape[0])
+    vis = np.flatnonzero(facing > 0) if closed else np.arange(F.shape[0])  # back faces culled on closed meshes
     Fv = F[vis]
     depth = P[Fv, 2].mean(axis=1)
     order = np.argsort(depth, kind="stable")  # far to near
@@ -360,7 +352,7 @@ def _render_surface(ax, mesh, values, *, cmap, norm, levels, view, line_width=0.
     bounds = np.linspace(0, k, n_slabs + 1).astype(np.int64)
     slab_of_rank = np.repeat(np.arange(n_slabs), np.diff(bounds))
     if levels.size:
-        seg3, seg_face, _ = _marching_triangles(V, F, values, levels)
+        seg3, seg_face = _marching_triangles(V, F, values, levels)
         rank = np.full(F.shape[0], -1, dtype=np.int64)
         rank[vis] = np.arange(k)
         r = rank[seg_face]
@@ -389,7 +381,7 @@ def _render_surface(ax, mesh, values, *, cmap, norm, levels, view, line_width=0.
         ax.add_artist(Gouraud(verts[a:b], colors[a:b], zorder=1.0 + 2 * i * 1e-3))
         s0, s1 = seg_bounds[i], seg_bounds[i + 1]
         if s1 > s0:
-            lc = LineCollection(seg2[s0:s1], colors="black", linewidths=line_width, alpha=0.85,
+            lc = LineCollection(seg2[s0:s1], colors="black", linewidths=0.45, alpha=0.85,
                                 capstyle="round", zorder=1.0 + (2 * i + 1) * 1e-3)
             ax.add_collection(lc, autolim=False)
         here = marks[mark_slab == i]

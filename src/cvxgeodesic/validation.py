@@ -17,6 +17,7 @@ import numbers
 import os
 import re
 from collections.abc import Iterable
+from contextlib import suppress
 from pathlib import Path
 from typing import Any
 
@@ -408,10 +409,8 @@ def check_not_an_input(path: str | os.PathLike, inputs, what: str = "output") ->
         src = Path(os.fspath(source))
         same = out.resolve() == src.resolve()
         if not same and out.exists() and src.exists():
-            try:
+            with suppress(OSError):  # unreadable: not known to be the same file
                 same = os.path.samefile(out, src)
-            except OSError:
-                same = False
         if same:
             raise ParameterError(f"{what} {out} is the input file {src}: refusing to overwrite an input; "
                                  "choose another output path")

@@ -306,10 +306,7 @@ def smoothness_report(mesh, d, d_exact, sources, *, rings: int = 2, threshold: f
         < 1 means smoother than the exact field at the ridge),
         ``off_ridge_rel_mean``, ``off_ridge_rel_max``, ``on_ridge_rel_mean``.
     """
-    mesh = check_mesh(mesh)
-    d_exact = vertex_field(d_exact, "d_exact", mesh.n_vertices)
-    d = vertex_field(d, "d", mesh.n_vertices)
-    sources = vertex_indices(sources, "sources", mesh.n_vertices)
+    # every input is checked where it is first used: the mesh, d_exact and sources by ridge_band, d by ridge_sharpness
     band = ridge_band(mesh, d_exact, rings, sources=sources, threshold=threshold, jump_threshold=jump_threshold)
     s = ridge_sharpness(mesh, d, band)
     se = ridge_sharpness(mesh, d_exact, band)
