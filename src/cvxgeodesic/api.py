@@ -225,7 +225,7 @@ class GeodesicSolver:
         self.dim = self.mesh.dim
         self._check_method_and_solver(method, solver)
         self.order = check_order(order)
-        target = resolve_target(multires, 0 if self.is_volume else self.mesh.n_faces)
+        target = resolve_target(multires, self.mesh.n_cells)  # a volume refuses multires below (capabilities)
         self._cell: dict[str, Any] = {"dim": self.dim, "order": self.order, "multires": target is not None,
                       "medium": "none" if cost is None and metric is None else "cost" if cost is not None else "metric"}
         m_value, lam_value = self._check_capabilities(m, lam)

@@ -330,24 +330,24 @@ def validate_sources(sources: Any, n: int, *, name: str = "sources", repeats: bo
         raise SourceError(f"{name} must be an int or a 1-D sequence of ints, got shape {arr.shape}")
     if arr.size == 0:
         raise SourceError(f"{name} is empty: give at least one source vertex")
-    out_of_range = "is out of range: the mesh has {n} vertices (0..{last})"
+    out_of_range = f"is out of range: the mesh has {n} vertices (0..{n - 1})"
     if arr.dtype == object and all(isinstance(v, int) and not isinstance(v, bool) for v in arr):
         # Python ints too large for int64
         big = next(v for v in arr if not -(2**63) <= v < 2**63)
-        raise SourceError(f"source index {big} " + out_of_range.format(n=n, last=n - 1))
+        raise SourceError(f"source index {big} " + out_of_range)
     if arr.dtype.kind == "f" and np.all(np.isfinite(arr)) and np.all(arr == np.round(arr)):
         big = np.abs(arr) >= 2.0**62
         if big.any():
-            raise SourceError(f"source index {arr[big][0]:g} " + out_of_range.format(n=n, last=n - 1))
+            raise SourceError(f"source index {arr[big][0]:g} " + out_of_range)
         arr = arr.astype(np.int64)
     if arr.dtype.kind not in "iu":
         raise SourceError(f"{name} must be integer vertex indices, got {short_repr(sources)}")
     if arr.dtype.kind == "u" and arr.max() >= 2**63:
-        raise SourceError(f"source index {int(arr.max())} " + out_of_range.format(n=n, last=n - 1))
+        raise SourceError(f"source index {int(arr.max())} " + out_of_range)
     arr = arr.astype(np.int64)
     bad = (arr < 0) | (arr >= n)
     if bad.any():
-        raise SourceError(f"source index {int(arr[bad][0])} " + out_of_range.format(n=n, last=n - 1))
+        raise SourceError(f"source index {int(arr[bad][0])} " + out_of_range)
     uniq, counts = np.unique(arr, return_counts=True)
     if not repeats and (counts > 1).any():
         raise SourceError(f"source vertex {int(uniq[counts > 1][0])} is given more than once")
