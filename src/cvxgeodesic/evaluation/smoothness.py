@@ -64,8 +64,8 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from ..operators.gradient import gradient_blocks, gradient_norms, triangle_frames
-from ..validation import check_count, check_number
-from ._validate import check_mesh, vertex_field, vertex_indices, vertex_mask
+from ..validation import as_vertex_field, check_count, check_number, vertex_indices, vertex_mask
+from ._validate import check_mesh
 from .errors import error_stats, percentile
 
 
@@ -117,7 +117,7 @@ def ridge_band(mesh, d_exact, rings: int = 2, *, sources=None, threshold: float 
         The band (only vertices where ``d_exact`` is finite).
     """
     mesh = check_mesh(mesh)
-    d_exact = vertex_field(d_exact, "d_exact", mesh.n_vertices)
+    d_exact = as_vertex_field(d_exact, "d_exact", mesh.n_vertices)
     rings = check_count(rings, "rings", minimum=0)
     if not exclude_radius >= 0:
         raise ValueError(f"exclude_radius must be a number >= 0, got {exclude_radius!r}")
@@ -182,7 +182,7 @@ def triangle_gradients_3d(mesh, d) -> np.ndarray:
         Lies in each triangle's plane.
     """
     mesh = check_mesh(mesh)
-    d = vertex_field(d, "d", mesh.n_vertices)
+    d = as_vertex_field(d, "d", mesh.n_vertices)
     g2 = np.einsum("tij,tj->ti", gradient_blocks(mesh), d[mesh.F])
     ex, ey = triangle_frames(mesh)
     return g2[:, :1] * ex + g2[:, 1:] * ey
@@ -211,7 +211,7 @@ def edge_gradient_jumps(mesh, d, *, signed: bool = False) -> tuple[np.ndarray, n
         has zero area.
     """
     mesh = check_mesh(mesh)
-    d = vertex_field(d, "d", mesh.n_vertices)
+    d = as_vertex_field(d, "d", mesh.n_vertices)
     edges, faces, opp = interior_edges(mesh)
     finite = np.isfinite(d)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -279,7 +279,7 @@ def off_ridge_error(d, d_exact, sources, band) -> float:
         ``inf`` if ``d`` is not finite on a compared vertex; ``nan`` if no vertex
         is compared.
     """
-    d_exact = vertex_field(d_exact, "d_exact")
+    d_exact = as_vertex_field(d_exact, "d_exact")
     band = vertex_mask(band, "band", d_exact.shape[0])
     return error_stats(d, d_exact, sources, mask=~band)["rel_mean"]
 
@@ -356,7 +356,7 @@ def cut_locus_band(mesh, d_exact, width: float, *, sources=None, threshold: floa
     if not seeds.any():
         return seeds
     dist = dijkstra(mesh.vertex_adjacency, indices=np.flatnonzero(seeds), min_only=True, limit=0.5 * width)
-    return (dist <= 0.5 * width) & np.isfinite(vertex_field(d_exact, "d_exact", mesh.n_vertices))
+    return (dist <= 0.5 * width) & np.isfinite(as_vertex_field(d_exact, "d_exact", mesh.n_vertices))
 
 
 def ridge_deficit(mesh, d, d_exact, width: float, *, sources=None, threshold: float = 0.9,
@@ -396,8 +396,8 @@ def ridge_deficit(mesh, d, d_exact, width: float, *, sources=None, threshold: fl
     (0.001, 0.01)
     """
     mesh = check_mesh(mesh)
-    d_exact = vertex_field(d_exact, "d_exact", mesh.n_vertices)
-    d = vertex_field(d, "d", mesh.n_vertices)
+    d_exact = as_vertex_field(d_exact, "d_exact", mesh.n_vertices)
+    d = as_vertex_field(d, "d", mesh.n_vertices)
     band = cut_locus_band(mesh, d_exact, width, sources=sources, threshold=threshold, jump_threshold=jump_threshold,
                           exclude_radius=exclude_radius)
     area = np.bincount(mesh.F.ravel(), np.repeat(mesh.face_areas / 3.0, 3), minlength=mesh.n_vertices)[band]
