@@ -260,6 +260,7 @@ def check_output_dir(path: str | os.PathLike, what: str = "output folder") -> Pa
     Returns
     -------
     pathlib.Path
+        ``path`` (the folder is not created here).
 
     Raises
     ------

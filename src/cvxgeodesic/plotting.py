@@ -350,15 +350,14 @@ def _render_surface(ax, mesh, values, *, cmap, norm, levels, view, marks, ambien
     k = len(Fv)
     n_slabs = int(np.clip(k // 4, 1, 128))
     bounds = np.linspace(0, k, n_slabs + 1).astype(np.int64)
-    slab_of_rank = np.repeat(np.arange(n_slabs), np.diff(bounds))
+    slab_of_face = np.full(F.shape[0], -1, dtype=np.int64)  # -1: culled
+    slab_of_face[vis] = np.repeat(np.arange(n_slabs), np.diff(bounds))
     if levels.size:
         seg3, seg_face = _marching_triangles(V, F, values, levels)
-        rank = np.full(F.shape[0], -1, dtype=np.int64)
-        rank[vis] = np.arange(k)
-        r = rank[seg_face]
-        on = r >= 0
+        seg_slab = slab_of_face[seg_face]
+        on = seg_slab >= 0
         seg2 = ((seg3[on] - V.mean(axis=0)) @ R[:2].T)  # (s, 2, 2)
-        seg_slab = slab_of_rank[r[on]]
+        seg_slab = seg_slab[on]
     else:
         seg2, seg_slab = np.empty((0, 2, 2)), np.empty(0, dtype=np.int64)
     seg_order = np.argsort(seg_slab, kind="stable")
@@ -368,8 +367,6 @@ def _render_surface(ax, mesh, values, *, cmap, norm, levels, view, marks, ambien
     # marked vertices: drawn with the slab of their nearest visible incident triangle (hidden if none is visible)
     mark_slab = np.full(marks.size, -1, dtype=np.int64)
     if marks.size:
-        slab_of_face = np.full(F.shape[0], -1, dtype=np.int64)
-        slab_of_face[vis] = slab_of_rank
         want = np.full(mesh.n_vertices, -1, dtype=np.int64)
         for c in range(3):
             np.maximum.at(want, F[:, c], slab_of_face)
