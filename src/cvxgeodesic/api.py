@@ -557,14 +557,14 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
 
 def _matrix_rows(mesh: Any, vertices: Any, *, local: bool) -> tuple[list, np.ndarray]:
     """The distinct sources of ``distance_matrix``'s rows and, for each row asked for, its index among them."""
-    from .sources import BoundaryFaces, SurfaceCurve, SurfacePoint, VolumePoint
+    from .sources import BoundaryFaces, CellPoint, SurfaceCurve
 
-    surface = (SurfacePoint, SurfaceCurve, str, VolumePoint, BoundaryFaces)
-    if isinstance(vertices, surface) or (isinstance(vertices, list | tuple)
-                                         and any(isinstance(v, surface) for v in vertices)):
+    objects = (CellPoint, SurfaceCurve, BoundaryFaces, str)  # points, curves, boundary faces, "boundary"
+    if isinstance(vertices, objects) or (isinstance(vertices, list | tuple)
+                                         and any(isinstance(v, objects) for v in vertices)):
         if local:
             raise SourceError("max_distance takes source vertices (ints), not points, curves or 'boundary'")
-        items = [vertices] if isinstance(vertices, surface) else list(vertices)
+        items = [vertices] if isinstance(vertices, objects) else list(vertices)
         return items, np.arange(len(items))  # one row per item
     uniq, inverse = np.unique(validate_sources(vertices, mesh.n_vertices, name="vertices", repeats=True),
                               return_inverse=True)
