@@ -382,7 +382,7 @@ def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | 
     Parameters
     ----------
     mesh : TriMesh, tuple (V, F), file path, trimesh.Trimesh, open3d TriangleMesh or meshio.Mesh
-        See :func:`~cvxgeodesic.mesh.io.as_trimesh`; or ``V``, (n, 3) float vertex
+        Any mesh :class:`GeodesicSolver` takes (a tetrahedral one too); or ``V``, (n, 3) float vertex
         positions, followed by ``F``, (m, 3) int triangles.
     sources : int or sequence of int
         Source vertex indices (positional after the mesh, or keyword), or surface sources.
@@ -465,8 +465,8 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
 
     Parameters
     ----------
-    mesh : TriMesh or tuple (V, F)
-        ``V`` (n, 3) float vertex positions, ``F`` (m, 3) int triangles.
+    mesh : TriMesh, TetMesh, tuple (V, F) or (V, T), ...
+        Any mesh :class:`GeodesicSolver` takes (a tetrahedral one too, without ``max_distance``).
     vertices : int or (k,) sequence of int
         Source vertex of each row.
     method, m, solver, lam, max_iter, multires, normalization, threads, cost, metric
