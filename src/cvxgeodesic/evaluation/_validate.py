@@ -9,9 +9,9 @@ from ..validation import check_type
 __all__ = ["check_mesh"]
 
 
-def check_mesh(mesh: object, name: str = "mesh", *, volumes: bool = False) -> TriMesh:
+def check_mesh(mesh: object, *, volumes: bool = False) -> TriMesh:
     """``mesh`` if it is a :class:`TriMesh` (with ``volumes``, any simplex mesh: a TetMesh too), else a TypeError
-    naming ``name``."""
+    naming it."""
     if volumes:
-        return check_type(mesh, name, SimplexMesh, "a TriMesh or a TetMesh")
-    return check_type(mesh, name, TriMesh, "a TriMesh")
+        return check_type(mesh, "mesh", SimplexMesh, "a TriMesh or a TetMesh")
+    return check_type(mesh, "mesh", TriMesh, "a TriMesh")
