@@ -24,7 +24,6 @@ from .errors import ParameterError, SourceError
 from .formulations import ALIASES, FORMULATIONS, NORMALIZATIONS, smoothness_weight
 from .mesh.convert import as_mesh
 from .mesh.tetmesh import TetMesh
-from .mesh.trimesh import TriMesh
 from .operators.metric import make_medium
 from .results import GeodesicResult, SolveInfo
 from .solvers._interrupt import reporting_to
@@ -52,7 +51,7 @@ DEFAULT_TOL = 1e-8
 
 def _is_2d(x: Any) -> bool:
     """True for a 2-D array_like (a vertex or face array), False for anything else (meshes, sources)."""
-    if isinstance(x, TriMesh | str) or not isinstance(x, np.ndarray | list | tuple) and not hasattr(x, "__array__"):
+    if not isinstance(x, np.ndarray | list | tuple) and not hasattr(x, "__array__"):  # a mesh object, a path
         return False
     try:
         return np.ndim(x) == 2
