@@ -42,8 +42,10 @@ def test_single_int_and_baseline(sphere):
     np.testing.assert_allclose(D[0], cg.geodesic_distance(sphere, 5, method="dijkstra"))
 
 
-@pytest.mark.parametrize("verts, match", [([], "empty"), ([0, 999], "out of range"), ([[0, 1]], "1-D"),
-                                          (True, "vertex indices"), ([0.5], "integer")])
+@pytest.mark.parametrize("verts, match", [([], "vertices is empty"), ([0, 999], "out of range"), ([[0, 1]], "1-D"),
+                                          (True, "vertices must be vertex indices"),
+                                          ([0.5], "vertices must be integer vertex indices"),
+                                          ([[0, 1], [2]], "vertices must be an int or a 1-D sequence of ints")])
 def test_bad_vertices(sphere, verts, match):
     with pytest.raises(SourceError, match=match):
         cg.distance_matrix(sphere, verts)

@@ -209,6 +209,14 @@ def test_smoothness_report_prefers_rounded_ridge():
     assert rep_soft["off_ridge_rel_mean"] < 0.02  # still accurate away from the ridge
     band = ridge_band(mesh, sharp, sources=src)
     assert off_ridge_error(soft, sharp, src, band) == rep_soft["off_ridge_rel_mean"]
+    # bad input named by the functions the report calls (ridge_band, ridge_sharpness), never a NumPy traceback
+    n = mesh.n_vertices
+    for args, error, match in [((mesh.V, soft, sharp, src), TypeError, "mesh must be a TriMesh"),
+                               ((mesh, soft, sharp[:-1], src), ValueError, rf"d_exact must have shape \({n},\)"),
+                               ((mesh, soft[:-1], sharp, src), ValueError, rf"d must have shape \({n},\)"),
+                               ((mesh, soft, sharp, [n]), ValueError, rf"sources\[0\] = {n} is outside")]:
+        with pytest.raises(error, match=match):
+            smoothness_report(*args)
 
 
 @pytest.mark.shared

@@ -243,6 +243,9 @@ def test_plot_gradient_histogram(tmp_path):
         plot_gradient_histogram({"a": (counts, edges[:-1])}, tmp_path / "bad.png")
     with pytest.raises(ValueError, match="non-empty"):
         plot_gradient_histogram({}, tmp_path / "bad.png")
+    for bins in (0, True, 2.5):  # the shared count check (validation.check_count): a ParameterError, a ValueError
+        with pytest.raises(ValueError, match=f"bins must be a positive integer, got {bins!r}"):
+            plot_gradient_histogram(norms, tmp_path / "bad.png", bins=bins)
     assert not (tmp_path / "bad.png").exists()
 
 

@@ -93,6 +93,13 @@ def test_validate_sources():
                         ([0.5], "integer vertex indices")]:
         with pytest.raises(SourceError, match=text):
             validate_sources(value, 3)
+    # distance_matrix's rows: its parameter's name in the messages, a vertex asked for twice accepted
+    assert validate_sources([2, 0, 2.0], 3, name="vertices", repeats=True).tolist() == [2, 0, 2]
+    for value, text in [([], "vertices is empty"), (True, "vertices must be vertex indices"),
+                        ([[0], [1, 2]], "vertices must be an int or a 1-D sequence"),
+                        ([0.5], "vertices must be integer"), ([1, 3], "source index 3 is out of range")]:
+        with pytest.raises(SourceError, match=text):
+            validate_sources(value, 3, name="vertices", repeats=True)
 
 
 def test_check_output_path(tmp_path):

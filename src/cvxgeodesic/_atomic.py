@@ -17,7 +17,7 @@ import secrets
 import stat
 import tempfile
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import BinaryIO
 
@@ -85,14 +85,11 @@ def _give_metadata(fd: int, st: os.stat_result | None) -> None:
         return
     own = os.fstat(fd)
     if hasattr(os, "fchown") and (own.st_uid, own.st_gid) != (st.st_uid, st.st_gid):
-        try:
+        with suppress(PermissionError):  # not root: the new file is the writer's, as with any editor's save
             os.fchown(fd, st.st_uid, st.st_gid)
-        except PermissionError:  # not root: the new file is the writer's, as with any editor's save
-            pass
-    try:  # after chown, which clears set-id bits
+    # after chown, which clears set-id bits; AttributeError, PermissionError: no Unix modes (Windows, some mounts)
+    with suppress(AttributeError, PermissionError):
         os.fchmod(fd, stat.S_IMODE(st.st_mode) & 0o777)  # permission bits only: never set-id or sticky bits
-    except (AttributeError, PermissionError):  # pragma: no cover - no Unix modes (Windows, some mounts)
-        pass
 
 
 def atomic_write(target: str | os.PathLike, write: Callable[[BinaryIO], None], *,
@@ -142,10 +139,8 @@ def atomic_write(target: str | os.PathLike, write: Callable[[BinaryIO], None], *
             os.fsync(fh.fileno())
         os.replace(tmp, target)
     except BaseException:
-        try:
+        with suppress(FileNotFoundError):
             os.unlink(tmp)
-        except FileNotFoundError:
-            pass
         raise
     return target
 
@@ -200,10 +195,8 @@ def output_set(*targets: str | os.PathLike, overwrite_read_only: bool = False) -
     finally:
         for tmp in tmps:
             _PENDING.pop(tmp, None)
-            try:
+            with suppress(FileNotFoundError):
                 os.unlink(tmp)
-            except FileNotFoundError:
-                pass
 
 
 def _rename_all(finals: list[Path], tmps: list[Path]) -> None:
@@ -224,20 +217,16 @@ def _rename_all(finals: list[Path], tmps: list[Path]) -> None:
             done.append((final, backup))
     except BaseException:
         for final, backup in reversed(done):
-            try:
+            with suppress(OSError):  # the file system failing on the way back too
                 if backup is None:
                     os.unlink(final)
                 elif backup != final:
                     os.replace(backup, final)
-            except OSError:  # pragma: no cover - the file system failing on the way back too
-                pass
         raise
     finally:
         for backup in backups:
-            try:
+            with suppress(FileNotFoundError):
                 os.unlink(backup)
-            except FileNotFoundError:
-                pass
 
 
 def probe_folder(folder: str | os.PathLike, prefix: str = ".cvxgeodesic.") -> None:
@@ -271,6 +260,7 @@ def check_output_dir(path: str | os.PathLike, what: str = "output folder") -> Pa
     Returns
     -------
     pathlib.Path
+        ``path`` (the folder is not created here).
 
     Raises
     ------

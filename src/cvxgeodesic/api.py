@@ -24,7 +24,6 @@ from .errors import ParameterError, SourceError
 from .formulations import ALIASES, FORMULATIONS, NORMALIZATIONS, smoothness_weight
 from .mesh.convert import as_mesh
 from .mesh.tetmesh import TetMesh
-from .mesh.trimesh import TriMesh
 from .operators.metric import make_medium
 from .results import GeodesicResult, SolveInfo
 from .solvers._interrupt import reporting_to
@@ -52,7 +51,7 @@ DEFAULT_TOL = 1e-8
 
 def _is_2d(x: Any) -> bool:
     """True for a 2-D array_like (a vertex or face array), False for anything else (meshes, sources)."""
-    if isinstance(x, TriMesh | str) or not isinstance(x, np.ndarray | list | tuple) and not hasattr(x, "__array__"):
+    if not isinstance(x, np.ndarray | list | tuple) and not hasattr(x, "__array__"):  # a mesh object, a path
         return False
     try:
         return np.ndim(x) == 2
@@ -225,17 +224,17 @@ class GeodesicSolver:
         self.dim = self.mesh.dim
         self._check_method_and_solver(method, solver)
         self.order = check_order(order)
-        target = resolve_target(multires, 0 if self.is_volume else self.mesh.n_faces)
+        target = resolve_target(multires, self.mesh.n_cells)  # a volume refuses multires below (capabilities)
         self._cell: dict[str, Any] = {"dim": self.dim, "order": self.order, "multires": target is not None,
                       "medium": "none" if cost is None and metric is None else "cost" if cost is not None else "metric"}
-        self._check_capabilities(m, lam)
+        m_value, lam_value = self._check_capabilities(m, lam)
         # a travel cost or metric (operators/metric.py): validated here, once
         self.medium = make_medium(self.mesh, cost, metric)
         self.tol = check_number(tol, "tol", low=0, high=1, low_open=True, high_open=True)
         self.max_iter = check_count(max_iter, "max_iter")
         self.verbose = bool(verbose)
         self.normalization = check_choice(normalization, "normalization", NORMALIZATIONS)
-        self._set_smoothness(m, lam)
+        self._set_smoothness(m_value, lam_value)
         config = SolveConfig(mesh=self.mesh, method=self.method, lam=self.lam, m=self.m,
                              normalization=self.normalization, solver=self._solver, tol=self.tol,
                              max_iter=self.max_iter, verbose=self.verbose, medium=self.medium,
@@ -266,20 +265,19 @@ class GeodesicSolver:
                 f"solver={self._solver!r} applies to the convex formulations, not to baseline {self.method!r}"
             )
 
-    def _check_capabilities(self, m: Any, lam: Any) -> None:
+    def _check_capabilities(self, m: Any, lam: Any) -> tuple[float, float | None]:
         """Raise when the capability table (:mod:`cvxgeodesic.capabilities`) refuses the method on this mesh, at this
         order, with this medium and multires; ``m`` and ``lam`` are checked first (a smoothed order-2 solve takes no
-        medium)."""
+        medium) and returned, and ``self.energy`` set (None: no smoothness term)."""
         m_value, lam_value = check_smoothness(m, lam)
-        energy = FORMULATIONS.get(self.method, ("", None))[1]
-        self._cell["smoothing"] = energy is not None and (m_value > 0 if lam_value is None else lam_value > 0)
+        self.energy = FORMULATIONS.get(self.method, ("", None))[1]
+        self._cell["smoothing"] = self.energy is not None and (m_value > 0 if lam_value is None else lam_value > 0)
         check_capability(self.method, **self._cell)
+        return m_value, lam_value
 
-    def _set_smoothness(self, m: Any, lam: Any) -> None:
-        """``self.lam`` (λ in the mesh's units), ``self.m`` and ``self.energy`` from ``m`` or ``lam``: both checked
-        here, λ computed once (0 without a smoothness energy)."""
-        m_value, lam_value = check_smoothness(m, lam)
-        self.energy = None if self.is_baseline else FORMULATIONS[self.method][1]
+    def _set_smoothness(self, m_value: float, lam_value: float | None) -> None:
+        """``self.lam`` (λ in the mesh's units) and ``self.m`` from the checked ``m`` or ``lam``
+        (:meth:`_check_capabilities`): λ computed once (0 without a smoothness energy)."""
         self.m = None if lam_value is not None else m_value
         if self.energy is None:
             self.lam = 0.0
@@ -383,7 +381,7 @@ def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | 
     Parameters
     ----------
     mesh : TriMesh, tuple (V, F), file path, trimesh.Trimesh, open3d TriangleMesh or meshio.Mesh
-        See :func:`~cvxgeodesic.mesh.io.as_trimesh`; or ``V``, (n, 3) float vertex
+        Any mesh :class:`GeodesicSolver` takes (a tetrahedral one too); or ``V``, (n, 3) float vertex
         positions, followed by ``F``, (m, 3) int triangles.
     sources : int or sequence of int
         Source vertex indices (positional after the mesh, or keyword), or surface sources.
@@ -426,13 +424,10 @@ def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | 
             given[key] = value
     if "sources" not in given:
         raise TypeError("geodesic_distance() missing the source vertices: geodesic_distance(mesh, sources)")
-    sources = given["sources"]
-    method = given.get("method")
-    m = given.get("m", 1.0)
-    solver = given.get("solver", "auto")
-    solver_obj = GeodesicSolver(mesh, method, m=m, lam=lam, solver=solver, tol=tol, max_iter=max_iter,
+    solver_obj = GeodesicSolver(mesh, given.get("method"), m=given.get("m", 1.0), lam=lam,
+                                solver=given.get("solver", "auto"), tol=tol, max_iter=max_iter,
                                 normalization=normalization, order=order, threads=threads, cost=cost, metric=metric)
-    return solver_obj.solve(sources).distance
+    return solver_obj.solve(given["sources"]).distance
 
 
 #: The default tolerance of local rows (``distance_matrix(..., max_distance=r)``): see its ``tol``.
@@ -469,8 +464,8 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
 
     Parameters
     ----------
-    mesh : TriMesh or tuple (V, F)
-        ``V`` (n, 3) float vertex positions, ``F`` (m, 3) int triangles.
+    mesh : TriMesh, TetMesh, tuple (V, F) or (V, T), ...
+        Any mesh :class:`GeodesicSolver` takes (a tetrahedral one too, without ``max_distance``).
     vertices : int or (k,) sequence of int
         Source vertex of each row.
     method, m, solver, lam, max_iter, multires, normalization, threads, cost, metric
@@ -561,24 +556,17 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
 
 def _matrix_rows(mesh: Any, vertices: Any, *, local: bool) -> tuple[list, np.ndarray]:
     """The distinct sources of ``distance_matrix``'s rows and, for each row asked for, its index among them."""
-    from .sources import BoundaryFaces, SurfaceCurve, SurfacePoint, VolumePoint
+    from .sources import BoundaryFaces, CellPoint, SurfaceCurve
 
-    surface = (SurfacePoint, SurfaceCurve, str, VolumePoint, BoundaryFaces)
-    if isinstance(vertices, surface) or (isinstance(vertices, list | tuple)
-                                         and any(isinstance(v, surface) for v in vertices)):
+    objects = (CellPoint, SurfaceCurve, BoundaryFaces, str)  # points, curves, boundary faces, "boundary"
+    if isinstance(vertices, objects) or (isinstance(vertices, list | tuple)
+                                         and any(isinstance(v, objects) for v in vertices)):
         if local:
             raise SourceError("max_distance takes source vertices (ints), not points, curves or 'boundary'")
-        items = [vertices] if isinstance(vertices, surface) else list(vertices)
+        items = [vertices] if isinstance(vertices, objects) else list(vertices)
         return items, np.arange(len(items))  # one row per item
-    if isinstance(vertices, bool | np.bool_):
-        raise SourceError(f"vertices must be vertex indices, got {vertices!r}")
-    arr = np.atleast_1d(np.asarray(vertices))
-    if arr.ndim != 1:
-        raise SourceError(f"vertices must be an int or a 1-D sequence of ints, got shape {arr.shape}")
-    if arr.size == 0:
-        raise SourceError("vertices is empty: give at least one source vertex")
-    uniq, inverse = np.unique(arr, return_inverse=True)
-    uniq = validate_sources(uniq, mesh.n_vertices)
+    uniq, inverse = np.unique(validate_sources(vertices, mesh.n_vertices, name="vertices", repeats=True),
+                              return_inverse=True)
     return uniq.tolist(), np.asarray(inverse).ravel()
 
 

@@ -33,7 +33,7 @@ from numpy.typing import ArrayLike
 
 from ._atomic import atomic_write
 from .mesh.io import as_trimesh
-from .validation import as_vertex_field, check_number, check_output_path, vertex_indices
+from .validation import as_vertex_field, check_count, check_number, check_output_path, vertex_indices
 
 __all__ = ["plot_field", "plot_error_map", "plot_gradient_histogram", "isoline_segments"]
 
@@ -50,10 +50,12 @@ _SEGMENT_BLOCK = 400_000  # (triangle, level) pairs processed at once by the mar
 # ----------------------------------------------------------------------------------------------------------------------
 
 
-def _check_marks(sources, n: int) -> np.ndarray:
-    if sources is None:
-        return np.empty(0, dtype=np.int64)
-    return vertex_indices(sources, "sources", n)
+def _surface_inputs(mesh, values, name: str, sources, path, dpi) -> tuple[Any, np.ndarray, np.ndarray, Path, float]:
+    """The checked inputs of a surface picture: ``(mesh, values (n,), marked vertices (k,), path, dpi)``."""
+    mesh = as_trimesh(mesh)
+    vals = as_vertex_field(values, name, mesh.n_vertices)
+    marks = np.empty(0, dtype=np.int64) if sources is None else vertex_indices(sources, "sources", mesh.n_vertices)
+    return mesh, vals, marks, check_output_path(path, PLOT_EXTENSIONS), check_number(dpi, "dpi", low=10, high=2000)
 
 
 def _new_figure(dpi: float, figsize=_FIGSIZE):
@@ -97,14 +99,14 @@ def _isolevels(levels, lo: float, hi: float) -> np.ndarray:
 def _marching_triangles(V: np.ndarray, F: np.ndarray, values: np.ndarray, levels: np.ndarray):
     """Segments where the piecewise-linear field crosses each level.
 
-    Returns ``(segments (s, 2, 3), face index (s,), level index (s,))``. A vertex
+    Returns ``(segments (s, 2, 3), face index (s,))``. A vertex
     counts as *above* a level when its value is strictly greater, so a triangle
     with a vertex exactly at a level gives a segment through that vertex, and
     an edge lying on a level is emitted once (by the triangle on the upper side).
     Zero-length segments are dropped; triangles with a non-finite value give none.
     """
     levels = np.sort(np.asarray(levels, dtype=np.float64).ravel())
-    empty = (np.empty((0, 2, 3)), np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64))
+    empty = (np.empty((0, 2, 3)), np.empty(0, dtype=np.int64))
     if levels.size == 0 or F.shape[0] == 0:
         return empty
     fval = values[F]
@@ -119,15 +121,13 @@ def _marching_triangles(V: np.ndarray, F: np.ndarray, values: np.ndarray, levels
     if total == 0:
         return empty
     offsets = np.cumsum(counts) - counts
-    seg_out, face_out, lev_out = [], [], []
+    seg_out, face_out = [], []
     # process (face, level) pairs in blocks of faces to bound the temporaries
     cum = np.cumsum(counts)
     block_edges = np.searchsorted(cum, np.arange(_SEGMENT_BLOCK, total, _SEGMENT_BLOCK), side="left")
     bounds = np.r_[0, block_edges + 1, len(faces)]
-    bounds = np.unique(np.clip(bounds, 0, len(faces)))
+    bounds = np.unique(np.clip(bounds, 0, len(faces)))  # strictly increasing: no empty block
     for b0, b1 in zip(bounds[:-1], bounds[1:], strict=False):
-        if b1 <= b0:
-            continue
         cnt = counts[b0:b1]
         n_pairs = int(cnt.sum())
         local = np.repeat(np.arange(b0, b1), cnt)
@@ -147,8 +147,7 @@ def _marching_triangles(V: np.ndarray, F: np.ndarray, values: np.ndarray, levels
         nonzero = np.any(seg[:, 0] != seg[:, 1], axis=1)
         seg_out.append(seg[nonzero])
         face_out.append(faces[local][nonzero])
-        lev_out.append(lev[nonzero])
-    return np.concatenate(seg_out), np.concatenate(face_out), np.concatenate(lev_out)
+    return np.concatenate(seg_out), np.concatenate(face_out)
 
 
 def isoline_segments(mesh, values, levels) -> np.ndarray:
@@ -306,8 +305,7 @@ def _gouraud_artist_class():
     return _GouraudTriangles
 
 
-def _render_surface(ax, mesh, values, *, cmap, norm, levels, view, line_width=0.45, ambient=0.38, marks=None,
-                    paths=()):
+def _render_surface(ax, mesh, values, *, cmap, norm, levels, view, marks, ambient=0.38, paths=()):
     """Draw the shaded, colour-mapped surface, its isolines and marked vertices into ``ax``."""
     from matplotlib.collections import LineCollection
 
@@ -320,15 +318,11 @@ def _render_surface(ax, mesh, values, *, cmap, norm, levels, view, line_width=0.
         if vol < 0:
             fn = -fn
     vnorm = _vertex_normals(V, F, fn)
-    marks = np.empty(0, dtype=np.int64) if marks is None else marks
     focus = vnorm[marks[0]] if marks.size and np.any(vnorm[marks[0]]) else None
     R = _camera(V, view, focus)
     P = (V - V.mean(axis=0)) @ R.T  # (n, 3): screen x, screen y, depth (towards the viewer)
     facing = fn @ R[2]
-    if closed:
-        vis = np.flatnonzero(facing > 0)
-    else:
-        vis = np.arange(F.shape[0])
+    vis = np.flatnonzero(facing > 0) if closed else np.arange(F.shape[0])  # back faces culled on closed meshes
     Fv = F[vis]
     depth = P[Fv, 2].mean(axis=1)
     order = np.argsort(depth, kind="stable")  # far to near
@@ -356,15 +350,14 @@ def _render_surface(ax, mesh, values, *, cmap, norm, levels, view, line_width=0.
     k = len(Fv)
     n_slabs = int(np.clip(k // 4, 1, 128))
     bounds = np.linspace(0, k, n_slabs + 1).astype(np.int64)
-    slab_of_rank = np.repeat(np.arange(n_slabs), np.diff(bounds))
+    slab_of_face = np.full(F.shape[0], -1, dtype=np.int64)  # -1: culled
+    slab_of_face[vis] = np.repeat(np.arange(n_slabs), np.diff(bounds))
     if levels.size:
-        seg3, seg_face, _ = _marching_triangles(V, F, values, levels)
-        rank = np.full(F.shape[0], -1, dtype=np.int64)
-        rank[vis] = np.arange(k)
-        r = rank[seg_face]
-        on = r >= 0
+        seg3, seg_face = _marching_triangles(V, F, values, levels)
+        seg_slab = slab_of_face[seg_face]
+        on = seg_slab >= 0
         seg2 = ((seg3[on] - V.mean(axis=0)) @ R[:2].T)  # (s, 2, 2)
-        seg_slab = slab_of_rank[r[on]]
+        seg_slab = seg_slab[on]
     else:
         seg2, seg_slab = np.empty((0, 2, 2)), np.empty(0, dtype=np.int64)
     seg_order = np.argsort(seg_slab, kind="stable")
@@ -374,8 +367,6 @@ def _render_surface(ax, mesh, values, *, cmap, norm, levels, view, line_width=0.
     # marked vertices: drawn with the slab of their nearest visible incident triangle (hidden if none is visible)
     mark_slab = np.full(marks.size, -1, dtype=np.int64)
     if marks.size:
-        slab_of_face = np.full(F.shape[0], -1, dtype=np.int64)
-        slab_of_face[vis] = slab_of_rank
         want = np.full(mesh.n_vertices, -1, dtype=np.int64)
         for c in range(3):
             np.maximum.at(want, F[:, c], slab_of_face)
@@ -387,7 +378,7 @@ def _render_surface(ax, mesh, values, *, cmap, norm, levels, view, line_width=0.
         ax.add_artist(Gouraud(verts[a:b], colors[a:b], zorder=1.0 + 2 * i * 1e-3))
         s0, s1 = seg_bounds[i], seg_bounds[i + 1]
         if s1 > s0:
-            lc = LineCollection(seg2[s0:s1], colors="black", linewidths=line_width, alpha=0.85,
+            lc = LineCollection(seg2[s0:s1], colors="black", linewidths=0.45, alpha=0.85,
                                 capstyle="round", zorder=1.0 + (2 * i + 1) * 1e-3)
             ax.add_collection(lc, autolim=False)
         here = marks[mark_slab == i]
@@ -517,11 +508,7 @@ def plot_field(
     from matplotlib.cm import ScalarMappable
     from matplotlib.colors import Colormap, Normalize
 
-    mesh = as_trimesh(mesh)
-    vals = as_vertex_field(values, "values", mesh.n_vertices)
-    marks = _check_marks(sources, mesh.n_vertices)
-    p = check_output_path(path, PLOT_EXTENSIONS)
-    dpi = check_number(dpi, "dpi", low=10, high=2000)
+    mesh, vals, marks, p, dpi = _surface_inputs(mesh, values, "values", sources, path, dpi)
     cm = cmap if isinstance(cmap, Colormap) else colormaps[cmap]
     lo, hi = _finite_range(vals, vmin, vmax)
     levels = _isolevels(isolines, lo, hi)
@@ -580,11 +567,7 @@ def plot_error_map(mesh, rel_error, path, *, title=None, vmax=None, view=None, d
     from matplotlib.colors import Normalize
     from matplotlib.ticker import PercentFormatter
 
-    mesh = as_trimesh(mesh)
-    err = as_vertex_field(rel_error, "rel_error", mesh.n_vertices)
-    marks = _check_marks(sources, mesh.n_vertices)
-    p = check_output_path(path, PLOT_EXTENSIONS)
-    dpi = check_number(dpi, "dpi", low=10, high=2000)
+    mesh, err, marks, p, dpi = _surface_inputs(mesh, rel_error, "rel_error", sources, path, dpi)
     fin = err[np.isfinite(err)]
     if vmax is None:
         vmax = float(np.percentile(fin, 99.0)) if fin.size else 1.0
@@ -679,8 +662,7 @@ def plot_gradient_histogram(norms_by_label, path, *, weights=None, title=None, b
         raise ValueError("norms_by_label must be a non-empty dict {label: norms or (counts, edges)}")
     p = check_output_path(path, PLOT_EXTENSIONS)
     dpi = check_number(dpi, "dpi", low=10, high=2000)
-    if isinstance(bins, bool) or not isinstance(bins, int | np.integer) or bins < 1:
-        raise ValueError(f"bins must be a positive integer, got {bins!r}")
+    bins = check_count(bins, "bins")
     entries = {str(k): _as_hist_entry(k, v, weights) for k, v in norms_by_label.items()}
 
     raw_all = [e[1] for e in entries.values() if e[0] == "raw" and e[1].size]

@@ -38,7 +38,6 @@ def remembered_sources(distance: Any) -> Any:
     return entry[1]
 
 
-
 @dataclass
 class SolveInfo:
     """What happened during one solve.

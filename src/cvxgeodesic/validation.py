@@ -17,6 +17,7 @@ import numbers
 import os
 import re
 from collections.abc import Iterable
+from contextlib import suppress
 from pathlib import Path
 from typing import Any
 
@@ -85,6 +86,7 @@ def check_number(value: Any, name: str, *, low: float | None = None, high: float
     Returns
     -------
     float
+        ``value`` converted.
 
     Raises
     ------
@@ -291,7 +293,7 @@ def vertex_mask(x: ArrayLike, name: str, n: int) -> np.ndarray:
     return arr
 
 
-def validate_sources(sources: Any, n: int) -> np.ndarray:
+def validate_sources(sources: Any, n: int, *, name: str = "sources", repeats: bool = False) -> np.ndarray:
     """Check and normalize source vertex indices.
 
     Parameters
@@ -301,6 +303,11 @@ def validate_sources(sources: Any, n: int) -> np.ndarray:
         (including NumPy bool arrays) are not.
     n : int
         Number of vertices.
+    name : str
+        The parameter's name in the messages about its type, shape and emptiness (``distance_matrix``:
+        ``"vertices"``).
+    repeats : bool
+        Accept an index given more than once (``distance_matrix`` solves it once).
 
     Returns
     -------
@@ -311,38 +318,38 @@ def validate_sources(sources: Any, n: int) -> np.ndarray:
     ------
     SourceError
         Empty, ragged, nested, non-integer (bool, float with a fraction, NaN, string,
-        ``None``), negative, out-of-range or duplicated indices.
+        ``None``), negative, out-of-range or (unless ``repeats``) duplicated indices.
     """
     if isinstance(sources, bool | np.bool_):
-        raise SourceError(f"sources must be vertex indices, got {sources!r}")
+        raise SourceError(f"{name} must be vertex indices, got {sources!r}")
     try:
         arr = np.atleast_1d(np.asarray(sources))
     except (ValueError, TypeError, OverflowError):  # ragged nesting and the like
-        raise SourceError(f"sources must be an int or a 1-D sequence of ints, got {short_repr(sources)}") from None
+        raise SourceError(f"{name} must be an int or a 1-D sequence of ints, got {short_repr(sources)}") from None
     if arr.ndim != 1:
-        raise SourceError(f"sources must be an int or a 1-D sequence of ints, got shape {arr.shape}")
+        raise SourceError(f"{name} must be an int or a 1-D sequence of ints, got shape {arr.shape}")
     if arr.size == 0:
-        raise SourceError("sources is empty: give at least one source vertex")
-    out_of_range = "is out of range: the mesh has {n} vertices (0..{last})"
+        raise SourceError(f"{name} is empty: give at least one source vertex")
+    out_of_range = f"is out of range: the mesh has {n} vertices (0..{n - 1})"
     if arr.dtype == object and all(isinstance(v, int) and not isinstance(v, bool) for v in arr):
         # Python ints too large for int64
         big = next(v for v in arr if not -(2**63) <= v < 2**63)
-        raise SourceError(f"source index {big} " + out_of_range.format(n=n, last=n - 1))
+        raise SourceError(f"source index {big} " + out_of_range)
     if arr.dtype.kind == "f" and np.all(np.isfinite(arr)) and np.all(arr == np.round(arr)):
         big = np.abs(arr) >= 2.0**62
         if big.any():
-            raise SourceError(f"source index {arr[big][0]:g} " + out_of_range.format(n=n, last=n - 1))
+            raise SourceError(f"source index {arr[big][0]:g} " + out_of_range)
         arr = arr.astype(np.int64)
     if arr.dtype.kind not in "iu":
-        raise SourceError(f"sources must be integer vertex indices, got {short_repr(sources)}")
+        raise SourceError(f"{name} must be integer vertex indices, got {short_repr(sources)}")
     if arr.dtype.kind == "u" and arr.max() >= 2**63:
-        raise SourceError(f"source index {int(arr.max())} " + out_of_range.format(n=n, last=n - 1))
+        raise SourceError(f"source index {int(arr.max())} " + out_of_range)
     arr = arr.astype(np.int64)
     bad = (arr < 0) | (arr >= n)
     if bad.any():
-        raise SourceError(f"source index {int(arr[bad][0])} " + out_of_range.format(n=n, last=n - 1))
+        raise SourceError(f"source index {int(arr[bad][0])} " + out_of_range)
     uniq, counts = np.unique(arr, return_counts=True)
-    if (counts > 1).any():
+    if not repeats and (counts > 1).any():
         raise SourceError(f"source vertex {int(uniq[counts > 1][0])} is given more than once")
     return arr
 
@@ -402,10 +409,8 @@ def check_not_an_input(path: str | os.PathLike, inputs, what: str = "output") ->
         src = Path(os.fspath(source))
         same = out.resolve() == src.resolve()
         if not same and out.exists() and src.exists():
-            try:
+            with suppress(OSError):  # unreadable: not known to be the same file
                 same = os.path.samefile(out, src)
-            except OSError:
-                same = False
         if same:
             raise ParameterError(f"{what} {out} is the input file {src}: refusing to overwrite an input; "
                                  "choose another output path")
@@ -495,6 +500,27 @@ def _g(x: float, digits: int = 6) -> str:
                   f"{x:.{digits}g}")
 
 
+def _per_item(value: Any, name: str, n: int, m: int, item: tuple[int, ...], *, what: str,
+              shapes: str) -> tuple[np.ndarray, str]:
+    """``value`` (a cost or a metric) as a float64 array of ``item``-shaped entries, and whose they are.
+
+    Returns ``(values, kind)``: one entry (1, *item) ``"constant"``, one per vertex (n, *item) ``"vertices"`` or one
+    per face (m, *item) ``"faces"`` (per vertex when ``n == m``). The ParameterErrors name ``name`` and say it must
+    be ``what`` (not numeric) or have one of the ``shapes``; complex values are refused by :func:`check_real`.
+    """
+    check_real(value, name)
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be {what}, got {short_repr(value)}") from None
+    if arr.shape == item:
+        return arr.reshape(1, *item), "constant"
+    for kind, count in (("vertices", n), ("faces", m)):
+        if arr.shape == (count, *item):
+            return arr, kind
+    raise ParameterError(f"{name} must have shape {shapes}, got shape {arr.shape}")
+
+
 def check_cost(cost: Any, n: int, m: int) -> tuple[np.ndarray, str]:
     """A travel cost (time per unit length, ``1/speed``) checked and classified.
 
@@ -517,21 +543,8 @@ def check_cost(cost: Any, n: int, m: int) -> tuple[np.ndarray, str]:
         ``[MIN_COST, MAX_COST]`` (the message names the first one), or values whose ratio max/min exceeds
         ``MAX_COST_RATIO`` (the message names both).
     """
-    check_real(cost, "cost")
-    try:
-        arr = np.asarray(cost, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ParameterError(f"cost must be a positive number or an array of shape ({n},) (per vertex) or ({m},) "
-                             f"(per face), got {short_repr(cost)}") from None
-    if arr.ndim == 0:
-        kind, arr = "constant", arr.reshape(1)
-    elif arr.ndim == 1 and arr.shape[0] == n:
-        kind = "vertices"
-    elif arr.ndim == 1 and arr.shape[0] == m:
-        kind = "faces"
-    else:
-        raise ParameterError(f"cost must have shape ({n},) (one value per vertex) or ({m},) (one per face), "
-                             f"got shape {arr.shape}")
+    arr, kind = _per_item(cost, "cost", n, m, (), what=f"a positive number or an array of shape ({n},) (per vertex) "
+                          f"or ({m},) (per face)", shapes=f"({n},) (one value per vertex) or ({m},) (one per face)")
     bad = ~(np.isfinite(arr) & (arr > 0))
     if bad.any():
         k = int(np.flatnonzero(bad)[0])
@@ -579,21 +592,9 @@ def check_metric(metric: Any, n: int, m: int) -> tuple[np.ndarray, str]:
         Complex or not numeric, another shape, a non-finite entry or a tensor that is not symmetric (relative 1e-10),
         naming the first.
     """
-    check_real(metric, "metric")
-    try:
-        arr = np.asarray(metric, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ParameterError(f"metric must be a (3, 3), ({n}, 3, 3) or ({m}, 3, 3) array of symmetric tensors, "
-                             f"got {short_repr(metric)}") from None
-    if arr.shape == (3, 3):
-        kind, arr = "constant", arr.reshape(1, 3, 3)
-    elif arr.ndim == 3 and arr.shape[1:] == (3, 3) and arr.shape[0] == n:
-        kind = "vertices"
-    elif arr.ndim == 3 and arr.shape[1:] == (3, 3) and arr.shape[0] == m:
-        kind = "faces"
-    else:
-        raise ParameterError(f"metric must have shape (3, 3) (one tensor), ({n}, 3, 3) (per vertex) or ({m}, 3, 3) "
-                             f"(per face), got shape {arr.shape}")
+    arr, kind = _per_item(metric, "metric", n, m, (3, 3),
+                          what=f"a (3, 3), ({n}, 3, 3) or ({m}, 3, 3) array of symmetric tensors",
+                          shapes=f"(3, 3) (one tensor), ({n}, 3, 3) (per vertex) or ({m}, 3, 3) (per face)")
     at = (lambda k: "metric") if kind == "constant" else (lambda k: f"metric[{k}]")
     finite = np.isfinite(arr).all(axis=(1, 2))
     if not finite.all():

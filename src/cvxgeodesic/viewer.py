@@ -61,16 +61,38 @@ def _init(ps: Any, headless: bool) -> None:
 
 
 def _source_positions(mesh: Any, source_set: Any, vertices: np.ndarray) -> np.ndarray:
-    """(k, 3) positions of the source marks: vertices, surface points, and the ends of curve pieces."""
-    V, F = mesh.V, mesh.F
-    parts = [V[np.asarray(vertices, dtype=np.int64)]]
-    if source_set is not None:
-        if len(source_set.point_faces):
-            parts.append(np.einsum("pk,pkd->pd", source_set.point_bary, V[F[source_set.point_faces]]))
-        if len(source_set.segment_faces):
-            ends = np.einsum("sek,skd->sed", source_set.segment_bary, V[F[source_set.segment_faces]])
-            parts.append(ends.reshape(-1, 3))
-    return np.concatenate(parts, axis=0) if parts else np.zeros((0, 3))
+    """(k, 3) positions of the source marks on a surface or in a solid: vertices (and a solid's source faces'
+    vertices), points, and the ends of curve pieces."""
+    if source_set is None:
+        return mesh.V[np.asarray(vertices, dtype=np.int64)]
+    parts = [mesh.V[source_set.fixed_vertices(mesh)], source_set.point_positions(mesh)]
+    if len(source_set.segment_faces):
+        ends = np.einsum("sek,skd->sed", source_set.segment_bary, mesh.V[mesh.F[source_set.segment_faces]])
+        parts.append(ends.reshape(-1, 3))
+    return np.concatenate(parts, axis=0)
+
+
+def _given_marks(mesh: Any, distance: np.ndarray, sources: Any) -> np.ndarray:
+    """(k, 3) marks of a given field: its ``sources`` resolved, or the vertices where it is 0."""
+    if sources is None:
+        return mesh.V[np.flatnonzero(distance == 0)]
+    from .sources import resolve_sources
+
+    ss = resolve_sources(mesh, sources)
+    return _source_positions(mesh, None if ss.vertex_only else ss, ss.vertices)
+
+
+def _shown(distance: np.ndarray) -> tuple[np.ndarray, float]:
+    """The field as polyscope colours it, and its top: it cannot colour inf/NaN, so unreachable vertices get the
+    top of the range."""
+    finite = np.isfinite(distance)
+    top = float(distance[finite].max()) if finite.any() else 1.0
+    return np.where(finite, distance, top), top
+
+
+def _add_marks(ps: Any, marks: np.ndarray, diag: float) -> None:
+    cloud = ps.register_point_cloud(SOURCES_NAME, marks.reshape(-1, 3), color=(0.9, 0.05, 0.05))
+    cloud.set_radius(SOURCE_RADIUS * diag, relative=False)
 
 
 class _Viewer:
@@ -102,10 +124,7 @@ class _Viewer:
     def set_field(self, distance: np.ndarray, marks: np.ndarray) -> None:
         """Show ``distance`` ((n,) float) on the surface and ``marks`` ((k, 3) float) as red spheres."""
         d = np.asarray(distance, dtype=np.float64)
-        finite = np.isfinite(d)
-        # polyscope cannot colour inf/NaN: unreachable vertices get the top of the range (and no isoline)
-        top = float(d[finite].max()) if finite.any() else 1.0
-        shown = np.where(finite, d, top)
+        shown, top = _shown(d)  # unreachable vertices at the top of the range, and no isoline there
         # polyscope 2.6's own isolines are bands a third of the period wide whatever the thickness
         # option (and their on/off state persists per quantity name): keep them off, and draw thin tubes
         # along marching-triangles isolines instead, the levels plot_field would draw
@@ -116,15 +135,14 @@ class _Viewer:
             from .plotting import isoline_segments
 
             levels = np.linspace(float(shown.min()), top, N_ISOLINES + 1)[1:-1]
-            seg = isoline_segments(self.mesh, np.where(finite, d, np.inf), levels)
+            seg = isoline_segments(self.mesh, np.where(np.isfinite(d), d, np.inf), levels)
             if len(seg):
                 edges = np.arange(2 * len(seg)).reshape(-1, 2)
                 lines = self.ps.register_curve_network(ISOLINES_NAME, seg.reshape(-1, 3), edges,
                                                        color=(0.05, 0.05, 0.05))
                 lines.set_radius(ISOLINE_RADIUS * self._diag, relative=False)
         self.distance = d
-        cloud = self.ps.register_point_cloud(SOURCES_NAME, marks.reshape(-1, 3), color=(0.9, 0.05, 0.05))
-        cloud.set_radius(SOURCE_RADIUS * self._diag, relative=False)
+        _add_marks(self.ps, marks, self._diag)
 
     def solve(self, sources: Any) -> np.ndarray:
         t0 = time.perf_counter()
@@ -210,15 +228,13 @@ def show(
         and no ``screenshot``.
     """
     from .mesh.convert import as_mesh
-    from .mesh.io import as_trimesh
     from .mesh.tetmesh import TetMesh
     from .validation import as_vertex_field
 
-    if isinstance(volume := as_mesh(mesh), TetMesh):
-        return show_volume(volume, distance, sources=sources, method=method or "qclp", screenshot=screenshot,
+    if isinstance(mesh := as_mesh(mesh), TetMesh):
+        return show_volume(mesh, distance, sources=sources, method=method or "qclp", screenshot=screenshot,
                            window_size=window_size, overwrite_read_only=overwrite_read_only, **solver_kwargs)
     method = method or "qcqp-hessian"
-    mesh = as_trimesh(mesh)
     n = mesh.n_vertices
     if distance is not None:
         d = as_vertex_field(distance, "distance", n)
@@ -227,14 +243,7 @@ def show(
     if distance is None:
         viewer.solve(0 if sources is None else sources)
     else:
-        if sources is None:
-            marks = mesh.V[np.flatnonzero(d == 0)]
-        else:
-            from .sources import resolve_sources
-
-            ss = resolve_sources(mesh, sources)
-            marks = _source_positions(mesh, None if ss.vertex_only else ss, ss.vertices)
-        viewer.set_field(d, marks)
+        viewer.set_field(d, _given_marks(mesh, d, sources))
     _present(ps, screenshot, viewer.callback, overwrite_read_only=overwrite_read_only)
     assert viewer.distance is not None
     return viewer.distance
@@ -359,35 +368,19 @@ def show_volume(
     centre = 0.5 * (mesh.V.min(axis=0) + mesh.V.max(axis=0)) + 0.01 * diag * unit
     org = centre if origin is None else as_points(origin, "origin").reshape(3)
     ps = _start(window_size, screenshot, overwrite_read_only)
-    marks = np.zeros((0, 3))
     if distance is None:
         from .api import GeodesicSolver
 
         res = GeodesicSolver(mesh, method, **solver_kwargs).solve(0 if sources is None else sources)
-        d = res.distance
-        ss = res.source_set
+        d, marks = res.distance, _source_positions(mesh, res.source_set, res.sources)
     else:
         d = as_vertex_field(distance, "distance", mesh.n_vertices)
-        ss = None
-        if sources is not None:
-            from .sources import resolve_sources
-
-            ss = resolve_sources(mesh, sources)
-        res = None
-    if ss is not None:
-        marks = np.vstack([mesh.V[ss.fixed_vertices(mesh)], *[p.position(mesh)[None] for p in ss.points]])
-    elif res is not None:
-        marks = mesh.V[res.sources]
-    else:
-        marks = mesh.V[np.flatnonzero(d == 0)]
-    finite = np.isfinite(d)
-    shown = np.where(finite, d, float(d[finite].max()) if finite.any() else 1.0)
+        marks = _given_marks(mesh, d, sources)
     vol = ps.register_volume_mesh(VOLUME_NAME, mesh.V, tets=mesh.T, color=(0.8, 0.8, 0.8))
-    vol.add_scalar_quantity(FIELD_NAME, shown, defined_on="vertices", enabled=True, cmap="viridis",
+    vol.add_scalar_quantity(FIELD_NAME, _shown(d)[0], defined_on="vertices", enabled=True, cmap="viridis",
                             isolines_enabled=True)
     if len(marks):
-        cloud = ps.register_point_cloud(SOURCES_NAME, marks.reshape(-1, 3), color=(0.9, 0.05, 0.05))
-        cloud.set_radius(SOURCE_RADIUS * diag, relative=False)
+        _add_marks(ps, marks, diag)
     plane = ps.add_scene_slice_plane()
     # polyscope keeps the side the normal points to: flip it so that the part on the positive side is cut away
     plane.set_pose(tuple(org.tolist()), tuple((-nrm / np.linalg.norm(nrm)).tolist()))

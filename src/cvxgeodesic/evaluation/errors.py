@@ -11,13 +11,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validate import vertex_field, vertex_indices, vertex_mask
+from ..validation import as_vertex_field, vertex_indices, vertex_mask
 
 
 def _inputs(d, d_exact, sources):
-    d_exact = vertex_field(d_exact, "d_exact")
+    d_exact = as_vertex_field(d_exact, "d_exact")
     n = d_exact.shape[0]
-    d = vertex_field(d, "d", n)
+    d = as_vertex_field(d, "d", n)
     sources = vertex_indices(sources, "sources", n)
     return d, d_exact, sources
 

@@ -11,12 +11,13 @@ from __future__ import annotations
 import numpy as np
 
 from ..operators.gradient import gradient_norms
-from ._validate import check_mesh, vertex_field, vertex_indices
+from ..validation import as_vertex_field, vertex_indices
+from ._validate import check_mesh
 
 
 def _norms_and_weights(mesh, d, sources):
     mesh = check_mesh(mesh, volumes=True)
-    d = vertex_field(d, "d", mesh.n_vertices)
+    d = as_vertex_field(d, "d", mesh.n_vertices)
     finite_v = np.isfinite(d)
     valid = finite_v[mesh.cells].all(axis=1) & (mesh.cell_measures > 0)
     if sources is not None:

@@ -64,7 +64,8 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from ..operators.gradient import gradient_blocks, gradient_norms, triangle_frames
-from ._validate import check_mesh, vertex_field, vertex_indices, vertex_mask
+from ..validation import as_vertex_field, check_count, check_number, vertex_indices, vertex_mask
+from ._validate import check_mesh
 from .errors import error_stats, percentile
 
 
@@ -116,9 +117,8 @@ def ridge_band(mesh, d_exact, rings: int = 2, *, sources=None, threshold: float 
         The band (only vertices where ``d_exact`` is finite).
     """
     mesh = check_mesh(mesh)
-    d_exact = vertex_field(d_exact, "d_exact", mesh.n_vertices)
-    if isinstance(rings, bool) or not isinstance(rings, int | np.integer) or rings < 0:
-        raise ValueError(f"rings must be an integer >= 0, got {rings!r}")
+    d_exact = as_vertex_field(d_exact, "d_exact", mesh.n_vertices)
+    rings = check_count(rings, "rings", minimum=0)
     if not exclude_radius >= 0:
         raise ValueError(f"exclude_radius must be a number >= 0, got {exclude_radius!r}")
     if sources is None:
@@ -137,7 +137,7 @@ def ridge_band(mesh, d_exact, rings: int = 2, *, sources=None, threshold: float 
     with np.errstate(invalid="ignore"):
         crease = (jumps < -jump_threshold) & ~near_src[edges[:, 0]] & ~near_src[edges[:, 1]]
     seeds[edges[crease].ravel()] = True
-    return _ring_dilate(mesh, seeds, int(rings)) & finite
+    return _ring_dilate(mesh, seeds, rings) & finite
 
 
 def interior_edges(mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -157,20 +157,15 @@ def interior_edges(mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         The vertex of each face opposite the edge.
     """
     mesh = check_mesh(mesh)
-    F = mesh.F
-    m = F.shape[0]
-    E = np.concatenate([F[:, [1, 2]], F[:, [2, 0]], F[:, [0, 1]]])
-    E.sort(axis=1)
-    face = np.tile(np.arange(m), 3)
-    opp = np.concatenate([F[:, 0], F[:, 1], F[:, 2]])
-    uniq, inv, counts = np.unique(E, axis=0, return_inverse=True, return_counts=True)
-    inv = inv.reshape(-1)
-    order = np.argsort(inv, kind="stable")
+    # the mesh's edge table (face_edges: the edge opposite each corner), one row per (corner, face), corner-major
+    face = np.tile(np.arange(mesh.n_faces), 3)
+    opp = mesh.F.T.ravel()
+    order = np.argsort(mesh.face_edges.T.ravel(), kind="stable")
+    counts = mesh.edge_face_counts
     starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
     two = np.flatnonzero(counts == 2)
     first, second = order[starts[two]], order[starts[two] + 1]
-    return (uniq[two].astype(np.int64), np.column_stack([face[first], face[second]]),
-            np.column_stack([opp[first], opp[second]]))
+    return mesh.edges[two], np.column_stack([face[first], face[second]]), np.column_stack([opp[first], opp[second]])
 
 
 def triangle_gradients_3d(mesh, d) -> np.ndarray:
@@ -187,7 +182,7 @@ def triangle_gradients_3d(mesh, d) -> np.ndarray:
         Lies in each triangle's plane.
     """
     mesh = check_mesh(mesh)
-    d = vertex_field(d, "d", mesh.n_vertices)
+    d = as_vertex_field(d, "d", mesh.n_vertices)
     g2 = np.einsum("tij,tj->ti", gradient_blocks(mesh), d[mesh.F])
     ex, ey = triangle_frames(mesh)
     return g2[:, :1] * ex + g2[:, 1:] * ey
@@ -216,7 +211,7 @@ def edge_gradient_jumps(mesh, d, *, signed: bool = False) -> tuple[np.ndarray, n
         has zero area.
     """
     mesh = check_mesh(mesh)
-    d = vertex_field(d, "d", mesh.n_vertices)
+    d = as_vertex_field(d, "d", mesh.n_vertices)
     edges, faces, opp = interior_edges(mesh)
     finite = np.isfinite(d)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -284,7 +279,7 @@ def off_ridge_error(d, d_exact, sources, band) -> float:
         ``inf`` if ``d`` is not finite on a compared vertex; ``nan`` if no vertex
         is compared.
     """
-    d_exact = vertex_field(d_exact, "d_exact")
+    d_exact = as_vertex_field(d_exact, "d_exact")
     band = vertex_mask(band, "band", d_exact.shape[0])
     return error_stats(d, d_exact, sources, mask=~band)["rel_mean"]
 
@@ -311,10 +306,7 @@ def smoothness_report(mesh, d, d_exact, sources, *, rings: int = 2, threshold: f
         < 1 means smoother than the exact field at the ridge),
         ``off_ridge_rel_mean``, ``off_ridge_rel_max``, ``on_ridge_rel_mean``.
     """
-    mesh = check_mesh(mesh)
-    d_exact = vertex_field(d_exact, "d_exact", mesh.n_vertices)
-    d = vertex_field(d, "d", mesh.n_vertices)
-    sources = vertex_indices(sources, "sources", mesh.n_vertices)
+    # every input is checked where it is first used: the mesh, d_exact and sources by ridge_band, d by ridge_sharpness
     band = ridge_band(mesh, d_exact, rings, sources=sources, threshold=threshold, jump_threshold=jump_threshold)
     s = ridge_sharpness(mesh, d, band)
     se = ridge_sharpness(mesh, d_exact, band)
@@ -358,14 +350,13 @@ def cut_locus_band(mesh, d_exact, width: float, *, sources=None, threshold: floa
     -------
     (n,) bool ndarray
     """
-    if not (np.isfinite(width) and width > 0):
-        raise ValueError(f"width must be a finite number > 0, got {width!r}")
+    width = check_number(width, "width", low=0, low_open=True)
     seeds = ridge_band(mesh, d_exact, 0, sources=sources, threshold=threshold, jump_threshold=jump_threshold,
                        exclude_radius=exclude_radius)
     if not seeds.any():
         return seeds
     dist = dijkstra(mesh.vertex_adjacency, indices=np.flatnonzero(seeds), min_only=True, limit=0.5 * width)
-    return (dist <= 0.5 * width) & np.isfinite(vertex_field(d_exact, "d_exact", mesh.n_vertices))
+    return (dist <= 0.5 * width) & np.isfinite(as_vertex_field(d_exact, "d_exact", mesh.n_vertices))
 
 
 def ridge_deficit(mesh, d, d_exact, width: float, *, sources=None, threshold: float = 0.9,
@@ -405,8 +396,8 @@ def ridge_deficit(mesh, d, d_exact, width: float, *, sources=None, threshold: fl
     (0.001, 0.01)
     """
     mesh = check_mesh(mesh)
-    d_exact = vertex_field(d_exact, "d_exact", mesh.n_vertices)
-    d = vertex_field(d, "d", mesh.n_vertices)
+    d_exact = as_vertex_field(d_exact, "d_exact", mesh.n_vertices)
+    d = as_vertex_field(d, "d", mesh.n_vertices)
     band = cut_locus_band(mesh, d_exact, width, sources=sources, threshold=threshold, jump_threshold=jump_threshold,
                           exclude_radius=exclude_radius)
     area = np.bincount(mesh.F.ravel(), np.repeat(mesh.face_areas / 3.0, 3), minlength=mesh.n_vertices)[band]
