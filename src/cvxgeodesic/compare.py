@@ -40,8 +40,8 @@ from .errors import CvxGeodesicError, ParameterError, SolverError
 from .tables import Column, text_table
 
 __all__ = [
-    "COLUMN_HELP", "CSV_COLUMNS", "REFERENCES", "TABLE_COLUMNS", "evaluate_methods", "format_table", "resolve_methods",
-    "run_compare", "solve_methods", "table_legend", "write_csv", "write_pictures",
+    "COLUMN_HELP", "CSV_COLUMNS", "REFERENCES", "TABLE_COLUMNS", "error_line", "evaluate_methods", "format_table",
+    "resolve_methods", "run_compare", "solve_methods", "table_legend", "write_csv", "write_pictures",
 ]
 
 #: Columns of ``compare.csv`` (and keys of every row returned by :func:`run_compare`), in order.
@@ -142,9 +142,11 @@ def _source_vertices(mesh: Any, sset: Any) -> np.ndarray:
     return sset.vertices if mesh.dim == 2 else sset.fixed_vertices(mesh)
 
 
-def _error_message(exc: BaseException) -> str:
-    msg = " ".join(str(exc).split())  # one line, for the CSV and the table
-    if isinstance(exc, CvxGeodesicError):
+def error_line(exc: BaseException, *, typed: bool = False) -> str:
+    """The message of ``exc`` on one line (for a CSV cell, a table, a batch row), after its type's name unless it is
+    one of the library's errors (whose messages say what went wrong) and not ``typed``."""
+    msg = " ".join(str(exc).split())
+    if isinstance(exc, CvxGeodesicError) and not typed:
         return msg or type(exc).__name__
     return f"{type(exc).__name__}: {msg}" if msg else type(exc).__name__
 
@@ -278,7 +280,7 @@ def solve_methods(mesh: Any, sset: Any, runs: list[Run], *, reference: Run | Non
         results[_key(reference)] = _attempt(mesh, reference, solve_src, m, solver)
         _, ref_wall, ref_err = results[_key(reference)]
         if ref_err is not None:
-            say(f"warning: no {_label(reference)} reference, errors are not computed ({_error_message(ref_err)})")
+            say(f"warning: no {_label(reference)} reference, errors are not computed ({error_line(ref_err)})")
         elif reference not in runs:
             say(f"{_label(reference):<{width}}  {ref_wall:8.2f} s  (reference)")
     for i, run in enumerate(runs, 1):
@@ -289,13 +291,13 @@ def solve_methods(mesh: Any, sset: Any, runs: list[Run], *, reference: Run | Non
         if err is None:
             say(f"{tag}  {wall:8.2f} s  {res.info.status}, {res.info.iterations} it")
         else:
-            say(f"{tag}  {wall:8.2f} s  FAILED: {_error_message(err)}")
+            say(f"{tag}  {wall:8.2f} s  FAILED: {error_line(err)}")
     return results
 
 
 def _failed_row(row: dict, wall: float, err: BaseException) -> None:
     row["time_s"] = float(wall)
-    row["status"] = _error_message(err)
+    row["status"] = error_line(err)
     if isinstance(err, SolverError):
         row["solver"] = str(err.solver)
         it = err.info.get("iterations")
@@ -346,7 +348,7 @@ def evaluate_methods(mesh: Any, runs: list[Run], results: dict[Run, Outcome], re
             record = summarize(mesh, res, reference, gradient=False)
             rel_errors[run] = relative_error(res.distance, reference, res.sources)
         except Exception as exc:  # noqa: BLE001
-            row["status"] = f"{row['status']}; evaluation failed: {_error_message(exc)}"
+            row["status"] = f"{row['status']}; evaluation failed: {error_line(exc)}"
             continue
         row.update({k: record[k] for k in _MEASURED_KEYS})
     return rows, rel_errors

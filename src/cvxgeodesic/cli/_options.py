@@ -1,8 +1,9 @@
 """The options several commands share and what they become: sources, method, travel cost, help texts.
 
 A surface (``mesh.dim == 2``) and a volume (``mesh.dim == 3``) take the same options; what differs between the two
-is data, :data:`SPACES`: the word for the cells, the default method, the output formats of a field and where a
-``--source-point`` goes (the closest surface point, or the point itself inside the solid).
+is data, :data:`SPACES`: the word for the cells, the output formats of a field and where a ``--source-point`` goes
+(the closest surface point, or the point itself inside the solid); the default method is the API's
+(:data:`~cvxgeodesic.api.DEFAULT_METHODS`).
 
 Only the standard library at import, as the whole :mod:`cvxgeodesic.cli` package (see its ``__init__``).
 """
@@ -26,16 +27,14 @@ class Space:
     """What the command line does differently on a surface and in a volume."""
 
     cells: str  # the cells in messages
-    default_method: str  # --method when not given
     outputs: tuple[str, ...] | None  # extensions of a distance file (None: every format of the registry)
     where: str  # where a --source-point lies, for messages
 
 
 #: By simplex dimension (``mesh.dim``).
 SPACES = {
-    2: Space("faces", "qcqp-hessian", None, ""),
-    # the curved Hessian energy exists on surfaces only; the formats that carry tetrahedra (or a bare array)
-    3: Space("tetrahedra", "qclp", (".vtu", ".vtk", ".npy"), " (inside the solid)"),
+    2: Space("faces", None, ""),
+    3: Space("tetrahedra", (".vtu", ".vtk", ".npy"), " (inside the solid)"),  # the formats that carry tetrahedra
 }
 
 
@@ -109,28 +108,27 @@ def add_solve_options(p: argparse.ArgumentParser, *, method: bool = True, m_help
     p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")
 
 
-class _Given(argparse.Action):
-    """Stores the value and records that the option was given (``args.method_given``)."""
-
-    def __call__(self, parser, namespace, values, option_string=None):
-        setattr(namespace, self.dest, values)
-        namespace.method_given = True
-
-
 def add_method_option(p: argparse.ArgumentParser) -> None:
-    """``--method NAME``, any method of :data:`~cvxgeodesic.api.ALL_METHODS` (default: :attr:`Space.default_method`
-    of the mesh, which ``args.method_given`` tells apart)."""
+    """``--method NAME``, any method of :data:`~cvxgeodesic.api.ALL_METHODS`; None when not given (the default of
+    the mesh's dimension, :func:`method_for`)."""
     from ..api import ALL_METHODS
 
-    p.add_argument("--method", default=SPACES[2].default_method, choices=ALL_METHODS, metavar="NAME", action=_Given,
-                   help=f"one of: {', '.join(ALL_METHODS)} (default {SPACES[2].default_method}; "
-                        f"{SPACES[3].default_method} on a tetrahedral mesh)")
-    p.set_defaults(method_given=False)
+    p.add_argument("--method", default=None, choices=ALL_METHODS, metavar="NAME",
+                   help=f"one of: {', '.join(ALL_METHODS)} (default {default_methods()})")
+
+
+def default_methods() -> str:
+    """The defaults of ``--method`` in words (:data:`~cvxgeodesic.api.DEFAULT_METHODS`)."""
+    from ..api import DEFAULT_METHODS
+
+    return f"{DEFAULT_METHODS[2]}; {DEFAULT_METHODS[3]} on a tetrahedral mesh"
 
 
 def method_for(args: argparse.Namespace, mesh: Any) -> str:
-    """``--method`` when given, else the default of the mesh's :data:`SPACES` entry."""
-    return args.method if getattr(args, "method_given", False) else SPACES[mesh.dim].default_method
+    """``--method`` when given, else the default for the mesh's dimension (:data:`~cvxgeodesic.api.DEFAULT_METHODS`)."""
+    from ..api import DEFAULT_METHODS
+
+    return args.method or DEFAULT_METHODS[mesh.dim]
 
 
 def add_cost_options(p: argparse.ArgumentParser) -> None:

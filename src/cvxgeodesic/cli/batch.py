@@ -6,7 +6,7 @@ import argparse
 import sys
 from typing import Any
 
-from ._options import add_solve_options, add_source_options, batch_sources, mesh_help
+from ._options import add_solve_options, add_source_options, batch_sources, default_methods, mesh_help
 
 
 def add_parser(sub: Any) -> None:
@@ -43,7 +43,9 @@ def run(args: argparse.Namespace) -> int:
     paths = expand_mesh_paths(args.meshes)
     if not args.quiet:
         where = args.scheduler or f"a local cluster of {args.workers} worker processes"
-        print(f"{len(paths)} mesh file(s); method {args.method}; running on {where}", file=sys.stderr)
+        method = args.method or f"the default ({default_methods()})"
+        print(f"{len(paths)} mesh file(s); method {method}; running on {where}", file=sys.stderr)
+    # --method not given: None, the default of each mesh's dimension
     rows = run_batch(paths, sources, args.out, method=args.method, m=args.m, solver=args.solver,
                      scheduler=args.scheduler, n_workers=args.workers, force=args.force, progress=not args.quiet,
                      multires=args.multires, output_format=args.format)
