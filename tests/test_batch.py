@@ -127,10 +127,12 @@ def test_default_local_cluster(meshes, tmp_path, capsys):
     assert "2 solved" in capsys.readouterr().out
 
 
-def test_the_default_method_is_the_one_of_each_mesh_dimension(tmp_path):
+def test_a_volume_takes_its_default_method_and_its_points_inside(tmp_path):
     """No method: a tetrahedral mesh is solved with the volume default (qclp), as geodesic_distance does; the
-    surface default qcqp-hessian does not apply to volumes (this batch used it everywhere and failed)."""
+    surface default qcqp-hessian does not apply to volumes (this batch used it everywhere and failed). A source
+    position is the point inside the solid."""
     from cvxgeodesic.batch import _finished, _params, output_paths, solve_one
+    from cvxgeodesic.mesh.locate import volume_point
     from cvxgeodesic.mesh.tet_generate import tet_box
 
     mesh = tet_box(2)
@@ -148,6 +150,11 @@ def test_the_default_method_is_the_one_of_each_mesh_dimension(tmp_path):
     # done: for a rerun with the default and for one naming qclp, not for one naming another method
     for method, done in ((None, True), ("qclp", True), ("lclp", None)):
         assert _finished(dist_path, sidecar, _params([0], method, 1.0, "auto", False, "npy")) is done
+    # a position is the point inside the solid (it was the closest surface point, which a volume has not)
+    row = solve_one(str(tmp_path / "box.ele"), [[0.4, 0.5, 0.5]], str(tmp_path), output_format="npy")
+    assert row["status"] == "ok", row["error"]
+    expected = cg.geodesic_distance(mesh, volume_point(mesh, [0.4, 0.5, 0.5]))
+    np.testing.assert_allclose(np.load(tmp_path / "box.npy"), expected, rtol=1e-7, atol=1e-9)
 
 
 def test_usage_errors_before_any_work(meshes, tmp_path):

@@ -135,15 +135,17 @@ def _source_spec(sources):
 
 
 def _mesh_sources(mesh, spec):
-    """The ``sources`` of one mesh: file vertex indices become mesh indices, positions its closest surface points."""
+    """The ``sources`` of one mesh: file vertex indices become mesh indices, positions its closest surface points
+    (inside a tetrahedral mesh, the points themselves)."""
     if spec == "boundary":
         return spec
     from .mesh.fileorder import file_sources
-    from .sources import surface_point
+    from .mesh.locate import surface_point, volume_point
 
     if all(isinstance(s, int) for s in spec):
         return file_sources(mesh, spec).tolist()
-    return [int(file_sources(mesh, [s])[0]) if isinstance(s, int) else surface_point(mesh, s) for s in spec]
+    at = volume_point if mesh.dim == 3 else surface_point
+    return [int(file_sources(mesh, [s])[0]) if isinstance(s, int) else at(mesh, s) for s in spec]
 
 
 def _params(sources, method, m, solver, multires, output_format) -> dict:
@@ -272,7 +274,7 @@ def run_batch(paths, sources, out_dir, *, method: str | None = None, m: float = 
     sources : int, sequence of int and [x, y, z] positions, or "boundary"
         Source vertex indices, the same for every mesh (a mesh where one is out
         of range fails, the others go on); a position is each mesh's closest
-        surface point; ``"boundary"`` each mesh's boundary.
+        surface point (in a tetrahedral mesh, the point inside); ``"boundary"`` each mesh's boundary.
     out_dir : str or Path
         Output folder, created if missing. With a remote ``scheduler`` it must
         be writable by the workers at the same path.
@@ -428,12 +430,11 @@ def _run_on_cluster(todo, rows, sources, out, method, m, solver, multires, outpu
         try:
             _collect(require_distributed()[1], futures, rows, bar)
         except KeyboardInterrupt:
-            if bar is not None:
-                bar.close()
             stop_after_interrupt(client, futures, cluster)
             raise
-        if bar is not None:
-            bar.close()
+        finally:
+            if bar is not None:
+                bar.close()
 
 
 class _LogLines:

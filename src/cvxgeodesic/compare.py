@@ -201,12 +201,12 @@ def run_compare(mesh: Any, sources: Any, methods: Any, out_dir: str | os.PathLik
     from .api import SOLVERS
     from .mesh.convert import as_mesh
     from .sources import resolve_sources
+    from .validation import check_choice
 
     mesh = as_mesh(mesh)
     names = resolve_methods(methods, mesh.dim)
     sset = resolve_sources(mesh, sources)
-    if not isinstance(solver, str) or solver.lower() not in SOLVERS:
-        raise ParameterError(f"unknown solver {solver!r}; choose one of {', '.join(SOLVERS)}")
+    check_choice(solver, "solver", SOLVERS)
     runs: list[Run] = [(n, 1) for n in names]
     ref_run: Run | None = REFERENCES[mesh.dim]
     if reference is not None:

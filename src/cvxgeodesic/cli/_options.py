@@ -231,6 +231,7 @@ def cli_sources(args: argparse.Namespace, mesh: Any) -> tuple[Any, str]:
     import numpy as np
 
     from ..mesh.fileorder import file_sources
+    from ..mesh.locate import volume_point
 
     vertices, points, boundary = _given_sources(args, SPACES[mesh.dim].where)
     if boundary:
@@ -240,7 +241,7 @@ def cli_sources(args: argparse.Namespace, mesh: Any) -> tuple[Any, str]:
     pts: list[Any] = []
     if points:
         X = np.array(points, dtype=float)
-        pts = _surface_points(mesh, X, points) if mesh.dim == 2 else _volume_points(mesh, X)
+        pts = _surface_points(mesh, X, points) if mesh.dim == 2 else list(volume_point(mesh, X))  # a list for (p, 3)
     label = ", ".join([*(str(v) for v in vertices), *("(" + ",".join(f"{c:g}" for c in x) + ")" for x in points)])
     return [*vertices, *pts], label
 
@@ -254,12 +255,6 @@ def _surface_points(mesh: Any, X: Any, points: list) -> list:
             print(f"cvxgeodesic: note: --source-point {','.join(f'{c:g}' for c in x)} is {dd:.3g} from the surface; "
                   "using the closest surface point", file=sys.stderr)
     return list(surface_point(mesh, X))  # a list for (p, 3) positions
-
-
-def _volume_points(mesh: Any, X: Any) -> list:
-    from ..mesh.locate import volume_point
-
-    return list(volume_point(mesh, X))  # a list for (p, 3) positions
 
 
 def batch_sources(args: argparse.Namespace) -> Any:
