@@ -111,7 +111,7 @@ def resolve_methods(methods: Any, dim: int = 2) -> list[str]:
         raise ParameterError("methods is empty: give at least one method name (or 'all')")
     out: list[str] = []
     for name in names:
-        for g in ((ALL_METHODS if dim == 2 else methods_for(3)) if name == "all" else [name]):
+        for g in (methods_for(dim) if name == "all" else [name]):
             if g not in ALL_METHODS:
                 raise ParameterError(f"unknown method {g!r}; choose from: all, {', '.join(ALL_METHODS)}")
             check(ALIASES.get(g, g), dim=dim)  # a surface method on a volume: the message names those that apply
@@ -408,6 +408,8 @@ def write_pictures(out: Path, mesh: Any, sset: Any, runs: list[Run], results: di
     reference : (n,) float ndarray or None
         The reference field: the colour range and the isolines of every field picture.
     """
+    from .evaluation.slice_plot import draw_field
+
     src = _source_vertices(mesh, sset)
     vmax_field, levels = _field_scale(results, runs, reference)
     # one colour scale for every error map: the median of the methods' 99th percentiles (the reference's 0 aside),
@@ -422,34 +424,14 @@ def write_pictures(out: Path, mesh: Any, sset: Any, runs: list[Run], results: di
         if res is None:
             continue
         title = f"{_label(run)} on {mesh.name} (source {src_txt})"
-        _draw(mesh, res.distance, out / f"field_{_stem(run)}.png", src, title=title, levels=levels,
-              vmin=0.0 if vmax_field is not None else None, vmax=vmax_field, label="distance")
+        draw_field(mesh, res.distance, out / f"field_{_stem(run)}.png", sources=src, title=title, levels=levels,
+                   vmin=0.0 if vmax_field is not None else None, vmax=vmax_field, label="distance")
         if run in rel_errors:
             rm = row["rel_mean"]
             mean_txt = f" (mean {100 * rm:.2f}%)" if rm is not None and np.isfinite(rm) else ""
-            _draw(mesh, rel_errors[run], out / f"error_{_stem(run)}.png", src, error=True, vmax=vmax_err,
-                  title=f"{_label(run)}: relative error{mean_txt}")
+            draw_field(mesh, rel_errors[run], out / f"error_{_stem(run)}.png", sources=src, error=True,
+                       vmax=vmax_err, title=f"{_label(run)}: relative error{mean_txt}")
     _write_histograms(out, mesh, src, runs, results, reference, rows[0]["reference"] if rows else "")
-
-
-def _draw(mesh: Any, values: np.ndarray, path: Path, src: np.ndarray, *, title: str, levels: Any = None,
-          vmin: float | None = 0.0, vmax: float | None = None, label: str = "", error: bool = False) -> None:
-    """A field (or, ``error``, a relative error) on the surface, or on the slice of a volume through its centre."""
-    if mesh.dim == 3:
-        from .evaluation.slice_plot import plot_slice
-
-        plot_slice(mesh, values, path, vmin=vmin if not error else 0.0, vmax=vmax, title=title, points=mesh.V[src],
-                   isolines=None if error else levels, cmap="inferno_r" if error else "viridis",
-                   colorbar_label="relative error" if error else label)
-    elif error:
-        from .plotting import plot_error_map
-
-        plot_error_map(mesh, values, path, title=title, vmax=vmax, sources=src)
-    else:
-        from .plotting import plot_field
-
-        plot_field(mesh, values, path, isolines=levels, title=title, vmin=vmin, vmax=vmax, colorbar_label=label,
-                   sources=src)
 
 
 def _write_histograms(out: Path, mesh: Any, src: np.ndarray, runs: list[Run], results: dict[Run, Outcome],

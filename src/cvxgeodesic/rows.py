@@ -401,15 +401,12 @@ def solve_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any], opt
         # one thread limit around the rows: each solve's own (the same count) is then free, not ~10 ms of library
         # discovery by threadpoolctl (measured: 16 % of a local row's time on kitten)
         with thread_limit(resolve_threads(options.get("threads"))):
-            _solve_into(factory(mesh, **options), items, todo, store, bar)
-
-
-def _solve_into(solver: Any, items: Sequence[Any], todo: np.ndarray, store: RowStore, bar: Any) -> None:
-    for i in todo:
-        store.put(int(i), solver.solve(items[int(i)]).distance)
-        _signals.check()  # a command-line Ctrl-C whose exception a ctypes callback swallowed during the row
-        store.save(force=False)
-        bar.update(1)
+            solver = factory(mesh, **options)
+            for i in todo:
+                store.put(int(i), solver.solve(items[int(i)]).distance)
+                _signals.check()  # a command-line Ctrl-C whose exception a ctypes callback swallowed during the row
+                store.save(force=False)
+                bar.update(1)
 
 
 def cluster_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any], options: dict, store: RowStore, *,
