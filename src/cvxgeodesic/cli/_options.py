@@ -1,9 +1,9 @@
 """The options several commands share and what they become: sources, method, travel cost, help texts.
 
 A surface (``mesh.dim == 2``) and a volume (``mesh.dim == 3``) take the same options; what differs between the two
-is data, :data:`SPACES`: the word for the cells, the output formats of a field and where a ``--source-point`` goes
-(the closest surface point, or the point itself inside the solid); the default method is the API's
-(:data:`~cvxgeodesic.api.DEFAULT_METHODS`).
+is data, :data:`SPACES`: the word for the cells and where a ``--source-point`` goes (the closest surface point, or
+the point itself inside the solid); the default method is the API's (:data:`~cvxgeodesic.api.DEFAULT_METHODS`), the
+formats of a field the registry's (``Format.dims``).
 
 Only the standard library at import, as the whole :mod:`cvxgeodesic.cli` package (see its ``__init__``).
 """
@@ -27,14 +27,13 @@ class Space:
     """What the command line does differently on a surface and in a volume."""
 
     cells: str  # the cells in messages
-    outputs: tuple[str, ...] | None  # extensions of a distance file (None: every format of the registry)
     where: str  # where a --source-point lies, for messages
 
 
 #: By simplex dimension (``mesh.dim``).
 SPACES = {
-    2: Space("faces", None, ""),
-    3: Space("tetrahedra", (".vtu", ".vtk", ".npy"), " (inside the solid)"),  # the formats that carry tetrahedra
+    2: Space("faces", ""),
+    3: Space("tetrahedra", " (inside the solid)"),
 }
 
 

@@ -57,15 +57,15 @@ def run(args: argparse.Namespace) -> int:
     from .._atomic import output_set
     from .._verbose import progress_printer
     from ..api import GeodesicSolver
-    from ..mesh.formats.registry import DISTANCE_EXTENSIONS
+    from ..mesh.formats.registry import DISTANCE_EXTENSIONS, VOLUME_DISTANCE_EXTENSIONS
     from ..mesh.io import load_mesh, save_distance
     from ..validation import check_output_path
 
     check_outputs(args, ("-o", args.output, DISTANCE_EXTENSIONS), ("--png", args.png, (".png",)))
     mesh = load_mesh(args.mesh)
     space = opt.SPACES[mesh.dim]
-    if space.outputs is not None:
-        check_output_path(args.output, space.outputs)
+    if mesh.dim == 3:  # before the solve: save_distance writes a volume's field in fewer formats
+        check_output_path(args.output, VOLUME_DISTANCE_EXTENSIONS)
     sources, label = opt.cli_sources(args, mesh)
     method = opt.method_for(args, mesh)
     log = sys.stderr
