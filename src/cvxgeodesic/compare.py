@@ -137,11 +137,6 @@ def _stem(run: Run) -> str:
     return run[0] if run[1] == 1 else f"{run[0]}_order{run[1]}"
 
 
-def _source_vertices(mesh: Any, sset: Any) -> np.ndarray:
-    """The vertices where every field is 0: marked in the pictures, left out of the histograms."""
-    return sset.vertices if mesh.dim == 2 else sset.fixed_vertices(mesh)
-
-
 def error_line(exc: BaseException, *, typed: bool = False) -> str:
     """The message of ``exc`` on one line (for a CSV cell, a table, a batch row), after its type's name unless it is
     one of the library's errors (whose messages say what went wrong) and not ``typed``."""
@@ -410,7 +405,8 @@ def write_pictures(out: Path, mesh: Any, sset: Any, runs: list[Run], results: di
     """
     from .evaluation.slice_plot import draw_field
 
-    src = _source_vertices(mesh, sset)
+    # the vertices where every field is 0: marked in the pictures, left out of the histograms
+    src = sset.vertices if mesh.dim == 2 else sset.fixed_vertices(mesh)
     vmax_field, levels = _field_scale(results, runs, reference)
     # one colour scale for every error map: the median of the methods' 99th percentiles (the reference's 0 aside),
     # so one very bad method does not wash out the others; the colour bar shows an arrow where it clips
