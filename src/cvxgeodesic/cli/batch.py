@@ -11,6 +11,8 @@ from ._options import add_solve_options, add_source_options, batch_sources, defa
 
 def add_parser(sub: Any) -> None:
     """The ``batch`` sub-command."""
+    from ..batch import OUTPUT_FORMATS
+
     p = sub.add_parser(
         "batch", help="distance fields for many meshes with Dask (local cluster or --scheduler)",
         description="Solve the same sources on every mesh matched by MESH_GLOB, one Dask task per mesh. Writes "
@@ -25,7 +27,7 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--multires", type=int, default=0, metavar="FACES",
                    help="coarse-to-fine approximation: solve on a mesh simplified to FACES faces (default 0: off)")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created if missing)")
-    p.add_argument("--format", choices=("ply", "npy"), default="ply", help="distance file format (default ply)")
+    p.add_argument("--format", choices=OUTPUT_FORMATS, default="ply", help="distance file format (default ply)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="address of a running Dask scheduler, e.g. tcp://SCHEDULER:8786 (default: a local cluster)")
     p.add_argument("--workers", type=int, default=2, metavar="N",
