@@ -129,12 +129,9 @@ def _key(run: Run) -> Run:
     return ALIASES.get(run[0], run[0]), run[1]
 
 
-def _label(run: Run) -> str:
-    return run[0] if run[1] == 1 else f"{run[0]} order {run[1]}"
-
-
-def _stem(run: Run) -> str:
-    return run[0] if run[1] == 1 else f"{run[0]}_order{run[1]}"
+def _label(run: Run, order: str = " order ") -> str:
+    """The run in tables and titles (in file names: ``order="_order"``)."""
+    return run[0] if run[1] == 1 else f"{run[0]}{order}{run[1]}"
 
 
 def error_line(exc: BaseException, *, typed: bool = False) -> str:
@@ -420,12 +417,12 @@ def write_pictures(out: Path, mesh: Any, sset: Any, runs: list[Run], results: di
         if res is None:
             continue
         title = f"{_label(run)} on {mesh.name} (source {src_txt})"
-        draw_field(mesh, res.distance, out / f"field_{_stem(run)}.png", sources=src, title=title, levels=levels,
-                   vmin=0.0 if vmax_field is not None else None, vmax=vmax_field, label="distance")
+        draw_field(mesh, res.distance, out / f"field_{_label(run, '_order')}.png", sources=src, title=title,
+                   levels=levels, vmin=0.0 if vmax_field is not None else None, vmax=vmax_field, label="distance")
         if run in rel_errors:
             rm = row["rel_mean"]
             mean_txt = f" (mean {100 * rm:.2f}%)" if rm is not None and np.isfinite(rm) else ""
-            draw_field(mesh, rel_errors[run], out / f"error_{_stem(run)}.png", sources=src, error=True,
+            draw_field(mesh, rel_errors[run], out / f"error_{_label(run, '_order')}.png", sources=src, error=True,
                        vmax=vmax_err, title=f"{_label(run)}: relative error{mean_txt}")
     _write_histograms(out, mesh, src, runs, results, reference, rows[0]["reference"] if rows else "")
 
