@@ -127,6 +127,36 @@ def test_default_local_cluster(meshes, tmp_path, capsys):
     assert "2 solved" in capsys.readouterr().out
 
 
+def test_a_volume_takes_its_default_method_and_its_points_inside(tmp_path):
+    """No method: a tetrahedral mesh is solved with the volume default (qclp), as geodesic_distance does; the
+    surface default qcqp-hessian does not apply to volumes (this batch used it everywhere and failed). A source
+    position is the point inside the solid."""
+    from cvxgeodesic.batch import _finished, _params, output_paths, solve_one
+    from cvxgeodesic.mesh.locate import volume_point
+    from cvxgeodesic.mesh.tet_generate import tet_box
+
+    mesh = tet_box(2)
+    (tmp_path / "box.node").write_text(f"{mesh.n_vertices} 3 0 0\n" + "".join(
+        f"{i} {x!r} {y!r} {z!r}\n" for i, (x, y, z) in enumerate(mesh.V.tolist())))
+    (tmp_path / "box.ele").write_text(f"{mesh.n_tets} 4 0\n" + "".join(
+        f"{i} {' '.join(map(str, t))}\n" for i, t in enumerate(mesh.T.tolist())))
+    row = solve_one(str(tmp_path / "box.ele"), [0], str(tmp_path), output_format="npy")
+    assert row["status"] == "ok", row["error"]
+    # the same solve in this process: agreement far below the solver's tolerance (1e-8), not bit for bit
+    np.testing.assert_allclose(np.load(tmp_path / "box.npy"), cg.geodesic_distance(mesh, 0), rtol=1e-7, atol=1e-9)
+    dist_path, sidecar = output_paths(tmp_path / "box.ele", tmp_path, "npy")
+    meta = json.loads(sidecar.read_text())
+    assert meta["info"]["method"] == meta["params"]["method"] == "qclp" and meta["dim"] == 3
+    # done: for a rerun with the default and for one naming qclp, not for one naming another method
+    for method, done in ((None, True), ("qclp", True), ("lclp", None)):
+        assert _finished(dist_path, sidecar, _params([0], method, 1.0, "auto", False, "npy")) is done
+    # a position is the point inside the solid (it was the closest surface point, which a volume has not)
+    row = solve_one(str(tmp_path / "box.ele"), [[0.4, 0.5, 0.5]], str(tmp_path), output_format="npy")
+    assert row["status"] == "ok", row["error"]
+    expected = cg.geodesic_distance(mesh, volume_point(mesh, [0.4, 0.5, 0.5]))
+    np.testing.assert_allclose(np.load(tmp_path / "box.npy"), expected, rtol=1e-7, atol=1e-9)
+
+
 def test_usage_errors_before_any_work(meshes, tmp_path):
     good, _, _ = meshes
     twin = tmp_path / "other" / "plane.obj"

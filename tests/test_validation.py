@@ -166,7 +166,8 @@ def test_batch_uses_the_same_checks(tmp_path):
                          ({"solver": "IPM"}, "^unknown solver 'IPM'"),
                          ({"m": True}, "^m must be a finite number >= 0, got True"),
                          ({"output_format": "obj"}, "^unknown output_format 'obj'; choose one of"),
-                         ({"n_workers": 0}, "^n_workers must be a positive integer, got 0")]:
+                         ({"n_workers": 0}, "^n_workers must be a positive integer, got 0"),
+                         ({"method": "heat", "multires": 500}, "^multires is not available for method 'heat'")]:
         with pytest.raises(ParameterError, match=text):
             run_batch([mesh_path], 0, tmp_path / "out", **kwargs)
 

@@ -47,6 +47,8 @@ BASELINE_METHODS = tuple(BASELINES)
 ALL_METHODS = (*FORMULATIONS, *ALIASES, *BASELINE_METHODS)
 SOLVERS = ("auto", "ipm", "clarabel")
 DEFAULT_TOL = 1e-8
+#: The method of ``method=None`` by simplex dimension (``mesh.dim``): the curved Hessian energy exists on surfaces only.
+DEFAULT_METHODS = {2: "qcqp-hessian", 3: "qclp"}
 
 
 def _is_2d(x: Any) -> bool:
@@ -248,7 +250,7 @@ class GeodesicSolver:
 
     def _check_method_and_solver(self, method: Any, solver: Any) -> None:
         if method is None:
-            method = "qclp" if self.is_volume else "qcqp-hessian"
+            method = DEFAULT_METHODS[self.dim]
         if not isinstance(method, str):
             raise ParameterError(f"method must be a string, got {type(method).__name__}")
         key = ALIASES.get(method.lower(), method.lower())

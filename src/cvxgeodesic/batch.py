@@ -13,7 +13,7 @@ Every task loads its mesh, solves, and writes, atomically,
   (the (n_file,) array), both in the file's vertex numbering and count (welded duplicates
   share a value, vertices in no face get ``inf``; see
   :func:`~cvxgeodesic.mesh.fileorder.to_file_order`), then
-- ``OUT/<mesh stem>.json``: the mesh path, the parameters, the mesh size, the
+- ``OUT/<mesh stem>.json``: the mesh path, the parameters, the mesh's dimension and size, the
   :class:`~cvxgeodesic.api.SolveInfo` as a dict, ``warnings`` (from loading) and
   ``notes`` (every repair, substitution and warning of the task, each once).
 
@@ -44,6 +44,7 @@ import numpy as np
 
 from ._atomic import check_replaceable, probe_folder
 from ._cluster import open_client, require_distributed, stop_after_interrupt
+from .compare import error_line
 from .errors import ParameterError
 from .validation import check_choice, check_count, check_not_an_input, check_smoothness
 
@@ -134,15 +135,17 @@ def _source_spec(sources):
 
 
 def _mesh_sources(mesh, spec):
-    """The ``sources`` of one mesh: file vertex indices become mesh indices, positions its closest surface points."""
+    """The ``sources`` of one mesh: file vertex indices become mesh indices, positions its closest surface points
+    (inside a tetrahedral mesh, the points themselves)."""
     if spec == "boundary":
         return spec
     from .mesh.fileorder import file_sources
-    from .sources import surface_point
+    from .mesh.locate import surface_point, volume_point
 
     if all(isinstance(s, int) for s in spec):
         return file_sources(mesh, spec).tolist()
-    return [int(file_sources(mesh, [s])[0]) if isinstance(s, int) else surface_point(mesh, s) for s in spec]
+    at = volume_point if mesh.dim == 3 else surface_point
+    return [int(file_sources(mesh, [s])[0]) if isinstance(s, int) else at(mesh, s) for s in spec]
 
 
 def _params(sources, method, m, solver, multires, output_format) -> dict:
@@ -176,15 +179,15 @@ def _finished(dist_path: Path, sidecar: Path, params: dict) -> bool | None:
         return False
     if meta.get("status") != "ok":
         return False
+    if params["method"] is None:  # the default: done if solved with the default of the mesh's dimension
+        from .api import DEFAULT_METHODS
+
+        dim = meta.get("dim", 2)  # absent in older files: taken as a surface (at worst the mesh is solved again)
+        params = {**params, "method": DEFAULT_METHODS.get(dim) if isinstance(dim, int) else None}
     return True if meta.get("params") == params else None
 
 
-def _error_text(exc: BaseException) -> str:
-    msg = str(exc).strip().splitlines()
-    return f"{type(exc).__name__}: {msg[0]}" if msg else type(exc).__name__
-
-
-def solve_one(mesh_path: str, sources: list[int], out_dir: str, method: str = "qcqp-hessian", m: float = 1.0,
+def solve_one(mesh_path: str, sources: list[int], out_dir: str, method: str | None = None, m: float = 1.0,
               solver: str = "auto", multires: bool | int = False, output_format: str = "ply") -> dict:
     """Load one mesh, solve, write its outputs; the task that :func:`run_batch` runs on a worker.
 
@@ -201,7 +204,7 @@ def solve_one(mesh_path: str, sources: list[int], out_dir: str, method: str = "q
     out_dir : str
         Existing output folder.
     method, m, solver, multires
-        See :class:`~cvxgeodesic.api.GeodesicSolver`.
+        See :class:`~cvxgeodesic.api.GeodesicSolver` (method None: its default for the mesh's dimension).
     output_format : {"ply", "npy"}
 
     Returns
@@ -211,14 +214,12 @@ def solve_one(mesh_path: str, sources: list[int], out_dir: str, method: str = "q
     """
     t0 = time.perf_counter()
     dist_path, sidecar = output_paths(mesh_path, out_dir, output_format)
-    row = {"mesh": mesh_path, "status": "failed", "output": None, "n_vertices": None, "n_faces": None,
-           "iterations": None, "solve_status": None, "time_s": None, "error": None, "warnings": [], "notes": [],
-           "worker": socket.gethostname()}
+    row = _row(mesh_path, "failed", worker=socket.gethostname())
     caught: list[warnings.WarningMessage] = []
     try:
         from . import __version__
         from ._atomic import atomic_write
-        from .api import GeodesicSolver
+        from .api import DEFAULT_METHODS, GeodesicSolver
         from .mesh.io import load_mesh, save_distance
 
         # every warning of the task becomes a note of its row (a worker's stderr would print it as raw
@@ -227,24 +228,32 @@ def solve_one(mesh_path: str, sources: list[int], out_dir: str, method: str = "q
             warnings.simplefilter("always")
             mesh = load_mesh(mesh_path)
             row["warnings"] = [str(w.message) for w in caught]
-            row["n_vertices"], row["n_faces"] = mesh.n_file_vertices, mesh.n_faces
+            row["n_vertices"], row["n_faces"] = mesh.n_file_vertices, mesh.n_cells  # tetrahedra in a volume
             src = _mesh_sources(mesh, sources)  # vertex indices are the file's
+            method = method or DEFAULT_METHODS[mesh.dim]  # recorded as if given: a rerun naming it skips the mesh
             res = GeodesicSolver(mesh, method, m=m, solver=solver, multires=multires).solve(src)
             save_distance(dist_path, mesh, res.distance, file_order=True)
         row["notes"] = _unique([*res.info.notes, *(str(w.message) for w in caught)])
         row.update(status="ok", output=str(dist_path), iterations=res.info.iterations,
                    solve_status=res.info.status, time_s=time.perf_counter() - t0)
         meta = {"status": "ok", "mesh": mesh_path, "output": dist_path.name, "cvxgeodesic": __version__,
-                "params": _params(sources, method, m, solver, multires, output_format),
-                "n_vertices": mesh.n_file_vertices, "n_mesh_vertices": mesh.n_vertices, "n_faces": mesh.n_faces,
+                "params": _params(sources, method, m, solver, multires, output_format), "dim": mesh.dim,
+                "n_vertices": mesh.n_file_vertices, "n_mesh_vertices": mesh.n_vertices, "n_faces": mesh.n_cells,
                 "wall_time": row["time_s"], "worker": row["worker"], "warnings": row["warnings"],
                 "notes": row["notes"], "info": res.info.as_dict()}
         text = json.dumps(_json_safe(meta), indent=1, allow_nan=False) + "\n"
         atomic_write(sidecar, lambda fh: fh.write(text.encode("utf-8")))
     except Exception as exc:  # one bad mesh must not stop the batch: report it in the row
-        row.update(status="failed", output=None, error=_error_text(exc), time_s=time.perf_counter() - t0,
+        row.update(status="failed", output=None, error=error_line(exc, typed=True), time_s=time.perf_counter() - t0,
                    notes=_unique(str(w.message) for w in caught))
     return row
+
+
+def _row(mesh, status: str, **values) -> dict:
+    """A row of :func:`run_batch`'s result: every key, None (no lists) where ``values`` gives none."""
+    return {"mesh": str(mesh), "status": status, "output": None, "n_vertices": None, "n_faces": None,
+            "iterations": None, "solve_status": None, "time_s": None, "error": None, "warnings": [], "notes": [],
+            "worker": None, **values}
 
 
 def _unique(lines) -> list[str]:
@@ -252,7 +261,7 @@ def _unique(lines) -> list[str]:
     return list(dict.fromkeys(str(x) for x in lines))
 
 
-def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float = 1.0, solver: str = "auto",
+def run_batch(paths, sources, out_dir, *, method: str | None = None, m: float = 1.0, solver: str = "auto",
               scheduler=None, n_workers: int = 2, force: bool = False, progress: bool = True,
               multires: bool | int = False, output_format: str = "ply") -> list[dict]:
     """Solve the same sources on many meshes, one Dask task per mesh.
@@ -265,12 +274,13 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
     sources : int, sequence of int and [x, y, z] positions, or "boundary"
         Source vertex indices, the same for every mesh (a mesh where one is out
         of range fails, the others go on); a position is each mesh's closest
-        surface point; ``"boundary"`` each mesh's boundary.
+        surface point (in a tetrahedral mesh, the point inside); ``"boundary"`` each mesh's boundary.
     out_dir : str or Path
         Output folder, created if missing. With a remote ``scheduler`` it must
         be writable by the workers at the same path.
     method, m, solver, multires
-        See :class:`~cvxgeodesic.api.GeodesicSolver`.
+        See :class:`~cvxgeodesic.api.GeodesicSolver`; method None (default): its default on each mesh,
+        ``"qcqp-hessian"`` on a surface, ``"qclp"`` on a tetrahedral mesh.
     scheduler : str or distributed.Client, optional
         Address of a running Dask scheduler (``"tcp://SCHEDULER:8786"``) or a
         connected client. Default: a ``LocalCluster`` of ``n_workers`` worker
@@ -293,7 +303,7 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
     list of dict
         One row per mesh, in the order of ``paths``: ``mesh``, ``status``
         (``"ok"``, ``"skipped"`` (already done) or ``"failed"``), ``output``,
-        ``n_vertices``, ``n_faces``, ``iterations``, ``solve_status``, ``time_s``
+        ``n_vertices``, ``n_faces`` (tetrahedra in a volume), ``iterations``, ``solve_status``, ``time_s``
         (load + solve + write, on the worker), ``error`` (one line, or None),
         ``warnings`` (from loading the mesh), ``notes`` (every note and warning of the
         task, each once) and ``worker`` (host name). ``n_vertices`` is the file's count.
@@ -305,7 +315,9 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
     ImportError
         Dask's ``distributed`` is not installed.
     """
-    from .api import ALL_METHODS, BASELINE_METHODS, SOLVERS
+    from .api import ALL_METHODS, SOLVERS
+    from .capabilities import check
+    from .formulations import ALIASES
     from .strategies import resolve_target
 
     paths = [Path(p).expanduser().resolve() for p in ([paths] if isinstance(paths, str | os.PathLike) else paths)]
@@ -313,11 +325,12 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
     if not paths:
         raise ParameterError("no mesh files given")
     sources_list = _source_spec(sources)
-    method = check_choice(method, "method", ALL_METHODS)
+    if method is not None:  # None: each mesh gets the default of its dimension, chosen by GeodesicSolver
+        method = check_choice(method, "method", ALL_METHODS)
     check_choice(solver, "solver", SOLVERS, lower=False)
     check_smoothness(m, None)  # its range too (validation.MAX_M): once, not once per mesh
-    if resolve_target(multires, 10**9) is not None and method in BASELINE_METHODS:
-        raise ParameterError(f"multires applies to the convex formulations, not to baseline {method!r}")
+    if method is not None and resolve_target(multires, 10**9) is not None:  # multires is for surfaces
+        check(ALIASES.get(method, method), dim=2, multires=True)
     check_choice(output_format, "output_format", OUTPUT_FORMATS, lower=False)
     if scheduler is None:
         check_count(n_workers, "n_workers")
@@ -338,9 +351,7 @@ def run_batch(paths, sources, out_dir, *, method: str = "qcqp-hessian", m: float
         dist_path, sidecar = output_paths(p, out, output_format)
         state = False if force else _finished(dist_path, sidecar, params)
         if state is True:
-            rows[p] = {"mesh": str(p), "status": "skipped", "output": str(dist_path), "n_vertices": None,
-                       "n_faces": None, "iterations": None, "solve_status": None, "time_s": None, "error": None,
-                       "warnings": [], "notes": [], "worker": None}
+            rows[p] = _row(p, "skipped", output=str(dist_path))
         else:
             for target in output_paths(p, out, output_format):  # a read-only output: refused now, not after its solve
                 check_replaceable(target, allow=None)
@@ -419,12 +430,11 @@ def _run_on_cluster(todo, rows, sources, out, method, m, solver, multires, outpu
         try:
             _collect(require_distributed()[1], futures, rows, bar)
         except KeyboardInterrupt:
-            if bar is not None:
-                bar.close()
             stop_after_interrupt(client, futures, cluster)
             raise
-        if bar is not None:
-            bar.close()
+        finally:
+            if bar is not None:
+                bar.close()
 
 
 class _LogLines:
@@ -468,9 +478,7 @@ def _collect(distributed, futures: dict, rows: dict, bar) -> None:
         try:
             row = fut.result()
         except Exception as exc:  # the task itself died (worker killed, out of memory, ...)
-            row = {"mesh": str(p), "status": "failed", "output": None, "n_vertices": None, "n_faces": None,
-                   "iterations": None, "solve_status": None, "time_s": None, "error": _error_text(exc),
-                   "warnings": [], "notes": [], "worker": None}
+            row = _row(p, "failed", error=error_line(exc, typed=True))
         rows[p] = row
         if bar is not None:
             bar.update(1)

@@ -40,8 +40,8 @@ from .errors import CvxGeodesicError, ParameterError, SolverError
 from .tables import Column, text_table
 
 __all__ = [
-    "COLUMN_HELP", "CSV_COLUMNS", "REFERENCES", "TABLE_COLUMNS", "evaluate_methods", "format_table", "resolve_methods",
-    "run_compare", "solve_methods", "table_legend", "write_csv", "write_pictures",
+    "COLUMN_HELP", "CSV_COLUMNS", "REFERENCES", "TABLE_COLUMNS", "error_line", "evaluate_methods", "format_table",
+    "resolve_methods", "run_compare", "solve_methods", "table_legend", "write_csv", "write_pictures",
 ]
 
 #: Columns of ``compare.csv`` (and keys of every row returned by :func:`run_compare`), in order.
@@ -111,7 +111,7 @@ def resolve_methods(methods: Any, dim: int = 2) -> list[str]:
         raise ParameterError("methods is empty: give at least one method name (or 'all')")
     out: list[str] = []
     for name in names:
-        for g in ((ALL_METHODS if dim == 2 else methods_for(3)) if name == "all" else [name]):
+        for g in (methods_for(dim) if name == "all" else [name]):
             if g not in ALL_METHODS:
                 raise ParameterError(f"unknown method {g!r}; choose from: all, {', '.join(ALL_METHODS)}")
             check(ALIASES.get(g, g), dim=dim)  # a surface method on a volume: the message names those that apply
@@ -129,22 +129,16 @@ def _key(run: Run) -> Run:
     return ALIASES.get(run[0], run[0]), run[1]
 
 
-def _label(run: Run) -> str:
-    return run[0] if run[1] == 1 else f"{run[0]} order {run[1]}"
+def _label(run: Run, order: str = " order ") -> str:
+    """The run in tables and titles (in file names: ``order="_order"``)."""
+    return run[0] if run[1] == 1 else f"{run[0]}{order}{run[1]}"
 
 
-def _stem(run: Run) -> str:
-    return run[0] if run[1] == 1 else f"{run[0]}_order{run[1]}"
-
-
-def _source_vertices(mesh: Any, sset: Any) -> np.ndarray:
-    """The vertices where every field is 0: marked in the pictures, left out of the histograms."""
-    return sset.vertices if mesh.dim == 2 else sset.fixed_vertices(mesh)
-
-
-def _error_message(exc: BaseException) -> str:
-    msg = " ".join(str(exc).split())  # one line, for the CSV and the table
-    if isinstance(exc, CvxGeodesicError):
+def error_line(exc: BaseException, *, typed: bool = False) -> str:
+    """The message of ``exc`` on one line (for a CSV cell, a table, a batch row), after its type's name unless it is
+    one of the library's errors (whose messages say what went wrong) and not ``typed``."""
+    msg = " ".join(str(exc).split())
+    if isinstance(exc, CvxGeodesicError) and not typed:
         return msg or type(exc).__name__
     return f"{type(exc).__name__}: {msg}" if msg else type(exc).__name__
 
@@ -199,12 +193,12 @@ def run_compare(mesh: Any, sources: Any, methods: Any, out_dir: str | os.PathLik
     from .api import SOLVERS
     from .mesh.convert import as_mesh
     from .sources import resolve_sources
+    from .validation import check_choice
 
     mesh = as_mesh(mesh)
     names = resolve_methods(methods, mesh.dim)
     sset = resolve_sources(mesh, sources)
-    if not isinstance(solver, str) or solver.lower() not in SOLVERS:
-        raise ParameterError(f"unknown solver {solver!r}; choose one of {', '.join(SOLVERS)}")
+    check_choice(solver, "solver", SOLVERS)
     runs: list[Run] = [(n, 1) for n in names]
     ref_run: Run | None = REFERENCES[mesh.dim]
     if reference is not None:
@@ -278,7 +272,7 @@ def solve_methods(mesh: Any, sset: Any, runs: list[Run], *, reference: Run | Non
         results[_key(reference)] = _attempt(mesh, reference, solve_src, m, solver)
         _, ref_wall, ref_err = results[_key(reference)]
         if ref_err is not None:
-            say(f"warning: no {_label(reference)} reference, errors are not computed ({_error_message(ref_err)})")
+            say(f"warning: no {_label(reference)} reference, errors are not computed ({error_line(ref_err)})")
         elif reference not in runs:
             say(f"{_label(reference):<{width}}  {ref_wall:8.2f} s  (reference)")
     for i, run in enumerate(runs, 1):
@@ -289,13 +283,13 @@ def solve_methods(mesh: Any, sset: Any, runs: list[Run], *, reference: Run | Non
         if err is None:
             say(f"{tag}  {wall:8.2f} s  {res.info.status}, {res.info.iterations} it")
         else:
-            say(f"{tag}  {wall:8.2f} s  FAILED: {_error_message(err)}")
+            say(f"{tag}  {wall:8.2f} s  FAILED: {error_line(err)}")
     return results
 
 
 def _failed_row(row: dict, wall: float, err: BaseException) -> None:
     row["time_s"] = float(wall)
-    row["status"] = _error_message(err)
+    row["status"] = error_line(err)
     if isinstance(err, SolverError):
         row["solver"] = str(err.solver)
         it = err.info.get("iterations")
@@ -346,7 +340,7 @@ def evaluate_methods(mesh: Any, runs: list[Run], results: dict[Run, Outcome], re
             record = summarize(mesh, res, reference, gradient=False)
             rel_errors[run] = relative_error(res.distance, reference, res.sources)
         except Exception as exc:  # noqa: BLE001
-            row["status"] = f"{row['status']}; evaluation failed: {_error_message(exc)}"
+            row["status"] = f"{row['status']}; evaluation failed: {error_line(exc)}"
             continue
         row.update({k: record[k] for k in _MEASURED_KEYS})
     return rows, rel_errors
@@ -406,7 +400,10 @@ def write_pictures(out: Path, mesh: Any, sset: Any, runs: list[Run], results: di
     reference : (n,) float ndarray or None
         The reference field: the colour range and the isolines of every field picture.
     """
-    src = _source_vertices(mesh, sset)
+    from .evaluation.slice_plot import draw_field
+
+    # the vertices where every field is 0: marked in the pictures, left out of the histograms
+    src = sset.vertices if mesh.dim == 2 else sset.fixed_vertices(mesh)
     vmax_field, levels = _field_scale(results, runs, reference)
     # one colour scale for every error map: the median of the methods' 99th percentiles (the reference's 0 aside),
     # so one very bad method does not wash out the others; the colour bar shows an arrow where it clips
@@ -420,34 +417,14 @@ def write_pictures(out: Path, mesh: Any, sset: Any, runs: list[Run], results: di
         if res is None:
             continue
         title = f"{_label(run)} on {mesh.name} (source {src_txt})"
-        _draw(mesh, res.distance, out / f"field_{_stem(run)}.png", src, title=title, levels=levels,
-              vmin=0.0 if vmax_field is not None else None, vmax=vmax_field, label="distance")
+        draw_field(mesh, res.distance, out / f"field_{_label(run, '_order')}.png", sources=src, title=title,
+                   levels=levels, vmin=0.0 if vmax_field is not None else None, vmax=vmax_field, label="distance")
         if run in rel_errors:
             rm = row["rel_mean"]
             mean_txt = f" (mean {100 * rm:.2f}%)" if rm is not None and np.isfinite(rm) else ""
-            _draw(mesh, rel_errors[run], out / f"error_{_stem(run)}.png", src, error=True, vmax=vmax_err,
-                  title=f"{_label(run)}: relative error{mean_txt}")
+            draw_field(mesh, rel_errors[run], out / f"error_{_label(run, '_order')}.png", sources=src, error=True,
+                       vmax=vmax_err, title=f"{_label(run)}: relative error{mean_txt}")
     _write_histograms(out, mesh, src, runs, results, reference, rows[0]["reference"] if rows else "")
-
-
-def _draw(mesh: Any, values: np.ndarray, path: Path, src: np.ndarray, *, title: str, levels: Any = None,
-          vmin: float | None = 0.0, vmax: float | None = None, label: str = "", error: bool = False) -> None:
-    """A field (or, ``error``, a relative error) on the surface, or on the slice of a volume through its centre."""
-    if mesh.dim == 3:
-        from .evaluation.slice_plot import plot_slice
-
-        plot_slice(mesh, values, path, vmin=vmin if not error else 0.0, vmax=vmax, title=title, points=mesh.V[src],
-                   isolines=None if error else levels, cmap="inferno_r" if error else "viridis",
-                   colorbar_label="relative error" if error else label)
-    elif error:
-        from .plotting import plot_error_map
-
-        plot_error_map(mesh, values, path, title=title, vmax=vmax, sources=src)
-    else:
-        from .plotting import plot_field
-
-        plot_field(mesh, values, path, isolines=levels, title=title, vmin=vmin, vmax=vmax, colorbar_label=label,
-                   sources=src)
 
 
 def _write_histograms(out: Path, mesh: Any, src: np.ndarray, runs: list[Run], results: dict[Run, Outcome],

@@ -28,6 +28,7 @@ import time
 import warnings
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import ExitStack
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -95,8 +96,7 @@ def fingerprint(mesh: Any, items: Sequence[Any], options: dict) -> dict[str, str
             h.update(np.ascontiguousarray(a).tobytes())
         return h.hexdigest()[:16]
 
-    cells = mesh.F if hasattr(mesh, "F") else mesh.T  # a TetMesh's tetrahedra
-    out = {"mesh": f"{mesh.n_vertices} vertices, {len(cells)} cells, {digest(mesh.V, cells)}"}
+    out = {"mesh": f"{mesh.n_vertices} vertices, {mesh.n_cells} cells, {digest(mesh.V, mesh.cells)}"}
     # a point or curve by its content (a curve's repr gives only its length)
     text = repr([int(i) if isinstance(i, int | np.integer)
                  else f"{type(i).__name__} {hashlib.sha256(pickle.dumps(i)).hexdigest()[:12]}" for i in items])
@@ -278,12 +278,12 @@ def sparse_to_file_order(mesh: Any, D: sp.csr_matrix) -> sp.csr_matrix:
     return sp.csr_matrix((vals[key], cols[key], indptr), shape=(D.shape[0], int(file_index.size)))
 
 
+@dataclass(frozen=True)
 class LocalRow:
     """One local row: ``distance`` is a (1, n) CSR matrix of the distances within ``max_distance``."""
 
-    def __init__(self, distance: sp.csr_matrix, patch_faces: int) -> None:
-        self.distance = distance
-        self.patch_faces = patch_faces
+    distance: sp.csr_matrix
+    patch_faces: int
 
 
 class LocalRows:
@@ -401,15 +401,12 @@ def solve_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any], opt
         # one thread limit around the rows: each solve's own (the same count) is then free, not ~10 ms of library
         # discovery by threadpoolctl (measured: 16 % of a local row's time on kitten)
         with thread_limit(resolve_threads(options.get("threads"))):
-            _solve_into(factory(mesh, **options), items, todo, store, bar)
-
-
-def _solve_into(solver: Any, items: Sequence[Any], todo: np.ndarray, store: RowStore, bar: Any) -> None:
-    for i in todo:
-        store.put(int(i), solver.solve(items[int(i)]).distance)
-        _signals.check()  # a command-line Ctrl-C whose exception a ctypes callback swallowed during the row
-        store.save(force=False)
-        bar.update(1)
+            solver = factory(mesh, **options)
+            for i in todo:
+                store.put(int(i), solver.solve(items[int(i)]).distance)
+                _signals.check()  # a command-line Ctrl-C whose exception a ctypes callback swallowed during the row
+                store.save(force=False)
+                bar.update(1)
 
 
 def cluster_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any], options: dict, store: RowStore, *,
@@ -453,11 +450,13 @@ def keeping(store: RowStore) -> Iterator[None]:
 
 
 def _row_bar(total: int, initial: int, desc: str, progress: bool | None) -> Any:
-    """A tqdm bar counting rows on stderr (shown after PROGRESS_DELAY seconds when ``progress`` is None)."""
+    """A tqdm bar counting rows on stderr (shown after PROGRESS_DELAY seconds, read now, when ``progress`` is None)."""
     from tqdm import tqdm
 
-    return tqdm(total=total, initial=initial, desc=desc, unit="row", file=sys.stderr, delay=_delay(progress),
-                disable=progress is False)
+    from . import _verbose
+
+    return tqdm(total=total, initial=initial, desc=desc, unit="row", file=sys.stderr, disable=progress is False,
+                delay=_verbose.PROGRESS_DELAY if progress is None else 0.0)
 
 
 def split_rows(n_rows: int, n_chunks: int) -> list[slice]:
@@ -539,12 +538,10 @@ def _slots(client: Any) -> int:
 
 
 class _RowBar:
-    """A row-counting tqdm bar fed from two threads: worker events (per row) and finished chunks."""
+    """A row-counting bar (:func:`_row_bar`) fed from two threads: worker events (per row) and finished chunks."""
 
-    def __init__(self, total: int, desc: str, delay: float = 0.0) -> None:
-        from tqdm import tqdm
-
-        self.bar = tqdm(total=total, desc=desc, unit="row", file=sys.stderr, delay=delay)
+    def __init__(self, bar: Any) -> None:
+        self.bar = bar
         self.lock = threading.Lock()
         self.events = 0
         self.done = 0
@@ -626,7 +623,7 @@ def distributed_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any
         chunks = split_rows(len(items), n_workers if cluster is not None else _slots(client))
         token = f"{os.getpid()}-{time.time_ns()}"
         topic = f"cvxgeodesic-rows-{token}" if progress is not False else None
-        bar = _RowBar(len(items), desc, _delay(progress)) if progress is not False else None
+        bar = _RowBar(_row_bar(len(items), 0, desc, progress)) if progress is not False else None
         if bar is not None:  # before the tasks start, so that no row's event is missed
             client.subscribe_topic(topic, bar.event)
         futures: list = []
@@ -652,13 +649,6 @@ def distributed_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any
                     client.unsubscribe_topic(topic)
     _rewarn(w for _, ws in parts for w in ws)
     return None if on_chunk is not None else _stack([rows for rows, _ in parts])
-
-
-def _delay(progress: bool | None) -> float:
-    """Seconds before a row bar shows: PROGRESS_DELAY (read now) for the default ``progress=None``, else 0."""
-    from . import _verbose
-
-    return _verbose.PROGRESS_DELAY if progress is None else 0.0
 
 
 def _gather(futures: list, chunks: list[slice], bar: _RowBar | None,

@@ -1,8 +1,9 @@
 """The options several commands share and what they become: sources, method, travel cost, help texts.
 
 A surface (``mesh.dim == 2``) and a volume (``mesh.dim == 3``) take the same options; what differs between the two
-is data, :data:`SPACES`: the word for the cells, the default method, the output formats of a field and where a
-``--source-point`` goes (the closest surface point, or the point itself inside the solid).
+is data, :data:`SPACES`: the word for the cells and where a ``--source-point`` goes (the closest surface point, or
+the point itself inside the solid); the default method is the API's (:data:`~cvxgeodesic.api.DEFAULT_METHODS`), the
+formats of a field the registry's (``Format.dims``).
 
 Only the standard library at import, as the whole :mod:`cvxgeodesic.cli` package (see its ``__init__``).
 """
@@ -26,16 +27,13 @@ class Space:
     """What the command line does differently on a surface and in a volume."""
 
     cells: str  # the cells in messages
-    default_method: str  # --method when not given
-    outputs: tuple[str, ...] | None  # extensions of a distance file (None: every format of the registry)
     where: str  # where a --source-point lies, for messages
 
 
 #: By simplex dimension (``mesh.dim``).
 SPACES = {
-    2: Space("faces", "qcqp-hessian", None, ""),
-    # the curved Hessian energy exists on surfaces only; the formats that carry tetrahedra (or a bare array)
-    3: Space("tetrahedra", "qclp", (".vtu", ".vtk", ".npy"), " (inside the solid)"),
+    2: Space("faces", ""),
+    3: Space("tetrahedra", " (inside the solid)"),
 }
 
 
@@ -109,28 +107,27 @@ def add_solve_options(p: argparse.ArgumentParser, *, method: bool = True, m_help
     p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")
 
 
-class _Given(argparse.Action):
-    """Stores the value and records that the option was given (``args.method_given``)."""
-
-    def __call__(self, parser, namespace, values, option_string=None):
-        setattr(namespace, self.dest, values)
-        namespace.method_given = True
-
-
 def add_method_option(p: argparse.ArgumentParser) -> None:
-    """``--method NAME``, any method of :data:`~cvxgeodesic.api.ALL_METHODS` (default: :attr:`Space.default_method`
-    of the mesh, which ``args.method_given`` tells apart)."""
+    """``--method NAME``, any method of :data:`~cvxgeodesic.api.ALL_METHODS`; None when not given (the default of
+    the mesh's dimension, :func:`method_for`)."""
     from ..api import ALL_METHODS
 
-    p.add_argument("--method", default=SPACES[2].default_method, choices=ALL_METHODS, metavar="NAME", action=_Given,
-                   help=f"one of: {', '.join(ALL_METHODS)} (default {SPACES[2].default_method}; "
-                        f"{SPACES[3].default_method} on a tetrahedral mesh)")
-    p.set_defaults(method_given=False)
+    p.add_argument("--method", default=None, choices=ALL_METHODS, metavar="NAME",
+                   help=f"one of: {', '.join(ALL_METHODS)} (default {default_methods()})")
+
+
+def default_methods() -> str:
+    """The defaults of ``--method`` in words (:data:`~cvxgeodesic.api.DEFAULT_METHODS`)."""
+    from ..api import DEFAULT_METHODS
+
+    return f"{DEFAULT_METHODS[2]}; {DEFAULT_METHODS[3]} on a tetrahedral mesh"
 
 
 def method_for(args: argparse.Namespace, mesh: Any) -> str:
-    """``--method`` when given, else the default of the mesh's :data:`SPACES` entry."""
-    return args.method if getattr(args, "method_given", False) else SPACES[mesh.dim].default_method
+    """``--method`` when given, else the default for the mesh's dimension (:data:`~cvxgeodesic.api.DEFAULT_METHODS`)."""
+    from ..api import DEFAULT_METHODS
+
+    return args.method or DEFAULT_METHODS[mesh.dim]
 
 
 def add_cost_options(p: argparse.ArgumentParser) -> None:
@@ -233,6 +230,7 @@ def cli_sources(args: argparse.Namespace, mesh: Any) -> tuple[Any, str]:
     import numpy as np
 
     from ..mesh.fileorder import file_sources
+    from ..mesh.locate import volume_point
 
     vertices, points, boundary = _given_sources(args, SPACES[mesh.dim].where)
     if boundary:
@@ -242,7 +240,7 @@ def cli_sources(args: argparse.Namespace, mesh: Any) -> tuple[Any, str]:
     pts: list[Any] = []
     if points:
         X = np.array(points, dtype=float)
-        pts = _surface_points(mesh, X, points) if mesh.dim == 2 else _volume_points(mesh, X)
+        pts = _surface_points(mesh, X, points) if mesh.dim == 2 else list(volume_point(mesh, X))  # a list for (p, 3)
     label = ", ".join([*(str(v) for v in vertices), *("(" + ",".join(f"{c:g}" for c in x) + ")" for x in points)])
     return [*vertices, *pts], label
 
@@ -256,12 +254,6 @@ def _surface_points(mesh: Any, X: Any, points: list) -> list:
             print(f"cvxgeodesic: note: --source-point {','.join(f'{c:g}' for c in x)} is {dd:.3g} from the surface; "
                   "using the closest surface point", file=sys.stderr)
     return list(surface_point(mesh, X))  # a list for (p, 3) positions
-
-
-def _volume_points(mesh: Any, X: Any) -> list:
-    from ..mesh.locate import volume_point
-
-    return list(volume_point(mesh, X))  # a list for (p, 3) positions
 
 
 def batch_sources(args: argparse.Namespace) -> Any:

@@ -6,11 +6,13 @@ import argparse
 import sys
 from typing import Any
 
-from ._options import add_solve_options, add_source_options, batch_sources, mesh_help
+from ._options import add_solve_options, add_source_options, batch_sources, default_methods, mesh_help
 
 
 def add_parser(sub: Any) -> None:
     """The ``batch`` sub-command."""
+    from ..batch import OUTPUT_FORMATS
+
     p = sub.add_parser(
         "batch", help="distance fields for many meshes with Dask (local cluster or --scheduler)",
         description="Solve the same sources on every mesh matched by MESH_GLOB, one Dask task per mesh. Writes "
@@ -25,7 +27,7 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--multires", type=int, default=0, metavar="FACES",
                    help="coarse-to-fine approximation: solve on a mesh simplified to FACES faces (default 0: off)")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created if missing)")
-    p.add_argument("--format", choices=("ply", "npy"), default="ply", help="distance file format (default ply)")
+    p.add_argument("--format", choices=OUTPUT_FORMATS, default="ply", help="distance file format (default ply)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="address of a running Dask scheduler, e.g. tcp://SCHEDULER:8786 (default: a local cluster)")
     p.add_argument("--workers", type=int, default=2, metavar="N",
@@ -43,7 +45,9 @@ def run(args: argparse.Namespace) -> int:
     paths = expand_mesh_paths(args.meshes)
     if not args.quiet:
         where = args.scheduler or f"a local cluster of {args.workers} worker processes"
-        print(f"{len(paths)} mesh file(s); method {args.method}; running on {where}", file=sys.stderr)
+        method = args.method or f"the default ({default_methods()})"
+        print(f"{len(paths)} mesh file(s); method {method}; running on {where}", file=sys.stderr)
+    # --method not given: None, the default of each mesh's dimension
     rows = run_batch(paths, sources, args.out, method=args.method, m=args.m, solver=args.solver,
                      scheduler=args.scheduler, n_workers=args.workers, force=args.force, progress=not args.quiet,
                      multires=args.multires, output_format=args.format)

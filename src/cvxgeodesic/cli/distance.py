@@ -57,15 +57,15 @@ def run(args: argparse.Namespace) -> int:
     from .._atomic import output_set
     from .._verbose import progress_printer
     from ..api import GeodesicSolver
-    from ..mesh.formats.registry import DISTANCE_EXTENSIONS
+    from ..mesh.formats.registry import DISTANCE_EXTENSIONS, VOLUME_DISTANCE_EXTENSIONS
     from ..mesh.io import load_mesh, save_distance
     from ..validation import check_output_path
 
     check_outputs(args, ("-o", args.output, DISTANCE_EXTENSIONS), ("--png", args.png, (".png",)))
     mesh = load_mesh(args.mesh)
     space = opt.SPACES[mesh.dim]
-    if space.outputs is not None:
-        check_output_path(args.output, space.outputs)
+    if mesh.dim == 3:  # before the solve: save_distance writes a volume's field in fewer formats
+        check_output_path(args.output, VOLUME_DISTANCE_EXTENSIONS)
     sources, label = opt.cli_sources(args, mesh)
     method = opt.method_for(args, mesh)
     log = sys.stderr
@@ -92,24 +92,14 @@ def run(args: argparse.Namespace) -> int:
 
 def draw_field(mesh: Any, res: Any, path: Any, *, title: str, normal: tuple[float, float, float],
                line: Any = None) -> None:
-    """The field of ``res`` and its sources into a PNG: on the surface, or on the slice of a volume by the plane
-    through the centre with this normal. With ``line`` ((k, 3) points of a geodesic path), the path instead of the
-    sources (in a volume its points projected onto the slice)."""
-    if mesh.dim == 2:
-        from ..plotting import plot_field
-
-        if line is not None:
-            plot_field(mesh, res.distance, path, title=title, paths=[line])
-        else:
-            plot_field(mesh, res.distance, path, title=title, sources=res.sources, colorbar_label="geodesic distance")
-        return
+    """The field of ``res`` and its sources into a PNG (:func:`~cvxgeodesic.evaluation.slice_plot.draw_field`): in a
+    volume every source is marked, its points inside too; ``line``, a geodesic path, replaces the marks."""
     import numpy as np
 
-    from ..evaluation.slice_plot import plot_slice
+    from ..evaluation.slice_plot import draw_field as draw
 
-    sset = res.source_set
-    marks = [mesh.V[sset.fixed_vertices(mesh) if sset is not None else res.sources]]
-    if sset is not None and sset.points:
-        marks.append(np.array([p.position(mesh) for p in sset.points]))
-    plot_slice(mesh, res.distance, path, normal=normal, points=np.vstack(marks) if line is None else line,
-               title=title, colorbar_label="geodesic distance")
+    sset, points = res.source_set, None
+    if mesh.dim == 3 and sset is not None:  # the vertices at 0 and the points inside
+        points = np.vstack([mesh.V[sset.fixed_vertices(mesh)], *(np.array([p.position(mesh)]) for p in sset.points)])
+    draw(mesh, res.distance, path, title=title, sources=res.sources, points=points, line=line, normal=normal,
+         label=None if line is not None and mesh.dim == 2 else "geodesic distance")

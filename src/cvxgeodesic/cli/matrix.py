@@ -85,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
         if kept:
             print(f"resuming from {partial}: {kept[0]} of {kept[1]} rows already done", file=sys.stderr)
     try:
-        D = distance_matrix(mesh, rows, method, m=args.m, solver=args.solver, progress=not args.quiet,
+        D: Any = distance_matrix(mesh, rows, method, m=args.m, solver=args.solver, progress=not args.quiet,
                             workers=args.workers, scheduler=args.scheduler, max_distance=args.max_distance,
                             checkpoint=partial)
     except KeyboardInterrupt:
@@ -94,18 +94,13 @@ def run(args: argparse.Namespace) -> int:
             print(f"cvxgeodesic: {kept[0]} of {kept[1]} rows kept in {partial}; run the same command again to "
                   "resume", file=sys.stderr)
         raise
-    if local:
-        import scipy.sparse as sp
+    import numpy as np
+    import scipy.sparse as sp
 
-        D = sparse_to_file_order(mesh, D)  # columns in the file's numbering, like every other output
-        atomic_write(args.output, lambda fh: sp.save_npz(fh, D), overwrite_read_only=args.overwrite_read_only)
-        what = f"sparse, {D.nnz} distances up to {args.max_distance:g} stored"
-    else:
-        import numpy as np
-
-        D = to_file_order(mesh, D)
-        atomic_write(args.output, lambda fh: np.save(fh, D), overwrite_read_only=args.overwrite_read_only)
-        what = "distances"
+    # columns in the file's numbering, like every other output
+    D, save = (sparse_to_file_order(mesh, D), sp.save_npz) if local else (to_file_order(mesh, D), np.save)
+    atomic_write(args.output, lambda fh: save(fh, D), overwrite_read_only=args.overwrite_read_only)
+    what = f"sparse, {D.nnz} distances up to {args.max_distance:g} stored" if local else "distances"
     partial.unlink(missing_ok=True)
     if not args.quiet:
         print(f"wrote {args.output}: {D.shape[0]} × {D.shape[1]}, {what}", file=sys.stderr)

@@ -1,4 +1,5 @@
-"""A PNG of a field on a planar slice of a tetrahedral mesh (issue 26), headless like :mod:`cvxgeodesic.plotting`.
+"""A PNG of a field on a planar slice of a tetrahedral mesh (issue 26), headless like :mod:`cvxgeodesic.plotting`;
+:func:`draw_field`, a field on a surface or on a volume's slice.
 
 The slice (:func:`~cvxgeodesic.mesh.tet_slice.slice_tets`) is drawn flat in the plane's own frame
 (``e1`` to the right, ``e2`` up; for the default normal ``z`` that is the ``x``–``y`` view from
@@ -19,7 +20,7 @@ from ..mesh.tetmesh import TetMesh, as_tetmesh
 from ..plotting import PLOT_EXTENSIONS, _finite_range, _isolevels, _new_figure, _save_atomic
 from ..validation import check_number, check_output_path
 
-__all__ = ["plot_slice"]
+__all__ = ["draw_field", "plot_slice"]
 
 _AXES = "xyz"
 
@@ -151,3 +152,31 @@ def plot_slice(
         cb.set_label(colorbar_label)
     _save_atomic(fig, p)
     return p
+
+
+def draw_field(mesh, values: ArrayLike, path: str | os.PathLike, *, title: str, sources: ArrayLike = (),
+               points: ArrayLike | None = None, line: ArrayLike | None = None, normal: ArrayLike = (0.0, 0.0, 1.0),
+               levels: int | ArrayLike | None = 20, vmin: float | None = None, vmax: float | None = None,
+               label: str | None = None, error: bool = False) -> None:
+    """A field (``error``: a relative error) into a PNG: on a surface (:func:`~cvxgeodesic.plotting.plot_field`,
+    :func:`~cvxgeodesic.plotting.plot_error_map`), or on the slice of a tetrahedral mesh by the plane through its
+    centre with this ``normal`` (:func:`plot_slice`): what the command line and the comparison draw.
+
+    The (k,) ``sources`` are marked, in a volume at their positions or at the (p, 3) ``points`` when given; a (q, 3)
+    ``line`` (a geodesic path) replaces the marks. ``levels`` (isolines), ``vmin``, ``vmax`` and ``label`` (the
+    colour bar's) style a field; an error has its own colour map and label, no isolines, and starts at 0.
+    """
+    if mesh.dim == 3:
+        marks = mesh.V[np.asarray(sources, dtype=np.int64)] if points is None else points
+        plot_slice(mesh, values, path, normal=normal, vmin=0.0 if error else vmin, vmax=vmax, title=title,
+                   points=marks if line is None else line, isolines=None if error else levels,
+                   cmap="inferno_r" if error else "viridis", colorbar_label="relative error" if error else label)
+    elif error:
+        from ..plotting import plot_error_map
+
+        plot_error_map(mesh, values, path, title=title, vmax=vmax, sources=sources)
+    else:
+        from ..plotting import plot_field
+
+        plot_field(mesh, values, path, isolines=levels, title=title, vmin=vmin, vmax=vmax, colorbar_label=label,
+                   sources=None if line is not None else sources, paths=() if line is None else [line])
