@@ -36,6 +36,7 @@ import scipy.sparse as sp
 from numpy.typing import ArrayLike
 
 from .errors import ParameterError, SolverError, SourceError
+from .mesh.closest import segment_point, triangle_point
 from .mesh.convert import as_mesh
 from .mesh.corridor import node_position, straighten_corridor
 from .mesh.locate import POINT_AT, POINT_TYPES, CellPoint, SurfacePoint, VolumePoint, corner_interpolant
@@ -285,20 +286,7 @@ def _closest_on_simplex(x: np.ndarray, S: np.ndarray) -> np.ndarray:
     """The point of the simplex ``S`` (a point (1, 3), a segment (2, 3) or a triangle (3, 3)) closest to ``x``."""
     if len(S) == 1:
         return S[0]
-    if len(S) == 2:
-        ab = S[1] - S[0]
-        den = float(ab @ ab)
-        return S[0] + (0.0 if den == 0 else float(np.clip((x - S[0]) @ ab / den, 0.0, 1.0))) * ab
-    a, b, c = S
-    cands = [_closest_on_simplex(x, S[[i, (i + 1) % 3]]) for i in range(3)]
-    nrm = np.cross(b - a, c - a)
-    nn = float(nrm @ nrm)
-    if nn > 0:  # the foot of the perpendicular, when it lies inside
-        foot = x - ((x - a) @ nrm) / nn * nrm
-        lam = [np.cross(c - b, foot - b) @ nrm / nn, np.cross(a - c, foot - c) @ nrm / nn]
-        if min(lam) >= 0 and sum(lam) <= 1:
-            cands.append(foot)
-    return min(cands, key=lambda y: float(np.linalg.norm(x - y)))
+    return (segment_point if len(S) == 2 else triangle_point)(x[None], *S[:, None])[0]
 
 
 # -- the walk ----------------------------------------------------------------------------------------------------
