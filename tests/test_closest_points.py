@@ -158,7 +158,8 @@ def _curve_before_the_index(mesh, curve):
         samples_b.append(b.bary)
     builder = sources._Builder(mesh)
     for f, bc in zip(samples_f, samples_b, strict=True):
-        builder.add_point(cg.SurfacePoint(f, bc))
+        p = cg.SurfacePoint(f, bc)
+        builder.add_bary(p.face, p.bary)
     V, F, h = mesh.V, mesh.F, mesh.bbox_diagonal
     for i in range(len(samples_f) - 1):
         fa, fb = samples_f[i], samples_f[i + 1]

@@ -43,8 +43,8 @@ from .mesh.locate import POINT_AT, POINT_TYPES, CellPoint, SurfacePoint, VolumeP
 from .mesh.simplex import CELL_FACETS
 from .operators.metric import make_medium
 from .results import GeodesicResult, remembered_sources
-from .sources import BARY_SNAP, SourceSet, _is_int_like, cells_around, resolve_sources
-from .validation import as_vertex_field, check_count
+from .sources import BARY_SNAP, SourceSet, cells_around, resolve_sources
+from .validation import as_vertex_field, check_count, is_integer
 
 #: A distance field as the functions here take it: the vertex values or the result they came from.
 Field: TypeAlias = ArrayLike | GeodesicResult
@@ -246,16 +246,11 @@ class _Ends:
         edge in both faces; in a volume one on a face or an edge goes to every tetrahedron around it); curve pieces
         in their faces; each source face in its tetrahedron, and as a wall on which the walk ends."""
         self.vertices[ss.fixed_vertices(mesh)] = True
-        if mesh.dim == 2:
-            for f, x in zip(ss.point_faces, ss.point_positions(mesh), strict=True):
-                self._add(f, x[None])
-        else:
-            for p in ss.points:
-                for t in geo.cells_of(mesh.T[p.tet][p.bary > 0]):
-                    self._add(t, p.position(mesh)[None])
-        T = mesh.V[mesh.cells[ss.segment_faces]]
-        for f, ba, t in zip(ss.segment_faces, ss.segment_bary, T, strict=True):
-            self._add(f, np.stack([ba[0] @ t, ba[1] @ t]))
+        for f, x, b in zip(ss.point_faces, ss.point_positions(mesh), ss.point_bary, strict=True):
+            for c in [f] if mesh.dim == 2 else geo.cells_of(mesh.cells[f][b > 0]):
+                self._add(c, x[None])
+        for f, xa, xb in zip(ss.segment_faces, *ss.segment_ends(mesh), strict=True):
+            self._add(f, np.stack([xa, xb]))
         for f, t in zip(ss.face_triangles(mesh), mesh.boundary_face_tets[ss.facets] if ss.facets.size else (),
                         strict=True):  # a volume's source faces
             self._add(t, mesh.V[f])
@@ -437,7 +432,7 @@ def _as_target(mesh: Any, target: Any) -> int | CellPoint:
     if isinstance(target, kind):
         target.check(mesh, "target")
         return target
-    if _is_int_like(target):
+    if is_integer(target):
         if not 0 <= int(target) < mesh.n_vertices:
             raise SourceError(f"target vertex {int(target)} is out of range: the mesh has {mesh.n_vertices} "
                               "vertices")
@@ -614,7 +609,7 @@ def _exact_applies(mesh: Any, result: Any, ss: Any, target: Any) -> bool:
     if isinstance(target, SurfacePoint):
         on_mesh = target.face < mesh.n_faces
     else:
-        on_mesh = _is_int_like(target) and 0 <= int(target) < mesh.n_vertices
+        on_mesh = is_integer(target) and 0 <= int(target) < mesh.n_vertices
     return (on_mesh and not ss.segment_faces.size and mesh.is_edge_manifold and mesh.referenced.all()
             and np.unique(mesh.component_labels).size == 1)
 
