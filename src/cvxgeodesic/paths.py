@@ -302,19 +302,16 @@ class _Descent:
         """The first state, from a vertex index, a point of the mesh's kind or a position (validated)."""
         geo, d = self.geo, self.d
         p = _as_target(geo.mesh, target)
+        if not isinstance(p, int) and p.bary.max() >= 1 - BARY_SNAP:  # on a vertex
+            p = int(geo.C[p.cell, np.argmax(p.bary)])
         if isinstance(p, int):
             state: tuple = ("v", p)
             value = d[p]
-        elif p.bary.max() >= 1 - BARY_SNAP:  # on a vertex
-            state = ("v", int(geo.C[p.cell, np.argmax(p.bary)]))
-            value = d[state[1]]
-        else:
-            c = p.cell
-            state = ("c", c, np.where(p.bary <= BARY_SNAP, 0.0, p.bary))
-            value = corner_interpolant(d[geo.C[c]][None], p.bary[None])[0]
-            self.nodes.append(("p", c, p.bary @ geo.V[geo.C[c]]))
-        if state[0] == "v":
             self.nodes.append(state)
+        else:
+            state = ("c", p.cell, np.where(p.bary <= BARY_SNAP, 0.0, p.bary))
+            value = corner_interpolant(d[geo.C[p.cell]][None], p.bary[None])[0]
+            self.nodes.append(("p", p.cell, p.position(geo.mesh)))
         if not np.isfinite(value):
             raise ParameterError("the distance is infinite at the target: no source is reachable from it")
         return state

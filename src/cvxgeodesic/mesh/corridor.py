@@ -74,7 +74,6 @@ def _fan(geo: Any, v: int, start: int, goal: int) -> list[tuple[list[int], list[
         others = [int(u) for u in F[f] if u != v]
         u = others[first]
         faces, ends = [f], []
-        ok = False
         for _ in range(64):
             across = [int(h) for h in geo.cells_of((v, u)) if h != f]
             if len(across) != 1:
@@ -83,11 +82,9 @@ def _fan(geo: Any, v: int, start: int, goal: int) -> list[tuple[list[int], list[
             f = across[0]
             faces.append(f)
             if f == goal:
-                ok = True
+                walks.append((ends, faces))
                 break
             u = next(int(w) for w in F[f] if w != v and w != u)
-        if ok:
-            walks.append((ends, faces))
     return walks
 
 
@@ -175,15 +172,13 @@ def _switch_sides(geo: Any, nodes: list) -> tuple[list, bool]:
         current = [run[0][2], *(r[3] for r in run)]
         q0, q1 = node_position(geo, out[-1]), node_position(geo, nodes[j + 1])
         walks = [w for w in _fan(geo, u, f_in, f_out) if w[1] != current] if f_in != f_out else []
-        if walks and np.linalg.norm(q0 - V[u]) > tol and np.linalg.norm(q1 - V[u]) > tol:
-            cur_walk = ([r[1][1] if r[1][0] == u else r[1][0] for r in run], current)
-            other = walks[0]
-            if _walk_angle(geo, u, other, q0, q1) < _walk_angle(geo, u, cur_walk, q0, q1) - 1e-9:
-                out.extend(_crossings(geo, u, other))
-                switched = True
-                i = j + 1
-                continue
-        out.extend(run)
+        cur_walk = ([r[1][1] if r[1][0] == u else r[1][0] for r in run], current)
+        if (walks and np.linalg.norm(q0 - V[u]) > tol and np.linalg.norm(q1 - V[u]) > tol
+                and _walk_angle(geo, u, walks[0], q0, q1) < _walk_angle(geo, u, cur_walk, q0, q1) - 1e-9):
+            out.extend(_crossings(geo, u, walks[0]))
+            switched = True
+        else:
+            out.extend(run)
         i = j + 1
     out.append(nodes[-1])
     return out, switched
