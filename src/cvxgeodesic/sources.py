@@ -46,7 +46,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .errors import SourceError
-from .mesh.closest import nearest_triangle_distance, point_triangle_distance, segment_distance, segment_parameter
+from .mesh.closest import nearest_triangle_distance, point_triangle_distance, segment_parameter
 from .mesh.geometry import clipped_barycentric
 from .mesh.locate import (
     BARY_TOL,
@@ -699,10 +699,10 @@ def vertex_bounds(mesh: Any, ss: SourceSet, medium: Any = None) -> np.ndarray:
         Fs = C[ss.segment_faces]
         A, B = ss.segment_ends(mesh)
         for i in range(3):
+            t = segment_parameter(V[Fs[:, i]], A, B)[:, None]
             if medium is None:
-                dist = segment_distance(V[Fs[:, i]], A, B)
+                dist = np.linalg.norm(V[Fs[:, i]] - (A + t * (B - A)), axis=1)
             else:  # a path to the Euclidean closest point of the piece, measured in the medium
-                t = segment_parameter(V[Fs[:, i]], A, B)[:, None]
                 closest = (1 - t) * ss.segment_bary[:, 0] + t * ss.segment_bary[:, 1]
                 dist = medium.segment_lengths(ss.segment_faces, closest, eye[i])
             np.minimum.at(bound, Fs[:, i], dist)

@@ -143,11 +143,6 @@ def segment_point(P: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:
     return A + segment_parameter(P, A, B)[:, None] * (B - A)
 
 
-def segment_distance(P: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """(k,) distances from points P to segments [A, B] (all (k, 3))."""
-    return np.linalg.norm(P - segment_point(P, A, B), axis=1)
-
-
 def triangle_point(P: np.ndarray, A: np.ndarray, B: np.ndarray, C: np.ndarray) -> np.ndarray:
     """(k, 3) closest points of the closed triangles ``(A, B, C)`` to the points ``P`` (all (k, 3)).
 
