@@ -158,7 +158,8 @@ def _curve_before_the_index(mesh, curve):
         samples_b.append(b.bary)
     builder = sources._Builder(mesh)
     for f, bc in zip(samples_f, samples_b, strict=True):
-        builder.add_point(cg.SurfacePoint(f, bc))
+        p = cg.SurfacePoint(f, bc)
+        builder.add_bary(p.face, p.bary)
     V, F, h = mesh.V, mesh.F, mesh.bbox_diagonal
     for i in range(len(samples_f) - 1):
         fa, fb = samples_f[i], samples_f[i + 1]
@@ -300,3 +301,31 @@ def test_nan_and_inf_positions_are_refused(bad):
         cg.surface_point(cg.icosphere(1), bad)
     with pytest.raises(SourceError, match=r"xyz\[1\] = "):
         cg.surface_point(cg.icosphere(1), [[0, 0, 0], bad])
+
+
+def test_triangle_point_is_the_closest_point_of_the_closed_triangle():
+    """triangle_point against a dense sampling of each triangle (random, plus a needle and a degenerate one); the
+    sampling's step bounds how much farther its best sample can be than the exact closest point."""
+    rng = np.random.default_rng(11)
+    T = rng.normal(size=(40, 3, 3))
+    T[0, 2] = T[0, 0] + 1e-9 * (T[0, 1] - T[0, 0])  # a needle
+    T[1, 2] = 0.5 * (T[1, 0] + T[1, 1])  # a degenerate triangle: the segment
+    P = rng.normal(size=(40, 3)) * 2
+    P[2] = T[2].mean(axis=0) + 0.3 * np.cross(T[2, 1] - T[2, 0], T[2, 2] - T[2, 0])  # above the inside
+    Y = closest.triangle_point(P, T[:, 0], T[:, 1], T[:, 2])
+    u, v = np.meshgrid(np.linspace(0, 1, 201), np.linspace(0, 1, 201))
+    keep = u + v <= 1
+    W = np.stack([1 - u[keep] - v[keep], u[keep], v[keep]], axis=1)  # (s, 3) barycentric samples
+    for k in range(len(P)):
+        S = W @ T[k]
+        sampled = np.linalg.norm(S - P[k], axis=1).min()
+        exact = np.linalg.norm(Y[k] - P[k])
+        # the closest point is no farther than the best sample, which is within a sampling step of it
+        step = np.linalg.norm(T[k] - T[k].mean(axis=0), axis=1).max() * 2 / 200
+        assert exact <= sampled + 1e-12 and sampled <= exact + step
+    np.testing.assert_allclose(closest.point_triangle_distance(P, T[:, 0], T[:, 1], T[:, 2]),
+                               np.linalg.norm(Y - P, axis=1), rtol=0, atol=0)
+    # a segment's closest point: the foot inside it, else the nearer end
+    A, B = np.zeros((3, 3)), np.array([[1.0, 0, 0]] * 3)
+    Q = np.array([[0.25, 1.0, 0.0], [-2.0, 0.5, 0.0], [3.0, 0.0, 1.0]])
+    np.testing.assert_array_equal(closest.segment_point(Q, A, B), [[0.25, 0, 0], [0, 0, 0], [1, 0, 0]])

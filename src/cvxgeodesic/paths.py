@@ -36,14 +36,15 @@ import scipy.sparse as sp
 from numpy.typing import ArrayLike
 
 from .errors import ParameterError, SolverError, SourceError
+from .mesh.closest import segment_point, triangle_point
 from .mesh.convert import as_mesh
 from .mesh.corridor import node_position, straighten_corridor
 from .mesh.locate import POINT_AT, POINT_TYPES, CellPoint, SurfacePoint, VolumePoint, corner_interpolant
 from .mesh.simplex import CELL_FACETS
 from .operators.metric import make_medium
 from .results import GeodesicResult, remembered_sources
-from .sources import BARY_SNAP, SourceSet, _is_int_like, cells_around, resolve_sources
-from .validation import as_vertex_field, check_count
+from .sources import BARY_SNAP, SourceSet, cells_around, resolve_sources
+from .validation import as_vertex_field, check_count, is_integer
 
 #: A distance field as the functions here take it: the vertex values or the result they came from.
 Field: TypeAlias = ArrayLike | GeodesicResult
@@ -245,16 +246,11 @@ class _Ends:
         edge in both faces; in a volume one on a face or an edge goes to every tetrahedron around it); curve pieces
         in their faces; each source face in its tetrahedron, and as a wall on which the walk ends."""
         self.vertices[ss.fixed_vertices(mesh)] = True
-        if mesh.dim == 2:
-            for f, x in zip(ss.point_faces, ss.point_positions(mesh), strict=True):
-                self._add(f, x[None])
-        else:
-            for p in ss.points:
-                for t in geo.cells_of(mesh.T[p.tet][p.bary > 0]):
-                    self._add(t, p.position(mesh)[None])
-        T = mesh.V[mesh.cells[ss.segment_faces]]
-        for f, ba, t in zip(ss.segment_faces, ss.segment_bary, T, strict=True):
-            self._add(f, np.stack([ba[0] @ t, ba[1] @ t]))
+        for f, x, b in zip(ss.point_faces, ss.point_positions(mesh), ss.point_bary, strict=True):
+            for c in [f] if mesh.dim == 2 else geo.cells_of(mesh.cells[f][b > 0]):
+                self._add(c, x[None])
+        for f, xa, xb in zip(ss.segment_faces, *ss.segment_ends(mesh), strict=True):
+            self._add(f, np.stack([xa, xb]))
         for f, t in zip(ss.face_triangles(mesh), mesh.boundary_face_tets[ss.facets] if ss.facets.size else (),
                         strict=True):  # a volume's source faces
             self._add(t, mesh.V[f])
@@ -285,20 +281,7 @@ def _closest_on_simplex(x: np.ndarray, S: np.ndarray) -> np.ndarray:
     """The point of the simplex ``S`` (a point (1, 3), a segment (2, 3) or a triangle (3, 3)) closest to ``x``."""
     if len(S) == 1:
         return S[0]
-    if len(S) == 2:
-        ab = S[1] - S[0]
-        den = float(ab @ ab)
-        return S[0] + (0.0 if den == 0 else float(np.clip((x - S[0]) @ ab / den, 0.0, 1.0))) * ab
-    a, b, c = S
-    cands = [_closest_on_simplex(x, S[[i, (i + 1) % 3]]) for i in range(3)]
-    nrm = np.cross(b - a, c - a)
-    nn = float(nrm @ nrm)
-    if nn > 0:  # the foot of the perpendicular, when it lies inside
-        foot = x - ((x - a) @ nrm) / nn * nrm
-        lam = [np.cross(c - b, foot - b) @ nrm / nn, np.cross(a - c, foot - c) @ nrm / nn]
-        if min(lam) >= 0 and sum(lam) <= 1:
-            cands.append(foot)
-    return min(cands, key=lambda y: float(np.linalg.norm(x - y)))
+    return (segment_point if len(S) == 2 else triangle_point)(x[None], *S[:, None])[0]
 
 
 # -- the walk ----------------------------------------------------------------------------------------------------
@@ -319,19 +302,16 @@ class _Descent:
         """The first state, from a vertex index, a point of the mesh's kind or a position (validated)."""
         geo, d = self.geo, self.d
         p = _as_target(geo.mesh, target)
+        if not isinstance(p, int) and p.bary.max() >= 1 - BARY_SNAP:  # on a vertex
+            p = int(geo.C[p.cell, np.argmax(p.bary)])
         if isinstance(p, int):
             state: tuple = ("v", p)
             value = d[p]
-        elif p.bary.max() >= 1 - BARY_SNAP:  # on a vertex
-            state = ("v", int(geo.C[p.cell, np.argmax(p.bary)]))
-            value = d[state[1]]
-        else:
-            c = p.cell
-            state = ("c", c, np.where(p.bary <= BARY_SNAP, 0.0, p.bary))
-            value = corner_interpolant(d[geo.C[c]][None], p.bary[None])[0]
-            self.nodes.append(("p", c, p.bary @ geo.V[geo.C[c]]))
-        if state[0] == "v":
             self.nodes.append(state)
+        else:
+            state = ("c", p.cell, np.where(p.bary <= BARY_SNAP, 0.0, p.bary))
+            value = corner_interpolant(d[geo.C[p.cell]][None], p.bary[None])[0]
+            self.nodes.append(("p", p.cell, p.position(geo.mesh)))
         if not np.isfinite(value):
             raise ParameterError("the distance is infinite at the target: no source is reachable from it")
         return state
@@ -449,7 +429,7 @@ def _as_target(mesh: Any, target: Any) -> int | CellPoint:
     if isinstance(target, kind):
         target.check(mesh, "target")
         return target
-    if _is_int_like(target):
+    if is_integer(target):
         if not 0 <= int(target) < mesh.n_vertices:
             raise SourceError(f"target vertex {int(target)} is out of range: the mesh has {mesh.n_vertices} "
                               "vertices")
@@ -626,7 +606,7 @@ def _exact_applies(mesh: Any, result: Any, ss: Any, target: Any) -> bool:
     if isinstance(target, SurfacePoint):
         on_mesh = target.face < mesh.n_faces
     else:
-        on_mesh = _is_int_like(target) and 0 <= int(target) < mesh.n_vertices
+        on_mesh = is_integer(target) and 0 <= int(target) < mesh.n_vertices
     return (on_mesh and not ss.segment_faces.size and mesh.is_edge_manifold and mesh.referenced.all()
             and np.unique(mesh.component_labels).size == 1)
 

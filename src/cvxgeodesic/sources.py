@@ -38,7 +38,6 @@ the exact field off.
 from __future__ import annotations
 
 import functools
-import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -47,7 +46,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .errors import SourceError
-from .mesh.closest import nearest_triangle_distance, point_triangle_distance, segment_distance, segment_parameter
+from .mesh.closest import nearest_triangle_distance, point_triangle_distance, segment_parameter
 from .mesh.geometry import clipped_barycentric
 from .mesh.locate import (
     BARY_TOL,
@@ -55,6 +54,7 @@ from .mesh.locate import (
     CellPoint,
     SurfacePoint,
     VolumePoint,
+    bary_positions,
     closest_points,
     interpolate_at,
     surface_point,
@@ -63,7 +63,7 @@ from .mesh.locate import (
 from .mesh.simplex import SimplexMesh
 from .mesh.tetmesh import TetMesh
 from .mesh.trimesh import TriMesh
-from .validation import validate_sources
+from .validation import is_integer, validate_sources
 
 __all__ = ["BARY_SNAP", "BARY_TOL", "CURVE_STEP", "ON_SURFACE_TOL", "BoundaryFaces", "CellPoint", "SourceConstraints",
            "SourceSet", "SurfaceCurve", "SurfacePoint", "VolumePoint", "boundary_edges", "closest_points",
@@ -277,9 +277,12 @@ class SourceSet:
 
     def point_positions(self, mesh: SimplexMesh) -> np.ndarray:
         """(p, 3) float ndarray: positions of the point sources on (in) ``mesh``."""
-        if not self.point_faces.size:
-            return np.zeros((0, 3))
-        return np.einsum("pk,pkj->pj", self.point_bary, mesh.V[mesh.cells[self.point_faces]])
+        return bary_positions(mesh, self.point_faces, self.point_bary)
+
+    def segment_ends(self, mesh: TriMesh) -> tuple[np.ndarray, np.ndarray]:
+        """(s, 3), (s, 3) float ndarrays: the two ends of each curve (boundary) piece."""
+        return (bary_positions(mesh, self.segment_faces, self.segment_bary[:, 0]),
+                bary_positions(mesh, self.segment_faces, self.segment_bary[:, 1]))
 
     def source_faces(self) -> np.ndarray:
         """(q,) int64 ndarray: cells that contain a point source or a curve piece (sorted, unique)."""
@@ -383,12 +386,8 @@ class _Builder:
         self.sb: list[np.ndarray] = []
         self.facets: list[np.ndarray] = []
 
-    def add_point(self, p: CellPoint) -> None:
-        """Snap to a vertex or a facet (an edge), else an interior point."""
-        self.add_bary(p.cell, p.bary)
-
     def add_bary(self, cell: int, b: np.ndarray) -> None:
-        """:meth:`add_point` of a cell and valid barycentric coordinates (``>= 0``, summing to 1).
+        """A point of a cell and valid barycentric coordinates (``>= 0``, summing to 1), snapped.
 
         A point within :data:`BARY_SNAP` of a vertex is that vertex; coordinates that small become 0. On a surface a
         point on an edge is then listed in each face of the edge (its bounds hold in both); in a solid it stays in
@@ -510,33 +509,23 @@ def _curve_pieces(mesh: TriMesh, faces: np.ndarray, bary: np.ndarray) -> list[tu
     -------
     list of (face, bary_a (3,), bary_b (3,))
     """
-    V, F = mesh.V, mesh.F
     fa, fb, ba, bb = faces[:-1], faces[1:], bary[:-1], bary[1:]
     out: list = [None] * fa.size
     for i in np.flatnonzero(fa == fb).tolist():
         out[i] = (int(fa[i]), ba[i], bb[i])
     cross = np.flatnonzero(fa != fb)
-    if cross.size:
-        def at(b, T):  # positions b @ T row by row (matmul: the same rounding as one point's b @ T)
-            return np.matmul(b[:, None, :], T)[:, 0, :]
-
-        xa, xb = at(ba[cross], V[F[fa[cross]]]), at(bb[cross], V[F[fb[cross]]])
-        tol = 1e-12 * mesh.bbox_diagonal
-        left = np.ones(cross.size, dtype=bool)
-        for g in (fa[cross], fb[cross]):  # the first face, then the second
-            T = V[F[g]]
-            corners = T[:, 0], T[:, 1], T[:, 2]
-            ga, gb = clipped_barycentric(xa, *corners), clipped_barycentric(xb, *corners)
-            ok = (left & (np.linalg.norm(at(ga, T) - xa, axis=1) <= tol)
-                  & (np.linalg.norm(at(gb, T) - xb, axis=1) <= tol))
-            for j in np.flatnonzero(ok).tolist():
-                out[int(cross[j])] = (int(g[j]), ga[j], gb[j])
-            left &= ~ok
+    xa, xb = bary_positions(mesh, fa[cross], ba[cross]), bary_positions(mesh, fb[cross], bb[cross])
+    tol = 1e-12 * mesh.bbox_diagonal
+    left = np.ones(cross.size, dtype=bool)
+    for g in (fa[cross], fb[cross]):  # the first face, then the second
+        corners = mesh.V[mesh.F[g]].transpose(1, 0, 2)
+        ga, gb = clipped_barycentric(xa, *corners), clipped_barycentric(xb, *corners)
+        ok = (left & (np.linalg.norm(bary_positions(mesh, g, ga) - xa, axis=1) <= tol)
+              & (np.linalg.norm(bary_positions(mesh, g, gb) - xb, axis=1) <= tol))
+        for j in np.flatnonzero(ok).tolist():
+            out[int(cross[j])] = (int(g[j]), ga[j], gb[j])
+        left &= ~ok
     return [piece for piece in out if piece is not None]
-
-
-def _is_int_like(x) -> bool:
-    return isinstance(x, numbers.Integral) and not isinstance(x, bool | np.bool_)
 
 
 #: The source objects each simplex dimension takes besides vertex indices.
@@ -598,7 +587,7 @@ def resolve_sources(mesh: Any, sources: Any) -> SourceSet:
         return _named_source(mesh, sources)
     if isinstance(sources, CellPoint | SurfaceCurve | BoundaryFaces):
         sources = [sources]
-    if (isinstance(sources, tuple) and len(sources) == 2 and _is_int_like(sources[0])
+    if (isinstance(sources, tuple) and len(sources) == 2 and is_integer(sources[0])
             and np.ndim(sources[1]) == 1 and np.size(sources[1]) == dim + 1):
         kind = POINT_TYPES[dim].__name__
         raise SourceError(f"sources = {sources!r} looks like a (cell, bary) pair: give a point inside a cell as "
@@ -611,7 +600,7 @@ def resolve_sources(mesh: Any, sources: Any) -> SourceSet:
             label = f"source {k}"
             if isinstance(s, CellPoint) and isinstance(s, accepted):
                 s.check(mesh, label)
-                builder.add_point(s)
+                builder.add_bary(s.cell, s.bary)
                 kinds.add("points")
             elif isinstance(s, SurfaceCurve) and isinstance(s, accepted):
                 _add_curve(builder, mesh, s, f"{label} (SurfaceCurve)")
@@ -619,7 +608,7 @@ def resolve_sources(mesh: Any, sources: Any) -> SourceSet:
             elif isinstance(s, BoundaryFaces) and isinstance(s, accepted):
                 builder.facets.append(s.resolve(mesh))
                 kinds.add("faces")
-            elif _is_int_like(s) or (isinstance(s, float | np.floating) and float(s).is_integer()):
+            elif is_integer(s) or (isinstance(s, float | np.floating) and float(s).is_integer()):
                 try:
                     builder.vertices.append(int(validate_sources(s, n)[0]))
                 except SourceError as exc:
@@ -639,7 +628,7 @@ def resolve_sources(mesh: Any, sources: Any) -> SourceSet:
 
 
 def _describe(items) -> str:
-    parts = [repr(s) if not _is_int_like(s) else f"vertex {int(s)}" for s in list(items)[:4]]
+    parts = [repr(s) if not is_integer(s) else f"vertex {int(s)}" for s in list(items)[:4]]
     return ", ".join(parts) + (f" and {len(items) - 4} more" if len(items) > 4 else "")
 
 
@@ -677,11 +666,6 @@ class SourceConstraints:
     anchors: np.ndarray
 
 
-def _segment_ends(mesh: TriMesh, ss: SourceSet) -> tuple[np.ndarray, np.ndarray]:
-    T = mesh.V[mesh.F[ss.segment_faces]]
-    return (np.einsum("sk,skj->sj", ss.segment_bary[:, 0], T), np.einsum("sk,skj->sj", ss.segment_bary[:, 1], T))
-
-
 def vertex_bounds(mesh: Any, ss: SourceSet, medium: Any = None) -> np.ndarray:
     """Upper bounds of the distance at the vertices of the cells of the sources.
 
@@ -713,12 +697,12 @@ def vertex_bounds(mesh: Any, ss: SourceSet, medium: Any = None) -> np.ndarray:
         np.minimum.at(bound, Cv.ravel(), dist.ravel())
     if ss.segment_faces.size:
         Fs = C[ss.segment_faces]
-        A, B = _segment_ends(mesh, ss)
+        A, B = ss.segment_ends(mesh)
         for i in range(3):
+            t = segment_parameter(V[Fs[:, i]], A, B)[:, None]
             if medium is None:
-                dist = segment_distance(V[Fs[:, i]], A, B)
+                dist = np.linalg.norm(V[Fs[:, i]] - (A + t * (B - A)), axis=1)
             else:  # a path to the Euclidean closest point of the piece, measured in the medium
-                t = segment_parameter(V[Fs[:, i]], A, B)[:, None]
                 closest = (1 - t) * ss.segment_bary[:, 0] + t * ss.segment_bary[:, 1]
                 dist = medium.segment_lengths(ss.segment_faces, closest, eye[i])
             np.minimum.at(bound, Fs[:, i], dist)
@@ -742,7 +726,7 @@ def _steep_cells(ops: Any, ss: SourceSet, near: np.ndarray, medium: Any) -> np.n
     corners = C[cand].reshape(-1)
     pts = [ss.point_positions(mesh), V[ss.vertices]]
     if ss.segment_faces.size:
-        A, B = _segment_ends(mesh, ss)
+        A, B = ss.segment_ends(mesh)
         pts += [A, B, 0.5 * (A + B)]
     P = np.concatenate(pts)
     local = np.full(corners.size, np.inf)

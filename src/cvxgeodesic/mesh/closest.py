@@ -138,30 +138,37 @@ def segment_parameter(P: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray
     return np.clip(t, 0.0, 1.0)
 
 
-def segment_distance(P: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """(k,) distances from points P to segments [A, B] (all (k, 3))."""
-    t = segment_parameter(P, A, B)
-    return np.linalg.norm(P - (A + t[:, None] * (B - A)), axis=1)
+def segment_point(P: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """(k, 3) closest points of the segments [A, B] to the points P (all (k, 3))."""
+    return A + segment_parameter(P, A, B)[:, None] * (B - A)
 
 
-def point_triangle_distance(P: np.ndarray, A: np.ndarray, B: np.ndarray, C: np.ndarray) -> np.ndarray:
-    """(k,) distances from points ``P`` to the closed triangles ``(A, B, C)`` (all (k, 3)).
+def triangle_point(P: np.ndarray, A: np.ndarray, B: np.ndarray, C: np.ndarray) -> np.ndarray:
+    """(k, 3) closest points of the closed triangles ``(A, B, C)`` to the points ``P`` (all (k, 3)).
 
-    The closest point by the Voronoi regions of the triangle's corners, edges and face (Ericson, *Real-Time
-    Collision Detection*, §5.1.5); a degenerate triangle gives the distance to its nearest edge.
+    The foot of the perpendicular on the triangle's plane where it lies inside the triangle, else the nearest of
+    the closest points of the three edges (the Voronoi regions of the corners, edges and face: Ericson, *Real-Time
+    Collision Detection*, §5.1.5); a degenerate triangle gives the closest point of its nearest edge.
     """
     P, A, B, C = (np.asarray(x, dtype=float).reshape(-1, 3) for x in (P, A, B, C))
     dot = lambda u, v: np.einsum("ij,ij->i", u, v)  # noqa: E731
-    edges = np.minimum(np.minimum(segment_distance(P, A, B), segment_distance(P, B, C)), segment_distance(P, C, A))
+    edges = np.stack([segment_point(P, A, B), segment_point(P, B, C), segment_point(P, C, A)])  # (3, k, 3)
+    nearest = edges[np.argmin(np.linalg.norm(P - edges, axis=2), axis=0), np.arange(len(P))]
     nrm = np.cross(B - A, C - A)
     nn = dot(nrm, nrm)
     with np.errstate(divide="ignore", invalid="ignore"):
-        # barycentric coordinates of the projection onto the plane; inside when all are >= 0
-        u = dot(np.cross(C - B, P - B), nrm) / nn
-        v = dot(np.cross(A - C, P - C), nrm) / nn
-        plane = np.abs(dot(P - A, nrm)) / np.sqrt(nn)
+        # barycentric coordinates of the foot on the plane; inside when all are >= 0
+        foot = P - (dot(P - A, nrm) / nn)[:, None] * nrm
+        u = dot(np.cross(C - B, foot - B), nrm) / nn
+        v = dot(np.cross(A - C, foot - C), nrm) / nn
     inside = (nn > 0) & (u >= 0) & (v >= 0) & (u + v <= 1)
-    return np.where(inside, plane, edges)
+    return np.where(inside[:, None], foot, nearest)
+
+
+def point_triangle_distance(P: np.ndarray, A: np.ndarray, B: np.ndarray, C: np.ndarray) -> np.ndarray:
+    """(k,) distances from points ``P`` to the closed triangles ``(A, B, C)`` (all (k, 3); :func:`triangle_point`)."""
+    P = np.asarray(P, dtype=float).reshape(-1, 3)
+    return np.linalg.norm(P - triangle_point(P, A, B, C), axis=1)
 
 
 def nearest_triangle_distance(mesh: Any, tri: np.ndarray, X: np.ndarray) -> np.ndarray:

@@ -74,7 +74,6 @@ def _fan(geo: Any, v: int, start: int, goal: int) -> list[tuple[list[int], list[
         others = [int(u) for u in F[f] if u != v]
         u = others[first]
         faces, ends = [f], []
-        ok = False
         for _ in range(64):
             across = [int(h) for h in geo.cells_of((v, u)) if h != f]
             if len(across) != 1:
@@ -83,11 +82,9 @@ def _fan(geo: Any, v: int, start: int, goal: int) -> list[tuple[list[int], list[
             f = across[0]
             faces.append(f)
             if f == goal:
-                ok = True
+                walks.append((ends, faces))
                 break
             u = next(int(w) for w in F[f] if w != v and w != u)
-        if ok:
-            walks.append((ends, faces))
     return walks
 
 
@@ -175,15 +172,13 @@ def _switch_sides(geo: Any, nodes: list) -> tuple[list, bool]:
         current = [run[0][2], *(r[3] for r in run)]
         q0, q1 = node_position(geo, out[-1]), node_position(geo, nodes[j + 1])
         walks = [w for w in _fan(geo, u, f_in, f_out) if w[1] != current] if f_in != f_out else []
-        if walks and np.linalg.norm(q0 - V[u]) > tol and np.linalg.norm(q1 - V[u]) > tol:
-            cur_walk = ([r[1][1] if r[1][0] == u else r[1][0] for r in run], current)
-            other = walks[0]
-            if _walk_angle(geo, u, other, q0, q1) < _walk_angle(geo, u, cur_walk, q0, q1) - 1e-9:
-                out.extend(_crossings(geo, u, other))
-                switched = True
-                i = j + 1
-                continue
-        out.extend(run)
+        cur_walk = ([r[1][1] if r[1][0] == u else r[1][0] for r in run], current)
+        if (walks and np.linalg.norm(q0 - V[u]) > tol and np.linalg.norm(q1 - V[u]) > tol
+                and _walk_angle(geo, u, walks[0], q0, q1) < _walk_angle(geo, u, cur_walk, q0, q1) - 1e-9):
+            out.extend(_crossings(geo, u, walks[0]))
+            switched = True
+        else:
+            out.extend(run)
         i = j + 1
     out.append(nodes[-1])
     return out, switched
@@ -246,8 +241,9 @@ def _funnel(start, portals, end) -> tuple[list[np.ndarray], list[int]]:
     return path, idx
 
 
-def _straighten_chain(geo: Any, q0: np.ndarray, chain: list, q1: np.ndarray) -> list:
-    """Shortest path from ``q0`` (in the first face) through the chain's edges to ``q1`` (in the last face)."""
+def _chain_crossings(geo: Any, q0: np.ndarray, chain: list, q1: np.ndarray) -> list[float]:
+    """Shortest path from ``q0`` (in the first face) through the chain's edges to ``q1`` (in the last face): where
+    it crosses each edge ``(a, c)``, as the parameter ``t`` of ``(1 − t) a + t c``."""
     V, F = geo.V, geo.C
     f0 = chain[0][2]
     tri = V[F[f0]]
@@ -258,7 +254,7 @@ def _straighten_chain(geo: Any, q0: np.ndarray, chain: list, q1: np.ndarray) -> 
     ey = np.cross(nrm / np.linalg.norm(nrm), ex)
     pos2 = {int(F[f0, k]): np.array([(tri[k] - tri[0]) @ ex, (tri[k] - tri[0]) @ ey]) for k in range(3)}
     start = np.array([(q0 - tri[0]) @ ex, (q0 - tri[0]) @ ey])
-    portals, ends = [], []
+    portals, flipped = [], []
     prev_face = f0
     for nd in chain:
         (a, c), f_out = nd[1], nd[3]
@@ -268,13 +264,9 @@ def _straighten_chain(geo: Any, q0: np.ndarray, chain: list, q1: np.ndarray) -> 
         o = next(int(w) for w in F[f_out] if w != a and w != c)
         po = _unfold_third(pa, pc, float(np.linalg.norm(V[o] - V[a])), float(np.linalg.norm(V[o] - V[c])), ref)
         pos2 = {a: pa, c: pc, o: po}
-        # left / right as seen when entering f_out from prev_face
-        if _cross(pc - ref, pa - ref) > 0:
-            portals.append((pa, pc))
-            ends.append((a, c))
-        else:
-            portals.append((pc, pa))
-            ends.append((c, a))
+        # left / right as seen when entering f_out from prev_face: (a, c), or (c, a) when flipped
+        flipped.append(not _cross(pc - ref, pa - ref) > 0)
+        portals.append((pc, pa) if flipped[-1] else (pa, pc))
         prev_face = f_out
     # the end point, in the last face's unfolded position (barycentric coordinates carry over)
     fl = chain[-1][3]
@@ -283,10 +275,10 @@ def _straighten_chain(geo: Any, q0: np.ndarray, chain: list, q1: np.ndarray) -> 
     corners, idx = _funnel(start, portals, end)
     out = []
     k = 0
-    for j, nd in enumerate(chain, start=1):
+    for j in range(1, len(chain) + 1):
         while idx[k + 1] < j:
             k += 1
-        (lft, rgt), (vl, vr) = portals[j - 1], ends[j - 1]
+        lft, rgt = portals[j - 1]
         if idx[k] == j:  # the path bends at an endpoint of this edge
             t = 0.0 if np.array_equal(corners[k], lft) else 1.0
         else:
@@ -299,8 +291,7 @@ def _straighten_chain(geo: Any, q0: np.ndarray, chain: list, q1: np.ndarray) -> 
                 t = float(np.clip((A - lft) @ w / (w @ w), 0.0, 1.0))
             else:
                 t = float(np.clip(_cross(lft - A, d) / den, 0.0, 1.0))
-        x = (1 - t) * V[vl] + t * V[vr]
-        out.append((*nd[:4], x))
+        out.append(1.0 - t if flipped[j - 1] else t)
     return out
 
 
@@ -318,15 +309,14 @@ def _straighten(geo: Any, nodes: list, medium: Any = None) -> None:
                and nodes[j + 1][2] == nodes[j][3]):
             j += 1
         q0, q1 = node_position(geo, nodes[i - 1]), node_position(geo, nodes[j + 1])
+        chain = nodes[i:j + 1]
         if medium is None:
-            nodes[i:j + 1] = _straighten_chain(geo, q0, nodes[i:j + 1], q1)
+            t = _chain_crossings(geo, q0, chain, q1)
         else:
-            chain = nodes[i:j + 1]
             ends = np.array([nd[1] for nd in chain], dtype=np.int64)
             faces = np.array([chain[0][2], *(nd[3] for nd in chain)], dtype=np.int64)  # of the K + 1 pieces
             t = medium.least_crossings(q0, ends, faces, q1)
-            if t is not None:
-                V = geo.V
-                nodes[i:j + 1] = [(*nd[:4], (1 - tk) * V[nd[1][0]] + tk * V[nd[1][1]])
-                                  for nd, tk in zip(chain, t, strict=True)]
+        if t is not None:
+            nodes[i:j + 1] = [(*nd[:4], (1 - tk) * geo.V[nd[1][0]] + tk * geo.V[nd[1][1]])
+                              for nd, tk in zip(chain, t, strict=True)]
         i = j + 1

@@ -11,7 +11,6 @@ coordinates of those candidates decide. No Delaunay triangulation of the vertice
 
 from __future__ import annotations
 
-import numbers
 from typing import Any
 
 import numpy as np
@@ -19,7 +18,7 @@ from numpy.typing import ArrayLike
 from scipy.spatial import cKDTree
 
 from ..errors import ParameterError, SourceError
-from ..validation import as_points, as_vertex_field
+from ..validation import as_points, as_vertex_field, is_integer, is_real
 from .closest import closest_point_index
 from .tetmesh import TET_FACES, TetMesh
 from .trimesh import TriMesh
@@ -134,13 +133,9 @@ class CellPoint:
 
     def __init__(self, cell: Any, bary: ArrayLike) -> None:
         name = type(self).__name__
-        f = cell
-        if isinstance(f, bool | np.bool_) or not isinstance(f, numbers.Integral):
-            if isinstance(f, numbers.Real) and not isinstance(f, bool | np.bool_) and float(f).is_integer():
-                f = int(float(f))
-            else:
-                raise SourceError(f"{name} {self._field} must be a {self._word} index (int), got {f!r}")
-        f = int(f)
+        if not (is_integer(cell) or (is_real(cell) and float(cell).is_integer())):
+            raise SourceError(f"{name} {self._field} must be a {self._word} index (int), got {cell!r}")
+        f = int(cell)
         if f < 0:
             raise SourceError(f"{name} {self._field} index {f} is negative")
         where, k = f"{name}({self._field}={f}", self._n_bary
@@ -212,7 +207,7 @@ class CellPoint:
     def position(self, mesh: Any) -> np.ndarray:
         """(3,) float ndarray: the point's position on ``mesh``."""
         self.check(mesh)
-        return self.bary @ mesh.V[mesh.cells[self.cell]]
+        return bary_positions(mesh, np.array([self.cell]), self.bary[None])[0]
 
 
 class SurfacePoint(CellPoint, field="face", n_bary=3, word="face", cells="faces",
@@ -418,6 +413,14 @@ def interpolate_at(mesh: TetMesh, values: ArrayLike, points: Any) -> np.ndarray:
     inside = tets >= 0
     out[inside] = corner_interpolant(d[mesh.T[tets[inside]]], bary[inside])
     return out
+
+
+def bary_positions(mesh: Any, cells: np.ndarray, bary: np.ndarray) -> np.ndarray:
+    """(k, 3) float ndarray: the positions of barycentric coordinates ``bary`` (k, dim + 1) in ``mesh``'s cells
+    ``cells`` (k,); row by row the rounding of one point's ``b @ V[cell]`` (matmul, not einsum)."""
+    if not len(cells):  # no cells: the coordinates may be of another dimension (a volume's empty curve pieces)
+        return np.zeros((0, 3))
+    return np.matmul(bary[:, None, :], mesh.V[mesh.cells[cells]])[:, 0, :]
 
 
 def corner_interpolant(Dv: np.ndarray, bary: np.ndarray) -> np.ndarray:
