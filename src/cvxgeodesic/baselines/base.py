@@ -30,7 +30,7 @@ Scale and orientation
 The libraries have absolute tolerances (pygeodesic returned infinite distances
 on a sphere of radius 1e-15 and 24x too small ones at 1e-30), so
 :class:`ComponentwiseSolver` hands them the coordinates divided by the power of
-two of :func:`~cvxgeodesic.mesh.trimesh.unit_scale` and multiplies the fields
+two of :func:`~cvxgeodesic.mesh.simplex.unit_scale` and multiplies the fields
 back: exact, so ``d(s V) = s d(V)`` for every ``s`` the mesh check accepts. A
 method whose library depends on the face orientation (``orient = True``: fast
 marching) gets the faces oriented consistently
@@ -40,6 +40,7 @@ with a :class:`~cvxgeodesic.errors.MeshRepairWarning`.
 
 from __future__ import annotations
 
+import importlib
 import time
 import warnings
 from dataclasses import dataclass
@@ -53,7 +54,8 @@ from ..capabilities import check, source_kinds
 from ..errors import CvxGeodesicError, MeshError, MeshRepairWarning, NonManifoldError, SolverError
 from ..mesh.convert import as_mesh
 from ..mesh.orient import Orientation, orient_faces
-from ..mesh.trimesh import TriMesh, unit_scale
+from ..mesh.simplex import unit_scale
+from ..mesh.trimesh import TriMesh
 from ..sources import SourceSet, resolve_sources
 
 
@@ -338,10 +340,22 @@ class _Part:
 class ComponentwiseSolver(BaselineSolver):
     """A baseline whose library is run separately on each connected component.
 
-    Subclasses implement :meth:`_build` (library solver for one submesh) and
-    :meth:`_run` (distance on one submesh from local source indices). The
+    Subclasses implement :meth:`_build` (library solver for one submesh, from the class ``library`` names,
+    imported by the set-up) and :meth:`_run` (distance on one submesh from local source indices). The
     library sees the coordinates divided by :attr:`scale` and, when ``orient``
     is set, the faces of :attr:`orientation` (module docstring).
+
+    Parameters
+    ----------
+    mesh : TriMesh or (V, F) tuple
+        ``V`` (n, 3) float, ``F`` (m, 3) int; edge- and vertex-manifold where ``manifold`` is set.
+
+    Raises
+    ------
+    NonManifoldError
+        ``manifold``: if an edge has more than two faces or a vertex joins several sheets.
+    MeshError
+        ``orient``: if the surface is not orientable (the message names the methods that work).
 
     Attributes
     ----------
@@ -357,6 +371,8 @@ class ComponentwiseSolver(BaselineSolver):
     manifold: bool = False
 
     def _setup(self) -> None:
+        module, _, cls = self.library.rpartition(".")
+        self._library = getattr(importlib.import_module(module), cls)
         mesh = self.mesh
         if self.manifold:
             require_manifold(mesh, self.name)  # the message names the methods that solve non-manifold meshes

@@ -98,13 +98,10 @@ class HeatBaseline(ComponentwiseSolver):
         if self.dim == 3:
             self._volume = _VolumeHeat(self.mesh, self.t_coef, self.notes)
             return
-        import potpourri3d as pp3d
-
-        self._pp3d = pp3d
         super()._setup()
 
     def _build(self, V: np.ndarray, F: np.ndarray) -> object:
-        return self._pp3d.MeshHeatMethodDistanceSolver(V, F, t_coef=self.t_coef, use_robust=self.use_robust)
+        return self._library(V, F, t_coef=self.t_coef, use_robust=self.use_robust)
 
     def _run(self, solver, local_sources: np.ndarray) -> np.ndarray:
         if local_sources.size == 1:

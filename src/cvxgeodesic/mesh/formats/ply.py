@@ -55,17 +55,8 @@ class _PlyElement:
 
 
 def read_mesh(path: Path) -> RawMesh:
-    """The ``vertex`` element's ``x, y, z`` and the ``face`` element's index lists; other elements are skipped.
-
-    Parameters
-    ----------
-    path : pathlib.Path
-
-    Returns
-    -------
-    RawMesh
-        With line numbers for ASCII files.
-    """
+    """The ``vertex`` element's ``x, y, z`` and the ``face`` element's index lists, with line numbers for ASCII
+    files; other elements are skipped."""
     values, line_nos = _read_elements(path, read_bytes(path, "a mesh file"))
     V, idx, sizes, v_lines, f_lines, _ = _mesh_parts(path, values, line_nos)
     return RawMesh(V, idx, sizes, v_lines, f_lines)
