@@ -169,6 +169,10 @@ class SimplexMesh:
     def _edge_data(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return self._sub_simplices(CELL_EDGES[self.dim])
 
+    @cached_property
+    def _facet_data(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return self._sub_simplices(CELL_FACETS[self.dim])
+
     edges = _cached_part("_edge_data", 0, "(e, 2) int64 ndarray: unique undirected edges, ``edges[:, 0] < "
                          "edges[:, 1]``, sorted.")
     cell_edges = _cached_part("_edge_data", 1, "(k, 3) or (k, 6) int64 ndarray: index into :attr:`edges` of each "

@@ -166,15 +166,11 @@ class TetMesh(SimplexMesh):
         return self.degenerate_cells(tol)
 
     # -- faces and the boundary -------------------------------------------------------------------------------
-    @cached_property
-    def _face_data(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        return self._sub_simplices(TET_FACES)
-
-    faces = _cached_part("_face_data", 0, "(f, 3) int64 ndarray: unique triangular faces (each row sorted), "
+    faces = _cached_part("_facet_data", 0, "(f, 3) int64 ndarray: unique triangular faces (each row sorted), "
                          "lexicographically sorted.")
-    tet_faces = _cached_part("_face_data", 1, "(k, 4) int64 ndarray: index into :attr:`faces` of the face opposite "
+    tet_faces = _cached_part("_facet_data", 1, "(k, 4) int64 ndarray: index into :attr:`faces` of the face opposite "
                              "each local vertex.")
-    face_tet_counts = _cached_part("_face_data", 2, "(f,) int64 ndarray: number of tetrahedra sharing each face of "
+    face_tet_counts = _cached_part("_facet_data", 2, "(f,) int64 ndarray: number of tetrahedra sharing each face of "
                                    ":attr:`faces`.")
 
     @cached_property
