@@ -122,7 +122,7 @@ class TetMesh(SimplexMesh):
         return P
 
     @cached_property
-    def face_areas_by_tet(self) -> np.ndarray:
+    def cell_facet_measures(self) -> np.ndarray:
         """(k, 4) float ndarray: area of the face opposite each local vertex."""
         V, T = self.V, self.T
         out = np.empty((self.n_tets, 4))
@@ -130,19 +130,14 @@ class TetMesh(SimplexMesh):
             out[:, i] = 0.5 * np.linalg.norm(np.cross(V[T[:, b]] - V[T[:, a]], V[T[:, c]] - V[T[:, a]]), axis=1)
         return out
 
-    @cached_property
-    def cell_facet_measures(self) -> np.ndarray:
-        """(k, 4) float ndarray: area of the face opposite each local vertex (:attr:`face_areas_by_tet`)."""
-        return self.face_areas_by_tet
+    face_areas_by_tet = property(lambda self: self.cell_facet_measures, doc="(k, 4) float: the faces' areas.")
 
     tet_longest_edges = property(lambda self: self.cell_longest_edges, doc="(k,) float: longest edge of each tet.")
     tet_min_altitudes = property(lambda self: self.cell_min_altitudes,
                                  doc="(k,) float: smallest vertex-to-opposite-face distance.")
     tet_edges = property(lambda self: self.cell_edges, doc="(k, 6) int64: edges in TET_EDGES order.")
 
-    @property
-    def cell_measures(self) -> np.ndarray:
-        return self.volumes
+    cell_measures = property(lambda self: self.volumes, doc="(k,) float: :attr:`volumes`.")
 
     def _with_vertices(self, V: np.ndarray) -> TetMesh:
         return TetMesh(V, self.T, vertex_map=self.vertex_map, name=self.name, file_index=self.file_index,

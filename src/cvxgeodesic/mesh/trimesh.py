@@ -116,9 +116,7 @@ class TriMesh(SimplexMesh):
     face_edges = property(lambda self: self.cell_edges, doc="(m, 3) int64: the edge opposite each corner.")
     edge_face_counts = property(lambda self: self.edge_cell_counts, doc="(e,) int64: faces per edge.")
 
-    @property
-    def cell_measures(self) -> np.ndarray:
-        return self.face_areas
+    cell_measures = property(lambda self: self.face_areas, doc="(m,) float: :attr:`face_areas`.")
 
     @cached_property
     def cell_facet_measures(self) -> np.ndarray:
