@@ -58,13 +58,17 @@ CELL_FACETS = {
 MeshT = TypeVar("MeshT", bound="SimplexMesh")
 
 
-def _cached_part(data: str, i: int, doc: str) -> cached_property:
-    """A cached property: item ``i`` of the cached tuple ``data`` (the parts of :meth:`SimplexMesh._sub_simplices`)."""
-    def part(self: Any) -> np.ndarray:
-        return getattr(self, data)[i]
+def _cached_parts(data: str, *docs: str) -> tuple[cached_property, ...]:
+    """Cached properties, one per docstring of ``docs``: item ``i`` of the cached tuple ``data`` (the parts of
+    :meth:`SimplexMesh._sub_simplices`)."""
+    def part(i: int, doc: str) -> cached_property:
+        def get(self: Any) -> np.ndarray:
+            return getattr(self, data)[i]
 
-    part.__doc__ = doc
-    return cached_property(part)
+        get.__doc__ = doc
+        return cached_property(get)
+
+    return tuple(part(i, doc) for i, doc in enumerate(docs))
 
 
 class SimplexMesh:
@@ -173,12 +177,10 @@ class SimplexMesh:
     def _facet_data(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return self._sub_simplices(CELL_FACETS[self.dim])
 
-    edges = _cached_part("_edge_data", 0, "(e, 2) int64 ndarray: unique undirected edges, ``edges[:, 0] < "
-                         "edges[:, 1]``, sorted.")
-    cell_edges = _cached_part("_edge_data", 1, "(k, 3) or (k, 6) int64 ndarray: index into :attr:`edges` of each "
-                              "cell's edges (:data:`CELL_EDGES`).")
-    edge_cell_counts = _cached_part("_edge_data", 2, "(e,) int64 ndarray: number of cells incident to each "
-                                    "edge of :attr:`edges`.")
+    edges, cell_edges, edge_cell_counts = _cached_parts(
+        "_edge_data", "(e, 2) int64 ndarray: unique undirected edges, ``edges[:, 0] < edges[:, 1]``, sorted.",
+        "(k, 3) or (k, 6) int64 ndarray: index into :attr:`edges` of each cell's edges (:data:`CELL_EDGES`).",
+        "(e,) int64 ndarray: number of cells incident to each edge of :attr:`edges`.")
 
     @cached_property
     def edge_lengths(self) -> np.ndarray:

@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import MeshError
-from .simplex import CELL_EDGES, CELL_FACETS, DEGENERATE_TOL, SimplexMesh, _cached_part
+from .simplex import CELL_EDGES, CELL_FACETS, DEGENERATE_TOL, SimplexMesh, _cached_parts
 from .trimesh import TriMesh
 
 __all__ = ["DEGENERATE_TET_TOL", "TET_EDGES", "TET_FACES", "TetMesh", "as_tetmesh"]
@@ -161,12 +161,10 @@ class TetMesh(SimplexMesh):
         return self.degenerate_cells(tol)
 
     # -- faces and the boundary -------------------------------------------------------------------------------
-    faces = _cached_part("_facet_data", 0, "(f, 3) int64 ndarray: unique triangular faces (each row sorted), "
-                         "lexicographically sorted.")
-    tet_faces = _cached_part("_facet_data", 1, "(k, 4) int64 ndarray: index into :attr:`faces` of the face opposite "
-                             "each local vertex.")
-    face_tet_counts = _cached_part("_facet_data", 2, "(f,) int64 ndarray: number of tetrahedra sharing each face of "
-                                   ":attr:`faces`.")
+    faces, tet_faces, face_tet_counts = _cached_parts(
+        "_facet_data", "(f, 3) int64 ndarray: unique triangular faces (each row sorted), lexicographically sorted.",
+        "(k, 4) int64 ndarray: index into :attr:`faces` of the face opposite each local vertex.",
+        "(f,) int64 ndarray: number of tetrahedra sharing each face of :attr:`faces`.")
 
     @cached_property
     def _boundary_slots(self) -> tuple[np.ndarray, np.ndarray]:
