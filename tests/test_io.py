@@ -187,6 +187,18 @@ def test_off(tmp_path):
     np.testing.assert_array_equal(m.F[4:], [[0, 3, 2], [0, 2, 1]])
 
 
+@pytest.mark.parametrize("cut, record", [(2, 4), (17, 4), (23, 3)])
+def test_ply_binary_mixed_polygon_sizes_truncated(tmp_path, cut, record):
+    # the record-by-record reader names the record where the data ends: inside the last quad's indices (cut 2),
+    # right after its count byte (cut 17), inside the triangle before it (cut 23; 13 bytes per triangle)
+    faces = [[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4], [0, 3, 2, 1]]
+    path = tmp_path / "mixed.ply"
+    path.write_bytes(ply_binary(V5, faces)[:-cut])
+    with pytest.raises(MeshFormatError, match=rf"mixed\.ply: binary PLY data ends in record {record} of element "
+                                              "'face'"):
+        load_mesh(path)
+
+
 def test_off_counts_on_header_line_and_coff(tmp_path):
     text = "COFF 3 1 0\n0 0 0 255 0 0 255\n1 0 0 255 0 0 255\n0 1 0 255 0 0 255\n3 0 1 2\n"
     m = load_mesh(write(tmp_path / "c.off", text))

@@ -313,7 +313,7 @@ def test_header_counts_past_the_file_size_are_refused_before_meshio_reads(tmp_pa
 ])
 def test_genuine_meshio_files_pass_the_count_checks(tmp_path, ext, fmt, binary):
     meshio = pytest.importorskip("meshio")
-    box = cg.mesh.tet_generate.tet_box(2, jitter=0.2, seed=3)
+    box = cg.tet_box(2, jitter=0.2, seed=3)
     path = tmp_path / f"box{ext}"
     kwargs = {} if binary is None else {"binary": binary}  # medit's writer has no binary option
     meshio.Mesh(box.V, [("tetra", box.T)]).write(path, file_format=fmt, **kwargs)

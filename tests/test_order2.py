@@ -14,7 +14,7 @@ from cvxgeodesic.errors import ParameterError, SourceError
 from cvxgeodesic.formulations_p2 import P2Builder
 from cvxgeodesic.mesh.generate import delaunay_plane as delaunay_mesh
 from cvxgeodesic.mesh.generate import fan_plate, needle_strip
-from cvxgeodesic.mesh.trimesh import unit_mesh
+from cvxgeodesic.mesh.simplex import unit_mesh
 from cvxgeodesic.operators.lagrange import LagrangeSpace, lagrange_basis, max_violation
 from cvxgeodesic.solvers import solve_clarabel
 from cvxgeodesic.solvers.ipm import InteriorPointSolver

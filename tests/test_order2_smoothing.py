@@ -15,7 +15,7 @@ from cvxgeodesic.errors import ParameterError
 from cvxgeodesic.evaluation import cut_locus_band, ridge_deficit, rounding_width
 from cvxgeodesic.formulations import KAPPA_ORDER2, smoothness_weight
 from cvxgeodesic.formulations_p2 import P2Builder, _restore_matrix
-from cvxgeodesic.mesh.trimesh import unit_mesh
+from cvxgeodesic.mesh.simplex import unit_mesh
 from cvxgeodesic.operators.lagrange import LagrangeSpace
 from cvxgeodesic.operators.p2_energy import (
     JUMP_SIGMA,

@@ -30,7 +30,7 @@ Scale and orientation
 The libraries have absolute tolerances (pygeodesic returned infinite distances
 on a sphere of radius 1e-15 and 24x too small ones at 1e-30), so
 :class:`ComponentwiseSolver` hands them the coordinates divided by the power of
-two of :func:`~cvxgeodesic.mesh.trimesh.unit_scale` and multiplies the fields
+two of :func:`~cvxgeodesic.mesh.simplex.unit_scale` and multiplies the fields
 back: exact, so ``d(s V) = s d(V)`` for every ``s`` the mesh check accepts. A
 method whose library depends on the face orientation (``orient = True``: fast
 marching) gets the faces oriented consistently
@@ -40,8 +40,11 @@ with a :class:`~cvxgeodesic.errors.MeshRepairWarning`.
 
 from __future__ import annotations
 
+import importlib
 import time
 import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -53,7 +56,8 @@ from ..capabilities import check, source_kinds
 from ..errors import CvxGeodesicError, MeshError, MeshRepairWarning, NonManifoldError, SolverError
 from ..mesh.convert import as_mesh
 from ..mesh.orient import Orientation, orient_faces
-from ..mesh.trimesh import TriMesh, unit_scale
+from ..mesh.simplex import SimplexMesh, unit_scale
+from ..mesh.trimesh import TriMesh
 from ..sources import SourceSet, resolve_sources
 
 
@@ -107,7 +111,7 @@ class BaselineSolver:
             self.library = self.volume_library
         self.notes: list[str] = []
         t0 = time.perf_counter()
-        with _LibraryErrors(self, "setup failed on"):
+        with _library_errors(self, "setup failed on"):
             self._setup()
         self.setup_time = time.perf_counter() - t0
 
@@ -162,7 +166,7 @@ class BaselineSolver:
         """
         src, seeds, count = self._resolve(sources)
         t0 = time.perf_counter()
-        with _LibraryErrors(self, "failed on"):
+        with _library_errors(self, "failed on"):
             # a surface's points, curves or boundary go through the library's point support; a volume's SourceSet is
             # what its _solve takes
             d, extra = self._solve_sources(src) if self.dim == 2 and isinstance(src, SourceSet) else self._solve(src)
@@ -212,37 +216,21 @@ class BaselineSolver:
         return ss, seeds.astype(np.int64), int(ss.vertices.size + ss.point_faces.size)
 
 
-class _LibraryErrors:
+@contextmanager
+def _library_errors(solver: BaselineSolver, what: str) -> Iterator[None]:
     """Turn any failure but the library's own errors into a :class:`SolverError` naming the baseline and the mesh:
     a library's exception never escapes bare."""
-
-    def __init__(self, solver: BaselineSolver, what: str):
-        self.solver, self.what = solver, what
-
-    def __enter__(self) -> _LibraryErrors:
-        return self
-
-    def __exit__(self, kind, exc, tb) -> None:
-        if exc is None or isinstance(exc, CvxGeodesicError) or not isinstance(exc, Exception):
-            return
-        s = self.solver
-        raise SolverError(f"baseline {s.name!r}: {self.what} {s.mesh.name}: {type(exc).__name__}: {exc}",
-                          solver=s.library, status="error") from exc
+    try:
+        yield
+    except CvxGeodesicError:
+        raise
+    except Exception as exc:
+        raise SolverError(f"baseline {solver.name!r}: {what} {solver.mesh.name}: {type(exc).__name__}: {exc}",
+                          solver=solver.library, status="error") from exc
 
 
-def reachable_mask(mesh: TriMesh, sources: np.ndarray) -> np.ndarray:
-    """Vertices connected to at least one source through the edge graph.
-
-    Parameters
-    ----------
-    mesh : TriMesh
-    sources : (k,) int ndarray
-
-    Returns
-    -------
-    (n,) bool ndarray
-    """
-    return mesh.connected_to(sources)
+#: Vertices connected to at least one source through the edge graph (kept for its old import).
+reachable_mask = SimplexMesh.connected_to
 
 
 def nonmanifold_vertices(mesh: TriMesh) -> np.ndarray:
@@ -338,10 +326,22 @@ class _Part:
 class ComponentwiseSolver(BaselineSolver):
     """A baseline whose library is run separately on each connected component.
 
-    Subclasses implement :meth:`_build` (library solver for one submesh) and
-    :meth:`_run` (distance on one submesh from local source indices). The
+    Subclasses implement :meth:`_build` (library solver for one submesh, from the class ``library`` names,
+    imported by the set-up) and :meth:`_run` (distance on one submesh from local source indices). The
     library sees the coordinates divided by :attr:`scale` and, when ``orient``
     is set, the faces of :attr:`orientation` (module docstring).
+
+    Parameters
+    ----------
+    mesh : TriMesh or (V, F) tuple
+        ``V`` (n, 3) float, ``F`` (m, 3) int; edge- and vertex-manifold where ``manifold`` is set.
+
+    Raises
+    ------
+    NonManifoldError
+        ``manifold``: if an edge has more than two faces or a vertex joins several sheets.
+    MeshError
+        ``orient``: if the surface is not orientable (the message names the methods that work).
 
     Attributes
     ----------
@@ -357,6 +357,8 @@ class ComponentwiseSolver(BaselineSolver):
     manifold: bool = False
 
     def _setup(self) -> None:
+        module, _, cls = self.library.rpartition(".")
+        self._library = getattr(importlib.import_module(module), cls)
         mesh = self.mesh
         if self.manifold:
             require_manifold(mesh, self.name)  # the message names the methods that solve non-manifold meshes

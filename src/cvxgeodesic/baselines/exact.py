@@ -31,28 +31,13 @@ class ExactBaseline(ComponentwiseSolver):
     meshes with unreferenced vertices and leaves unreached components at
     ``1e100``; both are avoided by running each connected component on its own
     submesh. Its own input errors are printed and ``None`` is returned; that
-    becomes a :class:`~cvxgeodesic.errors.SolverError`.
-
-    Parameters
-    ----------
-    mesh : TriMesh or (V, F) tuple
-        ``V`` (n, 3) float, ``F`` (m, 3) int; edge- and vertex-manifold.
-
-    Raises
-    ------
-    NonManifoldError
-        If an edge has more than two faces or a vertex joins several sheets.
+    becomes a :class:`~cvxgeodesic.errors.SolverError`. Parameters and errors: :class:`ComponentwiseSolver`
+    (``manifold``).
     """
 
     name = "exact"
     library = "pygeodesic.geodesic.PyGeodesicAlgorithmExact"
     manifold = True
-
-    def _setup(self) -> None:
-        from pygeodesic import geodesic
-
-        self._geodesic = geodesic
-        super()._setup()
 
     def _solve_sources(self, ss: SourceSet) -> tuple[np.ndarray, dict]:
         return super()._solve_sources(ss) if ss.kind == "boundary" else exact_inserted(type(self), self.mesh, ss)
@@ -60,7 +45,7 @@ class ExactBaseline(ComponentwiseSolver):
     def _build(self, V: np.ndarray, F: np.ndarray) -> object:
         out = io.StringIO()
         with contextlib.redirect_stdout(out):
-            alg = self._geodesic.PyGeodesicAlgorithmExact(V, F.astype(np.int32))
+            alg = self._library(V, F.astype(np.int32))
         msg = out.getvalue().strip()
         if msg:
             raise SolverError(f"baseline {self.name!r}: pygeodesic could not load {self.mesh.name}: {msg}",

@@ -32,19 +32,8 @@ class FastMarchingBaseline(ComponentwiseSolver):
     it is given the faces oriented consistently (``orient``; recorded in
     :attr:`notes`, with a :class:`~cvxgeodesic.errors.MeshRepairWarning`). A
     non-orientable surface (a Möbius strip) raises
-    :class:`~cvxgeodesic.errors.MeshError`: the library was 11 % off there.
-
-    Parameters
-    ----------
-    mesh : TriMesh or (V, F) tuple
-        ``V`` (n, 3) float, ``F`` (m, 3) int; edge- and vertex-manifold.
-
-    Raises
-    ------
-    NonManifoldError
-        If an edge has more than two faces or a vertex joins several sheets.
-    MeshError
-        If the surface is not orientable (the message names the methods that work).
+    :class:`~cvxgeodesic.errors.MeshError`: the library was 11 % off there. Parameters and errors:
+    :class:`ComponentwiseSolver` (``manifold``, ``orient``).
     """
 
     name = "fmm"
@@ -52,17 +41,11 @@ class FastMarchingBaseline(ComponentwiseSolver):
     orient = True
     manifold = True
 
-    def _setup(self) -> None:
-        import potpourri3d as pp3d
-
-        self._pp3d = pp3d
-        super()._setup()
-
     def _solve_sources(self, ss: SourceSet) -> tuple[np.ndarray, dict]:
         return super()._solve_sources(ss) if ss.kind == "boundary" else fmm_points(self, ss)
 
     def _build(self, V: np.ndarray, F: np.ndarray) -> object:
-        return self._pp3d.MeshFastMarchingDistanceSolver(V, F)
+        return self._library(V, F)
 
     def _run(self, solver, local_sources: np.ndarray) -> np.ndarray:
         points = [[(int(s), []) for s in local_sources]]

@@ -98,13 +98,10 @@ class HeatBaseline(ComponentwiseSolver):
         if self.dim == 3:
             self._volume = _VolumeHeat(self.mesh, self.t_coef, self.notes)
             return
-        import potpourri3d as pp3d
-
-        self._pp3d = pp3d
         super()._setup()
 
     def _build(self, V: np.ndarray, F: np.ndarray) -> object:
-        return self._pp3d.MeshHeatMethodDistanceSolver(V, F, t_coef=self.t_coef, use_robust=self.use_robust)
+        return self._library(V, F, t_coef=self.t_coef, use_robust=self.use_robust)
 
     def _run(self, solver, local_sources: np.ndarray) -> np.ndarray:
         if local_sources.size == 1:
@@ -147,28 +144,22 @@ class _VolumeHeat:
         mesh, self.scale = unit_mesh(mesh)
         self._unit = mesh
         deg = mesh.degenerate_cells(DEGENERATE_TET_TOL)
-        keep = np.ones(mesh.n_tets, dtype=bool)
+        self._keep = keep = np.ones(mesh.n_tets, dtype=bool)
         keep[deg] = False
         if deg.size:
             notes.append(f"{mesh.name}: heat method: left out {deg.size} degenerate tetrahedra (smallest altitude "
                          f"below {DEGENERATE_TET_TOL:g} of the longest edge; first: tet {int(deg[0])})")
-        self._keep = keep
         self._blocks = gradient_blocks(mesh)
         self._blocks[~keep] = 0.0
-        L = cotan_stiffness(mesh, cells=keep, blocks=self._blocks)
+        self._L = L = cotan_stiffness(mesh, cells=keep, blocks=self._blocks)
         mass = barycentric_mass(mesh, cells=keep).diagonal()
         self.t = self.t_coef * mesh.mean_edge_length ** 2  # on the unit mesh (info["t"] is in the mesh's units)
-        idle = mass <= 0  # in no kept tetrahedron: u = 0 and φ = 0 there (d = inf: unreachable)
-        self._L = L
-        self._idle = idle
-        A = sp.diags(mass + idle) + self.t * L
-        self._heat, self.backend = _factor(A)
+        self._idle = idle = mass <= 0  # in no kept tetrahedron: u = 0 and φ = 0 there (d = inf: unreachable)
+        self._heat, self.backend = _factor(sp.diags(mass + idle) + self.t * L)
         # the Neumann problem, one pinned vertex per component of the kept tetrahedra's graph
-        _, labels = connected_components(abs(L) + sp.diags(idle.astype(float)), directed=False)
-        _, first = np.unique(labels, return_index=True)
-        self._labels = labels
-        self._poisson = _factor(_pinned(L, first))[0]
-        self._pins = first
+        _, self._labels = connected_components(abs(L) + sp.diags(idle.astype(float)), directed=False)
+        _, self._pins = np.unique(self._labels, return_index=True)
+        self._poisson = _factor(_pinned(L, self._pins))[0]
 
     def _unit_field(self, u0: np.ndarray, notes: list[str]) -> np.ndarray:
         u = self._heat(u0)

@@ -14,13 +14,15 @@ formulation, a source resolution or a path descent is written once over ``cells`
 ``boundary_facets`` (b, dim) the facets of a single cell: boundary edges of a surface, faces of a solid
 ==================  ============================================================================
 
-The subclasses provide ``cells``, ``cell_measures``, the measures of each cell's facets
-(``cell_facet_measures``) and ``_with_vertices`` (a copy on other coordinates, for :func:`unit_mesh`).
+:class:`SimplexMesh` checks and stores the arrays (:func:`file_numbering` for the file's numbering); the
+subclasses provide ``cell_measures``, the measures of each cell's facets (``cell_facet_measures``) and
+``_with_vertices`` (a copy on other coordinates, for :func:`unit_mesh`).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from functools import cached_property
 from typing import Any, TypeVar
 
@@ -29,7 +31,16 @@ import scipy.sparse as sp
 from numpy.typing import ArrayLike
 from scipy.sparse.csgraph import connected_components
 
-__all__ = ["CELL_EDGES", "CELL_FACETS", "SimplexMesh", "unit_mesh", "unit_scale"]
+from ..errors import MeshError
+from ..validation import check_coordinates
+
+__all__ = ["CELL_EDGES", "CELL_FACETS", "DEGENERATE_TOL", "SimplexMesh", "file_numbering", "unit_mesh", "unit_scale"]
+
+#: Default of :meth:`SimplexMesh.degenerate_cells` (``TriMesh.degenerate_faces``, ``TetMesh.degenerate_tets``): a
+#: cell whose smallest altitude is below ``DEGENERATE_TOL`` times its longest edge (a sliver, needle, cap or wedge;
+#: exactly collinear or coplanar corners included) or below ``DEGENERATE_TOL`` times the mean edge length of the
+#: mesh (a speck) is *degenerate*. See the README, "Input meshes".
+DEGENERATE_TOL = 1e-3
 
 #: Local vertex pairs of a cell's edges, per dimension. Triangles: the edge opposite corner ``k`` in column ``k``
 #: (``TriMesh.face_edges``); tetrahedra: the order of ``TetMesh.tet_edges``.
@@ -47,29 +58,56 @@ CELL_FACETS = {
 MeshT = TypeVar("MeshT", bound="SimplexMesh")
 
 
+def _cached_parts(data: str, *docs: str) -> tuple[cached_property, ...]:
+    """Cached properties, one per docstring of ``docs``: item ``i`` of the cached tuple ``data`` (the parts of
+    :meth:`SimplexMesh._sub_simplices`)."""
+    def part(i: int, doc: str) -> cached_property:
+        def get(self: Any) -> np.ndarray:
+            return getattr(self, data)[i]
+
+        get.__doc__ = doc
+        return cached_property(get)
+
+    return tuple(part(i, doc) for i, doc in enumerate(docs))
+
+
 class SimplexMesh:
     """A validated simplicial mesh in 3-D space: vertices ``V`` (n, 3) and cells of ``dim + 1`` vertices.
 
     Not built directly: :class:`~cvxgeodesic.mesh.trimesh.TriMesh` and :class:`~cvxgeodesic.mesh.tetmesh.TetMesh`
-    validate their arrays and derive from it.
+    derive from it; their parameters (the cells are ``F`` or ``T``) and errors are documented there.
 
     Attributes
     ----------
     dim : int
         2 for triangles, 3 for tetrahedra.
     V : (n, 3) float64 ndarray, read-only
+    cells : (k, dim + 1) int64 ndarray, read-only
+        The triangles or tetrahedra.
     name : str
+    vertex_map, file_index, dropped_vertices : ndarray
+        The file's numbering (:func:`file_numbering`).
     """
 
     dim: int
-    V: np.ndarray
-    name: str
-    file_index: np.ndarray
+    #: The name of a mesh made without one.
+    default_name = "mesh"
+    #: What ``repr`` counts the cells as (``n_faces``, ``n_tets``).
+    count_name = "n_cells"
 
-    @property
-    def cells(self) -> np.ndarray:
-        """(k, dim + 1) int64 ndarray: the triangles or tetrahedra."""
-        raise NotImplementedError
+    def __init__(self, V: ArrayLike, cells: ArrayLike, *, vertex_map: ArrayLike | None = None, name: str | None = None,
+                 file_index: ArrayLike | None = None, dropped_vertices: ArrayLike | None = None,
+                 notes: Sequence[str] = ()) -> None:
+        self.name = name or self.default_name
+        self.V = _as_vertices(V, self.name)
+        self.cells = _as_cells(cells, self.V.shape[0], self.name, self.dim)
+        self.vertex_map, self.file_index, self.dropped_vertices = file_numbering(
+            self.V.shape[0], vertex_map, file_index, dropped_vertices, self.name)
+        self._reader_notes: tuple[str, ...] = tuple(str(s) for s in notes)
+
+    def __repr__(self) -> str:
+        counts = f"n_vertices={self.n_vertices}, {self.count_name}={self.n_cells}"
+        return f"{type(self).__name__}(name={self.name!r}, {counts})"
 
     @property
     def cell_measures(self) -> np.ndarray:
@@ -136,19 +174,13 @@ class SimplexMesh:
         return self._sub_simplices(CELL_EDGES[self.dim])
 
     @cached_property
-    def edges(self) -> np.ndarray:
-        """(e, 2) int64 ndarray: unique undirected edges, ``edges[:, 0] < edges[:, 1]``, sorted."""
-        return self._edge_data[0]
+    def _facet_data(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return self._sub_simplices(CELL_FACETS[self.dim])
 
-    @cached_property
-    def cell_edges(self) -> np.ndarray:
-        """(k, 3) or (k, 6) int64 ndarray: index into :attr:`edges` of each cell's edges (:data:`CELL_EDGES`)."""
-        return self._edge_data[1]
-
-    @cached_property
-    def edge_cell_counts(self) -> np.ndarray:
-        """(e,) int64 ndarray: number of cells incident to each edge of :attr:`edges`."""
-        return self._edge_data[2]
+    edges, cell_edges, edge_cell_counts = _cached_parts(
+        "_edge_data", "(e, 2) int64 ndarray: unique undirected edges, ``edges[:, 0] < edges[:, 1]``, sorted.",
+        "(k, 3) or (k, 6) int64 ndarray: index into :attr:`edges` of each cell's edges (:data:`CELL_EDGES`).",
+        "(e,) int64 ndarray: number of cells incident to each edge of :attr:`edges`.")
 
     @cached_property
     def edge_lengths(self) -> np.ndarray:
@@ -184,19 +216,20 @@ class SimplexMesh:
         np.divide(self.dim * self.cell_measures, largest, out=alt, where=largest > 0)
         return alt
 
-    def degenerate_cells(self, tol: float = 1e-3) -> np.ndarray:
+    def degenerate_cells(self, tol: float = DEGENERATE_TOL) -> np.ndarray:
         """Cells too thin or too small for the gradient-based operators.
 
         A cell is degenerate when its smallest altitude :attr:`cell_min_altitudes` is below ``tol`` times its
         longest edge (a sliver: zero measure, needles, caps, wedges) or below ``tol`` times
         :attr:`mean_edge_length` (a speck). The gradient of such a cell has entries of order ``1 / altitude``,
         which makes the cone constraints and the energies numerically singular; the convex formulations leave
-        these cells out.
+        these cells out. A regular tetrahedron has altitude ``0.816 ×`` its edge, a Kuhn (cube-corner) tetrahedron
+        ``0.408 ×`` its longest edge.
 
         Parameters
         ----------
         tol : float
-            Relative threshold (default 1e-3, ``DEGENERATE_TOL``); 0 selects only cells of exactly zero measure.
+            Relative threshold (default :data:`DEGENERATE_TOL` = 1e-3); 0 selects only cells of exactly zero measure.
 
         Returns
         -------
@@ -284,3 +317,103 @@ def unit_mesh(mesh: MeshT) -> tuple[MeshT, float]:
     if scale == 1.0:
         return mesh, 1.0
     return mesh._with_vertices(mesh.V / scale), scale
+
+
+def file_numbering(n: int, vertex_map: ArrayLike | None, file_index: ArrayLike | None,
+                   dropped_vertices: ArrayLike | None, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The checked file-numbering arrays of a mesh of ``n`` vertices (read-only; identity when not from a file).
+
+    Returns
+    -------
+    vertex_map : (n,) int64 ndarray
+    file_index : (n_file,) int64 ndarray
+        Each file vertex's mesh vertex, −1 for the dropped ones.
+    dropped_vertices : (n_dropped, 3) float ndarray
+        Positions of the dropped file vertices (NaN when not given).
+
+    Raises
+    ------
+    MeshError
+        Wrong shapes or indices, naming ``name``.
+    """
+    def as_index(x: ArrayLike, what: str) -> np.ndarray:
+        try:
+            return np.array(x, dtype=np.int64)
+        except (TypeError, ValueError, OverflowError):
+            raise MeshError(f"{name}: {what} must be an integer array") from None
+
+    vmap = as_index(np.arange(n) if vertex_map is None else vertex_map, "vertex_map")
+    if vmap.shape != (n,):
+        raise MeshError(f"{name}: vertex_map must have shape ({n},), got {vmap.shape}")
+    findex = as_index(np.arange(n) if file_index is None else file_index, "file_index")
+    if findex.ndim != 1 or np.any(findex < -1) or np.any(findex >= n):
+        raise MeshError(f"{name}: file_index must be a 1-D array of indices in [-1, {n})")
+    n_dropped = int(np.count_nonzero(findex < 0))
+    dropped = (np.full((n_dropped, 3), np.nan) if dropped_vertices is None
+               else np.array(dropped_vertices, dtype=np.float64).reshape(-1, 3))
+    if dropped.shape[0] != n_dropped:
+        raise MeshError(f"{name}: dropped_vertices must have {n_dropped} rows, got {dropped.shape[0]}")
+    for arr in (vmap, findex, dropped):
+        arr.setflags(write=False)
+    return vmap, findex, dropped
+
+
+def _as_vertices(V, name: str) -> np.ndarray:
+    try:
+        V = np.array(V, dtype=np.float64, order="C")
+    except (TypeError, ValueError) as exc:
+        raise MeshError(f"{name}: vertices must be a numeric (n, 3) array ({exc})") from None
+    if V.ndim != 2 or V.shape[1] != 3:
+        raise MeshError(f"{name}: vertices must have shape (n, 3), got {V.shape}")
+    if V.shape[0] == 0:
+        raise MeshError(f"{name}: the mesh has no vertices")
+    bad = ~np.isfinite(V).all(axis=1)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise MeshError(
+            f"{name}: vertex {i} has a non-finite coordinate {V[i].tolist()} ({int(bad.sum())} such vertices)"
+        )
+    check_coordinates(V, name)
+    V.setflags(write=False)
+    return V
+
+
+# per simplex dimension: (cell, cells, shape, hint after the shape, remedy for a repeated vertex)
+_CELL_WORDS = {
+    2: ("face", "faces", "(m, 3)", " (triangles only; load_mesh fan-triangulates polygons)",
+        "remove degenerate faces first"),
+    3: ("tetrahedron", "tetrahedra", "(k, 4)", "", "remove them first"),
+}
+
+
+def _as_cells(C, n: int, name: str, dim: int) -> np.ndarray:
+    """(k, dim + 1) read-only int64 cells checked against ``n`` vertices; a MeshError naming the first bad cell."""
+    one, many, shape, hint, remedy = _CELL_WORDS[dim]
+    try:
+        C_in = np.asarray(C)
+    except (TypeError, ValueError, OverflowError):  # ragged lists (polygons of several sizes), ...
+        raise MeshError(f"{name}: {many} must be an {shape} integer array{hint}") from None
+    if C_in.ndim != 2 or C_in.shape[1] != dim + 1:
+        raise MeshError(f"{name}: {many} must have shape {shape}{hint}, got {C_in.shape}")
+    if C_in.shape[0] == 0:
+        raise MeshError(f"{name}: the mesh has no {many}")
+    if C_in.dtype.kind == "f":
+        if not np.all(np.isfinite(C_in)) or not np.all(C_in == np.round(C_in)):
+            raise MeshError(f"{name}: {one} indices must be integers")
+    elif C_in.dtype.kind not in "iu":
+        raise MeshError(f"{name}: {one} indices must be integers, got dtype {C_in.dtype}")
+    if dim == 3 and C_in.dtype.kind == "u" and int(C_in.max()) >= 2**63:
+        raise MeshError(f"{name}: {one} indices must be in [0, {n})")
+    cells = np.array(C_in, dtype=np.int64, order="C")
+    out = (cells < 0) | (cells >= n)
+    if out.any():
+        c = int(np.flatnonzero(out.any(axis=1))[0])
+        raise MeshError(f"{name}: {one} {c} has vertex index {cells[c].tolist()} outside [0, {n})")
+    S = np.sort(cells, axis=1)
+    rep = (S[:, 1:] == S[:, :-1]).any(axis=1)
+    if rep.any():
+        c = int(np.flatnonzero(rep)[0])
+        raise MeshError(f"{name}: {one} {c} repeats a vertex {cells[c].tolist()} ({int(rep.sum())} such {many}); "
+                        f"{remedy}")
+    cells.setflags(write=False)
+    return cells

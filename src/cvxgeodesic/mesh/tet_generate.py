@@ -54,10 +54,14 @@ def _grid(nx: int, ny: int, nz: int, size: np.ndarray) -> tuple[np.ndarray, np.n
     xs, ys, zs = (np.linspace(0.0, s, k + 1) for s, k in zip(size, (nx, ny, nz), strict=True))
     Z, Y, X = np.meshgrid(zs, ys, xs, indexing="ij")
     V = np.column_stack([X.ravel(), Y.ravel(), Z.ravel()])
-    idx = np.arange(V.shape[0]).reshape(nz + 1, ny + 1, nx + 1)
-    corners = np.stack([idx[k:nz + k, j:ny + j, i:nx + i].reshape(-1)
-                        for k in (0, 1) for j in (0, 1) for i in (0, 1)], axis=1)
-    return V, corners
+    return V, _cell_corners(np.arange(V.shape[0]).reshape(nz + 1, ny + 1, nx + 1))
+
+
+def _cell_corners(idx: np.ndarray) -> np.ndarray:
+    """(cells, 8) corner indices (column ``i + 2j + 4k``) of the grid of vertex indices ``idx`` (nz+1, ny+1, nx+1)."""
+    nz, ny, nx = (s - 1 for s in idx.shape)
+    return np.stack([idx[k:nz + k, j:ny + j, i:nx + i].reshape(-1)
+                     for k in (0, 1) for j in (0, 1) for i in (0, 1)], axis=1)
 
 
 def _jitter(mesh: TetMesh, jitter: float, cell: float, seed: int) -> TetMesh:
@@ -66,8 +70,7 @@ def _jitter(mesh: TetMesh, jitter: float, cell: float, seed: int) -> TetMesh:
         return mesh
     rng = np.random.default_rng(seed)
     V = mesh.V.copy()
-    interior = np.ones(mesh.n_vertices, dtype=bool)
-    interior[mesh.boundary_vertices] = False
+    interior = ~np.isin(np.arange(mesh.n_vertices), mesh.boundary_vertices)
     V[interior] += rng.uniform(-jitter, jitter, (int(interior.sum()), 3)) * cell
     return TetMesh(V, mesh.T, name=mesh.name)
 
@@ -255,9 +258,7 @@ def tet_ball(n: int = 8, radius: float = 1.0, *, layers: int | None = None, smoo
     outer = np.stack([np.ones_like(U), np.tan(np.pi / 4 * U), np.tan(np.pi / 4 * Vg)], axis=-1)
     outer /= np.linalg.norm(outer, axis=-1, keepdims=True)
     P = ((1 - R)[..., None] * inner + R[..., None] * outer).reshape(-1, 3)  # local: (normal, u, v)
-    idx = np.arange(P.shape[0]).reshape(m + 1, n + 1, n + 1)
-    corners = np.stack([idx[k:m + k, j:n + j, i:n + i].reshape(-1)
-                        for k in (0, 1) for j in (0, 1) for i in (0, 1)], axis=1)
+    corners = _cell_corners(np.arange(P.shape[0]).reshape(m + 1, n + 1, n + 1))
     for axis in range(3):
         others = [ax for ax in range(3) if ax != axis]
         for sign in (1.0, -1.0):
@@ -287,8 +288,7 @@ def tet_ball(n: int = 8, radius: float = 1.0, *, layers: int | None = None, smoo
     if smooth:
         A = (mesh.vertex_adjacency > 0).astype(float)
         degree = np.asarray(A.sum(axis=1)).ravel()
-        interior = np.ones(mesh.n_vertices, dtype=bool)
-        interior[mesh.boundary_vertices] = False
+        interior = ~np.isin(np.arange(mesh.n_vertices), mesh.boundary_vertices)
         for _ in range(smooth):
             V[interior] = 0.5 * V[interior] + 0.5 * (A @ V)[interior] / degree[interior, None]
     return TetMesh(V * radius, mesh.positive_tets, name=mesh.name)

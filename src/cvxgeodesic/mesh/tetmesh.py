@@ -20,16 +20,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import MeshError
-from .simplex import CELL_EDGES, CELL_FACETS, SimplexMesh
-from .trimesh import TriMesh, _as_cells, _as_vertices, file_numbering
+from .simplex import CELL_EDGES, CELL_FACETS, DEGENERATE_TOL, SimplexMesh, _cached_parts
+from .trimesh import TriMesh
 
 __all__ = ["DEGENERATE_TET_TOL", "TET_EDGES", "TET_FACES", "TetMesh", "as_tetmesh"]
 
-#: Default of :meth:`TetMesh.degenerate_tets`: a tetrahedron whose smallest altitude (vertex to opposite
-#: face) is below ``DEGENERATE_TET_TOL`` times its longest edge (a sliver, needle, cap or wedge; exactly
-#: coplanar corners included) or below ``DEGENERATE_TET_TOL`` times the mean edge length of the mesh (a
-#: speck) is *degenerate*. The same rule and value as ``TriMesh.degenerate_faces`` (1e-3).
-DEGENERATE_TET_TOL = 1e-3
+#: Default of :meth:`TetMesh.degenerate_tets`: :data:`~cvxgeodesic.mesh.simplex.DEGENERATE_TOL` (the one rule).
+DEGENERATE_TET_TOL = DEGENERATE_TOL
 #: Local vertex pairs of the six edges of a tetrahedron, the column order of :attr:`TetMesh.tet_edges`.
 TET_EDGES = CELL_EDGES[3]
 #: Local vertices of the face opposite vertex ``i`` (row ``i``), ordered so that the face's normal
@@ -86,32 +83,16 @@ class TetMesh(SimplexMesh):
     """
 
     dim = 3
+    default_name = "tetmesh"
+    count_name = "n_tets"
+    T = property(lambda self: self.cells, doc="(k, 4) int64 ndarray, read-only: the tetrahedra (:attr:`cells`).")
+    n_tets = property(lambda self: self.n_cells, doc="Number of tetrahedra.")
 
-    def __init__(
-        self,
-        V: ArrayLike,
-        T: ArrayLike,
-        *,
-        vertex_map: ArrayLike | None = None,
-        name: str | None = None,
-        file_index: ArrayLike | None = None,
-        dropped_vertices: ArrayLike | None = None,
-        notes: Sequence[str] = (),
-    ) -> None:
-        self.name = name or "tetmesh"
-        self.V = _as_vertices(V, self.name)
-        self.T = _as_cells(T, self.V.shape[0], self.name, 3)
-        self.vertex_map, self.file_index, self.dropped_vertices = file_numbering(
-            self.V.shape[0], vertex_map, file_index, dropped_vertices, self.name)
-        self._reader_notes: tuple[str, ...] = tuple(str(s) for s in notes)
-
-    def __repr__(self) -> str:
-        return f"TetMesh(name={self.name!r}, n_vertices={self.n_vertices}, n_tets={self.n_tets})"
-
-    # -- sizes ------------------------------------------------------------------------------------------------
-    @property
-    def n_tets(self) -> int:
-        return int(self.T.shape[0])
+    def __init__(self, V: ArrayLike, T: ArrayLike, *, vertex_map: ArrayLike | None = None, name: str | None = None,
+                 file_index: ArrayLike | None = None, dropped_vertices: ArrayLike | None = None,
+                 notes: Sequence[str] = ()) -> None:
+        super().__init__(V, T, vertex_map=vertex_map, name=name, file_index=file_index,
+                         dropped_vertices=dropped_vertices, notes=notes)
 
     # -- volumes and shape ------------------------------------------------------------------------------------
     @cached_property
@@ -141,7 +122,7 @@ class TetMesh(SimplexMesh):
         return P
 
     @cached_property
-    def face_areas_by_tet(self) -> np.ndarray:
+    def cell_facet_measures(self) -> np.ndarray:
         """(k, 4) float ndarray: area of the face opposite each local vertex."""
         V, T = self.V, self.T
         out = np.empty((self.n_tets, 4))
@@ -149,38 +130,22 @@ class TetMesh(SimplexMesh):
             out[:, i] = 0.5 * np.linalg.norm(np.cross(V[T[:, b]] - V[T[:, a]], V[T[:, c]] - V[T[:, a]]), axis=1)
         return out
 
-    @cached_property
-    def cell_facet_measures(self) -> np.ndarray:
-        """(k, 4) float ndarray: area of the face opposite each local vertex (:attr:`face_areas_by_tet`)."""
-        return self.face_areas_by_tet
+    face_areas_by_tet = property(lambda self: self.cell_facet_measures, doc="(k, 4) float: the faces' areas.")
 
     tet_longest_edges = property(lambda self: self.cell_longest_edges, doc="(k,) float: longest edge of each tet.")
     tet_min_altitudes = property(lambda self: self.cell_min_altitudes,
                                  doc="(k,) float: smallest vertex-to-opposite-face distance.")
     tet_edges = property(lambda self: self.cell_edges, doc="(k, 6) int64: edges in TET_EDGES order.")
 
-    @property
-    def cells(self) -> np.ndarray:
-        return self.T
-
-    @property
-    def cell_measures(self) -> np.ndarray:
-        return self.volumes
+    cell_measures = property(lambda self: self.volumes, doc="(k,) float: :attr:`volumes`.")
 
     def _with_vertices(self, V: np.ndarray) -> TetMesh:
         return TetMesh(V, self.T, vertex_map=self.vertex_map, name=self.name, file_index=self.file_index,
                        dropped_vertices=self.dropped_vertices, notes=self._reader_notes)
 
     def degenerate_tets(self, tol: float = DEGENERATE_TET_TOL) -> np.ndarray:
-        """Tetrahedra too flat or too small for the gradient-based operators.
-
-        A tetrahedron is degenerate when its smallest altitude :attr:`tet_min_altitudes` is below
-        ``tol`` times its longest edge (slivers with four nearly coplanar corners, needles, caps,
-        wedges; zero volume included) or below ``tol`` times :attr:`mean_edge_length` (a speck).
-        The hat-function gradients of such a tetrahedron have entries of order ``1 / altitude``.
-        The measure is the one of :meth:`TriMesh.degenerate_faces` one dimension up; a regular
-        tetrahedron has altitude ``0.816 ×`` its edge, a Kuhn (cube-corner) tetrahedron ``0.408 ×``
-        its longest edge.
+        """Tetrahedra too flat or too small for the gradient-based operators: slivers with four nearly coplanar
+        corners, needles, caps, wedges (zero volume included) and specks (:meth:`SimplexMesh.degenerate_cells`).
 
         Parameters
         ----------
@@ -196,24 +161,10 @@ class TetMesh(SimplexMesh):
         return self.degenerate_cells(tol)
 
     # -- faces and the boundary -------------------------------------------------------------------------------
-    @cached_property
-    def _face_data(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        return self._sub_simplices(TET_FACES)
-
-    @cached_property
-    def faces(self) -> np.ndarray:
-        """(f, 3) int64 ndarray: unique triangular faces (each row sorted), lexicographically sorted."""
-        return self._face_data[0]
-
-    @cached_property
-    def tet_faces(self) -> np.ndarray:
-        """(k, 4) int64 ndarray: index into :attr:`faces` of the face opposite each local vertex."""
-        return self._face_data[1]
-
-    @cached_property
-    def face_tet_counts(self) -> np.ndarray:
-        """(f,) int64 ndarray: number of tetrahedra sharing each face of :attr:`faces`."""
-        return self._face_data[2]
+    faces, tet_faces, face_tet_counts = _cached_parts(
+        "_facet_data", "(f, 3) int64 ndarray: unique triangular faces (each row sorted), lexicographically sorted.",
+        "(k, 4) int64 ndarray: index into :attr:`faces` of the face opposite each local vertex.",
+        "(f,) int64 ndarray: number of tetrahedra sharing each face of :attr:`faces`.")
 
     @cached_property
     def _boundary_slots(self) -> tuple[np.ndarray, np.ndarray]:

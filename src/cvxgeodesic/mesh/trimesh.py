@@ -8,16 +8,10 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import MeshError
-from ..validation import MAX_COORDINATE, MIN_EXTENT, check_coordinates
-from .simplex import SimplexMesh, unit_mesh, unit_scale
+from ..validation import MAX_COORDINATE, MIN_EXTENT
+from .simplex import DEGENERATE_TOL, SimplexMesh, _as_cells, file_numbering
 
-#: Default of :meth:`TriMesh.degenerate_faces`: a face whose smallest altitude is below
-#: ``DEGENERATE_TOL`` times its longest edge (a needle or a cap; exactly collinear or
-#: coincident corners included) or below ``DEGENERATE_TOL`` times the mean edge length
-#: of the mesh (a speck) is *degenerate*. See the README, "Input meshes".
-DEGENERATE_TOL = 1e-3
-__all__ = ["DEGENERATE_TOL", "MAX_COORDINATE", "MIN_EXTENT", "TriMesh", "file_numbering", "unit_mesh", "unit_scale"]
+__all__ = ["DEGENERATE_TOL", "MAX_COORDINATE", "MIN_EXTENT", "TriMesh", "file_numbering"]
 
 
 class TriMesh(SimplexMesh):
@@ -77,36 +71,21 @@ class TriMesh(SimplexMesh):
     """
 
     dim = 2
+    count_name = "n_faces"
     #: Set on the coarse meshes of :func:`~cvxgeodesic.mesh.decimate.simplify_mesh` only: the method used.
     simplifier: str
 
-    def __init__(
-        self,
-        V: ArrayLike,
-        F: ArrayLike,
-        *,
-        vertex_map: ArrayLike | None = None,
-        name: str | None = None,
-        file_index: ArrayLike | None = None,
-        dropped_vertices: ArrayLike | None = None,
-        notes: Sequence[str] = (),
-        file_faces: ArrayLike | None = None,
-    ) -> None:
-        self.name = name or "mesh"
-        self.V = _as_vertices(V, self.name)
-        self.F = _as_cells(F, self.V.shape[0], self.name, 2)
-        self.vertex_map, self.file_index, self.dropped_vertices = file_numbering(
-            self.V.shape[0], vertex_map, file_index, dropped_vertices, self.name)
-        self.notes: tuple[str, ...] = tuple(str(n) for n in notes)
+    def __init__(self, V: ArrayLike, F: ArrayLike, *, vertex_map: ArrayLike | None = None, name: str | None = None,
+                 file_index: ArrayLike | None = None, dropped_vertices: ArrayLike | None = None,
+                 notes: Sequence[str] = (), file_faces: ArrayLike | None = None) -> None:
+        super().__init__(V, F, vertex_map=vertex_map, name=name, file_index=file_index,
+                         dropped_vertices=dropped_vertices, notes=notes)
         self._file_faces = None if file_faces is None else _as_cells(file_faces, self.file_index.shape[0],
                                                                       f"{self.name} (file faces)", 2)
 
-    def __repr__(self) -> str:
-        return f"TriMesh(name={self.name!r}, n_vertices={self.n_vertices}, n_faces={self.n_faces})"
-
-    @property
-    def n_faces(self) -> int:
-        return int(self.F.shape[0])
+    F = property(lambda self: self.cells, doc="(m, 3) int64 ndarray, read-only: the triangles (:attr:`cells`).")
+    n_faces = property(lambda self: self.n_cells, doc="Number of triangles.")
+    notes = property(lambda self: self._reader_notes, doc="tuple of str: one line per repair the reader made.")
 
     @property
     def file_faces(self) -> np.ndarray:
@@ -137,13 +116,7 @@ class TriMesh(SimplexMesh):
     face_edges = property(lambda self: self.cell_edges, doc="(m, 3) int64: the edge opposite each corner.")
     edge_face_counts = property(lambda self: self.edge_cell_counts, doc="(e,) int64: faces per edge.")
 
-    @property
-    def cells(self) -> np.ndarray:
-        return self.F
-
-    @property
-    def cell_measures(self) -> np.ndarray:
-        return self.face_areas
+    cell_measures = property(lambda self: self.face_areas, doc="(m,) float: :attr:`face_areas`.")
 
     @cached_property
     def cell_facet_measures(self) -> np.ndarray:
@@ -154,20 +127,9 @@ class TriMesh(SimplexMesh):
         return TriMesh(V, self.F, vertex_map=self.vertex_map, name=self.name)
 
     def degenerate_faces(self, tol: float = DEGENERATE_TOL) -> np.ndarray:
-        """Faces too thin or too small for the gradient-based operators (:meth:`SimplexMesh.degenerate_cells`).
-
-        Left out of the convex formulations (:class:`~cvxgeodesic.formulations.MeshOperators`).
-
-        Parameters
-        ----------
-        tol : float
-            Relative threshold (default :data:`DEGENERATE_TOL`); 0 selects only faces of exactly zero area.
-
-        Returns
-        -------
-        (k,) int64 ndarray
-            Sorted indices of the degenerate faces.
-        """
+        """(k,) int64 ndarray: the sorted indices of the faces too thin or too small for the gradient-based operators
+        (:meth:`SimplexMesh.degenerate_cells`), left out of the convex formulations
+        (:class:`~cvxgeodesic.formulations.MeshOperators`); ``tol = 0`` selects only faces of exactly zero area."""
         return self.degenerate_cells(tol)
 
     @cached_property
@@ -179,103 +141,3 @@ class TriMesh(SimplexMesh):
     def boundary_facets(self) -> np.ndarray:
         """(b, 2) int64 ndarray: the edges of a single face (the boundary of an open surface)."""
         return self.edges[self.edge_face_counts == 1]
-
-
-def file_numbering(n: int, vertex_map: ArrayLike | None, file_index: ArrayLike | None,
-                   dropped_vertices: ArrayLike | None, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The checked file-numbering arrays of a mesh of ``n`` vertices (read-only; identity when not from a file).
-
-    Returns
-    -------
-    vertex_map : (n,) int64 ndarray
-    file_index : (n_file,) int64 ndarray
-        Each file vertex's mesh vertex, −1 for the dropped ones.
-    dropped_vertices : (n_dropped, 3) float ndarray
-        Positions of the dropped file vertices (NaN when not given).
-
-    Raises
-    ------
-    MeshError
-        Wrong shapes or indices, naming ``name``.
-    """
-    def as_index(x: ArrayLike, what: str) -> np.ndarray:
-        try:
-            return np.array(x, dtype=np.int64)
-        except (TypeError, ValueError, OverflowError):
-            raise MeshError(f"{name}: {what} must be an integer array") from None
-
-    vmap = as_index(np.arange(n) if vertex_map is None else vertex_map, "vertex_map")
-    if vmap.shape != (n,):
-        raise MeshError(f"{name}: vertex_map must have shape ({n},), got {vmap.shape}")
-    findex = as_index(np.arange(n) if file_index is None else file_index, "file_index")
-    if findex.ndim != 1 or np.any(findex < -1) or np.any(findex >= n):
-        raise MeshError(f"{name}: file_index must be a 1-D array of indices in [-1, {n})")
-    n_dropped = int(np.count_nonzero(findex < 0))
-    dropped = (np.full((n_dropped, 3), np.nan) if dropped_vertices is None
-               else np.array(dropped_vertices, dtype=np.float64).reshape(-1, 3))
-    if dropped.shape[0] != n_dropped:
-        raise MeshError(f"{name}: dropped_vertices must have {n_dropped} rows, got {dropped.shape[0]}")
-    for arr in (vmap, findex, dropped):
-        arr.setflags(write=False)
-    return vmap, findex, dropped
-
-
-def _as_vertices(V, name: str) -> np.ndarray:
-    try:
-        V = np.array(V, dtype=np.float64, order="C")
-    except (TypeError, ValueError) as exc:
-        raise MeshError(f"{name}: vertices must be a numeric (n, 3) array ({exc})") from None
-    if V.ndim != 2 or V.shape[1] != 3:
-        raise MeshError(f"{name}: vertices must have shape (n, 3), got {V.shape}")
-    if V.shape[0] == 0:
-        raise MeshError(f"{name}: the mesh has no vertices")
-    bad = ~np.isfinite(V).all(axis=1)
-    if bad.any():
-        i = int(np.flatnonzero(bad)[0])
-        raise MeshError(
-            f"{name}: vertex {i} has a non-finite coordinate {V[i].tolist()} ({int(bad.sum())} such vertices)"
-        )
-    check_coordinates(V, name)
-    V.setflags(write=False)
-    return V
-
-
-# per simplex dimension: (cell, cells, shape, hint after the shape, remedy for a repeated vertex)
-_CELL_WORDS = {
-    2: ("face", "faces", "(m, 3)", " (triangles only; load_mesh fan-triangulates polygons)",
-        "remove degenerate faces first"),
-    3: ("tetrahedron", "tetrahedra", "(k, 4)", "", "remove them first"),
-}
-
-
-def _as_cells(C, n: int, name: str, dim: int) -> np.ndarray:
-    """(k, dim + 1) read-only int64 cells checked against ``n`` vertices; a MeshError naming the first bad cell."""
-    one, many, shape, hint, remedy = _CELL_WORDS[dim]
-    try:
-        C_in = np.asarray(C)
-    except (TypeError, ValueError, OverflowError):  # ragged lists (polygons of several sizes), ...
-        raise MeshError(f"{name}: {many} must be an {shape} integer array{hint}") from None
-    if C_in.ndim != 2 or C_in.shape[1] != dim + 1:
-        raise MeshError(f"{name}: {many} must have shape {shape}{hint}, got {C_in.shape}")
-    if C_in.shape[0] == 0:
-        raise MeshError(f"{name}: the mesh has no {many}")
-    if C_in.dtype.kind == "f":
-        if not np.all(np.isfinite(C_in)) or not np.all(C_in == np.round(C_in)):
-            raise MeshError(f"{name}: {one} indices must be integers")
-    elif C_in.dtype.kind not in "iu":
-        raise MeshError(f"{name}: {one} indices must be integers, got dtype {C_in.dtype}")
-    if dim == 3 and C_in.dtype.kind == "u" and int(C_in.max()) >= 2**63:
-        raise MeshError(f"{name}: {one} indices must be in [0, {n})")
-    cells = np.array(C_in, dtype=np.int64, order="C")
-    out = (cells < 0) | (cells >= n)
-    if out.any():
-        c = int(np.flatnonzero(out.any(axis=1))[0])
-        raise MeshError(f"{name}: {one} {c} has vertex index {cells[c].tolist()} outside [0, {n})")
-    S = np.sort(cells, axis=1)
-    rep = (S[:, 1:] == S[:, :-1]).any(axis=1)
-    if rep.any():
-        c = int(np.flatnonzero(rep)[0])
-        raise MeshError(f"{name}: {one} {c} repeats a vertex {cells[c].tolist()} ({int(rep.sum())} such {many}); "
-                        f"{remedy}")
-    cells.setflags(write=False)
-    return cells

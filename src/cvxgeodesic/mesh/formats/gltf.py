@@ -7,8 +7,9 @@ from __future__ import annotations
 
 import json
 import struct
+from collections.abc import Callable
 from pathlib import Path
-from typing import BinaryIO
+from typing import Any, BinaryIO
 
 import numpy as np
 
@@ -32,19 +33,24 @@ def read_mesh(path: Path) -> RawMesh:
     MeshFormatError
         trimesh is missing (the message says what to install) or cannot read the file.
     """
-    lib = optional_package("trimesh", f"{path}: reading {path.suffix} files", MeshFormatError)
+    V, F = _load(path, "reading", lambda tm: (np.asarray(tm.vertices, dtype=np.float64),
+                                              np.asarray(tm.faces, dtype=np.int64)), force="mesh")
+    return RawMesh(V, F.ravel(), np.full(F.shape[0], 3, dtype=np.int64))
+
+
+def _load(path: Path, what: str, convert: Callable[[Any], Any] = lambda loaded: loaded, **kwargs: Any) -> Any:
+    """``convert(trimesh.load(path, process=False, **kwargs))`` after :func:`check_json`, every failure a
+    MeshFormatError."""
+    lib = optional_package("trimesh", f"{path}: {what} {path.suffix} files", MeshFormatError)
     check_json(path)
     try:
         # process=False: no merging or reordering, so indices stay the file's
-        tm = lib.load(str(path), force="mesh", process=False)
-        V = np.asarray(tm.vertices, dtype=np.float64)
-        F = np.asarray(tm.faces, dtype=np.int64)
+        return convert(lib.load(str(path), process=False, **kwargs))
     except Exception as exc:  # anything from KeyError to trimesh's own errors
         detail = f"{type(exc).__name__}: {exc}"
         if isinstance(exc, ImportError) and path.suffix.lower() == ".3mf":  # trimesh's 3MF reader needs networkx
             detail += "; 3MF files need networkx too: pip install networkx"
         raise format_error(path, f"trimesh cannot read the file ({detail})") from None
-    return RawMesh(V, F.ravel(), np.full(F.shape[0], 3, dtype=np.int64))
 
 
 def check_json(path: Path) -> None:
@@ -143,12 +149,7 @@ def read_field(path: Path, name: str) -> np.ndarray:
         trimesh is missing, cannot read the file, the file holds several meshes, or the mesh has no
         such attribute (the message lists the ones it has).
     """
-    lib = optional_package("trimesh", f"{path}: reading fields from {path.suffix} files", MeshFormatError)
-    check_json(path)
-    try:
-        scene = lib.load(str(path), process=False)
-    except Exception as exc:
-        raise format_error(path, f"trimesh cannot read the file ({type(exc).__name__}: {exc})") from None
+    scene = _load(path, "reading fields from")
     meshes = list(scene.geometry.values()) if hasattr(scene, "geometry") else [scene]
     if len(meshes) != 1:
         raise format_error(path, f"expected one mesh, the file has {len(meshes)}")

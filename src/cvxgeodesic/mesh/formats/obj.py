@@ -19,17 +19,8 @@ _OBJ_F_RE = re.compile(r"^[ \t]*f(?![^ \t\n])([^\n]*)", re.M)
 
 
 def read_mesh(path: Path) -> RawMesh:
-    """The vertices and polygons of an OBJ file; texture coordinates, normals, groups and materials are ignored.
-
-    Parameters
-    ----------
-    path : pathlib.Path
-
-    Returns
-    -------
-    RawMesh
-        With line numbers, and the 1-based indices as written (``raw_idx``) for messages.
-    """
+    """The vertices and polygons of an OBJ file, with line numbers and the 1-based indices as written (``raw_idx``)
+    for messages; texture coordinates, normals, groups and materials are ignored."""
     text = decode(read_bytes(path, "a mesh file"))
     if "\r" in text:
         text = text.replace("\r\n", "\n").replace("\r", "\n")

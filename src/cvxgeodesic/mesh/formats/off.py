@@ -16,17 +16,7 @@ _OFF_HEADER_RE = re.compile(r"(ST)?(C)?(N)?(4)?(n)?OFF\Z")
 
 
 def read_mesh(path: Path) -> RawMesh:
-    """The vertices and polygons of an ASCII OFF file (binary, 4-D and n-D OFF are refused).
-
-    Parameters
-    ----------
-    path : pathlib.Path
-
-    Returns
-    -------
-    RawMesh
-        With line numbers.
-    """
+    """The vertices and polygons of an ASCII OFF file, with line numbers (binary, 4-D and n-D OFF are refused)."""
     text = decode(read_bytes(path, "a mesh file"))
     if "#" in text:
         text = re.sub(r"#[^\r\n]*", "", text)

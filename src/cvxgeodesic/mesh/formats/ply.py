@@ -14,24 +14,11 @@ from ._text import INT_RE, decode, parse_floats, parse_int_tokens
 
 __all__ = ["read_field", "read_fields", "read_mesh", "write_field"]
 
-_PLY_TYPES = {
-    "char": "i1",
-    "int8": "i1",
-    "uchar": "u1",
-    "uint8": "u1",
-    "short": "i2",
-    "int16": "i2",
-    "ushort": "u2",
-    "uint16": "u2",
-    "int": "i4",
-    "int32": "i4",
-    "uint": "u4",
-    "uint32": "u4",
-    "float": "f4",
-    "float32": "f4",
-    "double": "f8",
-    "float64": "f8",
-}
+#: numpy's type code of each PLY type, by both of its names (the original and the sized one).
+_PLY_TYPES = {name: code for names, code in (("char int8", "i1"), ("uchar uint8", "u1"), ("short int16", "i2"),
+                                             ("ushort uint16", "u2"), ("int int32", "i4"), ("uint uint32", "u4"),
+                                             ("float float32", "f4"), ("double float64", "f8"))
+              for name in names.split()}
 
 
 @dataclass
@@ -55,17 +42,8 @@ class _PlyElement:
 
 
 def read_mesh(path: Path) -> RawMesh:
-    """The ``vertex`` element's ``x, y, z`` and the ``face`` element's index lists; other elements are skipped.
-
-    Parameters
-    ----------
-    path : pathlib.Path
-
-    Returns
-    -------
-    RawMesh
-        With line numbers for ASCII files.
-    """
+    """The ``vertex`` element's ``x, y, z`` and the ``face`` element's index lists, with line numbers for ASCII
+    files; other elements are skipped."""
     values, line_nos = _read_elements(path, read_bytes(path, "a mesh file"))
     V, idx, sizes, v_lines, f_lines, _ = _mesh_parts(path, values, line_nos)
     return RawMesh(V, idx, sizes, v_lines, f_lines)
@@ -217,26 +195,23 @@ def _read_binary_element(path: Path, data: bytes, pos: int, el: _PlyElement, bo:
     # Slow path: variable-length lists, record by record.
     cols: dict[str, list] = {p.name: [] for p in el.props}
     sizes: dict[str, list[int]] = {p.name: [] for p in el.props if p.count_dtype}
+    def take(dtype: str, count: int, r: int) -> np.ndarray:
+        """The next ``count`` items of type ``dtype``, in record ``r``."""
+        nonlocal pos
+        dt = np.dtype(bo + dtype)
+        if count < 0 or pos + count * dt.itemsize > len(data):
+            raise format_error(path, f"binary PLY data ends in record {r} of element '{el.name}'")
+        pos += count * dt.itemsize
+        return np.frombuffer(data, dtype=dt, count=count, offset=pos - count * dt.itemsize)
+
     for r in range(n):
         for p in el.props:
             if p.count_dtype:
-                cdt = np.dtype(bo + p.count_dtype)
-                if pos + cdt.itemsize > len(data):
-                    raise format_error(path, f"binary PLY data ends in record {r} of element '{el.name}'")
-                c = int(np.frombuffer(data, dtype=cdt, count=1, offset=pos)[0])
-                pos += cdt.itemsize
-                idt = np.dtype(bo + p.dtype)
-                if c < 0 or pos + c * idt.itemsize > len(data):
-                    raise format_error(path, f"binary PLY data ends in record {r} of element '{el.name}'")
-                cols[p.name].append(np.frombuffer(data, dtype=idt, count=c, offset=pos))
+                c = int(take(p.count_dtype, 1, r)[0])
+                cols[p.name].append(take(p.dtype, c, r))
                 sizes[p.name].append(c)
-                pos += c * idt.itemsize
             else:
-                idt = np.dtype(bo + p.dtype)
-                if pos + idt.itemsize > len(data):
-                    raise format_error(path, f"binary PLY data ends in record {r} of element '{el.name}'")
-                cols[p.name].append(np.frombuffer(data, dtype=idt, count=1, offset=pos)[0])
-                pos += idt.itemsize
+                cols[p.name].append(take(p.dtype, 1, r)[0])
     out = {}
     for p in el.props:
         if p.count_dtype:

@@ -16,16 +16,8 @@ _STL_DTYPE = np.dtype([("normal", "<f4", (3,)), ("v", "<f4", (3, 3)), ("attr", "
 
 
 def read_mesh(path: Path) -> RawMesh:
-    """The triangles of a binary or ASCII STL file, corner ``3 * triangle + k`` as file vertex.
-
-    Parameters
-    ----------
-    path : pathlib.Path
-
-    Returns
-    -------
-    RawMesh
-        With line numbers for ASCII files.
+    """The triangles of a binary or ASCII STL file, corner ``3 * triangle + k`` as file vertex, with line numbers
+    for ASCII files.
 
     Warns
     -----
