@@ -85,8 +85,16 @@ class TetMesh(SimplexMesh):
     dim = 3
     default_name = "tetmesh"
     count_name = "n_tets"
-    T = property(lambda self: self.cells, doc="(k, 4) int64 ndarray, read-only: the tetrahedra (:attr:`cells`).")
-    n_tets = property(lambda self: self.n_cells, doc="Number of tetrahedra.")
+
+    @property
+    def T(self) -> np.ndarray:
+        """(k, 4) int64 ndarray, read-only: the tetrahedra (:attr:`cells`)."""
+        return self.cells
+
+    @property
+    def n_tets(self) -> int:
+        """Number of tetrahedra."""
+        return self.n_cells
 
     def __init__(self, V: ArrayLike, T: ArrayLike, *, vertex_map: ArrayLike | None = None, name: str | None = None,
                  file_index: ArrayLike | None = None, dropped_vertices: ArrayLike | None = None,

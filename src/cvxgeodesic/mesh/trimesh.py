@@ -83,9 +83,20 @@ class TriMesh(SimplexMesh):
         self._file_faces = None if file_faces is None else _as_cells(file_faces, self.file_index.shape[0],
                                                                       f"{self.name} (file faces)", 2)
 
-    F = property(lambda self: self.cells, doc="(m, 3) int64 ndarray, read-only: the triangles (:attr:`cells`).")
-    n_faces = property(lambda self: self.n_cells, doc="Number of triangles.")
-    notes = property(lambda self: self._reader_notes, doc="tuple of str: one line per repair the reader made.")
+    @property
+    def F(self) -> np.ndarray:
+        """(m, 3) int64 ndarray, read-only: the triangles (:attr:`cells`)."""
+        return self.cells
+
+    @property
+    def n_faces(self) -> int:
+        """Number of triangles."""
+        return self.n_cells
+
+    @property
+    def notes(self) -> tuple[str, ...]:
+        """tuple of str: one line per repair the reader made."""
+        return self._reader_notes
 
     @property
     def file_faces(self) -> np.ndarray:
