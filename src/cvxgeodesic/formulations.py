@@ -58,7 +58,7 @@ term; their edges get the LC constraint instead (:class:`MeshOperators`).
 Inside a tetrahedral mesh (``docs/volumes.md``) the same programs hold one dimension up: the field is linear in each
 tetrahedron, the cone ``‖B_t d_t‖ ≤ 1`` is an SOC(4), ``|S|`` becomes the volume ``|Ω|`` (the stretch is the mean of
 ``d`` over the solid, ``λ = m · κ · |Ω|^(1/3)``), and the energies are the Dirichlet and the squared-Laplacian ones
-(the curved Hessian energy is a surface notion: its formulations are refused, :data:`FORMULATIONS_BY_DIM`). The
+(the curved Hessian energy is a surface notion: its formulations are refused, :mod:`cvxgeodesic.capabilities`). The
 sources fix vertices and source faces, and the edges of every tetrahedron without a cone get the edge bounds
 (:mod:`cvxgeodesic.sources`); the near-source bounds ``d ≥ 0`` are the surface's, with :func:`smoothing_length`
 measured in the volume.
@@ -77,7 +77,7 @@ from . import capabilities
 from .errors import DegenerateFacesWarning, MeshError, ParameterError
 from .mesh.simplex import SimplexMesh
 from .mesh.trimesh import DEGENERATE_TOL
-from .operators import ENERGIES_BY_DIM, check_energy, energy_matrix, gradient_blocks
+from .operators import check_energy, energy_matrix, gradient_blocks
 from .operators.metric import Medium
 from .solvers.problem import ConeGroup, ConicProblem, PairInequalities
 from .sources import SourceSet, source_constraints
@@ -94,9 +94,6 @@ FORMULATIONS: dict[str, tuple[str, str | None]] = {
     "qcqp-hessian": ("qc", "hessian"),
 }
 ALIASES = {"qgdf": "lcqp-hessian"}
-#: The formulations of each simplex dimension: those whose energy is defined there (:data:`ENERGIES_BY_DIM`).
-FORMULATIONS_BY_DIM = {dim: tuple(k for k, (_, e) in FORMULATIONS.items() if e is None or e in energies)
-                       for dim, energies in ENERGIES_BY_DIM.items()}
 #: Every formulation bounds the vertices within this many edges of a source (of a source point's or curve's faces)
 #: below by 0 (module docstring).
 NONNEGATIVE_HOPS = 2
@@ -521,7 +518,7 @@ def build_problem(
         :func:`cvxgeodesic.sources.source_constraints`).
     method : str
         A name of :data:`FORMULATIONS` (aliases allowed) defined on the mesh's dimension
-        (:data:`FORMULATIONS_BY_DIM`).
+        (:func:`capabilities.methods_for`).
     lam : float
         Smoothness weight λ (ignored by lclp / qclp).
     stretch : {"area", "calibrated", "mean", "sum"}
@@ -545,8 +542,7 @@ def build_problem(
     mesh = ops.mesh
     n = mesh.n_vertices
     name = canonical_method(method)
-    if name not in FORMULATIONS_BY_DIM[mesh.dim]:
-        capabilities.check(name, dim=mesh.dim)  # names the methods that apply
+    capabilities.check(name, dim=mesh.dim)  # names the methods that apply
     constraint, energy = FORMULATIONS[name]
     if not np.isfinite(lam) or lam < 0:
         raise ParameterError(f"smoothness weight lambda must be finite and >= 0, got {lam}")

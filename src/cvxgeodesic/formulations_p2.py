@@ -60,6 +60,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
+from . import capabilities
 from .errors import DegenerateFacesWarning, MeshError, ParameterError
 from .mesh.simplex import CELL_EDGES
 from .operators.lagrange import SAMPLES, LagrangeSpace, edge_basis, sample_points
@@ -67,9 +68,8 @@ from .operators.metric import Medium
 from .operators.p2_energy import P2Energy, p2_energy
 from .solvers.problem import ConeGroup, ConicProblem, Equalities, PairInequalities
 
-__all__ = ["DEFAULT_SAMPLES", "DEFAULT_VOLUME_SAMPLES", "DEFAULT_WEIGHTS", "ORDER2_CACHE_VERSION", "ORDER2_METHODS",
-           "BernsteinEdgeCones", "P2Builder", "P2Program", "bernstein_edge_cones", "eliminate_pair_equalities",
-           "source_edges"]
+__all__ = ["DEFAULT_SAMPLES", "DEFAULT_VOLUME_SAMPLES", "DEFAULT_WEIGHTS", "ORDER2_CACHE_VERSION", "BernsteinEdgeCones",
+           "P2Builder", "P2Program", "bernstein_edge_cones", "eliminate_pair_equalities", "source_edges"]
 
 #: Where the cone is imposed on triangles: "flat-bernstein" = the three corners and the three
 #: :class:`BernsteinEdgeCones` on flat faces (:attr:`LagrangeSpace.flat_cells`), the three edge midpoints on the
@@ -85,9 +85,6 @@ DEFAULT_SAMPLES = "flat-bernstein"
 DEFAULT_VOLUME_SAMPLES = "flat-nodes"
 #: Objective weights (:meth:`LagrangeSpace.weights`; docs/order2.md has the measurement behind the choice).
 DEFAULT_WEIGHTS = "lumped"
-#: The formulations with an order-2 program: ``qclp`` and the smoothed QC formulations, whose energies act on ``φ``
-#: (:mod:`cvxgeodesic.operators.p2_energy`; ``qcqp-dirichlet`` takes the edge-jump term alone).
-ORDER2_METHODS = ("qclp", "qcqp-hessian", "qcqp-laplacian", "qcqp-dirichlet")
 #: Edges shorter than this fraction of the bounding-box diagonal get no 1-D cone (their DOF is tied linearly).
 MIN_EDGE = 1e-9
 #: Version of the order-2 fields, for caches keyed on the inputs only (``benchmarks/report_common.py``): bump it
@@ -269,24 +266,19 @@ class P2Builder:
             self.cone_replaced[:flat_cells.size * 6] = np.tile([False] * 3 + [True] * 3, flat_cells.size)
 
     def _check(self, samples: str, cone_scale: str, medium: Medium | None, energy: str | None, lam: float) -> None:
-        """ParameterError for a bad option, or one defined on triangles only (on tetrahedra)."""
+        """ParameterError for a bad option, or one the capability table refuses (:func:`capabilities.check`: a
+        smoothness energy with a medium; either on tetrahedra), or the edge cones on tetrahedra."""
         if not (np.isfinite(lam) and lam >= 0):
             raise ParameterError(f"smoothness weight lambda must be finite and >= 0, got {lam}")
-        if medium is not None and energy is not None and lam > 0:
-            raise ParameterError("order-2 smoothing takes no cost or metric: its energies vanish on the Euclidean "
-                                 "squared distance only; use order=1 or method='qclp'")
         if samples not in SAMPLES and samples not in ("flat-nodes", "flat-bernstein"):
             raise ParameterError(f"samples must be 'flat-bernstein', 'flat-nodes' or one of {SAMPLES}, "
                                  f"got {samples!r}")
         if cone_scale not in ("dijkstra", "unit"):
             raise ParameterError(f"cone_scale must be 'dijkstra' or 'unit', got {cone_scale!r}")
-        if self.dim == 3:
-            surface_only = [name for name, given in (("samples='flat-bernstein'", samples == "flat-bernstein"),
-                                                     ("smoothness energy", energy is not None and lam > 0),
-                                                     ("cost or metric", medium is not None)) if given]
-            if surface_only:
-                raise ParameterError(f"the order-2 program on tetrahedra takes no {' and no '.join(surface_only)} "
-                                     "(surfaces only)")
+        capabilities.check(f"qcqp-{energy}" if energy is not None and lam > 0 else "qclp", dim=self.dim, order=2,
+                           medium="none" if medium is None else "metric")
+        if self.dim == 3 and samples == "flat-bernstein":
+            raise ParameterError("the order-2 program on tetrahedra takes no samples='flat-bernstein' (surfaces only)")
 
     def _degenerate_edge_cones(self):
         """The 1-D cones ``(dφ/ds)² ≤ 4φ`` along each edge of a degenerate cell (each edge once, in one of its
