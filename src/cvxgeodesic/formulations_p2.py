@@ -193,9 +193,6 @@ class P2Builder:
         "flat-bernstein" is "flat-nodes": the edge cones' tangent is the Euclidean ``2I``.
     weights : {"lumped", "p2", "mixed"}, optional
         Objective weights (:meth:`LagrangeSpace.weights`); default :data:`DEFAULT_WEIGHTS`.
-    cone_scale : {"dijkstra", "unit"}
-        Centre of each cone: ``a`` = (Dijkstra distance at the sample)², floored at the squared
-        mean longest edge, or ``a = 1``.
     medium : Medium, optional
         Triangles only: a travel cost or metric on ``mesh`` (:mod:`cvxgeodesic.operators.metric`): every cone bounds
         ``|∇φ|²_{M⁻¹} ≤ 4c²φ`` with the medium at its sample point (:class:`LagrangeSpace`), a degenerate face's 1-D
@@ -223,13 +220,11 @@ class P2Builder:
         vertex, or for every edge when two sources share an edge (:meth:`build`).
     """
 
-    def __init__(self, mesh, samples: str | None = None, weights: str | None = None,
-                 cone_scale: str = "dijkstra", medium: Medium | None = None, energy: str | None = None,
-                 lam: float = 0.0):
+    def __init__(self, mesh, samples: str | None = None, weights: str | None = None, medium: Medium | None = None,
+                 energy: str | None = None, lam: float = 0.0):
         self.dim = dim = int(mesh.dim)
         samples = (DEFAULT_SAMPLES if dim == 2 else DEFAULT_VOLUME_SAMPLES) if samples is None else samples
-        self._check(samples, cone_scale, medium, energy, lam)
-        self.cone_scale = cone_scale
+        self._check(samples, medium, energy, lam)
         self.mesh = mesh
         self.space = sp_ = LagrangeSpace(mesh, 2, medium)
         self.w = sp_.weights(DEFAULT_WEIGHTS if weights is None else weights)
@@ -265,7 +260,7 @@ class P2Builder:
         if samples == "flat-bernstein":
             self.cone_replaced[:flat_cells.size * 6] = np.tile([False] * 3 + [True] * 3, flat_cells.size)
 
-    def _check(self, samples: str, cone_scale: str, medium: Medium | None, energy: str | None, lam: float) -> None:
+    def _check(self, samples: str, medium: Medium | None, energy: str | None, lam: float) -> None:
         """ParameterError for a bad option, or one the capability table refuses (:func:`capabilities.check`: a
         smoothness energy with a medium; either on tetrahedra), or the edge cones on tetrahedra."""
         if not (np.isfinite(lam) and lam >= 0):
@@ -273,8 +268,6 @@ class P2Builder:
         if samples not in SAMPLES and samples not in ("flat-nodes", "flat-bernstein"):
             raise ParameterError(f"samples must be 'flat-bernstein', 'flat-nodes' or one of {SAMPLES}, "
                                  f"got {samples!r}")
-        if cone_scale not in ("dijkstra", "unit"):
-            raise ParameterError(f"cone_scale must be 'dijkstra' or 'unit', got {cone_scale!r}")
         capabilities.check(f"qcqp-{energy}" if energy is not None and lam > 0 else "qclp", dim=self.dim, order=2,
                            medium="none" if medium is None else "metric")
         if self.dim == 3 and samples == "flat-bernstein":
@@ -488,8 +481,9 @@ class P2Builder:
         cf, cb = cone_cell[keep], cone_bary[keep]
         Gk, hk = G0[keep].copy(), h0[keep].copy()
         a_b = np.ones(int(keep_b.sum()))
-        if self.cone_scale == "dijkstra" and dv is not None:
-            # ‖(√a ∇φ, φ − a)‖ ≤ φ + a is |∇φ|² ≤ 4φ for every a > 0; a ≈ φ at the sample centres the cone there
+        if dv is not None:
+            # ‖(√a ∇φ, φ − a)‖ ≤ φ + a is |∇φ|² ≤ 4φ for every a > 0; a ≈ φ at the sample centres the cone there:
+            # (Dijkstra distance at the sample)², floored at the squared mean longest edge (a = 1 without sources)
             h2 = np.mean(space.cell_longest_edges[cf]) ** 2 if cf.size else 1.0
             a = np.maximum(np.einsum("ki,ki->k", cb, dv[mesh.cells[cf]]) ** 2, h2)
             Gk[:, 1:dim + 1] *= np.sqrt(a)[:, None, None]

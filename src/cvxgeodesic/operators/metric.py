@@ -410,22 +410,15 @@ class Medium:
     def _check_positive(self) -> None:
         mesh, kind = self.mesh, self.metric_kind or "constant"
         m = mesh.n_faces
-        faces = np.arange(m)
-        if kind == "vertices":
-            faces = np.repeat(faces, 3)
-            owner = mesh.F.ravel()
-            ex, ey = self._ex[faces], self._ey[faces]
-            M = self.metric[owner]
-            P = np.stack([np.stack([np.einsum("ki,kij,kj->k", ex, M, ex), np.einsum("ki,kij,kj->k", ex, M, ey)], -1),
-                          np.stack([np.einsum("ki,kij,kj->k", ey, M, ex), np.einsum("ki,kij,kj->k", ey, M, ey)], -1)],
-                         -2)
-        else:
-            saved, self.cost = self.cost, None  # the cost is positive: the metric alone decides
-            try:
-                P = self.plane(faces, _CENTROID)
-            finally:
-                self.cost = saved
-            owner = faces if kind == "faces" else np.zeros(m, dtype=np.int64)
+        faces, bary = np.arange(m), _CENTROID
+        owner = faces if kind == "faces" else np.zeros(m, dtype=np.int64)
+        if kind == "vertices":  # each corner's tensor in its face's plane (at the corner, the tensor is its own)
+            faces, bary, owner = np.repeat(faces, 3), np.tile(np.eye(3), (m, 1)), mesh.F.ravel()
+        saved, self.cost = self.cost, None  # the cost is positive: the metric alone decides
+        try:
+            P = self.plane(faces, bary)
+        finally:
+            self.cost = saved
         check_plane_metric(P, owner, faces, kind)
 
     def _normalization(self) -> float:
