@@ -186,11 +186,6 @@ def canonical_method(method: str) -> str:
     return name
 
 
-def check_normalization(normalization) -> str:
-    """Validated name of a normalization of ``m`` (see :data:`NORMALIZATIONS`)."""
-    return check_choice(normalization, "normalization", NORMALIZATIONS)
-
-
 def smoothness_weight(mesh: SimplexMesh, m: float, normalization: str = "area", energy: str = "hessian",
                       medium: Medium | None = None, order: int = 1) -> float:
     """The smoothness weight λ for a multiplier ``m``.
@@ -234,7 +229,7 @@ def smoothness_weight(mesh: SimplexMesh, m: float, normalization: str = "area", 
     >>> round(cg.smoothness_weight(cg.tet_box(2, size=2.0), 1.0, energy="dirichlet") / 1.3e-2, 12)
     2.0
     """
-    normalization = check_normalization(normalization)
+    normalization = check_choice(normalization, "normalization", NORMALIZATIONS)
     if order == 2:
         check_choice(energy, "energy", KAPPA_ORDER2, lower=False)
         return float(m) * KAPPA_ORDER2[energy]
