@@ -49,17 +49,14 @@ def lagrange_nodes(dim: int, order: int = 2) -> np.ndarray:
 def sample_points(name: str, dim: int) -> np.ndarray:
     """Barycentric sample points ``(s, dim + 1)`` of one of :data:`SAMPLES` (``"nodes+gauss"``: triangles only)."""
     nodes = lagrange_nodes(dim)
-    if name == "nodes":
-        return nodes
-    if name == "corners":
-        return nodes[:dim + 1]
-    if name == "midpoints":
-        return nodes[dim + 1:]
-    if name == "nodes+centroid":
-        return np.vstack([nodes, np.full((1, dim + 1), 1.0 / (dim + 1))])
-    if name == "nodes+gauss" and dim == 2:
-        return np.vstack([nodes, [[2 / 3, 1 / 6, 1 / 6], [1 / 6, 2 / 3, 1 / 6], [1 / 6, 1 / 6, 2 / 3]]])
-    raise ParameterError(f"samples {name!r} is not defined on cells of dimension {dim}")
+    points = {"nodes": nodes, "corners": nodes[:dim + 1], "midpoints": nodes[dim + 1:],
+              "nodes+centroid": np.vstack([nodes, np.full((1, dim + 1), 1.0 / (dim + 1))])}
+    if dim == 2:  # the three-point Gauss rule of a triangle
+        points["nodes+gauss"] = np.vstack([nodes, [[2 / 3, 1 / 6, 1 / 6], [1 / 6, 2 / 3, 1 / 6],
+                                                   [1 / 6, 1 / 6, 2 / 3]]])
+    if name not in points:
+        raise ParameterError(f"samples {name!r} is not defined on cells of dimension {dim}")
+    return points[name]
 
 
 def lagrange_basis(bary: np.ndarray, order: int = 2) -> tuple[np.ndarray, np.ndarray]:
