@@ -191,7 +191,7 @@ class P2Builder:
         of the others; the default on tetrahedra, where every proper cell is flat), or a name of
         :data:`~cvxgeodesic.operators.lagrange.SAMPLES` (on every cell, no edge cones). With a ``medium``
         "flat-bernstein" is "flat-nodes": the edge cones' tangent is the Euclidean ``2I``.
-    weights : {"lumped", "p2", "mixed"}, optional
+    weights : {"lumped", "p2"}, optional
         Objective weights (:meth:`LagrangeSpace.weights`); default :data:`DEFAULT_WEIGHTS`.
     medium : Medium, optional
         Triangles only: a travel cost or metric on ``mesh`` (:mod:`cvxgeodesic.operators.metric`): every cone bounds

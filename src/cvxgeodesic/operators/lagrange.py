@@ -29,7 +29,7 @@ __all__ = ["SAMPLES", "WEIGHTS", "LagrangeField", "LagrangeSpace", "SplitLagrang
            "edge_basis", "lagrange_basis", "lagrange_nodes", "max_violation", "sample_points", "violations"]
 
 #: Objective weights (:meth:`LagrangeSpace.weights`).
-WEIGHTS = ("lumped", "p2", "mixed")
+WEIGHTS = ("lumped", "p2")
 #: Names of the sample-point sets (:func:`sample_points`).
 SAMPLES = ("nodes", "corners", "midpoints", "nodes+centroid", "nodes+gauss")
 #: Words for messages: (a cell, cells as an argument name).
@@ -244,11 +244,11 @@ class LagrangeSpace:
 
         Parameters
         ----------
-        kind : {"lumped", "p2", "mixed"}
+        kind : {"lumped", "p2"}
             ``"lumped"``: the cell's measure split equally over its nodes (``A/6`` on a triangle, ``vol/10`` on a
             tetrahedron at order 2). Triangles at order 2 also: ``"p2"``, the exact integrals of the shape
             functions (0 for corners, ``A/3`` for midpoints; on a tetrahedron the corners' would be negative,
-            ``−vol/20``); ``"mixed"``, their average (``A/12`` and ``A/4``).
+            ``−vol/20``).
 
         Returns
         -------
@@ -257,7 +257,7 @@ class LagrangeSpace:
         Raises
         ------
         ParameterError
-            An unknown kind, or ``"p2"``/``"mixed"`` on tetrahedra or at order 1.
+            An unknown kind, or ``"p2"`` on tetrahedra or at order 1.
         """
         A = self.cell_measures
         n_loc, c = self.cell_dofs.shape[1], self.dim + 1
@@ -267,10 +267,8 @@ class LagrangeSpace:
             raise ParameterError(f"weights={kind!r} is defined for order-2 triangles only; use 'lumped'")
         if kind == "lumped":
             per = np.repeat(A[:, None] / float(n_loc), n_loc, axis=1)
-        elif kind == "p2":
-            per = np.hstack([np.zeros((A.size, c)), np.repeat(A[:, None] / 3.0, 3, axis=1)])
         else:
-            per = np.hstack([np.repeat(A[:, None] / 12.0, 3, axis=1), np.repeat(A[:, None] / 4.0, 3, axis=1)])
+            per = np.hstack([np.zeros((A.size, c)), np.repeat(A[:, None] / 3.0, 3, axis=1)])
         return np.bincount(self.cell_dofs.ravel(), per.ravel(), minlength=self.n_dofs)
 
     def hessian_rows(self, cells: np.ndarray) -> np.ndarray:
