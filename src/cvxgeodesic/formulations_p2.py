@@ -290,29 +290,22 @@ class P2Builder:
         t = np.array([0.0, 0.5, 1.0])
         Nt, dNt = edge_basis(t)
         r = np.arange(ids.size)
-        rows_v, rows_g, eb = [], [], []
-        for j in range(3):
+        cols = np.column_stack([a, dim + 1 + local, b])  # along the edge from corner a to corner b: its local DOFs
+        val, grd = np.zeros((3, ids.size, n_loc)), np.zeros((3, ids.size, 1, n_loc))
+        eb = np.zeros((3, ids.size, dim + 1))
+        for j in range(3):  # the edge's ends and midpoint
             # dφ/ds along the edge's length (in the medium: its rate of length per unit t at the sample)
             L = mesh.edge_lengths[ids] if sp_.medium is None else sp_.medium.edge_speed(owner, a, b, t[j])
-            # along the edge from corner a to corner b, local DOFs (a, dim + 1 + local, b)
-            val = np.zeros((ids.size, n_loc))
-            grd = np.zeros((ids.size, 1, n_loc))
-            for col, cv, cd in ((a, Nt[j, 0], dNt[j, 0]), (dim + 1 + local, Nt[j, 1], dNt[j, 1]),
-                                (b, Nt[j, 2], dNt[j, 2])):
-                val[r, col] = cv
-                grd[r, 0, col] = cd / L
-            rows_v.append(val)
-            rows_g.append(grd)
-            bb = np.zeros((ids.size, dim + 1))
-            bb[r, a], bb[r, b] = 1 - t[j], t[j]
-            eb.append(bb)
-        Ge, he = _cone_rows(np.concatenate(rows_v), np.concatenate(rows_g), dim)
+            val[j, r[:, None], cols] = Nt[j]
+            grd[j, r[:, None], 0, cols] = dNt[j] / L[:, None]
+            eb[j, r, a], eb[j, r, b] = 1 - t[j], t[j]
+        Ge, he = _cone_rows(val.reshape(-1, n_loc), grd.reshape(-1, 1, n_loc), dim)
         word = "face(s)" if dim == 2 else "tetrahedra"
         note = (f"{deg.size} degenerate {word} carry no cones at order 2; their {ids.size} edge(s) get the 1-D cone "
                 "(dφ/ds)² ≤ 4φ instead")
         self.notes.append(note)
         warnings.warn(f"{mesh.name}: {note}", DegenerateFacesWarning, stacklevel=4)
-        return Ge, he, np.tile(owner, 3), np.concatenate(eb)
+        return Ge, he, np.tile(owner, 3), eb.reshape(-1, dim + 1)
 
     def _source_rows(self, is_src: np.ndarray) -> sp.csr_matrix:
         """Zero derivative along every edge from a source vertex ``s`` to a non-source ``j``:

@@ -285,8 +285,7 @@ def _metric_energy(mesh: TriMesh, energy: str, face_metric: tuple[np.ndarray, np
         notes.append(f"{mesh.name}: with a travel cost or metric, the Hessian energy is the Euclidean surface's "
                      "divided by the mean area ratio of the medium (exact for a constant cost; the Dirichlet and "
                      "Laplacian energies use the metric itself)")
-        Q = hessian_energy_matrix(mesh, notes, analyse=analyse)
-        Q = Q if isinstance(Q, sp.csc_matrix) else sp.csc_matrix(Q)
+        Q = hessian_energy_matrix(mesh, notes, analyse=analyse)  # a csc_matrix
         Q.data /= mean_ratio  # in place: a symbolic analysis ``analyse`` made for this very matrix stays its own
         return Q
     S = metric_stiffness(mesh, T, ratio)
