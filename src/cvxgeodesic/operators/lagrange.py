@@ -114,7 +114,8 @@ class LagrangeSpace:
     medium : Medium, optional
         Triangles only: a travel cost or metric on ``mesh`` (:mod:`cvxgeodesic.operators.metric`): the gradient rows
         of :meth:`cell_cones` and :meth:`value_and_gradient_rows` are multiplied by its transform at each point
-        (``|∇φ|`` is then the norm in the medium), the weights use its areas and :attr:`edge_lengths` its lengths.
+        (``|∇φ|`` is then the norm in the medium), the weights use its areas, :attr:`cell_longest_edges` and
+        :attr:`adjacency` its edge lengths.
 
     Attributes
     ----------
@@ -159,18 +160,13 @@ class LagrangeSpace:
         self.gbasis = g
 
     @property
-    def edge_lengths(self) -> np.ndarray:
-        """(e,) float ndarray: lengths of ``mesh.edges`` (in the medium when there is one)."""
-        return self.mesh.edge_lengths if self.medium is None else self.medium.edge_lengths
-
-    @property
     def cell_longest_edges(self) -> np.ndarray:
-        """(k,) float ndarray: the longest of each cell's :attr:`edge_lengths`."""
+        """(k,) float ndarray: the longest of each cell's edges (in the medium when there is one)."""
         return self.mesh.cell_longest_edges if self.medium is None else self.medium.face_longest_edges
 
     @property
     def adjacency(self):
-        """(n, n) csr_matrix: the edge graph weighted by :attr:`edge_lengths`."""
+        """(n, n) csr_matrix: the edge graph weighted by the edge lengths (in the medium when there is one)."""
         return self.mesh.vertex_adjacency if self.medium is None else self.medium.adjacency()
 
     @property
