@@ -151,13 +151,10 @@ class LagrangeSpace:
         self.cell_edges = mesh.cell_edges
         cells = mesh.cells.astype(np.int64)
         self.cell_dofs = np.hstack([cells, n + self.cell_edges]).astype(np.int64) if order == 2 else cells
-        deg = np.zeros(mesh.n_cells, dtype=bool)
-        deg[mesh.degenerate_cells()] = True
-        self.degenerate = deg
-        with np.errstate(divide="ignore", invalid="ignore"):
-            g = gradient_blocks(mesh)
-        g[deg] = 0.0
-        self.gbasis = g
+        self.degenerate = np.zeros(mesh.n_cells, dtype=bool)
+        self.degenerate[mesh.degenerate_cells()] = True
+        self.gbasis = gradient_blocks(mesh)  # inf/nan on cells of zero measure (no warning): zeroed
+        self.gbasis[self.degenerate] = 0.0
 
     @property
     def cell_longest_edges(self) -> np.ndarray:
