@@ -33,7 +33,6 @@ BASELINE_TOL = 1e-9
 CONVEX_TOL = 1e-6
 #: Inside tetrahedra the order-1 programs are larger and less well conditioned: measured up to 1.3e-6 (qclp, box 3).
 TET_CONVEX_TOL = 1e-5
-ORDER2_METHODS = ("qclp", "qcqp-dirichlet", "qcqp-laplacian", "qcqp-hessian")
 
 
 def _rel(d_scaled: np.ndarray, d: np.ndarray, s: float) -> float:
@@ -76,7 +75,7 @@ def test_formulations_scale_with_the_mesh(method):
         assert _rel(_quiet_solve(cg.TriMesh(mesh.V * s, mesh.F), method), d, s) < CONVEX_TOL, (method, s)
 
 
-@pytest.mark.parametrize("method", ORDER2_METHODS)
+@pytest.mark.parametrize("method", methods_for(2, 2))
 def test_order2_scales_with_the_mesh(method):
     mesh = cg.icosphere(1)
     d = _quiet_solve(mesh, method, order=2)
