@@ -128,8 +128,8 @@ KAPPA_ORDER2 = {"hessian": 5.0e-7, "laplacian": 5.0e-7, "dirichlet": 5.0e-7}
 #: The root of the measure in ``λ = m · κ · |Ω|^(1/dim)``: a length on a surface and in a solid alike. On volumes κ
 #: keeps the surface values (not calibrated there; measurements in ``docs/volumes.md``).
 MEASURE_ROOT = {2: np.sqrt, 3: np.cbrt}
-#: What a cell is called in messages, singular and counted.
-CELL_WORDS = {2: ("face", "face(s)"), 3: ("tet", "tetrahedra")}
+#: What a cell is called in messages (singular, counted, plural) and what its measure is.
+CELL_WORDS = {2: ("face", "face(s)", "triangles", "area"), 3: ("tet", "tetrahedra", "tetrahedra", "volume")}
 
 
 def stretch_weights(mesh: SimplexMesh, stretch: str = "area", area_ratio: np.ndarray | None = None) -> np.ndarray:
@@ -331,12 +331,11 @@ class MeshOperators:
         self.degenerate = np.zeros(mesh.n_cells, dtype=bool)
         self.degenerate[mesh.degenerate_cells(tol)] = True
         n_bad = int(self.degenerate.sum())
-        word, counted = CELL_WORDS[mesh.dim]
+        word, counted, proper, measure = CELL_WORDS[mesh.dim]
         if n_bad == mesh.n_cells:
-            proper = "triangles" if mesh.dim == 2 else "tetrahedra"
             raise MeshError(
                 f"{mesh.name}: all {n_bad} {counted.replace('(s)', 's')} are degenerate (zero or near-zero "
-                f"{'area' if mesh.dim == 2 else 'volume'}); the convex formulations need proper {proper}; use "
+                f"{measure}); the convex formulations need proper {proper}; use "
                 "method='dijkstra' on this mesh"
             )
         self._face_metric = None
