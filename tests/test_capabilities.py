@@ -11,8 +11,9 @@ import pytest
 from cvxgeodesic import capabilities as cap
 from cvxgeodesic.baselines import BASELINES
 from cvxgeodesic.errors import ParameterError, SourceError
-from cvxgeodesic.formulations import FORMULATIONS, FORMULATIONS_BY_DIM
-from cvxgeodesic.formulations_p2 import ORDER2_METHODS
+from cvxgeodesic.formulations import FORMULATIONS
+from cvxgeodesic.operators import ENERGIES_BY_DIM
+from cvxgeodesic.operators.p2_energy import P2_ENERGIES
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "capabilities.md"
 
@@ -30,8 +31,9 @@ def test_the_table_names_the_solvers_methods():
     assert cap.BASELINE_METHODS == tuple(BASELINES)
     # what the solvers implement today, read from their own constants
     assert set(cap.methods_for(2)) == set(cap.METHODS)
-    assert cap.methods_for(3) == (*FORMULATIONS_BY_DIM[3], "dijkstra", "heat")
-    assert set(cap.methods_for(2, 2)) == set(ORDER2_METHODS)
+    assert cap.methods_for(3) == (*(k for k, (_, e) in FORMULATIONS.items() if e in (None, *ENERGIES_BY_DIM[3])),
+                                  "dijkstra", "heat")
+    assert set(cap.methods_for(2, 2)) == {"qclp", *(f"qcqp-{e}" for e in P2_ENERGIES)}
     assert cap.methods_for(3, 2) == ("qclp",)
     assert cap.methods_for(2, 1, "cost") == (*FORMULATIONS, "dijkstra")
 

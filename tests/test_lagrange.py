@@ -18,6 +18,7 @@ from cvxgeodesic.operators.lagrange import (
     lagrange_basis,
     lagrange_nodes,
     max_violation,
+    sample_points,
 )
 
 
@@ -164,3 +165,20 @@ def test_field_checks_its_queries(dim):
         fld.distance_at(0, [1.0, 0.0])
     with pytest.raises(ParameterError, match=f"{arg} must be an int or a 1-D array"):
         fld.distance_at(0.5, b)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_sample_points_are_barycentric_and_the_gauss_rule_is_the_triangles(dim):
+    n_nodes = (dim + 1) * (dim + 2) // 2
+    sizes = {"nodes": n_nodes, "corners": dim + 1, "midpoints": n_nodes - dim - 1, "nodes+centroid": n_nodes + 1}
+    if dim == 2:
+        sizes["nodes+gauss"] = n_nodes + 3
+    for name, size in sizes.items():
+        pts = sample_points(name, dim)
+        assert pts.shape == (size, dim + 1)
+        np.testing.assert_allclose(pts.sum(axis=1), 1.0, rtol=0, atol=1e-15)  # rounding of 1/6 + 1/6 + 2/3
+    if dim == 3:
+        with pytest.raises(ParameterError, match="samples 'nodes\\+gauss' is not defined on cells of dimension 3"):
+            sample_points("nodes+gauss", 3)
+    with pytest.raises(ParameterError, match="samples 'everywhere' is not defined"):
+        sample_points("everywhere", dim)

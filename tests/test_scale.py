@@ -14,8 +14,9 @@ import numpy as np
 import pytest
 
 import cvxgeodesic as cg
+from cvxgeodesic.capabilities import methods_for
 from cvxgeodesic.errors import MeshError
-from cvxgeodesic.formulations import FORMULATIONS, FORMULATIONS_BY_DIM
+from cvxgeodesic.formulations import FORMULATIONS
 from cvxgeodesic.mesh.tet_generate import tet_box
 from cvxgeodesic.mesh.tetmesh import TetMesh
 from cvxgeodesic.validation import MAX_COORDINATE, MIN_EXTENT
@@ -32,7 +33,6 @@ BASELINE_TOL = 1e-9
 CONVEX_TOL = 1e-6
 #: Inside tetrahedra the order-1 programs are larger and less well conditioned: measured up to 1.3e-6 (qclp, box 3).
 TET_CONVEX_TOL = 1e-5
-ORDER2_METHODS = ("qclp", "qcqp-dirichlet", "qcqp-laplacian", "qcqp-hessian")
 
 
 def _rel(d_scaled: np.ndarray, d: np.ndarray, s: float) -> float:
@@ -75,7 +75,7 @@ def test_formulations_scale_with_the_mesh(method):
         assert _rel(_quiet_solve(cg.TriMesh(mesh.V * s, mesh.F), method), d, s) < CONVEX_TOL, (method, s)
 
 
-@pytest.mark.parametrize("method", ORDER2_METHODS)
+@pytest.mark.parametrize("method", methods_for(2, 2))
 def test_order2_scales_with_the_mesh(method):
     mesh = cg.icosphere(1)
     d = _quiet_solve(mesh, method, order=2)
@@ -89,7 +89,7 @@ def test_order2_scales_with_the_mesh(method):
                                                 ("qclp", 2, CONVEX_TOL)])
 def test_tetrahedral_methods_scale_with_the_mesh(method, order, tol):
     """Before issue 34 the tetrahedral heat method came back 0 on boxes 1e-39 and 1e45 across."""
-    assert method in FORMULATIONS_BY_DIM[3] or method in ("dijkstra", "heat")
+    assert method in methods_for(3, order)
     box = tet_box(3)
     d = _quiet_solve(box, method, order)
     for s in SCALES:

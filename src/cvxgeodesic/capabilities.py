@@ -242,6 +242,8 @@ def _message(rule: Rule, method: str, *, dim: int, order: int, medium: str, mult
 # the table as text
 # ---------------------------------------------------------------------------------------------------------------
 _COLUMNS = ("order 1", "order 2", "cost, metric", "multires", *SOURCE_KINDS)
+#: What a column other than an order's asks of :func:`refusal` (a source column: its kind).
+_COLUMN_CELLS: dict[str, dict[str, Any]] = {"cost, metric": {"medium": "cost"}, "multires": {"multires": True}}
 
 
 def _cell(method: str, dim: int, column: str, notes: dict[str, int]) -> str:
@@ -256,16 +258,9 @@ def _cell(method: str, dim: int, column: str, notes: dict[str, int]) -> str:
     if column in ("order 1", "order 2"):
         rule = refusal(method, dim=dim, order=int(column[-1]))
         return "yes" if rule is None else f"no {note(rule)}"
-    verdicts = {}
-    for o in orders:
-        kw: dict = {"dim": dim, "order": o}
-        if column == "cost, metric":
-            kw["medium"] = "cost"
-        elif column == "multires":
-            kw["multires"] = True
-        else:
-            kw["source"] = column
-        verdicts[o] = (refusal(method, **kw), refusal(method, smoothing=False, **kw))
+    kw = _COLUMN_CELLS.get(column, {"source": column})
+    verdicts = {o: (refusal(method, dim=dim, order=o, **kw), refusal(method, dim=dim, order=o, smoothing=False, **kw))
+                for o in orders}
     if all(r is None for r, _ in verdicts.values()):
         return "yes"
     ok = [o for o, (r, _) in verdicts.items() if r is None]

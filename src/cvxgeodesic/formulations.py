@@ -58,7 +58,7 @@ term; their edges get the LC constraint instead (:class:`MeshOperators`).
 Inside a tetrahedral mesh (``docs/volumes.md``) the same programs hold one dimension up: the field is linear in each
 tetrahedron, the cone ``‖B_t d_t‖ ≤ 1`` is an SOC(4), ``|S|`` becomes the volume ``|Ω|`` (the stretch is the mean of
 ``d`` over the solid, ``λ = m · κ · |Ω|^(1/3)``), and the energies are the Dirichlet and the squared-Laplacian ones
-(the curved Hessian energy is a surface notion: its formulations are refused, :data:`FORMULATIONS_BY_DIM`). The
+(the curved Hessian energy is a surface notion: its formulations are refused, :mod:`cvxgeodesic.capabilities`). The
 sources fix vertices and source faces, and the edges of every tetrahedron without a cone get the edge bounds
 (:mod:`cvxgeodesic.sources`); the near-source bounds ``d ≥ 0`` are the surface's, with :func:`smoothing_length`
 measured in the volume.
@@ -77,7 +77,7 @@ from . import capabilities
 from .errors import DegenerateFacesWarning, MeshError, ParameterError
 from .mesh.simplex import SimplexMesh
 from .mesh.trimesh import DEGENERATE_TOL
-from .operators import ENERGIES_BY_DIM, check_energy, energy_matrix, gradient_blocks
+from .operators import check_energy, energy_matrix, gradient_blocks
 from .operators.metric import Medium
 from .solvers.problem import ConeGroup, ConicProblem, PairInequalities
 from .sources import SourceSet, source_constraints
@@ -94,9 +94,6 @@ FORMULATIONS: dict[str, tuple[str, str | None]] = {
     "qcqp-hessian": ("qc", "hessian"),
 }
 ALIASES = {"qgdf": "lcqp-hessian"}
-#: The formulations of each simplex dimension: those whose energy is defined there (:data:`ENERGIES_BY_DIM`).
-FORMULATIONS_BY_DIM = {dim: tuple(k for k, (_, e) in FORMULATIONS.items() if e is None or e in energies)
-                       for dim, energies in ENERGIES_BY_DIM.items()}
 #: Every formulation bounds the vertices within this many edges of a source (of a source point's or curve's faces)
 #: below by 0 (module docstring).
 NONNEGATIVE_HOPS = 2
@@ -131,8 +128,8 @@ KAPPA_ORDER2 = {"hessian": 5.0e-7, "laplacian": 5.0e-7, "dirichlet": 5.0e-7}
 #: The root of the measure in ``λ = m · κ · |Ω|^(1/dim)``: a length on a surface and in a solid alike. On volumes κ
 #: keeps the surface values (not calibrated there; measurements in ``docs/volumes.md``).
 MEASURE_ROOT = {2: np.sqrt, 3: np.cbrt}
-#: What a cell is called in messages, singular and counted.
-CELL_WORDS = {2: ("face", "face(s)"), 3: ("tet", "tetrahedra")}
+#: What a cell is called in messages (singular, counted, plural) and what its measure is.
+CELL_WORDS = {2: ("face", "face(s)", "triangles", "area"), 3: ("tet", "tetrahedra", "tetrahedra", "volume")}
 
 
 def stretch_weights(mesh: SimplexMesh, stretch: str = "area", area_ratio: np.ndarray | None = None) -> np.ndarray:
@@ -189,11 +186,6 @@ def canonical_method(method: str) -> str:
     return name
 
 
-def check_normalization(normalization) -> str:
-    """Validated name of a normalization of ``m`` (see :data:`NORMALIZATIONS`)."""
-    return check_choice(normalization, "normalization", NORMALIZATIONS)
-
-
 def smoothness_weight(mesh: SimplexMesh, m: float, normalization: str = "area", energy: str = "hessian",
                       medium: Medium | None = None, order: int = 1) -> float:
     """The smoothness weight λ for a multiplier ``m``.
@@ -237,7 +229,7 @@ def smoothness_weight(mesh: SimplexMesh, m: float, normalization: str = "area", 
     >>> round(cg.smoothness_weight(cg.tet_box(2, size=2.0), 1.0, energy="dirichlet") / 1.3e-2, 12)
     2.0
     """
-    normalization = check_normalization(normalization)
+    normalization = check_choice(normalization, "normalization", NORMALIZATIONS)
     if order == 2:
         check_choice(energy, "energy", KAPPA_ORDER2, lower=False)
         return float(m) * KAPPA_ORDER2[energy]
@@ -339,12 +331,11 @@ class MeshOperators:
         self.degenerate = np.zeros(mesh.n_cells, dtype=bool)
         self.degenerate[mesh.degenerate_cells(tol)] = True
         n_bad = int(self.degenerate.sum())
-        word, counted = CELL_WORDS[mesh.dim]
+        word, counted, proper, measure = CELL_WORDS[mesh.dim]
         if n_bad == mesh.n_cells:
-            proper = "triangles" if mesh.dim == 2 else "tetrahedra"
             raise MeshError(
                 f"{mesh.name}: all {n_bad} {counted.replace('(s)', 's')} are degenerate (zero or near-zero "
-                f"{'area' if mesh.dim == 2 else 'volume'}); the convex formulations need proper {proper}; use "
+                f"{measure}); the convex formulations need proper {proper}; use "
                 "method='dijkstra' on this mesh"
             )
         self._face_metric = None
@@ -521,7 +512,7 @@ def build_problem(
         :func:`cvxgeodesic.sources.source_constraints`).
     method : str
         A name of :data:`FORMULATIONS` (aliases allowed) defined on the mesh's dimension
-        (:data:`FORMULATIONS_BY_DIM`).
+        (:func:`capabilities.methods_for`).
     lam : float
         Smoothness weight λ (ignored by lclp / qclp).
     stretch : {"area", "calibrated", "mean", "sum"}
@@ -545,8 +536,7 @@ def build_problem(
     mesh = ops.mesh
     n = mesh.n_vertices
     name = canonical_method(method)
-    if name not in FORMULATIONS_BY_DIM[mesh.dim]:
-        capabilities.check(name, dim=mesh.dim)  # names the methods that apply
+    capabilities.check(name, dim=mesh.dim)  # names the methods that apply
     constraint, energy = FORMULATIONS[name]
     if not np.isfinite(lam) or lam < 0:
         raise ParameterError(f"smoothness weight lambda must be finite and >= 0, got {lam}")

@@ -60,6 +60,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
+from . import capabilities
 from .errors import DegenerateFacesWarning, MeshError, ParameterError
 from .mesh.simplex import CELL_EDGES
 from .operators.lagrange import SAMPLES, LagrangeSpace, edge_basis, sample_points
@@ -67,9 +68,8 @@ from .operators.metric import Medium
 from .operators.p2_energy import P2Energy, p2_energy
 from .solvers.problem import ConeGroup, ConicProblem, Equalities, PairInequalities
 
-__all__ = ["DEFAULT_SAMPLES", "DEFAULT_VOLUME_SAMPLES", "DEFAULT_WEIGHTS", "ORDER2_CACHE_VERSION", "ORDER2_METHODS",
-           "BernsteinEdgeCones", "P2Builder", "P2Program", "bernstein_edge_cones", "eliminate_pair_equalities",
-           "source_edges"]
+__all__ = ["DEFAULT_SAMPLES", "DEFAULT_VOLUME_SAMPLES", "DEFAULT_WEIGHTS", "ORDER2_CACHE_VERSION", "BernsteinEdgeCones",
+           "P2Builder", "P2Program", "bernstein_edge_cones", "eliminate_pair_equalities", "source_edges"]
 
 #: Where the cone is imposed on triangles: "flat-bernstein" = the three corners and the three
 #: :class:`BernsteinEdgeCones` on flat faces (:attr:`LagrangeSpace.flat_cells`), the three edge midpoints on the
@@ -85,9 +85,6 @@ DEFAULT_SAMPLES = "flat-bernstein"
 DEFAULT_VOLUME_SAMPLES = "flat-nodes"
 #: Objective weights (:meth:`LagrangeSpace.weights`; docs/order2.md has the measurement behind the choice).
 DEFAULT_WEIGHTS = "lumped"
-#: The formulations with an order-2 program: ``qclp`` and the smoothed QC formulations, whose energies act on ``φ``
-#: (:mod:`cvxgeodesic.operators.p2_energy`; ``qcqp-dirichlet`` takes the edge-jump term alone).
-ORDER2_METHODS = ("qclp", "qcqp-hessian", "qcqp-laplacian", "qcqp-dirichlet")
 #: Edges shorter than this fraction of the bounding-box diagonal get no 1-D cone (their DOF is tied linearly).
 MIN_EDGE = 1e-9
 #: Version of the order-2 fields, for caches keyed on the inputs only (``benchmarks/report_common.py``): bump it
@@ -194,11 +191,8 @@ class P2Builder:
         of the others; the default on tetrahedra, where every proper cell is flat), or a name of
         :data:`~cvxgeodesic.operators.lagrange.SAMPLES` (on every cell, no edge cones). With a ``medium``
         "flat-bernstein" is "flat-nodes": the edge cones' tangent is the Euclidean ``2I``.
-    weights : {"lumped", "p2", "mixed"}, optional
+    weights : {"lumped", "p2"}, optional
         Objective weights (:meth:`LagrangeSpace.weights`); default :data:`DEFAULT_WEIGHTS`.
-    cone_scale : {"dijkstra", "unit"}
-        Centre of each cone: ``a`` = (Dijkstra distance at the sample)², floored at the squared
-        mean longest edge, or ``a = 1``.
     medium : Medium, optional
         Triangles only: a travel cost or metric on ``mesh`` (:mod:`cvxgeodesic.operators.metric`): every cone bounds
         ``|∇φ|²_{M⁻¹} ≤ 4c²φ`` with the medium at its sample point (:class:`LagrangeSpace`), a degenerate face's 1-D
@@ -226,13 +220,11 @@ class P2Builder:
         vertex, or for every edge when two sources share an edge (:meth:`build`).
     """
 
-    def __init__(self, mesh, samples: str | None = None, weights: str | None = None,
-                 cone_scale: str = "dijkstra", medium: Medium | None = None, energy: str | None = None,
-                 lam: float = 0.0):
+    def __init__(self, mesh, samples: str | None = None, weights: str | None = None, medium: Medium | None = None,
+                 energy: str | None = None, lam: float = 0.0):
         self.dim = dim = int(mesh.dim)
         samples = (DEFAULT_SAMPLES if dim == 2 else DEFAULT_VOLUME_SAMPLES) if samples is None else samples
-        self._check(samples, cone_scale, medium, energy, lam)
-        self.cone_scale = cone_scale
+        self._check(samples, medium, energy, lam)
         self.mesh = mesh
         self.space = sp_ = LagrangeSpace(mesh, 2, medium)
         self.w = sp_.weights(DEFAULT_WEIGHTS if weights is None else weights)
@@ -268,25 +260,18 @@ class P2Builder:
         if samples == "flat-bernstein":
             self.cone_replaced[:flat_cells.size * 6] = np.tile([False] * 3 + [True] * 3, flat_cells.size)
 
-    def _check(self, samples: str, cone_scale: str, medium: Medium | None, energy: str | None, lam: float) -> None:
-        """ParameterError for a bad option, or one defined on triangles only (on tetrahedra)."""
+    def _check(self, samples: str, medium: Medium | None, energy: str | None, lam: float) -> None:
+        """ParameterError for a bad option, or one the capability table refuses (:func:`capabilities.check`: a
+        smoothness energy with a medium; either on tetrahedra), or the edge cones on tetrahedra."""
         if not (np.isfinite(lam) and lam >= 0):
             raise ParameterError(f"smoothness weight lambda must be finite and >= 0, got {lam}")
-        if medium is not None and energy is not None and lam > 0:
-            raise ParameterError("order-2 smoothing takes no cost or metric: its energies vanish on the Euclidean "
-                                 "squared distance only; use order=1 or method='qclp'")
         if samples not in SAMPLES and samples not in ("flat-nodes", "flat-bernstein"):
             raise ParameterError(f"samples must be 'flat-bernstein', 'flat-nodes' or one of {SAMPLES}, "
                                  f"got {samples!r}")
-        if cone_scale not in ("dijkstra", "unit"):
-            raise ParameterError(f"cone_scale must be 'dijkstra' or 'unit', got {cone_scale!r}")
-        if self.dim == 3:
-            surface_only = [name for name, given in (("samples='flat-bernstein'", samples == "flat-bernstein"),
-                                                     ("smoothness energy", energy is not None and lam > 0),
-                                                     ("cost or metric", medium is not None)) if given]
-            if surface_only:
-                raise ParameterError(f"the order-2 program on tetrahedra takes no {' and no '.join(surface_only)} "
-                                     "(surfaces only)")
+        capabilities.check(f"qcqp-{energy}" if energy is not None and lam > 0 else "qclp", dim=self.dim, order=2,
+                           medium="none" if medium is None else "metric")
+        if self.dim == 3 and samples == "flat-bernstein":
+            raise ParameterError("the order-2 program on tetrahedra takes no samples='flat-bernstein' (surfaces only)")
 
     def _degenerate_edge_cones(self):
         """The 1-D cones ``(dφ/ds)² ≤ 4φ`` along each edge of a degenerate cell (each edge once, in one of its
@@ -305,29 +290,22 @@ class P2Builder:
         t = np.array([0.0, 0.5, 1.0])
         Nt, dNt = edge_basis(t)
         r = np.arange(ids.size)
-        rows_v, rows_g, eb = [], [], []
-        for j in range(3):
+        cols = np.column_stack([a, dim + 1 + local, b])  # along the edge from corner a to corner b: its local DOFs
+        val, grd = np.zeros((3, ids.size, n_loc)), np.zeros((3, ids.size, 1, n_loc))
+        eb = np.zeros((3, ids.size, dim + 1))
+        for j in range(3):  # the edge's ends and midpoint
             # dφ/ds along the edge's length (in the medium: its rate of length per unit t at the sample)
             L = mesh.edge_lengths[ids] if sp_.medium is None else sp_.medium.edge_speed(owner, a, b, t[j])
-            # along the edge from corner a to corner b, local DOFs (a, dim + 1 + local, b)
-            val = np.zeros((ids.size, n_loc))
-            grd = np.zeros((ids.size, 1, n_loc))
-            for col, cv, cd in ((a, Nt[j, 0], dNt[j, 0]), (dim + 1 + local, Nt[j, 1], dNt[j, 1]),
-                                (b, Nt[j, 2], dNt[j, 2])):
-                val[r, col] = cv
-                grd[r, 0, col] = cd / L
-            rows_v.append(val)
-            rows_g.append(grd)
-            bb = np.zeros((ids.size, dim + 1))
-            bb[r, a], bb[r, b] = 1 - t[j], t[j]
-            eb.append(bb)
-        Ge, he = _cone_rows(np.concatenate(rows_v), np.concatenate(rows_g), dim)
+            val[j, r[:, None], cols] = Nt[j]
+            grd[j, r[:, None], 0, cols] = dNt[j] / L[:, None]
+            eb[j, r, a], eb[j, r, b] = 1 - t[j], t[j]
+        Ge, he = _cone_rows(val.reshape(-1, n_loc), grd.reshape(-1, 1, n_loc), dim)
         word = "face(s)" if dim == 2 else "tetrahedra"
         note = (f"{deg.size} degenerate {word} carry no cones at order 2; their {ids.size} edge(s) get the 1-D cone "
                 "(dφ/ds)² ≤ 4φ instead")
         self.notes.append(note)
         warnings.warn(f"{mesh.name}: {note}", DegenerateFacesWarning, stacklevel=4)
-        return Ge, he, np.tile(owner, 3), np.concatenate(eb)
+        return Ge, he, np.tile(owner, 3), eb.reshape(-1, dim + 1)
 
     def _source_rows(self, is_src: np.ndarray) -> sp.csr_matrix:
         """Zero derivative along every edge from a source vertex ``s`` to a non-source ``j``:
@@ -496,8 +474,9 @@ class P2Builder:
         cf, cb = cone_cell[keep], cone_bary[keep]
         Gk, hk = G0[keep].copy(), h0[keep].copy()
         a_b = np.ones(int(keep_b.sum()))
-        if self.cone_scale == "dijkstra" and dv is not None:
-            # ‖(√a ∇φ, φ − a)‖ ≤ φ + a is |∇φ|² ≤ 4φ for every a > 0; a ≈ φ at the sample centres the cone there
+        if dv is not None:
+            # ‖(√a ∇φ, φ − a)‖ ≤ φ + a is |∇φ|² ≤ 4φ for every a > 0; a ≈ φ at the sample centres the cone there:
+            # (Dijkstra distance at the sample)², floored at the squared mean longest edge (a = 1 without sources)
             h2 = np.mean(space.cell_longest_edges[cf]) ** 2 if cf.size else 1.0
             a = np.maximum(np.einsum("ki,ki->k", cb, dv[mesh.cells[cf]]) ** 2, h2)
             Gk[:, 1:dim + 1] *= np.sqrt(a)[:, None, None]

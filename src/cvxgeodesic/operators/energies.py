@@ -64,8 +64,12 @@ def laplacian_energy_matrix(mesh: SimplexMesh, *, cells: ArrayLike | None = None
     -------
     (n, n) scipy.sparse.csc_matrix, symmetric PSD
     """
-    S = cotan_stiffness(mesh, cells=cells)
     mass = (mass_matrix(mesh) if cells is None else barycentric_mass(mesh, cells=cells)).diagonal()
+    return _squared_laplacian(cotan_stiffness(mesh, cells=cells), mass)
+
+
+def _squared_laplacian(S: sp.spmatrix, mass: np.ndarray) -> sp.csc_matrix:
+    """``S M⁻¹ S``, symmetrized, for a stiffness ``S`` and a lumped mass diagonal ``mass`` (0 rows get nothing)."""
     inv = np.zeros_like(mass)
     np.divide(1.0, mass, out=inv, where=mass > 0)
     Q = S @ sp.diags(inv) @ S
@@ -281,8 +285,7 @@ def _metric_energy(mesh: TriMesh, energy: str, face_metric: tuple[np.ndarray, np
         notes.append(f"{mesh.name}: with a travel cost or metric, the Hessian energy is the Euclidean surface's "
                      "divided by the mean area ratio of the medium (exact for a constant cost; the Dirichlet and "
                      "Laplacian energies use the metric itself)")
-        Q = hessian_energy_matrix(mesh, notes, analyse=analyse)
-        Q = Q if isinstance(Q, sp.csc_matrix) else sp.csc_matrix(Q)
+        Q = hessian_energy_matrix(mesh, notes, analyse=analyse)  # a csc_matrix
         Q.data /= mean_ratio  # in place: a symbolic analysis ``analyse`` made for this very matrix stays its own
         return Q
     S = metric_stiffness(mesh, T, ratio)
@@ -293,11 +296,7 @@ def _metric_energy(mesh: TriMesh, energy: str, face_metric: tuple[np.ndarray, np
     den = np.bincount(mesh.F.ravel(), weights=np.repeat(A, 3), minlength=n)
     vr = np.ones(n)
     np.divide(num, den, out=vr, where=den > 0)
-    mass = mass_matrix(mesh).diagonal() * vr
-    inv = np.zeros_like(mass)
-    np.divide(1.0, mass, out=inv, where=mass > 0)
-    Q = S @ sp.diags(inv) @ S
-    return sp.csc_matrix(0.5 * (Q + Q.T))
+    return _squared_laplacian(S, mass_matrix(mesh).diagonal() * vr)
 
 
 def check_energy(mesh: SimplexMesh, energy: str) -> str:

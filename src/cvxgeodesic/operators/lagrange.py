@@ -29,7 +29,7 @@ __all__ = ["SAMPLES", "WEIGHTS", "LagrangeField", "LagrangeSpace", "SplitLagrang
            "edge_basis", "lagrange_basis", "lagrange_nodes", "max_violation", "sample_points", "violations"]
 
 #: Objective weights (:meth:`LagrangeSpace.weights`).
-WEIGHTS = ("lumped", "p2", "mixed")
+WEIGHTS = ("lumped", "p2")
 #: Names of the sample-point sets (:func:`sample_points`).
 SAMPLES = ("nodes", "corners", "midpoints", "nodes+centroid", "nodes+gauss")
 #: Words for messages: (a cell, cells as an argument name).
@@ -49,17 +49,14 @@ def lagrange_nodes(dim: int, order: int = 2) -> np.ndarray:
 def sample_points(name: str, dim: int) -> np.ndarray:
     """Barycentric sample points ``(s, dim + 1)`` of one of :data:`SAMPLES` (``"nodes+gauss"``: triangles only)."""
     nodes = lagrange_nodes(dim)
-    if name == "nodes":
-        return nodes
-    if name == "corners":
-        return nodes[:dim + 1]
-    if name == "midpoints":
-        return nodes[dim + 1:]
-    if name == "nodes+centroid":
-        return np.vstack([nodes, np.full((1, dim + 1), 1.0 / (dim + 1))])
-    if name == "nodes+gauss" and dim == 2:
-        return np.vstack([nodes, [[2 / 3, 1 / 6, 1 / 6], [1 / 6, 2 / 3, 1 / 6], [1 / 6, 1 / 6, 2 / 3]]])
-    raise ParameterError(f"samples {name!r} is not defined on cells of dimension {dim}")
+    points = {"nodes": nodes, "corners": nodes[:dim + 1], "midpoints": nodes[dim + 1:],
+              "nodes+centroid": np.vstack([nodes, np.full((1, dim + 1), 1.0 / (dim + 1))])}
+    if dim == 2:  # the three-point Gauss rule of a triangle
+        points["nodes+gauss"] = np.vstack([nodes, [[2 / 3, 1 / 6, 1 / 6], [1 / 6, 2 / 3, 1 / 6],
+                                                   [1 / 6, 1 / 6, 2 / 3]]])
+    if name not in points:
+        raise ParameterError(f"samples {name!r} is not defined on cells of dimension {dim}")
+    return points[name]
 
 
 def lagrange_basis(bary: np.ndarray, order: int = 2) -> tuple[np.ndarray, np.ndarray]:
@@ -117,7 +114,8 @@ class LagrangeSpace:
     medium : Medium, optional
         Triangles only: a travel cost or metric on ``mesh`` (:mod:`cvxgeodesic.operators.metric`): the gradient rows
         of :meth:`cell_cones` and :meth:`value_and_gradient_rows` are multiplied by its transform at each point
-        (``|∇φ|`` is then the norm in the medium), the weights use its areas and :attr:`edge_lengths` its lengths.
+        (``|∇φ|`` is then the norm in the medium), the weights use its areas, :attr:`cell_longest_edges` and
+        :attr:`adjacency` its edge lengths.
 
     Attributes
     ----------
@@ -153,27 +151,19 @@ class LagrangeSpace:
         self.cell_edges = mesh.cell_edges
         cells = mesh.cells.astype(np.int64)
         self.cell_dofs = np.hstack([cells, n + self.cell_edges]).astype(np.int64) if order == 2 else cells
-        deg = np.zeros(mesh.n_cells, dtype=bool)
-        deg[mesh.degenerate_cells()] = True
-        self.degenerate = deg
-        with np.errstate(divide="ignore", invalid="ignore"):
-            g = gradient_blocks(mesh)
-        g[deg] = 0.0
-        self.gbasis = g
-
-    @property
-    def edge_lengths(self) -> np.ndarray:
-        """(e,) float ndarray: lengths of ``mesh.edges`` (in the medium when there is one)."""
-        return self.mesh.edge_lengths if self.medium is None else self.medium.edge_lengths
+        self.degenerate = np.zeros(mesh.n_cells, dtype=bool)
+        self.degenerate[mesh.degenerate_cells()] = True
+        self.gbasis = gradient_blocks(mesh)  # inf/nan on cells of zero measure (no warning): zeroed
+        self.gbasis[self.degenerate] = 0.0
 
     @property
     def cell_longest_edges(self) -> np.ndarray:
-        """(k,) float ndarray: the longest of each cell's :attr:`edge_lengths`."""
+        """(k,) float ndarray: the longest of each cell's edges (in the medium when there is one)."""
         return self.mesh.cell_longest_edges if self.medium is None else self.medium.face_longest_edges
 
     @property
     def adjacency(self):
-        """(n, n) csr_matrix: the edge graph weighted by :attr:`edge_lengths`."""
+        """(n, n) csr_matrix: the edge graph weighted by the edge lengths (in the medium when there is one)."""
         return self.mesh.vertex_adjacency if self.medium is None else self.medium.adjacency()
 
     @property
@@ -247,11 +237,11 @@ class LagrangeSpace:
 
         Parameters
         ----------
-        kind : {"lumped", "p2", "mixed"}
+        kind : {"lumped", "p2"}
             ``"lumped"``: the cell's measure split equally over its nodes (``A/6`` on a triangle, ``vol/10`` on a
             tetrahedron at order 2). Triangles at order 2 also: ``"p2"``, the exact integrals of the shape
             functions (0 for corners, ``A/3`` for midpoints; on a tetrahedron the corners' would be negative,
-            ``−vol/20``); ``"mixed"``, their average (``A/12`` and ``A/4``).
+            ``−vol/20``).
 
         Returns
         -------
@@ -260,7 +250,7 @@ class LagrangeSpace:
         Raises
         ------
         ParameterError
-            An unknown kind, or ``"p2"``/``"mixed"`` on tetrahedra or at order 1.
+            An unknown kind, or ``"p2"`` on tetrahedra or at order 1.
         """
         A = self.cell_measures
         n_loc, c = self.cell_dofs.shape[1], self.dim + 1
@@ -270,10 +260,8 @@ class LagrangeSpace:
             raise ParameterError(f"weights={kind!r} is defined for order-2 triangles only; use 'lumped'")
         if kind == "lumped":
             per = np.repeat(A[:, None] / float(n_loc), n_loc, axis=1)
-        elif kind == "p2":
-            per = np.hstack([np.zeros((A.size, c)), np.repeat(A[:, None] / 3.0, 3, axis=1)])
         else:
-            per = np.hstack([np.repeat(A[:, None] / 12.0, 3, axis=1), np.repeat(A[:, None] / 4.0, 3, axis=1)])
+            per = np.hstack([np.zeros((A.size, c)), np.repeat(A[:, None] / 3.0, 3, axis=1)])
         return np.bincount(self.cell_dofs.ravel(), per.ravel(), minlength=self.n_dofs)
 
     def hessian_rows(self, cells: np.ndarray) -> np.ndarray:

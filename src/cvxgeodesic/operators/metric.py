@@ -15,7 +15,7 @@ Where the medium is read:
   the smaller of its faces' lengths (a path along the edge inside the cheaper face, so it bounds the distance from
   above);
 * **per vertex** (``(n,)``, ``(n, 3, 3)``): the tensor and the cost are interpolated linearly inside faces (the
-  cost through :data:`VERTEX_COST`); edges and segments are integrated along their length (5-point
+  cost itself, not the speed ``1/c``: measured below); edges and segments are integrated along their length (5-point
   Gauss–Legendre: exact for a medium constant along them, and for a linear cost along an edge);
 * order 1 takes each face's medium at its centroid; order 2 takes it at each cone's sample point.
 
@@ -36,15 +36,13 @@ from ..mesh.trimesh import TriMesh
 from ..validation import check_cost, check_metric, check_plane_metric
 from .gradient import triangle_frames
 
-__all__ = ["VERTEX_COST", "VERTEX_COST_RULES", "Medium", "make_medium"]
+__all__ = ["Medium", "make_medium"]
 
-#: How a per-vertex cost is read between vertices: ``"speed"`` (``1/c`` linear) or ``"cost"`` (``c`` linear).
-VERTEX_COST_RULES = ("speed", "cost")
-#: The rule used. Measured 2026-12-02 on the linear-velocity medium (speed 1 + 2y on a jittered 60 × 60 Delaunay
-#: grid of the unit square, source near (0.5, 0.2), qclp): mean relative error "cost" 1.814 % / "speed" 1.824 % at
-#: order 1, 0.114 % / 0.117 % at order 2 (the two differ by O(h²) inside a face); "cost" reads the given values
-#: as the piecewise-linear field they are, like the tensors. Per-face values at the centroids: 1.84 % / 0.245 %.
-VERTEX_COST = "cost"
+# A per-vertex cost is interpolated linearly, not the speed 1/c (which the rule "speed" did until 2026-12-03, never
+# selected). Measured 2026-12-02 on the linear-velocity medium (speed 1 + 2y on a jittered 60 × 60 Delaunay grid of
+# the unit square, source near (0.5, 0.2), qclp): mean relative error cost 1.814 % / speed 1.824 % at order 1,
+# 0.114 % / 0.117 % at order 2 (the two differ by O(h²) inside a face); the cost is read as the piecewise-linear
+# field it is given as, like the tensors. Per-face values at the centroids: 1.84 % / 0.245 %.
 
 _NODES, _WEIGHTS = np.polynomial.legendre.leggauss(5)
 _TAU = 0.5 * (_NODES + 1.0)  # Gauss-Legendre nodes and weights on [0, 1]
@@ -65,8 +63,6 @@ class Medium:
     metric : (1, 3, 3), (n, 3, 3) or (m, 3, 3) float ndarray, optional
         Validated symmetric tensors (:func:`~cvxgeodesic.validation.check_metric`).
     metric_kind : {"constant", "vertices", "faces"}, optional
-    vertex_cost : {"speed", "cost"}
-        :data:`VERTEX_COST` by default.
     scale : float, optional
         The normalization (computed when None; :meth:`on` passes it on).
     check : bool
@@ -89,15 +85,12 @@ class Medium:
 
     def __init__(self, mesh: TriMesh, cost: np.ndarray | None = None, cost_kind: str | None = None,
                  metric: np.ndarray | None = None, metric_kind: str | None = None, *,
-                 vertex_cost: str = VERTEX_COST, scale: float | None = None, check: bool = True) -> None:
+                 scale: float | None = None, check: bool = True) -> None:
         self.mesh = mesh
         self.cost = None if cost is None else np.asarray(cost, dtype=np.float64)
         self.cost_kind = None if cost is None else cost_kind
         self.metric = None if metric is None else np.asarray(metric, dtype=np.float64)
         self.metric_kind = None if metric is None else metric_kind
-        if vertex_cost not in VERTEX_COST_RULES:
-            raise ValueError(f"vertex_cost must be one of {VERTEX_COST_RULES}, got {vertex_cost!r}")
-        self.vertex_cost = vertex_cost
         with np.errstate(invalid="ignore", divide="ignore"):
             self._ex, self._ey = triangle_frames(mesh)
         self.scale = 1.0
@@ -119,19 +112,13 @@ class Medium:
         return out
 
     @property
-    def constant(self) -> bool:
-        """True when cost and metric are the same everywhere (straight lines of a flat mesh are then geodesics)."""
-        return self.cost_kind in (None, "constant") and self.metric_kind in (None, "constant")
-
-    @property
     def varies_in_faces(self) -> bool:
         """True when something is given per vertex (the medium then varies inside faces)."""
         return "vertices" in (self.cost_kind, self.metric_kind)
 
     def on(self, mesh: TriMesh) -> Medium:
         """The same medium on a mesh with the same vertices and faces (e.g. scaled by :func:`unit_mesh`)."""
-        return Medium(mesh, self.cost, self.cost_kind, self.metric, self.metric_kind, vertex_cost=self.vertex_cost,
-                      scale=self.scale, check=False)
+        return Medium(mesh, self.cost, self.cost_kind, self.metric, self.metric_kind, scale=self.scale, check=False)
 
     def split(self, split_mesh: TriMesh, parent: np.ndarray, points) -> Medium:
         """The medium on a mesh whose faces were split around inserted vertices.
@@ -156,8 +143,7 @@ class Medium:
             metric = self.metric[parent]
         elif self.metric_kind == "vertices":
             metric = np.concatenate([self.metric, np.einsum("kc,kcij->kij", bary, self.metric[self.mesh.F[faces]])])
-        return Medium(split_mesh, cost, self.cost_kind, metric, self.metric_kind, vertex_cost=self.vertex_cost,
-                      scale=self.scale, check=False)
+        return Medium(split_mesh, cost, self.cost_kind, metric, self.metric_kind, scale=self.scale, check=False)
 
     # -- pointwise values ------------------------------------------------------------------------------------
     def _cost_at(self, faces: np.ndarray, bary: np.ndarray) -> np.ndarray:
@@ -168,10 +154,7 @@ class Medium:
             return np.full(len(faces), self.cost[0])
         if self.cost_kind == "faces":
             return self.cost[faces]
-        cv = self.cost[self.mesh.F[faces]]
-        if self.vertex_cost == "speed":
-            return 1.0 / np.einsum("kc,kc->k", bary, 1.0 / cv)
-        return np.einsum("kc,kc->k", bary, cv)
+        return np.einsum("kc,kc->k", bary, self.cost[self.mesh.F[faces]])
 
     def _bilinear(self, faces: np.ndarray, bary: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
         """(k,) ``uᵀ M v`` with the metric at points (no cost; the identity without a metric)."""
@@ -270,14 +253,11 @@ class Medium:
         bary_b = np.broadcast_to(np.asarray(bary_b, dtype=np.float64), (len(faces), 3))
         T = self.mesh.V[self.mesh.F[faces]]
         u = np.einsum("kc,kcj->kj", bary_b - bary_a, T)
-        # along the segment the interpolated tensor, hence uᵀMu, and 1/c (rule "speed") or c is linear
+        # along the segment the interpolated tensor, hence uᵀMu, and c are linear
         qa, qb = self._bilinear(faces, bary_a, u, u), self._bilinear(faces, bary_b, u, u)
         ca, cb = self._cost_at(faces, bary_a), self._cost_at(faces, bary_b)
         q = np.maximum(np.outer(1 - _TAU, qa) + np.outer(_TAU, qb), 0.0)
-        if self.cost_kind == "vertices" and self.vertex_cost == "speed":
-            c = 1.0 / (np.outer(1 - _TAU, 1.0 / ca) + np.outer(_TAU, 1.0 / cb))
-        else:
-            c = np.outer(1 - _TAU, ca) + np.outer(_TAU, cb)
+        c = np.outer(1 - _TAU, ca) + np.outer(_TAU, cb)
         return (_W @ (c * np.sqrt(q))) / self.scale
 
     def vector_lengths(self, faces: np.ndarray, U: np.ndarray) -> np.ndarray:
@@ -410,22 +390,15 @@ class Medium:
     def _check_positive(self) -> None:
         mesh, kind = self.mesh, self.metric_kind or "constant"
         m = mesh.n_faces
-        faces = np.arange(m)
-        if kind == "vertices":
-            faces = np.repeat(faces, 3)
-            owner = mesh.F.ravel()
-            ex, ey = self._ex[faces], self._ey[faces]
-            M = self.metric[owner]
-            P = np.stack([np.stack([np.einsum("ki,kij,kj->k", ex, M, ex), np.einsum("ki,kij,kj->k", ex, M, ey)], -1),
-                          np.stack([np.einsum("ki,kij,kj->k", ey, M, ex), np.einsum("ki,kij,kj->k", ey, M, ey)], -1)],
-                         -2)
-        else:
-            saved, self.cost = self.cost, None  # the cost is positive: the metric alone decides
-            try:
-                P = self.plane(faces, _CENTROID)
-            finally:
-                self.cost = saved
-            owner = faces if kind == "faces" else np.zeros(m, dtype=np.int64)
+        faces, bary = np.arange(m), _CENTROID
+        owner = faces if kind == "faces" else np.zeros(m, dtype=np.int64)
+        if kind == "vertices":  # each corner's tensor in its face's plane (at the corner, the tensor is its own)
+            faces, bary, owner = np.repeat(faces, 3), np.tile(np.eye(3), (m, 1)), mesh.F.ravel()
+        saved, self.cost = self.cost, None  # the cost is positive: the metric alone decides
+        try:
+            P = self.plane(faces, bary)
+        finally:
+            self.cost = saved
         check_plane_metric(P, owner, faces, kind)
 
     def _normalization(self) -> float:

@@ -33,7 +33,8 @@ import time
 
 import numpy as np
 
-from ..errors import ParameterError, SourceError
+from .. import capabilities
+from ..errors import ParameterError
 from ..mesh.decimate import simplify_mesh
 from ..mesh.transfer import SurfaceTransfer
 from ..results import GeodesicResult, SolveInfo
@@ -188,18 +189,16 @@ class CoarseToFine:
         Raises
         ------
         SourceError
-            Sources other than vertices (points, curves, boundary).
+            Sources other than vertices (points, curves, boundary): :func:`capabilities.check`.
         """
         if self.fine is not None and self.skipped:
             res = self.fine.solve(sources, callback=callback)
             res.info.extra["multires"] = {"coarse_faces": self.config.mesh.n_faces, "polished": True,
                                           "skipped": "the mesh has no more faces than the multires target"}
             return res
-        sset = sources
-        if not sset.vertex_only:
-            raise SourceError("multires takes vertex sources only; solve point, curve and boundary sources "
-                              "without multires")
-        return self._solve_vertices(sset, callback)
+        capabilities.check(self.config.method, dim=self.config.mesh.dim, sources=capabilities.source_kinds(sources),
+                           multires=True)
+        return self._solve_vertices(sources, callback)
 
     def _solve_vertices(self, sset: SourceSet, callback: Callback | None) -> GeodesicResult:
         assert self.coarse is not None and self.transfer is not None

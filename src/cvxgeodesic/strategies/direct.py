@@ -101,10 +101,8 @@ class DirectStrategy:
 
     def solve(self, sources: SourceSet, *, callback: Callback | None = None) -> GeodesicResult:
         """Distance field from resolved ``sources`` (see :meth:`~cvxgeodesic.api.GeodesicSolver.solve`)."""
-        return self._solve(sources, time.perf_counter(), callback)
-
-    def _solve(self, src: SourceSet, t0: float, callback: Callback | None) -> GeodesicResult:
-        cfg = self.config
+        t0 = time.perf_counter()
+        cfg, src = self.config, sources
         # on the mesh scaled by 1/s, the field d/s minimizes (objective)/s when lambda becomes lambda/s
         stretch = cfg.stretch
         problem = build_problem(self.ops, src, cfg.method, cfg.lam / self.scale, stretch=stretch)

@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from ..capabilities import methods_for
-from ..errors import ParameterError, SolverError, SourceError
+from .. import capabilities
+from ..errors import SolverError
 from ..formulations_p2 import P2Builder, P2Program, source_edges
 from ..mesh.simplex import unit_mesh
 from ..mesh.split import SplitMesh
@@ -88,10 +88,7 @@ class Order2:
 
     def __init__(self, config: SolveConfig, refine: int = REFINE_ROUNDS, samples: str | None = None) -> None:
         t0 = time.perf_counter()
-        methods = methods_for(config.mesh.dim, order=2)
-        if config.method not in methods:
-            raise ParameterError(
-                f"order=2 is implemented for {', '.join(methods)}, not for {config.method!r} (docs/order2.md)")
+        capabilities.check(config.method, dim=config.mesh.dim, order=2)
         self.config = config
         self.refine = int(refine)
         self.samples = samples
@@ -134,6 +131,7 @@ class Order2:
         """
         t0 = time.perf_counter()
         mesh = self.config.mesh
+        capabilities.check(self.config.method, dim=mesh.dim, order=2, sources=capabilities.source_kinds(sources))
         fixed, vertex_sources, points, facets = _source_geometry(sources, mesh)
         source_fixed = fixed
         builder, ipm, split = self.builder, self.ipm, None
@@ -249,18 +247,10 @@ class Order2:
 def _source_geometry(sources: Any, mesh: Any) -> tuple[np.ndarray, np.ndarray, list, np.ndarray | None]:
     """``(fixed vertices, vertex sources, points, source faces)`` of resolved sources: where ``φ = 0``, the vertex
     sources alone (for :func:`~cvxgeodesic.formulations_p2.source_edges`), the points to insert as vertices, and
-    the faces of a solid's source wall (None on a surface).
-
-    Raises
-    ------
-    SourceError
-        Curves on a surface (order 1 only).
-    """
+    the faces of a solid's source wall (None on a surface)."""
     if mesh.dim == 3:
         return (np.asarray(sources.fixed_vertices(mesh), dtype=np.int64), np.asarray(sources.vertices, dtype=np.int64),
                 list(sources.points), sources.face_triangles(mesh))
-    if sources.segment_faces.size and sources.kind != "boundary":
-        raise SourceError("order=2 takes vertex, point and 'boundary' sources; solve curves at order 1")
     vertices = np.asarray(sources.vertices, dtype=np.int64)
     return vertices, vertices, sources.distinct_points(mesh), None
 
