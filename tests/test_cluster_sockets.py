@@ -90,3 +90,24 @@ def test_cli_matrix_on_workers_listens_on_loopback_only(tmp_path: Path) -> None:
     assert exposed == [], f"listening beyond loopback: {exposed}"
     in_clear = sorted(where for where, first in spoken.items() if first)
     assert in_clear == [], f"speaking Dask in clear to any local user: {in_clear}"
+
+
+@pytest.mark.parametrize("reply", [b"", b"abc"])
+def test_probe_of_a_server_that_closes_before_the_handshake(reply: bytes) -> None:
+    """A server that closes the connection before 8 bytes: the probe names it, not a bare socket error."""
+    from cvxgeodesic._cluster import check_scheduler
+
+    with socket.socket() as srv:
+        srv.bind(("127.0.0.1", 0))
+        srv.listen(1)
+
+        def answer() -> None:
+            conn, _ = srv.accept()
+            with conn:
+                conn.sendall(reply)
+
+        with ThreadPoolExecutor(1) as pool:
+            done = pool.submit(answer)
+            with pytest.raises(ConnectionError, match="closed the connection without a Dask handshake"):
+                check_scheduler(f"tcp://127.0.0.1:{srv.getsockname()[1]}", timeout=30.0)
+            done.result()

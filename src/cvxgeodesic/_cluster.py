@@ -79,25 +79,19 @@ def check_scheduler(address: str, timeout: float | None = None) -> None:
         raise ConnectionError(f"--scheduler {address!r} is not an address like tcp://SCHEDULER:8786")
     host = host.strip("[]") or "127.0.0.1"
     what = f"the Dask scheduler at {address}"
+    head = b""
     try:
         with socket.create_connection((host, int(port_text)), timeout=timeout) as sock:
             sock.settimeout(timeout)
-            head = b""
-            while len(head) < 8:
-                chunk = sock.recv(8 - len(head))
-                if not chunk:
-                    raise ConnectionError(f"{what} closed the connection without a Dask handshake: "
-                                          "is it a Dask scheduler?")
+            while len(head) < 8 and (chunk := sock.recv(8 - len(head))):
                 head += chunk
-    except (ConnectionRefusedError, ConnectionResetError, ConnectionAbortedError) as exc:
-        raise ConnectionError(f"cannot connect to {what}: {exc.strerror or exc}") from None
     except TimeoutError:
         raise ConnectionError(f"{what} did not answer within {timeout:g} s: is it a Dask scheduler "
                               "(dask scheduler --port 8786), and reachable?") from None
-    except ConnectionError:
-        raise
     except OSError as exc:
         raise ConnectionError(f"cannot connect to {what}: {exc.strerror or exc}") from None
+    if len(head) < 8:
+        raise ConnectionError(f"{what} closed the connection without a Dask handshake: is it a Dask scheduler?")
     (nbytes,) = struct.unpack("<Q", head)
     if not 0 < nbytes < 2**24:
         raise ConnectionError(f"{what} does not speak Dask's protocol (first bytes {head!r}): "

@@ -101,6 +101,33 @@ class ConeBlock(Protocol):
         ...
 
 
+class _LinearMapBlock:
+    """What the blocks with a field-valued ``A x`` and ``W⁻²`` from their scaling share (see :class:`ConeBlock`)."""
+
+    b_tilde: np.ndarray
+
+    def A(self, x: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def _winv2(self, sc: Scaling, u: np.ndarray) -> np.ndarray:
+        """``W⁻² u``."""
+        return sc.apply_winv2(u)
+
+    def b_dot(self, z) -> float:
+        return float((self.b_tilde * z).sum())
+
+    def norm_b(self) -> float:
+        return _amax(self.b_tilde)
+
+    def newton(self, dx, sc, wu, wr, rz):
+        adx = self.A(dx)
+        return -rz - adx, self._winv2(sc, adx) + wu + wr
+
+    def refine(self, delta, sc, ds, dz):
+        ad = self.A(delta)
+        return ds - ad, dz + self._winv2(sc, ad)
+
+
 class TriangleSOCBlock:
     """SOC(3) cones ``‖B_t x[cv[t]]‖ ≤ 1``: ``s_t = (1, B_t x_t)``, i.e. ``A_t = [0; −B_t]``, ``b_t = (1, 0)``.
 
@@ -192,7 +219,7 @@ class TriangleSOCBlock:
         mask[self.cv.ravel()] = True
 
 
-class CliqueSOCBlock:
+class CliqueSOCBlock(_LinearMapBlock):
     """Second-order cones on cliques of variables: ``s_t = h_t − G_t x[dofs_t] ∈ SOC(d)`` (``A_t = G_t``,
     ``b_t = h_t``).
 
@@ -249,12 +276,6 @@ class CliqueSOCBlock:
     def recession_violation(self, aux) -> float:
         return max(-self.cone.min_eigenvalue(self.shift - aux), 0.0) if self.count else 0.0  # −G d ∈ K
 
-    def b_dot(self, z) -> float:
-        return float((self.b_tilde * z).sum())
-
-    def norm_b(self) -> float:
-        return _amax(self.b_tilde)
-
     def A(self, x):
         return self.Gx(x)
 
@@ -270,20 +291,12 @@ class CliqueSOCBlock:
         if self.count:
             self._assemble(self.G, self.gjg, sc.w, sc.inv_eta2, self.tri_a, self.tri_b, self.pos, data)
 
-    def newton(self, dx, sc, wu, wr, rz):
-        g = self.Gx(dx)
-        return -rz - g, sc.apply_winv2(g) + wu + wr
-
-    def refine(self, delta, sc, ds, dz):
-        g = self.Gx(delta)
-        return ds - g, dz + sc.apply_winv2(g)
-
     def touch(self, mask) -> None:
         used = np.abs(self.G).max(axis=1) > 0  # (k, c): a column of zeros constrains nothing
         mask[self.dofs[used]] = True
 
 
-class PairInequalityBlock:
+class PairInequalityBlock(_LinearMapBlock):
     """Linear inequalities ``a_k · x[iv[k]] ≤ r_k`` with at most two variables each, on the orthant.
 
     Parameters
@@ -328,9 +341,6 @@ class PairInequalityBlock:
     def b_dot(self, z) -> float:
         return float(self.b_tilde @ z)
 
-    def norm_b(self) -> float:
-        return float(np.abs(self.b_tilde).max()) if self.count else 0.0
-
     def A(self, x):
         return self.L @ x
 
@@ -346,19 +356,14 @@ class PairInequalityBlock:
         if self.count:
             _kern.scatter_add((self.coef * sc.w2inv).ravel(), self.pos, data)
 
-    def newton(self, dx, sc, wu, wr, rz):
-        adx = self.L @ dx
-        return -rz - adx, sc.w2inv * adx + wu + wr
-
-    def refine(self, delta, sc, ds, dz):
-        adl = self.L @ delta
-        return ds - adl, dz + sc.w2inv * adl
+    def _winv2(self, sc, u):
+        return sc.w2inv * u
 
     def touch(self, mask) -> None:
         mask[self.iv[self.ia != 0]] = True
 
 
-class SparseBlock:
+class SparseBlock(_LinearMapBlock):
     """``count`` cones of one type with a general sparse map: ``s = b − A x`` (NumPy/SciPy throughout).
 
     Parameters
@@ -410,12 +415,6 @@ class SparseBlock:
         v = -(aux - self._field(self.b) + self.b_tilde)
         return max(-self.cone.min_eigenvalue(v), 0.0) if self.count else 0.0
 
-    def b_dot(self, z) -> float:
-        return float((self.b_tilde * z).sum())
-
-    def norm_b(self) -> float:
-        return _amax(self.b_tilde)
-
     def A(self, x):
         return self._field(self.A_mat @ x)
 
@@ -439,14 +438,6 @@ class SparseBlock:
         rows, colsj = touched[M.row], touched[M.col]
         low = rows >= colsj
         np.add.at(data, self._chol.positions(rows[low], colsj[low]), M.data[low])
-
-    def newton(self, dx, sc, wu, wr, rz):
-        adx = self.A(dx)
-        return -rz - adx, sc.apply_winv2(adx) + wu + wr
-
-    def refine(self, delta, sc, ds, dz):
-        ad = self.A(delta)
-        return ds - ad, dz + sc.apply_winv2(ad)
 
     def touch(self, mask) -> None:
         mask[np.flatnonzero(np.diff(self.A_mat.tocsc().indptr))] = True

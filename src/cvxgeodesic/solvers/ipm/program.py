@@ -25,13 +25,9 @@ from ...linalg import SymbolicCholesky
 from ..problem import ConicProblem, Equalities, clique_pattern
 from . import _kernels as _kern
 from .blocks import CliqueSOCBlock, ConeBlock, PairInequalityBlock, TriangleSOCBlock
-from .cones import Scaling
+from .cones import Scaling, _amax
 
 __all__ = ["PatternMismatch", "Program", "problem_pattern"]
-
-
-def _kern_amax(a: np.ndarray) -> float:
-    return float(np.abs(a).max()) if a.size else 0.0
 
 
 class PatternMismatch(Exception):
@@ -118,8 +114,8 @@ class Program:
         self.qt_free = (self.q + self.Px_fixed)[self.free]
         self.const = float(self.q @ self.x_fixed) + 0.5 * float(self.x_fixed @ self.Px_fixed)
         self._equalities(eq)
-        self.norm_b = max([b.norm_b() for b in self.blocks] + [_kern_amax(self.f_tilde)], default=0.0)
-        self.norm_q = float(np.abs(self.qt_free).max()) if self.qt_free.size else 0.0
+        self.norm_b = max([b.norm_b() for b in self.blocks] + [_amax(self.f_tilde)], default=0.0)
+        self.norm_q = _amax(self.qt_free)
         self.guess = None if guess is None else np.asarray(guess, dtype=np.float64)
 
         # Fixed variables: rows and columns replaced by identity rows.
