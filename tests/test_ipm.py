@@ -277,6 +277,14 @@ def test_auto_backend_prefers_pardiso_then_cholmod_without_warning(monkeypatch):
         SymbolicCholesky(pattern, backend="pardiso")
 
 
+@pytest.mark.parametrize("kwargs, message", [({"backend": "mumps"}, "backend must be 'auto', 'pardiso', 'cholmod'"),
+                                             ({"mode": "dense"}, "mode must be 'auto', 'supernodal'")])
+def test_unknown_backend_or_mode_is_a_clear_error(kwargs, message):
+    m = icosphere(1)
+    with pytest.raises(ValueError, match=message):
+        SymbolicCholesky(kkt_pattern(m.n_vertices, m.F, m.edges), **kwargs)
+
+
 # ---------------------------------------------------------------------------------------------------------------
 # Failures, reporting
 # ---------------------------------------------------------------------------------------------------------------

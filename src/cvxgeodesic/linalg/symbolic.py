@@ -132,8 +132,6 @@ class SymbolicCholesky:
     """
 
     def __init__(self, pattern, *, backend: str = "auto", ordering: str = "metis", mode: str = "auto"):
-        if backend not in ("auto", *BACKENDS):
-            raise ValueError(f"backend must be 'auto', 'pardiso', 'cholmod' or 'scipy', got {backend!r}")
         if mode not in ("auto", "supernodal", "simplicial"):
             raise ValueError(f"mode must be 'auto', 'supernodal' or 'simplicial', got {mode!r}")
         S = sp.csc_matrix(pattern)

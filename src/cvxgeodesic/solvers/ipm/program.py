@@ -45,12 +45,7 @@ def problem_pattern(problem: ConicProblem) -> sp.csc_matrix:
     -------
     (n, n) scipy.sparse.csc_matrix
     """
-    S = clique_pattern(problem.n, [g.dofs for g in problem.cones] + [problem.ineq.vertices])
-    if problem.P is not None:
-        Pc = sp.csc_matrix(problem.P)
-        S = S + sp.csc_matrix((np.ones(Pc.nnz), Pc.indices, Pc.indptr), shape=S.shape)
-        S.data[:] = 1.0
-    return S
+    return clique_pattern(problem.n, [g.dofs for g in problem.cones] + [problem.ineq.vertices], problem.P)
 
 
 class Program:

@@ -101,12 +101,9 @@ def converged(info: dict, tol: float, settings: IPMSettings) -> bool:
 
 
 def almost(info: dict, tol: float, settings: IPMSettings) -> bool:
-    """The reduced tolerances on one iterate's ``info``: residuals and gap below ``reduced_factor · tol``, and
-    the dual residual also relative to ``max(1, ‖q‖ + ‖x‖)`` alone (``res_dual_plain``)."""
-    red = settings.reduced_factor * tol
-    return (info["res_primal"] < red and info["res_dual"] < red
-            and info["res_dual_plain"] < settings.plain_dual_factor * red
-            and min(info["gap_abs"], info["gap_rel"]) < red)
+    """The reduced tolerances on one iterate's ``info``: :func:`converged` at ``reduced_factor · tol`` (residuals and
+    gap, the dual residual also relative to ``max(1, ‖q‖ + ‖x‖)`` alone, ``res_dual_plain``)."""
+    return converged(info, settings.reduced_factor * tol, settings)
 
 
 def certificate(pr: Program, ev: Evaluation, settings: IPMSettings) -> str | None:

@@ -109,7 +109,6 @@ class InteriorPointSolver:
         if settings is not None and not isinstance(settings, IPMSettings):
             raise TypeError(f"settings must be an IPMSettings, got {type(settings).__name__}")
         self.settings = settings if settings is not None else IPMSettings()
-        self._backend = backend
         self._ordering = ordering
         # an analysis made already (the direct strategy's, which the energy's PSD check used) is taken as it is
         self.cholesky = (pattern if isinstance(pattern, SymbolicCholesky)
