@@ -131,9 +131,7 @@ def simplify_mesh(mesh: TriMesh, target_faces: int, method: str = "shortest-edge
     tris = tris[ok]
     if tris.shape[0] == 0:
         raise MeshError(f"{mesh.name}: simplification to {target_faces} faces left no faces")
-    used_v = np.unique(tris)
-    remap = np.full(pts.shape[0], -1, dtype=np.int64)
-    remap[used_v] = np.arange(used_v.size)
-    coarse = TriMesh(pts[used_v], remap[tris], name=f"{mesh.name}@{tris.shape[0]}")
+    used_v, local = np.unique(tris, return_inverse=True)
+    coarse = TriMesh(pts[used_v], local.reshape(tris.shape), name=f"{mesh.name}@{tris.shape[0]}")
     coarse.simplifier = used
     return coarse
