@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 import warnings
 
 import numpy as np
@@ -240,6 +241,17 @@ def test_cholesky_backends_solve_correctly(backend, mode):
         chol.factorize(-vals)(b)
     with pytest.raises(ValueError, match="not in the sparsity pattern"):
         chol.positions(np.array([0]), np.array([m.n_vertices - 1]))
+
+
+def test_positions_of_no_entries_and_of_entries_outside_the_matrix():
+    m = icosphere(1)
+    chol = SymbolicCholesky(kkt_pattern(m.n_vertices, m.F, m.edges), backend="scipy")
+    empty = chol.positions(np.zeros(0, dtype=int), np.zeros(0, dtype=int))
+    assert empty.shape == (0,) and empty.dtype == np.int64
+    np.testing.assert_array_equal(chol.positions(np.arange(3), np.arange(3)), chol.diag_positions[:3])
+    for rows, cols, named in (([0, -1], [0, 0], "(-1, 0)"), ([1, 0], [1, m.n_vertices], f"(0, {m.n_vertices})")):
+        with pytest.raises(ValueError, match=re.escape(f"entry {named} is not in the sparsity pattern")):
+            chol.positions(np.array(rows), np.array(cols))
 
 
 def test_fallback_when_sksparse_is_missing_warns_and_matches(monkeypatch):

@@ -91,15 +91,14 @@ class Program:
         self.q = np.asarray(q, dtype=np.float64)
         nnz = chol.nnz
         # Assembly plan first: a problem that does not fit the pattern is detected before any other work.
+        self.base = np.zeros(nnz)
         try:
             self.blocks: Sequence[ConeBlock] = blocks(self.x_fixed, chol)
-            Pl = sp.tril(self.P, format="coo") if self.P is not None else None
-            P_pos = _kern.positions(chol, Pl.row, Pl.col) if Pl is not None else None
+            if self.P is not None:
+                Pl = sp.tril(self.P, format="coo")
+                self.base += np.bincount(_kern.positions(chol, Pl.row, Pl.col), weights=Pl.data, minlength=nnz)
         except ValueError as exc:
             raise PatternMismatch(str(exc)) from None
-        self.base = np.zeros(nnz)
-        if Pl is not None:
-            self.base += np.bincount(P_pos, weights=Pl.data, minlength=nnz)
         self.nu = sum(b.cone.degree(b.count) for b in self.blocks)
         self._eq_touch = np.unique(sp.csr_matrix(eq.E).indices) if eq is not None and eq.count else None
         self._fix_loose()
