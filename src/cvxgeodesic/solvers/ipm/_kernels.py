@@ -169,7 +169,8 @@ def scatter_add(values, pos, data):
 
 
 @njit(**_JIT)
-def _soc_step_bounds(u, du, out):
+def soc_step_bounds(u, du, out):
+    """``out[t]``: the reciprocal of cone ``t``'s largest step (:func:`._clique_kernels.max_step`)."""
     for t in prange(u.shape[1]):
         u0, u1, u2 = u[0, t], u[1, t], u[2, t]
         nb = math.sqrt(u1 * u1 + u2 * u2)
@@ -181,20 +182,6 @@ def _soc_step_bounds(u, du, out):
         r1 = du[1, t] - c * u1
         r2 = du[2, t] - c * u2
         out[t] = math.sqrt((r1 * r1 + r2 * r2) * inv_det) - rho0
-
-
-def max_step_soc(u, du):
-    """Largest ``α`` with ``u + α du`` in SOC(3) for every cone (``inf`` if unbounded); ``u`` interior.
-
-    Maps ``u`` to the identity with the quadratic representation of ``u^{-1/2}`` (as ECOS does),
-    where the condition reads ``1 + αρ₀ ≥ α‖ρ₁‖``.
-    """
-    if not u.shape[1]:
-        return np.inf
-    bounds = np.empty(u.shape[1])
-    _soc_step_bounds(u, du, bounds)
-    worst = float(bounds.max())
-    return 1.0 / worst if worst > 0 else np.inf
 
 
 @njit(**_JIT)

@@ -218,8 +218,6 @@ class SOC:
     def max_step(self, u: np.ndarray, du: np.ndarray) -> float:
         """Maps ``u`` to the identity with the quadratic representation of ``u^{-1/2}`` (as ECOS does), where the
         condition reads ``1 + αρ₀ ≥ α‖ρ₁‖``."""
-        if self.dim == 3:
-            return _kern.max_step_soc(_c(u), _c(du))
         return _ck.max_step(_c(u), _c(du))
 
     def max_step_closed(self, u: np.ndarray, du: np.ndarray) -> np.ndarray:
