@@ -43,7 +43,11 @@ _CLIQUE_B = np.array([0, 1, 2, 0, 0, 1])
 
 
 class ConeBlock(Protocol):
-    """What the algorithm needs of one block of constraints ``s = b − A x``, ``s ∈ K``."""
+    """What the algorithm needs of one block of constraints ``s = b − A x``, ``s ∈ K``.
+
+    A block that subclasses it inherits :meth:`b_dot`, :meth:`norm_b`, :meth:`newton` and :meth:`refine` from
+    its :meth:`A` and ``W⁻²`` (:meth:`_winv2`, the scaling's ``apply_winv2``).
+    """
 
     cone: Cone
     count: int
@@ -64,11 +68,11 @@ class ConeBlock(Protocol):
 
     def b_dot(self, z: np.ndarray) -> float:
         """``b̃ᵀz``."""
-        ...
+        return float((self.b_tilde * z).sum())
 
     def norm_b(self) -> float:
         """``‖b̃‖∞`` (0 for an empty block)."""
-        ...
+        return _amax(self.b_tilde)
 
     def A(self, x: np.ndarray) -> np.ndarray:
         """``A x``."""
@@ -89,43 +93,22 @@ class ConeBlock(Protocol):
     def newton(self, dx: np.ndarray, sc: Scaling, wu: np.ndarray, wr: np.ndarray, rz: np.ndarray
                ) -> tuple[np.ndarray, np.ndarray]:
         """``Δs = −r_z − A Δx``, ``Δz = W⁻² A Δx + wu + wr`` (``wr = W⁻² r_z``)."""
-        ...
+        adx = self.A(dx)
+        return -rz - adx, self._winv2(sc, adx) + wu + wr
 
     def refine(self, delta: np.ndarray, sc: Scaling, ds: np.ndarray, dz: np.ndarray
                ) -> tuple[np.ndarray, np.ndarray]:
         """``(Δs, Δz)`` after ``Δx += δ``: ``Δs − A δ``, ``Δz + W⁻² A δ``."""
-        ...
-
-    def touch(self, mask: np.ndarray) -> None:
-        """Mark the variables the block constrains."""
-        ...
-
-
-class _LinearMapBlock:
-    """What the blocks with a field-valued ``A x`` and ``W⁻²`` from their scaling share (see :class:`ConeBlock`)."""
-
-    b_tilde: np.ndarray
-
-    def A(self, x: np.ndarray) -> np.ndarray:
-        raise NotImplementedError
+        ad = self.A(delta)
+        return ds - ad, dz + self._winv2(sc, ad)
 
     def _winv2(self, sc: Scaling, u: np.ndarray) -> np.ndarray:
         """``W⁻² u``."""
         return sc.apply_winv2(u)
 
-    def b_dot(self, z) -> float:
-        return float((self.b_tilde * z).sum())
-
-    def norm_b(self) -> float:
-        return _amax(self.b_tilde)
-
-    def newton(self, dx, sc, wu, wr, rz):
-        adx = self.A(dx)
-        return -rz - adx, self._winv2(sc, adx) + wu + wr
-
-    def refine(self, delta, sc, ds, dz):
-        ad = self.A(delta)
-        return ds - ad, dz + self._winv2(sc, ad)
+    def touch(self, mask: np.ndarray) -> None:
+        """Mark the variables the block constrains."""
+        ...
 
 
 class TriangleSOCBlock:
@@ -219,7 +202,7 @@ class TriangleSOCBlock:
         mask[self.cv.ravel()] = True
 
 
-class CliqueSOCBlock(_LinearMapBlock):
+class CliqueSOCBlock(ConeBlock):
     """Second-order cones on cliques of variables: ``s_t = h_t − G_t x[dofs_t] ∈ SOC(d)`` (``A_t = G_t``,
     ``b_t = h_t``).
 
@@ -296,7 +279,7 @@ class CliqueSOCBlock(_LinearMapBlock):
         mask[self.dofs[used]] = True
 
 
-class PairInequalityBlock(_LinearMapBlock):
+class PairInequalityBlock(ConeBlock):
     """Linear inequalities ``a_k · x[iv[k]] ≤ r_k`` with at most two variables each, on the orthant.
 
     Parameters
@@ -363,7 +346,7 @@ class PairInequalityBlock(_LinearMapBlock):
         mask[self.iv[self.ia != 0]] = True
 
 
-class SparseBlock(_LinearMapBlock):
+class SparseBlock(ConeBlock):
     """``count`` cones of one type with a general sparse map: ``s = b − A x`` (NumPy/SciPy throughout).
 
     Parameters
