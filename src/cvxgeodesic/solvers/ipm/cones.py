@@ -61,7 +61,7 @@ class Cone(Protocol):
 
     def degree(self, count: int) -> int:
         """Barrier degree (the number of cones for the SOC, of entries for the orthant)."""
-        ...
+        return count
 
     def scaling(self, s: np.ndarray, z: np.ndarray) -> Scaling: ...
 
@@ -190,7 +190,7 @@ class _SocScaling:
         return np.concatenate([(a * w[0])[None], -g - a * w[1:]]) * self.inv_eta2
 
 
-class SOC:
+class SOC(Cone):
     """The second-order cone ``SOC(dim)`` (``dim ≥ 2``), fields (dim, k); see :class:`Cone`."""
 
     def __init__(self, dim: int = 3):
@@ -205,9 +205,6 @@ class SOC:
         e = np.zeros((self.dim, count))
         e[0] = 1.0
         return e
-
-    def degree(self, count: int) -> int:
-        return count
 
     def scaling(self, s: np.ndarray, z: np.ndarray) -> _SocScaling:
         return _SocScaling(s, z)
@@ -323,7 +320,7 @@ class _OrthantScaling:
         return self.w2inv * v
 
 
-class Orthant:
+class Orthant(Cone):
     """The nonnegative orthant ``R₊^p``, fields (p,); see :class:`Cone`."""
 
     def shape(self, count: int) -> tuple[int, ...]:
@@ -331,9 +328,6 @@ class Orthant:
 
     def identity(self, count: int) -> np.ndarray:
         return np.ones(count)
-
-    def degree(self, count: int) -> int:
-        return count
 
     def scaling(self, s: np.ndarray, z: np.ndarray) -> _OrthantScaling:
         return _OrthantScaling(s, z)
@@ -417,7 +411,7 @@ class _RotatedScaling:
         return _rotate(self.inner.apply_winv2(_rotate(v)))
 
 
-class RotatedSOC:
+class RotatedSOC(Cone):
     """The rotated second-order cone ``{u : 2u₀u₁ ≥ ‖u₂..‖², u₀, u₁ ≥ 0}`` of dimension ``dim ≥ 3``, fields
     (dim, k); every operation is :class:`SOC`'s conjugated by ``T``. See :class:`Cone`."""
 
@@ -432,9 +426,6 @@ class RotatedSOC:
 
     def identity(self, count: int) -> np.ndarray:
         return _rotate(self.soc.identity(count))
-
-    def degree(self, count: int) -> int:
-        return count
 
     def scaling(self, s: np.ndarray, z: np.ndarray) -> _RotatedScaling:
         return _RotatedScaling(self.soc.scaling(_rotate(s), _rotate(z)))
