@@ -111,7 +111,7 @@ class ConeBlock(Protocol):
         ...
 
 
-class TriangleSOCBlock:
+class TriangleSOCBlock(ConeBlock):
     """SOC(3) cones ``‖B_t x[cv[t]]‖ ≤ 1``: ``s_t = (1, B_t x_t)``, i.e. ``A_t = [0; −B_t]``, ``b_t = (1, 0)``.
 
     Parameters
@@ -189,13 +189,6 @@ class TriangleSOCBlock:
         dz = np.empty((3, self.count))
         ds = np.empty((3, self.count))
         _kern.newton_cones(g, sc.w, sc.inv_eta2, wu, wr, rz, dz, ds)
-        return ds, dz
-
-    def refine(self, delta, sc, ds, dz):
-        g = self.Bx(delta)
-        dz = dz + sc.body_to_inv2(g)
-        ds = ds.copy()
-        ds[1:] += g
         return ds, dz
 
     def touch(self, mask) -> None:

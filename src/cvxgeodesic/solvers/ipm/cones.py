@@ -183,12 +183,6 @@ class _SocScaling:
             (_ck.winv2_apply4 if v.shape[0] == 4 else _ck.winv2_apply)(self.w, self.inv_eta2, _c(v), out)
         return out
 
-    def body_to_inv2(self, g: np.ndarray) -> np.ndarray:
-        """``W⁻² (0, −g)`` for a (d − 1, k) body field ``g`` (that is ``W⁻² A Δx`` with ``g = B Δx``)."""
-        w = self.w
-        a = 2.0 * (w[1:] * g).sum(axis=0) if not self._k3 else 2.0 * (w[1] * g[0] + w[2] * g[1])
-        return np.concatenate([(a * w[0])[None], -g - a * w[1:]]) * self.inv_eta2
-
 
 class SOC(Cone):
     """The second-order cone ``SOC(dim)`` (``dim ≥ 2``), fields (dim, k); see :class:`Cone`."""
