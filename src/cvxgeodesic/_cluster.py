@@ -67,13 +67,9 @@ def check_scheduler(address: str, timeout: float | None = None) -> None:
         does not speak Dask's protocol.
     """
     timeout = PROBE_TIMEOUT if timeout is None else timeout
-    text = str(address)
-    if "://" in text:
-        scheme, rest = text.split("://", 1)
-        if scheme != "tcp":
-            return
-    else:
-        rest = text
+    scheme, _, rest = str(address).rpartition("://")
+    if scheme not in ("", "tcp"):
+        return
     host, sep, port_text = rest.rstrip("/").rpartition(":")
     if not sep or not port_text.isdigit():
         raise ConnectionError(f"--scheduler {address!r} is not an address like tcp://SCHEDULER:8786")

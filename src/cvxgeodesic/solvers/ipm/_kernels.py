@@ -37,8 +37,9 @@ from ..._jit import njit, watch_compiles  # njit: numba.njit, uncached where no 
 
 watch_compiles()  # one line on stderr when a kernel compiles (a cold cache: the first run after installation)
 
-# Numba's thread pool (the order-2 kernels run in parallel): OpenMP first, since MKL PARDISO uses the GNU OpenMP
-# runtime too, so both share one thread pool instead of two pools spinning against each other on a small machine.
+# Numba's thread pool (started by a solve's thread limit, cvxgeodesic._threads): OpenMP first, since MKL PARDISO
+# uses the GNU OpenMP runtime too, so both share one thread pool instead of two pools spinning against each other
+# on a small machine.
 if "NUMBA_THREADING_LAYER" not in os.environ and "NUMBA_THREADING_LAYER_PRIORITY" not in os.environ:
     numba.config.THREADING_LAYER_PRIORITY = ["omp", "tbb", "workqueue"]
 
@@ -46,8 +47,6 @@ if "NUMBA_THREADING_LAYER" not in os.environ and "NUMBA_THREADING_LAYER_PRIORITY
 # and the C wrapper Numba builds by default took about 5 % of the first compile (spot, qcqp-hessian: 5.1-5.2 s
 # against 5.4 s)
 _JIT = {"cache": True, "nogil": True, "error_model": "numpy", "no_cfunc_wrapper": True}
-# no kernel of this module is compiled in parallel (module docstring); the order-2 kernels import this
-_PJIT = {**_JIT, "parallel": True}
 
 
 @njit(**_JIT)
