@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import MeshError, ParameterError
+from ..validation import check_choice
 from .trimesh import TriMesh
 
 __all__ = ["SIMPLIFIERS", "decimate_timeout", "simplify_mesh"]
@@ -110,8 +111,7 @@ def simplify_mesh(mesh: TriMesh, target_faces: int, method: str = "shortest-edge
     """
     if not 0 < target_faces < mesh.n_faces:
         raise ParameterError(f"target_faces must be in (0, {mesh.n_faces}), got {target_faces}")
-    if method not in SIMPLIFIERS:
-        raise ParameterError(f"unknown simplification method {method!r}; choose one of {', '.join(SIMPLIFIERS)}")
+    check_choice(method, "simplification method", SIMPLIFIERS, lower=False)
     result, used = None, method
     if method == "shortest-edge":
         if mesh.is_edge_manifold:

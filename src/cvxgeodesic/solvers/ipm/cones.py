@@ -207,8 +207,7 @@ class SOC(Cone):
         return np.sqrt(u[1] ** 2 + u[2] ** 2) if self.dim == 3 else np.linalg.norm(u[1:], axis=0)
 
     def max_step(self, u: np.ndarray, du: np.ndarray) -> float:
-        """Maps ``u`` to the identity with the quadratic representation of ``u^{-1/2}`` (as ECOS does), where the
-        condition reads ``1 + αρ₀ ≥ α‖ρ₁‖``."""
+        """By the quadratic representation of ``u^{-1/2}`` (:func:`._clique_kernels.max_step`)."""
         return _ck.max_step(_c(u), _c(du))
 
     def max_step_closed(self, u: np.ndarray, du: np.ndarray) -> np.ndarray:
