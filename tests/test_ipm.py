@@ -533,3 +533,19 @@ def test_a_plain_dual_residual_at_its_end_game_floor_is_converged(method):
         warnings.simplefilter("ignore")
         res = GeodesicSolver(mesh, method, solver="ipm").solve(3318)
     assert res.info.status == "optimal" and res.info.iterations <= 30  # 20 / 26 (2026-12-02)
+
+
+def test_equilibration_keeps_an_empty_cone_group_and_the_solution(sphere):
+    """A cone group without cones passes through the equilibration (as an empty group) and changes nothing."""
+    from cvxgeodesic.solvers.ipm.equilibrate import equilibrate
+    from cvxgeodesic.solvers.problem import ConeGroup
+
+    m, ops, ipm = sphere
+    p = build_problem(ops, np.array([0]), "qclp", 0.0)
+    empty = ConeGroup(np.zeros((0, 3), dtype=np.int64), np.zeros((0, 4, 3)), np.zeros((0, 4)))
+    with_empty = dataclasses.replace(p, cones=[*p.cones, empty], equilibrate=True)
+    scaled, D = equilibrate(with_empty)
+    assert [g.count for g in scaled.cones] == [p.cones[0].count, 0] and scaled.cones[1].dim == 4
+    # both solves are equilibrated the same way: the empty group adds no row, the fields agree to rounding
+    x = ipm.solve(dataclasses.replace(p, equilibrate=True)).x
+    np.testing.assert_allclose(ipm.solve(with_empty).x, x, rtol=0, atol=1e-12 * np.abs(x).max())
