@@ -76,7 +76,7 @@ class Cone(Protocol):
 
     def dot(self, u: np.ndarray, v: np.ndarray) -> float:
         """``uᵀv`` summed over all cones."""
-        ...
+        return float((u * v).sum())
 
     def min_eigenvalue(self, u: np.ndarray) -> float:
         """Smallest eigenvalue of ``u`` over all cones (``inf`` when there are none)."""
@@ -232,9 +232,6 @@ class SOC(Cone):
 
     def min_eigenvalue(self, u: np.ndarray) -> float:
         return float((u[0] - self._norm_body(u)).min()) if u.shape[1] else np.inf
-
-    def dot(self, u: np.ndarray, v: np.ndarray) -> float:
-        return float((u * v).sum())
 
     def product(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
         return np.concatenate([(u * v).sum(axis=0)[None], u[0] * v[1:] + v[0] * u[1:]])
@@ -406,7 +403,8 @@ class _RotatedScaling:
 
 class RotatedSOC(Cone):
     """The rotated second-order cone ``{u : 2u₀u₁ ≥ ‖u₂..‖², u₀, u₁ ≥ 0}`` of dimension ``dim ≥ 3``, fields
-    (dim, k); every operation is :class:`SOC`'s conjugated by ``T``. See :class:`Cone`."""
+    (dim, k); every operation is :class:`SOC`'s conjugated by ``T`` (``dot``, Cone's, needs none: ``T`` is
+    orthogonal). See :class:`Cone`."""
 
     def __init__(self, dim: int = 3):
         if dim < 3:
@@ -431,9 +429,6 @@ class RotatedSOC(Cone):
 
     def min_eigenvalue(self, u: np.ndarray) -> float:
         return self.soc.min_eigenvalue(_rotate(u))
-
-    def dot(self, u: np.ndarray, v: np.ndarray) -> float:
-        return self.soc.dot(u, v)  # T is orthogonal
 
     def product(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
         return _rotate(self.soc.product(_rotate(u), _rotate(v)))
