@@ -232,28 +232,25 @@ class CliqueSOCBlock(ConeBlock):
         self._scatter = _ck.scatter4 if four else _ck.scatter
         self._kkt = _ck.kkt4 if four else _ck.kkt
         self._assemble = _ck.assemble4 if four else _ck.assemble
-        self.shift = self.Gx(x_fixed)
+        self.shift = self.A(x_fixed)
         self.b_tilde = self.h - self.shift
 
-    def Gx(self, x: np.ndarray) -> np.ndarray:
-        """(d, k): ``G_t x[dofs_t]`` for every cone."""
+    def A(self, x: np.ndarray) -> np.ndarray:
+        """(d, k): ``G_t x[dofs_t]`` for every cone (``A_t = G_t``)."""
         out = np.empty((self.h.shape[0], self.count))
         if self.count:
             self._gather(self.G, self.dofs, np.ascontiguousarray(x, dtype=np.float64), out)
         return out
 
     def slack(self, x, x_fixed):
-        return self.h - self.Gx(x)
+        return self.h - self.A(x)
 
     def residual(self, x, s):
-        gx = self.Gx(x)
+        gx = self.A(x)
         return gx + s - self.h, gx
 
     def recession_violation(self, aux) -> float:
         return max(-self.cone.min_eigenvalue(self.shift - aux), 0.0) if self.count else 0.0  # −G d ∈ K
-
-    def A(self, x):
-        return self.Gx(x)
 
     def At_add(self, z, out) -> None:
         if self.count:
