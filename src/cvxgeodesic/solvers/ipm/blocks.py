@@ -216,15 +216,13 @@ class CliqueSOCBlock(ConeBlock):
 
     def __init__(self, group: ConeGroup, x_fixed: np.ndarray, chol: SymbolicCholesky):
         self.cone = SOC(group.dim)
-        self.count = k = group.count
-        self.G = group.G  # (k, d, c), C-contiguous (ConeGroup makes it so)
-        self.dofs = group.dofs
+        self.count = group.count
+        self.G = G = group.G  # (k, d, c), C-contiguous (ConeGroup makes it so)
+        self.dofs = dofs = group.dofs
         self.h = np.ascontiguousarray(group.h.T)  # (d, k)
         ta, tb = np.tril_indices(group.clique)  # lower-triangle clique entries (a ≥ b)
         self.tri_a, self.tri_b = ta.astype(np.int64), tb.astype(np.int64)
-        dofs = self.dofs
-        self.pos = _kern.positions(chol, dofs[:, ta].ravel(), dofs[:, tb].ravel()) if k else np.zeros(0, np.int64)
-        G = self.G
+        self.pos = _kern.positions(chol, dofs[:, ta].ravel(), dofs[:, tb].ravel())
         self.gjg = np.ascontiguousarray(np.einsum("ke,ke->ke", G[:, 0, ta], G[:, 0, tb])
                                         - np.einsum("kie,kie->ke", G[:, 1:, ta], G[:, 1:, tb]))
         four = group.dim == 4  # SOC(4): the unrolled kernels
