@@ -134,9 +134,8 @@ class TriangleSOCBlock(ConeBlock):
         self.count = k = cv.shape[0]
         self.pos = _kern.positions(chol, cv[:, _CLIQUE_A].T.ravel(), cv[:, _CLIQUE_B].T.ravel())
         # SoA order for the kernels: B[:, :, t] is B_t
-        self.B = np.ascontiguousarray(Bt.transpose(1, 2, 0))  # (2, 3, k)
+        self.B = B = np.ascontiguousarray(Bt.transpose(1, 2, 0))  # (2, 3, k)
         self.cv = np.ascontiguousarray(cv)
-        B = self.B
         # clique constants B_tᵀB_t (6, k): each iteration adds a rank-one term
         self.BtB6 = np.stack([B[0, a] * B[0, b] + B[1, a] * B[1, b] for a, b in zip(_CLIQUE_A, _CLIQUE_B, strict=True)])
         self.shift = self.Bx(x_fixed)  # b̃ body = +B x_F (A body is −B)
