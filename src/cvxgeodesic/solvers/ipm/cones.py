@@ -138,6 +138,12 @@ def _amax(a: np.ndarray) -> float:
 # ---------------------------------------------------------------------------------------------------------------
 
 
+#: SOC dimension → the kernels of the NT scaling, ``W v`` and ``W⁻² v`` (unrolled for 3 and 4; 0: any dimension)
+_SCALING_KERNELS = {3: (_kern.nt_scaling, _kern.apply_w, _kern.apply_inv2),
+                    4: (_ck.nt_scaling4, _ck.w_apply4, _ck.winv2_apply4),
+                    0: (_ck.nt_scaling, _ck.w_apply, _ck.winv2_apply)}
+
+
 class _SocScaling:
     """NT scaling ``W = η W̄`` of SOC pairs (s, z), vectorized (CVXOPT's formulas).
 
@@ -148,22 +154,16 @@ class _SocScaling:
 
     def __init__(self, s: np.ndarray, z: np.ndarray):
         d, k = s.shape
-        self._k3 = d == 3
+        nt_scaling, self._w_kernel, self._winv2_kernel = _SCALING_KERNELS.get(d, _SCALING_KERNELS[0])
         self.w = np.empty((d, k))
         self.eta = np.empty(k)
         self.inv_eta2 = np.empty(k)
         self.lam = np.empty((d, k))
-        if self._k3:
-            _kern.nt_scaling(s, z, self.w, self.eta, self.inv_eta2, self.lam)
-        else:
-            (_ck.nt_scaling4 if d == 4 else _ck.nt_scaling)(_c(s), _c(z), self.w, self.eta, self.inv_eta2, self.lam)
+        nt_scaling(_c(s), _c(z), self.w, self.eta, self.inv_eta2, self.lam)
 
     def _apply(self, v: np.ndarray, sign: float) -> np.ndarray:
         out = np.empty(v.shape)
-        if self._k3:
-            _kern.apply_w(self.w, self.eta, v, sign, out)
-        else:
-            (_ck.w_apply4 if v.shape[0] == 4 else _ck.w_apply)(self.w, self.eta, _c(v), sign, out)
+        self._w_kernel(self.w, self.eta, _c(v), sign, out)
         return out
 
     def apply_w(self, v: np.ndarray) -> np.ndarray:
@@ -177,10 +177,7 @@ class _SocScaling:
     def apply_winv2(self, v: np.ndarray) -> np.ndarray:
         """``W⁻² v = (2 v̂ (v̂ᵀv) − J v)/η²`` with ``v̂ = J w̄``."""
         out = np.empty(v.shape)
-        if self._k3:
-            _kern.apply_inv2(self.w, self.inv_eta2, v, out)
-        else:
-            (_ck.winv2_apply4 if v.shape[0] == 4 else _ck.winv2_apply)(self.w, self.inv_eta2, _c(v), out)
+        self._winv2_kernel(self.w, self.inv_eta2, _c(v), out)
         return out
 
 
