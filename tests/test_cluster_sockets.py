@@ -90,3 +90,33 @@ def test_cli_matrix_on_workers_listens_on_loopback_only(tmp_path: Path) -> None:
     assert exposed == [], f"listening beyond loopback: {exposed}"
     in_clear = sorted(where for where, first in spoken.items() if first)
     assert in_clear == [], f"speaking Dask in clear to any local user: {in_clear}"
+
+
+@pytest.mark.parametrize("reply, scheme", [(b"", "tcp://"), (b"abc", "")])
+def test_probe_of_a_server_that_closes_before_the_handshake(reply: bytes, scheme: str) -> None:
+    """A server that closes the connection before 8 bytes: the probe names it, not a bare socket error (an
+    address with or without ``tcp://``)."""
+    from cvxgeodesic._cluster import check_scheduler
+
+    with socket.socket() as srv:
+        srv.bind(("127.0.0.1", 0))
+        srv.listen(1)
+
+        def answer() -> None:
+            conn, _ = srv.accept()
+            with conn:
+                conn.sendall(reply)
+
+        with ThreadPoolExecutor(1) as pool:
+            done = pool.submit(answer)
+            with pytest.raises(ConnectionError, match="closed the connection without a Dask handshake"):
+                check_scheduler(f"{scheme}127.0.0.1:{srv.getsockname()[1]}", timeout=30.0)
+            done.result()
+
+
+def test_probe_leaves_other_schemes_to_dask_and_rejects_an_address_without_a_port() -> None:
+    from cvxgeodesic._cluster import check_scheduler
+
+    assert check_scheduler("tls://127.0.0.1:1") is None  # not probed: nothing listens there
+    with pytest.raises(ConnectionError, match="is not an address like tcp://SCHEDULER:8786"):
+        check_scheduler("tcp://127.0.0.1")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 import warnings
 
 import numpy as np
@@ -242,6 +243,17 @@ def test_cholesky_backends_solve_correctly(backend, mode):
         chol.positions(np.array([0]), np.array([m.n_vertices - 1]))
 
 
+def test_positions_of_no_entries_and_of_entries_outside_the_matrix():
+    m = icosphere(1)
+    chol = SymbolicCholesky(kkt_pattern(m.n_vertices, m.F, m.edges), backend="scipy")
+    empty = chol.positions(np.zeros(0, dtype=int), np.zeros(0, dtype=int))
+    assert empty.shape == (0,) and empty.dtype == np.int64
+    np.testing.assert_array_equal(chol.positions(np.arange(3), np.arange(3)), chol.diag_positions[:3])
+    for rows, cols, named in (([0, -1], [0, 0], "(-1, 0)"), ([1, 0], [1, m.n_vertices], f"(0, {m.n_vertices})")):
+        with pytest.raises(ValueError, match=re.escape(f"entry {named} is not in the sparsity pattern")):
+            chol.positions(np.array(rows), np.array(cols))
+
+
 def test_fallback_when_sksparse_is_missing_warns_and_matches(monkeypatch):
     monkeypatch.setattr(chol_mod, "cholmod_available", lambda: False)
     monkeypatch.setattr(chol_mod, "pardiso_available", lambda: False)
@@ -275,6 +287,14 @@ def test_auto_backend_prefers_pardiso_then_cholmod_without_warning(monkeypatch):
         assert SymbolicCholesky(pattern).backend == "cholmod"
     with pytest.raises(ImportError, match=r"pip install 'cvxgeodesic\[pardiso\]'"):
         SymbolicCholesky(pattern, backend="pardiso")
+
+
+@pytest.mark.parametrize("kwargs, message", [({"backend": "mumps"}, "backend must be 'auto', 'pardiso', 'cholmod'"),
+                                             ({"mode": "dense"}, "mode must be 'auto', 'supernodal'")])
+def test_unknown_backend_or_mode_is_a_clear_error(kwargs, message):
+    m = icosphere(1)
+    with pytest.raises(ValueError, match=message):
+        SymbolicCholesky(kkt_pattern(m.n_vertices, m.F, m.edges), **kwargs)
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -513,3 +533,19 @@ def test_a_plain_dual_residual_at_its_end_game_floor_is_converged(method):
         warnings.simplefilter("ignore")
         res = GeodesicSolver(mesh, method, solver="ipm").solve(3318)
     assert res.info.status == "optimal" and res.info.iterations <= 30  # 20 / 26 (2026-12-02)
+
+
+def test_equilibration_keeps_an_empty_cone_group_and_the_solution(sphere):
+    """A cone group without cones passes through the equilibration (as an empty group) and changes nothing."""
+    from cvxgeodesic.solvers.ipm.equilibrate import equilibrate
+    from cvxgeodesic.solvers.problem import ConeGroup
+
+    m, ops, ipm = sphere
+    p = build_problem(ops, np.array([0]), "qclp", 0.0)
+    empty = ConeGroup(np.zeros((0, 3), dtype=np.int64), np.zeros((0, 4, 3)), np.zeros((0, 4)))
+    with_empty = dataclasses.replace(p, cones=[*p.cones, empty], equilibrate=True)
+    scaled, D = equilibrate(with_empty)
+    assert [g.count for g in scaled.cones] == [p.cones[0].count, 0] and scaled.cones[1].dim == 4
+    # both solves are equilibrated the same way: the empty group adds no row, the fields agree to rounding
+    x = ipm.solve(dataclasses.replace(p, equilibrate=True)).x
+    np.testing.assert_allclose(ipm.solve(with_empty).x, x, rtol=0, atol=1e-12 * np.abs(x).max())

@@ -67,37 +67,27 @@ def check_scheduler(address: str, timeout: float | None = None) -> None:
         does not speak Dask's protocol.
     """
     timeout = PROBE_TIMEOUT if timeout is None else timeout
-    text = str(address)
-    if "://" in text:
-        scheme, rest = text.split("://", 1)
-        if scheme != "tcp":
-            return
-    else:
-        rest = text
+    scheme, _, rest = str(address).rpartition("://")
+    if scheme not in ("", "tcp"):
+        return
     host, sep, port_text = rest.rstrip("/").rpartition(":")
     if not sep or not port_text.isdigit():
         raise ConnectionError(f"--scheduler {address!r} is not an address like tcp://SCHEDULER:8786")
     host = host.strip("[]") or "127.0.0.1"
     what = f"the Dask scheduler at {address}"
+    head = b""
     try:
         with socket.create_connection((host, int(port_text)), timeout=timeout) as sock:
             sock.settimeout(timeout)
-            head = b""
-            while len(head) < 8:
-                chunk = sock.recv(8 - len(head))
-                if not chunk:
-                    raise ConnectionError(f"{what} closed the connection without a Dask handshake: "
-                                          "is it a Dask scheduler?")
+            while len(head) < 8 and (chunk := sock.recv(8 - len(head))):
                 head += chunk
-    except (ConnectionRefusedError, ConnectionResetError, ConnectionAbortedError) as exc:
-        raise ConnectionError(f"cannot connect to {what}: {exc.strerror or exc}") from None
     except TimeoutError:
         raise ConnectionError(f"{what} did not answer within {timeout:g} s: is it a Dask scheduler "
                               "(dask scheduler --port 8786), and reachable?") from None
-    except ConnectionError:
-        raise
     except OSError as exc:
         raise ConnectionError(f"cannot connect to {what}: {exc.strerror or exc}") from None
+    if len(head) < 8:
+        raise ConnectionError(f"{what} closed the connection without a Dask handshake: is it a Dask scheduler?")
     (nbytes,) = struct.unpack("<Q", head)
     if not 0 < nbytes < 2**24:
         raise ConnectionError(f"{what} does not speak Dask's protocol (first bytes {head!r}): "

@@ -23,6 +23,7 @@ import os
 import sys
 import weakref
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -142,20 +143,16 @@ def _call(lib, pt, iparm, phase, n, a, indptr, indices, b, x, nrhs, threads) -> 
     # later phases, e.g. under a caller's threadpoolctl limit; a thread-local setting pins it for this call.
     previous = lib.MKL_Set_Num_Threads_Local(threads)
     try:
-        _pardiso_call(lib, pt, one, phase, n, a, indptr, indices, nrhs, iparm, b, x, err)
+        lib.pardiso(
+            pt.ctypes.data, ctypes.byref(one), ctypes.byref(one), ctypes.byref(ctypes.c_int32(_MTYPE_SPD)),
+            ctypes.byref(ctypes.c_int32(phase)), ctypes.byref(ctypes.c_int32(n)),
+            a.ctypes.data if a is not None else None, indptr.ctypes.data, indices.ctypes.data, None,
+            ctypes.byref(ctypes.c_int32(nrhs)), iparm.ctypes.data, ctypes.byref(ctypes.c_int32(0)),
+            b.ctypes.data if b is not None else None, x.ctypes.data if x is not None else None, ctypes.byref(err),
+        )
     finally:
         lib.MKL_Set_Num_Threads_Local(previous)
     return err.value
-
-
-def _pardiso_call(lib, pt, one, phase, n, a, indptr, indices, nrhs, iparm, b, x, err) -> None:
-    lib.pardiso(
-        pt.ctypes.data, ctypes.byref(one), ctypes.byref(one), ctypes.byref(ctypes.c_int32(_MTYPE_SPD)),
-        ctypes.byref(ctypes.c_int32(phase)), ctypes.byref(ctypes.c_int32(n)),
-        a.ctypes.data if a is not None else None, indptr.ctypes.data, indices.ctypes.data, None,
-        ctypes.byref(ctypes.c_int32(nrhs)), iparm.ctypes.data, ctypes.byref(ctypes.c_int32(0)),
-        b.ctypes.data if b is not None else None, x.ctypes.data if x is not None else None, ctypes.byref(err),
-    )
 
 
 def _release(lib, pt, iparm, n, indptr, indices, threads) -> None:
@@ -277,21 +274,21 @@ class PardisoBackend:
         return self.factor.threads
 
     def _solve(self, b: np.ndarray) -> np.ndarray:
-        try:
-            return self.factor.solve(b)
-        except PardisoError as exc:
-            if exc.code == NOT_POSITIVE_DEFINITE:
-                raise NotPositiveDefiniteError(str(exc)) from None
-            raise
+        return _positive_definite(self.factor.solve, b)
 
     def factorize(self, data: np.ndarray, beta: float) -> Callable[[np.ndarray], np.ndarray]:
         if beta:
             data = data.copy()
             data[self._diag] += beta
-        try:
-            self.factor.factorize(data)
-        except PardisoError as exc:
-            if exc.code == NOT_POSITIVE_DEFINITE:
-                raise NotPositiveDefiniteError(str(exc)) from None
-            raise
+        _positive_definite(self.factor.factorize, data)
         return self._solve
+
+
+def _positive_definite(phase: Callable[[np.ndarray], Any], arg: np.ndarray) -> Any:
+    """``phase(arg)``, PARDISO's "not positive definite" raised as :class:`NotPositiveDefiniteError`."""
+    try:
+        return phase(arg)
+    except PardisoError as exc:
+        if exc.code == NOT_POSITIVE_DEFINITE:
+            raise NotPositiveDefiniteError(str(exc)) from None
+        raise

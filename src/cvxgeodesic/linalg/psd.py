@@ -50,37 +50,26 @@ def is_positive_semidefinite(Q: sp.spmatrix, *, rel_shift: float = 1e-9, backend
     """
     if backend not in ("auto", "pardiso", "cholmod"):
         raise ValueError(f"backend must be 'auto', 'pardiso' or 'cholmod', got {backend!r}")
+    n = Q.shape[0]
+    tri = sp.tril(sp.coo_matrix(Q))
     if analysis is not None and analysis.backend in ("pardiso", "cholmod"):
-        return _check_in(analysis, Q, rel_shift)
-    if backend == "auto":
-        found = [name for name in ("pardiso", "cholmod") if symbolic.available(name)]
-        if not found:
-            return None
-        backend = found[0]
-    n = Q.shape[0]
-    tri = sp.tril(sp.coo_matrix(Q))
-    # an explicit (zero) diagonal: the symbolic analysis wants a full diagonal, e.g. for unreferenced vertices
-    lower = sp.csc_matrix(
-        (np.r_[tri.data, np.zeros(n)], (np.r_[tri.row, np.arange(n)], np.r_[tri.col, np.arange(n)])), shape=(n, n)
-    )
-    lower.sum_duplicates()
-    lower.sort_indices()
-    scale = float(np.abs(Q.diagonal()).max()) if Q.shape[0] else 0.0
-    try:
-        symbolic.SymbolicCholesky(lower, backend=backend, ordering="amd", mode="supernodal").factorize(
-            lower.data, beta=rel_shift * scale)
-    except NotPositiveDefiniteError:
-        return False
-    return True
-
-
-def _check_in(analysis: symbolic.SymbolicCholesky, Q: sp.spmatrix, rel_shift: float) -> bool:
-    """:func:`is_positive_semidefinite` by one factorization in an existing analysis."""
-    n = Q.shape[0]
-    if Q.shape != (analysis.n, analysis.n):
-        raise ValueError(f"analysis is of a {analysis.n}x{analysis.n} pattern, Q has shape {Q.shape}")
-    tri = sp.tril(sp.coo_matrix(Q))
-    data = np.bincount(analysis.positions(tri.row, tri.col), weights=tri.data, minlength=analysis.nnz)
+        if Q.shape != (analysis.n, analysis.n):
+            raise ValueError(f"analysis is of a {analysis.n}x{analysis.n} pattern, Q has shape {Q.shape}")
+        data = np.bincount(analysis.positions(tri.row, tri.col), weights=tri.data, minlength=analysis.nnz)
+    else:
+        if backend == "auto":
+            found = [name for name in ("pardiso", "cholmod") if symbolic.available(name)]
+            if not found:
+                return None
+            backend = found[0]
+        # an explicit (zero) diagonal: the symbolic analysis wants a full diagonal, e.g. for unreferenced vertices
+        lower = sp.csc_matrix(
+            (np.r_[tri.data, np.zeros(n)], (np.r_[tri.row, np.arange(n)], np.r_[tri.col, np.arange(n)])), shape=(n, n)
+        )
+        lower.sum_duplicates()
+        lower.sort_indices()
+        analysis = symbolic.SymbolicCholesky(lower, backend=backend, ordering="amd", mode="supernodal")
+        data = lower.data
     scale = float(np.abs(Q.diagonal()).max()) if n else 0.0
     try:
         analysis.factorize(data, beta=rel_shift * scale)

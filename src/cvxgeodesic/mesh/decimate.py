@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import MeshError, ParameterError
+from ..validation import check_choice
 from .trimesh import TriMesh
 
 __all__ = ["SIMPLIFIERS", "decimate_timeout", "simplify_mesh"]
@@ -110,8 +111,7 @@ def simplify_mesh(mesh: TriMesh, target_faces: int, method: str = "shortest-edge
     """
     if not 0 < target_faces < mesh.n_faces:
         raise ParameterError(f"target_faces must be in (0, {mesh.n_faces}), got {target_faces}")
-    if method not in SIMPLIFIERS:
-        raise ParameterError(f"unknown simplification method {method!r}; choose one of {', '.join(SIMPLIFIERS)}")
+    check_choice(method, "simplification method", SIMPLIFIERS, lower=False)
     result, used = None, method
     if method == "shortest-edge":
         if mesh.is_edge_manifold:
@@ -131,9 +131,7 @@ def simplify_mesh(mesh: TriMesh, target_faces: int, method: str = "shortest-edge
     tris = tris[ok]
     if tris.shape[0] == 0:
         raise MeshError(f"{mesh.name}: simplification to {target_faces} faces left no faces")
-    used_v = np.unique(tris)
-    remap = np.full(pts.shape[0], -1, dtype=np.int64)
-    remap[used_v] = np.arange(used_v.size)
-    coarse = TriMesh(pts[used_v], remap[tris], name=f"{mesh.name}@{tris.shape[0]}")
+    used_v, local = np.unique(tris, return_inverse=True)
+    coarse = TriMesh(pts[used_v], local.reshape(tris.shape), name=f"{mesh.name}@{tris.shape[0]}")
     coarse.simplifier = used
     return coarse

@@ -72,23 +72,9 @@ def _silent_native_output() -> Iterator[None]:
             import ctypes
 
             ctypes.CDLL(None).fflush(None)
-        os.dup2(saved[0], 1)
-        os.dup2(saved[1], 2)
-        os.close(saved[0])
-        os.close(saved[1])
-
-
-@contextlib.contextmanager
-def _in_temporary_directory() -> Iterator[None]:
-    """Run in a private temporary working directory (fTetWild's ``get_tet_mesh`` writes
-    ``__tracked_surface.stl`` into the working directory), then return and delete it."""
-    here = os.getcwd()
-    with tempfile.TemporaryDirectory(prefix="cvxgeodesic-tetwild-") as tmp:
-        os.chdir(tmp)
-        try:
-            yield
-        finally:
-            os.chdir(here)
+        for fd, copy in zip((1, 2), saved, strict=True):
+            os.dup2(copy, fd)
+            os.close(copy)
 
 
 def tetrahedralize(surface: TriMesh | tuple, *, mesher: str = "auto", max_volume: float | None = None,
@@ -165,7 +151,9 @@ def tetrahedralize(surface: TriMesh | tuple, *, mesher: str = "auto", max_volume
         params = f"minratio={quality:g}" + (f", maxvolume={max_volume:g}" if max_volume else "")
     else:
         try:
-            with _silent_native_output(), _in_temporary_directory():
+            # in a private working directory: fTetWild's get_tet_mesh writes __tracked_surface.stl into it
+            with (_silent_native_output(), tempfile.TemporaryDirectory(prefix="cvxgeodesic-tetwild-") as tmp,
+                  contextlib.chdir(tmp)):
                 tz = lib.Tetrahedralizer(max_threads=int(threads), **(
                     {"edge_length_r": edge_length / mesh.bbox_diagonal} if edge_length else {}))
                 tz.set_log_level(6)

@@ -38,6 +38,8 @@ class ConeGroup:
         The ``c`` variables of each cone.
     G : (k, d, c) float ndarray
     h : (k, d) float ndarray
+    count, dim, clique : int
+        ``k``, ``d`` (the cone dimension) and ``c`` (variables per cone), set from the arrays' shapes.
 
     Examples
     --------
@@ -64,6 +66,7 @@ class ConeGroup:
                              f"h {self.h.shape} (want (k, c), (k, d, c), (k, d))")
         if self.h.shape[1] < 2:
             raise ValueError(f"a second-order cone needs dimension >= 2, got {self.h.shape[1]}")
+        self.count, self.dim, self.clique = int(self.dofs.shape[0]), int(self.h.shape[1]), int(self.dofs.shape[1])
 
     @classmethod
     def norm_bound(cls, dofs: np.ndarray, B: np.ndarray, bound: np.ndarray | float = 1.0) -> ConeGroup:
@@ -82,20 +85,6 @@ class ConeGroup:
         h = np.zeros((k, r + 1))
         h[:, 0] = bound
         return cls(dofs, G, h)
-
-    @property
-    def count(self) -> int:
-        return int(self.dofs.shape[0])
-
-    @property
-    def dim(self) -> int:
-        """``d``: the cone dimension."""
-        return int(self.h.shape[1])
-
-    @property
-    def clique(self) -> int:
-        """``c``: variables per cone."""
-        return int(self.dofs.shape[1])
 
     def unit_blocks(self) -> np.ndarray | None:
         """``B`` (k, d − 1, c) when every cone is ``‖B_t x_t‖ ≤ 1`` (head row of ``G`` zero, ``h = e₀``), else None:
@@ -294,7 +283,17 @@ class BackendResult:
     extra: dict = field(default_factory=dict)
 
 
-def clique_pattern(n: int, cliques: Sequence[np.ndarray]) -> sp.csc_matrix:
+def _ones_with(S: sp.csc_matrix, P: sp.spmatrix | None) -> sp.csc_matrix:
+    """``S`` with the pattern of ``P`` (if any) added, every stored value 1, indices sorted."""
+    if P is not None:
+        Pc = sp.csc_matrix(P)
+        S = S + sp.csc_matrix((np.ones(Pc.nnz), Pc.indices, Pc.indptr), shape=S.shape)
+    S.data[:] = 1.0
+    S.sort_indices()
+    return S
+
+
+def clique_pattern(n: int, cliques: Sequence[np.ndarray], P: sp.spmatrix | None = None) -> sp.csc_matrix:
     """Sparsity pattern (ones, both triangles, full diagonal) of the union of variable cliques.
 
     Parameters
@@ -302,6 +301,8 @@ def clique_pattern(n: int, cliques: Sequence[np.ndarray]) -> sp.csc_matrix:
     n : int
     cliques : sequence of (k, c) int ndarrays
         Each row couples its ``c`` variables (a cone's ``dofs``, an inequality's pair).
+    P : (n, n) sparse matrix, optional
+        A quadratic term whose pattern is added.
 
     Returns
     -------
@@ -315,10 +316,7 @@ def clique_pattern(n: int, cliques: Sequence[np.ndarray]) -> sp.csc_matrix:
             r.append(np.repeat(q, w, axis=1).ravel())
             c.append(np.tile(q, (1, w)).ravel())
     rows, cols = np.concatenate(r), np.concatenate(c)
-    S = sp.csc_matrix((np.ones(rows.size), (rows, cols)), shape=(n, n))
-    S.data[:] = 1.0
-    S.sort_indices()
-    return S
+    return _ones_with(sp.csc_matrix((np.ones(rows.size), (rows, cols)), shape=(n, n)), P)
 
 
 def kkt_pattern(n: int, faces: np.ndarray, edges: np.ndarray, P: sp.spmatrix | None = None) -> sp.csc_matrix:
@@ -352,10 +350,4 @@ def kkt_pattern(n: int, faces: np.ndarray, edges: np.ndarray, P: sp.spmatrix | N
     """
     e0, e1 = np.asarray(edges[:, 0]), np.asarray(edges[:, 1])
     S = sp.csc_matrix((np.ones(2 * e0.size), (np.r_[e0, e1], np.r_[e1, e0])), shape=(n, n))
-    S = S + sp.identity(n, format="csc")
-    if P is not None:
-        Pc = sp.csc_matrix(P)
-        S = S + sp.csc_matrix((np.ones(Pc.nnz), Pc.indices, Pc.indptr), shape=(n, n))
-    S.data[:] = 1.0
-    S.sort_indices()
-    return S
+    return _ones_with(S + sp.identity(n, format="csc"), P)

@@ -24,7 +24,7 @@ import numpy as np
 from ..._jit import njit  # numba.njit, uncached where no cache location is writable
 
 # importing the SOC(3) kernels first selects Numba's threading layer (OpenMP, shared with MKL PARDISO)
-from ._kernels import _JIT
+from ._kernels import _JIT, soc_step_bounds
 
 __all__ = ["assemble", "assemble4", "gather", "gather4", "gondzio", "gondzio4", "kkt", "kkt4", "max_step", "mehrotra",
            "mehrotra4", "nt_scaling", "nt_scaling4", "scatter", "scatter4", "w_apply", "w_apply4", "winv2_apply",
@@ -167,12 +167,14 @@ def max_step(u: np.ndarray, du: np.ndarray) -> float:
     """Largest ``α`` with ``u + α du`` in the cone for every cone (``inf`` if unbounded); ``u`` interior.
 
     The quadratic representation of ``u^{-1/2}`` maps ``u`` to the identity (as ECOS does); there the condition
-    reads ``1 + αρ₀ ≥ α‖ρ₁‖``.
+    reads ``1 + αρ₀ ≥ α‖ρ₁‖``. SOC(3) and SOC(4) have their bounds unrolled (SOC(3)'s in :mod:`._kernels`).
     """
     if not u.shape[1]:
         return np.inf
     bounds = np.empty(u.shape[1])
-    (_step_bounds4 if u.shape[0] == 4 else _step_bounds)(np.ascontiguousarray(u), np.ascontiguousarray(du), bounds)
+    d = u.shape[0]
+    kernel = soc_step_bounds if d == 3 else _step_bounds4 if d == 4 else _step_bounds
+    kernel(np.ascontiguousarray(u), np.ascontiguousarray(du), bounds)
     worst = float(bounds.max())
     return 1.0 / worst if worst > 0 else np.inf
 

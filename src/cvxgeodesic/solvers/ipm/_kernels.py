@@ -37,8 +37,9 @@ from ..._jit import njit, watch_compiles  # njit: numba.njit, uncached where no 
 
 watch_compiles()  # one line on stderr when a kernel compiles (a cold cache: the first run after installation)
 
-# Numba's thread pool (the order-2 kernels run in parallel): OpenMP first, since MKL PARDISO uses the GNU OpenMP
-# runtime too, so both share one thread pool instead of two pools spinning against each other on a small machine.
+# Numba's thread pool (started by a solve's thread limit, cvxgeodesic._threads): OpenMP first, since MKL PARDISO
+# uses the GNU OpenMP runtime too, so both share one thread pool instead of two pools spinning against each other
+# on a small machine.
 if "NUMBA_THREADING_LAYER" not in os.environ and "NUMBA_THREADING_LAYER_PRIORITY" not in os.environ:
     numba.config.THREADING_LAYER_PRIORITY = ["omp", "tbb", "workqueue"]
 
@@ -46,8 +47,6 @@ if "NUMBA_THREADING_LAYER" not in os.environ and "NUMBA_THREADING_LAYER_PRIORITY
 # and the C wrapper Numba builds by default took about 5 % of the first compile (spot, qcqp-hessian: 5.1-5.2 s
 # against 5.4 s)
 _JIT = {"cache": True, "nogil": True, "error_model": "numpy", "no_cfunc_wrapper": True}
-# no kernel of this module is compiled in parallel (module docstring); the order-2 kernels import this
-_PJIT = {**_JIT, "parallel": True}
 
 
 @njit(**_JIT)
@@ -169,7 +168,8 @@ def scatter_add(values, pos, data):
 
 
 @njit(**_JIT)
-def _soc_step_bounds(u, du, out):
+def soc_step_bounds(u, du, out):
+    """``out[t]``: the reciprocal of cone ``t``'s largest step (:func:`._clique_kernels.max_step`)."""
     for t in prange(u.shape[1]):
         u0, u1, u2 = u[0, t], u[1, t], u[2, t]
         nb = math.sqrt(u1 * u1 + u2 * u2)
@@ -181,20 +181,6 @@ def _soc_step_bounds(u, du, out):
         r1 = du[1, t] - c * u1
         r2 = du[2, t] - c * u2
         out[t] = math.sqrt((r1 * r1 + r2 * r2) * inv_det) - rho0
-
-
-def max_step_soc(u, du):
-    """Largest ``α`` with ``u + α du`` in SOC(3) for every cone (``inf`` if unbounded); ``u`` interior.
-
-    Maps ``u`` to the identity with the quadratic representation of ``u^{-1/2}`` (as ECOS does),
-    where the condition reads ``1 + αρ₀ ≥ α‖ρ₁‖``.
-    """
-    if not u.shape[1]:
-        return np.inf
-    bounds = np.empty(u.shape[1])
-    _soc_step_bounds(u, du, bounds)
-    worst = float(bounds.max())
-    return 1.0 / worst if worst > 0 else np.inf
 
 
 @njit(**_JIT)

@@ -136,23 +136,14 @@ class Stepper:
                 target: float) -> tuple[Direction, float, float]:
         """Iterative refinement of the final direction (its Δx error becomes the next dual residual); every
         direction above is linear in Δx, so one correction δ updates them all."""
-        pr = self.pr
-        refined = False
-        prev = np.inf
-        dx, dy, ds, dz = d.dx, d.dy, list(d.ds), list(d.dz)
-        for _ in range(self.st.max_refine):
-            res_r, res_e = self.ls.residual(dx, dy, d.rhs, d.ey, scalings)
-            rn = max(float(np.abs(res_r).max()) if res_r.size else 0.0, float(np.abs(res_e).max(initial=0.0)))
-            if rn <= target or rn >= 0.5 * prev:
-                break
-            prev = rn
-            delta, delta_y = self.ls.solve_kkt(f, res_r, res_e)
-            self.counters["refinement_steps"] += 1
-            refined = True
-            dx += delta
-            dy = dy + delta_y
-            for i, (b, sc) in enumerate(zip(pr.blocks, scalings, strict=True)):
+        ds, dz = list(d.ds), list(d.dz)
+
+        def refine_blocks(delta: np.ndarray) -> None:
+            for i, (b, sc) in enumerate(zip(self.pr.blocks, scalings, strict=True)):
                 ds[i], dz[i] = b.refine(delta, sc, ds[i], dz[i])
-        if refined:
+
+        before = self.counters["refinement_steps"]
+        dx, dy = self.ls.refine(f, d.dx, d.dy, d.rhs, d.ey, scalings, target, on_step=refine_blocks)
+        if self.counters["refinement_steps"] > before:
             step_p, step_d = self._steps(it, ds, dz, self.st.step)
         return Direction(dx, ds, dz, d.rhs, dy, d.ey), step_p, step_d

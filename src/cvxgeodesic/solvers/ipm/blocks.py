@@ -43,7 +43,11 @@ _CLIQUE_B = np.array([0, 1, 2, 0, 0, 1])
 
 
 class ConeBlock(Protocol):
-    """What the algorithm needs of one block of constraints ``s = b − A x``, ``s ∈ K``."""
+    """What the algorithm needs of one block of constraints ``s = b − A x``, ``s ∈ K``.
+
+    A block that subclasses it inherits :meth:`b_dot`, :meth:`norm_b`, :meth:`newton` and :meth:`refine` from
+    its :meth:`A` and ``W⁻²`` (:meth:`_winv2`, the scaling's ``apply_winv2``).
+    """
 
     cone: Cone
     count: int
@@ -64,11 +68,11 @@ class ConeBlock(Protocol):
 
     def b_dot(self, z: np.ndarray) -> float:
         """``b̃ᵀz``."""
-        ...
+        return float((self.b_tilde * z).sum())
 
     def norm_b(self) -> float:
         """``‖b̃‖∞`` (0 for an empty block)."""
-        ...
+        return _amax(self.b_tilde)
 
     def A(self, x: np.ndarray) -> np.ndarray:
         """``A x``."""
@@ -89,19 +93,25 @@ class ConeBlock(Protocol):
     def newton(self, dx: np.ndarray, sc: Scaling, wu: np.ndarray, wr: np.ndarray, rz: np.ndarray
                ) -> tuple[np.ndarray, np.ndarray]:
         """``Δs = −r_z − A Δx``, ``Δz = W⁻² A Δx + wu + wr`` (``wr = W⁻² r_z``)."""
-        ...
+        adx = self.A(dx)
+        return -rz - adx, self._winv2(sc, adx) + wu + wr
 
     def refine(self, delta: np.ndarray, sc: Scaling, ds: np.ndarray, dz: np.ndarray
                ) -> tuple[np.ndarray, np.ndarray]:
         """``(Δs, Δz)`` after ``Δx += δ``: ``Δs − A δ``, ``Δz + W⁻² A δ``."""
-        ...
+        ad = self.A(delta)
+        return ds - ad, dz + self._winv2(sc, ad)
+
+    def _winv2(self, sc: Scaling, u: np.ndarray) -> np.ndarray:
+        """``W⁻² u``."""
+        return sc.apply_winv2(u)
 
     def touch(self, mask: np.ndarray) -> None:
         """Mark the variables the block constrains."""
         ...
 
 
-class TriangleSOCBlock:
+class TriangleSOCBlock(ConeBlock):
     """SOC(3) cones ``‖B_t x[cv[t]]‖ ≤ 1``: ``s_t = (1, B_t x_t)``, i.e. ``A_t = [0; −B_t]``, ``b_t = (1, 0)``.
 
     Parameters
@@ -124,9 +134,8 @@ class TriangleSOCBlock:
         self.count = k = cv.shape[0]
         self.pos = _kern.positions(chol, cv[:, _CLIQUE_A].T.ravel(), cv[:, _CLIQUE_B].T.ravel())
         # SoA order for the kernels: B[:, :, t] is B_t
-        self.B = np.ascontiguousarray(Bt.transpose(1, 2, 0))  # (2, 3, k)
+        self.B = B = np.ascontiguousarray(Bt.transpose(1, 2, 0))  # (2, 3, k)
         self.cv = np.ascontiguousarray(cv)
-        B = self.B
         # clique constants B_tᵀB_t (6, k): each iteration adds a rank-one term
         self.BtB6 = np.stack([B[0, a] * B[0, b] + B[1, a] * B[1, b] for a, b in zip(_CLIQUE_A, _CLIQUE_B, strict=True)])
         self.shift = self.Bx(x_fixed)  # b̃ body = +B x_F (A body is −B)
@@ -181,18 +190,11 @@ class TriangleSOCBlock:
         _kern.newton_cones(g, sc.w, sc.inv_eta2, wu, wr, rz, dz, ds)
         return ds, dz
 
-    def refine(self, delta, sc, ds, dz):
-        g = self.Bx(delta)
-        dz = dz + sc.body_to_inv2(g)
-        ds = ds.copy()
-        ds[1:] += g
-        return ds, dz
-
     def touch(self, mask) -> None:
         mask[self.cv.ravel()] = True
 
 
-class CliqueSOCBlock:
+class CliqueSOCBlock(ConeBlock):
     """Second-order cones on cliques of variables: ``s_t = h_t − G_t x[dofs_t] ∈ SOC(d)`` (``A_t = G_t``,
     ``b_t = h_t``).
 
@@ -213,15 +215,13 @@ class CliqueSOCBlock:
 
     def __init__(self, group: ConeGroup, x_fixed: np.ndarray, chol: SymbolicCholesky):
         self.cone = SOC(group.dim)
-        self.count = k = group.count
-        self.G = group.G  # (k, d, c), C-contiguous (ConeGroup makes it so)
-        self.dofs = group.dofs
+        self.count = group.count
+        self.G = G = group.G  # (k, d, c), C-contiguous (ConeGroup makes it so)
+        self.dofs = dofs = group.dofs
         self.h = np.ascontiguousarray(group.h.T)  # (d, k)
         ta, tb = np.tril_indices(group.clique)  # lower-triangle clique entries (a ≥ b)
         self.tri_a, self.tri_b = ta.astype(np.int64), tb.astype(np.int64)
-        dofs = self.dofs
-        self.pos = _kern.positions(chol, dofs[:, ta].ravel(), dofs[:, tb].ravel()) if k else np.zeros(0, np.int64)
-        G = self.G
+        self.pos = _kern.positions(chol, dofs[:, ta].ravel(), dofs[:, tb].ravel())
         self.gjg = np.ascontiguousarray(np.einsum("ke,ke->ke", G[:, 0, ta], G[:, 0, tb])
                                         - np.einsum("kie,kie->ke", G[:, 1:, ta], G[:, 1:, tb]))
         four = group.dim == 4  # SOC(4): the unrolled kernels
@@ -229,34 +229,25 @@ class CliqueSOCBlock:
         self._scatter = _ck.scatter4 if four else _ck.scatter
         self._kkt = _ck.kkt4 if four else _ck.kkt
         self._assemble = _ck.assemble4 if four else _ck.assemble
-        self.shift = self.Gx(x_fixed)
+        self.shift = self.A(x_fixed)
         self.b_tilde = self.h - self.shift
 
-    def Gx(self, x: np.ndarray) -> np.ndarray:
-        """(d, k): ``G_t x[dofs_t]`` for every cone."""
+    def A(self, x: np.ndarray) -> np.ndarray:
+        """(d, k): ``G_t x[dofs_t]`` for every cone (``A_t = G_t``)."""
         out = np.empty((self.h.shape[0], self.count))
         if self.count:
             self._gather(self.G, self.dofs, np.ascontiguousarray(x, dtype=np.float64), out)
         return out
 
     def slack(self, x, x_fixed):
-        return self.h - self.Gx(x)
+        return self.h - self.A(x)
 
     def residual(self, x, s):
-        gx = self.Gx(x)
+        gx = self.A(x)
         return gx + s - self.h, gx
 
     def recession_violation(self, aux) -> float:
         return max(-self.cone.min_eigenvalue(self.shift - aux), 0.0) if self.count else 0.0  # −G d ∈ K
-
-    def b_dot(self, z) -> float:
-        return float((self.b_tilde * z).sum())
-
-    def norm_b(self) -> float:
-        return _amax(self.b_tilde)
-
-    def A(self, x):
-        return self.Gx(x)
 
     def At_add(self, z, out) -> None:
         if self.count:
@@ -270,20 +261,12 @@ class CliqueSOCBlock:
         if self.count:
             self._assemble(self.G, self.gjg, sc.w, sc.inv_eta2, self.tri_a, self.tri_b, self.pos, data)
 
-    def newton(self, dx, sc, wu, wr, rz):
-        g = self.Gx(dx)
-        return -rz - g, sc.apply_winv2(g) + wu + wr
-
-    def refine(self, delta, sc, ds, dz):
-        g = self.Gx(delta)
-        return ds - g, dz + sc.apply_winv2(g)
-
     def touch(self, mask) -> None:
         used = np.abs(self.G).max(axis=1) > 0  # (k, c): a column of zeros constrains nothing
         mask[self.dofs[used]] = True
 
 
-class PairInequalityBlock:
+class PairInequalityBlock(ConeBlock):
     """Linear inequalities ``a_k · x[iv[k]] ≤ r_k`` with at most two variables each, on the orthant.
 
     Parameters
@@ -328,9 +311,6 @@ class PairInequalityBlock:
     def b_dot(self, z) -> float:
         return float(self.b_tilde @ z)
 
-    def norm_b(self) -> float:
-        return float(np.abs(self.b_tilde).max()) if self.count else 0.0
-
     def A(self, x):
         return self.L @ x
 
@@ -346,19 +326,14 @@ class PairInequalityBlock:
         if self.count:
             _kern.scatter_add((self.coef * sc.w2inv).ravel(), self.pos, data)
 
-    def newton(self, dx, sc, wu, wr, rz):
-        adx = self.L @ dx
-        return -rz - adx, sc.w2inv * adx + wu + wr
-
-    def refine(self, delta, sc, ds, dz):
-        adl = self.L @ delta
-        return ds - adl, dz + sc.w2inv * adl
+    def _winv2(self, sc, u):
+        return sc.w2inv * u
 
     def touch(self, mask) -> None:
         mask[self.iv[self.ia != 0]] = True
 
 
-class SparseBlock:
+class SparseBlock(ConeBlock):
     """``count`` cones of one type with a general sparse map: ``s = b − A x`` (NumPy/SciPy throughout).
 
     Parameters
@@ -410,12 +385,6 @@ class SparseBlock:
         v = -(aux - self._field(self.b) + self.b_tilde)
         return max(-self.cone.min_eigenvalue(v), 0.0) if self.count else 0.0
 
-    def b_dot(self, z) -> float:
-        return float((self.b_tilde * z).sum())
-
-    def norm_b(self) -> float:
-        return _amax(self.b_tilde)
-
     def A(self, x):
         return self._field(self.A_mat @ x)
 
@@ -439,14 +408,6 @@ class SparseBlock:
         rows, colsj = touched[M.row], touched[M.col]
         low = rows >= colsj
         np.add.at(data, self._chol.positions(rows[low], colsj[low]), M.data[low])
-
-    def newton(self, dx, sc, wu, wr, rz):
-        adx = self.A(dx)
-        return -rz - adx, sc.apply_winv2(adx) + wu + wr
-
-    def refine(self, delta, sc, ds, dz):
-        ad = self.A(delta)
-        return ds - ad, dz + sc.apply_winv2(ad)
 
     def touch(self, mask) -> None:
         mask[np.flatnonzero(np.diff(self.A_mat.tocsc().indptr))] = True

@@ -61,7 +61,7 @@ class Cone(Protocol):
 
     def degree(self, count: int) -> int:
         """Barrier degree (the number of cones for the SOC, of entries for the orthant)."""
-        ...
+        return count
 
     def scaling(self, s: np.ndarray, z: np.ndarray) -> Scaling: ...
 
@@ -76,7 +76,7 @@ class Cone(Protocol):
 
     def dot(self, u: np.ndarray, v: np.ndarray) -> float:
         """``uᵀv`` summed over all cones."""
-        ...
+        return float((u * v).sum())
 
     def min_eigenvalue(self, u: np.ndarray) -> float:
         """Smallest eigenvalue of ``u`` over all cones (``inf`` when there are none)."""
@@ -138,6 +138,12 @@ def _amax(a: np.ndarray) -> float:
 # ---------------------------------------------------------------------------------------------------------------
 
 
+#: SOC dimension → the kernels of the NT scaling, ``W v`` and ``W⁻² v`` (unrolled for 3 and 4; 0: any dimension)
+_SCALING_KERNELS = {3: (_kern.nt_scaling, _kern.apply_w, _kern.apply_inv2),
+                    4: (_ck.nt_scaling4, _ck.w_apply4, _ck.winv2_apply4),
+                    0: (_ck.nt_scaling, _ck.w_apply, _ck.winv2_apply)}
+
+
 class _SocScaling:
     """NT scaling ``W = η W̄`` of SOC pairs (s, z), vectorized (CVXOPT's formulas).
 
@@ -148,22 +154,16 @@ class _SocScaling:
 
     def __init__(self, s: np.ndarray, z: np.ndarray):
         d, k = s.shape
-        self._k3 = d == 3
+        nt_scaling, self._w_kernel, self._winv2_kernel = _SCALING_KERNELS.get(d, _SCALING_KERNELS[0])
         self.w = np.empty((d, k))
         self.eta = np.empty(k)
         self.inv_eta2 = np.empty(k)
         self.lam = np.empty((d, k))
-        if self._k3:
-            _kern.nt_scaling(s, z, self.w, self.eta, self.inv_eta2, self.lam)
-        else:
-            (_ck.nt_scaling4 if d == 4 else _ck.nt_scaling)(_c(s), _c(z), self.w, self.eta, self.inv_eta2, self.lam)
+        nt_scaling(_c(s), _c(z), self.w, self.eta, self.inv_eta2, self.lam)
 
     def _apply(self, v: np.ndarray, sign: float) -> np.ndarray:
         out = np.empty(v.shape)
-        if self._k3:
-            _kern.apply_w(self.w, self.eta, v, sign, out)
-        else:
-            (_ck.w_apply4 if v.shape[0] == 4 else _ck.w_apply)(self.w, self.eta, _c(v), sign, out)
+        self._w_kernel(self.w, self.eta, _c(v), sign, out)
         return out
 
     def apply_w(self, v: np.ndarray) -> np.ndarray:
@@ -177,20 +177,11 @@ class _SocScaling:
     def apply_winv2(self, v: np.ndarray) -> np.ndarray:
         """``W⁻² v = (2 v̂ (v̂ᵀv) − J v)/η²`` with ``v̂ = J w̄``."""
         out = np.empty(v.shape)
-        if self._k3:
-            _kern.apply_inv2(self.w, self.inv_eta2, v, out)
-        else:
-            (_ck.winv2_apply4 if v.shape[0] == 4 else _ck.winv2_apply)(self.w, self.inv_eta2, _c(v), out)
+        self._winv2_kernel(self.w, self.inv_eta2, _c(v), out)
         return out
 
-    def body_to_inv2(self, g: np.ndarray) -> np.ndarray:
-        """``W⁻² (0, −g)`` for a (d − 1, k) body field ``g`` (that is ``W⁻² A Δx`` with ``g = B Δx``)."""
-        w = self.w
-        a = 2.0 * (w[1:] * g).sum(axis=0) if not self._k3 else 2.0 * (w[1] * g[0] + w[2] * g[1])
-        return np.concatenate([(a * w[0])[None], -g - a * w[1:]]) * self.inv_eta2
 
-
-class SOC:
+class SOC(Cone):
     """The second-order cone ``SOC(dim)`` (``dim ≥ 2``), fields (dim, k); see :class:`Cone`."""
 
     def __init__(self, dim: int = 3):
@@ -206,9 +197,6 @@ class SOC:
         e[0] = 1.0
         return e
 
-    def degree(self, count: int) -> int:
-        return count
-
     def scaling(self, s: np.ndarray, z: np.ndarray) -> _SocScaling:
         return _SocScaling(s, z)
 
@@ -216,10 +204,7 @@ class SOC:
         return np.sqrt(u[1] ** 2 + u[2] ** 2) if self.dim == 3 else np.linalg.norm(u[1:], axis=0)
 
     def max_step(self, u: np.ndarray, du: np.ndarray) -> float:
-        """Maps ``u`` to the identity with the quadratic representation of ``u^{-1/2}`` (as ECOS does), where the
-        condition reads ``1 + αρ₀ ≥ α‖ρ₁‖``."""
-        if self.dim == 3:
-            return _kern.max_step_soc(_c(u), _c(du))
+        """By the quadratic representation of ``u^{-1/2}`` (:func:`._clique_kernels.max_step`)."""
         return _ck.max_step(_c(u), _c(du))
 
     def max_step_closed(self, u: np.ndarray, du: np.ndarray) -> np.ndarray:
@@ -244,9 +229,6 @@ class SOC:
 
     def min_eigenvalue(self, u: np.ndarray) -> float:
         return float((u[0] - self._norm_body(u)).min()) if u.shape[1] else np.inf
-
-    def dot(self, u: np.ndarray, v: np.ndarray) -> float:
-        return float((u * v).sum())
 
     def product(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
         return np.concatenate([(u * v).sum(axis=0)[None], u[0] * v[1:] + v[0] * u[1:]])
@@ -325,7 +307,7 @@ class _OrthantScaling:
         return self.w2inv * v
 
 
-class Orthant:
+class Orthant(Cone):
     """The nonnegative orthant ``R₊^p``, fields (p,); see :class:`Cone`."""
 
     def shape(self, count: int) -> tuple[int, ...]:
@@ -333,9 +315,6 @@ class Orthant:
 
     def identity(self, count: int) -> np.ndarray:
         return np.ones(count)
-
-    def degree(self, count: int) -> int:
-        return count
 
     def scaling(self, s: np.ndarray, z: np.ndarray) -> _OrthantScaling:
         return _OrthantScaling(s, z)
@@ -419,9 +398,10 @@ class _RotatedScaling:
         return _rotate(self.inner.apply_winv2(_rotate(v)))
 
 
-class RotatedSOC:
+class RotatedSOC(Cone):
     """The rotated second-order cone ``{u : 2u₀u₁ ≥ ‖u₂..‖², u₀, u₁ ≥ 0}`` of dimension ``dim ≥ 3``, fields
-    (dim, k); every operation is :class:`SOC`'s conjugated by ``T``. See :class:`Cone`."""
+    (dim, k); every operation is :class:`SOC`'s conjugated by ``T`` (``dot``, Cone's, needs none: ``T`` is
+    orthogonal). See :class:`Cone`."""
 
     def __init__(self, dim: int = 3):
         if dim < 3:
@@ -435,9 +415,6 @@ class RotatedSOC:
     def identity(self, count: int) -> np.ndarray:
         return _rotate(self.soc.identity(count))
 
-    def degree(self, count: int) -> int:
-        return count
-
     def scaling(self, s: np.ndarray, z: np.ndarray) -> _RotatedScaling:
         return _RotatedScaling(self.soc.scaling(_rotate(s), _rotate(z)))
 
@@ -449,9 +426,6 @@ class RotatedSOC:
 
     def min_eigenvalue(self, u: np.ndarray) -> float:
         return self.soc.min_eigenvalue(_rotate(u))
-
-    def dot(self, u: np.ndarray, v: np.ndarray) -> float:
-        return self.soc.dot(u, v)  # T is orthogonal
 
     def product(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
         return _rotate(self.soc.product(_rotate(u), _rotate(v)))

@@ -40,11 +40,8 @@ def equilibrate(problem: ConicProblem) -> tuple[ConicProblem, np.ndarray]:
     groups = []
     for g in problem.cones:
         G = g.G * D[g.dofs][:, None, :]
-        if g.count:
-            rs = 1.0 / np.maximum(np.abs(G).max(axis=(1, 2)), np.abs(g.h).max(axis=1))
-            groups.append(ConeGroup(g.dofs, G * rs[:, None, None], g.h * rs[:, None]))
-        else:
-            groups.append(g)
+        rs = 1.0 / np.maximum(np.abs(G).max(axis=(1, 2)), np.abs(g.h).max(axis=1))  # (k,): each cone's row scale
+        groups.append(ConeGroup(g.dofs, G * rs[:, None, None], g.h * rs[:, None]))
     qD = problem.q * D
     scale = max(float(np.abs(qD).max(initial=0.0)), 1e-300)
     Dm = sp.diags(D)

@@ -14,13 +14,13 @@ factorization, and the pattern of ``K`` stays the mesh's).
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 import scipy.linalg as sla
 
 from ...linalg import Factor, NotPositiveDefiniteError, SymbolicCholesky
-from .cones import Scaling
+from .cones import Scaling, _amax
 from .program import Program
 from .settings import IPMSettings
 from .state import Direction
@@ -153,10 +153,17 @@ class LinearSystem:
         residual's ∞-norm is at most ``target`` (or no more progress)."""
         e = np.zeros(self.pr.p) if e is None else e
         dx, dy = self.solve_kkt(f, rhs, e)
+        return self.refine(f, dx, dy, rhs, e, scalings, target, with_P)
+
+    def refine(self, f: KKTFactor, dx: np.ndarray, dy: np.ndarray, rhs: np.ndarray, e: np.ndarray,
+               scalings: Sequence[Scaling], target: float, with_P: bool = True,
+               on_step: Callable[[np.ndarray], None] | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Iterative refinement of a solution ``(dx, dy)`` (``dx`` updated in place) until the residual's ∞-norm
+        is at most ``target`` or stops halving; ``on_step(δ)`` after each correction ``dx += δ``."""
         prev = np.inf
         for _ in range(self.settings.max_refine):
             res, res_e = self.residual(dx, dy, rhs, e, scalings, with_P)
-            rn = max(float(np.abs(res).max()), float(np.abs(res_e).max(initial=0.0)))
+            rn = max(_amax(res), float(np.abs(res_e).max(initial=0.0)))
             if rn <= target or rn >= 0.5 * prev:
                 break
             prev = rn
@@ -164,6 +171,8 @@ class LinearSystem:
             dx += ddx
             dy = dy + ddy
             self.counters["refinement_steps"] += 1
+            if on_step is not None:
+                on_step(ddx)
         return dx, dy
 
 

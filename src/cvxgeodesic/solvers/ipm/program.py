@@ -25,13 +25,9 @@ from ...linalg import SymbolicCholesky
 from ..problem import ConicProblem, Equalities, clique_pattern
 from . import _kernels as _kern
 from .blocks import CliqueSOCBlock, ConeBlock, PairInequalityBlock, TriangleSOCBlock
-from .cones import Scaling
+from .cones import Scaling, _amax
 
 __all__ = ["PatternMismatch", "Program", "problem_pattern"]
-
-
-def _kern_amax(a: np.ndarray) -> float:
-    return float(np.abs(a).max()) if a.size else 0.0
 
 
 class PatternMismatch(Exception):
@@ -49,12 +45,7 @@ def problem_pattern(problem: ConicProblem) -> sp.csc_matrix:
     -------
     (n, n) scipy.sparse.csc_matrix
     """
-    S = clique_pattern(problem.n, [g.dofs for g in problem.cones] + [problem.ineq.vertices])
-    if problem.P is not None:
-        Pc = sp.csc_matrix(problem.P)
-        S = S + sp.csc_matrix((np.ones(Pc.nnz), Pc.indices, Pc.indptr), shape=S.shape)
-        S.data[:] = 1.0
-    return S
+    return clique_pattern(problem.n, [g.dofs for g in problem.cones] + [problem.ineq.vertices], problem.P)
 
 
 class Program:
@@ -100,15 +91,14 @@ class Program:
         self.q = np.asarray(q, dtype=np.float64)
         nnz = chol.nnz
         # Assembly plan first: a problem that does not fit the pattern is detected before any other work.
+        self.base = np.zeros(nnz)
         try:
             self.blocks: Sequence[ConeBlock] = blocks(self.x_fixed, chol)
-            Pl = sp.tril(self.P, format="coo") if self.P is not None else None
-            P_pos = _kern.positions(chol, Pl.row, Pl.col) if Pl is not None else None
+            if self.P is not None:
+                Pl = sp.tril(self.P, format="coo")
+                self.base += np.bincount(_kern.positions(chol, Pl.row, Pl.col), weights=Pl.data, minlength=nnz)
         except ValueError as exc:
             raise PatternMismatch(str(exc)) from None
-        self.base = np.zeros(nnz)
-        if Pl is not None:
-            self.base += np.bincount(P_pos, weights=Pl.data, minlength=nnz)
         self.nu = sum(b.cone.degree(b.count) for b in self.blocks)
         self._eq_touch = np.unique(sp.csr_matrix(eq.E).indices) if eq is not None and eq.count else None
         self._fix_loose()
@@ -118,8 +108,8 @@ class Program:
         self.qt_free = (self.q + self.Px_fixed)[self.free]
         self.const = float(self.q @ self.x_fixed) + 0.5 * float(self.x_fixed @ self.Px_fixed)
         self._equalities(eq)
-        self.norm_b = max([b.norm_b() for b in self.blocks] + [_kern_amax(self.f_tilde)], default=0.0)
-        self.norm_q = float(np.abs(self.qt_free).max()) if self.qt_free.size else 0.0
+        self.norm_b = max([b.norm_b() for b in self.blocks] + [_amax(self.f_tilde)], default=0.0)
+        self.norm_q = _amax(self.qt_free)
         self.guess = None if guess is None else np.asarray(guess, dtype=np.float64)
 
         # Fixed variables: rows and columns replaced by identity rows.

@@ -15,15 +15,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .cones import _amax
 from .program import Program
 from .settings import IPMSettings
 from .state import Iterate
 
 __all__ = ["BestIterate", "Evaluation", "almost", "certificate", "evaluate"]
-
-
-def _amax(a: np.ndarray) -> float:
-    return float(np.abs(a).max()) if a.size else 0.0
 
 
 @dataclass
@@ -71,7 +68,7 @@ def evaluate(pr: Program, it: Iterate, iteration: int, step: float, elapsed: flo
     pcost, dcost = pcost_r + pr.const, dcost_r + pr.const
     gap_abs = abs(pcost_r - dcost_r)
     gap_rel = gap_abs / max(1.0, min(abs(pcost), abs(dcost)))
-    norm_x = float(np.abs(xf).max()) if xf.size else 0.0
+    norm_x = _amax(xf)
     norm_s = max([_amax(s) for s in it.s], default=0.0)
     norm_z = max([_amax(z) for z in it.z], default=0.0)
     res_p = max([_amax(r) for r in rz] + [_amax(ry)], default=0.0) / max(1.0, pr.norm_b + norm_x + norm_s)
@@ -104,12 +101,9 @@ def converged(info: dict, tol: float, settings: IPMSettings) -> bool:
 
 
 def almost(info: dict, tol: float, settings: IPMSettings) -> bool:
-    """The reduced tolerances on one iterate's ``info``: residuals and gap below ``reduced_factor · tol``, and
-    the dual residual also relative to ``max(1, ‖q‖ + ‖x‖)`` alone (``res_dual_plain``)."""
-    red = settings.reduced_factor * tol
-    return (info["res_primal"] < red and info["res_dual"] < red
-            and info["res_dual_plain"] < settings.plain_dual_factor * red
-            and min(info["gap_abs"], info["gap_rel"]) < red)
+    """The reduced tolerances on one iterate's ``info``: :func:`converged` at ``reduced_factor · tol`` (residuals and
+    gap, the dual residual also relative to ``max(1, ‖q‖ + ‖x‖)`` alone, ``res_dual_plain``)."""
+    return converged(info, settings.reduced_factor * tol, settings)
 
 
 def certificate(pr: Program, ev: Evaluation, settings: IPMSettings) -> str | None:

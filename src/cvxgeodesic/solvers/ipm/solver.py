@@ -54,7 +54,7 @@ from .start import StartFailure, starting_point
 __all__ = ["InteriorPointSolver", "warm_up"]
 
 _MESSAGES = {
-    "max_iterations": "no convergence within max_iter iterations",
+    "max_iterations": "no convergence within max_iter={max_iter} iterations",
     "primal_infeasible": "the problem is primal infeasible (an infeasibility certificate was found)",
     "dual_infeasible": "the problem is unbounded (dual infeasible; a certificate was found)",
     "stalled": "the step lengths became negligible before convergence",
@@ -109,7 +109,6 @@ class InteriorPointSolver:
         if settings is not None and not isinstance(settings, IPMSettings):
             raise TypeError(f"settings must be an IPMSettings, got {type(settings).__name__}")
         self.settings = settings if settings is not None else IPMSettings()
-        self._backend = backend
         self._ordering = ordering
         # an analysis made already (the direct strategy's, which the energy's PSD check used) is taken as it is
         self.cholesky = (pattern if isinstance(pattern, SymbolicCholesky)
@@ -292,9 +291,7 @@ class _Run:
         total = time.perf_counter() - self.t_start
         info = self.info
         info.update(self.timers, status=status, solve_time=total, **self.counters)
-        msg = _MESSAGES[status] + (f": {extra_msg}" if extra_msg else "")
-        if status == "max_iterations":
-            msg = f"no convergence within max_iter={self.max_iter} iterations"
+        msg = _MESSAGES[status].format(max_iter=self.max_iter) + (f": {extra_msg}" if extra_msg else "")
         return SolverError(msg, solver="ipm", status=status, info=info)
 
     def result(self, x: np.ndarray, objective: float, status: str, info: dict, stopped: str | None,

@@ -18,6 +18,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ...linalg import NotPositiveDefiniteError
+from .cones import _amax
 from .graph import graph_field
 from .newton import LinearSystem, Trouble
 from .program import Program
@@ -40,10 +41,6 @@ class StartFailure(Exception):
 
 def _min_eigenvalue(pr: Program, u: Sequence[np.ndarray]) -> float:
     return min([b.cone.min_eigenvalue(ub) for b, ub in zip(pr.blocks, u, strict=True)], default=np.inf)
-
-
-def _amax(u: Sequence[np.ndarray]) -> float:
-    return max([float(np.abs(a).max()) if a.size else 0.0 for a in u], default=0.0)
 
 
 def _add_identity(pr: Program, u: Sequence[np.ndarray], d: float) -> list[np.ndarray]:
@@ -114,7 +111,7 @@ def mehrotra_shift(pr: Program, s: Sequence[np.ndarray], z: Sequence[np.ndarray]
 def shift_into_cone(pr: Program, u: Sequence[np.ndarray]) -> list[np.ndarray]:
     """CVXOPT's initialization: ``u + (1 + α)e`` when ``u`` is not strictly inside (``α`` = −min eigenvalue)."""
     worst = -_min_eigenvalue(pr, u)
-    if worst >= -1e-8 * max(_amax(u), 1.0):
+    if worst >= -1e-8 * max([_amax(a) for a in u] + [1.0]):
         return _add_identity(pr, u, 1.0 + worst)
     return list(u)
 
