@@ -89,14 +89,14 @@ class TriMesh(SimplexMesh):
         return self.cells
 
     @property
-    def n_faces(self) -> int:
-        """Number of triangles."""
-        return self.n_cells
-
-    @property
     def notes(self) -> tuple[str, ...]:
         """tuple of str: one line per repair the reader made."""
         return self._reader_notes
+
+    @property
+    def n_faces(self) -> int:
+        """Number of triangles."""
+        return self.n_cells
 
     @property
     def file_faces(self) -> np.ndarray:
