@@ -352,16 +352,14 @@ def show_volume(
         As :func:`show`; a zero normal.
     """
     from .mesh.convert import as_mesh
+    from .mesh.tet_slice import plane_frame
     from .mesh.tetmesh import TetMesh
     from .validation import as_points, as_vertex_field
 
     mesh = as_mesh(mesh)
     if not isinstance(mesh, TetMesh):
         raise ParameterError("show_volume takes a tetrahedral mesh; show() draws surfaces")
-    nrm = as_points(normal, "normal").reshape(3)
-    if not np.linalg.norm(nrm) > 0:
-        raise ParameterError(f"normal must be a nonzero vector, got {nrm.tolist()}")
-    unit = nrm / np.linalg.norm(nrm)
+    unit = plane_frame(normal)[0]  # a zero normal refused there
     diag = float(mesh.bbox_diagonal) if mesh.bbox_diagonal > 0 else 1.0
     # the default plane is nudged off the centre by 1 % of the diagonal: on a structured mesh the centre plane holds
     # whole faces, and the renderer's depth test then draws the cut in stripes
@@ -383,7 +381,7 @@ def show_volume(
         _add_marks(ps, marks, diag)
     plane = ps.add_scene_slice_plane()
     # polyscope keeps the side the normal points to: flip it so that the part on the positive side is cut away
-    plane.set_pose(tuple(org.tolist()), tuple((-nrm / np.linalg.norm(nrm)).tolist()))
+    plane.set_pose(tuple(org.tolist()), tuple((-unit).tolist()))
     plane.set_draw_plane(False)
     plane.set_draw_widget(screenshot is None)
     plane.set_volume_mesh_to_inspect(VOLUME_NAME)  # the cut through the tetrahedra, the field interpolated on it
