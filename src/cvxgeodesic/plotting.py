@@ -559,8 +559,7 @@ def plot_error_map(mesh, rel_error, path, *, title=None, vmax=None, view=None, d
     Raises
     ------
     ValueError
-        If ``rel_error`` does not have shape ``(n,)``, ``path`` is not ``.png``
-        or a source index is out of range.
+        As :func:`plot_field`, for ``rel_error`` in place of ``values``.
     """
     from matplotlib import colormaps
     from matplotlib.cm import ScalarMappable
@@ -700,23 +699,20 @@ def plot_gradient_histogram(norms_by_label, path, *, weights=None, title=None, b
         c, e = hists[ref]
         ax.stairs(c, e, fill=True, color="0.80", label=f"{ref}", zorder=1)
 
-    if nrows == 1 and ncols == 1:
-        ax = axes[0, 0]
-        draw_ref(ax)
-        for i, lab in enumerate(lab for lab in labels if lab != ref):
-            c, e = hists[lab]
-            ax.stairs(c, e, color=colors[i % len(colors)], linewidth=1.4, label=lab, zorder=2)
-        ax.legend(fontsize=8, frameon=False, loc="upper left")
-    else:
-        for i, lab in enumerate(others):
-            ax = axes.flat[i]
+    single = nrows == ncols == 1  # every label on one axis, else one panel per label (the reference in each)
+    draw_ref(axes[0, 0])
+    for i, lab in enumerate(lab for lab in labels if lab != ref):
+        ax = axes.flat[0 if single else i]
+        if i and not single:
             draw_ref(ax)
-            c, e = hists[lab]
-            ax.stairs(c, e, color=colors[i % len(colors)], linewidth=1.3, zorder=2)
+        c, e = hists[lab]
+        ax.stairs(c, e, color=colors[i % len(colors)], linewidth=1.4 if single else 1.3, label=lab if single else None,
+                  zorder=2)
+        if not single:
             ax.set_title(lab, fontsize=9, pad=3)
-        for ax in axes.flat[len(others):]:
-            ax.set_visible(False)
-        axes.flat[0].legend(fontsize=7, frameon=False, loc="upper left")
+    for ax in axes.flat[len(others):]:
+        ax.set_visible(False)
+    axes.flat[0].legend(fontsize=8 if single else 7, frameon=False, loc="upper left")
     for ax in axes.flat:
         ax.axvline(1.0, color="black", linestyle="--", linewidth=0.9, zorder=3)
         ax.set_yscale("log")

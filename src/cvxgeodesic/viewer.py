@@ -41,10 +41,6 @@ def _polyscope() -> Any:
     return polyscope
 
 
-def _have_display() -> bool:
-    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
-
-
 def _init(ps: Any, headless: bool) -> None:
     """Start polyscope once per process (it cannot be restarted with another backend)."""
     if getattr(_init, "done", False):
@@ -257,7 +253,7 @@ def _start(window_size: tuple[int, int], screenshot: str | os.PathLike | None, o
         raise ParameterError(f"window_size must be (width, height), got {window_size!r}") from None
     if w < 16 or h < 16:
         raise ParameterError(f"window_size must be at least 16 x 16 pixels, got {window_size!r}")
-    headless = screenshot is not None or not _have_display()
+    headless = screenshot is not None or not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
     if screenshot is None and headless:
         raise ParameterError("no display (DISPLAY/WAYLAND_DISPLAY unset): render off-screen with "
                              "screenshot='out.png' (CLI: --screenshot out.png)")

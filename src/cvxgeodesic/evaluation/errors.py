@@ -111,7 +111,7 @@ def error_stats(d, d_exact, sources, mask=None) -> dict:
         ab = np.abs(d[keep] - d_exact[keep])
     ab[~np.isfinite(d[keep])] = np.inf
     unreached = ~np.isfinite(d_exact)
-    out = {
+    return {
         "rel_mean": float(rel.mean()) if rel.size else float("nan"),
         "rel_max": float(rel.max()) if rel.size else float("nan"),
         "rel_p50": percentile(rel, 50),
@@ -123,4 +123,3 @@ def error_stats(d, d_exact, sources, mask=None) -> dict:
         "n_nonfinite": int(np.sum(~np.isfinite(d[keep]))),
         "n_spurious": int(np.sum(unreached & np.isfinite(d))),
     }
-    return out
