@@ -15,7 +15,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ._atomic import check_replaceable, output_set
 from .errors import ParameterError
+from .mesh.convert import as_mesh
+from .mesh.tet_slice import plane_frame
+from .mesh.tetmesh import TetMesh
+from .sources import resolve_sources
+from .validation import as_points, as_vertex_field, check_output_path
 
 __all__ = ["show", "show_volume"]
 
@@ -72,8 +78,6 @@ def _given_marks(mesh: Any, distance: np.ndarray, sources: Any) -> np.ndarray:
     """(k, 3) marks of a given field: its ``sources`` resolved, or the vertices where it is 0."""
     if sources is None:
         return mesh.V[np.flatnonzero(distance == 0)]
-    from .sources import resolve_sources
-
     ss = resolve_sources(mesh, sources)
     return _source_positions(mesh, None if ss.vertex_only else ss, ss.vertices)
 
@@ -223,10 +227,6 @@ def show(
         without ``overwrite_read_only``), or no display (or polyscope already started off-screen in this process)
         and no ``screenshot``.
     """
-    from .mesh.convert import as_mesh
-    from .mesh.tetmesh import TetMesh
-    from .validation import as_vertex_field
-
     if isinstance(mesh := as_mesh(mesh), TetMesh):
         return show_volume(mesh, distance, sources=sources, method=method or "qclp", screenshot=screenshot,
                            window_size=window_size, overwrite_read_only=overwrite_read_only, **solver_kwargs)
@@ -258,9 +258,6 @@ def _start(window_size: tuple[int, int], screenshot: str | os.PathLike | None, o
         raise ParameterError("no display (DISPLAY/WAYLAND_DISPLAY unset): render off-screen with "
                              "screenshot='out.png' (CLI: --screenshot out.png)")
     if screenshot is not None:  # before the solve: a bad path fails at once, not after it
-        from ._atomic import check_replaceable
-        from .validation import check_output_path
-
         check_output_path(screenshot, (".png",))
         check_replaceable(screenshot, overwrite_read_only=overwrite_read_only)
     ps = _polyscope()
@@ -284,8 +281,6 @@ def _present(ps: Any, screenshot: str | os.PathLike | None, callback: Any,
         ps.look_at(tuple(float(c) for c in camera[0]), tuple(float(c) for c in camera[1]))
     try:
         if screenshot is not None:
-            from ._atomic import output_set
-
             # polyscope reports a failed write only on stdout: output_set sees the missing file
             with output_set(screenshot, overwrite_read_only=overwrite_read_only) as tmp:
                 ps.screenshot(str(tmp[0]), transparent_bg=False)
@@ -347,11 +342,6 @@ def show_volume(
     ParameterError
         As :func:`show`; a zero normal.
     """
-    from .mesh.convert import as_mesh
-    from .mesh.tet_slice import plane_frame
-    from .mesh.tetmesh import TetMesh
-    from .validation import as_points, as_vertex_field
-
     mesh = as_mesh(mesh)
     if not isinstance(mesh, TetMesh):
         raise ParameterError("show_volume takes a tetrahedral mesh; show() draws surfaces")
