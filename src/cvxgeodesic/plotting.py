@@ -237,14 +237,12 @@ def _camera(V: np.ndarray, view, focus=None) -> np.ndarray:
         snapped.append(np.eye(3)[j])
     long1, long2, thin = snapped
     up = long1 if long1[1] == 1.0 else long2 if long2[1] == 1.0 else long1 if long1[2] == 1.0 else long2
-    best = None
-    for front in (1.0, -1.0) if focus is not None else (1.0,):
-        for turn in (1.0, -1.0) if focus is not None else (1.0,):
-            R = _three_quarter(up, front * thin, turn)
-            score = -np.inf if focus is None else float(R[2] @ focus)
-            if best is None or score > best[0] + 1e-9:
-                best = (score, R)
-    return best[1]
+    best = _three_quarter(up, thin, 1.0)
+    for front, turn in ((1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)) if focus is not None else ():
+        R = _three_quarter(up, front * thin, turn)
+        if R[2] @ focus > best[2] @ focus + 1e-9:  # the first of near ties: a symmetric mesh keeps the front view
+            best = R
+    return best
 
 
 def _three_quarter(up: np.ndarray, toward: np.ndarray, turn: float) -> np.ndarray:
@@ -368,8 +366,7 @@ def _render_surface(ax, mesh, values, *, cmap, norm, levels, view, marks, ambien
     mark_slab = np.full(marks.size, -1, dtype=np.int64)
     if marks.size:
         want = np.full(mesh.n_vertices, -1, dtype=np.int64)
-        for c in range(3):
-            np.maximum.at(want, F[:, c], slab_of_face)
+        np.maximum.at(want, F, slab_of_face[:, None])
         mark_slab = want[marks]
 
     Gouraud = _gouraud_artist_class()
