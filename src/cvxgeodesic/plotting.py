@@ -257,19 +257,14 @@ def _three_quarter(up: np.ndarray, toward: np.ndarray, turn: float) -> np.ndarra
 
 def _closed_oriented(F: np.ndarray, n: int) -> bool:
     """True when every directed edge appears once and its reverse once (closed, consistently oriented)."""
-    a = np.concatenate([F[:, 0], F[:, 1], F[:, 2]])
-    b = np.concatenate([F[:, 1], F[:, 2], F[:, 0]])
-    fwd = a * n + b
-    rev = b * n + a
-    fwd.sort()
-    rev.sort()
+    a, b = F.T.ravel(), np.roll(F, -1, axis=1).T.ravel()  # the directed edges a -> b, corner-major
+    fwd, rev = np.sort(a * n + b), np.sort(b * n + a)
     return bool(np.all(fwd[1:] != fwd[:-1]) and np.array_equal(fwd, rev))
 
 
 def _vertex_normals(V: np.ndarray, F: np.ndarray, fn: np.ndarray) -> np.ndarray:
     N = np.zeros_like(V)
-    for k in range(3):
-        np.add.at(N, F[:, k], fn)
+    np.add.at(N, F, fn[:, None])
     nrm = np.linalg.norm(N, axis=1, keepdims=True)
     return N / np.where(nrm > 0, nrm, 1.0)
 
