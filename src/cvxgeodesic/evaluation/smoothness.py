@@ -119,8 +119,7 @@ def ridge_band(mesh, d_exact, rings: int = 2, *, sources=None, threshold: float 
     mesh = check_mesh(mesh)
     d_exact = as_vertex_field(d_exact, "d_exact", mesh.n_vertices)
     rings = check_count(rings, "rings", minimum=0)
-    if not exclude_radius >= 0:
-        raise ValueError(f"exclude_radius must be a number >= 0, got {exclude_radius!r}")
+    exclude_radius = check_number(exclude_radius, "exclude_radius", low=0)
     if sources is None:
         src = d_exact == 0
     else:
