@@ -120,10 +120,10 @@ def _marching_triangles(V: np.ndarray, F: np.ndarray, values: np.ndarray, levels
     total = int(counts.sum())
     if total == 0:
         return empty
-    offsets = np.cumsum(counts) - counts
+    cum = np.cumsum(counts)
+    offsets = cum - counts
     seg_out, face_out = [], []
     # process (face, level) pairs in blocks of faces to bound the temporaries
-    cum = np.cumsum(counts)
     block_edges = np.searchsorted(cum, np.arange(_SEGMENT_BLOCK, total, _SEGMENT_BLOCK), side="left")
     bounds = np.r_[0, block_edges + 1, len(faces)]
     bounds = np.unique(np.clip(bounds, 0, len(faces)))  # strictly increasing: no empty block
