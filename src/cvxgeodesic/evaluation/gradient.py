@@ -21,9 +21,7 @@ def _norms_and_weights(mesh, d, sources):
     finite_v = np.isfinite(d)
     valid = finite_v[mesh.cells].all(axis=1) & (mesh.cell_measures > 0)
     if sources is not None:
-        src = np.zeros(mesh.n_vertices, dtype=bool)
-        src[vertex_indices(sources, "sources", mesh.n_vertices)] = True
-        valid &= ~src[mesh.cells].any(axis=1)
+        valid &= ~np.isin(mesh.cells, vertex_indices(sources, "sources", mesh.n_vertices)).any(axis=1)
     norms = gradient_norms(mesh, np.where(finite_v, d, 0.0))[valid]
     area = mesh.cell_measures[valid]
     return norms, area

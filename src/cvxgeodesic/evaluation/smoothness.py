@@ -120,11 +120,8 @@ def ridge_band(mesh, d_exact, rings: int = 2, *, sources=None, threshold: float 
     d_exact = as_vertex_field(d_exact, "d_exact", mesh.n_vertices)
     rings = check_count(rings, "rings", minimum=0)
     exclude_radius = check_number(exclude_radius, "exclude_radius", low=0)
-    if sources is None:
-        src = d_exact == 0
-    else:
-        src = np.zeros(mesh.n_vertices, dtype=bool)
-        src[vertex_indices(sources, "sources", mesh.n_vertices)] = True
+    n = mesh.n_vertices
+    src = d_exact == 0 if sources is None else np.isin(np.arange(n), vertex_indices(sources, "sources", n))
     finite = np.isfinite(d_exact)
     h_v = mesh.vertex_adjacency.max(axis=1).toarray().ravel()
     near_src = _ring_dilate(mesh, src, 1) | (finite & (d_exact < exclude_radius * h_v))
