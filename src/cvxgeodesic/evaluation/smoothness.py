@@ -64,6 +64,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from ..operators.gradient import gradient_blocks, gradient_norms, triangle_frames
+from ..operators.laplacian import barycentric_mass
 from ..validation import as_vertex_field, check_count, check_number, vertex_indices, vertex_mask
 from ._validate import check_mesh
 from .errors import error_stats, percentile
@@ -396,7 +397,7 @@ def ridge_deficit(mesh, d, d_exact, width: float, *, sources=None, threshold: fl
     d = as_vertex_field(d, "d", mesh.n_vertices)
     band = cut_locus_band(mesh, d_exact, width, sources=sources, threshold=threshold, jump_threshold=jump_threshold,
                           exclude_radius=exclude_radius)
-    area = np.bincount(mesh.F.ravel(), np.repeat(mesh.face_areas / 3.0, 3), minlength=mesh.n_vertices)[band]
+    area = barycentric_mass(mesh).diagonal()[band]
     with np.errstate(invalid="ignore"):
         diff = d_exact[band] - d[band]
     low, high = np.maximum(diff, 0.0), np.maximum(-diff, 0.0)
