@@ -676,13 +676,10 @@ def plot_gradient_histogram(norms_by_label, path, *, weights=None, title=None, b
     import matplotlib as mpl
 
     colors = mpl.colormaps["tab10"].colors
-    if len(labels) <= 3:
-        ncols, nrows = 1, 1
-    else:
-        ncols = 3 if len(others) > 4 else 2
-        nrows = int(np.ceil(len(others) / ncols))
-    figsize = (6.4, 4.2) if nrows == 1 and ncols == 1 else (3.2 * ncols, 2.3 * nrows + 0.6)
-    fig = _new_figure(dpi, figsize=figsize)
+    single = len(labels) <= 3  # every label on one axis, else one panel per label (the reference in each)
+    ncols = 1 if single else 3 if len(others) > 4 else 2
+    nrows = int(np.ceil(len(others) / ncols)) if not single else 1
+    fig = _new_figure(dpi, figsize=(6.4, 4.2) if single else (3.2 * ncols, 2.3 * nrows + 0.6))
     axes = fig.subplots(nrows, ncols, squeeze=False, sharex=True, sharey=True)
     positive = np.concatenate([h[0][h[0] > 0] for h in hists.values()] + [np.ones(1)])
     ymin = max(float(positive.min()) * 0.5, 1e-7)
@@ -691,7 +688,6 @@ def plot_gradient_histogram(norms_by_label, path, *, weights=None, title=None, b
         c, e = hists[ref]
         ax.stairs(c, e, fill=True, color="0.80", label=f"{ref}", zorder=1)
 
-    single = nrows == ncols == 1  # every label on one axis, else one panel per label (the reference in each)
     draw_ref(axes[0, 0])
     for i, lab in enumerate(lab for lab in labels if lab != ref):
         ax = axes.flat[0 if single else i]
