@@ -345,14 +345,11 @@ def _render_surface(ax, mesh, values, *, cmap, norm, levels, view, marks, ambien
     bounds = np.linspace(0, k, n_slabs + 1).astype(np.int64)
     slab_of_face = np.full(F.shape[0], -1, dtype=np.int64)  # -1: culled
     slab_of_face[vis] = np.repeat(np.arange(n_slabs), np.diff(bounds))
-    if levels.size:
-        seg3, seg_face = _marching_triangles(V, F, values, levels)
-        seg_slab = slab_of_face[seg_face]
-        on = seg_slab >= 0
-        seg2 = ((seg3[on] - V.mean(axis=0)) @ R[:2].T)  # (s, 2, 2)
-        seg_slab = seg_slab[on]
-    else:
-        seg2, seg_slab = np.empty((0, 2, 2)), np.empty(0, dtype=np.int64)
+    seg3, seg_face = _marching_triangles(V, F, values, levels)  # none without levels
+    seg_slab = slab_of_face[seg_face]
+    on = seg_slab >= 0
+    seg2 = ((seg3[on] - V.mean(axis=0)) @ R[:2].T)  # (s, 2, 2)
+    seg_slab = seg_slab[on]
     seg_order = np.argsort(seg_slab, kind="stable")
     seg2, seg_slab = seg2[seg_order], seg_slab[seg_order]
     seg_bounds = np.searchsorted(seg_slab, np.arange(n_slabs + 1), side="left")
