@@ -20,6 +20,7 @@ from .errors import ParameterError
 from .mesh.convert import as_mesh
 from .mesh.tet_slice import plane_frame
 from .mesh.tetmesh import TetMesh
+from .plotting import isoline_segments
 from .sources import resolve_sources
 from .validation import as_points, as_vertex_field, check_output_path
 
@@ -132,8 +133,6 @@ class _Viewer:
         if self.ps.has_curve_network(ISOLINES_NAME):
             self.ps.remove_curve_network(ISOLINES_NAME)
         if self.isolines and top > float(shown.min()):
-            from .plotting import isoline_segments
-
             levels = np.linspace(float(shown.min()), top, N_ISOLINES + 1)[1:-1]
             seg = isoline_segments(self.mesh, np.where(np.isfinite(d), d, np.inf), levels)
             if len(seg):
