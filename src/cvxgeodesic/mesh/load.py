@@ -135,8 +135,7 @@ def _finish_volume(path: Path, raw: RawMesh) -> TetMesh:
         notes.append(f"{path.name}: ignored cells other than tetrahedra: "
                      + ", ".join(f"{c} {t}" for t, c in sorted(raw.other_cells.items())))
     T = _unique_tets(T, name, notes)
-    used = np.zeros(n, dtype=bool)
-    used[T.ravel()] = True
+    used = np.bincount(T.ravel(), minlength=n) > 0
     vertex_map = np.flatnonzero(used)
     file_index = np.full(n, -1, dtype=np.int64)
     file_index[vertex_map] = np.arange(vertex_map.size)
@@ -236,8 +235,7 @@ def _finish(path: Path, raw: RawMesh) -> TriMesh:
         raise format_error(path, f"no faces left after dropping {n_deg} degenerate and {n_dup} duplicate face(s)")
 
     # Keep only referenced groups, ordered by their first file index.
-    used = np.zeros(rep.size, dtype=bool)
-    used[F.ravel()] = True
+    used = np.bincount(F.ravel(), minlength=rep.size) > 0
     kept = np.flatnonzero(used)
     kept = kept[np.argsort(rep[kept], kind="stable")]
     new_id = np.full(rep.size, -1, dtype=np.int64)
