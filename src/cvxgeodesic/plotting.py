@@ -507,11 +507,9 @@ def plot_field(
     ax, cax = _layout(fig, show_colorbar, title)
     _render_surface(ax, mesh, vals, cmap=cm, norm=norm, levels=levels, view=view, marks=marks, paths=paths)
     if cax is not None:
-        cb = fig.colorbar(ScalarMappable(norm=Normalize(lo, hi), cmap=cm), cax=cax)
+        cb = fig.colorbar(ScalarMappable(norm=Normalize(lo, hi), cmap=cm), cax=cax, label=colorbar_label or "")
         if levels.size and levels.size <= 60:
             cb.ax.hlines(levels, 0, 1, colors="black", linewidths=0.4, alpha=0.6)
-        if colorbar_label:
-            cb.set_label(colorbar_label)
     _save_atomic(fig, p)
     return p
 
@@ -571,8 +569,8 @@ def plot_error_map(mesh, rel_error, path, *, title=None, vmax=None, view=None, d
     _render_surface(ax, mesh, err, cmap=cm, norm=norm, levels=np.empty(0), view=view, ambient=0.78,
                     marks=marks)
     extend = "max" if fin.size and fin.max() > vmax else "neither"
-    cb = fig.colorbar(ScalarMappable(norm=Normalize(0.0, vmax), cmap=cm), cax=cax, extend=extend)
-    cb.set_label("relative error |d − d_exact| / d_exact")
+    cb = fig.colorbar(ScalarMappable(norm=Normalize(0.0, vmax), cmap=cm), cax=cax, extend=extend,
+                      label="relative error |d − d_exact| / d_exact")
     cb.ax.yaxis.set_major_formatter(PercentFormatter(xmax=1.0, decimals=None))
     if fin.size:
         note = f"mean {100 * fin.mean():.2f}%   max {100 * fin.max():.2f}%   (grey: no value, e.g. sources)"

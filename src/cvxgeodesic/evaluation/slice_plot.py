@@ -144,9 +144,7 @@ def plot_slice(
     ax.set_xlabel(_axis_label(cut.e1))
     ax.set_ylabel(_axis_label(cut.e2))
     ax.tick_params(labelsize=7)
-    cb = fig.colorbar(ScalarMappable(norm=Normalize(lo, hi), cmap=cm), cax=cax)
-    if colorbar_label:
-        cb.set_label(colorbar_label)
+    fig.colorbar(ScalarMappable(norm=Normalize(lo, hi), cmap=cm), cax=cax, label=colorbar_label or "")
     _save_atomic(fig, p)
     return p
 
