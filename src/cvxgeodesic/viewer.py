@@ -229,12 +229,10 @@ def show(
     if isinstance(mesh := as_mesh(mesh), TetMesh):
         return show_volume(mesh, distance, sources=sources, method=method or "qclp", screenshot=screenshot,
                            window_size=window_size, overwrite_read_only=overwrite_read_only, **solver_kwargs)
-    method = method or "qcqp-hessian"
-    n = mesh.n_vertices
     if distance is not None:
-        d = as_vertex_field(distance, "distance", n)
+        d = as_vertex_field(distance, "distance", mesh.n_vertices)
     ps = _start(window_size, screenshot, overwrite_read_only)
-    viewer = _Viewer(ps, mesh, method=method, solver_kwargs=solver_kwargs, isolines=isolines)
+    viewer = _Viewer(ps, mesh, method=method or "qcqp-hessian", solver_kwargs=solver_kwargs, isolines=isolines)
     if distance is None:
         viewer.solve(0 if sources is None else sources)
     else:
