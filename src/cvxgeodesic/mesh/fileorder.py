@@ -18,7 +18,7 @@ from .convert import as_mesh
 from .tetmesh import TetMesh
 from .trimesh import TriMesh
 
-__all__ = ["file_order_mesh", "file_sources", "from_file_order", "to_file_order"]
+__all__ = ["file_order_mesh", "file_sources", "file_vertices", "from_file_order", "to_file_order"]
 
 
 def to_file_order(mesh: TriMesh | TetMesh, field: ArrayLike, *, fill: float = np.inf) -> np.ndarray:
