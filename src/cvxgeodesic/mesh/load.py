@@ -208,10 +208,16 @@ def _finish(path: Path, raw: RawMesh) -> TriMesh:
         )
     F_file = _fan_triangulate(idx, sizes, starts)
 
-    # Weld vertices with exactly identical positions: rep, the first file index of each group (np.unique sorts
-    # stably when asked for the indices), group, the group of each file vertex
-    _, rep, group = np.unique(V, axis=0, return_index=True, return_inverse=True)
-    group = group.reshape(-1)  # NumPy 2.0.0 gave the inverse of an axis-unique a shape of its own
+    # Weld vertices with exactly identical positions, keeping the first occurrence (file order).
+    order = np.lexsort((V[:, 2], V[:, 1], V[:, 0]))
+    Vs = V[order]
+    new_group = np.empty(n, dtype=bool)
+    new_group[0] = True
+    np.any(Vs[1:] != Vs[:-1], axis=1, out=new_group[1:])
+    group_sorted = np.cumsum(new_group) - 1
+    group = np.empty(n, dtype=np.int64)
+    group[order] = group_sorted
+    rep = order[new_group]  # lexsort is stable: the smallest file index of each group
     F = group[F_file]  # faces in terms of group ids
 
     notes: list[str] = []
