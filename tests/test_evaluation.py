@@ -195,6 +195,8 @@ def test_ridge_band_on_cylinder():
     assert not ridge_band(mesh, sharp, rings=1, jump_threshold=np.inf)[ridge_column].all()
     with pytest.raises(ValueError, match="rings"):
         ridge_band(mesh, sharp, rings=-1)
+    with pytest.raises(ValueError, match=r"exclude_radius must be a finite number >= 0, got -1\.0"):
+        ridge_band(mesh, sharp, exclude_radius=-1.0)
 
 
 def test_smoothness_report_prefers_rounded_ridge():

@@ -261,6 +261,26 @@ def test_a_compressed_array_larger_than_its_counts_is_refused_before_it_is_infla
     assert peak < 16 << 20, peak
 
 
+@pytest.mark.parametrize("raw", [True, False])
+def test_compressed_arrays_cut_short_or_not_base64_are_refused(raw):
+    from cvxgeodesic.mesh.formats._vtu_limits import _Refused, _split_blocks
+
+    header, blocks = _vtk_blocks(bytes(100), "zlib")
+    enc = (lambda b: b) if raw else base64.b64encode  # base64: header and blocks encoded apart, as VTK does
+
+    def split(text):
+        return list(_split_blocks(text, (4, "little"), raw=raw))
+
+    assert b"".join(split(enc(header) + enc(blocks))) == blocks
+    with pytest.raises(_Refused, match="^has a compressed-block header cut short$"):
+        split(enc(header)[:8])
+    with pytest.raises(_Refused, match="^has compressed blocks cut short$"):
+        split(enc(header) + enc(blocks)[:-4])
+    if not raw:
+        with pytest.raises(_Refused, match=r"^is not valid base64 \("):
+            split(enc(header) + b"abcde")
+
+
 def test_vtu_counts_no_file_of_its_size_could_hold_are_refused(tmp_path):
     pytest.importorskip("meshio")
     path = _write_vtu(tmp_path / "huge.vtu", n_points=10**12)

@@ -199,3 +199,14 @@ def test_bad_arguments_are_named(sphere, monkeypatch, tmp_path):
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     with pytest.raises(ParameterError, match="no display"):
         cg.show(sphere, np.zeros(sphere.n_vertices))
+
+
+def test_show_volume_refuses_a_surface_and_a_zero_normal(sphere, tmp_path):
+    from cvxgeodesic.mesh.tet_generate import tet_box
+    from cvxgeodesic.viewer import show_volume
+
+    # both checked before polyscope is imported or started: no OpenGL needed
+    with pytest.raises(ParameterError, match="takes a tetrahedral mesh"):
+        show_volume(sphere, screenshot=tmp_path / "x.png")
+    with pytest.raises(ParameterError, match=r"normal must be a nonzero vector, got \[0.0, 0.0, 0.0\]"):
+        show_volume(tet_box(2), np.zeros(27), normal=(0, 0, 0), screenshot=tmp_path / "x.png")

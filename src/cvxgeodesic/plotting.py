@@ -120,10 +120,10 @@ def _marching_triangles(V: np.ndarray, F: np.ndarray, values: np.ndarray, levels
     total = int(counts.sum())
     if total == 0:
         return empty
-    offsets = np.cumsum(counts) - counts
+    cum = np.cumsum(counts)
+    offsets = cum - counts
     seg_out, face_out = [], []
     # process (face, level) pairs in blocks of faces to bound the temporaries
-    cum = np.cumsum(counts)
     block_edges = np.searchsorted(cum, np.arange(_SEGMENT_BLOCK, total, _SEGMENT_BLOCK), side="left")
     bounds = np.r_[0, block_edges + 1, len(faces)]
     bounds = np.unique(np.clip(bounds, 0, len(faces)))  # strictly increasing: no empty block
@@ -237,14 +237,12 @@ def _camera(V: np.ndarray, view, focus=None) -> np.ndarray:
         snapped.append(np.eye(3)[j])
     long1, long2, thin = snapped
     up = long1 if long1[1] == 1.0 else long2 if long2[1] == 1.0 else long1 if long1[2] == 1.0 else long2
-    best = None
-    for front in (1.0, -1.0) if focus is not None else (1.0,):
-        for turn in (1.0, -1.0) if focus is not None else (1.0,):
-            R = _three_quarter(up, front * thin, turn)
-            score = -np.inf if focus is None else float(R[2] @ focus)
-            if best is None or score > best[0] + 1e-9:
-                best = (score, R)
-    return best[1]
+    best = _three_quarter(up, thin, 1.0)
+    for front, turn in ((1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)) if focus is not None else ():
+        R = _three_quarter(up, front * thin, turn)
+        if R[2] @ focus > best[2] @ focus + 1e-9:  # the first of near ties: a symmetric mesh keeps the front view
+            best = R
+    return best
 
 
 def _three_quarter(up: np.ndarray, toward: np.ndarray, turn: float) -> np.ndarray:
@@ -259,19 +257,14 @@ def _three_quarter(up: np.ndarray, toward: np.ndarray, turn: float) -> np.ndarra
 
 def _closed_oriented(F: np.ndarray, n: int) -> bool:
     """True when every directed edge appears once and its reverse once (closed, consistently oriented)."""
-    a = np.concatenate([F[:, 0], F[:, 1], F[:, 2]])
-    b = np.concatenate([F[:, 1], F[:, 2], F[:, 0]])
-    fwd = a * n + b
-    rev = b * n + a
-    fwd.sort()
-    rev.sort()
+    a, b = F.T.ravel(), np.roll(F, -1, axis=1).T.ravel()  # the directed edges a -> b, corner-major
+    fwd, rev = np.sort(a * n + b), np.sort(b * n + a)
     return bool(np.all(fwd[1:] != fwd[:-1]) and np.array_equal(fwd, rev))
 
 
 def _vertex_normals(V: np.ndarray, F: np.ndarray, fn: np.ndarray) -> np.ndarray:
     N = np.zeros_like(V)
-    for k in range(3):
-        np.add.at(N, F[:, k], fn)
+    np.add.at(N, F, fn[:, None])
     nrm = np.linalg.norm(N, axis=1, keepdims=True)
     return N / np.where(nrm > 0, nrm, 1.0)
 
@@ -352,14 +345,11 @@ def _render_surface(ax, mesh, values, *, cmap, norm, levels, view, marks, ambien
     bounds = np.linspace(0, k, n_slabs + 1).astype(np.int64)
     slab_of_face = np.full(F.shape[0], -1, dtype=np.int64)  # -1: culled
     slab_of_face[vis] = np.repeat(np.arange(n_slabs), np.diff(bounds))
-    if levels.size:
-        seg3, seg_face = _marching_triangles(V, F, values, levels)
-        seg_slab = slab_of_face[seg_face]
-        on = seg_slab >= 0
-        seg2 = ((seg3[on] - V.mean(axis=0)) @ R[:2].T)  # (s, 2, 2)
-        seg_slab = seg_slab[on]
-    else:
-        seg2, seg_slab = np.empty((0, 2, 2)), np.empty(0, dtype=np.int64)
+    seg3, seg_face = _marching_triangles(V, F, values, levels)  # none without levels
+    seg_slab = slab_of_face[seg_face]
+    on = seg_slab >= 0
+    seg2 = ((seg3[on] - V.mean(axis=0)) @ R[:2].T)  # (s, 2, 2)
+    seg_slab = seg_slab[on]
     seg_order = np.argsort(seg_slab, kind="stable")
     seg2, seg_slab = seg2[seg_order], seg_slab[seg_order]
     seg_bounds = np.searchsorted(seg_slab, np.arange(n_slabs + 1), side="left")
@@ -368,8 +358,7 @@ def _render_surface(ax, mesh, values, *, cmap, norm, levels, view, marks, ambien
     mark_slab = np.full(marks.size, -1, dtype=np.int64)
     if marks.size:
         want = np.full(mesh.n_vertices, -1, dtype=np.int64)
-        for c in range(3):
-            np.maximum.at(want, F[:, c], slab_of_face)
+        np.maximum.at(want, F, slab_of_face[:, None])
         mark_slab = want[marks]
 
     Gouraud = _gouraud_artist_class()
@@ -518,11 +507,9 @@ def plot_field(
     ax, cax = _layout(fig, show_colorbar, title)
     _render_surface(ax, mesh, vals, cmap=cm, norm=norm, levels=levels, view=view, marks=marks, paths=paths)
     if cax is not None:
-        cb = fig.colorbar(ScalarMappable(norm=Normalize(lo, hi), cmap=cm), cax=cax)
+        cb = fig.colorbar(ScalarMappable(norm=Normalize(lo, hi), cmap=cm), cax=cax, label=colorbar_label or "")
         if levels.size and levels.size <= 60:
             cb.ax.hlines(levels, 0, 1, colors="black", linewidths=0.4, alpha=0.6)
-        if colorbar_label:
-            cb.set_label(colorbar_label)
     _save_atomic(fig, p)
     return p
 
@@ -559,8 +546,7 @@ def plot_error_map(mesh, rel_error, path, *, title=None, vmax=None, view=None, d
     Raises
     ------
     ValueError
-        If ``rel_error`` does not have shape ``(n,)``, ``path`` is not ``.png``
-        or a source index is out of range.
+        As :func:`plot_field`, for ``rel_error`` in place of ``values``.
     """
     from matplotlib import colormaps
     from matplotlib.cm import ScalarMappable
@@ -583,8 +569,8 @@ def plot_error_map(mesh, rel_error, path, *, title=None, vmax=None, view=None, d
     _render_surface(ax, mesh, err, cmap=cm, norm=norm, levels=np.empty(0), view=view, ambient=0.78,
                     marks=marks)
     extend = "max" if fin.size and fin.max() > vmax else "neither"
-    cb = fig.colorbar(ScalarMappable(norm=Normalize(0.0, vmax), cmap=cm), cax=cax, extend=extend)
-    cb.set_label("relative error |d − d_exact| / d_exact")
+    cb = fig.colorbar(ScalarMappable(norm=Normalize(0.0, vmax), cmap=cm), cax=cax, extend=extend,
+                      label="relative error |d − d_exact| / d_exact")
     cb.ax.yaxis.set_major_formatter(PercentFormatter(xmax=1.0, decimals=None))
     if fin.size:
         note = f"mean {100 * fin.mean():.2f}%   max {100 * fin.max():.2f}%   (grey: no value, e.g. sources)"
@@ -685,13 +671,10 @@ def plot_gradient_histogram(norms_by_label, path, *, weights=None, title=None, b
     import matplotlib as mpl
 
     colors = mpl.colormaps["tab10"].colors
-    if len(labels) <= 3:
-        ncols, nrows = 1, 1
-    else:
-        ncols = 3 if len(others) > 4 else 2
-        nrows = int(np.ceil(len(others) / ncols))
-    figsize = (6.4, 4.2) if nrows == 1 and ncols == 1 else (3.2 * ncols, 2.3 * nrows + 0.6)
-    fig = _new_figure(dpi, figsize=figsize)
+    single = len(labels) <= 3  # every label on one axis, else one panel per label (the reference in each)
+    ncols = 1 if single else 3 if len(others) > 4 else 2
+    nrows = int(np.ceil(len(others) / ncols)) if not single else 1
+    fig = _new_figure(dpi, figsize=(6.4, 4.2) if single else (3.2 * ncols, 2.3 * nrows + 0.6))
     axes = fig.subplots(nrows, ncols, squeeze=False, sharex=True, sharey=True)
     positive = np.concatenate([h[0][h[0] > 0] for h in hists.values()] + [np.ones(1)])
     ymin = max(float(positive.min()) * 0.5, 1e-7)
@@ -700,23 +683,19 @@ def plot_gradient_histogram(norms_by_label, path, *, weights=None, title=None, b
         c, e = hists[ref]
         ax.stairs(c, e, fill=True, color="0.80", label=f"{ref}", zorder=1)
 
-    if nrows == 1 and ncols == 1:
-        ax = axes[0, 0]
-        draw_ref(ax)
-        for i, lab in enumerate(lab for lab in labels if lab != ref):
-            c, e = hists[lab]
-            ax.stairs(c, e, color=colors[i % len(colors)], linewidth=1.4, label=lab, zorder=2)
-        ax.legend(fontsize=8, frameon=False, loc="upper left")
-    else:
-        for i, lab in enumerate(others):
-            ax = axes.flat[i]
+    draw_ref(axes[0, 0])
+    for i, lab in enumerate(lab for lab in labels if lab != ref):
+        ax = axes.flat[0 if single else i]
+        if i and not single:
             draw_ref(ax)
-            c, e = hists[lab]
-            ax.stairs(c, e, color=colors[i % len(colors)], linewidth=1.3, zorder=2)
+        c, e = hists[lab]
+        ax.stairs(c, e, color=colors[i % len(colors)], linewidth=1.4 if single else 1.3, label=lab if single else None,
+                  zorder=2)
+        if not single:
             ax.set_title(lab, fontsize=9, pad=3)
-        for ax in axes.flat[len(others):]:
-            ax.set_visible(False)
-        axes.flat[0].legend(fontsize=7, frameon=False, loc="upper left")
+    for ax in axes.flat[len(others):]:
+        ax.set_visible(False)
+    axes.flat[0].legend(fontsize=8 if single else 7, frameon=False, loc="upper left")
     for ax in axes.flat:
         ax.axvline(1.0, color="black", linestyle="--", linewidth=0.9, zorder=3)
         ax.set_yscale("log")

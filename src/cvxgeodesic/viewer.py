@@ -15,7 +15,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ._atomic import check_replaceable, output_set
 from .errors import ParameterError
+from .mesh.convert import as_mesh
+from .mesh.tet_slice import plane_frame
+from .mesh.tetmesh import TetMesh
+from .plotting import isoline_segments
+from .sources import resolve_sources
+from .validation import as_points, as_vertex_field, check_output_path
 
 __all__ = ["show", "show_volume"]
 
@@ -39,10 +46,6 @@ def _polyscope() -> Any:
         raise ImportError("the viewer (cvxgeodesic view, cvxgeodesic.show) needs the optional package polyscope: "
                           f"{INSTALL_HINT}") from None
     return polyscope
-
-
-def _have_display() -> bool:
-    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
 
 
 def _init(ps: Any, headless: bool) -> None:
@@ -76,8 +79,6 @@ def _given_marks(mesh: Any, distance: np.ndarray, sources: Any) -> np.ndarray:
     """(k, 3) marks of a given field: its ``sources`` resolved, or the vertices where it is 0."""
     if sources is None:
         return mesh.V[np.flatnonzero(distance == 0)]
-    from .sources import resolve_sources
-
     ss = resolve_sources(mesh, sources)
     return _source_positions(mesh, None if ss.vertex_only else ss, ss.vertices)
 
@@ -132,8 +133,6 @@ class _Viewer:
         if self.ps.has_curve_network(ISOLINES_NAME):
             self.ps.remove_curve_network(ISOLINES_NAME)
         if self.isolines and top > float(shown.min()):
-            from .plotting import isoline_segments
-
             levels = np.linspace(float(shown.min()), top, N_ISOLINES + 1)[1:-1]
             seg = isoline_segments(self.mesh, np.where(np.isfinite(d), d, np.inf), levels)
             if len(seg):
@@ -227,19 +226,13 @@ def show(
         without ``overwrite_read_only``), or no display (or polyscope already started off-screen in this process)
         and no ``screenshot``.
     """
-    from .mesh.convert import as_mesh
-    from .mesh.tetmesh import TetMesh
-    from .validation import as_vertex_field
-
     if isinstance(mesh := as_mesh(mesh), TetMesh):
         return show_volume(mesh, distance, sources=sources, method=method or "qclp", screenshot=screenshot,
                            window_size=window_size, overwrite_read_only=overwrite_read_only, **solver_kwargs)
-    method = method or "qcqp-hessian"
-    n = mesh.n_vertices
     if distance is not None:
-        d = as_vertex_field(distance, "distance", n)
+        d = as_vertex_field(distance, "distance", mesh.n_vertices)
     ps = _start(window_size, screenshot, overwrite_read_only)
-    viewer = _Viewer(ps, mesh, method=method, solver_kwargs=solver_kwargs, isolines=isolines)
+    viewer = _Viewer(ps, mesh, method=method or "qcqp-hessian", solver_kwargs=solver_kwargs, isolines=isolines)
     if distance is None:
         viewer.solve(0 if sources is None else sources)
     else:
@@ -257,14 +250,11 @@ def _start(window_size: tuple[int, int], screenshot: str | os.PathLike | None, o
         raise ParameterError(f"window_size must be (width, height), got {window_size!r}") from None
     if w < 16 or h < 16:
         raise ParameterError(f"window_size must be at least 16 x 16 pixels, got {window_size!r}")
-    headless = screenshot is not None or not _have_display()
+    headless = screenshot is not None or not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
     if screenshot is None and headless:
         raise ParameterError("no display (DISPLAY/WAYLAND_DISPLAY unset): render off-screen with "
                              "screenshot='out.png' (CLI: --screenshot out.png)")
     if screenshot is not None:  # before the solve: a bad path fails at once, not after it
-        from ._atomic import check_replaceable
-        from .validation import check_output_path
-
         check_output_path(screenshot, (".png",))
         check_replaceable(screenshot, overwrite_read_only=overwrite_read_only)
     ps = _polyscope()
@@ -288,8 +278,6 @@ def _present(ps: Any, screenshot: str | os.PathLike | None, callback: Any,
         ps.look_at(tuple(float(c) for c in camera[0]), tuple(float(c) for c in camera[1]))
     try:
         if screenshot is not None:
-            from ._atomic import output_set
-
             # polyscope reports a failed write only on stdout: output_set sees the missing file
             with output_set(screenshot, overwrite_read_only=overwrite_read_only) as tmp:
                 ps.screenshot(str(tmp[0]), transparent_bg=False)
@@ -351,17 +339,10 @@ def show_volume(
     ParameterError
         As :func:`show`; a zero normal.
     """
-    from .mesh.convert import as_mesh
-    from .mesh.tetmesh import TetMesh
-    from .validation import as_points, as_vertex_field
-
     mesh = as_mesh(mesh)
     if not isinstance(mesh, TetMesh):
         raise ParameterError("show_volume takes a tetrahedral mesh; show() draws surfaces")
-    nrm = as_points(normal, "normal").reshape(3)
-    if not np.linalg.norm(nrm) > 0:
-        raise ParameterError(f"normal must be a nonzero vector, got {nrm.tolist()}")
-    unit = nrm / np.linalg.norm(nrm)
+    unit = plane_frame(normal)[0]  # a zero normal refused there
     diag = float(mesh.bbox_diagonal) if mesh.bbox_diagonal > 0 else 1.0
     # the default plane is nudged off the centre by 1 % of the diagonal: on a structured mesh the centre plane holds
     # whole faces, and the renderer's depth test then draws the cut in stripes
@@ -383,7 +364,7 @@ def show_volume(
         _add_marks(ps, marks, diag)
     plane = ps.add_scene_slice_plane()
     # polyscope keeps the side the normal points to: flip it so that the part on the positive side is cut away
-    plane.set_pose(tuple(org.tolist()), tuple((-nrm / np.linalg.norm(nrm)).tolist()))
+    plane.set_pose(tuple(org.tolist()), tuple((-unit).tolist()))
     plane.set_draw_plane(False)
     plane.set_draw_widget(screenshot is None)
     plane.set_volume_mesh_to_inspect(VOLUME_NAME)  # the cut through the tetrahedra, the field interpolated on it

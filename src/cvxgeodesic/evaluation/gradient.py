@@ -15,18 +15,15 @@ from ..validation import as_vertex_field, vertex_indices
 from ._validate import check_mesh
 
 
-def _norms_and_weights(mesh, d, sources):
+def _norms_and_weights(mesh, d, sources) -> tuple[np.ndarray, np.ndarray]:
+    """The gradient norms (c,) of the cells used (finite values, nonzero measure, no source) and their measures (c,)."""
     mesh = check_mesh(mesh, volumes=True)
     d = as_vertex_field(d, "d", mesh.n_vertices)
     finite_v = np.isfinite(d)
     valid = finite_v[mesh.cells].all(axis=1) & (mesh.cell_measures > 0)
     if sources is not None:
-        src = np.zeros(mesh.n_vertices, dtype=bool)
-        src[vertex_indices(sources, "sources", mesh.n_vertices)] = True
-        valid &= ~src[mesh.cells].any(axis=1)
-    norms = gradient_norms(mesh, np.where(finite_v, d, 0.0))[valid]
-    area = mesh.cell_measures[valid]
-    return norms, area
+        valid &= ~np.isin(mesh.cells, vertex_indices(sources, "sources", mesh.n_vertices)).any(axis=1)
+    return gradient_norms(mesh, np.where(finite_v, d, 0.0))[valid], mesh.cell_measures[valid]
 
 
 def gradient_norm_stats(mesh, d, *, sources=None, band: tuple[float, float] = (0.9, 1.1)) -> dict:

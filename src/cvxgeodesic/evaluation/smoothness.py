@@ -64,6 +64,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from ..operators.gradient import gradient_blocks, gradient_norms, triangle_frames
+from ..operators.laplacian import barycentric_mass
 from ..validation import as_vertex_field, check_count, check_number, vertex_indices, vertex_mask
 from ._validate import check_mesh
 from .errors import error_stats, percentile
@@ -119,13 +120,9 @@ def ridge_band(mesh, d_exact, rings: int = 2, *, sources=None, threshold: float 
     mesh = check_mesh(mesh)
     d_exact = as_vertex_field(d_exact, "d_exact", mesh.n_vertices)
     rings = check_count(rings, "rings", minimum=0)
-    if not exclude_radius >= 0:
-        raise ValueError(f"exclude_radius must be a number >= 0, got {exclude_radius!r}")
-    if sources is None:
-        src = d_exact == 0
-    else:
-        src = np.zeros(mesh.n_vertices, dtype=bool)
-        src[vertex_indices(sources, "sources", mesh.n_vertices)] = True
+    exclude_radius = check_number(exclude_radius, "exclude_radius", low=0)
+    n = mesh.n_vertices
+    src = d_exact == 0 if sources is None else np.isin(np.arange(n), vertex_indices(sources, "sources", n))
     finite = np.isfinite(d_exact)
     h_v = mesh.vertex_adjacency.max(axis=1).toarray().ravel()
     near_src = _ring_dilate(mesh, src, 1) | (finite & (d_exact < exclude_radius * h_v))
@@ -400,7 +397,7 @@ def ridge_deficit(mesh, d, d_exact, width: float, *, sources=None, threshold: fl
     d = as_vertex_field(d, "d", mesh.n_vertices)
     band = cut_locus_band(mesh, d_exact, width, sources=sources, threshold=threshold, jump_threshold=jump_threshold,
                           exclude_radius=exclude_radius)
-    area = np.bincount(mesh.F.ravel(), np.repeat(mesh.face_areas / 3.0, 3), minlength=mesh.n_vertices)[band]
+    area = barycentric_mass(mesh).diagonal()[band]
     with np.errstate(invalid="ignore"):
         diff = d_exact[band] - d[band]
     low, high = np.maximum(diff, 0.0), np.maximum(-diff, 0.0)

@@ -18,7 +18,7 @@ from .convert import as_mesh
 from .tetmesh import TetMesh
 from .trimesh import TriMesh
 
-__all__ = ["file_order_mesh", "file_sources", "from_file_order", "to_file_order"]
+__all__ = ["file_order_mesh", "file_sources", "file_vertices", "from_file_order", "to_file_order"]
 
 
 def to_file_order(mesh: TriMesh | TetMesh, field: ArrayLike, *, fill: float = np.inf) -> np.ndarray:
@@ -178,10 +178,17 @@ def file_order_mesh(mesh: TriMesh) -> TriMesh:
     faces = mesh.file_faces
     if idx.size == mesh.n_vertices and np.array_equal(idx, np.arange(idx.size)) and np.array_equal(faces, mesh.F):
         return mesh
+    return TriMesh(file_vertices(mesh), faces, name=mesh.name)
+
+
+def file_vertices(mesh: TriMesh | TetMesh) -> np.ndarray:
+    """(n_file, 3) float: the file's vertex positions, welded duplicates at their mesh vertex (the same position),
+    dropped vertices at their own (at the origin when the mesh does not know them)."""
+    idx = mesh.file_index
     keep = idx >= 0
     V = np.empty((idx.size, 3))
     V[keep] = mesh.V[idx[keep]]
     V[~keep] = mesh.dropped_vertices
     if not np.all(np.isfinite(V[~keep])):  # positions unknown (file_index given without them): put them at the origin
         V[~keep] = 0.0
-    return TriMesh(V, faces, name=mesh.name)
+    return V

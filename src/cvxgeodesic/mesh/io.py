@@ -20,7 +20,7 @@ from ..errors import ParameterError
 from ..validation import as_vertex_field
 from ..validation import check_output_path as _check_output_path
 from .convert import as_mesh, as_trimesh
-from .fileorder import file_order_mesh, to_file_order
+from .fileorder import file_order_mesh, file_vertices, to_file_order
 from .formats import ply
 from .formats._common import FieldData, check_file, file_errors, format_error
 from .formats.registry import (
@@ -32,7 +32,6 @@ from .formats.registry import (
     property_reader,
 )
 from .load import load_mesh
-from .tetmesh import TetMesh
 from .trimesh import TriMesh
 
 __all__ = [
@@ -142,27 +141,13 @@ def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, na
         )
     if not file_order:
         field = FieldData(mesh.V, mesh.cells, d, name, np.arange(mesh.n_vertices), mesh.vertex_map, mesh.name)
-    elif mesh.dim == 2:
-        out = file_order_mesh(mesh)
-        field = FieldData(out.V, out.F, to_file_order(mesh, d), name, mesh.file_index, np.arange(out.n_vertices),
-                          mesh.name)
-    else:
-        field = _volume_in_file_order(mesh, d, name)
+    else:  # nothing is welded in a volume: its cells are the mesh's in the file's numbering
+        cells = mesh.file_faces if mesh.dim == 2 else mesh.vertex_map[mesh.cells]
+        field = FieldData(file_vertices(mesh), cells, to_file_order(mesh, d), name, mesh.file_index,
+                          np.arange(mesh.n_file_vertices), mesh.name)
     write = fmt.write_field
     atomic_write(p, lambda fh: write(fh, field), overwrite_read_only=overwrite_read_only)
     return p
-
-
-def _volume_in_file_order(mesh: TetMesh, d: np.ndarray, name: str) -> FieldData:
-    """A field on a tetrahedral mesh in its file's numbering: nothing is welded in a volume, so the file's vertices
-    are the mesh's and those in no tetrahedron, back at their place with ``inf``."""
-    n_file = mesh.n_file_vertices
-    V = np.empty((n_file, 3))
-    V[mesh.vertex_map] = mesh.V
-    V[mesh.file_index < 0] = mesh.dropped_vertices
-    d_file = np.full(n_file, np.inf)
-    d_file[mesh.vertex_map] = d
-    return FieldData(V, mesh.vertex_map[mesh.T], d_file, name, mesh.file_index, np.arange(n_file), mesh.name)
 
 
 def load_distance(path: str | os.PathLike, name: str = "distance") -> np.ndarray:

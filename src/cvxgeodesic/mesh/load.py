@@ -135,8 +135,7 @@ def _finish_volume(path: Path, raw: RawMesh) -> TetMesh:
         notes.append(f"{path.name}: ignored cells other than tetrahedra: "
                      + ", ".join(f"{c} {t}" for t, c in sorted(raw.other_cells.items())))
     T = _unique_tets(T, name, notes)
-    used = np.zeros(n, dtype=bool)
-    used[T.ravel()] = True
+    used = np.bincount(T.ravel(), minlength=n) > 0
     vertex_map = np.flatnonzero(used)
     file_index = np.full(n, -1, dtype=np.int64)
     file_index[vertex_map] = np.arange(vertex_map.size)
@@ -157,15 +156,19 @@ def _unique_tets(T: np.ndarray, name: str, notes: list[str]) -> np.ndarray:
     if rep.any():
         notes.append(f"{name}: dropped {int(rep.sum())} tetrahedra that repeat a vertex (first: tet "
                      f"{int(np.flatnonzero(rep)[0])} of the file)")
-        T, S = T[~rep], S[~rep]
+        T = T[~rep]
     if T.shape[0] == 0:
         raise MeshFormatError(f"{name}: no tetrahedra left after dropping those that repeat a vertex")
-    _, first = np.unique(S, axis=0, return_index=True)
-    if first.size < T.shape[0]:
-        notes.append(f"{name}: dropped {T.shape[0] - first.size} duplicate tetrahedra (same vertices as an earlier "
-                     "one)")
-        T = T[np.sort(first)]
+    T, n_dup = _without_duplicates(T)
+    if n_dup:
+        notes.append(f"{name}: dropped {n_dup} duplicate tetrahedra (same vertices as an earlier one)")
     return T
+
+
+def _without_duplicates(cells: np.ndarray) -> tuple[np.ndarray, int]:
+    """``cells`` ((m, k) int) without those with the same vertices as an earlier one, and how many were dropped."""
+    _, first = np.unique(np.sort(cells, axis=1), axis=0, return_index=True)
+    return cells[np.sort(first)], cells.shape[0] - first.size
 
 
 def _finish(path: Path, raw: RawMesh) -> TriMesh:
@@ -229,21 +232,16 @@ def _finish(path: Path, raw: RawMesh) -> TriMesh:
         notes.append(msg)
         warnings.warn(msg, MeshRepairWarning, stacklevel=3)
     # Drop exact duplicate faces (same vertex set), keeping the first.
-    n_dup = 0
-    if F.shape[0]:
-        _, first = np.unique(np.sort(F, axis=1), axis=0, return_index=True)
-        n_dup = F.shape[0] - first.size
-        if n_dup:
-            F = F[np.sort(first)]
-            msg = f"{path.name}: dropped {n_dup} duplicate face(s) (same vertices as an earlier face)"
-            notes.append(msg)
-            warnings.warn(msg, MeshRepairWarning, stacklevel=3)
+    F, n_dup = _without_duplicates(F)
+    if n_dup:
+        msg = f"{path.name}: dropped {n_dup} duplicate face(s) (same vertices as an earlier face)"
+        notes.append(msg)
+        warnings.warn(msg, MeshRepairWarning, stacklevel=3)
     if F.shape[0] == 0:
         raise format_error(path, f"no faces left after dropping {n_deg} degenerate and {n_dup} duplicate face(s)")
 
     # Keep only referenced groups, ordered by their first file index.
-    used = np.zeros(rep.size, dtype=bool)
-    used[F.ravel()] = True
+    used = np.bincount(F.ravel(), minlength=rep.size) > 0
     kept = np.flatnonzero(used)
     kept = kept[np.argsort(rep[kept], kind="stable")]
     new_id = np.full(rep.size, -1, dtype=np.int64)

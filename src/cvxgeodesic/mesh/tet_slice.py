@@ -150,8 +150,7 @@ def slice_tets(mesh: TetMesh, values: ArrayLike | None = None, *, origin: ArrayL
         for tri in _CASES[case]:
             tri_t.append(tets)
             tri_e.append(mesh.tet_edges[tets][:, list(tri)])
-    tets = np.concatenate(tri_t) if tri_t else np.empty(0, dtype=np.int64)
-    edges_of = np.concatenate(tri_e) if tri_e else np.empty((0, 3), dtype=np.int64)
+    tets, edges_of = np.concatenate(tri_t), np.concatenate(tri_e)  # one array per case: none is missing
     cut, triangles = np.unique(edges_of, return_inverse=True)
     triangles = triangles.reshape(-1, 3).astype(np.int64)
     a, b = mesh.edges[cut, 0], mesh.edges[cut, 1]

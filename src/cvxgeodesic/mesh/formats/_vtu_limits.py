@@ -105,58 +105,43 @@ def _appended(data: FileBytes) -> tuple[int, bool, int] | None:
     return (start + 1 if start >= 0 else len(data)), _attrs(m.group(1)).get("encoding") == "raw", m.start()
 
 
-def _chars(nbytes: int) -> int:
-    """base64 characters of ``nbytes`` bytes."""
-    return 4 * math.ceil(nbytes / 3)
-
-
 def _blocks(data: FileBytes, m: re.Match, attrs: dict[str, str], appended: tuple[int, bool, int] | None,
             layout: tuple[int, _Order]) -> Iterator[bytes]:
     """The compressed blocks of one array: ``num_blocks, block size, last block size, sizes...``, then the blocks."""
-    hs, order = layout
     if attrs.get("format") == "binary":
         if m.group(3).rstrip().endswith(b"/"):  # <DataArray .../>: no data
             return iter(())
         end = data.find(b"</DataArray>", m.end())
-        return _base64_blocks(data[m.end():end if end >= 0 else len(data)].strip(), hs, order)
+        return _split_blocks(data[m.end():end if end >= 0 else len(data)].strip(), layout, raw=False)
     if attrs.get("format") != "appended" or appended is None:
         return iter(())
-    start = appended[0] + _int(attrs.get("offset"))
-    if appended[1]:
-        return _raw_blocks(data, start, hs, order)
-    return _base64_blocks(memoryview(data)[start:], hs, order)
+    return _split_blocks(memoryview(data)[appended[0] + _int(attrs.get("offset")):], layout, raw=appended[1])
 
 
 def _header(raw: bytes, hs: int, order: _Order) -> list[int]:
     return [int.from_bytes(raw[i:i + hs], order) for i in range(0, len(raw) - hs + 1, hs)]
 
 
-def _base64_blocks(text, hs: int, order: _Order) -> Iterator[bytes]:
-    """Blocks of a base64 array (its header and its blocks are encoded apart, as VTK writes them)."""
+def _chars(nbytes: int) -> int:
+    """base64 characters of ``nbytes`` bytes."""
+    return 4 * math.ceil(nbytes / 3)
+
+
+def _split_blocks(text, layout: tuple[int, _Order], *, raw: bool) -> Iterator[bytes]:
+    """Blocks of a raw or a base64 array (base64: its header and its blocks are encoded apart, as VTK writes them)."""
+    hs, order = layout
+    span = (lambda nbytes: nbytes) if raw else _chars  # the characters of so many bytes
+    decode = bytes if raw else (lambda t: base64.b64decode(bytes(t)))
     try:
-        first = _header(base64.b64decode(bytes(text[:_chars(hs)])), hs, order)
+        first = _header(decode(text[:span(hs)]), hs, order)
         nb = first[0] if first else 0
-        hc = _chars((3 + nb) * hs)
+        hc = span((3 + nb) * hs)
         if not first or hc > len(text):
             raise _Refused("has a compressed-block header cut short")
-        sizes = _header(base64.b64decode(bytes(text[:hc])), hs, order)[3:3 + nb]
-        body = base64.b64decode(bytes(text[hc:hc + _chars(sum(sizes))]))
+        sizes = _header(decode(text[:hc]), hs, order)[3:3 + nb]
+        body = decode(text[hc:hc + span(sum(sizes))])
     except binascii.Error as exc:
         raise _Refused(f"is not valid base64 ({exc})") from None
-    return _split(body, sizes)
-
-
-def _raw_blocks(data: FileBytes, start: int, hs: int, order: _Order) -> Iterator[bytes]:
-    first = _header(data[start:start + hs], hs, order)
-    nb = first[0] if first else 0
-    if not first or start + (3 + nb) * hs > len(data):
-        raise _Refused("has a compressed-block header cut short")
-    sizes = _header(data[start:start + (3 + nb) * hs], hs, order)[3:]
-    end = start + (3 + nb) * hs
-    return _split(data[end:end + sum(sizes)], sizes)
-
-
-def _split(body: bytes, sizes: list[int]) -> Iterator[bytes]:
     if sum(sizes) > len(body):
         raise _Refused("has compressed blocks cut short")
     pos = 0

@@ -142,8 +142,7 @@ def _grouped(extensions: tuple[str, ...], note: Callable[[Format], str]) -> str:
     for ext in extensions:
         fmt = FORMATS[ext]
         groups.setdefault(fmt.package, []).append(ext + (f" ({note(fmt)})" if note(fmt) else ""))
-    parts = [", ".join(items) + (f" with {pkg}" if pkg else "") for pkg, items in groups.items()]
-    return "; ".join(parts)
+    return "; ".join(", ".join(items) + (f" with {pkg}" if pkg else "") for pkg, items in groups.items())
 
 
 def mesh_formats_help() -> str:
