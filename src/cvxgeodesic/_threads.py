@@ -35,8 +35,7 @@ from typing import Concatenate, ParamSpec, Protocol, TypeVar
 from . import _signals
 from .errors import ParameterError
 
-__all__ = ["ENV_VAR", "check_threads", "default_threads", "resolve_threads", "resolve_threads_noted", "thread_limit",
-           "usable_cores"]
+__all__ = ["ENV_VAR", "default_threads", "resolve_threads", "resolve_threads_noted", "thread_limit", "usable_cores"]
 
 ENV_VAR = "CVXGEODESIC_THREADS"
 
@@ -77,15 +76,6 @@ def set_openmp_wait_policy() -> str | None:
 
 
 set_openmp_wait_policy()
-
-
-def check_threads(value, *, name: str = "threads") -> int | None:
-    """``value`` as an int, or None; ParameterError unless it is None or a positive integer."""
-    if value is None:
-        return None
-    from .validation import check_count
-
-    return check_count(value, name, or_none=True)
 
 
 def env_threads() -> int | None:
@@ -238,9 +228,7 @@ def resolve_threads_noted(threads=None) -> tuple[int, str | None]:
     note : str or None
         ``"threads=1000000 capped at 2 (the cores available)"`` (or ``CVXGEODESIC_THREADS=...``).
     """
-    value = check_threads(threads)
-    source = f"threads={value}"
-    if value is None:
+    if threads is None:
         current = getattr(_local, "limit", None)
         if current is not None:  # the enclosing solve's count, capped when it was resolved
             return current, None
@@ -248,6 +236,11 @@ def resolve_threads_noted(threads=None) -> tuple[int, str | None]:
         if value is None:
             return default_threads(), None
         source = f"{ENV_VAR}={value}"
+    else:
+        from .validation import check_count  # NumPy: not at the package's import
+
+        value = check_count(threads, "threads", or_none=True)
+        source = f"threads={value}"
     cores = usable_cores()
     if value > cores:
         return cores, f"{source} capped at {cores} (the cores available)"

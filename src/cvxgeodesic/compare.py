@@ -362,11 +362,7 @@ def write_csv(path: Path, rows: list[dict]) -> None:
     for row in rows:
         writer.writerow({k: _fmt_csv(row[k]) for k in CSV_COLUMNS})
     data = buf.getvalue().encode("utf-8")
-
-    def write(fh: Any) -> None:
-        fh.write(data)
-
-    atomic_write(path, write, allow=None)  # a read-only file in the folder is refused: no override here
+    atomic_write(path, lambda fh: fh.write(data), allow=None)  # a read-only file is refused: no override here
 
 
 def _field_scale(results: dict[Run, Outcome], runs: list[Run], reference: np.ndarray | None) -> tuple[Any, Any]:

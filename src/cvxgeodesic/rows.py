@@ -237,15 +237,9 @@ def _sparse_row(cols: np.ndarray, vals: np.ndarray, n: int) -> sp.csr_matrix:
 
 
 def _vstack_keeping_zeros(rows: Sequence[sp.csr_matrix], n: int) -> sp.csr_matrix:
-    """CSR matrices of ``n`` columns one under the other, by their arrays (``scipy.sparse.vstack`` may drop the
-    stored zeros)."""
-    if not rows:
-        return sp.csr_matrix((0, n))
-    offsets = np.concatenate([[0], np.cumsum([r.nnz for r in rows])])
-    indptr = np.concatenate([r.indptr[:-1] + o for r, o in zip(rows, offsets[:-1], strict=True)] + [offsets[-1:]])
-    data = np.concatenate([r.data for r in rows]).astype(np.float64)
-    indices = np.concatenate([r.indices for r in rows]).astype(np.int64)
-    return sp.csr_matrix((data, indices, indptr.astype(np.int64)), shape=(int(indptr.size - 1), n))
+    """CSR matrices of ``n`` columns one under the other, stored zeros kept (``vstack`` of CSR blocks joins their
+    arrays; a source's distance is a stored 0)."""
+    return sp.vstack(rows, format="csr", dtype=np.float64) if rows else sp.csr_matrix((0, n))
 
 
 def sparse_to_file_order(mesh: Any, D: sp.csr_matrix) -> sp.csr_matrix:
@@ -263,19 +257,12 @@ def sparse_to_file_order(mesh: Any, D: sp.csr_matrix) -> sp.csr_matrix:
         Welded duplicates share their mesh vertex's entries; file vertices in no face have none.
     """
     file_index = np.asarray(mesh.file_index, dtype=np.int64)
-    valid = np.flatnonzero(file_index >= 0)
-    order = valid[np.argsort(file_index[valid], kind="stable")]  # file vertices grouped by mesh vertex
-    counts = np.bincount(file_index[valid], minlength=mesh.n_vertices)
-    starts = np.concatenate([[0], np.cumsum(counts)])[:-1]
-    coo = D.tocoo()
-    rep = counts[coo.col]
-    first = np.repeat(starts[coo.col], rep)
-    offset = np.arange(int(rep.sum())) - np.repeat(np.cumsum(rep) - rep, rep)
-    cols = order[first + offset]
-    rows, vals = np.repeat(coo.row, rep), np.repeat(coo.data, rep)
-    key = np.lexsort((cols, rows))
-    indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=D.shape[0]))])
-    return sp.csr_matrix((vals[key], cols[key], indptr), shape=(D.shape[0], int(file_index.size)))
+    n = mesh.n_vertices
+    # an empty column n more, for the file vertices in no face; column indexing keeps the stored zeros
+    padded = sp.csr_matrix((D.data, D.indices, D.indptr), shape=(D.shape[0], n + 1))
+    out = padded[:, np.where(file_index >= 0, file_index, n)].tocsr()
+    out.sort_indices()
+    return out
 
 
 @dataclass(frozen=True)
@@ -316,11 +303,7 @@ class LocalRows:
         self.threads = resolve_threads(self.options.get("threads"))  # once: every patch's solver runs under it
         self.options["threads"] = self.threads
         self.paper = self.options.get("normalization", "area") == "paper"
-        self.size = self._size(mesh)
-
-    @staticmethod
-    def _size(mesh: Any) -> float:
-        return float(mesh.face_areas.sum())
+        self.size = float(mesh.face_areas.sum())
 
     def solve(self, vertex: int) -> LocalRow:
         """The row of source ``vertex``: a :class:`LocalRow` whose ``distance`` holds the distances ≤ max_distance."""
@@ -348,7 +331,7 @@ class LocalRows:
         options = dict(self.options)
         if self.lam is not None:
             scale = (self.mesh.n_vertices / patch.mesh.n_vertices if self.paper
-                     else self.size / self._size(patch.mesh))
+                     else self.size / float(patch.mesh.face_areas.sum()))
             options["lam"] = self.lam * scale
         return self.factory(patch.mesh, **options).solve(patch.source).distance
 
