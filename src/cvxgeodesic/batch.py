@@ -92,10 +92,9 @@ def expand_mesh_paths(patterns) -> list[Path]:
             p = Path(pat).expanduser()
             if p.is_dir():
                 raise ParameterError(f"{p} is a directory; give mesh files or a pattern such as '{p}/*.obj'")
-            if p.exists():
-                found[p.resolve()] = None
-            else:
+            if not p.exists():
                 raise ParameterError(f"{p}: no such file")
+            found[p.resolve()] = None
     if not found:
         raise ParameterError(f"no mesh file ({', '.join(MESH_EXTENSIONS)}) matches {' '.join(map(str, patterns))}")
     return sorted(found)
@@ -351,11 +350,10 @@ def run_batch(paths, sources, out_dir, *, method: str | None = None, m: float = 
     todo: list[Path] = []
     for p in paths:
         dist_path, sidecar = output_paths(p, out, output_format)
-        state = False if force else _finished(dist_path, sidecar, params)
-        if state is True:
+        if not force and _finished(dist_path, sidecar, params) is True:
             rows[p] = _row(p, "skipped", output=str(dist_path))
         else:
-            for target in output_paths(p, out, output_format):  # a read-only output: refused now, not after its solve
+            for target in (dist_path, sidecar):  # a read-only output: refused now, not after its solve
                 check_replaceable(target, allow=None)
             todo.append(p)
     if todo:

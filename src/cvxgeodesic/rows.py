@@ -339,7 +339,7 @@ class LocalRows:
 def _whole_mesh_lambda(mesh: Any, options: dict) -> float | None:
     """λ of the whole mesh (None without a smoothness energy or for an unknown method: the solver says why)."""
     from .formulations import ALIASES, FORMULATIONS, canonical_method, smoothness_weight
-    from .validation import check_smoothness
+    from .validation import check_lam, check_smoothness
 
     m, lam = check_smoothness(options.get("m", 1.0), options.get("lam"))
     method = options.get("method") or "qcqp-hessian"
@@ -350,8 +350,6 @@ def _whole_mesh_lambda(mesh: Any, options: dict) -> float | None:
         return None
     normalization, order = options.get("normalization", "area"), options.get("order", 1)
     if lam is not None:  # its range on the whole mesh: each patch takes it scaled, unchecked (api._PatchSolver)
-        from .validation import check_lam
-
         return check_lam(lam, smoothness_weight(mesh, 1.0, normalization, energy, order=order))
     return smoothness_weight(mesh, m, normalization, energy, order=order)
 
@@ -555,8 +553,8 @@ class _RowBar:
 
 def distributed_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any], options: dict, *,
                      scheduler: Any = None, workers: int | None = None, progress: bool | None = False,
-                     desc: str = "rows", on_chunk: Callable[[slice, Any], None] | None = None) -> Any:
-    """Solve one row per item on a Dask cluster, in contiguous chunks; the rows in the order of ``items``.
+                     desc: str = "rows", on_chunk: Callable[[slice, Any], None]) -> None:
+    """Solve one row per item on a Dask cluster, in contiguous chunks, each chunk's rows to ``on_chunk``.
 
     Parameters
     ----------
@@ -579,13 +577,10 @@ def distributed_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any
         seconds.
     desc : str
         Label of the progress bar.
-    on_chunk : callable, optional
+    on_chunk : callable
         ``on_chunk(rows_slice, rows)`` as each chunk finishes (before the others): where ``distance_matrix``
-        keeps them. The rows are then not kept here (a matrix held once, not three times).
-
-    Returns
-    -------
-    (len(items), n) float ndarray, or CSR matrix (sparse rows); None with ``on_chunk``
+        keeps them, ``(len(rows_slice), n)`` float ndarray or CSR matrix (sparse rows). They are not kept here
+        (a matrix held once, not three times).
 
     Raises
     ------
@@ -615,7 +610,7 @@ def distributed_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any
             futures = [client.submit(solve_chunk, factory, mesh_future, items[s], options, topic,
                                      key=f"cvxgeodesic-rows-{i}-{token}", pure=False)
                        for i, s in enumerate(chunks)]
-            parts = _gather(futures, chunks, bar, on_chunk)
+            caught = _gather(futures, chunks, bar, on_chunk)
         except KeyboardInterrupt:
             if bar is not None:
                 bar.close()
@@ -630,25 +625,21 @@ def distributed_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any
                 bar.close()
                 with contextlib.suppress(Exception):  # the connection may be gone after Ctrl-C
                     client.unsubscribe_topic(topic)
-    _rewarn(w for _, ws in parts for w in ws)
-    return None if on_chunk is not None else _stack([rows for rows, _ in parts])
+    _rewarn(w for ws in caught for w in ws)
 
 
-def _gather(futures: list, chunks: list[slice], bar: _RowBar | None,
-            on_chunk: Callable[[slice, Any], None] | None = None) -> list:
-    """The chunks' results in chunk order, gathered as they finish (the bar moves by each one's rows)."""
+def _gather(futures: list, chunks: list[slice], bar: _RowBar | None, on_chunk: Callable[[slice, Any], None]) -> list:
+    """Each chunk's rows to ``on_chunk`` as it finishes (the bar moves by its rows); the warnings, in chunk order."""
     distributed = require_distributed(WHAT)[1]
     index = {f.key: i for i, f in enumerate(futures)}
-    parts: list = [None] * len(futures)
+    caught: list = [None] * len(futures)
     for fut in distributed.as_completed(futures):
         i = index[fut.key]
-        parts[i] = fut.result()  # a chunk's error is raised here, as the solver raised it
-        if on_chunk is not None:
-            on_chunk(chunks[i], parts[i][0])
-            parts[i] = (None, parts[i][1])  # the rows are the caller's now: only the warnings stay
+        rows, caught[i] = fut.result()  # a chunk's error is raised here, as the solver raised it
+        on_chunk(chunks[i], rows)
         if bar is not None:
             bar.chunk_done(chunks[i].stop - chunks[i].start)
-    return parts
+    return caught
 
 
 def _rewarn(caught) -> None:
