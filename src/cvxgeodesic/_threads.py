@@ -27,7 +27,7 @@ import os
 import threading
 import time
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from typing import Concatenate, ParamSpec, Protocol, TypeVar
 
 # nothing heavier than the standard library at import: the package imports this module first, and the command
@@ -168,9 +168,7 @@ def _other_runnable() -> int | None:
 def _fallback_runnable() -> int | None:
     """``procs_running`` less this process's runnable threads (kernel threads cannot be told apart here)."""
     n = _procs_running()
-    if n is None:
-        return None
-    return n - max(1, _runnable_threads(str(os.getpid())))
+    return None if n is None else n - max(1, _runnable_threads(str(os.getpid())))
 
 
 def busy_neighbours(samples: int = _SAMPLES, interval: float = _SAMPLE_INTERVAL) -> int:
@@ -278,11 +276,9 @@ def thread_limit(threads: int) -> Iterator[None]:
             numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
         from threadpoolctl import threadpool_limits
 
-        try:
+        with suppress(ImportError):  # no PARDISO binding in this installation: no MKL to load
             from .linalg.pardiso import pardiso_available
-        except ImportError:  # no PARDISO binding in this installation: no MKL to load
-            pass
-        else:
+
             pardiso_available()  # loads MKL now, so that the limit covers it (threadpoolctl sees loaded libraries)
         with threadpool_limits(limits=threads):
             _signals.check()  # a Ctrl-C that threadpoolctl's ctypes callbacks swallowed while finding the libraries

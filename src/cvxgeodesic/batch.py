@@ -422,14 +422,11 @@ class _LogLines:
 
     def __init__(self, total: int) -> None:
         self.total, self.n = total, 0
-        self._line()  # the tasks are submitted: the batch is under way
-
-    def _line(self) -> None:
-        print(f"meshes: {self.n}/{self.total} done", file=sys.stderr, flush=True)
+        self.update(0)  # the tasks are submitted: the batch is under way
 
     def update(self, k: int = 1) -> None:
         self.n += k
-        self._line()
+        print(f"meshes: {self.n}/{self.total} done", file=sys.stderr, flush=True)
 
     def write(self, text: str, file=None) -> None:
         print(text, file=sys.stderr if file is None else file, flush=True)

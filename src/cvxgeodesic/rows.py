@@ -35,8 +35,8 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from . import _signals
-from ._atomic import atomic_write
+from . import _signals, _verbose
+from ._atomic import atomic_write, check_replaceable
 from ._cluster import open_client, require_distributed, stop_after_interrupt
 from ._threads import resolve_threads, thread_limit
 from .errors import ParameterError
@@ -136,8 +136,6 @@ class RowStore:
         self.sparse = sparse
         self.path = None if path is None else Path(path)
         if self.path is not None:  # a read-only checkpoint is refused now, not at its first write after some rows
-            from ._atomic import check_replaceable
-
             check_replaceable(self.path, allow=None)
         self.parameters = dict(parameters or {})
         self.done = np.zeros(n_rows, dtype=bool)
@@ -434,8 +432,6 @@ def _row_bar(total: int, initial: int, desc: str, progress: bool | None) -> Any:
     """A tqdm bar counting rows on stderr (shown after PROGRESS_DELAY seconds, read now, when ``progress`` is None)."""
     from tqdm import tqdm
 
-    from . import _verbose
-
     return tqdm(total=total, initial=initial, desc=desc, unit="row", file=sys.stderr, disable=progress is False,
                 delay=_verbose.PROGRESS_DELAY if progress is None else 0.0)
 
@@ -530,14 +526,13 @@ class _RowBar:
 
     def _show(self) -> None:
         target = min(self.bar.total, max(self.events, self.done))
-        if target > self.bar.n:
+        if target > self.bar.n and not self.closed:  # an event may arrive after the run ended
             self.bar.update(target - self.bar.n)
 
     def event(self, _event: Any) -> None:
         with self.lock:
             self.events += 1
-            if not self.closed:  # an event may arrive after the run ended
-                self._show()
+            self._show()
 
     def chunk_done(self, rows: int) -> None:
         with self.lock:
