@@ -249,7 +249,7 @@ def test_unwritable_out_fails_before_any_solve(meshes, tmp_path, monkeypatch, ca
     proc = f"/proc/{os.getpid()}"  # an existing folder in which no one, root included, creates files
     if not os.path.isdir(proc):
         pytest.skip("no /proc")
-    with pytest.raises(ParameterError, match=r"--out /proc/\d+: cannot create files in the folder"):
+    with pytest.raises(ParameterError, match=r"--out /proc/\d+: cannot write files in it"):
         run_batch([good[1]], [0], proc, progress=False)
 
 

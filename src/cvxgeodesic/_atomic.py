@@ -92,7 +92,7 @@ def _give_metadata(fd: int, st: os.stat_result | None) -> None:
         os.fchmod(fd, stat.S_IMODE(st.st_mode) & 0o777)  # permission bits only: never set-id or sticky bits
 
 
-def atomic_write(target: str | os.PathLike, write: Callable[[BinaryIO], None], *,
+def atomic_write(target: str | os.PathLike, write: Callable[[BinaryIO], object], *,
                  overwrite_read_only: bool = False, allow: str | None = ALLOW_IN_PYTHON) -> Path:
     """Call ``write(fh)`` on a fresh temporary file next to ``target``, then move it over ``target``.
 

@@ -22,6 +22,7 @@ the pickled code Numba loads from its cache.
 
 from __future__ import annotations
 
+import functools
 import sys
 import threading
 import warnings
@@ -101,11 +102,7 @@ def njit(*args: Any, **options: Any) -> Any:
     finds no writable cache location: then :class:`CompileNotice` says :data:`NO_CACHE_NOTICE`, once."""
     if args and callable(args[0]):
         return _jit(args[0], options)
-
-    def decorate(func: Callable) -> Any:
-        return _jit(func, options)
-
-    return decorate
+    return functools.partial(_jit, options=options)
 
 
 def _jit(func: Callable, options: dict) -> Any:

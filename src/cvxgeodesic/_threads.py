@@ -27,7 +27,7 @@ import os
 import threading
 import time
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from typing import Concatenate, ParamSpec, Protocol, TypeVar
 
 # nothing heavier than the standard library at import: the package imports this module first, and the command
@@ -35,8 +35,7 @@ from typing import Concatenate, ParamSpec, Protocol, TypeVar
 from . import _signals
 from .errors import ParameterError
 
-__all__ = ["ENV_VAR", "check_threads", "default_threads", "resolve_threads", "resolve_threads_noted", "thread_limit",
-           "usable_cores"]
+__all__ = ["ENV_VAR", "default_threads", "resolve_threads", "resolve_threads_noted", "thread_limit", "usable_cores"]
 
 ENV_VAR = "CVXGEODESIC_THREADS"
 
@@ -77,15 +76,6 @@ def set_openmp_wait_policy() -> str | None:
 
 
 set_openmp_wait_policy()
-
-
-def check_threads(value, *, name: str = "threads") -> int | None:
-    """``value`` as an int, or None; ParameterError unless it is None or a positive integer."""
-    if value is None:
-        return None
-    from .validation import check_count
-
-    return check_count(value, name, or_none=True)
 
 
 def env_threads() -> int | None:
@@ -178,9 +168,7 @@ def _other_runnable() -> int | None:
 def _fallback_runnable() -> int | None:
     """``procs_running`` less this process's runnable threads (kernel threads cannot be told apart here)."""
     n = _procs_running()
-    if n is None:
-        return None
-    return n - max(1, _runnable_threads(str(os.getpid())))
+    return None if n is None else n - max(1, _runnable_threads(str(os.getpid())))
 
 
 def busy_neighbours(samples: int = _SAMPLES, interval: float = _SAMPLE_INTERVAL) -> int:
@@ -238,9 +226,7 @@ def resolve_threads_noted(threads=None) -> tuple[int, str | None]:
     note : str or None
         ``"threads=1000000 capped at 2 (the cores available)"`` (or ``CVXGEODESIC_THREADS=...``).
     """
-    value = check_threads(threads)
-    source = f"threads={value}"
-    if value is None:
+    if threads is None:
         current = getattr(_local, "limit", None)
         if current is not None:  # the enclosing solve's count, capped when it was resolved
             return current, None
@@ -248,6 +234,11 @@ def resolve_threads_noted(threads=None) -> tuple[int, str | None]:
         if value is None:
             return default_threads(), None
         source = f"{ENV_VAR}={value}"
+    else:
+        from .validation import check_count  # NumPy: not at the package's import
+
+        value = check_count(threads, "threads", or_none=True)
+        source = f"threads={value}"
     cores = usable_cores()
     if value > cores:
         return cores, f"{source} capped at {cores} (the cores available)"
@@ -285,11 +276,9 @@ def thread_limit(threads: int) -> Iterator[None]:
             numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
         from threadpoolctl import threadpool_limits
 
-        try:
+        with suppress(ImportError):  # no PARDISO binding in this installation: no MKL to load
             from .linalg.pardiso import pardiso_available
-        except ImportError:  # no PARDISO binding in this installation: no MKL to load
-            pass
-        else:
+
             pardiso_available()  # loads MKL now, so that the limit covers it (threadpoolctl sees loaded libraries)
         with threadpool_limits(limits=threads):
             _signals.check()  # a Ctrl-C that threadpoolctl's ctypes callbacks swallowed while finding the libraries

@@ -42,10 +42,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ._atomic import check_replaceable, probe_folder
+from ._atomic import check_output_dir, check_replaceable
 from ._cluster import open_client, require_distributed, stop_after_interrupt
 from .compare import error_line
 from .errors import ParameterError
+from .tables import Column, text_table
 from .validation import check_choice, check_count, check_not_an_input, check_smoothness
 
 __all__ = ["OUTPUT_FORMATS", "expand_mesh_paths", "format_summary", "output_paths", "run_batch", "solve_one"]
@@ -91,10 +92,9 @@ def expand_mesh_paths(patterns) -> list[Path]:
             p = Path(pat).expanduser()
             if p.is_dir():
                 raise ParameterError(f"{p} is a directory; give mesh files or a pattern such as '{p}/*.obj'")
-            if p.exists():
-                found[p.resolve()] = None
-            else:
+            if not p.exists():
                 raise ParameterError(f"{p}: no such file")
+            found[p.resolve()] = None
     if not found:
         raise ParameterError(f"no mesh file ({', '.join(MESH_EXTENSIONS)}) matches {' '.join(map(str, patterns))}")
     return sorted(found)
@@ -342,18 +342,18 @@ def run_batch(paths, sources, out_dir, *, method: str | None = None, m: float = 
         stems[p.stem] = p
     out = Path(out_dir).expanduser().resolve()
     _check_not_inputs(paths, out, output_format)
-    _prepare_out(out)
+    check_output_dir(out, "--out")  # a folder that cannot take files fails now, not after the solves
+    out.mkdir(parents=True, exist_ok=True)
     params = _params(sources_list, method, m, solver, multires, output_format)
 
     rows: dict[Path, dict] = {}
     todo: list[Path] = []
     for p in paths:
         dist_path, sidecar = output_paths(p, out, output_format)
-        state = False if force else _finished(dist_path, sidecar, params)
-        if state is True:
+        if not force and _finished(dist_path, sidecar, params) is True:
             rows[p] = _row(p, "skipped", output=str(dist_path))
         else:
-            for target in output_paths(p, out, output_format):  # a read-only output: refused now, not after its solve
+            for target in (dist_path, sidecar):  # a read-only output: refused now, not after its solve
                 check_replaceable(target, allow=None)
             todo.append(p)
     if todo:
@@ -375,30 +375,6 @@ def _check_not_inputs(paths: list[Path], out: Path, output_format: str) -> None:
     for p in paths:
         for target in output_paths(p, out, output_format):
             check_not_an_input(target, by_stem[p.stem.casefold()], "--out")
-
-
-def _prepare_out(out: Path) -> None:
-    """Create the output folder ``out`` and check that files can be created in it, before any solve.
-
-    Raises
-    ------
-    ParameterError
-        ``out`` is a file, cannot be created (below a file, permissions, read-only file system), or no
-        file can be created in it (checked by creating and removing an empty temporary file, which also
-        holds for root, whom permission bits do not stop).
-    """
-    if out.exists() and not out.is_dir():
-        raise ParameterError(f"--out {_printable(str(out))} exists and is not a directory")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ParameterError(f"--out {_printable(str(out))}: cannot create the folder "
-                             f"({exc.strerror or exc})") from None
-    try:  # the outputs are written through temporary files in this folder: try exactly that
-        probe_folder(out)
-    except OSError as exc:
-        raise ParameterError(f"--out {_printable(str(out))}: cannot create files in the folder "
-                             f"({exc.strerror or exc})") from None
 
 
 def _printable(text: str) -> str:
@@ -446,14 +422,11 @@ class _LogLines:
 
     def __init__(self, total: int) -> None:
         self.total, self.n = total, 0
-        self._line()  # the tasks are submitted: the batch is under way
-
-    def _line(self) -> None:
-        print(f"meshes: {self.n}/{self.total} done", file=sys.stderr, flush=True)
+        self.update(0)  # the tasks are submitted: the batch is under way
 
     def update(self, k: int = 1) -> None:
         self.n += k
-        self._line()
+        print(f"meshes: {self.n}/{self.total} done", file=sys.stderr, flush=True)
 
     def write(self, text: str, file=None) -> None:
         print(text, file=sys.stderr if file is None else file, flush=True)
@@ -494,24 +467,20 @@ def _with_name(name: str, note: str) -> str:
     return line if line.startswith(name) else f"{name}: {line}"
 
 
+#: The columns of :func:`format_summary` (``name`` and ``note`` are made there), all left-aligned.
+SUMMARY_COLUMNS = tuple(Column(h, k, *f, align="left") for h, k, *f in (
+    ("mesh", "name"), ("status", "status"), ("vertices", "n_vertices"), ("faces", "n_faces"), ("iters", "iterations"),
+    ("time_s", "time_s", lambda v: f"{v:.2f}"), ("output / error", "note")))
+
+
 def format_summary(rows: list[dict]) -> str:
-    """Plain-text table of :func:`run_batch` rows, with a totals line."""
-    head = ("mesh", "status", "vertices", "faces", "iters", "time_s", "output / error")
+    """Plain-text table of :func:`run_batch` rows (:func:`cvxgeodesic.tables.text_table`), with a totals line."""
     body = []
     for r in rows:
         note = r["error"] if r["status"] == "failed" else (r["output"] or "")
         if r["status"] == "ok" and r.get("solve_status") not in (None, "optimal"):
             note = f"[{r['solve_status']}] {note}"
-        body.append((_printable(Path(r["mesh"]).name), r["status"],
-                     "" if r["n_vertices"] is None else str(r["n_vertices"]),
-                     "" if r["n_faces"] is None else str(r["n_faces"]),
-                     "" if r["iterations"] is None else str(r["iterations"]),
-                     "" if r["time_s"] is None else f"{r['time_s']:.2f}", _printable(note or "")))
-    widths = [max(len(h), *(len(b[i]) for b in body)) if body else len(h) for i, h in enumerate(head)]
-    fmt = "  ".join(f"{{:<{w}}}" for w in widths[:-1]) + "  {}"
-    lines = [fmt.format(*head), fmt.format(*("-" * w for w in widths[:-1]), "-" * len(head[-1]))]
-    lines += [fmt.format(*b) for b in body]
+        body.append({**r, "name": _printable(Path(r["mesh"]).name), "note": _printable(note or "")})
     counts = {s: sum(r["status"] == s for r in rows) for s in ("ok", "skipped", "failed")}
-    lines.append(f"{len(rows)} meshes: {counts['ok']} solved, {counts['skipped']} skipped (already done), "
-                 f"{counts['failed']} failed")
-    return "\n".join(lines)
+    return (text_table(body, SUMMARY_COLUMNS, missing="") + f"\n{len(rows)} meshes: {counts['ok']} solved, "
+            f"{counts['skipped']} skipped (already done), {counts['failed']} failed")

@@ -288,8 +288,7 @@ def solve_methods(mesh: Any, sset: Any, runs: list[Run], *, reference: Run | Non
 
 
 def _failed_row(row: dict, wall: float, err: BaseException) -> None:
-    row["time_s"] = float(wall)
-    row["status"] = error_line(err)
+    row.update(time_s=float(wall), status=error_line(err))
     if isinstance(err, SolverError):
         row["solver"] = str(err.solver)
         it = err.info.get("iterations")
@@ -359,14 +358,9 @@ def write_csv(path: Path, rows: list[dict]) -> None:
     buf = io.StringIO()
     writer = csv.DictWriter(buf, fieldnames=list(CSV_COLUMNS), lineterminator="\n")
     writer.writeheader()
-    for row in rows:
-        writer.writerow({k: _fmt_csv(row[k]) for k in CSV_COLUMNS})
+    writer.writerows({k: _fmt_csv(row[k]) for k in CSV_COLUMNS} for row in rows)
     data = buf.getvalue().encode("utf-8")
-
-    def write(fh: Any) -> None:
-        fh.write(data)
-
-    atomic_write(path, write, allow=None)  # a read-only file in the folder is refused: no override here
+    atomic_write(path, lambda fh: fh.write(data), allow=None)  # a read-only file is refused: no override here
 
 
 def _field_scale(results: dict[Run, Outcome], runs: list[Run], reference: np.ndarray | None) -> tuple[Any, Any]:
@@ -409,9 +403,8 @@ def write_pictures(out: Path, mesh: Any, sset: Any, runs: list[Run], results: di
     # so one very bad method does not wash out the others; the colour bar shows an arrow where it clips
     p99s = [p for p in (r["rel_p99"] for r in rows) if p is not None and np.isfinite(p) and p > 0]
     vmax_err = float(np.median(p99s)) if p99s else None
-    src_txt = ", ".join(str(int(s)) for s in src[:5]) + (", ..." if len(src) > 5 else "")
-    if not sset.vertex_only:
-        src_txt = sset.description
+    src_txt = (", ".join(str(int(s)) for s in src[:5]) + (", ..." if len(src) > 5 else "") if sset.vertex_only
+               else sset.description)
     for run, row in zip(runs, rows, strict=True):
         res = results[_key(run)][0]
         if res is None:
@@ -433,9 +426,7 @@ def _write_histograms(out: Path, mesh: Any, src: np.ndarray, runs: list[Run], re
     from .evaluation import gradient_norm_histogram
     from .plotting import plot_gradient_histogram
 
-    hist_fields = {}
-    if reference is not None:
-        hist_fields[reference_label] = reference
+    hist_fields = {} if reference is None else {reference_label: reference}
     for run in runs:
         res = results[_key(run)][0]
         if res is not None and _label(run) not in hist_fields:

@@ -35,8 +35,8 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from . import _signals
-from ._atomic import atomic_write
+from . import _signals, _verbose
+from ._atomic import atomic_write, check_replaceable
 from ._cluster import open_client, require_distributed, stop_after_interrupt
 from ._threads import resolve_threads, thread_limit
 from .errors import ParameterError
@@ -136,8 +136,6 @@ class RowStore:
         self.sparse = sparse
         self.path = None if path is None else Path(path)
         if self.path is not None:  # a read-only checkpoint is refused now, not at its first write after some rows
-            from ._atomic import check_replaceable
-
             check_replaceable(self.path, allow=None)
         self.parameters = dict(parameters or {})
         self.done = np.zeros(n_rows, dtype=bool)
@@ -237,15 +235,9 @@ def _sparse_row(cols: np.ndarray, vals: np.ndarray, n: int) -> sp.csr_matrix:
 
 
 def _vstack_keeping_zeros(rows: Sequence[sp.csr_matrix], n: int) -> sp.csr_matrix:
-    """CSR matrices of ``n`` columns one under the other, by their arrays (``scipy.sparse.vstack`` may drop the
-    stored zeros)."""
-    if not rows:
-        return sp.csr_matrix((0, n))
-    offsets = np.concatenate([[0], np.cumsum([r.nnz for r in rows])])
-    indptr = np.concatenate([r.indptr[:-1] + o for r, o in zip(rows, offsets[:-1], strict=True)] + [offsets[-1:]])
-    data = np.concatenate([r.data for r in rows]).astype(np.float64)
-    indices = np.concatenate([r.indices for r in rows]).astype(np.int64)
-    return sp.csr_matrix((data, indices, indptr.astype(np.int64)), shape=(int(indptr.size - 1), n))
+    """CSR matrices of ``n`` columns one under the other, stored zeros kept (``vstack`` of CSR blocks joins their
+    arrays; a source's distance is a stored 0)."""
+    return sp.vstack(rows, format="csr", dtype=np.float64) if rows else sp.csr_matrix((0, n))
 
 
 def sparse_to_file_order(mesh: Any, D: sp.csr_matrix) -> sp.csr_matrix:
@@ -263,19 +255,12 @@ def sparse_to_file_order(mesh: Any, D: sp.csr_matrix) -> sp.csr_matrix:
         Welded duplicates share their mesh vertex's entries; file vertices in no face have none.
     """
     file_index = np.asarray(mesh.file_index, dtype=np.int64)
-    valid = np.flatnonzero(file_index >= 0)
-    order = valid[np.argsort(file_index[valid], kind="stable")]  # file vertices grouped by mesh vertex
-    counts = np.bincount(file_index[valid], minlength=mesh.n_vertices)
-    starts = np.concatenate([[0], np.cumsum(counts)])[:-1]
-    coo = D.tocoo()
-    rep = counts[coo.col]
-    first = np.repeat(starts[coo.col], rep)
-    offset = np.arange(int(rep.sum())) - np.repeat(np.cumsum(rep) - rep, rep)
-    cols = order[first + offset]
-    rows, vals = np.repeat(coo.row, rep), np.repeat(coo.data, rep)
-    key = np.lexsort((cols, rows))
-    indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=D.shape[0]))])
-    return sp.csr_matrix((vals[key], cols[key], indptr), shape=(D.shape[0], int(file_index.size)))
+    n = mesh.n_vertices
+    # an empty column n more, for the file vertices in no face; column indexing keeps the stored zeros
+    padded = sp.csr_matrix((D.data, D.indices, D.indptr), shape=(D.shape[0], n + 1))
+    out = padded[:, np.where(file_index >= 0, file_index, n)].tocsr()
+    out.sort_indices()
+    return out
 
 
 @dataclass(frozen=True)
@@ -316,11 +301,7 @@ class LocalRows:
         self.threads = resolve_threads(self.options.get("threads"))  # once: every patch's solver runs under it
         self.options["threads"] = self.threads
         self.paper = self.options.get("normalization", "area") == "paper"
-        self.size = self._size(mesh)
-
-    @staticmethod
-    def _size(mesh: Any) -> float:
-        return float(mesh.face_areas.sum())
+        self.size = float(mesh.face_areas.sum())
 
     def solve(self, vertex: int) -> LocalRow:
         """The row of source ``vertex``: a :class:`LocalRow` whose ``distance`` holds the distances ≤ max_distance."""
@@ -348,7 +329,7 @@ class LocalRows:
         options = dict(self.options)
         if self.lam is not None:
             scale = (self.mesh.n_vertices / patch.mesh.n_vertices if self.paper
-                     else self.size / self._size(patch.mesh))
+                     else self.size / float(patch.mesh.face_areas.sum()))
             options["lam"] = self.lam * scale
         return self.factory(patch.mesh, **options).solve(patch.source).distance
 
@@ -356,7 +337,7 @@ class LocalRows:
 def _whole_mesh_lambda(mesh: Any, options: dict) -> float | None:
     """λ of the whole mesh (None without a smoothness energy or for an unknown method: the solver says why)."""
     from .formulations import ALIASES, FORMULATIONS, canonical_method, smoothness_weight
-    from .validation import check_smoothness
+    from .validation import check_lam, check_smoothness
 
     m, lam = check_smoothness(options.get("m", 1.0), options.get("lam"))
     method = options.get("method") or "qcqp-hessian"
@@ -367,8 +348,6 @@ def _whole_mesh_lambda(mesh: Any, options: dict) -> float | None:
         return None
     normalization, order = options.get("normalization", "area"), options.get("order", 1)
     if lam is not None:  # its range on the whole mesh: each patch takes it scaled, unchecked (api._PatchSolver)
-        from .validation import check_lam
-
         return check_lam(lam, smoothness_weight(mesh, 1.0, normalization, energy, order=order))
     return smoothness_weight(mesh, m, normalization, energy, order=order)
 
@@ -452,8 +431,6 @@ def keeping(store: RowStore) -> Iterator[None]:
 def _row_bar(total: int, initial: int, desc: str, progress: bool | None) -> Any:
     """A tqdm bar counting rows on stderr (shown after PROGRESS_DELAY seconds, read now, when ``progress`` is None)."""
     from tqdm import tqdm
-
-    from . import _verbose
 
     return tqdm(total=total, initial=initial, desc=desc, unit="row", file=sys.stderr, disable=progress is False,
                 delay=_verbose.PROGRESS_DELAY if progress is None else 0.0)
@@ -549,14 +526,13 @@ class _RowBar:
 
     def _show(self) -> None:
         target = min(self.bar.total, max(self.events, self.done))
-        if target > self.bar.n:
+        if target > self.bar.n and not self.closed:  # an event may arrive after the run ended
             self.bar.update(target - self.bar.n)
 
     def event(self, _event: Any) -> None:
         with self.lock:
             self.events += 1
-            if not self.closed:  # an event may arrive after the run ended
-                self._show()
+            self._show()
 
     def chunk_done(self, rows: int) -> None:
         with self.lock:
@@ -572,8 +548,8 @@ class _RowBar:
 
 def distributed_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any], options: dict, *,
                      scheduler: Any = None, workers: int | None = None, progress: bool | None = False,
-                     desc: str = "rows", on_chunk: Callable[[slice, Any], None] | None = None) -> Any:
-    """Solve one row per item on a Dask cluster, in contiguous chunks; the rows in the order of ``items``.
+                     desc: str = "rows", on_chunk: Callable[[slice, Any], None]) -> None:
+    """Solve one row per item on a Dask cluster, in contiguous chunks, each chunk's rows to ``on_chunk``.
 
     Parameters
     ----------
@@ -596,13 +572,10 @@ def distributed_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any
         seconds.
     desc : str
         Label of the progress bar.
-    on_chunk : callable, optional
+    on_chunk : callable
         ``on_chunk(rows_slice, rows)`` as each chunk finishes (before the others): where ``distance_matrix``
-        keeps them. The rows are then not kept here (a matrix held once, not three times).
-
-    Returns
-    -------
-    (len(items), n) float ndarray, or CSR matrix (sparse rows); None with ``on_chunk``
+        keeps them, ``(len(rows_slice), n)`` float ndarray or CSR matrix (sparse rows). They are not kept here
+        (a matrix held once, not three times).
 
     Raises
     ------
@@ -632,7 +605,7 @@ def distributed_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any
             futures = [client.submit(solve_chunk, factory, mesh_future, items[s], options, topic,
                                      key=f"cvxgeodesic-rows-{i}-{token}", pure=False)
                        for i, s in enumerate(chunks)]
-            parts = _gather(futures, chunks, bar, on_chunk)
+            caught = _gather(futures, chunks, bar, on_chunk)
         except KeyboardInterrupt:
             if bar is not None:
                 bar.close()
@@ -647,25 +620,21 @@ def distributed_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any
                 bar.close()
                 with contextlib.suppress(Exception):  # the connection may be gone after Ctrl-C
                     client.unsubscribe_topic(topic)
-    _rewarn(w for _, ws in parts for w in ws)
-    return None if on_chunk is not None else _stack([rows for rows, _ in parts])
+    _rewarn(w for ws in caught for w in ws)
 
 
-def _gather(futures: list, chunks: list[slice], bar: _RowBar | None,
-            on_chunk: Callable[[slice, Any], None] | None = None) -> list:
-    """The chunks' results in chunk order, gathered as they finish (the bar moves by each one's rows)."""
+def _gather(futures: list, chunks: list[slice], bar: _RowBar | None, on_chunk: Callable[[slice, Any], None]) -> list:
+    """Each chunk's rows to ``on_chunk`` as it finishes (the bar moves by its rows); the warnings, in chunk order."""
     distributed = require_distributed(WHAT)[1]
     index = {f.key: i for i, f in enumerate(futures)}
-    parts: list = [None] * len(futures)
+    caught: list = [None] * len(futures)
     for fut in distributed.as_completed(futures):
         i = index[fut.key]
-        parts[i] = fut.result()  # a chunk's error is raised here, as the solver raised it
-        if on_chunk is not None:
-            on_chunk(chunks[i], parts[i][0])
-            parts[i] = (None, parts[i][1])  # the rows are the caller's now: only the warnings stay
+        rows, caught[i] = fut.result()  # a chunk's error is raised here, as the solver raised it
+        on_chunk(chunks[i], rows)
         if bar is not None:
             bar.chunk_done(chunks[i].stop - chunks[i].start)
-    return parts
+    return caught
 
 
 def _rewarn(caught) -> None:

@@ -20,7 +20,7 @@ import warnings
 
 # Only the standard library at import (the package's __init__ is lazy too): the console script imports this
 # package before main() runs, and main() must have its Ctrl-C handling in place before NumPy, SciPy and Numba load.
-from .. import __version__
+from .. import __version__, _signals
 from ._common import EXIT_USAGE, Notes, Signals, check_numbers
 
 __all__ = ["build_parser", "main"]
@@ -64,7 +64,7 @@ def main(argv=None) -> int:
     with Signals() as signals:
         try:
             parser = build_parser()  # the first heavy imports: inside the try
-            signals.check()
+            _signals.check()  # a signal whose KeyboardInterrupt an optional import turned into an ignored ImportError
             args = parser.parse_args(argv)
             args.notes = Notes()
             check_numbers(args)
@@ -73,16 +73,14 @@ def main(argv=None) -> int:
                     warnings.showwarning = args.notes.showwarning
                 return args.func(args)
         except KeyboardInterrupt:
-            line, code = signals.stop_line()
-            print(line, file=sys.stderr)
-            return code
+            pass
         except Exception as exc:  # every failure becomes one line; --debug shows where it came from
-            if signals.received is not None:  # the signal broke something on its way (an import)
-                line, code = signals.stop_line()
-                print(line, file=sys.stderr)
-                return code
-            if args is None or getattr(args, "debug", False):  # before the arguments are read: a bug
-                traceback.print_exc()
-            msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-            print(f"cvxgeodesic: error: {msg}", file=sys.stderr)
-            return EXIT_USAGE
+            if signals.received is None:  # else the signal broke something on its way (an import)
+                if args is None or getattr(args, "debug", False):  # before the arguments are read: a bug
+                    traceback.print_exc()
+                msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+                print(f"cvxgeodesic: error: {msg}", file=sys.stderr)
+                return EXIT_USAGE
+        line, code = signals.stop_line()
+        print(line, file=sys.stderr)
+        return code

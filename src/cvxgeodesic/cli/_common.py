@@ -79,12 +79,6 @@ class Signals:
             signal.signal(signum, handler)  # type: ignore[arg-type]
         _signals.clear()  # handled (main printed its line): a later command in this process starts afresh
 
-    def check(self) -> None:
-        """``KeyboardInterrupt`` if a signal came and what it raised was lost (an optional import that an
-        extension module turned it into an ``ImportError``, which its caller then ignored)."""
-        if self.received is not None:
-            raise KeyboardInterrupt
-
     def stop_line(self) -> tuple[str, int]:
         """The message and the exit code of the signal received (Ctrl-C when none was recorded)."""
         if self.received == signal.SIGTERM:

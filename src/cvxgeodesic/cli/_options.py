@@ -99,21 +99,13 @@ def add_source_options(p: argparse.ArgumentParser,
 
 def add_solve_options(p: argparse.ArgumentParser, *, method: bool = True, m_help: str = M_HELP) -> None:
     """``--method`` (with ``method``), ``--m`` and ``--solver``."""
-    from ..api import SOLVERS
+    from ..api import ALL_METHODS, SOLVERS
 
-    if method:
-        add_method_option(p)
+    if method:  # None when not given: the default of the mesh's dimension (method_for)
+        p.add_argument("--method", default=None, choices=ALL_METHODS, metavar="NAME",
+                       help=f"one of: {', '.join(ALL_METHODS)} (default {default_methods()})")
     p.add_argument("--m", type=float, default=1.0, help=m_help)
     p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")
-
-
-def add_method_option(p: argparse.ArgumentParser) -> None:
-    """``--method NAME``, any method of :data:`~cvxgeodesic.api.ALL_METHODS`; None when not given (the default of
-    the mesh's dimension, :func:`method_for`)."""
-    from ..api import ALL_METHODS
-
-    p.add_argument("--method", default=None, choices=ALL_METHODS, metavar="NAME",
-                   help=f"one of: {', '.join(ALL_METHODS)} (default {default_methods()})")
 
 
 def default_methods() -> str:

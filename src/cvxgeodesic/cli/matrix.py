@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 from typing import Any
 
 from ..errors import ParameterError, SourceError
@@ -37,8 +38,6 @@ def add_parser(sub: Any) -> None:
 
 def _check(args: argparse.Namespace) -> bool:
     """The options checked before the mesh is read; True for a sparse matrix (``--max-distance``)."""
-    from pathlib import Path
-
     local = args.max_distance is not None
     suffix = Path(args.output).suffix.lower()
     if local and suffix != ".npz":
@@ -60,8 +59,6 @@ def _check(args: argparse.Namespace) -> bool:
 
 def run(args: argparse.Namespace) -> int:
     """``cvxgeodesic matrix``: returns the exit code."""
-    from pathlib import Path
-
     from .._atomic import atomic_write
     from ..api import distance_matrix
     from ..mesh.fileorder import file_sources, to_file_order
