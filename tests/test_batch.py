@@ -255,3 +255,15 @@ def test_unwritable_out_fails_before_any_solve(meshes, tmp_path, monkeypatch, ca
 
 def _no_cluster(*args, **kwargs):
     raise AssertionError("the batch reached its cluster: the check must come before any solve")
+
+
+@pytest.mark.parametrize("text", ["[1, 2]", '"ok"', "3", "null"])
+def test_a_sidecar_that_is_not_an_object_means_not_done(tmp_path, text):
+    """A sidecar holding valid JSON of another shape (not written by batch) is not a finished solve: the mesh is
+    solved again, where ``meta.get`` raised AttributeError and stopped the batch."""
+    from cvxgeodesic.batch import _finished, _params
+
+    dist_path, sidecar = tmp_path / "plane.ply", tmp_path / "plane.json"
+    dist_path.write_text("ply\n")
+    sidecar.write_text(text)
+    assert _finished(dist_path, sidecar, _params([0], None, 1.0, "auto", False, "ply")) is False

@@ -177,7 +177,7 @@ def _finished(dist_path: Path, sidecar: Path, params: dict) -> bool | None:
         meta = json.loads(sidecar.read_text())
     except (OSError, ValueError):
         return False
-    if meta.get("status") != "ok":
+    if not isinstance(meta, dict) or meta.get("status") != "ok":  # a sidecar of another shape: not ours, redo
         return False
     if params["method"] is None:  # the default: done if solved with the default of the mesh's dimension
         from .api import DEFAULT_METHODS
