@@ -37,13 +37,11 @@ the exact field off.
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import scipy.sparse as sp
 
 from .errors import SourceError
 from .mesh.closest import nearest_triangle_distance, point_triangle_distance, segment_parameter
@@ -55,6 +53,7 @@ from .mesh.locate import (
     SurfacePoint,
     VolumePoint,
     bary_positions,
+    cells_around,
     closest_points,
     interpolate_at,
     surface_point,
@@ -342,21 +341,6 @@ class SourceSet:
         best = np.full(uniq.size, np.inf)
         np.minimum.at(best, inv, vals)
         return uniq.astype(np.int64), best
-
-
-def cells_around(mesh: Any, verts: Sequence[int]) -> np.ndarray:
-    """(q,) int32 ndarray: the cells that contain all of ``verts`` (around a vertex, an edge or a face), sorted.
-
-    Read from the rows of a vertex-cell incidence matrix (cached on the mesh object: it is immutable) by their
-    index pointers, not by sparse slicing.
-    """
-    inc = mesh.__dict__.get("_cg_vertex_cells")
-    if inc is None:
-        k, s = mesh.cells.shape
-        inc = sp.csr_matrix((np.ones(s * k), (mesh.cells.ravel(), np.repeat(np.arange(k), s))),
-                            shape=(mesh.n_vertices, k))
-        mesh.__dict__["_cg_vertex_cells"] = inc
-    return functools.reduce(np.intersect1d, [inc.indices[inc.indptr[v]:inc.indptr[v + 1]] for v in map(int, verts)])
 
 
 def boundary_edges(mesh: TriMesh) -> tuple[np.ndarray, np.ndarray]:

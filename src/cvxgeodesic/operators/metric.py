@@ -206,8 +206,7 @@ class Medium:
             l11 = np.sqrt(a)
             l21 = b / l11
             l22 = np.sqrt(d - l21 * l21)
-        T = np.zeros_like(P)
-        with np.errstate(invalid="ignore", divide="ignore"):
+            T = np.zeros_like(P)
             T[:, 0, 0] = 1.0 / l11
             T[:, 1, 0] = -l21 / (l11 * l22)
             T[:, 1, 1] = 1.0 / l22
