@@ -433,18 +433,24 @@ def _qc_constraints(ops: MeshOperators, sc, fixed_mask: np.ndarray, ell: np.ndar
         # every edge of a tetrahedron without a cone (next to a source, a point's, degenerate) gets |d_i - d_j| <=
         # l_ij: a tetrahedron's cone does not cover all the edges its neighbours share with it
         lc = np.unique(mesh.cell_edges[cell_free & ~keep])
-        lc = lc[~fixed_mask[E[lc]].all(axis=1)]
-        ineq.both_ways(E[lc], ell[lc])
+        ineq.both_ways(E[lc], ell[lc], ~fixed_mask[E[lc]].all(axis=1))
         return np.ascontiguousarray(cells[keep]), np.ascontiguousarray(ops.gradient_blocks[keep])
     # d_j - d_s <= |v_j - v_s| on the source stars; with d_s fixed at 0 this is a bound on d_j
     ineq.add(np.column_stack([sc.star_other, sc.star_source]), [1.0, -1.0], sc.star_rhs)
-    if ops.degenerate_edges.size:
-        # degenerate faces carry no cone: their edges get |d_i - d_j| <= l_ij (both directions)
-        Ed, ld = E[ops.degenerate_edges], ell[ops.degenerate_edges]
-        ineq.both_ways(Ed, ld, ~fixed_mask[Ed].all(axis=1))
-    Eu, lu = _uncovered_edges(mesh, keep, cell_free, fixed_mask, ops.degenerate_edges, ell)
-    if len(Eu):
-        ineq.both_ways(Eu, lu)
+    # degenerate faces carry no cone: their edges get |d_i - d_j| <= l_ij (both directions)
+    Ed, ld = E[ops.degenerate_edges], ell[ops.degenerate_edges]
+    ineq.both_ways(Ed, ld, ~fixed_mask[Ed].all(axis=1))
+    # A cone on a face bounds the derivative along each of its edges, |d_i - d_j| <= l_ij. An edge between two free
+    # vertices whose faces all carry no cone (faces incident to a source, point- and curve-source faces) would be
+    # unconstrained: on an open mesh's corner triangle, or between two sources' stars, the maximization then pushed a
+    # vertex above the edge-graph distance (found by hypothesis: 0.559 against Dijkstra's 0.5 on a 15-vertex grid with
+    # two sources), breaking d <= Dijkstra (Theorem 2). Those edges get the LC bound instead; on an ordinary mesh
+    # there are none. An edge with a fixed end is a source-star edge (bounded above) or lies outside the problem.
+    covered, candidate = np.zeros(len(E), dtype=bool), np.zeros(len(E), dtype=bool)
+    covered[mesh.cell_edges[keep].ravel()] = True
+    covered[ops.degenerate_edges] = True
+    candidate[mesh.cell_edges[cell_free].ravel()] = True
+    ineq.both_ways(E, ell, candidate & ~covered & ~fixed_mask[E].any(axis=1))
     return np.ascontiguousarray(cells[keep]), np.ascontiguousarray(ops.gradient_blocks[keep])
 
 
@@ -469,27 +475,6 @@ def _within(mesh: SimplexMesh, ell: np.ndarray, seeds: np.ndarray, radius: float
     graph = sp.csr_matrix((np.r_[ell, ell], (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])), shape=(n, n))
     dist = dijkstra(graph, directed=True, indices=np.unique(seeds), min_only=True, limit=radius)
     return np.isfinite(dist)
-
-
-def _uncovered_edges(mesh, cone_faces, face_free, fixed_mask, degenerate_edges, ell):
-    """Edges between two free vertices that no cone covers, with their bounds: (k, 2) vertices, (k,) lengths.
-
-    A cone on a face bounds the derivative along each of its edges, |d_i − d_j| ≤ l_ij. An edge whose faces all
-    carry no cone (faces incident to a source, point- and curve-source faces) would be unconstrained: on an
-    open mesh's corner triangle, or between two sources' stars, the maximization then pushed a vertex above
-    the edge-graph distance (found by hypothesis: 0.559 against Dijkstra's 0.5 on a 15-vertex grid with two
-    sources), breaking d ≤ Dijkstra (Theorem 2). Those edges get the LC bound instead; on an ordinary mesh
-    there are none, so the problem is unchanged. Degenerate faces' edges are bounded separately.
-    """
-    covered = np.zeros(len(mesh.edges), dtype=bool)
-    covered[mesh.cell_edges[cone_faces].ravel()] = True
-    covered[degenerate_edges] = True
-    candidate = np.zeros(len(mesh.edges), dtype=bool)
-    candidate[mesh.cell_edges[face_free].ravel()] = True
-    E = mesh.edges
-    # an edge with a fixed end is a source-star edge (bounded by the star bound) or lies outside the problem
-    pick = candidate & ~covered & ~fixed_mask[E].any(axis=1)
-    return E[pick], ell[pick]
 
 
 def build_problem(
