@@ -454,17 +454,6 @@ def _qc_constraints(ops: MeshOperators, sc, fixed_mask: np.ndarray, ell: np.ndar
     return np.ascontiguousarray(cells[keep]), np.ascontiguousarray(ops.gradient_blocks[keep])
 
 
-def _near(mesh: SimplexMesh, seeds: np.ndarray, hops: int) -> np.ndarray:
-    """(n,) bool ndarray: the vertices at most ``hops`` edges from ``seeds``."""
-    near = np.zeros(mesh.n_vertices, dtype=bool)
-    near[seeds] = True
-    E = mesh.edges
-    for _ in range(hops):
-        grow = near[E[:, 0]] | near[E[:, 1]]
-        near[E[grow].ravel()] = True
-    return near
-
-
 def _within(mesh: SimplexMesh, ell: np.ndarray, seeds: np.ndarray, radius: float) -> np.ndarray:
     """(n,) bool ndarray: the vertices whose shortest edge path to ``seeds`` (edge lengths ``ell``) is at most
     ``radius`` (Dijkstra stopped at ``radius``: the cost follows the ball, not the mesh)."""
@@ -560,7 +549,7 @@ def build_problem(
         # (2026-12-02: spot 11 -> 16, lucy_20k 14 -> 21, kitten 13 -> 17, qcqp-hessian)
         bounded = ~fixed_mask
     else:
-        bounded = _near(mesh, sc.anchors, NONNEGATIVE_HOPS) & ~fixed_mask
+        bounded = _within(mesh, np.ones(len(mesh.edges)), sc.anchors, NONNEGATIVE_HOPS) & ~fixed_mask  # edge hops
         if energy in SECOND_ORDER_ENERGIES and lam > 0:
             radius = NONNEGATIVE_RADIUS * smoothing_length(ops, lam, stretch)
             bounded |= _within(mesh, ell, sc.anchors, radius) & ~fixed_mask
