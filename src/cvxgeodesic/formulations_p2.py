@@ -554,13 +554,9 @@ class BernsteinEdgeCones:
         T[r, (corner + 1) % 3] = 3.0
         T[r, (corner + 2) % 3] = 3.0
         T[r, 3 + corner] = -4.0
-        G = np.zeros((k, 6, 6))
-        G[:, 0] = -T
-        G[:, 1:5] = -np.sqrt(a)[:, None, None] * grad
-        G[:, 5] = -T
-        h = np.zeros((k, 6))
-        h[:, 0] = a - e2
-        h[:, 5] = -a - e2
+        G, h = _cone_rows(T, np.sqrt(a)[:, None, None] * grad, 4)  # h = (1, 0, 0, 0, 0, −1)
+        h = a[:, None] * h
+        h[:, [0, 5]] -= e2[:, None]
         return G, h
 
 
