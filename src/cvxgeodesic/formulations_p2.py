@@ -279,9 +279,6 @@ class P2Builder:
         mesh, sp_, dim = self.mesh, self.space, self.dim
         deg = np.flatnonzero(sp_.degenerate)
         n_loc, n_e = sp_.cell_dofs.shape[1], sp_.cell_edges.shape[1]
-        if not deg.size:
-            return (np.zeros((0, dim + 2, n_loc)), np.zeros((0, dim + 2)), np.zeros(0, dtype=np.int64),
-                    np.zeros((0, dim + 1)))
         ids, first = np.unique(sp_.cell_edges[deg].ravel(), return_index=True)
         owner, local = deg[first // n_e], first % n_e
         ok = mesh.edge_lengths[ids] > MIN_EDGE * max(mesh.bbox_diagonal, 1e-300)
@@ -300,11 +297,12 @@ class P2Builder:
             grd[j, r[:, None], 0, cols] = dNt[j] / L[:, None]
             eb[j, r, a], eb[j, r, b] = 1 - t[j], t[j]
         Ge, he = _cone_rows(val.reshape(-1, n_loc), grd.reshape(-1, 1, n_loc), dim)
-        word = "face(s)" if dim == 2 else "tetrahedra"
-        note = (f"{deg.size} degenerate {word} carry no cones at order 2; their {ids.size} edge(s) get the 1-D cone "
-                "(dφ/ds)² ≤ 4φ instead")
-        self.notes.append(note)
-        warnings.warn(f"{mesh.name}: {note}", DegenerateFacesWarning, stacklevel=4)
+        if deg.size:
+            word = "face(s)" if dim == 2 else "tetrahedra"
+            note = (f"{deg.size} degenerate {word} carry no cones at order 2; their {ids.size} edge(s) get the 1-D "
+                    "cone (dφ/ds)² ≤ 4φ instead")
+            self.notes.append(note)
+            warnings.warn(f"{mesh.name}: {note}", DegenerateFacesWarning, stacklevel=4)
         return Ge, he, np.tile(owner, 3), eb.reshape(-1, dim + 1)
 
     def _source_rows(self, is_src: np.ndarray) -> sp.csr_matrix:
