@@ -42,6 +42,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from .errors import SourceError
 from .mesh.closest import nearest_triangle_distance, point_triangle_distance, segment_parameter
@@ -702,8 +703,6 @@ def _steep_cells(ops: Any, ss: SourceSet, near: np.ndarray, medium: Any) -> np.n
     """(q,) int64 ndarray: the cells of ``near`` where the linear interpolant of the local exact field is steeper
     than 1: the distance to the nearest source vertex, point, curve piece (its ends and midpoint stand in for it) or
     source face. There the exact field violates the cone too (an apex close to the cell's facet or corner)."""
-    from scipy.spatial import cKDTree
-
     mesh = ops.mesh
     V, C = mesh.V, mesh.cells
     cand = np.flatnonzero(near)
