@@ -22,6 +22,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..mesh.simplex import CELL_EDGES
 from ..mesh.split import SplitMesh
+from ..validation import check_choice, check_order
 from .gradient import gradient_blocks
 from .metric import Medium
 
@@ -140,8 +141,7 @@ class LagrangeSpace:
     """
 
     def __init__(self, mesh: Any, order: int = 2, medium: Medium | None = None):
-        if order not in (1, 2):
-            raise ParameterError(f"order must be 1 or 2, got {order!r}")
+        order = check_order(order)
         if medium is not None and mesh.dim != 2:
             raise ParameterError("a travel cost or metric is defined on surfaces only")
         self.mesh, self.order, self.medium, self.dim = mesh, order, medium, int(mesh.dim)
@@ -254,8 +254,7 @@ class LagrangeSpace:
         """
         A = self.cell_measures
         n_loc, c = self.cell_dofs.shape[1], self.dim + 1
-        if kind not in WEIGHTS:
-            raise ParameterError(f"weights must be one of {WEIGHTS}, got {kind!r}")
+        check_choice(kind, "weights", WEIGHTS, lower=False)
         if kind != "lumped" and (self.dim != 2 or self.order != 2):
             raise ParameterError(f"weights={kind!r} is defined for order-2 triangles only; use 'lumped'")
         if kind == "lumped":
