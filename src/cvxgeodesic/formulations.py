@@ -178,12 +178,8 @@ def stretch_weights(mesh: SimplexMesh, stretch: str = "area", area_ratio: np.nda
 
 def canonical_method(method: str) -> str:
     """Lower-case formulation name with aliases resolved; raises ParameterError if unknown."""
-    if not isinstance(method, str):
-        raise ParameterError(f"method must be a string, got {type(method).__name__}")
-    name = ALIASES.get(method.lower(), method.lower())
-    if name not in FORMULATIONS:
-        raise ParameterError(f"unknown formulation {method!r}; choose one of {', '.join([*FORMULATIONS, *ALIASES])}")
-    return name
+    name = check_choice(method, "formulation", [*FORMULATIONS, *ALIASES])
+    return ALIASES.get(name, name)
 
 
 def smoothness_weight(mesh: SimplexMesh, m: float, normalization: str = "area", energy: str = "hessian",
