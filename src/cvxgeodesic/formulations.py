@@ -74,7 +74,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from . import capabilities
-from .errors import DegenerateFacesWarning, MeshError, ParameterError
+from .errors import DegenerateFacesWarning, MeshError
 from .mesh.simplex import SimplexMesh
 from .mesh.trimesh import DEGENERATE_TOL
 from .operators import check_energy, energy_matrix, gradient_blocks
@@ -405,10 +405,9 @@ class _Inequalities:
         self._c.append(np.tile(np.asarray(coeffs, dtype=np.float64), (len(self._v[-1]), 1)))
         self._r.append(np.asarray(rhs, dtype=np.float64))
 
-    def both_ways(self, edges: np.ndarray, ell: np.ndarray, pick: np.ndarray | None = None) -> None:
-        """``|d_i − d_j| ≤ l_ij`` for the picked edges: all ``+`` rows, then all ``−`` rows."""
-        if pick is not None:
-            edges, ell = edges[pick], ell[pick]
+    def both_ways(self, edges: np.ndarray, ell: np.ndarray, pick: np.ndarray) -> None:
+        """``|d_i − d_j| ≤ l_ij`` for the picked edges (a mask): all ``+`` rows, then all ``−`` rows."""
+        edges, ell = edges[pick], ell[pick]
         self.add(edges, [1.0, -1.0], ell)
         self.add(edges, [-1.0, 1.0], ell)
 
@@ -508,8 +507,7 @@ def build_problem(
     name = canonical_method(method)
     capabilities.check(name, dim=mesh.dim)  # names the methods that apply
     constraint, energy = FORMULATIONS[name]
-    if not np.isfinite(lam) or lam < 0:
-        raise ParameterError(f"smoothness weight lambda must be finite and >= 0, got {lam}")
+    check_number(lam, "smoothness weight lambda", low=0)
 
     # fixed vertices, cone-free faces and source bounds (sources.py)
     sc = source_constraints(ops, sources, min_edge_bound=MIN_EDGE_BOUND)

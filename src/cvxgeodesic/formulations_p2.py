@@ -67,6 +67,7 @@ from .operators.lagrange import SAMPLES, LagrangeSpace, edge_basis, sample_point
 from .operators.metric import Medium
 from .operators.p2_energy import P2Energy, p2_energy
 from .solvers.problem import ConeGroup, ConicProblem, Equalities, PairInequalities
+from .validation import check_number
 
 __all__ = ["DEFAULT_SAMPLES", "DEFAULT_VOLUME_SAMPLES", "DEFAULT_WEIGHTS", "ORDER2_CACHE_VERSION", "BernsteinEdgeCones",
            "P2Builder", "P2Program", "bernstein_edge_cones", "eliminate_pair_equalities", "source_edges"]
@@ -263,8 +264,7 @@ class P2Builder:
     def _check(self, samples: str, medium: Medium | None, energy: str | None, lam: float) -> None:
         """ParameterError for a bad option, or one the capability table refuses (:func:`capabilities.check`: a
         smoothness energy with a medium; either on tetrahedra), or the edge cones on tetrahedra."""
-        if not (np.isfinite(lam) and lam >= 0):
-            raise ParameterError(f"smoothness weight lambda must be finite and >= 0, got {lam}")
+        check_number(lam, "smoothness weight lambda", low=0)
         if samples not in SAMPLES and samples not in ("flat-nodes", "flat-bernstein"):
             raise ParameterError(f"samples must be 'flat-bernstein', 'flat-nodes' or one of {SAMPLES}, "
                                  f"got {samples!r}")
