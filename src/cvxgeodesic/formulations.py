@@ -66,6 +66,7 @@ measured in the volume.
 
 from __future__ import annotations
 
+import functools
 import warnings
 from dataclasses import dataclass
 
@@ -317,7 +318,6 @@ class MeshOperators:
     medium: Medium | None = None
 
     def __post_init__(self):
-        self._blocks = None
         self._energies: dict[str, sp.csc_matrix] = {}
         self._stretch: dict[str, np.ndarray] = {}
         self.notes: list[str] = []
@@ -350,18 +350,16 @@ class MeshOperators:
             warnings.warn(message, DegenerateFacesWarning, stacklevel=3)
             self.notes.append(message)
 
-    @property
+    @functools.cached_property
     def gradient_blocks(self) -> np.ndarray:
         """(k, dim, dim + 1) float ndarray: :func:`~cvxgeodesic.operators.gradient_blocks`, zero on degenerate
         cells."""
-        if self._blocks is None:
-            blocks = gradient_blocks(self.mesh)
-            if self.medium is not None:
-                with np.errstate(invalid="ignore"):
-                    blocks = np.einsum("tij,tjk->tik", self.medium.face_transforms, blocks)
-            blocks[self.degenerate] = 0.0
-            self._blocks = blocks
-        return self._blocks
+        blocks = gradient_blocks(self.mesh)
+        if self.medium is not None:
+            with np.errstate(invalid="ignore"):
+                blocks = np.einsum("tij,tjk->tik", self.medium.face_transforms, blocks)
+        blocks[self.degenerate] = 0.0
+        return blocks
 
     def energy(self, name: str, *, analyse=None) -> sp.csc_matrix:
         """(n, n) csc_matrix of a named energy, assembled on the non-degenerate cells (cached).

@@ -14,6 +14,7 @@ were inserted as vertices, :class:`~cvxgeodesic.mesh.split.SplitMesh`).
 
 from __future__ import annotations
 
+import functools
 import itertools
 from typing import Any
 
@@ -209,16 +210,13 @@ class LagrangeSpace:
                 grad = np.einsum("tij,tsja->tsia", T, grad)
         return N, grad
 
-    @property
+    @functools.cached_property
     def flat_cells(self) -> np.ndarray:
         """(k,) bool ndarray: proper cells where ``d²`` is a quadratic wherever a source is visible: every proper
         tetrahedron (a solid is flat), the proper faces whose edge-neighbours all lie in their plane
         (|cos| ≥ 1 − 1e-10)."""
-        if getattr(self, "_flat", None) is None:
-            self._flat = ~self.degenerate if self.dim == 3 else self._flat_faces()
-        return self._flat
-
-    def _flat_faces(self) -> np.ndarray:
+        if self.dim == 3:
+            return ~self.degenerate
         nrm = self.mesh.face_normals_unnormalized
         with np.errstate(divide="ignore", invalid="ignore"):
             nrm = nrm / np.linalg.norm(nrm, axis=1, keepdims=True)
