@@ -327,8 +327,6 @@ class P2Builder:
         used[dofs[np.abs(G).max(axis=1) > 0]] = True
         used[sp.csr_matrix(E).indices] = True
         loose = np.flatnonzero(~used[n_v:] & ~fixed[n_v:]) + n_v
-        if not loose.size:
-            return c, fixed, (np.zeros(0, dtype=np.int64), sp.csr_matrix((0, n)))
         ends = self.mesh.edges[loose - n_v]
         c, fixed = c.copy(), fixed.copy()
         np.add.at(c, ends.ravel(), np.repeat(0.5 * c[loose], 2))
