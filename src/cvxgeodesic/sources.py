@@ -672,25 +672,23 @@ def vertex_bounds(mesh: Any, ss: SourceSet, medium: Any = None) -> np.ndarray:
     C, V = mesh.cells, mesh.V
     bound = np.full(mesh.n_vertices, np.inf)
     eye = np.eye(3)
-    if ss.point_faces.size:
-        X = ss.point_positions(mesh)
-        Cv = C[ss.point_faces]  # (p, dim + 1)
+    X = ss.point_positions(mesh)
+    Cv = C[ss.point_faces]  # (p, dim + 1)
+    if medium is None:
+        dist = np.linalg.norm(V[Cv] - X[:, None, :], axis=2)
+    else:
+        dist = np.stack([medium.segment_lengths(ss.point_faces, ss.point_bary, eye[i]) for i in range(3)], 1)
+    np.minimum.at(bound, Cv.ravel(), dist.ravel())
+    Fs = C[ss.segment_faces]  # the curve pieces' faces (none in a solid)
+    A, B = ss.segment_ends(mesh)
+    for i in range(3):
+        t = segment_parameter(V[Fs[:, i]], A, B)[:, None]
         if medium is None:
-            dist = np.linalg.norm(V[Cv] - X[:, None, :], axis=2)
-        else:
-            dist = np.stack([medium.segment_lengths(ss.point_faces, ss.point_bary, eye[i]) for i in range(3)], 1)
-        np.minimum.at(bound, Cv.ravel(), dist.ravel())
-    if ss.segment_faces.size:
-        Fs = C[ss.segment_faces]
-        A, B = ss.segment_ends(mesh)
-        for i in range(3):
-            t = segment_parameter(V[Fs[:, i]], A, B)[:, None]
-            if medium is None:
-                dist = np.linalg.norm(V[Fs[:, i]] - (A + t * (B - A)), axis=1)
-            else:  # a path to the Euclidean closest point of the piece, measured in the medium
-                closest = (1 - t) * ss.segment_bary[:, 0] + t * ss.segment_bary[:, 1]
-                dist = medium.segment_lengths(ss.segment_faces, closest, eye[i])
-            np.minimum.at(bound, Fs[:, i], dist)
+            dist = np.linalg.norm(V[Fs[:, i]] - (A + t * (B - A)), axis=1)
+        else:  # a path to the Euclidean closest point of the piece, measured in the medium
+            closest = (1 - t) * ss.segment_bary[:, 0] + t * ss.segment_bary[:, 1]
+            dist = medium.segment_lengths(ss.segment_faces, closest, eye[i])
+        np.minimum.at(bound, Fs[:, i], dist)
     if ss.facets.size:  # the fourth corner of each source face's tetrahedron: its distance to the face
         tri = ss.face_triangles(mesh)
         t_of, local = ss.face_slots(mesh)
