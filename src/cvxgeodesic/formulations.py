@@ -532,8 +532,8 @@ def build_problem(
         d = mesh.dim
         cone_vertices, cone_blocks = np.zeros((0, d + 1), dtype=np.int64), np.zeros((0, d, d + 1))
         ineq.both_ways(mesh.edges, ell, ~fixed_mask[mesh.edges].all(axis=1))
-    if sc.bound_vertices.size:  # point and curve sources: d_v <= (a surface path to the source)
-        ineq.add(np.column_stack([sc.bound_vertices] * 2), [1.0, 0.0], sc.bound_rhs)
+    # point and curve sources: d_v <= (a surface path to the source)
+    ineq.add(np.column_stack([sc.bound_vertices] * 2), [1.0, 0.0], sc.bound_rhs)
     if nonnegative:
         # d_i >= 0 holds for the exact distance; without it maximizing the sum can push a few vertices of folded
         # or self-intersecting meshes (and strongly smoothed coarse fields) below zero. Not everywhere by default: the
@@ -545,9 +545,8 @@ def build_problem(
         if energy in SECOND_ORDER_ENERGIES and lam > 0:
             radius = NONNEGATIVE_RADIUS * smoothing_length(ops, lam, stretch)
             bounded |= _within(mesh, ell, sc.anchors, radius) & ~fixed_mask
-    if bounded.any():
-        free_v = np.flatnonzero(bounded)
-        ineq.add(np.column_stack([free_v, free_v]), [-1.0, 0.0], np.zeros(len(free_v)))
+    free_v = np.flatnonzero(bounded)
+    ineq.add(np.column_stack([free_v, free_v]), [-1.0, 0.0], np.zeros(len(free_v)))
     ineq_vertices, ineq_coeffs, ineq_rhs = ineq.arrays()
 
     P = None
