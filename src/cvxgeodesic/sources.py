@@ -705,11 +705,8 @@ def _steep_cells(ops: Any, ss: SourceSet, near: np.ndarray, medium: Any) -> np.n
     V, C = mesh.V, mesh.cells
     cand = np.flatnonzero(near)
     corners = C[cand].reshape(-1)
-    pts = [ss.point_positions(mesh), V[ss.vertices]]
-    if ss.segment_faces.size:
-        A, B = ss.segment_ends(mesh)
-        pts += [A, B, 0.5 * (A + B)]
-    P = np.concatenate(pts)
+    A, B = ss.segment_ends(mesh)  # the curve pieces (none in a solid)
+    P = np.concatenate([ss.point_positions(mesh), V[ss.vertices], A, B, 0.5 * (A + B)])
     local = np.full(corners.size, np.inf)
     nearest = np.zeros(corners.size, dtype=np.int64)
     if len(P):

@@ -375,11 +375,10 @@ def _stationary_point(Q: np.ndarray, scale: np.ndarray, S: list[int]) -> np.ndar
     rhs[:, size] = 1.0
     ok = np.abs(np.linalg.det(M)) > 1e-12
     lam = np.full((k, c), -1.0)  # rejected by the caller unless solved and inside
-    if ok.any():
-        sol = np.linalg.solve(M[ok], rhs[ok][..., None])[..., 0]
-        full = np.zeros((int(ok.sum()), c))
-        full[:, S] = sol[:, :size]
-        lam[ok] = full
+    sol = np.linalg.solve(M[ok], rhs[ok][..., None])[..., 0]
+    full = np.zeros((int(ok.sum()), c))
+    full[:, S] = sol[:, :size]
+    lam[ok] = full
     return lam[:, None, :]
 
 
