@@ -16,6 +16,7 @@ from cvxgeodesic.formulations import (
     KAPPA,
     MeshOperators,
     build_problem,
+    canonical_method,
     smoothness_weight,
     stretch_weights,
 )
@@ -182,6 +183,13 @@ def test_smoothness_weight_formula():
     assert area == pytest.approx(2.0 * KAPPA["hessian"] * np.sqrt(mesh.face_areas.sum()))
     with pytest.raises(ParameterError, match="unknown normalization 'mean'; choose one of area, paper"):
         smoothness_weight(mesh, 1.0, normalization="mean")
+
+
+def test_canonical_method_resolves_case_and_aliases_and_names_the_choices():
+    assert canonical_method("QGDF") == "lcqp-hessian" and canonical_method("QCLP") == "qclp"
+    for bad in ("qcqp", 5):
+        with pytest.raises(ParameterError, match=f"^unknown formulation {bad!r}; choose one of lclp, .*, qgdf$"):
+            canonical_method(bad)  # type: ignore[arg-type]
 
 
 def test_area_normalization_does_not_depend_on_the_triangulation():

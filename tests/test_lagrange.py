@@ -80,8 +80,10 @@ def test_order2_reproduces_quadratics_and_their_gradient_norms(dim):
 def test_consistent_weights_are_for_triangles_only():
     with pytest.raises(ParameterError, match="weights='p2' is defined for order-2 triangles only"):
         LagrangeSpace(_mesh(3)).weights("p2")
-    with pytest.raises(ParameterError, match="order must be 1 or 2"):
+    with pytest.raises(ParameterError, match=r"order must be 1 \(P1 distance\) or 2"):
         LagrangeSpace(_mesh(2), order=3)
+    with pytest.raises(ParameterError, match="unknown weights 'exact'; choose one of lumped, p2"):
+        LagrangeSpace(_mesh(2)).weights("exact")
 
 
 @pytest.mark.parametrize("dim", [2, 3])

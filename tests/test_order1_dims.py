@@ -96,7 +96,7 @@ def test_smoothing_length_is_a_length_in_both_dimensions(kind):
 @pytest.mark.parametrize("lam", [-1e-3, np.nan, np.inf])
 def test_builder_refuses_a_bad_lambda(kind, lam):
     mesh = MESHES[kind]()
-    with pytest.raises(ParameterError, match="smoothness weight lambda must be finite and >= 0"):
+    with pytest.raises(ParameterError, match="smoothness weight lambda must be a finite number >= 0"):
         build_problem(MeshOperators(mesh), resolve_sources(mesh, 0), SMOOTH[kind], lam)
 
 

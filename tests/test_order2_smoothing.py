@@ -23,6 +23,7 @@ from cvxgeodesic.operators.p2_energy import (
     P2_ENERGIES,
     edge_diamonds,
     edge_pair_dofs,
+    face_hessian_energy,
     interior_edge_pairs,
     p2_energy,
 )
@@ -177,6 +178,10 @@ def test_bad_energy_arguments():
         p2_energy(space, "biharmonic")
     with pytest.raises(ParameterError, match="sigma"):
         p2_energy(space, "hessian", sigma=0.0)
+    with pytest.raises(ParameterError, match="unknown jump 'edge'; choose one of vertex, p2"):
+        p2_energy(space, "hessian", jump="edge")
+    with pytest.raises(ParameterError, match="unknown kind 'dirichlet'; choose one of hessian, laplacian"):
+        face_hessian_energy(space, "dirichlet")
     with pytest.raises(ParameterError, match="lambda"):
         P2Builder(grid(3), energy="hessian", lam=-1.0)
 

@@ -66,6 +66,7 @@ measured in the volume.
 
 from __future__ import annotations
 
+import functools
 import warnings
 from dataclasses import dataclass
 
@@ -74,7 +75,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from . import capabilities
-from .errors import DegenerateFacesWarning, MeshError, ParameterError
+from .errors import DegenerateFacesWarning, MeshError
 from .mesh.simplex import SimplexMesh
 from .mesh.trimesh import DEGENERATE_TOL
 from .operators import check_energy, energy_matrix, gradient_blocks
@@ -178,12 +179,8 @@ def stretch_weights(mesh: SimplexMesh, stretch: str = "area", area_ratio: np.nda
 
 def canonical_method(method: str) -> str:
     """Lower-case formulation name with aliases resolved; raises ParameterError if unknown."""
-    if not isinstance(method, str):
-        raise ParameterError(f"method must be a string, got {type(method).__name__}")
-    name = ALIASES.get(method.lower(), method.lower())
-    if name not in FORMULATIONS:
-        raise ParameterError(f"unknown formulation {method!r}; choose one of {', '.join([*FORMULATIONS, *ALIASES])}")
-    return name
+    name = check_choice(method, "formulation", [*FORMULATIONS, *ALIASES])
+    return ALIASES.get(name, name)
 
 
 def smoothness_weight(mesh: SimplexMesh, m: float, normalization: str = "area", energy: str = "hessian",
@@ -321,7 +318,6 @@ class MeshOperators:
     medium: Medium | None = None
 
     def __post_init__(self):
-        self._blocks = None
         self._energies: dict[str, sp.csc_matrix] = {}
         self._stretch: dict[str, np.ndarray] = {}
         self.notes: list[str] = []
@@ -354,18 +350,16 @@ class MeshOperators:
             warnings.warn(message, DegenerateFacesWarning, stacklevel=3)
             self.notes.append(message)
 
-    @property
+    @functools.cached_property
     def gradient_blocks(self) -> np.ndarray:
         """(k, dim, dim + 1) float ndarray: :func:`~cvxgeodesic.operators.gradient_blocks`, zero on degenerate
         cells."""
-        if self._blocks is None:
-            blocks = gradient_blocks(self.mesh)
-            if self.medium is not None:
-                with np.errstate(invalid="ignore"):
-                    blocks = np.einsum("tij,tjk->tik", self.medium.face_transforms, blocks)
-            blocks[self.degenerate] = 0.0
-            self._blocks = blocks
-        return self._blocks
+        blocks = gradient_blocks(self.mesh)
+        if self.medium is not None:
+            with np.errstate(invalid="ignore"):
+                blocks = np.einsum("tij,tjk->tik", self.medium.face_transforms, blocks)
+        blocks[self.degenerate] = 0.0
+        return blocks
 
     def energy(self, name: str, *, analyse=None) -> sp.csc_matrix:
         """(n, n) csc_matrix of a named energy, assembled on the non-degenerate cells (cached).
@@ -409,10 +403,9 @@ class _Inequalities:
         self._c.append(np.tile(np.asarray(coeffs, dtype=np.float64), (len(self._v[-1]), 1)))
         self._r.append(np.asarray(rhs, dtype=np.float64))
 
-    def both_ways(self, edges: np.ndarray, ell: np.ndarray, pick: np.ndarray | None = None) -> None:
-        """``|d_i − d_j| ≤ l_ij`` for the picked edges: all ``+`` rows, then all ``−`` rows."""
-        if pick is not None:
-            edges, ell = edges[pick], ell[pick]
+    def both_ways(self, edges: np.ndarray, ell: np.ndarray, pick: np.ndarray) -> None:
+        """``|d_i − d_j| ≤ l_ij`` for the picked edges (a mask): all ``+`` rows, then all ``−`` rows."""
+        edges, ell = edges[pick], ell[pick]
         self.add(edges, [1.0, -1.0], ell)
         self.add(edges, [-1.0, 1.0], ell)
 
@@ -433,30 +426,25 @@ def _qc_constraints(ops: MeshOperators, sc, fixed_mask: np.ndarray, ell: np.ndar
         # every edge of a tetrahedron without a cone (next to a source, a point's, degenerate) gets |d_i - d_j| <=
         # l_ij: a tetrahedron's cone does not cover all the edges its neighbours share with it
         lc = np.unique(mesh.cell_edges[cell_free & ~keep])
-        lc = lc[~fixed_mask[E[lc]].all(axis=1)]
-        ineq.both_ways(E[lc], ell[lc])
+        ineq.both_ways(E[lc], ell[lc], ~fixed_mask[E[lc]].all(axis=1))
         return np.ascontiguousarray(cells[keep]), np.ascontiguousarray(ops.gradient_blocks[keep])
     # d_j - d_s <= |v_j - v_s| on the source stars; with d_s fixed at 0 this is a bound on d_j
     ineq.add(np.column_stack([sc.star_other, sc.star_source]), [1.0, -1.0], sc.star_rhs)
-    if ops.degenerate_edges.size:
-        # degenerate faces carry no cone: their edges get |d_i - d_j| <= l_ij (both directions)
-        Ed, ld = E[ops.degenerate_edges], ell[ops.degenerate_edges]
-        ineq.both_ways(Ed, ld, ~fixed_mask[Ed].all(axis=1))
-    Eu, lu = _uncovered_edges(mesh, keep, cell_free, fixed_mask, ops.degenerate_edges, ell)
-    if len(Eu):
-        ineq.both_ways(Eu, lu)
+    # degenerate faces carry no cone: their edges get |d_i - d_j| <= l_ij (both directions)
+    Ed, ld = E[ops.degenerate_edges], ell[ops.degenerate_edges]
+    ineq.both_ways(Ed, ld, ~fixed_mask[Ed].all(axis=1))
+    # A cone on a face bounds the derivative along each of its edges, |d_i - d_j| <= l_ij. An edge between two free
+    # vertices whose faces all carry no cone (faces incident to a source, point- and curve-source faces) would be
+    # unconstrained: on an open mesh's corner triangle, or between two sources' stars, the maximization then pushed a
+    # vertex above the edge-graph distance (found by hypothesis: 0.559 against Dijkstra's 0.5 on a 15-vertex grid with
+    # two sources), breaking d <= Dijkstra (Theorem 2). Those edges get the LC bound instead; on an ordinary mesh
+    # there are none. An edge with a fixed end is a source-star edge (bounded above) or lies outside the problem.
+    covered, candidate = np.zeros(len(E), dtype=bool), np.zeros(len(E), dtype=bool)
+    covered[mesh.cell_edges[keep].ravel()] = True
+    covered[ops.degenerate_edges] = True
+    candidate[mesh.cell_edges[cell_free].ravel()] = True
+    ineq.both_ways(E, ell, candidate & ~covered & ~fixed_mask[E].any(axis=1))
     return np.ascontiguousarray(cells[keep]), np.ascontiguousarray(ops.gradient_blocks[keep])
-
-
-def _near(mesh: SimplexMesh, seeds: np.ndarray, hops: int) -> np.ndarray:
-    """(n,) bool ndarray: the vertices at most ``hops`` edges from ``seeds``."""
-    near = np.zeros(mesh.n_vertices, dtype=bool)
-    near[seeds] = True
-    E = mesh.edges
-    for _ in range(hops):
-        grow = near[E[:, 0]] | near[E[:, 1]]
-        near[E[grow].ravel()] = True
-    return near
 
 
 def _within(mesh: SimplexMesh, ell: np.ndarray, seeds: np.ndarray, radius: float) -> np.ndarray:
@@ -469,27 +457,6 @@ def _within(mesh: SimplexMesh, ell: np.ndarray, seeds: np.ndarray, radius: float
     graph = sp.csr_matrix((np.r_[ell, ell], (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])), shape=(n, n))
     dist = dijkstra(graph, directed=True, indices=np.unique(seeds), min_only=True, limit=radius)
     return np.isfinite(dist)
-
-
-def _uncovered_edges(mesh, cone_faces, face_free, fixed_mask, degenerate_edges, ell):
-    """Edges between two free vertices that no cone covers, with their bounds: (k, 2) vertices, (k,) lengths.
-
-    A cone on a face bounds the derivative along each of its edges, |d_i − d_j| ≤ l_ij. An edge whose faces all
-    carry no cone (faces incident to a source, point- and curve-source faces) would be unconstrained: on an
-    open mesh's corner triangle, or between two sources' stars, the maximization then pushed a vertex above
-    the edge-graph distance (found by hypothesis: 0.559 against Dijkstra's 0.5 on a 15-vertex grid with two
-    sources), breaking d ≤ Dijkstra (Theorem 2). Those edges get the LC bound instead; on an ordinary mesh
-    there are none, so the problem is unchanged. Degenerate faces' edges are bounded separately.
-    """
-    covered = np.zeros(len(mesh.edges), dtype=bool)
-    covered[mesh.cell_edges[cone_faces].ravel()] = True
-    covered[degenerate_edges] = True
-    candidate = np.zeros(len(mesh.edges), dtype=bool)
-    candidate[mesh.cell_edges[face_free].ravel()] = True
-    E = mesh.edges
-    # an edge with a fixed end is a source-star edge (bounded by the star bound) or lies outside the problem
-    pick = candidate & ~covered & ~fixed_mask[E].any(axis=1)
-    return E[pick], ell[pick]
 
 
 def build_problem(
@@ -538,8 +505,7 @@ def build_problem(
     name = canonical_method(method)
     capabilities.check(name, dim=mesh.dim)  # names the methods that apply
     constraint, energy = FORMULATIONS[name]
-    if not np.isfinite(lam) or lam < 0:
-        raise ParameterError(f"smoothness weight lambda must be finite and >= 0, got {lam}")
+    check_number(lam, "smoothness weight lambda", low=0)
 
     # fixed vertices, cone-free faces and source bounds (sources.py)
     sc = source_constraints(ops, sources, min_edge_bound=MIN_EDGE_BOUND)
@@ -566,8 +532,8 @@ def build_problem(
         d = mesh.dim
         cone_vertices, cone_blocks = np.zeros((0, d + 1), dtype=np.int64), np.zeros((0, d, d + 1))
         ineq.both_ways(mesh.edges, ell, ~fixed_mask[mesh.edges].all(axis=1))
-    if sc.bound_vertices.size:  # point and curve sources: d_v <= (a surface path to the source)
-        ineq.add(np.column_stack([sc.bound_vertices] * 2), [1.0, 0.0], sc.bound_rhs)
+    # point and curve sources: d_v <= (a surface path to the source)
+    ineq.add(np.column_stack([sc.bound_vertices] * 2), [1.0, 0.0], sc.bound_rhs)
     if nonnegative:
         # d_i >= 0 holds for the exact distance; without it maximizing the sum can push a few vertices of folded
         # or self-intersecting meshes (and strongly smoothed coarse fields) below zero. Not everywhere by default: the
@@ -575,13 +541,12 @@ def build_problem(
         # (2026-12-02: spot 11 -> 16, lucy_20k 14 -> 21, kitten 13 -> 17, qcqp-hessian)
         bounded = ~fixed_mask
     else:
-        bounded = _near(mesh, sc.anchors, NONNEGATIVE_HOPS) & ~fixed_mask
+        bounded = _within(mesh, np.ones(len(mesh.edges)), sc.anchors, NONNEGATIVE_HOPS) & ~fixed_mask  # edge hops
         if energy in SECOND_ORDER_ENERGIES and lam > 0:
             radius = NONNEGATIVE_RADIUS * smoothing_length(ops, lam, stretch)
             bounded |= _within(mesh, ell, sc.anchors, radius) & ~fixed_mask
-    if bounded.any():
-        free_v = np.flatnonzero(bounded)
-        ineq.add(np.column_stack([free_v, free_v]), [-1.0, 0.0], np.zeros(len(free_v)))
+    free_v = np.flatnonzero(bounded)
+    ineq.add(np.column_stack([free_v, free_v]), [-1.0, 0.0], np.zeros(len(free_v)))
     ineq_vertices, ineq_coeffs, ineq_rhs = ineq.arrays()
 
     P = None

@@ -67,6 +67,7 @@ from .operators.lagrange import SAMPLES, LagrangeSpace, edge_basis, sample_point
 from .operators.metric import Medium
 from .operators.p2_energy import P2Energy, p2_energy
 from .solvers.problem import ConeGroup, ConicProblem, Equalities, PairInequalities
+from .validation import check_number
 
 __all__ = ["DEFAULT_SAMPLES", "DEFAULT_VOLUME_SAMPLES", "DEFAULT_WEIGHTS", "ORDER2_CACHE_VERSION", "BernsteinEdgeCones",
            "P2Builder", "P2Program", "bernstein_edge_cones", "eliminate_pair_equalities", "source_edges"]
@@ -263,8 +264,7 @@ class P2Builder:
     def _check(self, samples: str, medium: Medium | None, energy: str | None, lam: float) -> None:
         """ParameterError for a bad option, or one the capability table refuses (:func:`capabilities.check`: a
         smoothness energy with a medium; either on tetrahedra), or the edge cones on tetrahedra."""
-        if not (np.isfinite(lam) and lam >= 0):
-            raise ParameterError(f"smoothness weight lambda must be finite and >= 0, got {lam}")
+        check_number(lam, "smoothness weight lambda", low=0)
         if samples not in SAMPLES and samples not in ("flat-nodes", "flat-bernstein"):
             raise ParameterError(f"samples must be 'flat-bernstein', 'flat-nodes' or one of {SAMPLES}, "
                                  f"got {samples!r}")
@@ -279,9 +279,6 @@ class P2Builder:
         mesh, sp_, dim = self.mesh, self.space, self.dim
         deg = np.flatnonzero(sp_.degenerate)
         n_loc, n_e = sp_.cell_dofs.shape[1], sp_.cell_edges.shape[1]
-        if not deg.size:
-            return (np.zeros((0, dim + 2, n_loc)), np.zeros((0, dim + 2)), np.zeros(0, dtype=np.int64),
-                    np.zeros((0, dim + 1)))
         ids, first = np.unique(sp_.cell_edges[deg].ravel(), return_index=True)
         owner, local = deg[first // n_e], first % n_e
         ok = mesh.edge_lengths[ids] > MIN_EDGE * max(mesh.bbox_diagonal, 1e-300)
@@ -300,11 +297,12 @@ class P2Builder:
             grd[j, r[:, None], 0, cols] = dNt[j] / L[:, None]
             eb[j, r, a], eb[j, r, b] = 1 - t[j], t[j]
         Ge, he = _cone_rows(val.reshape(-1, n_loc), grd.reshape(-1, 1, n_loc), dim)
-        word = "face(s)" if dim == 2 else "tetrahedra"
-        note = (f"{deg.size} degenerate {word} carry no cones at order 2; their {ids.size} edge(s) get the 1-D cone "
-                "(dφ/ds)² ≤ 4φ instead")
-        self.notes.append(note)
-        warnings.warn(f"{mesh.name}: {note}", DegenerateFacesWarning, stacklevel=4)
+        if deg.size:
+            word = "face(s)" if dim == 2 else "tetrahedra"
+            note = (f"{deg.size} degenerate {word} carry no cones at order 2; their {ids.size} edge(s) get the 1-D "
+                    "cone (dφ/ds)² ≤ 4φ instead")
+            self.notes.append(note)
+            warnings.warn(f"{mesh.name}: {note}", DegenerateFacesWarning, stacklevel=4)
         return Ge, he, np.tile(owner, 3), eb.reshape(-1, dim + 1)
 
     def _source_rows(self, is_src: np.ndarray) -> sp.csr_matrix:
@@ -329,8 +327,6 @@ class P2Builder:
         used[dofs[np.abs(G).max(axis=1) > 0]] = True
         used[sp.csr_matrix(E).indices] = True
         loose = np.flatnonzero(~used[n_v:] & ~fixed[n_v:]) + n_v
-        if not loose.size:
-            return c, fixed, (np.zeros(0, dtype=np.int64), sp.csr_matrix((0, n)))
         ends = self.mesh.edges[loose - n_v]
         c, fixed = c.copy(), fixed.copy()
         np.add.at(c, ends.ravel(), np.repeat(0.5 * c[loose], 2))
@@ -554,13 +550,9 @@ class BernsteinEdgeCones:
         T[r, (corner + 1) % 3] = 3.0
         T[r, (corner + 2) % 3] = 3.0
         T[r, 3 + corner] = -4.0
-        G = np.zeros((k, 6, 6))
-        G[:, 0] = -T
-        G[:, 1:5] = -np.sqrt(a)[:, None, None] * grad
-        G[:, 5] = -T
-        h = np.zeros((k, 6))
-        h[:, 0] = a - e2
-        h[:, 5] = -a - e2
+        G, h = _cone_rows(T, np.sqrt(a)[:, None, None] * grad, 4)  # h = (1, 0, 0, 0, 0, −1)
+        h = a[:, None] * h
+        h[:, [0, 5]] -= e2[:, None]
         return G, h
 
 

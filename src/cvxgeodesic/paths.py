@@ -28,6 +28,8 @@ the opposite corner, docs/volumes.md).
 
 from __future__ import annotations
 
+import contextlib
+import io
 from collections.abc import Sequence
 from typing import Any, Literal, TypeAlias, cast, overload
 
@@ -41,9 +43,10 @@ from .mesh.convert import as_mesh
 from .mesh.corridor import node_position, straighten_corridor
 from .mesh.locate import POINT_AT, POINT_TYPES, CellPoint, SurfacePoint, VolumePoint, corner_interpolant
 from .mesh.simplex import CELL_FACETS
+from .operators.gradient import gradient_blocks, triangle_frames
 from .operators.metric import make_medium
 from .results import GeodesicResult, remembered_sources
-from .sources import BARY_SNAP, SourceSet, cells_around, resolve_sources
+from .sources import BARY_SNAP, SourceSet, cells_around, closest_points, resolve_sources
 from .validation import as_vertex_field, check_count, is_integer
 
 #: A distance field as the functions here take it: the vertex values or the result they came from.
@@ -138,8 +141,6 @@ def distance_at(mesh: Any, distance: Field, points: Any) -> float | np.ndarray:
 def _hat_gradients(mesh: Any) -> np.ndarray:
     """(k, dim + 1, 3) world-coordinate gradients of each cell's barycentric coordinates (NaN/inf on degenerate
     cells): a surface's blocks are in each face's 2D frame and go back to 3D; a volume's are 3D already."""
-    from .operators.gradient import gradient_blocks, triangle_frames
-
     with np.errstate(invalid="ignore", divide="ignore"):
         B = gradient_blocks(mesh)  # (k, dim, dim + 1)
         if mesh.dim == 3:
@@ -190,8 +191,6 @@ class _Slope:
 
     def _in_medium(self, geo: _Cells, grad: np.ndarray, medium: Any) -> None:
         """``−M_t⁻¹∇d`` and its rate in each face of a surface (the medium read at the face's centroid)."""
-        from .operators.gradient import triangle_frames
-
         self.adjacency = sp.csr_matrix(medium.adjacency())  # edge lengths in the medium, as the rates
         with np.errstate(invalid="ignore", divide="ignore"):
             ex, ey = triangle_frames(geo.mesh)
@@ -613,13 +612,9 @@ def _exact_applies(mesh: Any, result: Any, ss: Any, target: Any) -> bool:
 
 def _exact_path(mesh: Any, ss: SourceSet, target, return_surface_points: bool):
     """pygeodesic's exact (MMP) path from ``target`` to the nearest source (points inserted as vertices)."""
-    import contextlib
-    import io
-
     from pygeodesic import geodesic
 
     from .baselines.points import _unique_points, insert_points
-    from .sources import closest_points
 
     X = _unique_points(mesh, ss)
     start = target.position(mesh) if isinstance(target, SurfacePoint) else mesh.V[int(target)]

@@ -37,13 +37,12 @@ the exact field off.
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import scipy.sparse as sp
+from scipy.spatial import cKDTree
 
 from .errors import SourceError
 from .mesh.closest import nearest_triangle_distance, point_triangle_distance, segment_parameter
@@ -55,6 +54,7 @@ from .mesh.locate import (
     SurfacePoint,
     VolumePoint,
     bary_positions,
+    cells_around,
     closest_points,
     interpolate_at,
     surface_point,
@@ -342,21 +342,6 @@ class SourceSet:
         best = np.full(uniq.size, np.inf)
         np.minimum.at(best, inv, vals)
         return uniq.astype(np.int64), best
-
-
-def cells_around(mesh: Any, verts: Sequence[int]) -> np.ndarray:
-    """(q,) int32 ndarray: the cells that contain all of ``verts`` (around a vertex, an edge or a face), sorted.
-
-    Read from the rows of a vertex-cell incidence matrix (cached on the mesh object: it is immutable) by their
-    index pointers, not by sparse slicing.
-    """
-    inc = mesh.__dict__.get("_cg_vertex_cells")
-    if inc is None:
-        k, s = mesh.cells.shape
-        inc = sp.csr_matrix((np.ones(s * k), (mesh.cells.ravel(), np.repeat(np.arange(k), s))),
-                            shape=(mesh.n_vertices, k))
-        mesh.__dict__["_cg_vertex_cells"] = inc
-    return functools.reduce(np.intersect1d, [inc.indices[inc.indptr[v]:inc.indptr[v + 1]] for v in map(int, verts)])
 
 
 def boundary_edges(mesh: TriMesh) -> tuple[np.ndarray, np.ndarray]:
@@ -687,25 +672,23 @@ def vertex_bounds(mesh: Any, ss: SourceSet, medium: Any = None) -> np.ndarray:
     C, V = mesh.cells, mesh.V
     bound = np.full(mesh.n_vertices, np.inf)
     eye = np.eye(3)
-    if ss.point_faces.size:
-        X = ss.point_positions(mesh)
-        Cv = C[ss.point_faces]  # (p, dim + 1)
+    X = ss.point_positions(mesh)
+    Cv = C[ss.point_faces]  # (p, dim + 1)
+    if medium is None:
+        dist = np.linalg.norm(V[Cv] - X[:, None, :], axis=2)
+    else:
+        dist = np.stack([medium.segment_lengths(ss.point_faces, ss.point_bary, eye[i]) for i in range(3)], 1)
+    np.minimum.at(bound, Cv.ravel(), dist.ravel())
+    Fs = C[ss.segment_faces]  # the curve pieces' faces (none in a solid)
+    A, B = ss.segment_ends(mesh)
+    for i in range(3):
+        t = segment_parameter(V[Fs[:, i]], A, B)[:, None]
         if medium is None:
-            dist = np.linalg.norm(V[Cv] - X[:, None, :], axis=2)
-        else:
-            dist = np.stack([medium.segment_lengths(ss.point_faces, ss.point_bary, eye[i]) for i in range(3)], 1)
-        np.minimum.at(bound, Cv.ravel(), dist.ravel())
-    if ss.segment_faces.size:
-        Fs = C[ss.segment_faces]
-        A, B = ss.segment_ends(mesh)
-        for i in range(3):
-            t = segment_parameter(V[Fs[:, i]], A, B)[:, None]
-            if medium is None:
-                dist = np.linalg.norm(V[Fs[:, i]] - (A + t * (B - A)), axis=1)
-            else:  # a path to the Euclidean closest point of the piece, measured in the medium
-                closest = (1 - t) * ss.segment_bary[:, 0] + t * ss.segment_bary[:, 1]
-                dist = medium.segment_lengths(ss.segment_faces, closest, eye[i])
-            np.minimum.at(bound, Fs[:, i], dist)
+            dist = np.linalg.norm(V[Fs[:, i]] - (A + t * (B - A)), axis=1)
+        else:  # a path to the Euclidean closest point of the piece, measured in the medium
+            closest = (1 - t) * ss.segment_bary[:, 0] + t * ss.segment_bary[:, 1]
+            dist = medium.segment_lengths(ss.segment_faces, closest, eye[i])
+        np.minimum.at(bound, Fs[:, i], dist)
     if ss.facets.size:  # the fourth corner of each source face's tetrahedron: its distance to the face
         tri = ss.face_triangles(mesh)
         t_of, local = ss.face_slots(mesh)
@@ -718,17 +701,12 @@ def _steep_cells(ops: Any, ss: SourceSet, near: np.ndarray, medium: Any) -> np.n
     """(q,) int64 ndarray: the cells of ``near`` where the linear interpolant of the local exact field is steeper
     than 1: the distance to the nearest source vertex, point, curve piece (its ends and midpoint stand in for it) or
     source face. There the exact field violates the cone too (an apex close to the cell's facet or corner)."""
-    from scipy.spatial import cKDTree
-
     mesh = ops.mesh
     V, C = mesh.V, mesh.cells
     cand = np.flatnonzero(near)
     corners = C[cand].reshape(-1)
-    pts = [ss.point_positions(mesh), V[ss.vertices]]
-    if ss.segment_faces.size:
-        A, B = ss.segment_ends(mesh)
-        pts += [A, B, 0.5 * (A + B)]
-    P = np.concatenate(pts)
+    A, B = ss.segment_ends(mesh)  # the curve pieces (none in a solid)
+    P = np.concatenate([ss.point_positions(mesh), V[ss.vertices], A, B, 0.5 * (A + B)])
     local = np.full(corners.size, np.inf)
     nearest = np.zeros(corners.size, dtype=np.int64)
     if len(P):

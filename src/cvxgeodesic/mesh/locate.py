@@ -11,9 +11,12 @@ coordinates of those candidates decide. No Delaunay triangulation of the vertice
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+import scipy.sparse as sp
 from numpy.typing import ArrayLike
 from scipy.spatial import cKDTree
 
@@ -413,6 +416,21 @@ def interpolate_at(mesh: TetMesh, values: ArrayLike, points: Any) -> np.ndarray:
     inside = tets >= 0
     out[inside] = corner_interpolant(d[mesh.T[tets[inside]]], bary[inside])
     return out
+
+
+def cells_around(mesh: Any, verts: Sequence[int]) -> np.ndarray:
+    """(q,) int32 ndarray: the cells that contain all of ``verts`` (around a vertex, an edge or a face), sorted.
+
+    Read from the rows of a vertex-cell incidence matrix (cached on the mesh object: it is immutable) by their
+    index pointers, not by sparse slicing.
+    """
+    inc = mesh.__dict__.get("_cg_vertex_cells")
+    if inc is None:
+        k, s = mesh.cells.shape
+        inc = sp.csr_matrix((np.ones(s * k), (mesh.cells.ravel(), np.repeat(np.arange(k), s))),
+                            shape=(mesh.n_vertices, k))
+        mesh.__dict__["_cg_vertex_cells"] = inc
+    return functools.reduce(np.intersect1d, [inc.indices[inc.indptr[v]:inc.indptr[v + 1]] for v in map(int, verts)])
 
 
 def bary_positions(mesh: Any, cells: np.ndarray, bary: np.ndarray) -> np.ndarray:

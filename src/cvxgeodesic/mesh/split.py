@@ -5,9 +5,9 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..errors import SourceError
+from .locate import cells_around
 
 __all__ = ["SplitMesh", "piece_coordinates"]
 
@@ -26,7 +26,7 @@ class SplitMesh:
     Parameters
     ----------
     mesh : TriMesh or TetMesh
-    points : sequence of objects with ``bary`` (normalized) and ``face`` (surfaces) or ``tet`` (volumes)
+    points : sequence of CellPoint (SurfacePoint, VolumePoint)
         Not at a vertex (a coordinate of exactly 0 means the point lies on the opposite facet).
 
     Attributes
@@ -56,22 +56,19 @@ class SplitMesh:
 
     def __init__(self, mesh: Any, points):
         n, cells = mesh.n_vertices, mesh.cells
-        k, c = cells.shape
         self._cells = cells.tolist()
         V = [mesh.V]
-        inc = sp.csr_matrix((np.ones(c * k), (cells.ravel(), np.repeat(np.arange(k), c))), shape=(n, k))
         #: cell -> [(local corner replaced, piece index, bary of the point in the cell)]
         self.pieces: dict[int, list[tuple[int, int, np.ndarray]]] = {}
         for i, p in enumerate(points):
-            t0 = int(p.face if mesh.dim == 2 else p.tet)
+            t0 = int(p.cell)
             V.append((p.bary @ mesh.V[cells[t0]])[None])
             nz = np.flatnonzero(p.bary > 0)
             if nz.size < 2:
                 raise SourceError(f"{p!r} lies at a vertex: give the vertex index instead")
             corners = cells[t0, nz]
             # every cell holding the point's edge, facet or itself: those with all its support corners
-            around = np.flatnonzero(np.asarray(inc[corners].sum(axis=0)).ravel() == nz.size)
-            for t in around.tolist():
+            for t in cells_around(mesh, corners.tolist()):
                 self._split_cell(t, n + i, cells[t], corners, p.bary[nz], mesh.dim)
         self.mesh = type(mesh)(np.vstack(V), np.asarray(self._cells, dtype=np.int64), name=mesh.name)
         self.cell_parent = np.arange(len(self._cells), dtype=np.int64)

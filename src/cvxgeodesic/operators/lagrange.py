@@ -14,6 +14,7 @@ were inserted as vertices, :class:`~cvxgeodesic.mesh.split.SplitMesh`).
 
 from __future__ import annotations
 
+import functools
 import itertools
 from typing import Any
 
@@ -22,6 +23,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..mesh.simplex import CELL_EDGES
 from ..mesh.split import SplitMesh
+from ..validation import check_choice, check_order
 from .gradient import gradient_blocks
 from .metric import Medium
 
@@ -140,8 +142,7 @@ class LagrangeSpace:
     """
 
     def __init__(self, mesh: Any, order: int = 2, medium: Medium | None = None):
-        if order not in (1, 2):
-            raise ParameterError(f"order must be 1 or 2, got {order!r}")
+        order = check_order(order)
         if medium is not None and mesh.dim != 2:
             raise ParameterError("a travel cost or metric is defined on surfaces only")
         self.mesh, self.order, self.medium, self.dim = mesh, order, medium, int(mesh.dim)
@@ -209,16 +210,13 @@ class LagrangeSpace:
                 grad = np.einsum("tij,tsja->tsia", T, grad)
         return N, grad
 
-    @property
+    @functools.cached_property
     def flat_cells(self) -> np.ndarray:
         """(k,) bool ndarray: proper cells where ``d²`` is a quadratic wherever a source is visible: every proper
         tetrahedron (a solid is flat), the proper faces whose edge-neighbours all lie in their plane
         (|cos| ≥ 1 − 1e-10)."""
-        if getattr(self, "_flat", None) is None:
-            self._flat = ~self.degenerate if self.dim == 3 else self._flat_faces()
-        return self._flat
-
-    def _flat_faces(self) -> np.ndarray:
+        if self.dim == 3:
+            return ~self.degenerate
         nrm = self.mesh.face_normals_unnormalized
         with np.errstate(divide="ignore", invalid="ignore"):
             nrm = nrm / np.linalg.norm(nrm, axis=1, keepdims=True)
@@ -254,8 +252,7 @@ class LagrangeSpace:
         """
         A = self.cell_measures
         n_loc, c = self.cell_dofs.shape[1], self.dim + 1
-        if kind not in WEIGHTS:
-            raise ParameterError(f"weights must be one of {WEIGHTS}, got {kind!r}")
+        check_choice(kind, "weights", WEIGHTS, lower=False)
         if kind != "lumped" and (self.dim != 2 or self.order != 2):
             raise ParameterError(f"weights={kind!r} is defined for order-2 triangles only; use 'lumped'")
         if kind == "lumped":
@@ -378,11 +375,10 @@ def _stationary_point(Q: np.ndarray, scale: np.ndarray, S: list[int]) -> np.ndar
     rhs[:, size] = 1.0
     ok = np.abs(np.linalg.det(M)) > 1e-12
     lam = np.full((k, c), -1.0)  # rejected by the caller unless solved and inside
-    if ok.any():
-        sol = np.linalg.solve(M[ok], rhs[ok][..., None])[..., 0]
-        full = np.zeros((int(ok.sum()), c))
-        full[:, S] = sol[:, :size]
-        lam[ok] = full
+    sol = np.linalg.solve(M[ok], rhs[ok][..., None])[..., 0]
+    full = np.zeros((int(ok.sum()), c))
+    full[:, S] = sol[:, :size]
+    lam[ok] = full
     return lam[:, None, :]
 
 

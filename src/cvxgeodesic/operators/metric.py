@@ -26,6 +26,7 @@ the strategies multiply the field back by it (exactly, as it is a power of two).
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any
 
@@ -206,8 +207,7 @@ class Medium:
             l11 = np.sqrt(a)
             l21 = b / l11
             l22 = np.sqrt(d - l21 * l21)
-        T = np.zeros_like(P)
-        with np.errstate(invalid="ignore", divide="ignore"):
+            T = np.zeros_like(P)
             T[:, 0, 0] = 1.0 / l11
             T[:, 1, 0] = -l21 / (l11 * l22)
             T[:, 1, 1] = 1.0 / l22
@@ -216,23 +216,19 @@ class Medium:
         return T
 
     # -- per-face and per-edge data (normalized) -------------------------------------------------------------
-    @property
+    @functools.cached_property
     def face_transforms(self) -> np.ndarray:
         """(m, 2, 2) float ndarray: :meth:`transforms` at each face's centroid (order 1)."""
-        if "T" not in self._cache:
-            self._cache["T"] = self.transforms(np.arange(self.mesh.n_faces), _CENTROID)
-        return self._cache["T"]
+        return self.transforms(np.arange(self.mesh.n_faces), _CENTROID)
 
-    @property
+    @functools.cached_property
     def area_ratio(self) -> np.ndarray:
         """(m,) float ndarray: area in the medium over Euclidean area, ``√det`` of :meth:`plane` at the centroid
         (1 on faces without a plane)."""
-        if "ratio" not in self._cache:
-            P = self.plane(np.arange(self.mesh.n_faces), _CENTROID)
-            with np.errstate(invalid="ignore"):
-                r = np.sqrt(P[:, 0, 0] * P[:, 1, 1] - P[:, 0, 1] ** 2)
-            self._cache["ratio"] = np.where(np.isfinite(r), r, 1.0)
-        return self._cache["ratio"]
+        P = self.plane(np.arange(self.mesh.n_faces), _CENTROID)
+        with np.errstate(invalid="ignore"):
+            r = np.sqrt(P[:, 0, 0] * P[:, 1, 1] - P[:, 0, 1] ** 2)
+        return np.where(np.isfinite(r), r, 1.0)
 
     def segment_lengths(self, faces: np.ndarray, bary_a: np.ndarray, bary_b: np.ndarray) -> np.ndarray:
         """Lengths in the medium of straight segments inside faces.
@@ -281,20 +277,18 @@ class Medium:
         q = np.maximum(self._bilinear(faces, bary, u, u), 0.0)
         return self._cost_at(faces, bary) * np.sqrt(q) / self.scale
 
-    @property
+    @functools.cached_property
     def edge_lengths(self) -> np.ndarray:
         """(e,) float ndarray: the length of each edge of ``mesh.edges``, the smaller of its faces' (normalized)."""
-        if "edges" not in self._cache:
-            mesh = self.mesh
-            m = mesh.n_faces
-            eye = np.eye(3)
-            k = np.tile(np.arange(3), m)
-            faces = np.repeat(np.arange(m), 3)
-            per = self.segment_lengths(faces, eye[(k + 1) % 3], eye[(k + 2) % 3])
-            out = np.full(len(mesh.edges), np.inf)
-            np.minimum.at(out, mesh.face_edges.ravel(), per)
-            self._cache["edges"] = out
-        return self._cache["edges"]
+        mesh = self.mesh
+        m = mesh.n_faces
+        eye = np.eye(3)
+        k = np.tile(np.arange(3), m)
+        faces = np.repeat(np.arange(m), 3)
+        per = self.segment_lengths(faces, eye[(k + 1) % 3], eye[(k + 2) % 3])
+        out = np.full(len(mesh.edges), np.inf)
+        np.minimum.at(out, mesh.face_edges.ravel(), per)
+        return out
 
     @property
     def face_longest_edges(self) -> np.ndarray:

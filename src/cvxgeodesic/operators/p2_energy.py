@@ -43,6 +43,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import ParameterError
+from ..validation import check_choice
 from .lagrange import LagrangeSpace, lagrange_basis
 
 __all__ = ["JUMPS", "JUMP_SIGMA", "P2_ENERGIES", "P2Energy", "edge_diamonds", "edge_pair_dofs", "face_hessian_energy",
@@ -247,6 +248,7 @@ def face_hessian_energy(space: LagrangeSpace, kind: str = "hessian") -> tuple[sp
     g : (n_dofs,) float ndarray
     c : float
     """
+    check_choice(kind, "kind", ("hessian", "laplacian"), lower=False)
     faces = np.flatnonzero(~space.degenerate)
     A = space.mesh.face_areas[faces]
     H = space.hessian_rows(faces)  # (k, 2, 2, 6)
@@ -254,11 +256,9 @@ def face_hessian_energy(space: LagrangeSpace, kind: str = "hessian") -> tuple[sp
     if kind == "hessian":
         blocks = A[:, None, None] * np.einsum("kcda,kcdb->kab", H, H)
         gf, c = -2.0 * A[:, None] * T, 8.0 * A.sum()  # ‖H − 2I‖² = ‖H‖² − 4 tr H + 8
-    elif kind == "laplacian":
+    else:
         blocks = A[:, None, None] * np.einsum("ka,kb->kab", T, T)
         gf, c = -4.0 * A[:, None] * T, 16.0 * A.sum()  # (tr H − 4)² = (tr H)² − 8 tr H + 16
-    else:
-        raise ParameterError(f"kind must be 'hessian' or 'laplacian', got {kind!r}")
     dofs = space.cell_dofs[faces]
     g = np.bincount(dofs.ravel(), gf.ravel(), minlength=space.n_dofs)
     return _assemble(dofs, blocks, space.n_dofs), g, float(c)
@@ -298,12 +298,10 @@ def p2_energy(space: LagrangeSpace, name: str, sigma: float = JUMP_SIGMA, jump: 
     >>> abs(E(((X - [0.3, 0.2, 0.0]) ** 2).sum(axis=1))) < 1e-10
     True
     """
-    if name not in P2_ENERGIES:
-        raise ParameterError(f"order-2 energy must be one of {P2_ENERGIES}, got {name!r}")
+    check_choice(name, "order-2 energy", P2_ENERGIES, lower=False)
     if not (np.isfinite(sigma) and sigma > 0):
         raise ParameterError(f"sigma must be a finite number > 0, got {sigma!r}")
-    if jump not in JUMPS:
-        raise ParameterError(f"jump must be one of {JUMPS}, got {jump!r}")
+    check_choice(jump, "jump", JUMPS, lower=False)
     n = space.n_dofs
     if jump == "p2":
         QJ, gJ, cJ = jump_energy(space, sigma), np.zeros(n), 0.0

@@ -198,14 +198,11 @@ class CoarseToFine:
             return res
         capabilities.check(self.config.method, dim=self.config.mesh.dim, sources=capabilities.source_kinds(sources),
                            multires=True)
-        return self._solve_vertices(sources, callback)
-
-    def _solve_vertices(self, sset: SourceSet, callback: Callback | None) -> GeodesicResult:
         assert self.coarse is not None and self.transfer is not None
         t0 = time.perf_counter()
         cfg = self.config
         mesh = cfg.mesh
-        src = sset.vertices
+        src = sources.vertices
         reach = mesh.connected_to(src) & mesh.referenced
         csrc, offset = self.transfer.nearest_vertex(mesh.V[src])
         cres = self.coarse.solve(resolve_sources(self.coarse_mesh, np.unique(csrc)), callback=callback)
@@ -225,7 +222,7 @@ class CoarseToFine:
             transfer_time=t2 - t1,
         )
         if self.fine is not None:  # polish
-            res = self.fine.solve(sset, callback=callback)
+            res = self.fine.solve(sources, callback=callback)
             both = np.isfinite(res.distance) & np.isfinite(d)
             diff = float(np.abs(res.distance[both] - d[both]).max()) if both.any() else 0.0
             scale = float(res.distance[both].max()) if both.any() else 0.0

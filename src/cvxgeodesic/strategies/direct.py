@@ -18,9 +18,10 @@ import numpy as np
 
 from ..errors import SolverError
 from ..formulations import MeshOperators, build_problem
+from ..linalg import SymbolicCholesky
 from ..mesh.simplex import unit_mesh
 from ..results import GeodesicResult, SolveInfo
-from ..solvers.problem import BackendResult, ConicProblem
+from ..solvers.problem import BackendResult, ConicProblem, kkt_pattern
 from ..sources import SourceSet
 from .backend import Backend, ipm_available
 from .base import Callback, SolveConfig
@@ -82,8 +83,6 @@ class DirectStrategy:
         self.setup_time = time.perf_counter() - t0
 
     def _pattern(self, P: Any) -> Any:
-        from ..solvers.problem import kkt_pattern
-
         # the unit mesh's edge table: the operators built it already (the mesh's own would be a second one); the
         # edges of a tetrahedron are all its pairs, so the same pattern is its clique's
         mesh = self.ops.mesh
@@ -93,8 +92,6 @@ class DirectStrategy:
         """``analyse(Q)`` for :meth:`MeshOperators.energy`: the analysis of the mesh's Newton pattern with ``Q``,
         kept with the ``Q`` it was made for (a planar energy that replaced an indefinite curved one gets an
         analysis of its own)."""
-        from ..linalg import SymbolicCholesky
-
         chol = SymbolicCholesky(self._pattern(Q))
         self._analysis = (Q, chol)
         return chol

@@ -132,8 +132,9 @@ class Order2:
         t0 = time.perf_counter()
         mesh = self.config.mesh
         capabilities.check(self.config.method, dim=mesh.dim, order=2, sources=capabilities.source_kinds(sources))
-        fixed, vertex_sources, points, facets = _source_geometry(sources, mesh)
-        source_fixed = fixed
+        # where φ = 0, the vertex sources alone (source_edges), the points to insert, a solid's source wall
+        fixed = source_fixed = sources.fixed_vertices(mesh)
+        vertex_sources, points = np.asarray(sources.vertices, dtype=np.int64), sources.distinct_points(mesh)
         builder, ipm, split = self.builder, self.ipm, None
         notes = list(self.notes)
         if points:
@@ -151,7 +152,7 @@ class Order2:
             added = f"{sm.n_cells - mesh.n_cells} {'face(s)' if mesh.dim == 2 else 'tetrahedra'} added"
             notes.append(f"{len(points)} source point(s) inserted as vertices ({added}; new symbolic analysis for "
                          "this solve)")
-        zero = source_edges(builder.mesh, vertex_sources, facets)
+        zero = source_edges(builder.mesh, vertex_sources, sources.face_triangles(mesh))
         program, res, rounds = self._solve_with_cuts(builder, ipm, fixed, zero, callback, notes)
         return self._result(program, res, rounds, builder, split, sources, source_fixed, notes, t0)
 
@@ -242,17 +243,6 @@ class Order2:
         )
         return GeodesicResult(distance=d, info=info, sources=sources.vertices,
                               source_set=None if sources.vertex_only else sources)
-
-
-def _source_geometry(sources: Any, mesh: Any) -> tuple[np.ndarray, np.ndarray, list, np.ndarray | None]:
-    """``(fixed vertices, vertex sources, points, source faces)`` of resolved sources: where ``φ = 0``, the vertex
-    sources alone (for :func:`~cvxgeodesic.formulations_p2.source_edges`), the points to insert as vertices, and
-    the faces of a solid's source wall (None on a surface)."""
-    if mesh.dim == 3:
-        return (np.asarray(sources.fixed_vertices(mesh), dtype=np.int64), np.asarray(sources.vertices, dtype=np.int64),
-                list(sources.points), sources.face_triangles(mesh))
-    vertices = np.asarray(sources.vertices, dtype=np.int64)
-    return vertices, vertices, sources.distinct_points(mesh), None
 
 
 def _moved(x_old: np.ndarray, x_new: np.ndarray, n: int) -> float:
