@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 
 from cvxgeodesic.errors import MeshError
+from cvxgeodesic.mesh.convert import as_mesh
 from cvxgeodesic.mesh.simplex import unit_mesh
 from cvxgeodesic.mesh.tet_generate import kuhn_tets, tet_ball, tet_box, tet_l_prism
-from cvxgeodesic.mesh.tetmesh import TET_FACES, TetMesh, as_tetmesh
+from cvxgeodesic.mesh.tetmesh import TET_FACES, TetMesh
 
 CORNER = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
 
@@ -41,11 +42,9 @@ def test_arrays_are_read_only_and_float_indices_accepted():
     assert mesh.T.dtype == np.int64 and not mesh.T.flags.writeable and not mesh.V.flags.writeable
 
 
-def test_as_tetmesh():
-    mesh = as_tetmesh((CORNER, [[0, 1, 2, 3]]))
-    assert as_tetmesh(mesh) is mesh
-    with pytest.raises(MeshError, match="expected a TetMesh"):
-        as_tetmesh(CORNER)
+def test_as_mesh_takes_tetrahedra():
+    mesh = as_mesh((CORNER, [[0, 1, 2, 3]]))
+    assert isinstance(mesh, TetMesh) and as_mesh(mesh) is mesh
 
 
 # -- derived quantities -------------------------------------------------------------------------------------------

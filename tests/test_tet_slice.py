@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cvxgeodesic.errors import ParameterError
+from cvxgeodesic.errors import MeshError, ParameterError
 from cvxgeodesic.evaluation.slice_plot import plot_slice
+from cvxgeodesic.mesh.generate import icosphere
 from cvxgeodesic.mesh.tet_generate import tet_ball, tet_box, tet_l_prism
 from cvxgeodesic.mesh.tet_slice import plane_frame, slice_tets
 
@@ -84,3 +85,7 @@ def test_plot_writes_a_png(tmp_path):
         plot_slice(m, d, tmp_path / "t.jpg")
     with pytest.raises(ParameterError, match="values"):
         plot_slice(m, d[:-1], tmp_path / "t.png")
+    surface = icosphere(1)
+    with pytest.raises(MeshError, match="takes a tetrahedral mesh.*plot_field"):
+        plot_slice(surface, np.zeros(surface.n_vertices), tmp_path / "t.png")
+    assert not (tmp_path / "t.png").exists()

@@ -15,9 +15,10 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import ParameterError
+from ..errors import MeshError, ParameterError
+from ..mesh.convert import as_mesh
 from ..mesh.tet_slice import slice_tets
-from ..mesh.tetmesh import TetMesh, as_tetmesh
+from ..mesh.tetmesh import TetMesh
 from ..plotting import PLOT_EXTENSIONS, _finite_range, _isolevels, _new_figure, _save_atomic
 from ..validation import as_points, check_number, check_output_path
 
@@ -34,7 +35,7 @@ def _axis_label(e: np.ndarray) -> str:
 
 
 def plot_slice(
-    mesh: TetMesh | tuple,
+    mesh: TetMesh | tuple | str | os.PathLike,
     values: ArrayLike,
     path: str | os.PathLike,
     *,
@@ -53,8 +54,8 @@ def plot_slice(
 
     Parameters
     ----------
-    mesh : TetMesh or (V, T) tuple
-        ``n`` vertices.
+    mesh : TetMesh, (V, T) tuple or file path
+        ``n`` vertices (what :func:`~cvxgeodesic.mesh.convert.as_mesh` takes, holding tetrahedra).
     values : (n,) float array_like
         One value per vertex (``inf``/NaN: grey, no isolines).
     path : str or os.PathLike
@@ -82,6 +83,8 @@ def plot_slice(
 
     Raises
     ------
+    MeshError
+        A mesh without tetrahedra (a surface: :func:`~cvxgeodesic.plotting.plot_field`).
     ParameterError
         ``values`` of the wrong length, a bad path, normal or dpi; or the plane misses the mesh.
 
@@ -96,13 +99,15 @@ def plot_slice(
     from matplotlib.colors import Normalize
     from matplotlib.tri import Triangulation
 
-    mesh = as_tetmesh(mesh)
+    tets = as_mesh(mesh)
+    if not isinstance(tets, TetMesh):
+        raise MeshError(f"plot_slice takes a tetrahedral mesh; {tets.name} is a triangle surface (plot_field draws it)")
     p = check_output_path(path, PLOT_EXTENSIONS)
     dpi = check_number(dpi, "dpi", low=10, high=2000)
-    cut = slice_tets(mesh, values, origin=origin, normal=normal)
+    cut = slice_tets(tets, values, origin=origin, normal=normal)
     if cut.triangles.shape[0] == 0:
         raise ParameterError(f"the plane through {cut.origin.tolist()} with normal {cut.normal.tolist()} misses "
-                             f"{mesh.name}")
+                             f"{tets.name}")
     vals = cut.values
     lo, hi = _finite_range(vals, vmin, vmax)
     levels = _isolevels(isolines, lo, hi)

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from functools import cached_property
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -23,7 +22,7 @@ from ..errors import MeshError
 from .simplex import CELL_EDGES, CELL_FACETS, DEGENERATE_TOL, SimplexMesh, _cached_parts
 from .trimesh import TriMesh
 
-__all__ = ["DEGENERATE_TET_TOL", "TET_EDGES", "TET_FACES", "TetMesh", "as_tetmesh"]
+__all__ = ["DEGENERATE_TET_TOL", "TET_EDGES", "TET_FACES", "TetMesh"]
 
 #: Default of :meth:`TetMesh.degenerate_tets`: :data:`~cvxgeodesic.mesh.simplex.DEGENERATE_TOL` (the one rule).
 DEGENERATE_TET_TOL = DEGENERATE_TOL
@@ -302,28 +301,3 @@ class TetMesh(SimplexMesh):
                        "they get an infinite distance")
         return tuple(out)
 
-
-def as_tetmesh(mesh: Any, name: str = "tetmesh") -> TetMesh:
-    """A :class:`TetMesh` from a TetMesh (returned as is) or a ``(V, T)`` pair with 4-column ``T``.
-
-    Parameters
-    ----------
-    mesh : TetMesh or (V, T) tuple
-        ``V`` (n, 3) float, ``T`` (k, 4) int.
-    name : str
-        Name of a mesh made from arrays.
-
-    Returns
-    -------
-    TetMesh
-
-    Raises
-    ------
-    MeshError
-        Anything else, or invalid arrays.
-    """
-    if isinstance(mesh, TetMesh):
-        return mesh
-    if isinstance(mesh, tuple | list) and len(mesh) == 2:
-        return TetMesh(mesh[0], mesh[1], name=name)
-    raise MeshError(f"expected a TetMesh or a (V, T) pair of arrays, got {type(mesh).__name__}")
