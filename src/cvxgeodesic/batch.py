@@ -44,8 +44,7 @@ import numpy as np
 
 from ._atomic import check_output_dir, check_replaceable
 from ._cluster import open_client, require_distributed, stop_after_interrupt
-from .compare import error_line
-from .errors import ParameterError
+from .errors import ParameterError, error_line
 from .tables import Column, text_table
 from .validation import check_choice, check_count, check_not_an_input, check_smoothness
 
@@ -140,11 +139,11 @@ def _mesh_sources(mesh, spec):
     if spec == "boundary":
         return spec
     from .mesh.fileorder import file_sources
-    from .mesh.locate import surface_point, volume_point
+    from .mesh.locate import POINT_AT
 
     if all(isinstance(s, int) for s in spec):
         return file_sources(mesh, spec).tolist()
-    at = volume_point if mesh.dim == 3 else surface_point
+    at = POINT_AT[mesh.dim]  # the closest surface point, or the point inside the solid
     return [int(file_sources(mesh, [s])[0]) if isinstance(s, int) else at(mesh, s) for s in spec]
 
 

@@ -36,11 +36,11 @@ from typing import Any
 import numpy as np
 
 from ._atomic import atomic_write, check_output_dir
-from .errors import CvxGeodesicError, ParameterError, SolverError
+from .errors import ParameterError, SolverError, error_line
 from .tables import Column, text_table
 
 __all__ = [
-    "COLUMN_HELP", "CSV_COLUMNS", "REFERENCES", "TABLE_COLUMNS", "error_line", "evaluate_methods", "format_table",
+    "COLUMN_HELP", "CSV_COLUMNS", "REFERENCES", "TABLE_COLUMNS", "evaluate_methods", "format_table",
     "resolve_methods", "run_compare", "solve_methods", "table_legend", "write_csv", "write_pictures",
 ]
 
@@ -132,15 +132,6 @@ def _key(run: Run) -> Run:
 def _label(run: Run, order: str = " order ") -> str:
     """The run in tables and titles (in file names: ``order="_order"``)."""
     return run[0] if run[1] == 1 else f"{run[0]}{order}{run[1]}"
-
-
-def error_line(exc: BaseException, *, typed: bool = False) -> str:
-    """The message of ``exc`` on one line (for a CSV cell, a table, a batch row), after its type's name unless it is
-    one of the library's errors (whose messages say what went wrong) and not ``typed``."""
-    msg = " ".join(str(exc).split())
-    if isinstance(exc, CvxGeodesicError) and not typed:
-        return msg or type(exc).__name__
-    return f"{type(exc).__name__}: {msg}" if msg else type(exc).__name__
 
 
 def run_compare(mesh: Any, sources: Any, methods: Any, out_dir: str | os.PathLike, *, m: float = 1.0,

@@ -110,3 +110,12 @@ def warn_user(message: str, category: type[Warning] = UserWarning) -> None:
     while frame is not None and (frame.f_globals.get("__name__") or "").startswith(package):
         frame, level = frame.f_back, level + 1
     warnings.warn(message, category, stacklevel=level)
+
+
+def error_line(exc: BaseException, *, typed: bool = False) -> str:
+    """The message of ``exc`` on one line (for a CSV cell, a table, a batch row), after its type's name unless it is
+    one of the library's errors (whose messages say what went wrong) and not ``typed``."""
+    msg = " ".join(str(exc).split())
+    if isinstance(exc, CvxGeodesicError) and not typed:
+        return msg or type(exc).__name__
+    return f"{type(exc).__name__}: {msg}" if msg else type(exc).__name__
