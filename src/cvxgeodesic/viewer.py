@@ -68,11 +68,8 @@ def _source_positions(mesh: Any, source_set: Any, vertices: np.ndarray) -> np.nd
     vertices), points, and the ends of curve pieces."""
     if source_set is None:
         return mesh.V[np.asarray(vertices, dtype=np.int64)]
-    parts = [mesh.V[source_set.fixed_vertices(mesh)], source_set.point_positions(mesh)]
-    if len(source_set.segment_faces):
-        ends = np.einsum("sek,skd->sed", source_set.segment_bary, mesh.V[mesh.F[source_set.segment_faces]])
-        parts.append(ends.reshape(-1, 3))
-    return np.concatenate(parts, axis=0)
+    return np.concatenate([mesh.V[source_set.fixed_vertices(mesh)], source_set.point_positions(mesh),
+                           *source_set.segment_ends(mesh)], axis=0)
 
 
 def _given_marks(mesh: Any, distance: np.ndarray, sources: Any) -> np.ndarray:

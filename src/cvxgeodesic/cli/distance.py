@@ -100,6 +100,6 @@ def draw_field(mesh: Any, res: Any, path: Any, *, title: str, normal: tuple[floa
 
     sset, points = res.source_set, None
     if mesh.dim == 3 and sset is not None:  # the vertices at 0 and the points inside
-        points = np.vstack([mesh.V[sset.fixed_vertices(mesh)], *(np.array([p.position(mesh)]) for p in sset.points)])
+        points = np.vstack([mesh.V[sset.fixed_vertices(mesh)], sset.point_positions(mesh)])
     draw(mesh, res.distance, path, title=title, sources=res.sources, points=points, line=line, normal=normal,
          label=None if line is not None and mesh.dim == 2 else "geodesic distance")
