@@ -254,3 +254,58 @@ def batch_sources(args: argparse.Namespace) -> Any:
     if boundary:
         return "boundary"
     return [*vertices, *(list(x) for x in points)] if points else vertices
+
+
+#: ``--view`` names and ``--up`` axes: :data:`cvxgeodesic.plotting.VIEW_NAMES` and ``UP_NAMES`` (this module imports
+#: only the standard library; a test holds them equal).
+VIEW_NAMES = ("front", "back")
+UP_NAMES = ("auto", "x", "y", "z", "-x", "-y", "-z")
+MAX_VIEWS = 4
+
+
+def view_spec(text: str) -> list[str | tuple[float, float]]:
+    """``"front,back"`` -> ``["front", "back"]``, ``"30,45"`` -> ``[(30.0, 45.0)]``: the value of one ``--view``."""
+    parts = [p.strip().lower() for p in text.split(",")]
+    if parts and all(p in VIEW_NAMES for p in parts):
+        return list(parts)
+    try:
+        angles = tuple(float(p) for p in parts)
+    except ValueError:
+        angles = ()
+    if len(angles) != 2 or not all(math.isfinite(a) for a in angles):
+        raise argparse.ArgumentTypeError(f"expected front, back, front,back or ELEV,AZIM in degrees, got {text!r}")
+    return [(angles[0], angles[1])]
+
+
+def up_spec(text: str) -> str | tuple[float, float, float]:
+    """``--up``: a name of :data:`UP_NAMES` or ``X,Y,Z`` (a non-zero vector)."""
+    name = text.strip().lower()
+    if name in UP_NAMES:
+        return name
+    try:
+        vec = xyz(text)
+    except argparse.ArgumentTypeError:
+        vec = (0.0, 0.0, 0.0)
+    if not any(vec):
+        raise argparse.ArgumentTypeError(f"expected {', '.join(UP_NAMES)} or X,Y,Z (not zero), got {text!r}")
+    return vec
+
+
+def add_view_options(p: argparse.ArgumentParser) -> None:
+    """``--view`` (repeatable) and ``--up``: the camera of a surface's ``--png`` (or pictures)."""
+    p.add_argument("--view", type=view_spec, action="extend", default=None, metavar="front|back|ELEV,AZIM",
+                   help="the panels of a surface's picture, side by side (repeat, or give front,back; at most "
+                        f"{MAX_VIEWS}): front faces the first source, back is the far side (turned 180° about the up "
+                        "axis); ELEV,AZIM in degrees about the up axis (--view=-20,90 for a negative number). "
+                        "Default: front,back")
+    p.add_argument("--up", type=up_spec, default="auto", metavar="auto|x|y|z|-x|-y|-z|X,Y,Z",
+                   help="the world axis drawn upwards in a surface's picture (--up=-y for a negative one). Default "
+                        "auto: y (the OBJ convention) unless y is the mesh's thinnest axis, then z")
+
+
+def cli_view(args: argparse.Namespace) -> list[str | tuple[float, float]] | None:
+    """``--view``'s panels (None: the default), at most :data:`MAX_VIEWS`."""
+    views = getattr(args, "view", None)
+    if views is not None and len(views) > MAX_VIEWS:
+        raise ParameterError(f"--view: at most {MAX_VIEWS} views, got {len(views)}")
+    return views
