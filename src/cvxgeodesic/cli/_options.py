@@ -266,14 +266,15 @@ MAX_VIEWS = 4
 def view_spec(text: str) -> list[str | tuple[float, float]]:
     """``"front,back"`` -> ``["front", "back"]``, ``"30,45"`` -> ``[(30.0, 45.0)]``: the value of one ``--view``."""
     parts = [p.strip().lower() for p in text.split(",")]
-    if parts and all(p in VIEW_NAMES for p in parts):
+    if all(p in VIEW_NAMES for p in parts):
         return list(parts)
     try:
         angles = tuple(float(p) for p in parts)
     except ValueError:
         angles = ()
     if len(angles) != 2 or not all(math.isfinite(a) for a in angles):
-        raise argparse.ArgumentTypeError(f"expected front, back, front,back or ELEV,AZIM in degrees, got {text!r}")
+        raise ParameterError(f"--view {text!r}: expected front, back, front,back or ELEV,AZIM (two finite numbers "
+                             "of degrees)")
     return [(angles[0], angles[1])]
 
 
@@ -287,25 +288,36 @@ def up_spec(text: str) -> str | tuple[float, float, float]:
     except argparse.ArgumentTypeError:
         vec = (0.0, 0.0, 0.0)
     if not any(vec):
-        raise argparse.ArgumentTypeError(f"expected {', '.join(UP_NAMES)} or X,Y,Z (not zero), got {text!r}")
+        raise ParameterError(f"--up {text!r}: expected {', '.join(UP_NAMES)} or X,Y,Z (three finite numbers, not "
+                             "all zero)")
     return vec
 
 
 def add_view_options(p: argparse.ArgumentParser) -> None:
-    """``--view`` (repeatable) and ``--up``: the camera of a surface's ``--png`` (or pictures)."""
-    p.add_argument("--view", type=view_spec, action="extend", default=None, metavar="front|back|ELEV,AZIM",
+    """``--view`` (repeatable) and ``--up``: the camera of a surface's ``--png``; read by :func:`parse_view_options`."""
+    p.add_argument("--view", action="append", default=None, metavar="front|back|ELEV,AZIM",
                    help="the panels of a surface's picture, side by side (repeat, or give front,back; at most "
                         f"{MAX_VIEWS}): front faces the first source, back is the far side (turned 180° about the up "
                         "axis); ELEV,AZIM in degrees about the up axis (--view=-20,90 for a negative number). "
                         "Default: front,back")
-    p.add_argument("--up", type=up_spec, default="auto", metavar="auto|x|y|z|-x|-y|-z|X,Y,Z",
+    p.add_argument("--up", default="auto", metavar="auto|x|y|z|-x|-y|-z|X,Y,Z",
                    help="the world axis drawn upwards in a surface's picture (--up=-y for a negative one). Default "
-                        "auto: y (the OBJ convention) unless y is the mesh's thinnest axis, then z")
+                        "auto: away from the flat end the model stands on, else y (the OBJ convention; z where y is "
+                        "the mesh's thinnest axis)")
 
 
-def cli_view(args: argparse.Namespace) -> list[str | tuple[float, float]] | None:
-    """``--view``'s panels (None: the default), at most :data:`MAX_VIEWS`."""
-    views = getattr(args, "view", None)
-    if views is not None and len(views) > MAX_VIEWS:
-        raise ParameterError(f"--view: at most {MAX_VIEWS} views, got {len(views)}")
-    return views
+def parse_view_options(args: argparse.Namespace) -> None:
+    """``--view`` and ``--up`` read into ``args.view`` (a list of panels, or None: the default) and ``args.up``.
+
+    Raises
+    ------
+    ParameterError
+        A value that is not a view or an axis, or more than :data:`MAX_VIEWS` views (the message names the option).
+    """
+    if getattr(args, "view", None) is not None:
+        views = [v for text in args.view for v in view_spec(text)]
+        if len(views) > MAX_VIEWS:
+            raise ParameterError(f"--view: at most {MAX_VIEWS} views, got {len(views)}")
+        args.view = views
+    if isinstance(getattr(args, "up", None), str):
+        args.up = up_spec(args.up)

@@ -68,7 +68,6 @@ def run(args: argparse.Namespace) -> int:
     if mesh.dim == 3:  # before the solve: save_distance writes a volume's field in fewer formats
         check_output_path(args.output, VOLUME_DISTANCE_EXTENSIONS)
     sources, label = opt.cli_sources(args, mesh)
-    opt.cli_view(args)  # before the solve
     method = opt.method_for(args, mesh)
     log = sys.stderr
     if not args.quiet:
@@ -85,7 +84,7 @@ def run(args: argparse.Namespace) -> int:
         save_distance(tmp[0], mesh, res.distance, file_order=True)
         if args.png:
             draw_field(mesh, res, tmp[1], title=f"{solver.method}, sources {label}", normal=slice_normal(args),
-                       view=opt.cli_view(args), up=getattr(args, "up", "auto"))
+                       view=args.view, up=args.up)
     if not args.quiet:
         i = res.info
         print(f"{i.method} via {i.solver}: {i.status}, {i.iterations} iterations, set-up {i.setup_time:.2f} s, "

@@ -93,7 +93,6 @@ def run(args: argparse.Namespace) -> int:
     check_outputs(args, ("-o", args.output, PATH_EXTENSIONS), ("--png", args.png, (".png",)))
     mesh = load_mesh(args.mesh)
     sources, label = opt.cli_sources(args, mesh)
-    opt.cli_view(args)  # before the solve
     target = _target(args, mesh)
     cost = opt.cli_cost(args, mesh)
     res = GeodesicSolver(mesh, opt.method_for(args, mesh), m=args.m, solver=args.solver, cost=cost).solve(
@@ -104,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
         atomic_write(tmp[0], _path_writer(str(tmp[0]), P, cells, bary, "face" if mesh.dim == 2 else "tet"))
         if args.png:
             draw_field(mesh, res, tmp[1], title=f"{res.info.method}, path to sources {label}",
-                       normal=slice_normal(args), line=P, view=opt.cli_view(args), up=args.up)
+                       normal=slice_normal(args), line=P, view=args.view, up=args.up)
     if not args.quiet:
         length = float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum())
         # a cost applies to surfaces only (cli_cost)
