@@ -141,7 +141,7 @@ def test_front_view_turns_until_nothing_hides_the_source():
     a, b = icosphere(2), icosphere(2)
     # sphere b in front of sphere a's vertex s, along s's normal: the straight view is blocked
     s = int(np.argmax(a.V[:, 0]))
-    V = np.vstack([a.V, b.V * 0.5 + [3.0, 0.0, 0.0]])
+    V = np.vstack([a.V, b.V + [3.0, 0.0, 0.0]])  # radius 1 at distance 2: it hides s from 15° above too
     mesh = TriMesh(V, np.vstack([a.F, b.F + a.n_vertices]))
     surf = _surface(mesh, V[:, 0], np.empty(0))
     from cvxgeodesic.plotting import _occluded
