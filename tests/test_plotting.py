@@ -65,7 +65,7 @@ def test_plot_field_options(tmp_path, kwargs):
 
 
 def test_plot_field_marks_sources_and_faces_them(tmp_path):
-    from cvxgeodesic.plotting import _camera
+    from cvxgeodesic.evaluation.camera import _camera
 
     mesh = icosphere(2)
     for src in (0, [5, 17]):
@@ -265,7 +265,7 @@ def _pixels(path) -> np.ndarray:
 
 def _screen(mesh, view="front", up="auto") -> np.ndarray:
     """Vertex positions in the renderer's camera frame: (n, 3) screen right, screen up, towards the viewer."""
-    from cvxgeodesic.plotting import _camera
+    from cvxgeodesic.evaluation.camera import _camera
 
     return (mesh.V - mesh.V.mean(axis=0)) @ _camera(mesh.V, view, up=up).T
 

@@ -9,17 +9,9 @@ import pytest
 import cvxgeodesic as cg
 from cvxgeodesic.cli import main
 from cvxgeodesic.errors import ParameterError
+from cvxgeodesic.evaluation.camera import UP_NAMES, VIEW_NAMES, _camera, up_vector, view_list
 from cvxgeodesic.mesh import TriMesh, icosphere
-from cvxgeodesic.plotting import (
-    UP_NAMES,
-    VIEW_NAMES,
-    _camera,
-    _panel_cameras,
-    _surface,
-    plot_field,
-    up_vector,
-    view_list,
-)
+from cvxgeodesic.plotting import _panel_cameras, _surface, plot_field
 
 X, Y, Z = np.eye(3)
 

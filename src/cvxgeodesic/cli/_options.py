@@ -256,8 +256,8 @@ def batch_sources(args: argparse.Namespace) -> Any:
     return [*vertices, *(list(x) for x in points)] if points else vertices
 
 
-#: ``--view`` names and ``--up`` axes: :data:`cvxgeodesic.plotting.VIEW_NAMES` and ``UP_NAMES`` (this module imports
-#: only the standard library; a test holds them equal).
+#: ``--view`` names and ``--up`` axes: :data:`cvxgeodesic.evaluation.camera.VIEW_NAMES` and ``UP_NAMES`` (this
+#: module imports only the standard library; a test holds them equal).
 VIEW_NAMES = ("front", "back")
 UP_NAMES = ("auto", "x", "y", "z", "-x", "-y", "-z")
 MAX_VIEWS = 4
