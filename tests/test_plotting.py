@@ -44,14 +44,16 @@ def test_plot_field_writes_png_of_expected_size(tmp_path):
     mesh = icosphere(2)
     out = plot_field(mesh, _sphere_distance(mesh), tmp_path / "field.png", title="sphere")
     assert out == tmp_path / "field.png"
-    assert _png_size(out) == (960, 810)
+    # the default: two panels side by side (front and back), each as wide as a one-panel picture's
+    assert _png_size(out) == (1728, 810)
     assert [p.name for p in tmp_path.iterdir()] == ["field.png"]  # no temporary left behind
+    assert _png_size(plot_field(mesh, _sphere_distance(mesh), tmp_path / "one.png", view="front")) == (960, 810)
 
 
 @pytest.mark.parametrize(
     "kwargs",
     [
-        {"isolines": 0, "show_colorbar": False, "dpi": 50},
+        {"isolines": 0, "show_colorbar": False, "dpi": 50, "view": "back"},
         {"isolines": [0.5, 1.0, 2.0], "view": (30, 45), "dpi": 50, "cmap": "magma"},
         {"isolines": None, "vmin": 0.5, "vmax": 1.5, "dpi": 50, "view": (90, 0)},
     ],
@@ -63,12 +65,12 @@ def test_plot_field_options(tmp_path, kwargs):
 
 
 def test_plot_field_marks_sources_and_faces_them(tmp_path):
-    from cvxgeodesic.plotting import _camera
+    from cvxgeodesic.evaluation.camera import _camera
 
     mesh = icosphere(2)
     for src in (0, [5, 17]):
         out = plot_field(mesh, _sphere_distance(mesh), tmp_path / "s.png", sources=src, dpi=40)
-        assert _png_size(out) == (256, 216)
+        assert _png_size(out) == (460, 216)  # two panels
         plot_error_map(mesh, np.abs(mesh.V[:, 0]), tmp_path / "e.png", sources=src, dpi=40)
     # the default view turns towards the first marked vertex's normal
     for i in (0, 7, 30):
@@ -92,7 +94,7 @@ def test_plot_field_open_meshes_and_unreachable(tmp_path):
     all_inf = np.full(cyl.n_vertices, np.inf)
     plot_field(cyl, all_inf, tmp_path / "inf.png", dpi=40)
     for name in ("plane.png", "cyl.png", "inf.png"):
-        assert _png_size(tmp_path / name) == (256, 216)
+        assert _png_size(tmp_path / name) == (460, 216)  # two panels
 
 
 def test_plot_field_accepts_vf_tuple_and_str_path(tmp_path):
@@ -216,10 +218,11 @@ def test_plot_error_map(tmp_path):
         rel = np.abs(exact * (1 + 0.05 * mesh.V[:, 0]) - exact) / exact
     rel[0] = np.nan  # the source
     out = plot_error_map(mesh, rel, tmp_path / "err.png", title="error")
-    assert _png_size(out) == (960, 810)
+    assert _png_size(out) == (1728, 810)  # two panels
+    assert _png_size(plot_error_map(mesh, rel, tmp_path / "one.png", view=(10, 20))) == (960, 810)
     plot_error_map(mesh, np.zeros(mesh.n_vertices), tmp_path / "zero.png", vmax=0.1, dpi=40)
     plot_error_map(mesh, np.full(mesh.n_vertices, np.nan), tmp_path / "nan.png", dpi=40)
-    assert _png_size(tmp_path / "nan.png") == (256, 216)
+    assert _png_size(tmp_path / "nan.png") == (460, 216)
 
 
 def test_plot_gradient_histogram(tmp_path):
@@ -260,11 +263,11 @@ def _pixels(path) -> np.ndarray:
     return mpimg.imread(path)[..., :3]  # (H, W, 3) float in [0, 1]
 
 
-def _screen(mesh, view=None) -> np.ndarray:
+def _screen(mesh, view="front", up="auto") -> np.ndarray:
     """Vertex positions in the renderer's camera frame: (n, 3) screen right, screen up, towards the viewer."""
-    from cvxgeodesic.plotting import _camera
+    from cvxgeodesic.evaluation.camera import _camera
 
-    return (mesh.V - mesh.V.mean(axis=0)) @ _camera(mesh.V, view).T
+    return (mesh.V - mesh.V.mean(axis=0)) @ _camera(mesh.V, view, up=up).T
 
 
 def _surface_mask(img) -> np.ndarray:
@@ -276,7 +279,7 @@ def test_surface_is_drawn_and_coloured_along_the_field(tmp_path):
     P = _screen(mesh)
     src = int(np.argmin(P[:, 0]))  # the vertex furthest left on screen
     d = np.linalg.norm(mesh.V - mesh.V[src], axis=1)
-    img = _pixels(plot_field(mesh, d, tmp_path / "f.png", isolines=0, show_colorbar=False, dpi=40))
+    img = _pixels(plot_field(mesh, d, tmp_path / "f.png", isolines=0, show_colorbar=False, dpi=40, view="front"))
     surf = _surface_mask(img)
     # a unit sphere fills about half of the square panel it is fitted into
     assert 0.35 < surf.mean() < 0.75
@@ -293,10 +296,10 @@ def test_surface_is_drawn_and_coloured_along_the_field(tmp_path):
 
 def test_isolines_are_drawn_where_the_levels_are_and_only_then(tmp_path):
     plane = grid_plane(16)
-    view = (90.0, 0.0)  # from straight above: the plane is a square on screen, unshaded
-    x = _screen(plane, view)[:, 0]  # screen right, centred: -0.5 .. 0.5
+    view = (90.0, 0.0)  # from straight above (up z: mplot3d's convention): the plane is a square on screen, unshaded
+    x = _screen(plane, view, up="z")[:, 0]  # screen right, centred: -0.5 .. 0.5
     levels = [-0.3, 0.05, 0.3]
-    kw = {"show_colorbar": False, "dpi": 80, "cmap": "autumn", "view": view}  # autumn: bright everywhere
+    kw = {"show_colorbar": False, "dpi": 80, "cmap": "autumn", "view": view, "up": "z"}  # autumn: bright everywhere
     on = _pixels(plot_field(plane, x, tmp_path / "on.png", isolines=levels, **kw))
     off = _pixels(plot_field(plane, x, tmp_path / "off.png", isolines=0, **kw))
 
@@ -322,7 +325,7 @@ def test_back_faces_are_culled_on_a_closed_mesh(tmp_path):
     mesh = icosphere(3)
     front = (_screen(mesh)[:, 2] > 0).astype(float)  # 1 on the half facing the camera, 0 on the far half
     img = _pixels(plot_field(mesh, front, tmp_path / "c.png", isolines=0, show_colorbar=False, dpi=40, cmap="bwr",
-                             vmin=0.0, vmax=1.0))
+                             vmin=0.0, vmax=1.0, view="front"))
     s = img[_surface_mask(img)]
     red = np.mean(s[:, 0] - s[:, 2] > 0.2)  # bwr: 1 is red, 0 is blue
     blue = np.mean(s[:, 2] - s[:, 0] > 0.2)

@@ -135,7 +135,8 @@ def _label(run: Run, order: str = " order ") -> str:
 
 
 def run_compare(mesh: Any, sources: Any, methods: Any, out_dir: str | os.PathLike, *, m: float = 1.0,
-                solver: str = "auto", reference: Any = None, progress: bool = True) -> list[dict]:
+                solver: str = "auto", reference: Any = None, progress: bool = True, view: Any = None,
+                up: Any = "auto") -> list[dict]:
     """Solve with several methods, compare each with the reference, write a CSV and PNGs.
 
     Parameters
@@ -156,6 +157,9 @@ def run_compare(mesh: Any, sources: Any, methods: Any, out_dir: str | os.PathLik
         The field to compare with (e.g. an analytic one); default the one of :data:`REFERENCES`, solved here.
     progress : bool, default True
         Print one line per method (name, time, status) to stderr.
+    view, up : optional
+        The camera of a surface's pictures (:func:`cvxgeodesic.plotting.plot_field`; default two panels: facing the
+        first source, and the far side).
 
     Returns
     -------
@@ -190,6 +194,7 @@ def run_compare(mesh: Any, sources: Any, methods: Any, out_dir: str | os.PathLik
     names = resolve_methods(methods, mesh.dim)
     sset = resolve_sources(mesh, sources)
     check_choice(solver, "solver", SOLVERS)
+    _check_camera(mesh, view, up)  # before the solves
     runs: list[Run] = [(n, 1) for n in names]
     ref_run: Run | None = REFERENCES[mesh.dim]
     if reference is not None:
@@ -212,7 +217,7 @@ def run_compare(mesh: Any, sources: Any, methods: Any, out_dir: str | os.PathLik
     rows, rel_errors = evaluate_methods(mesh, runs, results, reference, "given" if ref_run is None else _label(ref_run))
     write_csv(out / "compare.csv", rows)  # the numbers first: they matter more than the pictures
     t_png = time.perf_counter()
-    write_pictures(out, mesh, sset, runs, results, rows, rel_errors, reference)
+    write_pictures(out, mesh, sset, runs, results, rows, rel_errors, reference, view=view, up=up)
     say(f"wrote {out / 'compare.csv'} and {sum(1 for _ in out.glob('*.png'))} PNGs in {out} "
         f"({time.perf_counter() - t_png:.1f} s for the pictures)")
     return rows
@@ -370,8 +375,19 @@ def _field_scale(results: dict[Run, Outcome], runs: list[Run], reference: np.nda
     return vmax_field, levels
 
 
+def _check_camera(mesh: Any, view: Any, up: Any) -> None:
+    """``view`` and ``up`` of a surface's pictures checked before the solves (``"auto"`` is found when drawing)."""
+    from .plotting import up_vector, view_list
+
+    if mesh.dim == 2:
+        view_list(view)
+        if not (isinstance(up, str) and up == "auto"):
+            up_vector(mesh.V, up)
+
+
 def write_pictures(out: Path, mesh: Any, sset: Any, runs: list[Run], results: dict[Run, Outcome], rows: list[dict],
-                   rel_errors: dict[Run, np.ndarray], reference: np.ndarray | None) -> None:
+                   rel_errors: dict[Run, np.ndarray], reference: np.ndarray | None, *, view: Any = None,
+                   up: Any = "auto") -> None:
     """Write ``field_<method>.png``, ``error_<method>.png`` and ``gradient_histogram.png`` into ``out``.
 
     Parameters
@@ -402,12 +418,13 @@ def write_pictures(out: Path, mesh: Any, sset: Any, runs: list[Run], results: di
             continue
         title = f"{_label(run)} on {mesh.name} (source {src_txt})"
         draw_field(mesh, res.distance, out / f"field_{_label(run, '_order')}.png", sources=src, title=title,
-                   levels=levels, vmin=0.0 if vmax_field is not None else None, vmax=vmax_field, label="distance")
+                   levels=levels, vmin=0.0 if vmax_field is not None else None, vmax=vmax_field, label="distance",
+                   view=view, up=up)
         if run in rel_errors:
             rm = row["rel_mean"]
             mean_txt = f" (mean {100 * rm:.2f}%)" if rm is not None and np.isfinite(rm) else ""
             draw_field(mesh, rel_errors[run], out / f"error_{_label(run, '_order')}.png", sources=src, error=True,
-                       vmax=vmax_err, title=f"{_label(run)}: relative error{mean_txt}")
+                       vmax=vmax_err, title=f"{_label(run)}: relative error{mean_txt}", view=view, up=up)
     _write_histograms(out, mesh, src, runs, results, reference, rows[0]["reference"] if rows else "")
 
 

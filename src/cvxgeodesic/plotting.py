@@ -7,8 +7,10 @@ rendered into a temporary file next to the target and moved over it with
 
 The surface renderer is a small software pipeline on top of matplotlib:
 
-* orthographic projection along a view direction (a 3/4 view derived from the
-  mesh's principal axes by default);
+* orthographic projection along a view direction; by default two panels side by
+  side, one facing the first source and one from the opposite side (the field's far
+  side, where its ridge lies), with an up axis from the mesh
+  (:func:`~cvxgeodesic.evaluation.camera.up_vector`);
 * back-face culling on closed, consistently oriented meshes; two-sided
   lighting on open or non-orientable ones;
 * painter's algorithm: triangles sorted far-to-near and drawn with per-vertex
@@ -25,6 +27,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -32,10 +35,19 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ._atomic import atomic_write
+from .evaluation.camera import (
+    _ELEV,
+    _frame,
+    _front_angles,
+    _rotation,
+    _unit,
+    up_vector,
+    view_list,
+)
 from .mesh.io import as_trimesh
 from .validation import as_vertex_field, check_count, check_number, check_output_path, vertex_indices
 
-__all__ = ["plot_field", "plot_error_map", "plot_gradient_histogram", "isoline_segments"]
+__all__ = ["plot_field", "plot_error_map", "plot_gradient_histogram", "isoline_segments", "up_vector", "view_list"]
 
 #: Output formats accepted by the ``plot_*`` functions.
 PLOT_EXTENSIONS = (".png",)
@@ -198,63 +210,6 @@ def isoline_segments(mesh, values, levels) -> np.ndarray:
 # ----------------------------------------------------------------------------------------------------------------------
 
 
-def _unit(v: np.ndarray) -> np.ndarray:
-    n = np.linalg.norm(v)
-    return v / n if n > 0 else v
-
-
-def _camera(V: np.ndarray, view, focus=None) -> np.ndarray:
-    """Rows: screen right, screen up, direction towards the viewer (orthonormal, right-handed).
-
-    ``focus`` (a unit normal, optional) makes the default view pick, among its four mirror images
-    (front or back, turned left or right), the one that faces that normal most.
-    """
-    if view is not None:
-        try:
-            elev, azim = (float(x) for x in view)
-        except (TypeError, ValueError):
-            raise ValueError(f"view must be None or (elev, azim) in degrees, got {view!r}") from None
-        if not (np.isfinite(elev) and np.isfinite(azim)):
-            raise ValueError(f"view must be finite (elev, azim) degrees, got {view!r}")
-        e, a = np.radians(elev), np.radians(azim)
-        toward = np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
-        world_up = np.array([0.0, 0.0, 1.0])
-        if abs(toward[2]) > 0.999:  # looking straight down or up: screen up along -azim (or +azim)
-            world_up = -np.sign(toward[2]) * np.array([np.cos(a), np.sin(a), 0.0])
-        right = _unit(np.cross(world_up, toward))
-        up = np.cross(toward, right)
-        return np.vstack([right, up, toward])
-    # default: principal axes snapped to the nearest world axes (scanned models are usually axis-aligned);
-    # of the two longest, world y (OBJ convention) points up if it is one, else world z; we look along the thinnest,
-    # from its positive side, then turn 35 degrees sideways and raise the eye 15 degrees (a 3/4 view)
-    X = V - V.mean(axis=0)
-    _, U = np.linalg.eigh(X.T @ X)
-    axes = U[:, ::-1].T  # rows, largest variance first
-    snapped, free = [], [0, 1, 2]
-    for ax_i in axes:
-        j = max(free, key=lambda k: abs(ax_i[k]))
-        free.remove(j)
-        snapped.append(np.eye(3)[j])
-    long1, long2, thin = snapped
-    up = long1 if long1[1] == 1.0 else long2 if long2[1] == 1.0 else long1 if long1[2] == 1.0 else long2
-    best = _three_quarter(up, thin, 1.0)
-    for front, turn in ((1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)) if focus is not None else ():
-        R = _three_quarter(up, front * thin, turn)
-        if R[2] @ focus > best[2] @ focus + 1e-9:  # the first of near ties: a symmetric mesh keeps the front view
-            best = R
-    return best
-
-
-def _three_quarter(up: np.ndarray, toward: np.ndarray, turn: float) -> np.ndarray:
-    side = np.cross(up, toward)  # screen right: (right, up, toward) is right-handed
-    az, el = np.radians(35.0) * turn, np.radians(15.0)
-    toward = np.cos(az) * toward + np.sin(az) * side
-    side = _unit(np.cross(up, toward))
-    toward = np.cos(el) * toward + np.sin(el) * up
-    up = _unit(np.cross(toward, side))
-    return np.vstack([side, up, _unit(toward)])
-
-
 def _closed_oriented(F: np.ndarray, n: int) -> bool:
     """True when every directed edge appears once and its reverse once (closed, consistently oriented)."""
     a, b = F.T.ravel(), np.roll(F, -1, axis=1).T.ravel()  # the directed edges a -> b, corner-major
@@ -298,21 +253,105 @@ def _gouraud_artist_class():
     return _GouraudTriangles
 
 
-def _render_surface(ax, mesh, values, *, cmap, norm, levels, view, marks, ambient=0.38, paths=()):
-    """Draw the shaded, colour-mapped surface, its isolines and marked vertices into ``ax``."""
-    from matplotlib.collections import LineCollection
+@dataclass
+class _Surface:
+    """What every panel of one picture shares: the mesh, its normals, whether it is closed, its isolines."""
 
+    mesh: Any
+    closed: bool
+    fn: np.ndarray  # (m, 3) face normals, outward on a closed mesh
+    vnorm: np.ndarray  # (n, 3) unit vertex normals
+    seg3: np.ndarray  # (s, 2, 3) isoline segments
+    seg_face: np.ndarray  # (s,) their faces
+
+
+def _surface(mesh, values: np.ndarray, levels: np.ndarray) -> _Surface:
     V, F = mesh.V, mesh.F
     fn = mesh.face_normals_unnormalized
     closed = _closed_oriented(F, mesh.n_vertices)
-    if closed:
-        # outward orientation: signed volume positive
-        vol = np.einsum("ij,ij->", V[F[:, 0]] - V.mean(axis=0), fn)
-        if vol < 0:
-            fn = -fn
-    vnorm = _vertex_normals(V, F, fn)
-    focus = vnorm[marks[0]] if marks.size and np.any(vnorm[marks[0]]) else None
-    R = _camera(V, view, focus)
+    if closed and np.einsum("ij,ij->", V[F[:, 0]] - V.mean(axis=0), fn) < 0:  # outward: signed volume positive
+        fn = -fn
+    seg3, seg_face = _marching_triangles(V, F, values, levels)  # none without levels
+    return _Surface(mesh, closed, fn, _vertex_normals(V, F, fn), seg3, seg_face)
+
+
+def _source_normal(surf: _Surface, s: int) -> np.ndarray | None:
+    """The unit normal a ``"front"`` view faces at vertex ``s``: the mean vertex normal within 2 % of the mesh's
+    diagonal (one scanned vertex's normal is noisy); the vertex's own where they cancel (a thin part)."""
+    V = surf.mesh.V
+    near = np.linalg.norm(V - V[s], axis=1) <= 0.02 * np.linalg.norm(np.ptp(V, axis=0))
+    n = surf.vnorm[near].sum(axis=0)
+    if np.linalg.norm(n) < 0.3 * near.sum():
+        n = surf.vnorm[s]
+    return _unit(n) if np.linalg.norm(n) > 0 else None
+
+
+def _occluded(surf: _Surface, s: int, toward: np.ndarray) -> bool:
+    """Whether a face hides vertex ``s`` from a viewer in direction ``toward`` (a ray cast, Möller–Trumbore)."""
+    V, F = surf.mesh.V, surf.mesh.F
+    A = V[F[:, 0]]
+    E1, E2 = V[F[:, 1]] - A, V[F[:, 2]] - A
+    p = np.cross(toward, E2)
+    det = np.einsum("ij,ij->i", E1, p)
+    ok = np.abs(det) > 1e-300
+    inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+    tvec = V[s] - A
+    u = np.einsum("ij,ij->i", tvec, p) * inv
+    q = np.cross(tvec, E1)
+    v = (q @ toward) * inv
+    t = np.einsum("ij,ij->i", E2, q) * inv
+    hit = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 1e-9 * np.linalg.norm(np.ptp(V, axis=0)))
+    hit[np.flatnonzero((F == s).any(axis=1))] = False  # the faces around s meet the ray at its start
+    return bool(hit.any())
+
+
+def _facing_source(surf: _Surface, s: int, focus: np.ndarray, frame: np.ndarray, elev: float, azim: float):
+    """``(elev, azim)``: the front view turned (up to 90°) or raised/lowered until vertex ``s`` is in sight."""
+    tries = [(elev, azim + d) for d in (0, 30, -30, 60, -60, 90, -90)] + [(60.0, azim), (-30.0, azim)]
+    for e, a in tries:
+        toward = _rotation(e, a, frame)[2]
+        if toward @ focus > 0 and not _occluded(surf, s, toward):
+            return e, a % 360.0
+    return elev, azim
+
+
+def _up_name(up: np.ndarray) -> str:
+    k = int(np.argmax(np.abs(up)))
+    if abs(abs(up[k]) - 1.0) < 1e-12:
+        return ("−" if up[k] < 0 else "+") + "xyz"[k]
+    return "(" + ", ".join(f"{x:.2f}" for x in up) + ")"
+
+
+def _panel_cameras(surf: _Surface, marks: np.ndarray, view: Any, up: Any) -> list[tuple[np.ndarray, str]]:
+    """One ``(rotation (3, 3), caption)`` per panel of ``view`` (:func:`~cvxgeodesic.evaluation.camera.view_list`)."""
+    V = surf.mesh.V
+    u = up_vector(V, up)
+    frame = _frame(u)
+    s = int(marks[0]) if marks.size else None
+    focus = _source_normal(surf, s) if s is not None else None
+    out = []
+    for spec in view_list(view):
+        if isinstance(spec, tuple):
+            (elev, azim), label = spec, ""
+        else:
+            elev, azim = _front_angles(V, frame, focus)
+            if focus is not None:
+                elev, azim = _facing_source(surf, s, focus, frame, elev, azim)
+            if spec == "back":  # the other side; from below when the front looks down on the source, and so on
+                elev, azim = (-elev if abs(elev) > _ELEV else _ELEV), (azim + 180.0) % 360.0
+            label = ("facing source " + str(s) if spec == "front" else "far side") if s is not None else spec
+            label += ": "
+        out.append((_rotation(elev, azim, frame), f"{label}elev {elev:.0f}°, azim {azim:.0f}°, up {_up_name(u)}"))
+    return out
+
+
+def _render_surface(ax, surf: _Surface, values, R, *, cmap, norm, marks, ambient=0.38, paths=()):
+    """Draw the shaded, colour-mapped surface, its isolines and marked vertices seen through ``R`` (rows: screen
+    right, screen up, towards the viewer) into ``ax``."""
+    from matplotlib.collections import LineCollection
+
+    mesh, closed, fn, vnorm = surf.mesh, surf.closed, surf.fn, surf.vnorm
+    V, F = mesh.V, mesh.F
     P = (V - V.mean(axis=0)) @ R.T  # (n, 3): screen x, screen y, depth (towards the viewer)
     facing = fn @ R[2]
     vis = np.flatnonzero(facing > 0) if closed else np.arange(F.shape[0])  # back faces culled on closed meshes
@@ -345,7 +384,7 @@ def _render_surface(ax, mesh, values, *, cmap, norm, levels, view, marks, ambien
     bounds = np.linspace(0, k, n_slabs + 1).astype(np.int64)
     slab_of_face = np.full(F.shape[0], -1, dtype=np.int64)  # -1: culled
     slab_of_face[vis] = np.repeat(np.arange(n_slabs), np.diff(bounds))
-    seg3, seg_face = _marching_triangles(V, F, values, levels)  # none without levels
+    seg3, seg_face = surf.seg3, surf.seg_face
     seg_slab = slab_of_face[seg_face]
     on = seg_slab >= 0
     seg2 = ((seg3[on] - V.mean(axis=0)) @ R[:2].T)  # (s, 2, 2)
@@ -398,17 +437,31 @@ def _finite_range(values: np.ndarray, vmin, vmax) -> tuple[float, float]:
     return lo, hi
 
 
-def _layout(fig, show_colorbar: bool, title):
+def _figsize(n: int, show_colorbar: bool) -> tuple[float, float]:
+    """The figure of ``n`` panels side by side, each as wide as the one of a one-panel picture."""
+    return _FIGSIZE[0] + (n - 1) * _FIGSIZE[0] * (0.80 if show_colorbar else 0.98), _FIGSIZE[1]
+
+
+def _layout(fig, show_colorbar: bool, title, n: int = 1):
+    """``n`` picture axes side by side (a caption line under each when there are several) and the colour bar's."""
     top = 0.90 if title else 0.97
-    if show_colorbar:
-        ax = fig.add_axes((0.01, 0.02, 0.80, top - 0.02))
-        cax = fig.add_axes((0.84, 0.15, 0.03, (top - 0.02) * 0.78))
-    else:
-        ax = fig.add_axes((0.01, 0.02, 0.98, top - 0.02))
-        cax = None
+    s = _FIGSIZE[0] / fig.get_figwidth()  # figure fractions of the one-panel layout
+    pw = (0.80 if show_colorbar else 0.98) * s
+    bottom = 0.02 if n == 1 else 0.07
+    axes = [fig.add_axes((0.01 * s + i * pw, bottom, pw, top - bottom)) for i in range(n)]
+    cax = fig.add_axes((1.0 - 0.16 * s, 0.15, 0.03 * s, (top - 0.02) * 0.78)) if show_colorbar else None
     if title:
         fig.suptitle(str(title), y=0.975, fontsize=12)
-    return ax, cax
+    return axes, cax
+
+
+def _draw_panels(fig, axes, surf: _Surface, values, cameras, **kwargs) -> None:
+    """One view of ``cameras`` (:func:`_panel_cameras`) into each of ``axes``, captioned when there are several."""
+    for ax, (R, caption) in zip(axes, cameras, strict=True):
+        _render_surface(ax, surf, values, R, **kwargs)
+        if len(axes) > 1:
+            x0, _, w, _ = ax.get_position(original=True).bounds
+            fig.text(x0 + w / 2, 0.02, caption, ha="center", va="bottom", fontsize=8, color="0.3")
 
 
 def plot_field(
@@ -419,7 +472,8 @@ def plot_field(
     isolines: int | ArrayLike | None = 20,
     title: str | None = None,
     cmap: Any = "viridis",
-    view: tuple[float, float] | None = None,
+    view: Any = None,
+    up: Any = "auto",
     vmin: float | None = None,
     vmax: float | None = None,
     show_colorbar: bool = True,
@@ -447,24 +501,31 @@ def plot_field(
         Title above the picture.
     cmap : str or matplotlib Colormap, default "viridis"
         Colour map.
-    view : (elev, azim) tuple of float, optional
-        Camera direction in degrees, matplotlib's ``mplot3d`` convention (world
-        ``z`` up, ``azim`` around ``z`` from ``+x``). Default: a 3/4 view from
-        the mesh's principal axes (the axis closest to world ``y`` on screen up,
-        looking along the thinnest axis, turned 35° sideways and raised 20°).
+    view : str, (elev, azim) tuple of float, or a list of them, optional
+        The panels, side by side, sharing one colour bar. Default ``["front", "back"]``: ``"front"`` faces the
+        first of ``sources`` (the mean normal around it, turned up to 90° or raised until no part of the surface
+        hides it), without sources it is a 3/4 view (along the thinnest principal axis across ``up``, turned 35°
+        and raised 15°); ``"back"`` is the front turned 180° about ``up``: the far side of the field, where its
+        ridge lies. ``(elev, azim)``: the camera direction in degrees, ``elev`` above the plane across ``up`` and
+        ``azim`` about ``up`` (for ``up="z"`` matplotlib's ``mplot3d`` convention: from ``+x`` towards ``+y``; for
+        ``"y"`` from ``+z`` towards ``+x``; for ``"x"`` from ``+y`` towards ``+z``). Each panel of several is
+        captioned with its ``elev`` and ``azim``, so a view can be drawn again on its own. At most 4 panels.
+    up : {"auto", "x", "y", "z", "-x", "-y", "-z"} or (3,) array_like of float, default "auto"
+        The world direction drawn upwards. ``"auto"``: away from the flat, axis-aligned end of the convex hull the
+        model stands on (feet, a base); without one ``+y`` (the OBJ convention), ``+z`` where ``y`` is the mesh's
+        thinnest principal axis (:func:`~cvxgeodesic.evaluation.camera.up_vector`, which says how it was checked).
     vmin, vmax : float, optional
         Colour range; default the finite minimum and maximum of ``values``.
     show_colorbar : bool, default True
         Draw a colour bar on the right.
     dpi : float, default 150
-        Resolution; the PNG is ``round(6.4·dpi) × round(5.4·dpi)`` pixels
-        (960 × 810 at 150 dpi).
+        Resolution; one panel makes a PNG of ``6.4·dpi × 5.4·dpi`` pixels (960 × 810 at 150 dpi),
+        each further panel adds ``5.12·dpi`` pixels of width (``6.27·dpi`` without the colour bar): the default
+        two panels are 1728 × 810 at 150 dpi.
     colorbar_label : str, optional
         Label of the colour bar.
     sources : int or (k,) array_like of int, optional
-        Vertices to mark with a red dot (where visible). The default view
-        then picks, among its mirror images (front/back, turned left/right),
-        the one that faces the first of them.
+        Vertices to mark with a red dot (where visible); the ``"front"`` view faces the first of them.
     paths : sequence of (k, 3) float array_like, optional
         Polylines on the surface (e.g. :func:`cvxgeodesic.geodesic_path`), drawn on top in red.
 
@@ -476,7 +537,7 @@ def plot_field(
     Raises
     ------
     ValueError
-        If ``view`` is malformed; a :class:`~cvxgeodesic.errors.ParameterError` (a ``ValueError``) if
+        A :class:`~cvxgeodesic.errors.ParameterError` (a ``ValueError``) if ``view`` or ``up`` is malformed,
         ``values`` does not have shape ``(n,)``, ``path`` does not end in ``.png`` or cannot be written
         (its directory does not exist), ``dpi`` is out of range or a source index is out of range.
 
@@ -498,14 +559,18 @@ def plot_field(
     from matplotlib.colors import Colormap, Normalize
 
     mesh, vals, marks, p, dpi = _surface_inputs(mesh, values, "values", sources, path, dpi)
+    views = view_list(view)
+    up_vector(mesh.V, up)  # checked before the work
     cm = cmap if isinstance(cmap, Colormap) else colormaps[cmap]
     lo, hi = _finite_range(vals, vmin, vmax)
     levels = _isolevels(isolines, lo, hi)
     norm = Normalize(lo, hi, clip=True)
 
-    fig = _new_figure(dpi)
-    ax, cax = _layout(fig, show_colorbar, title)
-    _render_surface(ax, mesh, vals, cmap=cm, norm=norm, levels=levels, view=view, marks=marks, paths=paths)
+    surf = _surface(mesh, vals, levels)
+    cameras = _panel_cameras(surf, marks, views, up)
+    fig = _new_figure(dpi, _figsize(len(cameras), show_colorbar))
+    axes, cax = _layout(fig, show_colorbar, title, len(cameras))
+    _draw_panels(fig, axes, surf, vals, cameras, cmap=cm, norm=norm, marks=marks, paths=paths)
     if cax is not None:
         cb = fig.colorbar(ScalarMappable(norm=Normalize(lo, hi), cmap=cm), cax=cax, label=colorbar_label or "")
         if levels.size and levels.size <= 60:
@@ -514,7 +579,8 @@ def plot_field(
     return p
 
 
-def plot_error_map(mesh, rel_error, path, *, title=None, vmax=None, view=None, dpi=150, sources=None) -> Path:
+def plot_error_map(mesh, rel_error, path, *, title=None, vmax=None, view=None, up="auto", dpi=150,
+                   sources=None) -> Path:
     """Relative-error colour map on the surface (paper Fig. 6).
 
     Parameters
@@ -531,8 +597,10 @@ def plot_error_map(mesh, rel_error, path, *, title=None, vmax=None, view=None, d
     vmax : float, optional
         Top of the colour range (the range starts at 0); default the 99th
         percentile of the finite errors, so a few outliers do not wash out the map.
-    view : (elev, azim) tuple of float, optional
-        As in :func:`plot_field`.
+    view : str, (elev, azim) tuple of float, or a list of them, optional
+        The panels, as in :func:`plot_field` (default: facing the first source, and the far side).
+    up : str or (3,) array_like of float, default "auto"
+        The world direction drawn upwards, as in :func:`plot_field`.
     dpi : float, default 150
         Resolution (same picture size as :func:`plot_field`).
     sources : int or (k,) array_like of int, optional
@@ -554,6 +622,8 @@ def plot_error_map(mesh, rel_error, path, *, title=None, vmax=None, view=None, d
     from matplotlib.ticker import PercentFormatter
 
     mesh, err, marks, p, dpi = _surface_inputs(mesh, rel_error, "rel_error", sources, path, dpi)
+    views = view_list(view)
+    up_vector(mesh.V, up)  # checked before the work
     fin = err[np.isfinite(err)]
     if vmax is None:
         vmax = float(np.percentile(fin, 99.0)) if fin.size else 1.0
@@ -563,11 +633,13 @@ def plot_error_map(mesh, rel_error, path, *, title=None, vmax=None, view=None, d
     cm = colormaps["inferno_r"]
     norm = Normalize(0.0, vmax, clip=True)
 
-    fig = _new_figure(dpi)
-    ax, cax = _layout(fig, True, title)
+    surf = _surface(mesh, err, np.empty(0))
+    cameras = _panel_cameras(surf, marks, views, up)
+    fig = _new_figure(dpi, _figsize(len(cameras), True))
+    axes, cax = _layout(fig, True, title, len(cameras))
     # light shading only: dark shading would read as large error on this colour map
-    _render_surface(ax, mesh, err, cmap=cm, norm=norm, levels=np.empty(0), view=view, ambient=0.78,
-                    marks=marks)
+    _draw_panels(fig, axes, surf, err, cameras, cmap=cm, norm=norm, ambient=0.78, marks=marks)
+    ax = axes[0]
     extend = "max" if fin.size and fin.max() > vmax else "neither"
     cb = fig.colorbar(ScalarMappable(norm=Normalize(0.0, vmax), cmap=cm), cax=cax, extend=extend,
                       label="relative error |d − d_exact| / d_exact")

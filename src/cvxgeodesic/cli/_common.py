@@ -87,8 +87,8 @@ class Signals:
 
 
 def check_numbers(args: argparse.Namespace) -> None:
-    """``--m``, ``--lam`` and ``--slice-normal`` checked as the Python API checks them, before a command prints or
-    reads anything."""
+    """``--m``, ``--lam``, ``--slice-normal``, ``--view`` and ``--up`` checked as the Python API checks them, before a
+    command prints or reads anything."""
     from ..validation import check_number, check_smoothness
 
     if getattr(args, "lam", None) is not None:
@@ -99,6 +99,10 @@ def check_numbers(args: argparse.Namespace) -> None:
     if normal is not None and not any(normal):  # the plane's normal: any direction, but a direction
         raise ParameterError(f"--slice-normal {','.join(f'{c:g}' for c in normal)}: the normal of the slice must "
                              "not be zero (e.g. 0,0,1)")
+    if hasattr(args, "up"):  # the commands with pictures: --view and --up read here, one line naming the option
+        from ._options import parse_view_options
+
+        parse_view_options(args)
 
 
 def add_overwrite_option(p: argparse.ArgumentParser) -> None:

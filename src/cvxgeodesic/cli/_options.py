@@ -254,3 +254,70 @@ def batch_sources(args: argparse.Namespace) -> Any:
     if boundary:
         return "boundary"
     return [*vertices, *(list(x) for x in points)] if points else vertices
+
+
+#: ``--view`` names and ``--up`` axes: :data:`cvxgeodesic.evaluation.camera.VIEW_NAMES` and ``UP_NAMES`` (this
+#: module imports only the standard library; a test holds them equal).
+VIEW_NAMES = ("front", "back")
+UP_NAMES = ("auto", "x", "y", "z", "-x", "-y", "-z")
+MAX_VIEWS = 4
+
+
+def view_spec(text: str) -> list[str | tuple[float, float]]:
+    """``"front,back"`` -> ``["front", "back"]``, ``"30,45"`` -> ``[(30.0, 45.0)]``: the value of one ``--view``."""
+    parts = [p.strip().lower() for p in text.split(",")]
+    if all(p in VIEW_NAMES for p in parts):
+        return list(parts)
+    try:
+        angles = tuple(float(p) for p in parts)
+    except ValueError:
+        angles = ()
+    if len(angles) != 2 or not all(math.isfinite(a) for a in angles):
+        raise ParameterError(f"--view {text!r}: expected front, back, front,back or ELEV,AZIM (two finite numbers "
+                             "of degrees)")
+    return [(angles[0], angles[1])]
+
+
+def up_spec(text: str) -> str | tuple[float, float, float]:
+    """``--up``: a name of :data:`UP_NAMES` or ``X,Y,Z`` (a non-zero vector)."""
+    name = text.strip().lower()
+    if name in UP_NAMES:
+        return name
+    try:
+        vec = xyz(text)
+    except argparse.ArgumentTypeError:
+        vec = (0.0, 0.0, 0.0)
+    if not any(vec):
+        raise ParameterError(f"--up {text!r}: expected {', '.join(UP_NAMES)} or X,Y,Z (three finite numbers, not "
+                             "all zero)")
+    return vec
+
+
+def add_view_options(p: argparse.ArgumentParser) -> None:
+    """``--view`` (repeatable) and ``--up``: the camera of a surface's ``--png``; read by :func:`parse_view_options`."""
+    p.add_argument("--view", action="append", default=None, metavar="front|back|ELEV,AZIM",
+                   help="the panels of a surface's picture, side by side (repeat, or give front,back; at most "
+                        f"{MAX_VIEWS}): front faces the first source, back is the far side (turned 180° about the up "
+                        "axis); ELEV,AZIM in degrees about the up axis (--view=-20,90 for a negative number). "
+                        "Default: front,back")
+    p.add_argument("--up", default="auto", metavar="auto|x|y|z|-x|-y|-z|X,Y,Z",
+                   help="the world axis drawn upwards in a surface's picture (--up=-y for a negative one). Default "
+                        "auto: away from the flat end the model stands on, else y (the OBJ convention; z where y is "
+                        "the mesh's thinnest axis)")
+
+
+def parse_view_options(args: argparse.Namespace) -> None:
+    """``--view`` and ``--up`` read into ``args.view`` (a list of panels, or None: the default) and ``args.up``.
+
+    Raises
+    ------
+    ParameterError
+        A value that is not a view or an axis, or more than :data:`MAX_VIEWS` views (the message names the option).
+    """
+    if getattr(args, "view", None) is not None:
+        views = [v for text in args.view for v in view_spec(text)]
+        if len(views) > MAX_VIEWS:
+            raise ParameterError(f"--view: at most {MAX_VIEWS} views, got {len(views)}")
+        args.view = views
+    if isinstance(getattr(args, "up", None), str):
+        args.up = up_spec(args.up)

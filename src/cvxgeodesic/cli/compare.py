@@ -6,7 +6,7 @@ import argparse
 import textwrap
 from typing import Any
 
-from ._options import cli_sources
+from ._options import add_view_options, cli_sources
 from .distance import add_common_options
 
 
@@ -25,6 +25,7 @@ def add_parser(sub: Any) -> None:
     add_common_options(p, method=False)
     p.add_argument("--methods", default="all", help="comma-separated method names, or 'all' (default)")
     p.add_argument("--out", default="compare_output", help="output folder (CSV table and PNGs)")
+    add_view_options(p)
     p.set_defaults(func=run)
 
 
@@ -37,7 +38,8 @@ def run(args: argparse.Namespace) -> int:
     check_output_dir(args.out, "--out")  # before the solves, not when their results are written
     mesh = load_mesh(args.mesh)
     sources, _ = cli_sources(args, mesh)
-    rows = run_compare(mesh, sources, args.methods, args.out, m=args.m, solver=args.solver, progress=not args.quiet)
+    rows = run_compare(mesh, sources, args.methods, args.out, m=args.m, solver=args.solver, progress=not args.quiet,
+                       view=args.view, up=args.up)
     print(format_table(rows))
     if rows:
         print(f"(errors against: {rows[0]['reference']})")

@@ -29,6 +29,7 @@ def add_parser(sub: Any) -> None:
                    help="also render the field with isolines and the sources to this PNG (both files or neither; "
                         "a slice of a tetrahedral mesh)")
     add_slice_option(p)
+    opt.add_view_options(p)
     add_overwrite_option(p)
     p.set_defaults(func=run)
 
@@ -82,7 +83,8 @@ def run(args: argparse.Namespace) -> int:
         # every file in the file's numbering and vertex count, so it joins the input by index
         save_distance(tmp[0], mesh, res.distance, file_order=True)
         if args.png:
-            draw_field(mesh, res, tmp[1], title=f"{solver.method}, sources {label}", normal=slice_normal(args))
+            draw_field(mesh, res, tmp[1], title=f"{solver.method}, sources {label}", normal=slice_normal(args),
+                       view=args.view, up=args.up)
     if not args.quiet:
         i = res.info
         print(f"{i.method} via {i.solver}: {i.status}, {i.iterations} iterations, set-up {i.setup_time:.2f} s, "
@@ -91,9 +93,10 @@ def run(args: argparse.Namespace) -> int:
 
 
 def draw_field(mesh: Any, res: Any, path: Any, *, title: str, normal: tuple[float, float, float],
-               line: Any = None) -> None:
+               line: Any = None, view: Any = None, up: Any = "auto") -> None:
     """The field of ``res`` and its sources into a PNG (:func:`~cvxgeodesic.evaluation.slice_plot.draw_field`): in a
-    volume every source is marked, its points inside too; ``line``, a geodesic path, replaces the marks."""
+    volume every source is marked, its points inside too; ``line``, a geodesic path, replaces the marks. ``view`` and
+    ``up``: a surface's camera (:func:`~cvxgeodesic.plotting.plot_field`)."""
     import numpy as np
 
     from ..evaluation.slice_plot import draw_field as draw
@@ -102,4 +105,4 @@ def draw_field(mesh: Any, res: Any, path: Any, *, title: str, normal: tuple[floa
     if mesh.dim == 3 and sset is not None:  # the vertices at 0 and the points inside
         points = np.vstack([mesh.V[sset.fixed_vertices(mesh)], sset.point_positions(mesh)])
     draw(mesh, res.distance, path, title=title, sources=res.sources, points=points, line=line, normal=normal,
-         label=None if line is not None and mesh.dim == 2 else "geodesic distance")
+         label=None if line is not None and mesh.dim == 2 else "geodesic distance", view=view, up=up)

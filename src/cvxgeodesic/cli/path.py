@@ -32,6 +32,7 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--png", default=None, help="also draw the path on the field to this PNG (both files or neither; "
                                                "in a tetrahedral mesh its points on the slice)")
     add_slice_option(p)
+    opt.add_view_options(p)
     add_overwrite_option(p)
     p.add_argument("--quiet", "-q", action="store_true", help="no progress output")
     p.set_defaults(func=run)
@@ -102,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
         atomic_write(tmp[0], _path_writer(str(tmp[0]), P, cells, bary, "face" if mesh.dim == 2 else "tet"))
         if args.png:
             draw_field(mesh, res, tmp[1], title=f"{res.info.method}, path to sources {label}",
-                       normal=slice_normal(args), line=P)
+                       normal=slice_normal(args), line=P, view=args.view, up=args.up)
     if not args.quiet:
         length = float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum())
         # a cost applies to surfaces only (cli_cost)

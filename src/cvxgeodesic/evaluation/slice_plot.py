@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -157,14 +158,16 @@ def plot_slice(
 def draw_field(mesh, values: ArrayLike, path: str | os.PathLike, *, title: str, sources: ArrayLike = (),
                points: ArrayLike | None = None, line: ArrayLike | None = None, normal: ArrayLike = (0.0, 0.0, 1.0),
                levels: int | ArrayLike | None = 20, vmin: float | None = None, vmax: float | None = None,
-               label: str | None = None, error: bool = False) -> None:
+               label: str | None = None, error: bool = False, view: Any = None, up: Any = "auto") -> None:
     """A field (``error``: a relative error) into a PNG: on a surface (:func:`~cvxgeodesic.plotting.plot_field`,
     :func:`~cvxgeodesic.plotting.plot_error_map`), or on the slice of a tetrahedral mesh by the plane through its
     centre with this ``normal`` (:func:`plot_slice`): what the command line and the comparison draw.
 
     The (k,) ``sources`` are marked, in a volume at their positions or at the (p, 3) ``points`` when given; a (q, 3)
     ``line`` (a geodesic path) replaces the marks. ``levels`` (isolines), ``vmin``, ``vmax`` and ``label`` (the
-    colour bar's) style a field; an error has its own colour map and label, no isolines, and starts at 0.
+    colour bar's) style a field; an error has its own colour map and label, no isolines, and starts at 0. ``view``
+    and ``up``: a surface's camera (:func:`~cvxgeodesic.plotting.plot_field`; default: facing the first source, and
+    the far side); a slice is seen along its normal.
     """
     if mesh.dim == 3:
         marks = mesh.V[np.asarray(sources, dtype=np.int64)] if points is None else points
@@ -174,9 +177,10 @@ def draw_field(mesh, values: ArrayLike, path: str | os.PathLike, *, title: str, 
     elif error:
         from ..plotting import plot_error_map  # looked up at the call: tests replace it
 
-        plot_error_map(mesh, values, path, title=title, vmax=vmax, sources=sources)
+        plot_error_map(mesh, values, path, title=title, vmax=vmax, sources=sources, view=view, up=up)
     else:
         from ..plotting import plot_field
 
         plot_field(mesh, values, path, isolines=levels, title=title, vmin=vmin, vmax=vmax, colorbar_label=label,
-                   sources=None if line is not None else sources, paths=() if line is None else [line])
+                   sources=None if line is not None else sources, paths=() if line is None else [line], view=view,
+                   up=up)
