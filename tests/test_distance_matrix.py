@@ -333,7 +333,8 @@ def test_a_checkpoint_of_other_parameters_is_refused(sphere, tmp_path):
     with pytest.raises(ParameterError, match="junk.npz is not a distance_matrix checkpoint"):
         cg.distance_matrix(sphere, [0, 5], checkpoint=tmp_path / "junk.npz")
     np.savez(tmp_path / "other.npz", x=1)
-    with pytest.raises(ParameterError, match=r"other.npz is not a distance_matrix checkpoint \(no 'parameters' entry"):
+    with pytest.raises(ParameterError, match=r"other.npz is damaged or not a distance_matrix checkpoint \(no 'format' "
+                                             r"entry\); it was not used: delete it"):
         cg.distance_matrix(sphere, [0, 5], checkpoint=tmp_path / "other.npz")
     with pytest.raises(ParameterError, match="unsupported output file extension '.npy'"):
         cg.distance_matrix(sphere, [0, 5], checkpoint=tmp_path / "rows.npy")

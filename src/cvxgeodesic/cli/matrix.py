@@ -77,10 +77,7 @@ def run(args: argparse.Namespace) -> int:
                  else f"; on {args.scheduler or f'a local cluster of {args.workers} worker processes'}")
         within = f", distances up to {args.max_distance:g}" if local else ""
         print(f"{mesh.name}: {mesh.n_file_vertices} vertices, {len(rows)} rows{within}; method {method}{where}",
-              file=sys.stderr)
-        kept = checkpoint_rows(partial)
-        if kept:
-            print(f"resuming from {partial}: {kept[0]} of {kept[1]} rows already done", file=sys.stderr)
+              file=sys.stderr)  # "resuming from ..." comes from distance_matrix, once it has accepted the checkpoint
     try:
         D: Any = distance_matrix(mesh, rows, method, m=args.m, solver=args.solver, progress=not args.quiet,
                             workers=args.workers, scheduler=args.scheduler, max_distance=args.max_distance,
