@@ -50,7 +50,8 @@ DEFAULT_TOL = 1e-8
 #: The method of ``method=None`` by simplex dimension (``mesh.dim``): the curved Hessian energy exists on surfaces only.
 DEFAULT_METHODS = {2: "qcqp-hessian", 3: "qclp"}
 #: The method of ``distance_matrix(method=None)`` (and ``cvxgeodesic matrix``) on every mesh: as accurate as
-#: ``qcqp-hessian`` against the exact distance and 1.7-2.3x faster per row (benchmarks/row_default.py, docs/performance.md).
+#: ``qcqp-hessian`` against the exact distance and 1.7-2.3x faster per row (benchmarks/row_default.py,
+#: docs/performance.md).
 DEFAULT_ROW_METHOD = "qclp"
 
 
