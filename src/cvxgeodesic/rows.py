@@ -409,7 +409,7 @@ def _check_distances(values: np.ndarray, bad: Callable[[str], ParameterError], *
     if wrong.any():
         k = np.unravel_index(int(np.flatnonzero(wrong)[0]), values.shape)
         allowed = "finite and ≥ 0" if finite else "≥ 0 (or inf)"
-        raise bad(f"distance {values[k]!r} at {tuple(int(i) for i in k)}; distances are {allowed}")
+        raise bad(f"distance {float(values[k])!r} at {tuple(int(i) for i in k)}; distances are {allowed}")
 
 
 def _short(a: np.ndarray) -> str:
