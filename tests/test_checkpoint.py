@@ -379,7 +379,7 @@ def test_progress_off_a_terminal_is_a_plain_line_every_few_seconds():
     with rows.RowLines(10, 5, "qclp", resumed, delay=0.0, clock=lambda: clock.t) as bar:
         clock.t += 2.0
         bar.update(1)
-    assert resumed.getvalue() == "qclp: rows 6/10, 2 s, ~8 s left\n"
+    assert resumed.getvalue() == "qclp: rows 5/10, 0 s\nqclp: rows 6/10, 2 s, ~8 s left\n"  # at once, then
 
 
 def test_rows_progress_is_a_bar_in_a_terminal_and_lines_elsewhere(monkeypatch, capsys):

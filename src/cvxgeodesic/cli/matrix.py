@@ -103,7 +103,10 @@ def run(args: argparse.Namespace) -> int:
     D, save = (sparse_to_file_order(mesh, D), sp.save_npz) if local else (to_file_order(mesh, D), np.save)
     atomic_write(args.output, lambda fh: save(fh, D), overwrite_read_only=args.overwrite_read_only)
     what = f"sparse, {D.nnz} distances up to {args.max_distance:g} stored" if local else "distances"
-    partial.unlink(missing_ok=True)
+    try:
+        partial.unlink(missing_ok=True)
+    except OSError as exc:  # another user's file in a sticky folder: the output is written all the same
+        args.notes.say(f"{partial} could not be removed ({exc.strerror or exc}); delete it before another run")
     if not args.quiet:
         print(f"wrote {args.output}: {D.shape[0]} × {D.shape[1]}, {what}", file=sys.stderr)
     return 0
