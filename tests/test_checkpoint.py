@@ -287,6 +287,25 @@ def test_cli_full_disk_while_checkpointing_still_writes_the_output(tmp_path, cap
     assert np.load(out).shape == (2, mesh.n_vertices)
 
 
+def test_cli_writes_the_output_when_the_partial_file_cannot_be_removed(tmp_path, capsys, monkeypatch):
+    """The issue's sticky folder: the run failed on unlinking the partial file after writing D.npy."""
+    mesh = cg.icosphere(2)
+    path = cg.save_distance(tmp_path / "s.ply", mesh, np.zeros(mesh.n_vertices))
+    out, partial = tmp_path / "D.npy", tmp_path / "D.npy.partial.npz"
+    unlink = type(partial).unlink
+
+    def refuse(self, missing_ok=False):
+        if self.name == partial.name:
+            raise PermissionError(errno.EPERM, "Operation not permitted")
+        return unlink(self, missing_ok=missing_ok)
+
+    monkeypatch.setattr(type(partial), "unlink", refuse)
+    assert main(["matrix", str(path), "-s", "0,5", "--method", "dijkstra", "-o", str(out)]) == 0
+    assert (f"cvxgeodesic: note: {partial} could not be removed (Operation not permitted); delete it before another "
+            "run") in capsys.readouterr().err
+    assert np.load(out).shape == (2, mesh.n_vertices)
+
+
 # ---- the same call, typed differently ----
 
 def test_the_same_values_typed_differently_resume(ico3, tmp_path, monkeypatch):

@@ -50,7 +50,7 @@ DEFAULT_TOL = 1e-8
 #: The method of ``method=None`` by simplex dimension (``mesh.dim``): the curved Hessian energy exists on surfaces only.
 DEFAULT_METHODS = {2: "qcqp-hessian", 3: "qclp"}
 #: The method of ``distance_matrix(method=None)`` (and ``cvxgeodesic matrix``) on every mesh: as accurate as
-#: ``qcqp-hessian`` against the exact distance and 1.7-2.3x faster per row (benchmarks/row_default.py,
+#: ``qcqp-hessian`` against the exact distance and 1.5-2.3x faster per row (benchmarks/row_default.py,
 #: docs/performance.md).
 DEFAULT_ROW_METHOD = "qclp"
 
@@ -483,7 +483,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
         See :class:`GeodesicSolver`. Default (None): :data:`DEFAULT_ROW_METHOD` = ``"qclp"`` on every mesh, not the
         one-shot default ``"qcqp-hessian"``: measured side by side (one thread, 4 rows on spot, kitten and bimba,
         ``benchmarks/row_default.py``), ``qclp``'s rows were as accurate against the exact distance (mean relative
-        error 2.04 / 1.08 / 0.84 % against 2.16 / 1.13 / 0.91 %) and 1.7-2.3x faster (docs/performance.md).
+        error 2.04 / 1.08 / 0.84 % against 2.16 / 1.13 / 0.91 %) and 1.5-2.3x faster (docs/performance.md).
     m, solver, lam, max_iter, multires, normalization, threads, cost, metric
         See :class:`GeodesicSolver`. On a cluster, ``threads=None`` lets every worker's solver
         follow the worker's environment: ``cpu_count // workers`` threads on a local cluster.
