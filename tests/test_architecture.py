@@ -23,7 +23,7 @@ PACKAGE = Path(cvxgeodesic.__file__).resolve().parent
 #: prefix. A module may import its own layer and the layers below it.
 LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("leaf", ("errors", "_atomic", "_threads", "_cluster", "_jit", "_signals", "validation", "results", "tables",
-              "capabilities")),
+              "capabilities", "_checkpoint")),
     # the file formats know nothing of TriMesh or of each other's callers: load_mesh, io and the CLI use them
     ("mesh formats", ("mesh.formats",)),
     ("mesh", ("mesh",)),

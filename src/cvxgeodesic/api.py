@@ -49,6 +49,10 @@ SOLVERS = ("auto", "ipm", "clarabel")
 DEFAULT_TOL = 1e-8
 #: The method of ``method=None`` by simplex dimension (``mesh.dim``): the curved Hessian energy exists on surfaces only.
 DEFAULT_METHODS = {2: "qcqp-hessian", 3: "qclp"}
+#: The method of ``distance_matrix(method=None)`` (and ``cvxgeodesic matrix``) on every mesh: as accurate as
+#: ``qcqp-hessian`` against the exact distance and 1.5-2.3x faster per row (benchmarks/row_default.py,
+#: docs/performance.md).
+DEFAULT_ROW_METHOD = "qclp"
 
 
 def _is_2d(x: Any) -> bool:
@@ -457,7 +461,12 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
     With ``checkpoint`` the finished rows are written to that ``.npz`` file as they come (every couple of
     seconds, atomically, and when a row fails or Ctrl-C stops the call); the same call again resumes from
     it, skipping the rows it holds, and returns the whole matrix once it has every row. A checkpoint made
-    with other arguments (mesh, sources, method, any option) is refused.
+    with other arguments (mesh, sources, method, any option, compared by value: ``m=1`` is ``m=1.0``) is refused,
+    and so is one that is damaged (its entries are checked as strictly as a mesh file), not a regular file, not
+    owned by this user or writable by others (as ssh treats a key): the error names the file and why, and the
+    file is left alone. Checkpoints are written readable by their owner only. A checkpoint that cannot be
+    written (a full disk) does not stop the rows: a :class:`~cvxgeodesic.errors.CheckpointWarning` names the
+    file and the matrix is still returned.
 
     With ``workers`` or ``scheduler`` the rows are solved on a Dask cluster
     (``pip install 'cvxgeodesic[cluster]'``; :mod:`cvxgeodesic.rows`): split into contiguous
@@ -470,7 +479,12 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
         Any mesh :class:`GeodesicSolver` takes (a tetrahedral one too, without ``max_distance``).
     vertices : int or (k,) sequence of int
         Source vertex of each row.
-    method, m, solver, lam, max_iter, multires, normalization, threads, cost, metric
+    method : str, optional
+        See :class:`GeodesicSolver`. Default (None): :data:`DEFAULT_ROW_METHOD` = ``"qclp"`` on every mesh, not the
+        one-shot default ``"qcqp-hessian"``: measured side by side (one thread, 4 rows on spot, kitten and bimba,
+        ``benchmarks/row_default.py``), ``qclp``'s rows were as accurate against the exact distance (mean relative
+        error 2.04 / 1.08 / 0.84 % against 2.16 / 1.13 / 0.91 %) and 1.5-2.3x faster (docs/performance.md).
+    m, solver, lam, max_iter, multires, normalization, threads, cost, metric
         See :class:`GeodesicSolver`. On a cluster, ``threads=None`` lets every worker's solver
         follow the worker's environment: ``cpu_count // workers`` threads on a local cluster.
     tol : float, optional
@@ -528,6 +542,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
     ((2, 642), True, True)
     """
     mesh = as_mesh(mesh)
+    method = DEFAULT_ROW_METHOD if method is None else method
     if tol is None:
         tol = DEFAULT_TOL if max_distance is None else LOCAL_ROW_TOL
     if workers is not None:
@@ -547,7 +562,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
         checkpoint = check_output_path(checkpoint, (".npz",))
     store = RowStore(len(items), mesh.n_vertices, sparse=max_distance is not None, path=checkpoint,
                      parameters=fingerprint(mesh, items, options) if checkpoint is not None else None)
-    desc = str(method or "distance")
+    desc = str(method)
     if workers is not None or scheduler is not None:
         cluster_rows(factory, mesh, items, options, store, scheduler=scheduler, workers=workers, progress=progress,
                      desc=desc)

@@ -97,6 +97,11 @@ class IndefiniteEnergyWarning(UserWarning):
     """libigl's curved Hessian energy is indefinite on this mesh; the planar Hessian energy is used instead."""
 
 
+class CheckpointWarning(UserWarning):
+    """``distance_matrix`` could not write its checkpoint (a full disk): the rows go on, and the matrix is returned,
+    without it."""
+
+
 def warn_user(message: str, category: type[Warning] = UserWarning) -> None:
     """``warnings.warn`` attributed to the first frame outside this package (the user's call), however deep the
     library's own call chain is."""

@@ -37,9 +37,10 @@ import scipy.sparse as sp
 
 from . import _signals, _verbose
 from ._atomic import atomic_write, check_replaceable
+from ._checkpoint import CHECKPOINT_FORMAT, checked_layout, checked_rows, read_checkpoint
 from ._cluster import open_client, require_distributed, stop_after_interrupt
 from ._threads import resolve_threads, thread_limit
-from .errors import ParameterError
+from .errors import CheckpointWarning, ParameterError, warn_user
 from .mesh.patch import ball_patch
 
 __all__ = ["LocalRows", "RowStore", "checkpoint_rows", "cluster_rows", "distributed_rows", "keeping", "solve_rows",
@@ -69,8 +70,6 @@ SAVE_EVERY = 2.0
 SAVE_SHARE = 10.0
 #: Options a checkpoint may be resumed across: the thread count changes at most the last digits of a row.
 RESUMABLE_ACROSS = ("threads",)
-#: Version of the checkpoint file's layout.
-CHECKPOINT_FORMAT = 1
 
 
 def fingerprint(mesh: Any, items: Sequence[Any], options: dict) -> dict[str, str]:
@@ -104,10 +103,41 @@ def fingerprint(mesh: Any, items: Sequence[Any], options: dict) -> dict[str, str
     for key, value in sorted(options.items()):
         if key in RESUMABLE_ACROSS:
             continue
+        value = _canonical(key, value)
         text = f"array {digest(value)}" if isinstance(value, np.ndarray) else repr(value)
         short = f"{type(value).__name__} {hashlib.sha256(text.encode()).hexdigest()[:12]}"
         out[key] = text if len(text) <= 60 else short
     return out
+
+
+#: Options compared as what they mean, not as they were typed (:func:`_canonical`).
+FLOAT_OPTIONS = ("m", "lam", "tol", "max_distance")
+INT_OPTIONS = ("order", "max_iter")
+NAME_OPTIONS = ("method", "solver", "normalization")
+ARRAY_OPTIONS = ("cost", "metric")
+
+
+def _canonical(key: str, value: Any) -> Any:
+    """The value of option ``key`` as the solver reads it, so that ``m=1`` and ``m=1.0``, ``np.float64(1.0)``,
+    ``"QCLP"`` and ``"qclp"``, ``"qgdf"`` and ``"lcqp-hessian"`` make the same fingerprint. A value that is not
+    of the option's kind is kept as given (the solver refuses it with its own message)."""
+    from .formulations import ALIASES
+    from .validation import is_integer, is_real
+
+    if isinstance(value, bool | np.bool_):
+        return bool(value)
+    if key in FLOAT_OPTIONS and is_real(value):
+        return float(value)
+    if key in INT_OPTIONS and is_integer(value):
+        return int(value)
+    if key in NAME_OPTIONS and isinstance(value, str):
+        return ALIASES.get(value.lower(), value.lower())
+    if key in ARRAY_OPTIONS and value is not None:
+        with contextlib.suppress(TypeError, ValueError):
+            return np.asarray(value, dtype=np.float64)
+    if key == "multires" and is_integer(value):
+        return int(value)
+    return value
 
 
 class RowStore:
@@ -144,7 +174,8 @@ class RowStore:
         self._saved_at = time.monotonic()
         self._interval = SAVE_EVERY
         self._unsaved = False
-        if self.path is not None and self.path.exists():
+        self.write_error: str | None = None  # why the checkpoint could not be written (then it no longer is)
+        if self.path is not None and os.path.lexists(self.path):  # a link to nothing too: refused, not replaced
             self._load()
             self.resumed = int(self.done.sum())
 
@@ -156,14 +187,32 @@ class RowStore:
 
     def save(self, *, force: bool = True) -> None:
         """Write the finished rows to the checkpoint (atomically); unless ``force``, only when the last write is
-        SAVE_EVERY seconds old and SAVE_SHARE times its own duration."""
-        if self.path is None or not self._unsaved or not self.done.any():
+        SAVE_EVERY seconds old and SAVE_SHARE times its own duration.
+
+        A write that fails (a full disk, a folder gone) does not stop the rows: it warns once, naming the file
+        and the reason, records it in ``write_error``, and the checkpoint is not written again in this call
+        (the finished matrix is still returned; only a resume after a later interruption is lost).
+        """
+        if self.path is None or self.write_error is not None or not self._unsaved or not self.done.any():
             return
         start = time.monotonic()
         if not force and start - self._saved_at < self._interval:
             return
         arrays = self._arrays()
-        atomic_write(self.path, lambda fh: np.savez(fh, **arrays))  # type: ignore[arg-type]
+
+        def write(fh: Any) -> None:
+            with contextlib.suppress(AttributeError, OSError):  # private: read back only if no one else may write it
+                os.fchmod(fh.fileno(), 0o600)
+            np.savez(fh, **arrays)  # type: ignore[arg-type]
+
+        try:
+            atomic_write(self.path, write)
+        except OSError as exc:
+            self.write_error = (f"the finished rows could not be written to the checkpoint {self.path} "
+                                f"({exc.strerror or exc})")
+            warn_user(f"distance_matrix: {self.write_error}; the rows go on without it (an interruption now loses "
+                      "them)", CheckpointWarning)
+            return
         self._saved_at = time.monotonic()
         self._interval = max(SAVE_EVERY, SAVE_SHARE * (self._saved_at - start))
         self._unsaved = False
@@ -191,27 +240,20 @@ class RowStore:
 
     def _load(self) -> None:
         assert self.path is not None
-        try:
-            with np.load(self.path, allow_pickle=False) as z:
-                data = {k: z[k] for k in z.files}
-            theirs = json.loads(str(data["parameters"]))
-            if int(data["format"]) != CHECKPOINT_FORMAT:
-                raise ValueError(f"format {int(data['format'])}, expected {CHECKPOINT_FORMAT}")
-        except Exception as exc:  # any unreadable file: not a checkpoint of this function
-            why = f"no {exc} entry" if isinstance(exc, KeyError) else str(exc)
-            raise ParameterError(f"checkpoint {self.path} is not a distance_matrix checkpoint ({why}); "
-                                 "delete it or give another path") from None
+        data = read_checkpoint(self.path)
+        theirs = checked_layout(data, self.path)
         differ = [k for k in sorted(set(theirs) | set(self.parameters)) if theirs.get(k) != self.parameters.get(k)]
         if differ or tuple(data["shape"]) != self.shape or bool(data["sparse"]) != self.sparse:
             shown = "; ".join(f"{k}: {theirs.get(k, '-')} there, {self.parameters.get(k, '-')} here" for k in differ)
             raise ParameterError(f"checkpoint {self.path} was made with other parameters ({shown or 'shape'}); "
                                  "delete it to start again, or give another path")
-        index = data["index"].astype(np.int64)
+        index = checked_rows(data, self.path, self.shape, self.sparse)
         if self.sparse:
             bounds = np.concatenate([[0], np.cumsum(data["lengths"])])
+            cols, vals = data["cols"].astype(np.int64), data["vals"]
             for k, i in enumerate(index):
                 a, b = bounds[k], bounds[k + 1]
-                self.put(i, _sparse_row(data["cols"][a:b], data["vals"][a:b], self.shape[1]))
+                self.put(i, _sparse_row(cols[a:b], vals[a:b], self.shape[1]))
         else:
             for k, i in enumerate(index):
                 self.put(i, data["rows"][k])
@@ -219,11 +261,13 @@ class RowStore:
 
 
 def checkpoint_rows(path: str | os.PathLike) -> tuple[int, int] | None:
-    """``(finished rows, distinct rows)`` of a checkpoint file, or None when there is none or it is unreadable."""
+    """``(finished rows, distinct rows)`` of a checkpoint file, or None when there is none or it is unreadable,
+    untrusted (:func:`read_checkpoint`) or damaged."""
     try:
-        with np.load(path, allow_pickle=False) as z:
-            return int(z["index"].size), int(z["shape"][0])
-    except Exception:
+        data = read_checkpoint(Path(path))
+        checked_layout(data, Path(path))
+        return int(data["index"].size), int(data["shape"][0])
+    except (ParameterError, KeyError):
         return None
 
 
@@ -373,6 +417,7 @@ def solve_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any], opt
     desc : str
         Label of the bar.
     """
+    _say_resumed(store, progress)
     todo = np.flatnonzero(~store.done)
     if todo.size == 0:
         return
@@ -392,6 +437,7 @@ def cluster_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any], o
                  scheduler: Any, workers: int | None, progress: bool | None, desc: str) -> None:
     """:func:`solve_rows` on a Dask cluster (:func:`distributed_rows`): the rows ``store`` has not got, each chunk's
     rows into ``store`` (and its checkpoint) as the chunk finishes."""
+    _say_resumed(store, progress)
     todo = np.flatnonzero(~store.done)
     if todo.size == 0:
         return
@@ -406,6 +452,14 @@ def cluster_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any], o
                          progress=progress, desc=desc, on_chunk=keep)
 
 
+def _say_resumed(store: RowStore, progress: bool | None) -> None:
+    """One line on stderr when rows were taken from the checkpoint (after it was accepted), unless ``progress`` is
+    False."""
+    if store.resumed and progress is not False:
+        print(f"resuming from {store.path}: {store.resumed} of {store.shape[0]} rows already done", file=sys.stderr,
+              flush=True)
+
+
 @contextlib.contextmanager
 def keeping(store: RowStore) -> Iterator[None]:
     """Write the finished rows whatever happens; an error or Ctrl-C gets a note on what was kept."""
@@ -417,6 +471,9 @@ def keeping(store: RowStore) -> Iterator[None]:
         except Exception as save_error:  # the row's error (or Ctrl-C) stays the one raised; the save's is a note
             exc.add_note(f"distance_matrix: the finished rows could not be written to {store.path}: {save_error}")
             raise exc from None
+        if store.write_error is not None:
+            exc.add_note(f"distance_matrix: {store.write_error}")
+            raise
         done = int(store.done.sum())
         if store.path is not None and done:
             exc.add_note(f"distance_matrix: {done} of {store.shape[0]} rows kept in {store.path}; "
@@ -429,11 +486,77 @@ def keeping(store: RowStore) -> Iterator[None]:
 
 
 def _row_bar(total: int, initial: int, desc: str, progress: bool | None) -> Any:
-    """A tqdm bar counting rows on stderr (shown after PROGRESS_DELAY seconds, read now, when ``progress`` is None)."""
+    """Rows counted on stderr (from PROGRESS_DELAY seconds on, read now, when ``progress`` is None): a tqdm bar in a
+    terminal, else :class:`RowLines`."""
+    delay = _verbose.PROGRESS_DELAY if progress is None else 0.0
+    if progress is not False and not getattr(sys.stderr, "isatty", lambda: False)():
+        return RowLines(total, initial, desc, sys.stderr, delay=delay)
     from tqdm import tqdm
 
     return tqdm(total=total, initial=initial, desc=desc, unit="row", file=sys.stderr, disable=progress is False,
-                delay=_verbose.PROGRESS_DELAY if progress is None else 0.0)
+                delay=delay)
+
+
+#: Seconds between two lines of :class:`RowLines`.
+LINE_EVERY = 10.0
+
+
+class RowLines:
+    """Rows counted where the output is no terminal (a log file, a pipe): one plain line every LINE_EVERY seconds.
+
+    A tqdm bar redraws itself up to ten times a second with carriage returns, which only a terminal folds back into
+    one line: written to a file, 1,000 rows were 45 KB of redraws. Here a line such as
+    ``qclp: rows 120/1000, 12 s, ~88 s left`` is written once ``delay`` seconds have passed (at once when it is 0,
+    and again when the first row is done), then at most every LINE_EVERY seconds, and a last one when the rows end
+    (only if an earlier line was written).
+
+    Parameters
+    ----------
+    total, initial : int
+        Rows in all, and already done (resumed from a checkpoint).
+    desc : str
+        Label at the start of each line.
+    stream : text file
+    delay : float
+        Seconds before the first line.
+    clock : callable, optional
+        Seconds as a float (for tests).
+    """
+
+    def __init__(self, total: int, initial: int, desc: str, stream: Any, *, delay: float,
+                 clock: Callable[[], float] = time.monotonic) -> None:
+        self.total, self.n, self.initial = int(total), int(initial), int(initial)
+        self.desc, self.stream, self.delay, self.clock = desc, stream, float(delay), clock
+        self.start = clock()
+        self.last: float | None = None  # when the last line was written
+        self.shown = -1  # the count it showed
+        if self.delay <= 0:  # shown from the start (progress=True): the rows are under way
+            self._line(self.start)
+
+    def update(self, k: int = 1) -> None:
+        self.n += k
+        now = self.clock()
+        # the first finished row at once (its time gives the first estimate), then every LINE_EVERY seconds
+        due = self.last is None or self.shown == self.initial or now - self.last >= LINE_EVERY
+        if now - self.start >= self.delay and due:
+            self._line(now)
+
+    def close(self) -> None:
+        if self.last is not None and self.shown != self.n:
+            self._line(self.clock())
+
+    def _line(self, now: float) -> None:
+        elapsed = now - self.start
+        done = self.n - self.initial
+        left = f", ~{elapsed / done * (self.total - self.n):.0f} s left" if 0 < done and self.n < self.total else ""
+        print(f"{self.desc}: rows {self.n}/{self.total}, {elapsed:.0f} s{left}", file=self.stream, flush=True)
+        self.last, self.shown = now, self.n
+
+    def __enter__(self) -> RowLines:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
 
 
 def split_rows(n_rows: int, n_chunks: int) -> list[slice]:

@@ -321,3 +321,26 @@ def parse_view_options(args: argparse.Namespace) -> None:
         args.view = views
     if isinstance(getattr(args, "up", None), str):
         args.up = up_spec(args.up)
+
+
+LAM_HELP = "give λ directly (overrides --m)"
+ORDER_HELP = "2: second-order elements for the squared distance (qclp and the qcqp methods; docs/order2.md)"
+
+
+def add_precision_options(p: argparse.ArgumentParser, *, tol_default: str) -> None:
+    """``--lam``, ``--order`` and ``--tol``: what :class:`~cvxgeodesic.api.GeodesicSolver` takes beyond ``--m``;
+    ``--lam`` is checked with ``--m`` (:func:`~cvxgeodesic.cli._common.check_numbers`), ``--tol`` by
+    :func:`check_tol` before the mesh is read."""
+    p.add_argument("--lam", type=float, default=None, help=LAM_HELP)
+    p.add_argument("--order", type=int, default=1, choices=(1, 2), help=ORDER_HELP)
+    p.add_argument("--tol", type=float, default=None, metavar="TOL",
+                   help=f"relative tolerance of the solver's residuals and duality gap, in (0, 1) "
+                        f"(default {tol_default})")
+
+
+def check_tol(args: argparse.Namespace) -> None:
+    """``--tol`` in (0, 1) as the API checks ``tol``, when given."""
+    from ..validation import check_number
+
+    if getattr(args, "tol", None) is not None:
+        check_number(args.tol, "--tol", low=0, high=1, low_open=True, high_open=True)

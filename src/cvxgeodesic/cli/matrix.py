@@ -9,7 +9,7 @@ from typing import Any
 
 from ..errors import ParameterError, SourceError
 from ._common import add_overwrite_option, check_outputs
-from ._options import add_solve_options, add_source_options, method_for, volume_help
+from ._options import add_precision_options, add_solve_options, add_source_options, check_tol, volume_help
 
 
 def add_parser(sub: Any) -> None:
@@ -18,7 +18,13 @@ def add_parser(sub: Any) -> None:
     p.add_argument("mesh", help=volume_help())
     add_source_options(p, "source vertex of a row, in the file's numbering (repeat, or give a list: -s 0,5,9)",
                        points=False)
-    add_solve_options(p)
+    from ..api import ALL_METHODS, DEFAULT_ROW_METHOD, LOCAL_ROW_TOL
+
+    p.add_argument("--method", default=None, choices=ALL_METHODS, metavar="NAME",
+                   help=f"one of: {', '.join(ALL_METHODS)} (default {DEFAULT_ROW_METHOD}, the default of "
+                        "distance_matrix's rows on every mesh: docs/performance.md)")
+    add_solve_options(p, method=False)
+    add_precision_options(p, tol_default=f"1e-8; {LOCAL_ROW_TOL:g} with --max-distance")
     p.add_argument("-o", "--output", required=True,
                    help="output .npy: (rows, file vertices) float64, columns in the file's numbering; with "
                         "--max-distance a sparse .npz (scipy.sparse.load_npz). Finished rows are kept in "
@@ -52,6 +58,7 @@ def _check(args: argparse.Namespace) -> bool:
         from ..validation import check_number
 
         check_number(args.max_distance, "--max-distance", low=0, low_open=True)
+    check_tol(args)
     if args.workers is not None and args.scheduler is not None:
         raise ParameterError("give --workers (a local Dask cluster) or --scheduler (an existing one), not both")
     return local
@@ -60,7 +67,7 @@ def _check(args: argparse.Namespace) -> bool:
 def run(args: argparse.Namespace) -> int:
     """``cvxgeodesic matrix``: returns the exit code."""
     from .._atomic import atomic_write
-    from ..api import distance_matrix
+    from ..api import DEFAULT_ROW_METHOD, distance_matrix
     from ..mesh.fileorder import file_sources, to_file_order
     from ..mesh.io import load_mesh
     from ..rows import checkpoint_rows, sparse_to_file_order
@@ -70,21 +77,19 @@ def run(args: argparse.Namespace) -> int:
     if not args.source:
         raise SourceError("give the source vertex of each row: -s I[,J...] (repeatable)")
     rows = [int(file_sources(mesh, [s])[0]) for s in args.source]  # one row per -s, in the given order
-    method = method_for(args, mesh)
+    method = args.method or DEFAULT_ROW_METHOD  # distance_matrix's default, named in the first line
     partial = Path(f"{args.output}.partial.npz")  # finished rows as they come; the same command resumes from it
     if not args.quiet:
         where = ("" if args.workers is None and args.scheduler is None
                  else f"; on {args.scheduler or f'a local cluster of {args.workers} worker processes'}")
-        within = f", distances up to {args.max_distance:g}" if local else ""
+        within = (f", distances up to {args.max_distance:g}" if local else "") + (
+            f", order {args.order}" if args.order != 1 else "")
         print(f"{mesh.name}: {mesh.n_file_vertices} vertices, {len(rows)} rows{within}; method {method}{where}",
-              file=sys.stderr)
-        kept = checkpoint_rows(partial)
-        if kept:
-            print(f"resuming from {partial}: {kept[0]} of {kept[1]} rows already done", file=sys.stderr)
+              file=sys.stderr)  # "resuming from ..." comes from distance_matrix, once it has accepted the checkpoint
     try:
         D: Any = distance_matrix(mesh, rows, method, m=args.m, solver=args.solver, progress=not args.quiet,
-                            workers=args.workers, scheduler=args.scheduler, max_distance=args.max_distance,
-                            checkpoint=partial)
+                                 lam=args.lam, tol=args.tol, order=args.order, workers=args.workers,
+                                 scheduler=args.scheduler, max_distance=args.max_distance, checkpoint=partial)
     except KeyboardInterrupt:
         kept = checkpoint_rows(partial)
         if kept:
@@ -98,7 +103,10 @@ def run(args: argparse.Namespace) -> int:
     D, save = (sparse_to_file_order(mesh, D), sp.save_npz) if local else (to_file_order(mesh, D), np.save)
     atomic_write(args.output, lambda fh: save(fh, D), overwrite_read_only=args.overwrite_read_only)
     what = f"sparse, {D.nnz} distances up to {args.max_distance:g} stored" if local else "distances"
-    partial.unlink(missing_ok=True)
+    try:
+        partial.unlink(missing_ok=True)
+    except OSError as exc:  # another user's file in a sticky folder: the output is written all the same
+        args.notes.say(f"{partial} could not be removed ({exc.strerror or exc}); delete it before another run")
     if not args.quiet:
         print(f"wrote {args.output}: {D.shape[0]} × {D.shape[1]}, {what}", file=sys.stderr)
     return 0

@@ -15,7 +15,16 @@ from scipy.sparse.csgraph import dijkstra
 
 from .trimesh import TriMesh
 
-__all__ = ["Patch", "ball_patch"]
+__all__ = ["PATCH_LABEL", "Patch", "ball_patch", "is_patch"]
+
+#: What a patch's name adds to its mesh's: every note about the patch then says it is one, and reads the same on
+#: every patch (a warning shown once, not once per row).
+PATCH_LABEL = " (patch around a row's source)"
+
+
+def is_patch(mesh: TriMesh) -> bool:
+    """True for the mesh of a :class:`Patch` (or a copy of it that kept its name, as the solvers' scaled copies do)."""
+    return str(mesh.name).endswith(PATCH_LABEL)
 
 
 @dataclass(frozen=True)
@@ -74,5 +83,5 @@ def ball_patch(mesh: TriMesh, source: int, radius: float) -> Patch:
     # a left-out face that touches the patch marks its patch vertices as the cut
     touching = mesh.F[~keep & inside.any(axis=1)].ravel()
     cut = np.unique(local[touching])
-    patch = TriMesh(mesh.V[vertices], local[faces], name=mesh.name)  # a warning then reads the same on every patch
+    patch = TriMesh(mesh.V[vertices], local[faces], name=f"{mesh.name}{PATCH_LABEL}")
     return Patch(patch, vertices, int(local[source]), cut[cut >= 0], float(radius))
