@@ -163,6 +163,21 @@ def _glb(json_bytes: bytes, declared: int | None = None) -> bytes:
     return b"glTF" + struct.pack("<II", 2, 12 + len(chunk)) + chunk
 
 
+@pytest.mark.parametrize("name, make", [
+    ("arrays.gltf", lambda: b"[" * 200_000 + b"]" * 200_000),
+    ("objects.gltf", lambda: b'{"a":' * 200_000 + b"1" + b"}" * 200_000),
+    ("arrays.glb", lambda: _glb(b'{"asset": ' + b"[" * 200_000 + b"]" * 200_000 + b"}")),
+], ids=["gltf-arrays", "gltf-objects", "glb-arrays"])
+def test_gltf_json_nested_too_deeply_is_a_format_error(tmp_path, name, make):
+    """issue 41 (D15): JSON 200,000 levels deep gave a raw RecursionError."""
+    pytest.importorskip("trimesh")
+    path = tmp_path / name
+    path.write_bytes(make())
+    with pytest.raises(MeshFormatError) as exc:
+        cg.load_mesh(path)
+    assert str(exc.value) == f"{path}: not valid glTF JSON (arrays or objects nested too deeply to parse)"
+
+
 @pytest.mark.parametrize("name, data, message", [
     ("b.gltf", b'{"asset": {"version": "2.0"}, "meshes": [', "not valid glTF JSON (Expecting value at line 1, "
                                                              "column 42)"),
