@@ -305,3 +305,17 @@ def test_a_full_disk_while_drawing_leaves_nothing_of_the_run(tmp_path, monkeypat
     names = sorted(p.name for p in out.iterdir())
     assert "compare.csv" in names and "gradient_histogram.png" in names and "field_heat.png" in names
     assert not [n for n in names if n.startswith(".")]
+
+
+def test_compare_where_every_cell_touches_a_source_has_no_log_scale_note(tmp_path):
+    """issue 41: on a box of 6 tetrahedra around vertex 0 the histograms count nothing; matplotlib's "cannot be
+    log-scaled" warning became a note of compare."""
+    import warnings
+
+    from cvxgeodesic.mesh.tet_generate import tet_box
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        run_compare(tet_box(1), 0, ["dijkstra"], tmp_path, progress=False)
+    assert not [str(w.message) for w in caught if "log-scaled" in str(w.message)]
+    assert (tmp_path / "gradient_histogram.png").is_file()
