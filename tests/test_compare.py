@@ -271,6 +271,7 @@ def test_a_full_disk_while_drawing_leaves_nothing_of_the_run(tmp_path, monkeypat
     """issue 41 (D17): a full disk at the pictures left compare.csv and no pictures. Now the run writes everything
     or nothing (files there before stay as they were), and the error names the file that failed."""
     import errno
+    import pickle
 
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
@@ -293,6 +294,8 @@ def test_a_full_disk_while_drawing_leaves_nothing_of_the_run(tmp_path, monkeypat
     with pytest.raises(OutputError) as exc:
         run_compare(icosphere(1), 0, ["dijkstra", "heat"], out, progress=False)
     assert isinstance(exc.value, OSError) and exc.value.errno == errno.ENOSPC
+    back = pickle.loads(pickle.dumps(exc.value))  # a worker's error crosses processes
+    assert type(back) is OutputError and str(back) == str(exc.value) and back.filename == exc.value.filename
     failed = exc.value.filename
     assert failed is not None and failed.startswith(str(out / "")) and failed.endswith(".png")
     assert str(exc.value) == (f"cannot write {failed} (No space left on device); nothing of this comparison was "
