@@ -144,8 +144,8 @@ def atomic_write(target: str | os.PathLike, write: Callable[[BinaryIO], object],
     except BaseException as exc:
         with suppress(FileNotFoundError):
             os.unlink(tmp)
-        if isinstance(exc, OSError) and exc.filename in (None, str(tmp)):
-            exc.filename = str(target)  # the output, not its temporary file
+        if isinstance(exc, OSError) and exc.errno is not None and exc.filename in (None, str(tmp)):
+            exc.filename = str(target)  # the output, not its temporary file (a system error's message shows it)
         raise
     return target
 
