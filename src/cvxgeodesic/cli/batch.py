@@ -6,7 +6,7 @@ import argparse
 import sys
 from typing import Any
 
-from ._options import add_solve_options, add_source_options, batch_sources, default_methods, mesh_help
+from ._options import add_solve_options, add_source_options, batch_sources, default_methods, volume_help
 
 
 def add_parser(sub: Any) -> None:
@@ -20,7 +20,8 @@ def add_parser(sub: Any) -> None:
                     "skips meshes already done with the same parameters. Exit code 0: all solved; 1: some meshes "
                     "failed (listed); 2: usage error.")
     p.add_argument("meshes", nargs="+", metavar="MESH_GLOB",
-                   help="mesh files or quoted glob patterns ('data/*.obj', 'data/**/*.ply'); " + mesh_help())
+                   help="mesh files or quoted glob patterns ('data/*.obj', 'data/**/*.ply', 'parts/*'); "
+                        + volume_help())
     add_source_options(p, "source vertex index in each file's numbering, the same in every mesh "
                           "(repeat, or give a list: -s 0,5)")
     add_solve_options(p)
