@@ -222,7 +222,8 @@ def run_compare(mesh: Any, sources: Any, methods: Any, out_dir: str | os.PathLik
             write_pictures(stage, mesh, sset, runs, results, rows, rel_errors, reference)
             n_png = sum(1 for _ in stage.glob("*.png"))
     except OSError as exc:
-        where = out / Path(exc.filename).name if isinstance(exc.filename, str) else out
+        name = Path(exc.filename).name if isinstance(exc.filename, str) else ""
+        where = out / name if name and not name.startswith(".") else out  # a hidden name: the private folder
         raise OutputError(f"cannot write {where} ({exc.strerror or exc}); nothing of this comparison was written "
                           f"to {out}", str(where), exc.errno) from None
     say(f"wrote {out / 'compare.csv'} and {n_png} PNGs in {out} ({time.perf_counter() - t_png:.1f} s for the "
