@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -267,3 +268,60 @@ def test_a_sidecar_that_is_not_an_object_means_not_done(tmp_path, text):
     dist_path.write_text("ply\n")
     sidecar.write_text(text)
     assert _finished(dist_path, sidecar, _params([0], None, 1.0, "auto", False, "ply")) is False
+
+
+def _write_tet_files(folder):
+    """box.msh (Gmsh 2.2, tetrahedra only), the TetGen pair tg.node + tg.ele, and a surface plane.off."""
+    meshio = pytest.importorskip("meshio")
+    from cvxgeodesic.mesh.tet_generate import tet_box
+
+    mesh = tet_box(2)
+    meshio.Mesh(mesh.V, [("tetra", mesh.T)]).write(folder / "box.msh", file_format="gmsh22", binary=False)
+    (folder / "tg.node").write_text(f"{mesh.n_vertices} 3 0 0\n" + "".join(
+        f"{i} {x!r} {y!r} {z!r}\n" for i, (x, y, z) in enumerate(mesh.V.tolist())))
+    (folder / "tg.ele").write_text(f"{mesh.n_tets} 4 0\n" + "".join(
+        f"{i} {' '.join(map(str, t))}\n" for i, t in enumerate(mesh.T.tolist())))
+    _write_off(folder / "plane.off", cg.grid_plane(5, 5))
+    return mesh
+
+
+def test_a_glob_takes_every_mesh_format_and_volumes_get_a_volume_format(cluster, tmp_path):
+    """issue 41: ``batch 'b/*'`` skipped .msh files silently, and an explicit .msh was solved, then failed writing
+    .ply (no tetrahedra in PLY). Volumes now get a .vtu (tetrahedra + field), surfaces still a .ply; TetGen's pair
+    is one mesh."""
+    folder = tmp_path / "b"
+    folder.mkdir()
+    mesh = _write_tet_files(folder)
+    paths = expand_mesh_paths([str(folder / "*")])
+    assert [p.name for p in paths] == ["box.msh", "plane.off", "tg.ele"]
+    out = tmp_path / "out"
+    rows = run_batch(paths, [0], out, scheduler=cluster.scheduler_address, progress=False)
+    assert [r["status"] for r in rows] == ["ok", "ok", "ok"], [r["error"] for r in rows]
+    assert sorted(p.name for p in out.iterdir()) == ["box.json", "box.vtu", "plane.json", "plane.ply", "tg.json",
+                                                     "tg.vtu"]
+    expected = cg.geodesic_distance(mesh, 0)
+    for stem in ("box", "tg"):
+        np.testing.assert_allclose(cg.load_distance(out / f"{stem}.vtu"), expected, rtol=1e-7, atol=1e-9)
+        assert json.loads((out / f"{stem}.json").read_text())["params"]["format"] == "vtu"
+    # a rerun finds them done, in the format each mesh got
+    again = run_batch(paths, [0], out, scheduler=cluster.scheduler_address, progress=False)
+    assert [r["status"] for r in again] == ["skipped"] * 3
+    assert [Path(r["output"]).name for r in again] == ["box.vtu", "plane.ply", "tg.vtu"]
+
+
+def test_a_volume_with_a_surface_format_fails_before_its_solve(tmp_path, monkeypatch):
+    from cvxgeodesic import api
+    from cvxgeodesic.batch import solve_one
+
+    _write_tet_files(tmp_path)
+
+    def no_solve(*args, **kwargs):
+        raise AssertionError("solved a mesh whose output cannot be written")
+
+    monkeypatch.setattr(api, "GeodesicSolver", no_solve)
+    row = solve_one(str(tmp_path / "box.msh"), [0], str(tmp_path), output_format="ply")
+    assert row["status"] == "failed"
+    assert row["error"] == ("ParameterError: box.msh is a tetrahedral mesh: its field cannot be written as .ply "
+                            "(PLY (ASCII or binary) holds no tetrahedra); give --format npy or vtu, or no --format "
+                            "(.vtu)")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["box.msh", "plane.off", "tg.ele", "tg.node"]

@@ -13,6 +13,8 @@ import os
 import socket
 import ssl
 import sys
+import urllib.error
+import urllib.request
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import ExitStack
 from urllib.parse import urlsplit
@@ -21,8 +23,9 @@ import numpy as np
 import pytest
 
 import cvxgeodesic as cg
-from cvxgeodesic._cluster import LOCAL_HOST, open_client
+from cvxgeodesic._cluster import DASHBOARD_VARIABLE, LOCAL_HOST, open_client
 from cvxgeodesic.batch import run_batch
+from cvxgeodesic.errors import ParameterError
 
 distributed = pytest.importorskip("distributed")
 pytest.importorskip("cryptography")
@@ -141,4 +144,44 @@ def test_batch_and_rows_run_on_the_tls_cluster(local_run, tmp_path):
 def test_without_cryptography_the_error_names_it(monkeypatch):
     monkeypatch.setitem(sys.modules, "cryptography", None)  # makes `import cryptography` fail
     with ExitStack() as stack, pytest.raises(ImportError, match=r"pip install cryptography"):
+        open_client(stack, None, 1)
+
+
+def _http_status(port: int, path: str) -> int:
+    """The HTTP status of ``GET path`` on 127.0.0.1:port (404 included)."""
+    try:
+        with urllib.request.urlopen(f"http://{LOCAL_HOST}:{port}{path}", timeout=10) as reply:
+            return int(reply.status)
+    except urllib.error.HTTPError as exc:
+        return int(exc.code)
+
+
+#: Pages of Dask's HTTP servers: the dashboard, the scheduler's info pages (``/info/logs/<address>.html`` makes the
+#: scheduler connect to that address and log the failure into the job's stderr: issue 41), health and metrics.
+PAGES = ("/status", "/info/main/workers.html", f"/info/logs/tls://{LOCAL_HOST}:1.html", "/health", "/metrics",
+         "/statics/")
+
+
+def test_the_local_cluster_has_no_dashboard_and_no_pages(local_run):
+    """Dask starts an HTTP server in the scheduler and each worker whatever the dashboard; without
+    CVXGEODESIC_DASHBOARD=1, every page of theirs is 404 (a local user reached all of them)."""
+    client, cluster = local_run
+    assert cluster.scheduler_spec["options"]["dashboard"] is False
+    ports = {"scheduler": client.scheduler_info()["services"]["dashboard"]}
+    ports.update(client.run(lambda dask_worker: dask_worker.http_server._sockets and
+                            next(iter(dask_worker.http_server._sockets.values())).getsockname()[1]))
+    assert len(ports) >= 3, ports  # the scheduler and two workers
+    for who, port in ports.items():
+        assert {path: _http_status(port, path) for path in PAGES} == dict.fromkeys(PAGES, 404), who
+
+
+def test_the_dashboard_on_request_is_on_loopback(monkeypatch, capsys):
+    monkeypatch.setenv(DASHBOARD_VARIABLE, "1")
+    with ExitStack() as stack:
+        client, cluster = open_client(stack, None, 1, what="test")
+        link = f"http://{LOCAL_HOST}:{client.scheduler_info()['services']['dashboard']}/status"
+        assert cluster.dashboard_link == link and _http_status(int(urlsplit(link).port or 0), "/status") == 200
+    assert f"cvxgeodesic: Dask dashboard at {link} (CVXGEODESIC_DASHBOARD=1)" in capsys.readouterr().err
+    monkeypatch.setenv(DASHBOARD_VARIABLE, "yes")
+    with ExitStack() as stack, pytest.raises(ParameterError, match="CVXGEODESIC_DASHBOARD must be 1 .* got 'yes'"):
         open_client(stack, None, 1)

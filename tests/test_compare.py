@@ -265,3 +265,60 @@ def test_surface_compare_takes_a_given_reference(tmp_path, monkeypatch):
     (row,) = rows
     assert row["reference"] == "given" and row["order"] == 1 and row["rel_mean"] > 0
     assert row["ridge_jump_ratio"] is not None  # measured against the given field's ridge
+
+
+def test_a_full_disk_while_drawing_leaves_nothing_of_the_run(tmp_path, monkeypatch):
+    """issue 41 (D17): a full disk at the pictures left compare.csv and no pictures. Now the run writes everything
+    or nothing (files there before stay as they were), and the error names the file that failed."""
+    import errno
+    import pickle
+
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from cvxgeodesic.errors import OutputError
+
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "compare.csv").write_text("from before\n")
+    (out / "notes.txt").write_text("mine\n")
+    calls = []
+    print_png = FigureCanvasAgg.print_png
+
+    def disk_full(self, *args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:  # the second picture: the CSV and one picture are written by then
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return print_png(self, *args, **kwargs)
+
+    monkeypatch.setattr(FigureCanvasAgg, "print_png", disk_full)
+    with pytest.raises(OutputError) as exc:
+        run_compare(icosphere(1), 0, ["dijkstra", "heat"], out, progress=False)
+    assert isinstance(exc.value, OSError) and exc.value.errno == errno.ENOSPC
+    back = pickle.loads(pickle.dumps(exc.value))  # a worker's error crosses processes
+    assert type(back) is OutputError and str(back) == str(exc.value) and back.filename == exc.value.filename
+    failed = exc.value.filename
+    assert failed is not None and failed.startswith(str(out / "")) and failed.endswith(".png")
+    assert str(exc.value) == (f"cannot write {failed} (No space left on device); nothing of this comparison was "
+                              f"written to {out}")
+    assert sorted(p.name for p in out.iterdir()) == ["compare.csv", "notes.txt"]  # no private folder left either
+    assert (out / "compare.csv").read_text() == "from before\n"
+    # the same run on a disk with room: everything appears
+    monkeypatch.setattr(FigureCanvasAgg, "print_png", print_png)
+    run_compare(icosphere(1), 0, ["dijkstra", "heat"], out, progress=False)
+    names = sorted(p.name for p in out.iterdir())
+    assert "compare.csv" in names and "gradient_histogram.png" in names and "field_heat.png" in names
+    assert not [n for n in names if n.startswith(".")]
+
+
+def test_compare_where_every_cell_touches_a_source_has_no_log_scale_note(tmp_path):
+    """issue 41: on a box of 6 tetrahedra around vertex 0 the histograms count nothing; matplotlib's "cannot be
+    log-scaled" warning became a note of compare."""
+    import warnings
+
+    from cvxgeodesic.mesh.tet_generate import tet_box
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        run_compare(tet_box(1), 0, ["dijkstra"], tmp_path, progress=False)
+    assert not [str(w.message) for w in caught if "log-scaled" in str(w.message)]
+    assert (tmp_path / "gradient_histogram.png").is_file()

@@ -55,8 +55,9 @@ def test_every_mesh_argument_lists_exactly_the_registry_formats():
         for action in p._actions:
             if action.dest in ("mesh", "meshes"):
                 found = _extensions(action.help)
-                # the commands that take a volume list the tetrahedral files too (issue 26)
-                volume = VOLUME_EXTENSIONS if command in ("distance", "compare", "view", "path", "matrix") else ()
+                # the commands that take a volume list the tetrahedral files too (issue 26; batch: issue 41)
+                volume = VOLUME_EXTENSIONS if command in ("distance", "compare", "view", "path", "matrix",
+                                                          "batch") else ()
                 assert sorted(set(found)) == sorted({*MESH_EXTENSIONS, *volume}), (command, action.help)
                 checked.append(command)
     assert sorted(checked) == ["batch", "compare", "distance", "matrix", "path", "view"]

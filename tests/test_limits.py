@@ -163,6 +163,21 @@ def _glb(json_bytes: bytes, declared: int | None = None) -> bytes:
     return b"glTF" + struct.pack("<II", 2, 12 + len(chunk)) + chunk
 
 
+@pytest.mark.parametrize("name, make", [
+    ("arrays.gltf", lambda: b"[" * 200_000 + b"]" * 200_000),
+    ("objects.gltf", lambda: b'{"a":' * 200_000 + b"1" + b"}" * 200_000),
+    ("arrays.glb", lambda: _glb(b'{"asset": ' + b"[" * 200_000 + b"]" * 200_000 + b"}")),
+], ids=["gltf-arrays", "gltf-objects", "glb-arrays"])
+def test_gltf_json_nested_too_deeply_is_a_format_error(tmp_path, name, make):
+    """issue 41 (D15): JSON 200,000 levels deep gave a raw RecursionError."""
+    pytest.importorskip("trimesh")
+    path = tmp_path / name
+    path.write_bytes(make())
+    with pytest.raises(MeshFormatError) as exc:
+        cg.load_mesh(path)
+    assert str(exc.value) == f"{path}: not valid glTF JSON (arrays or objects nested too deeply to parse)"
+
+
 @pytest.mark.parametrize("name, data, message", [
     ("b.gltf", b'{"asset": {"version": "2.0"}, "meshes": [', "not valid glTF JSON (Expecting value at line 1, "
                                                              "column 42)"),
@@ -194,24 +209,28 @@ def test_broken_gltf_json_is_a_format_error_naming_the_problem(tmp_path, name, d
 TET_POINTS = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=np.float64)
 
 
-def _vtk_blocks(raw: bytes, codec: str) -> tuple[bytes, bytes]:
-    """VTK's compressed layout: the header (blocks, block size, last block's size, compressed sizes) and the blocks."""
+def _vtk_blocks(raw: bytes, codec: str, declare: int | None = None) -> tuple[bytes, bytes]:
+    """VTK's compressed layout: the header (blocks, block size, last block's size, compressed sizes) and the blocks;
+    ``declare``: the block and last block sizes the header declares instead of the true ones."""
     size = 1 << 20  # VTK writes 32 KB blocks; 1 MB ones make the 16 MB arrays below quick to write in LZMA
     chunks = [raw[i:i + size] for i in range(0, len(raw), size)] or [b""]
     packed = [zlib.compress(c) if codec == "zlib" else lzma.compress(c) for c in chunks]
-    return struct.pack(f"<{3 + len(packed)}I", len(packed), size, len(chunks[-1]), *map(len, packed)), b"".join(packed)
+    full, last = (size, len(chunks[-1])) if declare is None else (declare, declare)
+    return struct.pack(f"<{3 + len(packed)}I", len(packed), full, last, *map(len, packed)), b"".join(packed)
 
 
 def _write_vtu(path: Path, *, n_points: int = 4, points: bytes | None = None, layout: str = "inline",
-               codec: str = "zlib") -> Path:
-    """One tetrahedron as a compressed VTU, its arrays inline, appended in base64 or appended raw."""
+               codec: str = "zlib", connectivity: bytes | None = None, declare: int | None = None) -> Path:
+    """One tetrahedron as a compressed VTU, its arrays inline, appended in base64 or appended raw; ``connectivity``
+    and the inflated size its block header declares (``declare``, one block) may be given."""
     arrays = [("Points", 'type="Float64" NumberOfComponents="3"', TET_POINTS.tobytes() if points is None else points),
-              ("Cells", 'type="Int64" Name="connectivity"', np.arange(4, dtype=np.int64).tobytes()),
+              ("Cells", 'type="Int64" Name="connectivity"',
+               np.arange(4, dtype=np.int64).tobytes() if connectivity is None else connectivity),
               ("Cells", 'type="Int64" Name="offsets"', np.array([4], dtype=np.int64).tobytes()),
               ("Cells", 'type="UInt8" Name="types"', np.array([10], dtype=np.uint8).tobytes())]
     tags, appended = {"Points": [], "Cells": []}, b""
     for section, attrs, raw in arrays:
-        header, blocks = _vtk_blocks(raw, codec)
+        header, blocks = _vtk_blocks(raw, codec, declare if "connectivity" in attrs else None)
         encoded = base64.b64encode(header) + base64.b64encode(blocks) if layout != "raw" else header + blocks
         if layout == "inline":
             tags[section].append(f'<DataArray {attrs} format="binary">'.encode() + encoded + b"</DataArray>")
@@ -254,8 +273,9 @@ def test_a_compressed_array_larger_than_its_counts_is_refused_before_it_is_infla
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
-    assert str(exc.value) == (f"{path}: DataArray 'Points' (piece 0) inflates to more than the 96 bytes "
-                              "NumberOfPoints 4 allows (4 × 3 component(s) × 8 bytes); refused before reading it")
+    assert str(exc.value) == (f"{path}: DataArray 'Points' (piece 0) declares {32 << 20} bytes inflated (its "
+                              "compressed-block header), more than the 96 bytes NumberOfPoints 4 allows (4 × 3 "
+                              "component(s) × 8 bytes); refused before reading it")
     # the check inflates 1 MB at a time (and LZMA's decoder holds its 8 MB dictionary: measured peaks 1.1 MB with zlib,
     # 10.6 MB with LZMA); without the check meshio held the 32 MB at least once (numpy's allocations are traced too)
     assert peak < 16 << 20, peak
@@ -269,9 +289,9 @@ def test_compressed_arrays_cut_short_or_not_base64_are_refused(raw):
     enc = (lambda b: b) if raw else base64.b64encode  # base64: header and blocks encoded apart, as VTK does
 
     def split(text):
-        return list(_split_blocks(text, (4, "little"), raw=raw))
+        return _split_blocks(text, (4, "little"), raw=raw)
 
-    assert b"".join(split(enc(header) + enc(blocks))) == blocks
+    assert split(enc(header) + enc(blocks)) == [(100, blocks)]
     with pytest.raises(_Refused, match="^has a compressed-block header cut short$"):
         split(enc(header)[:8])
     with pytest.raises(_Refused, match="^has compressed blocks cut short$"):
@@ -279,6 +299,79 @@ def test_compressed_arrays_cut_short_or_not_base64_are_refused(raw):
     if not raw:
         with pytest.raises(_Refused, match=r"^is not valid base64 \("):
             split(enc(header) + b"abcde")
+
+
+class _Inflation:
+    """Counts the bytes every zlib and LZMA decompressor gives (the check's and meshio's)."""
+
+    def __init__(self, monkeypatch) -> None:
+        self.total = 0
+        for module, name in ((zlib, "decompressobj"), (lzma, "LZMADecompressor")):
+            monkeypatch.setattr(module, name, self._counting(getattr(module, name)))
+        monkeypatch.setattr(zlib, "decompress", self._counted(zlib.decompress))
+        monkeypatch.setattr(lzma, "decompress", self._counted(lzma.decompress))
+
+    def _counted(self, fn):
+        def wrapper(*args, **kwargs):
+            out = fn(*args, **kwargs)
+            self.total += len(out)
+            return out
+        return wrapper
+
+    def _counting(self, make):
+        outer = self
+
+        class Counting:
+            def __init__(self, *args, **kwargs) -> None:
+                self._d = make(*args, **kwargs)
+
+            def decompress(self, *args, **kwargs):
+                out = self._d.decompress(*args, **kwargs)
+                outer.total += len(out)
+                return out
+
+            def __getattr__(self, name):
+                return getattr(self._d, name)
+
+        return Counting
+
+
+@pytest.mark.parametrize("layout, codec", LAYOUTS)
+def test_a_block_header_that_declares_more_than_the_file_allows_is_refused_before_inflating(tmp_path, monkeypatch,
+                                                                                           layout, codec):
+    """issue 41 (D9): an array without a count of its own (connectivity) whose block header declared about 1032 ×
+    the file's size was inflated to that much (4.97 GB, 19.8 s) before its refusal; now the header's declaration
+    is refused before anything is inflated."""
+    pytest.importorskip("meshio")
+    declared = 4_000_000_000  # UInt32 headers: at most 2**32 - 1
+    path = _write_vtu(tmp_path / "bomb.vtu", layout=layout, codec=codec, declare=declared)
+    budget = path.stat().st_size * 1032
+    inflation = _Inflation(monkeypatch)
+    with pytest.raises(MeshFormatError) as exc:
+        cg.load_mesh(path)
+    assert inflation.total == 96  # the 4 points before it, nothing of the connectivity
+    assert str(exc.value).startswith(f"{path}: DataArray 'connectivity' (piece 0) declares {declared} bytes inflated "
+                                     f"(its compressed-block header), more than the ")
+    left = re.search(r"more than the (\d+) bytes the file's size allows", str(exc.value))
+    assert left is not None and budget - 200 < int(left.group(1)) <= budget, str(exc.value)  # less the points
+
+
+@pytest.mark.parametrize("layout, codec", LAYOUTS)
+def test_a_block_that_inflates_past_its_declared_size_is_refused(tmp_path, layout, codec):
+    """A header that declares less than its block holds: the block is refused as soon as it passes the declaration
+    (meshio inflates each block whole, whatever the header says)."""
+    pytest.importorskip("meshio")
+    path = _write_vtu(tmp_path / "liar.vtu", layout=layout, codec=codec, connectivity=bytes(8 << 20), declare=32)
+    tracemalloc.start()
+    try:
+        with pytest.raises(MeshFormatError) as exc:
+            cg.load_mesh(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert str(exc.value) == (f"{path}: DataArray 'connectivity' (piece 0) has a block (block 0) that inflates to "
+                              "more than the 32 bytes its compressed-block header declares; refused before reading it")
+    assert peak < 16 << 20, peak
 
 
 def test_vtu_counts_no_file_of_its_size_could_hold_are_refused(tmp_path):
@@ -351,6 +444,6 @@ def test_the_checks_read_the_file_where_it_cannot_be_mapped(tmp_path, monkeypatc
 
     monkeypatch.setattr(_limits.mmap, "mmap", no_mmap)
     path = _write_vtu(tmp_path / "bomb.vtu", points=bytes(4 << 20))
-    with pytest.raises(MeshFormatError, match="DataArray 'Points' \\(piece 0\\) inflates to more than the 96 bytes"):
+    with pytest.raises(MeshFormatError, match="DataArray 'Points' \\(piece 0\\) declares 4194304 bytes inflated"):
         cg.load_mesh(path)
     assert cg.load_mesh(_write_vtu(tmp_path / "ok.vtu")).T.tolist() == [[0, 1, 2, 3]]

@@ -109,6 +109,17 @@ SPHERE = cg.icosphere(1)
     ({"method": "qclp", "cost": 2 + 0j}, r"^cost must hold real numbers, got complex values"),
     ({"method": "qclp", "cost": [1.0] * 41 + [1j]}, r"^cost must hold real numbers, got complex values"),
     ({"method": "qclp", "metric": np.eye(3) * (1 + 0j)}, r"^metric must hold real numbers, got complex values"),
+    # issue 41: a value just past a bound was rounded to it ("m = 1e6 is outside the supported range [0, 1e6]")
+    ({"method": "qclp", "m": 1000000.1}, r"^m = 1000000\.1 is outside the supported range \[0, 1000000\]"),
+    ({"method": "qclp", "m": 1e6 * (1 + 2e-16)}, r"^m = 1000000\.0000000002 is outside the supported range "
+                                                 r"\[0, 1000000\]"),
+    ({"method": "qclp", "cost": 1.000001e30}, r"^cost = 1\.000001e30 is outside the supported range \[1e-30, 1e30\]"),
+    ({"method": "qclp", "cost": np.r_[1e6 * (1 + 1e-9), np.ones(41)]},
+     r"^cost varies by a factor 1000000\.001 \(cost\[0\] \(vertex 0\) = 1000000\.001, cost\[1\] \(vertex 1\) = 1\); "
+     r"the supported ratio of the largest to the smallest cost is at most 1e6"),
+    ({"method": "qclp", "metric": np.eye(3) * 1.00001e60}, r"^metric is outside the supported range in the plane of "
+                                                            r"face \d+ \(eigenvalues there 1\.00001e60, 1\.00001e60: "
+                                                            r"condition number 1\); .*\[1e-60, 1e60\]"),
 ])
 def test_numbers_outside_the_supported_ranges_are_refused_naming_the_parameter(kwargs, match):
     with pytest.raises(cg.ParameterError, match=match):

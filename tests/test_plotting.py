@@ -330,3 +330,16 @@ def test_back_faces_are_culled_on_a_closed_mesh(tmp_path):
     red = np.mean(s[:, 0] - s[:, 2] > 0.2)  # bwr: 1 is red, 0 is blue
     blue = np.mean(s[:, 2] - s[:, 0] > 0.2)
     assert red > 0.9 and blue < 0.02, (red, blue)
+
+
+def test_a_histogram_with_nothing_counted_asks_for_no_log_scale(tmp_path):
+    """issue 41: every count zero (every cell touches a source) made matplotlib warn "Data has no positive values,
+    and therefore cannot be log-scaled", which compare showed as a note."""
+    import warnings
+
+    edges = np.linspace(0.0, 2.0, 11)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        path = plot_gradient_histogram({"exact": (np.zeros(10), edges), "qclp": (np.zeros(10), edges)},
+                                       tmp_path / "h.png")
+    assert Image.open(path).size[0] > 100

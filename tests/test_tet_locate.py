@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -66,6 +68,20 @@ def test_volume_point_and_its_errors():
         volume_point(m, [[0, 0, 0], [0, 0, 5.0], [0, 0, 6.0]])
     with pytest.raises(SourceError, match="finite"):
         volume_point(m, [np.nan, 0, 0])
+
+
+# issue 41: from about 1e154 on, scipy's k-d tree search overflowed ("The value of p too large for this dataset")
+@pytest.mark.parametrize("x", [1e154, 1e200, 1e300, -1.7e308, np.finfo(float).max])
+def test_huge_finite_positions_are_outside_with_a_clean_error(x):
+    m = tet_box(2)
+    with np.errstate(over="raise", invalid="raise"):  # nor an overflow on the way
+        with pytest.raises(SourceError, match=re.escape(f"xyz = {[float(x), 0.0, 0.0]} is outside box2x2x2 (in no "
+                                                        "tetrahedron; the nearest vertex is ") + r"[0-9.e+]+ away\)$"):
+            volume_point(m, [x, 0, 0])
+        tets, bary = locate_points(m, [[0.25, 0.5, 0.75], [0, x, 0], [x, x, x]])
+    assert tets[0] >= 0 and (tets[1:] == -1).all() and np.isnan(bary[1:]).all()
+    values = interpolate_at(m, m.V[:, 0], [[0.25, 0.5, 0.75], [0, 0, x]])
+    assert values[0] == pytest.approx(0.25) and np.isnan(values[1])
 
 
 def test_interpolation_is_exact_for_linear_fields_and_keeps_inf():

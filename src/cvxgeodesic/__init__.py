@@ -16,9 +16,45 @@ Inside a solid (tetrahedra; ``docs/volumes.md``)::
     wall = cg.geodesic_distance(part, "boundary", method="qclp")
 """
 
-from typing import TYPE_CHECKING
 
-from . import _threads  # noqa: F401  (first: it sets OpenMP's wait policy before a library loads the runtime)
+
+def _interrupted_early(signum: int, frame: object) -> None:
+    """Ctrl-C in the command's process before :func:`cvxgeodesic.cli.main` installs its handler: the command's line
+    and exit code, no traceback (nothing is written yet; :mod:`cvxgeodesic._signals`)."""
+    import os
+
+    os.write(2, b"cvxgeodesic: interrupted\n")
+    os._exit(130)
+
+
+_interrupted_early.cvxgeodesic_early = True  # type: ignore[attr-defined]  # _signals.EARLY_MARK
+
+
+def _install_early() -> None:
+    """Install :func:`_interrupted_early` in the command's process only: the console script ``cvxgeodesic`` or
+    ``python -m cvxgeodesic.cli`` (``sys.orig_argv``: while ``-m`` imports the package, ``sys.argv[0]`` is
+    ``"-m"``). Defined here, not imported, and with the builtin ``_signal``: every module imported before it
+    is a moment where Ctrl-C still gives a traceback. A SIGINT the process ignores stays ignored."""
+    import _signal
+    import os
+    import sys
+
+    orig = list(getattr(sys, "orig_argv", ()))
+    i = orig.index("cvxgeodesic.cli") if "cvxgeodesic.cli" in orig else 0
+    command = (i > 0 and orig[i - 1] == "-m") or (
+        bool(sys.argv) and os.path.basename(sys.argv[0]) in ("cvxgeodesic", "cvxgeodesic.exe", "cvxgeodesic-script.py"))
+    if command and _signal.getsignal(_signal.SIGINT) is _signal.default_int_handler:
+        try:
+            _signal.signal(_signal.SIGINT, _interrupted_early)
+        except ValueError:  # not the main thread
+            pass
+
+
+_install_early()  # first
+
+from typing import TYPE_CHECKING  # noqa: E402
+
+from . import _threads  # noqa: E402, F401  (it sets OpenMP's wait policy before a library loads the runtime)
 
 # The names below are imported on first use (PEP 562): ``import cvxgeodesic`` and ``import cvxgeodesic.cli`` load
 # no NumPy, SciPy or Numba, so the command line's Ctrl-C handling is in place before the heavy imports start.
@@ -42,6 +78,7 @@ if TYPE_CHECKING:
         MeshFormatError,
         MeshRepairWarning,
         NonManifoldError,
+        OutputError,
         ParameterError,
         SolverError,
         SourceError,
@@ -64,7 +101,7 @@ __all__ = [
     "ALL_METHODS", "BASELINE_METHODS", "FORMULATIONS", "CvxGeodesicError", "DegenerateFacesWarning",
     "IndefiniteEnergyWarning", "GeodesicResult", "GeodesicSolver",
     "MeshError", "MeshFileNotFoundError", "MeshFormatError", "MeshRepairWarning",
-    "NonManifoldError", "ParameterError", "SolveInfo", "SolverError", "SourceError",
+    "NonManifoldError", "OutputError", "ParameterError", "SolveInfo", "SolverError", "SourceError",
     "TriMesh", "cylinder", "distance_matrix", "geodesic_distance", "grid_plane", "icosphere", "load_distance",
     "load_mesh", "plot_field", "save_distance", "smoothness_weight", "to_file_order", "SurfaceCurve", "SurfacePoint",
     "surface_point", "distance_at", "geodesic_path", "show",
@@ -78,7 +115,7 @@ _LAZY = {
                      "distance_matrix", "geodesic_distance"), ".api"),
     **dict.fromkeys(("CvxGeodesicError", "DegenerateFacesWarning", "IndefiniteEnergyWarning", "MeshError",
                      "MeshFileNotFoundError", "MeshFormatError", "MeshRepairWarning", "NonManifoldError",
-                     "ParameterError", "SolverError", "SourceError"), ".errors"),
+                     "OutputError", "ParameterError", "SolverError", "SourceError"), ".errors"),
     **dict.fromkeys(("FORMULATIONS", "smoothness_weight"), ".formulations"),
     **dict.fromkeys(("TriMesh", "cylinder", "grid_plane", "icosphere"), ".mesh"),
     "to_file_order": ".mesh.fileorder",

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import os
 import secrets
+import shutil
 import stat
 import tempfile
 from collections.abc import Callable, Iterator
@@ -23,7 +24,7 @@ from typing import BinaryIO
 
 from .errors import ParameterError
 
-__all__ = ["atomic_write", "check_output_dir", "check_replaceable", "output_set", "probe_folder"]
+__all__ = ["atomic_write", "check_output_dir", "check_replaceable", "output_folder", "output_set", "probe_folder"]
 
 #: How the library names the permission in a refusal; the command line names its flag instead.
 ALLOW_IN_PYTHON = "overwrite_read_only=True"
@@ -121,6 +122,8 @@ def atomic_write(target: str | os.PathLike, write: Callable[[BinaryIO], object],
     ------
     ParameterError
         ``target`` is read-only and ``overwrite_read_only`` is False (nothing is written).
+    OSError
+        Writing failed (a full disk: ``write`` and ``fsync`` name no file); its ``filename`` is ``target``.
     """
     target = Path(target)
     st = _PENDING.get(target) or check_replaceable(target, overwrite_read_only=overwrite_read_only, allow=allow)
@@ -138,15 +141,18 @@ def atomic_write(target: str | os.PathLike, write: Callable[[BinaryIO], object],
             fh.flush()
             os.fsync(fh.fileno())
         os.replace(tmp, target)
-    except BaseException:
+    except BaseException as exc:
         with suppress(FileNotFoundError):
             os.unlink(tmp)
+        if isinstance(exc, OSError) and exc.errno is not None and exc.filename in (None, str(tmp)):
+            exc.filename = str(target)  # the output, not its temporary file (a system error's message shows it)
         raise
     return target
 
 
 @contextmanager
-def output_set(*targets: str | os.PathLike, overwrite_read_only: bool = False) -> Iterator[list[Path]]:
+def output_set(*targets: str | os.PathLike, overwrite_read_only: bool = False,
+               allow: str | None = ALLOW_IN_PYTHON) -> Iterator[list[Path]]:
     """Temporary paths for several outputs that must appear together: all of them, or none.
 
     Yields one temporary path per target, next to it and with the same suffix (so writers
@@ -164,6 +170,8 @@ def output_set(*targets: str | os.PathLike, overwrite_read_only: bool = False) -
         Final paths; their directories must exist.
     overwrite_read_only : bool, default False
         Replace read-only targets instead of refusing.
+    allow : str or None
+        How the caller's user allows that, for the refusal's message (None: the caller does not offer it).
 
     Yields
     ------
@@ -176,7 +184,7 @@ def output_set(*targets: str | os.PathLike, overwrite_read_only: bool = False) -
         A target is read-only and ``overwrite_read_only`` is False: raised on entry, before the block runs.
     """
     finals = [Path(t) for t in targets]
-    stats = [check_replaceable(f, overwrite_read_only=overwrite_read_only) for f in finals]
+    stats = [check_replaceable(f, overwrite_read_only=overwrite_read_only, allow=allow) for f in finals]
     tmps = [p.parent / f".{p.stem}.{secrets.token_hex(4)}.part{p.suffix}" for p in finals]
     _PENDING.update({t: s for t, s in zip(tmps, stats, strict=True) if s is not None})
     try:
@@ -197,6 +205,39 @@ def output_set(*targets: str | os.PathLike, overwrite_read_only: bool = False) -
             _PENDING.pop(tmp, None)
             with suppress(FileNotFoundError):
                 os.unlink(tmp)
+
+
+@contextmanager
+def output_folder(folder: Path, *, allow: str | None = ALLOW_IN_PYTHON) -> Iterator[Path]:
+    """A private folder inside ``folder`` for outputs whose names are known once written: they appear in ``folder``
+    all together, or none of them.
+
+    When the block ends normally, every file written into the yielded folder is moved into ``folder`` through
+    :func:`output_set` (all or none; a replaced file's mode carries over; a read-only one is refused with a
+    :class:`ParameterError`); when the block raises (KeyboardInterrupt included) or a move fails, nothing in
+    ``folder`` changes. The private folder (``.cvxgeodesic.*.part``) and what is left in it are removed either way.
+
+    Parameters
+    ----------
+    folder : pathlib.Path
+        The output folder; it must exist.
+    allow : str or None
+        As for :func:`output_set` (``overwrite_read_only`` is never given here).
+
+    Yields
+    ------
+    pathlib.Path
+        The private folder.
+    """
+    stage = Path(tempfile.mkdtemp(prefix=".cvxgeodesic.", suffix=".part", dir=folder))
+    try:
+        yield stage
+        names = sorted(p.name for p in stage.iterdir())
+        with output_set(*(folder / n for n in names), allow=allow) as tmps:
+            for name, tmp in zip(names, tmps, strict=True):
+                os.replace(stage / name, tmp)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
 
 
 def _rename_all(finals: list[Path], tmps: list[Path]) -> None:

@@ -3,8 +3,8 @@
 One place for: the optional import with an error that names the extra, the probe that fails fast on an
 address that is not a Dask scheduler, the thread budget of local workers, the client/cluster of a run
 (a local cluster speaks TLS with credentials of its own: no other user of the machine can submit work to it;
-its HTTP endpoints, the dashboard and health pages, stay plain HTTP on 127.0.0.1: readable, not able to run code),
-and Ctrl-C (one line, no worker tracebacks). Dask (``pip install 'cvxgeodesic[cluster]'``) is imported
+it serves no HTTP pages unless :data:`DASHBOARD_VARIABLE` asks for the dashboard, which is then plain HTTP on
+127.0.0.1), and Ctrl-C (one line, no worker tracebacks). Dask (``pip install 'cvxgeodesic[cluster]'``) is imported
 only inside these functions.
 """
 
@@ -14,17 +14,28 @@ import contextlib
 import os
 import socket
 import struct
+import sys
 from collections.abc import Iterator
 from contextlib import ExitStack
 from typing import Any
 
-__all__ = ["LOCAL_HOST", "PROBE_TIMEOUT", "THREAD_VARIABLES", "check_scheduler", "local_security",
-           "local_worker_environ", "open_client", "require_distributed", "sigint_ignored", "stop_after_interrupt"]
+from .errors import ParameterError
+
+__all__ = ["DASHBOARD_VARIABLE", "LOCAL_HOST", "PROBE_TIMEOUT", "THREAD_VARIABLES", "check_scheduler",
+           "dashboard_wanted", "local_http_config", "local_security", "local_worker_environ",
+           "open_client", "require_distributed", "sigint_ignored", "stop_after_interrupt"]
 
 #: The one address a local cluster listens on (scheduler, workers, nannies and the scheduler's dashboard).
 #: Dask binds the dashboard of ``dashboard_address=":0"`` to every interface, so a job would be reachable
 #: from the network while it runs; on loopback it stays reachable from this machine (or an SSH tunnel).
 LOCAL_HOST = "127.0.0.1"
+
+#: The environment variable that turns on the scheduler's dashboard of a local cluster (``1``; unset, empty or
+#: ``0``: off). Off, the cluster's HTTP servers (Dask starts them whatever the dashboard) have no pages at all: any
+#: user of the machine who finds the port of Dask's pages could read what runs (tasks, arguments, worker logs) and,
+#: through ``/info/logs/<address>.html``, make the scheduler open TLS connections to any address and write their
+#: errors into the job's stderr.
+DASHBOARD_VARIABLE = "CVXGEODESIC_DASHBOARD"
 
 #: Seconds :func:`check_scheduler` waits for the connection and for the scheduler's first bytes.
 PROBE_TIMEOUT = 4.0
@@ -120,6 +131,26 @@ def local_worker_environ(n_workers: int) -> dict:
     return env
 
 
+def dashboard_wanted() -> bool:
+    """Whether :data:`DASHBOARD_VARIABLE` asks for the dashboard of a local cluster (ParameterError for a value
+    other than ``1``, ``0`` or empty)."""
+    raw = os.environ.get(DASHBOARD_VARIABLE, "").strip()
+    if raw not in ("", "0", "1"):
+        raise ParameterError(f"environment variable {DASHBOARD_VARIABLE} must be 1 (a local cluster's Dask dashboard "
+                             f"on 127.0.0.1) or 0 (none, the default), got {raw!r}")
+    return raw == "1"
+
+
+def local_http_config(dashboard: bool) -> dict:
+    """Dask config of a local cluster's HTTP servers: Dask's pages with the dashboard, else none.
+
+    The scheduler and each worker start an HTTP server whatever the dashboard; without one, their routes are
+    emptied, so that they answer every request with 404 (the scheduler's pages include ``/info/logs/<address>``,
+    which makes it connect to any address).
+    """
+    return {} if dashboard else {"distributed.scheduler.http.routes": [], "distributed.worker.http.routes": []}
+
+
 @contextlib.contextmanager
 def _environ_kept(names: tuple[str, ...]) -> Iterator[None]:
     """Restore ``os.environ[name]`` (set or unset) for every name when the block ends.
@@ -200,9 +231,10 @@ def open_client(stack: ExitStack, scheduler: Any, n_workers: int, what: str = "c
         Closes the client and the local cluster this opens when the run ends.
     scheduler : None, str or distributed.Client
         None: a ``LocalCluster`` of ``n_workers`` worker processes with one Dask thread each and
-        :func:`local_worker_environ`'s thread budget, every socket of it (dashboard included) on
-        :data:`LOCAL_HOST`, scheduler, workers and nannies on ``tls://`` with :func:`local_security`'s
-        credentials (held by the returned client alone); an address (probed by :func:`check_scheduler`
+        :func:`local_worker_environ`'s thread budget, every socket of it on :data:`LOCAL_HOST`, scheduler,
+        workers and nannies on ``tls://`` with :func:`local_security`'s credentials (held by the returned client
+        alone), no dashboard and no HTTP pages (:func:`local_http_config`) unless :data:`DASHBOARD_VARIABLE` is
+        ``1`` (then its address is printed on stderr); an address (probed by :func:`check_scheduler`
         first; a ``tls://`` one uses the Dask configuration's credentials); or a connected client,
         used as it is (not closed).
     n_workers : int
@@ -218,19 +250,28 @@ def open_client(stack: ExitStack, scheduler: Any, n_workers: int, what: str = "c
     ------
     ImportError
         Dask's ``distributed`` is not installed, or (local cluster) ``cryptography``.
+    ParameterError
+        :data:`DASHBOARD_VARIABLE` is set to something else than ``0`` or ``1`` (local cluster).
     ConnectionError
         ``scheduler`` is not a reachable Dask scheduler.
     """
     dask, distributed = require_distributed(what)
     if scheduler is None:
+        dashboard = dashboard_wanted()
         security = local_security(what)
         # Ctrl-C goes to the whole process group: worker processes started with SIGINT ignored keep
         # quiet (no tracebacks of their own) and this process alone stops them (stop_after_interrupt)
         kept = _environ_kept((*THREAD_VARIABLES, MALLOC_TRIM))
-        with dask.config.set(local_worker_environ(n_workers)), sigint_ignored(), kept:
+        config = {**local_worker_environ(n_workers), **local_http_config(dashboard)}
+        with dask.config.set(config), sigint_ignored(), kept:
             cluster = stack.enter_context(distributed.LocalCluster(
                 n_workers=n_workers, threads_per_worker=1, processes=True, host=LOCAL_HOST, protocol="tls://",
-                security=security, dashboard_address=f"{LOCAL_HOST}:0"))
+                security=security, dashboard_address=f"{LOCAL_HOST}:0" if dashboard else None,
+                # the scheduler's HTTP server (no pages without the dashboard) on a free port, not Dask's 8787
+                scheduler_kwargs={"dashboard_address": f"{LOCAL_HOST}:0"}))
+        if dashboard:
+            print(f"cvxgeodesic: Dask dashboard at {cluster.dashboard_link} ({DASHBOARD_VARIABLE}=1)",
+                  file=sys.stderr, flush=True)
         return stack.enter_context(distributed.Client(cluster, security=security)), cluster
     if isinstance(scheduler, distributed.Client):
         return scheduler, None

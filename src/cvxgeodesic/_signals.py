@@ -9,11 +9,22 @@ the signal here, and the places that call into ctypes, and the loops over rows, 
 
 Only the command line records signals: in a Python session nothing is recorded, and :func:`check` does nothing.
 Standard library only (imported by the command line before NumPy).
+
+Before :func:`cvxgeodesic.cli.main` installs its handlers, the command's process imports the package and the
+command line's modules (tens of milliseconds); a Ctrl-C there printed a ``KeyboardInterrupt`` traceback. So the
+package's ``__init__``, first thing and before it imports anything of its own, installs a handler in the command's
+process only (the console script ``cvxgeodesic``, ``python -m cvxgeodesic.cli``): until ``main`` takes over, a
+Ctrl-C prints the command's one line and exits with 130 (nothing is written yet, so nothing is left to remove).
+That handler carries the attribute :data:`EARLY_MARK`; what comes before it is Python's own start-up.
 """
 
 from __future__ import annotations
 
-__all__ = ["check", "clear", "record"]
+__all__ = ["EARLY_MARK", "check", "clear", "record"]
+
+#: The attribute that marks the package's early SIGINT handler (``cvxgeodesic/__init__.py``), which the command
+#: line replaces with its own.
+EARLY_MARK = "cvxgeodesic_early"
 
 _pending: dict[str, int | None] = {"signum": None}
 

@@ -9,10 +9,12 @@ output folder at the same paths (a shared file system).
 Every task loads its mesh, solves, and writes, atomically,
 
 - ``OUT/<mesh stem>.ply`` (mesh + per-vertex ``distance``, read it with
-  :func:`~cvxgeodesic.mesh.io.load_distance_ply`) or ``OUT/<mesh stem>.npy``
-  (the (n_file,) array), both in the file's vertex numbering and count (welded duplicates
+  :func:`~cvxgeodesic.mesh.io.load_distance_ply`), ``OUT/<mesh stem>.vtu`` (the mesh, tetrahedra
+  included, + the field as point data, for ParaView) or ``OUT/<mesh stem>.npy``
+  (the (n_file,) array), all in the file's vertex numbering and count (welded duplicates
   share a value, vertices in no face get ``inf``; see
-  :func:`~cvxgeodesic.mesh.fileorder.to_file_order`), then
+  :func:`~cvxgeodesic.mesh.fileorder.to_file_order`); without a format, ``.ply`` for a surface and
+  ``.vtu`` for a tetrahedral mesh (:data:`DEFAULT_FORMATS`: PLY holds no tetrahedra), then
 - ``OUT/<mesh stem>.json``: the mesh path, the parameters, the mesh's dimension and size, the
   :class:`~cvxgeodesic.api.SolveInfo` as a dict, ``warnings`` (from loading) and
   ``notes`` (every repair, substitution and warning of the task, each once).
@@ -48,10 +50,14 @@ from .errors import ParameterError, error_line
 from .tables import Column, text_table
 from .validation import check_choice, check_count, check_not_an_input, check_smoothness
 
-__all__ = ["OUTPUT_FORMATS", "expand_mesh_paths", "format_summary", "output_paths", "run_batch", "solve_one"]
+__all__ = ["DEFAULT_FORMATS", "OUTPUT_FORMATS", "expand_mesh_paths", "format_summary", "output_paths", "run_batch",
+           "solve_one"]
 
-#: Formats of the distance file written per mesh.
-OUTPUT_FORMATS = ("ply", "npy")
+#: Formats of the distance file written per mesh (each one's meshes: ``Format.dims`` in
+#: :data:`~cvxgeodesic.mesh.formats.registry.FORMATS`).
+OUTPUT_FORMATS = ("ply", "npy", "vtu")
+#: The format of a mesh's distance file when none is given, by the mesh's simplex dimension.
+DEFAULT_FORMATS = {2: "ply", 3: "vtu"}
 
 
 def expand_mesh_paths(patterns) -> list[Path]:
@@ -61,8 +67,9 @@ def expand_mesh_paths(patterns) -> list[Path]:
     ----------
     patterns : str or sequence of str
         File names or patterns (``*``, ``?``, ``[...]``; ``**`` matches any depth).
-        A pattern keeps only files with a mesh extension (``.obj``, ``.off``,
-        ``.ply``, ``.stl``); a plain file name is kept whatever its extension (so
+        A pattern keeps only files with an extension that :func:`~cvxgeodesic.mesh.io.load_mesh` reads,
+        surfaces' and volumes' (``.obj``, ..., ``.msh``, ``.ele``; TetGen's ``.node`` only where no ``.ele`` of
+        the same name matched: the two are one mesh); a plain file name is kept whatever its extension (so
         that a wrong file is reported, not silently dropped).
 
     Returns
@@ -75,8 +82,9 @@ def expand_mesh_paths(patterns) -> list[Path]:
     ParameterError
         Nothing matches.
     """
-    from .mesh.io import MESH_EXTENSIONS
+    from .mesh.formats.registry import MESH_EXTENSIONS, VOLUME_EXTENSIONS
 
+    readable = tuple(dict.fromkeys((*MESH_EXTENSIONS, *VOLUME_EXTENSIONS)))
     if isinstance(patterns, str | os.PathLike):
         patterns = [patterns]
     found: dict[Path, None] = {}
@@ -85,7 +93,7 @@ def expand_mesh_paths(patterns) -> list[Path]:
         if glob.has_magic(pat):
             for name in sorted(glob.glob(os.path.expanduser(pat), recursive=True)):
                 p = Path(name)
-                if p.is_file() and p.suffix.lower() in MESH_EXTENSIONS:
+                if p.is_file() and p.suffix.lower() in readable:
                     found[p.resolve()] = None
         else:
             p = Path(pat).expanduser()
@@ -95,15 +103,54 @@ def expand_mesh_paths(patterns) -> list[Path]:
                 raise ParameterError(f"{p}: no such file")
             found[p.resolve()] = None
     if not found:
-        raise ParameterError(f"no mesh file ({', '.join(MESH_EXTENSIONS)}) matches {' '.join(map(str, patterns))}")
-    return sorted(found)
+        raise ParameterError(f"no mesh file ({', '.join(readable)}) matches {' '.join(map(str, patterns))}")
+    return sorted(_one_per_tetgen_pair(found))
+
+
+def _one_per_tetgen_pair(paths) -> list[Path]:
+    """``paths`` without each TetGen ``.node`` whose ``.ele`` is among them (either names the one mesh)."""
+    eles = {(p.parent, p.stem) for p in paths if p.suffix.lower() == ".ele"}
+    return [p for p in paths if not (p.suffix.lower() == ".node" and (p.parent, p.stem) in eles)]
 
 
 def output_paths(mesh_path, out_dir, output_format: str = "ply") -> tuple[Path, Path]:
-    """``(OUT/<stem>.<format>, OUT/<stem>.json)`` for one mesh."""
+    """``(OUT/<stem>.<format>, OUT/<stem>.json)`` for one mesh and format."""
     stem = Path(mesh_path).stem
     out = Path(out_dir)
     return out / f"{stem}.{output_format}", out / f"{stem}.json"
+
+
+def _output_formats(mesh_path, output_format: str | None) -> tuple[str, ...]:
+    """The formats the distance file of ``mesh_path`` may have before the mesh is read: the one given, else the
+    default of each dimension its extension may hold (a VTK file holds either; an unknown extension fails on
+    loading)."""
+    from .mesh.formats.registry import FORMATS
+
+    if output_format is not None:
+        return (output_format,)
+    fmt = FORMATS.get(Path(mesh_path).suffix.lower())
+    dims = fmt.dims if fmt is not None and fmt.read_mesh is not None else (2,)
+    return tuple(dict.fromkeys(DEFAULT_FORMATS[d] for d in dims))
+
+
+def _output_format(mesh, mesh_path, output_format: str | None) -> str:
+    """The format of the distance file of the loaded ``mesh``: the one given, if it holds the mesh's dimension
+    (else ParameterError, before the solve), or its dimension's default; one that needs an optional package not
+    installed fails now too (ParameterError)."""
+    from .mesh.formats._common import optional_package
+    from .mesh.formats.registry import FORMATS
+
+    fmt = output_format or DEFAULT_FORMATS[mesh.dim]
+    spec = FORMATS["." + fmt]
+    if mesh.dim not in spec.dims:
+        fits = [f for f in OUTPUT_FORMATS if mesh.dim in FORMATS["." + f].dims]
+        kind = "a tetrahedral mesh" if mesh.dim == 3 else "a triangle mesh"
+        raise ParameterError(f"{Path(mesh_path).name} is {kind}: its field cannot be written as .{fmt} "
+                             f"({spec.description} holds no {'tetrahedra' if mesh.dim == 3 else 'triangles'}); "
+                             f"give --format {' or '.join(fits)}, or no --format (.{DEFAULT_FORMATS[mesh.dim]})")
+    if spec.package is not None:
+        optional_package(spec.package, f"writing .{fmt} files", ParameterError)
+    return fmt
 
 
 def _source_spec(sources):
@@ -187,7 +234,7 @@ def _finished(dist_path: Path, sidecar: Path, params: dict) -> bool | None:
 
 
 def solve_one(mesh_path: str, sources: list[int], out_dir: str, method: str | None = None, m: float = 1.0,
-              solver: str = "auto", multires: bool | int = False, output_format: str = "ply") -> dict:
+              solver: str = "auto", multires: bool | int = False, output_format: str | None = None) -> dict:
     """Load one mesh, solve, write its outputs; the task that :func:`run_batch` runs on a worker.
 
     Never raises: a failure is returned as a row with ``status="failed"``.
@@ -204,7 +251,9 @@ def solve_one(mesh_path: str, sources: list[int], out_dir: str, method: str | No
         Existing output folder.
     method, m, solver, multires
         See :class:`~cvxgeodesic.api.GeodesicSolver` (method None: its default for the mesh's dimension).
-    output_format : {"ply", "npy"}
+    output_format : {"ply", "npy", "vtu"} or None
+        None: by the mesh's dimension (:data:`DEFAULT_FORMATS`). A format that cannot hold the mesh (``"ply"``
+        for tetrahedra) fails the row before the solve.
 
     Returns
     -------
@@ -212,7 +261,6 @@ def solve_one(mesh_path: str, sources: list[int], out_dir: str, method: str | No
         A row of :func:`run_batch`'s result.
     """
     t0 = time.perf_counter()
-    dist_path, sidecar = output_paths(mesh_path, out_dir, output_format)
     row = _row(mesh_path, "failed", worker=socket.gethostname())
     caught: list[warnings.WarningMessage] = []
     try:
@@ -228,6 +276,8 @@ def solve_one(mesh_path: str, sources: list[int], out_dir: str, method: str | No
             mesh = load_mesh(mesh_path)
             row["warnings"] = [str(w.message) for w in caught]
             row["n_vertices"], row["n_faces"] = mesh.n_file_vertices, mesh.n_cells  # tetrahedra in a volume
+            output_format = _output_format(mesh, mesh_path, output_format)  # before the solve: it may not fit
+            dist_path, sidecar = output_paths(mesh_path, out_dir, output_format)
             src = _mesh_sources(mesh, sources)  # vertex indices are the file's
             method = method or DEFAULT_METHODS[mesh.dim]  # recorded as if given: a rerun naming it skips the mesh
             res = GeodesicSolver(mesh, method, m=m, solver=solver, multires=multires).solve(src)
@@ -262,7 +312,7 @@ def _unique(lines) -> list[str]:
 
 def run_batch(paths, sources, out_dir, *, method: str | None = None, m: float = 1.0, solver: str = "auto",
               scheduler=None, n_workers: int = 2, force: bool = False, progress: bool = True,
-              multires: bool | int = False, output_format: str = "ply") -> list[dict]:
+              multires: bool | int = False, output_format: str | None = None) -> list[dict]:
     """Solve the same sources on many meshes, one Dask task per mesh.
 
     Parameters
@@ -294,8 +344,10 @@ def run_batch(paths, sources, out_dir, *, method: str | None = None, m: float = 
         Recompute meshes whose outputs exist.
     progress : bool
         Show a progress bar and one line per failed mesh on stderr.
-    output_format : {"ply", "npy"}
-        Format of the distance file.
+    output_format : {"ply", "npy", "vtu"} or None
+        Format of the distance file; None (default): ``"ply"`` for a surface, ``"vtu"`` for a tetrahedral mesh
+        (:data:`DEFAULT_FORMATS`). A mesh whose dimension the format cannot hold (``"ply"`` and tetrahedra) fails
+        before its solve.
 
     Returns
     -------
@@ -330,7 +382,8 @@ def run_batch(paths, sources, out_dir, *, method: str | None = None, m: float = 
     check_smoothness(m, None)  # its range too (validation.MAX_M): once, not once per mesh
     if method is not None and resolve_target(multires, 10**9) is not None:  # multires is for surfaces
         check(ALIASES.get(method, method), dim=2, multires=True)
-    check_choice(output_format, "output_format", OUTPUT_FORMATS, lower=False)
+    if output_format is not None:
+        check_choice(output_format, "output_format", OUTPUT_FORMATS, lower=False)
     if scheduler is None:
         check_count(n_workers, "n_workers")
     stems: dict[str, Path] = {}
@@ -348,12 +401,13 @@ def run_batch(paths, sources, out_dir, *, method: str | None = None, m: float = 
     rows: dict[Path, dict] = {}
     todo: list[Path] = []
     for p in paths:
-        dist_path, sidecar = output_paths(p, out, output_format)
-        if not force and _finished(dist_path, sidecar, params) is True:
-            rows[p] = _row(p, "skipped", output=str(dist_path))
+        done = None if force else _done_output(p, out, output_format, params)
+        if done is not None:
+            rows[p] = _row(p, "skipped", output=str(done))
         else:
-            for target in (dist_path, sidecar):  # a read-only output: refused now, not after its solve
-                check_replaceable(target, allow=None)
+            for fmt in _output_formats(p, output_format):
+                for target in output_paths(p, out, fmt):  # a read-only output: refused now, not after its solve
+                    check_replaceable(target, allow=None)
             todo.append(p)
     if todo:
         _run_on_cluster(todo, rows, sources_list, out, method, m, solver, multires, output_format,
@@ -361,7 +415,17 @@ def run_batch(paths, sources, out_dir, *, method: str | None = None, m: float = 
     return [rows[p] for p in paths]
 
 
-def _check_not_inputs(paths: list[Path], out: Path, output_format: str) -> None:
+def _done_output(path: Path, out: Path, output_format: str | None, params: dict) -> Path | None:
+    """The distance file of ``path`` when it is done with ``params`` (in one of the formats it may have), or
+    None."""
+    for fmt in _output_formats(path, output_format):
+        dist_path, sidecar = output_paths(path, out, fmt)
+        if _finished(dist_path, sidecar, {**params, "format": fmt}) is True:
+            return dist_path
+    return None
+
+
+def _check_not_inputs(paths: list[Path], out: Path, output_format: str | None) -> None:
     """ParameterError when an output of the batch (``OUT/<stem>.<format>`` or ``.json``) is one of its inputs.
 
     ``batch 'in/*.ply' --out in`` would replace every mesh by its distance file. Distinct stems (checked
@@ -372,8 +436,9 @@ def _check_not_inputs(paths: list[Path], out: Path, output_format: str) -> None:
     for p in paths:
         by_stem.setdefault(p.stem.casefold(), []).append(p)
     for p in paths:
-        for target in output_paths(p, out, output_format):
-            check_not_an_input(target, by_stem[p.stem.casefold()], "--out")
+        for fmt in _output_formats(p, output_format):
+            for target in output_paths(p, out, fmt):
+                check_not_an_input(target, by_stem[p.stem.casefold()], "--out")
 
 
 def _printable(text: str) -> str:

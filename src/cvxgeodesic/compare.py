@@ -35,8 +35,8 @@ from typing import Any
 
 import numpy as np
 
-from ._atomic import atomic_write, check_output_dir
-from .errors import ParameterError, SolverError, error_line
+from ._atomic import atomic_write, check_output_dir, output_folder
+from .errors import OutputError, ParameterError, SolverError, error_line
 from .tables import Column, text_table
 
 __all__ = [
@@ -148,7 +148,8 @@ def run_compare(mesh: Any, sources: Any, methods: Any, out_dir: str | os.PathLik
     methods : sequence of str or str
         Method names (see :func:`resolve_methods`); ``"all"`` means every method that applies to the mesh.
     out_dir : str or os.PathLike
-        Output folder, created if missing. Existing files of the same names are replaced.
+        Output folder, created if missing. Existing files of the same names are replaced; the CSV and the
+        pictures appear together or not at all (they are written in a private folder inside it first).
     m : float, default 1.0
         Smoothness multiplier of the quadratic formulations (ignored by the others).
     solver : {"auto", "ipm", "clarabel"}, default "auto"
@@ -175,6 +176,9 @@ def run_compare(mesh: Any, sources: Any, methods: Any, out_dir: str | os.PathLik
         ``reference`` of the wrong shape.
     SourceError
         Invalid sources (checked before anything is solved).
+    OutputError
+        An output could not be written (a full disk): the message names it, and nothing of the run is left in
+        ``out_dir`` (files there from before are as they were).
 
     Notes
     -----
@@ -215,11 +219,20 @@ def run_compare(mesh: Any, sources: Any, methods: Any, out_dir: str | os.PathLik
         ref_result = results[_key(ref_run)][0]
         reference = ref_result.distance if ref_result is not None else None
     rows, rel_errors = evaluate_methods(mesh, runs, results, reference, "given" if ref_run is None else _label(ref_run))
-    write_csv(out / "compare.csv", rows)  # the numbers first: they matter more than the pictures
     t_png = time.perf_counter()
-    write_pictures(out, mesh, sset, runs, results, rows, rel_errors, reference, view=view, up=up)
-    say(f"wrote {out / 'compare.csv'} and {sum(1 for _ in out.glob('*.png'))} PNGs in {out} "
-        f"({time.perf_counter() - t_png:.1f} s for the pictures)")
+    try:
+        # the CSV and every picture appear together or not at all (a full disk left compare.csv without pictures)
+        with output_folder(out, allow=None) as stage:
+            write_csv(stage / "compare.csv", rows)
+            write_pictures(stage, mesh, sset, runs, results, rows, rel_errors, reference, view=view, up=up)
+            n_png = sum(1 for _ in stage.glob("*.png"))
+    except OSError as exc:
+        name = Path(exc.filename).name if isinstance(exc.filename, str) else ""
+        where = out / name if name and not name.startswith(".") else out  # a hidden name: the private folder
+        raise OutputError(f"cannot write {where} ({exc.strerror or exc}); nothing of this comparison was written "
+                          f"to {out}", str(where), exc.errno) from None
+    say(f"wrote {out / 'compare.csv'} and {n_png} PNGs in {out} ({time.perf_counter() - t_png:.1f} s for the "
+        "pictures)")
     return rows
 
 

@@ -8,6 +8,7 @@ for solver failure), so ``except ValueError`` keeps working.
 from __future__ import annotations
 
 import errno
+import os
 
 
 class CvxGeodesicError(Exception):
@@ -48,6 +49,33 @@ class MeshFileNotFoundError(MeshFormatError, FileNotFoundError):
     def __reduce__(self) -> tuple[type, tuple[str, str | None]]:
         # OSError pickles as (errno, strerror, filename), which this __init__ does not take
         return type(self), (str(self), self.filename)
+
+
+class OutputError(CvxGeodesicError, OSError):
+    """An output could not be written (a full disk, a failing file system); the message names the file.
+
+    An :class:`OSError` too (``except OSError`` catches it), with the ``errno`` of the failure and ``filename`` the
+    output; ``str()`` is the message alone.
+
+    Parameters
+    ----------
+    message : str
+    filename : str, optional
+    code : int, optional
+        The ``errno`` of the failure.
+    """
+
+    def __init__(self, message: str, filename: str | None = None, code: int | None = None) -> None:
+        super().__init__(message)
+        self.errno = code
+        self.strerror = os.strerror(code) if code is not None else None
+        self.filename = filename
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else ""
+
+    def __reduce__(self) -> tuple[type, tuple[str, str | None, int | None]]:
+        return type(self), (str(self), self.filename, self.errno)
 
 
 class SourceError(CvxGeodesicError, ValueError):

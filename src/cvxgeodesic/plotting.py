@@ -713,7 +713,8 @@ def plot_gradient_histogram(norms_by_label, path, *, weights=None, title=None, b
     -----
     Histograms are normalised to fractions (of triangles, or of total weight)
     and drawn on a log scale, so the small populations away from 1 (across the
-    ridge: < 1; at the sources: > 1) stay visible. Up to three labels share one
+    ridge: < 1; at the sources: > 1) stay visible (histograms with nothing counted,
+    every cell left out: a linear scale and "no cell to count"). Up to three labels share one
     axis; more are drawn as small multiples. The dashed line marks ``‖∇d‖ = 1``.
     """
     if not isinstance(norms_by_label, Mapping) or len(norms_by_label) == 0:
@@ -768,10 +769,18 @@ def plot_gradient_histogram(norms_by_label, path, *, weights=None, title=None, b
     for ax in axes.flat[len(others):]:
         ax.set_visible(False)
     axes.flat[0].legend(fontsize=8 if single else 7, frameon=False, loc="upper left")
+    # no cell counted anywhere (every cell touches a source): a log scale of nothing makes matplotlib warn "Data has
+    # no positive values, and therefore cannot be log-scaled", which compare showed as a note
+    empty = not any((h[0] > 0).any() for h in hists.values())
     for ax in axes.flat:
         ax.axvline(1.0, color="black", linestyle="--", linewidth=0.9, zorder=3)
-        ax.set_yscale("log")
-        ax.set_ylim(ymin, 1.5)
+        if empty:
+            ax.set_ylim(0.0, 1.0)
+            ax.text(0.5, 0.5, "no cell to count", transform=ax.transAxes, ha="center", va="center", fontsize=9,
+                    color="0.35")
+        else:
+            ax.set_yscale("log")
+            ax.set_ylim(ymin, 1.5)
         ax.tick_params(labelsize=8)
         ax.grid(True, which="major", alpha=0.25)
     for ax in axes[-1, :]:

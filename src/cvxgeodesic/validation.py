@@ -154,7 +154,8 @@ def check_smoothness(m: Any, lam: Any) -> tuple[float, float | None]:
     (its upper bound needs the mesh: :func:`check_lam`)."""
     m_value = check_number(m, "m", low=0)
     if m_value > MAX_M:
-        raise ParameterError(f"m = {_g(m_value)} is outside the supported range [0, {_g(MAX_M)}]: beyond it the "
+        d = _apart(m_value, MAX_M)
+        raise ParameterError(f"m = {_g(m_value, d)} is outside the supported range [0, {_g(MAX_M, d)}]: beyond it the "
                              "smoothing outweighs the distance a million times and the solvers fail")
     lam_value = None if lam is None else check_number(lam, "lam", low=0)
     return m_value, lam_value
@@ -171,9 +172,10 @@ def check_lam(lam: float, unit: float) -> float:
         The weight of ``m = 1`` on this mesh (``smoothness_weight(mesh, 1.0, ...)``).
     """
     if unit > 0 and lam > MAX_M * unit:
-        raise ParameterError(f"lam = {_g(lam)} is outside the supported range [0, {_g(MAX_M * unit)}] on this mesh "
-                             f"(the weight of m = {_g(MAX_M)}; m = 1 is lam = {_g(unit)}): beyond it the smoothing "
-                             "outweighs the distance a million times and the solvers fail")
+        d = _apart(lam, MAX_M * unit)
+        raise ParameterError(f"lam = {_g(lam, d)} is outside the supported range [0, {_g(MAX_M * unit, d)}] on this "
+                             f"mesh (the weight of m = {_g(MAX_M)}; m = 1 is lam = {_g(unit)}): beyond it the "
+                             "smoothing outweighs the distance a million times and the solvers fail")
     return lam
 
 
@@ -500,6 +502,16 @@ def _g(x: float, digits: int = 6) -> str:
                   f"{x:.{digits}g}")
 
 
+def _apart(x: float, *bounds: float, digits: int = 6) -> int:
+    """The fewest significant digits, at least ``digits`` and at most 17 (exact), at which :func:`_g` writes ``x``
+    and each bound it differs from as different numbers: ``m = 1000000.1 is outside [0, 1e6]``, not
+    ``m = 1e6 is outside [0, 1e6]``."""
+    for d in range(digits, 17):
+        if all(float(_g(x, d)) != float(_g(b, d)) for b in bounds if b != x):
+            return d
+    return 17
+
+
 def _per_item(value: Any, name: str, n: int, m: int, item: tuple[int, ...], *, what: str,
               shapes: str) -> tuple[np.ndarray, str]:
     """``value`` (a cost or a metric) as a float64 array of ``item``-shaped entries, and whose they are.
@@ -560,14 +572,16 @@ def _check_cost_range(arr: np.ndarray, kind: str) -> None:
     out = (arr < MIN_COST) | (arr > MAX_COST)
     if out.any():
         k = int(np.flatnonzero(out)[0])
-        raise ParameterError(f"{at(k)} = {_g(arr[k])} is outside the supported range [{_g(MIN_COST)}, "
+        d = _apart(arr[k], MIN_COST, MAX_COST)
+        raise ParameterError(f"{at(k)} = {_g(arr[k], d)} is outside the supported range [{_g(MIN_COST)}, "
                              f"{_g(MAX_COST)}]; a constant factor only scales the distances: divide it out and "
                              "multiply the result by it")
     lo, hi = int(np.argmin(arr)), int(np.argmax(arr))
     if arr[hi] > MAX_COST_RATIO * arr[lo]:
-        raise ParameterError(f"cost varies by a factor {_g(arr[hi] / arr[lo])} ({at(hi)} = {_g(arr[hi])}, "
-                             f"{at(lo)} = {_g(arr[lo])}); the supported ratio of the largest to the smallest cost is "
-                             f"at most {_g(MAX_COST_RATIO)} (beyond, the solvers fail)")
+        d = _apart(arr[hi] / arr[lo], MAX_COST_RATIO)
+        raise ParameterError(f"cost varies by a factor {_g(arr[hi] / arr[lo], d)} ({at(hi)} = {_g(arr[hi], d)}, "
+                             f"{at(lo)} = {_g(arr[lo], d)}); the supported ratio of the largest to the smallest cost "
+                             f"is at most {_g(MAX_COST_RATIO)} (beyond, the solvers fail)")
 
 
 def check_metric(metric: Any, n: int, m: int) -> tuple[np.ndarray, str]:
@@ -650,5 +664,7 @@ def check_plane_metric(M2: np.ndarray, owner: np.ndarray, face: np.ndarray, kind
             i = int(np.flatnonzero(bad)[0])
             k, t = int(owner[i]), int(face[i])
             name = "metric" if kind == "constant" else f"metric[{k}] ({_where(kind, k)})"
-            raise ParameterError(f"{name} {what} in the plane of face {t} (eigenvalues there {_g(low[i], 3)}, "
-                                 f"{_g(high[i], 3)}: condition number {_g(condition[i], 3)}); {why}")
+            d = max(_apart(low[i], MIN_COST**2, MAX_COST**2, digits=3), _apart(high[i], MIN_COST**2, MAX_COST**2,
+                    digits=3), _apart(condition[i], MAX_METRIC_CONDITION, digits=3))  # not read as the bounds
+            raise ParameterError(f"{name} {what} in the plane of face {t} (eigenvalues there {_g(low[i], d)}, "
+                                 f"{_g(high[i], d)}: condition number {_g(condition[i], d)}); {why}")

@@ -58,7 +58,9 @@ def main(argv=None) -> int:
     Ctrl-C (SIGINT) and SIGTERM at any moment of the command, the start-up's imports of NumPy, SciPy and Numba
     included, end it with one line on stderr (``cvxgeodesic: interrupted`` / ``cvxgeodesic: terminated``), no
     partial output file, and exit code 130 / 143. (Before this function runs, the console script imports only
-    the standard library's modules this package and the package's ``__init__`` need: tens of milliseconds.)
+    the standard library's modules this package and the package's ``__init__`` need: tens of milliseconds, during
+    which the handler that ``__init__`` installs first thing ends a Ctrl-C with the same line and 130; see
+    :mod:`cvxgeodesic._signals`. Only Python's own start-up comes before it.)
     """
     args = None
     with Signals() as signals:

@@ -66,7 +66,9 @@ class Signals:
         # named as solvers._interrupt.STOPS_SOLVES, which is not imported here: it loads Clarabel and SciPy
         setattr(on_signal, "cvxgeodesic_stops_solves", True)  # noqa: B010
         if threading.current_thread() is threading.main_thread():  # signal.signal works there only
-            if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+            current = signal.getsignal(signal.SIGINT)
+            # Python's handler, or the one the package installed until this one (_signals.install_early)
+            if current is signal.default_int_handler or getattr(current, _signals.EARLY_MARK, False):
                 self.previous[signal.SIGINT] = signal.signal(signal.SIGINT, on_signal)
             if signal.getsignal(signal.SIGTERM) is not signal.SIG_IGN:  # a parent's deliberate ignore stays
                 self.previous[signal.SIGTERM] = signal.signal(signal.SIGTERM, on_signal)

@@ -6,7 +6,7 @@ import argparse
 import sys
 from typing import Any
 
-from ._options import add_solve_options, add_source_options, batch_sources, default_methods, mesh_help
+from ._options import add_solve_options, add_source_options, batch_sources, default_methods, volume_help
 
 
 def add_parser(sub: Any) -> None:
@@ -16,18 +16,21 @@ def add_parser(sub: Any) -> None:
     p = sub.add_parser(
         "batch", help="distance fields for many meshes with Dask (local cluster or --scheduler)",
         description="Solve the same sources on every mesh matched by MESH_GLOB, one Dask task per mesh. Writes "
-                    "OUT/<stem>.ply (or .npy) and OUT/<stem>.json (SolveInfo, parameters); skips meshes already "
-                    "done with the same parameters. Exit code 0: all solved; 1: some meshes failed (listed); "
-                    "2: usage error.")
+                    "OUT/<stem>.ply (a volume: .vtu; or --format) and OUT/<stem>.json (SolveInfo, parameters); "
+                    "skips meshes already done with the same parameters. Exit code 0: all solved; 1: some meshes "
+                    "failed (listed); 2: usage error.")
     p.add_argument("meshes", nargs="+", metavar="MESH_GLOB",
-                   help="mesh files or quoted glob patterns ('data/*.obj', 'data/**/*.ply'); " + mesh_help())
+                   help="mesh files or quoted glob patterns ('data/*.obj', 'data/**/*.ply', 'parts/*'); "
+                        + volume_help())
     add_source_options(p, "source vertex index in each file's numbering, the same in every mesh "
                           "(repeat, or give a list: -s 0,5)")
     add_solve_options(p)
     p.add_argument("--multires", type=int, default=0, metavar="FACES",
                    help="coarse-to-fine approximation: solve on a mesh simplified to FACES faces (default 0: off)")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created if missing)")
-    p.add_argument("--format", choices=OUTPUT_FORMATS, default="ply", help="distance file format (default ply)")
+    p.add_argument("--format", choices=OUTPUT_FORMATS, default=None,
+                   help="distance file format (default: ply for a surface, vtu for a tetrahedral mesh; ply holds no "
+                        "tetrahedra: a volume with --format ply fails before its solve)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="address of a running Dask scheduler, e.g. tcp://SCHEDULER:8786 (default: a local cluster)")
     p.add_argument("--workers", type=int, default=2, metavar="N",

@@ -86,9 +86,12 @@ def locate_points(mesh: TetMesh, points: ArrayLike) -> tuple[np.ndarray, np.ndar
     """
     X = as_points(points, "points").reshape(-1, 3)
     tree, radius = _locator(mesh)
-    cand = tree.query_ball_point(X, radius, return_sorted=False)
+    # only points within ``radius`` of the bounding box can be within it of a centroid: the others are outside
+    # without a search, whose squared distances overflow from coordinates of about 1e154 on (scipy's ValueError)
+    near = np.flatnonzero(((X >= mesh.V.min(axis=0) - radius) & (X <= mesh.V.max(axis=0) + radius)).all(axis=1))
+    cand = tree.query_ball_point(X[near], radius, return_sorted=False)
     counts = np.fromiter((len(c) for c in cand), dtype=np.int64, count=len(cand))
-    point_of = np.repeat(np.arange(len(X)), counts)
+    point_of = np.repeat(near, counts)
     tet_of = np.fromiter((t for c in cand for t in c), dtype=np.int64, count=int(counts.sum()))
     tets = np.full(len(X), -1, dtype=np.int64)
     bary = np.full((len(X), 4), np.nan)
@@ -332,6 +335,14 @@ def surface_point(mesh: Any, xyz: ArrayLike) -> SurfacePoint | list[SurfacePoint
     return pts[0] if single else pts
 
 
+def _nearest_distance(V: np.ndarray, x: np.ndarray) -> float:
+    """The distance from ``x`` (3,) to the nearest of the points ``V`` (n, 3), without overflow for any finite
+    ``x`` (the differences are scaled by their largest magnitude before they are squared)."""
+    d = V - x
+    scale = float(np.abs(d).max())
+    return 0.0 if scale == 0.0 else float(np.linalg.norm(d / scale, axis=1).min()) * scale
+
+
 def volume_point(mesh: TetMesh, xyz: ArrayLike) -> VolumePoint | list[VolumePoint]:
     """The :class:`VolumePoint` (or points) at position(s) ``xyz`` inside ``mesh``
     (:func:`~cvxgeodesic.mesh.locate.locate_points`).
@@ -364,7 +375,7 @@ def volume_point(mesh: TetMesh, xyz: ArrayLike) -> VolumePoint | list[VolumePoin
     if out.size:
         k = int(out[0])
         x = X.reshape(-1, 3)[k]
-        gap = float(np.linalg.norm(mesh.V - x, axis=1).min())
+        gap = _nearest_distance(mesh.V, x)
         where = "xyz" if X.ndim == 1 else f"xyz[{k}]"
         more = f" ({out.size} such points)" if out.size > 1 else ""
         raise SourceError(f"{where} = {x.tolist()} is outside {mesh.name} (in no tetrahedron; the nearest vertex is "

@@ -3,23 +3,25 @@
 - Each ``<Piece>``'s ``NumberOfPoints`` and ``NumberOfCells`` must fit the file (:func:`._bounds.check_counts`;
   compressed files at :data:`._bounds.MAX_COMPRESSION`:1).
 - In a compressed file (``compressor="vtkZLibDataCompressor"`` or LZMA), every binary array, inline or appended
-  (base64 or raw), is inflated here once, block by block and :data:`_CHUNK` bytes at a time, and refused as soon
-  as it holds more than its counts allow: a point array (``Points``, ``PointData``) ``NumberOfPoints ×
-  components × item size`` bytes, a cell array (``CellData``, ``offsets``, ``types``, ``faceoffsets``)
-  ``NumberOfCells × components × item size``, any other (``connectivity``, ``faces``, ``FieldData``) what is
-  left of :data:`._bounds.MAX_COMPRESSION` times the file's size for all the arrays together. meshio inflates
-  every block whole and concatenates the blocks; this check needs the memory of one compressed array.
+  (base64 or raw), is refused when its compressed-block header declares more bytes than its counts allow, before
+  anything is inflated; else it is inflated here once, block by block and :data:`_CHUNK` bytes at a time, and
+  refused as soon as a block inflates to more than its header declares. What an array may hold: a point array
+  (``Points``, ``PointData``) ``NumberOfPoints × components × item size`` bytes, a cell array (``CellData``,
+  ``offsets``, ``types``, ``faceoffsets``) ``NumberOfCells × components × item size``, any other
+  (``connectivity``, ``faces``, ``FieldData``) what is left of :data:`._bounds.MAX_COMPRESSION` times the file's
+  size for all the arrays together. meshio inflates every block whole and concatenates the blocks; this check
+  needs the memory of one compressed array.
 """
 
 from __future__ import annotations
 
 import base64
 import binascii
+import itertools
 import lzma
 import math
 import re
 import zlib
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Literal
 
@@ -72,7 +74,12 @@ def check_vtu(path: Path, data: FileBytes) -> None:
                 where = f"DataArray {attrs.get('Name', section)!r} (piece {piece})"
                 limit, why = _limit(section, attrs, n, c, budget)
                 try:
-                    budget -= _inflated(_blocks(data, m, attrs, appended, layout), codec, limit, why)
+                    blocks = _blocks(data, m, attrs, appended, layout)
+                    declared = sum(size for size, _ in blocks)
+                    if declared > limit:  # at the header: nothing inflated yet
+                        raise _Refused(f"declares {declared} bytes inflated (its compressed-block header), more than "
+                                       f"the {limit} bytes {why}")
+                    budget -= _inflated(blocks, codec)
                 except _Refused as exc:
                     raise format_error(path, f"{where} {exc}; refused before reading it") from None
         elif closing:
@@ -106,15 +113,16 @@ def _appended(data: FileBytes) -> tuple[int, bool, int] | None:
 
 
 def _blocks(data: FileBytes, m: re.Match, attrs: dict[str, str], appended: tuple[int, bool, int] | None,
-            layout: tuple[int, _Order]) -> Iterator[bytes]:
-    """The compressed blocks of one array: ``num_blocks, block size, last block size, sizes...``, then the blocks."""
+            layout: tuple[int, _Order]) -> list[tuple[int, bytes]]:
+    """The compressed blocks of one array (:func:`_split_blocks`), each with the bytes its header says it inflates
+    to."""
     if attrs.get("format") == "binary":
         if m.group(3).rstrip().endswith(b"/"):  # <DataArray .../>: no data
-            return iter(())
+            return []
         end = data.find(b"</DataArray>", m.end())
         return _split_blocks(data[m.end():end if end >= 0 else len(data)].strip(), layout, raw=False)
     if attrs.get("format") != "appended" or appended is None:
-        return iter(())
+        return []
     return _split_blocks(memoryview(data)[appended[0] + _int(attrs.get("offset")):], layout, raw=appended[1])
 
 
@@ -127,8 +135,13 @@ def _chars(nbytes: int) -> int:
     return 4 * math.ceil(nbytes / 3)
 
 
-def _split_blocks(text, layout: tuple[int, _Order], *, raw: bool) -> Iterator[bytes]:
-    """Blocks of a raw or a base64 array (base64: its header and its blocks are encoded apart, as VTK writes them)."""
+def _split_blocks(text, layout: tuple[int, _Order], *, raw: bool) -> list[tuple[int, bytes]]:
+    """``(inflated size, compressed block)`` of each block of a raw or a base64 array (base64: its header and its
+    blocks are encoded apart, as VTK writes them).
+
+    VTK's header is ``num_blocks, block size, last block size, compressed sizes...``: every block inflates to the
+    block size but the last, which inflates to the last block size (0: the block size, a full block).
+    """
     hs, order = layout
     span = (lambda nbytes: nbytes) if raw else _chars  # the characters of so many bytes
     decode = bytes if raw else (lambda t: base64.b64decode(bytes(t)))
@@ -138,30 +151,32 @@ def _split_blocks(text, layout: tuple[int, _Order], *, raw: bool) -> Iterator[by
         hc = span((3 + nb) * hs)
         if not first or hc > len(text):
             raise _Refused("has a compressed-block header cut short")
-        sizes = _header(decode(text[:hc]), hs, order)[3:3 + nb]
+        head = _header(decode(text[:hc]), hs, order)
+        sizes = head[3:3 + nb]
         body = decode(text[hc:hc + span(sum(sizes))])
     except binascii.Error as exc:
         raise _Refused(f"is not valid base64 ({exc})") from None
     if sum(sizes) > len(body):
         raise _Refused("has compressed blocks cut short")
-    pos = 0
-    for s in sizes:
-        yield body[pos:pos + s]
-        pos += s
+    full, last = head[1], head[2] or head[1]
+    ends = [0, *itertools.accumulate(sizes)]
+    return [(last if k == nb - 1 else full, body[ends[k]:ends[k + 1]]) for k in range(len(sizes))]
 
 
-def _inflated(blocks: Iterator[bytes], codec: str, limit: int, why: str) -> int:
-    """The bytes the blocks inflate to; _Refused as soon as they pass ``limit`` (``why``: the limit's reason)."""
+def _inflated(blocks: list[tuple[int, bytes]], codec: str) -> int:
+    """The bytes the blocks inflate to; _Refused as soon as a block inflates to more than its header declares."""
     total = 0
-    for block in blocks:
+    for k, (limit, block) in enumerate(blocks):
+        done = 0
         d = zlib.decompressobj() if codec == "zlib" else lzma.LZMADecompressor()
         buf = block
         try:
             while True:
                 out = d.decompress(buf, _CHUNK)
-                total += len(out)
-                if total > limit:
-                    raise _Refused(f"inflates to more than the {limit} bytes {why}")
+                done += len(out)
+                if done > limit:
+                    raise _Refused(f"has a block (block {k}) that inflates to more than the {limit} bytes its "
+                                   "compressed-block header declares")
                 if codec == "zlib":
                     buf = d.unconsumed_tail  # type: ignore[union-attr]
                     if d.eof or (not buf and len(out) < _CHUNK):
@@ -172,4 +187,5 @@ def _inflated(blocks: Iterator[bytes], codec: str, limit: int, why: str) -> int:
                         break
         except (zlib.error, lzma.LZMAError) as exc:
             raise _Refused(f"has corrupt compressed data ({exc})") from None
+        total += done
     return total

@@ -62,8 +62,8 @@ def check_json(path: Path) -> None:
     Raises
     ------
     MeshFormatError
-        ``"<path>: not valid glTF JSON (<problem> at line L, column C)"``, or a GLB whose header or first
-        chunk is not glTF's.
+        ``"<path>: not valid glTF JSON (<problem> at line L, column C)"`` (JSON nested too deeply for the parser
+        included), or a GLB whose header or first chunk is not glTF's.
     """
     ext = path.suffix.lower()
     if ext not in (".gltf", ".glb"):
@@ -79,6 +79,8 @@ def check_json(path: Path) -> None:
         raise format_error(path, f"not valid glTF JSON (not UTF-8 text: byte {exc.start})") from None
     except json.JSONDecodeError as exc:
         raise format_error(path, f"not valid glTF JSON ({exc.msg} at line {exc.lineno}, column {exc.colno})") from None
+    except RecursionError:  # arrays or objects nested deeper than the parser's recursion (a glTF nests a few levels)
+        raise format_error(path, "not valid glTF JSON (arrays or objects nested too deeply to parse)") from None
     if not isinstance(doc, dict):
         raise format_error(path, f"not valid glTF JSON (a glTF file is a JSON object, this one is a "
                                  f"{type(doc).__name__})")
