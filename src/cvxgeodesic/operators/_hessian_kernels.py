@@ -50,6 +50,8 @@ if "NUMBA_THREADING_LAYER" not in os.environ and "NUMBA_THREADING_LAYER_PRIORITY
 # and the C wrapper Numba builds by default took about 5 % of the first compile (spot, qcqp-hessian: 5.1-5.2 s
 # against 5.4 s)
 _JIT = {"cache": True, "nogil": True, "error_model": "numpy", "no_cfunc_wrapper": True}
+# the helpers called only from the kernels above: no Python wrapper either (cvxgeodesic.solvers.ipm._kernels._HELPER)
+_HELPER = {**_JIT, "no_cpython_wrapper": True}
 
 
 @njit(**_JIT)
@@ -89,7 +91,7 @@ def face_geometry(V, F, lsq, dA, theta):
             theta[f, d] = math.acos((s3 + s2 - s1) / (2.0 * math.sqrt(s3 * s2)))
 
 
-@njit(**_JIT)
+@njit(**_HELPER)
 def _gradient_rows(F, lsq, dA, h):
     """libigl's ``scalar_to_cr_vector_gradient`` entries of half-edge ``h`` = 3 f + e: (par_i, par_j, perp_i,
     perp_j, perp_k) with i, j, k = F[f, e+1], F[f, e+2], F[f, e]."""
@@ -142,7 +144,7 @@ def face_blocks(F, E, twin, lsq, dA, theta, minv, sk, blocks, verts):
                     blocks[f, r, c] = blocks[f, c, r] = 0.5 * (acc1 + acc2)
 
 
-@njit(**_JIT)
+@njit(**_HELPER)
 def _gradient_block(F, E, twin, lsq, dA, minv, f, C, verts):
     """Rows of ``G = M⁻¹ D`` on the six edge unknowns of face f, columns ``verts[f]`` (filled here)."""
     for e in range(3):
@@ -172,7 +174,7 @@ def _gradient_block(F, E, twin, lsq, dA, minv, f, C, verts):
             verts[f, 3 + e] = -1
 
 
-@njit(**_JIT)
+@njit(**_HELPER)
 def _laplacian_block(F, lsq, dA, theta, sk, f, LK):
     """libigl's ``cr_vector_laplacian`` plus ``cr_vector_curvature_correction`` on the edge unknowns of face f."""
     for e in range(3):
@@ -226,7 +228,7 @@ def vertex_slots(verts, n):
 _ROW_RANGES = 16
 
 
-@njit(**_JIT)
+@njit(**_HELPER)
 def _row_columns(u, verts, slot_ptr, slots, seen, cols):
     """The distinct columns of row u into ``cols`` (in order of appearance); ``seen[v] == u`` marks them.
     Returns their count."""
