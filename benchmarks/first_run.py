@@ -9,7 +9,7 @@ Every case runs in a fresh Python process with ``NUMBA_CACHE_DIR`` pointed at a 
 right after ``pip install``), then again in a fresh process on the cache the first one filled ("warm"). The time is
 that of the user's calls, from ``GeodesicSolver(...)`` to the end of ``solve`` (imports excluded), wall-clock and
 the process's CPU time (on a loaded machine the CPU time is the steadier of the two); the cold run
-also lists the package's kernels that compiled (Numba's ``numba:compile`` events) with the seconds each took,
+also lists the package's kernels that compiled (Numba's ``numba:compile`` events) with the CPU seconds each took,
 nested compilations included in their caller's. State the machine's load (``uptime``) with the numbers.
 """
 
@@ -42,11 +42,11 @@ compiled, stack = [], []
 class Record(event.Listener):  # compilations nest (a kernel calling another): a stack of the open ones
     def on_start(self, ev):
         f = ev.data["dispatcher"].py_func
-        stack.append((f.__module__.rsplit(".", 1)[-1] + "." + f.__name__, f.__module__, time.perf_counter()))
+        stack.append((f.__module__.rsplit(".", 1)[-1] + "." + f.__name__, f.__module__, time.process_time()))
     def on_end(self, ev):
         name, module, t0 = stack.pop()
         if module.startswith("cvxgeodesic."):
-            compiled.append((name, round(time.perf_counter() - t0, 3)))
+            compiled.append((name, round(time.process_time() - t0, 3)))
 
 event.register("numba:compile", Record())
 mesh = load_mesh(str(files("cvxgeodesic") / "data" / "spot.obj"))

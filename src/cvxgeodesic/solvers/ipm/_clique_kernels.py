@@ -39,7 +39,8 @@ __all__ = ["assemble", "assemble4", "gather", "gather4", "gondzio", "gondzio4", 
 def _dot_body(a, b, out):
     """``out[t] = Σ_{i ≥ 1} a[i, t] b[i, t]``."""
     d, k = a.shape
-    out[:] = 0.0
+    for t in range(k):  # not out[:] = 0.0 (see the note on NumPy calls in solvers/ipm/_kernels.py)
+        out[t] = 0.0
     for i in range(1, d):
         for t in range(k):
             out[t] += a[i, t] * b[i, t]
@@ -143,7 +144,9 @@ def winv2_apply(w, inv_eta2, v, out):
 @njit(**_JIT)
 def _step_bounds(u, du, out):
     d, k = u.shape
-    nb, ud, r2 = np.empty(k), np.empty(k), np.zeros(k)
+    nb, ud, r2 = np.empty(k), np.empty(k), np.empty(k)
+    for t in range(k):  # not np.zeros (see the note on NumPy calls in solvers/ipm/_kernels.py)
+        r2[t] = 0.0
     _dot_body(u, u, nb)
     _dot_body(u, du, ud)
     c = np.empty(k)
