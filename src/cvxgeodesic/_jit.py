@@ -39,10 +39,11 @@ from typing import Any
 __all__ = ["NOTICE", "NO_CACHE_NOTICE", "CompileNotice", "njit", "watch_compiles"]
 
 #: What the compilation costs: the first solve of the bundled spot mesh in a fresh process with an empty cache minus
-#: the same with the cache filled (``benchmarks/first_run.py``, CPU time, 2026-12-06 on a 2-core machine at load
-#: 10-13): QCLP 3.9 - 0.65 s, order 2 4.2 - 1.4 s, QCQP-Hessian 7.8 - 0.74 s (its energy's kernels 3.8 s more).
-#: Per element order, so that one line holds for a process that uses both.
-_COST = "about 3 s for each element order used, 4 s more for the curved Hessian energy"
+#: the same with the cache filled (``benchmarks/first_run.py``, CPU time, 2026-12-06 05:25 UTC on a 2-core machine
+#: at load 8-9): QCLP 3.17 - 0.52 s, order 2 3.51 - 1.10 s, QCQP-Hessian 6.71 - 0.63 s (its energy's kernels 3.4 s
+#: more), both orders in one process 6.26 - 1.20 s. Per element order, so that one line holds for a process that
+#: uses both.
+_COST = "about 3 s for each element order used, 3 s more for the curved Hessian energy"
 NOTICE = f"compiling the solver's kernels once after installation ({_COST}); later runs load them from the cache"
 
 #: The line instead of :data:`NOTICE` when Numba has no writable cache location (see the module's docstring).
