@@ -22,7 +22,8 @@ from cvxgeodesic import _jit
 
 pytest.importorskip("numba")
 
-# what a fresh process compiles: nothing at import or for a baseline, then the QCLP solve's kernels
+# what a fresh process compiles: nothing at import or for a baseline, then the QCLP solve's kernels, then an order-2
+# solve's (each kernel once: none of the first solve's compiles again)
 SCRIPT = """
 import json, sys
 from numba.core import event
@@ -45,7 +46,10 @@ cg.GeodesicSolver(mesh, "dijkstra").solve(0)
 solver = cg.GeodesicSolver(mesh, "qclp", threads=1)
 after_setup = list(compiled)
 res = solver.solve(0)  # NOTICE LINE
-print(json.dumps({"after_setup": after_setup, "solve": compiled[len(after_setup):], "status": res.info.status}))
+first = list(compiled)
+res2 = cg.GeodesicSolver(mesh, "qclp", order=2, threads=1).solve(0)
+print(json.dumps({"after_setup": after_setup, "solve": first[len(after_setup):], "status": res.info.status,
+                  "order2": compiled[len(first):], "status2": res2.info.status}))
 """
 
 
@@ -74,12 +78,18 @@ def test_a_cold_cache_compiles_what_the_solve_needs_and_says_so_once(tmp_path):
     # nothing at import, for a baseline, or while a solver is built (QCLP's set-up has no kernel)
     assert record["after_setup"] == []
     assert record["solve"] and all(k.startswith("cvxgeodesic.solvers.ipm._kernels.") for k in record["solve"])
-    # one line, at the user's call, whatever the number of kernels compiled
+    # order 2 compiles the clique kernels, and nothing the order-1 solve compiled already
+    assert record["status2"] == "optimal" and record["order2"]
+    assert all(k.startswith("cvxgeodesic.solvers.ipm._clique_kernels.") for k in record["order2"]), record["order2"]
+    every = record["solve"] + record["order2"]
+    assert len(set(every)) == len(every), every
+    # one line for the process, at the user's first call, whatever the number of kernels and element orders compiled
     assert first.stderr.count(_jit.NOTICE) == 1, first.stderr
+    assert "CompileNotice" not in first.stderr.replace(f"CompileNotice: {_jit.NOTICE}", ""), first.stderr
     assert f"user.py:{line}: CompileNotice: {_jit.NOTICE}" in first.stderr
     # the next process loads every kernel from the cache: no compilation, no line
     second = _run([str(script)], cache, tmp_path)
-    assert json.loads(second.stdout)["solve"] == []
+    assert json.loads(second.stdout)["solve"] == [] and json.loads(second.stdout)["order2"] == []
     assert _jit.NOTICE not in second.stderr
 
 

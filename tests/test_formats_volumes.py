@@ -242,3 +242,36 @@ def test_save_distance_on_a_volume_in_the_file_numbering(tmp_path):
     np.testing.assert_array_equal(back.points[1], [9, 9, 9])
     np.testing.assert_array_equal(back.point_data["distance"], [0, np.inf, 1, 2, 3, 4])
     np.testing.assert_array_equal(back.cells_dict["tetra"], [[0, 2, 3, 4], [2, 3, 4, 5]])
+
+
+def test_load_mesh_kind_asks_for_a_surface_or_a_volume(tmp_path):
+    """``kind=`` (the statically typed form of load_mesh): the mesh of that kind, or a MeshError naming the file."""
+    from cvxgeodesic.errors import MeshError
+
+    box = tet_box(2)
+    ele = write_tetgen(tmp_path, box)
+    assert isinstance(load_mesh(ele, kind="volume"), TetMesh)
+    with pytest.raises(MeshError, match=r"m\.ele: kind='surface' asks for a triangle surface, and a \.ele file holds "
+                                        r"only a tetrahedral volume \(kind='volume'\)"):
+        load_mesh(ele, kind="surface")
+    sphere = cg.icosphere(1)
+    obj = tmp_path / "s.obj"
+    obj.write_text("".join(f"v {x} {y} {z}\n" for x, y, z in sphere.V) + "".join(
+        f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in sphere.F))
+    assert isinstance(load_mesh(obj, kind="surface"), cg.TriMesh)
+    with pytest.raises(MeshError, match=r"s\.obj: kind='volume' asks for a tetrahedral volume, and a \.obj file"):
+        load_mesh(obj, kind="volume")
+    # a VTU holds either: the check comes after reading it
+    meshio.Mesh(box.V, [("tetra", box.T)]).write(tmp_path / "v.vtu")
+    meshio.Mesh(sphere.V, [("triangle", sphere.F)]).write(tmp_path / "t.vtu")
+    assert isinstance(load_mesh(tmp_path / "v.vtu", kind="volume"), TetMesh)
+    assert isinstance(load_mesh(tmp_path / "t.vtu", kind="surface"), cg.TriMesh)
+    with pytest.raises(MeshError, match=r"v\.vtu: kind='surface' asks for a triangle surface, and this file holds a "
+                                        r"tetrahedral volume \(kind='volume'\)"):
+        load_mesh(tmp_path / "v.vtu", kind="surface")
+    with pytest.raises(MeshError, match=r"t\.vtu: kind='volume' asks for a tetrahedral volume, and this file holds a "
+                                        r"triangle surface \(kind='surface'\)"):
+        load_mesh(tmp_path / "t.vtu", kind="volume")
+    with pytest.raises(ParameterError, match="unknown kind 'solid'; choose one of surface, volume"):
+        load_mesh(obj, kind="solid")  # type: ignore[call-overload]
+    assert isinstance(load_mesh(obj), cg.TriMesh) and isinstance(load_mesh(ele), TetMesh)  # kind=None: either

@@ -65,7 +65,9 @@ if TYPE_CHECKING:
         BASELINE_METHODS,
         GeodesicResult,
         GeodesicSolver,
+        Method,
         SolveInfo,
+        SolverName,
         distance_matrix,
         geodesic_distance,
     )
@@ -104,7 +106,7 @@ __all__ = [
     "NonManifoldError", "OutputError", "ParameterError", "SolveInfo", "SolverError", "SourceError",
     "TriMesh", "cylinder", "distance_matrix", "geodesic_distance", "grid_plane", "icosphere", "load_distance",
     "load_mesh", "plot_field", "save_distance", "smoothness_weight", "to_file_order", "SurfaceCurve", "SurfacePoint",
-    "surface_point", "distance_at", "geodesic_path", "show",
+    "surface_point", "distance_at", "geodesic_path", "show", "Method", "SolverName",
     "BoundaryFaces", "TetMesh", "VolumePoint", "tet_ball", "tet_box", "tet_l_prism", "tetrahedralize", "volume_point",
 ]
 
@@ -112,7 +114,7 @@ __all__ = [
 #: public name -> the module that defines it (relative to the package)
 _LAZY = {
     **dict.fromkeys(("ALL_METHODS", "BASELINE_METHODS", "GeodesicResult", "GeodesicSolver", "SolveInfo",
-                     "distance_matrix", "geodesic_distance"), ".api"),
+                     "distance_matrix", "geodesic_distance", "Method", "SolverName"), ".api"),
     **dict.fromkeys(("CvxGeodesicError", "DegenerateFacesWarning", "IndefiniteEnergyWarning", "MeshError",
                      "MeshFileNotFoundError", "MeshFormatError", "MeshRepairWarning", "NonManifoldError",
                      "OutputError", "ParameterError", "SolverError", "SourceError"), ".errors"),

@@ -3,13 +3,19 @@
 The Numba kernels (:mod:`cvxgeodesic.solvers.ipm._kernels`, :mod:`cvxgeodesic.operators._hessian_kernels`, the
 order-2 solver's) are compiled on their first call and cached on disk (``cache=True``); later processes load them
 in well under a second. The first solve after an installation (or a Numba upgrade, or with an empty
-``NUMBA_CACHE_DIR``) therefore pauses for a few seconds, which would look like a hang without a word.
+``NUMBA_CACHE_DIR``) therefore pauses for a few seconds, which would look like a hang without a word. What compiles
+is what the solve needs, each kernel once per process: the order-1 solver's kernels (``_kernels``) at the first
+order-1 solve, the curved Hessian energy's (``operators._hessian_kernels``) when a Hessian method builds its energy,
+the order-2 solver's (``_clique_kernels``) at the first order-2 solve; ``benchmarks/first_run.py`` lists and times
+them.
 
 Numba announces every real compilation (a miss of its on-disk cache, after the cache was looked up) as a
 ``"numba:compile"`` event, so a listener learns of a cold cache at no cost: no marker file, no look at the
 cache's index. :func:`watch_compiles` registers one (once per process, from each kernel module), and the first
-compilation of a kernel of this package issues :class:`CompileNotice`, once per process. The command line
-prints it as ``cvxgeodesic: note: ...``; a Python user sees it as a warning at the line that called the library.
+compilation of a kernel of this package issues :class:`CompileNotice`, once per process: its estimate is per element
+order (and for the Hessian energy), so the one line also accounts for a process that later uses the other order.
+The command line prints it as ``cvxgeodesic: note: ...``; a Python user sees it as a warning at the line that called
+the library.
 
 Where Numba finds no writable place for its cache (no ``NUMBA_CACHE_DIR``, the package's ``__pycache__`` and the
 home folder not writable: a read-only installation run by a user without a home), ``cache=True`` makes Numba
@@ -32,13 +38,16 @@ from typing import Any
 
 __all__ = ["NOTICE", "NO_CACHE_NOTICE", "CompileNotice", "njit", "watch_compiles"]
 
-#: Measured 2026-12-02 on a shared 2-core machine, first solve on the bundled spot mesh with an empty cache:
-#: qclp 2.6 s, qcqp-hessian 5.5 s, order 2 (qclp) 5.7 s, against 0.4-0.8 s once the kernels are cached.
-NOTICE = ("compiling the solver's kernels (first run after installation, about 3-6 s; "
-          "later runs load them from the cache)")
+#: What the compilation costs: the first solve of the bundled spot mesh in a fresh process with an empty cache minus
+#: the same with the cache filled (``benchmarks/first_run.py``, CPU time, 2026-12-06 05:25 UTC on a 2-core machine
+#: at load 8-9): QCLP 3.17 - 0.52 s, order 2 3.51 - 1.10 s, QCQP-Hessian 6.71 - 0.63 s (its energy's kernels 3.4 s
+#: more), both orders in one process 6.26 - 1.20 s. Per element order, so that one line holds for a process that
+#: uses both.
+_COST = "about 3 s for each element order used, 3 s more for the curved Hessian energy"
+NOTICE = f"compiling the solver's kernels once after installation ({_COST}); later runs load them from the cache"
 
 #: The line instead of :data:`NOTICE` when Numba has no writable cache location (see the module's docstring).
-NO_CACHE_NOTICE = ("compiling the solver's kernels without a disk cache (about 3-6 s in every process): Numba found "
+NO_CACHE_NOTICE = (f"compiling the solver's kernels without a disk cache, in every process ({_COST}): Numba found "
                    "no writable cache location; set NUMBA_CACHE_DIR to a writable folder to keep them")
 
 _PACKAGE = __name__.rsplit(".", 1)[0]

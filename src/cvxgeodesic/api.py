@@ -10,7 +10,7 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable, Iterable
-from typing import Any, cast
+from typing import Any, Literal, TypeAlias, cast, overload
 
 import numpy as np
 import scipy.sparse as sp
@@ -40,19 +40,27 @@ from .validation import (
     validate_sources,
 )
 
-__all__ = ["ALL_METHODS", "BASELINE_METHODS", "DEFAULT_TOL", "GeodesicResult", "GeodesicSolver", "SOLVERS",
-           "SolveInfo", "distance_matrix", "geodesic_distance"]
+__all__ = ["ALL_METHODS", "BASELINE_METHODS", "DEFAULT_TOL", "GeodesicResult", "GeodesicSolver", "Method", "SOLVERS",
+           "SolveInfo", "SolverName", "distance_matrix", "geodesic_distance"]
 
 BASELINE_METHODS = tuple(BASELINES)
 ALL_METHODS = (*FORMULATIONS, *ALIASES, *BASELINE_METHODS)
 SOLVERS = ("auto", "ipm", "clarabel")
+#: A method name as a type: every name of :data:`ALL_METHODS` (formulations, aliases, baselines), so that a type
+#: checker refuses ``method="qclpp"``. At run time the names are also taken in any case (``"QCLP"``); a name held
+#: in a ``str`` variable is checked at run time: ``typing.cast(cg.Method, name)``. tests/test_typing.py keeps it
+#: equal to :data:`ALL_METHODS`.
+Method: TypeAlias = Literal["lclp", "lcqp-dirichlet", "lcqp-laplacian", "lcqp-hessian", "qclp", "qcqp-dirichlet",
+                            "qcqp-laplacian", "qcqp-hessian", "qgdf", "dijkstra", "fmm", "heat", "exact"]
+#: A backend name of :data:`SOLVERS` as a type.
+SolverName: TypeAlias = Literal["auto", "ipm", "clarabel"]
 DEFAULT_TOL = 1e-8
 #: The method of ``method=None`` by simplex dimension (``mesh.dim``): the curved Hessian energy exists on surfaces only.
-DEFAULT_METHODS = {2: "qcqp-hessian", 3: "qclp"}
+DEFAULT_METHODS: dict[int, Method] = {2: "qcqp-hessian", 3: "qclp"}
 #: The method of ``distance_matrix(method=None)`` (and ``cvxgeodesic matrix``) on every mesh: as accurate as
 #: ``qcqp-hessian`` against the exact distance and 1.5-2.3x faster per row (benchmarks/row_default.py,
 #: docs/performance.md).
-DEFAULT_ROW_METHOD = "qclp"
+DEFAULT_ROW_METHOD: Method = "qclp"
 
 
 def _is_2d(x: Any) -> bool:
@@ -76,7 +84,7 @@ class GeodesicSolver:
         tetrahedra, a meshio.Mesh with ``tetra`` cells: the distance *inside* the solid (``docs/volumes.md``;
         sources vertices, VolumePoints, BoundaryFaces and ``"boundary"``). Which method takes which mesh,
         order, medium and source: :mod:`cvxgeodesic.capabilities` (``docs/capabilities.md``).
-    method : str
+    method : str (:data:`Method`)
         One of :data:`ALL_METHODS`: the eight convex formulations
         (``"lclp"``, ``"lcqp-dirichlet"``, ``"lcqp-laplacian"``, ``"lcqp-hessian"``
         (alias ``"qgdf"``), ``"qclp"``, ``"qcqp-dirichlet"``, ``"qcqp-laplacian"``,
@@ -208,11 +216,11 @@ class GeodesicSolver:
     def __init__(
         self,
         mesh: Any,
-        method: str | None = None,
+        method: Method | None = None,
         *,
         m: float = 1.0,
         lam: float | None = None,
-        solver: str = "auto",
+        solver: SolverName = "auto",
         tol: float = DEFAULT_TOL,
         max_iter: int = 200,
         verbose: bool = False,
@@ -369,8 +377,9 @@ class GeodesicSolver:
         return [self.solve(s) for s in items]
 
 
-def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | None = None, m: float | None = None,
-                      solver: str | None = None, lam: float | None = None, tol: float = DEFAULT_TOL,
+def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: Method | None = None,
+                      m: float | None = None, solver: SolverName | None = None, lam: float | None = None,
+                      tol: float = DEFAULT_TOL,
                       max_iter: int = 200, normalization: str = "area",
                       order: int = 1, threads: int | None = None, cost: Any = None, metric: Any = None) -> np.ndarray:
     """Geodesic distance field from source vertices (one-shot form of :class:`GeodesicSolver`).
@@ -440,7 +449,33 @@ def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | 
 LOCAL_ROW_TOL = 1e-5
 
 
-def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m: float = 1.0, solver: str = "auto",
+# the return type follows max_distance: dense full rows without it, sparse local rows with it
+@overload
+def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
+                    solver: SolverName = "auto", progress: bool | None = None, *, lam: float | None = None,
+                    tol: float | None = None, max_iter: int = 200, multires: bool | int = False,
+                    normalization: str = "area", order: int = 1, threads: int | None = None,
+                    workers: int | None = None, scheduler: Any = None, cost: Any = None, metric: Any = None,
+                    max_distance: None = None, checkpoint: str | os.PathLike | None = None) -> np.ndarray: ...
+@overload
+def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
+                    solver: SolverName = "auto", progress: bool | None = None, *, lam: float | None = None,
+                    tol: float | None = None, max_iter: int = 200, multires: bool | int = False,
+                    normalization: str = "area", order: int = 1, threads: int | None = None,
+                    workers: int | None = None, scheduler: Any = None, cost: Any = None, metric: Any = None,
+                    max_distance: float, checkpoint: str | os.PathLike | None = None) -> sp.csr_matrix: ...
+@overload
+def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
+                    solver: SolverName = "auto", progress: bool | None = None, *, lam: float | None = None,
+                    tol: float | None = None, max_iter: int = 200, multires: bool | int = False,
+                    normalization: str = "area", order: int = 1, threads: int | None = None,
+                    workers: int | None = None, scheduler: Any = None, cost: Any = None, metric: Any = None,
+                    max_distance: float | None = None,
+                    checkpoint: str | os.PathLike | None = None) -> np.ndarray | sp.csr_matrix: ...
+
+
+def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
+                    solver: SolverName = "auto",
                     progress: bool | None = None, *, lam: float | None = None, tol: float | None = None,
                     max_iter: int = 200, multires: bool | int = False, normalization: str = "area",
                     order: int = 1, threads: int | None = None, workers: int | None = None,
@@ -512,6 +547,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
     Returns
     -------
     (k, n) float ndarray, or (k, n) scipy.sparse.csr_matrix with ``max_distance``
+        (so typed: ``np.ndarray`` when ``max_distance`` is left out or None, ``csr_matrix`` when it is a number)
         ``D[i, j]`` is the distance of vertex ``j`` from ``vertices[i]``
         (``inf`` where ``j`` is not connected to it). The matrix is not exactly
         symmetric: every row is its own optimization problem. Sparse: the entries are the

@@ -31,7 +31,7 @@ import os
 import sys
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -237,13 +237,14 @@ def run_compare(mesh: Any, sources: Any, methods: Any, out_dir: str | os.PathLik
 
 
 def _attempt(mesh: Any, run: Run, sources: Any, m: float, solver: str) -> Outcome:
-    from .api import BASELINE_METHODS, GeodesicSolver
+    from .api import BASELINE_METHODS, GeodesicSolver, Method
 
     t0 = time.perf_counter()
     method, order = run
     try:
         options: dict[str, Any] = {} if method in BASELINE_METHODS else {"solver": solver, "order": order}
-        return GeodesicSolver(mesh, method=method, m=m, **options).solve(sources), time.perf_counter() - t0, None
+        solver_obj = GeodesicSolver(mesh, method=cast(Method, method), m=m, **options)
+        return solver_obj.solve(sources), time.perf_counter() - t0, None
     except Exception as exc:  # noqa: BLE001 - a failed method becomes a row, never the end of the comparison
         return None, time.perf_counter() - t0, exc
 

@@ -88,6 +88,10 @@ def distance_at(mesh: Any, distance: Field, points: MeshPoint) -> float: ...
 @overload
 def distance_at(mesh: Any, distance: Field, points: Sequence[MeshPoint]) -> np.ndarray: ...
 @overload
+def distance_at(mesh: Any, distance: Field, points: Sequence[float]) -> float: ...
+@overload
+def distance_at(mesh: Any, distance: Field, points: Sequence[Sequence[float]]) -> np.ndarray: ...
+@overload
 def distance_at(mesh: Any, distance: Field, points: ArrayLike) -> float | np.ndarray: ...
 
 
@@ -108,7 +112,9 @@ def distance_at(mesh: Any, distance: Field, points: Any) -> float | np.ndarray:
     Returns
     -------
     float for one point, else (k,) float ndarray
-        ``Σ_i b_i d[cells[cell, i]]``.
+        ``Σ_i b_i d[cells[cell, i]]``. Typed ``float`` for a point or a sequence of 3 numbers, ``np.ndarray`` for
+        a sequence of points or of sequences, the union for an ndarray of positions (its shape is unknown to a
+        type checker).
 
     Raises
     ------

@@ -10,7 +10,7 @@ from __future__ import annotations
 import importlib
 import os
 import time
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -23,6 +23,9 @@ from .mesh.tetmesh import TetMesh
 from .plotting import isoline_segments
 from .sources import resolve_sources
 from .validation import as_points, as_vertex_field, check_output_path
+
+if TYPE_CHECKING:
+    from .api import Method
 
 __all__ = ["show", "show_volume"]
 
@@ -96,7 +99,7 @@ def _add_marks(ps: Any, marks: np.ndarray, diag: float) -> None:
 class _Viewer:
     """The polyscope scene of one mesh: field, isolines, source marks; ``pick`` re-solves from a vertex."""
 
-    def __init__(self, ps: Any, mesh: Any, *, method: str, solver_kwargs: dict, isolines: bool) -> None:
+    def __init__(self, ps: Any, mesh: Any, *, method: Method, solver_kwargs: dict, isolines: bool) -> None:
         self.ps = ps
         self.mesh = mesh
         self.method = method
@@ -176,7 +179,7 @@ def show(
     distance: ArrayLike | None = None,
     *,
     sources: Any = None,
-    method: str | None = None,
+    method: Method | None = None,
     screenshot: str | os.PathLike | None = None,
     isolines: bool = True,
     window_size: tuple[int, int] = (1024, 768),
@@ -195,7 +198,7 @@ def show(
     sources : optional
         Anything :meth:`GeodesicSolver.solve` takes. With ``distance``: only marked (default: the
         vertices where ``distance`` is 0). Without ``distance``: solved (default: vertex 0).
-    method : str, optional
+    method : str (:data:`~cvxgeodesic.api.Method`), optional
         Method of the initial solve (when ``distance`` is None) and of the re-solves after a click (default
         ``"qcqp-hessian"``).
     screenshot : str or path-like, optional
@@ -290,7 +293,7 @@ def show_volume(
     distance: ArrayLike | None = None,
     *,
     sources: Any = None,
-    method: str = "qclp",
+    method: Method = "qclp",
     screenshot: str | os.PathLike | None = None,
     origin: ArrayLike | None = None,
     normal: ArrayLike = (0.0, 0.0, 1.0),
@@ -309,7 +312,7 @@ def show_volume(
         The field; without it the field is solved from ``sources`` (default vertex 0) with ``method``.
     sources : optional
         Anything :meth:`GeodesicSolver.solve` takes on a tetrahedral mesh; marked as red points.
-    method : str
+    method : str (:data:`~cvxgeodesic.api.Method`)
         Method of the solve when ``distance`` is None (default ``"qclp"``).
     screenshot : str or path-like, optional
         Render one frame to this PNG and return without opening a window.

@@ -14,9 +14,12 @@ import argparse
 import math
 import sys
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..errors import ParameterError, SourceError
+
+if TYPE_CHECKING:
+    from ..api import Method
 
 M_HELP = "smoothness multiplier m (default 1): λ = m·κ·√area, one rounding on the surface whatever the mesh"
 SLICE_HELP = "tetrahedral meshes: normal of the slice through the centre that --png (or view) shows (default 0,0,1)"
@@ -115,7 +118,7 @@ def default_methods() -> str:
     return f"{DEFAULT_METHODS[2]}; {DEFAULT_METHODS[3]} on a tetrahedral mesh"
 
 
-def method_for(args: argparse.Namespace, mesh: Any) -> str:
+def method_for(args: argparse.Namespace, mesh: Any) -> Method:
     """``--method`` when given, else the default for the mesh's dimension (:data:`~cvxgeodesic.api.DEFAULT_METHODS`)."""
     from ..api import DEFAULT_METHODS
 

@@ -11,10 +11,12 @@ from __future__ import annotations
 import os
 import warnings
 from pathlib import Path
+from typing import Literal, overload
 
 import numpy as np
 
-from ..errors import MeshFormatError, MeshRepairWarning
+from ..errors import MeshError, MeshFormatError, MeshRepairWarning
+from ..validation import check_choice
 from .formats._common import RawMesh, at_line, check_file, file_errors, format_error
 from .formats.registry import mesh_format
 from .tetmesh import TetMesh
@@ -23,7 +25,21 @@ from .trimesh import TriMesh
 __all__ = ["load_mesh"]
 
 
-def load_mesh(path: str | os.PathLike) -> TriMesh | TetMesh:
+#: What ``load_mesh(path, kind=...)`` asks the file to hold, by simplex dimension.
+MESH_KINDS = {"surface": 2, "volume": 3}
+_KIND = {d: k for k, d in MESH_KINDS.items()}
+_HOLDS = {2: "a triangle surface", 3: "a tetrahedral volume"}
+
+
+@overload
+def load_mesh(path: str | os.PathLike, *, kind: Literal["surface"]) -> TriMesh: ...
+@overload
+def load_mesh(path: str | os.PathLike, *, kind: Literal["volume"]) -> TetMesh: ...
+@overload
+def load_mesh(path: str | os.PathLike, *, kind: None = None) -> TriMesh | TetMesh: ...
+
+
+def load_mesh(path: str | os.PathLike, *, kind: Literal["surface", "volume"] | None = None) -> TriMesh | TetMesh:
     """Read a triangle mesh from an OBJ, OFF, PLY or STL file (glTF, GLB, 3MF, VTK, VTU with the ``io`` extra), or
     a tetrahedral mesh from a file that holds tetrahedra.
 
@@ -38,6 +54,12 @@ def load_mesh(path: str | os.PathLike) -> TriMesh | TetMesh:
     ----------
     path : str or os.PathLike
         The file to read.
+    kind : {"surface", "volume"}, optional
+        What the file must hold: ``"surface"`` returns a :class:`~cvxgeodesic.mesh.trimesh.TriMesh` and
+        ``"volume"`` a :class:`~cvxgeodesic.mesh.tetmesh.TetMesh`, and a type checker knows it
+        (``load_mesh("part.obj", kind="surface").F`` type-checks); a file holding the other kind is refused
+        with a :class:`~cvxgeodesic.errors.MeshError`. Default None: whatever the file holds, typed
+        ``TriMesh | TetMesh`` (tell them apart with ``isinstance`` or ``mesh.dim``).
 
     Files holding tetrahedra give a :class:`~cvxgeodesic.mesh.tetmesh.TetMesh` (the list is
     :data:`~cvxgeodesic.mesh.formats.registry.VOLUME_EXTENSIONS`): TetGen's ``.node``/``.ele`` pair (either
@@ -49,7 +71,8 @@ def load_mesh(path: str | os.PathLike) -> TriMesh | TetMesh:
     Returns
     -------
     TriMesh or TetMesh
-        The welded triangle mesh, named after the file's base name.
+        A ``TetMesh`` when the file holds tetrahedra, else a ``TriMesh``: the welded triangle mesh, named after
+        the file's base name.
         ``mesh.vertex_map[i]`` is the 0-based index in the file of the (first)
         original vertex of vertex ``i``; for STL, whose vertices are the triangle
         corners, it is the corner number ``3 * triangle + corner``.
@@ -63,6 +86,11 @@ def load_mesh(path: str | os.PathLike) -> TriMesh | TetMesh:
     ------
     MeshFileNotFoundError
         If the file does not exist (a ``MeshFormatError`` and a ``FileNotFoundError``).
+    ParameterError
+        ``kind`` is not ``"surface"``, ``"volume"`` or None.
+    MeshError
+        ``kind`` asks for a surface and the file holds tetrahedra, or for a volume and it holds none (the message
+        names the file and what it holds); a format that holds only the other kind is refused before reading.
     MeshFormatError
         If the file is a directory or not a regular file, has an unsupported extension, is empty or malformed
         (the message names the line for text formats), has a face or tetrahedron index out of range
@@ -102,13 +130,21 @@ def load_mesh(path: str | os.PathLike) -> TriMesh | TetMesh:
     ...     print(exc)
     no_such_mesh.obj: no such file
     """
+    dim = None if kind is None else MESH_KINDS[check_choice(kind, "kind", MESH_KINDS, lower=False)]
     p = Path(path)
     fmt = mesh_format(p)
+    if dim is not None and dim not in fmt.dims:
+        raise MeshError(f"{p}: kind={kind!r} asks for {_HOLDS[dim]}, and a {fmt.extension} file holds only "
+                        f"{_HOLDS[5 - dim]} (kind={_KIND[5 - dim]!r})")
     check_file(p, "a mesh file")  # the same messages for missing, directory and empty files in every format
     assert fmt.read_mesh is not None  # mesh_format returns formats with a reader
     with file_errors(p):
         raw = fmt.read_mesh(p)
-    if raw.tets is not None and raw.tets.size:
+    volume = raw.tets is not None and raw.tets.size > 0
+    if dim is not None and volume != (dim == 3):
+        raise MeshError(f"{p}: kind={kind!r} asks for {_HOLDS[dim]}, and this file holds {_HOLDS[5 - dim]} "
+                        f"(kind={_KIND[5 - dim]!r})")
+    if volume:
         return _finish_volume(p, raw)
     cell_types = ", ".join(sorted(raw.other_cells or {})) or "none"
     if 2 not in fmt.dims:

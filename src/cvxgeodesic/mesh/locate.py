@@ -12,8 +12,8 @@ coordinates of those candidates decide. No Delaunay triangulation of the vertice
 from __future__ import annotations
 
 import functools
-from collections.abc import Sequence
-from typing import Any
+from collections.abc import Callable, Sequence
+from typing import Any, overload
 
 import numpy as np
 import scipy.sparse as sp
@@ -294,6 +294,16 @@ def closest_points(mesh: TriMesh, X: ArrayLike) -> tuple[np.ndarray, np.ndarray,
     return closest_point_index(mesh).query(np.ascontiguousarray(np.asarray(X, dtype=np.float64).reshape(-1, 3)))
 
 
+# the return type follows the shape of xyz where a type checker sees it: one position (a sequence of 3 numbers), or
+# several (a sequence of sequences); an ndarray's shape is unknown to it, so either
+@overload
+def surface_point(mesh: Any, xyz: Sequence[float]) -> SurfacePoint: ...
+@overload
+def surface_point(mesh: Any, xyz: Sequence[Sequence[float]]) -> list[SurfacePoint]: ...
+@overload
+def surface_point(mesh: Any, xyz: ArrayLike) -> SurfacePoint | list[SurfacePoint]: ...
+
+
 def surface_point(mesh: Any, xyz: ArrayLike) -> SurfacePoint | list[SurfacePoint]:
     """The closest :class:`SurfacePoint` of a 3D position (or of each of ``k`` positions).
 
@@ -305,6 +315,8 @@ def surface_point(mesh: Any, xyz: ArrayLike) -> SurfacePoint | list[SurfacePoint
     Returns
     -------
     SurfacePoint, or list of SurfacePoint for a ``(k, 3)`` input
+        Typed ``SurfacePoint`` for a sequence of numbers, ``list[SurfacePoint]`` for a sequence of sequences, the
+        union for an ndarray (whose shape a type checker does not know).
 
     Raises
     ------
@@ -343,6 +355,14 @@ def _nearest_distance(V: np.ndarray, x: np.ndarray) -> float:
     return 0.0 if scale == 0.0 else float(np.linalg.norm(d / scale, axis=1).min()) * scale
 
 
+@overload
+def volume_point(mesh: TetMesh, xyz: Sequence[float]) -> VolumePoint: ...
+@overload
+def volume_point(mesh: TetMesh, xyz: Sequence[Sequence[float]]) -> list[VolumePoint]: ...
+@overload
+def volume_point(mesh: TetMesh, xyz: ArrayLike) -> VolumePoint | list[VolumePoint]: ...
+
+
 def volume_point(mesh: TetMesh, xyz: ArrayLike) -> VolumePoint | list[VolumePoint]:
     """The :class:`VolumePoint` (or points) at position(s) ``xyz`` inside ``mesh``
     (:func:`~cvxgeodesic.mesh.locate.locate_points`).
@@ -355,6 +375,7 @@ def volume_point(mesh: TetMesh, xyz: ArrayLike) -> VolumePoint | list[VolumePoin
     Returns
     -------
     VolumePoint for one position (3,), list of VolumePoint for (p, 3).
+        Typed as :func:`surface_point`'s: by the kind of sequence, the union for an ndarray.
 
     Raises
     ------
@@ -386,7 +407,7 @@ def volume_point(mesh: TetMesh, xyz: ArrayLike) -> VolumePoint | list[VolumePoin
 
 #: The point (or points) of each simplex dimension at positions: the closest surface point, the containing
 #: tetrahedron (a position outside the mesh: SourceError).
-POINT_AT = {2: surface_point, 3: volume_point}
+POINT_AT: dict[int, Callable[[Any, ArrayLike], CellPoint | Sequence[CellPoint]]] = {2: surface_point, 3: volume_point}
 
 
 def interpolate_at(mesh: TetMesh, values: ArrayLike, points: Any) -> np.ndarray:

@@ -50,24 +50,35 @@ if "NUMBA_THREADING_LAYER" not in os.environ and "NUMBA_THREADING_LAYER_PRIORITY
 # and the C wrapper Numba builds by default took about 5 % of the first compile (spot, qcqp-hessian: 5.1-5.2 s
 # against 5.4 s)
 _JIT = {"cache": True, "nogil": True, "error_model": "numpy", "no_cfunc_wrapper": True}
+# the helpers called only from the kernels above: no Python wrapper either (cvxgeodesic.solvers.ipm._kernels._HELPER)
+_HELPER = {**_JIT, "no_cpython_wrapper": True}
 
 
 @njit(**_JIT)
 def twins(E, n_edges):
     """(3m,) int64: the other half-edge of each half-edge's edge, −1 where the edge has one face."""
-    first = np.full(n_edges, -1, dtype=np.int64)
-    second = np.full(n_edges, -1, dtype=np.int64)
-    flat = E.ravel()
-    for h in range(flat.size):
-        e = flat[h]
+    first, second = _minus_ones(n_edges), _minus_ones(n_edges)
+    m = E.shape[0]
+    for h in range(3 * m):
+        e = E[h // 3, h % 3]
         if first[e] < 0:
             first[e] = h
         else:
             second[e] = h
-    out = np.empty(flat.size, dtype=np.int64)
-    for h in range(flat.size):
-        e = flat[h]
+    out = np.empty(3 * m, dtype=np.int64)
+    for h in range(3 * m):
+        e = E[h // 3, h % 3]
         out[h] = second[e] if first[e] == h else first[e]
+    return out
+
+
+@njit(**_HELPER)
+def _minus_ones(n):
+    """(n,) int64 of −1: a loop, not np.full, whose generic implementation compiles too
+    (see the note on NumPy calls in solvers/ipm/_kernels.py)."""
+    out = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        out[i] = -1
     return out
 
 
@@ -89,7 +100,7 @@ def face_geometry(V, F, lsq, dA, theta):
             theta[f, d] = math.acos((s3 + s2 - s1) / (2.0 * math.sqrt(s3 * s2)))
 
 
-@njit(**_JIT)
+@njit(**_HELPER)
 def _gradient_rows(F, lsq, dA, h):
     """libigl's ``scalar_to_cr_vector_gradient`` entries of half-edge ``h`` = 3 f + e: (par_i, par_j, perp_i,
     perp_j, perp_k) with i, j, k = F[f, e+1], F[f, e+2], F[f, e]."""
@@ -122,8 +133,10 @@ def face_blocks(F, E, twin, lsq, dA, theta, minv, sk, blocks, verts):
         LK = np.empty((6, 6))
         T = np.empty((6, 6))
         for f in range(chunk * _CHUNK, min(m, (chunk + 1) * _CHUNK)):
-            C[:] = 0.0
-            LK[:] = 0.0
+            for r in range(6):  # not C[:] = 0.0 (see the note on NumPy calls in solvers/ipm/_kernels.py)
+                for c in range(6):
+                    C[r, c] = 0.0
+                    LK[r, c] = 0.0
             _gradient_block(F, E, twin, lsq, dA, minv, f, C, verts)
             _laplacian_block(F, lsq, dA, theta, sk, f, LK)
             for r in range(6):  # T = LK C
@@ -142,7 +155,7 @@ def face_blocks(F, E, twin, lsq, dA, theta, minv, sk, blocks, verts):
                     blocks[f, r, c] = blocks[f, c, r] = 0.5 * (acc1 + acc2)
 
 
-@njit(**_JIT)
+@njit(**_HELPER)
 def _gradient_block(F, E, twin, lsq, dA, minv, f, C, verts):
     """Rows of ``G = M⁻¹ D`` on the six edge unknowns of face f, columns ``verts[f]`` (filled here)."""
     for e in range(3):
@@ -172,7 +185,7 @@ def _gradient_block(F, E, twin, lsq, dA, minv, f, C, verts):
             verts[f, 3 + e] = -1
 
 
-@njit(**_JIT)
+@njit(**_HELPER)
 def _laplacian_block(F, lsq, dA, theta, sk, f, LK):
     """libigl's ``cr_vector_laplacian`` plus ``cr_vector_curvature_correction`` on the edge unknowns of face f."""
     for e in range(3):
@@ -202,16 +215,21 @@ def _laplacian_block(F, lsq, dA, theta, sk, f, LK):
 def vertex_slots(verts, n):
     """CSR (indptr (n+1,), slots) of the (face, slot) pairs, coded ``6 f + a``, where ``verts[f, a]`` is
     vertex u, in face order."""
-    count = np.zeros(n + 1, dtype=np.int64)
+    indptr = np.empty(n + 1, dtype=np.int64)
+    for v in range(n + 1):  # loops, not np.zeros, np.cumsum, .copy() (NumPy calls: ipm/_kernels.py)
+        indptr[v] = 0
     m = verts.shape[0]
     for f in range(m):
         for a in range(6):
             v = verts[f, a]
             if v >= 0:
-                count[v + 1] += 1
-    indptr = np.cumsum(count)
-    fill = indptr[:-1].copy()
-    slots = np.empty(indptr[-1], dtype=np.int64)
+                indptr[v + 1] += 1
+    for v in range(n):
+        indptr[v + 1] += indptr[v]
+    fill = np.empty(n, dtype=np.int64)
+    for v in range(n):
+        fill[v] = indptr[v]
+    slots = np.empty(indptr[n], dtype=np.int64)
     for f in range(m):
         for a in range(6):
             v = verts[f, a]
@@ -226,7 +244,7 @@ def vertex_slots(verts, n):
 _ROW_RANGES = 16
 
 
-@njit(**_JIT)
+@njit(**_HELPER)
 def _row_columns(u, verts, slot_ptr, slots, seen, cols):
     """The distinct columns of row u into ``cols`` (in order of appearance); ``seen[v] == u`` marks them.
     Returns their count."""
@@ -248,7 +266,7 @@ def row_lengths(verts, slot_ptr, slots, width, length):
     n = slot_ptr.size - 1
     step = max(1, (n + _ROW_RANGES - 1) // _ROW_RANGES)
     for r in prange((n + step - 1) // step):
-        seen = np.full(n, -1, dtype=np.int64)
+        seen = _minus_ones(n)
         cols = np.empty(width, dtype=np.int64)
         for u in range(r * step, min(n, (r + 1) * step)):
             length[u] = _row_columns(u, verts, slot_ptr, slots, seen, cols)
@@ -261,7 +279,7 @@ def gather_rows(verts, blocks, slot_ptr, slots, width, indptr, indices, data):
     n = slot_ptr.size - 1
     step = max(1, (n + _ROW_RANGES - 1) // _ROW_RANGES)
     for r in prange((n + step - 1) // step):
-        seen = np.full(n, -1, dtype=np.int64)
+        seen = _minus_ones(n)
         where = np.empty(n, dtype=np.int64)  # column v of the current row is at indices[p + where[v]]
         cols = np.empty(width, dtype=np.int64)
         for u in range(r * step, min(n, (r + 1) * step)):

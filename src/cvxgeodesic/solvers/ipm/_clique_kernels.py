@@ -24,7 +24,7 @@ import numpy as np
 from ..._jit import njit  # numba.njit, uncached where no cache location is writable
 
 # importing the SOC(3) kernels first selects Numba's threading layer (OpenMP, shared with MKL PARDISO)
-from ._kernels import _JIT, soc_step_bounds
+from ._kernels import _HELPER, _JIT, soc_step_bounds
 
 __all__ = ["assemble", "assemble4", "gather", "gather4", "gondzio", "gondzio4", "kkt", "kkt4", "max_step", "mehrotra",
            "mehrotra4", "nt_scaling", "nt_scaling4", "scatter", "scatter4", "w_apply", "w_apply4", "winv2_apply",
@@ -35,17 +35,18 @@ __all__ = ["assemble", "assemble4", "gather", "gather4", "gondzio", "gondzio4", 
 # Each kernel makes a few passes over the (d, k) fields, every inner loop running over the cones of one row: those
 # loops vectorize. Per-cone loops over a trip count known only at run time did not (Gondzio's term over 21K
 # SOC(5) cones: 11.5 ms per cone against 0.94 ms in passes, 2026-12-02).
-@njit(**_JIT)
+@njit(**_HELPER)
 def _dot_body(a, b, out):
     """``out[t] = Σ_{i ≥ 1} a[i, t] b[i, t]``."""
     d, k = a.shape
-    out[:] = 0.0
+    for t in range(k):  # not out[:] = 0.0 (see the note on NumPy calls in solvers/ipm/_kernels.py)
+        out[t] = 0.0
     for i in range(1, d):
         for t in range(k):
             out[t] += a[i, t] * b[i, t]
 
 
-@njit(**_JIT)
+@njit(**_HELPER)
 def _w_rows(w, f, sign, v, out, tmp):
     """``out = f · W̄ v`` (``sign`` = +1) or ``f · W̄⁻¹ v`` (``sign`` = −1), ``f`` (k,); may alias; ``tmp`` (k,)."""
     d, k = v.shape
@@ -60,7 +61,7 @@ def _w_rows(w, f, sign, v, out, tmp):
             out[i, t] = (v[i, t] + tmp[t] * w[i, t]) * f[t]
 
 
-@njit(**_JIT)
+@njit(**_HELPER)
 def _jprod_rows(a, b, out, tmp):
     """``out = a ∘ b`` (Jordan product); may alias ``a``; ``tmp`` (k,)."""
     d, k = a.shape
@@ -74,7 +75,7 @@ def _jprod_rows(a, b, out, tmp):
         out[0, t] = tmp[t]
 
 
-@njit(**_JIT)
+@njit(**_HELPER)
 def _jdiv_rows(lam, u, tmp, tmp2):
     """``u = λ \\ u`` in place (the ``x`` with ``λ ∘ x = u``; λ interior)."""
     d, k = lam.shape
@@ -143,7 +144,9 @@ def winv2_apply(w, inv_eta2, v, out):
 @njit(**_JIT)
 def _step_bounds(u, du, out):
     d, k = u.shape
-    nb, ud, r2 = np.empty(k), np.empty(k), np.zeros(k)
+    nb, ud, r2 = np.empty(k), np.empty(k), np.empty(k)
+    for t in range(k):  # not np.zeros (see the note on NumPy calls in solvers/ipm/_kernels.py)
+        r2[t] = 0.0
     _dot_body(u, u, nb)
     _dot_body(u, du, ud)
     c = np.empty(k)
@@ -301,7 +304,7 @@ def assemble(G, gjg, w, inv_eta2, tri_a, tri_b, pos, data):
 
 
 # ------------------------------------------------------------------------------ SOC(4), unrolled
-@njit(**_JIT)
+@njit(**_HELPER)
 def _w4(w, t, f, sign, v0, v1, v2, v3):
     """Cone ``t``'s ``f · W̄ v`` (``sign`` = +1) or ``f · W̄⁻¹ v`` (``sign`` = −1)."""
     w0, w1, w2, w3 = w[0, t], w[1, t], w[2, t], w[3, t]
@@ -310,7 +313,7 @@ def _w4(w, t, f, sign, v0, v1, v2, v3):
     return (w0 * v0 + sign * wv) * f, (v1 + c * w1) * f, (v2 + c * w2) * f, (v3 + c * w3) * f
 
 
-@njit(**_JIT)
+@njit(**_HELPER)
 def _jdiv_winv4(w, t, inv_eta, lam, d0, d1, d2, d3):
     """Cone ``t``'s ``W⁻¹ (λ \\ d)``."""
     l0, l1, l2, l3 = lam[0, t], lam[1, t], lam[2, t], lam[3, t]

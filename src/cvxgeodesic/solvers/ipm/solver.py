@@ -326,7 +326,8 @@ class _Run:
 
 
 def warm_up() -> None:
-    """Compile (first run after an install, about 10 s) or load (later, under a second) the solver's kernels.
+    """Compile (first run after an install: the kernels of both orders and of the curved Hessian energy, about 9 s
+    by :data:`cvxgeodesic._jit.NOTICE`'s estimates) or load (later, under a second) the solver's kernels.
 
     The first :meth:`InteriorPointSolver.solve` of a process does this by itself; call it beforehand to keep
     that one-time cost out of a timing. ``make setup`` runs it once so that the on-disk cache exists.
