@@ -56,10 +56,10 @@ def main() -> None:
         mesh = cg.load_mesh(path)
         src = args.source
         exact = cg.geodesic_distance(mesh, src, method="exact")
-        _, t_heat = timed(lambda: cg.geodesic_distance(mesh, src, method="heat"), 3)
+        _, t_heat = timed(lambda mesh=mesh, src=src: cg.geodesic_distance(mesh, src, method="heat"), 3)
         fields: dict[float, np.ndarray] = {}
         for frac in fractions:
-            def run(frac=frac):
+            def run(frac=frac, mesh=mesh, src=src):
                 s = cg.GeodesicSolver(mesh, args.method, resolution=frac, m=0.0 if args.method == "qclp" else 1.0)
                 return s.solve(src)
             res, t = timed(run, args.repeats)

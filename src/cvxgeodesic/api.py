@@ -277,7 +277,8 @@ class GeodesicSolver:
             return
         if multires:
             raise ParameterError("give multires= or resolution=, not both: each chooses the mesh the field is "
-                                 "solved on (resolution= at order 2 with the sources at their positions, docs/adapted.md)")
+                                 "solved on (resolution= at order 2 with the sources at their positions, "
+                                 "docs/adapted.md)")
         self.resolution = resolution.strip().lower() if isinstance(resolution, str) else resolution
         self.order = 2
 

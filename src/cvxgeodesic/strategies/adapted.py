@@ -35,7 +35,7 @@ from ..mesh.locate import SurfacePoint, bary_positions
 from ..mesh.transfer import ProjectedField
 from ..mesh.trimesh import TriMesh
 from ..operators.metric import Medium
-from ..results import GeodesicResult, SolveInfo
+from ..results import GeodesicResult
 from ..sources import SourceSet, resolve_sources
 from .base import Callback, SolveConfig
 from .order2 import Order2
