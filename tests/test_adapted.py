@@ -225,3 +225,24 @@ def test_a_source_near_a_coarse_edge_is_snapped_onto_it(grid):
     assert 0 < ad["source_offset"] < 1e-4 and any("moved onto it" in n for n in res.info.notes)
     # the field is still exact on the flat grid, from the point where the source went
     assert np.abs(res.distance - _euclid(grid, x)).max() <= ad["source_offset"] + FLAT
+
+
+def test_cli_resolution(grid, tmp_path, capsys):
+    from cvxgeodesic.cli import main
+
+    path = tmp_path / "grid.off"
+    lines = ["OFF", f"{grid.n_vertices} {grid.n_faces} 0", *(" ".join(map(repr, v)) for v in grid.V.tolist()),
+             *("3 " + " ".join(map(str, f)) for f in grid.F.tolist())]
+    path.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "d.npy"
+    assert main(["distance", str(path), "-s", "119", "--method", "qclp", "--resolution", "80", "-o", str(out)]) == 0
+    np.testing.assert_allclose(np.load(out), _euclid(grid, grid.V[119]), atol=FLAT)
+    assert "estimated mean relative error" in capsys.readouterr().err
+    D = tmp_path / "D.npy"
+    assert main(["matrix", str(path), "-s", "119,5", "--method", "qclp", "--resolution", "0.2", "-q",
+                 "-o", str(D)]) == 0
+    np.testing.assert_allclose(np.load(D)[0], _euclid(grid, grid.V[119]), atol=FLAT)
+    with pytest.raises(SystemExit) as exc:  # argparse's usage error
+        main(["distance", str(path), "-s", "0", "--resolution", "coarse", "-o", str(out)])
+    assert exc.value.code == 2
+    assert main(["distance", str(path), "-s", "0", "--resolution", "1.5", "-o", str(out)]) == 2  # the library's check
