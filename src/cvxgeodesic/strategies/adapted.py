@@ -67,6 +67,8 @@ SOURCE_SNAP = 2e-3
 ESTIMATE_RATIO = 0.5
 #: The targets (times the asked face count) tried in turn until a copy keeps the mesh's topology.
 RETRY_TARGETS = (1.0, 1.02, 0.98, 1.05, 0.95)
+#: fast-simplification's aggressiveness for the copies (see the measurement in docs/adapted.md).
+DECIMATION_AGG = 7.0
 #: How the solve mesh is made (recorded in ``info.extra["adapted"]["simplifier"]``).
 SIMPLIFIER = "quadric (fast-simplification, boundary kept)"
 
@@ -150,7 +152,8 @@ def _without_fins(mesh: TriMesh) -> TriMesh:
 
 def _decimated_once(mesh: TriMesh, target: int) -> tuple[TriMesh | None, str | None]:
     try:
-        coarse = _without_fins(simplify_mesh(mesh, target, method="quadric", preserve_border=True))
+        coarse = _without_fins(simplify_mesh(mesh, target, method="quadric", preserve_border=True,
+                                             agg=DECIMATION_AGG))
     except Exception as exc:  # noqa: BLE001 - any failure of the extension falls back, with its message
         return None, f"the decimation failed ({type(exc).__name__}: {exc})"
     checks = ((not coarse.is_edge_manifold, "the decimated copy has non-manifold edges"),
@@ -388,7 +391,7 @@ class Adapted:
         record = {**self.record, "solve_time": time.perf_counter() - t0 - transfer, "transfer_time": transfer,
                   "source_offset": offset}
         notes = [*self.notes, *cres.info.notes]
-        if offset > 0:
+        if offset > 1e-12 * self.config.mesh.bbox_diagonal:
             notes.append(f"a source within {SOURCE_SNAP:g} of a face's altitude from an edge of the solve mesh was "
                          f"moved onto it (by {offset:.3g})")
         if self.companion is not None:
