@@ -246,3 +246,13 @@ def test_cli_resolution(grid, tmp_path, capsys):
         main(["distance", str(path), "-s", "0", "--resolution", "coarse", "-o", str(out)])
     assert exc.value.code == 2
     assert main(["distance", str(path), "-s", "0", "--resolution", "1.5", "-o", str(out)]) == 2  # the library's check
+
+
+def test_the_default_is_one_constant(grid, monkeypatch):
+    from cvxgeodesic import api
+
+    monkeypatch.setitem(api.DEFAULT_RESOLUTIONS, 2, 100)
+    assert cg.GeodesicSolver(grid, "qclp").resolution == 100  # adapted by default
+    assert cg.GeodesicSolver(grid, "heat").resolution == "mesh"  # a method without order 2 keeps the mesh
+    assert cg.GeodesicSolver(grid, "qclp", multires=100).resolution == "mesh"  # multires asked: no conflict
+    assert cg.GeodesicSolver(cg.tet_box(2), "qclp").resolution == "mesh"

@@ -332,9 +332,10 @@ class Adapted:
                                        "faces": mesh.n_faces, "simplifier": None, "decimate_time": 0.0,
                                        "fallback": None, "order": 2, "error_estimate": None,
                                        "error_estimate_method": None}
-        coarse, why, small = None, None, target is None or target >= mesh.n_faces
-        if small:
-            why = f"the target of {target} faces is not below the mesh's {mesh.n_faces}"
+        coarse: TriMesh | None = None
+        small = target is None or target >= mesh.n_faces
+        if target is None or small:
+            why: str | None = f"the target of {target} faces is not below the mesh's {mesh.n_faces}"
         else:
             why = _unsuitable(mesh)
             if why is None:
@@ -342,6 +343,7 @@ class Adapted:
         self.record["decimate_time"] = time.perf_counter() - t0
         self.copy: _Copy | None = None
         self.companion: _Copy | None = None
+        self.inner: Any
         if coarse is None:
             self.solve_mesh = mesh
             # a small mesh is the solve mesh asked for; a mesh that cannot be decimated gets what a copy would cost
