@@ -13,11 +13,13 @@ copy:
 3. **the answer on the user's mesh**: the P2 field evaluated at each user vertex's closest point of the solve mesh
    (found once); :class:`~cvxgeodesic.mesh.transfer.ProjectedField` answers ``distance_at`` at any point of the user's
    faces the same way, and ``geodesic_path`` descends the vertex values on the user's mesh;
-4. **fallbacks**: a mesh that is not edge-manifold, has several components or degenerate faces, or whose copy
-   changes its topology (Euler characteristic, components, a non-manifold edge), is solved on itself at order 2,
+4. **next to the sources** a patch of the user's mesh solved at order 2 and mixed in (:data:`SOURCE_PATCH_EDGES`);
+5. **fallbacks**: a mesh that is not edge-manifold, has several components or faces of zero area, or whose copy
+   changes its topology (Euler characteristic, components, a non-manifold edge), is solved on itself at order 1,
    with a note (quadric decimation gave NaN fields on a non-manifold mesh, issue 43).
 
-``info.extra["adapted"]`` records the solve mesh, its times and an error estimate (:func:`edge_shortening`).
+``info.extra["adapted"]`` records the solve mesh, its times and an error estimate (a second solve on a copy with
+:data:`ESTIMATE_RATIO` of the faces).
 """
 
 from __future__ import annotations
