@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ParameterError, SolverError, SourceError
+from ..errors import MeshError, ParameterError, SolverError, SourceError
 from ..formulations import smoothness_weight
 from ..mesh.closest import closest_point_index
 from ..mesh.decimate import simplify_mesh
@@ -447,7 +447,7 @@ class Adapted:
             src = patch.source if point is None else SurfacePoint(int(face_map[point.cell]), point.bary)
             try:
                 res = Order2(self.config.on(patch.mesh, lam=self.config.lam)).solve(resolve_sources(patch.mesh, src))
-            except (SolverError, SourceError) as exc:
+            except (SolverError, SourceError, MeshError, ParameterError) as exc:  # the copy's field stays
                 notes.append(f"the patch solve around source vertex {center} failed ({exc}); the copy's field kept")
                 continue
             out.append(SourcePatch(face_map, patch.vertices, res.info.extra["p2_field"], radius / 6, radius / 3))
