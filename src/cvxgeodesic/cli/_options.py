@@ -347,3 +347,27 @@ def check_tol(args: argparse.Namespace) -> None:
 
     if getattr(args, "tol", None) is not None:
         check_number(args.tol, "--tol", low=0, high=1, low_open=True, high_open=True)
+
+
+def add_resolution_option(p: argparse.ArgumentParser) -> None:
+    """``--resolution`` (docs/adapted.md): the mesh the field is solved on."""
+    p.add_argument("--resolution", type=resolution, default=None, metavar="R",
+                   help="solve at order 2 on a quadric-decimated copy and answer on this mesh: a face count (e.g. "
+                        "4000), a fraction of the faces (e.g. 0.1), 'auto' (1/10, at least 2000 faces) or 'mesh' "
+                        "(this mesh, the default; docs/adapted.md)")
+
+
+def resolution(text: str) -> Any:
+    """``--resolution`` as :class:`~cvxgeodesic.api.GeodesicSolver` takes it: ``"mesh"``, ``"auto"``, an int or a
+    float (the values are checked there)."""
+    t = text.strip().lower()
+    if t in ("mesh", "auto"):
+        return t
+    try:
+        return int(t)
+    except ValueError:
+        pass
+    try:
+        return float(t)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected 'mesh', 'auto', a face count or a fraction, got {text!r}") from None

@@ -9,7 +9,14 @@ from typing import Any
 
 from ..errors import ParameterError, SourceError
 from ._common import add_overwrite_option, check_outputs
-from ._options import add_precision_options, add_solve_options, add_source_options, check_tol, volume_help
+from ._options import (
+    add_precision_options,
+    add_resolution_option,
+    add_solve_options,
+    add_source_options,
+    check_tol,
+    volume_help,
+)
 
 
 def add_parser(sub: Any) -> None:
@@ -25,6 +32,7 @@ def add_parser(sub: Any) -> None:
                         "distance_matrix's rows on every mesh: docs/performance.md)")
     add_solve_options(p, method=False)
     add_precision_options(p, tol_default=f"1e-8; {LOCAL_ROW_TOL:g} with --max-distance")
+    add_resolution_option(p)
     p.add_argument("-o", "--output", required=True,
                    help="output .npy: (rows, file vertices) float64, columns in the file's numbering; with "
                         "--max-distance a sparse .npz (scipy.sparse.load_npz). Finished rows are kept in "
@@ -89,7 +97,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         D: Any = distance_matrix(mesh, rows, method, m=args.m, solver=args.solver, progress=not args.quiet,
                                  lam=args.lam, tol=args.tol, order=args.order, workers=args.workers,
-                                 scheduler=args.scheduler, max_distance=args.max_distance, checkpoint=partial)
+                                 scheduler=args.scheduler, max_distance=args.max_distance, checkpoint=partial,
+                                 resolution=args.resolution)
     except KeyboardInterrupt:
         kept = checkpoint_rows(partial)
         if kept:

@@ -1,0 +1,469 @@
+"""Adapted solves: order 2 on a quadric-decimated copy of the surface, the answer on the user's mesh.
+
+The resolution a distance field needs is not the resolution of the file it came in (issue 43, DESIGN.md §11).
+:class:`Adapted` decimates the user's mesh once, in its constructor (quadric error, ``fast-simplification``, the
+boundary kept vertex for vertex), and every solve then runs the order-2 strategy (:class:`~.order2.Order2`) on that
+copy:
+
+1. **sources at their exact positions**: a source vertex, a source point, becomes a point of the solve mesh at its
+   closest point there (never the nearest coarse vertex); ``"boundary"`` is the solve mesh's boundary, which is the
+   user's (no edge touching it is collapsed); curves are refused (order 2 takes none);
+2. **media** moved to the solve mesh: a per-vertex cost or metric read at each coarse vertex's closest point of the
+   user's surface, a per-face one from the user's face closest to each coarse face's centroid;
+3. **the answer on the user's mesh**: the P2 field evaluated at each user vertex's closest point of the solve mesh
+   (found once); :class:`~cvxgeodesic.mesh.transfer.ProjectedField` answers ``distance_at`` at any point of the user's
+   faces the same way, and ``geodesic_path`` descends the vertex values on the user's mesh;
+4. **next to the sources** a patch of the user's mesh solved at order 2 and mixed in (:data:`SOURCE_PATCH_EDGES`);
+5. **fallbacks**: a mesh that is not edge-manifold, has several components or faces of zero area, or whose copy
+   changes its topology (Euler characteristic, components, a non-manifold edge), is solved on itself at order 1,
+   with a note (quadric decimation gave NaN fields on a non-manifold mesh, issue 43).
+
+``info.extra["adapted"]`` records the solve mesh, its times and an error estimate (a second solve on a copy with
+:data:`ESTIMATE_RATIO` of the faces).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from ..errors import MeshError, ParameterError, SolverError, SourceError
+from ..formulations import smoothness_weight
+from ..mesh.closest import closest_point_index
+from ..mesh.decimate import simplify_mesh
+from ..mesh.locate import SurfacePoint, bary_positions
+from ..mesh.patch import ball_patch
+from ..mesh.transfer import ProjectedField, SourcePatch, mix_patches
+from ..mesh.trimesh import TriMesh
+from ..operators.metric import Medium
+from ..results import GeodesicResult
+from ..sources import SourceSet, resolve_sources
+from .base import Callback, SolveConfig
+from .direct import DirectStrategy
+from .order2 import Order2
+
+__all__ = ["AUTO_FRACTION", "AUTO_MIN_FACES", "MIN_RESOLUTION_FACES", "RESOLUTIONS", "SIMPLIFIER", "Adapted",
+           "edge_shortening", "resolve_resolution"]
+
+#: The named values of ``resolution``; any other is a face count (int) or a fraction of the faces (float).
+RESOLUTIONS = ("mesh", "auto")
+#: The smallest face count ``resolution`` takes.
+MIN_RESOLUTION_FACES = 4
+#: ``resolution="auto"``: this fraction of the user's faces (issue 43: at 1/10 order 2 costs what order 1 costs on
+#: the user's mesh, with 2-4x less error) ...
+AUTO_FRACTION = 0.1
+#: ... but never fewer faces than this; a mesh with fewer than ``AUTO_MIN_FACES / AUTO_FRACTION`` faces is solved at
+#: this count, and one with at most ``AUTO_MIN_FACES`` on itself (see docs/adapted.md for the measurement).
+AUTO_MIN_FACES = 2000
+#: A source's barycentric coordinate on the solve mesh below this is set to 0: the point moves onto the edge (by at
+#: most this fraction of the face's altitude) instead of splitting the face into a sliver, which the order-2 program
+#: leaves without cones (measured on fandisk at 1/10, source vertex 0 at 4.6e-4 from an edge: mean error 1.95 %, max
+#: 108 %, against 1.08 % at 1/20 where the point fell on the edge). Recorded as ``source_offset``.
+SOURCE_SNAP = 2e-3
+#: The error estimate's second copy has this fraction of the solve mesh's faces: the mean relative difference of the
+#: two fields estimates the solve's mean error. Measured by `bench` (adapted-findings.md §3, 9 meshes of 5.9-20K faces,
+#: source vertex 0): the difference between the 1/10 and 1/20 fields was 0.58-1.10x the true error of the 1/10 field;
+#: the coarser companion costs about half the solve.
+ESTIMATE_RATIO = 0.5
+#: The targets (times the asked face count) tried in turn until a copy keeps the mesh's topology.
+RETRY_TARGETS = (1.0, 1.02, 0.98, 1.05, 0.95)
+#: Near each source the field is solved again on the user's own mesh, on the patch of faces within this many of the
+#: copy's mean edge lengths (edge-graph distance, :func:`~cvxgeodesic.mesh.patch.ball_patch`), and mixed in where it
+#: is below 1/3 of that radius (fully below 1/6): the copy's field is weakest next to the sources (docs/adapted.md).
+#: 0 turns it off. Not with a medium, ``"boundary"`` or more than :data:`MAX_SOURCE_PATCHES` sources.
+SOURCE_PATCH_EDGES = 3.0
+#: At most this many sources get a patch (each is an order-2 solve of its own).
+MAX_SOURCE_PATCHES = 8
+#: fast-simplification's aggressiveness for the copies (see the measurement in docs/adapted.md).
+DECIMATION_AGG = 7.0
+#: How the solve mesh is made (recorded in ``info.extra["adapted"]["simplifier"]``).
+SIMPLIFIER = "quadric (fast-simplification, boundary kept)"
+
+
+def resolve_resolution(resolution: Any, n_faces: int) -> int | None:
+    """The solve mesh's target face count for ``resolution``, or None to solve on the mesh itself.
+
+    Parameters
+    ----------
+    resolution : "mesh", "auto", int or float
+        ``"mesh"``: the mesh itself; an int >= :data:`MIN_RESOLUTION_FACES`: that many faces; a float in (0, 1):
+        that fraction of the faces; ``"auto"``: :data:`AUTO_FRACTION` of the faces, at least :data:`AUTO_MIN_FACES`.
+    n_faces : int
+        The user's face count.
+
+    Returns
+    -------
+    int or None
+        None for ``"mesh"``; otherwise the target, which may be at or above ``n_faces`` (then the strategy solves
+        on the mesh itself, with a note).
+
+    Raises
+    ------
+    ParameterError
+        Anything else (the message names ``resolution`` and what it takes).
+    """
+    if isinstance(resolution, str):
+        key = resolution.strip().lower()
+        if key == "mesh":
+            return None
+        if key == "auto":
+            return max(AUTO_MIN_FACES, int(round(AUTO_FRACTION * n_faces)))
+    elif isinstance(resolution, int | np.integer) and not isinstance(resolution, bool | np.bool_):
+        if resolution >= MIN_RESOLUTION_FACES:
+            return int(resolution)
+    elif isinstance(resolution, float | np.floating) and 0 < resolution < 1:
+        return max(MIN_RESOLUTION_FACES, int(round(float(resolution) * n_faces)))
+    raise ParameterError(f"resolution must be 'mesh', 'auto', a face count >= {MIN_RESOLUTION_FACES} (int) or a "
+                         f"fraction of the faces in (0, 1) (float), got {resolution!r}")
+
+
+def _euler(mesh: TriMesh) -> int:
+    return int(mesh.referenced.sum()) - len(mesh.edges) + mesh.n_faces
+
+
+def _unsuitable(mesh: TriMesh) -> str | None:
+    """Why the mesh is not decimated (solved on itself instead), or None."""
+    if not mesh.is_edge_manifold:
+        return "the mesh is not edge-manifold (quadric decimation can merge its sheets)"
+    comps = np.unique(mesh.component_labels[mesh.referenced]).size
+    if comps > 1:
+        return f"the mesh has {comps} connected components (decimation could merge them)"
+    if mesh.degenerate_faces(0.0).size:
+        return f"the mesh has {mesh.degenerate_faces(0.0).size} face(s) of zero area"
+    return None
+
+
+def _decimated(mesh: TriMesh, target: int) -> tuple[TriMesh | None, str | None]:
+    """The quadric copy of ``mesh`` with about ``target`` faces, or ``(None, why)`` when every try changed its
+    topology: the targets of :data:`RETRY_TARGETS` are tried in turn (the collapses that break a copy depend on
+    where the decimation stops; measured on bimba at 1/10: the first copy had non-manifold edges)."""
+    why: str | None = None
+    for factor in RETRY_TARGETS:
+        coarse, why = _decimated_once(mesh, max(MIN_RESOLUTION_FACES, int(round(factor * target))))
+        if coarse is not None:
+            return coarse, None
+    return None, why
+
+
+def _without_fins(mesh: TriMesh) -> TriMesh:
+    """``mesh`` without the faces that appear twice (a collapse can fold two faces onto each other, opposite ways:
+    a fin of no area that makes their edges non-manifold; measured on bimba at 1/10), nor the vertices they left."""
+    key = np.sort(mesh.F, axis=1)
+    _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    keep = counts[inverse.ravel()] == 1
+    if keep.all():
+        return mesh
+    used, local = np.unique(mesh.F[keep], return_inverse=True)
+    return TriMesh(mesh.V[used], local.reshape(-1, 3), name=mesh.name)
+
+
+def _decimated_once(mesh: TriMesh, target: int) -> tuple[TriMesh | None, str | None]:
+    try:
+        coarse = _without_fins(simplify_mesh(mesh, target, method="quadric", preserve_border=True,
+                                             agg=DECIMATION_AGG))
+    except Exception as exc:  # noqa: BLE001 - any failure of the extension falls back, with its message
+        return None, f"the decimation failed ({type(exc).__name__}: {exc})"
+    checks = ((not coarse.is_edge_manifold, "the decimated copy has non-manifold edges"),
+              (coarse.n_components != 1, f"the decimated copy has {coarse.n_components} components"),
+              (_euler(coarse) != _euler(mesh), f"the decimated copy changed the Euler characteristic "
+                                               f"({_euler(mesh)} -> {_euler(coarse)})"),
+              (coarse.degenerate_faces(0.0).size > 0, "the decimated copy has faces of zero area"))
+    for bad, why in checks:
+        if bad:
+            return None, why
+    coarse.simplifier = SIMPLIFIER
+    return coarse, None
+
+
+def _medium_on(medium: Medium | None, mesh: TriMesh, coarse: TriMesh) -> Medium | None:
+    """The user's medium moved to the solve mesh: per-vertex values at each coarse vertex's closest user point,
+    per-face values of the user face closest to each coarse face's centroid (its normalization kept)."""
+    if medium is None:
+        return None
+    index = closest_point_index(mesh)
+    vf, vb, _ = index.query(np.ascontiguousarray(coarse.V))
+    cf, _, _ = index.query(np.ascontiguousarray(coarse.V[coarse.F].mean(axis=1)))
+
+    def moved(values: np.ndarray | None, kind: str | None) -> np.ndarray | None:
+        if values is None or kind == "constant":
+            return values
+        if kind == "faces":
+            return values[cf]
+        return np.einsum("kc,kc...->k...", vb, values[mesh.F[vf]])
+
+    try:
+        return Medium(coarse, moved(medium.cost, medium.cost_kind), medium.cost_kind,
+                      moved(medium.metric, medium.metric_kind), medium.metric_kind, scale=medium.scale)
+    except ParameterError as exc:
+        raise ParameterError(f"the metric moved to the {coarse.n_faces}-face solve mesh of resolution= is not "
+                             f"positive definite there ({exc}); give resolution='mesh'") from None
+
+
+def edge_shortening(mesh: TriMesh, positions: np.ndarray) -> float:
+    """The error estimate of an adapted solve: how much shorter the user's edges are on the solve mesh.
+
+    Each user edge ``(i, j)`` is compared with the segment between the closest points of its ends on the solve
+    mesh: ``Σ (ℓ_ij − |p_i − p_j|) / Σ ℓ_ij`` over the edges. On detailed scans the error of an adapted solve is
+    mostly this shortening (issue 43); order 2 adds little on the solve mesh itself.
+
+    Parameters
+    ----------
+    mesh : TriMesh
+        The user's mesh (``n`` vertices).
+    positions : (n, 3) float ndarray
+        The closest point of each user vertex on the solve mesh.
+
+    Returns
+    -------
+    float
+        A relative length (0 when the solve mesh is the user's).
+    """
+    E = mesh.edges
+    ell = mesh.edge_lengths
+    short = np.linalg.norm(positions[E[:, 0]] - positions[E[:, 1]], axis=1)
+    total = float(ell.sum())
+    return float(np.maximum(ell - short, 0.0).sum() / total) if total > 0 else 0.0
+
+
+class _Copy:
+    """One decimated copy of the user's mesh: its order-2 strategy and the user's vertices projected onto it.
+
+    Parameters
+    ----------
+    config : SolveConfig
+        The user's.
+    coarse : TriMesh
+        The copy (:func:`_decimated`).
+    """
+
+    def __init__(self, config: SolveConfig, coarse: TriMesh) -> None:
+        mesh = config.mesh
+        self.user, self.mesh = mesh, coarse
+        self.strategy = Order2(replace(config.on(coarse, lam=config.lam),
+                                       medium=_medium_on(config.medium, mesh, coarse)))
+        self.vertex_faces, self.vertex_bary, gap = closest_point_index(coarse).query(np.ascontiguousarray(mesh.V))
+        self.max_gap = float(gap[mesh.referenced].max(initial=0.0))
+        self.shortening = edge_shortening(mesh, bary_positions(coarse, self.vertex_faces, self.vertex_bary))
+
+    def sources(self, sources: SourceSet) -> tuple[SourceSet, float]:
+        """The user's sources on the copy, at their positions, and the largest snap (:data:`SOURCE_SNAP`): vertices
+        and points become the closest points there; the boundary stays the boundary (kept by the decimation)."""
+        mesh, coarse = self.user, self.mesh
+        if sources.boundary:
+            return resolve_sources(coarse, "boundary"), 0.0
+        X = np.concatenate([mesh.V[sources.vertices],
+                            np.array([p.position(mesh) for p in sources.distinct_points(mesh)]).reshape(-1, 3)])
+        faces, bary, _ = closest_point_index(coarse).query(np.ascontiguousarray(X))
+        snapped = np.where(bary < SOURCE_SNAP, 0.0, bary)
+        snapped /= snapped.sum(axis=1, keepdims=True)
+        moved = np.linalg.norm(bary_positions(coarse, faces, snapped) - bary_positions(coarse, faces, bary), axis=1)
+        points = [SurfacePoint(int(f), b) for f, b in zip(faces, snapped, strict=True)]
+        return resolve_sources(coarse, points), float(moved.max(initial=0.0))
+
+    def solve(self, sources: SourceSet, callback: Callback | None,
+              requested: Any) -> tuple[GeodesicResult, np.ndarray, float, float]:
+        """``(result on the copy, the field at the user's vertices, the sources' snap, seconds of the transfer)``;
+        the field is 0 at source vertices, inf at vertices of no face.
+
+        Raises
+        ------
+        SourceError
+            Two sources in one face of the copy (order 2 takes one point per face), saying so.
+        """
+        csources, offset = self.sources(sources)
+        try:
+            cres = self.strategy.solve(csources, callback=callback)
+        except SourceError as exc:
+            raise SourceError(f"resolution={requested!r}: on the {self.mesh.n_faces}-face solve mesh, {exc}; give a "
+                              "finer resolution or resolution='mesh'") from None
+        t0 = time.perf_counter()
+        d = np.asarray(cres.info.extra["p2_field"].distance_at(self.vertex_faces, self.vertex_bary), dtype=float)
+        d[sources.fixed_vertices(self.user)] = 0.0
+        d[~self.user.referenced] = np.inf
+        return cres, d, offset, time.perf_counter() - t0
+
+
+def _relative_difference(a: np.ndarray, b: np.ndarray, fixed: np.ndarray) -> float:
+    """Mean of ``|a − b| / b`` over the vertices where both are finite, ``b > 0``, and not in ``fixed``."""
+    keep = np.isfinite(a) & np.isfinite(b) & (b > 0)
+    keep[fixed] = False
+    return float(np.mean(np.abs(a[keep] - b[keep]) / b[keep])) if keep.any() else 0.0
+
+
+def _fallback(config: SolveConfig) -> tuple[Any, int]:
+    """The strategy of a mesh that is not decimated, and its order: order 1 on the mesh (what an adapted solve
+    costs; order 2 on the whole mesh costs 5-30x more), or order 2 where λ was given for order 2 (``lam=``)."""
+    if config.energy is not None and config.lam > 0 and config.m is None:
+        return Order2(config), 2
+    lam = 0.0 if config.energy is None or not config.m else smoothness_weight(
+        config.mesh, config.m, config.normalization, config.energy, medium=config.medium, order=1)
+    return DirectStrategy(replace(config, lam=lam)), 1
+
+
+class Adapted:
+    """Order-2 solves on a decimated copy of a surface, answered on the surface itself.
+
+    Parameters
+    ----------
+    config : SolveConfig
+        The user's mesh and an order-2 method (:func:`~cvxgeodesic.capabilities.check` passed with
+        ``resolution=True``; λ is order 2's).
+    target : int or None
+        The solve mesh's face count (:func:`resolve_resolution`); None or at least the mesh's face count: the mesh
+        itself, with a note.
+    requested : object
+        The ``resolution`` the user gave (for the record).
+    estimate : bool
+        Estimate the error of every solve by a second solve on a copy with :data:`ESTIMATE_RATIO` of the faces.
+
+    Attributes
+    ----------
+    solve_mesh : TriMesh
+        The mesh the order-2 program is solved on (the user's after a fallback).
+    copy, companion : _Copy or None
+        The solve mesh's copy; the coarser copy of the error estimate.
+    inner : Order2 or DirectStrategy
+        The strategy on ``solve_mesh``.
+    record : dict
+        What ``info.extra["adapted"]`` reports for every solve (per-solve times are added).
+    """
+
+    def __init__(self, config: SolveConfig, target: int | None, requested: Any = None, *,
+                 estimate: bool = True) -> None:
+        t0 = time.perf_counter()
+        mesh = config.mesh
+        self.config = config
+        self.requested = requested
+        self.notes: list[str] = list(config.notes)
+        self.record: dict[str, Any] = {"resolution": requested, "target_faces": target, "user_faces": mesh.n_faces,
+                                       "faces": mesh.n_faces, "simplifier": None, "decimate_time": 0.0,
+                                       "fallback": None, "order": 2, "error_estimate": None,
+                                       "error_estimate_method": None}
+        coarse: TriMesh | None = None
+        small = target is None or target >= mesh.n_faces
+        if target is None or small:
+            why: str | None = f"the target of {target} faces is not below the mesh's {mesh.n_faces}"
+        else:
+            why = _unsuitable(mesh)
+            if why is None:
+                coarse, why = _decimated(mesh, target)
+        self.record["decimate_time"] = time.perf_counter() - t0
+        self.copy: _Copy | None = None
+        self.companion: _Copy | None = None
+        self.inner: Any
+        if coarse is None:
+            self.solve_mesh = mesh
+            # a small mesh is the solve mesh asked for; a mesh that cannot be decimated gets what a copy would cost
+            self.inner, order = (Order2(config), 2) if small else _fallback(config)
+            self.record.update(fallback=why, order=order, error_estimate_method="none: solved on the mesh itself")
+            self.notes.append(f"resolution={requested!r}: solved on the mesh itself at order {order} ({why})")
+        else:
+            self.copy = _Copy(config, coarse)
+            self.solve_mesh, self.inner = coarse, self.copy.strategy
+            self.notes.append(f"resolution={requested!r}: solved at order 2 on a {coarse.n_faces}-face copy of the "
+                              f"mesh ({mesh.n_faces} faces; {SIMPLIFIER}), the field read at the mesh's vertices")
+            self.record.update(faces=coarse.n_faces, simplifier=SIMPLIFIER, max_surface_distance=self.copy.max_gap,
+                               edge_shortening=self.copy.shortening)
+            if estimate:
+                self._companion(coarse.n_faces)
+        self.backend = self.inner.backend
+        self.setup_time = time.perf_counter() - t0
+
+    def _companion(self, faces: int) -> None:
+        """The coarser copy of the error estimate (none, with the reason, when its decimation fails)."""
+        t0 = time.perf_counter()
+        coarser, why = _decimated(self.config.mesh, max(MIN_RESOLUTION_FACES, int(ESTIMATE_RATIO * faces)))
+        self.record["decimate_time"] += time.perf_counter() - t0
+        if coarser is None:
+            self.record["error_estimate_method"] = f"none: the coarser copy failed ({why})"
+            return
+        self.companion = _Copy(self.config, coarser)
+        self.record["error_estimate_method"] = (
+            f"two resolutions: the mean relative difference to the field solved on a {coarser.n_faces}-face copy "
+            f"({ESTIMATE_RATIO:g} of the solve mesh's faces)")
+
+    def solve(self, sources: SourceSet, *, callback: Callback | None = None) -> GeodesicResult:
+        """Distance field on the user's mesh from sources resolved on it.
+
+        Raises
+        ------
+        SourceError
+            Two sources that fall into one face of the solve mesh (order 2 takes one point per face).
+        """
+        if self.copy is None:
+            res = self.inner.solve(sources, callback=callback)
+            res.info.notes.insert(len(self.config.notes), self.notes[len(self.config.notes)])  # the fallback's note
+            res.info.extra["adapted"] = {**self.record, "solve_time": res.info.solve_time, "transfer_time": 0.0}
+            return res
+        t0 = time.perf_counter()
+        cres, d, offset, transfer = self.copy.solve(sources, callback, self.requested)
+        t1 = time.perf_counter()
+        notes = [*self.notes, *cres.info.notes]
+        patches = self._source_patches(sources, notes)
+        n = self.config.mesh.n_vertices
+        nears = [p.at_vertices(n) for p in patches]
+        d = mix_patches(d, patches, nears)
+        record = {**self.record, "solve_time": t1 - t0 - transfer, "transfer_time": transfer,
+                  "source_offset": offset, "source_patches": len(patches),
+                  "source_patch_time": time.perf_counter() - t1}
+        if offset > 1e-12 * self.config.mesh.bbox_diagonal:
+            notes.append(f"a source within {SOURCE_SNAP:g} of a face's altitude from an edge of the solve mesh was "
+                         f"moved onto it (by {offset:.3g})")
+        if self.companion is not None:
+            t2 = time.perf_counter()
+            try:
+                _, dc, _, _ = self.companion.solve(sources, None, self.requested)
+                dc = mix_patches(dc, patches, nears)  # the same near the sources: the estimate is of the rest
+                record["error_estimate"] = _relative_difference(dc, d, sources.fixed_vertices(self.config.mesh))
+            except SourceError as exc:
+                record["error_estimate_method"] = f"none: the coarser copy took not the sources ({exc})"
+            record["estimate_time"] = time.perf_counter() - t2
+        return self._result(cres, d, sources, notes, record, t0, patches)
+
+    def _source_patches(self, sources: SourceSet, notes: list[str]) -> list[SourcePatch]:
+        """The order-2 fields on the user's mesh around each source (:data:`SOURCE_PATCH_EDGES`)."""
+        mesh = self.config.mesh
+        if SOURCE_PATCH_EDGES <= 0 or sources.boundary or self.config.medium is not None or self.copy is None:
+            return []
+        items: list[tuple[int, Any]] = [(int(v), None) for v in sources.vertices]
+        items += [(int(mesh.F[p.cell][np.argmax(p.bary)]), p) for p in sources.distinct_points(mesh)]
+        if len(items) > MAX_SOURCE_PATCHES:
+            notes.append(f"{len(items)} sources: no patch solve around them (at most {MAX_SOURCE_PATCHES})")
+            return []
+        radius = SOURCE_PATCH_EDGES * self.copy.mesh.mean_edge_length
+        out = []
+        for center, point in items:
+            patch = ball_patch(mesh, center, radius)
+            if patch.mesh is None:
+                continue
+            inside = np.zeros(mesh.n_vertices, dtype=bool)
+            inside[patch.vertices] = True
+            keep = inside[mesh.F].all(axis=1)  # ball_patch's faces, in its order
+            face_map = np.full(mesh.n_faces, -1, dtype=np.int64)
+            face_map[keep] = np.arange(int(keep.sum()))
+            src = patch.source if point is None else SurfacePoint(int(face_map[point.cell]), point.bary)
+            try:
+                res = Order2(self.config.on(patch.mesh, lam=self.config.lam)).solve(resolve_sources(patch.mesh, src))
+            except (SolverError, SourceError, MeshError, ParameterError) as exc:  # the copy's field stays
+                notes.append(f"the patch solve around source vertex {center} failed ({exc}); the copy's field kept")
+                continue
+            out.append(SourcePatch(face_map, patch.vertices, res.info.extra["p2_field"], radius / 6, radius / 3))
+        if out:
+            notes.append(f"{len(out)} patch(es) of the mesh around the sources solved at order 2 and mixed in within "
+                         f"{radius / 3:.3g} of them")
+        return out
+
+    def _result(self, cres: GeodesicResult, d: np.ndarray, sources: SourceSet, notes: list[str], record: dict,
+                t0: float, patches: list[SourcePatch]) -> GeodesicResult:
+        ci = cres.info
+        assert self.copy is not None
+        extra = {k: v for k, v in ci.extra.items() if k != "p2_field"}
+        field = ProjectedField(self.config.mesh, self.solve_mesh, ci.extra["p2_field"], d, patches)
+        extra.update(adapted=record, p2_field=field, solve_mesh=self.solve_mesh)
+        info = replace(ci, setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
+                       n_unreachable=int(np.isinf(d).sum()), notes=notes, extra=extra)
+        return GeodesicResult(distance=d, info=info, sources=sources.vertices,
+                              source_set=None if sources.vertex_only else sources)
