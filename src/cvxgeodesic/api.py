@@ -496,14 +496,16 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None
                     tol: float | None = None, max_iter: int = 200, multires: bool | int = False,
                     normalization: str = "area", order: int = 1, threads: int | None = None,
                     workers: int | None = None, scheduler: Any = None, cost: Any = None, metric: Any = None,
-                    max_distance: None = None, checkpoint: str | os.PathLike | None = None) -> np.ndarray: ...
+                    max_distance: None = None, checkpoint: str | os.PathLike | None = None,
+                    resolution: Any = None) -> np.ndarray: ...
 @overload
 def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
                     solver: SolverName = "auto", progress: bool | None = None, *, lam: float | None = None,
                     tol: float | None = None, max_iter: int = 200, multires: bool | int = False,
                     normalization: str = "area", order: int = 1, threads: int | None = None,
                     workers: int | None = None, scheduler: Any = None, cost: Any = None, metric: Any = None,
-                    max_distance: float, checkpoint: str | os.PathLike | None = None) -> sp.csr_matrix: ...
+                    max_distance: float, checkpoint: str | os.PathLike | None = None,
+                    resolution: Any = None) -> sp.csr_matrix: ...
 @overload
 def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
                     solver: SolverName = "auto", progress: bool | None = None, *, lam: float | None = None,
@@ -511,7 +513,8 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None
                     normalization: str = "area", order: int = 1, threads: int | None = None,
                     workers: int | None = None, scheduler: Any = None, cost: Any = None, metric: Any = None,
                     max_distance: float | None = None,
-                    checkpoint: str | os.PathLike | None = None) -> np.ndarray | sp.csr_matrix: ...
+                    checkpoint: str | os.PathLike | None = None,
+                    resolution: Any = None) -> np.ndarray | sp.csr_matrix: ...
 
 
 def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
