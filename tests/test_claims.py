@@ -145,7 +145,7 @@ def test_verdict_rounds_as_the_page_does():
     assert claims.verdict(c, {"a": 2.24}) == "OUTSIDE"
     assert claims.verdict(c, {}) == "not measured"
     measured, worst = claims.describe(c, {"kitten": 3.0, "horse": 6.5}, 2)
-    assert measured.startswith("3–6.5× over 2 of 2") and worst == "horse 6.5×"
+    assert measured.startswith("3–6.5× over 2 meshes (of 2 in this run)") and worst == "horse 6.5×"
 
 
 def test_an_unmarked_figure_is_found(tmp_path):
