@@ -10,7 +10,7 @@ STAMP  := $(VENV)/.installed
 DEB_PACKAGES := libsuitesparse-dev libopenblas0-pthread libgomp1 libegl1 libegl-mesa0 libgl1-mesa-dri
 OUT ?= demo_output
 
-.PHONY: demo test test-all docs lint bench report clean setup
+.PHONY: demo test test-all docs lint bench report clean setup claims claims-full
 
 setup: $(STAMP)
 
@@ -27,6 +27,15 @@ $(STAMP): pyproject.toml requirements.lock
 	$(PY) -m pip install -q --no-deps -e .
 	$(PY) -c "from cvxgeodesic.solvers.ipm import warm_up; warm_up()"  # compile the solver kernels once (Numba cache)
 	@touch $(STAMP)
+
+# every time and accuracy figure README.md and docs/ quote, measured on this machine beside the quoted value
+# (one thread; needs ../shared/meshes). claims: a subset of the meshes, under 10 min on 2 cores;
+# claims-full: every shared mesh each figure concerns. CLAIMS_OUT=docs/claims.md also writes the dated page.
+claims: $(STAMP)
+	$(PY) benchmarks/claims.py --quick $(if $(CLAIMS_OUT),--out $(CLAIMS_OUT))
+
+claims-full: $(STAMP)
+	$(PY) benchmarks/claims.py $(if $(CLAIMS_OUT),--out $(CLAIMS_OUT))
 
 demo: $(STAMP)
 	$(VENV)/bin/cvxgeodesic demo --out $(OUT)
