@@ -686,6 +686,11 @@ class _PatchSolver(GeodesicSolver):
     _lam_checked = True
 
 
+def _is_mesh_resolution(value: Any) -> bool:
+    """``resolution="mesh"`` in any case (an array or a number is not)."""
+    return isinstance(value, str) and value.strip().lower() == "mesh"
+
+
 def _local_rows(mesh: Any, options: dict, max_distance: Any) -> tuple[Any, dict]:
     """The factory and options of local rows (:class:`~cvxgeodesic.rows.LocalRows`), after their checks."""
     from .rows import LocalRows
@@ -693,8 +698,11 @@ def _local_rows(mesh: Any, options: dict, max_distance: Any) -> tuple[Any, dict]
     if isinstance(mesh, TetMesh):
         raise ParameterError("max_distance is for triangle meshes (surfaces), not tetrahedral meshes")
     r = check_number(max_distance, "max_distance", low=0, low_open=True)
+    given = {"multires": bool(options["multires"]), "cost": options["cost"] is not None,
+             "metric": options["metric"] is not None,
+             "resolution": options["resolution"] is not None and not _is_mesh_resolution(options["resolution"])}
     for name in ("multires", "cost", "metric", "resolution"):
-        if options[name] if name == "multires" else options[name] is not None and options[name] != "mesh":
+        if given[name]:
             raise ParameterError(f"max_distance does not take {name}= (a patch has no coarse mesh, cost or metric "
                                  "of its own yet)")
     rest = {k: v for k, v in options.items() if k not in ("multires", "cost", "metric", "resolution")}
