@@ -137,3 +137,18 @@ def test_order2_two_speed_plane_far_half_matches_refraction(ratio):
                                       bounds=(0.0, 1.0), method="bounded", options={"xatol": 1e-12}).fun
                       for a, b in mesh.V[far, :2]])
     np.testing.assert_allclose(res.distance[far], exact, rtol=5e-5)
+
+
+def test_degenerate_face_warnings_point_at_the_callers_line():
+    # issue 41's sweep: DegenerateFacesWarning was attributed to strategies/direct.py:63 (a fixed stacklevel counted
+    # from inside the package); every warning of a solve goes through errors.warn_user now
+    from cvxgeodesic.errors import DegenerateFacesWarning
+
+    mesh = cg.grid_plane(4)
+    V = mesh.V.copy()
+    V[6, 1] = 1e-5  # an interior vertex moved next to the bottom edge: faces below 1e-3 of their longest edge
+    mesh = cg.TriMesh(V, mesh.F, name="sliver")
+    for order in (1, 2):
+        with pytest.warns(DegenerateFacesWarning) as record:
+            cg.GeodesicSolver(mesh, "qclp", order=order).solve(0)
+        assert {w.filename for w in record if w.category is DegenerateFacesWarning} == {__file__}, order
