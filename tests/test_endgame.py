@@ -32,6 +32,10 @@ def test_an_almost_optimal_iterate_within_the_accept_factor_is_kept_without_clar
     # the field's accuracy is Clarabel's at the same tolerance: within 1e-6 of the largest distance
     ref = cg.GeodesicSolver(mesh, "qcqp-hessian", solver="clarabel", tol=1e-10).solve(0).distance
     assert np.max(np.abs(res.distance - ref)) < 1e-6 * ref.max()
+    # solver="ipm" returns the same iterate, with the same note (no re-solve was possible anyway)
+    res_ipm = cg.GeodesicSolver(mesh, "qcqp-hessian", solver="ipm", tol=1e-10).solve(0)
+    assert res_ipm.info.status == "almost_optimal" and np.array_equal(res_ipm.distance, res.distance)
+    assert [n for n in res_ipm.info.notes if "without a Clarabel re-solve" in n] == note
 
 
 def test_an_almost_optimal_iterate_beyond_the_accept_factor_still_goes_to_clarabel(monkeypatch):

@@ -108,10 +108,12 @@ class Backend:
                     raise
                 notes.append(f"Clarabel failed too ({clarabel_exc.status})")
                 raise exc from clarabel_exc
-        if res.status == "optimal" or not retry:
+        if res.status == "optimal":
             return res
         if res.extra.get("acceptable"):
             notes.append(_accepted_note(res, self.tol))
+            return res
+        if not retry:
             return res
         try:  # "almost_optimal": Clarabel may reach the full accuracy; else keep the IPM's best iterate
             return self._clarabel_retry(problem, res.status, notes)
