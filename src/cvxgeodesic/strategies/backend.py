@@ -5,7 +5,7 @@ happens when it fails, each step recorded in ``info.notes``.
   Clarabel (noted);
 - an ``almost_optimal`` interior-point solve whose best iterate is within ``IPMSettings.accept_factor`` × ``tol``
   (``extra["acceptable"]``: the iterations stopped at the rounding floor of the residuals, just above ``tol``) is
-  kept, with a note giving its gap and residuals: a Clarabel re-solve cost 5–10× the time for a field equal within
+  kept, with a note giving its gap and residuals: a Clarabel re-solve cost 7–25× the time for a field equal within
   1e-6 (issue 41, docs/dev/endgame.md);
 - under ``"auto"``, Clarabel retries an interior-point solve that failed or was ``almost_optimal`` farther from
   ``tol`` (warned and noted); an almost optimal iterate is kept when Clarabel fails too (noted);
