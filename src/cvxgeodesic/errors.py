@@ -138,8 +138,10 @@ def warn_user(message: str, category: type[Warning] = UserWarning) -> None:
     import warnings
 
     package = __name__.rsplit(".", 1)[0] + "."
+    # stacklevel 1 is this function's own frame, 2 its caller's (``sys._getframe(1)``): counting from 1 here
+    # attributed the warning to the last frame inside the package (issue 41: ``_threads.py:318``)
     frame: types.FrameType | None = sys._getframe(1)
-    level = 1
+    level = 2
     while frame is not None and (frame.f_globals.get("__name__") or "").startswith(package):
         frame, level = frame.f_back, level + 1
     warnings.warn(message, category, stacklevel=level)

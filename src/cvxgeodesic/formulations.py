@@ -67,7 +67,6 @@ measured in the volume.
 from __future__ import annotations
 
 import functools
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -75,7 +74,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from . import capabilities
-from .errors import DegenerateFacesWarning, MeshError
+from .errors import DegenerateFacesWarning, MeshError, warn_user
 from .mesh.simplex import SimplexMesh
 from .mesh.trimesh import DEGENERATE_TOL
 from .operators import check_energy, energy_matrix, gradient_blocks
@@ -347,7 +346,7 @@ class MeshOperators:
                 f"edge or of the mean edge length; first: {word} {f} {mesh.cells[f].tolist()}) are left out of the "
                 "cone constraints and energies; their edges are constrained by |d_i - d_j| <= edge length instead"
             )
-            warnings.warn(message, DegenerateFacesWarning, stacklevel=3)
+            warn_user(message, DegenerateFacesWarning)
             self.notes.append(message)
 
     @functools.cached_property

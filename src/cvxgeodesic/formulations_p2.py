@@ -53,7 +53,6 @@ the solve in :mod:`cvxgeodesic.strategies.order2`.
 from __future__ import annotations
 
 import itertools
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -61,7 +60,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from . import capabilities
-from .errors import DegenerateFacesWarning, MeshError, ParameterError
+from .errors import DegenerateFacesWarning, MeshError, ParameterError, warn_user
 from .mesh.simplex import CELL_EDGES
 from .operators.lagrange import SAMPLES, LagrangeSpace, edge_basis, sample_points
 from .operators.metric import Medium
@@ -302,7 +301,7 @@ class P2Builder:
             note = (f"{deg.size} degenerate {word} carry no cones at order 2; their {ids.size} edge(s) get the 1-D "
                     "cone (dφ/ds)² ≤ 4φ instead")
             self.notes.append(note)
-            warnings.warn(f"{mesh.name}: {note}", DegenerateFacesWarning, stacklevel=4)
+            warn_user(f"{mesh.name}: {note}", DegenerateFacesWarning)
         return Ge, he, np.tile(owner, 3), eb.reshape(-1, dim + 1)
 
     def _source_rows(self, is_src: np.ndarray) -> sp.csr_matrix:

@@ -42,7 +42,6 @@ from __future__ import annotations
 
 import importlib
 import time
-import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -53,7 +52,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from ..capabilities import check, source_kinds
-from ..errors import CvxGeodesicError, MeshError, MeshRepairWarning, NonManifoldError, SolverError
+from ..errors import CvxGeodesicError, MeshError, MeshRepairWarning, NonManifoldError, SolverError, warn_user
 from ..mesh.convert import as_mesh
 from ..mesh.orient import Orientation, orient_faces
 from ..mesh.simplex import SimplexMesh, unit_scale
@@ -372,7 +371,7 @@ class ComponentwiseSolver(BaselineSolver):
             require_orientable(mesh, self.name, self.orientation)
             note = self.orientation.note(mesh.name, f"{self.name!r} ({self.library})")
             if note:
-                warnings.warn(note, MeshRepairWarning, stacklevel=4)
+                warn_user(note, MeshRepairWarning)
                 self.notes.append(note)
             F = self.orientation.F
         labels = mesh.component_labels

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Callable
 from typing import Any
 
@@ -11,7 +10,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike
 
-from ..errors import IndefiniteEnergyWarning, MeshRepairWarning, ParameterError
+from ..errors import IndefiniteEnergyWarning, MeshRepairWarning, ParameterError, warn_user
 from ..linalg import SymbolicCholesky, is_positive_semidefinite
 from ..mesh.cover import manifold_cover, pull_back
 from ..mesh.orient import orient_faces
@@ -138,7 +137,7 @@ def hessian_energy_matrix(mesh: TriMesh, notes: list[str] | None = None, *,
                  else "on this mesh (sharp corners or large angle defects)")
         message = (f"{mesh.name}: libigl's curved Hessian energy is indefinite {where}; using the planar Hessian "
                    "energy (Stein et al. 2018) instead")
-        warnings.warn(message, IndefiniteEnergyWarning, stacklevel=3)
+        warn_user(message, IndefiniteEnergyWarning)
         notes.append(message)
         Q = _padded_symmetric(igl.hessian_energy(energy_mesh.V, energy_mesh.F), n)
     return Q if to_mesh is None else pull_back(Q, to_mesh, mesh.n_vertices)
@@ -152,7 +151,7 @@ def _oriented(mesh: TriMesh, notes: list[str]) -> TriMesh:
     note = orientation.note(mesh.name, "the curved Hessian energy")
     if note is None:
         return mesh
-    warnings.warn(note, MeshRepairWarning, stacklevel=4)
+    warn_user(note, MeshRepairWarning)
     notes.append(note)
     return TriMesh(mesh.V, orientation.F, name=mesh.name) if orientation.flipped.any() else mesh
 

@@ -20,7 +20,7 @@ from .program import Program
 from .settings import IPMSettings
 from .state import Iterate
 
-__all__ = ["BestIterate", "Evaluation", "almost", "certificate", "evaluate"]
+__all__ = ["BestIterate", "Evaluation", "acceptable", "almost", "certificate", "evaluate"]
 
 
 @dataclass
@@ -104,6 +104,11 @@ def almost(info: dict, tol: float, settings: IPMSettings) -> bool:
     """The reduced tolerances on one iterate's ``info``: :func:`converged` at ``reduced_factor · tol`` (residuals and
     gap, the dual residual also relative to ``max(1, ‖q‖ + ‖x‖)`` alone, ``res_dual_plain``)."""
     return converged(info, settings.reduced_factor * tol, settings)
+
+
+def acceptable(info: dict, tol: float, settings: IPMSettings) -> bool:
+    """:func:`converged` at ``accept_factor · tol``: an ``"almost_optimal"`` iterate the backend policy keeps."""
+    return converged(info, settings.accept_factor * tol, settings)
 
 
 def certificate(pr: Program, ev: Evaluation, settings: IPMSettings) -> str | None:

@@ -107,6 +107,17 @@ class IPMSettings:
         tol; Clarabel's reduced tolerances, 1e-4 and 5e-5, let through a field 5× off on a sliver mesh whose
         dual residual was hidden by ‖z‖ ≈ 1e7 in its scale). Seen on Thingi10K slivers: gap 1.6e-8, dual
         residual 1.5e-9, then rounding takes over. Default 100.
+    accept_factor : float
+        An ``"almost_optimal"`` best iterate within this multiple of ``tol`` (residuals and gap, the plain dual
+        residual at ``plain_dual_factor × accept_factor × tol``) is marked acceptable
+        (``extra["acceptable"]``): ``solver="auto"`` keeps it, with a note, instead of re-solving with Clarabel.
+        Default 10. The iterations stop short there when the dual residual reaches its rounding floor: on the split
+        max_planck (42K faces, QCQP-Hessian) 8 of 15 sources ended with the best iterate just above tol (four read:
+        gaps 1.6e-9–5e-8, dual residuals 4.5e-9–1.6e-8) and went to Clarabel at 7–25× the time (23–36 s against
+        1.4–3.3 s; Clarabel itself ended two of them ``AlmostSolved``); the fields of four such iterates were
+        7e-8–8.1e-7 of the largest distance from Clarabel solves at tol 1e-10, as close as ``"optimal"`` fields at
+        tol 1e-8 (2.6e-7, and 8.1e-7 for a solve of source 10768 refined further), and a solve at tol 1e-6 was 2.3e-6
+        from it (2026-12-06, docs/dev/endgame.md).
     stall_iterations : int
         ... and iterating stops when the best iterate, meeting them, has not been improved on for this many
         iterations (seen: the dual residual stuck at 3–8e-8 by rounding while μ underflows, up to max_iter).
@@ -177,6 +188,7 @@ class IPMSettings:
     gz_b: float = 0.1
     corrector_weights: tuple[float, ...] = (1.0, 0.5, 0.25)
     reduced_factor: float = 100.0
+    accept_factor: float = 10.0
     stall_iterations: int = 10
     init: str = "graph"
     interior_fraction: float = 0.9

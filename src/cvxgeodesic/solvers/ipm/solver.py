@@ -47,7 +47,7 @@ from .algorithm import Stepper
 from .equilibrate import equilibrate
 from .newton import LinearSystem, Trouble
 from .program import PatternMismatch, Program, problem_pattern
-from .residuals import BestIterate, almost, certificate, converged, evaluate, refine_target
+from .residuals import BestIterate, acceptable, almost, certificate, converged, evaluate, refine_target
 from .settings import IPMSettings
 from .start import StartFailure, starting_point
 
@@ -166,7 +166,8 @@ class InteriorPointSolver:
             10 iterations) or ``max_iter`` after an iterate whose residuals and gap
             were below 100 × ``tol``; ``x`` and the residuals are then that best
             iterate's, ``extra["stopped"]`` the reason and ``extra["best_iteration"]``
-            its iteration.
+            its iteration, ``extra["acceptable"]`` whether it is within ``IPMSettings.accept_factor`` × ``tol``
+            (``extra["accept_tol"]``; the backend policy keeps such an iterate without a Clarabel re-solve).
 
         Raises
         ------
@@ -218,7 +219,7 @@ class InteriorPointSolver:
 
     def _run(self, pr: Program, t_start: float, tol: float, max_iter: int, callback):
         """Start, iterate, and settle the status: ``(x, status, info, stopped, run)``; raises SolverError."""
-        run = _Run(self, pr, t_start, max_iter)
+        run = _Run(self, pr, t_start, max_iter, tol)
         if pr.unbounded_var >= 0:
             raise run.fail("dual_infeasible", f"variable {pr.unbounded_var} has a linear cost and no constraint")
         try:
@@ -277,8 +278,8 @@ class InteriorPointSolver:
 class _Run:
     """The bookkeeping of one solve: timers, counters, the latest ``info``, the best iterate, the result."""
 
-    def __init__(self, solver: InteriorPointSolver, pr: Program, t_start: float, max_iter: int):
-        self.solver, self.pr, self.t_start, self.max_iter = solver, pr, t_start, max_iter
+    def __init__(self, solver: InteriorPointSolver, pr: Program, t_start: float, max_iter: int, tol: float):
+        self.solver, self.pr, self.t_start, self.max_iter, self.tol = solver, pr, t_start, max_iter, tol
         self.timers = {"program_time": time.perf_counter() - t_start, "assembly_time": 0.0, "factor_time": 0.0,
                        "linear_solve_time": 0.0}
         self.counters = {"refinement_steps": 0, "correctors": 0, "correctors_accepted": 0}
@@ -310,7 +311,9 @@ class _Run:
             "gap_abs": info["gap_abs"],
         }
         if stopped is not None:
-            extra.update(stopped=stopped, best_iteration=info["iterations"])
+            extra.update(stopped=stopped, best_iteration=info["iterations"],
+                         acceptable=acceptable(info, self.tol, self.solver.settings),
+                         accept_tol=self.solver.settings.accept_factor * self.tol)
         return BackendResult(
             x=x,
             solver="ipm",
