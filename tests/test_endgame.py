@@ -156,3 +156,15 @@ def test_degenerate_face_warnings_point_at_the_callers_line():
         with pytest.warns(DegenerateFacesWarning) as record:
             cg.GeodesicSolver(mesh, "qclp", order=order).solve(0)
         assert {w.filename for w in record if w.category is DegenerateFacesWarning} == {__file__}, order
+
+
+@pytest.mark.parametrize("ratio, noted", [(10.0, False), (1e3, True)])
+def test_order2_notes_a_strong_cost_contrast(ratio, noted):
+    # docs/input.md, "Costs at order 2": the order-2 field falls below the travel time on the cheap side from a
+    # ratio of about 100 on; the result says so where the user reads substitutions
+    mesh = icosphere(2)
+    cost = np.r_[np.ones(mesh.n_vertices - 1), ratio]
+    info = cg.GeodesicSolver(mesh, "qclp", order=2, cost=cost).solve(0).info
+    assert any("travel-cost ratio" in note for note in info.notes) == noted
+    plain = cg.GeodesicSolver(mesh, "qclp", order=1, cost=cost).solve(0).info
+    assert not any("travel-cost ratio" in note for note in plain.notes)

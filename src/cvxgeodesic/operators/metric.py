@@ -113,6 +113,13 @@ class Medium:
         return out
 
     @property
+    def cost_ratio(self) -> float:
+        """The largest over the smallest travel cost (1 without a cost, or with one number)."""
+        if self.cost is None or self.cost.ndim == 0:
+            return 1.0
+        return float(self.cost.max() / self.cost.min())
+
+    @property
     def varies_in_faces(self) -> bool:
         """True when something is given per vertex (the medium then varies inside faces)."""
         return "vertices" in (self.cost_kind, self.metric_kind)

@@ -100,7 +100,7 @@ class Order2:
         self.builder = self._builder(unit, medium)
         self.policy = Backend(config.solver, config.tol, config.max_iter, config.verbose, config.mesh.name)
         self.backend = self.policy.name
-        self.notes: list[str] = [*config.notes, *self.policy.notes]
+        self.notes: list[str] = [*config.notes, *self.policy.notes, *_contrast_note(config.medium)]
         self.ipm = self._ipm(self.builder)
         self.setup_time = time.perf_counter() - t0
 
@@ -249,3 +249,18 @@ def _moved(x_old: np.ndarray, x_new: np.ndarray, n: int) -> float:
     """The largest change of the vertex distances ``√max(φ, 0)`` between two rounds, relative to the largest."""
     d_old, d_new = (np.sqrt(np.maximum(v[:n], 0.0)) for v in (x_old, x_new))
     return float(np.abs(d_new - d_old).max(initial=0.0) / max(d_new.max(initial=0.0), 1e-300))
+
+
+#: The cost ratio from which an order-2 field is noted as less accurate than order 1 (docs/input.md, "Costs at
+#: order 2": measured on icosphere(2) and flat grids, up to 6 % of the largest distance at a ratio of 100).
+CONTRAST_NOTE_RATIO = 100.0
+
+
+def _contrast_note(medium: Medium | None) -> list[str]:
+    """A note when a strong cost contrast makes the order-2 field fall below the travel time on its cheap side."""
+    ratio = 1.0 if medium is None else medium.cost_ratio
+    if ratio < CONTRAST_NOTE_RATIO:
+        return []
+    return [f"order 2 with a travel-cost ratio of {ratio:.3g}: the order-2 field can fall below the travel time on "
+            "the cheap side of a strong contrast (up to 6 % of the largest distance at a ratio of 100, 10-13 % at "
+            "1e3; docs/input.md); order=1 is more accurate there"]
