@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 from ._threads import limited
 from .baselines import BASELINES
 from .capabilities import check as check_capability
-from .capabilities import methods_for, source_kinds
+from .capabilities import methods_for, source_kinds, supported
 from .errors import ParameterError, SourceError
 from .formulations import ALIASES, FORMULATIONS, NORMALIZATIONS, smoothness_weight
 from .mesh.convert import as_mesh
@@ -29,6 +29,7 @@ from .results import GeodesicResult, SolveInfo
 from .solvers._interrupt import reporting_to
 from .sources import resolve_sources
 from .strategies import SolveConfig, SolveStrategy, make_strategy, resolve_target
+from .strategies.adapted import resolve_resolution
 from .validation import (
     check_choice,
     check_count,
@@ -49,6 +50,9 @@ SOLVERS = ("auto", "ipm", "clarabel")
 DEFAULT_TOL = 1e-8
 #: The method of ``method=None`` by simplex dimension (``mesh.dim``): the curved Hessian energy exists on surfaces only.
 DEFAULT_METHODS = {2: "qcqp-hessian", 3: "qclp"}
+#: The ``resolution`` of ``resolution=None`` by simplex dimension (docs/adapted.md): ``"mesh"``, the user's mesh. A
+#: method without an adapted solve (a baseline, an LC formulation) falls back to ``"mesh"`` whatever this says.
+DEFAULT_RESOLUTIONS: dict[int, Any] = {2: "mesh", 3: "mesh"}
 
 
 def _is_2d(x: Any) -> bool:
@@ -154,6 +158,15 @@ class GeodesicSolver:
         Riemannian metric: a tangent vector ``u`` is ``√(uᵀ M u)`` long (times the cost, with
         both). Symmetric, positive definite in each face's plane. Recorded in
         ``info.extra["metric"]``.
+    resolution : "mesh", "auto", int or float, optional
+        The mesh the field is solved on (``docs/adapted.md``). ``"mesh"``: this mesh. An int (>= 4): a
+        quadric-decimated copy with about that many faces; a float in (0, 1): that fraction of the faces;
+        ``"auto"``: 1/10 of the faces, at least 2,000 (:data:`~cvxgeodesic.strategies.adapted.AUTO_FRACTION`).
+        Any of these solves **at order 2** (``order`` is then 2 whatever it says) on the copy, with the sources
+        at their exact positions, and answers on this mesh: ``distance`` per vertex, ``distance_at`` and
+        ``geodesic_path`` on this surface; ``info.extra["adapted"]`` records the solve mesh, its times and an
+        error estimate. Non-manifold meshes, several components and faces of zero area are solved on this mesh
+        instead, with a note. Surfaces only; not with ``multires``. None: :data:`DEFAULT_RESOLUTIONS`.
 
     Raises
     ------
@@ -219,6 +232,7 @@ class GeodesicSolver:
         threads: int | None = None,
         cost: Any = None,
         metric: Any = None,
+        resolution: Any = None,
     ) -> None:
         t0 = time.perf_counter()
         self.mesh: Any = cast(Any, as_mesh(mesh))  # a TriMesh or a TetMesh, told apart by is_volume
@@ -227,8 +241,10 @@ class GeodesicSolver:
         self._check_method_and_solver(method, solver)
         self.order = check_order(order)
         target = resolve_target(multires, self.mesh.n_cells)  # a volume refuses multires below (capabilities)
+        self._set_resolution(resolution, multires=target is not None)
         self._cell: dict[str, Any] = {"dim": self.dim, "order": self.order, "multires": target is not None,
-                      "medium": "none" if cost is None and metric is None else "cost" if cost is not None else "metric"}
+                      "medium": "none" if cost is None and metric is None else "cost" if cost is not None else "metric",
+                      "resolution": self.resolution != "mesh"}
         m_value, lam_value = self._check_capabilities(m, lam)
         # a travel cost or metric (operators/metric.py): validated here, once
         self.medium = make_medium(self.mesh, cost, metric)
@@ -242,11 +258,28 @@ class GeodesicSolver:
                              max_iter=self.max_iter, verbose=self.verbose, medium=self.medium,
                              notes=(*getattr(self.mesh, "notes", ()), *getattr(self.medium, "notes", ())))
         self._strategy: SolveStrategy = make_strategy(config, baseline=self.is_baseline, order=self.order,
-                                                      multires_target=target, polish=bool(multires_polish))
+                                                      multires_target=target, polish=bool(multires_polish),
+                                                      resolution=self.resolution)
         self.solver_name = self._strategy.backend
         # substitutions made for every solve of this object (copied into SolveInfo): the loader's repairs first
         self.notes: list[str] = self._strategy.notes
         self.setup_time = time.perf_counter() - t0
+
+    def _set_resolution(self, resolution: Any, *, multires: bool) -> None:
+        """``self.resolution`` (``"mesh"``, or what :func:`resolve_resolution` takes) checked; any other than
+        ``"mesh"`` solves at order 2 (docs/adapted.md)."""
+        if resolution is None:  # the default applies where an adapted solve exists
+            resolution = DEFAULT_RESOLUTIONS[self.dim]
+            if not supported(self.method, dim=self.dim, resolution=True) or multires:
+                resolution = "mesh"
+        if resolve_resolution(resolution, self.mesh.n_cells) is None:
+            self.resolution: Any = "mesh"
+            return
+        if multires:
+            raise ParameterError("give multires= or resolution=, not both: each chooses the mesh the field is "
+                                 "solved on (resolution= at order 2 with the sources at their positions, docs/adapted.md)")
+        self.resolution = resolution.strip().lower() if isinstance(resolution, str) else resolution
+        self.order = 2
 
     def _check_method_and_solver(self, method: Any, solver: Any) -> None:
         if method is None:
@@ -368,7 +401,8 @@ class GeodesicSolver:
 def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | None = None, m: float | None = None,
                       solver: str | None = None, lam: float | None = None, tol: float = DEFAULT_TOL,
                       max_iter: int = 200, normalization: str = "area",
-                      order: int = 1, threads: int | None = None, cost: Any = None, metric: Any = None) -> np.ndarray:
+                      order: int = 1, threads: int | None = None, cost: Any = None, metric: Any = None,
+                      resolution: Any = None) -> np.ndarray:
     """Geodesic distance field from source vertices (one-shot form of :class:`GeodesicSolver`).
 
     Two call forms, told apart by the second argument (sources are never a 2-D array):
@@ -387,7 +421,7 @@ def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | 
         positions, followed by ``F``, (m, 3) int triangles.
     sources : int or sequence of int
         Source vertex indices (positional after the mesh, or keyword), or surface sources.
-    method, m, solver, lam, tol, max_iter, normalization, threads, cost, metric
+    method, m, solver, lam, tol, max_iter, normalization, threads, cost, metric, resolution
         See :class:`GeodesicSolver` (defaults ``"qcqp-hessian"``, 1.0, ``"auto"``).
 
     Returns
@@ -428,7 +462,8 @@ def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | 
         raise TypeError("geodesic_distance() missing the source vertices: geodesic_distance(mesh, sources)")
     solver_obj = GeodesicSolver(mesh, given.get("method"), m=given.get("m", 1.0), lam=lam,
                                 solver=given.get("solver", "auto"), tol=tol, max_iter=max_iter,
-                                normalization=normalization, order=order, threads=threads, cost=cost, metric=metric)
+                                normalization=normalization, order=order, threads=threads, cost=cost, metric=metric,
+                                resolution=resolution)
     return solver_obj.solve(given["sources"]).distance
 
 
@@ -441,7 +476,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
                     max_iter: int = 200, multires: bool | int = False, normalization: str = "area",
                     order: int = 1, threads: int | None = None, workers: int | None = None,
                     scheduler: Any = None, cost: Any = None, metric: Any = None, max_distance: float | None = None,
-                    checkpoint: str | os.PathLike | None = None) -> np.ndarray | sp.csr_matrix:
+                    checkpoint: str | os.PathLike | None = None, resolution: Any = None) -> np.ndarray | sp.csr_matrix:
     """Distance fields from several vertices, one row per vertex, with one :class:`GeodesicSolver`.
 
     The per-mesh work (operators, energy matrix, symbolic Cholesky analysis) is
@@ -470,8 +505,9 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
         Any mesh :class:`GeodesicSolver` takes (a tetrahedral one too, without ``max_distance``).
     vertices : int or (k,) sequence of int
         Source vertex of each row.
-    method, m, solver, lam, max_iter, multires, normalization, threads, cost, metric
-        See :class:`GeodesicSolver`. On a cluster, ``threads=None`` lets every worker's solver
+    method, m, solver, lam, max_iter, multires, normalization, threads, cost, metric, resolution
+        See :class:`GeodesicSolver`. With ``resolution`` every row is solved on the one decimated copy (made once per
+        solver: once, or once per chunk on a cluster). On a cluster, ``threads=None`` lets every worker's solver
         follow the worker's environment: ``cpu_count // workers`` threads on a local cluster.
     tol : float, optional
         See :class:`GeodesicSolver`. Default: 1e-8 (the tolerance of every other solve) for full rows,
@@ -536,7 +572,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
             raise ParameterError("give workers (a local Dask cluster) or scheduler (an existing one), not both")
     options: dict[str, Any] = {"method": method, "m": m, "lam": lam, "solver": solver, "tol": tol, "max_iter": max_iter,
                "multires": multires, "normalization": normalization, "order": order, "threads": threads,
-               "cost": cost, "metric": metric}
+               "cost": cost, "metric": metric, "resolution": resolution}
     items, inverse = _matrix_rows(mesh, vertices, local=max_distance is not None)
     factory: Any = GeodesicSolver
     if max_distance is not None:
@@ -596,9 +632,9 @@ def _local_rows(mesh: Any, options: dict, max_distance: Any) -> tuple[Any, dict]
     if isinstance(mesh, TetMesh):
         raise ParameterError("max_distance is for triangle meshes (surfaces), not tetrahedral meshes")
     r = check_number(max_distance, "max_distance", low=0, low_open=True)
-    for name in ("multires", "cost", "metric"):
-        if options[name] if name == "multires" else options[name] is not None:
+    for name in ("multires", "cost", "metric", "resolution"):
+        if options[name] if name == "multires" else options[name] is not None and options[name] != "mesh":
             raise ParameterError(f"max_distance does not take {name}= (a patch has no coarse mesh, cost or metric "
                                  "of its own yet)")
-    rest = {k: v for k, v in options.items() if k not in ("multires", "cost", "metric")}
+    rest = {k: v for k, v in options.items() if k not in ("multires", "cost", "metric", "resolution")}
     return LocalRows, {"max_distance": r, "factory": _PatchSolver, **rest}

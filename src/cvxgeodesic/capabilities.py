@@ -1,8 +1,8 @@
 """What each method supports: one table, read by the checks at the API edge, the docs and the CLI's help.
 
 A *cell* is a method on a simplex dimension (2: triangle meshes, 3: tetrahedral meshes) at an element order
-(1, 2), with a medium (``"none"``, ``"cost"``, ``"metric"``), a source kind (:data:`SOURCE_KINDS`) and with or
-without ``multires``. Every cell is supported unless a rule of :data:`RULES` refuses it; the first such rule gives
+(1, 2), with a medium (``"none"``, ``"cost"``, ``"metric"``), a source kind (:data:`SOURCE_KINDS`), with or
+without ``multires`` and with or without a ``resolution`` other than ``"mesh"`` (an adapted solve). Every cell is supported unless a rule of :data:`RULES` refuses it; the first such rule gives
 the reason. :func:`check` turns a refusal into the library's error (``ParameterError``, or ``SourceError`` for a
 kind of source) naming what is supported instead; :func:`markdown_table` writes the table of ``docs/capabilities.md``
 and :func:`help_text` the short version for the command line.
@@ -53,7 +53,7 @@ class Rule:
 
     Attributes
     ----------
-    axis : {"method", "order", "medium", "multires", "source"}
+    axis : {"method", "resolution", "order", "medium", "multires", "source"}
         What the rule is about (it matches only where that axis is asked for: a medium, a source kind, multires;
         "order" rules name order 2). Decides the message and the error class.
     reason : str
@@ -74,10 +74,10 @@ class Rule:
     smoothing: bool = False
 
     def matches(self, method: str, dim: int, order: int, medium: str, source: str | None, multires: bool,
-                smoothing: bool) -> bool:
+                smoothing: bool, resolution: bool = False) -> bool:
         """Whether the cell is one this rule refuses."""
         active = {"method": True, "order": order != 1, "medium": medium != "none", "multires": multires,
-                  "source": source is not None}[self.axis]
+                  "source": source is not None, "resolution": resolution}[self.axis]
         return (active and (self.methods is None or method in self.methods)
                 and (self.dims is None or dim in self.dims) and (self.orders is None or order in self.orders)
                 and (self.media is None or medium in self.media)
@@ -108,6 +108,15 @@ RULES: tuple[Rule, ...] = (
          media=_WITH_MEDIUM),
     Rule("multires", "multires takes vertex sources only; solve point, curve and boundary sources without "
          "multires", sources=("point", "curve", "boundary", "boundary faces")),
+    # an adapted solve (resolution= other than "mesh": order 2 on a decimated copy, strategies/adapted.py)
+    Rule("resolution", "resolution= decimates triangle meshes; tetrahedral meshes are solved on themselves",
+         dims=(3,)),
+    Rule("resolution", "resolution= solves at order 2, which the baselines do not have; give resolution='mesh'",
+         BASELINE_METHODS),
+    Rule("resolution", "resolution= solves at order 2, which the LC formulations do not have; use qclp or a qcqp "
+         "method, or resolution='mesh'", _LC),
+    Rule("resolution", "resolution= solves at order 2, which takes no curves; solve curves with resolution='mesh'",
+         sources=("curve",)),
     # kinds of source
     Rule("source", "a SurfaceCurve lies on a surface; inside a volume give VolumePoints or BoundaryFaces",
          dims=(3,), sources=("curve",)),
@@ -117,11 +126,11 @@ RULES: tuple[Rule, ...] = (
          sources=("point", "curve")),
     Rule("source", "solve curves at order 1", dims=(2,), orders=(2,), sources=("curve",)),
 )
-_AXES = ("method", "order", "medium", "multires", "source")
+_AXES = ("method", "resolution", "order", "medium", "multires", "source")
 
 
 def refusal(method: str, *, dim: int, order: int = 1, medium: str = "none", source: str | None = None,
-            multires: bool = False, smoothing: bool = True) -> Rule | None:
+            multires: bool = False, smoothing: bool = True, resolution: bool = False) -> Rule | None:
     """The first rule that refuses the cell (method rules first, then order, medium, multires, source), or None.
 
     Parameters
@@ -136,8 +145,10 @@ def refusal(method: str, *, dim: int, order: int = 1, medium: str = "none", sour
     multires : bool
     smoothing : bool
         The solve has a smoothness term (``m > 0``); False lets the smoothed methods behave as their LP.
+    resolution : bool
+        An adapted solve (``resolution`` other than ``"mesh"``; it runs at order 2).
     """
-    hits = [r for r in RULES if r.matches(method, dim, order, medium, source, multires, smoothing)]
+    hits = [r for r in RULES if r.matches(method, dim, order, medium, source, multires, smoothing, resolution)]
     return min(hits, key=lambda r: _AXES.index(r.axis)) if hits else None
 
 
@@ -147,10 +158,10 @@ def supported(method: str, **cell) -> bool:
 
 
 def methods_for(dim: int, order: int = 1, medium: str = "none", source: str | None = None, *,
-                multires: bool = False) -> tuple[str, ...]:
+                multires: bool = False, resolution: bool = False) -> tuple[str, ...]:
     """The methods that support a cell, in the order of :data:`METHODS` (a smoothed solve)."""
     return tuple(m for m in METHODS if supported(m, dim=dim, order=order, medium=medium, source=source,
-                                                 multires=multires))
+                                                 multires=multires, resolution=resolution))
 
 
 def source_kinds(sources: Any) -> set[str]:
@@ -177,14 +188,14 @@ def source_phrase(kinds: Iterable[str]) -> str:
 
 
 def check(method: str, *, dim: int, order: int = 1, medium: str = "none", sources: Iterable[str] = (),
-          multires: bool = False, smoothing: bool = True) -> None:
+          multires: bool = False, smoothing: bool = True, resolution: bool = False) -> None:
     """Raise the library's error when the table refuses the solve; the message says what is supported instead.
 
     Parameters
     ----------
     method : str
         A canonical name of :data:`METHODS` (aliases resolved, unknown names refused by the caller).
-    dim, order, medium, multires, smoothing
+    dim, order, medium, multires, smoothing, resolution
         See :func:`refusal`.
     sources : iterable of str
         The kinds of source of one solve (:data:`SOURCE_KINDS`); empty when the solver is built.
@@ -192,12 +203,12 @@ def check(method: str, *, dim: int, order: int = 1, medium: str = "none", source
     Raises
     ------
     ParameterError
-        The method on this dimension, at this order, with this medium or with multires.
+        The method on this dimension, at this order, with this medium, with multires or with resolution.
     SourceError
         A kind of source the method cannot take there (the message names the methods that can).
     """
     cell: dict[str, Any] = {"dim": dim, "order": order, "medium": medium, "multires": multires,
-                            "smoothing": smoothing}
+                            "smoothing": smoothing, "resolution": resolution}
     rule = refusal(method, **cell)
     if rule is not None:
         raise ParameterError(_message(rule, method, **cell))
@@ -213,16 +224,19 @@ def _source_message(method: str, kind: str, rule: Rule, cell: dict[str, Any]) ->
     same = [k for k in SOURCE_KINDS if k == kind or (refusal(method, source=k, **cell) == rule
                                                      and methods_for(dim, source=k))]
     what = source_phrase(same)
-    if rule.axis == "multires":
-        return f"multires cannot take {what} sources ({rule.reason})"
-    can = [m for m in methods_for(dim, cell["order"], cell["medium"], kind, multires=cell["multires"]) if m != method]
+    if rule.axis in ("multires", "resolution"):
+        return f"{rule.axis}{'=' if rule.axis == 'resolution' else ''} cannot take {what} sources ({rule.reason})"
+    can = [m for m in methods_for(dim, cell["order"], cell["medium"], kind, multires=cell["multires"],
+                                  resolution=cell["resolution"]) if m != method]
     return (f"method {method!r} cannot take {what} sources {_ON[dim]}{' at order 2' if cell['order'] == 2 else ''} "
             f"({rule.reason}); " + (f"methods that can: {', '.join(can)}" if can else "no method can there"))
 
 
 def _message(rule: Rule, method: str, *, dim: int, order: int, medium: str, multires: bool,
-             smoothing: bool) -> str:
+             smoothing: bool, resolution: bool = False) -> str:
     where = DIM_NAMES[dim]
+    if rule.axis == "resolution":
+        return f"resolution= is not available for method {method!r} on {where}: {rule.reason}"
     if rule.axis == "method":
         volume_or_surface = "on a volume" if dim == 3 else "on a surface"
         return (f"method {method!r} does not apply to {where} ({rule.reason}); {volume_or_surface} use one of "
@@ -241,9 +255,10 @@ def _message(rule: Rule, method: str, *, dim: int, order: int, medium: str, mult
 # ---------------------------------------------------------------------------------------------------------------
 # the table as text
 # ---------------------------------------------------------------------------------------------------------------
-_COLUMNS = ("order 1", "order 2", "cost, metric", "multires", *SOURCE_KINDS)
+_COLUMNS = ("order 1", "order 2", "cost, metric", "multires", "resolution", *SOURCE_KINDS)
 #: What a column other than an order's asks of :func:`refusal` (a source column: its kind).
-_COLUMN_CELLS: dict[str, dict[str, Any]] = {"cost, metric": {"medium": "cost"}, "multires": {"multires": True}}
+_COLUMN_CELLS: dict[str, dict[str, Any]] = {"cost, metric": {"medium": "cost"}, "multires": {"multires": True},
+                                            "resolution": {"resolution": True}}
 
 
 def _cell(method: str, dim: int, column: str, notes: dict[str, int]) -> str:

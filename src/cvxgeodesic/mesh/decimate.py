@@ -77,7 +77,8 @@ def _igl_decimate(mesh: TriMesh, target_faces: int):
     return (U, G), None
 
 
-def simplify_mesh(mesh: TriMesh, target_faces: int, method: str = "shortest-edge") -> TriMesh:
+def simplify_mesh(mesh: TriMesh, target_faces: int, method: str = "shortest-edge", *,
+                  preserve_border: bool = False) -> TriMesh:
     """Decimate a mesh to about ``target_faces`` faces by edge collapses.
 
     Parameters
@@ -93,6 +94,9 @@ def simplify_mesh(mesh: TriMesh, target_faces: int, method: str = "shortest-edge
         when it fails, times out, or the mesh is not edge-manifold, ``"quadric"``
         is used instead. ``"quadric"``: quadric error decimation of
         ``fast-simplification`` (faster, robust, elongated triangles).
+    preserve_border : bool
+        ``"quadric"`` only: collapse no edge that touches a boundary vertex, so that the coarse mesh's boundary is
+        the fine mesh's boundary, vertex for vertex (the adapted solves' ``"boundary"`` sources).
 
     Returns
     -------
@@ -124,7 +128,7 @@ def simplify_mesh(mesh: TriMesh, target_faces: int, method: str = "shortest-edge
         fs = _fast_simplification()
         # writable copies: the extension rejects the read-only arrays of a TriMesh
         result = fs.simplify(np.array(mesh.V, dtype=np.float64), np.array(mesh.F, dtype=np.int64),
-                             target_count=int(target_faces))
+                             target_count=int(target_faces), preserve_border=bool(preserve_border))
     pts = np.asarray(result[0], dtype=np.float64)
     tris = np.asarray(result[1], dtype=np.int64).reshape(-1, 3)
     ok = (tris[:, 0] != tris[:, 1]) & (tris[:, 1] != tris[:, 2]) & (tris[:, 0] != tris[:, 2])

@@ -2,7 +2,8 @@
 
 For every query point (the fine mesh's vertices), :class:`SurfaceTransfer` finds the closest point on the
 coarse surface (libigl's AABB tree, exact point–triangle distance) and its barycentric coordinates in that
-coarse triangle; a coarse per-vertex field is then interpolated there.
+coarse triangle; a coarse per-vertex field is then interpolated there. :class:`ProjectedField` does the same for a
+field that answers at points of the coarse mesh's faces (an order-2 field): it answers at points of the fine mesh.
 """
 
 from __future__ import annotations
@@ -12,10 +13,12 @@ from typing import Any
 
 import numpy as np
 
+from .closest import closest_point_index
 from .geometry import clipped_barycentric
+from .locate import bary_positions
 from .trimesh import TriMesh
 
-__all__ = ["SurfaceTransfer"]
+__all__ = ["ProjectedField", "SurfaceTransfer"]
 
 
 class SurfaceTransfer:
@@ -105,3 +108,47 @@ class SurfaceTransfer:
             self._kdtree = cKDTree(self.coarse.V)
         dist, idx = self._kdtree.query(np.atleast_2d(points))
         return np.asarray(idx, dtype=np.int64), np.asarray(dist)
+
+
+class ProjectedField:
+    """A distance field solved on another mesh of the same surface, read at points of this one.
+
+    A point of ``mesh`` (a face and barycentric coordinates) is moved to its closest point on ``solve_mesh``, where
+    ``field`` is evaluated: the field of an adapted solve (:mod:`cvxgeodesic.strategies.adapted`) answers
+    :func:`~cvxgeodesic.paths.distance_at` on the user's surface this way.
+
+    Parameters
+    ----------
+    mesh : TriMesh
+        The mesh the queries name faces of (``m`` faces).
+    solve_mesh : TriMesh
+        The mesh the field lives on.
+    field : object
+        Anything with ``distance_at(faces, bary) -> (p,) float ndarray`` on ``solve_mesh`` (a
+        :class:`~cvxgeodesic.operators.lagrange.LagrangeField`).
+    vertex_distance : (n,) float ndarray
+        The field at ``mesh``'s vertices (what the solve returned).
+    """
+
+    def __init__(self, mesh: TriMesh, solve_mesh: TriMesh, field: Any, vertex_distance: np.ndarray) -> None:
+        self.mesh = mesh
+        self.solve_mesh = solve_mesh
+        self.field = field
+        self.vertex_distance = vertex_distance
+
+    def distance_at(self, faces: Any, bary: Any) -> np.ndarray:
+        """Distance at points of ``mesh``'s faces.
+
+        Parameters
+        ----------
+        faces : int or (p,) int array_like
+        bary : (3,) or (p, 3) float array_like
+
+        Returns
+        -------
+        (p,) float ndarray
+        """
+        faces = np.atleast_1d(np.asarray(faces, dtype=np.int64))
+        X = bary_positions(self.mesh, faces, np.atleast_2d(np.asarray(bary, dtype=float)))
+        cf, cb, _ = closest_point_index(self.solve_mesh).query(np.ascontiguousarray(X))
+        return np.asarray(self.field.distance_at(cf, cb), dtype=float)

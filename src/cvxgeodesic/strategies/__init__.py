@@ -10,11 +10,15 @@ supports is :mod:`cvxgeodesic.capabilities`). Each strategy is built once per so
 :class:`BaselineStrategy`  Dijkstra, fast marching, heat, exact (:mod:`cvxgeodesic.baselines`)
 :class:`CoarseToFine`      two direct solves: a decimated mesh, then (with polish) the mesh itself
 :class:`Order2`            P2 elements for d², edge cones and cutting planes on flat faces
+:class:`Adapted`           order 2 on a decimated copy (``resolution=``), the field read on the mesh
 =========================  =====================================================================
 """
 
 from __future__ import annotations
 
+from typing import Any
+
+from .adapted import Adapted, resolve_resolution
 from .backend import Backend, ipm_available
 from .base import Callback, SolveConfig, SolveStrategy
 from .baseline import BaselineStrategy
@@ -23,14 +27,14 @@ from .direct import DirectStrategy
 from .order2 import Order2
 
 __all__ = [
-    "Backend", "BaselineStrategy", "Callback", "CoarseToFine", "DirectStrategy", "Order2", "SolveConfig",
+    "Adapted", "Backend", "BaselineStrategy", "Callback", "CoarseToFine", "DirectStrategy", "Order2", "SolveConfig",
     "SolveStrategy",
     "default_target_faces", "ipm_available", "make_strategy", "resolve_target",
 ]
 
 
 def make_strategy(config: SolveConfig, *, baseline: bool, order: int = 1, multires_target: int | None = None,
-                  polish: bool = False) -> SolveStrategy:
+                  polish: bool = False, resolution: Any = "mesh") -> SolveStrategy:
     """The strategy for a validated config.
 
     Parameters
@@ -43,11 +47,16 @@ def make_strategy(config: SolveConfig, *, baseline: bool, order: int = 1, multir
         Coarse face count (from :func:`resolve_target`); None for a direct solve.
     polish : bool
         With ``multires_target``: finish with a direct solve on the mesh.
+    resolution : "mesh", "auto", int or float
+        Anything but ``"mesh"``: an :class:`Adapted` solve (order 2 on a decimated copy,
+        :func:`resolve_resolution`).
 
     Returns
     -------
     SolveStrategy
     """
+    if resolution != "mesh":
+        return Adapted(config, resolve_resolution(resolution, config.mesh.n_cells), resolution)
     if order == 2:
         return Order2(config)
     if baseline:
