@@ -19,11 +19,11 @@ DOC = Path(__file__).resolve().parents[1] / "docs" / "capabilities.md"
 
 
 def _cells():
-    for method, dim, order, medium, multires, smoothing in itertools.product(
-            cap.METHODS, cap.DIMS, cap.ORDERS, cap.MEDIA, (False, True), (False, True)):
+    for method, dim, order, medium, multires, smoothing, resolution in itertools.product(
+            cap.METHODS, cap.DIMS, cap.ORDERS, cap.MEDIA, (False, True), (False, True), (False, True)):
         for source in (None, *cap.SOURCE_KINDS):
             yield method, {"dim": dim, "order": order, "medium": medium, "source": source, "multires": multires,
-                           "smoothing": smoothing}
+                           "smoothing": smoothing, "resolution": resolution}
 
 
 def test_the_table_names_the_solvers_methods():

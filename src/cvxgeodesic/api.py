@@ -166,7 +166,10 @@ class GeodesicSolver:
         at their exact positions, and answers on this mesh: ``distance`` per vertex, ``distance_at`` and
         ``geodesic_path`` on this surface; ``info.extra["adapted"]`` records the solve mesh, its times and an
         error estimate. Non-manifold meshes, several components and faces of zero area are solved on this mesh
-        instead, with a note. Surfaces only; not with ``multires``. None: :data:`DEFAULT_RESOLUTIONS`.
+        at order 1 instead, with a note. Surfaces only; not with ``multires``. None: :data:`DEFAULT_RESOLUTIONS`.
+    estimate_error : bool
+        With ``resolution``: estimate every solve's mean relative error by a second solve on a copy with half the
+        faces (``info.extra["adapted"]["error_estimate"]``; about half a solve more). False: None there.
 
     Raises
     ------
@@ -233,6 +236,7 @@ class GeodesicSolver:
         cost: Any = None,
         metric: Any = None,
         resolution: Any = None,
+        estimate_error: bool = True,
     ) -> None:
         t0 = time.perf_counter()
         self.mesh: Any = cast(Any, as_mesh(mesh))  # a TriMesh or a TetMesh, told apart by is_volume
@@ -259,7 +263,7 @@ class GeodesicSolver:
                              notes=(*getattr(self.mesh, "notes", ()), *getattr(self.medium, "notes", ())))
         self._strategy: SolveStrategy = make_strategy(config, baseline=self.is_baseline, order=self.order,
                                                       multires_target=target, polish=bool(multires_polish),
-                                                      resolution=self.resolution)
+                                                      resolution=self.resolution, estimate=bool(estimate_error))
         self.solver_name = self._strategy.backend
         # substitutions made for every solve of this object (copied into SolveInfo): the loader's repairs first
         self.notes: list[str] = self._strategy.notes
@@ -277,7 +281,8 @@ class GeodesicSolver:
             return
         if multires:
             raise ParameterError("give multires= or resolution=, not both: each chooses the mesh the field is "
-                                 "solved on (resolution= at order 2 with the sources at their positions, docs/adapted.md)")
+                                 "solved on (resolution= at order 2 with the sources at their positions, "
+                                 "docs/adapted.md)")
         self.resolution = resolution.strip().lower() if isinstance(resolution, str) else resolution
         self.order = 2
 
@@ -463,7 +468,7 @@ def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: str | 
     solver_obj = GeodesicSolver(mesh, given.get("method"), m=given.get("m", 1.0), lam=lam,
                                 solver=given.get("solver", "auto"), tol=tol, max_iter=max_iter,
                                 normalization=normalization, order=order, threads=threads, cost=cost, metric=metric,
-                                resolution=resolution)
+                                resolution=resolution, estimate_error=False)  # the estimate would be thrown away
     return solver_obj.solve(given["sources"]).distance
 
 
@@ -573,6 +578,8 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: str | None = None, m
     options: dict[str, Any] = {"method": method, "m": m, "lam": lam, "solver": solver, "tol": tol, "max_iter": max_iter,
                "multires": multires, "normalization": normalization, "order": order, "threads": threads,
                "cost": cost, "metric": metric, "resolution": resolution}
+    if resolution is not None and resolution != "mesh":  # the rows keep no info: no error estimate to pay for
+        options["estimate_error"] = False
     items, inverse = _matrix_rows(mesh, vertices, local=max_distance is not None)
     factory: Any = GeodesicSolver
     if max_distance is not None:

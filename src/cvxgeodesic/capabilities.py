@@ -2,9 +2,10 @@
 
 A *cell* is a method on a simplex dimension (2: triangle meshes, 3: tetrahedral meshes) at an element order
 (1, 2), with a medium (``"none"``, ``"cost"``, ``"metric"``), a source kind (:data:`SOURCE_KINDS`), with or
-without ``multires`` and with or without a ``resolution`` other than ``"mesh"`` (an adapted solve). Every cell is supported unless a rule of :data:`RULES` refuses it; the first such rule gives
-the reason. :func:`check` turns a refusal into the library's error (``ParameterError``, or ``SourceError`` for a
-kind of source) naming what is supported instead; :func:`markdown_table` writes the table of ``docs/capabilities.md``
+without ``multires`` and with or without a ``resolution`` other than ``"mesh"`` (an adapted solve). Every cell is
+supported unless a rule of :data:`RULES` refuses it; the first such rule gives the reason. :func:`check` turns a
+refusal into the library's error (``ParameterError``, or ``SourceError`` for a kind of source) naming what is
+supported instead; :func:`markdown_table` writes the table of ``docs/capabilities.md``
 and :func:`help_text` the short version for the command line.
 
 A leaf module (no NumPy): the method names are spelled here and a test checks them against

@@ -254,3 +254,27 @@ def batch_sources(args: argparse.Namespace) -> Any:
     if boundary:
         return "boundary"
     return [*vertices, *(list(x) for x in points)] if points else vertices
+
+
+def add_resolution_option(p: argparse.ArgumentParser) -> None:
+    """``--resolution`` (docs/adapted.md): the mesh the field is solved on."""
+    p.add_argument("--resolution", type=resolution, default=None, metavar="R",
+                   help="solve at order 2 on a quadric-decimated copy and answer on this mesh: a face count (e.g. "
+                        "4000), a fraction of the faces (e.g. 0.1), 'auto' (1/10, at least 2000 faces) or 'mesh' "
+                        "(this mesh, the default; docs/adapted.md)")
+
+
+def resolution(text: str) -> Any:
+    """``--resolution`` as :class:`~cvxgeodesic.api.GeodesicSolver` takes it: ``"mesh"``, ``"auto"``, an int or a
+    float (the values are checked there)."""
+    t = text.strip().lower()
+    if t in ("mesh", "auto"):
+        return t
+    try:
+        return int(t)
+    except ValueError:
+        pass
+    try:
+        return float(t)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected 'mesh', 'auto', a face count or a fraction, got {text!r}") from None

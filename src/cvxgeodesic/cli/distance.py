@@ -24,6 +24,7 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--order", type=int, default=1, choices=(1, 2),
                    help="2: second-order elements for the squared distance (qclp and the qcqp methods; docs/order2.md)")
     opt.add_cost_options(p)
+    opt.add_resolution_option(p)
     p.add_argument("-o", "--output", required=True, help=opt.output_help())
     p.add_argument("--png", default=None,
                    help="also render the field with isolines and the sources to this PNG (both files or neither; "
@@ -73,7 +74,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"{mesh.name}: {mesh.n_file_vertices} vertices, {mesh.n_cells} {space.cells}; method {method}"
               + (f", order {args.order}" if args.order != 1 else ""), file=log)
     solver = GeodesicSolver(mesh, method, m=args.m, lam=args.lam, solver=args.solver,
-                            normalization=args.normalization, order=args.order, cost=opt.cli_cost(args, mesh))
+                            normalization=args.normalization, order=args.order, cost=opt.cli_cost(args, mesh),
+                            resolution=args.resolution)
     res = solver.solve(sources, callback=None if args.quiet else progress_printer(log))
     for note in res.info.notes:
         args.notes.say(note)
@@ -87,6 +89,10 @@ def run(args: argparse.Namespace) -> int:
         i = res.info
         print(f"{i.method} via {i.solver}: {i.status}, {i.iterations} iterations, set-up {i.setup_time:.2f} s, "
               f"solve {i.solve_time:.2f} s; wrote {args.output}" + (f" and {args.png}" if args.png else ""), file=log)
+        ad = i.extra.get("adapted")
+        if ad is not None and ad.get("error_estimate") is not None:
+            print(f"solved on {ad['faces']} of {ad['user_faces']} faces; estimated mean relative error "
+                  f"{100 * ad['error_estimate']:.2g} %", file=log)
     return 0
 
 

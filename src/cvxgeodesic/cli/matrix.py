@@ -9,7 +9,7 @@ from typing import Any
 
 from ..errors import ParameterError, SourceError
 from ._common import add_overwrite_option, check_outputs
-from ._options import add_solve_options, add_source_options, method_for, volume_help
+from ._options import add_resolution_option, add_solve_options, add_source_options, method_for, volume_help
 
 
 def add_parser(sub: Any) -> None:
@@ -19,6 +19,7 @@ def add_parser(sub: Any) -> None:
     add_source_options(p, "source vertex of a row, in the file's numbering (repeat, or give a list: -s 0,5,9)",
                        points=False)
     add_solve_options(p)
+    add_resolution_option(p)
     p.add_argument("-o", "--output", required=True,
                    help="output .npy: (rows, file vertices) float64, columns in the file's numbering; with "
                         "--max-distance a sparse .npz (scipy.sparse.load_npz). Finished rows are kept in "
@@ -84,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         D: Any = distance_matrix(mesh, rows, method, m=args.m, solver=args.solver, progress=not args.quiet,
                             workers=args.workers, scheduler=args.scheduler, max_distance=args.max_distance,
-                            checkpoint=partial)
+                            checkpoint=partial, resolution=args.resolution)
     except KeyboardInterrupt:
         kept = checkpoint_rows(partial)
         if kept:

@@ -34,7 +34,7 @@ __all__ = [
 
 
 def make_strategy(config: SolveConfig, *, baseline: bool, order: int = 1, multires_target: int | None = None,
-                  polish: bool = False, resolution: Any = "mesh") -> SolveStrategy:
+                  polish: bool = False, resolution: Any = "mesh", estimate: bool = True) -> SolveStrategy:
     """The strategy for a validated config.
 
     Parameters
@@ -50,13 +50,15 @@ def make_strategy(config: SolveConfig, *, baseline: bool, order: int = 1, multir
     resolution : "mesh", "auto", int or float
         Anything but ``"mesh"``: an :class:`Adapted` solve (order 2 on a decimated copy,
         :func:`resolve_resolution`).
+    estimate : bool
+        With ``resolution``: estimate each solve's error (a second, coarser solve; :class:`Adapted`).
 
     Returns
     -------
     SolveStrategy
     """
     if resolution != "mesh":
-        return Adapted(config, resolve_resolution(resolution, config.mesh.n_cells), resolution)
+        return Adapted(config, resolve_resolution(resolution, config.mesh.n_cells), resolution, estimate=estimate)
     if order == 2:
         return Order2(config)
     if baseline:

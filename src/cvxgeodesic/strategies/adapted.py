@@ -29,15 +29,17 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError, SourceError
+from ..formulations import smoothness_weight
 from ..mesh.closest import closest_point_index
 from ..mesh.decimate import simplify_mesh
 from ..mesh.locate import SurfacePoint, bary_positions
 from ..mesh.transfer import ProjectedField
 from ..mesh.trimesh import TriMesh
 from ..operators.metric import Medium
-from ..results import GeodesicResult, SolveInfo
+from ..results import GeodesicResult
 from ..sources import SourceSet, resolve_sources
 from .base import Callback, SolveConfig
+from .direct import DirectStrategy
 from .order2 import Order2
 
 __all__ = ["AUTO_FRACTION", "AUTO_MIN_FACES", "MIN_RESOLUTION_FACES", "RESOLUTIONS", "SIMPLIFIER", "Adapted",
@@ -53,6 +55,18 @@ AUTO_FRACTION = 0.1
 #: ... but never fewer faces than this; a mesh with fewer than ``AUTO_MIN_FACES / AUTO_FRACTION`` faces is solved at
 #: this count, and one with at most ``AUTO_MIN_FACES`` on itself (see docs/adapted.md for the measurement).
 AUTO_MIN_FACES = 2000
+#: A source's barycentric coordinate on the solve mesh below this is set to 0: the point moves onto the edge (by at
+#: most this fraction of the face's altitude) instead of splitting the face into a sliver, which the order-2 program
+#: leaves without cones (measured on fandisk at 1/10, source vertex 0 at 4.6e-4 from an edge: mean error 1.95 %, max
+#: 108 %, against 1.08 % at 1/20 where the point fell on the edge). Recorded as ``source_offset``.
+SOURCE_SNAP = 2e-3
+#: The error estimate's second copy has this fraction of the solve mesh's faces: the mean relative difference of the
+#: two fields estimates the solve's mean error. Measured by `bench` (adapted-findings.md §3, 9 meshes of 5.9-20K faces,
+#: source vertex 0): the difference between the 1/10 and 1/20 fields was 0.58-1.10x the true error of the 1/10 field;
+#: the coarser companion costs about half the solve.
+ESTIMATE_RATIO = 0.5
+#: The targets (times the asked face count) tried in turn until a copy keeps the mesh's topology.
+RETRY_TARGETS = (1.0, 1.02, 0.98, 1.05, 0.95)
 #: How the solve mesh is made (recorded in ``info.extra["adapted"]["simplifier"]``).
 SIMPLIFIER = "quadric (fast-simplification, boundary kept)"
 
@@ -111,9 +125,32 @@ def _unsuitable(mesh: TriMesh) -> str | None:
 
 
 def _decimated(mesh: TriMesh, target: int) -> tuple[TriMesh | None, str | None]:
-    """The quadric copy of ``mesh`` with about ``target`` faces, or ``(None, why)`` when its topology changed."""
+    """The quadric copy of ``mesh`` with about ``target`` faces, or ``(None, why)`` when every try changed its
+    topology: the targets of :data:`RETRY_TARGETS` are tried in turn (the collapses that break a copy depend on
+    where the decimation stops; measured on bimba at 1/10: the first copy had non-manifold edges)."""
+    why: str | None = None
+    for factor in RETRY_TARGETS:
+        coarse, why = _decimated_once(mesh, max(MIN_RESOLUTION_FACES, int(round(factor * target))))
+        if coarse is not None:
+            return coarse, None
+    return None, why
+
+
+def _without_fins(mesh: TriMesh) -> TriMesh:
+    """``mesh`` without the faces that appear twice (a collapse can fold two faces onto each other, opposite ways:
+    a fin of no area that makes their edges non-manifold; measured on bimba at 1/10), nor the vertices they left."""
+    key = np.sort(mesh.F, axis=1)
+    _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    keep = counts[inverse.ravel()] == 1
+    if keep.all():
+        return mesh
+    used, local = np.unique(mesh.F[keep], return_inverse=True)
+    return TriMesh(mesh.V[used], local.reshape(-1, 3), name=mesh.name)
+
+
+def _decimated_once(mesh: TriMesh, target: int) -> tuple[TriMesh | None, str | None]:
     try:
-        coarse = simplify_mesh(mesh, target, method="quadric", preserve_border=True)
+        coarse = _without_fins(simplify_mesh(mesh, target, method="quadric", preserve_border=True))
     except Exception as exc:  # noqa: BLE001 - any failure of the extension falls back, with its message
         return None, f"the decimation failed ({type(exc).__name__}: {exc})"
     checks = ((not coarse.is_edge_manifold, "the decimated copy has non-manifold edges"),
@@ -178,6 +215,81 @@ def edge_shortening(mesh: TriMesh, positions: np.ndarray) -> float:
     return float(np.maximum(ell - short, 0.0).sum() / total) if total > 0 else 0.0
 
 
+class _Copy:
+    """One decimated copy of the user's mesh: its order-2 strategy and the user's vertices projected onto it.
+
+    Parameters
+    ----------
+    config : SolveConfig
+        The user's.
+    coarse : TriMesh
+        The copy (:func:`_decimated`).
+    """
+
+    def __init__(self, config: SolveConfig, coarse: TriMesh) -> None:
+        mesh = config.mesh
+        self.user, self.mesh = mesh, coarse
+        self.strategy = Order2(replace(config.on(coarse, lam=config.lam),
+                                       medium=_medium_on(config.medium, mesh, coarse)))
+        self.vertex_faces, self.vertex_bary, gap = closest_point_index(coarse).query(np.ascontiguousarray(mesh.V))
+        self.max_gap = float(gap[mesh.referenced].max(initial=0.0))
+        self.shortening = edge_shortening(mesh, bary_positions(coarse, self.vertex_faces, self.vertex_bary))
+
+    def sources(self, sources: SourceSet) -> tuple[SourceSet, float]:
+        """The user's sources on the copy, at their positions, and the largest snap (:data:`SOURCE_SNAP`): vertices
+        and points become the closest points there; the boundary stays the boundary (kept by the decimation)."""
+        mesh, coarse = self.user, self.mesh
+        if sources.boundary:
+            return resolve_sources(coarse, "boundary"), 0.0
+        X = np.concatenate([mesh.V[sources.vertices],
+                            np.array([p.position(mesh) for p in sources.distinct_points(mesh)]).reshape(-1, 3)])
+        faces, bary, _ = closest_point_index(coarse).query(np.ascontiguousarray(X))
+        snapped = np.where(bary < SOURCE_SNAP, 0.0, bary)
+        snapped /= snapped.sum(axis=1, keepdims=True)
+        moved = np.linalg.norm(bary_positions(coarse, faces, snapped) - bary_positions(coarse, faces, bary), axis=1)
+        points = [SurfacePoint(int(f), b) for f, b in zip(faces, snapped, strict=True)]
+        return resolve_sources(coarse, points), float(moved.max(initial=0.0))
+
+    def solve(self, sources: SourceSet, callback: Callback | None,
+              requested: Any) -> tuple[GeodesicResult, np.ndarray, float, float]:
+        """``(result on the copy, the field at the user's vertices, the sources' snap, seconds of the transfer)``;
+        the field is 0 at source vertices, inf at vertices of no face.
+
+        Raises
+        ------
+        SourceError
+            Two sources in one face of the copy (order 2 takes one point per face), saying so.
+        """
+        csources, offset = self.sources(sources)
+        try:
+            cres = self.strategy.solve(csources, callback=callback)
+        except SourceError as exc:
+            raise SourceError(f"resolution={requested!r}: on the {self.mesh.n_faces}-face solve mesh, {exc}; give a "
+                              "finer resolution or resolution='mesh'") from None
+        t0 = time.perf_counter()
+        d = np.asarray(cres.info.extra["p2_field"].distance_at(self.vertex_faces, self.vertex_bary), dtype=float)
+        d[sources.fixed_vertices(self.user)] = 0.0
+        d[~self.user.referenced] = np.inf
+        return cres, d, offset, time.perf_counter() - t0
+
+
+def _relative_difference(a: np.ndarray, b: np.ndarray, fixed: np.ndarray) -> float:
+    """Mean of ``|a − b| / b`` over the vertices where both are finite, ``b > 0``, and not in ``fixed``."""
+    keep = np.isfinite(a) & np.isfinite(b) & (b > 0)
+    keep[fixed] = False
+    return float(np.mean(np.abs(a[keep] - b[keep]) / b[keep])) if keep.any() else 0.0
+
+
+def _fallback(config: SolveConfig) -> tuple[Any, int]:
+    """The strategy of a mesh that is not decimated, and its order: order 1 on the mesh (what an adapted solve
+    costs; order 2 on the whole mesh costs 5-30x more), or order 2 where λ was given for order 2 (``lam=``)."""
+    if config.energy is not None and config.lam > 0 and config.m is None:
+        return Order2(config), 2
+    lam = 0.0 if config.energy is None or not config.m else smoothness_weight(
+        config.mesh, config.m, config.normalization, config.energy, medium=config.medium, order=1)
+    return DirectStrategy(replace(config, lam=lam)), 1
+
+
 class Adapted:
     """Order-2 solves on a decimated copy of a surface, answered on the surface itself.
 
@@ -185,70 +297,78 @@ class Adapted:
     ----------
     config : SolveConfig
         The user's mesh and an order-2 method (:func:`~cvxgeodesic.capabilities.check` passed with
-        ``resolution=True``).
+        ``resolution=True``; λ is order 2's).
     target : int or None
         The solve mesh's face count (:func:`resolve_resolution`); None or at least the mesh's face count: the mesh
         itself, with a note.
     requested : object
         The ``resolution`` the user gave (for the record).
+    estimate : bool
+        Estimate the error of every solve by a second solve on a copy with :data:`ESTIMATE_RATIO` of the faces.
 
     Attributes
     ----------
     solve_mesh : TriMesh
-        The mesh the order-2 program is solved on (the user's when it fell back).
-    inner : Order2
-        The order-2 strategy on ``solve_mesh``.
+        The mesh the order-2 program is solved on (the user's after a fallback).
+    copy, companion : _Copy or None
+        The solve mesh's copy; the coarser copy of the error estimate.
+    inner : Order2 or DirectStrategy
+        The strategy on ``solve_mesh``.
     record : dict
         What ``info.extra["adapted"]`` reports for every solve (per-solve times are added).
     """
 
-    def __init__(self, config: SolveConfig, target: int | None, requested: Any = None) -> None:
+    def __init__(self, config: SolveConfig, target: int | None, requested: Any = None, *,
+                 estimate: bool = True) -> None:
         t0 = time.perf_counter()
         mesh = config.mesh
         self.config = config
+        self.requested = requested
         self.notes: list[str] = list(config.notes)
         self.record: dict[str, Any] = {"resolution": requested, "target_faces": target, "user_faces": mesh.n_faces,
                                        "faces": mesh.n_faces, "simplifier": None, "decimate_time": 0.0,
-                                       "fallback": None}
-        coarse, why = None, None
-        if target is None or target >= mesh.n_faces:
+                                       "fallback": None, "order": 2, "error_estimate": None,
+                                       "error_estimate_method": None}
+        coarse, why, small = None, None, target is None or target >= mesh.n_faces
+        if small:
             why = f"the target of {target} faces is not below the mesh's {mesh.n_faces}"
         else:
             why = _unsuitable(mesh)
             if why is None:
                 coarse, why = _decimated(mesh, target)
         self.record["decimate_time"] = time.perf_counter() - t0
+        self.copy: _Copy | None = None
+        self.companion: _Copy | None = None
         if coarse is None:
             self.solve_mesh = mesh
-            self.record["fallback"] = why
-            self.notes.append(f"resolution={requested!r}: solved on the mesh itself at order 2 ({why})")
-            self.inner = Order2(config)
+            # a small mesh is the solve mesh asked for; a mesh that cannot be decimated gets what a copy would cost
+            self.inner, order = (Order2(config), 2) if small else _fallback(config)
+            self.record.update(fallback=why, order=order, error_estimate_method="none: solved on the mesh itself")
+            self.notes.append(f"resolution={requested!r}: solved on the mesh itself at order {order} ({why})")
         else:
-            self.solve_mesh = coarse
-            medium = _medium_on(config.medium, mesh, coarse)
-            self.inner = Order2(replace(config.on(coarse, lam=config.lam), medium=medium))
+            self.copy = _Copy(config, coarse)
+            self.solve_mesh, self.inner = coarse, self.copy.strategy
             self.notes.append(f"resolution={requested!r}: solved at order 2 on a {coarse.n_faces}-face copy of the "
                               f"mesh ({mesh.n_faces} faces; {SIMPLIFIER}), the field read at the mesh's vertices")
-            self.record.update(faces=coarse.n_faces, simplifier=SIMPLIFIER)
-            self._project_vertices()
+            self.record.update(faces=coarse.n_faces, simplifier=SIMPLIFIER, max_surface_distance=self.copy.max_gap,
+                               edge_shortening=self.copy.shortening)
+            if estimate:
+                self._companion(coarse.n_faces)
         self.backend = self.inner.backend
         self.setup_time = time.perf_counter() - t0
 
-    def _project_vertices(self) -> None:
-        """Each user vertex's closest point on the solve mesh, the distance to it and the error estimate."""
-        mesh = self.config.mesh
-        self.vertex_faces, self.vertex_bary, gap = closest_point_index(self.solve_mesh).query(
-            np.ascontiguousarray(mesh.V))
-        positions = bary_positions(self.solve_mesh, self.vertex_faces, self.vertex_bary)
-        self.record.update(max_surface_distance=float(gap[mesh.referenced].max(initial=0.0)),
-                           error_estimate=edge_shortening(mesh, positions),
-                           error_estimate_method="edge shortening: the user's edges against the segments between "
-                                                 "their ends' closest points on the solve mesh")
-
-    @property
-    def adapted(self) -> bool:
-        """True when the solves run on a decimated copy (False after a fallback)."""
-        return self.solve_mesh is not self.config.mesh
+    def _companion(self, faces: int) -> None:
+        """The coarser copy of the error estimate (none, with the reason, when its decimation fails)."""
+        t0 = time.perf_counter()
+        coarser, why = _decimated(self.config.mesh, max(MIN_RESOLUTION_FACES, int(ESTIMATE_RATIO * faces)))
+        self.record["decimate_time"] += time.perf_counter() - t0
+        if coarser is None:
+            self.record["error_estimate_method"] = f"none: the coarser copy failed ({why})"
+            return
+        self.companion = _Copy(self.config, coarser)
+        self.record["error_estimate_method"] = (
+            f"two resolutions: the mean relative difference to the field solved on a {coarser.n_faces}-face copy "
+            f"({ESTIMATE_RATIO:g} of the solve mesh's faces)")
 
     def solve(self, sources: SourceSet, *, callback: Callback | None = None) -> GeodesicResult:
         """Distance field on the user's mesh from sources resolved on it.
@@ -258,53 +378,37 @@ class Adapted:
         SourceError
             Two sources that fall into one face of the solve mesh (order 2 takes one point per face).
         """
-        if not self.adapted:
+        if self.copy is None:
             res = self.inner.solve(sources, callback=callback)
-            res.info.extra["adapted"] = {**self.record, "solve_time": res.info.solve_time, "transfer_time": 0.0,
-                                         "error_estimate": 0.0, "error_estimate_method": "solved on the mesh itself"}
+            res.info.notes.insert(len(self.config.notes), self.notes[len(self.config.notes)])  # the fallback's note
+            res.info.extra["adapted"] = {**self.record, "solve_time": res.info.solve_time, "transfer_time": 0.0}
             return res
         t0 = time.perf_counter()
-        coarse_sources = self._sources(sources)
-        try:
-            cres = self.inner.solve(coarse_sources, callback=callback)
-        except SourceError as exc:
-            raise SourceError(f"resolution={self.record['resolution']!r}: on the {self.solve_mesh.n_faces}-face "
-                              f"solve mesh, {exc}; give a finer resolution or resolution='mesh'") from None
-        t1 = time.perf_counter()
-        d = self._on_user_mesh(cres, sources)
-        t2 = time.perf_counter()
-        return self._result(cres, d, sources, t0, t1, t2)
+        cres, d, offset, transfer = self.copy.solve(sources, callback, self.requested)
+        record = {**self.record, "solve_time": time.perf_counter() - t0 - transfer, "transfer_time": transfer,
+                  "source_offset": offset}
+        notes = [*self.notes, *cres.info.notes]
+        if offset > 0:
+            notes.append(f"a source within {SOURCE_SNAP:g} of a face's altitude from an edge of the solve mesh was "
+                         f"moved onto it (by {offset:.3g})")
+        if self.companion is not None:
+            t2 = time.perf_counter()
+            try:
+                _, dc, _, _ = self.companion.solve(sources, None, self.requested)
+                record["error_estimate"] = _relative_difference(dc, d, sources.fixed_vertices(self.config.mesh))
+            except SourceError as exc:
+                record["error_estimate_method"] = f"none: the coarser copy took not the sources ({exc})"
+            record["estimate_time"] = time.perf_counter() - t2
+        return self._result(cres, d, sources, notes, record, t0)
 
-    def _sources(self, sources: SourceSet) -> SourceSet:
-        """The user's sources on the solve mesh, at their positions: vertices and points become the closest points
-        there; the boundary stays the boundary (kept by the decimation)."""
-        mesh, coarse = self.config.mesh, self.solve_mesh
-        if sources.boundary:
-            return resolve_sources(coarse, "boundary")
-        X = np.concatenate([mesh.V[sources.vertices],
-                            np.array([p.position(mesh) for p in sources.distinct_points(mesh)]).reshape(-1, 3)])
-        faces, bary, _ = closest_point_index(coarse).query(np.ascontiguousarray(X))
-        return resolve_sources(coarse, [SurfacePoint(int(f), b) for f, b in zip(faces, bary, strict=True)])
-
-    def _on_user_mesh(self, cres: GeodesicResult, sources: SourceSet) -> np.ndarray:
-        """The solve mesh's field at the user's vertices; 0 at source vertices, inf at vertices of no face."""
-        mesh = self.config.mesh
-        fld = cres.info.extra["p2_field"]
-        d = np.asarray(fld.distance_at(self.vertex_faces, self.vertex_bary), dtype=float)
-        d[sources.fixed_vertices(mesh)] = 0.0
-        d[~mesh.referenced] = np.inf
-        return d
-
-    def _result(self, cres: GeodesicResult, d: np.ndarray, sources: SourceSet, t0: float, t1: float,
-                t2: float) -> GeodesicResult:
+    def _result(self, cres: GeodesicResult, d: np.ndarray, sources: SourceSet, notes: list[str], record: dict,
+                t0: float) -> GeodesicResult:
         ci = cres.info
-        mesh = self.config.mesh
-        record = {**self.record, "solve_time": t1 - t0, "transfer_time": t2 - t1}
+        assert self.copy is not None
         extra = {k: v for k, v in ci.extra.items() if k != "p2_field"}
-        extra.update(adapted=record, p2_field=ProjectedField(mesh, self.solve_mesh, ci.extra["p2_field"], d),
-                     solve_mesh=self.solve_mesh)
+        field = ProjectedField(self.config.mesh, self.solve_mesh, ci.extra["p2_field"], d)
+        extra.update(adapted=record, p2_field=field, solve_mesh=self.solve_mesh)
         info = replace(ci, setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
-                       n_unreachable=int(np.isinf(d).sum()), notes=[*self.notes, *ci.notes],
-                       extra=extra)
+                       n_unreachable=int(np.isinf(d).sum()), notes=notes, extra=extra)
         return GeodesicResult(distance=d, info=info, sources=sources.vertices,
                               source_set=None if sources.vertex_only else sources)

@@ -1,0 +1,248 @@
+"""Adapted solves (``resolution=``): order 2 on a quadric-decimated copy, answered on the user's mesh."""
+
+import numpy as np
+import pytest
+
+import cvxgeodesic as cg
+from cvxgeodesic.errors import ParameterError, SourceError
+from cvxgeodesic.mesh.trimesh import TriMesh
+from cvxgeodesic.strategies import adapted
+from cvxgeodesic.strategies.adapted import edge_shortening, resolve_resolution
+
+FLAT = 1e-6  # order 2 is exact on flat regions whatever the triangles
+
+
+@pytest.fixture(scope="module")
+def grid():
+    return cg.grid_plane(16, jitter=0.2, seed=3)  # 512 faces on [0, 1]², a boundary
+
+
+def _euclid(mesh, x):
+    return np.linalg.norm(mesh.V - np.asarray(x), axis=1)
+
+
+def test_resolution_values():
+    assert resolve_resolution("mesh", 1000) is None
+    assert resolve_resolution(300, 1000) == 300
+    assert resolve_resolution(0.25, 1000) == 250
+    assert resolve_resolution("auto", 100_000) == 10_000
+    assert resolve_resolution("auto", 5_000) == adapted.AUTO_MIN_FACES
+    for bad in (0, 3, 1.0, 1.5, 0.0, -0.1, "coarse", True, None, [100]):
+        with pytest.raises(ParameterError, match="resolution"):
+            resolve_resolution(bad, 1000)
+
+
+@pytest.mark.parametrize("source", ["vertex", "point"])
+def test_flat_grid_exact_from_exact_positions(grid, source):
+    """The field is exact on a flat mesh, so any offset of the source from its position would show."""
+    src = 119 if source == "vertex" else cg.SurfacePoint(200, [0.2, 0.5, 0.3])
+    x = grid.V[src] if source == "vertex" else src.position(grid)
+    res = cg.GeodesicSolver(grid, "qclp", resolution=80).solve(src)
+    assert res.info.extra["adapted"]["faces"] < 200  # a coarse copy was solved
+    np.testing.assert_allclose(res.distance, _euclid(grid, x), atol=FLAT)
+    pts = [cg.SurfacePoint(f, [0.3, 0.3, 0.4]) for f in (0, 77, 300, 511)]
+    want = [np.linalg.norm(p.position(grid) - x) for p in pts]
+    np.testing.assert_allclose(cg.distance_at(grid, res, pts), want, atol=FLAT)
+
+
+def test_boundary_source_is_the_users_boundary(grid):
+    res = cg.GeodesicSolver(grid, "qclp", resolution=200).solve("boundary")
+    coarse = res.info.extra["solve_mesh"]
+    # the decimation kept every boundary vertex where it was
+    ub, cb = np.unique(grid.boundary_facets), np.unique(coarse.boundary_facets)
+    assert cb.size == ub.size
+    assert np.abs(np.sort(coarse.V[cb], axis=0) - np.sort(grid.V[ub], axis=0)).max() == 0
+    x, y = grid.V[:, 0], grid.V[:, 1]
+    exact = np.minimum.reduce([x, 1 - x, y, 1 - y])
+    assert np.abs(res.distance[ub]).max() == 0
+    # the ridges of the distance to a square's sides cross the coarse faces: close, not exact; exact where d² is
+    # one quadratic (near a side, away from the diagonals)
+    err = np.abs(res.distance - exact)
+    near = (exact < 0.1) & (np.abs(x - y) > 0.15) & (np.abs(x + y - 1) > 0.15)
+    assert err.mean() < 1e-2 and err[near].max() < 1e-3
+
+
+def test_curve_sources_are_refused_naming_the_option(grid):
+    curve = cg.SurfaceCurve([cg.SurfacePoint(10, [1, 0, 0]), cg.SurfacePoint(400, [0, 1, 0])])
+    with pytest.raises(SourceError, match="resolution=.*curve"):
+        cg.GeodesicSolver(grid, "qclp", resolution=100).solve(curve)
+
+
+@pytest.mark.parametrize("kind", ["constant", "vertices", "faces"])
+def test_constant_cost_scales_the_distance(grid, kind):
+    c = 2.5
+    cost = {"constant": c, "vertices": np.full(grid.n_vertices, c), "faces": np.full(grid.n_faces, c)}[kind]
+    res = cg.GeodesicSolver(grid, "qclp", resolution=100, cost=cost).solve(119)
+    np.testing.assert_allclose(res.distance, c * _euclid(grid, grid.V[119]), atol=FLAT)
+
+
+def test_metric_moved_to_the_solve_mesh(grid):
+    M = np.diag([4.0, 1.0, 1.0])  # lengths √(4 dx² + dy²) in the plane
+    res = cg.GeodesicSolver(grid, "qclp", resolution=100, metric=np.repeat(M[None], grid.n_faces, 0)).solve(119)
+    dx = grid.V - grid.V[119]
+    np.testing.assert_allclose(res.distance, np.sqrt(4 * dx[:, 0] ** 2 + dx[:, 1] ** 2), atol=FLAT)
+
+
+def test_non_manifold_mesh_falls_back_with_a_note(grid):
+    # a fin on an interior edge: three faces on that edge
+    a, b = grid.edges[grid.edge_face_counts == 2][5]
+    V = np.vstack([grid.V, 0.5 * (grid.V[a] + grid.V[b]) + [0, 0, 0.1]])
+    mesh = TriMesh(V, np.vstack([grid.F, [[a, b, len(grid.V)]]]))
+    res = cg.GeodesicSolver(mesh, "qclp", resolution=100).solve(0)
+    ad = res.info.extra["adapted"]
+    assert "edge-manifold" in ad["fallback"] and ad["faces"] == mesh.n_faces and ad["order"] == 1
+    assert ad["error_estimate"] is None
+    assert any("solved on the mesh itself at order 1" in n for n in res.info.notes)
+    direct = cg.GeodesicSolver(mesh, "qclp").solve(0)  # order 1: what a copy would have cost
+    np.testing.assert_allclose(res.distance, direct.distance, atol=1e-9)
+
+
+def test_several_components_fall_back_with_a_note(grid):
+    other = grid.V + [2.0, 0, 0]
+    mesh = TriMesh(np.vstack([grid.V, other]), np.vstack([grid.F, grid.F + grid.n_vertices]))
+    res = cg.GeodesicSolver(mesh, "qclp", resolution=100).solve(0)
+    assert "components" in res.info.extra["adapted"]["fallback"]
+    assert any("components" in n for n in res.info.notes)
+    assert np.isinf(res.distance[grid.n_vertices:]).all()
+    np.testing.assert_allclose(res.distance, cg.GeodesicSolver(mesh, "qclp").solve(0).distance, atol=1e-9)
+
+
+def test_paths_and_distance_at_on_the_users_surface():
+    sphere = cg.icosphere(3)  # 1280 faces, radius 1
+    res = cg.GeodesicSolver(sphere, "qclp", resolution=400).solve(0)
+    assert res.info.extra["adapted"]["faces"] <= 420
+    arc = np.arccos(np.clip(sphere.V @ sphere.V[0], -1, 1))
+    assert np.abs(res.distance - arc).mean() < 0.02
+    # at a user vertex distance_at reads the same field as the vertex values
+    np.testing.assert_allclose(cg.distance_at(sphere, res, sphere.V[[5, 300, 600]]), res.distance[[5, 300, 600]],
+                               atol=1e-12)
+    p = cg.SurfacePoint(700, [0.2, 0.3, 0.5])
+    x = p.position(sphere)
+    assert abs(cg.distance_at(sphere, res, p) - np.arccos(x @ sphere.V[0] / np.linalg.norm(x))) < 0.03
+    path = cg.geodesic_path(sphere, res, 600)
+    assert np.allclose(path[0], sphere.V[600]) and np.allclose(path[-1], sphere.V[0])
+    assert abs(np.linalg.norm(np.diff(path, axis=0), axis=1).sum() - arc[600]) < 0.03
+
+
+def test_flat_path_is_straight(grid):
+    res = cg.GeodesicSolver(grid, "qclp", resolution=80).solve(cg.SurfacePoint(200, [0.2, 0.5, 0.3]))
+    path = cg.geodesic_path(grid, res, 0)
+    assert abs(np.linalg.norm(np.diff(path, axis=0), axis=1).sum() - res.distance[0]) < 1e-6
+
+
+def test_info_record_and_one_decimation(grid, monkeypatch):
+    calls = []
+    real = adapted.simplify_mesh
+    monkeypatch.setattr(adapted, "simplify_mesh", lambda *a, **k: calls.append(1) or real(*a, **k))
+    solver = cg.GeodesicSolver(grid, "qclp", resolution=0.2)
+    r1, r2 = solver.solve(5), solver.solve(250)
+    ad = r1.info.extra["adapted"]
+    assert calls == [1, 1]  # the copy and the error estimate's coarser copy, made once per solver
+    assert set(ad) >= {"faces", "simplifier", "decimate_time", "solve_time", "transfer_time", "error_estimate",
+                       "error_estimate_method"}
+    assert 90 <= ad["faces"] <= 110 and "quadric" in ad["simplifier"] and isinstance(ad["error_estimate"], float)
+    assert ad["error_estimate"] < 1e-6  # both fields are exact on a flat mesh
+    assert "two resolutions" in ad["error_estimate_method"]
+    assert any(f"{ad['faces']}-face copy" in n for n in r1.info.notes)
+    assert r1.info.extra["solve_mesh"] is r2.info.extra["solve_mesh"]
+    assert r1.distance.shape == (grid.n_vertices,)
+    D = cg.distance_matrix(grid, [5, 250], "qclp", resolution=0.2)
+    np.testing.assert_allclose(D, np.stack([r1.distance, r2.distance]), atol=1e-9)
+    assert calls == [1, 1, 1]  # one more solver, one more copy, for both rows (and no estimate: rows keep no info)
+
+
+def test_error_estimate_within_two_times_the_error():
+    sphere = cg.icosphere(4)  # 5120 faces
+    exact = cg.geodesic_distance(sphere, 0, method="exact")  # the polyhedron's: what the user's mesh means
+    for faces in (300, 800):
+        ad = (res := cg.GeodesicSolver(sphere, "qclp", resolution=faces).solve(0)).info.extra["adapted"]
+        true = np.mean(np.abs(res.distance[1:] - exact[1:]) / exact[1:])
+        assert true / 2 <= ad["error_estimate"] <= 2 * true, (faces, true, ad["error_estimate"])
+        assert ad["edge_shortening"] > 0  # the copy of a sphere is shorter
+    assert edge_shortening(sphere, sphere.V) == 0  # no shortening when the copy is the mesh itself
+    off = cg.GeodesicSolver(sphere, "qclp", resolution=300, estimate_error=False).solve(0).info.extra["adapted"]
+    assert off["error_estimate"] is None
+
+
+def test_sources_in_one_coarse_face_are_refused_naming_the_option(grid):
+    with pytest.raises(SourceError, match="resolution=.*finer resolution"):
+        cg.GeodesicSolver(grid, "qclp", resolution=8).solve([100, 101, 102, 103, 104, 105, 106, 107])
+
+
+@pytest.mark.parametrize("method, kwargs, match", [
+    ("heat", {}, "baselines"),
+    ("lclp", {}, "LC formulations"),
+    ("qclp", {"multires": 100}, "not both"),
+])
+def test_refusals_name_the_option(grid, method, kwargs, match):
+    with pytest.raises(ParameterError, match=f"resolution.*{match}|{match}.*resolution"):
+        cg.GeodesicSolver(grid, method, resolution=100, **kwargs)
+
+
+def test_volumes_are_refused_in_the_capability_table():
+    from cvxgeodesic import capabilities
+
+    assert not capabilities.supported("qclp", dim=3, order=2, resolution=True)
+    assert "resolution" in capabilities.markdown_table()
+    with pytest.raises(ParameterError, match="resolution= is not available.*tetrahedral"):
+        cg.GeodesicSolver(cg.tet_box(2), "qclp", resolution=20)
+
+
+def test_local_rows_refuse_resolution(grid):
+    with pytest.raises(ParameterError, match="max_distance does not take resolution"):
+        cg.distance_matrix(grid, [0], "qclp", resolution=100, max_distance=0.3)
+
+
+def test_small_mesh_auto_and_default(grid):
+    res = cg.GeodesicSolver(grid, "qclp", resolution="auto").solve(119)
+    assert "not below" in res.info.extra["adapted"]["fallback"]  # 512 faces: below the auto rule's floor
+    assert res.info.extra["adapted"]["order"] == 2  # the mesh is the solve mesh: order 2 on it
+    np.testing.assert_allclose(res.distance, _euclid(grid, grid.V[119]), atol=FLAT)
+    plain = cg.GeodesicSolver(grid, "qclp").solve(119)
+    assert "adapted" not in plain.info.extra and plain.info.extra.get("order") is None  # default: order 1 on the mesh
+    # an adapted solve implies order 2, also with the default method
+    assert cg.GeodesicSolver(grid, resolution=100).order == 2
+    d = cg.geodesic_distance(grid, 119, method="qclp", resolution=100)
+    np.testing.assert_allclose(d, _euclid(grid, grid.V[119]), atol=FLAT)
+
+
+def test_duplicate_face_fins_are_removed():
+    grid = cg.grid_plane(4)
+    fin = TriMesh(grid.V, np.vstack([grid.F, grid.F[[3]][:, ::-1], grid.F[[3]]]))  # face 3 three times
+    assert not fin.is_edge_manifold
+    clean = adapted._without_fins(fin)
+    assert clean.is_edge_manifold and clean.n_faces == grid.n_faces - 1
+
+
+def test_a_source_near_a_coarse_edge_is_snapped_onto_it(grid):
+    solver = cg.GeodesicSolver(grid, "qclp", resolution=100, estimate_error=False)
+    copy = solver._strategy.copy
+    f = 10
+    a, b, _ = copy.mesh.V[copy.mesh.F[f]]
+    x = 0.5 * (a + b) + 1e-4 * (copy.mesh.V[copy.mesh.F[f]].mean(axis=0) - 0.5 * (a + b))  # just inside face f
+    res = solver.solve(cg.surface_point(grid, x))
+    ad = res.info.extra["adapted"]
+    assert 0 < ad["source_offset"] < 1e-4 and any("moved onto it" in n for n in res.info.notes)
+    # the field is still exact on the flat grid, from the point where the source went
+    assert np.abs(res.distance - _euclid(grid, x)).max() <= ad["source_offset"] + FLAT
+
+
+def test_cli_resolution(grid, tmp_path, capsys):
+    from cvxgeodesic.cli import main
+
+    path = tmp_path / "grid.off"
+    lines = ["OFF", f"{grid.n_vertices} {grid.n_faces} 0", *(" ".join(map(repr, v)) for v in grid.V.tolist()),
+             *("3 " + " ".join(map(str, f)) for f in grid.F.tolist())]
+    path.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "d.npy"
+    assert main(["distance", str(path), "-s", "119", "--method", "qclp", "--resolution", "80", "-o", str(out)]) == 0
+    np.testing.assert_allclose(np.load(out), _euclid(grid, grid.V[119]), atol=FLAT)
+    assert "estimated mean relative error" in capsys.readouterr().err
+    D = tmp_path / "D.npy"
+    assert main(["matrix", str(path), "-s", "119,5", "--method", "qclp", "--resolution", "0.2", "-q",
+                 "-o", str(D)]) == 0
+    np.testing.assert_allclose(np.load(D)[0], _euclid(grid, grid.V[119]), atol=FLAT)
+    with pytest.raises(SystemExit) as exc:  # argparse's usage error
+        main(["distance", str(path), "-s", "0", "--resolution", "coarse", "-o", str(out)])
+    assert exc.value.code == 2
+    assert main(["distance", str(path), "-s", "0", "--resolution", "1.5", "-o", str(out)]) == 2  # the library's check
