@@ -156,7 +156,8 @@ def measure(mesh, fractions, order2_max: int, repeat: int) -> list[dict]:
         if res is not None:
             extra = res.info.extra.get("adapted") or {}
             row.update(notes=list(res.info.notes), adapted_faces=extra.get("faces"),
-                       fallback=extra.get("fallback"), estimate=extra.get("error_estimate"),
+                       fallback=extra.get("fallback"), solve_order=extra.get("order"),
+                       estimate=extra.get("error_estimate"),
                        parts={k: extra.get(k) for k in ("decimate_time", "solve_time", "transfer_time")})
         if res is not None and d_exact is not None:
             d = np.asarray(res.distance, dtype=np.float64)
@@ -309,7 +310,8 @@ def render(env: dict, meshes: dict, scaling: list[dict]) -> str:
             est = "" if r.get("estimate") is None else (
                 f"{_pct(r['estimate'])} ({r['estimate'] / r['rel_mean']:.2f})" if r.get("rel_mean") else "")
             case = r["case"] + (f" ({r['adapted_faces']:,} f)" if r.get("adapted_faces") else "")
-            note = r["error"] or "; ".join(n for n in r.get("notes") or [] if "resolution=" in n)
+            note = r["error"] or (
+                f"on the mesh itself at order {r.get('solve_order')}: {r['fallback']}" if r.get("fallback") else "")
             ridge = "—" if r.get("ridge") is None else f"{r['ridge']:.2f}"
             lines.append(f"| {shown} ({m['faces']:,}) | {case} | {_pct(r.get('rel_mean'))} | {_pct(r.get('rel_max'))} "
                          f"| {r['time_s']:.2f} s | {r['x_heat']:.1f} | "
