@@ -5,6 +5,7 @@ Not a test: run it by hand, one thread, on as quiet a machine as you have::
     python benchmarks/accuracy_per_second.py --quick                       # 4 meshes, <= 10 min on 2 cores
     python benchmarks/accuracy_per_second.py                               # every surface >= 5K faces
     python benchmarks/accuracy_per_second.py --meshes kitten.obj fandisk.obj --out docs/dev/x.md
+    python benchmarks/accuracy_per_second.py --meshes --scaling              # the 1.1M-face mesh only
 
 For every surface of ``--shared`` (default ``../shared/meshes``) with at least 5,000 faces, in this process
 and from source vertex 0, the cases below are timed side by side (set-up included, minimum of ``--repeat``
@@ -343,14 +344,17 @@ def render(env: dict, meshes: dict, scaling: list[dict]) -> str:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--child", help=argparse.SUPPRESS)
-    ap.add_argument("--meshes", nargs="*", default=None, help="file names in --shared (default: every surface "
+    ap.add_argument("--meshes", nargs="*", default=None,
+                    help="file names in --shared, none if given without names (default: every surface "
                     f"of at least {MIN_FACES} faces, and {NON_MANIFOLD[0]})")
     ap.add_argument("--shared", type=Path, default=SHARED)
     ap.add_argument("--quick", action="store_true", help=f"only {', '.join(QUICK)}, fractions "
                     f"{', '.join(map(str, QUICK_FRACTIONS))}, one run, no order 2 on the user's mesh")
     ap.add_argument("--repeat", type=int, default=2)
     ap.add_argument("--order2-max", type=int, default=50_000, help="order 2 on the user's mesh up to this size")
-    ap.add_argument("--scaling", action="store_true", help=f"add bunny grown to {SCALING_FACES:,} faces")
+    ap.add_argument("--scaling", action="store_true", help="add bunny grown to --scaling-faces faces")
+    ap.add_argument("--scaling-faces", type=int, default=SCALING_FACES,
+                    help=f"size of the scaling mesh (default {SCALING_FACES:,}, the largest of benchmarks/scaling.py)")
     ap.add_argument("--out", type=Path, default=None, help="also write the Markdown report here")
     ap.add_argument("--json", type=Path, default=None, help="also write the rows here")
     args = ap.parse_args(argv)
@@ -358,7 +362,10 @@ def main(argv=None) -> int:
         _child(json.loads(args.child))
         return 0
     os.environ.setdefault("CVXGEODESIC_THREADS", "1")
-    names = list(QUICK) if args.quick and args.meshes is None else candidate_meshes(args.shared, args.meshes)
+    if args.meshes == []:  # "--meshes" alone: none (with --scaling: the scaling mesh only)
+        names = []
+    else:
+        names = list(QUICK) if args.quick and args.meshes is None else candidate_meshes(args.shared, args.meshes)
     if args.meshes is None and not args.quick:
         names += [n for n in NON_MANIFOLD if n not in names]
     fractions = QUICK_FRACTIONS if args.quick else FRACTIONS
@@ -374,7 +381,7 @@ def main(argv=None) -> int:
         _log(f"{name}: {mesh.n_faces} faces")
         rows = measure(mesh, fractions, order2_max, repeat)
         meshes[name] = {"faces": mesh.n_faces, "rows": rows, "targets": targets(name, mesh.n_faces, rows)}
-    scaling = scaling_rows(SCALING_FACES, 600.0) if args.scaling else []
+    scaling = scaling_rows(args.scaling_faces, 600.0) if args.scaling else []
     env = {"date": _now(), "machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores",
            "threads": os.environ.get("CVXGEODESIC_THREADS"), "load0": load0, "load1": os.getloadavg()[0],
            "repeat": repeat, "argv": ["benchmarks/accuracy_per_second.py", *(argv or sys.argv[1:])]}
