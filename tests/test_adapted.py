@@ -246,3 +246,32 @@ def test_cli_resolution(grid, tmp_path, capsys):
         main(["distance", str(path), "-s", "0", "--resolution", "coarse", "-o", str(out)])
     assert exc.value.code == 2
     assert main(["distance", str(path), "-s", "0", "--resolution", "1.5", "-o", str(out)]) == 2  # the library's check
+
+
+def test_the_default_is_one_constant(grid, monkeypatch):
+    from cvxgeodesic import api
+
+    monkeypatch.setitem(api.DEFAULT_RESOLUTIONS, 2, 100)
+    assert cg.GeodesicSolver(grid, "qclp").resolution == 100  # adapted by default
+    assert cg.GeodesicSolver(grid, "heat").resolution == "mesh"  # a method without order 2 keeps the mesh
+    assert cg.GeodesicSolver(grid, "qclp", multires=100).resolution == "mesh"  # multires asked: no conflict
+    assert cg.GeodesicSolver(cg.tet_box(2), "qclp").resolution == "mesh"
+
+
+def test_a_patch_around_the_source_mends_the_field_next_to_it(monkeypatch):
+    sphere = cg.icosphere(4)  # 5120 faces
+    exact = cg.geodesic_distance(sphere, 0, method="exact")
+    near = (exact > 0) & (exact < 0.1)
+
+    def worst(edges):
+        monkeypatch.setattr(adapted, "SOURCE_PATCH_EDGES", edges)
+        res = cg.GeodesicSolver(sphere, "qclp", resolution=300, estimate_error=False).solve(0)
+        return res, float(np.max(np.abs(res.distance[near] - exact[near]) / exact[near]))
+
+    (plain, without), (res, with_patch) = worst(0.0), worst(3.0)
+    assert res.info.extra["adapted"]["source_patches"] == 1 and any("patch" in n for n in res.info.notes)
+    assert with_patch < without / 2
+    # distance_at reads the same mixed field: at the vertices near the source, the vertex values
+    idx = np.flatnonzero(near)[:20]
+    np.testing.assert_allclose(cg.distance_at(sphere, res, sphere.V[idx]), res.distance[idx], atol=1e-9)
+    assert np.abs(cg.distance_at(sphere, plain, sphere.V[idx]) - res.distance[idx]).max() > 1e-3

@@ -78,7 +78,7 @@ def _igl_decimate(mesh: TriMesh, target_faces: int):
 
 
 def simplify_mesh(mesh: TriMesh, target_faces: int, method: str = "shortest-edge", *,
-                  preserve_border: bool = False) -> TriMesh:
+                  preserve_border: bool = False, agg: float = 7.0) -> TriMesh:
     """Decimate a mesh to about ``target_faces`` faces by edge collapses.
 
     Parameters
@@ -97,6 +97,9 @@ def simplify_mesh(mesh: TriMesh, target_faces: int, method: str = "shortest-edge
     preserve_border : bool
         ``"quadric"`` only: collapse no edge that touches a boundary vertex, so that the coarse mesh's boundary is
         the fine mesh's boundary, vertex for vertex (the adapted solves' ``"boundary"`` sources).
+    agg : float
+        ``"quadric"`` only: fast-simplification's aggressiveness (its default 7; lower keeps the shape better, and
+        may stop short of the target).
 
     Returns
     -------
@@ -128,7 +131,8 @@ def simplify_mesh(mesh: TriMesh, target_faces: int, method: str = "shortest-edge
         fs = _fast_simplification()
         # writable copies: the extension rejects the read-only arrays of a TriMesh
         result = fs.simplify(np.array(mesh.V, dtype=np.float64), np.array(mesh.F, dtype=np.int64),
-                             target_count=int(target_faces), preserve_border=bool(preserve_border))
+                             target_count=int(target_faces), preserve_border=bool(preserve_border),
+                             agg=float(agg))
     pts = np.asarray(result[0], dtype=np.float64)
     tris = np.asarray(result[1], dtype=np.int64).reshape(-1, 3)
     ok = (tris[:, 0] != tris[:, 1]) & (tris[:, 1] != tris[:, 2]) & (tris[:, 0] != tris[:, 2])

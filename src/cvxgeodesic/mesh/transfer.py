@@ -18,7 +18,7 @@ from .geometry import clipped_barycentric
 from .locate import bary_positions
 from .trimesh import TriMesh
 
-__all__ = ["ProjectedField", "SurfaceTransfer"]
+__all__ = ["ProjectedField", "SourcePatch", "SurfaceTransfer", "mix_patches"]
 
 
 class SurfaceTransfer:
@@ -110,6 +110,73 @@ class SurfaceTransfer:
         return np.asarray(idx, dtype=np.int64), np.asarray(dist)
 
 
+class SourcePatch:
+    """A field solved on a patch of faces of a mesh around a source, mixed into another field near the source
+    (:func:`mix_patches`): where the patch's field is at most ``inner`` it replaces the other field, between
+    ``inner`` and ``outer`` it is mixed in linearly (by its own value), beyond ``outer`` (or outside the patch) the
+    other field stays.
+
+    Parameters
+    ----------
+    face_map : (m,) int64 ndarray
+        The patch's face of each face of the whole mesh, -1 outside the patch.
+    vertices : (p,) int64 ndarray
+        The whole mesh's index of each patch vertex.
+    field : object
+        ``distance_at(faces, bary)`` and ``vertex_distance`` on the patch's faces and vertices.
+    inner, outer : float
+        Distances of the blend, ``0 < inner < outer``.
+    """
+
+    def __init__(self, face_map: np.ndarray, vertices: np.ndarray, field: Any, inner: float, outer: float) -> None:
+        self.face_map, self.vertices, self.field = face_map, vertices, field
+        self.inner, self.outer = float(inner), float(outer)
+
+    def weight(self, near: np.ndarray) -> np.ndarray:
+        """(k,) float in [0, 1]: the patch's share where its field is ``near``."""
+        with np.errstate(invalid="ignore"):
+            w = np.clip((self.outer - near) / (self.outer - self.inner), 0.0, 1.0)
+        return np.where(np.isfinite(near), w, 0.0)
+
+    def at_vertices(self, n: int) -> np.ndarray:
+        """(n,) the patch's field at the whole mesh's vertices, inf outside the patch."""
+        out = np.full(n, np.inf)
+        out[self.vertices] = np.asarray(self.field.vertex_distance, dtype=float)
+        return out
+
+    def at_points(self, faces: np.ndarray, bary: np.ndarray) -> np.ndarray:
+        """(k,) the patch's field at points of the whole mesh's faces, inf outside the patch."""
+        out = np.full(faces.size, np.inf)
+        local = self.face_map[faces]
+        inside = np.flatnonzero(local >= 0)
+        if inside.size:
+            out[inside] = np.asarray(self.field.distance_at(local[inside], bary[inside]), dtype=float)
+        return out
+
+
+def mix_patches(base: np.ndarray, patches: Any, nears: Any) -> np.ndarray:
+    """``base`` with the fields of source patches mixed in: where points are within some patch's ``outer``, the
+    least of those patches' blends (:meth:`SourcePatch.weight`), elsewhere ``base``.
+
+    Parameters
+    ----------
+    base : (k,) float ndarray
+    patches : sequence of SourcePatch
+    nears : sequence of (k,) float ndarray
+        Each patch's field at the points (inf outside it).
+
+    Returns
+    -------
+    (k,) float ndarray
+    """
+    best = np.full(base.shape, np.inf)
+    for patch, near in zip(patches, nears, strict=True):
+        w = patch.weight(near)
+        with np.errstate(invalid="ignore"):
+            best = np.minimum(best, np.where(w > 0, w * near + (1 - w) * base, np.inf))
+    return np.where(np.isfinite(best), best, base)
+
+
 class ProjectedField:
     """A distance field solved on another mesh of the same surface, read at points of this one.
 
@@ -128,13 +195,17 @@ class ProjectedField:
         :class:`~cvxgeodesic.operators.lagrange.LagrangeField`).
     vertex_distance : (n,) float ndarray
         The field at ``mesh``'s vertices (what the solve returned).
+    patches : sequence of SourcePatch
+        Fields solved on ``mesh`` itself around the sources, mixed in near them (in order).
     """
 
-    def __init__(self, mesh: TriMesh, solve_mesh: TriMesh, field: Any, vertex_distance: np.ndarray) -> None:
+    def __init__(self, mesh: TriMesh, solve_mesh: TriMesh, field: Any, vertex_distance: np.ndarray,
+                 patches: Any = ()) -> None:
         self.mesh = mesh
         self.solve_mesh = solve_mesh
         self.field = field
         self.vertex_distance = vertex_distance
+        self.patches = tuple(patches)
 
     def distance_at(self, faces: Any, bary: Any) -> np.ndarray:
         """Distance at points of ``mesh``'s faces.
@@ -151,4 +222,8 @@ class ProjectedField:
         faces = np.atleast_1d(np.asarray(faces, dtype=np.int64))
         X = bary_positions(self.mesh, faces, np.atleast_2d(np.asarray(bary, dtype=float)))
         cf, cb, _ = closest_point_index(self.solve_mesh).query(np.ascontiguousarray(X))
-        return np.asarray(self.field.distance_at(cf, cb), dtype=float)
+        out = np.asarray(self.field.distance_at(cf, cb), dtype=float)
+        if not self.patches:
+            return out
+        B = np.atleast_2d(np.asarray(bary, dtype=float))
+        return mix_patches(out, self.patches, [p.at_points(faces, B) for p in self.patches])

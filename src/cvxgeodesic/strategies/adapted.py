@@ -13,11 +13,13 @@ copy:
 3. **the answer on the user's mesh**: the P2 field evaluated at each user vertex's closest point of the solve mesh
    (found once); :class:`~cvxgeodesic.mesh.transfer.ProjectedField` answers ``distance_at`` at any point of the user's
    faces the same way, and ``geodesic_path`` descends the vertex values on the user's mesh;
-4. **fallbacks**: a mesh that is not edge-manifold, has several components or degenerate faces, or whose copy
-   changes its topology (Euler characteristic, components, a non-manifold edge), is solved on itself at order 2,
+4. **next to the sources** a patch of the user's mesh solved at order 2 and mixed in (:data:`SOURCE_PATCH_EDGES`);
+5. **fallbacks**: a mesh that is not edge-manifold, has several components or faces of zero area, or whose copy
+   changes its topology (Euler characteristic, components, a non-manifold edge), is solved on itself at order 1,
    with a note (quadric decimation gave NaN fields on a non-manifold mesh, issue 43).
 
-``info.extra["adapted"]`` records the solve mesh, its times and an error estimate (:func:`edge_shortening`).
+``info.extra["adapted"]`` records the solve mesh, its times and an error estimate (a second solve on a copy with
+:data:`ESTIMATE_RATIO` of the faces).
 """
 
 from __future__ import annotations
@@ -28,12 +30,13 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ParameterError, SourceError
+from ..errors import MeshError, ParameterError, SolverError, SourceError
 from ..formulations import smoothness_weight
 from ..mesh.closest import closest_point_index
 from ..mesh.decimate import simplify_mesh
 from ..mesh.locate import SurfacePoint, bary_positions
-from ..mesh.transfer import ProjectedField
+from ..mesh.patch import ball_patch
+from ..mesh.transfer import ProjectedField, SourcePatch, mix_patches
 from ..mesh.trimesh import TriMesh
 from ..operators.metric import Medium
 from ..results import GeodesicResult
@@ -67,6 +70,15 @@ SOURCE_SNAP = 2e-3
 ESTIMATE_RATIO = 0.5
 #: The targets (times the asked face count) tried in turn until a copy keeps the mesh's topology.
 RETRY_TARGETS = (1.0, 1.02, 0.98, 1.05, 0.95)
+#: Near each source the field is solved again on the user's own mesh, on the patch of faces within this many of the
+#: copy's mean edge lengths (edge-graph distance, :func:`~cvxgeodesic.mesh.patch.ball_patch`), and mixed in where it
+#: is below 1/3 of that radius (fully below 1/6): the copy's field is weakest next to the sources (docs/adapted.md).
+#: 0 turns it off. Not with a medium, ``"boundary"`` or more than :data:`MAX_SOURCE_PATCHES` sources.
+SOURCE_PATCH_EDGES = 3.0
+#: At most this many sources get a patch (each is an order-2 solve of its own).
+MAX_SOURCE_PATCHES = 8
+#: fast-simplification's aggressiveness for the copies (see the measurement in docs/adapted.md).
+DECIMATION_AGG = 7.0
 #: How the solve mesh is made (recorded in ``info.extra["adapted"]["simplifier"]``).
 SIMPLIFIER = "quadric (fast-simplification, boundary kept)"
 
@@ -150,7 +162,8 @@ def _without_fins(mesh: TriMesh) -> TriMesh:
 
 def _decimated_once(mesh: TriMesh, target: int) -> tuple[TriMesh | None, str | None]:
     try:
-        coarse = _without_fins(simplify_mesh(mesh, target, method="quadric", preserve_border=True))
+        coarse = _without_fins(simplify_mesh(mesh, target, method="quadric", preserve_border=True,
+                                             agg=DECIMATION_AGG))
     except Exception as exc:  # noqa: BLE001 - any failure of the extension falls back, with its message
         return None, f"the decimation failed ({type(exc).__name__}: {exc})"
     checks = ((not coarse.is_edge_manifold, "the decimated copy has non-manifold edges"),
@@ -329,9 +342,10 @@ class Adapted:
                                        "faces": mesh.n_faces, "simplifier": None, "decimate_time": 0.0,
                                        "fallback": None, "order": 2, "error_estimate": None,
                                        "error_estimate_method": None}
-        coarse, why, small = None, None, target is None or target >= mesh.n_faces
-        if small:
-            why = f"the target of {target} faces is not below the mesh's {mesh.n_faces}"
+        coarse: TriMesh | None = None
+        small = target is None or target >= mesh.n_faces
+        if target is None or small:
+            why: str | None = f"the target of {target} faces is not below the mesh's {mesh.n_faces}"
         else:
             why = _unsuitable(mesh)
             if why is None:
@@ -339,6 +353,7 @@ class Adapted:
         self.record["decimate_time"] = time.perf_counter() - t0
         self.copy: _Copy | None = None
         self.companion: _Copy | None = None
+        self.inner: Any
         if coarse is None:
             self.solve_mesh = mesh
             # a small mesh is the solve mesh asked for; a mesh that cannot be decimated gets what a copy would cost
@@ -385,28 +400,68 @@ class Adapted:
             return res
         t0 = time.perf_counter()
         cres, d, offset, transfer = self.copy.solve(sources, callback, self.requested)
-        record = {**self.record, "solve_time": time.perf_counter() - t0 - transfer, "transfer_time": transfer,
-                  "source_offset": offset}
+        t1 = time.perf_counter()
         notes = [*self.notes, *cres.info.notes]
-        if offset > 0:
+        patches = self._source_patches(sources, notes)
+        n = self.config.mesh.n_vertices
+        nears = [p.at_vertices(n) for p in patches]
+        d = mix_patches(d, patches, nears)
+        record = {**self.record, "solve_time": t1 - t0 - transfer, "transfer_time": transfer,
+                  "source_offset": offset, "source_patches": len(patches),
+                  "source_patch_time": time.perf_counter() - t1}
+        if offset > 1e-12 * self.config.mesh.bbox_diagonal:
             notes.append(f"a source within {SOURCE_SNAP:g} of a face's altitude from an edge of the solve mesh was "
                          f"moved onto it (by {offset:.3g})")
         if self.companion is not None:
             t2 = time.perf_counter()
             try:
                 _, dc, _, _ = self.companion.solve(sources, None, self.requested)
+                dc = mix_patches(dc, patches, nears)  # the same near the sources: the estimate is of the rest
                 record["error_estimate"] = _relative_difference(dc, d, sources.fixed_vertices(self.config.mesh))
             except SourceError as exc:
                 record["error_estimate_method"] = f"none: the coarser copy took not the sources ({exc})"
             record["estimate_time"] = time.perf_counter() - t2
-        return self._result(cres, d, sources, notes, record, t0)
+        return self._result(cres, d, sources, notes, record, t0, patches)
+
+    def _source_patches(self, sources: SourceSet, notes: list[str]) -> list[SourcePatch]:
+        """The order-2 fields on the user's mesh around each source (:data:`SOURCE_PATCH_EDGES`)."""
+        mesh = self.config.mesh
+        if SOURCE_PATCH_EDGES <= 0 or sources.boundary or self.config.medium is not None or self.copy is None:
+            return []
+        items: list[tuple[int, Any]] = [(int(v), None) for v in sources.vertices]
+        items += [(int(mesh.F[p.cell][np.argmax(p.bary)]), p) for p in sources.distinct_points(mesh)]
+        if len(items) > MAX_SOURCE_PATCHES:
+            notes.append(f"{len(items)} sources: no patch solve around them (at most {MAX_SOURCE_PATCHES})")
+            return []
+        radius = SOURCE_PATCH_EDGES * self.copy.mesh.mean_edge_length
+        out = []
+        for center, point in items:
+            patch = ball_patch(mesh, center, radius)
+            if patch.mesh is None:
+                continue
+            inside = np.zeros(mesh.n_vertices, dtype=bool)
+            inside[patch.vertices] = True
+            keep = inside[mesh.F].all(axis=1)  # ball_patch's faces, in its order
+            face_map = np.full(mesh.n_faces, -1, dtype=np.int64)
+            face_map[keep] = np.arange(int(keep.sum()))
+            src = patch.source if point is None else SurfacePoint(int(face_map[point.cell]), point.bary)
+            try:
+                res = Order2(self.config.on(patch.mesh, lam=self.config.lam)).solve(resolve_sources(patch.mesh, src))
+            except (SolverError, SourceError, MeshError, ParameterError) as exc:  # the copy's field stays
+                notes.append(f"the patch solve around source vertex {center} failed ({exc}); the copy's field kept")
+                continue
+            out.append(SourcePatch(face_map, patch.vertices, res.info.extra["p2_field"], radius / 6, radius / 3))
+        if out:
+            notes.append(f"{len(out)} patch(es) of the mesh around the sources solved at order 2 and mixed in within "
+                         f"{radius / 3:.3g} of them")
+        return out
 
     def _result(self, cres: GeodesicResult, d: np.ndarray, sources: SourceSet, notes: list[str], record: dict,
-                t0: float) -> GeodesicResult:
+                t0: float, patches: list[SourcePatch]) -> GeodesicResult:
         ci = cres.info
         assert self.copy is not None
         extra = {k: v for k, v in ci.extra.items() if k != "p2_field"}
-        field = ProjectedField(self.config.mesh, self.solve_mesh, ci.extra["p2_field"], d)
+        field = ProjectedField(self.config.mesh, self.solve_mesh, ci.extra["p2_field"], d, patches)
         extra.update(adapted=record, p2_field=field, solve_mesh=self.solve_mesh)
         info = replace(ci, setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
                        n_unreachable=int(np.isinf(d).sum()), notes=notes, extra=extra)
