@@ -424,7 +424,7 @@ def test_an_indefinite_energy_on_a_patch_is_said_of_the_patch():
         patch = [str(w.message) for w in caught]
         caught.clear()
         cg.GeodesicSolver(spot, "qcqp-hessian")  # the whole mesh's energy is PSD: no note
-    assert patch == ["spot.obj (patch around a row's source): libigl's curved Hessian energy is indefinite on this "
+    assert patch == ["spot.obj (patch around a source): libigl's curved Hessian energy is indefinite on this "
                      "patch, not necessarily on the whole mesh; using the planar Hessian energy (Stein et al. 2018) "
                      "instead"], patch
     assert not [w for w in caught if issubclass(w.category, cg.IndefiniteEnergyWarning)]

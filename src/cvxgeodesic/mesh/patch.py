@@ -19,7 +19,7 @@ __all__ = ["PATCH_LABEL", "Patch", "ball_patch", "is_patch"]
 
 #: What a patch's name adds to its mesh's: every note about the patch then says it is one, and reads the same on
 #: every patch (a warning shown once, not once per row).
-PATCH_LABEL = " (patch around a row's source)"
+PATCH_LABEL = " (patch around a source)"
 
 
 def is_patch(mesh: TriMesh) -> bool:
