@@ -232,3 +232,17 @@ def test_trimesh_and_open3d_like_clouds_are_taken():
     trimesh = pytest.importorskip("trimesh")
     mesh = cg.GeodesicSolver(trimesh.PointCloud(P), "qclp").mesh
     assert isinstance(mesh, CloudMesh)
+
+
+@pytest.mark.parametrize("ext", [".ply", ".npy", ".csv"])
+def test_a_cloud_field_is_saved_on_its_points(tmp_path, plane_cloud, ext):
+    d = cg.geodesic_distance(plane_cloud, 0, method="qclp")
+    path = cg.save_distance(tmp_path / f"d{ext}", plane_cloud, d)
+    np.testing.assert_array_equal(cg.load_distance(path), d)
+    if ext == ".ply":  # no faces: it reads back as the same cloud
+        np.testing.assert_array_equal(cg.load_point_cloud(path).P, plane_cloud.P)
+
+
+def test_formats_that_need_cells_are_refused_for_a_cloud(tmp_path, plane_cloud):
+    with pytest.raises(ParameterError, match="a field on a point cloud is written as"):
+        cg.save_distance(tmp_path / "d.vtu", plane_cloud, np.zeros(plane_cloud.n_points))
