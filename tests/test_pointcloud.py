@@ -246,3 +246,14 @@ def test_a_cloud_field_is_saved_on_its_points(tmp_path, plane_cloud, ext):
 def test_formats_that_need_cells_are_refused_for_a_cloud(tmp_path, plane_cloud):
     with pytest.raises(ParameterError, match="a field on a point cloud is written as"):
         cg.save_distance(tmp_path / "d.vtu", plane_cloud, np.zeros(plane_cloud.n_points))
+
+
+def test_the_command_line_takes_a_point_file(tmp_path):
+    from cvxgeodesic.cli import main
+
+    P = _plane(8)
+    np.savetxt(tmp_path / "c.xyz", P)
+    out = tmp_path / "d.ply"
+    assert main(["distance", str(tmp_path / "c.xyz"), "--source", "0", "--quiet", "-o", str(out)]) == 0
+    d = cg.load_distance(out)
+    np.testing.assert_allclose(d, cg.geodesic_distance(PointCloud(P), 0), rtol=1e-6, atol=1e-9)
