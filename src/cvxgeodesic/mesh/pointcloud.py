@@ -29,6 +29,9 @@ __all__ = ["TRIANGLE_SETS", "CloudMesh", "PointCloud", "fan_triangles", "triangl
 #: reaches in the union, the union's triangles of its fan (so no point becomes unreachable).
 TRIANGLE_SETS = ("union", "consensus", "repaired")
 DEFAULT_NEIGHBOURS = 30
+#: docs/pointclouds.md: the repaired consensus has the lower mean error on clean and on unevenly sampled clouds (up to
+#: 1.5× at order 2) but leaves holes where the fans disagree (max error up to 4.5× the union's on a sphere's cloud);
+#: the union has the lower mean error on noisy evenly sampled clouds (up to 1.5×) and no holes.
 DEFAULT_TRIANGLES = "union"
 #: A cloud whose second principal extent is below this fraction of its first lies on a line.
 COLLINEAR_TOL = 1e-9
