@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import MeshError
+from ..errors import MeshError, MeshFileNotFoundError
 from .pointcloud import PointCloud
 
 __all__ = ["POINT_EXTENSIONS", "is_point_file", "load_point_cloud"]
@@ -64,12 +64,12 @@ def load_point_cloud(path: str | os.PathLike, **kwargs: Any) -> PointCloud:
     Raises
     ------
     MeshError
-        The file is missing or unreadable, a line is not numbers (the message names the line), the array has the
+        The file is unreadable (a missing one: :class:`~cvxgeodesic.errors.MeshFileNotFoundError`), a line is not numbers (the message names the line), the array has the
         wrong shape, a PLY has faces (read it with ``load_mesh``), or the points fail :class:`PointCloud`'s checks.
     """
     p = Path(path)
     if not p.is_file():
-        raise MeshError(f"{p}: no such point file")
+        raise MeshFileNotFoundError(f"{p}: no such file", str(p))
     ext = p.suffix.lower()
     if ext == ".npy":
         P, N = _split(_load_npy(p), p)
