@@ -64,8 +64,9 @@ def load_point_cloud(path: str | os.PathLike, **kwargs: Any) -> PointCloud:
     Raises
     ------
     MeshError
-        The file is unreadable (a missing one: :class:`~cvxgeodesic.errors.MeshFileNotFoundError`), a line is not numbers (the message names the line), the array has the
-        wrong shape, a PLY has faces (read it with ``load_mesh``), or the points fail :class:`PointCloud`'s checks.
+        The file is unreadable (a missing one: :class:`~cvxgeodesic.errors.MeshFileNotFoundError`), a line is
+        not numbers (the message names the line), the array has the wrong shape, a PLY has faces (read it with
+        ``load_mesh``), or the points fail :class:`PointCloud`'s checks.
     """
     p = Path(path)
     if not p.is_file():
