@@ -262,3 +262,16 @@ def test_the_command_line_takes_a_point_file(tmp_path):
     assert main(["distance", str(tmp_path / "c.xyz"), "--source", "0", "--quiet", "-o", str(out)]) == 0
     d = cg.load_distance(out)
     np.testing.assert_allclose(d, cg.geodesic_distance(PointCloud(P), 0), rtol=1e-6, atol=1e-9)
+
+
+def test_docs_list_every_refusal_of_the_cloud_domain():
+    from pathlib import Path
+
+    from cvxgeodesic.capabilities import CLOUD_REFUSALS
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "pointclouds.md").read_text(encoding="utf-8")
+    section = page.split("**What a cloud refuses**", 1)[1].split("`heat` on a cloud", 1)[0]
+    names = {"curve": "SurfaceCurve", "multires": "multires=", "resolution": "resolution="}
+    for axis, what, _ in CLOUD_REFUSALS:
+        word = names.get(what or axis, what)
+        assert f"`{word}" in section or f'"{word}"' in section, word

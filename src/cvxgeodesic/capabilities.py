@@ -20,8 +20,8 @@ from typing import Any
 
 from .errors import ParameterError, SourceError
 
-__all__ = ["BASELINE_METHODS", "CLOUD_DEFAULT_METHOD", "CLOUD_REFUSALS", "check_cloud", "cloud_markdown",
-           "cloud_methods", "DIMS", "FORMULATION_METHODS", "MEDIA", "METHODS", "ORDERS", "RULES", "Rule",
+__all__ = ["BASELINE_METHODS", "CLOUD_DEFAULT_METHOD", "CLOUD_REFUSALS", "check_cloud", "cloud_methods",
+           "DIMS", "FORMULATION_METHODS", "MEDIA", "METHODS", "ORDERS", "RULES", "Rule",
            "SOURCE_KINDS", "check", "help_text", "markdown_table", "methods_for", "refusal", "source_kinds",
            "source_phrase", "supported"]
 
@@ -266,11 +266,6 @@ def cloud_methods() -> list[str]:
     """The methods that run on point clouds."""
     refused = {what for axis, what, _ in CLOUD_REFUSALS if axis == "method"}
     return [m for m in METHODS if m not in refused]
-
-
-def cloud_markdown() -> str:
-    """The point-cloud domain's refusals as a Markdown list (docs/pointclouds.md)."""
-    return "\n".join(f"- {what or axis} ({axis}): {reason}" for axis, what, reason in CLOUD_REFUSALS)
 
 
 def _source_message(method: str, kind: str, rule: Rule, cell: dict[str, Any]) -> str:
