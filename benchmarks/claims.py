@@ -425,6 +425,8 @@ CLAIMS: list[Claim] = [
        (POINTCLOUDS, "7–8 % for order 1 and 1.6–1.7 % for order 2")),
     _r("pointclouds-summary", "2026-12-06", "`python benchmarks/point_clouds.py --quick`; `--m 10` for m = 10",
        (POINTCLOUDS, "is 17–21× more accurate than the point-cloud heat method")),
+    _r("pointclouds-resampled", "2026-12-06", "`python benchmarks/point_clouds.py --quick --resample 1.0,0.25 "
+       "--noise 0 --sets union,repaired --repeats 1`", (POINTCLOUDS, "| kitten, every face | 18,894 |")),
     _r("pointclouds-uneven", "2026-12-06", "`python benchmarks/point_clouds.py --meshes fandisk max_planck --sets "
        "union,repaired --repeats 1`", (POINTCLOUDS, "| fandisk | 0 | 3.44 %, 1× |")),
 ]

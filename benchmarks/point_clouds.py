@@ -1,8 +1,9 @@
 """Geodesic distance on point clouds: the vertices of the shared meshes, clean and with Gaussian noise.
 
-Each cloud is the vertex set of a shared mesh (no faces), as is or moved by Gaussian noise of ``--noise`` times the
-bounding-box diagonal (a fixed seed). The reference is the mesh's exact field (MMP, ``method="exact"``) from the
-same vertex, at the original vertices: point ``i`` of the cloud is vertex ``i`` of the mesh. Methods:
+Each cloud is the vertex set of a shared mesh (no faces), or with ``--resample`` random points of its surface, as is
+or moved by Gaussian noise of ``--noise`` times the bounding-box diagonal (a fixed seed). The reference is the mesh's
+exact field (MMP, ``method="exact"``) from the same point, at the original positions: point ``i`` of a vertex cloud
+is vertex ``i`` of the mesh; resampled points are inserted into the mesh as vertices for it. Methods:
 
 - ``pc-heat``: the point-cloud heat method (``potpourri3d.PointCloudHeatSolver``; the library's ``heat`` on a
   cloud runs it), the time unit;
@@ -93,6 +94,9 @@ def main() -> None:
     ap.add_argument("--no-order2", action="store_true")
     ap.add_argument("--m", type=float, default=1.0, help="smoothness of qcqp-dirichlet")
     ap.add_argument("--repeats", type=int, default=2, help="times are the best of this many runs")
+    ap.add_argument("--resample", default="", help="instead of the vertices: random surface points, these fractions "
+                    "of the face count (e.g. 0.5,0.25: two densities); the reference is exact MMP on the mesh with "
+                    "the points inserted as vertices")
     args = ap.parse_args()
     print(f"# {datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M} UTC, load {os.getloadavg()[0]:.2f} "
           f"{os.getloadavg()[1]:.2f}, threads {os.environ.get('CVXGEODESIC_THREADS', 'default')}", flush=True)
@@ -103,31 +107,67 @@ def main() -> None:
     rng = np.random.default_rng(0)
     for path in paths:
         mesh = cg.load_mesh(path, kind="surface")
+        for name, V0, exact, src in clouds_of(mesh, path.stem, args, rng):
+            for noise in (float(x) for x in args.noise.split(",")):
+                P = V0 + rng.normal(scale=noise * mesh.bbox_diagonal, size=V0.shape) if noise else V0
+                compare(name, noise, P, exact, src, sets, args)
+
+
+def clouds_of(mesh, stem: str, args, rng) -> list[tuple[str, np.ndarray, np.ndarray, int]]:
+    """``(label, points, exact field at them, source index)``: the vertices, or with ``--resample`` the clouds of
+    random surface points (:func:`resample`)."""
+    if not args.resample:
         src = int(args.source * mesh.n_vertices)
-        exact = cg.geodesic_distance(mesh, src, method="exact")
-        name = f"{path.stem} ({mesh.n_vertices // 1000}K)"
-        for noise in (float(x) for x in args.noise.split(",")):
-            P = mesh.V + rng.normal(scale=noise * mesh.bbox_diagonal, size=mesh.V.shape) if noise else mesh.V
+        return [(f"{stem} ({mesh.n_vertices // 1000}K)", mesh.V, cg.geodesic_distance(mesh, src, method="exact"),
+                 src)]
+    out = []
+    for fraction in (float(x) for x in args.resample.split(",")):
+        X, split, idx = resample(mesh, fraction, rng)
+        src = int(args.source * X.shape[0])
+        exact = cg.geodesic_distance(split, int(idx[src]), method="exact")[idx]
+        out.append((f"{stem} resampled ({X.shape[0] // 1000}K)", X, exact, src))
+    return out
 
-            def pc_heat(P=P, src=src):
-                import potpourri3d as pp3d
 
-                return pp3d.PointCloudHeatSolver(P).compute_distance(src)
-            d, t_heat = timed(pc_heat, args.repeats)
-            row(name, noise, "pc-heat", d, exact, src, t_heat, t_heat)
-            d, t = timed(lambda P=P, src=src: knn_dijkstra(P, src, args.knn), args.repeats)
-            row(name, noise, f"{args.knn}-NN Dijkstra", d, exact, src, t, t_heat)
-            for kind in sets:
-                runs = [("qclp", 1, 0.0)] + ([] if args.no_order2 else [("qclp", 2, 0.0)])
-                if kind == sets[0]:  # the smoothed formulation, at both orders, on the first set
-                    runs += [("qcqp-dirichlet", order, args.m) for order in (1, 2) if order == 1 or not args.no_order2]
-                for method, order, m in runs:
-                    def solve(P=P, src=src, kind=kind, method=method, order=order, m=m):
-                        cloud = cg.PointCloud(P, triangles=kind)
-                        return cg.GeodesicSolver(cloud, method, order=order, m=m).solve(src).distance
-                    d, t = timed(solve, args.repeats)
-                    label = f"{method} order {order}{f' m={m:g}' if m else ''}, {kind}"
-                    row(name, noise, label, d, exact, src, t, t_heat)
+def resample(mesh, fraction: float, rng) -> tuple[np.ndarray, cg.TriMesh, np.ndarray]:
+    """Random surface points: ``fraction`` of the faces drawn without replacement with probability proportional to
+    their area, one uniform point in each. Returns the points, the mesh with each point inserted as a vertex (its face
+    split in three: the same surface, so exact MMP on it gives the exact field at the points) and their indices."""
+    V, F = mesh.V, mesh.F
+    area = mesh.face_areas
+    k = int(fraction * mesh.n_faces)
+    faces = rng.choice(mesh.n_faces, size=k, replace=False, p=area / area.sum())
+    X = np.einsum("ki,kij->kj", rng.dirichlet([1.0, 1.0, 1.0], size=k), V[F[faces]])
+    idx = mesh.n_vertices + np.arange(k)
+    a, b, c = F[faces].T
+    keep = np.ones(mesh.n_faces, dtype=bool)
+    keep[faces] = False
+    split = cg.TriMesh(np.vstack([V, X]), np.vstack([F[keep], np.c_[a, b, idx], np.c_[b, c, idx], np.c_[c, a, idx]]))
+    return X, split, idx
+
+
+def compare(name: str, noise: float, P: np.ndarray, exact: np.ndarray, src: int, sets: list[str], args) -> None:
+    """One row per method on the cloud ``P``."""
+    def pc_heat():
+        import potpourri3d as pp3d
+
+        return pp3d.PointCloudHeatSolver(P).compute_distance(src)
+    d, t_heat = timed(pc_heat, args.repeats)
+    row(name, noise, "pc-heat", d, exact, src, t_heat, t_heat)
+    d, t = timed(lambda: knn_dijkstra(P, src, args.knn), args.repeats)
+    row(name, noise, f"{args.knn}-NN Dijkstra", d, exact, src, t, t_heat)
+    for kind in sets:
+        runs = [("qclp", 1, 0.0)] + ([] if args.no_order2 else [("qclp", 2, 0.0)])
+        if kind == sets[0]:  # the smoothed formulation, at both orders, on the first set
+            runs += [("qcqp-dirichlet", order, args.m) for order in (1, 2) if order == 1 or not args.no_order2]
+        for method, order, m in runs:
+            def solve(kind=kind, method=method, order=order, m=m):
+                cloud = cg.PointCloud(P, triangles=kind)
+                return cg.GeodesicSolver(cloud, method, order=order, m=m).solve(src).distance
+            d, t = timed(solve, args.repeats)
+            label = f"{method} order {order}{f' m={m:g}' if m else ''}, {kind}"
+            row(name, noise, label, d, exact, src, t, t_heat)
+
 
 if __name__ == "__main__":
     main()
