@@ -38,8 +38,8 @@ def files(tmp_path_factory):
                             [[0, 1, 2], [1, 0, 3], [0, 1, 4]])
     (root / "bad.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n")
     out["malformed"] = root / "bad.obj"
-    (root / "mesh.xyz").write_text("0 0 0\n")
-    out["extension"] = root / "mesh.xyz"
+    (root / "mesh.abc").write_text("0 0 0\n")
+    out["extension"] = root / "mesh.abc"
     (root / "empty.stl").write_bytes(b"")
     out["empty"] = root / "empty.stl"
     out["plain_file"] = root / "not_a_dir"
@@ -55,7 +55,7 @@ def run_cli(args, capsys) -> tuple[int, list[str]]:
 
 BAD_INPUT = [
     ("missing file", ["{tmp}/missing.obj", "-s", "0"], "no such file"),
-    ("bad extension", ["{extension}", "-s", "0"], "unsupported mesh file extension '.xyz'"),
+    ("bad extension", ["{extension}", "-s", "0"], "unsupported mesh file extension '.abc'"),
     ("malformed file", ["{malformed}", "-s", "0"], r"line 4: face \('f'\) has a non-integer vertex index 'x'"),
     ("empty file", ["{empty}", "-s", "0"], "file is empty"),
     ("NaN coordinates", ["{nan}", "-s", "0"], r"vertex 5 \(line 8\) has a non-finite coordinate"),

@@ -89,6 +89,8 @@ if TYPE_CHECKING:
     from .mesh import TriMesh, cylinder, grid_plane, icosphere
     from .mesh.fileorder import to_file_order
     from .mesh.io import load_distance, load_mesh, save_distance
+    from .mesh.pointcloud import PointCloud
+    from .mesh.pointcloud_io import load_point_cloud
     from .mesh.tet_generate import tet_ball, tet_box, tet_l_prism
     from .mesh.tetmesh import TetMesh
     from .mesh.tetrahedralize import tetrahedralize
@@ -108,6 +110,7 @@ __all__ = [
     "load_mesh", "plot_field", "save_distance", "smoothness_weight", "to_file_order", "SurfaceCurve", "SurfacePoint",
     "surface_point", "distance_at", "geodesic_path", "show", "Method", "SolverName",
     "BoundaryFaces", "TetMesh", "VolumePoint", "tet_ball", "tet_box", "tet_l_prism", "tetrahedralize", "volume_point",
+    "PointCloud", "load_point_cloud",
 ]
 
 
@@ -125,6 +128,8 @@ _LAZY = {
     **dict.fromkeys(("tet_ball", "tet_box", "tet_l_prism"), ".mesh.tet_generate"),
     "TetMesh": ".mesh.tetmesh",
     "tetrahedralize": ".mesh.tetrahedralize",
+    "PointCloud": ".mesh.pointcloud",
+    "load_point_cloud": ".mesh.pointcloud_io",
     **dict.fromkeys(("distance_at", "geodesic_path"), ".paths"),
     "plot_field": ".plotting",  # matplotlib costs ~0.3 s to import
     **dict.fromkeys(("BoundaryFaces", "SurfaceCurve", "SurfacePoint", "VolumePoint", "surface_point", "volume_point"),

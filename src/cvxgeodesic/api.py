@@ -18,8 +18,8 @@ from numpy.typing import ArrayLike
 
 from ._threads import limited
 from .baselines import BASELINES
+from .capabilities import CLOUD_DEFAULT_METHOD, check_cloud, methods_for, source_kinds, supported
 from .capabilities import check as check_capability
-from .capabilities import methods_for, source_kinds, supported
 from .errors import ParameterError, SourceError
 from .formulations import ALIASES, FORMULATIONS, NORMALIZATIONS, smoothness_weight
 from .mesh.convert import as_mesh
@@ -254,10 +254,13 @@ class GeodesicSolver:
         self.mesh: Any = cast(Any, as_mesh(mesh))  # a TriMesh or a TetMesh, told apart by is_volume
         self.is_volume = isinstance(self.mesh, TetMesh)  # distance inside tetrahedra
         self.dim = self.mesh.dim
+        self.is_cloud = getattr(self.mesh, "cloud", None) is not None  # a PointCloud's soup (mesh/pointcloud.py)
         self._check_method_and_solver(method, solver)
         self.order = check_order(order)
         target = resolve_target(multires, self.mesh.n_cells)  # a volume refuses multires below (capabilities)
         self._set_resolution(resolution, multires=target is not None)
+        if self.is_cloud:  # what the point-cloud domain refuses beyond the triangle meshes' table
+            check_cloud(self.method, multires=target is not None, resolution=self.resolution != "mesh")
         self._cell: dict[str, Any] = {"dim": self.dim, "order": self.order, "multires": target is not None,
                       "medium": "none" if cost is None and metric is None else "cost" if cost is not None else "metric",
                       "resolution": self.resolution != "mesh"}
@@ -300,7 +303,7 @@ class GeodesicSolver:
 
     def _check_method_and_solver(self, method: Any, solver: Any) -> None:
         if method is None:
-            method = DEFAULT_METHODS[self.dim]
+            method = CLOUD_DEFAULT_METHOD if self.is_cloud else DEFAULT_METHODS[self.dim]
         if not isinstance(method, str):
             raise ParameterError(f"method must be a string, got {type(method).__name__}")
         key = ALIASES.get(method.lower(), method.lower())
@@ -382,6 +385,10 @@ class GeodesicSolver:
         t0 = time.perf_counter()
         # a curve in a volume, boundary faces on a surface: refused with the table's reason before any resolution
         check_capability(self.method, sources=_object_kinds(sources), **self._cell)
+        if self.is_cloud:  # before resolving: the soup's free edges would pass for a boundary
+            named = sources if isinstance(sources, list | tuple) else [sources]
+            words = {s.strip().lower() for s in named if isinstance(s, str)}
+            check_cloud(self.method, sources=_object_kinds(sources) | words)
         sset = resolve_sources(self.mesh, sources)
         check_capability(self.method, sources=source_kinds(sset), **self._cell)
         source_time = time.perf_counter() - t0  # closest points and curve samples: part of this solve

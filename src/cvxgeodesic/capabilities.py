@@ -20,7 +20,8 @@ from typing import Any
 
 from .errors import ParameterError, SourceError
 
-__all__ = ["BASELINE_METHODS", "DIMS", "FORMULATION_METHODS", "MEDIA", "METHODS", "ORDERS", "RULES", "Rule",
+__all__ = ["BASELINE_METHODS", "CLOUD_DEFAULT_METHOD", "CLOUD_REFUSALS", "check_cloud", "cloud_methods",
+           "DIMS", "FORMULATION_METHODS", "MEDIA", "METHODS", "ORDERS", "RULES", "Rule",
            "SOURCE_KINDS", "check", "help_text", "markdown_table", "methods_for", "refusal", "source_kinds",
            "source_phrase", "supported"]
 
@@ -216,6 +217,55 @@ def check(method: str, *, dim: int, order: int = 1, medium: str = "none", source
     refused = [(k, r) for k in SOURCE_KINDS if k in set(sources) and (r := refusal(method, source=k, **cell))]
     if refused:
         raise SourceError(_source_message(method, *refused[0], cell))
+
+
+#: The point-cloud domain (:class:`~cvxgeodesic.mesh.pointcloud.PointCloud`, solved on the triangle soup of its local
+#: fans): what it refuses beyond the triangle meshes' rules, as (axis, what, reason). docs/pointclouds.md.
+CLOUD_REFUSALS: tuple[tuple[str, str, str], ...] = (
+    ("method", "exact", "it needs a manifold surface; a cloud's triangles are overlapping fans, not one"),
+    ("method", "fmm", "it needs a manifold surface; a cloud's triangles are overlapping fans, not one"),
+    ("method", "lcqp-hessian", "the curved Hessian energy needs a consistently oriented surface; a cloud's "
+     "overlapping fans have none (use qcqp-dirichlet or qcqp-laplacian for a smoothed field)"),
+    ("method", "qcqp-hessian", "the curved Hessian energy needs a consistently oriented surface; a cloud's "
+     "overlapping fans have none (use qcqp-dirichlet or qcqp-laplacian for a smoothed field)"),
+    ("multires", "", "multires coarsens a mesh; solve a cloud on its own triangles"),
+    ("resolution", "", "resolution= decimates a mesh; a cloud's triangles are a soup that quadric decimation does "
+     "not keep; give resolution='mesh'"),
+    ("source", "boundary", "a cloud's boundary is not detected (the fans' free edges are everywhere the fans "
+     "disagree); give the boundary's points by index"),
+    ("source", "curve", "curves are resampled on a manifold surface; give the curve's points by index or as "
+     "SurfacePoints"),
+)
+#: The default method on a point cloud (docs/pointclouds.md: the most accurate on noisy clouds at about the
+#: point-cloud heat method's cost).
+CLOUD_DEFAULT_METHOD = "qclp"
+
+
+def check_cloud(method: str, *, sources: Iterable[str] = (), multires: bool = False, resolution: bool = False) -> None:
+    """Raise where :data:`CLOUD_REFUSALS` refuses the solve on a point cloud (after :func:`check` on triangles).
+
+    Raises
+    ------
+    ParameterError
+        The method, multires or resolution= on a cloud.
+    SourceError
+        A kind of source a cloud does not take.
+    """
+    kinds = set(sources)
+    for axis, what, reason in CLOUD_REFUSALS:
+        if axis == "method" and what == method:
+            raise ParameterError(f"method {method!r} does not run on point clouds ({reason}); methods that do: "
+                                 f"{', '.join(cloud_methods())}")
+        if (axis == "multires" and multires) or (axis == "resolution" and resolution):
+            raise ParameterError(f"{axis} on a point cloud: {reason}")
+        if axis == "source" and what in kinds:
+            raise SourceError(f"{what} sources on a point cloud: {reason}")
+
+
+def cloud_methods() -> list[str]:
+    """The methods that run on point clouds."""
+    refused = {what for axis, what, _ in CLOUD_REFUSALS if axis == "method"}
+    return [m for m in METHODS if m not in refused]
 
 
 def _source_message(method: str, kind: str, rule: Rule, cell: dict[str, Any]) -> str:

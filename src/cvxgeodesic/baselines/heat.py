@@ -32,6 +32,10 @@ class HeatBaseline(ComponentwiseSolver):
     (it rounds the ridge); its error is largest next to the sources. The
     default ``t_coef = 1.0`` is reported as ``info["t_coef"]``.
 
+    **On a point cloud** (a :class:`~cvxgeodesic.mesh.pointcloud.PointCloud`):
+    ``potpourri3d.PointCloudHeatSolver`` on the points of each component of the cloud's triangles (geometry-central
+    builds its own intrinsic triangulation of the local fans).
+
     **On a surface**: ``potpourri3d.MeshHeatMethodDistanceSolver``; relative
     error about 19 % next to the sources on icospheres, almost independent of
     the resolution. With ``use_robust=True`` (default) the library works on an
@@ -93,6 +97,8 @@ class HeatBaseline(ComponentwiseSolver):
         self.t_coef = check_number(t_coef, "t_coef", low=0, low_open=True)
         self.use_robust = bool(use_robust)
         super().__init__(mesh)
+        if getattr(self.mesh, "cloud", None) is not None:  # what _build ran (info["solver"])
+            self.library = "potpourri3d.PointCloudHeatSolver"
 
     def _setup(self) -> None:
         if self.dim == 3:
@@ -101,6 +107,10 @@ class HeatBaseline(ComponentwiseSolver):
         super()._setup()
 
     def _build(self, V: np.ndarray, F: np.ndarray) -> object:
+        if getattr(self.mesh, "cloud", None) is not None:  # a PointCloud's soup: the point-cloud heat method
+            import potpourri3d as pp3d
+
+            return pp3d.PointCloudHeatSolver(V, t_coef=self.t_coef)
         return self._library(V, F, t_coef=self.t_coef, use_robust=self.use_robust)
 
     def _run(self, solver, local_sources: np.ndarray) -> np.ndarray:

@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import signal
 import sys
+from typing import Any
 
 from ..errors import ParameterError
 
@@ -86,6 +87,15 @@ class Signals:
         if self.received == signal.SIGTERM:
             return "cvxgeodesic: terminated", EXIT_TERMINATED
         return "cvxgeodesic: interrupted", EXIT_INTERRUPTED
+
+
+def load_input(path: str) -> Any:
+    """The command's input: a point file's cloud (its triangle soup, ``mesh/pointcloud_io.is_point_file``), else
+    :func:`~cvxgeodesic.mesh.load.load_mesh`."""
+    from ..mesh.io import load_mesh
+    from ..mesh.pointcloud_io import is_point_file, load_point_cloud
+
+    return load_point_cloud(path).mesh if is_point_file(path) else load_mesh(path)
 
 
 def check_numbers(args: argparse.Namespace) -> None:

@@ -121,7 +121,10 @@ def default_methods() -> str:
 def method_for(args: argparse.Namespace, mesh: Any) -> Method:
     """``--method`` when given, else the default for the mesh's dimension (:data:`~cvxgeodesic.api.DEFAULT_METHODS`)."""
     from ..api import DEFAULT_METHODS
+    from ..capabilities import CLOUD_DEFAULT_METHOD
 
+    if getattr(mesh, "cloud", None) is not None:  # a point file (docs/pointclouds.md)
+        return args.method or CLOUD_DEFAULT_METHOD  # type: ignore[return-value]
     return args.method or DEFAULT_METHODS[mesh.dim]
 
 

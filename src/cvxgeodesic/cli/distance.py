@@ -11,7 +11,7 @@ import sys
 from typing import Any
 
 from . import _options as opt
-from ._common import add_overwrite_option, check_outputs
+from ._common import add_overwrite_option, check_outputs, load_input
 
 
 def add_parser(sub: Any) -> None:
@@ -60,11 +60,11 @@ def run(args: argparse.Namespace) -> int:
     from .._verbose import progress_printer
     from ..api import GeodesicSolver
     from ..mesh.formats.registry import DISTANCE_EXTENSIONS, VOLUME_DISTANCE_EXTENSIONS
-    from ..mesh.io import load_mesh, save_distance
+    from ..mesh.io import save_distance
     from ..validation import check_output_path
 
     check_outputs(args, ("-o", args.output, DISTANCE_EXTENSIONS), ("--png", args.png, (".png",)))
-    mesh = load_mesh(args.mesh)
+    mesh = load_input(args.mesh)
     space = opt.SPACES[mesh.dim]
     if mesh.dim == 3:  # before the solve: save_distance writes a volume's field in fewer formats
         check_output_path(args.output, VOLUME_DISTANCE_EXTENSIONS)

@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ParameterError, SourceError
-from ._common import add_overwrite_option, check_outputs
+from ._common import add_overwrite_option, check_outputs, load_input
 from ._options import (
     add_precision_options,
     add_resolution_option,
@@ -77,11 +77,10 @@ def run(args: argparse.Namespace) -> int:
     from .._atomic import atomic_write
     from ..api import DEFAULT_ROW_METHOD, distance_matrix
     from ..mesh.fileorder import file_sources, to_file_order
-    from ..mesh.io import load_mesh
     from ..rows import checkpoint_rows, sparse_to_file_order
 
     local = _check(args)
-    mesh: Any = load_mesh(args.mesh)  # a TriMesh or a TetMesh: both have the file's numbering
+    mesh: Any = load_input(args.mesh)  # a TriMesh or a TetMesh: both have the file's numbering
     if not args.source:
         raise SourceError("give the source vertex of each row: -s I[,J...] (repeatable)")
     rows = [int(file_sources(mesh, [s])[0]) for s in args.source]  # one row per -s, in the given order

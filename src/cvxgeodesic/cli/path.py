@@ -9,7 +9,7 @@ from typing import Any
 
 from ..errors import ParameterError, SourceError
 from . import _options as opt
-from ._common import add_overwrite_option, check_outputs
+from ._common import add_overwrite_option, check_outputs, load_input
 from .distance import add_slice_option, draw_field, slice_normal
 
 #: The formats of a path file.
@@ -86,12 +86,11 @@ def run(args: argparse.Namespace) -> int:
     from .._atomic import atomic_write, output_set
     from .._verbose import progress_printer
     from ..api import GeodesicSolver
-    from ..mesh.io import load_mesh
     from ..paths import distance_at, geodesic_path
     from ..sources import SurfacePoint
 
     check_outputs(args, ("-o", args.output, PATH_EXTENSIONS), ("--png", args.png, (".png",)))
-    mesh = load_mesh(args.mesh)
+    mesh = load_input(args.mesh)
     sources, label = opt.cli_sources(args, mesh)
     target = _target(args, mesh)
     cost = opt.cli_cost(args, mesh)

@@ -42,6 +42,9 @@ def as_mesh(mesh: Any, name: str = "mesh") -> TriMesh | TetMesh:
         return mesh
     if _is_tet_pair(mesh):
         return TetMesh(mesh[0], mesh[1], name=name)
+    cloud = _as_cloud(mesh)
+    if cloud is not None:  # a point cloud or point file: the triangle soup of its fans (mesh/pointcloud.py)
+        return cloud.mesh
     if isinstance(mesh, str | os.PathLike):
         from .load import load_mesh
 
@@ -67,7 +70,10 @@ def as_trimesh(mesh: Any, name: str = "mesh") -> TriMesh:
       with ``np.asarray``);
     - open3d's tensor ``open3d.t.geometry.TriangleMesh`` (``.vertex["positions"]`` and
       ``.triangle["indices"]`` tensors, copied to the CPU and converted with ``.numpy()``);
-    - ``meshio.Mesh`` (``.points`` and ``.cells_dict["triangle"]``; other cell types are ignored).
+    - ``meshio.Mesh`` (``.points`` and ``.cells_dict["triangle"]``; other cell types are ignored);
+    - a :class:`~cvxgeodesic.mesh.pointcloud.PointCloud`, a ``trimesh.PointCloud``, an
+      ``open3d.geometry.PointCloud`` or a point file (``.xyz``, ``.pts``, ``.csv``, ``.npy``, a PLY without
+      faces): the cloud's :class:`~cvxgeodesic.mesh.pointcloud.CloudMesh` (its points, in their order).
 
     The vertex order of the object is kept (no welding): indices mean the same in both.
 
@@ -99,6 +105,9 @@ def as_trimesh(mesh: Any, name: str = "mesh") -> TriMesh:
     """
     if isinstance(mesh, TriMesh):
         return mesh
+    cloud = _as_cloud(mesh)
+    if cloud is not None:  # a point cloud: the triangle soup of its local fans (mesh/pointcloud.py)
+        return cloud.mesh
     if isinstance(mesh, str | os.PathLike):
         from .load import load_mesh
 
@@ -134,6 +143,23 @@ def as_trimesh(mesh: Any, name: str = "mesh") -> TriMesh:
         "or open3d.t.geometry.TriangleMesh, or a meshio.Mesh (something with vertices and faces, vertices and "
         f"triangles, vertex and triangle, or points and cells_dict), got {qualified}"
     )
+
+
+def _as_cloud(obj: Any) -> Any:
+    """``obj`` as a :class:`~cvxgeodesic.mesh.pointcloud.PointCloud` when it is one, or a trimesh or open3d point
+    cloud, or a point file (:func:`~cvxgeodesic.mesh.pointcloud_io.is_point_file`); else None."""
+    from .pointcloud import PointCloud, is_point_cloud_object
+
+    if isinstance(obj, PointCloud):
+        return obj
+    if is_point_cloud_object(obj):
+        return PointCloud.from_object(obj, name=getattr(obj, "name", None) or None)
+    if isinstance(obj, str | os.PathLike):
+        from .pointcloud_io import is_point_file, load_point_cloud
+
+        if is_point_file(obj):
+            return load_point_cloud(obj)
+    return None
 
 
 def _o3d_tensor(attributes: Any, key: str, label: str) -> np.ndarray:

@@ -7,6 +7,7 @@ the public face: the readers and writers by extension, atomic writes, and the fi
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import re
 from pathlib import Path
@@ -43,6 +44,10 @@ _NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*\Z")
 _RESERVED = ("x", "y", "z", "vertex", "file_vertex")
 
 
+#: What a point cloud's field is written as (readers of .vtu/.glb expect cells).
+CLOUD_DISTANCE_EXTENSIONS = (".ply", ".npy", ".csv")
+
+
 def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, name: str = "distance",
                   file_order: bool = False, overwrite_read_only: bool = False) -> Path:
     """Write a per-vertex distance field, atomically.
@@ -68,6 +73,10 @@ def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, na
       ``trimesh.load(path, process=False)`` puts in each geometry's ``vertex_attributes``;
       float32 (glTF has no float64), and ``inf`` is written as -1 (the format's JSON header
       cannot hold infinity).
+
+    A field on a :class:`~cvxgeodesic.mesh.pointcloud.PointCloud` is written on its points, without the triangles
+    it was solved on (a ``.ply`` then has no faces, and :func:`~cvxgeodesic.mesh.pointcloud_io.load_point_cloud`
+    reads it back as a cloud); ``.vtu`` and ``.glb`` are refused for clouds.
 
     A field on a tetrahedral mesh (:class:`~cvxgeodesic.mesh.tetmesh.TetMesh`) is written as ``.vtu`` / ``.vtk``
     with the tetrahedra (ParaView opens it: slices, clips, contours), or as ``.npy``
@@ -145,6 +154,11 @@ def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, na
         cells = mesh.file_faces if mesh.dim == 2 else mesh.vertex_map[mesh.cells]
         field = FieldData(file_vertices(mesh), cells, to_file_order(mesh, d), name, mesh.file_index,
                           np.arange(mesh.n_file_vertices), mesh.name)
+    if getattr(mesh, "cloud", None) is not None:  # a point cloud's field: its points, not the fans' triangle soup
+        if p.suffix.lower() not in CLOUD_DISTANCE_EXTENSIONS:
+            raise ParameterError(f"{p}: a field on a point cloud is written as {', '.join(CLOUD_DISTANCE_EXTENSIONS)} "
+                                 f"(its points, no faces), not {p.suffix!r}")
+        field = dataclasses.replace(field, cells=field.cells[:0])
     write = fmt.write_field
     atomic_write(p, lambda fh: write(fh, field), overwrite_read_only=overwrite_read_only)
     return p

@@ -1,0 +1,173 @@
+"""Geodesic distance on point clouds: the vertices of the shared meshes, clean and with Gaussian noise.
+
+Each cloud is the vertex set of a shared mesh (no faces), or with ``--resample`` random points of its surface, as is
+or moved by Gaussian noise of ``--noise`` times the bounding-box diagonal (a fixed seed). The reference is the mesh's
+exact field (MMP, ``method="exact"``) from the same point, at the original positions: point ``i`` of a vertex cloud
+is vertex ``i`` of the mesh; resampled points are inserted into the mesh as vertices for it. Methods:
+
+- ``pc-heat``: the point-cloud heat method (``potpourri3d.PointCloudHeatSolver``; the library's ``heat`` on a
+  cloud runs it), the time unit;
+- ``knn-dijkstra``: Dijkstra on the symmetrized graph of the ``--knn`` nearest neighbours (scipy), Euclidean edges;
+- ``qclp`` at order 1 and 2 on each triangle set of :data:`~cvxgeodesic.mesh.pointcloud.TRIANGLE_SETS`
+  (``--sets``), and the smoothed ``qcqp-dirichlet`` (``--m``) at both orders on the first set.
+
+Columns: mean and max relative error over the reachable points (``cvxgeodesic.evaluation.errors.relative_error``),
+time over pc-heat's (best of ``--repeats``; building the cloud's triangles included for the library's methods:
+each is a fresh ``PointCloud`` + solver + solve; pc-heat's includes its own set-up), and unreachable points
+(infinite distance).
+One process; run with one thread::
+
+    CVXGEODESIC_THREADS=1 OMP_NUM_THREADS=1 PYTHONPATH=src python benchmarks/point_clouds.py --quick
+
+The date and the load average are printed first.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import dijkstra
+from scipy.spatial import cKDTree
+
+import cvxgeodesic as cg
+from cvxgeodesic.evaluation.errors import relative_error
+from cvxgeodesic.mesh.pointcloud import TRIANGLE_SETS
+
+MESHES = Path(__file__).resolve().parents[1].parent / "shared" / "meshes"
+QUICK = ("kitten", "bimba")
+MIN_VERTICES = 5000
+
+
+def knn_dijkstra(P: np.ndarray, src: int, k: int) -> np.ndarray:
+    """Dijkstra on the symmetrized k-nearest-neighbour graph (Euclidean edge lengths)."""
+    dist, idx = cKDTree(P).query(P, k=k + 1)
+    n = P.shape[0]
+    rows = np.repeat(np.arange(n), k)
+    G = sp.coo_matrix((dist[:, 1:].ravel(), (rows, idx[:, 1:].ravel())), shape=(n, n)).tocsr()
+    G = G.maximum(G.T)
+    return dijkstra(G, indices=src)
+
+
+def timed(fn, repeats: int):
+    """The result of ``fn()`` and its best time over ``repeats`` runs."""
+    best, out = np.inf, None
+    for _ in range(repeats):
+        t = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t)
+    return out, best
+
+
+def row(name, noise, label, d, exact, src, t, t_heat):
+    reach = np.isfinite(d)
+    err = relative_error(np.where(reach, d, exact), exact, [src])[reach]  # unreachable: counted, not averaged
+    print(f"| {name} | {noise * 100:.1f} % | {label} | {np.nanmean(err) * 100:.3f} % | {np.nanmax(err) * 100:.2f} % "
+          f"| {t / t_heat:.2f}× | {int((~reach).sum())} |", flush=True)
+
+
+def shared_meshes(names: list[str] | None) -> list[Path]:
+    if names:
+        return [next(MESHES.glob(f"{n}.*")) for n in names]
+    out = []
+    for line in (MESHES / "MANIFEST.tsv").read_text().splitlines()[1:]:
+        cols = line.split("\t")
+        if int(cols[3]) >= MIN_VERTICES and cols[5] == "yes" and "/" not in cols[0]:
+            out.append(MESHES / cols[0])
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--meshes", nargs="*", help="mesh names in ../shared/meshes (default: all manifold ones with "
+                    f"at least {MIN_VERTICES} vertices)")
+    ap.add_argument("--quick", action="store_true", help=f"the meshes {', '.join(QUICK)}")
+    ap.add_argument("--noise", default="0,0.001,0.003", help="noise levels, fractions of the diagonal")
+    ap.add_argument("--sets", default=",".join(TRIANGLE_SETS))
+    ap.add_argument("--knn", type=int, default=8)
+    ap.add_argument("--source", type=float, default=0.5, help="source vertex, as a fraction of the vertex count")
+    ap.add_argument("--no-order2", action="store_true")
+    ap.add_argument("--m", type=float, default=1.0, help="smoothness of qcqp-dirichlet")
+    ap.add_argument("--repeats", type=int, default=2, help="times are the best of this many runs")
+    ap.add_argument("--resample", default="", help="instead of the vertices: random surface points, these fractions "
+                    "of the face count (e.g. 0.5,0.25: two densities); the reference is exact MMP on the mesh with "
+                    "the points inserted as vertices")
+    args = ap.parse_args()
+    print(f"# {datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M} UTC, load {os.getloadavg()[0]:.2f} "
+          f"{os.getloadavg()[1]:.2f}, threads {os.environ.get('CVXGEODESIC_THREADS', 'default')}", flush=True)
+    print("| cloud | noise | method | mean err | max err | time / pc-heat | unreachable |")
+    print("|---|---|---|---|---|---|---|")
+    paths = shared_meshes(list(QUICK) if args.quick else args.meshes)
+    sets = args.sets.split(",")
+    rng = np.random.default_rng(0)
+    for path in paths:
+        mesh = cg.load_mesh(path, kind="surface")
+        for name, V0, exact, src in clouds_of(mesh, path.stem, args, rng):
+            for noise in (float(x) for x in args.noise.split(",")):
+                P = V0 + rng.normal(scale=noise * mesh.bbox_diagonal, size=V0.shape) if noise else V0
+                compare(name, noise, P, exact, src, sets, args)
+
+
+def clouds_of(mesh, stem: str, args, rng) -> list[tuple[str, np.ndarray, np.ndarray, int]]:
+    """``(label, points, exact field at them, source index)``: the vertices, or with ``--resample`` the clouds of
+    random surface points (:func:`resample`)."""
+    if not args.resample:
+        src = int(args.source * mesh.n_vertices)
+        return [(f"{stem} ({mesh.n_vertices // 1000}K)", mesh.V, cg.geodesic_distance(mesh, src, method="exact"),
+                 src)]
+    out = []
+    for fraction in (float(x) for x in args.resample.split(",")):
+        X, split, idx = resample(mesh, fraction, rng)
+        src = int(args.source * X.shape[0])
+        exact = cg.geodesic_distance(split, int(idx[src]), method="exact")[idx]
+        out.append((f"{stem} resampled ({X.shape[0] // 1000}K)", X, exact, src))
+    return out
+
+
+def resample(mesh, fraction: float, rng) -> tuple[np.ndarray, cg.TriMesh, np.ndarray]:
+    """Random surface points: ``fraction`` of the faces drawn without replacement with probability proportional to
+    their area, one uniform point in each. Returns the points, the mesh with each point inserted as a vertex (its face
+    split in three: the same surface, so exact MMP on it gives the exact field at the points) and their indices."""
+    V, F = mesh.V, mesh.F
+    area = mesh.face_areas
+    k = int(fraction * mesh.n_faces)
+    faces = rng.choice(mesh.n_faces, size=k, replace=False, p=area / area.sum())
+    X = np.einsum("ki,kij->kj", rng.dirichlet([1.0, 1.0, 1.0], size=k), V[F[faces]])
+    idx = mesh.n_vertices + np.arange(k)
+    a, b, c = F[faces].T
+    keep = np.ones(mesh.n_faces, dtype=bool)
+    keep[faces] = False
+    split = cg.TriMesh(np.vstack([V, X]), np.vstack([F[keep], np.c_[a, b, idx], np.c_[b, c, idx], np.c_[c, a, idx]]))
+    return X, split, idx
+
+
+def compare(name: str, noise: float, P: np.ndarray, exact: np.ndarray, src: int, sets: list[str], args) -> None:
+    """One row per method on the cloud ``P``."""
+    def pc_heat():
+        import potpourri3d as pp3d
+
+        return pp3d.PointCloudHeatSolver(P).compute_distance(src)
+    d, t_heat = timed(pc_heat, args.repeats)
+    row(name, noise, "pc-heat", d, exact, src, t_heat, t_heat)
+    d, t = timed(lambda: knn_dijkstra(P, src, args.knn), args.repeats)
+    row(name, noise, f"{args.knn}-NN Dijkstra", d, exact, src, t, t_heat)
+    for kind in sets:
+        runs = [("qclp", 1, 0.0)] + ([] if args.no_order2 else [("qclp", 2, 0.0)])
+        if kind == sets[0]:  # the smoothed formulation, at both orders, on the first set
+            runs += [("qcqp-dirichlet", order, args.m) for order in (1, 2) if order == 1 or not args.no_order2]
+        for method, order, m in runs:
+            def solve(kind=kind, method=method, order=order, m=m):
+                cloud = cg.PointCloud(P, triangles=kind)
+                return cg.GeodesicSolver(cloud, method, order=order, m=m).solve(src).distance
+            d, t = timed(solve, args.repeats)
+            label = f"{method} order {order}{f' m={m:g}' if m else ''}, {kind}"
+            row(name, noise, label, d, exact, src, t, t_heat)
+
+
+if __name__ == "__main__":
+    main()

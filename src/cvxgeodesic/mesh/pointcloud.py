@@ -1,0 +1,290 @@
+"""Point clouds: raw points (no faces) solved on the triangles of their local Delaunay fans.
+
+:class:`PointCloud` validates the points (finite, at least four, not all on a line; exact duplicates merged with a
+note) and builds a triangle soup from ``potpourri3d.PointCloudLocalTriangulation``: for every point, the fan of
+triangles around it in its tangent plane (its ``neighbours`` nearest points, Delaunay in the plane fitted to them).
+The soup is a :class:`CloudMesh`, a :class:`~cvxgeodesic.mesh.trimesh.TriMesh` that remembers its cloud, so every
+function that takes a mesh takes the cloud (``mesh/convert.as_mesh``) and returns one value per point. The convex
+formulations accept the non-manifold soup as it is (one cone per triangle). docs/pointclouds.md has the choices and
+their measured errors.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import ArrayLike
+from scipy.sparse.csgraph import connected_components
+
+from ..errors import MeshError, ParameterError
+from .trimesh import TriMesh
+
+__all__ = ["TRIANGLE_SETS", "CloudMesh", "PointCloud", "fan_triangles", "triangle_set"]
+
+#: The triangle sets a cloud can be solved on (docs/pointclouds.md has their measured errors):
+#: ``"union"`` every triangle of every fan; ``"consensus"`` the triangles that appear in at least two fans;
+#: ``"repaired"`` the consensus plus, for every point that the consensus leaves outside the largest component it
+#: reaches in the union, the union's triangles of its fan (so no point becomes unreachable).
+TRIANGLE_SETS = ("union", "consensus", "repaired")
+DEFAULT_NEIGHBOURS = 30
+#: docs/pointclouds.md: the repaired consensus has the lower mean error on clean and on unevenly sampled clouds (up to
+#: 1.5× at order 2) but leaves holes where the fans disagree (max error up to 4.5× the union's on a sphere's cloud);
+#: the union has the lower mean error on noisy evenly sampled clouds (up to 1.5×) and no holes.
+DEFAULT_TRIANGLES = "union"
+#: A cloud whose second principal extent is below this fraction of its first lies on a line.
+COLLINEAR_TOL = 1e-9
+
+
+class CloudMesh(TriMesh):
+    """The triangle soup of a :class:`PointCloud` (its vertices are the cloud's points, in the same order).
+
+    A :class:`TriMesh` with one more attribute, :attr:`cloud`, that the capability checks read: the methods and
+    sources that need a manifold surface refuse it (``capabilities.check_cloud``).
+    """
+
+    cloud: PointCloud
+
+
+def fan_triangles(P: np.ndarray, neighbours: int) -> tuple[np.ndarray, np.ndarray]:
+    """Every fan triangle of ``potpourri3d.PointCloudLocalTriangulation``, and the point whose fan it is in.
+
+    Parameters
+    ----------
+    P : (n, 3) float ndarray
+    neighbours : int
+        Points in each local neighbourhood.
+
+    Returns
+    -------
+    tri : (k, 3) int64 ndarray
+        Point indices (global), each row sorted (so that a triangle of several fans has one spelling).
+    owner : (k,) int64 ndarray
+        The point whose fan holds it (row ``i`` of the library's ``(n, max_neighbours, 3)`` array, padded with -1).
+    """
+    import potpourri3d as pp3d
+
+    if neighbours != DEFAULT_NEIGHBOURS:  # geometry-central's k; potpourri3d 1.4 does not pass another one
+        raise ParameterError(f"neighbours: potpourri3d's local triangulation uses {DEFAULT_NEIGHBOURS} neighbours "
+                             f"and does not take another count; got {neighbours!r}")
+    fans = np.asarray(pp3d.PointCloudLocalTriangulation(np.ascontiguousarray(P)).get_local_triangulation(),
+                      dtype=np.int64)
+    owner = np.repeat(np.arange(fans.shape[0]), fans.shape[1])
+    flat = fans.reshape(-1, 3)
+    keep = (flat >= 0).all(axis=1)
+    return np.sort(flat[keep], axis=1), owner[keep]
+
+
+def triangle_set(tri: np.ndarray, owner: np.ndarray, n: int, kind: str) -> tuple[np.ndarray, list[str]]:
+    """The triangles of one of :data:`TRIANGLE_SETS` from the fans' triangles (:func:`fan_triangles`).
+
+    Returns
+    -------
+    F : (m, 3) int64 ndarray
+        Distinct triangles.
+    notes : list of str
+        What the repair added, if anything.
+    """
+    uniq, inverse, counts = np.unique(tri, axis=0, return_inverse=True, return_counts=True)
+    inverse = inverse.reshape(-1)
+    if kind == "union":
+        return uniq, []
+    chosen = counts >= 2
+    if kind == "consensus":
+        return uniq[chosen], []
+    # repaired: points the consensus leaves in a smaller piece than the union's component get their fans back
+    union_labels = _components(uniq, n)
+    labels = _components(uniq[chosen], n)
+    big = _largest_piece(labels, union_labels)
+    stranded = np.flatnonzero(labels != big[union_labels])
+    if stranded.size:
+        chosen = chosen.copy()
+        chosen[np.unique(inverse[np.isin(owner, stranded)])] = True
+    notes = [f"point cloud: {stranded.size} points would be cut off by the consensus triangles; their fans' "
+             "triangles were added back"] if stranded.size else []
+    return uniq[chosen], notes
+
+
+def _components(F: np.ndarray, n: int) -> np.ndarray:
+    """Component label of every point in the graph of the triangles' edges (a point in no triangle: its own)."""
+    i = F[:, [0, 1, 2]].ravel()
+    j = F[:, [1, 2, 0]].ravel()
+    A = sp.coo_matrix((np.ones(i.size), (i, j)), shape=(n, n))
+    return connected_components(A, directed=False)[1]
+
+
+def _largest_piece(labels: np.ndarray, union_labels: np.ndarray) -> np.ndarray:
+    """For each union component, the consensus label holding most of its points."""
+    order = np.lexsort((labels, union_labels))
+    pairs = np.stack([union_labels[order], labels[order]], axis=1)
+    uniq, counts = np.unique(pairs, axis=0, return_counts=True)
+    best = np.full(union_labels.max() + 1, -1)
+    top = np.zeros(union_labels.max() + 1, dtype=np.int64)
+    for (u, c), k in zip(uniq, counts, strict=True):
+        if k > top[u]:
+            top[u], best[u] = k, c
+    return best
+
+
+class PointCloud:
+    """Points in 3-D with no faces, solved on the triangles of their local fans.
+
+    Parameters
+    ----------
+    P : (n, 3) array_like of float
+        The points. Finite; at least 4 distinct ones, not all on one line.
+    normals : (n, 3) array_like of float, optional
+        Normals as read from a file; kept with the points (the fans fit their own tangent planes).
+    neighbours : int, default 30
+        Points in each local neighbourhood (potpourri3d's fixed default; another value is refused until the
+        library exposes it).
+    triangles : {"union", "consensus", "repaired"}, default "union"
+        Which of the fans' triangles to solve on (:data:`TRIANGLE_SETS`; docs/pointclouds.md measures them).
+    name : str, optional
+        Label for messages.
+
+    Attributes
+    ----------
+    P : (n, 3) float ndarray, read-only
+        The distinct points (duplicates merged: :attr:`file_index` maps the input's points to them).
+    mesh : CloudMesh
+        The triangle soup; its vertices are ``P``.
+    notes : tuple of str
+        Every repair made (merged duplicates, stranded points given their fans back, points in no triangle).
+
+    Raises
+    ------
+    MeshError
+        A non-finite coordinate (the message names the point), fewer than 4 distinct points, all points on a line.
+    ParameterError
+        An unknown ``triangles`` or a ``neighbours`` other than 30.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> g = np.linspace(0, 1, 12)
+    >>> x, y = np.meshgrid(g, g)
+    >>> cloud = PointCloud(np.c_[x.ravel(), y.ravel(), 0 * x.ravel()])
+    >>> cloud.n_points
+    144
+    """
+
+    def __init__(self, P: ArrayLike, normals: ArrayLike | None = None, *, neighbours: int = DEFAULT_NEIGHBOURS,
+                 triangles: str = DEFAULT_TRIANGLES, name: str | None = None) -> None:
+        self.name = name or "point cloud"
+        if triangles not in TRIANGLE_SETS:
+            raise ParameterError(f"triangles must be one of {', '.join(TRIANGLE_SETS)}, got {triangles!r}")
+        if isinstance(neighbours, bool) or not isinstance(neighbours, int | np.integer):
+            raise ParameterError(f"neighbours must be an integer, got {neighbours!r}")
+        self.neighbours, self.triangles = int(neighbours), triangles
+        raw = _check_points(P, self.name)
+        notes: list[str] = []
+        uniq, first, inverse = np.unique(raw, axis=0, return_index=True, return_inverse=True)
+        inverse = inverse.reshape(-1)
+        if uniq.shape[0] < raw.shape[0]:
+            keep = np.sort(first)  # the input's order, first occurrence of each position
+            remap = np.empty(uniq.shape[0], dtype=np.int64)
+            remap[inverse[keep]] = np.arange(keep.size)
+            file_index = remap[inverse]
+            dup = np.flatnonzero(np.bincount(file_index)[file_index] > 1)
+            notes.append(f"{self.name}: merged {raw.shape[0] - keep.size} duplicate points (same coordinates; "
+                         f"first: input points {', '.join(str(int(i)) for i in dup[:4])}); fields have one value "
+                         "per distinct point, file_index maps the input's points to them")
+            pts = raw[keep]
+        else:
+            keep = np.arange(raw.shape[0])
+            file_index = keep
+            pts = raw
+        _check_shape(pts, self.name)
+        self.file_index = file_index
+        self.normals = None if normals is None else _check_normals(normals, raw.shape[0], self.name)[keep]
+        tri, owner = fan_triangles(pts, self.neighbours)
+        F, added = triangle_set(tri, owner, pts.shape[0], triangles)
+        notes += added
+        alone = np.setdiff1d(np.arange(pts.shape[0]), F.ravel())
+        if alone.size:
+            notes.append(f"{self.name}: {alone.size} points are in no triangle (isolated; first: "
+                         f"{', '.join(str(int(i)) for i in alone[:4])}): their distance is infinite")
+        if F.shape[0] == 0:
+            raise MeshError(f"{self.name}: the local triangulation of the {pts.shape[0]} points made no triangle")
+        mesh = CloudMesh(pts, F, name=self.name, vertex_map=keep, file_index=file_index, notes=notes)
+        mesh.cloud = self
+        self.mesh = mesh
+        self.notes = tuple(notes)
+
+    @property
+    def P(self) -> np.ndarray:
+        """(n, 3) float ndarray: the distinct points (the soup's vertices)."""
+        return self.mesh.V
+
+    @property
+    def n_points(self) -> int:
+        """Number of distinct points."""
+        return self.mesh.n_vertices
+
+    n_vertices = n_points
+
+    def __repr__(self) -> str:
+        return (f"PointCloud(name={self.name!r}, n_points={self.n_points}, triangles={self.triangles!r}, "
+                f"n_triangles={self.mesh.n_faces})")
+
+    @classmethod
+    def from_object(cls, obj: Any, **kwargs: Any) -> PointCloud:
+        """A cloud from a ``trimesh.PointCloud`` (``.vertices``) or an ``open3d.geometry.PointCloud``
+        (``.points``, and ``.normals`` when it has them), by duck typing."""
+        return cls(*_object_points(obj), **kwargs)
+
+
+def _object_points(obj: Any) -> tuple[np.ndarray, np.ndarray | None]:
+    """Points and normals (or None) of another library's point-cloud object."""
+    if isinstance(obj, PointCloud):
+        return obj.P, obj.normals
+    if hasattr(obj, "points") and hasattr(obj, "has_normals"):  # open3d.geometry.PointCloud
+        normals = np.asarray(obj.normals) if obj.has_normals() else None
+        return np.asarray(obj.points), normals
+    if hasattr(obj, "vertices") and not hasattr(obj, "faces"):  # trimesh.PointCloud
+        return np.asarray(obj.vertices), None
+    raise TypeError(f"not a point cloud: {type(obj).__module__}.{type(obj).__qualname__} (expected a "
+                    "trimesh.PointCloud or an open3d.geometry.PointCloud)")
+
+
+def is_point_cloud_object(obj: Any) -> bool:
+    """Whether ``obj`` is a point cloud of this library, trimesh or open3d (no faces)."""
+    if isinstance(obj, PointCloud):
+        return True
+    kind = f"{type(obj).__module__}.{type(obj).__qualname__}"
+    return kind.startswith(("trimesh.points.PointCloud", "open3d")) and "PointCloud" in kind
+
+
+def _check_points(P: ArrayLike, name: str) -> np.ndarray:
+    try:
+        X = np.asarray(P, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise MeshError(f"{name}: points must be an (n, 3) array of numbers ({exc})") from None
+    if X.ndim != 2 or X.shape[1] != 3:
+        raise MeshError(f"{name}: points must be an (n, 3) array, got shape {X.shape}")
+    bad = np.flatnonzero(~np.isfinite(X).all(axis=1))
+    if bad.size:
+        raise MeshError(f"{name}: point {int(bad[0])} has a non-finite coordinate ({X[bad[0]].tolist()}); "
+                        f"{bad.size} such points in all")
+    return X
+
+
+def _check_shape(P: np.ndarray, name: str) -> None:
+    if P.shape[0] < 4:
+        raise MeshError(f"{name}: a point cloud needs at least 4 distinct points, got {P.shape[0]}")
+    s = np.linalg.svd(P - P.mean(axis=0), compute_uv=False)
+    if s[1] <= COLLINEAR_TOL * s[0]:
+        raise MeshError(f"{name}: all {P.shape[0]} points lie on one line (second principal extent "
+                        f"{s[1] / max(s[0], 1e-300):.1e} of the first): there is no surface to measure on")
+
+
+def _check_normals(N: ArrayLike, n: int, name: str) -> np.ndarray:
+    X = np.asarray(N, dtype=np.float64)
+    if X.shape != (n, 3):
+        raise MeshError(f"{name}: normals must have the points' shape ({n}, 3), got {X.shape}")
+    bad = np.flatnonzero(~np.isfinite(X).all(axis=1))
+    if bad.size:
+        raise MeshError(f"{name}: normal {int(bad[0])} has a non-finite coordinate")
+    return X

@@ -1,0 +1,277 @@
+"""Point clouds (mesh/pointcloud.py, mesh/pointcloud_io.py): exact and analytic distances, paths, input defects,
+files, and what the domain refuses."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import cvxgeodesic as cg
+from cvxgeodesic.errors import MeshError, ParameterError, SourceError
+from cvxgeodesic.mesh.pointcloud import CloudMesh, PointCloud
+
+RNG = np.random.default_rng(1)
+
+
+def _plane(n: int = 20, seed: int = 1) -> np.ndarray:
+    """A jittered n × n grid of the unit square, rotated into a generic plane of 3-D."""
+    rng = np.random.default_rng(seed)
+    g = np.linspace(0.0, 1.0, n)
+    x, y = np.meshgrid(g, g)
+    P = np.c_[x.ravel(), y.ravel(), np.zeros(x.size)]
+    P[:, :2] += rng.uniform(-0.2 / n, 0.2 / n, (P.shape[0], 2))
+    R = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    return P @ R.T
+
+
+def _sphere(n: int = 1500, seed: int = 2) -> np.ndarray:
+    X = np.random.default_rng(seed).normal(size=(n, 3))
+    return X / np.linalg.norm(X, axis=1)[:, None]
+
+
+@pytest.fixture(scope="module")
+def plane_cloud() -> PointCloud:
+    return PointCloud(_plane())
+
+
+@pytest.mark.parametrize("triangles", ["union", "consensus", "repaired"])
+def test_plane_cloud_is_exact_at_order_2(triangles):
+    # the P2 squared distance is exact on flat triangles, overlapping fans included; measured 2e-10..3e-9 of the
+    # largest distance (the solver's tolerance), asserted at 1e-6
+    P = _plane()
+    src = 210
+    d = cg.geodesic_distance(PointCloud(P, triangles=triangles), src, method="qclp", order=2)
+    exact = np.linalg.norm(P - P[src], axis=1)
+    assert d.shape == (P.shape[0],)
+    assert np.abs(d - exact).max() <= 1e-6 * exact.max()
+
+
+def test_sphere_cloud_is_near_the_great_circle_distance():
+    # 1,500 random points of the unit sphere, the default (union) triangles; measured max error 0.0043 π at order 2
+    # and 0.030 π at order 1, mean 0.0011 π and 0.013 π (the consensus: 0.0195 π at order 2, a hole where fans disagree)
+    X = _sphere()
+    cloud = PointCloud(X)
+    exact = np.arccos(np.clip(X @ X[0], -1.0, 1.0))
+    d2 = cg.geodesic_distance(cloud, 0, method="qclp", order=2)
+    d1 = cg.geodesic_distance(cloud, 0, method="qclp")
+    assert np.abs(d2 - exact).max() <= 0.01 * np.pi
+    assert np.abs(d1 - exact).max() <= 0.04 * np.pi
+    assert np.abs(d2 - exact).mean() < np.abs(d1 - exact).mean()
+
+
+def test_the_default_method_on_a_cloud_is_qclp(plane_cloud):
+    solver = cg.GeodesicSolver(plane_cloud)
+    assert solver.method == "qclp" and solver.is_cloud
+
+
+def test_heat_on_a_cloud_is_the_point_cloud_heat_method():
+    import potpourri3d as pp3d
+
+    X = _sphere(800)
+    res = cg.GeodesicSolver(PointCloud(X), "heat").solve(3)
+    assert res.info.solver == "potpourri3d.PointCloudHeatSolver"
+    np.testing.assert_allclose(res.distance, pp3d.PointCloudHeatSolver(X).compute_distance(3), rtol=1e-12,
+                               atol=1e-12)
+
+
+def test_a_path_on_a_cloud_is_the_straight_segment_on_a_plane(plane_cloud):
+    P = plane_cloud.P
+    res = cg.GeodesicSolver(plane_cloud, "qclp", order=2).solve(0)
+    target = int(np.argmax(np.linalg.norm(P - P[0], axis=1)))
+    path = cg.geodesic_path(plane_cloud, res, target)
+    assert np.allclose(path[0], P[target]) and np.allclose(path[-1], P[0], atol=1e-6)
+    length = np.linalg.norm(np.diff(path, axis=0), axis=1).sum()
+    assert length == pytest.approx(np.linalg.norm(P[target] - P[0]), rel=1e-3)
+
+
+def test_positions_as_sources_and_distance_at(plane_cloud):
+    P = plane_cloud.P
+    x = 0.5 * (P[0] + P[21])  # inside the plane, not a point of the cloud
+    point = cg.surface_point(plane_cloud, x)
+    res = cg.GeodesicSolver(plane_cloud, "qclp", order=2).solve(point)
+    exact = np.linalg.norm(P - point.position(plane_cloud.mesh), axis=1)
+    assert np.abs(res.distance - exact).max() <= 1e-6
+    assert cg.distance_at(plane_cloud, res, P[50]) == pytest.approx(exact[50], abs=1e-6)
+
+
+def test_distance_matrix_takes_a_cloud(plane_cloud):
+    D = cg.distance_matrix(plane_cloud, [0, 7], method="qclp")
+    assert D.shape == (2, plane_cloud.n_points) and D[1, 7] == 0.0
+
+
+def test_a_non_finite_point_is_refused_by_index():
+    P = _plane(6)
+    P[9, 1] = np.nan
+    with pytest.raises(MeshError, match="point 9 has a non-finite"):
+        PointCloud(P)
+
+
+def test_duplicate_points_are_merged_with_a_note():
+    P = _plane(8)
+    Q = np.r_[P, P[[3, 10]]]
+    cloud = PointCloud(Q)
+    assert cloud.n_points == P.shape[0]
+    assert any("merged 2 duplicate points" in n for n in cloud.notes)
+    assert cloud.file_index[-2:].tolist() == [3, 10]
+    res = cg.GeodesicSolver(cloud, "qclp").solve(0)
+    assert any("merged 2 duplicate" in n for n in res.info.notes)
+
+
+@pytest.mark.parametrize("P, match", [
+    (np.c_[np.arange(10.0), 2 * np.arange(10.0), np.zeros(10)], "lie on one line"),
+    (np.eye(3), "at least 4 distinct points"),
+    (np.r_[np.eye(3), np.eye(3)], "at least 4 distinct points"),
+    (np.ones((5, 2)), r"\(n, 3\)"),
+])
+def test_degenerate_clouds_are_refused(P, match):
+    with pytest.raises(MeshError, match=match):
+        PointCloud(P)
+
+
+def test_consensus_leaves_no_point_unreachable_once_repaired(monkeypatch):
+    # a point whose fan's triangles appear in no other fan: the consensus drops it, the repair gives it back
+    from cvxgeodesic.mesh import pointcloud
+
+    P = _plane(10)
+    tri, owner = pointcloud.fan_triangles(P, 30)
+    lonely = 44
+    mine = (tri == lonely).any(axis=1)
+    keep = ~mine | (owner == lonely)  # the other fans forget point 44
+    monkeypatch.setattr(pointcloud, "fan_triangles", lambda P, k: (tri[keep], owner[keep]))
+    consensus = PointCloud(P, triangles="consensus")
+    repaired = PointCloud(P, triangles="repaired")
+    assert lonely not in consensus.mesh.F
+    assert lonely in repaired.mesh.F
+    assert any("added back" in n for n in repaired.notes)
+    assert np.isfinite(cg.geodesic_distance(repaired, 0, method="qclp")).all()
+
+
+@pytest.mark.parametrize("method", ["exact", "fmm", "qcqp-hessian"])
+def test_methods_that_need_a_manifold_are_refused_on_clouds(plane_cloud, method):
+    with pytest.raises(ParameterError, match="does not run on point clouds"):
+        cg.GeodesicSolver(plane_cloud, method)
+
+
+def test_boundary_sources_and_multires_are_refused_on_clouds(plane_cloud):
+    with pytest.raises(SourceError, match="boundary sources on a point cloud"):
+        cg.geodesic_distance(plane_cloud, "boundary", method="qclp")
+    with pytest.raises(ParameterError, match="multires on a point cloud"):
+        cg.GeodesicSolver(plane_cloud, "qclp", multires=True)
+
+
+def test_unknown_triangle_set_and_neighbour_count_are_refused():
+    with pytest.raises(ParameterError, match="triangles must be one of"):
+        PointCloud(_plane(6), triangles="all")
+    with pytest.raises(ParameterError, match="30 neighbours"):
+        PointCloud(_plane(6), neighbours=12)
+
+
+# -- files ----------------------------------------------------------------------------------------------------------
+
+def _ply(path, P, N=None):
+    props = "property double x\nproperty double y\nproperty double z\n"
+    if N is not None:
+        props += "property double nx\nproperty double ny\nproperty double nz\n"
+    rows = np.c_[P, N] if N is not None else P
+    body = "\n".join(" ".join(repr(float(v)) for v in r) for r in rows)
+    path.write_text(f"ply\nformat ascii 1.0\nelement vertex {len(P)}\n{props}end_header\n{body}\n")
+
+
+@pytest.mark.parametrize("ext", [".xyz", ".pts", ".csv", ".npy", ".ply"])
+def test_point_files_round_trip(tmp_path, ext):
+    P = _plane(8)
+    N = np.tile([0.0, 0.0, 1.0], (P.shape[0], 1))
+    path = tmp_path / f"cloud{ext}"
+    if ext == ".npy":
+        np.save(path, np.c_[P, N])
+    elif ext == ".csv":
+        np.savetxt(path, np.c_[P, N], delimiter=",", header="x,y,z,nx,ny,nz", comments="")
+    elif ext == ".pts":
+        np.savetxt(path, P, header=str(P.shape[0]), comments="")
+    elif ext == ".ply":
+        _ply(path, P, N)
+    else:
+        np.savetxt(path, np.c_[P, N])
+    cloud = cg.load_point_cloud(path)
+    np.testing.assert_array_equal(cloud.P, P)
+    if ext != ".pts":
+        np.testing.assert_array_equal(cloud.normals, N)
+    assert isinstance(cg.GeodesicSolver(path, "qclp").mesh, CloudMesh)  # a path is taken where a mesh is
+
+
+def test_a_ply_with_faces_is_still_a_mesh(tmp_path):
+    path = tmp_path / "tri.ply"
+    path.write_text("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                    "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n"
+                    "3 0 1 2\n")
+    assert type(cg.GeodesicSolver(path, "qclp").mesh) is cg.TriMesh
+    with pytest.raises(MeshError, match="has faces"):
+        cg.load_point_cloud(path)
+
+
+def test_a_missing_point_file_is_a_file_not_found_error(tmp_path):
+    with pytest.raises(FileNotFoundError, match="no such file"):
+        cg.load_point_cloud(tmp_path / "absent.xyz")
+
+
+def test_a_bad_line_of_a_point_file_is_named(tmp_path):
+    path = tmp_path / "bad.xyz"
+    path.write_text("0 0 0\n1 0 0\n0 1 zero\n")
+    with pytest.raises(MeshError, match="line 3: not numbers"):
+        cg.load_point_cloud(path)
+
+
+def test_trimesh_and_open3d_like_clouds_are_taken():
+    P = _plane(8)
+
+    class O3dCloud:  # the duck type of open3d.geometry.PointCloud
+        points = P
+        normals = np.tile([0.0, 0.0, 1.0], (P.shape[0], 1))
+
+        def has_normals(self):
+            return True
+
+    cloud = PointCloud.from_object(O3dCloud())
+    np.testing.assert_array_equal(cloud.P, P)
+    assert cloud.normals is not None
+    trimesh = pytest.importorskip("trimesh")
+    mesh = cg.GeodesicSolver(trimesh.PointCloud(P), "qclp").mesh
+    assert isinstance(mesh, CloudMesh)
+
+
+@pytest.mark.parametrize("ext", [".ply", ".npy", ".csv"])
+def test_a_cloud_field_is_saved_on_its_points(tmp_path, plane_cloud, ext):
+    d = cg.geodesic_distance(plane_cloud, 0, method="qclp")
+    path = cg.save_distance(tmp_path / f"d{ext}", plane_cloud, d)
+    np.testing.assert_array_equal(cg.load_distance(path), d)
+    if ext == ".ply":  # no faces: it reads back as the same cloud
+        np.testing.assert_array_equal(cg.load_point_cloud(path).P, plane_cloud.P)
+
+
+def test_formats_that_need_cells_are_refused_for_a_cloud(tmp_path, plane_cloud):
+    with pytest.raises(ParameterError, match="a field on a point cloud is written as"):
+        cg.save_distance(tmp_path / "d.vtu", plane_cloud, np.zeros(plane_cloud.n_points))
+
+
+def test_the_command_line_takes_a_point_file(tmp_path):
+    from cvxgeodesic.cli import main
+
+    P = _plane(8)
+    np.savetxt(tmp_path / "c.xyz", P)
+    out = tmp_path / "d.ply"
+    assert main(["distance", str(tmp_path / "c.xyz"), "--source", "0", "--quiet", "-o", str(out)]) == 0
+    d = cg.load_distance(out)
+    np.testing.assert_allclose(d, cg.geodesic_distance(PointCloud(P), 0), rtol=1e-6, atol=1e-9)
+
+
+def test_docs_list_every_refusal_of_the_cloud_domain():
+    from pathlib import Path
+
+    from cvxgeodesic.capabilities import CLOUD_REFUSALS
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "pointclouds.md").read_text(encoding="utf-8")
+    section = page.split("**What a cloud refuses**", 1)[1].split("`heat` on a cloud", 1)[0]
+    names = {"curve": "SurfaceCurve", "multires": "multires=", "resolution": "resolution="}
+    for axis, what, _ in CLOUD_REFUSALS:
+        word = names.get(what or axis, what)
+        assert f"`{word}" in section or f'"{word}"' in section, word
