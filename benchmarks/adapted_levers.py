@@ -23,17 +23,11 @@ import numpy as np
 
 import cvxgeodesic as cg
 from cvxgeodesic.evaluation.errors import relative_error
+from report_common import timed
 
 MESHES = Path(__file__).resolve().parents[1].parent / "shared" / "meshes"
 
 
-def timed(fn, repeats: int):
-    best, out = np.inf, None
-    for _ in range(repeats):
-        t = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t)
-    return out, best
 
 
 def main() -> None:

@@ -27,7 +27,6 @@ from __future__ import annotations
 import argparse
 import datetime
 import os
-import time
 from pathlib import Path
 
 import numpy as np
@@ -38,6 +37,7 @@ from scipy.spatial import cKDTree
 import cvxgeodesic as cg
 from cvxgeodesic.evaluation.errors import relative_error
 from cvxgeodesic.mesh.pointcloud import TRIANGLE_SETS
+from report_common import timed
 
 MESHES = Path(__file__).resolve().parents[1].parent / "shared" / "meshes"
 QUICK = ("kitten", "bimba")
@@ -54,14 +54,6 @@ def knn_dijkstra(P: np.ndarray, src: int, k: int) -> np.ndarray:
     return dijkstra(G, indices=src)
 
 
-def timed(fn, repeats: int):
-    """The result of ``fn()`` and its best time over ``repeats`` runs."""
-    best, out = np.inf, None
-    for _ in range(repeats):
-        t = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t)
-    return out, best
 
 
 def row(name, noise, label, d, exact, src, t, t_heat):

@@ -432,3 +432,13 @@ def environment(argv: list[str]) -> dict:
         "versions": versions, "commit": commit, "blas": blas,
         "command": " ".join(["python", *argv]),
     }
+
+
+def timed(fn, repeats: int):
+    """The result of ``fn()`` and its best time over ``repeats`` runs."""
+    best, out = np.inf, None
+    for _ in range(repeats):
+        t = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t)
+    return out, best
