@@ -302,6 +302,12 @@ def test_max_turn_and_the_fold_detector(grid):
     book = TriMesh([[0, 0, 0], [1, 0, 0], [0.5, 1, 0], [0.5, np.cos(np.radians(30)), -np.sin(np.radians(30))]],
                    [[0, 1, 2], [1, 0, 3]])
     assert abs(adapted.max_turn(book) - 150) < 1e-6
+    # a creased mesh (a cube: its edges turn by 90 deg) is not checked: a sharp turn of its copy is a crease's corner
+    cube = TriMesh(np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], dtype=float),
+                   [[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1], [2, 3, 7], [2, 7, 6],
+                    [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+    assert abs(adapted.max_turn(cube) - 90) < 1e-6
+    assert adapted.fold_reference(cube) == 180 and adapted.fold_reference(grid) < 1e-6
 
 
 def test_a_folded_copy_is_decimated_again(grid, monkeypatch):
@@ -319,6 +325,10 @@ def test_a_folded_copy_is_decimated_again(grid, monkeypatch):
     assert [t["outcome"][:6] for t in ad["decimation_tries"]] == ["folded", "kept"]
     assert any("decimated again" in n and "folded" in n for n in res.info.notes)
     np.testing.assert_allclose(res.distance, _euclid(grid, grid.V[119]), atol=FLAT)  # the flat copy was solved
+    # the error estimate's coarser copy starts at the solve copy's aggressiveness (no estimate of a fold)
+    aggs.clear()
+    ad = cg.GeodesicSolver(grid, "qclp", resolution=100).solve(119).info.extra["adapted"]
+    assert aggs == [7.0, 5.0, 5.0] and ad["estimate_agg"] == 5.0 and ad["error_estimate"] < FLAT
     # every copy folded: the least folded is kept, and said so
     monkeypatch.setattr(adapted, "simplify_mesh", lambda *a, **k: _flip_a_face(real(*a, **k)))
     res = cg.GeodesicSolver(grid, "qclp", resolution=100, estimate_error=False).solve(119)
@@ -340,7 +350,7 @@ def test_a_copy_refused_for_topology_is_retried_at_other_aggressiveness(grid, mo
     ad = res.info.extra["adapted"]
     assert ad["order"] == 2 and ad["fallback"] is None and ad["agg"] == adapted.RETRY_AGGS[-1]
     tries = ad["decimation_tries"]
-    assert len(tries) == len(adapted.RETRY_TARGETS) * (len(adapted.RETRY_AGGS) - 1) + 1
+    assert len(tries) == len(adapted.RETRY_TARGETS) + adapted.RETRY_TARGETS_LATER * (len(adapted.RETRY_AGGS) - 2) + 1
     assert all("collapse broke" in t["outcome"] for t in tries[:-1]) and tries[-1]["outcome"] == "kept"
     np.testing.assert_allclose(res.distance, _euclid(grid, grid.V[119]), atol=FLAT)
     # a retry that stops far above the target is refused too (it would cost more than the solve asked for)
