@@ -90,10 +90,10 @@ RETRY_AGGS = (7.0, 5.0, 3.0)
 FOLD_ANGLE = 100.0
 FOLD_MARGIN = 30.0
 CREASE_ANGLE = 60.0
-#: A retry (an aggressiveness after the first tried) that stops above this many times the target faces is refused (low
-#: aggressiveness can stop short: dragon at 1/10 with agg 3 stopped at 3,826 of 2,000 faces, which costs more than
-#: the target's solve). The first aggressiveness's copy is kept however many faces it has (a kept boundary can stop
-#: the decimation early on a small mesh).
+#: A copy of a gentler aggressiveness than the most aggressive that stops above this many times the target faces is
+#: refused (dragon at 1/10 with agg 3 stopped at 3,826 of 2,000 faces, which costs more than the target's solve; the
+#: estimate's copy would be nearly the solve copy). The most aggressive copy is kept however many faces it has (a
+#: kept boundary stops the decimation early on a small mesh; no gentler one gets further).
 MAX_FACES_OVER = 1.25
 #: How the solve mesh is made (recorded in ``info.extra["adapted"]["simplifier"]``).
 SIMPLIFIER = "quadric (fast-simplification, boundary kept)"
@@ -182,7 +182,7 @@ def _decimated(mesh: TriMesh, target: int, first_agg: float | None = None
     for i, agg in enumerate(aggs):
         for factor in RETRY_TARGETS if i == 0 else RETRY_TARGETS[:RETRY_TARGETS_LATER]:
             faces = max(MIN_RESOLUTION_FACES, int(round(factor * target)))
-            coarse, why = _decimated_once(mesh, faces, agg, retry=i > 0)
+            coarse, why = _decimated_once(mesh, faces, agg)
             if coarse is None:
                 tries.append((agg, faces, str(why)))
                 continue
@@ -272,8 +272,7 @@ def _without_fins(mesh: TriMesh) -> TriMesh:
     return TriMesh(mesh.V[used], local.reshape(-1, 3), name=mesh.name)
 
 
-def _decimated_once(mesh: TriMesh, target: int, agg: float = 7.0, retry: bool = False
-                    ) -> tuple[TriMesh | None, str | None]:
+def _decimated_once(mesh: TriMesh, target: int, agg: float = 7.0) -> tuple[TriMesh | None, str | None]:
     try:
         coarse = _without_fins(simplify_mesh(mesh, target, method="quadric", preserve_border=True, agg=agg))
     except Exception as exc:  # noqa: BLE001 - any failure of the extension falls back, with its message
@@ -283,7 +282,7 @@ def _decimated_once(mesh: TriMesh, target: int, agg: float = 7.0, retry: bool = 
               (_euler(coarse) != _euler(mesh), f"the decimated copy changed the Euler characteristic "
                                                f"({_euler(mesh)} -> {_euler(coarse)})"),
               (coarse.degenerate_faces(0.0).size > 0, "the decimated copy has faces of zero area"),
-              (retry and coarse.n_faces > MAX_FACES_OVER * target,
+              (agg < max(RETRY_AGGS) and coarse.n_faces > MAX_FACES_OVER * target,
                f"the decimation stopped at {coarse.n_faces} faces"))
     for bad, why in checks:
         if bad:
