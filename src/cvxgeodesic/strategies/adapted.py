@@ -516,9 +516,10 @@ class Adapted:
                               f"{made['fold_angle']:.0f} deg, the mesh at most {made['mesh_turn']:.0f}); the least "
                               f"folded is used (aggressiveness {made['agg']:g})")
         elif made.get("agg") is not None and len(tries) > 1:
-            refused = "; ".join(f"agg {a:g}, {t} faces: {o}" for a, t, o in tries[:-1])
-            self.notes.append(f"resolution={self.requested!r}: {what} was decimated again ({refused}); kept "
-                              f"aggressiveness {made['agg']:g}, {tries[-1][1]} faces")
+            outcomes = [o for _, _, o in tries[:-1]]
+            refused = "; ".join(f"{outcomes.count(o)}x {o}" for o in dict.fromkeys(outcomes))
+            self.notes.append(f"resolution={self.requested!r}: {what} was decimated {len(tries)} times ({refused}); "
+                              f"kept aggressiveness {made['agg']:g}, {tries[-1][1]} faces")
 
     def solve(self, sources: SourceSet, *, callback: Callback | None = None) -> GeodesicResult:
         """Distance field on the user's mesh from sources resolved on it.
