@@ -14,9 +14,11 @@ copy:
    (found once); :class:`~cvxgeodesic.mesh.transfer.ProjectedField` answers ``distance_at`` at any point of the user's
    faces the same way, and ``geodesic_path`` descends the vertex values on the user's mesh;
 4. **next to the sources** a patch of the user's mesh solved at order 2 and mixed in (:data:`SOURCE_PATCH_EDGES`);
-5. **fallbacks**: a mesh that is not edge-manifold, has several components or faces of zero area, or whose copy
-   changes its topology (Euler characteristic, components, a non-manifold edge), is solved on itself at order 1,
-   with a note (quadric decimation gave NaN fields on a non-manifold mesh, issue 43).
+5. **retries and fallbacks**: a copy that changes the topology (Euler characteristic, components, a non-manifold
+   edge) or is folded (:func:`fold_excess`) is decimated again at other targets and aggressiveness values
+   (:func:`_decimated`, recorded in ``decimation_tries``); a mesh that is not edge-manifold, has several components
+   or faces of zero area, or whose every copy was refused, is solved on itself at order 1, with a note (quadric
+   decimation gave NaN fields on a non-manifold mesh, issue 43).
 
 ``info.extra["adapted"]`` records the solve mesh, its times and an error estimate (a second solve on a copy with
 :data:`ESTIMATE_RATIO` of the faces).
