@@ -416,7 +416,7 @@ CLAIMS: list[Claim] = [
     _r("adapted-targets", "2026-12-06", "`python benchmarks/accuracy_per_second.py`",
        (BENCH, "the scans of 50K–100K faces reached ≤ 0.3 % at ≤ 3× heat on horse only")),
     _r("choice-adapted", "2026-12-06", "`python benchmarks/accuracy_per_second.py`",
-       (README, "| 0.91 / 1.95 / 1.19 % |"), (README, "0.24–0.37 % mean error at 2.9–4.1× the heat method's time")),
+       (README, "| 0.91 / 0.33 / 1.19 % |"), (README, "0.24–0.37 % mean error at 2.9–4.1× the heat method's time")),
     _r("rows-default", "2026-12-06", "`python benchmarks/row_default.py`",
        (PERF, "0.063 s (28× heat), 2.04 %"), (PERF, "cost 1.5–2.3× `qclp`'s")),
     _r("adapted-source-snap", "2026-12-06", "`python benchmarks/adapted_levers.py fandisk`",
