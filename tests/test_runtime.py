@@ -6,6 +6,7 @@ import os
 import re
 import signal
 import socket
+import sys
 import threading
 import time
 from pathlib import Path
@@ -165,3 +166,32 @@ def test_docs_use_a_placeholder_scheduler_address():
             if not m.group(0).startswith("tcp://SCHEDULER:"):
                 found.append(f"{f.relative_to(ROOT)}: {m.group(0)}")
     assert found == []
+
+
+def test_a_signal_inside_a_ctypes_callback_is_kept_for_the_next_check(monkeypatch, capfd):
+    # threadpoolctl finds the loaded libraries through dl_iterate_phdr, which calls Python back through ctypes; a
+    # KeyboardInterrupt raised there was printed as "Exception ignored ..." with a traceback and lost
+    import threadpoolctl
+
+    from cvxgeodesic import _signals
+    from cvxgeodesic.cli._common import Signals
+
+    real = threadpoolctl.ThreadpoolController._make_controller_from_path
+    fired = []
+
+    def spy(self, filepath):
+        if not fired:
+            fired.append(True)
+            os.kill(os.getpid(), signal.SIGINT)  # its handler runs here, under the ctypes callback
+        return real(self, filepath)
+
+    monkeypatch.setattr(threadpoolctl.ThreadpoolController, "_make_controller_from_path", spy)
+    lost = []  # what ctypes prints as "Exception ignored on calling ctypes callback function" goes through this hook
+    monkeypatch.setattr(sys, "unraisablehook", lost.append)
+    with Signals() as signals:
+        threadpoolctl.ThreadpoolController()
+        assert fired and signals.received == signal.SIGINT
+        with pytest.raises(KeyboardInterrupt):
+            _signals.check()
+    assert lost == []
+    assert "Traceback" not in capfd.readouterr().err

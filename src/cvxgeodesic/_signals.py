@@ -20,13 +20,32 @@ That handler carries the attribute :data:`EARLY_MARK`; what comes before it is P
 
 from __future__ import annotations
 
-__all__ = ["EARLY_MARK", "check", "clear", "record"]
+__all__ = ["C_CALLBACKS", "EARLY_MARK", "check", "clear", "in_c_callback", "record"]
 
 #: The attribute that marks the package's early SIGINT handler (``cvxgeodesic/__init__.py``), which the command
 #: line replaces with its own.
 EARLY_MARK = "cvxgeodesic_early"
 
 _pending: dict[str, int | None] = {"signum": None}
+
+#: Python functions that C code calls back through ctypes, as (file name ending, function name): an exception raised
+#: under them is printed ("Exception ignored on calling ctypes callback function", with a traceback) and dropped.
+C_CALLBACKS = (("threadpoolctl.py", "match_library_callback"),)
+
+
+def in_c_callback(frame: object) -> bool:
+    """Whether ``frame`` (a signal handler's frame argument) runs under one of :data:`C_CALLBACKS`.
+
+    The command line's handler then only records the signal: :func:`check` raises it at the next safe point, where
+    raising it at once would print a traceback and lose it (seen in a loaded run of the Ctrl-C test of
+    ``cvxgeodesic matrix``, 2026-12-06).
+    """
+    while frame is not None:
+        code = frame.f_code  # type: ignore[attr-defined]
+        if any(code.co_filename.endswith(name) and code.co_name == func for name, func in C_CALLBACKS):
+            return True
+        frame = frame.f_back  # type: ignore[attr-defined]
+    return False
 
 
 def record(signum: int) -> None:

@@ -62,6 +62,8 @@ class Signals:
         def on_signal(signum: int, frame: object) -> None:
             self.received = self.received or signum
             _signals.record(signum)  # raised again at the library's next check if a ctypes callback swallows it
+            if _signals.in_c_callback(frame):
+                return  # raised there would print a traceback and be lost: _signals.check raises it next
             raise KeyboardInterrupt
 
         # named as solvers._interrupt.STOPS_SOLVES, which is not imported here: it loads Clarabel and SciPy
