@@ -639,7 +639,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None
     options: dict[str, Any] = {"method": method, "m": m, "lam": lam, "solver": solver, "tol": tol, "max_iter": max_iter,
                "multires": multires, "normalization": normalization, "order": order, "threads": threads,
                "cost": cost, "metric": metric, "resolution": resolution}
-    if resolution is not None and resolution != "mesh":  # the rows keep no info: no error estimate to pay for
+    if resolution is not None and not _is_mesh_resolution(resolution):  # rows keep no info: no estimate to pay for
         options["estimate_error"] = False
     items, inverse = _matrix_rows(mesh, vertices, local=max_distance is not None)
     factory: Any = GeodesicSolver
@@ -708,9 +708,9 @@ def _local_rows(mesh: Any, options: dict, max_distance: Any) -> tuple[Any, dict]
     given = {"multires": bool(options["multires"]), "cost": options["cost"] is not None,
              "metric": options["metric"] is not None,
              "resolution": options["resolution"] is not None and not _is_mesh_resolution(options["resolution"])}
-    for name in ("multires", "cost", "metric", "resolution"):
-        if given[name]:
+    for name, is_given in given.items():
+        if is_given:
             raise ParameterError(f"max_distance does not take {name}= (a patch has no coarse mesh, cost or metric "
                                  "of its own yet)")
-    rest = {k: v for k, v in options.items() if k not in ("multires", "cost", "metric", "resolution")}
+    rest = {k: v for k, v in options.items() if k not in given}
     return LocalRows, {"max_distance": r, "factory": _PatchSolver, **rest}
