@@ -220,10 +220,10 @@ class ProjectedField:
         (p,) float ndarray
         """
         faces = np.atleast_1d(np.asarray(faces, dtype=np.int64))
-        X = bary_positions(self.mesh, faces, np.atleast_2d(np.asarray(bary, dtype=float)))
+        B = np.atleast_2d(np.asarray(bary, dtype=float))
+        X = bary_positions(self.mesh, faces, B)
         cf, cb, _ = closest_point_index(self.solve_mesh).query(np.ascontiguousarray(X))
         out = np.asarray(self.field.distance_at(cf, cb), dtype=float)
         if not self.patches:
             return out
-        B = np.atleast_2d(np.asarray(bary, dtype=float))
         return mix_patches(out, self.patches, [p.at_points(faces, B) for p in self.patches])
