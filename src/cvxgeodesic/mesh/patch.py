@@ -44,6 +44,8 @@ class Patch:
         (the mesh's own boundary is not a cut). Empty when the patch is the source's whole component.
     radius : float
         The edge-graph distance that chose the faces.
+    faces : (k,) int64 ndarray
+        The whole mesh's index of each patch face, in the patch's order (empty without a face).
     """
 
     mesh: TriMesh | None
@@ -51,6 +53,7 @@ class Patch:
     source: int
     cut: np.ndarray
     radius: float
+    faces: np.ndarray
 
 
 def ball_patch(mesh: TriMesh, source: int, radius: float) -> Patch:
@@ -75,7 +78,8 @@ def ball_patch(mesh: TriMesh, source: int, radius: float) -> Patch:
     inside = near[mesh.F]
     keep = inside.all(axis=1)
     if not keep.any():
-        return Patch(None, np.array([source], dtype=np.int64), 0, np.zeros(0, dtype=np.int64), float(radius))
+        empty = np.zeros(0, dtype=np.int64)
+        return Patch(None, np.array([source], dtype=np.int64), 0, empty, float(radius), empty)
     faces = mesh.F[keep]
     vertices = np.unique(faces)
     local = np.full(mesh.n_vertices, -1, dtype=np.int64)
@@ -84,4 +88,4 @@ def ball_patch(mesh: TriMesh, source: int, radius: float) -> Patch:
     touching = mesh.F[~keep & inside.any(axis=1)].ravel()
     cut = np.unique(local[touching])
     patch = TriMesh(mesh.V[vertices], local[faces], name=f"{mesh.name}{PATCH_LABEL}")
-    return Patch(patch, vertices, int(local[source]), cut[cut >= 0], float(radius))
+    return Patch(patch, vertices, int(local[source]), cut[cut >= 0], float(radius), np.flatnonzero(keep))

@@ -577,11 +577,8 @@ class Adapted:
             patch = ball_patch(mesh, center, radius)
             if patch.mesh is None:
                 continue
-            inside = np.zeros(mesh.n_vertices, dtype=bool)
-            inside[patch.vertices] = True
-            keep = inside[mesh.F].all(axis=1)  # ball_patch's faces, in its order
             face_map = np.full(mesh.n_faces, -1, dtype=np.int64)
-            face_map[keep] = np.arange(int(keep.sum()))
+            face_map[patch.faces] = np.arange(patch.faces.size)
             src = patch.source if point is None else SurfacePoint(int(face_map[point.cell]), point.bary)
             try:
                 res = Order2(self.config.on(patch.mesh, lam=self.config.lam)).solve(resolve_sources(patch.mesh, src))
