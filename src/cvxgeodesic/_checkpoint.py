@@ -131,7 +131,7 @@ def checked_rows(data: dict[str, np.ndarray], path: Path, shape: tuple[int, int]
         return _refused(path, f"is damaged ({what})")
 
     index = data["index"].astype(np.int64)
-    n_rows, n_cols = shape
+    n_cols = shape[1]
     if not sparse:
         rows = data.get("rows")
         if rows is None:
