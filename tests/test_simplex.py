@@ -71,3 +71,18 @@ def test_degenerate_cells_one_rule_in_both_dimensions():
 def test_open_surface_boundary_facets_are_its_boundary_edges():
     tri = cg.TriMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], [[0, 1, 2], [1, 3, 2]])
     np.testing.assert_array_equal(tri.boundary_facets, [[0, 1], [0, 2], [1, 3], [2, 3]])
+
+
+def test_reference_simplex_matches_the_mesh_classes():
+    """Each mesh class carries its cell kind; its local frame gives the gradient code's corner coordinates."""
+    from cvxgeodesic.mesh.reference import TETRAHEDRON, TRIANGLE
+    from cvxgeodesic.operators.gradient import local_coordinates
+
+    sphere, box = cg.icosphere(1), cg.tet_box(2)
+    assert sphere.reference is TRIANGLE and box.reference is TETRAHEDRON
+    for mesh in (sphere, box):
+        ref = mesh.reference
+        assert ref.dim == mesh.dim and ref.n_corners == mesh.cells.shape[1]
+        np.testing.assert_array_equal(ref.local_coordinates(mesh.V[mesh.cells]), local_coordinates(mesh))
+        assert isinstance(ref.locate(mesh, mesh.V[3] * 0.999), ref.point_type)
+    assert TRIANGLE.words.one == "face" and TETRAHEDRON.words.many == "tetrahedra"

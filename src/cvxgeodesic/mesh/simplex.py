@@ -33,6 +33,7 @@ from scipy.sparse.csgraph import connected_components
 
 from ..errors import MeshError
 from ..validation import check_coordinates
+from .reference import ReferenceSimplex
 
 __all__ = ["CELL_EDGES", "CELL_FACETS", "DEGENERATE_TOL", "SimplexMesh", "file_numbering", "unit_mesh", "unit_scale"]
 
@@ -90,6 +91,8 @@ class SimplexMesh:
     """
 
     dim: int
+    #: The cell kind (:mod:`cvxgeodesic.mesh.reference`): what shared code asks instead of ``dim``.
+    reference: ReferenceSimplex
     #: The name of a mesh made without one.
     default_name = "mesh"
     #: What ``repr`` counts the cells as (``n_faces``, ``n_tets``).

@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import MeshError
+from .reference import TETRAHEDRON
 from .simplex import CELL_EDGES, CELL_FACETS, DEGENERATE_TOL, SimplexMesh, _cached_parts
 from .trimesh import TriMesh
 
@@ -82,6 +83,7 @@ class TetMesh(SimplexMesh):
     """
 
     dim = 3
+    reference = TETRAHEDRON
     default_name = "tetmesh"
     count_name = "n_tets"
 

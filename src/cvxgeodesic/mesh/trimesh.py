@@ -9,6 +9,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..validation import MAX_COORDINATE, MIN_EXTENT
+from .reference import TRIANGLE
 from .simplex import DEGENERATE_TOL, SimplexMesh, _as_cells, file_numbering
 
 __all__ = ["DEGENERATE_TOL", "MAX_COORDINATE", "MIN_EXTENT", "TriMesh", "file_numbering"]
@@ -71,6 +72,7 @@ class TriMesh(SimplexMesh):
     """
 
     dim = 2
+    reference = TRIANGLE
     count_name = "n_faces"
     #: Set on the coarse meshes of :func:`~cvxgeodesic.mesh.decimate.simplify_mesh` only: the method used.
     simplifier: str
