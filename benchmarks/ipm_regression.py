@@ -1,6 +1,6 @@
 """Iteration counts and fields of the structured IPM on a fixed set of problems (a refactoring guard).
 
-Every formulation in :data:`cvxgeodesic.formulations.FORMULATIONS` on icosphere(3), spot and bimba, source
+Every formulation in :data:`cvxgeodesic.problems.formulations.FORMULATIONS` on icosphere(3), spot and bimba, source
 vertex 0, ``solver="ipm"``, ``m = 1``. Not a test (bimba takes a while); run it by hand::
 
     python benchmarks/ipm_regression.py --out benchmarks/ipm_regression.json --fields /tmp/fields_before.npz
@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from cvxgeodesic import GeodesicSolver
-from cvxgeodesic.formulations import FORMULATIONS
 from cvxgeodesic.mesh import icosphere, load_mesh
+from cvxgeodesic.problems.formulations import FORMULATIONS
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "meshes"
 MESHES = {"icosphere3": lambda: icosphere(3), "spot": lambda: load_mesh(SHARED / "spot.obj"),

@@ -26,9 +26,9 @@ from pathlib import Path
 import numpy as np
 
 import cvxgeodesic as cg
-from cvxgeodesic import formulations
 from cvxgeodesic.baselines import BASELINES
 from cvxgeodesic.evaluation import error_stats, smoothness_report
+from cvxgeodesic.problems import formulations
 
 SHARED = Path(__file__).resolve().parents[1] / ".." / "shared" / "meshes"
 

@@ -34,7 +34,7 @@ import numpy as np
 import cvxgeodesic as cg
 from cvxgeodesic.baselines import BASELINES
 from cvxgeodesic.evaluation import ridge_deficit, rounding_width
-from cvxgeodesic.formulations import KAPPA_ORDER2
+from cvxgeodesic.problems.formulations import KAPPA_ORDER2
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "meshes"
 CAD = ["thingi_243015.stl", "thingi_32770.stl", "thingi_37881.stl", "thingi_47076.stl", "thingi_65395.stl",

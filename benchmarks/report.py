@@ -999,7 +999,7 @@ SMOOTH_TITLES = {"exact": "exact", "o1_qclp": "order 1, qclp", "o1_hessian": "or
 def sec_order2_smoothing(ctx, plan):
     """Issue 25: order 1 vs order 2, smoothed vs not: the two-source plane, the fine meshes, the coarse CAD set."""
     from cvxgeodesic.evaluation import ridge_deficit
-    from cvxgeodesic.formulations import KAPPA_ORDER2
+    from cvxgeodesic.problems.formulations import KAPPA_ORDER2
 
     plane_rec, (pm, space, pfields) = smooth_plane_case(plan)
     fine = []

@@ -33,7 +33,7 @@ import numpy as np
 import cvxgeodesic as cg
 from cvxgeodesic.api import BASELINE_METHODS
 from cvxgeodesic.errors import NonManifoldError
-from cvxgeodesic.formulations import ALIASES, FORMULATIONS
+from cvxgeodesic.problems.formulations import ALIASES, FORMULATIONS
 
 REPO = Path(__file__).resolve().parents[1]
 DEFAULT_SHARED = REPO.parent / "shared" / "meshes"

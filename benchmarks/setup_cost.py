@@ -73,7 +73,7 @@ def _instrument(acc: dict[str, float]) -> None:
     """Wrap the library's set-up functions so that each adds its own time (nested pieces excluded) to ``acc``."""
     from cvxgeodesic.linalg import symbolic
     from cvxgeodesic.operators import energies
-    from cvxgeodesic.solvers import problem
+    from cvxgeodesic.problems import conic as problem
     from cvxgeodesic.strategies import direct
 
     stack: list[list] = []  # [label, time spent in nested wrapped calls]

@@ -48,10 +48,10 @@ from pathlib import Path
 
 import numpy as np
 
-from cvxgeodesic.formulations import MeshOperators, build_problem, smoothness_weight
 from cvxgeodesic.mesh import icosphere
+from cvxgeodesic.problems.conic import kkt_pattern
+from cvxgeodesic.problems.formulations import MeshOperators, build_problem, smoothness_weight
 from cvxgeodesic.solvers.ipm import InteriorPointSolver, warm_up
-from cvxgeodesic.solvers.problem import kkt_pattern
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "meshes"
 DEFAULT_SHARED = ["spot.obj", "bimba.obj", "horse.ply", "armadillo.obj"]

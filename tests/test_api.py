@@ -127,7 +127,7 @@ def test_negative_values_trigger_a_nonnegative_resolve(monkeypatch):
     # the paper normalization smooths a 3x3 grid so strongly that it trades negative values for a larger sum
     # (measured: min -0.11); the re-solve with d >= 0 is recorded in the notes. The bounds next to the sources
     # (formulations.NONNEGATIVE_HOPS, NONNEGATIVE_RADIUS) prevent it there: without them the re-solve is what remains
-    import cvxgeodesic.formulations as formulations
+    import cvxgeodesic.problems.formulations as formulations
 
     mesh = cg.grid_plane(3, jitter=0.3, seed=1)
     res = cg.GeodesicSolver(mesh, "qcqp-hessian", solver="clarabel", normalization="paper").solve(4)

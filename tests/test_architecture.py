@@ -29,7 +29,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("mesh", ("mesh",)),
     ("linalg", ("linalg",)),
     ("operators", ("operators",)),
-    ("problems", ("formulations", "formulations_p2", "sources", "solvers.problem")),
+    ("problems", ("problems", "formulations_p2", "sources")),
     ("solvers", ("solvers",)),
     ("baselines", ("baselines",)),
     ("api", ("api", "rows", "strategies", "paths", "_verbose")),

@@ -11,9 +11,9 @@ import pytest
 from cvxgeodesic import capabilities as cap
 from cvxgeodesic.baselines import BASELINES
 from cvxgeodesic.errors import ParameterError, SourceError
-from cvxgeodesic.formulations import FORMULATIONS
 from cvxgeodesic.operators import ENERGIES_BY_DIM
 from cvxgeodesic.operators.p2_energy import P2_ENERGIES
+from cvxgeodesic.problems.formulations import FORMULATIONS
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "capabilities.md"
 

@@ -11,7 +11,9 @@ from scipy.sparse.csgraph import dijkstra
 import cvxgeodesic as cg
 from conftest import shared_mesh_path
 from cvxgeodesic.errors import ParameterError
-from cvxgeodesic.formulations import (
+from cvxgeodesic.mesh import cylinder, grid_plane, icosphere
+from cvxgeodesic.operators import gradient_norms
+from cvxgeodesic.problems.formulations import (
     FORMULATIONS,
     KAPPA,
     MeshOperators,
@@ -20,8 +22,6 @@ from cvxgeodesic.formulations import (
     smoothness_weight,
     stretch_weights,
 )
-from cvxgeodesic.mesh import cylinder, grid_plane, icosphere
-from cvxgeodesic.operators import gradient_norms
 from cvxgeodesic.solvers import solve_clarabel
 from cvxgeodesic.sources import resolve_sources
 
@@ -233,7 +233,7 @@ def test_edge_bounds_at_rounding_level_are_floored():
     F = np.array([[0, 1, 2], [1, 3, 2], [3, 4, 2]])
     mesh = cg.TriMesh(V, F, name="near_duplicate")
     ops = MeshOperators(mesh)
-    floor = cg.formulations.MIN_EDGE_BOUND * mesh.bbox_diagonal
+    floor = cg.problems.formulations.MIN_EDGE_BOUND * mesh.bbox_diagonal
     for method in ("lclp", "qclp"):
         p = build_problem(ops, np.array([0]), method, 0.0)
         edge_rows = p.ineq.coeffs[:, 1] != 0  # two-vertex rows (not the bounds d >= 0 next to the source)
@@ -267,7 +267,7 @@ def test_lclp_on_a_mesh_with_near_duplicate_vertices_equals_dijkstra(monkeypatch
 def test_without_the_floor_the_solver_fails_loudly_rather_than_wrongly(monkeypatch):
     # the edge floor removed: duals of the 6e-16 edges reach 1e13 and the dual residual relative to ‖z‖ looks
     # converged (5e-8) at an objective 5x off; the residual relative to ‖q‖ + ‖x‖ alone must stop that
-    import cvxgeodesic.formulations as formulations
+    import cvxgeodesic.problems.formulations as formulations
     from cvxgeodesic.errors import SolverError
 
     monkeypatch.setattr(formulations, "MIN_EDGE_BOUND", 0.0)
@@ -290,7 +290,7 @@ def test_the_bounds_next_to_a_source_cover_one_surface_disc_at_every_resolution(
     subdivided to 21K vertices went negative three edges from its sources, beyond the NONNEGATIVE_HOPS = 2 that
     covered it at 5K (2026-12-03). The bounds reach NONNEGATIVE_RADIUS smoothing lengths along edges, whatever the
     triangulation (m = 20 makes the disc wider than two edges of the finer grid, so the radius shows)."""
-    from cvxgeodesic.formulations import NONNEGATIVE_HOPS, NONNEGATIVE_RADIUS, smoothing_length
+    from cvxgeodesic.problems.formulations import NONNEGATIVE_HOPS, NONNEGATIVE_RADIUS, smoothing_length
 
     reach = {}
     for n in (9, 41):
@@ -317,7 +317,7 @@ def test_the_bounds_next_to_a_source_cover_one_surface_disc_at_every_resolution(
 def test_without_a_second_order_energy_the_bounds_reach_two_edges(method):
     # the smoothing length is that of the energies of second derivatives; QCLP's negative values (the medial-axis
     # bug) and the Dirichlet energy's were all within NONNEGATIVE_HOPS edges
-    from cvxgeodesic.formulations import NONNEGATIVE_HOPS
+    from cvxgeodesic.problems.formulations import NONNEGATIVE_HOPS
 
     mesh = grid_plane(41)
     centre = int(np.argmin(np.linalg.norm(mesh.V[:, :2] - 0.5, axis=1)))

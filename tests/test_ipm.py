@@ -12,14 +12,14 @@ import scipy.sparse as sp
 
 from conftest import shared_mesh_path
 from cvxgeodesic.errors import SolverError
-from cvxgeodesic.formulations import FORMULATIONS, MeshOperators, build_problem, smoothness_weight
 from cvxgeodesic.linalg import NotPositiveDefiniteError, SymbolicCholesky
 from cvxgeodesic.linalg import symbolic as chol_mod
 from cvxgeodesic.mesh import TriMesh, cylinder, grid_plane, icosphere
+from cvxgeodesic.problems.conic import PairInequalities, kkt_pattern
+from cvxgeodesic.problems.formulations import FORMULATIONS, MeshOperators, build_problem, smoothness_weight
 from cvxgeodesic.solvers.clarabel_backend import solve_clarabel
 from cvxgeodesic.solvers.ipm import InteriorPointSolver, IPMSettings
 from cvxgeodesic.solvers.ipm.cones import SOC
-from cvxgeodesic.solvers.problem import PairInequalities, kkt_pattern
 
 OBJ_RTOL = 1e-6
 DIST_TOL = 1e-5  # times the bounding-box diagonal
@@ -537,8 +537,8 @@ def test_a_plain_dual_residual_at_its_end_game_floor_is_converged(method):
 
 def test_equilibration_keeps_an_empty_cone_group_and_the_solution(sphere):
     """A cone group without cones passes through the equilibration (as an empty group) and changes nothing."""
+    from cvxgeodesic.problems.conic import ConeGroup
     from cvxgeodesic.solvers.ipm.equilibrate import equilibrate
-    from cvxgeodesic.solvers.problem import ConeGroup
 
     m, ops, ipm = sphere
     p = build_problem(ops, np.array([0]), "qclp", 0.0)

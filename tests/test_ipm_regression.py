@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 
 from conftest import shared_mesh_path
-from cvxgeodesic.formulations import FORMULATIONS, MeshOperators, build_problem, smoothness_weight
 from cvxgeodesic.mesh import cylinder, grid_plane, icosphere
+from cvxgeodesic.problems.conic import kkt_pattern
+from cvxgeodesic.problems.formulations import FORMULATIONS, MeshOperators, build_problem, smoothness_weight
 from cvxgeodesic.solvers.ipm import InteriorPointSolver, IPMSettings
-from cvxgeodesic.solvers.problem import kkt_pattern
 
 # lclp, lcqp-dirichlet, lcqp-laplacian, lcqp-hessian, qclp, qcqp-dirichlet, qcqp-laplacian, qcqp-hessian
 # (2026-12-02, later: every formulation bounds the vertices within two edges of the sources by d >= 0, where optima

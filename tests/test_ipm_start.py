@@ -7,14 +7,14 @@ import dataclasses
 import numpy as np
 import pytest
 
-from cvxgeodesic.formulations import MeshOperators, build_problem, smoothness_weight
 from cvxgeodesic.mesh import TriMesh, icosphere
+from cvxgeodesic.problems.conic import kkt_pattern
+from cvxgeodesic.problems.formulations import MeshOperators, build_problem, smoothness_weight
 from cvxgeodesic.solvers.ipm import InteriorPointSolver, IPMSettings
 from cvxgeodesic.solvers.ipm.blocks import PairInequalityBlock, TriangleSOCBlock
 from cvxgeodesic.solvers.ipm.graph import edge_arcs, graph_field
 from cvxgeodesic.solvers.ipm.program import Program
 from cvxgeodesic.solvers.ipm.start import interior_primal
-from cvxgeodesic.solvers.problem import kkt_pattern
 
 GRAPH = IPMSettings(init="graph")
 LEAST_SQUARES = IPMSettings(init="interior", max_correctors=2)  # the defaults before the graph start

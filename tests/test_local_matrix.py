@@ -95,7 +95,7 @@ def test_the_patch_gets_the_whole_meshs_smoothness(spot, monkeypatch):
 
     local = rows.LocalRows(spot, max_distance=0.1 * spot.bbox_diagonal, factory=factory, method="qcqp-hessian", m=3.0)
     assert local.lam == pytest.approx(cg.GeodesicSolver(spot, "dijkstra", m=3.0).lam or
-                                      cg.formulations.smoothness_weight(spot, 3.0, "area", "hessian"), rel=1e-12)
+                                      cg.smoothness_weight(spot, 3.0, "area", "hessian"), rel=1e-12)
     local.solve(0)
     patch, options = seen[-1]
     assert options["lam"] == pytest.approx(local.lam * spot.face_areas.sum() / patch.face_areas.sum(), rel=1e-12)

@@ -16,9 +16,9 @@ from scipy.optimize import minimize_scalar
 
 import cvxgeodesic as cg
 from cvxgeodesic.errors import ParameterError
-from cvxgeodesic.formulations import FORMULATIONS
 from cvxgeodesic.mesh.generate import delaunay_grid
 from cvxgeodesic.operators.metric import Medium, make_medium
+from cvxgeodesic.problems.formulations import FORMULATIONS
 
 pytestmark = pytest.mark.filterwarnings("ignore::cvxgeodesic.errors.IndefiniteEnergyWarning")
 
@@ -225,8 +225,8 @@ def test_order1_metric_field_is_close():
 # energies in the metric
 # ---------------------------------------------------------------------------------------------------------------
 def test_dirichlet_energy_of_a_linear_field_is_its_metric_gradient_norm():
-    from cvxgeodesic.formulations import MeshOperators
     from cvxgeodesic.operators.energies import metric_stiffness
+    from cvxgeodesic.problems.formulations import MeshOperators
 
     mesh = cg.grid_plane(5, jitter=0.2)
     ops = MeshOperators(mesh, medium=make_medium(mesh, metric=ANISO))

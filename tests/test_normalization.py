@@ -16,7 +16,7 @@ import cvxgeodesic as cg
 from conftest import SHARED_MESHES, shared_mesh_path
 from cvxgeodesic.baselines import BASELINES, nonmanifold_vertices
 from cvxgeodesic.evaluation import error_stats, smoothness_report
-from cvxgeodesic.formulations import stretch_weights
+from cvxgeodesic.problems.formulations import stretch_weights
 
 ANISOTROPIC = ["thingi_243015.stl", "thingi_32770.stl", "thingi_37881.stl", "thingi_47076.stl",
                "thingi_65395.stl", "thingi_93703.stl", "thingi_96457.stl"]

@@ -244,7 +244,7 @@ def test_psd_check_in_an_existing_analysis():
     """``analysis=``: the same answers as the check's own analysis, for a PSD matrix, a shifted one and one with
     a rank-one dent, factored in a wider pattern (the mesh's Newton pattern with the matrix)."""
     from cvxgeodesic import linalg as cholesky
-    from cvxgeodesic.solvers.problem import kkt_pattern
+    from cvxgeodesic.problems.conic import kkt_pattern
 
     if not (cholesky.pardiso_available() or cholesky.cholmod_available()):
         pytest.skip("the PSD check needs PARDISO or CHOLMOD")

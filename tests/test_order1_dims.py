@@ -11,7 +11,9 @@ import pytest
 
 import cvxgeodesic as cg
 from cvxgeodesic.errors import ParameterError
-from cvxgeodesic.formulations import (
+from cvxgeodesic.mesh.tet_generate import tet_box
+from cvxgeodesic.mesh.tetmesh import TetMesh
+from cvxgeodesic.problems.formulations import (
     KAPPA,
     MIN_STRETCH_WEIGHT,
     NONNEGATIVE_HOPS,
@@ -21,8 +23,6 @@ from cvxgeodesic.formulations import (
     smoothness_weight,
     stretch_weights,
 )
-from cvxgeodesic.mesh.tet_generate import tet_box
-from cvxgeodesic.mesh.tetmesh import TetMesh
 from cvxgeodesic.sources import SurfacePoint, VolumePoint, resolve_sources
 from cvxgeodesic.strategies.backend import Backend
 
@@ -154,7 +154,7 @@ def test_stretch_weight_floor(kind):
 
 def test_one_newton_pattern_for_both_dimensions():
     """The direct strategy's pattern from the edges is the tetrahedra's clique pattern (the analysis TetDirect made)."""
-    from cvxgeodesic.solvers.problem import clique_pattern, kkt_pattern
+    from cvxgeodesic.problems.conic import clique_pattern, kkt_pattern
 
     mesh = MESHES["volume"]()
     P = MeshOperators(mesh).energy("laplacian")

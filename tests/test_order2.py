@@ -16,10 +16,10 @@ from cvxgeodesic.mesh.generate import delaunay_plane as delaunay_mesh
 from cvxgeodesic.mesh.generate import fan_plate, needle_strip
 from cvxgeodesic.mesh.simplex import unit_mesh
 from cvxgeodesic.operators.lagrange import LagrangeSpace, lagrange_basis, max_violation
+from cvxgeodesic.problems.conic import clique_pattern
 from cvxgeodesic.solvers import solve_clarabel
 from cvxgeodesic.solvers.ipm import InteriorPointSolver
 from cvxgeodesic.solvers.ipm.settings import ORDER2
-from cvxgeodesic.solvers.problem import clique_pattern
 
 FLAT_TOL = 1e-5  # max vertex error / largest distance on flat meshes (issue 17)
 
@@ -440,8 +440,8 @@ def test_clique_block_matches_the_general_sparse_block():
     import scipy.sparse as sp
 
     from cvxgeodesic.linalg import SymbolicCholesky
+    from cvxgeodesic.problems.conic import ConeGroup
     from cvxgeodesic.solvers.ipm.blocks import CliqueSOCBlock, SparseBlock
-    from cvxgeodesic.solvers.problem import ConeGroup
 
     rng = np.random.default_rng(4)
     k, n, d, c = 40, 30, 4, 6

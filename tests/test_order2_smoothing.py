@@ -13,7 +13,6 @@ import pytest
 import cvxgeodesic as cg
 from cvxgeodesic.errors import ParameterError
 from cvxgeodesic.evaluation import cut_locus_band, ridge_deficit, rounding_width
-from cvxgeodesic.formulations import KAPPA_ORDER2, smoothness_weight
 from cvxgeodesic.formulations_p2 import P2Builder, _restore_matrix
 from cvxgeodesic.mesh.simplex import unit_mesh
 from cvxgeodesic.operators.lagrange import LagrangeSpace
@@ -27,10 +26,11 @@ from cvxgeodesic.operators.p2_energy import (
     interior_edge_pairs,
     p2_energy,
 )
+from cvxgeodesic.problems.conic import clique_pattern
+from cvxgeodesic.problems.formulations import KAPPA_ORDER2, smoothness_weight
 from cvxgeodesic.solvers import solve_clarabel
 from cvxgeodesic.solvers.ipm import InteriorPointSolver
 from cvxgeodesic.solvers.ipm.settings import ORDER2
-from cvxgeodesic.solvers.problem import clique_pattern
 
 FLAT_TOL = 1e-5  # max vertex error / largest distance on flat meshes (issue 25, "Must show")
 FORMULATIONS_ENERGY = {"qcqp-hessian": "hessian", "qcqp-laplacian": "laplacian", "qcqp-dirichlet": "dirichlet"}

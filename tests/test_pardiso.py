@@ -7,13 +7,13 @@ import pytest
 import scipy.sparse as sp
 from threadpoolctl import threadpool_limits
 
-from cvxgeodesic.formulations import MeshOperators, build_problem, smoothness_weight
 from cvxgeodesic.linalg import NotPositiveDefiniteError, SymbolicCholesky
 from cvxgeodesic.linalg.pardiso import PardisoError, PardisoFactor, pardiso_available
 from cvxgeodesic.mesh import icosphere
+from cvxgeodesic.problems.conic import kkt_pattern
+from cvxgeodesic.problems.formulations import MeshOperators, build_problem, smoothness_weight
 from cvxgeodesic.solvers.clarabel_backend import solve_clarabel
 from cvxgeodesic.solvers.ipm import InteriorPointSolver
-from cvxgeodesic.solvers.problem import kkt_pattern
 
 pytestmark = pytest.mark.skipif(not pardiso_available(), reason="MKL (PARDISO) not installed")
 

@@ -28,8 +28,8 @@ from cvxgeodesic.errors import (
     SolverError,
     SourceError,
 )
-from cvxgeodesic.formulations import FORMULATIONS, MeshOperators
 from cvxgeodesic.mesh import TriMesh, grid_plane
+from cvxgeodesic.problems.formulations import FORMULATIONS, MeshOperators
 
 BASELINES = ("dijkstra", "fmm", "heat", "exact")
 ALL = (*FORMULATIONS, *BASELINES)

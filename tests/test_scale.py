@@ -16,9 +16,9 @@ import pytest
 import cvxgeodesic as cg
 from cvxgeodesic.capabilities import methods_for
 from cvxgeodesic.errors import MeshError
-from cvxgeodesic.formulations import FORMULATIONS
 from cvxgeodesic.mesh.tet_generate import tet_box
 from cvxgeodesic.mesh.tetmesh import TetMesh
+from cvxgeodesic.problems.formulations import FORMULATIONS
 from cvxgeodesic.validation import MAX_COORDINATE, MIN_EXTENT
 
 #: The scales of the issue, far beyond where the libraries' absolute tolerances broke (pygeodesic from 1e-15), and the

@@ -8,7 +8,7 @@ import scipy.sparse as sp
 
 import cvxgeodesic as cg
 from cvxgeodesic.operators import hessian_energy_matrix, laplacian_energy_matrix
-from cvxgeodesic.solvers.problem import kkt_pattern
+from cvxgeodesic.problems.conic import kkt_pattern
 
 
 def _reference_pattern(n, faces, edges, P=None):

@@ -7,7 +7,7 @@ import pytest
 
 import cvxgeodesic as cg
 from cvxgeodesic.errors import SourceError
-from cvxgeodesic.formulations import FORMULATIONS, MeshOperators, build_problem
+from cvxgeodesic.problems.formulations import FORMULATIONS, MeshOperators, build_problem
 from cvxgeodesic.sources import boundary_edges, resolve_sources
 
 PLANE = cg.grid_plane(12, jitter=0.25)

@@ -24,9 +24,9 @@ import pytest
 import cvxgeodesic as cg
 from cvxgeodesic.baselines import DijkstraBaseline
 from cvxgeodesic.errors import DegenerateFacesWarning, MeshError, ParameterError, SourceError
-from cvxgeodesic.formulations import MeshOperators, build_problem, smoothness_weight
 from cvxgeodesic.mesh.tet_generate import l_prism_distance, tet_ball, tet_box, tet_l_prism
 from cvxgeodesic.mesh.tetmesh import TetMesh
+from cvxgeodesic.problems.formulations import MeshOperators, build_problem, smoothness_weight
 from cvxgeodesic.sources import BoundaryFaces, VolumePoint, resolve_sources, volume_point
 
 

@@ -13,8 +13,8 @@ import pytest
 import cvxgeodesic as cg
 from cvxgeodesic import capabilities
 from cvxgeodesic.errors import ParameterError, SourceError
-from cvxgeodesic.formulations import ALIASES
 from cvxgeodesic.mesh.tet_generate import tet_box
+from cvxgeodesic.problems.formulations import ALIASES
 from cvxgeodesic.sources import BoundaryFaces, VolumePoint
 
 MESHES = {2: cg.icosphere(2), 3: tet_box(2)}

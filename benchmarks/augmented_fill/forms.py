@@ -28,7 +28,7 @@ from cvxgeodesic.operators.energies import (
     curved_hessian_energy,  # noqa: F401 (re-exported for the scripts)
     curved_hessian_face_data,
 )
-from cvxgeodesic.solvers.problem import kkt_pattern  # noqa: F401
+from cvxgeodesic.problems.conic import kkt_pattern  # noqa: F401
 
 
 @njit(cache=True)

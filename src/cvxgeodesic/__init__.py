@@ -85,7 +85,6 @@ if TYPE_CHECKING:
         SolverError,
         SourceError,
     )
-    from .formulations import FORMULATIONS, smoothness_weight
     from .mesh import TriMesh, cylinder, grid_plane, icosphere
     from .mesh.fileorder import to_file_order
     from .mesh.io import load_distance, load_mesh, save_distance
@@ -96,6 +95,7 @@ if TYPE_CHECKING:
     from .mesh.tetrahedralize import tetrahedralize
     from .paths import distance_at, geodesic_path
     from .plotting import plot_field
+    from .problems.formulations import FORMULATIONS, smoothness_weight
     from .sources import BoundaryFaces, SurfaceCurve, SurfacePoint, VolumePoint, surface_point, volume_point
     from .viewer import show
 
@@ -121,7 +121,7 @@ _LAZY = {
     **dict.fromkeys(("CvxGeodesicError", "DegenerateFacesWarning", "IndefiniteEnergyWarning", "MeshError",
                      "MeshFileNotFoundError", "MeshFormatError", "MeshRepairWarning", "NonManifoldError",
                      "OutputError", "ParameterError", "SolverError", "SourceError"), ".errors"),
-    **dict.fromkeys(("FORMULATIONS", "smoothness_weight"), ".formulations"),
+    **dict.fromkeys(("FORMULATIONS", "smoothness_weight"), ".problems.formulations"),
     **dict.fromkeys(("TriMesh", "cylinder", "grid_plane", "icosphere"), ".mesh"),
     "to_file_order": ".mesh.fileorder",
     **dict.fromkeys(("load_distance", "load_mesh", "save_distance"), ".mesh.io"),

@@ -21,10 +21,10 @@ from .baselines import BASELINES
 from .capabilities import CLOUD_DEFAULT_METHOD, check_cloud, methods_for, source_kinds, supported
 from .capabilities import check as check_capability
 from .errors import ParameterError, SourceError
-from .formulations import ALIASES, FORMULATIONS, NORMALIZATIONS, smoothness_weight
 from .mesh.convert import as_mesh
 from .mesh.tetmesh import TetMesh
 from .operators.metric import make_medium
+from .problems.formulations import ALIASES, FORMULATIONS, NORMALIZATIONS, smoothness_weight
 from .results import GeodesicResult, SolveInfo
 from .solvers._interrupt import reporting_to
 from .sources import resolve_sources
@@ -99,7 +99,7 @@ class GeodesicSolver:
         Smoothness multiplier (default 1; 0 is the LP without smoothing). With the
         default ``normalization="area"`` the objective is
         ``−(1/|S|) ∫ d dA + λ E(d)`` with ``λ = m · κ · √|S|`` (``|S|`` the surface
-        area, :data:`~cvxgeodesic.formulations.KAPPA`): one ``m`` rounds the ridge
+        area, :data:`~cvxgeodesic.problems.formulations.KAPPA`): one ``m`` rounds the ridge
         by the same length *on the surface* on every triangulation and at every
         scale; ``m = 1`` rounds it to about 0.4 of the exact field's sharpness on
         bimba (``docs/method.md``). Ignored by LP formulations and baselines.
@@ -151,7 +151,7 @@ class GeodesicSolver:
         inside faces. The same solvers and fallback as order 1. Not with ``multires`` or the
         baselines. The smoothed methods take energies of ``φ = d²`` that vanish on the exact
         field of flat regions (:mod:`cvxgeodesic.operators.p2_energy`) with the dimensionless
-        ``λ = m · κ₂`` (:data:`~cvxgeodesic.formulations.KAPPA_ORDER2`): ``m = 1`` rounds the ridge
+        ``λ = m · κ₂`` (:data:`~cvxgeodesic.problems.formulations.KAPPA_ORDER2`): ``m = 1`` rounds the ridge
         of two sources half a side apart on a unit square over about 1.2 % of the side, ``m = 30``
         over 4 % (order 1's ``m = 1``); the width grows as ``m^(1/3)`` (docs/order2.md,
         "Smoothing at order 2").

@@ -368,7 +368,7 @@ def run_batch(paths, sources, out_dir, *, method: str | None = None, m: float = 
     """
     from .api import ALL_METHODS, SOLVERS
     from .capabilities import check
-    from .formulations import ALIASES
+    from .problems.formulations import ALIASES
     from .strategies import resolve_target
 
     paths = [Path(p).expanduser().resolve() for p in ([paths] if isinstance(paths, str | os.PathLike) else paths)]

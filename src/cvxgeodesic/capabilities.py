@@ -9,7 +9,7 @@ supported instead; :func:`markdown_table` writes the table of ``docs/capabilitie
 and :func:`help_text` the short version for the command line.
 
 A leaf module (no NumPy): the method names are spelled here and a test checks them against
-:data:`~cvxgeodesic.formulations.FORMULATIONS` and :data:`~cvxgeodesic.baselines.BASELINES`.
+:data:`~cvxgeodesic.problems.formulations.FORMULATIONS` and :data:`~cvxgeodesic.baselines.BASELINES`.
 """
 
 from __future__ import annotations

@@ -98,7 +98,7 @@ def resolve_methods(methods: Any, dim: int = 2) -> list[str]:
     """
     from .api import ALL_METHODS
     from .capabilities import check, methods_for
-    from .formulations import ALIASES
+    from .problems.formulations import ALIASES
 
     if isinstance(methods, str):
         methods = methods.split(",")
@@ -124,7 +124,7 @@ def resolve_methods(methods: Any, dim: int = 2) -> list[str]:
 
 def _key(run: Run) -> Run:
     """The run an alias stands for (``qgdf`` is ``lcqp-hessian``): solved once, reported under both names."""
-    from .formulations import ALIASES
+    from .problems.formulations import ALIASES
 
     return ALIASES.get(run[0], run[0]), run[1]
 

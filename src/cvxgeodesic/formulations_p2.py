@@ -65,7 +65,7 @@ from .mesh.simplex import CELL_EDGES
 from .operators.lagrange import SAMPLES, LagrangeSpace, edge_basis, sample_points
 from .operators.metric import Medium
 from .operators.p2_energy import P2Energy, p2_energy
-from .solvers.problem import ConeGroup, ConicProblem, Equalities, PairInequalities
+from .problems.conic import ConeGroup, ConicProblem, Equalities, PairInequalities
 from .validation import check_number
 
 __all__ = ["DEFAULT_SAMPLES", "DEFAULT_VOLUME_SAMPLES", "DEFAULT_WEIGHTS", "ORDER2_CACHE_VERSION", "BernsteinEdgeCones",

@@ -121,7 +121,7 @@ def _canonical(key: str, value: Any) -> Any:
     """The value of option ``key`` as the solver reads it, so that ``m=1`` and ``m=1.0``, ``np.float64(1.0)``,
     ``"QCLP"`` and ``"qclp"``, ``"qgdf"`` and ``"lcqp-hessian"`` make the same fingerprint. A value that is not
     of the option's kind is kept as given (the solver refuses it with its own message)."""
-    from .formulations import ALIASES
+    from .problems.formulations import ALIASES
     from .validation import is_integer, is_real
 
     if isinstance(value, bool | np.bool_):
@@ -380,7 +380,7 @@ class LocalRows:
 
 def _whole_mesh_lambda(mesh: Any, options: dict) -> float | None:
     """λ of the whole mesh (None without a smoothness energy or for an unknown method: the solver says why)."""
-    from .formulations import ALIASES, FORMULATIONS, canonical_method, smoothness_weight
+    from .problems.formulations import ALIASES, FORMULATIONS, canonical_method, smoothness_weight
     from .validation import check_lam, check_smoothness
 
     m, lam = check_smoothness(options.get("m", 1.0), options.get("lam"))

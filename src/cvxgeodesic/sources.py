@@ -23,7 +23,7 @@ convex formulations add (``docs/sources.md`` and ``docs/volumes.md`` explain and
   source face) is steeper than 1 when interpolated linearly (the trace of a cone whose apex is close to the cell)
   carries no cone either. On a surface the vertices it leaves free are bounded through the edges to the source
   face's vertices, ``d_w ≤ d_v + ℓ_vw`` (a triangle inequality); in a solid every edge of a tetrahedron without a
-  cone gets ``|d_i − d_j| ≤ ℓ_ij`` (:func:`~cvxgeodesic.formulations.build_problem`);
+  cone gets ``|d_i − d_j| ≤ ℓ_ij`` (:func:`~cvxgeodesic.problems.formulations.build_problem`);
 - a curve is sampled along each segment at an eighth of the mean edge length (plus its given
   points); every sample is a point source, and two consecutive samples in the same face add the
   bound by the distance to the segment between them (straight in that face);
@@ -622,7 +622,7 @@ def _describe(items) -> str:
 # ---------------------------------------------------------------------------------------------------------------
 @dataclass
 class SourceConstraints:
-    """What the sources add to a formulation (read by :func:`~cvxgeodesic.formulations.build_problem`).
+    """What the sources add to a formulation (read by :func:`~cvxgeodesic.problems.formulations.build_problem`).
 
     Attributes
     ----------
@@ -732,7 +732,7 @@ def source_constraints(ops: Any, sources: Any, min_edge_bound: float) -> SourceC
         The mesh (possibly the solver's rescaled copy), its gradient blocks and degenerate cells.
     sources : (k,) int64 ndarray or SourceSet
     min_edge_bound : float
-        The formulations' floor of the edge bounds (:data:`~cvxgeodesic.formulations.MIN_EDGE_BOUND`),
+        The formulations' floor of the edge bounds (:data:`~cvxgeodesic.problems.formulations.MIN_EDGE_BOUND`),
         as a fraction of the bounding-box diagonal; passed in so that sources do not import the formulations.
 
     Returns

@@ -31,7 +31,7 @@ def is_positive_semidefinite(Q: sp.spmatrix, *, rel_shift: float = 1e-9, backend
         ``"auto"``: PARDISO when installed, else CHOLMOD.
     analysis : SymbolicCholesky, optional
         An analysis of a pattern that contains ``Q``'s (e.g. the interior-point solver's, of the mesh's
-        :func:`~cvxgeodesic.solvers.problem.kkt_pattern` with ``Q``), done anyway: ``Q`` is factored in it,
+        :func:`~cvxgeodesic.problems.conic.kkt_pattern` with ``Q``), done anyway: ``Q`` is factored in it,
         zero-padded, instead of in an analysis of its own. The same matrix, so the same answer; it saves the
         analysis and, with METIS's ordering, most of the factorization (measured 2026-12-01, shared 2-core
         machine, load 4: bimba 0.14 s against 0.50 s, horse 0.33-0.41 s against 1.16 s, armadillo 0.23-0.35 s

@@ -1,7 +1,7 @@
 """Sparse Cholesky with one symbolic analysis reused for many numeric factorizations: the backend choice.
 
 The interior-point solvers factorize a sequence of SPD matrices that all share
-one sparsity pattern (the mesh's :func:`~cvxgeodesic.solvers.problem.kkt_pattern`).
+one sparsity pattern (the mesh's :func:`~cvxgeodesic.problems.conic.kkt_pattern`).
 :func:`analyse` (or :class:`SymbolicCholesky`) analyses that pattern once
 (fill-reducing ordering, supernodal structure) and then only does numeric
 factorizations: the caller fills a data array aligned with the pattern's
@@ -95,7 +95,7 @@ class SymbolicCholesky:
     ----------
     pattern : (n, n) scipy.sparse matrix
         Symmetric sparsity pattern (values ignored) with a full diagonal, e.g. from
-        :func:`~cvxgeodesic.solvers.problem.kkt_pattern`. Only its lower triangle is kept.
+        :func:`~cvxgeodesic.problems.conic.kkt_pattern`. Only its lower triangle is kept.
     backend : {"auto", "pardiso", "cholmod", "scipy"}
         ``"auto"`` takes the first available of PARDISO, CHOLMOD and (with a
         warning) SciPy. ``"pardiso"`` and ``"cholmod"`` raise ImportError when

@@ -142,7 +142,8 @@ class TriMesh(SimplexMesh):
     def degenerate_faces(self, tol: float = DEGENERATE_TOL) -> np.ndarray:
         """(k,) int64 ndarray: the sorted indices of the faces too thin or too small for the gradient-based operators
         (:meth:`SimplexMesh.degenerate_cells`), left out of the convex formulations
-        (:class:`~cvxgeodesic.formulations.MeshOperators`); ``tol = 0`` selects only faces of exactly zero area."""
+        (:class:`~cvxgeodesic.problems.formulations.MeshOperators`); ``tol = 0`` selects only faces of exactly zero
+        area."""
         return self.degenerate_cells(tol)
 
     @cached_property

@@ -1,4 +1,4 @@
-"""Backends that solve :class:`~cvxgeodesic.solvers.problem.ConicProblem`.
+"""Backends that solve :class:`~cvxgeodesic.problems.conic.ConicProblem`.
 
 :class:`InteriorPointSolver` is imported on first use (PEP 562): its compiled kernels need Numba, and
 ``import cvxgeodesic`` must work without it (the API then solves with Clarabel and says so in the notes).
@@ -6,8 +6,8 @@
 
 from typing import Any
 
+from ..problems.conic import BackendResult, ConicProblem, kkt_pattern
 from .clarabel_backend import solve_clarabel
-from .problem import BackendResult, ConicProblem, kkt_pattern
 
 __all__ = ["BackendResult", "ConicProblem", "InteriorPointSolver", "kkt_pattern", "solve_clarabel"]
 

@@ -9,8 +9,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import SolverError
+from ..problems.conic import BackendResult, ConicProblem
 from ._interrupt import interruptible
-from .problem import BackendResult, ConicProblem
 
 _SOLVED = {"Solved"}
 _ALMOST = {"AlmostSolved"}

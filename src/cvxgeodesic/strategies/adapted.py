@@ -33,7 +33,6 @@ from typing import Any
 import numpy as np
 
 from ..errors import MeshError, ParameterError, SolverError, SourceError
-from ..formulations import smoothness_weight
 from ..mesh.closest import closest_point_index
 from ..mesh.decimate import simplify_mesh
 from ..mesh.locate import SurfacePoint, bary_positions
@@ -41,6 +40,7 @@ from ..mesh.patch import ball_patch
 from ..mesh.transfer import ProjectedField, SourcePatch, mix_patches
 from ..mesh.trimesh import TriMesh
 from ..operators.metric import Medium
+from ..problems.formulations import smoothness_weight
 from ..results import GeodesicResult
 from ..sources import SourceSet, resolve_sources
 from .base import Callback, SolveConfig

@@ -20,7 +20,7 @@ from collections.abc import Callable
 from typing import Any
 
 from ..errors import ParameterError, SolverError, warn_user
-from ..solvers.problem import BackendResult, ConicProblem
+from ..problems.conic import BackendResult, ConicProblem
 
 __all__ = ["Backend", "ipm_available"]
 

@@ -6,9 +6,9 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Protocol
 
-from ..formulations import FORMULATIONS, smoothness_weight
 from ..mesh.trimesh import TriMesh
 from ..operators.metric import Medium
+from ..problems.formulations import FORMULATIONS, smoothness_weight
 from ..results import GeodesicResult
 from ..sources import SourceSet
 
@@ -25,7 +25,7 @@ class SolveConfig:
     mesh : TriMesh
         The mesh in its own units (``n`` vertices, ``m`` faces).
     method : str
-        Canonical formulation name (a key of :data:`~cvxgeodesic.formulations.FORMULATIONS`) or baseline name.
+        Canonical formulation name (a key of :data:`~cvxgeodesic.problems.formulations.FORMULATIONS`) or baseline name.
     lam : float
         Smoothness weight λ in the mesh's units (0 for LP formulations; dimensionless at order 2).
     m : float or None
@@ -58,7 +58,8 @@ class SolveConfig:
     @property
     def stretch(self) -> str:
         """Weights of the stretch term that go with the normalization of ``m``
-        (:func:`~cvxgeodesic.formulations.stretch_weights`): ``"area"``, or ``"calibrated"`` for ``"paper"``."""
+        (:func:`~cvxgeodesic.problems.formulations.stretch_weights`): ``"area"``, or ``"calibrated"`` for
+        ``"paper"``."""
         return "area" if self.normalization == "area" else "calibrated"
 
     @property
@@ -76,7 +77,7 @@ class SolveConfig:
         lam : float, optional
             λ on ``mesh``; exclusive with ``m``.
         m : float, optional
-            Multiplier: λ is :func:`~cvxgeodesic.formulations.smoothness_weight` of ``mesh``.
+            Multiplier: λ is :func:`~cvxgeodesic.problems.formulations.smoothness_weight` of ``mesh``.
 
         Returns
         -------

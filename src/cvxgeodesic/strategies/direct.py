@@ -5,7 +5,7 @@ The policy (:class:`~cvxgeodesic.strategies.backend.Backend`: the structured sol
 under ``solver="auto"``) and what this strategy adds, every step recorded in ``info.notes``:
 
 - an optimum with negative distances (beyond the bounds next to the sources that every formulation has,
-  :data:`~cvxgeodesic.formulations.NONNEGATIVE_RADIUS`) is re-solved with the bounds ``d >= 0`` everywhere;
+  :data:`~cvxgeodesic.problems.formulations.NONNEGATIVE_RADIUS`) is re-solved with the bounds ``d >= 0`` everywhere;
 - a failed Hessian solve says that the curved Hessian energy can be indefinite.
 """
 
@@ -17,11 +17,11 @@ from typing import Any
 import numpy as np
 
 from ..errors import SolverError
-from ..formulations import MeshOperators, build_problem
 from ..linalg import SymbolicCholesky
 from ..mesh.simplex import unit_mesh
+from ..problems.conic import BackendResult, ConicProblem, kkt_pattern
+from ..problems.formulations import MeshOperators, build_problem
 from ..results import GeodesicResult, SolveInfo
-from ..solvers.problem import BackendResult, ConicProblem, kkt_pattern
 from ..sources import SourceSet
 from .backend import Backend, ipm_available
 from .base import Callback, SolveConfig

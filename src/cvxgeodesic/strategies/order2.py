@@ -28,8 +28,8 @@ from ..mesh.simplex import unit_mesh
 from ..mesh.split import SplitMesh
 from ..operators.lagrange import LagrangeField, SplitLagrangeField, violations
 from ..operators.metric import Medium
+from ..problems.conic import BackendResult, clique_pattern
 from ..results import GeodesicResult, SolveInfo
-from ..solvers.problem import BackendResult, clique_pattern
 from .backend import Backend
 from .base import Callback, SolveConfig
 

@@ -11,7 +11,7 @@ values); ``b̃ = b − A x_F`` is the right-hand side of the problem with the fi
     with the fused compiled kernels of :mod:`._kernels`.
 :class:`CliqueSOCBlock`
     Second-order cones of any dimension on variable cliques, ``s_t = h_t − G_t x[dofs_t]`` (a
-    :class:`~cvxgeodesic.solvers.problem.ConeGroup`): the order-2 cones on a face's six P2 nodes, the
+    :class:`~cvxgeodesic.problems.conic.ConeGroup`): the order-2 cones on a face's six P2 nodes, the
     gradient bounds of tetrahedra; the compiled kernels of :mod:`._clique_kernels`.
 :class:`PairInequalityBlock`
     The mesh problems' linear inequalities ``a_k · x_k ≤ r_k`` (each touches at most two variables),
@@ -30,7 +30,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ...linalg import SymbolicCholesky
-from ..problem import ConeGroup
+from ...problems.conic import ConeGroup
 from . import _clique_kernels as _ck
 from . import _kernels as _kern
 from .cones import SOC, Cone, Orthant, Scaling, _amax

@@ -19,7 +19,7 @@ import dataclasses
 import numpy as np
 import scipy.sparse as sp
 
-from ..problem import ConeGroup, ConicProblem, Equalities, PairInequalities
+from ...problems.conic import ConeGroup, ConicProblem, Equalities, PairInequalities
 
 __all__ = ["GUESS_SPREAD", "equilibrate"]
 

@@ -8,7 +8,7 @@
                 x_j = x_F,j                      for the fixed variables
 
 Fixed variables become identity rows of the reduced Newton matrix ``K = P + Σ_i A_iᵀW_i⁻²A_i``, which
-keeps its sparsity pattern (the mesh's :func:`~cvxgeodesic.solvers.problem.kkt_pattern`); one
+keeps its sparsity pattern (the mesh's :func:`~cvxgeodesic.problems.conic.kkt_pattern`); one
 symbolic analysis therefore serves every iteration of every solve on a mesh. The equalities stay out
 of that pattern: their rows are few, and the Newton system ``[K Eᵀ; E 0]`` is solved through the
 dense Schur complement ``E K⁻¹ Eᵀ`` (:mod:`.newton`).
@@ -22,7 +22,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ...linalg import SymbolicCholesky
-from ..problem import ConicProblem, Equalities, clique_pattern
+from ...problems.conic import ConicProblem, Equalities, clique_pattern
 from . import _kernels as _kern
 from .blocks import CliqueSOCBlock, ConeBlock, PairInequalityBlock, TriangleSOCBlock
 from .cones import Scaling, _amax

@@ -1,4 +1,4 @@
-"""A structured primal–dual interior-point solver for :class:`~cvxgeodesic.solvers.problem.ConicProblem`, at
+"""A structured primal–dual interior-point solver for :class:`~cvxgeodesic.problems.conic.ConicProblem`, at
 every element order.
 
 The problem (fixed variables eliminated) is written in the standard conic form ::
@@ -19,7 +19,7 @@ n×n SPD system ::
 
     (P + Σ_t G_tᵀ W_t⁻² G_t + Σ_k a_kᵀ (z_k/s_k) a_k) Δx = r
 
-whose sparsity pattern is the union of the cliques (:func:`~cvxgeodesic.solvers.problem.kkt_pattern` at order 1),
+whose sparsity pattern is the union of the cliques (:func:`~cvxgeodesic.problems.conic.kkt_pattern` at order 1),
 whatever the sources, the formulation or λ. Fixed variables become identity rows, which keeps the pattern; the
 equalities enter through a small dense Schur complement. One symbolic Cholesky analysis
 (:class:`~cvxgeodesic.linalg.SymbolicCholesky`) therefore serves every iteration of every solve on a mesh; an
@@ -42,7 +42,7 @@ from threadpoolctl import threadpool_limits
 
 from ...errors import SolverError
 from ...linalg import NotPositiveDefiniteError, SymbolicCholesky
-from ..problem import BackendResult, ConicProblem
+from ...problems.conic import BackendResult, ConicProblem
 from .algorithm import Stepper
 from .equilibrate import equilibrate
 from .newton import LinearSystem, Trouble
@@ -75,7 +75,7 @@ class InteriorPointSolver:
     Parameters
     ----------
     pattern : (n, n) scipy.sparse matrix or SymbolicCholesky
-        :func:`~cvxgeodesic.solvers.problem.kkt_pattern` of the mesh, or an analysis of it (then ``backend``
+        :func:`~cvxgeodesic.problems.conic.kkt_pattern` of the mesh, or an analysis of it (then ``backend``
         and ``ordering`` are its own).
     backend : {"auto", "pardiso", "cholmod", "scipy"}
         Sparse Cholesky backend, see :class:`~cvxgeodesic.linalg.SymbolicCholesky`.
@@ -95,8 +95,8 @@ class InteriorPointSolver:
     --------
     >>> import numpy as np
     >>> from cvxgeodesic.mesh import icosphere
-    >>> from cvxgeodesic.formulations import MeshOperators, build_problem
-    >>> from cvxgeodesic.solvers.problem import kkt_pattern
+    >>> from cvxgeodesic.problems.formulations import MeshOperators, build_problem
+    >>> from cvxgeodesic.problems.conic import kkt_pattern
     >>> m = icosphere(2); ops = MeshOperators(m)
     >>> ipm = InteriorPointSolver(kkt_pattern(m.n_vertices, m.F, m.edges))
     >>> res = ipm.solve(build_problem(ops, np.array([0]), "qclp", 0.0))
@@ -335,10 +335,10 @@ def warm_up() -> None:
     The first :meth:`InteriorPointSolver.solve` of a process does this by itself; call it beforehand to keep
     that one-time cost out of a timing. ``make setup`` runs it once so that the on-disk cache exists.
     """
-    from ...formulations import MeshOperators, build_problem, smoothness_weight
     from ...formulations_p2 import P2Builder
     from ...mesh.generate import icosphere
-    from ..problem import clique_pattern, kkt_pattern
+    from ...problems.conic import clique_pattern, kkt_pattern
+    from ...problems.formulations import MeshOperators, build_problem, smoothness_weight
     from .settings import ORDER2
 
     mesh = icosphere(1)

@@ -73,15 +73,15 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
-from . import capabilities
-from .errors import DegenerateFacesWarning, MeshError, warn_user
-from .mesh.simplex import SimplexMesh
-from .mesh.trimesh import DEGENERATE_TOL
-from .operators import check_energy, energy_matrix, gradient_blocks
-from .operators.metric import Medium
-from .solvers.problem import ConeGroup, ConicProblem, PairInequalities
-from .sources import SourceSet, source_constraints
-from .validation import check_choice, check_number
+from .. import capabilities
+from ..errors import DegenerateFacesWarning, MeshError, warn_user
+from ..mesh.simplex import SimplexMesh
+from ..mesh.trimesh import DEGENERATE_TOL
+from ..operators import check_energy, energy_matrix, gradient_blocks
+from ..operators.metric import Medium
+from ..sources import SourceSet, source_constraints
+from ..validation import check_choice, check_number
+from .conic import ConeGroup, ConicProblem, PairInequalities
 
 FORMULATIONS: dict[str, tuple[str, str | None]] = {
     "lclp": ("lc", None),
