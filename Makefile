@@ -25,7 +25,7 @@ $(STAMP): pyproject.toml requirements.lock
 	$(PY) -m pip install -q --upgrade pip
 	$(PY) -m pip install -q -r requirements.lock
 	$(PY) -m pip install -q --no-deps -e .
-	$(PY) -c "from cvxgeodesic.solvers.ipm import warm_up; warm_up()"  # compile the solver kernels once (Numba cache)
+	$(PY) -c "from cvxgeodesic.strategies.warm_up import warm_up; warm_up()"  # compile the solver kernels once (Numba cache)
 	@touch $(STAMP)
 
 # every time and accuracy figure README.md and docs/ quote, measured on this machine beside the quoted value

@@ -82,7 +82,7 @@ def main(argv=None) -> None:
     p.add_argument("--orders", nargs="+", type=int, default=[1, 2])
     p.add_argument("--repeat", type=int, default=3)
     args = p.parse_args(argv)
-    from cvxgeodesic.solvers.ipm import warm_up
+    from cvxgeodesic.strategies.warm_up import warm_up
 
     warm_up()
     mesh = load(args.mesh)

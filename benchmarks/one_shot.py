@@ -43,7 +43,7 @@ def child(path: str, methods: list[str], repeat: int, order2: bool) -> dict:
     import potpourri3d as pp3d
 
     import cvxgeodesic as cg
-    from cvxgeodesic.solvers.ipm import warm_up
+    from cvxgeodesic.strategies.warm_up import warm_up
 
     mesh = cg.load_mesh(path)
     warm_up()

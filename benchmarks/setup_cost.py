@@ -111,7 +111,7 @@ def _instrument(acc: dict[str, float]) -> None:
 def run_case(spec: str, method: str, solve: bool) -> dict:
     """One case in this process: the pieces in seconds, the iterations, the load average."""
     import cvxgeodesic as cg
-    from cvxgeodesic.solvers.ipm import warm_up
+    from cvxgeodesic.strategies.warm_up import warm_up
 
     mesh = _mesh(spec)
     warm_up()

@@ -51,7 +51,8 @@ import numpy as np
 from cvxgeodesic.mesh import icosphere
 from cvxgeodesic.problems.conic import kkt_pattern
 from cvxgeodesic.problems.formulations import MeshOperators, build_problem, smoothness_weight
-from cvxgeodesic.solvers.ipm import InteriorPointSolver, warm_up
+from cvxgeodesic.solvers.ipm import InteriorPointSolver
+from cvxgeodesic.strategies.warm_up import warm_up
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "meshes"
 DEFAULT_SHARED = ["spot.obj", "bimba.obj", "horse.ply", "armadillo.obj"]

@@ -42,7 +42,7 @@ def child(method: str, order: int, n: int) -> dict:
 
     import cvxgeodesic as cg
     from cvxgeodesic.mesh.tet_generate import l_prism_distance
-    from cvxgeodesic.solvers.ipm import warm_up
+    from cvxgeodesic.strategies.warm_up import warm_up
 
     warm_up()
     mesh = cg.tet_l_prism(n, jitter=0.2, seed=1)

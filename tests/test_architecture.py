@@ -27,10 +27,15 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     # the file formats know nothing of TriMesh or of each other's callers: load_mesh, io and the CLI use them
     ("mesh formats", ("mesh.formats",)),
     ("mesh", ("mesh",)),
+    # the user's source types and their resolution against a mesh
+    ("sources", ("sources",)),
     ("linalg", ("linalg",)),
     ("operators", ("operators",)),
-    ("problems", ("problems", "formulations_p2", "sources")),
+    # the conic program: the one shape the builders make and the solvers take
+    ("program", ("problems.conic",)),
     ("solvers", ("solvers",)),
+    # the builders and the source rows make a program and call no solver: above the solvers, which never import them
+    ("problems", ("problems", "formulations_p2")),
     ("baselines", ("baselines",)),
     ("api", ("api", "rows", "strategies", "paths", "_verbose")),
     ("evaluation/pictures", ("evaluation", "plotting", "viewer")),

@@ -100,8 +100,9 @@ def test_help_text_lists_each_dimension():
 
 def test_source_kinds_of_resolved_sets_in_both_dimensions():
     import cvxgeodesic as cg
+    from cvxgeodesic.mesh.locate import VolumePoint
     from cvxgeodesic.mesh.tet_generate import tet_box
-    from cvxgeodesic.sources import BoundaryFaces, VolumePoint, resolve_sources
+    from cvxgeodesic.sources import BoundaryFaces, resolve_sources
     from cvxgeodesic.sources import resolve_sources as resolve_tet_sources
 
     plane, box = cg.grid_plane(4), tet_box(2)

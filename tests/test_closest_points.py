@@ -21,7 +21,8 @@ from cvxgeodesic import sources
 from cvxgeodesic.errors import SourceError
 from cvxgeodesic.mesh import closest
 from cvxgeodesic.mesh.geometry import clipped_barycentric
-from cvxgeodesic.sources import closest_points, resolve_sources
+from cvxgeodesic.mesh.locate import closest_points
+from cvxgeodesic.sources import resolve_sources
 
 # Distances of the index and of the brute-force reference are computed by different formulas: each is within
 # a few ulps of the diagonal; 1e-12 of it leaves room and still catches a wrong face (any other face is farther

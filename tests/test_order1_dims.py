@@ -11,6 +11,7 @@ import pytest
 
 import cvxgeodesic as cg
 from cvxgeodesic.errors import ParameterError
+from cvxgeodesic.mesh.locate import SurfacePoint, VolumePoint
 from cvxgeodesic.mesh.tet_generate import tet_box
 from cvxgeodesic.mesh.tetmesh import TetMesh
 from cvxgeodesic.problems.formulations import (
@@ -23,7 +24,7 @@ from cvxgeodesic.problems.formulations import (
     smoothness_weight,
     stretch_weights,
 )
-from cvxgeodesic.sources import SurfacePoint, VolumePoint, resolve_sources
+from cvxgeodesic.sources import resolve_sources
 from cvxgeodesic.strategies.backend import Backend
 
 MESHES = {"surface": lambda: cg.grid_plane(6), "volume": lambda: tet_box(3, jitter=0.1, seed=3)}
@@ -171,7 +172,7 @@ def test_one_point_type_located_in_a_cell(cls, field, bary):
     """SurfacePoint and VolumePoint are one CellPoint(cell, bary) under their public names and attributes."""
     import pickle
 
-    from cvxgeodesic.sources import CellPoint
+    from cvxgeodesic.mesh.locate import CellPoint
 
     p = cls(**{field: 3, "bary": bary})
     assert isinstance(p, CellPoint) and getattr(p, field) == p.cell == 3

@@ -248,3 +248,44 @@ def test_qclp_stays_below_dijkstra_for_surface_sources(mesh):
         d = cg.geodesic_distance(mesh, src, method="qclp")
         dij = cg.geodesic_distance(mesh, src, method="dijkstra")
         assert np.all(d <= dij + 1e-7 * mesh.bbox_diagonal)
+
+
+def test_the_accepted_source_types_come_from_the_cell_kind():
+    # the resolver asks mesh.reference (its point type and source kinds), not the dimension
+    from dataclasses import replace
+
+    from cvxgeodesic.sources import source_types
+
+    assert source_types(cg.icosphere(1)) == (cg.SurfacePoint, cg.SurfaceCurve)
+    assert source_types(cg.tet_box(1)) == (cg.VolumePoint, cg.BoundaryFaces)
+    mesh = cg.grid_plane(4)
+    curve = cg.SurfaceCurve([[0.2, 0.5, 0.0], [0.8, 0.5, 0.0]])
+    assert resolve_sources(mesh, curve).kind == "curve"
+    mesh.reference = replace(mesh.reference, source_kinds=("vertex", "point", "boundary"))  # this mesh takes no curve
+    assert source_types(mesh) == (cg.SurfacePoint,)
+    with pytest.raises(SourceError, match="must be a vertex index, a SurfacePoint, got SurfaceCurve"):
+        resolve_sources(mesh, [curve])
+    ss = resolve_sources(mesh, cg.SurfacePoint(3, [0.2, 0.3, 0.5]))
+    assert ss.reference is mesh.reference and type(ss.points[0]) is cg.SurfacePoint
+
+
+def test_the_source_rows_do_not_ask_the_dimension():
+    # the rows around a point source are the same kind of rows in a solid: the star and cone-free cells' edges; the
+    # solid program bounds every edge of a cell without a cone instead, which implies them
+    from cvxgeodesic.problems.source_rows import source_constraints
+
+    mesh = cg.tet_box(2)
+    ops = MeshOperators(mesh)
+    ss = resolve_sources(mesh, [0, cg.volume_point(mesh, [0.5, 0.4, 0.3])])
+    sc = source_constraints(ops, ss, min_edge_bound=1e-9)
+    assert sc.star_other.size and sc.star_other.size == sc.star_source.size == sc.star_rhs.size
+    E = mesh.edges
+    pairs = {tuple(sorted(p)) for p in zip(sc.star_other.tolist(), sc.star_source.tolist(), strict=True)}
+    assert pairs <= {tuple(e) for e in E.tolist()}
+    edge = {tuple(e): i for i, e in enumerate(E.tolist())}
+    rhs = np.array([mesh.edge_lengths[edge[p]] for p in
+                    (tuple(sorted(p)) for p in zip(sc.star_other.tolist(), sc.star_source.tolist(), strict=True))])
+    np.testing.assert_allclose(sc.star_rhs, np.maximum(rhs, 1e-9 * mesh.bbox_diagonal))
+    # the star of the source vertex 0: each of its edges bounds its other end
+    star = {int(e[1 - list(e).index(0)]) for e in E.tolist() if 0 in e}
+    assert star <= {o for o, s in zip(sc.star_other.tolist(), sc.star_source.tolist(), strict=True) if s == 0}

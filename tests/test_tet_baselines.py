@@ -23,9 +23,9 @@ from scipy.sparse.csgraph import dijkstra
 
 from cvxgeodesic.baselines import BASELINES, DijkstraBaseline, HeatBaseline
 from cvxgeodesic.errors import ParameterError, SourceError
+from cvxgeodesic.mesh.locate import VolumePoint, volume_point
 from cvxgeodesic.mesh.tet_generate import l_prism_distance, tet_ball, tet_box, tet_l_prism
 from cvxgeodesic.mesh.tetmesh import TetMesh
-from cvxgeodesic.sources import VolumePoint, volume_point
 from cvxgeodesic.sources import resolve_sources as resolve_tet_sources
 
 

@@ -8,9 +8,8 @@ import numpy as np
 import pytest
 
 from cvxgeodesic.errors import ParameterError, SourceError
-from cvxgeodesic.mesh.locate import locate_points
+from cvxgeodesic.mesh.locate import VolumePoint, interpolate_at, locate_points, volume_point
 from cvxgeodesic.mesh.tet_generate import tet_ball, tet_box, tet_l_prism
-from cvxgeodesic.sources import VolumePoint, interpolate_at, volume_point
 
 
 @pytest.mark.parametrize("tet, bary, match", [

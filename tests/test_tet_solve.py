@@ -24,10 +24,11 @@ import pytest
 import cvxgeodesic as cg
 from cvxgeodesic.baselines import DijkstraBaseline
 from cvxgeodesic.errors import DegenerateFacesWarning, MeshError, ParameterError, SourceError
+from cvxgeodesic.mesh.locate import VolumePoint, volume_point
 from cvxgeodesic.mesh.tet_generate import l_prism_distance, tet_ball, tet_box, tet_l_prism
 from cvxgeodesic.mesh.tetmesh import TetMesh
 from cvxgeodesic.problems.formulations import MeshOperators, build_problem, smoothness_weight
-from cvxgeodesic.sources import BoundaryFaces, VolumePoint, resolve_sources, volume_point
+from cvxgeodesic.sources import BoundaryFaces, resolve_sources
 
 
 def _mean_rel(d, ex):

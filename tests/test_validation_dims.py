@@ -13,9 +13,10 @@ import pytest
 import cvxgeodesic as cg
 from cvxgeodesic import capabilities
 from cvxgeodesic.errors import ParameterError, SourceError
+from cvxgeodesic.mesh.locate import VolumePoint
 from cvxgeodesic.mesh.tet_generate import tet_box
 from cvxgeodesic.problems.formulations import ALIASES
-from cvxgeodesic.sources import BoundaryFaces, VolumePoint
+from cvxgeodesic.sources import BoundaryFaces
 
 MESHES = {2: cg.icosphere(2), 3: tet_box(2)}
 

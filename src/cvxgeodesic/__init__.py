@@ -88,6 +88,7 @@ if TYPE_CHECKING:
     from .mesh import TriMesh, cylinder, grid_plane, icosphere
     from .mesh.fileorder import to_file_order
     from .mesh.io import load_distance, load_mesh, save_distance
+    from .mesh.locate import SurfacePoint, VolumePoint, surface_point, volume_point
     from .mesh.pointcloud import PointCloud
     from .mesh.pointcloud_io import load_point_cloud
     from .mesh.tet_generate import tet_ball, tet_box, tet_l_prism
@@ -96,7 +97,7 @@ if TYPE_CHECKING:
     from .paths import distance_at, geodesic_path
     from .plotting import plot_field
     from .problems.formulations import FORMULATIONS, smoothness_weight
-    from .sources import BoundaryFaces, SurfaceCurve, SurfacePoint, VolumePoint, surface_point, volume_point
+    from .sources import BoundaryFaces, SurfaceCurve
     from .viewer import show
 
 __version__ = "0.1.0"
@@ -132,8 +133,8 @@ _LAZY = {
     "load_point_cloud": ".mesh.pointcloud_io",
     **dict.fromkeys(("distance_at", "geodesic_path"), ".paths"),
     "plot_field": ".plotting",  # matplotlib costs ~0.3 s to import
-    **dict.fromkeys(("BoundaryFaces", "SurfaceCurve", "SurfacePoint", "VolumePoint", "surface_point", "volume_point"),
-                    ".sources"),
+    **dict.fromkeys(("SurfacePoint", "VolumePoint", "surface_point", "volume_point"), ".mesh.locate"),
+    **dict.fromkeys(("BoundaryFaces", "SurfaceCurve"), ".sources"),
     "show": ".viewer",  # polyscope is an optional extra: imported when show() runs
 }
 

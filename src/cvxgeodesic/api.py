@@ -662,7 +662,8 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None
 
 def _matrix_rows(mesh: Any, vertices: Any, *, local: bool) -> tuple[list, np.ndarray]:
     """The distinct sources of ``distance_matrix``'s rows and, for each row asked for, its index among them."""
-    from .sources import BoundaryFaces, CellPoint, SurfaceCurve
+    from .mesh.locate import CellPoint
+    from .sources import BoundaryFaces, SurfaceCurve
 
     objects = (CellPoint, SurfaceCurve, BoundaryFaces, str)  # points, curves, boundary faces, "boundary"
     if isinstance(vertices, objects) or (isinstance(vertices, list | tuple)

@@ -41,12 +41,21 @@ from .errors import ParameterError, SolverError, SourceError
 from .mesh.closest import segment_point, triangle_point
 from .mesh.convert import as_mesh
 from .mesh.corridor import node_position, straighten_corridor
-from .mesh.locate import POINT_AT, POINT_TYPES, CellPoint, SurfacePoint, VolumePoint, corner_interpolant
+from .mesh.locate import (
+    POINT_AT,
+    POINT_TYPES,
+    CellPoint,
+    SurfacePoint,
+    VolumePoint,
+    cells_around,
+    closest_points,
+    corner_interpolant,
+)
 from .mesh.simplex import CELL_FACETS
 from .operators.gradient import gradient_blocks, triangle_frames
 from .operators.metric import make_medium
 from .results import GeodesicResult, remembered_sources
-from .sources import BARY_SNAP, SourceSet, cells_around, closest_points, resolve_sources
+from .sources import BARY_SNAP, SourceSet, resolve_sources
 from .validation import as_vertex_field, check_count, is_integer
 
 #: A distance field as the functions here take it: the vertex values or the result they came from.

@@ -10,29 +10,12 @@ A source may be
 - the string ``"boundary"``: every boundary edge of a surface, every boundary face of a solid (the wall distance);
 - in a solid :class:`BoundaryFaces`: some faces of the boundary surface (part of the wall).
 
-:func:`resolve_sources` turns any of these (or a list mixing them) into one normalized
-:class:`SourceSet`; :func:`source_constraints` turns a source set into the constraints the
-convex formulations add (``docs/sources.md`` and ``docs/volumes.md`` explain and measure each choice):
-
-- vertex sources and the vertices of source faces are fixed at 0; the cells incident to a source vertex carry no
-  cone; on a surface each star edge bounds its other end by its length;
-- a point ``p`` in cell ``t`` bounds each vertex of ``t`` by ``|v_i − p|`` (the straight segment inside the flat
-  cell is a path, so this is an upper bound of the geodesic distance) and ``t`` carries no cone. On a surface a
-  point on an edge does this in both faces of the edge;
-- a cell next to the sources whose local field (the distance to the nearest source vertex, point, curve piece or
-  source face) is steeper than 1 when interpolated linearly (the trace of a cone whose apex is close to the cell)
-  carries no cone either. On a surface the vertices it leaves free are bounded through the edges to the source
-  face's vertices, ``d_w ≤ d_v + ℓ_vw`` (a triangle inequality); in a solid every edge of a tetrahedron without a
-  cone gets ``|d_i − d_j| ≤ ℓ_ij`` (:func:`~cvxgeodesic.problems.formulations.build_problem`);
-- a curve is sampled along each segment at an eighth of the mean edge length (plus its given
-  points); every sample is a point source, and two consecutive samples in the same face add the
-  bound by the distance to the segment between them (straight in that face);
-- the boundary of a surface fixes every boundary vertex at 0 and bounds the third vertex of each boundary
-  face by its distance to the boundary edge; a source face of a solid bounds the fourth vertex of its tetrahedron
-  by its distance to the (closed) triangle.
-
-Every bound is an upper bound of the exact distance (tested against pygeodesic on surfaces), so none of them cuts
-the exact field off.
+:func:`resolve_sources` turns any of these (or a list mixing them) into one normalized :class:`SourceSet`, against
+the mesh's cell kind (``mesh.reference``: its point type and the kinds of source it takes); :func:`vertex_bounds`
+gives the upper bounds of the distance at the vertices of the sources' cells. The rows the convex program adds for
+a source set are :func:`cvxgeodesic.problems.source_rows.source_constraints`. The point types and their locators
+(:class:`~cvxgeodesic.mesh.locate.SurfacePoint`, :func:`~cvxgeodesic.mesh.locate.surface_point`, ...) live in
+:mod:`cvxgeodesic.mesh.locate`.
 """
 
 from __future__ import annotations
@@ -42,33 +25,19 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from .errors import SourceError
-from .mesh.closest import nearest_triangle_distance, point_triangle_distance, segment_parameter
+from .mesh.closest import point_triangle_distance, segment_parameter
 from .mesh.geometry import clipped_barycentric
-from .mesh.locate import (
-    BARY_TOL,
-    POINT_TYPES,
-    CellPoint,
-    SurfacePoint,
-    VolumePoint,
-    bary_positions,
-    cells_around,
-    closest_points,
-    interpolate_at,
-    surface_point,
-    volume_point,
-)
+from .mesh.locate import CellPoint, SurfacePoint, bary_positions, cells_around, closest_points
+from .mesh.reference import TRIANGLE, ReferenceSimplex
 from .mesh.simplex import SimplexMesh
 from .mesh.tetmesh import TetMesh
 from .mesh.trimesh import TriMesh
 from .validation import is_integer, validate_sources
 
-__all__ = ["BARY_SNAP", "BARY_TOL", "CURVE_STEP", "ON_SURFACE_TOL", "BoundaryFaces", "CellPoint", "SourceConstraints",
-           "SourceSet", "SurfaceCurve", "SurfacePoint", "VolumePoint", "boundary_edges", "closest_points",
-           "interpolate_at", "point_triangle_distance", "resolve_sources", "source_constraints", "surface_point",
-           "vertex_bounds", "volume_point"]
+__all__ = ["BARY_SNAP", "CURVE_STEP", "ON_SURFACE_TOL", "BoundaryFaces", "SourceSet", "SurfaceCurve", "boundary_edges",
+           "resolve_sources", "source_types", "vertex_bounds"]
 
 #: A barycentric coordinate this close to 0 (or 1) counts as exactly 0 (1): the point is on an edge (a vertex).
 BARY_SNAP = 1e-9
@@ -234,8 +203,8 @@ class SourceSet:
     facets : (f,) int64 ndarray
         Source facets, sorted rows of ``mesh.boundary_facets`` (volumes: ``"boundary"`` and :class:`BoundaryFaces`;
         their vertices are fixed at 0).
-    dim : int
-        The simplex dimension of the mesh (2 or 3).
+    reference : ReferenceSimplex
+        The cell kind of the mesh (``mesh.reference``): the type of :attr:`points`.
     """
 
     vertices: np.ndarray
@@ -246,7 +215,7 @@ class SourceSet:
     kind: str
     description: str
     facets: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
-    dim: int = 2
+    reference: ReferenceSimplex = TRIANGLE
 
     @property
     def vertex_only(self) -> bool:
@@ -255,8 +224,9 @@ class SourceSet:
 
     @property
     def points(self) -> tuple[CellPoint, ...]:
-        """The point sources as :class:`SurfacePoint` or :class:`VolumePoint` objects (see :attr:`point_faces`)."""
-        kind = POINT_TYPES[self.dim]
+        """The point sources as objects of the cell kind's point type (``SurfacePoint``, ``VolumePoint``; see
+        :attr:`point_faces`)."""
+        kind: Any = self.reference.point_type  # a CellPoint subclass
         return tuple(kind._exact(c, b) for c, b in zip(self.point_faces.tolist(), self.point_bary, strict=True))
 
     @property
@@ -387,13 +357,12 @@ class _Builder:
         if zero.any():
             b = np.where(zero, 0.0, b)
             b = b / b.sum()
-        if zero.any() and self.mesh.dim == 2:
-            on = np.flatnonzero(~zero)  # exactly two corners: an edge point
-            va, vb = int(C[cell, on[0]]), int(C[cell, on[1]])
-            for g in cells_around(self.mesh, (va, vb)):
-                bg = np.zeros(3)
-                bg[C[g] == va] = b[on[0]]
-                bg[C[g] == vb] = b[on[1]]
+        if zero.any() and self.mesh.reference.shared_points:
+            on = C[cell, np.flatnonzero(~zero)]  # the corners of the edge (facet, ...) the point lies on
+            for g in cells_around(self.mesh, on.tolist()):
+                bg = np.zeros(C.shape[1])
+                for v, w in zip(on.tolist(), b[~zero].tolist(), strict=True):
+                    bg[C[g] == v] = w
                 self.pf.append(int(g))
                 self.pb.append(bg)
             return
@@ -405,7 +374,7 @@ class _Builder:
         self.sb.append(np.stack([ba, bb]))
 
     def build(self, kind: str, description: str) -> SourceSet:
-        w = self.mesh.dim + 1
+        w = self.mesh.reference.n_corners
         facets = np.unique(np.concatenate(self.facets)) if self.facets else np.zeros(0)
         return SourceSet(
             vertices=np.unique(np.asarray(self.vertices, dtype=np.int64)),
@@ -413,7 +382,7 @@ class _Builder:
             point_bary=np.asarray(self.pb, dtype=float).reshape(-1, w),
             segment_faces=np.asarray(self.sf, dtype=np.int64),
             segment_bary=np.asarray(self.sb, dtype=float).reshape(-1, 2, 3),
-            kind=kind, description=description, facets=facets.astype(np.int64), dim=self.mesh.dim,
+            kind=kind, description=description, facets=facets.astype(np.int64), reference=self.mesh.reference,
         )
 
 
@@ -513,18 +482,36 @@ def _curve_pieces(mesh: TriMesh, faces: np.ndarray, bary: np.ndarray) -> list[tu
     return [piece for piece in out if piece is not None]
 
 
-#: The source objects each simplex dimension takes besides vertex indices.
-SOURCE_TYPES: dict[int, tuple[type, ...]] = {2: (SurfacePoint, SurfaceCurve), 3: (VolumePoint, BoundaryFaces)}
+#: The source object of each kind of source (:data:`cvxgeodesic.capabilities.SOURCE_KINDS`) that has one; a point is
+#: the cell kind's point type (``mesh.reference.point_type``).
+SOURCE_CLASSES: dict[str, type] = {"curve": SurfaceCurve, "boundary faces": BoundaryFaces}
+
+
+def source_types(mesh: SimplexMesh) -> tuple[type, ...]:
+    """The source objects ``mesh`` takes besides vertex indices, in the order of ``mesh.reference.source_kinds``.
+
+    Examples
+    --------
+    >>> import cvxgeodesic as cg
+    >>> [t.__name__ for t in source_types(cg.icosphere(1))]
+    ['SurfacePoint', 'SurfaceCurve']
+    >>> [t.__name__ for t in source_types(cg.tet_box(1))]
+    ['VolumePoint', 'BoundaryFaces']
+    """
+    classes = {"point": mesh.reference.point_type, **SOURCE_CLASSES}
+    return tuple(classes[k] for k in mesh.reference.source_kinds if k in classes)
 
 
 def _named_source(mesh: Any, name: str) -> SourceSet:
     """The one named source, ``"boundary"``: every boundary edge of a surface, every boundary face of a solid."""
     if name.strip().lower() != "boundary":
-        kinds = ", ".join(f"{t.__name__}s" if t is not BoundaryFaces else t.__name__ for t in SOURCE_TYPES[mesh.dim])
+        kinds = ", ".join(f"{t.__name__}s" if t is not BoundaryFaces else t.__name__ for t in source_types(mesh))
         raise SourceError(f"unknown source {name!r}: sources must be integer vertex indices, {kinds} or 'boundary' "
                           "(the only named source)")
     builder = _Builder(mesh)
-    if mesh.dim == 3:  # the facets are the source: their vertices are fixed, the cells' fourth corners bounded
+    # a cell kind whose boundary facets can be sources (BoundaryFaces) takes the boundary as all of them: their
+    # vertices are fixed, the cells' opposite corners bounded; the others take it as curve pieces along the edges
+    if "boundary faces" in mesh.reference.source_kinds:
         nb = mesh.boundary_facets.shape[0]
         if nb == 0:
             raise SourceError(f"sources='boundary' but {mesh.name} has no boundary faces")
@@ -566,15 +553,15 @@ def resolve_sources(mesh: Any, sources: Any) -> SourceSet:
     """
     if isinstance(sources, SourceSet):
         return sources
-    n, dim = mesh.n_vertices, mesh.dim
-    accepted = SOURCE_TYPES[dim]
+    n, corners = mesh.n_vertices, mesh.reference.n_corners
+    accepted = source_types(mesh)
     if isinstance(sources, str):
         return _named_source(mesh, sources)
     if isinstance(sources, CellPoint | SurfaceCurve | BoundaryFaces):
         sources = [sources]
     if (isinstance(sources, tuple) and len(sources) == 2 and is_integer(sources[0])
-            and np.ndim(sources[1]) == 1 and np.size(sources[1]) == dim + 1):
-        kind = POINT_TYPES[dim].__name__
+            and np.ndim(sources[1]) == 1 and np.size(sources[1]) == corners):
+        kind = mesh.reference.point_type.__name__
         raise SourceError(f"sources = {sources!r} looks like a (cell, bary) pair: give a point inside a cell as "
                           f"cg.{kind}({sources[0]}, {list(sources[1])})")
     if isinstance(sources, list | tuple) and any(isinstance(s, CellPoint | SurfaceCurve | BoundaryFaces | str)
@@ -603,13 +590,15 @@ def resolve_sources(mesh: Any, sources: Any) -> SourceSet:
                 names = " or ".join(t.__name__ for t in accepted)
                 raise SourceError(f"{label} must be a vertex index, a {names}, got {s!r}" + (
                     "" if not isinstance(s, str) else ": 'boundary' cannot be mixed with other sources (it must be "
-                    "given alone" + ("; give BoundaryFaces for part of the wall)" if dim == 3 else ")")))
+                    "given alone" + ("; give BoundaryFaces for part of the wall)" if BoundaryFaces in accepted
+                                     else ")")))
         kind = kinds.pop() if len(kinds) == 1 else "mixed"
         return builder.build(kind, _describe(sources))
     src = validate_sources(sources, n)
-    return SourceSet(vertices=src, point_faces=np.zeros(0, np.int64), point_bary=np.zeros((0, dim + 1)),
+    return SourceSet(vertices=src, point_faces=np.zeros(0, np.int64), point_bary=np.zeros((0, corners)),
                      segment_faces=np.zeros(0, np.int64), segment_bary=np.zeros((0, 2, 3)), kind="vertices",
-                     description=f"vertices {src.tolist()}" if src.size <= 8 else f"{src.size} vertices", dim=dim)
+                     description=f"vertices {src.tolist()}" if src.size <= 8 else f"{src.size} vertices",
+                     reference=mesh.reference)
 
 
 def _describe(items) -> str:
@@ -618,39 +607,8 @@ def _describe(items) -> str:
 
 
 # ---------------------------------------------------------------------------------------------------------------
-# constraints of the convex formulations
+# bounds at the vertices around the sources (the program's rows, problems/source_rows.py, and the baselines' seeds)
 # ---------------------------------------------------------------------------------------------------------------
-@dataclass
-class SourceConstraints:
-    """What the sources add to a formulation (read by :func:`~cvxgeodesic.problems.formulations.build_problem`).
-
-    Attributes
-    ----------
-    fixed : (k,) int64 ndarray
-        Vertices fixed at 0.
-    no_cone : (m,) bool ndarray
-        Cells that carry no cone.
-    star_other, star_source : (e,) int64 ndarray
-        Edge bounds ``d[star_other] − d[star_source] ≤ star_rhs`` (surfaces; in a solid the edges of every
-        tetrahedron without a cone are bounded by the formulation).
-    star_rhs : (e,) float ndarray
-    bound_vertices : (b,) int64 ndarray
-        Vertex bounds ``d[bound_vertices] ≤ bound_rhs`` (free vertices only, one per vertex).
-    bound_rhs : (b,) float ndarray
-    anchors : (r,) int64 ndarray
-        Vertices whose components contain a source (the others are unreachable).
-    """
-
-    fixed: np.ndarray
-    no_cone: np.ndarray
-    star_other: np.ndarray
-    star_source: np.ndarray
-    star_rhs: np.ndarray
-    bound_vertices: np.ndarray
-    bound_rhs: np.ndarray
-    anchors: np.ndarray
-
-
 def vertex_bounds(mesh: Any, ss: SourceSet, medium: Any = None) -> np.ndarray:
     """Upper bounds of the distance at the vertices of the cells of the sources.
 
@@ -695,111 +653,3 @@ def vertex_bounds(mesh: Any, ss: SourceSet, medium: Any = None) -> np.ndarray:
         other = C[t_of, local]
         np.minimum.at(bound, other, point_triangle_distance(V[other], V[tri[:, 0]], V[tri[:, 1]], V[tri[:, 2]]))
     return bound
-
-
-def _steep_cells(ops: Any, ss: SourceSet, near: np.ndarray, medium: Any) -> np.ndarray:
-    """(q,) int64 ndarray: the cells of ``near`` where the linear interpolant of the local exact field is steeper
-    than 1: the distance to the nearest source vertex, point, curve piece (its ends and midpoint stand in for it) or
-    source face. There the exact field violates the cone too (an apex close to the cell's facet or corner)."""
-    mesh = ops.mesh
-    V, C = mesh.V, mesh.cells
-    cand = np.flatnonzero(near)
-    corners = C[cand].reshape(-1)
-    A, B = ss.segment_ends(mesh)  # the curve pieces (none in a solid)
-    P = np.concatenate([ss.point_positions(mesh), V[ss.vertices], A, B, 0.5 * (A + B)])
-    local = np.full(corners.size, np.inf)
-    nearest = np.zeros(corners.size, dtype=np.int64)
-    if len(P):
-        local, nearest = cKDTree(P).query(V[corners])
-    if medium is not None:  # the local field in the medium: the distance to the nearest point, in cell cand's
-        local = medium.vector_lengths(np.repeat(cand, C.shape[1]), V[corners] - P[nearest])
-    if ss.facets.size:
-        local = np.minimum(local, nearest_triangle_distance(mesh, ss.face_triangles(mesh), V[corners]))
-        local[np.isin(corners, ss.fixed_vertices(mesh))] = 0.0
-    g = np.einsum("tij,tj->ti", ops.gradient_blocks[cand], local.reshape(len(cand), -1))
-    return cand[np.linalg.norm(g, axis=1) > 1.0 + 1e-9]
-
-
-def source_constraints(ops: Any, sources: Any, min_edge_bound: float) -> SourceConstraints:
-    """Constraints of a source set (or of validated source vertices) for one mesh, a surface or a solid: those the
-    module docstring lists (the bounds at the corners of the sources' cells: :func:`vertex_bounds`; the cells next to
-    the sources where the local field is steeper than 1: :func:`_steep_cells`; the edge bounds around cone-free faces
-    of a surface: :func:`_surface_edge_bounds`).
-
-    Parameters
-    ----------
-    ops : MeshOperators
-        The mesh (possibly the solver's rescaled copy), its gradient blocks and degenerate cells.
-    sources : (k,) int64 ndarray or SourceSet
-    min_edge_bound : float
-        The formulations' floor of the edge bounds (:data:`~cvxgeodesic.problems.formulations.MIN_EDGE_BOUND`),
-        as a fraction of the bounding-box diagonal; passed in so that sources do not import the formulations.
-
-    Returns
-    -------
-    SourceConstraints
-    """
-    mesh = ops.mesh
-    n, C, E = mesh.n_vertices, mesh.cells, mesh.edges
-    # the formulations' floor of the edge bounds, also for the vertex bounds next to a point that almost
-    # touches a vertex: it keeps them inequalities
-    floor = min_edge_bound * mesh.bbox_diagonal
-    ell = np.maximum(ops.edge_lengths, floor)
-    medium = getattr(ops, "medium", None)
-    ss = sources if isinstance(sources, SourceSet) else None
-    vertices = np.asarray(ss.vertices if ss is not None else sources, dtype=np.int64)
-    fixed = ss.fixed_vertices(mesh) if ss is not None and ss.facets.size else vertices
-    is_source = np.zeros(n, dtype=bool)
-    is_source[vertices] = True
-    no_cone = is_source[C].any(axis=1)
-    is_source[fixed] = True
-    # on a surface each star edge bounds its other end; in a solid the formulation bounds the edges of every
-    # tetrahedron without a cone
-    star = (is_source[E[:, 0]] ^ is_source[E[:, 1]]) & (mesh.dim == 2)
-    o_end, s_end = _edge_ends(E, star, is_source)
-    star_rhs = ell[star]
-    empty = np.zeros(0, dtype=np.int64)
-    if ss is None or ss.vertex_only:
-        return SourceConstraints(fixed, no_cone, o_end, s_end, star_rhs, empty, np.zeros(0), fixed)
-
-    bound = vertex_bounds(mesh, ss, medium)
-    src_faces = ss.source_faces()
-    no_cone[src_faces] = True
-    src_verts = is_source.copy()
-    src_verts[C[src_faces].ravel()] = True
-    near = src_verts[C].any(axis=1) & ~no_cone & ~ops.degenerate
-    if near.any():
-        no_cone[_steep_cells(ops, ss, near, medium)] = True
-    bv = np.flatnonzero(np.isfinite(bound) & ~is_source)
-    if mesh.dim == 2:
-        o_end, s_end, star_rhs = _surface_edge_bounds(mesh, ops, ell, is_source, src_verts & ~is_source, no_cone,
-                                                      (o_end, s_end, star_rhs))
-    return SourceConstraints(fixed=fixed, no_cone=no_cone, star_other=o_end.astype(np.int64),
-                             star_source=s_end.astype(np.int64), star_rhs=star_rhs, bound_vertices=bv.astype(np.int64),
-                             bound_rhs=np.maximum(bound[bv], floor), anchors=ss.anchor_vertices(mesh))
-
-
-def _edge_ends(E: np.ndarray, mask: np.ndarray, first: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(other end, first end) of the edges ``E[mask]`` (each with exactly one end where ``first`` is True)."""
-    a = first[E[mask, 0]]
-    return np.where(a, E[mask, 1], E[mask, 0]), np.where(a, E[mask, 0], E[mask, 1])
-
-
-def _surface_edge_bounds(mesh: TriMesh, ops: Any, ell: np.ndarray, is_source: np.ndarray, src_verts: np.ndarray,
-                         no_cone: np.ndarray, star: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The star bounds ``star`` followed by the edge bounds around the cone-free faces of points and curves.
-
-    Every edge from a source-face vertex to a free vertex outside them bounds that vertex (triangle inequality);
-    this keeps the vertices of steep faces bounded and costs nothing elsewhere. The edges of every face left without a
-    cone keep ``|d_i − d_j| ≤ l_ij`` (both ways; true of every distance field): without them an edge between two
-    free vertices of two such faces is unconstrained and the field can climb above Dijkstra's (measured on a
-    jittered grid with the boundary as source: +0.034 at one vertex).
-    """
-    E = mesh.edges
-    one = (src_verts[E[:, 0]] ^ src_verts[E[:, 1]]) & ~is_source[E[:, 0]] & ~is_source[E[:, 1]]
-    o2, s2 = _edge_ends(E, one, src_verts)
-    ei = np.unique(mesh.face_edges[no_cone & ~ops.degenerate])
-    ei = ei[~is_source[E[ei, 0]] & ~is_source[E[ei, 1]]]
-    o_end, s_end, star_rhs = star
-    return (np.concatenate([o_end, o2, E[ei, 0], E[ei, 1]]), np.concatenate([s_end, s2, E[ei, 1], E[ei, 0]]),
-            np.concatenate([star_rhs, ell[one], ell[ei], ell[ei]]))

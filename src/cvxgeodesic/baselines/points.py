@@ -30,8 +30,9 @@ from scipy.sparse.csgraph import dijkstra
 
 from ..capabilities import methods_for
 from ..errors import SourceError
+from ..mesh.locate import closest_points
 from ..mesh.trimesh import TriMesh
-from ..sources import BARY_SNAP, SourceSet, closest_points, vertex_bounds
+from ..sources import BARY_SNAP, SourceSet, vertex_bounds
 
 
 def graph_distance(graph: sp.spmatrix, starts: np.ndarray, near: np.ndarray | None = None,

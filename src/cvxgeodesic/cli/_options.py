@@ -244,7 +244,8 @@ def cli_sources(args: argparse.Namespace, mesh: Any) -> tuple[Any, str]:
 
 
 def _surface_points(mesh: Any, X: Any, points: list) -> list:
-    from ..sources import ON_SURFACE_TOL, closest_points, surface_point
+    from ..mesh.locate import closest_points, surface_point
+    from ..sources import ON_SURFACE_TOL
 
     _, _, dist = closest_points(mesh, X)
     for x, dd in zip(points, dist, strict=True):

@@ -41,7 +41,7 @@ def add_parser(sub: Any) -> None:
 def _target(args: argparse.Namespace, mesh: Any) -> Any:
     import numpy as np
 
-    from ..sources import surface_point
+    from ..mesh.locate import surface_point
 
     if (args.to is None) == (args.to_point is None):
         raise ParameterError("give exactly one target: --to I or --to-point X,Y,Z")
@@ -86,8 +86,8 @@ def run(args: argparse.Namespace) -> int:
     from .._atomic import atomic_write, output_set
     from .._verbose import progress_printer
     from ..api import GeodesicSolver
+    from ..mesh.locate import SurfacePoint
     from ..paths import distance_at, geodesic_path
-    from ..sources import SurfacePoint
 
     check_outputs(args, ("-o", args.output, PATH_EXTENSIONS), ("--png", args.png, (".png",)))
     mesh = load_input(args.mesh)

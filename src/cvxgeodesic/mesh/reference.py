@@ -98,6 +98,10 @@ class ReferenceSimplex:
         The kinds of source (:data:`cvxgeodesic.capabilities.SOURCE_KINDS`) a mesh of these cells takes.
     measure_root : callable
         Turns a total measure (area, volume) into a length: ``np.sqrt``, ``np.cbrt``.
+    shared_points : bool
+        Whether a point source on the boundary of a cell (a triangle's edge) is listed in every cell around it, so
+        that its bounds hold in each (triangles), or only in the cell it was given in (tetrahedra)
+        (:func:`cvxgeodesic.sources.resolve_sources`).
     """
 
     name: str
@@ -107,6 +111,7 @@ class ReferenceSimplex:
     words: CellWords
     source_kinds: tuple[str, ...]
     measure_root: Callable[[Any], Any]
+    shared_points: bool
     _frame: Callable[[np.ndarray], np.ndarray] = field(repr=False)
     _point_type: str = field(repr=False)
     _locator: str = field(repr=False)
@@ -167,7 +172,7 @@ TRIANGLE = ReferenceSimplex(
                     mesh="a triangle surface", meshes="triangle meshes", preposition="on", domain="on a surface",
                     argument="faces"),
     source_kinds=("vertex", "point", "curve", "boundary"),
-    measure_root=np.sqrt,
+    measure_root=np.sqrt, shared_points=True,
     _frame=_triangle_frame_coordinates, _point_type="SurfacePoint", _locator="surface_point",
 )
 
@@ -179,6 +184,6 @@ TETRAHEDRON = ReferenceSimplex(
                     mesh="a tetrahedral volume", meshes="tetrahedral meshes", preposition="in",
                     domain="inside a volume", argument="tets"),
     source_kinds=("vertex", "point", "boundary", "boundary faces"),
-    measure_root=np.cbrt,
+    measure_root=np.cbrt, shared_points=False,
     _frame=_world_coordinates, _point_type="VolumePoint", _locator="volume_point",
 )

@@ -79,9 +79,10 @@ from ..mesh.simplex import SimplexMesh
 from ..mesh.trimesh import DEGENERATE_TOL
 from ..operators import check_energy, energy_matrix, gradient_blocks
 from ..operators.metric import Medium
-from ..sources import SourceSet, source_constraints
+from ..sources import SourceSet
 from ..validation import check_choice, check_number
 from .conic import ConeGroup, ConicProblem, PairInequalities
+from .source_rows import source_constraints
 
 FORMULATIONS: dict[str, tuple[str, str | None]] = {
     "lclp": ("lc", None),
@@ -475,7 +476,7 @@ def build_problem(
     sources : (k,) int64 ndarray or SourceSet
         Validated source vertices, or any source set of :func:`cvxgeodesic.sources.resolve_sources`
         (points, curves, the boundary, source faces; their constraints are in
-        :func:`cvxgeodesic.sources.source_constraints`).
+        :func:`cvxgeodesic.problems.source_rows.source_constraints`).
     method : str
         A name of :data:`FORMULATIONS` (aliases allowed) defined on the mesh's dimension
         (:func:`capabilities.methods_for`).

@@ -3,8 +3,7 @@
 ================  ===================================================================================
 module            owns
 ================  ===================================================================================
-``solver``        :class:`InteriorPointSolver` (pattern, re-analysis, threads, the loop, the result),
-                  :func:`warm_up`
+``solver``        :class:`InteriorPointSolver` (pattern, re-analysis, threads, the loop, the result)
 ``settings``      :class:`IPMSettings`: every tuning constant, its default and why
 ``program``       :class:`~.program.Program`: the problem with the fixed variables eliminated, its
                   blocks, the reduced Newton matrix (operator and assembly)
@@ -22,6 +21,6 @@ module            owns
 
 from .program import problem_pattern
 from .settings import IPMSettings
-from .solver import InteriorPointSolver, warm_up
+from .solver import InteriorPointSolver
 
-__all__ = ["IPMSettings", "InteriorPointSolver", "problem_pattern", "warm_up"]
+__all__ = ["IPMSettings", "InteriorPointSolver", "problem_pattern"]

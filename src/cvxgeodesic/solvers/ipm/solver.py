@@ -51,7 +51,7 @@ from .residuals import BestIterate, acceptable, almost, certificate, converged, 
 from .settings import IPMSettings
 from .start import StartFailure, starting_point
 
-__all__ = ["InteriorPointSolver", "warm_up"]
+__all__ = ["InteriorPointSolver"]
 
 _MESSAGES = {
     "max_iterations": "no convergence within max_iter={max_iter} iterations",
@@ -326,27 +326,3 @@ class _Run:
             gap=info["gap_rel"],
             extra=extra,
         )
-
-
-def warm_up() -> None:
-    """Compile (first run after an install: the kernels of both orders and of the curved Hessian energy, about 9 s
-    by :data:`cvxgeodesic._jit.NOTICE`'s estimates) or load (later, under a second) the solver's kernels.
-
-    The first :meth:`InteriorPointSolver.solve` of a process does this by itself; call it beforehand to keep
-    that one-time cost out of a timing. ``make setup`` runs it once so that the on-disk cache exists.
-    """
-    from ...formulations_p2 import P2Builder
-    from ...mesh.generate import icosphere
-    from ...problems.conic import clique_pattern, kkt_pattern
-    from ...problems.formulations import MeshOperators, build_problem, smoothness_weight
-    from .settings import ORDER2
-
-    mesh = icosphere(1)
-    ops = MeshOperators(mesh)
-    for method in ("qclp", "lclp", "qcqp-hessian"):
-        p = build_problem(ops, np.array([0]), method, smoothness_weight(mesh, 1.0))
-        InteriorPointSolver(kkt_pattern(mesh.n_vertices, mesh.F, mesh.edges, p.P)).solve(p)
-    builder = P2Builder(mesh)  # order 2: the SOC(4) clique kernels
-    space = builder.space
-    InteriorPointSolver(clique_pattern(space.n_dofs, [space.cell_dofs]), settings=ORDER2).solve(
-        builder.build(np.array([0])).problem)
