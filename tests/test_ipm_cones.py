@@ -1,9 +1,7 @@
 """The cone-block protocol of the interior-point solver against dense NumPy references, and a made-up program
-with rotated-SOC, SOC(4) and orthant blocks against Clarabel."""
+with SOC(3), SOC(4) and orthant blocks against Clarabel."""
 
 from __future__ import annotations
-
-import math
 
 import numpy as np
 import pytest
@@ -12,27 +10,18 @@ import scipy.sparse as sp
 from cvxgeodesic.linalg import SymbolicCholesky
 from cvxgeodesic.solvers.ipm import InteriorPointSolver, IPMSettings
 from cvxgeodesic.solvers.ipm.blocks import SparseBlock
-from cvxgeodesic.solvers.ipm.cones import SOC, Orthant, RotatedSOC
+from cvxgeodesic.solvers.ipm.cones import SOC, Orthant
 from cvxgeodesic.solvers.ipm.program import Program
 
-CONES = [SOC(3), SOC(4), SOC(6), Orthant(), RotatedSOC(3), RotatedSOC(4)]
-IDS = ["soc3", "soc4", "soc6", "orthant", "rsoc3", "rsoc4"]
+CONES = [SOC(3), SOC(4), SOC(6), Orthant()]
+IDS = ["soc3", "soc4", "soc6", "orthant"]
 K = 40  # cones per block
-
-
-def _t(d: int) -> np.ndarray:
-    """The rotated cone's map to the SOC, dense."""
-    T = np.eye(d)
-    T[:2, :2] = np.array([[1.0, 1.0], [1.0, -1.0]]) / math.sqrt(2.0)
-    return T
 
 
 def _inside(cone, u: np.ndarray) -> np.ndarray:
     """Membership of every cone of ``u`` from the cone's definition (not through the code under test)."""
     if isinstance(cone, Orthant):
         return u >= 0
-    if isinstance(cone, RotatedSOC):
-        return (u[0] >= 0) & (u[1] >= 0) & (2.0 * u[0] * u[1] >= (u[2:] ** 2).sum(axis=0))
     return u[0] >= np.linalg.norm(u[1:], axis=0)
 
 
@@ -41,7 +30,7 @@ def _interior(cone, rng, k=K, margin=(1e-2, 2.0)) -> np.ndarray:
         return rng.uniform(*margin, k)
     v = rng.normal(size=(cone.dim, k))
     v[0] = np.linalg.norm(v[1:], axis=0) + rng.uniform(*margin, k)
-    return _t(cone.dim) @ v if isinstance(cone, RotatedSOC) else v
+    return v
 
 
 def _dense(apply, cone, i: int) -> np.ndarray:
@@ -63,9 +52,6 @@ def _arrow(cone, u: np.ndarray) -> np.ndarray:
     """Dense Jordan multiplication matrix ``L(u)`` with ``u ∘ v = L(u) v`` (one cone's ``u``)."""
     if isinstance(cone, Orthant):
         return np.array([[float(u[0])]])
-    if isinstance(cone, RotatedSOC):
-        T = _t(cone.dim)
-        return T @ _arrow(SOC(cone.dim), T @ u) @ T
     L = u[0] * np.eye(u.size)
     L[0, 1:] = L[1:, 0] = u[1:]
     return L
@@ -158,12 +144,11 @@ def _spectral(cone, v):
     """Eigenvalues and Jordan frame of one cone's element ``v`` (dense, in the cone's own coordinates)."""
     if isinstance(cone, Orthant):
         return np.array([v[0]]), [np.ones(1)]
-    T = _t(cone.dim) if isinstance(cone, RotatedSOC) else np.eye(cone.dim)
-    w = T @ v
+    w = v
     nb = np.linalg.norm(w[1:])
     u = w[1:] / nb if nb > 0 else np.zeros(w.size - 1)
     frames = [0.5 * np.r_[1.0, -u], 0.5 * np.r_[1.0, u]]
-    return np.array([w[0] - nb, w[0] + nb]), [T @ f for f in frames]
+    return np.array([w[0] - nb, w[0] + nb]), frames
 
 
 @pytest.mark.parametrize("cone", CONES, ids=IDS)
@@ -199,10 +184,8 @@ def test_shift_cones_moves_the_masked_cones_inside_and_leaves_the_others(cone):
     inside = _inside(cone, shifted)
     assert inside[mask].all() and cone.min_eigenvalue(shifted[..., mask]) > 0  # strictly inside
     assert np.abs(shifted[..., ~mask] - u[..., ~mask]).max() <= 1e-14 * np.abs(u).max()  # the others unchanged
-    if not isinstance(cone, Orthant):  # only the heads (the SOC's, in the rotated cone's own coordinates) move
-        moved = u if isinstance(cone, SOC) else _t(cone.dim) @ u
-        after = shifted if isinstance(cone, SOC) else _t(cone.dim) @ shifted
-        assert np.allclose(after[1:], moved[1:])
+    if not isinstance(cone, Orthant):  # only the heads move
+        assert np.allclose(shifted[1:], u[1:])
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -211,12 +194,12 @@ def test_shift_cones_moves_the_masked_cones_inside_and_leaves_the_others(cone):
 
 
 def _made_up(seed: int, quadratic: bool):
-    """``min ½xᵀPx + qᵀx`` with rotated SOC(3), SOC(4) and box (orthant) blocks, strictly feasible at ``x0``;
+    """``min ½xᵀPx + qᵀx`` with SOC(3), SOC(4) and box (orthant) blocks, strictly feasible at ``x0``;
     one variable fixed at its ``x0`` value."""
     rng = np.random.default_rng(seed)
     n = 12
     x0 = rng.normal(size=n)
-    spec = [(RotatedSOC(3), 6), (SOC(4), 5)]
+    spec = [(SOC(3), 6), (SOC(4), 5)]
     blocks = []
     for cone, k in spec:
         A = sp.random(cone.dim * k, n, density=0.4, random_state=rng, format="csr")
@@ -245,10 +228,8 @@ def _clarabel(n, P, q, fixed, x0, blocks):
             rhs.append(b)
             cones.append(clarabel.NonnegativeConeT(A.shape[0]))
             continue
-        one = _t(cone.dim) if isinstance(cone, RotatedSOC) else np.eye(cone.dim)
-        T = sp.block_diag([one] * (A.shape[0] // cone.dim))
-        rows.append(sp.csr_matrix(T @ A))
-        rhs.append(T @ b)
+        rows.append(A)
+        rhs.append(b)
         cones.extend([clarabel.SecondOrderConeT(cone.dim)] * (A.shape[0] // cone.dim))
     settings = clarabel.DefaultSettings()
     settings.verbose = False
@@ -260,7 +241,7 @@ def _clarabel(n, P, q, fixed, x0, blocks):
 
 
 @pytest.mark.parametrize("quadratic", [True, False], ids=["qp", "lp"])
-def test_made_up_program_with_rotated_soc_matches_clarabel(quadratic):
+def test_made_up_program_matches_clarabel(quadratic):
     n, P, q, fixed, x0, blocks = _made_up(7, quadratic)
     pattern = sp.identity(n, format="csc")
     for _, A, _ in blocks:

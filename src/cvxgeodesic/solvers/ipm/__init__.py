@@ -9,7 +9,7 @@ module            owns
                   blocks, the reduced Newton matrix (operator and assembly)
 ``blocks``        constraint blocks (cone type + linear map): mesh triangle cones, pair inequalities,
                   a general sparse block
-``cones``         the cone-block protocol: SOC(k), nonnegative orthant, rotated SOC
+``cones``         the cone-block protocol: SOC(k), nonnegative orthant
 ``state``         :class:`~.state.Iterate`, :class:`~.state.Direction`
 ``start``         the starting point
 ``algorithm``     one iteration (predictor, corrector, Gondzio correctors, refinement, step lengths)

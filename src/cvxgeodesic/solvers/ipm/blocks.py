@@ -17,7 +17,7 @@ values); ``b̃ = b − A x_F`` is the right-hand side of the problem with the fi
     The mesh problems' linear inequalities ``a_k · x_k ≤ r_k`` (each touches at most two variables),
     on the nonnegative orthant.
 :class:`SparseBlock`
-    Any cone (:class:`~.cones.SOC` of any size, :class:`~.cones.RotatedSOC`, :class:`~.cones.Orthant`)
+    Any cone (:class:`~.cones.SOC` of any size, :class:`~.cones.Orthant`)
     with a general sparse ``A``, in NumPy/SciPy: for programs that are not mesh-shaped, and the reference
     the structured blocks are tested against.
 """
@@ -339,7 +339,7 @@ class SparseBlock(ConeBlock):
     Parameters
     ----------
     cone : Cone
-        :class:`~.cones.SOC` (any dimension), :class:`~.cones.RotatedSOC` or :class:`~.cones.Orthant`.
+        :class:`~.cones.SOC` (any dimension) or :class:`~.cones.Orthant`.
     A : (count·dim, n) sparse matrix
         Rows cone-major: row ``t·dim + i`` is component ``i`` of cone ``t`` (``dim = 1`` for the orthant).
     b : (count·dim,) float ndarray

@@ -17,17 +17,12 @@ Cone types
     :mod:`._kernels`, other dimensions those of :mod:`._clique_kernels` (the same formulas, CVXOPT's).
 :class:`Orthant`
     ``{u : u ≥ 0}`` (the linear inequalities).
-:class:`RotatedSOC`
-    ``{u : 2u₀u₁ ≥ ‖u₂..‖², u₀, u₁ ≥ 0}``, through the orthogonal involution
-    ``T u = ((u₀ + u₁)/√2, (u₀ − u₁)/√2, u₂..)`` that maps it onto the SOC: every operation is the
-    SOC's conjugated by ``T`` (``W_r = T W T``, ``u ∘_r v = T(Tu ∘ Tv)``, ``e_r = T e``).
 
 Adding a cone type is one class here with these methods (plus its kernels when speed matters).
 """
 
 from __future__ import annotations
 
-import math
 from typing import Protocol
 
 import numpy as np
@@ -35,7 +30,7 @@ import numpy as np
 from . import _clique_kernels as _ck
 from . import _kernels as _kern
 
-__all__ = ["SOC", "Cone", "Orthant", "RotatedSOC", "Scaling"]
+__all__ = ["SOC", "Cone", "Orthant", "Scaling"]
 
 
 class Scaling(Protocol):
@@ -364,92 +359,3 @@ class Orthant(Cone):
         sub = u[mask]
         u[mask] = sub + factor * np.maximum(-sub, 0.0) + margin * np.maximum(np.abs(sub), 1e-3 * _amax(u))
         return u
-
-
-# ---------------------------------------------------------------------------------------------------------------
-# Rotated second-order cone, through its linear map to the SOC
-# ---------------------------------------------------------------------------------------------------------------
-
-_R2 = 1.0 / math.sqrt(2.0)
-
-
-def _rotate(u: np.ndarray) -> np.ndarray:
-    """``T u`` (``T`` orthogonal and its own inverse)."""
-    out = u.copy()
-    out[0] = (u[0] + u[1]) * _R2
-    out[1] = (u[0] - u[1]) * _R2
-    return out
-
-
-class _RotatedScaling:
-    """``W_r = T W T`` of the SOC scaling of ``(T s, T z)``; ``λ_r = T λ``."""
-
-    def __init__(self, inner: _SocScaling):
-        self.inner = inner
-        self.lam = _rotate(inner.lam)
-
-    def apply_w(self, v: np.ndarray) -> np.ndarray:
-        return _rotate(self.inner.apply_w(_rotate(v)))
-
-    def apply_winv(self, v: np.ndarray) -> np.ndarray:
-        return _rotate(self.inner.apply_winv(_rotate(v)))
-
-    def apply_winv2(self, v: np.ndarray) -> np.ndarray:
-        return _rotate(self.inner.apply_winv2(_rotate(v)))
-
-
-class RotatedSOC(Cone):
-    """The rotated second-order cone ``{u : 2u₀u₁ ≥ ‖u₂..‖², u₀, u₁ ≥ 0}`` of dimension ``dim ≥ 3``, fields
-    (dim, k); every operation is :class:`SOC`'s conjugated by ``T`` (``dot``, Cone's, needs none: ``T`` is
-    orthogonal). See :class:`Cone`."""
-
-    def __init__(self, dim: int = 3):
-        if dim < 3:
-            raise ValueError(f"rotated SOC dimension must be at least 3, got {dim}")
-        self.dim = int(dim)
-        self.soc = SOC(dim)
-
-    def shape(self, count: int) -> tuple[int, ...]:
-        return (self.dim, count)
-
-    def identity(self, count: int) -> np.ndarray:
-        return _rotate(self.soc.identity(count))
-
-    def scaling(self, s: np.ndarray, z: np.ndarray) -> _RotatedScaling:
-        return _RotatedScaling(self.soc.scaling(_rotate(s), _rotate(z)))
-
-    def max_step(self, u: np.ndarray, du: np.ndarray) -> float:
-        return self.soc.max_step(_rotate(u), _rotate(du))
-
-    def max_step_closed(self, u: np.ndarray, du: np.ndarray) -> np.ndarray:
-        return self.soc.max_step_closed(_rotate(u), _rotate(du))
-
-    def min_eigenvalue(self, u: np.ndarray) -> float:
-        return self.soc.min_eigenvalue(_rotate(u))
-
-    def product(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
-        return _rotate(self.soc.product(_rotate(u), _rotate(v)))
-
-    def divide(self, lam: np.ndarray, d: np.ndarray) -> np.ndarray:
-        return _rotate(self.soc.divide(_rotate(lam), _rotate(d)))
-
-    def mehrotra(self, sc, ds, dz, z, sigma_mu):
-        return _rotate(self.soc.mehrotra(sc.inner, _rotate(ds), _rotate(dz), _rotate(z), sigma_mu))
-
-    def gondzio(self, sc, s, ds, tp, z, dz, td, lo, hi):
-        return _rotate(self.soc.gondzio(sc.inner, _rotate(s), _rotate(ds), tp, _rotate(z), _rotate(dz), td, lo, hi))
-
-    def add_identity(self, u: np.ndarray, d: float) -> np.ndarray:
-        return _rotate(self.soc.add_identity(_rotate(u), d))
-
-    def sum_heads(self, u: np.ndarray) -> float:
-        return self.soc.sum_heads(_rotate(u))
-
-    def dual_shift(self, z: np.ndarray, factor: float) -> np.ndarray:
-        return _rotate(self.soc.dual_shift(_rotate(z), factor))
-
-    def floor(self, z: np.ndarray, margin: float) -> np.ndarray:
-        return _rotate(self.soc.floor(_rotate(z), margin))
-
-    def shift_cones(self, u: np.ndarray, mask: np.ndarray, factor: float, margin: float) -> np.ndarray:
-        return _rotate(self.soc.shift_cones(_rotate(u), mask, factor, margin))
