@@ -314,25 +314,27 @@ class SourceSet:
         return uniq.astype(np.int64), best
 
 
-def boundary_edges(mesh: TriMesh) -> tuple[np.ndarray, np.ndarray]:
-    """Edges with a single face (:attr:`TriMesh.boundary_facets <cvxgeodesic.mesh.trimesh.TriMesh.boundary_facets>`).
+def boundary_edges(mesh: SimplexMesh) -> tuple[np.ndarray, np.ndarray]:
+    """Edges with a single cell (on a surface
+    :attr:`TriMesh.boundary_facets <cvxgeodesic.mesh.trimesh.TriMesh.boundary_facets>`).
 
     Returns
     -------
     edges : (b, 2) int64 ndarray
     faces : (b,) int64 ndarray
-        The face of each boundary edge.
+        The cell of each boundary edge.
     """
-    one = mesh.edge_face_counts == 1
+    one = mesh.edge_cell_counts == 1
     face_of = np.empty(len(one), dtype=np.int64)
-    face_of[mesh.face_edges.ravel()] = np.repeat(np.arange(mesh.n_faces), 3)  # exact where an edge has one face
-    return mesh.boundary_facets.copy(), face_of[one]
+    per_cell = mesh.cell_edges.shape[1]
+    face_of[mesh.cell_edges.ravel()] = np.repeat(np.arange(mesh.n_cells), per_cell)  # exact where an edge has one
+    return mesh.edges[one], face_of[one]
 
 
 class _Builder:
     """Accumulates vertices, points, pieces and facets while resolving, with snapping."""
 
-    def __init__(self, mesh: Any):
+    def __init__(self, mesh: SimplexMesh):
         self.mesh = mesh
         self.vertices: list[int] = []
         self.pf: list[int] = []
@@ -522,9 +524,9 @@ def _named_source(mesh: Any, name: str) -> SourceSet:
         raise SourceError(f"sources='boundary' but {mesh.name} is closed: it has no boundary edge "
                           "(an edge with a single face)")
     builder.vertices.extend(np.unique(E).tolist())
-    F = mesh.F
+    C = mesh.cells
     for (a, b), f in zip(E, faces, strict=True):
-        builder.add_piece(int(f), (F[f] == a).astype(float), (F[f] == b).astype(float))
+        builder.add_piece(int(f), (C[f] == a).astype(float), (C[f] == b).astype(float))
     return builder.build("boundary", f"boundary ({len(E)} edges)")
 
 
