@@ -60,7 +60,7 @@ tetrahedron, the cone ``‖B_t d_t‖ ≤ 1`` is an SOC(4), ``|S|`` becomes the 
 ``d`` over the solid, ``λ = m · κ · |Ω|^(1/3)``), and the energies are the Dirichlet and the squared-Laplacian ones
 (the curved Hessian energy is a surface notion: its formulations are refused, :mod:`cvxgeodesic.capabilities`). The
 sources fix vertices and source faces, and the edges of every tetrahedron without a cone get the edge bounds
-(:mod:`cvxgeodesic.sources`); the near-source bounds ``d ≥ 0`` are the surface's, with :func:`smoothing_length`
+(:mod:`.source_rows`); the near-source bounds ``d ≥ 0`` are the surface's, with :func:`smoothing_length`
 measured in the volume.
 """
 
@@ -420,7 +420,7 @@ def _qc_constraints(ops: MeshOperators, sc, fixed_mask: np.ndarray, ell: np.ndar
     mesh = ops.mesh
     cells, E = mesh.cells, mesh.edges
     cell_free = ~fixed_mask[cells].all(axis=1)
-    # cells incident to a source (and the cells of point and curve sources, sources.py) carry no cone
+    # cells incident to a source (and the cells of point and curve sources, source_rows.py) carry no cone
     keep = cell_free & ~sc.no_cone & ~ops.degenerate
     if mesh.dim == 3:
         # every edge of a tetrahedron without a cone (next to a source, a point's, degenerate) gets |d_i - d_j| <=
@@ -507,7 +507,7 @@ def build_problem(
     constraint, energy = FORMULATIONS[name]
     check_number(lam, "smoothness weight lambda", low=0)
 
-    # fixed vertices, cone-free faces and source bounds (sources.py)
+    # fixed vertices, cone-free faces and source bounds (source_rows.py)
     sc = source_constraints(ops, sources, min_edge_bound=MIN_EDGE_BOUND)
     unreachable = ~(mesh.connected_to(sc.anchors) & mesh.referenced)
     fixed_mask = unreachable.copy()
