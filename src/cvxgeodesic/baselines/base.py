@@ -146,7 +146,7 @@ class BaselineSolver:
         """Distance from a surface's points, curves or boundary (validated): the boundary's vertices here (the
         capability table refuses points and curves at the API edge; a direct user gets this class's own check); the
         classes whose library takes points override it (:mod:`~cvxgeodesic.baselines.points`)."""
-        if ss.point_faces.size or ss.segment_faces.size:
+        if not ss.boundary and (ss.point_faces.size or ss.segment_faces.size):
             raise SourceError(f"baseline {self.name!r} takes vertex sources and 'boundary' only ({self.library} "
                               "computes from vertices)")
         d, extra = self._solve(ss.vertices)
