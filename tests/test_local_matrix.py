@@ -152,8 +152,8 @@ def test_bad_local_arguments(kwargs, error, match):
 
 
 def test_local_rows_take_vertices_only():
-    with pytest.raises(SourceError, match=r"^max_distance cannot take point, curve or boundary sources \(local rows take "
-                                          r"source vertices"):
+    with pytest.raises(SourceError, match=r"^max_distance cannot take point, curve or boundary sources \(local rows "
+                                          r"take source vertices"):
         cg.distance_matrix(cg.icosphere(2), [cg.SurfacePoint(0, [0.2, 0.3, 0.5])], max_distance=0.5)
 
 

@@ -16,10 +16,10 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike
 
+from . import capabilities
 from ._threads import limited
 from .baselines import BASELINES
 from .capabilities import DOMAINS, METHODS, Capability, methods_for, source_kinds, supported
-from .capabilities import check as check_capability
 from .errors import ParameterError
 from .formulations import ALIASES, FORMULATIONS, NORMALIZATIONS, smoothness_weight
 from .mesh.convert import as_mesh
@@ -319,7 +319,7 @@ class GeodesicSolver:
         m_value, lam_value = check_smoothness(m, lam)
         self.energy = FORMULATIONS.get(self.method, ("", None))[1]
         smoothing = self.energy is not None and (m_value > 0 if lam_value is None else lam_value > 0)
-        self.capability: Capability = check_capability(
+        self.capability: Capability = capabilities.check(
             self.method, domain=self.domain.name, order=self.order, medium=medium, multires=multires,
             smoothing=smoothing, resolution=self.resolution != "mesh")
         return m_value, lam_value
@@ -705,7 +705,7 @@ def _local_rows(mesh: Any, options: dict, max_distance: Any, items: list) -> tup
     key = ALIASES.get(method.lower(), method.lower()) if isinstance(method, str) else None
     if key in ALL_METHODS:  # an unknown name: the solver names the known ones
         medium = "cost" if given["cost"] else "metric" if given["metric"] else "none"
-        check_capability(key, domain=mesh.domain, local=True, multires=given["multires"], medium=medium,
+        capabilities.check(key, domain=mesh.domain, local=True, multires=given["multires"], medium=medium,
                          order=2 if given["resolution"] else check_order(options["order"]),
                          resolution=given["resolution"], sources=_named_kinds(items, points=True) | (
                              {"boundary"} if any(isinstance(i, str) for i in items) else set()))  # any word

@@ -81,15 +81,15 @@ class Domain:
 
 #: Every domain by name (``mesh.domain``). The curved Hessian energy exists on surfaces only: ``qclp`` in a volume;
 #: on a point cloud ``qclp`` is the most accurate on noisy clouds at about the point-cloud heat method's cost
-#: (docs/pointclouds.md). A cloud has no reference of its own: the comparison's is the surface's (refused there,
-#: the comparison says so).
+#: (docs/pointclouds.md). Where no exact method applies (a volume, a cloud's soup) the comparison's reference is the
+#: most accurate field the library computes there, ``qclp`` at order 2.
 DOMAINS: dict[str, Domain] = {
     "surface": Domain("surface", "triangle meshes", "on a surface", "on a surface", 2, "qcqp-hessian", "mesh",
                       ("exact", 1), "ply"),
     "volume": Domain("volume", "tetrahedral meshes", "inside a volume", "on a volume", 3, "qclp", "mesh",
                      ("qclp", 2), "vtu"),
     "cloud": Domain("cloud", "point clouds", "on a point cloud", "on a point cloud", 2, "qclp", "mesh",
-                    ("exact", 1), "ply"),
+                    ("qclp", 2), "ply"),
 }
 
 _HESSIAN = ("lcqp-hessian", "qcqp-hessian")

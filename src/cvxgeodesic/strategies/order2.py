@@ -129,7 +129,7 @@ class Order2:
         """
         t0 = time.perf_counter()
         mesh = self.config.mesh
-        if sources.segment_faces.size and not sources.boundary:  # the API edge refuses them (capabilities); here: a direct user
+        if sources.segment_faces.size and not sources.boundary:  # the API edge refuses curves; this: a direct user
             raise SourceError("the order-2 solve takes no curve sources (solve curves at order 1)")
         # where φ = 0, the vertex sources alone (source_edges), the points to insert, a solid's source wall
         fixed = source_fixed = sources.fixed_vertices(mesh)
