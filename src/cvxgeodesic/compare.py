@@ -200,13 +200,14 @@ def run_compare(mesh: Any, sources: Any, methods: Any, out_dir: str | os.PathLik
     check_choice(solver, "solver", SOLVERS)
     _check_camera(mesh, view, up)  # before the solves
     runs: list[Run] = [(n, 1) for n in names]
-    ref_run: Run | None = DOMAINS[mesh.domain].reference
+    domain_run = DOMAINS[mesh.domain].reference
+    ref_run: Run | None = domain_run
     if reference is not None:
         from .validation import as_vertex_field
 
         reference, ref_run = as_vertex_field(reference, "reference", mesh.n_vertices), None
-    elif ref_run[1] != 1:  # no method name asks for it: listed first
-        runs.insert(0, ref_run)
+    elif domain_run[1] != 1:  # no method name asks for it: listed first
+        runs.insert(0, domain_run)
     out = check_output_dir(out_dir, "out_dir")  # a folder that cannot take files fails now, not after the solves
     out.mkdir(parents=True, exist_ok=True)
 
