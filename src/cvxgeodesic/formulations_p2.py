@@ -268,6 +268,9 @@ class P2Builder:
                                  f"got {samples!r}")
         if self.dim == 3 and energy is not None and lam > 0:
             raise ParameterError("the order-2 program on tetrahedra takes no smoothness energy (surfaces only)")
+        if medium is not None and energy is not None and lam > 0:  # a field biased without a word, else
+            raise ParameterError("the order-2 smoothness energies vanish on the Euclidean squared distance only: a "
+                                 "cost or metric takes lam=0")
         if self.dim == 3 and samples == "flat-bernstein":
             raise ParameterError("the order-2 program on tetrahedra takes no samples='flat-bernstein' (surfaces only)")
 
