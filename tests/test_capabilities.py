@@ -197,8 +197,10 @@ def test_the_command_line_choices_and_defaults_read_the_table(monkeypatch):
 
     p = argparse.ArgumentParser()
     _options.add_solve_options(p)
+    _options.add_precision_options(p, tol_default="1e-8")
     method = next(a for a in p._actions if a.dest == "method")
     assert tuple(method.choices) == (*cap.METHODS, *ALIASES)
+    assert next(a for a in p._actions if a.dest == "order").choices == cap.ORDERS
     assert _options.default_methods() == "qcqp-hessian; qclp on tetrahedral meshes; qclp on point clouds"
     monkeypatch.setitem(cap.DOMAINS, "volume", replace(cap.DOMAINS["volume"], default_method="heat"))
     assert _options.method_for(argparse.Namespace(method=None), tet_box(1)) == "heat"

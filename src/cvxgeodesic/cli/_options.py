@@ -345,8 +345,10 @@ def add_precision_options(p: argparse.ArgumentParser, *, tol_default: str) -> No
     """``--lam``, ``--order`` and ``--tol``: what :class:`~cvxgeodesic.api.GeodesicSolver` takes beyond ``--m``;
     ``--lam`` is checked with ``--m`` (:func:`~cvxgeodesic.cli._common.check_numbers`), ``--tol`` by
     :func:`check_tol` before the mesh is read."""
+    from ..capabilities import ORDERS
+
     p.add_argument("--lam", type=float, default=None, help=LAM_HELP)
-    p.add_argument("--order", type=int, default=1, choices=(1, 2), help=ORDER_HELP)
+    p.add_argument("--order", type=int, default=1, choices=ORDERS, help=ORDER_HELP)
     p.add_argument("--tol", type=float, default=None, metavar="TOL",
                    help=f"relative tolerance of the solver's residuals and duality gap, in (0, 1) "
                         f"(default {tol_default})")
