@@ -229,8 +229,9 @@ def _finished(dist_path: Path, sidecar: Path, params: dict) -> bool | None:
     if params["method"] is None:  # the default: done if solved with the default of the mesh's dimension
         # the domain, or in older files the dimension's first domain (absent: a surface; at worst the mesh is solved
         # again)
-        dim = meta.get("dim", 2)
-        domain = DOMAINS.get(meta.get("domain")) or next((d for d in DOMAINS.values() if d.dim == dim), None)
+        dim, name = meta.get("dim", 2), meta.get("domain")
+        domain = (DOMAINS.get(name) if isinstance(name, str) else None) or next(
+            (d for d in DOMAINS.values() if d.dim == dim), None)
         params = {**params, "method": None if domain is None else domain.default_method}
     return True if meta.get("params") == params else None
 
