@@ -182,7 +182,7 @@ def test_refusals_name_the_option(grid, method, kwargs, match):
 def test_volumes_are_refused_in_the_capability_table():
     from cvxgeodesic import capabilities
 
-    assert not capabilities.supported("qclp", dim=3, order=2, resolution=True)
+    assert not capabilities.supported("qclp", domain="volume", order=2, resolution=True)
     assert "resolution" in capabilities.markdown_table()
     with pytest.raises(ParameterError, match="resolution= is not available.*tetrahedral"):
         cg.GeodesicSolver(cg.tet_box(2), "qclp", resolution=20)
@@ -249,9 +249,11 @@ def test_cli_resolution(grid, tmp_path, capsys):
 
 
 def test_the_default_is_one_constant(grid, monkeypatch):
-    from cvxgeodesic import api
+    from dataclasses import replace
 
-    monkeypatch.setitem(api.DEFAULT_RESOLUTIONS, 2, 100)
+    from cvxgeodesic.capabilities import DOMAINS
+
+    monkeypatch.setitem(DOMAINS, "surface", replace(DOMAINS["surface"], default_resolution=100))
     assert cg.GeodesicSolver(grid, "qclp").resolution == 100  # adapted by default
     assert cg.GeodesicSolver(grid, "heat").resolution == "mesh"  # a method without order 2 keeps the mesh
     assert cg.GeodesicSolver(grid, "qclp", multires=100).resolution == "mesh"  # multires asked: no conflict

@@ -151,6 +151,10 @@ def test_a_volume_takes_its_default_method_and_its_points_inside(tmp_path):
     # done: for a rerun with the default and for one naming qclp, not for one naming another method
     for method, done in ((None, True), ("qclp", True), ("lclp", None)):
         assert _finished(dist_path, sidecar, _params([0], method, 1.0, "auto", False, "npy")) is done
+    # the default is the domain's (capabilities.DOMAINS); a sidecar written before it had one: its dimension's
+    assert meta["domain"] == "volume"
+    sidecar.write_text(json.dumps({k: v for k, v in meta.items() if k != "domain"}))
+    assert _finished(dist_path, sidecar, _params([0], None, 1.0, "auto", False, "npy")) is True
     # a position is the point inside the solid (it was the closest surface point, which a volume has not)
     row = solve_one(str(tmp_path / "box.ele"), [[0.4, 0.5, 0.5]], str(tmp_path), output_format="npy")
     assert row["status"] == "ok", row["error"]

@@ -151,8 +151,20 @@ def test_bad_local_arguments(kwargs, error, match):
         cg.distance_matrix(cg.icosphere(2), [0, 1], **kwargs)
 
 
+def test_local_rows_are_cells_of_the_capability_table():
+    # a volume, a metric, a word: refused by the table's rules of local rows, with their reasons
+    with pytest.raises(ParameterError, match="^max_distance is not available for method 'qclp' on tetrahedral meshes: "
+                                             "local rows are solved on patches of a triangle mesh"):
+        cg.distance_matrix(cg.tet_box(2), [0], "qclp", max_distance=0.5)
+    with pytest.raises(ParameterError, match="max_distance does not take cost= or metric="):
+        cg.distance_matrix(cg.icosphere(1), [0], "qclp", max_distance=0.5, metric=np.eye(3))
+    with pytest.raises(SourceError, match="^max_distance cannot take .*boundary"):
+        cg.distance_matrix(cg.icosphere(1), ["boundary"], "qclp", max_distance=0.5)
+
+
 def test_local_rows_take_vertices_only():
-    with pytest.raises(SourceError, match="max_distance takes source vertices"):
+    with pytest.raises(SourceError, match=r"^max_distance cannot take point, curve or boundary sources \(local rows "
+                                          r"take source vertices"):
         cg.distance_matrix(cg.icosphere(2), [cg.SurfacePoint(0, [0.2, 0.3, 0.5])], max_distance=0.5)
 
 

@@ -61,7 +61,7 @@ def test_sphere_cloud_is_near_the_great_circle_distance():
 
 def test_the_default_method_on_a_cloud_is_qclp(plane_cloud):
     solver = cg.GeodesicSolver(plane_cloud)
-    assert solver.method == "qclp" and solver.is_cloud
+    assert solver.method == "qclp" and solver.domain.name == "cloud"
 
 
 def test_heat_on_a_cloud_is_the_point_cloud_heat_method():
@@ -148,14 +148,17 @@ def test_consensus_leaves_no_point_unreachable_once_repaired(monkeypatch):
 
 @pytest.mark.parametrize("method", ["exact", "fmm", "qcqp-hessian"])
 def test_methods_that_need_a_manifold_are_refused_on_clouds(plane_cloud, method):
-    with pytest.raises(ParameterError, match="does not run on point clouds"):
+    with pytest.raises(ParameterError, match=f"^method '{method}' does not apply to point clouds .*; on a point cloud "
+                                             "use one of lclp, .*, dijkstra, heat$"):
         cg.GeodesicSolver(plane_cloud, method)
 
 
 def test_boundary_sources_and_multires_are_refused_on_clouds(plane_cloud):
-    with pytest.raises(SourceError, match="boundary sources on a point cloud"):
+    with pytest.raises(SourceError, match="^method 'qclp' cannot take boundary sources on a point cloud .a cloud's "
+                                          "boundary is not detected"):
         cg.geodesic_distance(plane_cloud, "boundary", method="qclp")
-    with pytest.raises(ParameterError, match="multires on a point cloud"):
+    with pytest.raises(ParameterError, match="^multires is not available for method 'qclp' on point clouds: multires "
+                                             "coarsens a mesh"):
         cg.GeodesicSolver(plane_cloud, "qclp", multires=True)
 
 
@@ -267,11 +270,14 @@ def test_the_command_line_takes_a_point_file(tmp_path):
 def test_docs_list_every_refusal_of_the_cloud_domain():
     from pathlib import Path
 
-    from cvxgeodesic.capabilities import CLOUD_REFUSALS
+    from cvxgeodesic.capabilities import RULES
 
     page = (Path(__file__).resolve().parents[1] / "docs" / "pointclouds.md").read_text(encoding="utf-8")
     section = page.split("**What a cloud refuses**", 1)[1].split("`heat` on a cloud", 1)[0]
     names = {"curve": "SurfaceCurve", "multires": "multires=", "resolution": "resolution="}
-    for axis, what, _ in CLOUD_REFUSALS:
-        word = names.get(what or axis, what)
-        assert f"`{word}" in section or f'"{word}"' in section, word
+    cloud_rules = [r for r in RULES if r.domains == ("cloud",)]  # the domain's own rules (the surfaces' hold too)
+    assert {r.axis for r in cloud_rules} == {"method", "multires", "resolution", "source"}
+    for rule in cloud_rules:
+        for what in rule.methods or rule.sources or (rule.axis,):
+            word = names.get(what, what)
+            assert f"`{word}" in section or f'"{word}"' in section, word

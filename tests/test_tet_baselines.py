@@ -57,10 +57,11 @@ def test_source_resolution():
         resolve_tet_sources(m, ["boundary", VolumePoint(0, [1, 0, 0, 0])])
     with pytest.raises(SourceError, match="out of range"):
         HeatBaseline(m).solve(27)
-    # one registry for both dimensions: the surface algorithms refuse a volume and say why (capabilities.py)
+    # one registry for both dimensions: the surface algorithms refuse a volume and say why (their own argument check;
+    # at the API edge the capability table's, test_capabilities)
     for name in ("fmm", "exact"):
-        with pytest.raises(ParameterError, match=f"method '{name}' does not apply to tetrahedral meshes .it is a "
-                                                 "surface algorithm.; on a volume use one of .*dijkstra, heat"):
+        with pytest.raises(ParameterError, match=f"^baseline '{name}' takes triangle meshes only .* is a surface "
+                                                 f"algorithm.; {m.name} holds tetrahedra"):
             BASELINES[name](m)
     assert BASELINES["heat"](m).library == "cvxgeodesic heat method (P1 tetrahedra)"
 

@@ -91,11 +91,12 @@ def test_method_literals_equal_the_runtime_names() -> None:
 
     import cvxgeodesic as cg
     from cvxgeodesic import api
+    from cvxgeodesic.capabilities import DOMAINS
 
     assert sorted(get_args(cg.Method)) == sorted(api.ALL_METHODS)
     assert len(get_args(cg.Method)) == len(api.ALL_METHODS)
     assert sorted(get_args(cg.SolverName)) == sorted(api.SOLVERS)
-    assert set(api.DEFAULT_METHODS.values()) <= set(get_args(cg.Method))
+    assert {d.default_method for d in DOMAINS.values()} <= set(get_args(cg.Method))
 
 
 # mypy --strict on a user's code: every assert_type holds (the overloads give exact types) ...

@@ -81,7 +81,7 @@ def test_every_bad_input_is_refused_alike_on_a_surface_and_in_a_volume(case, kwa
     solve = error is SourceError
     for dim in (2, 3):
         exc = _attempt(dim, kwargs, sources, solve)
-        assert type(exc) is error, f"{case} on {capabilities.DIM_NAMES[dim]}: {exc!r}"
+        assert type(exc) is error, f"{case} on {MESHES[dim].domain}: {exc!r}"
         assert str(exc), case
 
 
@@ -130,14 +130,14 @@ def test_where_the_dimensions_differ_the_table_says_why(case, kwargs, kind, kind
     for dim in (2, 3):
         exc = _attempt(dim, kwargs, _sources(kind, dim), solve=True)
         method = ALIASES.get(kwargs["method"], kwargs["method"])
-        cell = {"dim": dim, "order": kwargs.get("order", 1), "multires": "multires" in kwargs,
+        cell = {"domain": MESHES[dim].domain, "order": kwargs.get("order", 1), "multires": "multires" in kwargs,
                 "medium": "cost" if "cost" in kwargs else "metric" if "metric" in kwargs else "none"}
         rules = [capabilities.refusal(method, source=k, **cell) for k in kinds] or [
             capabilities.refusal(method, **cell)]
         rule = next((r for r in rules if r is not None), None)
         verdicts[dim] = exc is None
         if rule is None:
-            assert exc is None, f"{case} on {capabilities.DIM_NAMES[dim]}: the table accepts it, the solver refused"
+            assert exc is None, f"{case} on {MESHES[dim].domain}: the table accepts it, the solver refused"
         else:
             assert isinstance(exc, SourceError if rule.axis == "source" else ParameterError), (case, dim, exc)
             assert rule.reason in str(exc), (case, dim, str(exc))

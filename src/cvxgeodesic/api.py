@@ -16,13 +16,12 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike
 
+from . import capabilities
 from ._threads import limited
 from .baselines import BASELINES
-from .capabilities import CLOUD_DEFAULT_METHOD, check_cloud, methods_for, source_kinds, supported
-from .capabilities import check as check_capability
-from .errors import ParameterError, SourceError
+from .capabilities import DOMAINS, METHODS, Capability, methods_for, source_kinds, supported
+from .errors import ParameterError
 from .mesh.convert import as_mesh
-from .mesh.tetmesh import TetMesh
 from .operators.metric import make_medium
 from .problems.formulations import ALIASES, FORMULATIONS, NORMALIZATIONS, smoothness_weight
 from .results import GeodesicResult, SolveInfo
@@ -56,15 +55,10 @@ Method: TypeAlias = Literal["lclp", "lcqp-dirichlet", "lcqp-laplacian", "lcqp-he
 #: A backend name of :data:`SOLVERS` as a type.
 SolverName: TypeAlias = Literal["auto", "ipm", "clarabel"]
 DEFAULT_TOL = 1e-8
-#: The method of ``method=None`` by simplex dimension (``mesh.dim``): the curved Hessian energy exists on surfaces only.
-DEFAULT_METHODS: dict[int, Method] = {2: "qcqp-hessian", 3: "qclp"}
 #: The method of ``distance_matrix(method=None)`` (and ``cvxgeodesic matrix``) on every mesh: as accurate as
 #: ``qcqp-hessian`` against the exact distance and 1.5-2.3x faster per row (benchmarks/row_default.py,
 #: docs/performance.md).
 DEFAULT_ROW_METHOD: Method = "qclp"
-#: The ``resolution`` of ``resolution=None`` by simplex dimension (docs/adapted.md): ``"mesh"``, the user's mesh. A
-#: method without an adapted solve (a baseline, an LC formulation) falls back to ``"mesh"`` whatever this says.
-DEFAULT_RESOLUTIONS: dict[int, Any] = {2: "mesh", 3: "mesh"}
 
 
 def _is_2d(x: Any) -> bool:
@@ -178,7 +172,8 @@ class GeodesicSolver:
         at their exact positions, and answers on this mesh: ``distance`` per vertex, ``distance_at`` and
         ``geodesic_path`` on this surface; ``info.extra["adapted"]`` records the solve mesh, its times and an
         error estimate. Non-manifold meshes, several components and faces of zero area are solved on this mesh
-        at order 1 instead, with a note. Surfaces only; not with ``multires``. None: :data:`DEFAULT_RESOLUTIONS`.
+        at order 1 instead, with a note. Surfaces only; not with ``multires``. None: the mesh's domain's
+        (:attr:`cvxgeodesic.capabilities.Domain.default_resolution`: ``"mesh"``).
     estimate_error : bool
         With ``resolution``: estimate every solve's mean relative error by a second solve on a copy with half the
         faces (``info.extra["adapted"]["error_estimate"]``; about half a solve more). False: None there.
@@ -251,20 +246,14 @@ class GeodesicSolver:
         estimate_error: bool = True,
     ) -> None:
         t0 = time.perf_counter()
-        self.mesh: Any = cast(Any, as_mesh(mesh))  # a TriMesh or a TetMesh, told apart by is_volume
-        self.is_volume = isinstance(self.mesh, TetMesh)  # distance inside tetrahedra
-        self.dim = self.mesh.dim
-        self.is_cloud = getattr(self.mesh, "cloud", None) is not None  # a PointCloud's soup (mesh/pointcloud.py)
+        self.mesh: Any = cast(Any, as_mesh(mesh))  # a TriMesh, TetMesh or CloudMesh: mesh.domain names which
+        self.domain = DOMAINS[self.mesh.domain]  # its defaults and the words of its messages
         self._check_method_and_solver(method, solver)
         self.order = check_order(order)
         target = resolve_target(multires, self.mesh.n_cells)  # a volume refuses multires below (capabilities)
         self._set_resolution(resolution, multires=target is not None)
-        if self.is_cloud:  # what the point-cloud domain refuses beyond the triangle meshes' table
-            check_cloud(self.method, multires=target is not None, resolution=self.resolution != "mesh")
-        self._cell: dict[str, Any] = {"dim": self.dim, "order": self.order, "multires": target is not None,
-                      "medium": "none" if cost is None and metric is None else "cost" if cost is not None else "metric",
-                      "resolution": self.resolution != "mesh"}
-        m_value, lam_value = self._check_capabilities(m, lam)
+        medium = "none" if cost is None and metric is None else "cost" if cost is not None else "metric"
+        m_value, lam_value = self._check_capabilities(m, lam, medium=medium, multires=target is not None)
         # a travel cost or metric (operators/metric.py): validated here, once
         self.medium = make_medium(self.mesh, cost, metric)
         self.tol = check_number(tol, "tol", low=0, high=1, low_open=True, high_open=True)
@@ -275,7 +264,8 @@ class GeodesicSolver:
         config = SolveConfig(mesh=self.mesh, method=self.method, lam=self.lam, m=self.m,
                              normalization=self.normalization, solver=self._solver, tol=self.tol,
                              max_iter=self.max_iter, verbose=self.verbose, medium=self.medium,
-                             notes=(*getattr(self.mesh, "notes", ()), *getattr(self.medium, "notes", ())))
+                             notes=(*getattr(self.mesh, "notes", ()), *getattr(self.medium, "notes", ())),
+                             capability=self.capability)
         self._strategy: SolveStrategy = make_strategy(config, baseline=self.is_baseline, order=self.order,
                                                       multires_target=target, polish=bool(multires_polish),
                                                       resolution=self.resolution, estimate=bool(estimate_error))
@@ -288,8 +278,8 @@ class GeodesicSolver:
         """``self.resolution`` (``"mesh"``, or what :func:`resolve_resolution` takes) checked; any other than
         ``"mesh"`` solves at order 2 (docs/adapted.md)."""
         if resolution is None:  # the default applies where an adapted solve exists
-            resolution = DEFAULT_RESOLUTIONS[self.dim]
-            if not supported(self.method, dim=self.dim, resolution=True) or multires:
+            resolution = self.domain.default_resolution
+            if not supported(self.method, domain=self.domain.name, resolution=True) or multires:
                 resolution = "mesh"
         if resolve_resolution(resolution, self.mesh.n_cells) is None:
             self.resolution: Any = "mesh"
@@ -303,15 +293,15 @@ class GeodesicSolver:
 
     def _check_method_and_solver(self, method: Any, solver: Any) -> None:
         if method is None:
-            method = CLOUD_DEFAULT_METHOD if self.is_cloud else DEFAULT_METHODS[self.dim]
+            method = self.domain.default_method
         if not isinstance(method, str):
             raise ParameterError(f"method must be a string, got {type(method).__name__}")
         key = ALIASES.get(method.lower(), method.lower())
         if key not in ALL_METHODS:
-            known = ALL_METHODS if not self.is_volume else methods_for(self.dim)
-            raise ParameterError(f"unknown method {method!r}; choose one of {', '.join(known)}"
-                                 + (" (on tetrahedral meshes)" if self.is_volume else ""))
-        check_capability(key, dim=self.dim)  # a surface method on a volume: the message says why
+            known = methods_for(self.domain.name)  # every name where every method applies, else the domain's
+            raise ParameterError(f"unknown method {method!r}; choose one of "
+                                 + (", ".join(ALL_METHODS) if len(known) == len(METHODS)
+                                    else f"{', '.join(known)} (on {self.domain.meshes})"))
         self.method = key
         self._solver = check_choice(solver, "solver", SOLVERS)
         self.is_baseline = self.method in BASELINE_METHODS
@@ -320,14 +310,18 @@ class GeodesicSolver:
                 f"solver={self._solver!r} applies to the convex formulations, not to baseline {self.method!r}"
             )
 
-    def _check_capabilities(self, m: Any, lam: Any) -> tuple[float, float | None]:
-        """Raise when the capability table (:mod:`cvxgeodesic.capabilities`) refuses the method on this mesh, at this
-        order, with this medium and multires; ``m`` and ``lam`` are checked first (a smoothed order-2 solve takes no
-        medium) and returned, and ``self.energy`` set (None: no smoothness term)."""
+    def _check_capabilities(self, m: Any, lam: Any, *, medium: str, multires: bool) -> tuple[float, float | None]:
+        """Raise when the capability table (:mod:`cvxgeodesic.capabilities`) refuses the method on this mesh's domain,
+        at this order, with this medium, multires and resolution: the one :func:`~cvxgeodesic.capabilities.check` of
+        this solver, whose cell (``self.capability``) the strategy is given and each solve's sources are checked
+        against. ``m`` and ``lam`` are checked first (a smoothed order-2 solve takes no medium) and returned, and
+        ``self.energy`` set (None: no smoothness term)."""
         m_value, lam_value = check_smoothness(m, lam)
         self.energy = FORMULATIONS.get(self.method, ("", None))[1]
-        self._cell["smoothing"] = self.energy is not None and (m_value > 0 if lam_value is None else lam_value > 0)
-        check_capability(self.method, **self._cell)
+        smoothing = self.energy is not None and (m_value > 0 if lam_value is None else lam_value > 0)
+        self.capability: Capability = capabilities.check(
+            self.method, domain=self.domain.name, order=self.order, medium=medium, multires=multires,
+            smoothing=smoothing, resolution=self.resolution != "mesh")
         return m_value, lam_value
 
     def _set_smoothness(self, m_value: float, lam_value: float | None) -> None:
@@ -383,14 +377,11 @@ class GeodesicSolver:
             message adds that it can be indefinite on meshes with sharp corners).
         """
         t0 = time.perf_counter()
-        # a curve in a volume, boundary faces on a surface: refused with the table's reason before any resolution
-        check_capability(self.method, sources=_object_kinds(sources), **self._cell)
-        if self.is_cloud:  # before resolving: the soup's free edges would pass for a boundary
-            named = sources if isinstance(sources, list | tuple) else [sources]
-            words = {s.strip().lower() for s in named if isinstance(s, str)}
-            check_cloud(self.method, sources=_object_kinds(sources) | words)
+        # a curve in a volume, boundary faces on a surface, a cloud's "boundary" (its soup's free edges would pass for
+        # one): refused by the solver's cell with the table's reason before any resolution; the resolved kinds after
+        self.capability.admit(_named_kinds(sources))
         sset = resolve_sources(self.mesh, sources)
-        check_capability(self.method, sources=source_kinds(sset), **self._cell)
+        self.capability.admit(source_kinds(sset))
         source_time = time.perf_counter() - t0  # closest points and curve samples: part of this solve
         with reporting_to(callback):  # Clarabel's iterations too, wherever a strategy runs it
             res = self._strategy.solve(sset, callback=callback)
@@ -641,10 +632,10 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None
                "cost": cost, "metric": metric, "resolution": resolution}
     if resolution is not None and not _is_mesh_resolution(resolution):  # rows keep no info: no estimate to pay for
         options["estimate_error"] = False
-    items, inverse = _matrix_rows(mesh, vertices, local=max_distance is not None)
+    items, inverse = _matrix_rows(mesh, vertices)
     factory: Any = GeodesicSolver
     if max_distance is not None:
-        factory, options = _local_rows(mesh, options, max_distance)
+        factory, options = _local_rows(mesh, options, max_distance, items)
     from .rows import RowStore, cluster_rows, fingerprint, solve_rows
 
     if checkpoint is not None:
@@ -660,7 +651,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None
     return store.matrix(inverse)
 
 
-def _matrix_rows(mesh: Any, vertices: Any, *, local: bool) -> tuple[list, np.ndarray]:
+def _matrix_rows(mesh: Any, vertices: Any) -> tuple[list, np.ndarray]:
     """The distinct sources of ``distance_matrix``'s rows and, for each row asked for, its index among them."""
     from .mesh.locate import CellPoint
     from .sources import BoundaryFaces, SurfaceCurve
@@ -668,8 +659,6 @@ def _matrix_rows(mesh: Any, vertices: Any, *, local: bool) -> tuple[list, np.nda
     objects = (CellPoint, SurfaceCurve, BoundaryFaces, str)  # points, curves, boundary faces, "boundary"
     if isinstance(vertices, objects) or (isinstance(vertices, list | tuple)
                                          and any(isinstance(v, objects) for v in vertices)):
-        if local:
-            raise SourceError("max_distance takes source vertices (ints), not points, curves or 'boundary'")
         items = [vertices] if isinstance(vertices, objects) else list(vertices)
         return items, np.arange(len(items))  # one row per item
     uniq, inverse = np.unique(validate_sources(vertices, mesh.n_vertices, name="vertices", repeats=True),
@@ -677,13 +666,17 @@ def _matrix_rows(mesh: Any, vertices: Any, *, local: bool) -> tuple[list, np.nda
     return uniq.tolist(), np.asarray(inverse).ravel()
 
 
-def _object_kinds(sources: Any) -> set[str]:
-    """The kinds of source that a raw ``sources`` value names by its type alone: curves and boundary faces."""
-    from .sources import BoundaryFaces, SurfaceCurve
+def _named_kinds(sources: Any, *, points: bool = False) -> set[str]:
+    """The kinds of source (:data:`~cvxgeodesic.capabilities.SOURCE_KINDS`) that a raw ``sources`` value names by its
+    type alone: curves, boundary faces, ``"boundary"`` and, with ``points``, points (a point at a corner resolves to
+    a vertex)."""
+    from .sources import BoundaryFaces, CellPoint, SurfaceCurve
 
     items = sources if isinstance(sources, list | tuple) else [sources]
-    return ({"curve"} if any(isinstance(s, SurfaceCurve) for s in items) else set()) | (
-        {"boundary faces"} if any(isinstance(s, BoundaryFaces) for s in items) else set())
+    kinds = {"curve": SurfaceCurve, "boundary faces": BoundaryFaces, **({"point": CellPoint} if points else {})}
+    named = {k for k, t in kinds.items() if any(isinstance(s, t) for s in items)}
+    return named | ({"boundary"} if any(isinstance(s, str) and s.strip().lower() == "boundary" for s in items)
+                    else set())
 
 
 class _PatchSolver(GeodesicSolver):
@@ -699,19 +692,23 @@ def _is_mesh_resolution(value: Any) -> bool:
     return isinstance(value, str) and value.strip().lower() == "mesh"
 
 
-def _local_rows(mesh: Any, options: dict, max_distance: Any) -> tuple[Any, dict]:
-    """The factory and options of local rows (:class:`~cvxgeodesic.rows.LocalRows`), after their checks."""
+def _local_rows(mesh: Any, options: dict, max_distance: Any, items: list) -> tuple[Any, dict]:
+    """The factory and options of local rows (:class:`~cvxgeodesic.rows.LocalRows`), after their checks: the
+    capability table's cell of local rows (a volume, multires, a medium, resolution= and sources other than vertices
+    are refused there), checked once for the matrix; each patch's solver checks its own solve."""
     from .rows import LocalRows
 
-    if isinstance(mesh, TetMesh):
-        raise ParameterError("max_distance is for triangle meshes (surfaces), not tetrahedral meshes")
     r = check_number(max_distance, "max_distance", low=0, low_open=True)
     given = {"multires": bool(options["multires"]), "cost": options["cost"] is not None,
              "metric": options["metric"] is not None,
              "resolution": options["resolution"] is not None and not _is_mesh_resolution(options["resolution"])}
-    for name, is_given in given.items():
-        if is_given:
-            raise ParameterError(f"max_distance does not take {name}= (a patch has no coarse mesh, cost or metric "
-                                 "of its own yet)")
+    method = options["method"]
+    key = ALIASES.get(method.lower(), method.lower()) if isinstance(method, str) else None
+    if key in ALL_METHODS:  # an unknown name: the solver names the known ones
+        medium = "cost" if given["cost"] else "metric" if given["metric"] else "none"
+        capabilities.check(key, domain=mesh.domain, local=True, multires=given["multires"], medium=medium,
+                         order=2 if given["resolution"] else check_order(options["order"]),
+                         resolution=given["resolution"], sources=_named_kinds(items, points=True) | (
+                             {"boundary"} if any(isinstance(i, str) for i in items) else set()))  # any word
     rest = {k: v for k, v in options.items() if k not in given}
     return LocalRows, {"max_distance": r, "factory": _PatchSolver, **rest}

@@ -14,7 +14,8 @@ Every task loads its mesh, solves, and writes, atomically,
   (the (n_file,) array), all in the file's vertex numbering and count (welded duplicates
   share a value, vertices in no face get ``inf``; see
   :func:`~cvxgeodesic.mesh.fileorder.to_file_order`); without a format, ``.ply`` for a surface and
-  ``.vtu`` for a tetrahedral mesh (:data:`DEFAULT_FORMATS`: PLY holds no tetrahedra), then
+  ``.vtu`` for a tetrahedral mesh (the domain's :attr:`~cvxgeodesic.capabilities.Domain.output_format`: PLY holds
+  no tetrahedra), then
 - ``OUT/<mesh stem>.json``: the mesh path, the parameters, the mesh's dimension and size, the
   :class:`~cvxgeodesic.api.SolveInfo` as a dict, ``warnings`` (from loading) and
   ``notes`` (every repair, substitution and warning of the task, each once).
@@ -46,18 +47,17 @@ import numpy as np
 
 from ._atomic import check_output_dir, check_replaceable
 from ._cluster import open_client, require_distributed, stop_after_interrupt
+from .capabilities import DOMAINS
 from .errors import ParameterError, error_line
 from .tables import Column, text_table
 from .validation import check_choice, check_count, check_not_an_input, check_smoothness
 
-__all__ = ["DEFAULT_FORMATS", "OUTPUT_FORMATS", "expand_mesh_paths", "format_summary", "output_paths", "run_batch",
+__all__ = ["OUTPUT_FORMATS", "expand_mesh_paths", "format_summary", "output_paths", "run_batch",
            "solve_one"]
 
 #: Formats of the distance file written per mesh (each one's meshes: ``Format.dims`` in
 #: :data:`~cvxgeodesic.mesh.formats.registry.FORMATS`).
 OUTPUT_FORMATS = ("ply", "npy", "vtu")
-#: The format of a mesh's distance file when none is given, by the mesh's simplex dimension.
-DEFAULT_FORMATS = {2: "ply", 3: "vtu"}
 
 
 def expand_mesh_paths(patterns) -> list[Path]:
@@ -130,7 +130,7 @@ def _output_formats(mesh_path, output_format: str | None) -> tuple[str, ...]:
         return (output_format,)
     fmt = FORMATS.get(Path(mesh_path).suffix.lower())
     dims = fmt.dims if fmt is not None and fmt.read_mesh is not None else (2,)
-    return tuple(dict.fromkeys(DEFAULT_FORMATS[d] for d in dims))
+    return tuple(dict.fromkeys(d.output_format for d in DOMAINS.values() if d.dim in dims))
 
 
 def _output_format(mesh, mesh_path, output_format: str | None) -> str:
@@ -140,14 +140,15 @@ def _output_format(mesh, mesh_path, output_format: str | None) -> str:
     from .mesh.formats._common import optional_package
     from .mesh.formats.registry import FORMATS
 
-    fmt = output_format or DEFAULT_FORMATS[mesh.dim]
+    default = DOMAINS[mesh.domain].output_format
+    fmt = output_format or default
     spec = FORMATS["." + fmt]
     if mesh.dim not in spec.dims:
         fits = [f for f in OUTPUT_FORMATS if mesh.dim in FORMATS["." + f].dims]
         kind = "a tetrahedral mesh" if mesh.dim == 3 else "a triangle mesh"
         raise ParameterError(f"{Path(mesh_path).name} is {kind}: its field cannot be written as .{fmt} "
                              f"({spec.description} holds no {'tetrahedra' if mesh.dim == 3 else 'triangles'}); "
-                             f"give --format {' or '.join(fits)}, or no --format (.{DEFAULT_FORMATS[mesh.dim]})")
+                             f"give --format {' or '.join(fits)}, or no --format (.{default})")
     if spec.package is not None:
         optional_package(spec.package, f"writing .{fmt} files", ParameterError)
     return fmt
@@ -226,10 +227,12 @@ def _finished(dist_path: Path, sidecar: Path, params: dict) -> bool | None:
     if not isinstance(meta, dict) or meta.get("status") != "ok":  # a sidecar of another shape: not ours, redo
         return False
     if params["method"] is None:  # the default: done if solved with the default of the mesh's dimension
-        from .api import DEFAULT_METHODS
-
-        dim = meta.get("dim", 2)  # absent in older files: taken as a surface (at worst the mesh is solved again)
-        params = {**params, "method": DEFAULT_METHODS.get(dim) if isinstance(dim, int) else None}
+        # the domain, or in older files the dimension's first domain (absent: a surface; at worst the mesh is solved
+        # again)
+        dim, name = meta.get("dim", 2), meta.get("domain")
+        domain = (DOMAINS.get(name) if isinstance(name, str) else None) or next(
+            (d for d in DOMAINS.values() if d.dim == dim), None)
+        params = {**params, "method": None if domain is None else domain.default_method}
     return True if meta.get("params") == params else None
 
 
@@ -250,10 +253,10 @@ def solve_one(mesh_path: str, sources: list[int], out_dir: str, method: str | No
     out_dir : str
         Existing output folder.
     method, m, solver, multires
-        See :class:`~cvxgeodesic.api.GeodesicSolver` (method None: its default for the mesh's dimension).
+        See :class:`~cvxgeodesic.api.GeodesicSolver` (method None: its default for the mesh's domain).
     output_format : {"ply", "npy", "vtu"} or None
-        None: by the mesh's dimension (:data:`DEFAULT_FORMATS`). A format that cannot hold the mesh (``"ply"``
-        for tetrahedra) fails the row before the solve.
+        None: by the mesh's domain (:attr:`~cvxgeodesic.capabilities.Domain.output_format`). A format that cannot
+        hold the mesh (``"ply"`` for tetrahedra) fails the row before the solve.
 
     Returns
     -------
@@ -266,7 +269,7 @@ def solve_one(mesh_path: str, sources: list[int], out_dir: str, method: str | No
     try:
         from . import __version__
         from ._atomic import atomic_write
-        from .api import DEFAULT_METHODS, GeodesicSolver
+        from .api import GeodesicSolver
         from .mesh.io import load_mesh, save_distance
 
         # every warning of the task becomes a note of its row (a worker's stderr would print it as raw
@@ -279,7 +282,7 @@ def solve_one(mesh_path: str, sources: list[int], out_dir: str, method: str | No
             output_format = _output_format(mesh, mesh_path, output_format)  # before the solve: it may not fit
             dist_path, sidecar = output_paths(mesh_path, out_dir, output_format)
             src = _mesh_sources(mesh, sources)  # vertex indices are the file's
-            method = method or DEFAULT_METHODS[mesh.dim]  # recorded as if given: a rerun naming it skips the mesh
+            method = method or DOMAINS[mesh.domain].default_method  # recorded as if given: a rerun naming it skips it
             res = GeodesicSolver(mesh, method, m=m, solver=solver, multires=multires).solve(src)
             save_distance(dist_path, mesh, res.distance, file_order=True)
         row["notes"] = _unique([*res.info.notes, *(str(w.message) for w in caught)])
@@ -287,6 +290,7 @@ def solve_one(mesh_path: str, sources: list[int], out_dir: str, method: str | No
                    solve_status=res.info.status, time_s=time.perf_counter() - t0)
         meta = {"status": "ok", "mesh": mesh_path, "output": dist_path.name, "cvxgeodesic": __version__,
                 "params": _params(sources, method, m, solver, multires, output_format), "dim": mesh.dim,
+                "domain": mesh.domain,
                 "n_vertices": mesh.n_file_vertices, "n_mesh_vertices": mesh.n_vertices, "n_faces": mesh.n_cells,
                 "wall_time": row["time_s"], "worker": row["worker"], "warnings": row["warnings"],
                 "notes": row["notes"], "info": res.info.as_dict()}
@@ -346,7 +350,8 @@ def run_batch(paths, sources, out_dir, *, method: str | None = None, m: float = 
         Show a progress bar and one line per failed mesh on stderr.
     output_format : {"ply", "npy", "vtu"} or None
         Format of the distance file; None (default): ``"ply"`` for a surface, ``"vtu"`` for a tetrahedral mesh
-        (:data:`DEFAULT_FORMATS`). A mesh whose dimension the format cannot hold (``"ply"`` and tetrahedra) fails
+        (:attr:`~cvxgeodesic.capabilities.Domain.output_format`). A mesh whose dimension the format cannot hold
+        (``"ply"`` and tetrahedra) fails
         before its solve.
 
     Returns
@@ -381,7 +386,7 @@ def run_batch(paths, sources, out_dir, *, method: str | None = None, m: float = 
     check_choice(solver, "solver", SOLVERS, lower=False)
     check_smoothness(m, None)  # its range too (validation.MAX_M): once, not once per mesh
     if method is not None and resolve_target(multires, 10**9) is not None:  # multires is for surfaces
-        check(ALIASES.get(method, method), dim=2, multires=True)
+        check(ALIASES.get(method, method), domain="surface", multires=True)
     if output_format is not None:
         check_choice(output_format, "output_format", OUTPUT_FORMATS, lower=False)
     if scheduler is None:

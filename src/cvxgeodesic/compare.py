@@ -13,10 +13,10 @@
 * ``gradient_histogram.png``: area- (volume-) weighted histograms of the per-cell ``‖∇d|_t‖`` of every method
   next to the reference's (:func:`~cvxgeodesic.plotting.plot_gradient_histogram`).
 
-The reference (:data:`REFERENCES`) is the exact polyhedral distance (MMP, method ``"exact"``) on a surface; inside
-a solid, where no exact algorithm exists, the most accurate field the library computes, ``qclp`` at order 2 (exact
-wherever the source is visible, docs/volumes.md), or a field the caller gives (an analytic one). A reference that
-no method name asks for (order 2) is listed first.
+The reference (the domain's, :attr:`cvxgeodesic.capabilities.Domain.reference`) is the exact polyhedral distance
+(MMP, method ``"exact"``) on a surface; inside a solid, where no exact algorithm exists, the most accurate field the
+library computes, ``qclp`` at order 2 (exact wherever the source is visible, docs/volumes.md), or a field the caller
+gives (an analytic one). A reference that no method name asks for (order 2) is listed first.
 
 A method that raises gets a row whose ``status`` is the error message, and no PNGs; the other methods go on.
 :func:`format_table` turns the rows into the aligned text table the command line prints.
@@ -40,7 +40,7 @@ from .errors import OutputError, ParameterError, SolverError, error_line
 from .tables import Column, text_table
 
 __all__ = [
-    "COLUMN_HELP", "CSV_COLUMNS", "REFERENCES", "TABLE_COLUMNS", "evaluate_methods", "format_table",
+    "COLUMN_HELP", "CSV_COLUMNS", "TABLE_COLUMNS", "evaluate_methods", "format_table",
     "resolve_methods", "run_compare", "solve_methods", "table_legend", "write_csv", "write_pictures",
 ]
 
@@ -60,9 +60,6 @@ CSV_COLUMNS = (
     "ridge_jump_p95", "ridge_jump_ratio", "off_ridge_rel_mean", "reference", "status",
 )
 
-#: The reference of each simplex dimension (``mesh.dim``): ``(method, order)``.
-REFERENCES = {2: ("exact", 1), 3: ("qclp", 2)}
-
 _RUN_KEYS = ("solver", "time_s", "setup_s", "solve_s", "iterations", "status")
 _MEASURED_KEYS = ("rel_mean", "rel_max", "rel_p99", "abs_max", "ridge_jump_p95", "ridge_jump_ratio",
                   "off_ridge_rel_mean")
@@ -74,7 +71,7 @@ Run = tuple[str, int]
 Outcome = tuple[Any, float, BaseException | None]
 
 
-def resolve_methods(methods: Any, dim: int = 2) -> list[str]:
+def resolve_methods(methods: Any, domain: str = "surface") -> list[str]:
     """Normalize a method list: lower case, ``"all"`` expanded, duplicates removed, names checked.
 
     Parameters
@@ -83,8 +80,9 @@ def resolve_methods(methods: Any, dim: int = 2) -> list[str]:
         Method names of :data:`cvxgeodesic.api.ALL_METHODS` (a comma-separated string is accepted too); ``"all"``
         stands for all of those that apply to the mesh. When ``"all"`` is expanded, the alias ``"qgdf"`` is left
         out if ``"lcqp-hessian"`` is in the list (it is the same formulation).
-    dim : {2, 3}
-        The simplex dimension of the mesh: 3 takes the methods that apply to tetrahedral meshes only.
+    domain : {"surface", "volume", "cloud"}
+        The mesh's domain (``mesh.domain``): ``"all"`` takes the methods that apply there, and a method that does
+        not is refused (:mod:`cvxgeodesic.capabilities`).
 
     Returns
     -------
@@ -111,10 +109,10 @@ def resolve_methods(methods: Any, dim: int = 2) -> list[str]:
         raise ParameterError("methods is empty: give at least one method name (or 'all')")
     out: list[str] = []
     for name in names:
-        for g in (methods_for(dim) if name == "all" else [name]):
+        for g in (methods_for(domain) if name == "all" else [name]):
             if g not in ALL_METHODS:
                 raise ParameterError(f"unknown method {g!r}; choose from: all, {', '.join(ALL_METHODS)}")
-            check(ALIASES.get(g, g), dim=dim)  # a surface method on a volume: the message names those that apply
+            check(ALIASES.get(g, g), domain=domain)  # a surface method on a volume: the message names those that apply
             if g not in out:
                 out.append(g)
     if "all" in names:
@@ -155,7 +153,8 @@ def run_compare(mesh: Any, sources: Any, methods: Any, out_dir: str | os.PathLik
     solver : {"auto", "ipm", "clarabel"}, default "auto"
         Backend of the convex formulations (baselines use their own library).
     reference : (n,) float array_like, optional
-        The field to compare with (e.g. an analytic one); default the one of :data:`REFERENCES`, solved here.
+        The field to compare with (e.g. an analytic one); default the mesh's domain's
+        (:attr:`cvxgeodesic.capabilities.Domain.reference`), solved here.
     progress : bool, default True
         Print one line per method (name, time, status) to stderr.
     view, up : optional
@@ -190,23 +189,25 @@ def run_compare(mesh: Any, sources: Any, methods: Any, out_dir: str | os.PathLik
     ``"lcqp-hessian"``) is solved once and reported under both names.
     """
     from .api import SOLVERS
+    from .capabilities import DOMAINS
     from .mesh.convert import as_mesh
     from .sources import resolve_sources
     from .validation import check_choice
 
     mesh = as_mesh(mesh)
-    names = resolve_methods(methods, mesh.dim)
+    names = resolve_methods(methods, mesh.domain)
     sset = resolve_sources(mesh, sources)
     check_choice(solver, "solver", SOLVERS)
     _check_camera(mesh, view, up)  # before the solves
     runs: list[Run] = [(n, 1) for n in names]
-    ref_run: Run | None = REFERENCES[mesh.dim]
+    domain_run = DOMAINS[mesh.domain].reference
+    ref_run: Run | None = domain_run
     if reference is not None:
         from .validation import as_vertex_field
 
         reference, ref_run = as_vertex_field(reference, "reference", mesh.n_vertices), None
-    elif REFERENCES[mesh.dim][1] != 1:  # no method name asks for it: listed first
-        runs.insert(0, REFERENCES[mesh.dim])
+    elif domain_run[1] != 1:  # no method name asks for it: listed first
+        runs.insert(0, domain_run)
     out = check_output_dir(out_dir, "out_dir")  # a folder that cannot take files fails now, not after the solves
     out.mkdir(parents=True, exist_ok=True)
 

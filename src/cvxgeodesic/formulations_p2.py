@@ -59,7 +59,6 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
-from . import capabilities
 from .errors import DegenerateFacesWarning, MeshError, ParameterError, warn_user
 from .mesh.simplex import CELL_EDGES
 from .operators.lagrange import SAMPLES, LagrangeSpace, edge_basis, sample_points
@@ -261,14 +260,17 @@ class P2Builder:
             self.cone_replaced[:flat_cells.size * 6] = np.tile([False] * 3 + [True] * 3, flat_cells.size)
 
     def _check(self, samples: str, medium: Medium | None, energy: str | None, lam: float) -> None:
-        """ParameterError for a bad option, or one the capability table refuses (:func:`capabilities.check`: a
-        smoothness energy with a medium; either on tetrahedra), or the edge cones on tetrahedra."""
+        """ParameterError for a bad option: a smoothness energy or the edge cones on tetrahedra (what the API takes is
+        the capability table's, :mod:`cvxgeodesic.capabilities`, checked there; this is the builder's own check)."""
         check_number(lam, "smoothness weight lambda", low=0)
         if samples not in SAMPLES and samples not in ("flat-nodes", "flat-bernstein"):
             raise ParameterError(f"samples must be 'flat-bernstein', 'flat-nodes' or one of {SAMPLES}, "
                                  f"got {samples!r}")
-        capabilities.check(f"qcqp-{energy}" if energy is not None and lam > 0 else "qclp", dim=self.dim, order=2,
-                           medium="none" if medium is None else "metric")
+        if self.dim == 3 and energy is not None and lam > 0:
+            raise ParameterError("the order-2 program on tetrahedra takes no smoothness energy (surfaces only)")
+        if medium is not None and energy is not None and lam > 0:  # a field biased without a word, else
+            raise ParameterError("the order-2 smoothness energies vanish on the Euclidean squared distance only: a "
+                                 "cost or metric takes lam=0")
         if self.dim == 3 and samples == "flat-bernstein":
             raise ParameterError("the order-2 program on tetrahedra takes no samples='flat-bernstein' (surfaces only)")
 

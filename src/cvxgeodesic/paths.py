@@ -37,6 +37,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike
 
+from .capabilities import check_path
 from .errors import ParameterError, SolverError, SourceError
 from .mesh.closest import segment_point, triangle_point
 from .mesh.convert import as_mesh
@@ -563,12 +564,9 @@ def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = Non
 
 
 def _path_medium(mesh: Any, result: Any, cost: Any, metric: Any) -> Any:
-    """The surface's travel cost or metric (given, else the result's); a volume's paths are Euclidean."""
-    if mesh.dim == 3:
-        if cost is not None or metric is not None:
-            raise ParameterError("cost and metric apply to paths on triangle meshes; inside a tetrahedral mesh "
-                                 "the path follows the Euclidean distance")
-        return None
+    """The surface's travel cost or metric (given, else the result's); a volume's paths are Euclidean (the capability
+    table refuses a medium there: a volume's results have none)."""
+    check_path(domain=mesh.domain, medium="none" if cost is None and metric is None else "cost")
     medium = make_medium(mesh, cost, metric)
     if medium is None and result is not None:
         medium = result.info.extra.get("medium")

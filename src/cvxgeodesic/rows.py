@@ -380,11 +380,12 @@ class LocalRows:
 
 def _whole_mesh_lambda(mesh: Any, options: dict) -> float | None:
     """λ of the whole mesh (None without a smoothness energy or for an unknown method: the solver says why)."""
+    from .capabilities import DOMAINS
     from .problems.formulations import ALIASES, FORMULATIONS, canonical_method, smoothness_weight
     from .validation import check_lam, check_smoothness
 
     m, lam = check_smoothness(options.get("m", 1.0), options.get("lam"))
-    method = options.get("method") or "qcqp-hessian"
+    method = options.get("method") or DOMAINS[mesh.domain].default_method  # the solver's default of the domain
     if not isinstance(method, str) or method.lower() not in FORMULATIONS and method.lower() not in ALIASES:
         return None
     energy = FORMULATIONS[canonical_method(method)][1]

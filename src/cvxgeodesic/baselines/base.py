@@ -51,10 +51,19 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from ..capabilities import check, source_kinds
-from ..errors import CvxGeodesicError, MeshError, MeshRepairWarning, NonManifoldError, SolverError, warn_user
+from ..errors import (
+    CvxGeodesicError,
+    MeshError,
+    MeshRepairWarning,
+    NonManifoldError,
+    ParameterError,
+    SolverError,
+    SourceError,
+    warn_user,
+)
 from ..mesh.convert import as_mesh
 from ..mesh.orient import Orientation, orient_faces
+from ..mesh.reference import TRIANGLE
 from ..mesh.simplex import SimplexMesh, unit_scale
 from ..mesh.trimesh import TriMesh
 from ..sources import SourceSet, resolve_sources
@@ -91,21 +100,28 @@ class BaselineSolver:
         What the set-up changed or left out (the faces it reoriented, the degenerate tetrahedra it left out),
         copied into every ``info["notes"]``.
 
+    triangles_only : bool
+        The library takes triangle meshes only (``"fmm"``, ``"exact"``).
+
     Raises
     ------
     ParameterError
-        The method does not apply to the mesh's dimension (``"fmm"``, ``"exact"`` inside a volume).
+        A library of triangles on a tetrahedral mesh (which methods take which mesh: the capability table, checked at
+        the API edge; this is the class's own argument check for a direct user).
     """
 
     name: str = ""
     library: str = ""
     volume_library: str = ""
     supports_multiple_sources: bool = True
+    triangles_only: bool = False
 
     def __init__(self, mesh: Any):
         self.mesh: Any = as_mesh(mesh)
         self.dim = self.mesh.dim
-        check(self.name, dim=self.dim)
+        if self.triangles_only and self.mesh.reference is not TRIANGLE:
+            raise ParameterError(f"baseline {self.name!r} takes triangle meshes only ({self.library} is a surface "
+                                 f"algorithm); {self.mesh.name} holds {self.mesh.reference.words.many}")
         if self.dim == 3 and self.volume_library:
             self.library = self.volume_library
         self.notes: list[str] = []
@@ -127,10 +143,12 @@ class BaselineSolver:
         raise NotImplementedError
 
     def _solve_sources(self, ss: SourceSet) -> tuple[np.ndarray, dict]:
-        """Distance from a surface's points, curves or boundary (validated): the boundary's vertices here, after
-        the capability table's check; the classes whose library takes points override it
-        (:mod:`~cvxgeodesic.baselines.points`)."""
-        check(self.name, dim=2, sources=source_kinds(ss))
+        """Distance from a surface's points, curves or boundary (validated): the boundary's vertices here (the
+        capability table refuses points and curves at the API edge; a direct user gets this class's own check); the
+        classes whose library takes points override it (:mod:`~cvxgeodesic.baselines.points`)."""
+        if not ss.boundary and (ss.point_faces.size or ss.segment_faces.size):
+            raise SourceError(f"baseline {self.name!r} takes vertex sources and 'boundary' only ({self.library} "
+                              "computes from vertices)")
         d, extra = self._solve(ss.vertices)
         return d, {**extra, "sources": "boundary vertices"}
 

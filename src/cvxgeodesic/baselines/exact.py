@@ -37,6 +37,7 @@ class ExactBaseline(ComponentwiseSolver):
 
     name = "exact"
     library = "pygeodesic.geodesic.PyGeodesicAlgorithmExact"
+    triangles_only = True
     manifold = True
 
     def _solve_sources(self, ss: SourceSet) -> tuple[np.ndarray, dict]:

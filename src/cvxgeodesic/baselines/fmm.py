@@ -38,6 +38,7 @@ class FastMarchingBaseline(ComponentwiseSolver):
 
     name = "fmm"
     library = "potpourri3d.MeshFastMarchingDistanceSolver"
+    triangles_only = True
     orient = True
     manifold = True
 

@@ -167,7 +167,7 @@ def fmm_points(baseline, ss: SourceSet) -> tuple[np.ndarray, dict]:
     mesh = baseline.mesh
     parts = baseline._parts
     if len(parts) != 1 or next(iter(parts.values())).vertices.size != mesh.n_vertices:
-        can = [m for m in methods_for(2, source="point") if m != "fmm"]
+        can = [m for m in methods_for(mesh.domain, source="point") if m != "fmm"]
         raise SourceError("method 'fmm' cannot take point or curve sources on a mesh with several components or "
                           "unreferenced vertices (the library's face indices are per component); methods that can: "
                           + ", ".join(can))

@@ -2,8 +2,9 @@
 
 A surface (``mesh.dim == 2``) and a volume (``mesh.dim == 3``) take the same options; what differs between the two
 is data, :data:`SPACES`: the word for the cells and where a ``--source-point`` goes (the closest surface point, or
-the point itself inside the solid); the default method is the API's (:data:`~cvxgeodesic.api.DEFAULT_METHODS`), the
-formats of a field the registry's (``Format.dims``).
+the point itself inside the solid); the method names, the default method of each domain and what a travel cost
+applies to are the capability table's (:mod:`cvxgeodesic.capabilities`), the formats of a field the registry's
+(``Format.dims``).
 
 Only the standard library at import, as the whole :mod:`cvxgeodesic.cli` package (see its ``__init__``).
 """
@@ -102,30 +103,33 @@ def add_source_options(p: argparse.ArgumentParser,
 
 def add_solve_options(p: argparse.ArgumentParser, *, method: bool = True, m_help: str = M_HELP) -> None:
     """``--method`` (with ``method``), ``--m`` and ``--solver``."""
-    from ..api import ALL_METHODS, SOLVERS
+    from ..api import SOLVERS
+    from ..capabilities import METHODS
+    from ..problems.formulations import ALIASES
 
-    if method:  # None when not given: the default of the mesh's dimension (method_for)
-        p.add_argument("--method", default=None, choices=ALL_METHODS, metavar="NAME",
-                       help=f"one of: {', '.join(ALL_METHODS)} (default {default_methods()})")
+    if method:  # None when not given: the default of the mesh's domain (method_for)
+        names = (*METHODS, *ALIASES)  # the table's methods and their aliases
+        p.add_argument("--method", default=None, choices=names, metavar="NAME",
+                       help=f"one of: {', '.join(names)} (default {default_methods()})")
     p.add_argument("--m", type=float, default=1.0, help=m_help)
     p.add_argument("--solver", default="auto", choices=SOLVERS, help="backend for the convex formulations")
 
 
 def default_methods() -> str:
-    """The defaults of ``--method`` in words (:data:`~cvxgeodesic.api.DEFAULT_METHODS`)."""
-    from ..api import DEFAULT_METHODS
+    """The defaults of ``--method`` in words: each domain's (:attr:`~cvxgeodesic.capabilities.Domain.default_method`),
+    the first one's first."""
+    from ..capabilities import DOMAINS
 
-    return f"{DEFAULT_METHODS[2]}; {DEFAULT_METHODS[3]} on a tetrahedral mesh"
+    first, *rest = DOMAINS.values()
+    return "; ".join([first.default_method, *(f"{d.default_method} on {d.meshes}" for d in rest)])
 
 
 def method_for(args: argparse.Namespace, mesh: Any) -> Method:
-    """``--method`` when given, else the default for the mesh's dimension (:data:`~cvxgeodesic.api.DEFAULT_METHODS`)."""
-    from ..api import DEFAULT_METHODS
-    from ..capabilities import CLOUD_DEFAULT_METHOD
+    """``--method`` when given, else the default of the mesh's domain
+    (:attr:`~cvxgeodesic.capabilities.Domain.default_method`; a point file's is the cloud's, docs/pointclouds.md)."""
+    from ..capabilities import DOMAINS
 
-    if getattr(mesh, "cloud", None) is not None:  # a point file (docs/pointclouds.md)
-        return args.method or CLOUD_DEFAULT_METHOD  # type: ignore[return-value]
-    return args.method or DEFAULT_METHODS[mesh.dim]
+    return args.method or DOMAINS[mesh.domain].default_method  # type: ignore[return-value]
 
 
 def add_cost_options(p: argparse.ArgumentParser) -> None:
@@ -152,7 +156,7 @@ def cli_cost(args: argparse.Namespace, mesh: Any) -> Any:
     ------
     ParameterError
         A ``--cost`` file that is not a .npy array of real numbers, one per file vertex or per mesh triangle; a
-        cost on a tetrahedral mesh (the volume formulations take none).
+        cost on a mesh whose domain no method takes one on (the capability table: a tetrahedral mesh).
     MeshFormatError
         ``--cost-field`` on a format without per-vertex properties, or a property the file does not have.
     """
@@ -161,8 +165,12 @@ def cli_cost(args: argparse.Namespace, mesh: Any) -> Any:
     given = "--cost-field" if getattr(args, "cost_field", None) else "--cost" if getattr(args, "cost", None) else None
     if given is None:
         return None
-    if mesh.dim != 2:  # before: ignored without a word, the field solved without the cost
-        raise ParameterError(f"{given}: a travel cost applies to triangle meshes; {mesh.name} holds tetrahedra")
+    from ..capabilities import DOMAINS, methods_for
+
+    if not methods_for(mesh.domain, medium="cost"):  # before reading the file: no method of this domain takes one
+        where = [d.meshes for d in DOMAINS.values() if methods_for(d.name, medium="cost")]
+        raise ParameterError(f"{given}: a travel cost applies to {' and '.join(where)}, not to "
+                             f"{DOMAINS[mesh.domain].meshes} ({mesh.name})")
     if given == "--cost-field":
         from ..mesh.io import load_vertex_property
 
@@ -338,8 +346,10 @@ def add_precision_options(p: argparse.ArgumentParser, *, tol_default: str) -> No
     """``--lam``, ``--order`` and ``--tol``: what :class:`~cvxgeodesic.api.GeodesicSolver` takes beyond ``--m``;
     ``--lam`` is checked with ``--m`` (:func:`~cvxgeodesic.cli._common.check_numbers`), ``--tol`` by
     :func:`check_tol` before the mesh is read."""
+    from ..capabilities import ORDERS
+
     p.add_argument("--lam", type=float, default=None, help=LAM_HELP)
-    p.add_argument("--order", type=int, default=1, choices=(1, 2), help=ORDER_HELP)
+    p.add_argument("--order", type=int, default=1, choices=ORDERS, help=ORDER_HELP)
     p.add_argument("--tol", type=float, default=None, metavar="TOL",
                    help=f"relative tolerance of the solver's residuals and duality gap, in (0, 1) "
                         f"(default {tol_default})")

@@ -40,10 +40,12 @@ COLLINEAR_TOL = 1e-9
 class CloudMesh(TriMesh):
     """The triangle soup of a :class:`PointCloud` (its vertices are the cloud's points, in the same order).
 
-    A :class:`TriMesh` with one more attribute, :attr:`cloud`, that the capability checks read: the methods and
-    sources that need a manifold surface refuse it (``capabilities.check_cloud``).
+    A :class:`TriMesh` with one more attribute, :attr:`cloud`, and its own domain, ``"cloud"``: the capability
+    table's rules of that domain refuse the methods and sources that need a manifold surface
+    (:data:`cvxgeodesic.capabilities.RULES`).
     """
 
+    domain = "cloud"
     cloud: PointCloud
 
 

@@ -93,6 +93,9 @@ class SimplexMesh:
     dim: int
     #: The cell kind (:mod:`cvxgeodesic.mesh.reference`): what shared code asks instead of ``dim``.
     reference: ReferenceSimplex
+    #: The domain of the capability table (:data:`cvxgeodesic.capabilities.DOMAINS`): ``"surface"``, ``"volume"``,
+    #: ``"cloud"``; what the API, the CLI, batches and comparisons read their per-domain defaults through.
+    domain: str
     #: The name of a mesh made without one.
     default_name = "mesh"
     #: What ``repr`` counts the cells as (``n_faces``, ``n_tets``).

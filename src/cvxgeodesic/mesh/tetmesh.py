@@ -84,6 +84,7 @@ class TetMesh(SimplexMesh):
 
     dim = 3
     reference = TETRAHEDRON
+    domain = "volume"
     default_name = "tetmesh"
     count_name = "n_tets"
 

@@ -73,6 +73,7 @@ class TriMesh(SimplexMesh):
 
     dim = 2
     reference = TRIANGLE
+    domain = "surface"
     count_name = "n_faces"
     #: Set on the coarse meshes of :func:`~cvxgeodesic.mesh.decimate.simplify_mesh` only: the method used.
     simplifier: str

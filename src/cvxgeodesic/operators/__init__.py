@@ -2,7 +2,6 @@
 
 from .energies import (
     ENERGIES,
-    ENERGIES_BY_DIM,
     check_energy,
     dirichlet_energy_matrix,
     energy_matrix,
@@ -13,7 +12,7 @@ from .gradient import gradient_blocks, gradient_matrix, gradient_norms, triangle
 from .laplacian import barycentric_mass, cotan_stiffness, divergence, mass_matrix
 
 __all__ = [
-    "ENERGIES", "ENERGIES_BY_DIM", "barycentric_mass", "check_energy", "cotan_stiffness", "dirichlet_energy_matrix",
+    "ENERGIES", "barycentric_mass", "check_energy", "cotan_stiffness", "dirichlet_energy_matrix",
     "divergence", "energy_matrix", "gradient_blocks", "gradient_matrix", "gradient_norms", "hessian_energy_matrix",
     "laplacian_energy_matrix", "mass_matrix", "triangle_frames",
 ]

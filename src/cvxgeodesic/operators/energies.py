@@ -15,14 +15,13 @@ from ..linalg import SymbolicCholesky, is_positive_semidefinite
 from ..mesh.cover import manifold_cover, pull_back
 from ..mesh.orient import orient_faces
 from ..mesh.patch import is_patch
+from ..mesh.reference import TRIANGLE
 from ..mesh.simplex import SimplexMesh
 from ..mesh.trimesh import TriMesh
 from .gradient import gradient_blocks, gradient_matrix
 from .laplacian import barycentric_mass, cotan_stiffness, mass_matrix, selected_cells
 
 ENERGIES = ("dirichlet", "laplacian", "hessian")
-#: The energies defined on each simplex dimension: the curved Hessian energy is a surface notion.
-ENERGIES_BY_DIM = {2: ENERGIES, 3: ("dirichlet", "laplacian")}
 
 
 def _measure(mesh: SimplexMesh, cells: ArrayLike | None) -> float:
@@ -303,11 +302,13 @@ def _metric_energy(mesh: TriMesh, energy: str, face_metric: tuple[np.ndarray, np
 
 
 def check_energy(mesh: SimplexMesh, energy: str) -> str:
-    """``energy`` when it is defined on ``mesh``'s dimension (:data:`ENERGIES_BY_DIM`); ParameterError otherwise."""
-    allowed = ENERGIES_BY_DIM[mesh.dim]
+    """``energy`` when it is one of :data:`ENERGIES` that ``mesh``'s cells have (the curved Hessian energy is built on
+    triangles); ParameterError otherwise. Which method takes which energy on which domain is the capability table's
+    (:data:`cvxgeodesic.capabilities.RULES`), checked at the API edge; this is the energies' own argument check."""
+    allowed = ENERGIES if mesh.reference is TRIANGLE else tuple(e for e in ENERGIES if e != "hessian")
     if energy not in allowed:
-        where = "tetrahedral meshes" if mesh.dim == 3 else "triangle meshes"
-        raise ParameterError(f"energy {energy!r} does not apply to {where}; use {' or '.join(map(repr, allowed))}")
+        raise ParameterError(f"energy {energy!r} does not apply to {mesh.reference.words.meshes}; use "
+                             f"{' or '.join(map(repr, allowed))}")
     return energy
 
 

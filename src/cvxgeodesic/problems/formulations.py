@@ -73,7 +73,6 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
-from .. import capabilities
 from ..errors import DegenerateFacesWarning, MeshError, warn_user
 from ..mesh.simplex import SimplexMesh
 from ..mesh.trimesh import DEGENERATE_TOL
@@ -503,7 +502,6 @@ def build_problem(
     mesh = ops.mesh
     n = mesh.n_vertices
     name = canonical_method(method)
-    capabilities.check(name, dim=mesh.dim)  # names the methods that apply
     constraint, energy = FORMULATIONS[name]
     check_number(lam, "smoothness weight lambda", low=0)
 

@@ -6,6 +6,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Protocol
 
+from ..capabilities import Capability
 from ..mesh.trimesh import TriMesh
 from ..operators.metric import Medium
 from ..problems.formulations import FORMULATIONS, smoothness_weight
@@ -41,6 +42,10 @@ class SolveConfig:
     medium : Medium or None
         A travel cost and/or metric on ``mesh`` (:mod:`cvxgeodesic.operators.metric`), validated; None for the
         Euclidean distance.
+    capability : Capability or None
+        The cell the capability table accepted for this solver (:func:`cvxgeodesic.capabilities.check`, once, at
+        the API edge): the strategies and builders below do not consult the table again. None for a strategy built
+        directly (the builders' own argument checks then stand between it and a crash).
     """
 
     mesh: TriMesh
@@ -54,6 +59,7 @@ class SolveConfig:
     verbose: bool = False
     notes: tuple[str, ...] = field(default_factory=tuple)
     medium: Medium | None = None
+    capability: Capability | None = None
 
     @property
     def stretch(self) -> str:

@@ -33,8 +33,7 @@ import time
 
 import numpy as np
 
-from .. import capabilities
-from ..errors import ParameterError
+from ..errors import ParameterError, SourceError
 from ..mesh.decimate import simplify_mesh
 from ..mesh.transfer import SurfaceTransfer
 from ..results import GeodesicResult, SolveInfo
@@ -189,15 +188,16 @@ class CoarseToFine:
         Raises
         ------
         SourceError
-            Sources other than vertices (points, curves, boundary): :func:`capabilities.check`.
+            Sources other than vertices (points, curves, boundary): the capability table refuses them at the API
+            edge; this is the strategy's own check.
         """
         if self.fine is not None and self.skipped:
             res = self.fine.solve(sources, callback=callback)
             res.info.extra["multires"] = {"coarse_faces": self.config.mesh.n_faces, "polished": True,
                                           "skipped": "the mesh has no more faces than the multires target"}
             return res
-        capabilities.check(self.config.method, dim=self.config.mesh.dim, sources=capabilities.source_kinds(sources),
-                           multires=True)
+        if sources.point_faces.size or sources.segment_faces.size or sources.boundary or sources.facets.size:
+            raise SourceError("the coarse-to-fine solve takes vertex sources only (they are moved to coarse vertices)")
         assert self.coarse is not None and self.transfer is not None
         t0 = time.perf_counter()
         cfg = self.config

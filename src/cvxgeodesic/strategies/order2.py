@@ -21,8 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import capabilities
-from ..errors import SolverError
+from ..errors import SolverError, SourceError
 from ..formulations_p2 import P2Builder, P2Program, source_edges
 from ..mesh.simplex import unit_mesh
 from ..mesh.split import SplitMesh
@@ -88,7 +87,6 @@ class Order2:
 
     def __init__(self, config: SolveConfig, refine: int = REFINE_ROUNDS, samples: str | None = None) -> None:
         t0 = time.perf_counter()
-        capabilities.check(config.method, dim=config.mesh.dim, order=2)
         self.config = config
         self.refine = int(refine)
         self.samples = samples
@@ -131,7 +129,8 @@ class Order2:
         """
         t0 = time.perf_counter()
         mesh = self.config.mesh
-        capabilities.check(self.config.method, dim=mesh.dim, order=2, sources=capabilities.source_kinds(sources))
+        if sources.segment_faces.size and not sources.boundary:  # the API edge refuses curves; this: a direct user
+            raise SourceError("the order-2 solve takes no curve sources (solve curves at order 1)")
         # where φ = 0, the vertex sources alone (source_edges), the points to insert, a solid's source wall
         fixed = source_fixed = sources.fixed_vertices(mesh)
         vertex_sources, points = np.asarray(sources.vertices, dtype=np.int64), sources.distinct_points(mesh)
