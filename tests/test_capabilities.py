@@ -12,7 +12,6 @@ from cvxgeodesic import capabilities as cap
 from cvxgeodesic.baselines import BASELINES
 from cvxgeodesic.errors import ParameterError, SourceError
 from cvxgeodesic.operators import ENERGIES, check_energy
-from cvxgeodesic.problems.formulations import FORMULATIONS
 from cvxgeodesic.operators.p2_energy import P2_ENERGIES
 from cvxgeodesic.problems.formulations import FORMULATIONS
 
@@ -194,8 +193,8 @@ def test_the_command_line_choices_and_defaults_read_the_table(monkeypatch):
     from dataclasses import replace
 
     from cvxgeodesic.cli import _options
-    from cvxgeodesic.problems.formulations import ALIASES
     from cvxgeodesic.mesh.tet_generate import tet_box
+    from cvxgeodesic.problems.formulations import ALIASES
 
     p = argparse.ArgumentParser()
     _options.add_solve_options(p)
