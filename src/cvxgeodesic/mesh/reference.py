@@ -98,6 +98,11 @@ class ReferenceSimplex:
         The kinds of source (:data:`cvxgeodesic.capabilities.SOURCE_KINDS`) a mesh of these cells takes.
     measure_root : callable
         Turns a total measure (area, volume) into a length: ``np.sqrt``, ``np.cbrt``.
+    picture : str
+        How a field on such a mesh is drawn: ``"surface"``, the cells themselves seen from a camera
+        (:func:`~cvxgeodesic.plotting.plot_field`, :func:`~cvxgeodesic.viewer.show`); ``"slice"``, a plane's cut through
+        a solid, the cells hiding one another (:func:`~cvxgeodesic.evaluation.slice_plot.plot_slice`,
+        :func:`~cvxgeodesic.viewer.show_volume`).
     """
 
     name: str
@@ -110,6 +115,7 @@ class ReferenceSimplex:
     _frame: Callable[[np.ndarray], np.ndarray] = field(repr=False)
     _point_type: str = field(repr=False)
     _locator: str = field(repr=False)
+    picture: str = "surface"
 
     @property
     def n_corners(self) -> int:
@@ -180,5 +186,5 @@ TETRAHEDRON = ReferenceSimplex(
                     domain="inside a volume", argument="tets"),
     source_kinds=("vertex", "point", "boundary", "boundary faces"),
     measure_root=np.cbrt,
-    _frame=_world_coordinates, _point_type="VolumePoint", _locator="volume_point",
+    _frame=_world_coordinates, _point_type="VolumePoint", _locator="volume_point", picture="slice",
 )
