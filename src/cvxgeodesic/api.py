@@ -10,7 +10,7 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable, Iterable
-from typing import Any, Literal, TypeAlias, cast, overload
+from typing import Any, Literal, TypeAlias, overload
 
 import numpy as np
 import scipy.sparse as sp
@@ -22,7 +22,8 @@ from .capabilities import CLOUD_DEFAULT_METHOD, check_cloud, methods_for, source
 from .capabilities import check as check_capability
 from .errors import ParameterError, SourceError
 from .formulations import ALIASES, FORMULATIONS, NORMALIZATIONS, smoothness_weight
-from .mesh.convert import as_mesh
+from .mesh.convert import MeshLike, as_mesh
+from .mesh.simplex import SimplexMesh
 from .mesh.tetmesh import TetMesh
 from .operators.metric import make_medium
 from .results import GeodesicResult, SolveInfo
@@ -231,7 +232,7 @@ class GeodesicSolver:
     @limited
     def __init__(
         self,
-        mesh: Any,
+        mesh: MeshLike,
         method: Method | None = None,
         *,
         m: float = 1.0,
@@ -251,8 +252,7 @@ class GeodesicSolver:
         estimate_error: bool = True,
     ) -> None:
         t0 = time.perf_counter()
-        self.mesh: Any = cast(Any, as_mesh(mesh))  # a TriMesh or a TetMesh, told apart by is_volume
-        self.is_volume = isinstance(self.mesh, TetMesh)  # distance inside tetrahedra
+        self.mesh: SimplexMesh = as_mesh(mesh)  # a TriMesh or a TetMesh: what differs, its reference says
         self.dim = self.mesh.dim
         self.is_cloud = getattr(self.mesh, "cloud", None) is not None  # a PointCloud's soup (mesh/pointcloud.py)
         self._check_method_and_solver(method, solver)
@@ -308,9 +308,9 @@ class GeodesicSolver:
             raise ParameterError(f"method must be a string, got {type(method).__name__}")
         key = ALIASES.get(method.lower(), method.lower())
         if key not in ALL_METHODS:
-            known = ALL_METHODS if not self.is_volume else methods_for(self.dim)
-            raise ParameterError(f"unknown method {method!r}; choose one of {', '.join(known)}"
-                                 + (" (on tetrahedral meshes)" if self.is_volume else ""))
+            known = [m for m in ALL_METHODS if ALIASES.get(m, m) in methods_for(self.dim)]  # aliases too
+            raise ParameterError(f"unknown method {method!r}; choose one of {', '.join(known)} "
+                                 f"(on {self.mesh.reference.words.meshes})")
         check_capability(key, dim=self.dim)  # a surface method on a volume: the message says why
         self.method = key
         self._solver = check_choice(solver, "solver", SOLVERS)
@@ -422,7 +422,7 @@ class GeodesicSolver:
         return [self.solve(s) for s in items]
 
 
-def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: Method | None = None,
+def geodesic_distance(mesh: MeshLike, *args: Any, sources: Any = None, method: Method | None = None,
                       m: float | None = None, solver: SolverName | None = None, lam: float | None = None,
                       tol: float = DEFAULT_TOL,
                       max_iter: int = 200, normalization: str = "area",
@@ -498,7 +498,7 @@ LOCAL_ROW_TOL = 1e-5
 
 # the return type follows max_distance: dense full rows without it, sparse local rows with it
 @overload
-def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
+def distance_matrix(mesh: MeshLike, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
                     solver: SolverName = "auto", progress: bool | None = None, *, lam: float | None = None,
                     tol: float | None = None, max_iter: int = 200, multires: bool | int = False,
                     normalization: str = "area", order: int = 1, threads: int | None = None,
@@ -506,7 +506,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None
                     max_distance: None = None, checkpoint: str | os.PathLike | None = None,
                     resolution: Any = None) -> np.ndarray: ...
 @overload
-def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
+def distance_matrix(mesh: MeshLike, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
                     solver: SolverName = "auto", progress: bool | None = None, *, lam: float | None = None,
                     tol: float | None = None, max_iter: int = 200, multires: bool | int = False,
                     normalization: str = "area", order: int = 1, threads: int | None = None,
@@ -514,7 +514,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None
                     max_distance: float, checkpoint: str | os.PathLike | None = None,
                     resolution: Any = None) -> sp.csr_matrix: ...
 @overload
-def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
+def distance_matrix(mesh: MeshLike, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
                     solver: SolverName = "auto", progress: bool | None = None, *, lam: float | None = None,
                     tol: float | None = None, max_iter: int = 200, multires: bool | int = False,
                     normalization: str = "area", order: int = 1, threads: int | None = None,
@@ -524,7 +524,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None
                     resolution: Any = None) -> np.ndarray | sp.csr_matrix: ...
 
 
-def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
+def distance_matrix(mesh: MeshLike, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
                     solver: SolverName = "auto",
                     progress: bool | None = None, *, lam: float | None = None, tol: float | None = None,
                     max_iter: int = 200, multires: bool | int = False, normalization: str = "area",
@@ -660,7 +660,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None
     return store.matrix(inverse)
 
 
-def _matrix_rows(mesh: Any, vertices: Any, *, local: bool) -> tuple[list, np.ndarray]:
+def _matrix_rows(mesh: SimplexMesh, vertices: Any, *, local: bool) -> tuple[list, np.ndarray]:
     """The distinct sources of ``distance_matrix``'s rows and, for each row asked for, its index among them."""
     from .sources import BoundaryFaces, CellPoint, SurfaceCurve
 
@@ -698,7 +698,7 @@ def _is_mesh_resolution(value: Any) -> bool:
     return isinstance(value, str) and value.strip().lower() == "mesh"
 
 
-def _local_rows(mesh: Any, options: dict, max_distance: Any) -> tuple[Any, dict]:
+def _local_rows(mesh: SimplexMesh, options: dict, max_distance: Any) -> tuple[Any, dict]:
     """The factory and options of local rows (:class:`~cvxgeodesic.rows.LocalRows`), after their checks."""
     from .rows import LocalRows
 

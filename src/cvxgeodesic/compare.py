@@ -403,9 +403,9 @@ def _check_camera(mesh: SimplexMesh, view: Any, up: Any) -> None:
             up_vector(mesh.V, up)
 
 
-def write_pictures(out: Path, mesh: SimplexMesh, sset: Any, runs: list[Run], results: dict[Run, Outcome], rows: list[dict],
-                   rel_errors: dict[Run, np.ndarray], reference: np.ndarray | None, *, view: Any = None,
-                   up: Any = "auto") -> None:
+def write_pictures(out: Path, mesh: SimplexMesh, sset: Any, runs: list[Run], results: dict[Run, Outcome],
+                   rows: list[dict], rel_errors: dict[Run, np.ndarray], reference: np.ndarray | None, *,
+                   view: Any = None, up: Any = "auto") -> None:
     """Write ``field_<method>.png``, ``error_<method>.png`` and ``gradient_histogram.png`` into ``out``.
 
     Parameters
