@@ -51,6 +51,7 @@ def test_path_outputs(plane_file, tmp_path, ext):
     if ext == "npy":
         P = np.load(out)
     elif ext == "csv":
+        assert out.read_text().splitlines()[0] == "x,y,z,face,b0,b1,b2"  # the cell column named by the reference
         table = np.loadtxt(out, delimiter=",", skiprows=1)
         P, faces, bary = table[:, :3], table[:, 3].astype(int), table[:, 4:]
         np.testing.assert_allclose(np.einsum("kj,kji->ki", bary, mesh.V[mesh.F[faces]]), P, atol=1e-12)
