@@ -245,3 +245,15 @@ def test_cli_view_hands_a_solid_to_show_volume_with_its_slice_normal(sphere, tmp
                    + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in sphere.F))
     assert main(["view", str(obj), "--slice-normal", "1,0,0", "--screenshot", out, "-q"]) == 2
     assert calls[1:] == [("surface",)]
+
+
+def test_show_draws_a_solid_by_its_slice_with_the_normal_given(gl, tmp_path):
+    """``cg.show`` on a tetrahedral mesh renders ``show_volume``'s cut, turned by ``normal`` (issue 42: the mesh's
+    reference says it is drawn by a slice)."""
+    from cvxgeodesic.mesh.tet_generate import tet_box
+
+    box = tet_box(3)
+    along_x = _render(tmp_path, "x.png", box, sources=0, normal=(1.0, 0.0, 0.0))
+    along_z = _render(tmp_path, "z.png", box, sources=0, normal=(0.0, 0.0, 1.0))
+    assert _surface(along_x).mean() > 0.05 and _surface(along_z).mean() > 0.05
+    assert np.abs(along_x - along_z).sum(axis=-1).mean() > 0.01  # another cut, seen from another side
