@@ -73,7 +73,7 @@ def test_outputs_failures_and_rerun(cluster, meshes, tmp_path):
         meta = json.loads((out / f"{p.stem}.json").read_text())
         assert meta["mesh"] == str(p.resolve()) and meta["params"]["sources"] == SOURCES
         assert meta["info"]["status"] == "optimal" and meta["info"]["iterations"] == r["iterations"] > 0
-        assert meta["n_vertices"] == mesh.n_vertices
+        assert meta["n_vertices"] == mesh.n_vertices and meta["n_cells"] == r["n_cells"] == mesh.n_faces
     assert not list(out.glob(".*.tmp"))  # atomic writes leave no temporary files
 
     table = format_summary(rows)
@@ -148,6 +148,9 @@ def test_a_volume_takes_its_default_method_and_its_points_inside(tmp_path):
     dist_path, sidecar = output_paths(tmp_path / "box.ele", tmp_path, "npy")
     meta = json.loads(sidecar.read_text())
     assert meta["info"]["method"] == meta["params"]["method"] == "qclp" and meta["dim"] == 3
+    # the cell count is the tetrahedra's, under a name that does not call them faces (issue 42)
+    assert row["n_cells"] == meta["n_cells"] == mesh.n_tets and "n_faces" not in row and "n_faces" not in meta
+    assert "cells" in format_summary([row]).splitlines()[0]
     # done: for a rerun with the default and for one naming qclp, not for one naming another method
     for method, done in ((None, True), ("qclp", True), ("lclp", None)):
         assert _finished(dist_path, sidecar, _params([0], method, 1.0, "auto", False, "npy")) is done
@@ -325,7 +328,7 @@ def test_a_volume_with_a_surface_format_fails_before_its_solve(tmp_path, monkeyp
     monkeypatch.setattr(api, "GeodesicSolver", no_solve)
     row = solve_one(str(tmp_path / "box.msh"), [0], str(tmp_path), output_format="ply")
     assert row["status"] == "failed"
-    assert row["error"] == ("ParameterError: box.msh is a tetrahedral mesh: its field cannot be written as .ply "
+    assert row["error"] == ("ParameterError: box.msh is a tetrahedral volume: its field cannot be written as .ply "
                             "(PLY (ASCII or binary) holds no tetrahedra); give --format npy or vtu, or no --format "
                             "(.vtu)")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["box.msh", "plane.off", "tg.ele", "tg.node"]

@@ -51,6 +51,7 @@ def test_path_outputs(plane_file, tmp_path, ext):
     if ext == "npy":
         P = np.load(out)
     elif ext == "csv":
+        assert out.read_text().splitlines()[0] == "x,y,z,face,b0,b1,b2"  # the cell column named by the reference
         table = np.loadtxt(out, delimiter=",", skiprows=1)
         P, faces, bary = table[:, :3], table[:, 3].astype(int), table[:, 4:]
         np.testing.assert_allclose(np.einsum("kj,kji->ki", bary, mesh.V[mesh.F[faces]]), P, atol=1e-12)
@@ -138,3 +139,33 @@ def test_batch_source_options_and_spec():
         _source_spec([0, [0.1, 0.2]])
     with pytest.raises(ParameterError, match="duplicate"):
         _source_spec([1, 1])
+
+
+def test_source_points_are_located_by_the_mesh_reference_with_a_note_off_the_surface(capsys):
+    """issue 42: ``--source-point`` asks ``mesh.reference.locate`` (no branch on the dimension): a surface's closest
+    point, with a note when the position is off the surface; a solid's point inside, and no note."""
+    from cvxgeodesic.cli import build_parser
+    from cvxgeodesic.cli._options import cli_sources
+    from cvxgeodesic.errors import SourceError
+    from cvxgeodesic.mesh.locate import SurfacePoint, VolumePoint
+    from cvxgeodesic.mesh.tet_generate import tet_box
+
+    sphere = cg.icosphere(2)  # radius 1
+    args = build_parser().parse_args(["distance", "x.obj", "--source-point", "0,0,2", "--source-point",
+                                      ",".join(map(repr, sphere.V[5].tolist())), "-o", "o.npy"])
+    points, _ = cli_sources(args, sphere)
+    assert [type(p) for p in points] == [SurfacePoint, SurfacePoint]
+    np.testing.assert_allclose(points[1].position(sphere), sphere.V[5], atol=1e-12)
+    err = capsys.readouterr().err
+    assert err.count("note:") == 1 and "--source-point 0,0,2 is 1 from" in err and "closest point on it" in err
+    box = tet_box(2)
+    args = build_parser().parse_args(["distance", "x.ele", "--source-point", "0.3,0.4,0.2", "-o", "o.npy"])
+    (p,), _ = cli_sources(args, box)
+    assert isinstance(p, VolumePoint) and np.allclose(p.position(box), [0.3, 0.4, 0.2])
+    assert "note" not in capsys.readouterr().err
+    args = build_parser().parse_args(["distance", "x.ele", "--source-point", "0.3,0.4,5", "-o", "o.npy"])
+    with pytest.raises(SourceError, match="outside"):
+        cli_sources(args, box)
+    # the message of a missing source says where a point goes, in the reference's words
+    with pytest.raises(SourceError, match=r"--source-point X,Y,Z \(inside a volume\) or --boundary"):
+        cli_sources(build_parser().parse_args(["distance", "x.ele", "-o", "o.npy"]), box)

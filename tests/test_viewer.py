@@ -210,3 +210,50 @@ def test_show_volume_refuses_a_surface_and_a_zero_normal(sphere, tmp_path):
         show_volume(sphere, screenshot=tmp_path / "x.png")
     with pytest.raises(ParameterError, match=r"normal must be a nonzero vector, got \[0.0, 0.0, 0.0\]"):
         show_volume(tet_box(2), np.zeros(27), normal=(0, 0, 0), screenshot=tmp_path / "x.png")
+
+
+def test_cli_view_hands_a_solid_to_show_volume_with_its_slice_normal(sphere, tmp_path, monkeypatch):
+    """issue 42: ``view`` calls ``show`` on every mesh; ``show`` hands a mesh drawn by a slice
+    (``mesh.reference.picture``) to ``show_volume`` with ``--slice-normal``, and draws a surface itself. No OpenGL:
+    both ends are replaced by recorders."""
+    import cvxgeodesic.viewer as viewer
+    from cvxgeodesic.cli import main
+    from cvxgeodesic.mesh.tet_generate import tet_box
+
+    calls = []
+
+    def volume(mesh, distance=None, **kw):
+        calls.append(("volume", mesh.n_cells, kw["normal"], kw["method"]))
+        return np.zeros(mesh.n_vertices)
+
+    def start(*args):
+        calls.append(("surface",))
+        raise ParameterError("stopped before polyscope")
+
+    monkeypatch.setattr(viewer, "show_volume", volume)
+    monkeypatch.setattr(viewer, "_start", start)
+    box = tet_box(2)
+    (tmp_path / "box.node").write_text(f"{box.n_vertices} 3 0 0\n" + "".join(
+        f"{i} {x!r} {y!r} {z!r}\n" for i, (x, y, z) in enumerate(box.V.tolist())))
+    (tmp_path / "box.ele").write_text(f"{box.n_tets} 4 0\n" + "".join(
+        f"{i} {' '.join(map(str, t))}\n" for i, t in enumerate(box.T.tolist())))
+    out = str(tmp_path / "v.png")
+    assert main(["view", str(tmp_path / "box.ele"), "--slice-normal", "1,0,0", "--screenshot", out, "-q"]) == 0
+    assert calls == [("volume", box.n_tets, (1.0, 0.0, 0.0), "qclp")]
+    obj = tmp_path / "sphere.obj"
+    obj.write_text("".join(f"v {x} {y} {z}\n" for x, y, z in sphere.V)
+                   + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in sphere.F))
+    assert main(["view", str(obj), "--slice-normal", "1,0,0", "--screenshot", out, "-q"]) == 2
+    assert calls[1:] == [("surface",)]
+
+
+def test_show_draws_a_solid_by_its_slice_with_the_normal_given(gl, tmp_path):
+    """``cg.show`` on a tetrahedral mesh renders ``show_volume``'s cut, turned by ``normal`` (issue 42: the mesh's
+    reference says it is drawn by a slice)."""
+    from cvxgeodesic.mesh.tet_generate import tet_box
+
+    box = tet_box(3)
+    along_x = _render(tmp_path, "x.png", box, sources=0, normal=(1.0, 0.0, 0.0))
+    along_z = _render(tmp_path, "z.png", box, sources=0, normal=(0.0, 0.0, 1.0))
+    assert _surface(along_x).mean() > 0.05 and _surface(along_z).mean() > 0.05
+    assert np.abs(along_x - along_z).sum(axis=-1).mean() > 0.01  # another cut, seen from another side

@@ -10,7 +10,7 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable, Iterable
-from typing import Any, Literal, TypeAlias, cast, overload
+from typing import Any, Literal, TypeAlias, overload
 
 import numpy as np
 import scipy.sparse as sp
@@ -21,7 +21,8 @@ from ._threads import limited
 from .baselines import BASELINES
 from .capabilities import DOMAINS, METHODS, Capability, methods_for, source_kinds, supported
 from .errors import ParameterError
-from .mesh.convert import as_mesh
+from .mesh.convert import MeshLike, as_mesh
+from .mesh.simplex import SimplexMesh
 from .operators.metric import make_medium
 from .problems.formulations import ALIASES, FORMULATIONS, NORMALIZATIONS, smoothness_weight
 from .results import GeodesicResult, SolveInfo
@@ -226,7 +227,7 @@ class GeodesicSolver:
     @limited
     def __init__(
         self,
-        mesh: Any,
+        mesh: MeshLike,
         method: Method | None = None,
         *,
         m: float = 1.0,
@@ -246,8 +247,8 @@ class GeodesicSolver:
         estimate_error: bool = True,
     ) -> None:
         t0 = time.perf_counter()
-        self.mesh: Any = cast(Any, as_mesh(mesh))  # a TriMesh, TetMesh or CloudMesh: mesh.domain names which
-        self.domain = DOMAINS[self.mesh.domain]  # its defaults and the words of its messages
+        self.mesh: SimplexMesh = as_mesh(mesh)  # a TriMesh, TetMesh or CloudMesh: what differs, its reference says,
+        self.domain = DOMAINS[self.mesh.domain]  # and its domain names its defaults and the words of its messages
         self._check_method_and_solver(method, solver)
         self.order = check_order(order)
         target = resolve_target(multires, self.mesh.n_cells)  # a volume refuses multires below (capabilities)
@@ -413,7 +414,7 @@ class GeodesicSolver:
         return [self.solve(s) for s in items]
 
 
-def geodesic_distance(mesh: Any, *args: Any, sources: Any = None, method: Method | None = None,
+def geodesic_distance(mesh: MeshLike, *args: Any, sources: Any = None, method: Method | None = None,
                       m: float | None = None, solver: SolverName | None = None, lam: float | None = None,
                       tol: float = DEFAULT_TOL,
                       max_iter: int = 200, normalization: str = "area",
@@ -489,7 +490,7 @@ LOCAL_ROW_TOL = 1e-5
 
 # the return type follows max_distance: dense full rows without it, sparse local rows with it
 @overload
-def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
+def distance_matrix(mesh: MeshLike, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
                     solver: SolverName = "auto", progress: bool | None = None, *, lam: float | None = None,
                     tol: float | None = None, max_iter: int = 200, multires: bool | int = False,
                     normalization: str = "area", order: int = 1, threads: int | None = None,
@@ -497,7 +498,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None
                     max_distance: None = None, checkpoint: str | os.PathLike | None = None,
                     resolution: Any = None) -> np.ndarray: ...
 @overload
-def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
+def distance_matrix(mesh: MeshLike, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
                     solver: SolverName = "auto", progress: bool | None = None, *, lam: float | None = None,
                     tol: float | None = None, max_iter: int = 200, multires: bool | int = False,
                     normalization: str = "area", order: int = 1, threads: int | None = None,
@@ -505,7 +506,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None
                     max_distance: float, checkpoint: str | os.PathLike | None = None,
                     resolution: Any = None) -> sp.csr_matrix: ...
 @overload
-def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
+def distance_matrix(mesh: MeshLike, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
                     solver: SolverName = "auto", progress: bool | None = None, *, lam: float | None = None,
                     tol: float | None = None, max_iter: int = 200, multires: bool | int = False,
                     normalization: str = "area", order: int = 1, threads: int | None = None,
@@ -515,7 +516,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None
                     resolution: Any = None) -> np.ndarray | sp.csr_matrix: ...
 
 
-def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
+def distance_matrix(mesh: MeshLike, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
                     solver: SolverName = "auto",
                     progress: bool | None = None, *, lam: float | None = None, tol: float | None = None,
                     max_iter: int = 200, multires: bool | int = False, normalization: str = "area",
@@ -651,7 +652,7 @@ def distance_matrix(mesh: Any, vertices: ArrayLike, method: Method | None = None
     return store.matrix(inverse)
 
 
-def _matrix_rows(mesh: Any, vertices: Any) -> tuple[list, np.ndarray]:
+def _matrix_rows(mesh: SimplexMesh, vertices: Any) -> tuple[list, np.ndarray]:
     """The distinct sources of ``distance_matrix``'s rows and, for each row asked for, its index among them."""
     from .mesh.locate import CellPoint
     from .sources import BoundaryFaces, SurfaceCurve
@@ -692,7 +693,7 @@ def _is_mesh_resolution(value: Any) -> bool:
     return isinstance(value, str) and value.strip().lower() == "mesh"
 
 
-def _local_rows(mesh: Any, options: dict, max_distance: Any, items: list) -> tuple[Any, dict]:
+def _local_rows(mesh: SimplexMesh, options: dict, max_distance: Any, items: list) -> tuple[Any, dict]:
     """The factory and options of local rows (:class:`~cvxgeodesic.rows.LocalRows`), after their checks: the
     capability table's cell of local rows (a volume, multires, a medium, resolution= and sources other than vertices
     are refused there), checked once for the matrix; each patch's solver checks its own solve."""

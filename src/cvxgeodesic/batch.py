@@ -145,9 +145,9 @@ def _output_format(mesh, mesh_path, output_format: str | None) -> str:
     spec = FORMATS["." + fmt]
     if mesh.dim not in spec.dims:
         fits = [f for f in OUTPUT_FORMATS if mesh.dim in FORMATS["." + f].dims]
-        kind = "a tetrahedral mesh" if mesh.dim == 3 else "a triangle mesh"
-        raise ParameterError(f"{Path(mesh_path).name} is {kind}: its field cannot be written as .{fmt} "
-                             f"({spec.description} holds no {'tetrahedra' if mesh.dim == 3 else 'triangles'}); "
+        words = mesh.reference.words
+        raise ParameterError(f"{Path(mesh_path).name} is {words.mesh}: its field cannot be written as .{fmt} "
+                             f"({spec.description} holds no {words.many}); "
                              f"give --format {' or '.join(fits)}, or no --format (.{default})")
     if spec.package is not None:
         optional_package(spec.package, f"writing .{fmt} files", ParameterError)
@@ -187,11 +187,10 @@ def _mesh_sources(mesh, spec):
     if spec == "boundary":
         return spec
     from .mesh.fileorder import file_sources
-    from .mesh.locate import POINT_AT
 
     if all(isinstance(s, int) for s in spec):
         return file_sources(mesh, spec).tolist()
-    at = POINT_AT[mesh.dim]  # the closest surface point, or the point inside the solid
+    at = mesh.reference.locate  # the closest surface point, or the point inside the solid
     return [int(file_sources(mesh, [s])[0]) if isinstance(s, int) else at(mesh, s) for s in spec]
 
 
@@ -278,7 +277,7 @@ def solve_one(mesh_path: str, sources: list[int], out_dir: str, method: str | No
             warnings.simplefilter("always")
             mesh = load_mesh(mesh_path)
             row["warnings"] = [str(w.message) for w in caught]
-            row["n_vertices"], row["n_faces"] = mesh.n_file_vertices, mesh.n_cells  # tetrahedra in a volume
+            row["n_vertices"], row["n_cells"] = mesh.n_file_vertices, mesh.n_cells  # faces, or tetrahedra
             output_format = _output_format(mesh, mesh_path, output_format)  # before the solve: it may not fit
             dist_path, sidecar = output_paths(mesh_path, out_dir, output_format)
             src = _mesh_sources(mesh, sources)  # vertex indices are the file's
@@ -291,7 +290,7 @@ def solve_one(mesh_path: str, sources: list[int], out_dir: str, method: str | No
         meta = {"status": "ok", "mesh": mesh_path, "output": dist_path.name, "cvxgeodesic": __version__,
                 "params": _params(sources, method, m, solver, multires, output_format), "dim": mesh.dim,
                 "domain": mesh.domain,
-                "n_vertices": mesh.n_file_vertices, "n_mesh_vertices": mesh.n_vertices, "n_faces": mesh.n_cells,
+                "n_vertices": mesh.n_file_vertices, "n_mesh_vertices": mesh.n_vertices, "n_cells": mesh.n_cells,
                 "wall_time": row["time_s"], "worker": row["worker"], "warnings": row["warnings"],
                 "notes": row["notes"], "info": res.info.as_dict()}
         text = json.dumps(_json_safe(meta), indent=1, allow_nan=False) + "\n"
@@ -304,7 +303,7 @@ def solve_one(mesh_path: str, sources: list[int], out_dir: str, method: str | No
 
 def _row(mesh, status: str, **values) -> dict:
     """A row of :func:`run_batch`'s result: every key, None (no lists) where ``values`` gives none."""
-    return {"mesh": str(mesh), "status": status, "output": None, "n_vertices": None, "n_faces": None,
+    return {"mesh": str(mesh), "status": status, "output": None, "n_vertices": None, "n_cells": None,
             "iterations": None, "solve_status": None, "time_s": None, "error": None, "warnings": [], "notes": [],
             "worker": None, **values}
 
@@ -359,7 +358,7 @@ def run_batch(paths, sources, out_dir, *, method: str | None = None, m: float = 
     list of dict
         One row per mesh, in the order of ``paths``: ``mesh``, ``status``
         (``"ok"``, ``"skipped"`` (already done) or ``"failed"``), ``output``,
-        ``n_vertices``, ``n_faces`` (tetrahedra in a volume), ``iterations``, ``solve_status``, ``time_s``
+        ``n_vertices``, ``n_cells`` (faces, or tetrahedra in a volume), ``iterations``, ``solve_status``, ``time_s``
         (load + solve + write, on the worker), ``error`` (one line, or None),
         ``warnings`` (from loading the mesh), ``notes`` (every note and warning of the
         task, each once) and ``worker`` (host name). ``n_vertices`` is the file's count.
@@ -538,7 +537,7 @@ def _with_name(name: str, note: str) -> str:
 
 #: The columns of :func:`format_summary` (``name`` and ``note`` are made there), all left-aligned.
 SUMMARY_COLUMNS = tuple(Column(h, k, *f, align="left") for h, k, *f in (
-    ("mesh", "name"), ("status", "status"), ("vertices", "n_vertices"), ("faces", "n_faces"), ("iters", "iterations"),
+    ("mesh", "name"), ("status", "status"), ("vertices", "n_vertices"), ("cells", "n_cells"), ("iters", "iterations"),
     ("time_s", "time_s", lambda v: f"{v:.2f}"), ("output / error", "note")))
 
 

@@ -31,13 +31,17 @@ import os
 import sys
 import time
 from pathlib import Path
-from typing import Any, cast
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
 from ._atomic import atomic_write, check_output_dir, output_folder
 from .errors import OutputError, ParameterError, SolverError, error_line
 from .tables import Column, text_table
+
+if TYPE_CHECKING:
+    from .mesh.convert import MeshLike
+    from .mesh.simplex import SimplexMesh
 
 __all__ = [
     "COLUMN_HELP", "CSV_COLUMNS", "TABLE_COLUMNS", "evaluate_methods", "format_table",
@@ -132,7 +136,7 @@ def _label(run: Run, order: str = " order ") -> str:
     return run[0] if run[1] == 1 else f"{run[0]}{order}{run[1]}"
 
 
-def run_compare(mesh: Any, sources: Any, methods: Any, out_dir: str | os.PathLike, *, m: float = 1.0,
+def run_compare(mesh: MeshLike, sources: Any, methods: Any, out_dir: str | os.PathLike, *, m: float = 1.0,
                 solver: str = "auto", reference: Any = None, progress: bool = True, view: Any = None,
                 up: Any = "auto") -> list[dict]:
     """Solve with several methods, compare each with the reference, write a CSV and PNGs.
@@ -237,7 +241,7 @@ def run_compare(mesh: Any, sources: Any, methods: Any, out_dir: str | os.PathLik
     return rows
 
 
-def _attempt(mesh: Any, run: Run, sources: Any, m: float, solver: str) -> Outcome:
+def _attempt(mesh: SimplexMesh, run: Run, sources: Any, m: float, solver: str) -> Outcome:
     from .api import BASELINE_METHODS, GeodesicSolver, Method
 
     t0 = time.perf_counter()
@@ -250,7 +254,7 @@ def _attempt(mesh: Any, run: Run, sources: Any, m: float, solver: str) -> Outcom
         return None, time.perf_counter() - t0, exc
 
 
-def solve_methods(mesh: Any, sset: Any, runs: list[Run], *, reference: Run | None = None, m: float = 1.0,
+def solve_methods(mesh: SimplexMesh, sset: Any, runs: list[Run], *, reference: Run | None = None, m: float = 1.0,
                   solver: str = "auto", say: Any = None) -> dict[Run, Outcome]:
     """Solve the reference and every run once; a failure is kept, not raised.
 
@@ -306,7 +310,7 @@ def _failed_row(row: dict, wall: float, err: BaseException) -> None:
         row["iterations"] = int(it) if isinstance(it, int | np.integer) else None
 
 
-def evaluate_methods(mesh: Any, runs: list[Run], results: dict[Run, Outcome], reference: np.ndarray | None,
+def evaluate_methods(mesh: SimplexMesh, runs: list[Run], results: dict[Run, Outcome], reference: np.ndarray | None,
                      reference_label: str = "exact") -> tuple[list[dict], dict[Run, np.ndarray]]:
     """The rows of the comparison: each run's record of :func:`cvxgeodesic.evaluation.summary.summarize`.
 
@@ -390,19 +394,19 @@ def _field_scale(results: dict[Run, Outcome], runs: list[Run], reference: np.nda
     return vmax_field, levels
 
 
-def _check_camera(mesh: Any, view: Any, up: Any) -> None:
+def _check_camera(mesh: SimplexMesh, view: Any, up: Any) -> None:
     """``view`` and ``up`` of a surface's pictures checked before the solves (``"auto"`` is found when drawing)."""
     from .plotting import up_vector, view_list
 
-    if mesh.dim == 2:
+    if mesh.reference.picture == "surface":  # a slice is seen along its normal
         view_list(view)
         if not (isinstance(up, str) and up == "auto"):
             up_vector(mesh.V, up)
 
 
-def write_pictures(out: Path, mesh: Any, sset: Any, runs: list[Run], results: dict[Run, Outcome], rows: list[dict],
-                   rel_errors: dict[Run, np.ndarray], reference: np.ndarray | None, *, view: Any = None,
-                   up: Any = "auto") -> None:
+def write_pictures(out: Path, mesh: SimplexMesh, sset: Any, runs: list[Run], results: dict[Run, Outcome],
+                   rows: list[dict], rel_errors: dict[Run, np.ndarray], reference: np.ndarray | None, *,
+                   view: Any = None, up: Any = "auto") -> None:
     """Write ``field_<method>.png``, ``error_<method>.png`` and ``gradient_histogram.png`` into ``out``.
 
     Parameters
@@ -418,8 +422,9 @@ def write_pictures(out: Path, mesh: Any, sset: Any, runs: list[Run], results: di
     """
     from .evaluation.slice_plot import draw_field
 
-    # the vertices where every field is 0: marked in the pictures, left out of the histograms
-    src = sset.vertices if mesh.dim == 2 else sset.fixed_vertices(mesh)
+    # the vertices where every field is 0: marked in the pictures, left out of the histograms (a volume's source faces'
+    # vertices too)
+    src = sset.fixed_vertices(mesh) if sset.facets.size else sset.vertices
     vmax_field, levels = _field_scale(results, runs, reference)
     # one colour scale for every error map: the median of the methods' 99th percentiles (the reference's 0 aside),
     # so one very bad method does not wash out the others; the colour bar shows an arrow where it clips
@@ -443,7 +448,7 @@ def write_pictures(out: Path, mesh: Any, sset: Any, runs: list[Run], results: di
     _write_histograms(out, mesh, src, runs, results, reference, rows[0]["reference"] if rows else "")
 
 
-def _write_histograms(out: Path, mesh: Any, src: np.ndarray, runs: list[Run], results: dict[Run, Outcome],
+def _write_histograms(out: Path, mesh: SimplexMesh, src: np.ndarray, runs: list[Run], results: dict[Run, Outcome],
                       reference: np.ndarray | None, reference_label: str) -> None:
     """Gradient-norm histograms: the reference first, then every successful method."""
     from .evaluation import gradient_norm_histogram
@@ -462,9 +467,9 @@ def _write_histograms(out: Path, mesh: Any, src: np.ndarray, runs: list[Run], re
     last = max((int(nz[-1]) for nz in nonzero if nz.size), default=len(edges) - 2)
     cut = min(max(last + 2, int(np.searchsorted(edges, 1.5))), len(edges) - 1)  # show at least [0, 1.5]
     hists = {k: (c[:cut], e[: cut + 1]) for k, (c, e) in hists.items()}
-    cell, weight = ("triangle", "area") if mesh.dim == 2 else ("tetrahedron", "volume")
-    plot_gradient_histogram(hists, out / "gradient_histogram.png",
-                            title=f"‖∇d‖ per {cell} on {mesh.name} ({weight}-weighted, source {cell}s excluded)")
+    words = mesh.reference.words
+    plot_gradient_histogram(hists, out / "gradient_histogram.png", title=f"‖∇d‖ per {words.one} on {mesh.name} "
+                            f"({words.measure}-weighted, source {words.many} excluded)")
 
 
 # ----------------------------------------------------------------------------------------------------------------------

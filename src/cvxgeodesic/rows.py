@@ -30,7 +30,7 @@ from collections.abc import Callable, Iterator, Sequence
 from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -42,6 +42,10 @@ from ._cluster import open_client, require_distributed, stop_after_interrupt
 from ._threads import resolve_threads, thread_limit
 from .errors import CheckpointWarning, ParameterError, warn_user
 from .mesh.patch import ball_patch
+
+if TYPE_CHECKING:
+    from .mesh.simplex import SimplexMesh
+    from .mesh.trimesh import TriMesh
 
 __all__ = ["LocalRows", "RowStore", "checkpoint_rows", "cluster_rows", "distributed_rows", "keeping", "solve_rows",
            "sparse_to_file_order", "split_rows"]
@@ -72,12 +76,12 @@ SAVE_SHARE = 10.0
 RESUMABLE_ACROSS = ("threads",)
 
 
-def fingerprint(mesh: Any, items: Sequence[Any], options: dict) -> dict[str, str]:
+def fingerprint(mesh: SimplexMesh, items: Sequence[Any], options: dict) -> dict[str, str]:
     """What a checkpoint's rows depend on, as short strings: the mesh, the sources, every option.
 
     Parameters
     ----------
-    mesh : TriMesh
+    mesh : TriMesh or TetMesh
     items : sequence
         The distinct sources, one per row.
     options : dict
@@ -284,12 +288,12 @@ def _vstack_keeping_zeros(rows: Sequence[sp.csr_matrix], n: int) -> sp.csr_matri
     return sp.vstack(rows, format="csr", dtype=np.float64) if rows else sp.csr_matrix((0, n))
 
 
-def sparse_to_file_order(mesh: Any, D: sp.csr_matrix) -> sp.csr_matrix:
+def sparse_to_file_order(mesh: SimplexMesh, D: sp.csr_matrix) -> sp.csr_matrix:
     """Columns of a sparse matrix in the numbering of the file ``mesh`` was read from, stored zeros kept.
 
     Parameters
     ----------
-    mesh : TriMesh
+    mesh : TriMesh or TetMesh
     D : (k, n) CSR matrix
         Columns are mesh vertices.
 
@@ -336,7 +340,7 @@ class LocalRows:
         Keyword arguments of ``factory`` (``method``, ``m``, ``lam``, ``normalization``, ``order``, ...).
     """
 
-    def __init__(self, mesh: Any, *, max_distance: float, factory: Callable[..., Any], **options: Any) -> None:
+    def __init__(self, mesh: TriMesh, *, max_distance: float, factory: Callable[..., Any], **options: Any) -> None:
         self.mesh = mesh
         self.max_distance = float(max_distance)
         self.factory = factory
@@ -378,7 +382,7 @@ class LocalRows:
         return self.factory(patch.mesh, **options).solve(patch.source).distance
 
 
-def _whole_mesh_lambda(mesh: Any, options: dict) -> float | None:
+def _whole_mesh_lambda(mesh: TriMesh, options: dict) -> float | None:
     """λ of the whole mesh (None without a smoothness energy or for an unknown method: the solver says why)."""
     from .capabilities import DOMAINS
     from .problems.formulations import ALIASES, FORMULATIONS, canonical_method, smoothness_weight
@@ -397,7 +401,7 @@ def _whole_mesh_lambda(mesh: Any, options: dict) -> float | None:
     return smoothness_weight(mesh, m, normalization, energy, order=order)
 
 
-def solve_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any], options: dict, store: RowStore, *,
+def solve_rows(factory: Callable[..., Any], mesh: SimplexMesh, items: Sequence[Any], options: dict, store: RowStore, *,
                progress: bool | None, desc: str) -> None:
     """Solve the rows ``store`` has not got, in this process, with one solver; each row into ``store`` as it ends.
 
@@ -405,7 +409,7 @@ def solve_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any], opt
     ----------
     factory : callable
         ``factory(mesh, **options)`` builds the solver (built only when a row is left).
-    mesh : TriMesh
+    mesh : TriMesh or TetMesh
     items : sequence
         The source of each distinct row.
     options : dict
@@ -434,8 +438,8 @@ def solve_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any], opt
                 bar.update(1)
 
 
-def cluster_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any], options: dict, store: RowStore, *,
-                 scheduler: Any, workers: int | None, progress: bool | None, desc: str) -> None:
+def cluster_rows(factory: Callable[..., Any], mesh: SimplexMesh, items: Sequence[Any], options: dict,
+                 store: RowStore, *, scheduler: Any, workers: int | None, progress: bool | None, desc: str) -> None:
     """:func:`solve_rows` on a Dask cluster (:func:`distributed_rows`): the rows ``store`` has not got, each chunk's
     rows into ``store`` (and its checkpoint) as the chunk finishes."""
     _say_resumed(store, progress)
@@ -580,7 +584,7 @@ def split_rows(n_rows: int, n_chunks: int) -> list[slice]:
     return [slice(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
 
 
-def solve_chunk(factory: Callable[..., Any], mesh: Any, items: Sequence[Any], options: dict,
+def solve_chunk(factory: Callable[..., Any], mesh: SimplexMesh, items: Sequence[Any], options: dict,
                 topic: str | None = None) -> tuple[np.ndarray, list[tuple[type[Warning], str]]]:
     """The task of one chunk, on a worker: one solver, its rows in order, and the warnings they raised.
 
@@ -588,7 +592,7 @@ def solve_chunk(factory: Callable[..., Any], mesh: Any, items: Sequence[Any], op
     ----------
     factory : callable
         ``factory(mesh, **options)`` builds the solver (:class:`~cvxgeodesic.api.GeodesicSolver`).
-    mesh : TriMesh
+    mesh : TriMesh or TetMesh
     items : sequence
         The sources of each row (anything ``solve`` takes).
     options : dict
@@ -670,7 +674,7 @@ class _RowBar:
                 self.bar.close()
 
 
-def distributed_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any], options: dict, *,
+def distributed_rows(factory: Callable[..., Any], mesh: SimplexMesh, items: Sequence[Any], options: dict, *,
                      scheduler: Any = None, workers: int | None = None, progress: bool | None = False,
                      desc: str = "rows", on_chunk: Callable[[slice, Any], None]) -> None:
     """Solve one row per item on a Dask cluster, in contiguous chunks, each chunk's rows to ``on_chunk``.
@@ -680,7 +684,7 @@ def distributed_rows(factory: Callable[..., Any], mesh: Any, items: Sequence[Any
     factory : callable
         ``factory(mesh, **options)`` builds a solver whose ``solve(item).distance`` is a row; it must be
         importable on the workers (it is sent by reference).
-    mesh : TriMesh
+    mesh : TriMesh or TetMesh
         Scattered to the workers once.
     items : sequence
         One entry per row, at least one.

@@ -17,9 +17,9 @@ from numpy.typing import ArrayLike
 
 from ._atomic import check_replaceable, output_set
 from .errors import ParameterError
-from .mesh.convert import as_mesh
+from .mesh.convert import MeshLike, as_mesh
+from .mesh.simplex import SimplexMesh
 from .mesh.tet_slice import plane_frame
-from .mesh.tetmesh import TetMesh
 from .plotting import isoline_segments
 from .sources import resolve_sources
 from .validation import as_points, as_vertex_field, check_output_path
@@ -66,7 +66,7 @@ def _init(ps: Any, headless: bool) -> None:
     _init.done = True  # type: ignore[attr-defined]
 
 
-def _source_positions(mesh: Any, source_set: Any, vertices: np.ndarray) -> np.ndarray:
+def _source_positions(mesh: SimplexMesh, source_set: Any, vertices: np.ndarray) -> np.ndarray:
     """(k, 3) positions of the source marks on a surface or in a solid: vertices (and a solid's source faces'
     vertices), points, and the ends of curve pieces."""
     if source_set is None:
@@ -75,7 +75,7 @@ def _source_positions(mesh: Any, source_set: Any, vertices: np.ndarray) -> np.nd
                            *source_set.segment_ends(mesh)], axis=0)
 
 
-def _given_marks(mesh: Any, distance: np.ndarray, sources: Any) -> np.ndarray:
+def _given_marks(mesh: SimplexMesh, distance: np.ndarray, sources: Any) -> np.ndarray:
     """(k, 3) marks of a given field: its ``sources`` resolved, or the vertices where it is 0."""
     if sources is None:
         return mesh.V[np.flatnonzero(distance == 0)]
@@ -99,7 +99,7 @@ def _add_marks(ps: Any, marks: np.ndarray, diag: float) -> None:
 class _Viewer:
     """The polyscope scene of one mesh: field, isolines, source marks; ``pick`` re-solves from a vertex."""
 
-    def __init__(self, ps: Any, mesh: Any, *, method: Method, solver_kwargs: dict, isolines: bool) -> None:
+    def __init__(self, ps: Any, mesh: SimplexMesh, *, method: Method, solver_kwargs: dict, isolines: bool) -> None:
         self.ps = ps
         self.mesh = mesh
         self.method = method
@@ -109,7 +109,7 @@ class _Viewer:
         self._last_selection: tuple | None = None
         self.message = "click a vertex to re-solve from it"
         self.distance: np.ndarray | None = None
-        self.surface = ps.register_surface_mesh(MESH_NAME, mesh.V, mesh.F, smooth_shade=True,
+        self.surface = ps.register_surface_mesh(MESH_NAME, mesh.V, mesh.cells, smooth_shade=True,
                                                 color=(0.8, 0.8, 0.8))
         self.surface.set_selection_mode("vertices_only")
         diag = float(mesh.bbox_diagonal)
@@ -175,13 +175,14 @@ class _Viewer:
 
 
 def show(
-    mesh: Any,
+    mesh: MeshLike,
     distance: ArrayLike | None = None,
     *,
     sources: Any = None,
     method: Method | None = None,
     screenshot: str | os.PathLike | None = None,
     isolines: bool = True,
+    normal: ArrayLike = (0.0, 0.0, 1.0),
     window_size: tuple[int, int] = (1024, 768),
     overwrite_read_only: bool = False,
     **solver_kwargs: Any,
@@ -191,8 +192,9 @@ def show(
     Parameters
     ----------
     mesh : TriMesh, (V, F) tuple or path
-        The surface, ``n`` vertices (anything :class:`~cvxgeodesic.GeodesicSolver` accepts); a tetrahedral mesh
-        goes to :func:`show_volume` (default method ``"qclp"``).
+        The surface, ``n`` vertices (anything :class:`~cvxgeodesic.GeodesicSolver` accepts); a mesh drawn by a
+        slice (``mesh.reference.picture``: a tetrahedral mesh) goes to :func:`show_volume` (default method
+        ``"qclp"``).
     distance : (n,) array_like of float, optional
         The field to show (``inf`` where unreachable). Without it the field is solved from ``sources``.
     sources : optional
@@ -205,6 +207,8 @@ def show(
         Render one frame to this PNG and return without opening a window (works without a display).
     isolines : bool
         Draw isolines (20 over the field's range).
+    normal : (3,) float array_like
+        A solid's slice plane normal (:func:`show_volume`); unused on a surface.
     window_size : (int, int)
         Width and height in pixels of the window or screenshot.
     overwrite_read_only : bool, default False
@@ -226,9 +230,10 @@ def show(
         without ``overwrite_read_only``), or no display (or polyscope already started off-screen in this process)
         and no ``screenshot``.
     """
-    if isinstance(mesh := as_mesh(mesh), TetMesh):
+    if (mesh := as_mesh(mesh)).reference.picture == "slice":
         return show_volume(mesh, distance, sources=sources, method=method or "qclp", screenshot=screenshot,
-                           window_size=window_size, overwrite_read_only=overwrite_read_only, **solver_kwargs)
+                           normal=normal, window_size=window_size, overwrite_read_only=overwrite_read_only,
+                           **solver_kwargs)
     if distance is not None:
         d = as_vertex_field(distance, "distance", mesh.n_vertices)
     ps = _start(window_size, screenshot, overwrite_read_only)
@@ -289,7 +294,7 @@ def _present(ps: Any, screenshot: str | os.PathLike | None, callback: Any,
 
 
 def show_volume(
-    mesh: Any,
+    mesh: MeshLike,
     distance: ArrayLike | None = None,
     *,
     sources: Any = None,
@@ -340,8 +345,8 @@ def show_volume(
         As :func:`show`; a zero normal.
     """
     mesh = as_mesh(mesh)
-    if not isinstance(mesh, TetMesh):
-        raise ParameterError("show_volume takes a tetrahedral mesh; show() draws surfaces")
+    if mesh.reference.picture != "slice":
+        raise ParameterError(f"show_volume takes a tetrahedral mesh; show() draws {mesh.reference.words.mesh}")
     unit = plane_frame(normal)[0]  # a zero normal refused there
     diag = float(mesh.bbox_diagonal) if mesh.bbox_diagonal > 0 else 1.0
     # the default plane is nudged off the centre by 1 % of the diagonal: on a structured mesh the centre plane holds
@@ -357,7 +362,7 @@ def show_volume(
     else:
         d = as_vertex_field(distance, "distance", mesh.n_vertices)
         marks = _given_marks(mesh, d, sources)
-    vol = ps.register_volume_mesh(VOLUME_NAME, mesh.V, tets=mesh.T, color=(0.8, 0.8, 0.8))
+    vol = ps.register_volume_mesh(VOLUME_NAME, mesh.V, tets=mesh.cells, color=(0.8, 0.8, 0.8))
     vol.add_scalar_quantity(FIELD_NAME, _shown(d)[0], defined_on="vertices", enabled=True, cmap="viridis",
                             isolines_enabled=True)
     if len(marks):

@@ -1,8 +1,8 @@
 """Command-line interface: ``cvxgeodesic distance | compare | batch | path | view | matrix | demo``.
 
 One module per command (``distance.py``, ``compare.py``, ...), each with ``add_parser(sub)`` and ``run(args)``;
-``distance``, ``compare`` and ``view`` take a surface or a tetrahedral mesh, what differs being data
-(:data:`cvxgeodesic.cli._options.SPACES`). Every error a user can cause ends the program with exit code 2 and a
+``distance``, ``compare`` and ``view`` take a surface or a tetrahedral mesh, what differs asked of its reference
+(``mesh.reference``: words, ``locate``). Every error a user can cause ends the program with exit code 2 and a
 one-line message on stderr; ``--debug`` shows the full traceback instead. ``batch`` returns 1 when some meshes
 failed (each listed) and the others were solved. Ctrl-C ends it with 130 and SIGTERM with 143, one line each and no
 partial file. Output files are checked before any work: never one of the inputs, and a read-only one only with

@@ -8,9 +8,12 @@ from __future__ import annotations
 import argparse
 import signal
 import sys
-from typing import Any
+from typing import TYPE_CHECKING
 
 from ..errors import ParameterError
+
+if TYPE_CHECKING:
+    from ..mesh.simplex import SimplexMesh
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 128 + signal.SIGINT  # 130, as a shell reports a process ended by Ctrl-C
@@ -91,7 +94,7 @@ class Signals:
         return "cvxgeodesic: interrupted", EXIT_INTERRUPTED
 
 
-def load_input(path: str) -> Any:
+def load_input(path: str) -> SimplexMesh:
     """The command's input: a point file's cloud (its triangle soup, ``mesh/pointcloud_io.is_point_file``), else
     :func:`~cvxgeodesic.mesh.load.load_mesh`."""
     from ..mesh.io import load_mesh

@@ -1,10 +1,10 @@
 """The options several commands share and what they become: sources, method, travel cost, help texts.
 
-A surface (``mesh.dim == 2``) and a volume (``mesh.dim == 3``) take the same options; what differs between the two
-is data, :data:`SPACES`: the word for the cells and where a ``--source-point`` goes (the closest surface point, or
-the point itself inside the solid); the method names, the default method of each domain and what a travel cost
-applies to are the capability table's (:mod:`cvxgeodesic.capabilities`), the formats of a field the registry's
-(``Format.dims``).
+A surface and a volume take the same options; what differs between the two is the mesh's reference simplex
+(``mesh.reference``, :mod:`cvxgeodesic.mesh.reference`): the words for the cells and where a ``--source-point`` goes
+(``locate``: the closest surface point, or the point itself inside the solid); the method names, the default method
+of each domain and what a travel cost applies to are the capability table's (:mod:`cvxgeodesic.capabilities`), the
+formats of a field the registry's (``Format.dims``).
 
 Only the standard library at import, as the whole :mod:`cvxgeodesic.cli` package (see its ``__init__``).
 """
@@ -14,31 +14,16 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from ..errors import ParameterError, SourceError
 
 if TYPE_CHECKING:
     from ..api import Method
+    from ..mesh.simplex import SimplexMesh
 
 M_HELP = "smoothness multiplier m (default 1): λ = m·κ·√area, one rounding on the surface whatever the mesh"
 SLICE_HELP = "tetrahedral meshes: normal of the slice through the centre that --png (or view) shows (default 0,0,1)"
-
-
-@dataclass(frozen=True)
-class Space:
-    """What the command line does differently on a surface and in a volume."""
-
-    cells: str  # the cells in messages
-    where: str  # where a --source-point lies, for messages
-
-
-#: By simplex dimension (``mesh.dim``).
-SPACES = {
-    2: Space("faces", ""),
-    3: Space("tetrahedra", " (inside the solid)"),
-}
 
 
 def mesh_help() -> str:
@@ -124,7 +109,7 @@ def default_methods() -> str:
     return "; ".join([first.default_method, *(f"{d.default_method} on {d.meshes}" for d in rest)])
 
 
-def method_for(args: argparse.Namespace, mesh: Any) -> Method:
+def method_for(args: argparse.Namespace, mesh: SimplexMesh) -> Method:
     """``--method`` when given, else the default of the mesh's domain
     (:attr:`~cvxgeodesic.capabilities.Domain.default_method`; a point file's is the cloud's, docs/pointclouds.md)."""
     from ..capabilities import DOMAINS
@@ -143,7 +128,7 @@ def add_cost_options(p: argparse.ArgumentParser) -> None:
                         "data)")
 
 
-def cli_cost(args: argparse.Namespace, mesh: Any) -> Any:
+def cli_cost(args: argparse.Namespace, mesh: SimplexMesh) -> Any:
     """The ``cost`` of :class:`~cvxgeodesic.api.GeodesicSolver` from ``--cost`` / ``--cost-field``, in the mesh's
     numbering (None without either); notes go to ``args.notes``.
 
@@ -222,11 +207,12 @@ def _given_sources(args: argparse.Namespace, where: str = "") -> tuple[list[int]
     return vertices, points, boundary
 
 
-def cli_sources(args: argparse.Namespace, mesh: Any) -> tuple[Any, str]:
+def cli_sources(args: argparse.Namespace, mesh: SimplexMesh) -> tuple[Any, str]:
     """The ``sources`` value for :meth:`GeodesicSolver.solve` from the options, and a label for titles.
 
-    ``--source`` are vertex numbers of the file; ``--source-point`` the closest surface point on a surface (a
-    note when it is off the surface), the point itself inside a solid.
+    ``--source`` are vertex numbers of the file; ``--source-point`` the mesh's point there
+    (``mesh.reference.locate``): the closest surface point on a surface (a note when it is off the surface), the
+    point itself inside a solid.
 
     Raises
     ------
@@ -236,31 +222,33 @@ def cli_sources(args: argparse.Namespace, mesh: Any) -> tuple[Any, str]:
     import numpy as np
 
     from ..mesh.fileorder import file_sources
-    from ..mesh.locate import volume_point
 
-    vertices, points, boundary = _given_sources(args, SPACES[mesh.dim].where)
+    vertices, points, boundary = _given_sources(args, f" ({mesh.reference.words.domain})")
     if boundary:
         return "boundary", "boundary"
     if vertices:  # vertex indices of the file (load_mesh may weld or drop vertices)
         vertices = file_sources(mesh, vertices).tolist()
     pts: list[Any] = []
     if points:
-        X = np.array(points, dtype=float)
-        pts = _surface_points(mesh, X, points) if mesh.dim == 2 else list(volume_point(mesh, X))  # a list for (p, 3)
+        pts = _located_points(mesh, np.array(points, dtype=float), points)
     label = ", ".join([*(str(v) for v in vertices), *("(" + ",".join(f"{c:g}" for c in x) + ")" for x in points)])
     return [*vertices, *pts], label
 
 
-def _surface_points(mesh: Any, X: Any, points: list) -> list:
-    from ..mesh.locate import closest_points, surface_point
+def _located_points(mesh: SimplexMesh, X: Any, points: list) -> list:
+    """The mesh's points at the (p, 3) positions ``X`` (``mesh.reference.locate``: a surface's closest points, a
+    solid's points inside, which refuses a position outside), with a note for each one that is off the mesh."""
+    import numpy as np
+
     from ..sources import ON_SURFACE_TOL
 
-    _, _, dist = closest_points(mesh, X)
+    located = list(mesh.reference.locate(mesh, X))  # a list for (p, 3) positions
+    dist = np.linalg.norm(np.array([p.position(mesh) for p in located]).reshape(-1, 3) - X, axis=1)
     for x, dd in zip(points, dist, strict=True):
         if dd > ON_SURFACE_TOL * mesh.bbox_diagonal:
-            print(f"cvxgeodesic: note: --source-point {','.join(f'{c:g}' for c in x)} is {dd:.3g} from the surface; "
-                  "using the closest surface point", file=sys.stderr)
-    return list(surface_point(mesh, X))  # a list for (p, 3) positions
+            print(f"cvxgeodesic: note: --source-point {','.join(f'{c:g}' for c in x)} is {dd:.3g} from "
+                  f"{mesh.name}; using the closest point {mesh.reference.words.preposition} it", file=sys.stderr)
+    return located
 
 
 def batch_sources(args: argparse.Namespace) -> Any:

@@ -8,10 +8,13 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from . import _options as opt
 from ._common import add_overwrite_option, check_outputs, load_input
+
+if TYPE_CHECKING:
+    from ..mesh.simplex import SimplexMesh
 
 
 def add_parser(sub: Any) -> None:
@@ -59,20 +62,20 @@ def run(args: argparse.Namespace) -> int:
     from .._atomic import output_set
     from .._verbose import progress_printer
     from ..api import GeodesicSolver
-    from ..mesh.formats.registry import DISTANCE_EXTENSIONS, VOLUME_DISTANCE_EXTENSIONS
+    from ..mesh.formats.registry import DISTANCE_EXTENSIONS, FORMATS
     from ..mesh.io import save_distance
     from ..validation import check_output_path
 
     check_outputs(args, ("-o", args.output, DISTANCE_EXTENSIONS), ("--png", args.png, (".png",)))
     mesh = load_input(args.mesh)
-    space = opt.SPACES[mesh.dim]
-    if mesh.dim == 3:  # before the solve: save_distance writes a volume's field in fewer formats
-        check_output_path(args.output, VOLUME_DISTANCE_EXTENSIONS)
+    # before the solve: the formats that hold a field on this mesh's cells (a volume's: fewer)
+    check_output_path(args.output, tuple(e for e in DISTANCE_EXTENSIONS if mesh.dim in FORMATS[e].dims))
     sources, label = opt.cli_sources(args, mesh)
     method = opt.method_for(args, mesh)
     log = sys.stderr
     if not args.quiet:
-        print(f"{mesh.name}: {mesh.n_file_vertices} vertices, {mesh.n_cells} {space.cells}; method {method}"
+        cells = mesh.reference.words.many
+        print(f"{mesh.name}: {mesh.n_file_vertices} vertices, {mesh.n_cells} {cells}; method {method}"
               + (f", order {args.order}" if args.order != 1 else ""), file=log)
     solver = GeodesicSolver(mesh, method, m=args.m, lam=args.lam, solver=args.solver,
                             normalization=args.normalization, order=args.order, cost=opt.cli_cost(args, mesh),
@@ -98,17 +101,19 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def draw_field(mesh: Any, res: Any, path: Any, *, title: str, normal: tuple[float, float, float],
+def draw_field(mesh: SimplexMesh, res: Any, path: Any, *, title: str, normal: tuple[float, float, float],
                line: Any = None, view: Any = None, up: Any = "auto") -> None:
-    """The field of ``res`` and its sources into a PNG (:func:`~cvxgeodesic.evaluation.slice_plot.draw_field`): in a
-    volume every source is marked, its points inside too; ``line``, a geodesic path, replaces the marks. ``view`` and
-    ``up``: a surface's camera (:func:`~cvxgeodesic.plotting.plot_field`)."""
+    """The field of ``res`` and its sources into a PNG (:func:`~cvxgeodesic.evaluation.slice_plot.draw_field`): on a
+    slice every source is marked, its points inside too; ``line``, a geodesic path, replaces the marks. ``view`` and
+    ``up``: a surface's camera (:func:`~cvxgeodesic.plotting.plot_field`), whose path picture has no colour bar
+    label."""
     import numpy as np
 
     from ..evaluation.slice_plot import draw_field as draw
 
     sset, points = res.source_set, None
-    if mesh.dim == 3 and sset is not None:  # the vertices at 0 and the points inside
+    if sset is not None:  # the vertices at 0 and the points (a slice's marks; a surface marks res.sources)
         points = np.vstack([mesh.V[sset.fixed_vertices(mesh)], sset.point_positions(mesh)])
+    label = None if line is not None and mesh.reference.picture == "surface" else "geodesic distance"
     draw(mesh, res.distance, path, title=title, sources=res.sources, points=points, line=line, normal=normal,
-         label=None if line is not None and mesh.dim == 2 else "geodesic distance", view=view, up=up)
+         label=label, view=view, up=up)

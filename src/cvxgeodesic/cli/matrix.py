@@ -80,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
     from ..rows import checkpoint_rows, sparse_to_file_order
 
     local = _check(args)
-    mesh: Any = load_input(args.mesh)  # a TriMesh or a TetMesh: both have the file's numbering
+    mesh = load_input(args.mesh)  # a TriMesh or a TetMesh: both have the file's numbering
     if not args.source:
         raise SourceError("give the source vertex of each row: -s I[,J...] (repeatable)")
     rows = [int(file_sources(mesh, [s])[0]) for s in args.source]  # one row per -s, in the given order

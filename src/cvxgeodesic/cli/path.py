@@ -5,12 +5,15 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..errors import ParameterError, SourceError
 from . import _options as opt
 from ._common import add_overwrite_option, check_outputs, load_input
 from .distance import add_slice_option, draw_field, slice_normal
+
+if TYPE_CHECKING:
+    from ..mesh.simplex import SimplexMesh
 
 #: The formats of a path file.
 PATH_EXTENSIONS = (".csv", ".npy", ".ply")
@@ -38,10 +41,8 @@ def add_parser(sub: Any) -> None:
     p.set_defaults(func=run)
 
 
-def _target(args: argparse.Namespace, mesh: Any) -> Any:
+def _target(args: argparse.Namespace, mesh: SimplexMesh) -> Any:
     import numpy as np
-
-    from ..mesh.locate import surface_point
 
     if (args.to is None) == (args.to_point is None):
         raise ParameterError("give exactly one target: --to I or --to-point X,Y,Z")
@@ -50,14 +51,15 @@ def _target(args: argparse.Namespace, mesh: Any) -> Any:
             raise SourceError(f"target vertex {args.to} is out of range: the mesh has {mesh.n_vertices} vertices "
                               f"(0..{mesh.n_vertices - 1})")
         return args.to
-    X = np.array(args.to_point)
-    # a SurfacePoint, so that an exact field's path is pygeodesic's; inside a solid the position itself
-    return surface_point(mesh, X) if mesh.dim == 2 else X
+    # the mesh's point there (mesh.reference.locate): a SurfacePoint, so that an exact field's path is pygeodesic's;
+    # inside a solid the VolumePoint at the position
+    return mesh.reference.locate(mesh, np.array(args.to_point))
 
 
 def _path_writer(path: str, P: Any, cells: Any, bary: Any, cell: str) -> Any:
     """The function that writes the path into an open binary file, by the extension of ``path``; ``cell`` names
-    the column of the cell that holds each point (``face``, ``tet``)."""
+    the column of the cell that holds each point (``face``, ``tet``: the singular of the reference's
+    ``words.argument``)."""
     import io
 
     import numpy as np
@@ -86,7 +88,6 @@ def run(args: argparse.Namespace) -> int:
     from .._atomic import atomic_write, output_set
     from .._verbose import progress_printer
     from ..api import GeodesicSolver
-    from ..mesh.locate import SurfacePoint
     from ..paths import distance_at, geodesic_path
 
     check_outputs(args, ("-o", args.output, PATH_EXTENSIONS), ("--png", args.png, (".png",)))
@@ -99,14 +100,14 @@ def run(args: argparse.Namespace) -> int:
     P, cells, bary = geodesic_path(mesh, res, target, return_surface_points=True)
     outputs = [args.output, args.png] if args.png else [args.output]
     with output_set(*outputs, overwrite_read_only=args.overwrite_read_only) as tmp:  # both files or neither
-        atomic_write(tmp[0], _path_writer(str(tmp[0]), P, cells, bary, "face" if mesh.dim == 2 else "tet"))
+        atomic_write(tmp[0], _path_writer(str(tmp[0]), P, cells, bary, mesh.reference.words.argument.removesuffix("s")))
         if args.png:
             draw_field(mesh, res, tmp[1], title=f"{res.info.method}, path to sources {label}",
                        normal=slice_normal(args), line=P, view=args.view, up=args.up)
     if not args.quiet:
         length = float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum())
-        # a cost applies to surfaces only (cli_cost)
-        time = "" if cost is None else f", travel time {distance_at(mesh, res, SurfacePoint(cells[0], bary[0])):.6g}"
+        start = mesh.reference.point_type(cells[0], bary[0])  # the target, as the path's first point
+        time = "" if cost is None else f", travel time {distance_at(mesh, res, start):.6g}"
         print(f"{res.info.method}: path of {len(P)} points, length {length:.6g}{time}; wrote {args.output}"
               + (f" and {args.png}" if args.png else ""), file=sys.stderr)
     return 0

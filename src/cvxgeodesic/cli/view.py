@@ -26,17 +26,15 @@ def add_parser(sub: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     """``cvxgeodesic view``: returns the exit code."""
     from ..mesh.io import load_mesh
-    from ..viewer import show, show_volume
+    from ..viewer import show
 
     check_outputs(args, ("--screenshot", args.screenshot, (".png",)))
     mesh = load_mesh(args.mesh)
     given = args.source or args.source_point or args.boundary
     sources = cli_sources(args, mesh)[0] if given else 0  # a field to start from; clicks choose the next ones
-    # a volume is shown cut by a plane through the centre
-    extra = {} if mesh.dim == 2 else {"normal": slice_normal(args)}
-    viewer: Any = show if mesh.dim == 2 else show_volume
-    viewer(mesh, sources=sources, method=method_for(args, mesh), screenshot=args.screenshot, m=args.m,
-           solver=args.solver, overwrite_read_only=args.overwrite_read_only, **extra)
+    # a solid is shown cut by a plane through the centre with this normal (show_volume); a surface ignores it
+    show(mesh, sources=sources, method=method_for(args, mesh), screenshot=args.screenshot, m=args.m,
+         solver=args.solver, overwrite_read_only=args.overwrite_read_only, normal=slice_normal(args))
     if args.screenshot and not args.quiet:
         print(f"wrote {args.screenshot}", file=sys.stderr)
     return 0

@@ -17,7 +17,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import MeshError, ParameterError
-from ..mesh.convert import as_mesh
+from ..mesh.convert import MeshLike, as_mesh
+from ..mesh.simplex import SimplexMesh
 from ..mesh.tet_slice import slice_tets
 from ..mesh.tetmesh import TetMesh
 from ..plotting import PLOT_EXTENSIONS, _finite_range, _isolevels, _new_figure, _save_atomic
@@ -36,7 +37,7 @@ def _axis_label(e: np.ndarray) -> str:
 
 
 def plot_slice(
-    mesh: TetMesh | tuple | str | os.PathLike,
+    mesh: MeshLike,
     values: ArrayLike,
     path: str | os.PathLike,
     *,
@@ -101,8 +102,9 @@ def plot_slice(
     from matplotlib.tri import Triangulation
 
     tets = as_mesh(mesh)
-    if not isinstance(tets, TetMesh):
-        raise MeshError(f"plot_slice takes a tetrahedral mesh; {tets.name} is a triangle surface (plot_field draws it)")
+    if not isinstance(tets, TetMesh):  # dimension: the input check of a TetMesh-only function (slice_tets)
+        raise MeshError(f"plot_slice takes a tetrahedral mesh; {tets.name} is {tets.reference.words.mesh} (plot_field "
+                        "draws it)")
     p = check_output_path(path, PLOT_EXTENSIONS)
     dpi = check_number(dpi, "dpi", low=10, high=2000)
     cut = slice_tets(tets, values, origin=origin, normal=normal)
@@ -155,7 +157,7 @@ def plot_slice(
     return p
 
 
-def draw_field(mesh, values: ArrayLike, path: str | os.PathLike, *, title: str, sources: ArrayLike = (),
+def draw_field(mesh: SimplexMesh, values: ArrayLike, path: str | os.PathLike, *, title: str, sources: ArrayLike = (),
                points: ArrayLike | None = None, line: ArrayLike | None = None, normal: ArrayLike = (0.0, 0.0, 1.0),
                levels: int | ArrayLike | None = 20, vmin: float | None = None, vmax: float | None = None,
                label: str | None = None, error: bool = False, view: Any = None, up: Any = "auto") -> None:
@@ -167,9 +169,9 @@ def draw_field(mesh, values: ArrayLike, path: str | os.PathLike, *, title: str, 
     ``line`` (a geodesic path) replaces the marks. ``levels`` (isolines), ``vmin``, ``vmax`` and ``label`` (the
     colour bar's) style a field; an error has its own colour map and label, no isolines, and starts at 0. ``view``
     and ``up``: a surface's camera (:func:`~cvxgeodesic.plotting.plot_field`; default: facing the first source, and
-    the far side); a slice is seen along its normal.
+    the far side); a slice is seen along its normal. How the mesh is drawn: ``mesh.reference.picture``.
     """
-    if mesh.dim == 3:
+    if mesh.reference.picture == "slice":
         marks = mesh.V[np.asarray(sources, dtype=np.int64)] if points is None else points
         plot_slice(mesh, values, path, normal=normal, vmin=0.0 if error else vmin, vmax=vmax, title=title,
                    points=marks if line is None else line, isolines=None if error else levels,

@@ -94,7 +94,7 @@ def summarize_field(mesh, d, d_exact, sources, *, smoothness: bool = True, gradi
     if gradient:
         g = gradient_norm_stats(mesh, d, sources=sources)
         out.update(grad_mean=g["mean"], grad_max=g["max"], grad_unit_share=g["share_0.9_1.1"])
-    if smoothness and mesh.dim == 2:  # the jump of the normal derivative across edges: a surface measure
+    if smoothness and mesh.dim == 2:  # dimension: the ridge (evaluation/smoothness.py) is measured on surfaces only
         sm = smoothness_report(mesh, d, d_exact, sources)
         out.update({k: sm[k] for k in SMOOTHNESS_KEYS})
     return {k: (float(v) if isinstance(v, float | np.floating) else int(v) if isinstance(v, np.integer) else v)

@@ -4,15 +4,21 @@ the same, or a :class:`~cvxgeodesic.mesh.tetmesh.TetMesh` for tetrahedra."""
 from __future__ import annotations
 
 import os
-from typing import Any
+from typing import Any, TypeAlias
 
 import numpy as np
 
 from ..errors import MeshError
+from .simplex import SimplexMesh
 from .tetmesh import TetMesh
 from .trimesh import TriMesh
 
-__all__ = ["as_mesh", "as_trimesh"]
+__all__ = ["MeshLike", "as_mesh", "as_trimesh"]
+
+#: What the API edge takes as a mesh and :func:`as_mesh` converts: a :class:`~cvxgeodesic.mesh.simplex.SimplexMesh`,
+#: a ``(V, F)`` or ``(V, T)`` pair, a file path, or a mesh or point cloud of trimesh, open3d or meshio. Those are
+#: recognised by duck typing, so a type checker sees ``object``: a function taking it converts it before use.
+MeshLike: TypeAlias = SimplexMesh | tuple | list | str | os.PathLike | object
 
 
 def _is_tet_pair(mesh: Any) -> bool:

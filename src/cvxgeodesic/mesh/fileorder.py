@@ -15,13 +15,13 @@ from numpy.typing import ArrayLike
 
 from ..errors import ParameterError, SourceError
 from .convert import as_mesh
-from .tetmesh import TetMesh
+from .simplex import SimplexMesh
 from .trimesh import TriMesh
 
 __all__ = ["file_order_mesh", "file_sources", "file_vertices", "from_file_order", "to_file_order"]
 
 
-def to_file_order(mesh: TriMesh | TetMesh, field: ArrayLike, *, fill: float = np.inf) -> np.ndarray:
+def to_file_order(mesh: SimplexMesh, field: ArrayLike, *, fill: float = np.inf) -> np.ndarray:
     """A per-vertex field in the numbering of the file ``mesh`` was read from.
 
     Parameters
@@ -70,12 +70,12 @@ def to_file_order(mesh: TriMesh | TetMesh, field: ArrayLike, *, fill: float = np
     return out
 
 
-def from_file_order(mesh: TriMesh, values: ArrayLike, name: str) -> tuple[np.ndarray, str | None]:
+def from_file_order(mesh: SimplexMesh, values: ArrayLike, name: str) -> tuple[np.ndarray, str | None]:
     """A per-vertex field given in the file's numbering, in the mesh's (the inverse of :func:`to_file_order`).
 
     Parameters
     ----------
-    mesh : TriMesh
+    mesh : TriMesh or TetMesh
         A mesh from :func:`~cvxgeodesic.mesh.load.load_mesh`.
     values : (n_file,) float array_like
         One value per vertex of the file.
@@ -114,12 +114,12 @@ def from_file_order(mesh: TriMesh, values: ArrayLike, name: str) -> tuple[np.nda
     return out, note
 
 
-def file_sources(mesh: TriMesh, sources: ArrayLike) -> np.ndarray:
+def file_sources(mesh: SimplexMesh, sources: ArrayLike) -> np.ndarray:
     """Mesh indices of source vertices given as vertex indices *of the file*.
 
     Parameters
     ----------
-    mesh : TriMesh
+    mesh : TriMesh or TetMesh
         A mesh from :func:`~cvxgeodesic.mesh.load.load_mesh`.
     sources : int or (k,) array_like of int
         File vertex indices in ``[0, mesh.n_file_vertices)``.
@@ -181,7 +181,7 @@ def file_order_mesh(mesh: TriMesh) -> TriMesh:
     return TriMesh(file_vertices(mesh), faces, name=mesh.name)
 
 
-def file_vertices(mesh: TriMesh | TetMesh) -> np.ndarray:
+def file_vertices(mesh: SimplexMesh) -> np.ndarray:
     """(n_file, 3) float: the file's vertex positions, welded duplicates at their mesh vertex (the same position),
     dropped vertices at their own (at the origin when the mesh does not know them)."""
     idx = mesh.file_index

@@ -102,6 +102,11 @@ class ReferenceSimplex:
         Whether a point source on the boundary of a cell (a triangle's edge) is listed in every cell around it, so
         that its bounds hold in each (triangles), or only in the cell it was given in (tetrahedra)
         (:func:`cvxgeodesic.sources.resolve_sources`).
+    picture : str
+        How a field on such a mesh is drawn: ``"surface"``, the cells themselves seen from a camera
+        (:func:`~cvxgeodesic.plotting.plot_field`, :func:`~cvxgeodesic.viewer.show`); ``"slice"``, a plane's cut through
+        a solid, the cells hiding one another (:func:`~cvxgeodesic.evaluation.slice_plot.plot_slice`,
+        :func:`~cvxgeodesic.viewer.show_volume`).
     """
 
     name: str
@@ -115,6 +120,7 @@ class ReferenceSimplex:
     _frame: Callable[[np.ndarray], np.ndarray] = field(repr=False)
     _point_type: str = field(repr=False)
     _locator: str = field(repr=False)
+    picture: str = "surface"
 
     @property
     def n_corners(self) -> int:
@@ -185,5 +191,5 @@ TETRAHEDRON = ReferenceSimplex(
                     domain="inside a volume", argument="tets"),
     source_kinds=("vertex", "point", "boundary", "boundary faces"),
     measure_root=np.cbrt, shared_points=False,
-    _frame=_world_coordinates, _point_type="VolumePoint", _locator="volume_point",
+    _frame=_world_coordinates, _point_type="VolumePoint", _locator="volume_point", picture="slice",
 )

@@ -28,11 +28,12 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import scipy.sparse as sp
 
+from ..mesh.simplex import SimplexMesh
 from ..mesh.trimesh import TriMesh
 from ..validation import check_cost, check_metric, check_plane_metric
 from .gradient import triangle_frames
@@ -124,9 +125,11 @@ class Medium:
         """True when something is given per vertex (the medium then varies inside faces)."""
         return "vertices" in (self.cost_kind, self.metric_kind)
 
-    def on(self, mesh: TriMesh) -> Medium:
-        """The same medium on a mesh with the same vertices and faces (e.g. scaled by :func:`unit_mesh`)."""
-        return Medium(mesh, self.cost, self.cost_kind, self.metric, self.metric_kind, scale=self.scale, check=False)
+    def on(self, mesh: SimplexMesh) -> Medium:
+        """The same medium on a mesh with the same vertices and faces (e.g. scaled by :func:`unit_mesh`): a triangle
+        surface, as this medium's."""
+        return Medium(cast(TriMesh, mesh), self.cost, self.cost_kind, self.metric, self.metric_kind, scale=self.scale,
+                      check=False)
 
     def split(self, split_mesh: TriMesh, parent: np.ndarray, points) -> Medium:
         """The medium on a mesh whose faces were split around inserted vertices.
@@ -413,12 +416,14 @@ class Medium:
         return math.ldexp(1.0, round(math.log2(float(np.median(f)))))
 
 
-def make_medium(mesh: TriMesh, cost=None, metric=None) -> Medium | None:
+def make_medium(mesh: SimplexMesh, cost=None, metric=None) -> Medium | None:
     """The :class:`Medium` of user input, validated (None when neither is given).
 
     Parameters
     ----------
-    mesh : TriMesh
+    mesh : SimplexMesh
+        A triangle surface when ``cost`` or ``metric`` is given (the capability table refuses a medium on any other
+        mesh before).
     cost : float or (n,) or (m,) float array_like, optional
         Travel cost (time per unit length): one number, per vertex or per face.
     metric : (3, 3), (n, 3, 3) or (m, 3, 3) float array_like, optional
@@ -437,10 +442,10 @@ def make_medium(mesh: TriMesh, cost=None, metric=None) -> Medium | None:
     """
     if cost is None and metric is None:
         return None
-    n, m = mesh.n_vertices, mesh.n_faces
+    n, m = mesh.n_vertices, mesh.n_cells
     c, ck = check_cost(cost, n, m) if cost is not None else (None, None)
     g, gk = check_metric(metric, n, m) if metric is not None else (None, None)
-    medium = Medium(mesh, c, ck, g, gk)
+    medium = Medium(cast(TriMesh, mesh), c, ck, g, gk)
     medium.notes = [f"{name} of length {n} read per vertex (the mesh has as many vertices as faces)"
                     for name, kind in (("cost", ck), ("metric", gk)) if kind == "vertices" and n == m]
     return medium

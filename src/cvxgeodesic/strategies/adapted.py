@@ -355,7 +355,7 @@ class _Copy:
     """
 
     def __init__(self, config: SolveConfig, coarse: TriMesh) -> None:
-        mesh = config.mesh
+        mesh = config.surface
         self.user, self.mesh = mesh, coarse
         self.strategy = Order2(replace(config.on(coarse, lam=config.lam),
                                        medium=_medium_on(config.medium, mesh, coarse)))
@@ -449,7 +449,7 @@ class Adapted:
     def __init__(self, config: SolveConfig, target: int | None, requested: Any = None, *,
                  estimate: bool = True) -> None:
         t0 = time.perf_counter()
-        mesh = config.mesh
+        mesh = config.surface  # an adapted resolution: triangle surfaces only
         self.config = config
         self.requested = requested
         self.notes: list[str] = list(config.notes)
@@ -493,7 +493,7 @@ class Adapted:
         t0 = time.perf_counter()
         # the solve copy's aggressiveness first: a companion folded where the copy is not would be an estimate of the
         # fold (bimba at 1/10: the agg-5 copy 0.33 % off, the agg-7 companion 1.58 %, the estimate 1.44 %)
-        coarser, why, made = _decimated(self.config.mesh, max(MIN_RESOLUTION_FACES, int(ESTIMATE_RATIO * faces)),
+        coarser, why, made = _decimated(self.config.surface, max(MIN_RESOLUTION_FACES, int(ESTIMATE_RATIO * faces)),
                                         self.record["agg"])
         self.record["decimate_time"] += time.perf_counter() - t0
         self._record_decimation(made, "estimate_")
@@ -563,7 +563,7 @@ class Adapted:
 
     def _source_patches(self, sources: SourceSet, notes: list[str]) -> list[SourcePatch]:
         """The order-2 fields on the user's mesh around each source (:data:`SOURCE_PATCH_EDGES`)."""
-        mesh = self.config.mesh
+        mesh = self.config.surface
         if SOURCE_PATCH_EDGES <= 0 or sources.boundary or self.config.medium is not None or self.copy is None:
             return []
         items: list[tuple[int, Any]] = [(int(v), None) for v in sources.vertices]
@@ -596,7 +596,7 @@ class Adapted:
         ci = cres.info
         assert self.copy is not None
         extra = {k: v for k, v in ci.extra.items() if k != "p2_field"}
-        field = ProjectedField(self.config.mesh, self.solve_mesh, ci.extra["p2_field"], d, patches)
+        field = ProjectedField(self.config.surface, self.solve_mesh, ci.extra["p2_field"], d, patches)
         extra.update(adapted=record, p2_field=field, solve_mesh=self.solve_mesh)
         info = replace(ci, setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
                        n_unreachable=int(np.isinf(d).sum()), notes=notes, extra=extra)

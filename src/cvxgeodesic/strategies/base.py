@@ -4,9 +4,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from typing import Protocol
+from typing import Protocol, cast
 
 from ..capabilities import Capability
+from ..mesh.simplex import SimplexMesh
 from ..mesh.trimesh import TriMesh
 from ..operators.metric import Medium
 from ..problems.formulations import FORMULATIONS, smoothness_weight
@@ -23,8 +24,8 @@ class SolveConfig:
 
     Attributes
     ----------
-    mesh : TriMesh
-        The mesh in its own units (``n`` vertices, ``m`` faces).
+    mesh : SimplexMesh
+        The mesh in its own units (``n`` vertices, ``m`` cells: faces or tetrahedra).
     method : str
         Canonical formulation name (a key of :data:`~cvxgeodesic.problems.formulations.FORMULATIONS`) or baseline name.
     lam : float
@@ -48,7 +49,7 @@ class SolveConfig:
         directly (the builders' own argument checks then stand between it and a crash).
     """
 
-    mesh: TriMesh
+    mesh: SimplexMesh
     method: str
     lam: float = 0.0
     m: float | None = None
@@ -60,6 +61,12 @@ class SolveConfig:
     notes: tuple[str, ...] = field(default_factory=tuple)
     medium: Medium | None = None
     capability: Capability | None = None
+
+    @property
+    def surface(self) -> TriMesh:
+        """:attr:`mesh` as the triangle surface it is for the strategies that exist on surfaces only (multires, an
+        adapted resolution): the capability table (:func:`cvxgeodesic.capabilities.check`) gives them no other."""
+        return cast(TriMesh, self.mesh)
 
     @property
     def stretch(self) -> str:
@@ -74,12 +81,12 @@ class SolveConfig:
         entry = FORMULATIONS.get(self.method)
         return None if entry is None else entry[1]
 
-    def on(self, mesh: TriMesh, *, lam: float | None = None, m: float | None = None) -> SolveConfig:
+    def on(self, mesh: SimplexMesh, *, lam: float | None = None, m: float | None = None) -> SolveConfig:
         """The same parameters on another mesh (a coarse one), with λ given directly or recomputed from ``m``.
 
         Parameters
         ----------
-        mesh : TriMesh
+        mesh : SimplexMesh
         lam : float, optional
             λ on ``mesh``; exclusive with ``m``.
         m : float, optional

@@ -100,7 +100,7 @@ def resolve_target(multires, n_faces: int) -> int | None:
 
 
 def _coarse_mesh(config: SolveConfig, target_faces: int):
-    mesh = config.mesh
+    mesh = config.surface  # multires: triangle surfaces only
     coarse = simplify_mesh(mesh, target_faces)
     if config.energy == "hessian" and not coarse.is_edge_manifold and \
             coarse.simplifier == "shortest-edge":  # a manifold coarse mesh needs no cut for the Hessian
@@ -150,7 +150,7 @@ class CoarseToFine:
         self.config = config
         self.polish = bool(polish)
         self.target_faces = int(target_faces)
-        self.skipped = self.target_faces >= config.mesh.n_faces
+        self.skipped = self.target_faces >= config.mesh.n_cells
         self.coarse: DirectStrategy | None = None
         self.fine: DirectStrategy | None = None
         self.transfer: SurfaceTransfer | None = None
@@ -193,7 +193,7 @@ class CoarseToFine:
         """
         if self.fine is not None and self.skipped:
             res = self.fine.solve(sources, callback=callback)
-            res.info.extra["multires"] = {"coarse_faces": self.config.mesh.n_faces, "polished": True,
+            res.info.extra["multires"] = {"coarse_faces": self.config.mesh.n_cells, "polished": True,
                                           "skipped": "the mesh has no more faces than the multires target"}
             return res
         if sources.point_faces.size or sources.segment_faces.size or sources.boundary or sources.facets.size:
