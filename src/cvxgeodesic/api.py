@@ -299,10 +299,10 @@ class GeodesicSolver:
             raise ParameterError(f"method must be a string, got {type(method).__name__}")
         key = ALIASES.get(method.lower(), method.lower())
         if key not in ALL_METHODS:
-            known = methods_for(self.domain.name)  # every name where every method applies, else the domain's
-            raise ParameterError(f"unknown method {method!r}; choose one of "
-                                 + (", ".join(ALL_METHODS) if len(known) == len(METHODS)
-                                    else f"{', '.join(known)} (on {self.domain.meshes})"))
+            known = methods_for(self.domain.name)  # every name where every method applies (aliases too), else the
+            names = ALL_METHODS if len(known) == len(METHODS) else known  # domain's methods
+            raise ParameterError(f"unknown method {method!r}; choose one of {', '.join(names)} "
+                                 f"(on {self.domain.meshes})")
         self.method = key
         self._solver = check_choice(solver, "solver", SOLVERS)
         self.is_baseline = self.method in BASELINE_METHODS
