@@ -39,9 +39,9 @@ def _inside(cone, u: np.ndarray) -> np.ndarray:
 def _interior(cone, rng, k=K, margin=(1e-2, 2.0)) -> np.ndarray:
     if isinstance(cone, Orthant):
         return rng.uniform(*margin, k)
-    v = rng.normal(size=(cone.dim, k))
+    v = rng.normal(size=(cone.size, k))
     v[0] = np.linalg.norm(v[1:], axis=0) + rng.uniform(*margin, k)
-    return _t(cone.dim) @ v if isinstance(cone, RotatedSOC) else v
+    return _t(cone.size) @ v if isinstance(cone, RotatedSOC) else v
 
 
 def _dense(apply, cone, i: int) -> np.ndarray:
@@ -50,7 +50,7 @@ def _dense(apply, cone, i: int) -> np.ndarray:
         e = np.zeros(K)
         e[i] = 1.0
         return np.array([[apply(e)[i]]])
-    d = cone.dim
+    d = cone.size
     cols = []
     for j in range(d):
         e = np.zeros((d, K))
@@ -64,8 +64,8 @@ def _arrow(cone, u: np.ndarray) -> np.ndarray:
     if isinstance(cone, Orthant):
         return np.array([[float(u[0])]])
     if isinstance(cone, RotatedSOC):
-        T = _t(cone.dim)
-        return T @ _arrow(SOC(cone.dim), T @ u) @ T
+        T = _t(cone.size)
+        return T @ _arrow(SOC(cone.size), T @ u) @ T
     L = u[0] * np.eye(u.size)
     L[0, 1:] = L[1:, 0] = u[1:]
     return L
@@ -158,7 +158,7 @@ def _spectral(cone, v):
     """Eigenvalues and Jordan frame of one cone's element ``v`` (dense, in the cone's own coordinates)."""
     if isinstance(cone, Orthant):
         return np.array([v[0]]), [np.ones(1)]
-    T = _t(cone.dim) if isinstance(cone, RotatedSOC) else np.eye(cone.dim)
+    T = _t(cone.size) if isinstance(cone, RotatedSOC) else np.eye(cone.size)
     w = T @ v
     nb = np.linalg.norm(w[1:])
     u = w[1:] / nb if nb > 0 else np.zeros(w.size - 1)
@@ -200,8 +200,8 @@ def test_shift_cones_moves_the_masked_cones_inside_and_leaves_the_others(cone):
     assert inside[mask].all() and cone.min_eigenvalue(shifted[..., mask]) > 0  # strictly inside
     assert np.abs(shifted[..., ~mask] - u[..., ~mask]).max() <= 1e-14 * np.abs(u).max()  # the others unchanged
     if not isinstance(cone, Orthant):  # only the heads (the SOC's, in the rotated cone's own coordinates) move
-        moved = u if isinstance(cone, SOC) else _t(cone.dim) @ u
-        after = shifted if isinstance(cone, SOC) else _t(cone.dim) @ shifted
+        moved = u if isinstance(cone, SOC) else _t(cone.size) @ u
+        after = shifted if isinstance(cone, SOC) else _t(cone.size) @ shifted
         assert np.allclose(after[1:], moved[1:])
 
 
@@ -219,7 +219,7 @@ def _made_up(seed: int, quadratic: bool):
     spec = [(RotatedSOC(3), 6), (SOC(4), 5)]
     blocks = []
     for cone, k in spec:
-        A = sp.random(cone.dim * k, n, density=0.4, random_state=rng, format="csr")
+        A = sp.random(cone.size * k, n, density=0.4, random_state=rng, format="csr")
         s0 = _interior(cone, rng, k)
         blocks.append((cone, A, A @ x0 + s0.T.ravel()))
     box = sp.vstack([sp.identity(n), -sp.identity(n)], format="csr")  # −5 ≤ x ≤ 5 keeps the LP bounded
@@ -245,11 +245,11 @@ def _clarabel(n, P, q, fixed, x0, blocks):
             rhs.append(b)
             cones.append(clarabel.NonnegativeConeT(A.shape[0]))
             continue
-        one = _t(cone.dim) if isinstance(cone, RotatedSOC) else np.eye(cone.dim)
-        T = sp.block_diag([one] * (A.shape[0] // cone.dim))
+        one = _t(cone.size) if isinstance(cone, RotatedSOC) else np.eye(cone.size)
+        T = sp.block_diag([one] * (A.shape[0] // cone.size))
         rows.append(sp.csr_matrix(T @ A))
         rhs.append(T @ b)
-        cones.extend([clarabel.SecondOrderConeT(cone.dim)] * (A.shape[0] // cone.dim))
+        cones.extend([clarabel.SecondOrderConeT(cone.size)] * (A.shape[0] // cone.size))
     settings = clarabel.DefaultSettings()
     settings.verbose = False
     settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = 1e-10
@@ -276,7 +276,7 @@ def test_made_up_program_with_rotated_soc_matches_clarabel(quadratic):
     assert res.x[3] == x0[3]
     for cone, A, b in blocks:  # feasible: b − A x in the cone
         slack = b - A @ res.x
-        field = slack if isinstance(cone, Orthant) else slack.reshape(-1, cone.dim).T
+        field = slack if isinstance(cone, Orthant) else slack.reshape(-1, cone.size).T
         assert _inside(cone, field + 1e-8 * cone.identity(field.shape[-1])).all()
     # the settings reach the generic solver too
     ipm.settings = IPMSettings(max_correctors=0)

@@ -186,11 +186,10 @@ def _mesh_sources(mesh, spec):
     if spec == "boundary":
         return spec
     from .mesh.fileorder import file_sources
-    from .mesh.locate import POINT_AT
 
     if all(isinstance(s, int) for s in spec):
         return file_sources(mesh, spec).tolist()
-    at = POINT_AT[mesh.dim]  # the closest surface point, or the point inside the solid
+    at = mesh.reference.locate  # the closest surface point, or the point inside the solid
     return [int(file_sources(mesh, [s])[0]) if isinstance(s, int) else at(mesh, s) for s in spec]
 
 

@@ -49,7 +49,6 @@ from .mesh.closest import nearest_triangle_distance, point_triangle_distance, se
 from .mesh.geometry import clipped_barycentric
 from .mesh.locate import (
     BARY_TOL,
-    POINT_TYPES,
     CellPoint,
     SurfacePoint,
     VolumePoint,
@@ -60,6 +59,7 @@ from .mesh.locate import (
     surface_point,
     volume_point,
 )
+from .mesh.reference import reference_simplex
 from .mesh.simplex import SimplexMesh
 from .mesh.tetmesh import TetMesh
 from .mesh.trimesh import TriMesh
@@ -139,7 +139,7 @@ class BoundaryFaces:
     Parameters
     ----------
     faces : (k,) int array_like or (k, 3) int array_like
-        Rows of :attr:`TetMesh.boundary_faces <cvxgeodesic.mesh.tetmesh.TetMesh.boundary_faces>` (indices), or
+        Rows of :attr:`TetMesh.boundary_facets <cvxgeodesic.mesh.tetmesh.TetMesh.boundary_facets>` (indices), or
         the faces' three vertices (any order); checked against the mesh when used.
 
     Examples
@@ -149,7 +149,7 @@ class BoundaryFaces:
     >>> import numpy as np
     >>> from cvxgeodesic.mesh.tet_generate import tet_box
     >>> mesh = tet_box(2)
-    >>> bottom = np.flatnonzero(mesh.V[mesh.boundary_faces].mean(axis=1)[:, 2] == 0)
+    >>> bottom = np.flatnonzero(mesh.V[mesh.boundary_facets].mean(axis=1)[:, 2] == 0)
     >>> BoundaryFaces(bottom).resolve(mesh).size
     8
     """
@@ -177,14 +177,14 @@ class BoundaryFaces:
         return f"BoundaryFaces({self.faces.shape[0]} faces)"
 
     def resolve(self, mesh: TetMesh) -> np.ndarray:
-        """(k,) int64 ndarray: sorted unique rows of ``mesh.boundary_faces``.
+        """(k,) int64 ndarray: sorted unique rows of ``mesh.boundary_facets``.
 
         Raises
         ------
         SourceError
             An index out of range, or a vertex triple that is no boundary face of ``mesh``.
         """
-        B = mesh.boundary_faces
+        B = mesh.boundary_facets
         if self.faces.ndim == 1:
             bad = (self.faces < 0) | (self.faces >= B.shape[0])
             if bad.any():
@@ -256,7 +256,7 @@ class SourceSet:
     @property
     def points(self) -> tuple[CellPoint, ...]:
         """The point sources as :class:`SurfacePoint` or :class:`VolumePoint` objects (see :attr:`point_faces`)."""
-        kind = POINT_TYPES[self.dim]
+        kind = reference_simplex(self.dim).point_type
         return tuple(kind._exact(c, b) for c, b in zip(self.point_faces.tolist(), self.point_bary, strict=True))
 
     @property
@@ -353,9 +353,9 @@ def boundary_edges(mesh: TriMesh) -> tuple[np.ndarray, np.ndarray]:
     faces : (b,) int64 ndarray
         The face of each boundary edge.
     """
-    one = mesh.edge_face_counts == 1
+    one = mesh.edge_cell_counts == 1
     face_of = np.empty(len(one), dtype=np.int64)
-    face_of[mesh.face_edges.ravel()] = np.repeat(np.arange(mesh.n_faces), 3)  # exact where an edge has one face
+    face_of[mesh.cell_edges.ravel()] = np.repeat(np.arange(mesh.n_faces), 3)  # exact where an edge has one face
     return mesh.boundary_facets.copy(), face_of[one]
 
 
@@ -574,7 +574,7 @@ def resolve_sources(mesh: Any, sources: Any) -> SourceSet:
         sources = [sources]
     if (isinstance(sources, tuple) and len(sources) == 2 and is_integer(sources[0])
             and np.ndim(sources[1]) == 1 and np.size(sources[1]) == dim + 1):
-        kind = POINT_TYPES[dim].__name__
+        kind = mesh.reference.point_type.__name__
         raise SourceError(f"sources = {sources!r} looks like a (cell, bary) pair: give a point inside a cell as "
                           f"cg.{kind}({sources[0]}, {list(sources[1])})")
     if isinstance(sources, list | tuple) and any(isinstance(s, CellPoint | SurfaceCurve | BoundaryFaces | str)
@@ -798,7 +798,7 @@ def _surface_edge_bounds(mesh: TriMesh, ops: Any, ell: np.ndarray, is_source: np
     E = mesh.edges
     one = (src_verts[E[:, 0]] ^ src_verts[E[:, 1]]) & ~is_source[E[:, 0]] & ~is_source[E[:, 1]]
     o2, s2 = _edge_ends(E, one, src_verts)
-    ei = np.unique(mesh.face_edges[no_cone & ~ops.degenerate])
+    ei = np.unique(mesh.cell_edges[no_cone & ~ops.degenerate])
     ei = ei[~is_source[E[ei, 0]] & ~is_source[E[ei, 1]]]
     o_end, s_end, star_rhs = star
     return (np.concatenate([o_end, o2, E[ei, 0], E[ei, 1]]), np.concatenate([s_end, s2, E[ei, 1], E[ei, 0]]),

@@ -285,7 +285,7 @@ def require_manifold(mesh: TriMesh, method: str, alternatives: str = NON_MANIFOL
         Methods that work on the mesh (used in the message).
     """
     if not mesh.is_edge_manifold:
-        n_bad = int(np.sum(mesh.edge_face_counts > 2))
+        n_bad = int(np.sum(mesh.edge_cell_counts > 2))
         raise NonManifoldError(
             f"{mesh.name}: method {method!r} needs an edge-manifold mesh, but {n_bad} edges are shared by more "
             f"than two faces; use {alternatives} instead"

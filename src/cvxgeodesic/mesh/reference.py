@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["TETRAHEDRON", "TRIANGLE", "CellWords", "ReferenceSimplex"]
+__all__ = ["TETRAHEDRON", "TRIANGLE", "CellWords", "ReferenceSimplex", "reference_simplex"]
 
 
 @dataclass(frozen=True)
@@ -46,6 +46,11 @@ class CellWords:
         Where a point of such a mesh lies (``"on a surface"``, ``"inside a volume"``).
     argument : str
         The name of the cell-index argument of :meth:`distance_at`-like calls (``"faces"``, ``"tets"``).
+    shape_hint : str
+        Said after the shape when the cell array has the wrong one (triangles: polygons are fan-triangulated by
+        ``load_mesh``, not by the mesh class).
+    repeat_remedy : str
+        What to do about a cell that repeats a vertex.
     """
 
     one: str
@@ -58,6 +63,8 @@ class CellWords:
     preposition: str
     domain: str
     argument: str
+    shape_hint: str = ""
+    repeat_remedy: str = "remove them first"
 
 
 def _triangle_frame_coordinates(X: np.ndarray) -> np.ndarray:
@@ -98,6 +105,17 @@ class ReferenceSimplex:
         The kinds of source (:data:`cvxgeodesic.capabilities.SOURCE_KINDS`) a mesh of these cells takes.
     measure_root : callable
         Turns a total measure (area, volume) into a length: ``np.sqrt``, ``np.cbrt``.
+    libigl_operators : bool
+        The cells are triangles that libigl's surface operators take: the stiffness and lumped (mixed-Voronoi) mass
+        of a whole mesh come from ``igl.cotmatrix`` / ``igl.massmatrix`` (:mod:`cvxgeodesic.operators.laplacian`);
+        otherwise from the library's own gradient blocks (barycentric mass).
+    coneless_cell_edges : bool
+        The order-1 QC programs bound ``|d_i − d_j| ≤ l_ij`` on every edge of a cell that carries no cone (next to a
+        source, a point's cell, a degenerate cell): a tetrahedron's cone does not cover all the edges its
+        neighbours share with it. False (triangles): the source stars and the degenerate cells' edges are bounded
+        instead (:func:`cvxgeodesic.formulations.build_problem`).
+    point_type, locate
+        Given as objects, or as names in :mod:`cvxgeodesic.mesh.locate` (imported when first asked).
     """
 
     name: str
@@ -108,8 +126,10 @@ class ReferenceSimplex:
     source_kinds: tuple[str, ...]
     measure_root: Callable[[Any], Any]
     _frame: Callable[[np.ndarray], np.ndarray] = field(repr=False)
-    _point_type: str = field(repr=False)
-    _locator: str = field(repr=False)
+    _point_type: str | type = field(repr=False)
+    _locator: str | Callable[..., Any] = field(repr=False)
+    libigl_operators: bool = False
+    coneless_cell_edges: bool = False
 
     @property
     def n_corners(self) -> int:
@@ -142,15 +162,20 @@ class ReferenceSimplex:
     @property
     def point_type(self) -> type:
         """The :class:`~cvxgeodesic.mesh.locate.CellPoint` subclass of a point in such a cell."""
-        return getattr(importlib.import_module("cvxgeodesic.mesh.locate"), self._point_type)
+        return _resolve(self._point_type)
 
     @property
     def locate(self) -> Callable[..., Any]:
         """``locate(mesh, X)``: the point(s) of the mesh at positions ``X`` (closest on a surface, inside a solid)."""
-        return getattr(importlib.import_module("cvxgeodesic.mesh.locate"), self._locator)
+        return _resolve(self._locator)
 
     def __repr__(self) -> str:
         return f"ReferenceSimplex({self.name!r})"
+
+
+def _resolve(member: Any) -> Any:
+    """A member given by its name in :mod:`cvxgeodesic.mesh.locate` (imported now), or the object itself."""
+    return getattr(importlib.import_module("cvxgeodesic.mesh.locate"), member) if isinstance(member, str) else member
 
 
 def _readonly(a: list[list[int]]) -> np.ndarray:
@@ -165,10 +190,12 @@ TRIANGLE = ReferenceSimplex(
     facets=_readonly([[1, 2], [2, 0], [0, 1]]),
     words=CellWords(one="face", many="faces", short="faces", shape="(m, 3)", measure="area",
                     mesh="a triangle surface", meshes="triangle meshes", preposition="on", domain="on a surface",
-                    argument="faces"),
+                    argument="faces", shape_hint=" (triangles only; load_mesh fan-triangulates polygons)",
+                    repeat_remedy="remove degenerate faces first"),
     source_kinds=("vertex", "point", "curve", "boundary"),
     measure_root=np.sqrt,
     _frame=_triangle_frame_coordinates, _point_type="SurfacePoint", _locator="surface_point",
+    libigl_operators=True,
 )
 
 TETRAHEDRON = ReferenceSimplex(
@@ -181,4 +208,22 @@ TETRAHEDRON = ReferenceSimplex(
     source_kinds=("vertex", "point", "boundary", "boundary faces"),
     measure_root=np.cbrt,
     _frame=_world_coordinates, _point_type="VolumePoint", _locator="volume_point",
+    coneless_cell_edges=True,
 )
+
+
+def reference_simplex(dim: int) -> ReferenceSimplex:
+    """The reference simplex of the library's meshes of dimension ``dim`` (:data:`TRIANGLE`, :data:`TETRAHEDRON`).
+
+    For code that is handed a dimension and no mesh (the Lagrange element functions, a source set's point type);
+    code that has a mesh asks ``mesh.reference``, which a new kind of cell sets (docs/architecture.md, "A domain").
+
+    Raises
+    ------
+    ValueError
+        No reference simplex of that dimension.
+    """
+    for reference in (TRIANGLE, TETRAHEDRON):
+        if reference.dim == dim:
+            return reference
+    raise ValueError(f"no reference simplex of dimension {dim}")

@@ -2,17 +2,16 @@
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Sequence
 
 import numpy as np
 
 from ..errors import SourceError
-from .locate import cells_around
+from .locate import CellPoint, cells_around
+from .reference import ReferenceSimplex
+from .simplex import SimplexMesh
 
 __all__ = ["SplitMesh", "piece_coordinates"]
-
-#: (a cell, a preposition) for messages, by simplex dimension.
-_WORDS = {2: ("face", "on"), 3: ("tetrahedron", "in")}
 
 
 class SplitMesh:
@@ -54,7 +53,7 @@ class SplitMesh:
     (9, [8])
     """
 
-    def __init__(self, mesh: Any, points):
+    def __init__(self, mesh: SimplexMesh, points: Sequence[CellPoint]):
         n, cells = mesh.n_vertices, mesh.cells
         self._cells = cells.tolist()
         V = [mesh.V]
@@ -69,7 +68,7 @@ class SplitMesh:
             corners = cells[t0, nz]
             # every cell holding the point's edge, facet or itself: those with all its support corners
             for t in cells_around(mesh, corners.tolist()):
-                self._split_cell(t, n + i, cells[t], corners, p.bary[nz], mesh.dim)
+                self._split_cell(t, n + i, cells[t], corners, p.bary[nz], mesh.reference)
         self.mesh = type(mesh)(np.vstack(V), np.asarray(self._cells, dtype=np.int64), name=mesh.name)
         self.cell_parent = np.arange(len(self._cells), dtype=np.int64)
         del self._cells
@@ -79,10 +78,10 @@ class SplitMesh:
         self.n_original = n
 
     def _split_cell(self, t: int, vid: int, cell: np.ndarray, corners: np.ndarray, weights: np.ndarray,
-                    dim: int) -> None:
+                    reference: ReferenceSimplex) -> None:
         """Replace cell ``t`` by its pieces around the new vertex ``vid`` (at ``weights`` on ``corners``)."""
         if t in self.pieces:
-            one, prep = _WORDS[dim]
+            one, prep = reference.words.one, reference.words.preposition
             raise SourceError(f"two source points {prep} {one} {t}: order 2 takes at most one per {one}")
         beta = np.zeros(cell.size)
         for corner, b in zip(corners, weights, strict=True):

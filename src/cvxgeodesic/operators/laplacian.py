@@ -62,7 +62,7 @@ def cotan_stiffness(mesh: SimplexMesh, *, cells: ArrayLike | None = None,
     -------
     (n, n) scipy.sparse.csc_matrix
     """
-    if mesh.dim == 2 and cells is None and blocks is None:
+    if mesh.reference.libigl_operators and cells is None and blocks is None:
         return sp.csc_matrix(-igl.cotmatrix(mesh.V, mesh.cells))
     sel = selected_cells(mesh, cells)
     B = (gradient_blocks(mesh) if blocks is None else blocks)[sel]
@@ -105,7 +105,7 @@ def mass_matrix(mesh: SimplexMesh) -> sp.dia_matrix:
     -------
     (n, n) scipy.sparse.dia_matrix
     """
-    if mesh.dim == 3:
+    if not mesh.reference.libigl_operators:
         return barycentric_mass(mesh)
     M = igl.massmatrix(mesh.V, mesh.cells, igl.MASSMATRIX_TYPE_VORONOI)
     diag = np.zeros(mesh.n_vertices)
