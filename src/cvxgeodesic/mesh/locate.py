@@ -227,7 +227,7 @@ class SurfacePoint(CellPoint, field="face", n_bary=3, word="face", cells="faces"
     def __init__(self, face: Any, bary: ArrayLike) -> None:
         super().__init__(face, bary)
 
-    def position(self, mesh: SimplexMesh | tuple[ArrayLike, ArrayLike]) -> np.ndarray:  # type: ignore[override]
+    def position(self, mesh: SimplexMesh | tuple[ArrayLike, ArrayLike]) -> np.ndarray:
         """(3,) float ndarray: the point's position on ``mesh`` (a TriMesh or ``(V, F)``)."""
         return super().position(_mesh(mesh))
 
@@ -263,6 +263,10 @@ class VolumePoint(CellPoint, field="tet", n_bary=4, word="tetrahedron", cells="t
         super().__init__(tet, bary)
 
 
+#: What :func:`surface_point` takes: a triangle mesh, or its ``(V, F)`` arrays.
+_SurfaceLike = TriMesh | tuple[ArrayLike, ArrayLike]
+
+
 def _mesh(mesh: SimplexMesh | tuple[ArrayLike, ArrayLike]) -> TriMesh:
     from .io import as_trimesh
 
@@ -279,14 +283,14 @@ def closest_points(mesh: TriMesh, X: ArrayLike) -> tuple[np.ndarray, np.ndarray,
 # the return type follows the shape of xyz where a type checker sees it: one position (a sequence of 3 numbers), or
 # several (a sequence of sequences); an ndarray's shape is unknown to it, so either
 @overload
-def surface_point(mesh: TriMesh | tuple[ArrayLike, ArrayLike], xyz: Sequence[float]) -> SurfacePoint: ...
+def surface_point(mesh: _SurfaceLike, xyz: Sequence[float]) -> SurfacePoint: ...
 @overload
-def surface_point(mesh: TriMesh | tuple[ArrayLike, ArrayLike], xyz: Sequence[Sequence[float]]) -> list[SurfacePoint]: ...
+def surface_point(mesh: _SurfaceLike, xyz: Sequence[Sequence[float]]) -> list[SurfacePoint]: ...
 @overload
-def surface_point(mesh: TriMesh | tuple[ArrayLike, ArrayLike], xyz: ArrayLike) -> SurfacePoint | list[SurfacePoint]: ...
+def surface_point(mesh: _SurfaceLike, xyz: ArrayLike) -> SurfacePoint | list[SurfacePoint]: ...
 
 
-def surface_point(mesh: TriMesh | tuple[ArrayLike, ArrayLike], xyz: ArrayLike) -> SurfacePoint | list[SurfacePoint]:
+def surface_point(mesh: _SurfaceLike, xyz: ArrayLike) -> SurfacePoint | list[SurfacePoint]:
     """The closest :class:`SurfacePoint` of a 3D position (or of each of ``k`` positions).
 
     Parameters

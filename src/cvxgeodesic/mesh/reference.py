@@ -15,9 +15,12 @@ from __future__ import annotations
 import importlib
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from .locate import CellPoint
 
 __all__ = ["TETRAHEDRON", "TRIANGLE", "CellWords", "ReferenceSimplex", "reference_simplex"]
 
@@ -153,6 +156,9 @@ class ReferenceSimplex:
         Examples
         --------
         >>> import numpy as np
+
+if TYPE_CHECKING:
+    from .locate import CellPoint
         >>> X = np.array([[[0.0, 0, 0], [2, 0, 0], [0, 3, 0]]])
         >>> TRIANGLE.local_coordinates(X).round(6).tolist()
         [[[0.0, 0.0], [2.0, 0.0], [0.0, 3.0]]]
@@ -160,7 +166,7 @@ class ReferenceSimplex:
         return self._frame(X)
 
     @property
-    def point_type(self) -> type:
+    def point_type(self) -> type[CellPoint]:
         """The :class:`~cvxgeodesic.mesh.locate.CellPoint` subclass of a point in such a cell."""
         return _resolve(self._point_type)
 

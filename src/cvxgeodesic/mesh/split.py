@@ -3,18 +3,19 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Generic
 
 import numpy as np
 
 from ..errors import SourceError
 from .locate import CellPoint, cells_around
 from .reference import ReferenceSimplex
-from .simplex import SimplexMesh
+from .simplex import MeshT
 
 __all__ = ["SplitMesh", "piece_coordinates"]
 
 
-class SplitMesh:
+class SplitMesh(Generic[MeshT]):
     """A triangle or tetrahedral mesh with points inserted as vertices (the conforming splits).
 
     A point inside a cell splits it into ``dim + 1`` pieces; a point on a facet or an edge splits every cell around
@@ -53,7 +54,7 @@ class SplitMesh:
     (9, [8])
     """
 
-    def __init__(self, mesh: SimplexMesh, points: Sequence[CellPoint]):
+    def __init__(self, mesh: MeshT, points: Sequence[CellPoint]):
         n, cells = mesh.n_vertices, mesh.cells
         self._cells = cells.tolist()
         V = [mesh.V]
@@ -69,7 +70,7 @@ class SplitMesh:
             # every cell holding the point's edge, facet or itself: those with all its support corners
             for t in cells_around(mesh, corners.tolist()):
                 self._split_cell(t, n + i, cells[t], corners, p.bary[nz], mesh.reference)
-        self.mesh = type(mesh)(np.vstack(V), np.asarray(self._cells, dtype=np.int64), name=mesh.name)
+        self.mesh: MeshT = type(mesh)(np.vstack(V), np.asarray(self._cells, dtype=np.int64), name=mesh.name)
         self.cell_parent = np.arange(len(self._cells), dtype=np.int64)
         del self._cells
         for t, lst in self.pieces.items():

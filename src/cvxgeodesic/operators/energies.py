@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import cast
 
 import igl
 import numpy as np
@@ -333,10 +334,11 @@ def energy_matrix(mesh: SimplexMesh, energy: str, notes: list[str] | None = None
     check_energy(mesh, energy)
     if cells is not None and mesh.reference.libigl_operators:  # libigl's operators take a mesh: the kept triangles
         mesh, cells = TriMesh(mesh.V, mesh.cells[selected_cells(mesh, cells)], name=mesh.name), None
+    # a medium and the curved Hessian energy are surface notions: the capability table admits them on surfaces only
     if face_metric is not None:
-        return _metric_energy(mesh, energy, face_metric, [] if notes is None else notes, analyse)
+        return _metric_energy(cast(TriMesh, mesh), energy, face_metric, [] if notes is None else notes, analyse)
     if energy == "hessian":
-        return hessian_energy_matrix(mesh, notes, analyse=analyse)
+        return hessian_energy_matrix(cast(TriMesh, mesh), notes, analyse=analyse)
     if energy == "dirichlet":
         return dirichlet_energy_matrix(mesh, cells=cells)
     Q = laplacian_energy_matrix(mesh, cells=cells)
