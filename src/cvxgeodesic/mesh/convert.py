@@ -4,7 +4,7 @@ the same, or a :class:`~cvxgeodesic.mesh.tetmesh.TetMesh` for tetrahedra."""
 from __future__ import annotations
 
 import os
-from typing import Any
+from typing import Any, TypeAlias
 
 import numpy as np
 
@@ -12,10 +12,14 @@ from ..errors import MeshError
 from .tetmesh import TetMesh
 from .trimesh import TriMesh
 
-__all__ = ["as_mesh", "as_trimesh"]
+__all__ = ["MeshLike", "as_mesh", "as_trimesh"]
+
+#: What :func:`as_mesh` and :func:`as_trimesh` take: a ``TriMesh`` or ``TetMesh``, a ``(V, F)`` or ``(V, T)`` pair,
+#: a trimesh / open3d / meshio mesh, a mesh file's path, a point cloud (duck-typed: no common base class).
+MeshLike: TypeAlias = Any
 
 
-def _is_tet_pair(mesh: Any) -> bool:
+def _is_tet_pair(mesh: MeshLike) -> bool:
     """A ``(V, T)`` pair whose second array has four columns."""
     if not (isinstance(mesh, tuple | list) and len(mesh) == 2):
         return False
@@ -25,7 +29,7 @@ def _is_tet_pair(mesh: Any) -> bool:
         return False
 
 
-def as_mesh(mesh: Any, name: str = "mesh") -> TriMesh | TetMesh:
+def as_mesh(mesh: MeshLike, name: str = "mesh") -> TriMesh | TetMesh:
     """``mesh`` as a :class:`TetMesh` when it holds tetrahedra, else as :func:`as_trimesh` takes it.
 
     Tetrahedra: a :class:`TetMesh`, a ``(V, T)`` pair with a 4-column ``T``, a file that holds tetrahedra
@@ -57,7 +61,7 @@ def as_mesh(mesh: Any, name: str = "mesh") -> TriMesh | TetMesh:
     return as_trimesh(mesh, name)
 
 
-def as_trimesh(mesh: Any, name: str = "mesh") -> TriMesh:
+def as_trimesh(mesh: MeshLike, name: str = "mesh") -> TriMesh:
     """Return ``mesh`` as a :class:`TriMesh`, accepting the meshes other libraries use.
 
     Accepted, by duck typing (none of these libraries is imported or required):

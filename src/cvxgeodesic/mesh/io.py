@@ -11,7 +11,6 @@ import dataclasses
 import os
 import re
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -20,7 +19,7 @@ from .._atomic import atomic_write, check_replaceable
 from ..errors import ParameterError
 from ..validation import as_vertex_field
 from ..validation import check_output_path as _check_output_path
-from .convert import as_mesh, as_trimesh
+from .convert import MeshLike, as_mesh, as_trimesh
 from .fileorder import file_order_mesh, file_vertices, to_file_order
 from .formats import ply
 from .formats._common import FieldData, check_file, file_errors, format_error
@@ -48,7 +47,7 @@ _RESERVED = ("x", "y", "z", "vertex", "file_vertex")
 CLOUD_DISTANCE_EXTENSIONS = (".ply", ".npy", ".csv")
 
 
-def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, name: str = "distance",
+def save_distance(path: str | os.PathLike, mesh: MeshLike, distance: ArrayLike, *, name: str = "distance",
                   file_order: bool = False, overwrite_read_only: bool = False) -> Path:
     """Write a per-vertex distance field, atomically.
 

@@ -306,7 +306,7 @@ def check_energy(mesh: SimplexMesh, energy: str) -> str:
     """``energy`` when it is defined on ``mesh``'s dimension (:data:`ENERGIES_BY_DIM`); ParameterError otherwise."""
     allowed = ENERGIES_BY_DIM[mesh.dim]
     if energy not in allowed:
-        where = "tetrahedral meshes" if mesh.dim == 3 else "triangle meshes"
+        where = mesh.reference.words.meshes
         raise ParameterError(f"energy {energy!r} does not apply to {where}; use {' or '.join(map(repr, allowed))}")
     return energy
 
