@@ -148,10 +148,7 @@ def _hat_gradients(mesh: Any) -> np.ndarray:
     cells): a surface's blocks are in each face's 2D frame and go back to 3D; a volume's are 3D already."""
     with np.errstate(invalid="ignore", divide="ignore"):
         B = gradient_blocks(mesh)  # (k, dim, dim + 1)
-        if mesh.dim == 3:
-            return np.ascontiguousarray(B.transpose(0, 2, 1))
-        ex, ey = triangle_frames(mesh)
-        return B[:, 0, :, None] * ex[:, None, :] + B[:, 1, :, None] * ey[:, None, :]
+        return mesh.reference.world_vectors(B, mesh.V[mesh.cells])
 
 
 class _Cells:

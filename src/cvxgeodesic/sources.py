@@ -355,7 +355,7 @@ def boundary_edges(mesh: TriMesh) -> tuple[np.ndarray, np.ndarray]:
     """
     one = mesh.edge_cell_counts == 1
     face_of = np.empty(len(one), dtype=np.int64)
-    face_of[mesh.cell_edges.ravel()] = np.repeat(np.arange(mesh.n_faces), 3)  # exact where an edge has one face
+    face_of[mesh.cell_edges.ravel()] = np.repeat(np.arange(mesh.n_cells), 3)  # exact where an edge has one face
     return mesh.boundary_facets.copy(), face_of[one]
 
 
@@ -535,7 +535,7 @@ def _named_source(mesh: Any, name: str) -> SourceSet:
         raise SourceError(f"sources='boundary' but {mesh.name} is closed: it has no boundary edge "
                           "(an edge with a single face)")
     builder.vertices.extend(np.unique(E).tolist())
-    F = mesh.F
+    F = mesh.cells
     for (a, b), f in zip(E, faces, strict=True):
         builder.add_piece(int(f), (F[f] == a).astype(float), (F[f] == b).astype(float))
     return builder.build("boundary", f"boundary ({len(E)} edges)")
@@ -583,7 +583,7 @@ def resolve_sources(mesh: Any, sources: Any) -> SourceSet:
         kinds = set()
         for k, s in enumerate(sources):
             label = f"source {k}"
-            if isinstance(s, CellPoint) and isinstance(s, accepted):
+            if isinstance(s, mesh.reference.point_type):
                 s.check(mesh, label)
                 builder.add_bary(s.cell, s.bary)
                 kinds.add("points")

@@ -4,11 +4,12 @@ the same, or a :class:`~cvxgeodesic.mesh.tetmesh.TetMesh` for tetrahedra."""
 from __future__ import annotations
 
 import os
-from typing import Any, TypeAlias
+from typing import Any, TypeAlias, overload
 
 import numpy as np
 
 from ..errors import MeshError
+from .simplex import MeshT, SimplexMesh
 from .tetmesh import TetMesh
 from .trimesh import TriMesh
 
@@ -29,8 +30,17 @@ def _is_tet_pair(mesh: MeshLike) -> bool:
         return False
 
 
-def as_mesh(mesh: MeshLike, name: str = "mesh") -> TriMesh | TetMesh:
+@overload
+def as_mesh(mesh: MeshT, name: str = "mesh") -> MeshT: ...
+@overload
+def as_mesh(mesh: MeshLike, name: str = "mesh") -> TriMesh | TetMesh: ...
+
+
+def as_mesh(mesh: MeshLike, name: str = "mesh") -> SimplexMesh:
     """``mesh`` as a :class:`TetMesh` when it holds tetrahedra, else as :func:`as_trimesh` takes it.
+
+    Any :class:`~cvxgeodesic.mesh.simplex.SimplexMesh` (a ``TriMesh``, a ``TetMesh``, a mesh of another domain) is
+    returned as it is.
 
     Tetrahedra: a :class:`TetMesh`, a ``(V, T)`` pair with a 4-column ``T``, a file that holds tetrahedra
     (:func:`~cvxgeodesic.mesh.load.load_mesh`), a ``meshio.Mesh`` with ``tetra`` cells (``tetra10``: their
@@ -42,7 +52,7 @@ def as_mesh(mesh: MeshLike, name: str = "mesh") -> TriMesh | TetMesh:
     >>> as_mesh((np.eye(4, 3), [[0, 1, 2, 3]]))
     TetMesh(name='mesh', n_vertices=4, n_tets=1)
     """
-    if isinstance(mesh, TetMesh):
+    if isinstance(mesh, SimplexMesh):
         return mesh
     if _is_tet_pair(mesh):
         return TetMesh(mesh[0], mesh[1], name=name)

@@ -82,9 +82,25 @@ def _triangle_frame_coordinates(X: np.ndarray) -> np.ndarray:
     return np.stack([np.einsum("kvx,kx->kv", rel, ex), np.einsum("kvx,kx->kv", rel, ey)], axis=2)
 
 
+def _triangle_frame_vectors(G: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """(k, m, 3) world vectors of ``G`` (k, 2, m), given in the frames of :func:`_triangle_frame_coordinates`."""
+    e = X[:, 1] - X[:, 0]
+    normal = np.cross(e, X[:, 2] - X[:, 0])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ex = e / np.linalg.norm(e, axis=1, keepdims=True)
+        nhat = normal / np.linalg.norm(normal, axis=1, keepdims=True)
+    ey = np.cross(nhat, ex)
+    return G[:, 0, :, None] * ex[:, None, :] + G[:, 1, :, None] * ey[:, None, :]
+
+
 def _world_coordinates(X: np.ndarray) -> np.ndarray:
     """A solid cell needs no frame: its corners in world coordinates."""
     return X
+
+
+def _world_vectors(G: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """(k, m, 3): vectors ``G`` (k, 3, m) already in world coordinates, one per row."""
+    return np.ascontiguousarray(G.transpose(0, 2, 1))
 
 
 @dataclass(frozen=True, eq=False)
@@ -117,6 +133,10 @@ class ReferenceSimplex:
         source, a point's cell, a degenerate cell): a tetrahedron's cone does not cover all the edges its
         neighbours share with it. False (triangles): the source stars and the degenerate cells' edges are bounded
         instead (:func:`cvxgeodesic.formulations.build_problem`).
+    flat : bool
+        Every cell of such a mesh lies in one flat space (a solid's cells, triangles in a plane): no cell bends
+        against its neighbours, so ``d²`` is a quadratic in every proper cell that sees a source
+        (:attr:`cvxgeodesic.operators.lagrange.LagrangeSpace.flat_cells`). False (surfaces): decided cell by cell.
     point_type, locate
         Given as objects, or as names in :mod:`cvxgeodesic.mesh.locate` (imported when first asked).
     """
@@ -129,10 +149,12 @@ class ReferenceSimplex:
     source_kinds: tuple[str, ...]
     measure_root: Callable[[Any], Any]
     _frame: Callable[[np.ndarray], np.ndarray] = field(repr=False)
+    _to_world: Callable[[np.ndarray, np.ndarray], np.ndarray] = field(repr=False)
     _point_type: str | type = field(repr=False)
     _locator: str | Callable[..., Any] = field(repr=False)
     libigl_operators: bool = False
     coneless_cell_edges: bool = False
+    flat: bool = False
 
     @property
     def n_corners(self) -> int:
@@ -164,6 +186,24 @@ if TYPE_CHECKING:
         [[[0.0, 0.0], [2.0, 0.0], [0.0, 3.0]]]
         """
         return self._frame(X)
+
+    def world_vectors(self, G: np.ndarray, X: np.ndarray) -> np.ndarray:
+        """Vectors given in the cells' frames (:meth:`local_coordinates`), in world coordinates.
+
+        Parameters
+        ----------
+        G : (k, dim, m) float ndarray
+            ``m`` vectors per cell in its frame (a cell's gradient blocks, say).
+        X : (k, dim + 1, 3) float ndarray
+            The cells' corners in world coordinates.
+
+        Returns
+        -------
+        (k, m, 3) float ndarray
+            Row ``j`` of cell ``t``: ``Σ_i G[t, i, j] e_i`` with ``e_i`` the frame's axes (NaN on triangles of zero
+            area).
+        """
+        return self._to_world(G, X)
 
     @property
     def point_type(self) -> type[CellPoint]:
@@ -200,7 +240,8 @@ TRIANGLE = ReferenceSimplex(
                     repeat_remedy="remove degenerate faces first"),
     source_kinds=("vertex", "point", "curve", "boundary"),
     measure_root=np.sqrt,
-    _frame=_triangle_frame_coordinates, _point_type="SurfacePoint", _locator="surface_point",
+    _frame=_triangle_frame_coordinates, _to_world=_triangle_frame_vectors, _point_type="SurfacePoint",
+    _locator="surface_point",
     libigl_operators=True,
 )
 
@@ -213,8 +254,8 @@ TETRAHEDRON = ReferenceSimplex(
                     domain="inside a volume", argument="tets"),
     source_kinds=("vertex", "point", "boundary", "boundary faces"),
     measure_root=np.cbrt,
-    _frame=_world_coordinates, _point_type="VolumePoint", _locator="volume_point",
-    coneless_cell_edges=True,
+    _frame=_world_coordinates, _to_world=_world_vectors, _point_type="VolumePoint", _locator="volume_point",
+    coneless_cell_edges=True, flat=True,
 )
 
 

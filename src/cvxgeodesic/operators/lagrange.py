@@ -215,7 +215,7 @@ class LagrangeSpace:
         """(k,) bool ndarray: proper cells where ``d²`` is a quadratic wherever a source is visible: every proper
         tetrahedron (a solid is flat), the proper faces whose edge-neighbours all lie in their plane
         (|cos| ≥ 1 − 1e-10)."""
-        if self.dim == 3:
+        if self.mesh.reference.flat:
             return ~self.degenerate
         nrm = self.mesh.face_normals_unnormalized
         with np.errstate(divide="ignore", invalid="ignore"):
