@@ -714,7 +714,7 @@ def test_guess_start_on_flat_faces_steps_over_the_cones_that_hold_at_zero(monkey
     program = Program.from_problem(scaled, solver.cholesky)
     x, left_out = guess_primal(program, ORDER2.interior_fraction)
     # every SOC(6) edge cone is left out (none holds at x_F); the sampled SOC(4) cones bound the step
-    assert [getattr(blk.cone, "dim", 0) for blk, out in zip(program.blocks, left_out, strict=True)
+    assert [getattr(blk.cone, "size", 0) for blk, out in zip(program.blocks, left_out, strict=True)
             if out.size and out.all()] == [6]
     s4 = program.blocks[0].slack(x, program.x_fixed)
     assert (s4[0] - np.linalg.norm(s4[1:], axis=0))[~left_out[0]].min() > 0

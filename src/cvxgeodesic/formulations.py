@@ -132,7 +132,7 @@ def stretch_weights(mesh: SimplexMesh, stretch: str = "area", area_ratio: np.nda
 
     Parameters
     ----------
-    mesh : TriMesh or TetMesh
+    mesh : SimplexMesh
     stretch : {"area", "calibrated", "mean", "sum"}
         ``"area"``: ``w_i = M_i / |Ω|`` with ``M_i`` a third of the area of the faces around vertex ``i`` (a
         quarter of the volume of its tetrahedra): the exact integral of the piecewise linear field, so ``wᵀd`` is
@@ -183,7 +183,7 @@ def smoothness_weight(mesh: SimplexMesh, m: float, normalization: str = "area", 
 
     Parameters
     ----------
-    mesh : TriMesh or TetMesh
+    mesh : SimplexMesh
     m : float
         Dimensionless multiplier; ``m = 1`` is the default rounding (docs/method.md).
     normalization : {"area", "paper"}
@@ -283,7 +283,7 @@ class MeshOperators:
 
     Parameters
     ----------
-    mesh : TriMesh or TetMesh
+    mesh : SimplexMesh
     degenerate_tol : float
         Threshold of :meth:`~cvxgeodesic.mesh.simplex.SimplexMesh.degenerate_cells` (default
         :data:`~cvxgeodesic.mesh.trimesh.DEGENERATE_TOL`; 0 drops only cells of exactly zero measure).

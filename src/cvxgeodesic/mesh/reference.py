@@ -15,12 +15,9 @@ from __future__ import annotations
 import importlib
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
-
-if TYPE_CHECKING:
-    from .locate import CellPoint
 
 __all__ = ["TETRAHEDRON", "TRIANGLE", "CellWords", "ReferenceSimplex", "reference_simplex"]
 
@@ -178,9 +175,6 @@ class ReferenceSimplex:
         Examples
         --------
         >>> import numpy as np
-
-if TYPE_CHECKING:
-    from .locate import CellPoint
         >>> X = np.array([[[0.0, 0, 0], [2, 0, 0], [0, 3, 0]]])
         >>> TRIANGLE.local_coordinates(X).round(6).tolist()
         [[[0.0, 0.0], [2.0, 0.0], [0.0, 3.0]]]
@@ -206,7 +200,7 @@ if TYPE_CHECKING:
         return self._to_world(G, X)
 
     @property
-    def point_type(self) -> type[CellPoint]:
+    def point_type(self) -> type[Any]:  # a CellPoint subclass: mesh.locate is above this module
         """The :class:`~cvxgeodesic.mesh.locate.CellPoint` subclass of a point in such a cell."""
         return _resolve(self._point_type)
 

@@ -37,7 +37,7 @@ def dirichlet_energy_matrix(mesh: SimplexMesh, *, cells: ArrayLike | None = None
 
     Parameters
     ----------
-    mesh : TriMesh or TetMesh
+    mesh : SimplexMesh
     cells : (s,) int or (k,) bool array_like, optional
         Cells to assemble (:func:`~.laplacian.cotan_stiffness`).
 
@@ -56,7 +56,7 @@ def laplacian_energy_matrix(mesh: SimplexMesh, *, cells: ArrayLike | None = None
 
     Parameters
     ----------
-    mesh : TriMesh or TetMesh
+    mesh : SimplexMesh
     cells : (s,) int or (k,) bool array_like, optional
         Cells to assemble.
 

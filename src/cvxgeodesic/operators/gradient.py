@@ -79,7 +79,7 @@ def gradient_matrix(mesh: SimplexMesh, blocks: np.ndarray | None = None) -> sp.c
 
     Parameters
     ----------
-    mesh : TriMesh or TetMesh
+    mesh : SimplexMesh
         ``k`` cells, ``n`` vertices.
     blocks : (k, dim, dim + 1) float ndarray, optional
         Precomputed :func:`gradient_blocks`.
@@ -103,7 +103,7 @@ def gradient_norms(mesh: SimplexMesh, d: np.ndarray, blocks: np.ndarray | None =
 
     Parameters
     ----------
-    mesh : TriMesh or TetMesh
+    mesh : SimplexMesh
     d : (n,) float array_like
     blocks : (k, dim, dim + 1) float ndarray, optional
 

@@ -51,7 +51,7 @@ def cotan_stiffness(mesh: SimplexMesh, *, cells: ArrayLike | None = None,
 
     Parameters
     ----------
-    mesh : TriMesh or TetMesh
+    mesh : SimplexMesh
     cells : (s,) int or (k,) bool array_like, optional
         Cells to assemble; default every cell (triangles: libigl's ``cotmatrix``) or every tetrahedron of nonzero
         volume.
@@ -79,7 +79,7 @@ def barycentric_mass(mesh: SimplexMesh, *, cells: ArrayLike | None = None) -> sp
 
     Parameters
     ----------
-    mesh : TriMesh or TetMesh
+    mesh : SimplexMesh
     cells : (s,) int or (k,) bool array_like, optional
         Cells to assemble; default every cell of nonzero measure.
 
@@ -124,7 +124,7 @@ def divergence(mesh: SimplexMesh, X: ArrayLike, *, cells: ArrayLike | None = Non
 
     Parameters
     ----------
-    mesh : TriMesh or TetMesh
+    mesh : SimplexMesh
     X : (k, dim) float array_like
         One vector per cell, in the frame of the gradient blocks (world coordinates on tetrahedra).
     cells : (s,) int or (k,) bool array_like, optional
