@@ -96,6 +96,16 @@ def test_the_heat_method_names_its_implementation_per_dimension():
     assert HeatBaseline((MESHES[3].V, MESHES[3].T)).dim == 3  # a (V, T) pair is a volume
 
 
+def test_a_baseline_class_builds_its_variant_for_the_mesh_cells():
+    """HeatBaseline and DijkstraBaseline on tetrahedra are their volume variants (chosen by mesh.reference)."""
+    from cvxgeodesic.baselines import VolumeDijkstraBaseline, VolumeHeatBaseline
+
+    assert type(HeatBaseline(MESHES[2])) is HeatBaseline and type(DijkstraBaseline(MESHES[2])) is DijkstraBaseline
+    assert type(HeatBaseline(MESHES[3])) is VolumeHeatBaseline
+    assert type(DijkstraBaseline((MESHES[3].V, MESHES[3].T))) is VolumeDijkstraBaseline
+    assert type(BASELINES["heat"](MESHES[3], t_coef=2.0)) is VolumeHeatBaseline
+
+
 def test_graph_distance_starts_at_zero_offsets_and_joins_the_others_through_one_node():
     # a path 0 - 1 - 2 - 3 with unit edges
     G = sp.csr_matrix(sp.diags([1.0, 1.0, 1.0], 1, shape=(4, 4)))

@@ -92,3 +92,18 @@ def test_reference_simplex_matches_the_mesh_classes():
         np.testing.assert_array_equal(ref.local_coordinates(X), expected)
         assert isinstance(ref.locate(mesh, mesh.V[3] * 0.999), ref.point_type)
     assert TRIANGLE.words.one == "face" and TETRAHEDRON.words.many == "tetrahedra"
+
+
+@pytest.mark.parametrize("mesh", [cg.icosphere(1), cg.tet_box(2)], ids=["tri", "tet"])
+def test_vertex_cells_and_centroid_tree_are_cached_members(mesh):
+    """The incidence of vertices and cells and the cells' centroid tree: computed once per mesh, as members (no
+    hand-made entries in the mesh's __dict__)."""
+    inc = mesh.vertex_cells
+    assert inc is mesh.vertex_cells and mesh.centroid_tree is mesh.centroid_tree
+    for v in (0, 3, mesh.n_vertices - 1):
+        np.testing.assert_array_equal(inc.indices[inc.indptr[v]:inc.indptr[v + 1]],
+                                      np.flatnonzero((mesh.cells == v).any(axis=1)))
+    tree, radius = mesh.centroid_tree
+    corners = mesh.V[mesh.cells]
+    assert np.all(np.linalg.norm(corners - tree.data[:, None], axis=2) <= radius)
+    assert not [k for k in vars(mesh) if k.startswith("_cg") or k == "_tet_locator"]
