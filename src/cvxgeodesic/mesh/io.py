@@ -149,9 +149,8 @@ def save_distance(path: str | os.PathLike, mesh: MeshLike, distance: ArrayLike, 
         )
     if not file_order:
         field = FieldData(mesh.V, mesh.cells, d, name, np.arange(mesh.n_vertices), mesh.vertex_map, mesh.name)
-    else:  # nothing is welded in a volume: its cells are the mesh's in the file's numbering
-        cells = mesh.file_faces if mesh.dim == 2 else mesh.vertex_map[mesh.cells]
-        field = FieldData(file_vertices(mesh), cells, to_file_order(mesh, d), name, mesh.file_index,
+    else:
+        field = FieldData(file_vertices(mesh), mesh.file_cells, to_file_order(mesh, d), name, mesh.file_index,
                           np.arange(mesh.n_file_vertices), mesh.name)
     if getattr(mesh, "cloud", None) is not None:  # a point cloud's field: its points, not the fans' triangle soup
         if p.suffix.lower() not in CLOUD_DISTANCE_EXTENSIONS:

@@ -80,7 +80,7 @@ def load_mesh(path: str | os.PathLike, *, kind: Literal["surface", "volume"] | N
         original vertex of vertex ``i``; for STL, whose vertices are the triangle
         corners, it is the corner number ``3 * triangle + corner``.
         ``mesh.file_index[j]`` is the mesh index of file vertex ``j`` (-1: in no face),
-        ``mesh.n_file_vertices`` the file's vertex count, ``mesh.file_faces`` the file's
+        ``mesh.n_file_vertices`` the file's vertex count, ``mesh.file_cells`` the file's
         triangles in its own numbering, and ``mesh.notes`` one line per repair. The mesh's
         numbering differs from the file's when vertices were welded or dropped:
         :func:`~cvxgeodesic.mesh.fileorder.to_file_order` maps a field back.

@@ -121,6 +121,12 @@ class SimplexMesh:
         raise NotImplementedError
 
     @property
+    def file_cells(self) -> np.ndarray:
+        """(k, dim + 1) int64 ndarray: the cells in the file's vertex numbering, ``vertex_map[cells]`` (a
+        :class:`~cvxgeodesic.mesh.trimesh.TriMesh` read from a file keeps the file's own triangles)."""
+        return self.vertex_map[self.cells]
+
+    @property
     def n_vertices(self) -> int:
         return int(self.V.shape[0])
 

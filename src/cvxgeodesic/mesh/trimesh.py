@@ -96,7 +96,7 @@ class TriMesh(SimplexMesh):
         return self.n_cells
 
     @property
-    def file_faces(self) -> np.ndarray:
+    def file_cells(self) -> np.ndarray:
         """(k, 3) int64 ndarray: the file's triangles in the file's vertex numbering.
 
         The faces as the file has them (before welding; polygons fan-triangulated, faces that
