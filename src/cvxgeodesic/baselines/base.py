@@ -114,8 +114,8 @@ class BaselineSolver:
     variants: tuple[type[BaselineSolver], ...] = ()
     source_sets: bool = False
 
-    def __new__(cls, mesh: MeshLike, *args: Any, **kwargs: Any) -> BaselineSolver:
-        if cls.variants:
+    def __new__(cls, mesh: MeshLike = None, *args: Any, **kwargs: Any) -> BaselineSolver:
+        if cls.variants and mesh is not None:  # (no mesh: unpickling, which builds the pickled class)
             kind = as_mesh(mesh).reference
             cls = next((v for v in cls.variants if v.cells is None or kind in v.cells), cls)
         return super().__new__(cls)

@@ -13,6 +13,8 @@ formulation, a source resolution or a path descent is written once over ``cells`
 ``cell_edges``      (k, 3) or (k, 6) indices into ``edges`` (``reference.edges`` gives the local pairs)
 ``boundary_facets`` (b, dim) the facets of a single cell: boundary edges of a surface, faces of a solid
 ``notes``           one line per repair the reader made (and, on a solid, per finding)
+``file_cells``      the cells in the file's vertex numbering
+``vertex_cells``    the (n, k) vertex-cell incidence; ``centroid_tree`` the cells' centroids for locators
 ==================  ============================================================================
 
 :class:`SimplexMesh` checks and stores the arrays (:func:`file_numbering` for the file's numbering); the
