@@ -164,6 +164,22 @@ def test_domain_recipe_order2(square, source):
     np.testing.assert_allclose(res.distance, np.linalg.norm(mesh.V - p, axis=1), atol=1e-6)
 
 
+def test_domain_recipe_order2_smoothed_boundary(square):
+    """An order-2 smoothness energy of ``φ = d²`` and the boundary source: still the distance to the sides."""
+    mesh, tri = square
+    res = _solve(mesh, "boundary", "qcqp-dirichlet", order=2)
+    np.testing.assert_allclose(res.distance, _solve(tri, "boundary", "qcqp-dirichlet", order=2).distance,
+                               rtol=1e-6, atol=1e-8)
+    np.testing.assert_allclose(res.distance, _boundary_distance(mesh.V), atol=1e-6)
+
+
+@pytest.mark.parametrize("method", ["dijkstra", "heat"])
+def test_domain_recipe_baselines(square, method):
+    """The baselines take the domain's triangles as they take a TriMesh's: the same field."""
+    mesh, tri = square
+    np.testing.assert_allclose(_solve(mesh, 0, method).distance, _solve(tri, 0, method).distance, rtol=1e-12)
+
+
 def test_domain_recipe_distance_at_and_geodesic_path(square):
     """The field between vertices (the order-1 interpolant: within 0.02 of ``|x|``) and the path back to a vertex
     source: the straight segment in the plane."""

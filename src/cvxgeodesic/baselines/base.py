@@ -265,7 +265,7 @@ def nonmanifold_vertices(mesh: TriMesh) -> np.ndarray:
         Sorted indices of the referenced vertices with more than one fan.
         Unreferenced vertices are not listed.
     """
-    F = np.asarray(mesh.F, dtype=np.int64)
+    F = np.asarray(mesh.cells, dtype=np.int64)
     n, m = mesh.n_vertices, F.shape[0]
     # corner (t, i): vertex F[t, i], whose fan links the two other vertices of t.
     centre = F.ravel()  # (3m,)
@@ -379,10 +379,10 @@ class ComponentwiseSolver(BaselineSolver):
             require_manifold(mesh, self.name)  # the message names the methods that solve non-manifold meshes
         self.scale = unit_scale(mesh)
         V = mesh.V / self.scale  # exact: a power of two
-        F = mesh.F
+        F = mesh.cells  # triangles: what the surface libraries take
         self.orientation: Orientation | None = None
         if self.orient:
-            self.orientation = orient_faces(mesh.F, mesh.n_vertices)
+            self.orientation = orient_faces(mesh.cells, mesh.n_vertices)
             require_orientable(mesh, self.name, self.orientation)
             note = self.orientation.note(mesh.name, f"{self.name!r} ({self.library})")
             if note:
