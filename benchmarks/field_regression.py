@@ -33,7 +33,7 @@ def _cases():
 
     sphere, plane = cg.icosphere(3), cg.grid_plane(12, jitter=0.2)
     box, prism = cg.tet_box(4), cg.tet_l_prism(3)
-    bottom = np.flatnonzero(box.V[box.boundary_faces].mean(axis=1)[:, 2] == 0)
+    bottom = np.flatnonzero(box.V[box.boundary_facets].mean(axis=1)[:, 2] == 0)
     p_tri = cg.surface_point(sphere, sphere.V[5] * 0.6 + sphere.V[40] * 0.4)
     p_tet = cg.volume_point(box, [0.31, 0.42, 0.27])
 

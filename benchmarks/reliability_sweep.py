@@ -46,7 +46,7 @@ def subdivide(mesh: cg.TriMesh) -> cg.TriMesh:
     E = mesh.edges
     V = np.vstack([mesh.V, 0.5 * (mesh.V[E[:, 0]] + mesh.V[E[:, 1]])])
     n = mesh.n_vertices
-    fe = mesh.face_edges + n  # column k: the midpoint of the edge opposite corner k
+    fe = mesh.cell_edges + n  # column k: the midpoint of the edge opposite corner k
     F = mesh.F
     faces = np.vstack([np.column_stack([F[:, 0], fe[:, 2], fe[:, 1]]), np.column_stack([F[:, 1], fe[:, 0], fe[:, 2]]),
                        np.column_stack([F[:, 2], fe[:, 1], fe[:, 0]]), fe])

@@ -565,8 +565,8 @@ def sec_fig8(ctx, plan):
     name = "bug_medial_axis.obj"
     mesh = ctx.mesh(name)
     mr = mesh_row(mesh)
-    mr["nonmanifold_edges"] = int(np.sum(mesh.edge_face_counts > 2))
-    mr["boundary_edges"] = int(np.sum(mesh.edge_face_counts == 1))
+    mr["nonmanifold_edges"] = int(np.sum(mesh.edge_cell_counts > 2))
+    mr["boundary_edges"] = int(np.sum(mesh.edge_cell_counts == 1))
     lab = mesh.component_labels
     mr["source_component_vertices"] = int(np.sum(lab == lab[SOURCE]))
     rows = {}
@@ -761,7 +761,7 @@ def order2_flat(plan) -> tuple[list[dict], tuple | None]:
     for _tag, meth, order in ORDER2_METHODS:  # load the compiled kernels before anything is timed
         _flat_solve(cg.grid_plane(3), meth, order, 0, np.ones(16))
     for case, mesh, vsrc, psrc in flat_cases(plan.quick):
-        aspect = float(np.max(mesh.face_longest_edges / mesh.face_min_altitudes))
+        aspect = float(np.max(mesh.cell_longest_edges / mesh.cell_min_altitudes))
         for kind, sources in (("vertex", vsrc), ("point", psrc)):
             per = []
             for src in sources:

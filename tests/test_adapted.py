@@ -85,7 +85,7 @@ def test_metric_moved_to_the_solve_mesh(grid):
 
 def test_non_manifold_mesh_falls_back_with_a_note(grid):
     # a fin on an interior edge: three faces on that edge
-    a, b = grid.edges[grid.edge_face_counts == 2][5]
+    a, b = grid.edges[grid.edge_cell_counts == 2][5]
     V = np.vstack([grid.V, 0.5 * (grid.V[a] + grid.V[b]) + [0, 0, 0.1]])
     mesh = TriMesh(V, np.vstack([grid.F, [[a, b, len(grid.V)]]]))
     res = cg.GeodesicSolver(mesh, "qclp", resolution=100).solve(0)

@@ -88,7 +88,7 @@ def test_bundled_demo_mesh_is_welded():
     mesh = demo_mesh()
     # spot.obj has texture seams: loading must weld them (a split mesh would have boundary edges)
     assert (mesh.n_vertices, mesh.n_faces) == (2930, 5856)
-    assert np.all(mesh.edge_face_counts == 2)
+    assert np.all(mesh.edge_cell_counts == 2)
 
 
 def test_auto_retries_an_almost_optimal_ipm_solve_with_clarabel(sphere, monkeypatch):

@@ -33,7 +33,8 @@ def test_a_library_failure_is_a_solver_error_naming_the_baseline_and_the_mesh(mo
     def boom(self, *args):
         raise ValueError("boom")
 
-    monkeypatch.setattr(DijkstraBaseline, where, boom)
+    for cls in (DijkstraBaseline, *DijkstraBaseline.variants):  # the volume's variant has its own _solve
+        monkeypatch.setattr(cls, where, boom)
     with pytest.raises(SolverError, match=rf"^baseline 'dijkstra': {what} {MESHES[dim].name}: ValueError: boom "
                                           r"\(solver=scipy.sparse.csgraph.dijkstra, status=error\)$"):
         DijkstraBaseline(MESHES[dim]).solve(0)
@@ -44,7 +45,8 @@ def test_non_finite_values_where_a_source_is_reachable_are_a_solver_error(monkey
     n = MESHES[dim].n_vertices
     d = np.ones(n)
     d[3] = np.nan
-    monkeypatch.setattr(DijkstraBaseline, "_solve", lambda self, src: (d.copy(), {}))
+    for cls in (DijkstraBaseline, *DijkstraBaseline.variants):
+        monkeypatch.setattr(cls, "_solve", lambda self, src: (d.copy(), {}))
     with pytest.raises(SolverError, match=r"returned 1 non-finite distances at vertices connected to a source "
                                           r"\(first: vertex 3\)"):
         DijkstraBaseline(MESHES[dim]).solve(0)
@@ -52,7 +54,8 @@ def test_non_finite_values_where_a_source_is_reachable_are_a_solver_error(monkey
 
 @DIMS
 def test_a_field_of_the_wrong_length_is_a_solver_error(monkeypatch, dim):
-    monkeypatch.setattr(DijkstraBaseline, "_solve", lambda self, src: (np.zeros(5), {}))
+    for cls in (DijkstraBaseline, *DijkstraBaseline.variants):
+        monkeypatch.setattr(cls, "_solve", lambda self, src: (np.zeros(5), {}))
     with pytest.raises(SolverError, match=rf"returned 5 values for {MESHES[dim].n_vertices} vertices"):
         DijkstraBaseline(MESHES[dim]).solve(0)
 
@@ -91,6 +94,16 @@ def test_the_heat_method_names_its_implementation_per_dimension():
     assert HeatBaseline(MESHES[2]).library == "potpourri3d.MeshHeatMethodDistanceSolver"
     assert HeatBaseline(MESHES[3]).library == "cvxgeodesic heat method (P1 tetrahedra)"
     assert HeatBaseline((MESHES[3].V, MESHES[3].T)).dim == 3  # a (V, T) pair is a volume
+
+
+def test_a_baseline_class_builds_its_variant_for_the_mesh_cells():
+    """HeatBaseline and DijkstraBaseline on tetrahedra are their volume variants (chosen by mesh.reference)."""
+    from cvxgeodesic.baselines import VolumeDijkstraBaseline, VolumeHeatBaseline
+
+    assert type(HeatBaseline(MESHES[2])) is HeatBaseline and type(DijkstraBaseline(MESHES[2])) is DijkstraBaseline
+    assert type(HeatBaseline(MESHES[3])) is VolumeHeatBaseline
+    assert type(DijkstraBaseline((MESHES[3].V, MESHES[3].T))) is VolumeDijkstraBaseline
+    assert type(BASELINES["heat"](MESHES[3], t_coef=2.0)) is VolumeHeatBaseline
 
 
 def test_graph_distance_starts_at_zero_offsets_and_joins_the_others_through_one_node():

@@ -190,10 +190,10 @@ def test_file_faces_leave_out_faces_that_repeat_a_vertex(tmp_path):
                     "f 1 2 3 4\nf 2 5 3\nf 1 1 5\nf 6 5 2\n")
     with pytest.warns(MeshRepairWarning):
         mesh = cg.load_mesh(path)
-    np.testing.assert_array_equal(mesh.file_faces, [[0, 1, 2], [0, 2, 3], [1, 4, 2], [5, 4, 1]])
+    np.testing.assert_array_equal(mesh.file_cells, [[0, 1, 2], [0, 2, 3], [1, 4, 2], [5, 4, 1]])
     assert mesh.n_faces == 4 and mesh.n_vertices == 5  # the last face is the mesh's (0, 4, 1)
-    np.testing.assert_array_equal(file_order_mesh(mesh).F, mesh.file_faces)
-    # a clean file stores nothing extra: file_faces is vertex_map[F]
+    np.testing.assert_array_equal(file_order_mesh(mesh).F, mesh.file_cells)
+    # a clean file stores nothing extra: file_cells is vertex_map[F]
     clean = tmp_path / "c.obj"
     clean.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
     m2 = cg.load_mesh(clean)

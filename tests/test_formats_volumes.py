@@ -95,7 +95,7 @@ def test_repeated_vertices_and_duplicates_are_dropped_with_notes(tmp_path):
                                       (".inp", "abaqus")])
 def test_meshio_formats(tmp_path, ext, fmt):
     mesh = tet_box(2, jitter=0.2, seed=4)
-    tri = mesh.boundary_faces
+    tri = mesh.boundary_facets
     path = tmp_path / f"m{ext}"
     cells = [("tetra", mesh.T), ("triangle", tri)]
     kwargs = {"file_format": fmt}

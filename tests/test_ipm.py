@@ -545,7 +545,7 @@ def test_equilibration_keeps_an_empty_cone_group_and_the_solution(sphere):
     empty = ConeGroup(np.zeros((0, 3), dtype=np.int64), np.zeros((0, 4, 3)), np.zeros((0, 4)))
     with_empty = dataclasses.replace(p, cones=[*p.cones, empty], equilibrate=True)
     scaled, D = equilibrate(with_empty)
-    assert [g.count for g in scaled.cones] == [p.cones[0].count, 0] and scaled.cones[1].dim == 4
+    assert [g.count for g in scaled.cones] == [p.cones[0].count, 0] and scaled.cones[1].size == 4
     # both solves are equilibrated the same way: the empty group adds no row, the fields agree to rounding
     x = ipm.solve(dataclasses.replace(p, equilibrate=True)).x
     np.testing.assert_allclose(ipm.solve(with_empty).x, x, rtol=0, atol=1e-12 * np.abs(x).max())

@@ -28,7 +28,7 @@ def _inside(cone, u: np.ndarray) -> np.ndarray:
 def _interior(cone, rng, k=K, margin=(1e-2, 2.0)) -> np.ndarray:
     if isinstance(cone, Orthant):
         return rng.uniform(*margin, k)
-    v = rng.normal(size=(cone.dim, k))
+    v = rng.normal(size=(cone.size, k))
     v[0] = np.linalg.norm(v[1:], axis=0) + rng.uniform(*margin, k)
     return v
 
@@ -39,7 +39,7 @@ def _dense(apply, cone, i: int) -> np.ndarray:
         e = np.zeros(K)
         e[i] = 1.0
         return np.array([[apply(e)[i]]])
-    d = cone.dim
+    d = cone.size
     cols = []
     for j in range(d):
         e = np.zeros((d, K))
@@ -202,7 +202,7 @@ def _made_up(seed: int, quadratic: bool):
     spec = [(SOC(3), 6), (SOC(4), 5)]
     blocks = []
     for cone, k in spec:
-        A = sp.random(cone.dim * k, n, density=0.4, random_state=rng, format="csr")
+        A = sp.random(cone.size * k, n, density=0.4, random_state=rng, format="csr")
         s0 = _interior(cone, rng, k)
         blocks.append((cone, A, A @ x0 + s0.T.ravel()))
     box = sp.vstack([sp.identity(n), -sp.identity(n)], format="csr")  # −5 ≤ x ≤ 5 keeps the LP bounded
@@ -230,7 +230,7 @@ def _clarabel(n, P, q, fixed, x0, blocks):
             continue
         rows.append(A)
         rhs.append(b)
-        cones.extend([clarabel.SecondOrderConeT(cone.dim)] * (A.shape[0] // cone.dim))
+        cones.extend([clarabel.SecondOrderConeT(cone.size)] * (A.shape[0] // cone.size))
     settings = clarabel.DefaultSettings()
     settings.verbose = False
     settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = 1e-10
@@ -257,7 +257,7 @@ def test_made_up_program_matches_clarabel(quadratic):
     assert res.x[3] == x0[3]
     for cone, A, b in blocks:  # feasible: b − A x in the cone
         slack = b - A @ res.x
-        field = slack if isinstance(cone, Orthant) else slack.reshape(-1, cone.dim).T
+        field = slack if isinstance(cone, Orthant) else slack.reshape(-1, cone.size).T
         assert _inside(cone, field + 1e-8 * cone.identity(field.shape[-1])).all()
     # the settings reach the generic solver too
     ipm.settings = IPMSettings(max_correctors=0)

@@ -9,7 +9,6 @@ import pytest
 
 import cvxgeodesic as cg
 from cvxgeodesic.errors import ParameterError, SourceError
-from cvxgeodesic.mesh.simplex import CELL_EDGES
 from cvxgeodesic.mesh.split import SplitMesh
 from cvxgeodesic.mesh.tet_generate import tet_box
 from cvxgeodesic.operators.lagrange import (
@@ -50,7 +49,7 @@ def test_basis_is_nodal_and_a_partition_of_unity(dim, order):
 @pytest.mark.parametrize("dim", [2, 3])
 def test_cell_edges_follow_the_local_edge_order(dim):
     mesh = _mesh(dim)
-    ends = np.sort(mesh.cells[:, CELL_EDGES[dim]], axis=2)  # (k, e, 2)
+    ends = np.sort(mesh.cells[:, mesh.reference.edges], axis=2)  # (k, e, 2)
     np.testing.assert_array_equal(mesh.edges[LagrangeSpace(mesh).cell_edges], ends)
 
 

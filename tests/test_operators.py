@@ -124,7 +124,7 @@ def test_manifold_cover_of_a_fin_on_a_grid():
     from cvxgeodesic.mesh.cover import manifold_cover
 
     g = grid_plane(6)
-    a, b = g.edges[np.flatnonzero(g.edge_face_counts == 2)[0]]
+    a, b = g.edges[np.flatnonzero(g.edge_cell_counts == 2)[0]]
     V = np.vstack([g.V, [[0.5, 0.5, 1.0]]])
     F = np.vstack([g.F, [[a, b, g.n_vertices]]])
     mesh = TriMesh(V, F)
@@ -270,7 +270,7 @@ def test_psd_check_in_an_existing_analysis():
 
 def test_face_edges_index_the_edge_opposite_each_corner():
     mesh = grid_plane(5, jitter=0.2, seed=1)
-    fe = mesh.face_edges
+    fe = mesh.cell_edges
     for k in range(3):
         expected = np.sort(mesh.F[:, [(k + 1) % 3, (k + 2) % 3]], axis=1)
         np.testing.assert_array_equal(mesh.edges[fe[:, k]], expected)
@@ -281,7 +281,7 @@ def test_flat_generators_shapes_and_aspect():
 
     strip = needle_strip(10, 240)
     assert (strip.n_vertices, strip.n_faces) == (22, 20) and np.all(strip.V[:, 2] == 0)
-    e = strip.edge_lengths[strip.face_edges]
+    e = strip.edge_lengths[strip.cell_edges]
     # longest edge / altitude = aspect for every needle (altitude = 2 area / longest edge)
     np.testing.assert_allclose(e.max(axis=1) ** 2 / (2 * strip.face_areas), 240, rtol=0.01)
     fan = fan_plate(12)

@@ -146,7 +146,7 @@ def test_flat_random_delaunay():
 
 def test_flat_fan_plate():
     mesh = fan_plate()
-    aspect = mesh.face_longest_edges / mesh.face_min_altitudes
+    aspect = mesh.cell_longest_edges / mesh.cell_min_altitudes
     assert aspect.max() > 20  # the fans are long and thin
     for src in (0, 5, mesh.n_vertices - 1, pt(3, (0.3, 0.3, 0.4)), pt(15, (0.1, 0.1, 0.8))):
         assert flat_error(mesh, src) <= FLAT_TOL
@@ -708,13 +708,13 @@ def test_guess_start_on_flat_faces_steps_over_the_cones_that_hold_at_zero(monkey
 
     b, prog = _program(cg.grid_plane(6, jitter=0.3, seed=2), [0])
     pr = prog.problem
-    assert pr.guess is not None and [g.dim for g in pr.cones] == [4, 6]
+    assert pr.guess is not None and [g.size for g in pr.cones] == [4, 6]
     scaled, _ = equilibrate(pr)
     solver = ipm_for(b)
     program = Program.from_problem(scaled, solver.cholesky)
     x, left_out = guess_primal(program, ORDER2.interior_fraction)
     # every SOC(6) edge cone is left out (none holds at x_F); the sampled SOC(4) cones bound the step
-    assert [getattr(blk.cone, "dim", 0) for blk, out in zip(program.blocks, left_out, strict=True)
+    assert [getattr(blk.cone, "size", 0) for blk, out in zip(program.blocks, left_out, strict=True)
             if out.size and out.all()] == [6]
     s4 = program.blocks[0].slack(x, program.x_fixed)
     assert (s4[0] - np.linalg.norm(s4[1:], axis=0))[~left_out[0]].min() > 0
@@ -761,7 +761,7 @@ print(json.dumps({"solver": res.info.solver, "status": res.info.status, "notes":
 
 def test_cones_on_sources_only():
     corners = np.array([[0, 1, 2], [0, 1, 2], [0, 1, 2], [3, 0, 1], [3, 0, 1]])
-    # the cells' edges in CELL_EDGES order ((1, 2), (2, 0), (0, 1) locally): edge 0 joins the sources 0 and 1
+    # the cells' edges in reference.edges order ((1, 2), (2, 0), (0, 1) locally): edge 0 joins the sources 0 and 1
     edges = np.array([[1, 2, 0], [1, 2, 0], [1, 2, 0], [0, 3, 4], [0, 3, 4]])
     bary = np.array([[1, 0, 0], [0.5, 0.5, 0], [0, 0.5, 0.5], [0, 0.5, 0.5], [0.2, 0.4, 0.4]])
     is_src = np.isin(np.arange(4), [0, 1])

@@ -213,7 +213,7 @@ def split_near_edge(eps: float, kind: str = "cap") -> TriMesh:
 def test_zero_area_faces_are_handled(method, kind):
     mesh = split_near_edge(0.0, kind)
     deg = mesh.degenerate_faces()
-    assert len(deg) >= 1 and np.all(mesh.face_areas[deg] <= 1e-3 * mesh.face_longest_edges[deg] ** 2)
+    assert len(deg) >= 1 and np.all(mesh.face_areas[deg] <= 1e-3 * mesh.cell_longest_edges[deg] ** 2)
     if method in FORMULATIONS:
         with pytest.warns(DegenerateFacesWarning, match="degenerate face"):
             d = solve(mesh, [0], method)
@@ -250,7 +250,7 @@ def test_degenerate_faces_definition():
     mesh = TriMesh(V, F)
     np.testing.assert_array_equal(mesh.degenerate_faces(), [1, 2, 3])
     np.testing.assert_array_equal(mesh.degenerate_faces(0.0), [1])
-    np.testing.assert_allclose(mesh.face_min_altitudes[[0, 1]], [np.sqrt(0.5), 0.0])
+    np.testing.assert_allclose(mesh.cell_min_altitudes[[0, 1]], [np.sqrt(0.5), 0.0])
     with pytest.warns(DegenerateFacesWarning, match="1 degenerate face.*face 1"):
         ops = MeshOperators(TriMesh(V, F[:3]), degenerate_tol=1e-6)
     assert ops.degenerate.tolist() == [False, True, False]

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import cvxgeodesic as cg
-from cvxgeodesic.mesh.simplex import CELL_EDGES, unit_mesh
+from cvxgeodesic.mesh.simplex import unit_mesh
 from cvxgeodesic.operators.gradient import gradient_blocks, gradient_matrix, gradient_norms
 
 
@@ -42,12 +42,12 @@ def test_the_vocabulary_means_the_same_in_both_dimensions(mesh):
     assert mesh.cells is (mesh.F if mesh.dim == 2 else mesh.T)
     assert np.isclose(mesh.total_measure, mesh.cell_measures.sum())
     # each cell's edges are the unique edges of its local pairs
-    pairs = np.sort(mesh.cells[:, CELL_EDGES[mesh.dim]], axis=2)
+    pairs = np.sort(mesh.cells[:, mesh.reference.edges], axis=2)
     np.testing.assert_array_equal(mesh.edges[mesh.cell_edges], pairs)
-    assert mesh.edge_cell_counts.sum() == mesh.n_cells * len(CELL_EDGES[mesh.dim])
+    assert mesh.edge_cell_counts.sum() == mesh.n_cells * len(mesh.reference.edges)
     assert mesh.n_components == 1 and mesh.referenced.all()
     # a closed sphere has no boundary; a box's boundary faces cover its surface (area 6)
-    assert mesh.boundary_facets.shape == ((0, 2) if mesh.dim == 2 else (mesh.boundary_faces.shape[0], 3))
+    assert mesh.boundary_facets.shape == ((0, 2) if mesh.dim == 2 else (mesh.boundary_facets.shape[0], 3))
     if mesh.dim == 3:
         assert np.isclose(mesh.boundary_area, 6.0)
     big = mesh._with_vertices(mesh.V * 3.0)
@@ -76,13 +76,34 @@ def test_open_surface_boundary_facets_are_its_boundary_edges():
 def test_reference_simplex_matches_the_mesh_classes():
     """Each mesh class carries its cell kind; its local frame gives the gradient code's corner coordinates."""
     from cvxgeodesic.mesh.reference import TETRAHEDRON, TRIANGLE
-    from cvxgeodesic.operators.gradient import local_coordinates
+    from cvxgeodesic.operators.gradient import triangle_frames
 
     sphere, box = cg.icosphere(1), cg.tet_box(2)
     assert sphere.reference is TRIANGLE and box.reference is TETRAHEDRON
     for mesh in (sphere, box):
         ref = mesh.reference
         assert ref.dim == mesh.dim and ref.n_corners == mesh.cells.shape[1]
-        np.testing.assert_array_equal(ref.local_coordinates(mesh.V[mesh.cells]), local_coordinates(mesh))
+        X = mesh.V[mesh.cells]
+        expected = X
+        if mesh is sphere:  # each face's frame of triangle_frames, corner 0 at the origin
+            ex, ey = triangle_frames(sphere)
+            rel = X - X[:, :1]
+            expected = np.stack([np.einsum("kvx,kx->kv", rel, ex), np.einsum("kvx,kx->kv", rel, ey)], axis=2)
+        np.testing.assert_array_equal(ref.local_coordinates(X), expected)
         assert isinstance(ref.locate(mesh, mesh.V[3] * 0.999), ref.point_type)
     assert TRIANGLE.words.one == "face" and TETRAHEDRON.words.many == "tetrahedra"
+
+
+@pytest.mark.parametrize("mesh", [cg.icosphere(1), cg.tet_box(2)], ids=["tri", "tet"])
+def test_vertex_cells_and_centroid_tree_are_cached_members(mesh):
+    """The incidence of vertices and cells and the cells' centroid tree: computed once per mesh, as members (no
+    hand-made entries in the mesh's __dict__)."""
+    inc = mesh.vertex_cells
+    assert inc is mesh.vertex_cells and mesh.centroid_tree is mesh.centroid_tree
+    for v in (0, 3, mesh.n_vertices - 1):
+        np.testing.assert_array_equal(inc.indices[inc.indptr[v]:inc.indptr[v + 1]],
+                                      np.flatnonzero((mesh.cells == v).any(axis=1)))
+    tree, radius = mesh.centroid_tree
+    corners = mesh.V[mesh.cells]
+    assert np.all(np.linalg.norm(corners - tree.data[:, None], axis=2) <= radius)
+    assert not [k for k in vars(mesh) if k.startswith("_cg") or k == "_tet_locator"]

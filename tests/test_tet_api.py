@@ -73,7 +73,7 @@ def test_load_mesh_returns_a_tetmesh_for_files_with_tetrahedra(prism, tmp_path):
         assert isinstance(m, TetMesh) and m.n_tets == prism.n_tets, ext
     # a VTU without tetrahedra is still a surface
     surf = tmp_path / "surface.vtu"
-    meshio.write(str(surf), meshio.Mesh(prism.V, [("triangle", prism.boundary_faces)]))
+    meshio.write(str(surf), meshio.Mesh(prism.V, [("triangle", prism.boundary_facets)]))
     with pytest.warns(cg.MeshRepairWarning, match="dropped 32 vertices in no face"):  # the interior ones
         assert isinstance(cg.load_mesh(surf), cg.TriMesh)
     # TetGen's pair

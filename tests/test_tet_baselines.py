@@ -174,7 +174,7 @@ def test_unreachable_components_get_inf():
 def test_degenerate_tets_are_left_out_of_the_heat_method_and_noted():
     # a flat tetrahedron glued on a boundary face: its apex is in no kept tetrahedron
     box = tet_box(4)
-    f = box.boundary_faces[0]
+    f = box.boundary_facets[0]
     nrm = np.cross(box.V[f[1]] - box.V[f[0]], box.V[f[2]] - box.V[f[0]])
     apex = box.V[f].mean(axis=0) + 1e-6 * nrm / np.linalg.norm(nrm)
     m = TetMesh(np.vstack([box.V, apex]), np.vstack([box.T, [[*f, box.n_vertices]]]))

@@ -73,7 +73,7 @@ def test_ball_is_a_ball():
 
 
 def test_ball_smoothing_improves_the_worst_tetrahedron():
-    q = {s: (lambda b: (b.tet_min_altitudes / b.tet_longest_edges).min())(tet_ball(8, smooth=s)) for s in (0, 5)}
+    q = {s: (lambda b: (b.cell_min_altitudes / b.cell_longest_edges).min())(tet_ball(8, smooth=s)) for s in (0, 5)}
     assert q[0] < 0.1 and q[5] > 0.19  # the docstring's 0.098 → 0.196
 
 

@@ -7,9 +7,10 @@ import pytest
 
 from cvxgeodesic.errors import MeshError
 from cvxgeodesic.mesh.convert import as_mesh
+from cvxgeodesic.mesh.reference import TETRAHEDRON
 from cvxgeodesic.mesh.simplex import unit_mesh
 from cvxgeodesic.mesh.tet_generate import kuhn_tets, tet_ball, tet_box, tet_l_prism
-from cvxgeodesic.mesh.tetmesh import TET_FACES, TetMesh
+from cvxgeodesic.mesh.tetmesh import TetMesh
 
 CORNER = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
 
@@ -63,25 +64,25 @@ def test_edges_faces_and_boundary_of_two_tets():
     # every tet edge maps back to its two vertices
     for t in range(2):
         for k, (a, b) in enumerate([[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]]):
-            assert sorted(m.edges[m.tet_edges[t, k]].tolist()) == sorted([m.T[t, a], m.T[t, b]])
+            assert sorted(m.edges[m.cell_edges[t, k]].tolist()) == sorted([m.T[t, a], m.T[t, b]])
     np.testing.assert_allclose(m.edge_lengths[m.edges.tolist().index([0, 1])], 1.0)
     assert m.faces.shape == (7, 3) and m.face_tet_counts.tolist().count(2) == 1
-    assert m.boundary_faces.shape == (6, 3) and m.is_manifold
+    assert m.boundary_facets.shape == (6, 3) and m.is_manifold
     assert m.boundary_vertices.tolist() == [0, 1, 2, 3, 4]
     assert m.boundary_face_tets.tolist().count(0) == 3
     # outward: the normals of the closed boundary integrate the divergence theorem, Σ (c · n) A = 3 · volume
-    V, B = m.V, m.boundary_faces
+    V, B = m.V, m.boundary_facets
     nrm = np.cross(V[B[:, 1]] - V[B[:, 0]], V[B[:, 2]] - V[B[:, 0]]) / 2
     flux = np.einsum("ij,ij->", V[B].mean(axis=1), nrm)
     np.testing.assert_allclose(flux, 3 * m.total_volume)
     # the opposite face really is opposite: it does not contain the vertex
-    for i, face in enumerate(TET_FACES):
+    for i, face in enumerate(TETRAHEDRON.facets):
         assert i not in face
 
 
 def test_outward_boundary_on_generated_meshes():
     for mesh in (tet_box(3, jitter=0.2), tet_l_prism(2), tet_ball(3)):
-        V, B = mesh.V, mesh.boundary_faces
+        V, B = mesh.V, mesh.boundary_facets
         nrm = np.cross(V[B[:, 1]] - V[B[:, 0]], V[B[:, 2]] - V[B[:, 0]]) / 2
         np.testing.assert_allclose(np.einsum("ij,ij->", V[B].mean(axis=1), nrm), 3 * mesh.total_volume, rtol=1e-12)
         assert mesh.boundary_mesh().is_edge_manifold
@@ -113,11 +114,11 @@ def test_components_connected_to_and_referenced():
 def test_altitudes_of_known_tetrahedra():
     # the corner tetrahedron: altitudes 1, 1, 1 and 1/√3 (to the face x + y + z = 1)
     m = TetMesh(CORNER, [[0, 1, 2, 3]])
-    np.testing.assert_allclose(m.tet_min_altitudes, [1 / 3**0.5])
-    np.testing.assert_allclose(m.tet_longest_edges, [2**0.5])
+    np.testing.assert_allclose(m.cell_min_altitudes, [1 / 3**0.5])
+    np.testing.assert_allclose(m.cell_longest_edges, [2**0.5])
     # Kuhn tetrahedra: 0.408 of their longest edge (the docstring's number)
     box = tet_box(2)
-    np.testing.assert_allclose(box.tet_min_altitudes / box.tet_longest_edges, (1 / 6) ** 0.5)
+    np.testing.assert_allclose(box.cell_min_altitudes / box.cell_longest_edges, (1 / 6) ** 0.5)
 
 
 def test_degenerate_tets_found_and_noted():

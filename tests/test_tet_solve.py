@@ -162,7 +162,7 @@ def test_l_prism_9k_tets():
 def _wall_distance(m):
     import igl
 
-    sqd, _, _ = igl.point_mesh_squared_distance(m.V, m.V, m.boundary_faces)
+    sqd, _, _ = igl.point_mesh_squared_distance(m.V, m.V, m.boundary_facets)
     return np.sqrt(sqd)  # the nearest wall point is always in sight: exact for any polyhedral domain
 
 
@@ -194,11 +194,11 @@ def test_ball_wall_distance(n, stated):
 @pytest.mark.parametrize("order", [1, 2])
 def test_boundary_faces_source(order):
     m = tet_box(3, jitter=0.2, seed=2)
-    bottom = np.flatnonzero(m.V[m.boundary_faces].mean(axis=1)[:, 2] < 1e-12)
+    bottom = np.flatnonzero(m.V[m.boundary_facets].mean(axis=1)[:, 2] < 1e-12)
     res = cg.GeodesicSolver(m, "qclp", order=order).solve(BoundaryFaces(bottom))
     assert np.abs(res.distance - m.V[:, 2]).max() <= 1e-6  # distance to the floor: z
     # the same faces given by their vertices
-    d = cg.geodesic_distance(m, BoundaryFaces(m.boundary_faces[bottom][:, ::-1]), method="qclp", order=order)
+    d = cg.geodesic_distance(m, BoundaryFaces(m.boundary_facets[bottom][:, ::-1]), method="qclp", order=order)
     np.testing.assert_allclose(d, res.distance, atol=1e-7)
     path = cg.geodesic_path(m, res, [0.4, 0.6, 0.7])
     assert path[-1][2] == pytest.approx(0.0, abs=1e-9)
@@ -283,7 +283,7 @@ def test_folded_mesh_is_noted_and_finite():
 def test_degenerate_tets_are_left_out_with_a_note():
     m = tet_box(3)
     # a flat tetrahedron glued on a boundary face: its fourth vertex in the face's plane
-    B = m.boundary_faces[0]
+    B = m.boundary_facets[0]
     V = np.vstack([m.V, m.V[B].mean(axis=0) + 0.3 * (m.V[B[1]] - m.V[B[0]])])
     flat = TetMesh(V, np.vstack([m.T, [[*B, m.n_vertices]]]))
     with warnings.catch_warnings():
@@ -302,7 +302,7 @@ def test_a_midpoint_in_no_cone_is_tied_to_its_edge_in_a_solid():
     """As on surfaces (test_order2.py): a degenerate tetrahedron's edge shorter than MIN_EDGE gets no 1-D cone, and
     its midpoint, in no cone and no equality, is tied to the mean of its ends instead of left unbounded."""
     m = tet_box(2)
-    B = m.boundary_faces[0]
+    B = m.boundary_facets[0]
     V = np.vstack([m.V, m.V[B[0]] + 1e-12 * (m.V[B[1]] - m.V[B[0]])])  # a new vertex 1e-12 from corner B[0]
     mesh = TetMesh(V, np.vstack([m.T, [[*B, m.n_vertices]]]))
     src = int(np.argmax(np.linalg.norm(V - V[B[0]], axis=1)))  # off the tiny edge: no source row holds it
@@ -343,6 +343,6 @@ def test_problem_shape():
     ops = MeshOperators(m)
     pb = build_problem(ops, resolve_sources(m, 0), "qclp", 0.0)
     (group,) = pb.cones
-    assert group.dim == 4 and group.clique == 4
+    assert group.size == 4 and group.clique == 4
     # the source's tetrahedra carry no cone; every other one does
     assert group.count == m.n_tets - int((m.T == 0).any(axis=1).sum())

@@ -60,7 +60,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from .errors import DegenerateFacesWarning, MeshError, ParameterError, warn_user
-from .mesh.simplex import CELL_EDGES
+from .mesh.reference import reference_simplex
 from .operators.lagrange import SAMPLES, LagrangeSpace, edge_basis, sample_points
 from .operators.metric import Medium
 from .operators.p2_energy import P2Energy, p2_energy
@@ -284,7 +284,7 @@ class P2Builder:
         owner, local = deg[first // n_e], first % n_e
         ok = mesh.edge_lengths[ids] > MIN_EDGE * max(mesh.bbox_diagonal, 1e-300)
         ids, owner, local = ids[ok], owner[ok], local[ok]
-        a, b = CELL_EDGES[dim][local, 0], CELL_EDGES[dim][local, 1]
+        a, b = mesh.reference.edges[local, 0], mesh.reference.edges[local, 1]
         t = np.array([0.0, 0.5, 1.0])
         Nt, dNt = edge_basis(t)
         r = np.arange(ids.size)
@@ -597,7 +597,7 @@ def _on_sources(corners: np.ndarray, edges: np.ndarray, bary: np.ndarray, is_src
     corners : (p, dim + 1) int ndarray
         The vertices of each sample's cell.
     edges : (p, dim (dim + 1) / 2) int ndarray
-        Their edges (indices into ``mesh.edges``, :data:`~cvxgeodesic.mesh.simplex.CELL_EDGES` order).
+        Their edges (indices into ``mesh.edges``, ``mesh.reference.edges`` order).
     bary : (p, dim + 1) float ndarray
         The samples' barycentric coordinates in those cells.
     is_src : (n,) bool ndarray
@@ -610,7 +610,7 @@ def _on_sources(corners: np.ndarray, edges: np.ndarray, bary: np.ndarray, is_src
     (p,) bool ndarray
     """
     support = bary > 0
-    E = CELL_EDGES[corners.shape[1] - 1]
+    E = reference_simplex(corners.shape[1] - 1).edges
     need = support[:, E[:, 0]] & support[:, E[:, 1]]
     return (is_src[corners] | ~support).all(axis=1) & (zero_edges[edges] | ~need).all(axis=1)
 

@@ -42,17 +42,7 @@ from .errors import ParameterError, SolverError, SourceError
 from .mesh.closest import segment_point, triangle_point
 from .mesh.convert import as_mesh
 from .mesh.corridor import node_position, straighten_corridor
-from .mesh.locate import (
-    POINT_AT,
-    POINT_TYPES,
-    CellPoint,
-    SurfacePoint,
-    VolumePoint,
-    cells_around,
-    closest_points,
-    corner_interpolant,
-)
-from .mesh.simplex import CELL_FACETS
+from .mesh.locate import CellPoint, SurfacePoint, VolumePoint, cells_around, closest_points, corner_interpolant
 from .operators.gradient import gradient_blocks, triangle_frames
 from .operators.metric import make_medium
 from .results import GeodesicResult, remembered_sources
@@ -76,7 +66,7 @@ def _field(mesh: Any, distance: Any) -> tuple[np.ndarray, Any]:
 # -- points of the cells: SurfacePoint on triangles, VolumePoint in tetrahedra ------------------------------------
 def _as_points(mesh: Any, points: Any) -> tuple[np.ndarray, np.ndarray, bool]:
     """(cells (k,), bary (k, dim + 1), single) of points of the mesh's kind or of positions."""
-    kind = POINT_TYPES[mesh.dim]
+    kind = mesh.reference.point_type
     found = points
     if not isinstance(points, kind) and not (isinstance(points, list | tuple)
                                              and all(isinstance(p, kind) for p in points)):
@@ -84,7 +74,7 @@ def _as_points(mesh: Any, points: Any) -> tuple[np.ndarray, np.ndarray, bool]:
             X = np.asarray(points, dtype=float)
         except (TypeError, ValueError):
             raise SourceError(f"points must be {kind.__name__}s or (k, 3) positions") from None
-        found = POINT_AT[mesh.dim](mesh, X)
+        found = mesh.reference.locate(mesh, X)
     single = isinstance(found, kind)
     pts: list[CellPoint] = [found] if single else list(found)
     for k, p in enumerate(pts):
@@ -159,10 +149,7 @@ def _hat_gradients(mesh: Any) -> np.ndarray:
     cells): a surface's blocks are in each face's 2D frame and go back to 3D; a volume's are 3D already."""
     with np.errstate(invalid="ignore", divide="ignore"):
         B = gradient_blocks(mesh)  # (k, dim, dim + 1)
-        if mesh.dim == 3:
-            return np.ascontiguousarray(B.transpose(0, 2, 1))
-        ex, ey = triangle_frames(mesh)
-        return B[:, 0, :, None] * ex[:, None, :] + B[:, 1, :, None] * ey[:, None, :]
+        return mesh.reference.world_vectors(B, mesh.V[mesh.cells])
 
 
 class _Cells:
@@ -400,7 +387,7 @@ class _Descent:
         y = nb @ geo.V[corners]
         zero = np.flatnonzero(nb <= 1e-10)
         if zero.size == 1:  # through the facet opposite that corner
-            facet = tuple(int(u) for u in corners[CELL_FACETS[geo.mesh.dim][zero[0]]])
+            facet = tuple(int(u) for u in corners[geo.mesh.reference.facets[zero[0]]])
             if frozenset(facet) in self.ends.facets:  # a source face of the volume: the path ends on it
                 self.nodes.append(("p", c, y))
                 return None
@@ -440,7 +427,7 @@ class _Descent:
 
 def _as_target(mesh: Any, target: Any) -> int | CellPoint:
     """A vertex index or a point of the mesh's kind (a position: the closest surface point, the point inside)."""
-    kind = POINT_TYPES[mesh.dim]
+    kind = mesh.reference.point_type
     if isinstance(target, kind):
         target.check(mesh, "target")
         return target
@@ -456,7 +443,7 @@ def _as_target(mesh: Any, target: Any) -> int | CellPoint:
         raise SourceError(wrong) from None
     if X.shape != (3,) or not np.all(np.isfinite(X)):
         raise SourceError(wrong)
-    return cast(CellPoint, POINT_AT[mesh.dim](mesh, X))  # one position: one point
+    return cast(CellPoint, mesh.reference.locate(mesh, X))  # one position: one point
 
 
 @overload

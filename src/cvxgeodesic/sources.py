@@ -108,7 +108,7 @@ class BoundaryFaces:
     Parameters
     ----------
     faces : (k,) int array_like or (k, 3) int array_like
-        Rows of :attr:`TetMesh.boundary_faces <cvxgeodesic.mesh.tetmesh.TetMesh.boundary_faces>` (indices), or
+        Rows of :attr:`TetMesh.boundary_facets <cvxgeodesic.mesh.tetmesh.TetMesh.boundary_facets>` (indices), or
         the faces' three vertices (any order); checked against the mesh when used.
 
     Examples
@@ -118,7 +118,7 @@ class BoundaryFaces:
     >>> import numpy as np
     >>> from cvxgeodesic.mesh.tet_generate import tet_box
     >>> mesh = tet_box(2)
-    >>> bottom = np.flatnonzero(mesh.V[mesh.boundary_faces].mean(axis=1)[:, 2] == 0)
+    >>> bottom = np.flatnonzero(mesh.V[mesh.boundary_facets].mean(axis=1)[:, 2] == 0)
     >>> BoundaryFaces(bottom).resolve(mesh).size
     8
     """
@@ -146,14 +146,14 @@ class BoundaryFaces:
         return f"BoundaryFaces({self.faces.shape[0]} faces)"
 
     def resolve(self, mesh: TetMesh) -> np.ndarray:
-        """(k,) int64 ndarray: sorted unique rows of ``mesh.boundary_faces``.
+        """(k,) int64 ndarray: sorted unique rows of ``mesh.boundary_facets``.
 
         Raises
         ------
         SourceError
             An index out of range, or a vertex triple that is no boundary face of ``mesh``.
         """
-        B = mesh.boundary_faces
+        B = mesh.boundary_facets
         if self.faces.ndim == 1:
             bad = (self.faces < 0) | (self.faces >= B.shape[0])
             if bad.any():
@@ -572,7 +572,7 @@ def resolve_sources(mesh: Any, sources: Any) -> SourceSet:
         kinds = set()
         for k, s in enumerate(sources):
             label = f"source {k}"
-            if isinstance(s, CellPoint) and isinstance(s, accepted):
+            if isinstance(s, mesh.reference.point_type):
                 s.check(mesh, label)
                 builder.add_bary(s.cell, s.bary)
                 kinds.add("points")

@@ -19,10 +19,10 @@ Vertices not connected to any source get ``np.inf`` with every method.
 """
 
 from .base import BaselineSolver, ComponentwiseSolver, nonmanifold_vertices, reachable_mask, require_manifold
-from .dijkstra import DijkstraBaseline
+from .dijkstra import DijkstraBaseline, VolumeDijkstraBaseline
 from .exact import ExactBaseline
 from .fmm import FastMarchingBaseline
-from .heat import DEFAULT_T_COEF, HeatBaseline
+from .heat import DEFAULT_T_COEF, HeatBaseline, VolumeHeatBaseline
 from .points import graph_distance
 
 BASELINES: dict[str, type[BaselineSolver]] = {
@@ -32,6 +32,7 @@ BASELINES: dict[str, type[BaselineSolver]] = {
 
 __all__ = [
     "BASELINES", "BaselineSolver", "ComponentwiseSolver", "DEFAULT_T_COEF", "DijkstraBaseline", "ExactBaseline",
-    "FastMarchingBaseline", "HeatBaseline", "graph_distance", "nonmanifold_vertices", "reachable_mask",
+    "FastMarchingBaseline", "HeatBaseline", "VolumeDijkstraBaseline", "VolumeHeatBaseline",
+    "graph_distance", "nonmanifold_vertices", "reachable_mask",
     "require_manifold",
 ]

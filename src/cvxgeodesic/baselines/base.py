@@ -61,9 +61,9 @@ from ..errors import (
     SourceError,
     warn_user,
 )
-from ..mesh.convert import as_mesh
+from ..mesh.convert import MeshLike, as_mesh
 from ..mesh.orient import Orientation, orient_faces
-from ..mesh.reference import TRIANGLE
+from ..mesh.reference import ReferenceSimplex
 from ..mesh.simplex import SimplexMesh, unit_scale
 from ..mesh.trimesh import TriMesh
 from ..sources import SourceSet, resolve_sources
@@ -86,8 +86,17 @@ class BaselineSolver:
     name : str
         Method name used as key of :data:`cvxgeodesic.baselines.BASELINES`.
     library : str
-        The library function doing the work (reported as ``info["solver"]``); inside a volume
-        ``volume_library`` where a class sets it (the heat method's own P1 operators).
+        The library function doing the work (reported as ``info["solver"]``).
+    cells : tuple of ReferenceSimplex, or None
+        The cell kinds (:attr:`SimplexMesh.reference <cvxgeodesic.mesh.simplex.SimplexMesh.reference>`) the class
+        computes on; None: any.
+    variants : tuple of type
+        Classes of the same method for other cell kinds: calling the class on a mesh of such cells builds the first
+        variant whose :attr:`cells` hold the mesh's (the heat method inside a volume), else the class itself.
+    source_sets : bool
+        True: ``_solve`` takes the resolved :class:`~cvxgeodesic.sources.SourceSet` of any source (the class reads
+        points and facets itself: the volume baselines). False: ``_solve`` takes vertex indices and
+        ``_solve_sources`` the points, curves and boundary, where the library can.
     supports_multiple_sources : bool
         Whether the library computes the distance to a set of sources in one
         run (otherwise the class takes the minimum over single-source runs).
@@ -100,9 +109,6 @@ class BaselineSolver:
         What the set-up changed or left out (the faces it reoriented, the degenerate tetrahedra it left out),
         copied into every ``info["notes"]``.
 
-    triangles_only : bool
-        The library takes triangle meshes only (``"fmm"``, ``"exact"``).
-
     Raises
     ------
     ParameterError
@@ -112,18 +118,24 @@ class BaselineSolver:
 
     name: str = ""
     library: str = ""
-    volume_library: str = ""
     supports_multiple_sources: bool = True
-    triangles_only: bool = False
+    cells: tuple[ReferenceSimplex, ...] | None = None
+    variants: tuple[type[BaselineSolver], ...] = ()
+    source_sets: bool = False
 
-    def __init__(self, mesh: Any):
+    def __new__(cls, mesh: MeshLike = None, *args: Any, **kwargs: Any) -> BaselineSolver:
+        if cls.variants and mesh is not None:  # (no mesh: unpickling, which builds the pickled class)
+            kind = as_mesh(mesh).reference
+            cls = next((v for v in cls.variants if v.cells is None or kind in v.cells), cls)
+        return super().__new__(cls)
+
+    def __init__(self, mesh: MeshLike):
         self.mesh: Any = as_mesh(mesh)
         self.dim = self.mesh.dim
-        if self.triangles_only and self.mesh.reference is not TRIANGLE:
-            raise ParameterError(f"baseline {self.name!r} takes triangle meshes only ({self.library} is a surface "
+        if self.cells is not None and self.mesh.reference not in self.cells:
+            takes = " and ".join(c.words.meshes for c in self.cells)
+            raise ParameterError(f"baseline {self.name!r} takes {takes} only ({self.library} is a surface "
                                  f"algorithm); {self.mesh.name} holds {self.mesh.reference.words.many}")
-        if self.dim == 3 and self.volume_library:
-            self.library = self.volume_library
         self.notes: list[str] = []
         t0 = time.perf_counter()
         with _library_errors(self, "setup failed on"):
@@ -138,8 +150,8 @@ class BaselineSolver:
         """Per-mesh precomputation (called once by the constructor)."""
 
     def _solve(self, sources: Any) -> tuple[np.ndarray, dict]:
-        """Distance from validated sources: a (k,) int64 array of vertices on a surface, a
-        :class:`~cvxgeodesic.sources.SourceSet` inside a volume. Returns ``(d, extra_info)``."""
+        """Distance from validated sources: a (k,) int64 array of vertices, or the
+        :class:`~cvxgeodesic.sources.SourceSet` of a class with :attr:`source_sets`. Returns ``(d, extra_info)``."""
         raise NotImplementedError
 
     def _solve_sources(self, ss: SourceSet) -> tuple[np.ndarray, dict]:
@@ -184,9 +196,9 @@ class BaselineSolver:
         src, seeds, count = self._resolve(sources)
         t0 = time.perf_counter()
         with _library_errors(self, "failed on"):
-            # a surface's points, curves or boundary go through the library's point support; a volume's SourceSet is
-            # what its _solve takes
-            d, extra = self._solve_sources(src) if self.dim == 2 and isinstance(src, SourceSet) else self._solve(src)
+            # points, curves or the boundary go through the library's point support, unless _solve takes source sets
+            by_library = isinstance(src, SourceSet) and not self.source_sets
+            d, extra = self._solve_sources(src) if by_library else self._solve(src)
         solve_time = time.perf_counter() - t0
         d = np.array(d, dtype=np.float64).reshape(-1)
         if d.shape != (self.mesh.n_vertices,):
@@ -220,16 +232,15 @@ class BaselineSolver:
 
 
     def _resolve(self, sources: Any) -> tuple[Any, np.ndarray, int]:
-        """The validated sources (vertex indices, a surface's SourceSet of points, curves or boundary, a volume's
-        SourceSet), the vertices the field spreads from, and how many sources there are."""
-        if self.dim == 3:
-            src = resolve_sources(self.mesh, sources)
-            return src, src.seed_vertices(self.mesh), src.count
+        """The validated sources (vertex indices, or a SourceSet of points, curves or boundary; always the SourceSet
+        for a class with :attr:`source_sets`), the vertices the field spreads from, and how many sources there are."""
         ss = resolve_sources(self.mesh, sources)
+        if self.source_sets:
+            return ss, ss.seed_vertices(self.mesh), ss.count
         if ss.vertex_only:
             return ss.vertices, ss.vertices, int(ss.vertices.size)
-        F = self.mesh.F
-        seeds = np.unique(np.concatenate([ss.vertices, F[ss.point_faces].ravel(), F[ss.segment_faces].ravel()]))
+        C = self.mesh.cells
+        seeds = np.unique(np.concatenate([ss.vertices, C[ss.point_faces].ravel(), C[ss.segment_faces].ravel()]))
         return ss, seeds.astype(np.int64), int(ss.vertices.size + ss.point_faces.size)
 
 
@@ -268,7 +279,7 @@ def nonmanifold_vertices(mesh: TriMesh) -> np.ndarray:
         Sorted indices of the referenced vertices with more than one fan.
         Unreferenced vertices are not listed.
     """
-    F = np.asarray(mesh.F, dtype=np.int64)
+    F = np.asarray(mesh.cells, dtype=np.int64)
     n, m = mesh.n_vertices, F.shape[0]
     # corner (t, i): vertex F[t, i], whose fan links the two other vertices of t.
     centre = F.ravel()  # (3m,)
@@ -303,7 +314,7 @@ def require_manifold(mesh: TriMesh, method: str, alternatives: str = NON_MANIFOL
         Methods that work on the mesh (used in the message).
     """
     if not mesh.is_edge_manifold:
-        n_bad = int(np.sum(mesh.edge_face_counts > 2))
+        n_bad = int(np.sum(mesh.edge_cell_counts > 2))
         raise NonManifoldError(
             f"{mesh.name}: method {method!r} needs an edge-manifold mesh, but {n_bad} edges are shared by more "
             f"than two faces; use {alternatives} instead"
@@ -382,10 +393,10 @@ class ComponentwiseSolver(BaselineSolver):
             require_manifold(mesh, self.name)  # the message names the methods that solve non-manifold meshes
         self.scale = unit_scale(mesh)
         V = mesh.V / self.scale  # exact: a power of two
-        F = mesh.F
+        F = mesh.cells  # triangles: what the surface libraries take
         self.orientation: Orientation | None = None
         if self.orient:
-            self.orientation = orient_faces(mesh.F, mesh.n_vertices)
+            self.orientation = orient_faces(mesh.cells, mesh.n_vertices)
             require_orientable(mesh, self.name, self.orientation)
             note = self.orientation.note(mesh.name, f"{self.name!r} ({self.library})")
             if note:

@@ -7,6 +7,8 @@ from typing import Any
 
 import numpy as np
 
+from ..mesh.convert import MeshLike
+from ..mesh.reference import TETRAHEDRON
 from ..sources import SourceSet
 from .base import BaselineSolver
 from .points import dijkstra_sources, graph_distance
@@ -54,7 +56,7 @@ class DijkstraBaseline(BaselineSolver):
     name = "dijkstra"
     library = "scipy.sparse.csgraph.dijkstra"
 
-    def __init__(self, mesh: Any, medium: Any = None) -> None:
+    def __init__(self, mesh: MeshLike, medium: Any = None) -> None:
         self.medium = medium
         super().__init__(mesh)
 
@@ -65,11 +67,23 @@ class DijkstraBaseline(BaselineSolver):
             self.graph = self.medium.on(self.mesh).adjacency() * self.medium.scale
 
     def _solve(self, sources: Any) -> tuple[np.ndarray, dict]:
-        if self.dim == 2:
-            return graph_distance(self.graph, sources), {}
-        # the source vertices and faces' vertices at 0, the corners of a point's tetrahedron at |v − p|
-        near, offsets = sources.local_values(self.mesh)
-        return graph_distance(self.graph, np.zeros(0, dtype=np.int64), near, offsets), {}
+        return graph_distance(self.graph, sources), {}
 
     def _solve_sources(self, ss: SourceSet) -> tuple[np.ndarray, dict]:
         return dijkstra_sources(self.mesh, ss, self.graph, self.medium), {"sources": "virtual node with offsets"}
+
+
+class VolumeDijkstraBaseline(DijkstraBaseline):
+    """:class:`DijkstraBaseline` inside a tetrahedral mesh (what ``DijkstraBaseline(tetmesh)`` builds): every kind of
+    volume source, the source vertices and the vertices of the source faces at 0, the corners of a point's
+    tetrahedron at ``|v − p|``."""
+
+    cells = (TETRAHEDRON,)
+    source_sets = True
+
+    def _solve(self, sources: Any) -> tuple[np.ndarray, dict]:
+        near, offsets = sources.local_values(self.mesh)
+        return graph_distance(self.graph, np.zeros(0, dtype=np.int64), near, offsets), {}
+
+
+DijkstraBaseline.variants = (VolumeDijkstraBaseline,)

@@ -8,6 +8,7 @@ import io
 import numpy as np
 
 from ..errors import SolverError
+from ..mesh.reference import TRIANGLE
 from ..sources import SourceSet
 from .base import ComponentwiseSolver
 from .points import exact_inserted
@@ -37,7 +38,7 @@ class ExactBaseline(ComponentwiseSolver):
 
     name = "exact"
     library = "pygeodesic.geodesic.PyGeodesicAlgorithmExact"
-    triangles_only = True
+    cells = (TRIANGLE,)
     manifold = True
 
     def _solve_sources(self, ss: SourceSet) -> tuple[np.ndarray, dict]:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..mesh.reference import TRIANGLE
 from ..sources import SourceSet
 from .base import ComponentwiseSolver
 from .points import fmm_points
@@ -38,7 +39,7 @@ class FastMarchingBaseline(ComponentwiseSolver):
 
     name = "fmm"
     library = "potpourri3d.MeshFastMarchingDistanceSolver"
-    triangles_only = True
+    cells = (TRIANGLE,)
     orient = True
     manifold = True
 

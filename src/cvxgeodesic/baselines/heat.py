@@ -10,11 +10,12 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from ..linalg import analyse
+from ..mesh.convert import MeshLike
+from ..mesh.reference import TETRAHEDRON
 from ..mesh.simplex import unit_mesh
 from ..mesh.tetmesh import DEGENERATE_TET_TOL, TetMesh
 from ..operators.gradient import gradient_blocks
 from ..operators.laplacian import barycentric_mass, cotan_stiffness, divergence
-from ..sources import SourceSet
 from ..validation import check_number
 from .base import ComponentwiseSolver
 
@@ -24,7 +25,8 @@ DEFAULT_T_COEF = 1.0
 
 
 class HeatBaseline(ComponentwiseSolver):
-    """The heat method on triangle and tetrahedral meshes.
+    """The heat method on triangle and tetrahedral meshes (:class:`VolumeHeatBaseline`, which ``HeatBaseline(tetmesh)``
+    builds, inside a volume).
 
     Diffuses heat from the sources for a short time ``t = t_coef · h̄²`` (``h̄``
     the mean edge length), normalizes the gradient of the result and recovers
@@ -50,9 +52,9 @@ class HeatBaseline(ComponentwiseSolver):
     Several components are handled by running each component separately
     (the library alone returns finite garbage on unreached components).
 
-    **Inside a volume**: the library's own P1 operators
-    (:mod:`cvxgeodesic.operators.laplacian`; ``info["solver"]`` is
-    :attr:`volume_library`), every kind of volume source:
+    **Inside a volume** (:class:`VolumeHeatBaseline`): the library's own P1 operators
+    (:mod:`cvxgeodesic.operators.laplacian`; ``info["solver"]`` is its
+    :attr:`~VolumeHeatBaseline.library`), every kind of volume source:
 
     1. Heat flow for ``t``, one backward Euler step: ``(M + t L) u = u₀`` with the lumped mass ``M`` and
        the cotangent stiffness ``L``; ``u₀`` is 1 at each source vertex, the barycentric weights at a
@@ -91,20 +93,13 @@ class HeatBaseline(ComponentwiseSolver):
 
     name = "heat"
     library = "potpourri3d.MeshHeatMethodDistanceSolver"
-    volume_library = "cvxgeodesic heat method (P1 tetrahedra)"
 
-    def __init__(self, mesh: Any, *, t_coef: float = DEFAULT_T_COEF, use_robust: bool = True):
+    def __init__(self, mesh: MeshLike, *, t_coef: float = DEFAULT_T_COEF, use_robust: bool = True):
         self.t_coef = check_number(t_coef, "t_coef", low=0, low_open=True)
         self.use_robust = bool(use_robust)
         super().__init__(mesh)
         if getattr(self.mesh, "cloud", None) is not None:  # what _build ran (info["solver"])
             self.library = "potpourri3d.PointCloudHeatSolver"
-
-    def _setup(self) -> None:
-        if self.dim == 3:
-            self._volume = _VolumeHeat(self.mesh, self.t_coef, self.notes)
-            return
-        super()._setup()
 
     def _build(self, V: np.ndarray, F: np.ndarray) -> object:
         if getattr(self.mesh, "cloud", None) is not None:  # a PointCloud's soup: the point-cloud heat method
@@ -121,8 +116,6 @@ class HeatBaseline(ComponentwiseSolver):
         return np.asarray(d, dtype=np.float64).reshape(-1)
 
     def _solve(self, sources: Any) -> tuple[np.ndarray, dict]:
-        if self.dim == 3:
-            return self._volume.solve(sources)
         d, info = super()._solve(sources)
         info.update(t_coef=self.t_coef, use_robust=self.use_robust, max_abs_at_sources=float(np.abs(d[sources]).max()))
         return d, info
@@ -146,12 +139,18 @@ def _pinned(K: sp.spmatrix, pinned: np.ndarray) -> sp.csc_matrix:
     return sp.csc_matrix(D @ K @ D + sp.diags(1.0 - keep))
 
 
-class _VolumeHeat:
-    """The P1 heat method inside a tetrahedral mesh (:class:`HeatBaseline` on a TetMesh)."""
+class VolumeHeatBaseline(HeatBaseline):
+    """The P1 heat method inside a tetrahedral mesh (what ``HeatBaseline(tetmesh)`` builds; the steps are
+    :class:`HeatBaseline`'s "Inside a volume"). ``use_robust`` is not used."""
 
-    def __init__(self, mesh: TetMesh, t_coef: float, notes: list[str]) -> None:
-        self.mesh, self.t_coef = mesh, t_coef
-        mesh, self.scale = unit_mesh(mesh)
+    library = "cvxgeodesic heat method (P1 tetrahedra)"
+    cells = (TETRAHEDRON,)
+    source_sets = True
+    mesh: TetMesh
+
+    def _setup(self) -> None:
+        notes = self.notes
+        mesh, self.scale = unit_mesh(self.mesh)
         self._unit = mesh
         deg = mesh.degenerate_cells(DEGENERATE_TET_TOL)
         self._keep = keep = np.ones(mesh.n_tets, dtype=bool)
@@ -184,7 +183,8 @@ class _VolumeHeat:
                          "far from the sources, or unreached components); their unit field is set to 0")
         return X
 
-    def solve(self, src: SourceSet) -> tuple[np.ndarray, dict]:
+    def _solve(self, src: Any) -> tuple[np.ndarray, dict]:
+        """The field from a :class:`~cvxgeodesic.sources.SourceSet` (:attr:`source_sets`)."""
         mesh = self._unit  # the sources are indices and barycentric coordinates: the same on it
         notes: list[str] = []
         u0 = np.zeros(mesh.n_vertices)
@@ -248,3 +248,6 @@ class _VolumeHeat:
         return _factor(_pinned(L, pins))[0](rhs)
 
 
+
+
+HeatBaseline.variants = (VolumeHeatBaseline,)

@@ -154,11 +154,11 @@ def interior_edges(mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         The vertex of each face opposite the edge.
     """
     mesh = check_mesh(mesh)
-    # the mesh's edge table (face_edges: the edge opposite each corner), one row per (corner, face), corner-major
+    # the mesh's edge table (cell_edges: the edge opposite each corner), one row per (corner, face), corner-major
     face = np.tile(np.arange(mesh.n_faces), 3)
     opp = mesh.F.T.ravel()
-    order = np.argsort(mesh.face_edges.T.ravel(), kind="stable")
-    counts = mesh.edge_face_counts
+    order = np.argsort(mesh.cell_edges.T.ravel(), kind="stable")
+    counts = mesh.edge_cell_counts
     starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
     two = np.flatnonzero(counts == 2)
     first, second = order[starts[two]], order[starts[two] + 1]

@@ -11,11 +11,11 @@ from __future__ import annotations
 import math
 import threading
 import weakref
-from typing import Any
 
 import numpy as np
 
 from .geometry import clipped_barycentric
+from .simplex import SimplexMesh
 from .trimesh import TriMesh
 
 #: A position farther than this many bounding-box diagonals from the box's center is moved in along the ray from
@@ -171,7 +171,7 @@ def point_triangle_distance(P: np.ndarray, A: np.ndarray, B: np.ndarray, C: np.n
     return np.linalg.norm(P - triangle_point(P, A, B, C), axis=1)
 
 
-def nearest_triangle_distance(mesh: Any, tri: np.ndarray, X: np.ndarray) -> np.ndarray:
+def nearest_triangle_distance(mesh: SimplexMesh, tri: np.ndarray, X: np.ndarray) -> np.ndarray:
     """(p,) distance from each row of ``X`` to the nearest of the triangles ``tri`` (f, 3) of ``mesh``."""
     import igl
 

@@ -4,12 +4,12 @@ the same, or a :class:`~cvxgeodesic.mesh.tetmesh.TetMesh` for tetrahedra."""
 from __future__ import annotations
 
 import os
-from typing import Any, TypeAlias
+from typing import Any, TypeAlias, overload
 
 import numpy as np
 
 from ..errors import MeshError
-from .simplex import SimplexMesh
+from .simplex import MeshT, SimplexMesh
 from .tetmesh import TetMesh
 from .trimesh import TriMesh
 
@@ -21,7 +21,7 @@ __all__ = ["MeshLike", "as_mesh", "as_trimesh"]
 MeshLike: TypeAlias = SimplexMesh | tuple | list | str | os.PathLike | object
 
 
-def _is_tet_pair(mesh: Any) -> bool:
+def _is_tet_pair(mesh: MeshLike) -> bool:
     """A ``(V, T)`` pair whose second array has four columns."""
     if not (isinstance(mesh, tuple | list) and len(mesh) == 2):
         return False
@@ -31,8 +31,17 @@ def _is_tet_pair(mesh: Any) -> bool:
         return False
 
 
-def as_mesh(mesh: Any, name: str = "mesh") -> TriMesh | TetMesh:
+@overload
+def as_mesh(mesh: MeshT, name: str = "mesh") -> MeshT: ...
+@overload
+def as_mesh(mesh: MeshLike, name: str = "mesh") -> TriMesh | TetMesh: ...
+
+
+def as_mesh(mesh: MeshLike, name: str = "mesh") -> SimplexMesh:
     """``mesh`` as a :class:`TetMesh` when it holds tetrahedra, else as :func:`as_trimesh` takes it.
+
+    Any :class:`~cvxgeodesic.mesh.simplex.SimplexMesh` (a ``TriMesh``, a ``TetMesh``, a mesh of another domain) is
+    returned as it is.
 
     Tetrahedra: a :class:`TetMesh`, a ``(V, T)`` pair with a 4-column ``T``, a file that holds tetrahedra
     (:func:`~cvxgeodesic.mesh.load.load_mesh`), a ``meshio.Mesh`` with ``tetra`` cells (``tetra10``: their
@@ -44,7 +53,7 @@ def as_mesh(mesh: Any, name: str = "mesh") -> TriMesh | TetMesh:
     >>> as_mesh((np.eye(4, 3), [[0, 1, 2, 3]]))
     TetMesh(name='mesh', n_vertices=4, n_tets=1)
     """
-    if isinstance(mesh, TetMesh):
+    if isinstance(mesh, SimplexMesh):
         return mesh
     if _is_tet_pair(mesh):
         return TetMesh(mesh[0], mesh[1], name=name)
@@ -63,7 +72,7 @@ def as_mesh(mesh: Any, name: str = "mesh") -> TriMesh | TetMesh:
     return as_trimesh(mesh, name)
 
 
-def as_trimesh(mesh: Any, name: str = "mesh") -> TriMesh:
+def as_trimesh(mesh: MeshLike, name: str = "mesh") -> TriMesh:
     """Return ``mesh`` as a :class:`TriMesh`, accepting the meshes other libraries use.
 
     Accepted, by duck typing (none of these libraries is imported or required):

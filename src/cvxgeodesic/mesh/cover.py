@@ -53,8 +53,8 @@ def manifold_cover(mesh: TriMesh) -> tuple[TriMesh, np.ndarray]:
     start = np.arange(3 * m).reshape(m, 3)
     end = start[:, [1, 2, 0]]
     a = F.ravel()
-    edge = mesh.face_edges[:, [2, 0, 1]].ravel()  # half-edge k lies on the edge opposite corner k+2
-    manifold = np.flatnonzero(mesh.edge_face_counts[edge] == 2)
+    edge = mesh.cell_edges[:, [2, 0, 1]].ravel()  # half-edge k lies on the edge opposite corner k+2
+    manifold = np.flatnonzero(mesh.edge_cell_counts[edge] == 2)
     h = manifold[np.argsort(edge[manifold], kind="stable")].reshape(-1, 2)  # the two half-edges of each
     h1, h2 = h[:, 0], h[:, 1]
     s1, e1, s2, e2 = start.ravel()[h1], end.ravel()[h1], start.ravel()[h2], end.ravel()[h2]

@@ -162,7 +162,7 @@ def file_order_mesh(mesh: TriMesh) -> TriMesh:
     TriMesh
         ``mesh.n_file_vertices`` vertices: welded duplicates at their mesh vertex's position
         (the same, as welding joins identical positions), dropped vertices at their file
-        position; the faces are ``mesh.file_faces``, the file's own triangles (polygons
+        position; the faces are ``mesh.file_cells``, the file's own triangles (polygons
         fan-triangulated), including those the loader dropped as duplicates or degenerate
         after welding. ``mesh`` itself when the file needs nothing else.
 
@@ -175,7 +175,7 @@ def file_order_mesh(mesh: TriMesh) -> TriMesh:
     True
     """
     idx = mesh.file_index
-    faces = mesh.file_faces
+    faces = mesh.file_cells
     if idx.size == mesh.n_vertices and np.array_equal(idx, np.arange(idx.size)) and np.array_equal(faces, mesh.F):
         return mesh
     return TriMesh(file_vertices(mesh), faces, name=mesh.name)

@@ -25,10 +25,13 @@ from .trimesh import TriMesh
 __all__ = ["load_mesh"]
 
 
-#: What ``load_mesh(path, kind=...)`` asks the file to hold, by simplex dimension.
-MESH_KINDS = {"surface": 2, "volume": 3}
-_KIND = {d: k for k, d in MESH_KINDS.items()}
-_HOLDS = {2: "a triangle surface", 3: "a tetrahedral volume"}
+#: What ``load_mesh(path, kind=...)`` asks the file to hold: the mesh class of each kind.
+MESH_KINDS: dict[str, type[TriMesh] | type[TetMesh]] = {"surface": TriMesh, "volume": TetMesh}
+
+
+def _other_kind(wanted: type) -> str:
+    """The kind of :data:`MESH_KINDS` other than that of the class ``wanted``."""
+    return next(k for k, cls in MESH_KINDS.items() if cls is not wanted)
 
 
 @overload
@@ -77,7 +80,7 @@ def load_mesh(path: str | os.PathLike, *, kind: Literal["surface", "volume"] | N
         original vertex of vertex ``i``; for STL, whose vertices are the triangle
         corners, it is the corner number ``3 * triangle + corner``.
         ``mesh.file_index[j]`` is the mesh index of file vertex ``j`` (-1: in no face),
-        ``mesh.n_file_vertices`` the file's vertex count, ``mesh.file_faces`` the file's
+        ``mesh.n_file_vertices`` the file's vertex count, ``mesh.file_cells`` the file's
         triangles in its own numbering, and ``mesh.notes`` one line per repair. The mesh's
         numbering differs from the file's when vertices were welded or dropped:
         :func:`~cvxgeodesic.mesh.fileorder.to_file_order` maps a field back.
@@ -130,20 +133,22 @@ def load_mesh(path: str | os.PathLike, *, kind: Literal["surface", "volume"] | N
     ...     print(exc)
     no_such_mesh.obj: no such file
     """
-    dim = None if kind is None else MESH_KINDS[check_choice(kind, "kind", MESH_KINDS, lower=False)]
+    wanted = None if kind is None else MESH_KINDS[check_choice(kind, "kind", MESH_KINDS, lower=False)]
     p = Path(path)
     fmt = mesh_format(p)
-    if dim is not None and dim not in fmt.dims:
-        raise MeshError(f"{p}: kind={kind!r} asks for {_HOLDS[dim]}, and a {fmt.extension} file holds only "
-                        f"{_HOLDS[5 - dim]} (kind={_KIND[5 - dim]!r})")
+    if wanted is not None and wanted.dim not in fmt.dims:
+        other = _other_kind(wanted)
+        raise MeshError(f"{p}: kind={kind!r} asks for {wanted.reference.words.mesh}, and a {fmt.extension} file holds "
+                        f"only {MESH_KINDS[other].reference.words.mesh} (kind={other!r})")
     check_file(p, "a mesh file")  # the same messages for missing, directory and empty files in every format
     assert fmt.read_mesh is not None  # mesh_format returns formats with a reader
     with file_errors(p):
         raw = fmt.read_mesh(p)
     volume = raw.tets is not None and raw.tets.size > 0
-    if dim is not None and volume != (dim == 3):
-        raise MeshError(f"{p}: kind={kind!r} asks for {_HOLDS[dim]}, and this file holds {_HOLDS[5 - dim]} "
-                        f"(kind={_KIND[5 - dim]!r})")
+    holds = TetMesh if volume else TriMesh
+    if wanted is not None and holds is not wanted:
+        raise MeshError(f"{p}: kind={kind!r} asks for {wanted.reference.words.mesh}, and this file holds "
+                        f"{holds.reference.words.mesh} (kind={_other_kind(wanted)!r})")
     if volume:
         return _finish_volume(p, raw)
     cell_types = ", ".join(sorted(raw.other_cells or {})) or "none"

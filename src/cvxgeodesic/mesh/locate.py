@@ -12,21 +12,20 @@ coordinates of those candidates decide. No Delaunay triangulation of the vertice
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import Any, overload
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import ArrayLike
-from scipy.spatial import cKDTree
 
 from ..errors import ParameterError, SourceError
 from ..validation import as_points, as_vertex_field, is_integer, is_real
 from .closest import closest_point_index
-from .tetmesh import TET_FACES, TetMesh
+from .simplex import SimplexMesh
+from .tetmesh import TetMesh
 from .trimesh import TriMesh
 
-__all__ = ["BARY_TOL", "INSIDE_TOL", "POINT_AT", "POINT_TYPES", "CellPoint", "SurfacePoint", "VolumePoint",
+__all__ = ["BARY_TOL", "INSIDE_TOL", "CellPoint", "SurfacePoint", "VolumePoint",
            "closest_points", "interpolate_at", "locate_points", "surface_point", "volume_point"]
 
 #: Tolerance of the barycentric checks of :class:`SurfacePoint` (negative coordinates, sum ≠ 1).
@@ -42,24 +41,11 @@ def _tet_barycentric(mesh: TetMesh, tets: np.ndarray, X: np.ndarray) -> np.ndarr
     V, T = mesh.V, mesh.T[tets]
     out = np.empty((len(tets), 4))
     with np.errstate(divide="ignore", invalid="ignore"):
-        for i, (a, b, c) in enumerate(TET_FACES):
+        for i, (a, b, c) in enumerate(mesh.reference.facets):
             pa = V[T[:, a]]
             nrm = np.cross(V[T[:, b]] - pa, V[T[:, c]] - pa)
             out[:, i] = np.einsum("ij,ij->i", nrm, X - pa) / np.einsum("ij,ij->i", nrm, V[T[:, i]] - pa)
     return out
-
-
-def _locator(mesh: TetMesh) -> tuple[cKDTree, float]:
-    """The k-d tree of the tetrahedra's centroids and the largest distance from a centroid to its tetrahedron's
-    vertices (built once per mesh, cached on it)."""
-    loc = mesh.__dict__.get("_tet_locator")
-    if loc is None:
-        P = mesh.V[mesh.T]  # (k, 4, 3)
-        centroids = P.mean(axis=1)
-        radius = float(np.linalg.norm(P - centroids[:, None], axis=2).max()) * (1 + 1e-9)
-        # TetMesh is immutable: a cache like its cached properties
-        loc = mesh.__dict__["_tet_locator"] = (cKDTree(centroids), radius)
-    return loc
 
 
 def locate_points(mesh: TetMesh, points: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
@@ -85,7 +71,7 @@ def locate_points(mesh: TetMesh, points: ArrayLike) -> tuple[np.ndarray, np.ndar
         ``points`` not finite positions.
     """
     X = as_points(points, "points").reshape(-1, 3)
-    tree, radius = _locator(mesh)
+    tree, radius = mesh.centroid_tree
     # only points within ``radius`` of the bounding box can be within it of a centroid: the others are outside
     # without a search, whose squared distances overflow from coordinates of about 1e154 on (scipy's ValueError)
     near = np.flatnonzero(((X >= mesh.V.min(axis=0) - radius) & (X <= mesh.V.max(axis=0) + radius)).all(axis=1))
@@ -197,7 +183,7 @@ class CellPoint:
     def __hash__(self) -> int:
         return hash((self.cell, self.bary.tobytes()))
 
-    def check(self, mesh: Any, label: str | None = None) -> None:
+    def check(self, mesh: SimplexMesh, label: str | None = None) -> None:
         """Raise :class:`SourceError` unless the cell is one of ``mesh``'s (``label`` starts the message)."""
         k = mesh.n_cells
         if self.cell >= k:
@@ -205,12 +191,12 @@ class CellPoint:
             raise SourceError(f"{head}: {self._word} index {self.cell} is out of range: {mesh.name} has {k} "
                               f"{self._cells} (0..{k - 1})")
 
-    def vertices(self, mesh: Any) -> np.ndarray:
+    def vertices(self, mesh: SimplexMesh) -> np.ndarray:
         """(dim + 1,) int64 ndarray: the vertices of the point's cell (the order of ``bary``)."""
         self.check(mesh)
         return mesh.cells[self.cell].copy()
 
-    def position(self, mesh: Any) -> np.ndarray:
+    def position(self, mesh: SimplexMesh) -> np.ndarray:
         """(3,) float ndarray: the point's position on ``mesh``."""
         self.check(mesh)
         return bary_positions(mesh, np.array([self.cell]), self.bary[None])[0]
@@ -241,7 +227,7 @@ class SurfacePoint(CellPoint, field="face", n_bary=3, word="face", cells="faces"
     def __init__(self, face: Any, bary: ArrayLike) -> None:
         super().__init__(face, bary)
 
-    def position(self, mesh: Any) -> np.ndarray:
+    def position(self, mesh: SimplexMesh | tuple[ArrayLike, ArrayLike]) -> np.ndarray:
         """(3,) float ndarray: the point's position on ``mesh`` (a TriMesh or ``(V, F)``)."""
         return super().position(_mesh(mesh))
 
@@ -277,11 +263,11 @@ class VolumePoint(CellPoint, field="tet", n_bary=4, word="tetrahedron", cells="t
         super().__init__(tet, bary)
 
 
-#: The point type of each simplex dimension.
-POINT_TYPES: dict[int, type[CellPoint]] = {2: SurfacePoint, 3: VolumePoint}
+#: What :func:`surface_point` takes: a triangle mesh, or its ``(V, F)`` arrays.
+_SurfaceLike = TriMesh | tuple[ArrayLike, ArrayLike]
 
 
-def _mesh(mesh) -> TriMesh:
+def _mesh(mesh: SimplexMesh | tuple[ArrayLike, ArrayLike]) -> TriMesh:
     from .io import as_trimesh
 
     return as_trimesh(mesh)
@@ -297,14 +283,14 @@ def closest_points(mesh: TriMesh, X: ArrayLike) -> tuple[np.ndarray, np.ndarray,
 # the return type follows the shape of xyz where a type checker sees it: one position (a sequence of 3 numbers), or
 # several (a sequence of sequences); an ndarray's shape is unknown to it, so either
 @overload
-def surface_point(mesh: Any, xyz: Sequence[float]) -> SurfacePoint: ...
+def surface_point(mesh: _SurfaceLike, xyz: Sequence[float]) -> SurfacePoint: ...
 @overload
-def surface_point(mesh: Any, xyz: Sequence[Sequence[float]]) -> list[SurfacePoint]: ...
+def surface_point(mesh: _SurfaceLike, xyz: Sequence[Sequence[float]]) -> list[SurfacePoint]: ...
 @overload
-def surface_point(mesh: Any, xyz: ArrayLike) -> SurfacePoint | list[SurfacePoint]: ...
+def surface_point(mesh: _SurfaceLike, xyz: ArrayLike) -> SurfacePoint | list[SurfacePoint]: ...
 
 
-def surface_point(mesh: Any, xyz: ArrayLike) -> SurfacePoint | list[SurfacePoint]:
+def surface_point(mesh: _SurfaceLike, xyz: ArrayLike) -> SurfacePoint | list[SurfacePoint]:
     """The closest :class:`SurfacePoint` of a 3D position (or of each of ``k`` positions).
 
     Parameters
@@ -405,11 +391,6 @@ def volume_point(mesh: TetMesh, xyz: ArrayLike) -> VolumePoint | list[VolumePoin
     return points[0] if X.ndim == 1 else points
 
 
-#: The point (or points) of each simplex dimension at positions: the closest surface point, the containing
-#: tetrahedron (a position outside the mesh: SourceError).
-POINT_AT: dict[int, Callable[[Any, ArrayLike], CellPoint | Sequence[CellPoint]]] = {2: surface_point, 3: volume_point}
-
-
 def interpolate_at(mesh: TetMesh, values: ArrayLike, points: Any) -> np.ndarray:
     """A vertex field's linear interpolant at points inside a tetrahedral mesh.
 
@@ -450,22 +431,17 @@ def interpolate_at(mesh: TetMesh, values: ArrayLike, points: Any) -> np.ndarray:
     return out
 
 
-def cells_around(mesh: Any, verts: Sequence[int]) -> np.ndarray:
+def cells_around(mesh: SimplexMesh, verts: Sequence[int]) -> np.ndarray:
     """(q,) int32 ndarray: the cells that contain all of ``verts`` (around a vertex, an edge or a face), sorted.
 
-    Read from the rows of a vertex-cell incidence matrix (cached on the mesh object: it is immutable) by their
-    index pointers, not by sparse slicing.
+    Read from the rows of :attr:`SimplexMesh.vertex_cells <cvxgeodesic.mesh.simplex.SimplexMesh.vertex_cells>` by
+    their index pointers, not by sparse slicing.
     """
-    inc = mesh.__dict__.get("_cg_vertex_cells")
-    if inc is None:
-        k, s = mesh.cells.shape
-        inc = sp.csr_matrix((np.ones(s * k), (mesh.cells.ravel(), np.repeat(np.arange(k), s))),
-                            shape=(mesh.n_vertices, k))
-        mesh.__dict__["_cg_vertex_cells"] = inc
+    inc = mesh.vertex_cells
     return functools.reduce(np.intersect1d, [inc.indices[inc.indptr[v]:inc.indptr[v + 1]] for v in map(int, verts)])
 
 
-def bary_positions(mesh: Any, cells: np.ndarray, bary: np.ndarray) -> np.ndarray:
+def bary_positions(mesh: SimplexMesh, cells: np.ndarray, bary: np.ndarray) -> np.ndarray:
     """(k, 3) float ndarray: the positions of barycentric coordinates ``bary`` (k, dim + 1) in ``mesh``'s cells
     ``cells`` (k,); row by row the rounding of one point's ``b @ V[cell]`` (matmul, not einsum)."""
     if not len(cells):  # no cells: the coordinates may be of another dimension (a volume's empty curve pieces)

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["TETRAHEDRON", "TRIANGLE", "CellWords", "ReferenceSimplex"]
+__all__ = ["TETRAHEDRON", "TRIANGLE", "CellWords", "ReferenceSimplex", "reference_simplex"]
 
 
 @dataclass(frozen=True)
@@ -46,6 +46,11 @@ class CellWords:
         Where a point of such a mesh lies (``"on a surface"``, ``"inside a volume"``).
     argument : str
         The name of the cell-index argument of :meth:`distance_at`-like calls (``"faces"``, ``"tets"``).
+    shape_hint : str
+        Said after the shape when the cell array has the wrong one (triangles: polygons are fan-triangulated by
+        ``load_mesh``, not by the mesh class).
+    repeat_remedy : str
+        What to do about a cell that repeats a vertex.
     """
 
     one: str
@@ -58,6 +63,8 @@ class CellWords:
     preposition: str
     domain: str
     argument: str
+    shape_hint: str = ""
+    repeat_remedy: str = "remove them first"
 
 
 def _triangle_frame_coordinates(X: np.ndarray) -> np.ndarray:
@@ -72,9 +79,25 @@ def _triangle_frame_coordinates(X: np.ndarray) -> np.ndarray:
     return np.stack([np.einsum("kvx,kx->kv", rel, ex), np.einsum("kvx,kx->kv", rel, ey)], axis=2)
 
 
+def _triangle_frame_vectors(G: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """(k, m, 3) world vectors of ``G`` (k, 2, m), given in the frames of :func:`_triangle_frame_coordinates`."""
+    e = X[:, 1] - X[:, 0]
+    normal = np.cross(e, X[:, 2] - X[:, 0])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ex = e / np.linalg.norm(e, axis=1, keepdims=True)
+        nhat = normal / np.linalg.norm(normal, axis=1, keepdims=True)
+    ey = np.cross(nhat, ex)
+    return G[:, 0, :, None] * ex[:, None, :] + G[:, 1, :, None] * ey[:, None, :]
+
+
 def _world_coordinates(X: np.ndarray) -> np.ndarray:
     """A solid cell needs no frame: its corners in world coordinates."""
     return X
+
+
+def _world_vectors(G: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """(k, m, 3): vectors ``G`` (k, 3, m) already in world coordinates, one per row."""
+    return np.ascontiguousarray(G.transpose(0, 2, 1))
 
 
 @dataclass(frozen=True, eq=False)
@@ -107,6 +130,21 @@ class ReferenceSimplex:
         (:func:`~cvxgeodesic.plotting.plot_field`, :func:`~cvxgeodesic.viewer.show`); ``"slice"``, a plane's cut through
         a solid, the cells hiding one another (:func:`~cvxgeodesic.evaluation.slice_plot.plot_slice`,
         :func:`~cvxgeodesic.viewer.show_volume`).
+    libigl_operators : bool
+        The cells are triangles that libigl's surface operators take: the stiffness and lumped (mixed-Voronoi) mass
+        of a whole mesh come from ``igl.cotmatrix`` / ``igl.massmatrix`` (:mod:`cvxgeodesic.operators.laplacian`);
+        otherwise from the library's own gradient blocks (barycentric mass).
+    coneless_cell_edges : bool
+        The order-1 QC programs bound ``|d_i − d_j| ≤ l_ij`` on every edge of a cell that carries no cone (next to a
+        source, a point's cell, a degenerate cell): a tetrahedron's cone does not cover all the edges its
+        neighbours share with it. False (triangles): the source stars and the degenerate cells' edges are bounded
+        instead (:func:`cvxgeodesic.formulations.build_problem`).
+    flat : bool
+        Every cell of such a mesh lies in one flat space (a solid's cells, triangles in a plane): no cell bends
+        against its neighbours, so ``d²`` is a quadratic in every proper cell that sees a source
+        (:attr:`cvxgeodesic.operators.lagrange.LagrangeSpace.flat_cells`). False (surfaces): decided cell by cell.
+    point_type, locate
+        Given as objects, or as names in :mod:`cvxgeodesic.mesh.locate` (imported when first asked).
     """
 
     name: str
@@ -118,9 +156,13 @@ class ReferenceSimplex:
     measure_root: Callable[[Any], Any]
     shared_points: bool
     _frame: Callable[[np.ndarray], np.ndarray] = field(repr=False)
-    _point_type: str = field(repr=False)
-    _locator: str = field(repr=False)
+    _to_world: Callable[[np.ndarray, np.ndarray], np.ndarray] = field(repr=False)
+    _point_type: str | type = field(repr=False)
+    _locator: str | Callable[..., Any] = field(repr=False)
     picture: str = "surface"
+    libigl_operators: bool = False
+    coneless_cell_edges: bool = False
+    flat: bool = False
 
     @property
     def n_corners(self) -> int:
@@ -150,18 +192,41 @@ class ReferenceSimplex:
         """
         return self._frame(X)
 
+    def world_vectors(self, G: np.ndarray, X: np.ndarray) -> np.ndarray:
+        """Vectors given in the cells' frames (:meth:`local_coordinates`), in world coordinates.
+
+        Parameters
+        ----------
+        G : (k, dim, m) float ndarray
+            ``m`` vectors per cell in its frame (a cell's gradient blocks, say).
+        X : (k, dim + 1, 3) float ndarray
+            The cells' corners in world coordinates.
+
+        Returns
+        -------
+        (k, m, 3) float ndarray
+            Row ``j`` of cell ``t``: ``Σ_i G[t, i, j] e_i`` with ``e_i`` the frame's axes (NaN on triangles of zero
+            area).
+        """
+        return self._to_world(G, X)
+
     @property
-    def point_type(self) -> type:
+    def point_type(self) -> type[Any]:  # a CellPoint subclass: mesh.locate is above this module
         """The :class:`~cvxgeodesic.mesh.locate.CellPoint` subclass of a point in such a cell."""
-        return getattr(importlib.import_module("cvxgeodesic.mesh.locate"), self._point_type)
+        return _resolve(self._point_type)
 
     @property
     def locate(self) -> Callable[..., Any]:
         """``locate(mesh, X)``: the point(s) of the mesh at positions ``X`` (closest on a surface, inside a solid)."""
-        return getattr(importlib.import_module("cvxgeodesic.mesh.locate"), self._locator)
+        return _resolve(self._locator)
 
     def __repr__(self) -> str:
         return f"ReferenceSimplex({self.name!r})"
+
+
+def _resolve(member: Any) -> Any:
+    """A member given by its name in :mod:`cvxgeodesic.mesh.locate` (imported now), or the object itself."""
+    return getattr(importlib.import_module("cvxgeodesic.mesh.locate"), member) if isinstance(member, str) else member
 
 
 def _readonly(a: list[list[int]]) -> np.ndarray:
@@ -176,10 +241,13 @@ TRIANGLE = ReferenceSimplex(
     facets=_readonly([[1, 2], [2, 0], [0, 1]]),
     words=CellWords(one="face", many="faces", short="faces", shape="(m, 3)", measure="area",
                     mesh="a triangle surface", meshes="triangle meshes", preposition="on", domain="on a surface",
-                    argument="faces"),
+                    argument="faces", shape_hint=" (triangles only; load_mesh fan-triangulates polygons)",
+                    repeat_remedy="remove degenerate faces first"),
     source_kinds=("vertex", "point", "curve", "boundary"),
     measure_root=np.sqrt, shared_points=True,
-    _frame=_triangle_frame_coordinates, _point_type="SurfacePoint", _locator="surface_point",
+    _frame=_triangle_frame_coordinates, _to_world=_triangle_frame_vectors, _point_type="SurfacePoint",
+    _locator="surface_point",
+    libigl_operators=True,
 )
 
 TETRAHEDRON = ReferenceSimplex(
@@ -191,5 +259,23 @@ TETRAHEDRON = ReferenceSimplex(
                     domain="inside a volume", argument="tets"),
     source_kinds=("vertex", "point", "boundary", "boundary faces"),
     measure_root=np.cbrt, shared_points=False,
-    _frame=_world_coordinates, _point_type="VolumePoint", _locator="volume_point", picture="slice",
+    _frame=_world_coordinates, _to_world=_world_vectors, _point_type="VolumePoint", _locator="volume_point",
+    picture="slice", coneless_cell_edges=True, flat=True,
 )
+
+
+def reference_simplex(dim: int) -> ReferenceSimplex:
+    """The reference simplex of the library's meshes of dimension ``dim`` (:data:`TRIANGLE`, :data:`TETRAHEDRON`).
+
+    For code that is handed a dimension and no mesh (the Lagrange element functions, a source set's point type);
+    code that has a mesh asks ``mesh.reference``, which a new kind of cell sets (docs/architecture.md, "A domain").
+
+    Raises
+    ------
+    ValueError
+        No reference simplex of that dimension.
+    """
+    for reference in (TRIANGLE, TETRAHEDRON):
+        if reference.dim == dim:
+            return reference
+    raise ValueError(f"no reference simplex of dimension {dim}")

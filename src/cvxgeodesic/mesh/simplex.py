@@ -9,13 +9,16 @@ formulation, a source resolution or a path descent is written once over ``cells`
 ``dim``             the simplex dimension (2: triangles, 3: tetrahedra)
 ``cells``           (k, dim + 1) int64 vertex indices
 ``cell_measures``   (k,) areas or volumes; ``total_measure`` their sum
-``cell_edges``      (k, 3) or (k, 6) indices into ``edges`` (:data:`CELL_EDGES` gives the local pairs)
-``facets``          the (dim − 1)-faces of a cell (:data:`CELL_FACETS`: the facet opposite each corner)
+``reference``       the cell kind (:mod:`~cvxgeodesic.mesh.reference`): local edges and facets, words, point type
+``cell_edges``      (k, 3) or (k, 6) indices into ``edges`` (``reference.edges`` gives the local pairs)
 ``boundary_facets`` (b, dim) the facets of a single cell: boundary edges of a surface, faces of a solid
+``notes``           one line per repair the reader made (and, on a solid, per finding)
+``file_cells``      the cells in the file's vertex numbering
+``vertex_cells``    the (n, k) vertex-cell incidence; ``centroid_tree`` the cells' centroids for locators
 ==================  ============================================================================
 
 :class:`SimplexMesh` checks and stores the arrays (:func:`file_numbering` for the file's numbering); the
-subclasses provide ``cell_measures``, the measures of each cell's facets (``cell_facet_measures``) and
+subclasses provide ``reference``, ``cell_measures``, the measures of each cell's facets (``cell_facet_measures``) and
 ``_with_vertices`` (a copy on other coordinates, for :func:`unit_mesh`).
 """
 
@@ -30,31 +33,19 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike
 from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
 from ..errors import MeshError
 from ..validation import check_coordinates
 from .reference import ReferenceSimplex
 
-__all__ = ["CELL_EDGES", "CELL_FACETS", "DEGENERATE_TOL", "SimplexMesh", "file_numbering", "unit_mesh", "unit_scale"]
+__all__ = ["DEGENERATE_TOL", "SimplexMesh", "file_numbering", "unit_mesh", "unit_scale"]
 
 #: Default of :meth:`SimplexMesh.degenerate_cells` (``TriMesh.degenerate_faces``, ``TetMesh.degenerate_tets``): a
 #: cell whose smallest altitude is below ``DEGENERATE_TOL`` times its longest edge (a sliver, needle, cap or wedge;
 #: exactly collinear or coplanar corners included) or below ``DEGENERATE_TOL`` times the mean edge length of the
 #: mesh (a speck) is *degenerate*. See the README, "Input meshes".
 DEGENERATE_TOL = 1e-3
-
-#: Local vertex pairs of a cell's edges, per dimension. Triangles: the edge opposite corner ``k`` in column ``k``
-#: (``TriMesh.face_edges``); tetrahedra: the order of ``TetMesh.tet_edges``.
-CELL_EDGES = {
-    2: np.array([[1, 2], [2, 0], [0, 1]], dtype=np.int64),
-    3: np.array([[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]], dtype=np.int64),
-}
-#: Local vertices of the facet opposite corner ``i`` (row ``i``). Tetrahedra: ordered so that the face's normal
-#: ``(b − a) × (c − a)`` points away from corner ``i`` when the signed volume is positive.
-CELL_FACETS = {
-    2: CELL_EDGES[2],
-    3: np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]], dtype=np.int64),
-}
 
 MeshT = TypeVar("MeshT", bound="SimplexMesh")
 
@@ -106,7 +97,7 @@ class SimplexMesh:
                  notes: Sequence[str] = ()) -> None:
         self.name = name or self.default_name
         self.V = _as_vertices(V, self.name)
-        self.cells = _as_cells(cells, self.V.shape[0], self.name, self.dim)
+        self.cells = _as_cells(cells, self.V.shape[0], self.name, self.reference)
         self.vertex_map, self.file_index, self.dropped_vertices = file_numbering(
             self.V.shape[0], vertex_map, file_index, dropped_vertices, self.name)
         self._reader_notes: tuple[str, ...] = tuple(str(s) for s in notes)
@@ -114,6 +105,11 @@ class SimplexMesh:
     def __repr__(self) -> str:
         counts = f"n_vertices={self.n_vertices}, {self.count_name}={self.n_cells}"
         return f"{type(self).__name__}(name={self.name!r}, {counts})"
+
+    @property
+    def notes(self) -> tuple[str, ...]:
+        """tuple of str: one line per repair the reader made."""
+        return self._reader_notes
 
     @property
     def cell_measures(self) -> np.ndarray:
@@ -128,6 +124,12 @@ class SimplexMesh:
     def _with_vertices(self: MeshT, V: np.ndarray) -> MeshT:
         """The same mesh (cells, numbering, name) on the coordinates ``V``."""
         raise NotImplementedError
+
+    @property
+    def file_cells(self) -> np.ndarray:
+        """(k, dim + 1) int64 ndarray: the cells in the file's vertex numbering, ``vertex_map[cells]`` (a
+        :class:`~cvxgeodesic.mesh.trimesh.TriMesh` read from a file keeps the file's own triangles)."""
+        return self.vertex_map[self.cells]
 
     @property
     def n_vertices(self) -> int:
@@ -177,16 +179,30 @@ class SimplexMesh:
 
     @cached_property
     def _edge_data(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        return self._sub_simplices(CELL_EDGES[self.dim])
+        return self._sub_simplices(self.reference.edges)
 
     @cached_property
     def _facet_data(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        return self._sub_simplices(CELL_FACETS[self.dim])
+        return self._sub_simplices(self.reference.facets)
 
     edges, cell_edges, edge_cell_counts = _cached_parts(
         "_edge_data", "(e, 2) int64 ndarray: unique undirected edges, ``edges[:, 0] < edges[:, 1]``, sorted.",
-        "(k, 3) or (k, 6) int64 ndarray: index into :attr:`edges` of each cell's edges (:data:`CELL_EDGES`).",
+        "(k, 3) or (k, 6) int64 ndarray: index into :attr:`edges` of each cell's edges (``reference.edges`` order).",
         "(e,) int64 ndarray: number of cells incident to each edge of :attr:`edges`.")
+
+    @cached_property
+    def is_edge_manifold(self) -> bool:
+        """True when no edge is shared by more than two cells (the manifold test of a surface; inside a solid an
+        edge has as many cells as there are around it)."""
+        return bool(np.all(self.edge_cell_counts <= 2))
+
+    @cached_property
+    def boundary_facets(self) -> np.ndarray:
+        """(b, dim) int64 ndarray: the facets of a single cell, each row sorted, rows in lexicographic order (the
+        boundary edges of an open surface; :class:`~cvxgeodesic.mesh.tetmesh.TetMesh` orients its faces
+        outward)."""
+        facets, _, counts = self._facet_data
+        return facets[counts == 1]
 
     @cached_property
     def edge_lengths(self) -> np.ndarray:
@@ -246,6 +262,23 @@ class SimplexMesh:
         bad = (alt <= tol * self.cell_longest_edges) | (alt <= tol * self.mean_edge_length)
         return np.flatnonzero(bad).astype(np.int64)
 
+    # -- cells around vertices and points ------------------------------------------------------------------------
+    @cached_property
+    def vertex_cells(self) -> sp.csr_matrix:
+        """(n, k) sparse incidence matrix: row ``v`` holds the cells of vertex ``v`` (its ``indices``, sorted)."""
+        k, s = self.cells.shape
+        return sp.csr_matrix((np.ones(s * k), (self.cells.ravel(), np.repeat(np.arange(k), s))),
+                             shape=(self.n_vertices, k))
+
+    @cached_property
+    def centroid_tree(self) -> tuple[cKDTree, float]:
+        """The k-d tree of the cells' centroids and the largest distance from a centroid to its cell's corners
+        (times ``1 + 1e-9``): every cell holding a point ``x`` has its centroid within that radius of ``x``."""
+        P = self.V[self.cells]  # (k, dim + 1, 3)
+        centroids = P.mean(axis=1)
+        radius = float(np.linalg.norm(P - centroids[:, None], axis=2).max()) * (1 + 1e-9)
+        return cKDTree(centroids), radius
+
     # -- the edge graph ---------------------------------------------------------------------------------------
     @cached_property
     def vertex_adjacency(self) -> sp.csr_matrix:
@@ -291,7 +324,7 @@ class SimplexMesh:
         return hit[labels]  # a lookup: np.isin sorts all n labels on every solve
 
 
-def unit_scale(mesh: Any) -> float:
+def unit_scale(mesh: SimplexMesh) -> float:
     """The power of two ``s`` that puts ``mesh``'s bounding-box diagonal in [0.5, 1) when divided by it (1.0 for a
     zero-size mesh): :func:`unit_mesh`'s, for the methods that scale their own copy of the coordinates."""
     diag = mesh.bbox_diagonal
@@ -386,17 +419,10 @@ def _as_vertices(V, name: str) -> np.ndarray:
     return V
 
 
-# per simplex dimension: (cell, cells, shape, hint after the shape, remedy for a repeated vertex)
-_CELL_WORDS = {
-    2: ("face", "faces", "(m, 3)", " (triangles only; load_mesh fan-triangulates polygons)",
-        "remove degenerate faces first"),
-    3: ("tetrahedron", "tetrahedra", "(k, 4)", "", "remove them first"),
-}
-
-
-def _as_cells(C, n: int, name: str, dim: int) -> np.ndarray:
+def _as_cells(C, n: int, name: str, reference: ReferenceSimplex) -> np.ndarray:
     """(k, dim + 1) read-only int64 cells checked against ``n`` vertices; a MeshError naming the first bad cell."""
-    one, many, shape, hint, remedy = _CELL_WORDS[dim]
+    words, dim = reference.words, reference.dim
+    one, many, shape, hint, remedy = words.one, words.many, words.shape, words.shape_hint, words.repeat_remedy
     try:
         C_in = np.asarray(C)
     except (TypeError, ValueError, OverflowError):  # ragged lists (polygons of several sizes), ...
@@ -410,7 +436,7 @@ def _as_cells(C, n: int, name: str, dim: int) -> np.ndarray:
             raise MeshError(f"{name}: {one} indices must be integers")
     elif C_in.dtype.kind not in "iu":
         raise MeshError(f"{name}: {one} indices must be integers, got dtype {C_in.dtype}")
-    if dim == 3 and C_in.dtype.kind == "u" and int(C_in.max()) >= 2**63:
+    if C_in.dtype.kind == "u" and int(C_in.max()) >= 2**63:
         raise MeshError(f"{name}: {one} indices must be in [0, {n})")
     cells = np.array(C_in, dtype=np.int64, order="C")
     out = (cells < 0) | (cells >= n)

@@ -2,20 +2,20 @@
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Sequence
+from typing import Generic
 
 import numpy as np
 
 from ..errors import SourceError
-from .locate import cells_around
+from .locate import CellPoint, cells_around
+from .reference import ReferenceSimplex
+from .simplex import MeshT
 
 __all__ = ["SplitMesh", "piece_coordinates"]
 
-#: (a cell, a preposition) for messages, by simplex dimension.
-_WORDS = {2: ("face", "on"), 3: ("tetrahedron", "in")}
 
-
-class SplitMesh:
+class SplitMesh(Generic[MeshT]):
     """A triangle or tetrahedral mesh with points inserted as vertices (the conforming splits).
 
     A point inside a cell splits it into ``dim + 1`` pieces; a point on a facet or an edge splits every cell around
@@ -54,7 +54,7 @@ class SplitMesh:
     (9, [8])
     """
 
-    def __init__(self, mesh: Any, points):
+    def __init__(self, mesh: MeshT, points: Sequence[CellPoint]):
         n, cells = mesh.n_vertices, mesh.cells
         self._cells = cells.tolist()
         V = [mesh.V]
@@ -69,8 +69,8 @@ class SplitMesh:
             corners = cells[t0, nz]
             # every cell holding the point's edge, facet or itself: those with all its support corners
             for t in cells_around(mesh, corners.tolist()):
-                self._split_cell(t, n + i, cells[t], corners, p.bary[nz], mesh.dim)
-        self.mesh = type(mesh)(np.vstack(V), np.asarray(self._cells, dtype=np.int64), name=mesh.name)
+                self._split_cell(t, n + i, cells[t], corners, p.bary[nz], mesh.reference)
+        self.mesh: MeshT = type(mesh)(np.vstack(V), np.asarray(self._cells, dtype=np.int64), name=mesh.name)
         self.cell_parent = np.arange(len(self._cells), dtype=np.int64)
         del self._cells
         for t, lst in self.pieces.items():
@@ -79,10 +79,10 @@ class SplitMesh:
         self.n_original = n
 
     def _split_cell(self, t: int, vid: int, cell: np.ndarray, corners: np.ndarray, weights: np.ndarray,
-                    dim: int) -> None:
+                    reference: ReferenceSimplex) -> None:
         """Replace cell ``t`` by its pieces around the new vertex ``vid`` (at ``weights`` on ``corners``)."""
         if t in self.pieces:
-            one, prep = _WORDS[dim]
+            one, prep = reference.words.one, reference.words.preposition
             raise SourceError(f"two source points {prep} {one} {t}: order 2 takes at most one per {one}")
         beta = np.zeros(cell.size)
         for corner, b in zip(corners, weights, strict=True):

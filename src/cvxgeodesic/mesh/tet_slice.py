@@ -17,14 +17,15 @@ from numpy.typing import ArrayLike
 
 from ..errors import ParameterError
 from ..validation import as_points, as_vertex_field
-from .tetmesh import TET_EDGES, TetMesh
+from .reference import TETRAHEDRON
+from .tetmesh import TetMesh
 
 __all__ = ["TetSlice", "plane_frame", "slice_tets"]
 
 
 def _cases() -> list[list[tuple[int, int, int]]]:
     """For each of the 16 sign patterns (bit i: vertex i below the plane), the triangles as local edge numbers."""
-    edge_of = {tuple(e): k for k, e in enumerate(TET_EDGES.tolist())}
+    edge_of = {tuple(e): k for k, e in enumerate(TETRAHEDRON.edges.tolist())}
 
     def e(a: int, b: int) -> int:
         return edge_of[(min(a, b), max(a, b))]
@@ -149,7 +150,7 @@ def slice_tets(mesh: TetMesh, values: ArrayLike | None = None, *, origin: ArrayL
         tets = np.flatnonzero(mask == case)
         for tri in _CASES[case]:
             tri_t.append(tets)
-            tri_e.append(mesh.tet_edges[tets][:, list(tri)])
+            tri_e.append(mesh.cell_edges[tets][:, list(tri)])
     tets, edges_of = np.concatenate(tri_t), np.concatenate(tri_e)  # one array per case: none is missing
     cut, triangles = np.unique(edges_of, return_inverse=True)
     triangles = triangles.reshape(-1, 3).astype(np.int64)
@@ -166,7 +167,7 @@ def slice_tets(mesh: TetMesh, values: ArrayLike | None = None, *, origin: ArrayL
 
 def _outline(mesh: TetMesh, below: np.ndarray, cut: np.ndarray) -> np.ndarray:
     """Segments where the plane cuts the boundary faces: each such face has exactly two cut edges."""
-    B = mesh.boundary_faces
+    B = mesh.boundary_facets
     nb = below[B].sum(axis=1)
     B = B[(nb == 1) | (nb == 2)]
     if B.shape[0] == 0:

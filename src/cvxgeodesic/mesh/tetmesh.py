@@ -20,18 +20,13 @@ from numpy.typing import ArrayLike
 
 from ..errors import MeshError
 from .reference import TETRAHEDRON
-from .simplex import CELL_EDGES, CELL_FACETS, DEGENERATE_TOL, SimplexMesh, _cached_parts
+from .simplex import DEGENERATE_TOL, SimplexMesh, _cached_parts
 from .trimesh import TriMesh
 
-__all__ = ["DEGENERATE_TET_TOL", "TET_EDGES", "TET_FACES", "TetMesh"]
+__all__ = ["DEGENERATE_TET_TOL", "TetMesh"]
 
 #: Default of :meth:`TetMesh.degenerate_tets`: :data:`~cvxgeodesic.mesh.simplex.DEGENERATE_TOL` (the one rule).
 DEGENERATE_TET_TOL = DEGENERATE_TOL
-#: Local vertex pairs of the six edges of a tetrahedron, the column order of :attr:`TetMesh.tet_edges`.
-TET_EDGES = CELL_EDGES[3]
-#: Local vertices of the face opposite vertex ``i`` (row ``i``), ordered so that the face's normal
-#: ``(b − a) × (c − a)`` points away from vertex ``i`` when the tetrahedron's signed volume is positive.
-TET_FACES = CELL_FACETS[3]
 #: A fold is reported only when the opposite vertices of an interior face lie on the same side by more than
 #: this fraction of the face's longest edge (round-off on flat configurations is not a fold).
 FOLD_TOL = 1e-9
@@ -78,7 +73,7 @@ class TetMesh(SimplexMesh):
     >>> import numpy as np
     >>> V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
     >>> mesh = TetMesh(V, [[0, 2, 1, 3]])  # negatively oriented: accepted
-    >>> round(float(mesh.total_volume), 6), mesh.boundary_faces.shape, mesh.is_manifold
+    >>> round(float(mesh.total_volume), 6), mesh.boundary_facets.shape, mesh.is_manifold
     (0.166667, (4, 3), True)
     """
 
@@ -136,18 +131,14 @@ class TetMesh(SimplexMesh):
         """(k, 4) float ndarray: area of the face opposite each local vertex."""
         V, T = self.V, self.T
         out = np.empty((self.n_tets, 4))
-        for i, (a, b, c) in enumerate(TET_FACES):
+        for i, (a, b, c) in enumerate(TETRAHEDRON.facets):
             out[:, i] = 0.5 * np.linalg.norm(np.cross(V[T[:, b]] - V[T[:, a]], V[T[:, c]] - V[T[:, a]]), axis=1)
         return out
 
-    face_areas_by_tet = property(lambda self: self.cell_facet_measures, doc="(k, 4) float: the faces' areas.")
-
-    tet_longest_edges = property(lambda self: self.cell_longest_edges, doc="(k,) float: longest edge of each tet.")
-    tet_min_altitudes = property(lambda self: self.cell_min_altitudes,
-                                 doc="(k,) float: smallest vertex-to-opposite-face distance.")
-    tet_edges = property(lambda self: self.cell_edges, doc="(k, 6) int64: edges in TET_EDGES order.")
-
-    cell_measures = property(lambda self: self.volumes, doc="(k,) float: :attr:`volumes`.")
+    @property
+    def cell_measures(self) -> np.ndarray:
+        """(k,) float ndarray: the cells' measures, :attr:`volumes`."""
+        return self.volumes
 
     def _with_vertices(self, V: np.ndarray) -> TetMesh:
         return TetMesh(V, self.T, vertex_map=self.vertex_map, name=self.name, file_index=self.file_index,
@@ -183,31 +174,29 @@ class TetMesh(SimplexMesh):
         return t, i
 
     @cached_property
-    def boundary_faces(self) -> np.ndarray:
+    def boundary_facets(self) -> np.ndarray:
         """(b, 3) int64 ndarray: faces of a single tetrahedron, oriented with normals pointing out of it.
 
         On a manifold mesh this is the closed boundary surface, outward oriented; faces shared by
         more than two tetrahedra are not boundary faces (see :attr:`nonmanifold_faces`).
         """
         t, i = self._boundary_slots
-        return self.positive_tets[t[:, None], TET_FACES[i]].astype(np.int64)
-
-    boundary_facets = property(lambda self: self.boundary_faces, doc="(b, 3) int64: :attr:`boundary_faces`.")
+        return self.positive_tets[t[:, None], TETRAHEDRON.facets[i]].astype(np.int64)
 
     @cached_property
     def boundary_face_tets(self) -> np.ndarray:
-        """(b,) int64 ndarray: the tetrahedron of each row of :attr:`boundary_faces`."""
+        """(b,) int64 ndarray: the tetrahedron of each row of :attr:`boundary_facets`."""
         return self._boundary_slots[0].astype(np.int64)
 
     @cached_property
     def boundary_vertices(self) -> np.ndarray:
-        """(v,) int64 ndarray: sorted indices of the vertices of :attr:`boundary_faces`."""
-        return np.unique(self.boundary_faces).astype(np.int64)
+        """(v,) int64 ndarray: sorted indices of the vertices of :attr:`boundary_facets`."""
+        return np.unique(self.boundary_facets).astype(np.int64)
 
     @cached_property
     def boundary_area(self) -> float:
-        """Total area of :attr:`boundary_faces`."""
-        V, B = self.V, self.boundary_faces
+        """Total area of :attr:`boundary_facets`."""
+        V, B = self.V, self.boundary_facets
         return float(0.5 * np.linalg.norm(np.cross(V[B[:, 1]] - V[B[:, 0]], V[B[:, 2]] - V[B[:, 0]]), axis=1).sum())
 
     def boundary_mesh(self) -> TriMesh:
@@ -216,16 +205,16 @@ class TetMesh(SimplexMesh):
         Returns
         -------
         TriMesh
-            Faces :attr:`boundary_faces` (outward), the same vertex numbering as this mesh.
+            Faces :attr:`boundary_facets` (outward), the same vertex numbering as this mesh.
 
         Raises
         ------
         MeshError
             If the mesh has no boundary face (every face shared: impossible for a finite manifold mesh).
         """
-        if self.boundary_faces.shape[0] == 0:
+        if self.boundary_facets.shape[0] == 0:
             raise MeshError(f"{self.name}: the mesh has no boundary faces")
-        return TriMesh(self.V, self.boundary_faces, name=f"{self.name} (boundary)")
+        return TriMesh(self.V, self.boundary_facets, name=f"{self.name} (boundary)")
 
     @cached_property
     def nonmanifold_faces(self) -> np.ndarray:

@@ -116,7 +116,7 @@ def tetrahedralize(surface: TriMesh | tuple, *, mesher: str = "auto", max_volume
     --------
     >>> from cvxgeodesic.mesh.generate import icosphere
     >>> ball = tetrahedralize(icosphere(2))  # doctest: +SKIP
-    >>> ball.boundary_faces.shape  # doctest: +SKIP
+    >>> ball.boundary_facets.shape  # doctest: +SKIP
     (320, 3)
     """
     mesh = surface if isinstance(surface, TriMesh) else TriMesh(*surface)
@@ -137,10 +137,10 @@ def tetrahedralize(surface: TriMesh | tuple, *, mesher: str = "auto", max_volume
         raise ParameterError(f"mesher {mesher!r} is not installed: {MESHERS[mesher][1]}")
     t0 = time.perf_counter()
     if mesher == "tetgen":
-        open_edges = int(np.count_nonzero(mesh.edge_face_counts == 1))
+        open_edges = int(np.count_nonzero(mesh.edge_cell_counts == 1))
         if open_edges or not mesh.is_edge_manifold:
             raise MeshError(f"{mesh.name}: TetGen needs a closed manifold surface, this one has {open_edges} boundary "
-                            f"edges and {int(np.count_nonzero(mesh.edge_face_counts > 2))} edges of more than two "
+                            f"edges and {int(np.count_nonzero(mesh.edge_cell_counts > 2))} edges of more than two "
                             "faces; repair it or use mesher='wildmeshing'")
         try:
             tg = lib.TetGen(np.asarray(mesh.V, dtype=np.float64), np.asarray(mesh.F, dtype=np.int32))

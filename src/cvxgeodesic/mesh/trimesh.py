@@ -84,7 +84,7 @@ class TriMesh(SimplexMesh):
         super().__init__(V, F, vertex_map=vertex_map, name=name, file_index=file_index,
                          dropped_vertices=dropped_vertices, notes=notes)
         self._file_faces = None if file_faces is None else _as_cells(file_faces, self.file_index.shape[0],
-                                                                      f"{self.name} (file faces)", 2)
+                                                                      f"{self.name} (file faces)", TRIANGLE)
 
     @property
     def F(self) -> np.ndarray:
@@ -92,17 +92,12 @@ class TriMesh(SimplexMesh):
         return self.cells
 
     @property
-    def notes(self) -> tuple[str, ...]:
-        """tuple of str: one line per repair the reader made."""
-        return self._reader_notes
-
-    @property
     def n_faces(self) -> int:
         """Number of triangles."""
         return self.n_cells
 
     @property
-    def file_faces(self) -> np.ndarray:
+    def file_cells(self) -> np.ndarray:
         """(k, 3) int64 ndarray: the file's triangles in the file's vertex numbering.
 
         The faces as the file has them (before welding; polygons fan-triangulated, faces that
@@ -124,18 +119,15 @@ class TriMesh(SimplexMesh):
         """(m,) float ndarray: triangle areas."""
         return 0.5 * np.linalg.norm(self.face_normals_unnormalized, axis=1)
 
-    # the names of the surface vocabulary for the shared ones (:class:`~cvxgeodesic.mesh.simplex.SimplexMesh`)
-    face_longest_edges = property(lambda self: self.cell_longest_edges, doc="(m,) float: longest edge of each face.")
-    face_min_altitudes = property(lambda self: self.cell_min_altitudes, doc="(m,) float: smallest altitude.")
-    face_edges = property(lambda self: self.cell_edges, doc="(m, 3) int64: the edge opposite each corner.")
-    edge_face_counts = property(lambda self: self.edge_cell_counts, doc="(e,) int64: faces per edge.")
-
-    cell_measures = property(lambda self: self.face_areas, doc="(m,) float: :attr:`face_areas`.")
+    @property
+    def cell_measures(self) -> np.ndarray:
+        """(m,) float ndarray: the cells' measures, :attr:`face_areas`."""
+        return self.face_areas
 
     @cached_property
     def cell_facet_measures(self) -> np.ndarray:
         """(m, 3) float ndarray: the length of the edge opposite each corner."""
-        return self.edge_lengths[self.face_edges]
+        return self.edge_lengths[self.cell_edges]
 
     def _with_vertices(self, V: np.ndarray) -> TriMesh:
         return TriMesh(V, self.F, vertex_map=self.vertex_map, name=self.name)
@@ -146,13 +138,3 @@ class TriMesh(SimplexMesh):
         (:class:`~cvxgeodesic.problems.formulations.MeshOperators`); ``tol = 0`` selects only faces of exactly zero
         area."""
         return self.degenerate_cells(tol)
-
-    @cached_property
-    def is_edge_manifold(self) -> bool:
-        """True when no edge is shared by more than two faces."""
-        return bool(np.all(self.edge_face_counts <= 2))
-
-    @cached_property
-    def boundary_facets(self) -> np.ndarray:
-        """(b, 2) int64 ndarray: the edges of a single face (the boundary of an open surface)."""
-        return self.edges[self.edge_face_counts == 1]

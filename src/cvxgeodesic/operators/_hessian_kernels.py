@@ -20,7 +20,7 @@ half-edge runs from the lower to the higher vertex index, the angle defect is 0 
 vertices); the result equals libigl's to rounding (``tests/test_operators.py``).
 
 Conventions: ``F`` (m, 3) int64, ``E`` (m, 3) int64 (the edge opposite each corner, as
-:attr:`~cvxgeodesic.mesh.TriMesh.face_edges`), ``twin`` (3m,) the other half-edge ``3 f' + e'`` of
+:attr:`~cvxgeodesic.mesh.TriMesh.cell_edges`), ``twin`` (3m,) the other half-edge ``3 f' + e'`` of
 each half-edge ``3 f + e`` (−1 on the boundary).
 """
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import cast
 
 import igl
 import numpy as np
@@ -36,7 +36,7 @@ def dirichlet_energy_matrix(mesh: SimplexMesh, *, cells: ArrayLike | None = None
 
     Parameters
     ----------
-    mesh : TriMesh or TetMesh
+    mesh : SimplexMesh
     cells : (s,) int or (k,) bool array_like, optional
         Cells to assemble (:func:`~.laplacian.cotan_stiffness`).
 
@@ -55,7 +55,7 @@ def laplacian_energy_matrix(mesh: SimplexMesh, *, cells: ArrayLike | None = None
 
     Parameters
     ----------
-    mesh : TriMesh or TetMesh
+    mesh : SimplexMesh
     cells : (s,) int or (k,) bool array_like, optional
         Cells to assemble.
 
@@ -114,12 +114,12 @@ def hessian_energy_matrix(mesh: TriMesh, notes: list[str] | None = None, *,
     notes = [] if notes is None else notes
     energy_mesh, to_mesh = mesh, None
     if not mesh.is_edge_manifold:
-        bad = int(np.sum(mesh.edge_face_counts > 2))
+        bad = int(np.sum(mesh.edge_cell_counts > 2))
         energy_mesh, to_mesh = manifold_cover(mesh)
         notes.append(f"{mesh.name}: {bad} non-manifold edge(s); the Hessian energy is built on the mesh cut along "
                      f"them ({energy_mesh.n_vertices} vertices instead of {int(mesh.referenced.sum())})")
         if not energy_mesh.is_edge_manifold:  # a sheet that closes up around a vertex of a non-manifold edge
-            keep = ~(energy_mesh.edge_face_counts[energy_mesh.face_edges] > 2).any(axis=1)
+            keep = ~(energy_mesh.edge_cell_counts[energy_mesh.cell_edges] > 2).any(axis=1)
             notes.append(f"{mesh.name}: {int((~keep).sum())} face(s) whose non-manifold edge the cut cannot open "
                          "carry no Hessian energy")
             energy_mesh = TriMesh(energy_mesh.V, energy_mesh.F[keep], name=energy_mesh.name)
@@ -165,7 +165,7 @@ def curved_hessian_face_data(mesh: TriMesh, kern) -> tuple:
     """
     V = np.ascontiguousarray(mesh.V, dtype=np.float64)
     F = np.ascontiguousarray(mesh.F, dtype=np.int64)
-    E = np.ascontiguousarray(mesh.face_edges, dtype=np.int64)
+    E = np.ascontiguousarray(mesh.cell_edges, dtype=np.int64)
     n, m, n_edges = mesh.n_vertices, F.shape[0], len(mesh.edges)
     lsq, dA, theta = np.empty((m, 3)), np.empty(m), np.empty((m, 3))
     kern.face_geometry(V, F, lsq, dA, theta)
@@ -174,7 +174,7 @@ def curved_hessian_face_data(mesh: TriMesh, kern) -> tuple:
     np.divide(1.0, mass, out=minv, where=mass > 0)
     angle_sum = np.bincount(F.ravel(), weights=theta.ravel(), minlength=n)
     defect = 2.0 * np.pi - angle_sum
-    defect[mesh.edges[mesh.edge_face_counts == 1].ravel()] = 0.0  # libigl: no curvature on the boundary
+    defect[mesh.edges[mesh.edge_cell_counts == 1].ravel()] = 0.0  # libigl: no curvature on the boundary
     sk = np.zeros(n)
     np.divide(defect, angle_sum, out=sk, where=angle_sum > 0)
     return F, E, n_edges, lsq, dA, theta, minv, sk
@@ -312,7 +312,7 @@ def check_energy(mesh: SimplexMesh, energy: str) -> str:
     return energy
 
 
-def energy_matrix(mesh: Any, energy: str, notes: list[str] | None = None, *,
+def energy_matrix(mesh: SimplexMesh, energy: str, notes: list[str] | None = None, *,
                   analyse: Callable[[sp.csc_matrix], SymbolicCholesky] | None = None,
                   face_metric: tuple[np.ndarray, np.ndarray] | None = None,
                   cells: ArrayLike | None = None) -> sp.csc_matrix:
@@ -322,9 +322,10 @@ def energy_matrix(mesh: Any, energy: str, notes: list[str] | None = None, *,
     :func:`hessian_energy_matrix` (the other energies are PSD by construction and have no check).
     ``face_metric``, ``(transforms (m, 2, 2), area_ratio (m,))`` of a travel cost or metric
     (:class:`~cvxgeodesic.operators.metric.Medium`, surfaces only), measures the energy in it
-    (:func:`_metric_energy`). ``cells`` (indices or mask) assembles the energy on those cells only. On tetrahedra
-    the Laplacian energy is divided by ``|Ω|^(1/3)``: ``∫ (Δd)² dV`` has the units of a length there (in 2-D it is
-    dimensionless), so that one smoothness weight means one rounding at every scale.
+    (:func:`_metric_energy`). ``cells`` (indices or mask) assembles the energy on those cells only. The Laplacian
+    energy is divided by ``(|Ω|^(1/dim))^(dim − 2)`` (``mesh.reference.measure_root``): ``∫ (Δd)² dV`` has the units
+    of a length to the ``dim − 2`` (a length in a solid, dimensionless on a surface), so that one smoothness weight
+    means one rounding at every scale.
 
     Raises
     ------
@@ -332,13 +333,14 @@ def energy_matrix(mesh: Any, energy: str, notes: list[str] | None = None, *,
         An energy not defined on the mesh's dimension (:func:`check_energy`).
     """
     check_energy(mesh, energy)
-    if cells is not None and mesh.dim == 2:  # libigl's operators take a mesh: the one of the kept triangles
+    if cells is not None and mesh.reference.libigl_operators:  # libigl's operators take a mesh: the kept triangles
         mesh, cells = TriMesh(mesh.V, mesh.cells[selected_cells(mesh, cells)], name=mesh.name), None
+    # a medium and the curved Hessian energy are surface notions: the capability table admits them on surfaces only
     if face_metric is not None:
-        return _metric_energy(mesh, energy, face_metric, [] if notes is None else notes, analyse)
+        return _metric_energy(cast(TriMesh, mesh), energy, face_metric, [] if notes is None else notes, analyse)
     if energy == "hessian":
-        return hessian_energy_matrix(mesh, notes, analyse=analyse)
+        return hessian_energy_matrix(cast(TriMesh, mesh), notes, analyse=analyse)
     if energy == "dirichlet":
         return dirichlet_energy_matrix(mesh, cells=cells)
     Q = laplacian_energy_matrix(mesh, cells=cells)
-    return sp.csc_matrix(Q / np.cbrt(_measure(mesh, cells))) if mesh.dim == 3 else Q
+    return sp.csc_matrix(Q / mesh.reference.measure_root(_measure(mesh, cells)) ** (mesh.dim - 2))

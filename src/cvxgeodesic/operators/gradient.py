@@ -2,12 +2,10 @@
 
 from __future__ import annotations
 
-from typing import cast
-
 import numpy as np
 import scipy.sparse as sp
 
-from ..mesh.simplex import CELL_FACETS, SimplexMesh
+from ..mesh.simplex import SimplexMesh
 from ..mesh.trimesh import TriMesh
 
 
@@ -30,25 +28,6 @@ def triangle_frames(mesh: TriMesh) -> tuple[np.ndarray, np.ndarray]:
     return ex, ey
 
 
-def local_coordinates(mesh: SimplexMesh) -> np.ndarray:
-    """The corners of each cell in an orthonormal frame of its affine hull.
-
-    Triangles: the 2-D frame of :func:`triangle_frames`, corner 0 at the origin; tetrahedra: world coordinates
-    (a solid needs no frame).
-
-    Returns
-    -------
-    (k, dim + 1, dim) float ndarray
-        NaN on faces of zero area (their frame is undefined).
-    """
-    X = mesh.V[mesh.cells]
-    if mesh.dim == 3:
-        return X
-    ex, ey = triangle_frames(cast(TriMesh, mesh))
-    rel = X - X[:, :1]
-    return np.stack([np.einsum("kvx,kx->kv", rel, ex), np.einsum("kvx,kx->kv", rel, ey)], axis=2)
-
-
 def _facet_normal(P: np.ndarray, facet: np.ndarray) -> np.ndarray:
     """(k, dim) normals of the facet of local corners ``facet`` (dim of them) of each cell, any length."""
     a = P[:, facet[0]]
@@ -63,11 +42,12 @@ def gradient_blocks(mesh: SimplexMesh) -> np.ndarray:
 
     Column ``i`` of ``blocks[t]`` is ``∇λ_i``, the gradient of the barycentric coordinate of local corner ``i``:
     the normal of the facet opposite ``i``, pointing towards ``i``, of length ``1 / h_i`` (``h_i`` the altitude
-    from ``i``), in the frame of :func:`local_coordinates`. The corner order does not matter.
+    from ``i``), in the frame of the mesh's reference simplex
+    (:meth:`~cvxgeodesic.mesh.reference.ReferenceSimplex.local_coordinates`). The corner order does not matter.
 
     Parameters
     ----------
-    mesh : TriMesh or TetMesh
+    mesh : SimplexMesh
         ``k`` cells of ``dim + 1`` corners.
 
     Returns
@@ -84,10 +64,10 @@ def gradient_blocks(mesh: SimplexMesh) -> np.ndarray:
     >>> (B[0] @ (mesh.V[mesh.T[0]] @ [1.0, 2.0, 3.0])).round(12).tolist()  # the gradient of a linear function
     [1.0, 2.0, 3.0]
     """
-    P = local_coordinates(mesh)
+    P = mesh.reference.local_coordinates(mesh.V[mesh.cells])
     out = np.empty((mesh.n_cells, mesh.dim, mesh.dim + 1))
     with np.errstate(divide="ignore", invalid="ignore"):
-        for i, facet in enumerate(CELL_FACETS[mesh.dim]):
+        for i, facet in enumerate(mesh.reference.facets):
             nrm = _facet_normal(P, facet)
             # ∇λ_i ∥ nrm and ∇λ_i · (p_i − p_a) = 1
             out[:, :, i] = nrm / np.einsum("ij,ij->i", nrm, P[:, i] - P[:, facet[0]])[:, None]
@@ -99,7 +79,7 @@ def gradient_matrix(mesh: SimplexMesh, blocks: np.ndarray | None = None) -> sp.c
 
     Parameters
     ----------
-    mesh : TriMesh or TetMesh
+    mesh : SimplexMesh
         ``k`` cells, ``n`` vertices.
     blocks : (k, dim, dim + 1) float ndarray, optional
         Precomputed :func:`gradient_blocks`.
@@ -108,7 +88,7 @@ def gradient_matrix(mesh: SimplexMesh, blocks: np.ndarray | None = None) -> sp.c
     -------
     G : (dim·k, n) scipy.sparse.csr_matrix
         Rows ``dim·t … dim·t + dim − 1`` give the gradient on cell ``t`` (in the frame of
-        :func:`local_coordinates`), so ``Gᵀ diag(measure ⊗ 1_dim) G`` is the cotangent stiffness matrix.
+        ``mesh.reference.local_coordinates``), so ``Gᵀ diag(measure ⊗ 1_dim) G`` is the cotangent stiffness matrix.
     """
     if blocks is None:
         blocks = gradient_blocks(mesh)
@@ -123,7 +103,7 @@ def gradient_norms(mesh: SimplexMesh, d: np.ndarray, blocks: np.ndarray | None =
 
     Parameters
     ----------
-    mesh : TriMesh or TetMesh
+    mesh : SimplexMesh
     d : (n,) float array_like
     blocks : (k, dim, dim + 1) float ndarray, optional
 

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError
-from ..mesh.simplex import CELL_EDGES
+from ..mesh.reference import reference_simplex
 from ..mesh.split import SplitMesh
 from ..validation import check_choice, check_order
 from .gradient import gradient_blocks
@@ -40,11 +40,11 @@ CELL_WORDS = {2: ("face", "faces"), 3: ("tetrahedron", "tets")}
 
 def lagrange_nodes(dim: int, order: int = 2) -> np.ndarray:
     """Barycentric coordinates of the nodes of a cell: the corners, then (order 2) the midpoints of
-    :data:`~cvxgeodesic.mesh.simplex.CELL_EDGES` (the local DOF order). Shape ``(n_local, dim + 1)``."""
+    :attr:`~cvxgeodesic.mesh.reference.ReferenceSimplex.edges` (the local DOF order). Shape ``(n_local, dim + 1)``."""
     corners = np.eye(dim + 1)
     if order == 1:
         return corners
-    E = CELL_EDGES[dim]
+    E = reference_simplex(dim).edges
     return np.vstack([corners, 0.5 * (corners[E[:, 0]] + corners[E[:, 1]])])
 
 
@@ -65,7 +65,7 @@ def lagrange_basis(bary: np.ndarray, order: int = 2) -> tuple[np.ndarray, np.nda
     """Lagrange shape functions of a simplex and their derivatives in the barycentric coordinates.
 
     Order 1: ``N_i = λ_i``. Order 2: ``N_i = λ_i (2λ_i − 1)`` at corner ``i``, then ``N_ab = 4 λ_a λ_b`` at the
-    midpoint of each edge ``(a, b)`` of :data:`~cvxgeodesic.mesh.simplex.CELL_EDGES`.
+    midpoint of each edge ``(a, b)`` of :attr:`~cvxgeodesic.mesh.reference.ReferenceSimplex.edges`.
 
     Parameters
     ----------
@@ -84,7 +84,7 @@ def lagrange_basis(bary: np.ndarray, order: int = 2) -> tuple[np.ndarray, np.nda
     s, c = lam.shape
     if order == 1:
         return lam.copy(), np.broadcast_to(np.eye(c), (s, c, c)).copy()
-    E = CELL_EDGES[c - 1]
+    E = reference_simplex(c - 1).edges
     N = np.empty((s, c + len(E)))
     dN = np.zeros((s, c + len(E), c))
     for k in range(c):
@@ -128,7 +128,7 @@ class LagrangeSpace:
     cell_dofs : (k, n_local) int64 ndarray
         Global DOFs of each cell in the local order of :func:`lagrange_basis`.
     cell_edges : (k, dim (dim + 1) / 2) int64 ndarray
-        Index into ``mesh.edges`` of each cell's edges, in :data:`~cvxgeodesic.mesh.simplex.CELL_EDGES` order.
+        Index into ``mesh.edges`` of each cell's edges, in ``mesh.reference.edges`` order.
     gbasis : (k, dim, dim + 1) float ndarray
         ``∇λ_i`` of each cell (:func:`~cvxgeodesic.operators.gradient.gradient_blocks`: in the face's 2-D frame on
         triangles, in world coordinates on tetrahedra), zero on degenerate cells.
@@ -215,7 +215,7 @@ class LagrangeSpace:
         """(k,) bool ndarray: proper cells where ``d²`` is a quadratic wherever a source is visible: every proper
         tetrahedron (a solid is flat), the proper faces whose edge-neighbours all lie in their plane
         (|cos| ≥ 1 − 1e-10)."""
-        if self.dim == 3:
+        if self.mesh.reference.flat:
             return ~self.degenerate
         nrm = self.mesh.face_normals_unnormalized
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -270,7 +270,7 @@ class LagrangeSpace:
             ``Hess φ|_t = H[t] @ φ[cell_dofs[t]]``.
         """
         c = self.dim + 1
-        E = CELL_EDGES[self.dim]
+        E = self.mesh.reference.edges
         D2 = np.zeros((c + len(E), c, c))
         D2[range(c), range(c), range(c)] = 4.0
         D2[c + np.arange(len(E)), E[:, 0], E[:, 1]] = 4.0
@@ -346,7 +346,7 @@ def _violation_candidates(space: LagrangeSpace, x: np.ndarray) -> tuple[np.ndarr
     k = xt.shape[0]
     Q = np.zeros((k, c, c))
     Q[:, range(c), range(c)] = v[:, :c]
-    for e, (a, b) in enumerate(CELL_EDGES[space.dim]):
+    for e, (a, b) in enumerate(space.mesh.reference.edges):
         Q[:, a, b] = Q[:, b, a] = 2 * v[:, c + e] - 0.5 * (v[:, a] + v[:, b])
     scale = np.abs(Q).max(axis=(1, 2)) + 1e-300
     cands = [np.broadcast_to(np.eye(c), (k, c, c))]

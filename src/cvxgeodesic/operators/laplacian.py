@@ -51,7 +51,7 @@ def cotan_stiffness(mesh: SimplexMesh, *, cells: ArrayLike | None = None,
 
     Parameters
     ----------
-    mesh : TriMesh or TetMesh
+    mesh : SimplexMesh
     cells : (s,) int or (k,) bool array_like, optional
         Cells to assemble; default every cell (triangles: libigl's ``cotmatrix``) or every tetrahedron of nonzero
         volume.
@@ -62,7 +62,7 @@ def cotan_stiffness(mesh: SimplexMesh, *, cells: ArrayLike | None = None,
     -------
     (n, n) scipy.sparse.csc_matrix
     """
-    if mesh.dim == 2 and cells is None and blocks is None:
+    if mesh.reference.libigl_operators and cells is None and blocks is None:
         return sp.csc_matrix(-igl.cotmatrix(mesh.V, mesh.cells))
     sel = selected_cells(mesh, cells)
     B = (gradient_blocks(mesh) if blocks is None else blocks)[sel]
@@ -79,7 +79,7 @@ def barycentric_mass(mesh: SimplexMesh, *, cells: ArrayLike | None = None) -> sp
 
     Parameters
     ----------
-    mesh : TriMesh or TetMesh
+    mesh : SimplexMesh
     cells : (s,) int or (k,) bool array_like, optional
         Cells to assemble; default every cell of nonzero measure.
 
@@ -105,7 +105,7 @@ def mass_matrix(mesh: SimplexMesh) -> sp.dia_matrix:
     -------
     (n, n) scipy.sparse.dia_matrix
     """
-    if mesh.dim == 3:
+    if not mesh.reference.libigl_operators:
         return barycentric_mass(mesh)
     M = igl.massmatrix(mesh.V, mesh.cells, igl.MASSMATRIX_TYPE_VORONOI)
     diag = np.zeros(mesh.n_vertices)
@@ -124,7 +124,7 @@ def divergence(mesh: SimplexMesh, X: ArrayLike, *, cells: ArrayLike | None = Non
 
     Parameters
     ----------
-    mesh : TriMesh or TetMesh
+    mesh : SimplexMesh
     X : (k, dim) float array_like
         One vector per cell, in the frame of the gradient blocks (world coordinates on tetrahedra).
     cells : (s,) int or (k,) bool array_like, optional

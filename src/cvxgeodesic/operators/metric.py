@@ -297,13 +297,13 @@ class Medium:
         faces = np.repeat(np.arange(m), 3)
         per = self.segment_lengths(faces, eye[(k + 1) % 3], eye[(k + 2) % 3])
         out = np.full(len(mesh.edges), np.inf)
-        np.minimum.at(out, mesh.face_edges.ravel(), per)
+        np.minimum.at(out, mesh.cell_edges.ravel(), per)
         return out
 
     @property
     def face_longest_edges(self) -> np.ndarray:
         """(m,) float ndarray: the longest of each face's three :attr:`edge_lengths`."""
-        return self.edge_lengths[self.mesh.face_edges].max(axis=1)
+        return self.edge_lengths[self.mesh.cell_edges].max(axis=1)
 
     def adjacency(self) -> sp.csr_matrix:
         """(n, n) csr_matrix: the edge graph weighted by :attr:`edge_lengths` (as ``mesh.vertex_adjacency``)."""

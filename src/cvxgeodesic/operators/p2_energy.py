@@ -125,7 +125,7 @@ def edge_diamonds(space: LagrangeSpace) -> np.ndarray:
     """(k, 4) int64 ndarray: the ends and the two opposite vertices of each edge of :func:`interior_edge_pairs`:
     the cliques the vertex jump term couples."""
     edges, faces, corners = interior_edge_pairs(space)
-    F = space.mesh.F
+    F = space.mesh.cells
     return np.column_stack([space.mesh.edges[edges], F[faces[:, 0], corners[:, 0]], F[faces[:, 1], corners[:, 1]]])
 
 
@@ -134,7 +134,7 @@ def _conormal_rows(space: LagrangeSpace, faces: np.ndarray, corners: np.ndarray,
     ``corners[i]``) at the edge's global endpoint ``ends[i, 0]``, the midpoint and ``ends[i, 1]``, as rows on the
     face's six DOFs."""
     k = faces.size
-    F = space.mesh.F[faces]
+    F = space.mesh.cells[faces]
     r = np.arange(k)
     loc_a = np.argmax(F == ends[:, :1], axis=1)
     loc_b = np.argmax(F == ends[:, 1:], axis=1)
@@ -186,7 +186,7 @@ def jump_energy(space: LagrangeSpace, sigma: float = JUMP_SIGMA) -> sp.csr_matri
 def _jump_weights(space: LagrangeSpace, edges: np.ndarray, faces: np.ndarray, sigma: float = JUMP_SIGMA) -> np.ndarray:
     """(k,) ``σ ℓ_e / h_e`` with ``h_e = (A_{t1} + A_{t2}) / ℓ_e``: the weight of ``J²`` (a constant jump) per edge."""
     ell = space.mesh.edge_lengths[edges]
-    return sigma * ell**2 / space.mesh.face_areas[faces].sum(axis=1)
+    return sigma * ell**2 / space.mesh.cell_measures[faces].sum(axis=1)
 
 
 def vertex_jump_energy(space: LagrangeSpace, sigma: float = JUMP_SIGMA) -> tuple[sp.csr_matrix, np.ndarray, float]:
@@ -226,10 +226,10 @@ def vertex_jump_energy(space: LagrangeSpace, sigma: float = JUMP_SIGMA) -> tuple
         nu = -g[np.arange(t.size), :, k]
         nu /= np.linalg.norm(nu, axis=1, keepdims=True)
         row = np.einsum("kc,kcv->kv", nu, g)  # ν·∇λ_v of the face's corners: the P1 conormal derivative
-        q = ((mesh.V[mesh.F[t]] - o[:, None]) ** 2).sum(axis=2)  # |x − o|² at the corners
+        q = ((mesh.V[mesh.cells[t]] - o[:, None]) ** 2).sum(axis=2)  # |x − o|² at the corners
         offset += np.einsum("kv,kv->k", row, q)
         rows.append(row)
-        dofs.append(mesh.F[t])
+        dofs.append(mesh.cells[t])
     J = np.concatenate(rows, axis=1)  # (k, 6) on the corners of both faces (the edge's ends twice)
     D = np.concatenate(dofs, axis=1)
     w = _jump_weights(space, edges, faces, sigma)
@@ -250,7 +250,7 @@ def face_hessian_energy(space: LagrangeSpace, kind: str = "hessian") -> tuple[sp
     """
     check_choice(kind, "kind", ("hessian", "laplacian"), lower=False)
     faces = np.flatnonzero(~space.degenerate)
-    A = space.mesh.face_areas[faces]
+    A = space.mesh.cell_measures[faces]
     H = space.hessian_rows(faces)  # (k, 2, 2, 6)
     T = H[:, 0, 0] + H[:, 1, 1]  # (k, 6): tr H
     if kind == "hessian":

@@ -38,8 +38,8 @@ class ConeGroup:
         The ``c`` variables of each cone.
     G : (k, d, c) float ndarray
     h : (k, d) float ndarray
-    count, dim, clique : int
-        ``k``, ``d`` (the cone dimension) and ``c`` (variables per cone), set from the arrays' shapes.
+    count, size, clique : int
+        ``k``, ``d`` (the entries of a cone) and ``c`` (variables per cone), set from the arrays' shapes.
 
     Examples
     --------
@@ -47,7 +47,7 @@ class ConeGroup:
 
     >>> import numpy as np
     >>> g = ConeGroup.norm_bound(np.array([[0, 1, 2]]), np.array([[[-1.0, 1.0, 0.0], [-1.0, 0.0, 1.0]]]))
-    >>> g.count, g.dim, g.clique, g.violation(np.array([0.0, 1.0, 1.0]))
+    >>> g.count, g.size, g.clique, g.violation(np.array([0.0, 1.0, 1.0]))
     (1, 3, 3, 0.41421356237309515)
     """
 
@@ -65,8 +65,8 @@ class ConeGroup:
             raise ValueError(f"ConeGroup shapes do not match: dofs {self.dofs.shape}, G {self.G.shape}, "
                              f"h {self.h.shape} (want (k, c), (k, d, c), (k, d))")
         if self.h.shape[1] < 2:
-            raise ValueError(f"a second-order cone needs dimension >= 2, got {self.h.shape[1]}")
-        self.count, self.dim, self.clique = int(self.dofs.shape[0]), int(self.h.shape[1]), int(self.dofs.shape[1])
+            raise ValueError(f"a second-order cone needs size >= 2, got {self.h.shape[1]}")
+        self.count, self.size, self.clique = int(self.dofs.shape[0]), int(self.h.shape[1]), int(self.dofs.shape[1])
 
     @classmethod
     def norm_bound(cls, dofs: np.ndarray, B: np.ndarray, bound: np.ndarray | float = 1.0) -> ConeGroup:

@@ -125,11 +125,6 @@ KAPPA = {"hessian": 3.0e-6, "laplacian": 3.0e-6, "dirichlet": 1.3e-2}
 #: units of the stretch term, so λ is dimensionless); docs/order2.md, "Smoothing at order 2", has the calibration.
 #: Changing it changes every smoothed order-2 field: bump :data:`~cvxgeodesic.formulations_p2.ORDER2_CACHE_VERSION`.
 KAPPA_ORDER2 = {"hessian": 5.0e-7, "laplacian": 5.0e-7, "dirichlet": 5.0e-7}
-#: The root of the measure in ``λ = m · κ · |Ω|^(1/dim)``: a length on a surface and in a solid alike. On volumes κ
-#: keeps the surface values (not calibrated there; measurements in ``docs/volumes.md``).
-MEASURE_ROOT = {2: np.sqrt, 3: np.cbrt}
-#: What a cell is called in messages (singular, counted, plural) and what its measure is.
-CELL_WORDS = {2: ("face", "face(s)", "triangles", "area"), 3: ("tet", "tetrahedra", "tetrahedra", "volume")}
 
 
 def stretch_weights(mesh: SimplexMesh, stretch: str = "area", area_ratio: np.ndarray | None = None) -> np.ndarray:
@@ -137,7 +132,7 @@ def stretch_weights(mesh: SimplexMesh, stretch: str = "area", area_ratio: np.nda
 
     Parameters
     ----------
-    mesh : TriMesh or TetMesh
+    mesh : SimplexMesh
     stretch : {"area", "calibrated", "mean", "sum"}
         ``"area"``: ``w_i = M_i / |Ω|`` with ``M_i`` a third of the area of the faces around vertex ``i`` (a
         quarter of the volume of its tetrahedra): the exact integral of the piecewise linear field, so ``wᵀd`` is
@@ -164,7 +159,7 @@ def stretch_weights(mesh: SimplexMesh, stretch: str = "area", area_ratio: np.nda
         mass = np.bincount(mesh.cells.ravel(), weights=np.repeat(measures / w, w), minlength=n)
         total = mass.sum()
         if not total > 0:
-            raise MeshError(f"{mesh.name}: the {'surface has zero area' if mesh.dim == 2 else 'mesh has zero volume'}")
+            raise MeshError(f"{mesh.name}: the mesh has zero {mesh.reference.words.measure}")
         # A vertex whose cells have (almost) no measure would get (almost) no weight: the optimum is then (almost)
         # not unique there, and the solvers stop anywhere in its feasible range (measured: LCLP 3e-4 of the
         # diagonal off Dijkstra on Thingi10K slivers). The floor changes no vertex of an ordinary mesh.
@@ -188,7 +183,7 @@ def smoothness_weight(mesh: SimplexMesh, m: float, normalization: str = "area", 
 
     Parameters
     ----------
-    mesh : TriMesh or TetMesh
+    mesh : SimplexMesh
     m : float
         Dimensionless multiplier; ``m = 1`` is the default rounding (docs/method.md).
     normalization : {"area", "paper"}
@@ -235,7 +230,9 @@ def smoothness_weight(mesh: SimplexMesh, m: float, normalization: str = "area", 
     check_choice(energy, "energy", KAPPA, lower=False)
     check_energy(mesh, energy)
     measure = mesh.total_measure if medium is None else medium.surface_area
-    return float(m) * KAPPA[energy] * float(MEASURE_ROOT[mesh.dim](measure))
+    # the root of the measure (``mesh.reference.measure_root``) is a length on a surface and in a solid alike; on
+    # volumes κ keeps the surface values (not calibrated there; measurements in ``docs/volumes.md``)
+    return float(m) * KAPPA[energy] * float(mesh.reference.measure_root(measure))
 
 
 def smoothing_length(ops: MeshOperators, lam: float, stretch: str = "area") -> float:
@@ -286,7 +283,7 @@ class MeshOperators:
 
     Parameters
     ----------
-    mesh : TriMesh or TetMesh
+    mesh : SimplexMesh
     degenerate_tol : float
         Threshold of :meth:`~cvxgeodesic.mesh.simplex.SimplexMesh.degenerate_cells` (default
         :data:`~cvxgeodesic.mesh.trimesh.DEGENERATE_TOL`; 0 drops only cells of exactly zero measure).
@@ -326,11 +323,12 @@ class MeshOperators:
         self.degenerate = np.zeros(mesh.n_cells, dtype=bool)
         self.degenerate[mesh.degenerate_cells(tol)] = True
         n_bad = int(self.degenerate.sum())
-        word, counted, proper, measure = CELL_WORDS[mesh.dim]
+        words = mesh.reference.words
+        word, counted = words.one, words.many
         if n_bad == mesh.n_cells:
             raise MeshError(
-                f"{mesh.name}: all {n_bad} {counted.replace('(s)', 's')} are degenerate (zero or near-zero "
-                f"{measure}); the convex formulations need proper {proper}; use "
+                f"{mesh.name}: all {n_bad} {counted} are degenerate (zero or near-zero "
+                f"{words.measure}); the convex formulations need proper {counted}; use "
                 "method='dijkstra' on this mesh"
             )
         self._face_metric = None
@@ -421,7 +419,7 @@ def _qc_constraints(ops: MeshOperators, sc, fixed_mask: np.ndarray, ell: np.ndar
     cell_free = ~fixed_mask[cells].all(axis=1)
     # cells incident to a source (and the cells of point and curve sources, source_rows.py) carry no cone
     keep = cell_free & ~sc.no_cone & ~ops.degenerate
-    if mesh.dim == 3:
+    if mesh.reference.coneless_cell_edges:
         # every edge of a tetrahedron without a cone (next to a source, a point's, degenerate) gets |d_i - d_j| <=
         # l_ij: a tetrahedron's cone does not cover all the edges its neighbours share with it
         lc = np.unique(mesh.cell_edges[cell_free & ~keep])

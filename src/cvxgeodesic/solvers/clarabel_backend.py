@@ -60,7 +60,7 @@ def reduce_to_free(problem: ConicProblem):
         if g.count:
             mats.append(g.matrix(n))
             rhs.append(g.h.ravel())
-            cones.extend([clarabel.SecondOrderConeT(g.dim)] * g.count)
+            cones.extend([clarabel.SecondOrderConeT(g.size)] * g.count)
     if mats:
         A_full = sp.vstack(mats).tocsc()
         b = np.concatenate(rhs) - A_full @ dc

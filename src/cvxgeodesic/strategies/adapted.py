@@ -251,7 +251,7 @@ def fold_reference(mesh: TriMesh) -> float:
 
 def _turns(mesh: TriMesh) -> np.ndarray:
     """The angle (degrees) between the normals of the two faces of every edge that has two."""
-    fe = mesh.face_edges.ravel()
+    fe = mesh.cell_edges.ravel()
     fi = np.repeat(np.arange(mesh.n_faces), 3)
     order = np.argsort(fe, kind="stable")
     fe, fi = fe[order], fi[order]

@@ -214,7 +214,7 @@ class CliqueSOCBlock(ConeBlock):
     """
 
     def __init__(self, group: ConeGroup, x_fixed: np.ndarray, chol: SymbolicCholesky):
-        self.cone = SOC(group.dim)
+        self.cone = SOC(group.size)
         self.count = group.count
         self.G = G = group.G  # (k, d, c), C-contiguous (ConeGroup makes it so)
         self.dofs = dofs = group.dofs
@@ -224,7 +224,7 @@ class CliqueSOCBlock(ConeBlock):
         self.pos = _kern.positions(chol, dofs[:, ta].ravel(), dofs[:, tb].ravel())
         self.gjg = np.ascontiguousarray(np.einsum("ke,ke->ke", G[:, 0, ta], G[:, 0, tb])
                                         - np.einsum("kie,kie->ke", G[:, 1:, ta], G[:, 1:, tb]))
-        four = group.dim == 4  # SOC(4): the unrolled kernels
+        four = group.size == 4  # SOC(4): the unrolled kernels
         self._gather = _ck.gather4 if four else _ck.gather
         self._scatter = _ck.scatter4 if four else _ck.scatter
         self._kkt = _ck.kkt4 if four else _ck.kkt

@@ -177,18 +177,18 @@ class _SocScaling:
 
 
 class SOC(Cone):
-    """The second-order cone ``SOC(dim)`` (``dim ≥ 2``), fields (dim, k); see :class:`Cone`."""
+    """The second-order cone ``SOC(size)`` (``size ≥ 2`` entries per cone), fields (size, k); see :class:`Cone`."""
 
-    def __init__(self, dim: int = 3):
-        if dim < 2:
-            raise ValueError(f"SOC dimension must be at least 2, got {dim}")
-        self.dim = int(dim)
+    def __init__(self, size: int = 3):
+        if size < 2:
+            raise ValueError(f"SOC size must be at least 2, got {size}")
+        self.size = int(size)
 
     def shape(self, count: int) -> tuple[int, ...]:
-        return (self.dim, count)
+        return (self.size, count)
 
     def identity(self, count: int) -> np.ndarray:
-        e = np.zeros((self.dim, count))
+        e = np.zeros((self.size, count))
         e[0] = 1.0
         return e
 
@@ -196,7 +196,7 @@ class SOC(Cone):
         return _SocScaling(s, z)
 
     def _norm_body(self, u: np.ndarray) -> np.ndarray:
-        return np.sqrt(u[1] ** 2 + u[2] ** 2) if self.dim == 3 else np.linalg.norm(u[1:], axis=0)
+        return np.sqrt(u[1] ** 2 + u[2] ** 2) if self.size == 3 else np.linalg.norm(u[1:], axis=0)
 
     def max_step(self, u: np.ndarray, du: np.ndarray) -> float:
         """By the quadratic representation of ``u^{-1/2}`` (:func:`._clique_kernels.max_step`)."""
@@ -235,9 +235,9 @@ class SOC(Cone):
 
     def mehrotra(self, sc, ds, dz, z, sigma_mu):
         out = np.empty(z.shape)
-        if self.dim == 3:
+        if self.size == 3:
             _kern.mehrotra_cones(sc.w, sc.eta, sc.lam, ds, dz, z, sigma_mu, out)
-        elif self.dim == 4:
+        elif self.size == 4:
             _ck.mehrotra4(sc.w, sc.eta, sc.lam, _c(ds), _c(dz), _c(z), sigma_mu, out)
         else:
             _ck.mehrotra(sc.w, sc.eta, sc.lam, _c(ds), _c(dz), _c(z), sigma_mu, np.empty(z.shape), out)
@@ -245,9 +245,9 @@ class SOC(Cone):
 
     def gondzio(self, sc, s, ds, tp, z, dz, td, lo, hi):
         out = np.empty(z.shape)
-        if self.dim == 3:
+        if self.size == 3:
             _kern.gondzio_cones(sc.w, sc.eta, sc.lam, s, ds, tp, z, dz, td, lo, hi, out)
-        elif self.dim == 4:
+        elif self.size == 4:
             _ck.gondzio4(sc.w, sc.eta, sc.lam, _c(s), _c(ds), tp, _c(z), _c(dz), td, lo, hi, out)
         else:
             _ck.gondzio(sc.w, sc.eta, sc.lam, _c(s), _c(ds), tp, _c(z), _c(dz), td, lo, hi, np.empty(z.shape), out)

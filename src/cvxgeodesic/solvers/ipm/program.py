@@ -175,7 +175,7 @@ class Program:
         def blocks(x_fixed, chol):
             out: list[ConeBlock] = []
             for g in problem.cones:
-                B = g.unit_blocks() if (g.dim, g.clique) == (3, 3) else None
+                B = g.unit_blocks() if (g.size, g.clique) == (3, 3) else None
                 out.append(TriangleSOCBlock(B, g.dofs, x_fixed, chol) if B is not None
                            else CliqueSOCBlock(g, x_fixed, chol))
             ineq = problem.ineq
