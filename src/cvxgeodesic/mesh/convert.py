@@ -17,8 +17,9 @@ __all__ = ["MeshLike", "as_mesh", "as_trimesh"]
 
 #: What the API edge takes as a mesh and :func:`as_mesh` converts: a :class:`~cvxgeodesic.mesh.simplex.SimplexMesh`,
 #: a ``(V, F)`` or ``(V, T)`` pair, a file path, or a mesh or point cloud of trimesh, open3d or meshio. Those are
-#: recognised by duck typing, so a type checker sees ``object``: a function taking it converts it before use.
-MeshLike: TypeAlias = SimplexMesh | tuple | list | str | os.PathLike | object
+#: recognised by duck typing (no common base class), so to a type checker this is ``Any``: a function taking it
+#: converts it with :func:`as_mesh` before use (``tools/architecture_counts.py`` lists these parameters apart).
+MeshLike: TypeAlias = Any
 
 
 def _is_tet_pair(mesh: MeshLike) -> bool:

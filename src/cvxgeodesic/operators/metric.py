@@ -131,12 +131,12 @@ class Medium:
         return Medium(cast(TriMesh, mesh), self.cost, self.cost_kind, self.metric, self.metric_kind, scale=self.scale,
                       check=False)
 
-    def split(self, split_mesh: TriMesh, parent: np.ndarray, points) -> Medium:
+    def split(self, split_mesh: SimplexMesh, parent: np.ndarray, points) -> Medium:
         """The medium on a mesh whose faces were split around inserted vertices.
 
         Parameters
         ----------
-        split_mesh : TriMesh
+        split_mesh : TriMesh (a medium lives on a surface: the capability table refuses it elsewhere)
             The original vertices first, then one per point.
         parent : (m',) int ndarray
             The original face of each face of ``split_mesh``.
@@ -154,7 +154,8 @@ class Medium:
             metric = self.metric[parent]
         elif self.metric_kind == "vertices":
             metric = np.concatenate([self.metric, np.einsum("kc,kcij->kij", bary, self.metric[self.mesh.F[faces]])])
-        return Medium(split_mesh, cost, self.cost_kind, metric, self.metric_kind, scale=self.scale, check=False)
+        return Medium(cast(TriMesh, split_mesh), cost, self.cost_kind, metric, self.metric_kind, scale=self.scale,
+                      check=False)
 
     # -- pointwise values ------------------------------------------------------------------------------------
     def _cost_at(self, faces: np.ndarray, bary: np.ndarray) -> np.ndarray:
