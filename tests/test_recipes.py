@@ -16,6 +16,7 @@ import pytest
 from numpy.typing import ArrayLike
 
 import cvxgeodesic as cg
+from cvxgeodesic.capabilities import DOMAINS, Domain
 from cvxgeodesic.errors import SourceError
 from cvxgeodesic.mesh.locate import CellPoint
 from cvxgeodesic.mesh.reference import TRIANGLE, CellWords, ReferenceSimplex
@@ -69,9 +70,20 @@ PLANAR = ReferenceSimplex(
     words=CellWords(one="triangle", many="triangles", short="triangles", shape="(m, 3)", measure="area",
                     mesh="a planar triangulation", meshes="planar triangulations", preposition="in",
                     domain="in the plane", argument="triangles"),
-    source_kinds=("vertex", "point", "boundary"), measure_root=np.sqrt,
+    source_kinds=("vertex", "point", "boundary"), measure_root=np.sqrt, shared_points=True,
     _frame=_plane_frame, _to_world=_plane_vectors, _point_type=PlanarPoint, _locator=planar_point, flat=True,
 )
+
+
+#: The domain's entry of the capability table: its defaults and the words of its messages. Rules of RULES that name
+#: no domain hold for it; a rule for it alone would name "plane" in its ``domains``.
+PLANE = Domain("plane", "planar triangulations", "in the plane", "in the plane", 2, "qclp", "mesh", ("qclp", 2), "ply")
+
+
+@pytest.fixture(autouse=True)
+def _plane_domain(monkeypatch):
+    """The toy domain declared in the capability table for the test (a package domain is a line of DOMAINS)."""
+    monkeypatch.setitem(DOMAINS, PLANE.name, PLANE)
 
 
 class PlanarTriangles(SimplexMesh):
@@ -79,6 +91,7 @@ class PlanarTriangles(SimplexMesh):
 
     dim = 2
     reference = PLANAR
+    domain = PLANE.name
 
     def __init__(self, V: ArrayLike, cells: ArrayLike, *, name: str | None = None, **numbering) -> None:
         super().__init__(V, cells, name=name or "planar", **numbering)
