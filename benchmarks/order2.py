@@ -186,7 +186,7 @@ def main(argv):
         speed(argv[1:])
         return
     if argv[0].startswith("--weights="):
-        import cvxgeodesic.formulations_p2 as p2
+        import cvxgeodesic.problems.squared_distance as p2
 
         p2.DEFAULT_WEIGHTS = argv.pop(0).split("=", 1)[1]
     dest = Path(argv[0])

@@ -217,8 +217,8 @@ def use_jump(jump: str) -> None:
     """Build every order-2 energy with this form of the jump term (``p2_energy(..., jump=jump)``)."""
     import functools
 
-    import cvxgeodesic.formulations_p2 as fp2
-    from cvxgeodesic.operators.p2_energy import p2_energy
+    import cvxgeodesic.problems.squared_distance as fp2
+    from cvxgeodesic.operators.squared_energy import p2_energy
 
     fp2.p2_energy = functools.partial(p2_energy, jump=jump)
 

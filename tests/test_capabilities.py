@@ -13,7 +13,7 @@ from cvxgeodesic.baselines import BASELINES
 from cvxgeodesic.errors import ParameterError, SourceError
 from cvxgeodesic.formulations import FORMULATIONS
 from cvxgeodesic.operators import ENERGIES_BY_DIM
-from cvxgeodesic.operators.p2_energy import P2_ENERGIES
+from cvxgeodesic.operators.squared_energy import P2_ENERGIES
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "capabilities.md"
 

@@ -1,4 +1,4 @@
-"""Order 2: P2 elements for d² (``operators/lagrange.py``, ``formulations_p2.py``, ``strategies/order2.py``)."""
+"""Order 2: P2 elements for d² (``operators/lagrange.py``, ``problems/squared_distance.py``, ``strategies/order2.py``)."""
 
 from __future__ import annotations
 
@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 import cvxgeodesic as cg
-import cvxgeodesic.formulations_p2 as p2mod
+import cvxgeodesic.problems.squared_distance as p2mod
 from conftest import shared_mesh_path
 from cvxgeodesic.errors import ParameterError, SourceError
-from cvxgeodesic.formulations_p2 import P2Builder
+from cvxgeodesic.problems.squared_distance import P2Builder
 from cvxgeodesic.mesh.generate import delaunay_plane as delaunay_mesh
 from cvxgeodesic.mesh.generate import fan_plate, needle_strip
 from cvxgeodesic.mesh.simplex import unit_mesh
@@ -618,7 +618,7 @@ def test_eliminating_the_source_equalities_keeps_the_optimum():
 def test_pair_equalities_that_cannot_be_substituted_stay_rows():
     import scipy.sparse as sps
 
-    from cvxgeodesic.formulations_p2 import eliminate_pair_equalities
+    from cvxgeodesic.problems.squared_distance import eliminate_pair_equalities
 
     b, prog = _program(cg.icosphere(2), [0], eliminate=False)
     pr = prog.problem
@@ -636,7 +636,7 @@ def test_pair_equalities_that_cannot_be_substituted_stay_rows():
 def test_a_dof_fixed_by_a_one_unknown_row_keeps_no_cone_columns():
     import scipy.sparse as sps
 
-    from cvxgeodesic.formulations_p2 import eliminate_pair_equalities
+    from cvxgeodesic.problems.squared_distance import eliminate_pair_equalities
 
     b, prog = _program(cg.icosphere(2), [0], eliminate=False)
     pr = prog.problem

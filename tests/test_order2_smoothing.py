@@ -1,5 +1,5 @@
-"""Smoothing at order 2 (issue 25): the energies of ``φ = d²`` (``operators/p2_energy.py``), the smoothed order-2
-programs (``formulations_p2.py``, ``strategies/order2.py``), λ from ``m`` and the ridge deficit over a fixed surface
+"""Smoothing at order 2 (issue 25): the energies of ``φ = d²`` (``operators/squared_energy.py``), the smoothed order-2
+programs (``problems/squared_distance.py``, ``strategies/order2.py``), λ from ``m`` and the ridge deficit over a fixed surface
 width (``evaluation/smoothness.py``)."""
 
 from __future__ import annotations
@@ -14,10 +14,10 @@ import cvxgeodesic as cg
 from cvxgeodesic.errors import ParameterError
 from cvxgeodesic.evaluation import cut_locus_band, ridge_deficit, rounding_width
 from cvxgeodesic.formulations import KAPPA_ORDER2, smoothness_weight
-from cvxgeodesic.formulations_p2 import P2Builder, _restore_matrix
+from cvxgeodesic.problems.squared_distance import P2Builder, _restore_matrix
 from cvxgeodesic.mesh.simplex import unit_mesh
 from cvxgeodesic.operators.lagrange import LagrangeSpace
-from cvxgeodesic.operators.p2_energy import (
+from cvxgeodesic.operators.squared_energy import (
     JUMP_SIGMA,
     JUMPS,
     P2_ENERGIES,

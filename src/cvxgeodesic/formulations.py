@@ -121,9 +121,9 @@ SECOND_ORDER_ENERGIES = ("hessian", "laplacian")
 #: (ridge sharpness 0.24, 0.41 of the exact field's; Laplacian 0.241, Dirichlet 0.243); docs/method.md has
 #: the sweep and what other values of κ trade.
 KAPPA = {"hessian": 3.0e-6, "laplacian": 3.0e-6, "dirichlet": 1.3e-2}
-#: ``κ₂`` of ``λ = m · κ₂`` at order 2 (the energies of ``φ = d²``, :mod:`cvxgeodesic.operators.p2_energy`, have the
+#: ``κ₂`` of ``λ = m · κ₂`` at order 2 (the energies of ``φ = d²``, :mod:`cvxgeodesic.operators.squared_energy`, have the
 #: units of the stretch term, so λ is dimensionless); docs/order2.md, "Smoothing at order 2", has the calibration.
-#: Changing it changes every smoothed order-2 field: bump :data:`~cvxgeodesic.formulations_p2.ORDER2_CACHE_VERSION`.
+#: Changing it changes every smoothed order-2 field: bump :data:`~cvxgeodesic.problems.squared_distance.ORDER2_CACHE_VERSION`.
 KAPPA_ORDER2 = {"hessian": 5.0e-7, "laplacian": 5.0e-7, "dirichlet": 5.0e-7}
 #: The root of the measure in ``λ = m · κ · |Ω|^(1/dim)``: a length on a surface and in a solid alike. On volumes κ
 #: keeps the surface values (not calibrated there; measurements in ``docs/volumes.md``).

@@ -1,7 +1,7 @@
 """Continuous Lagrange elements of order 1 or 2 on a simplex mesh (triangles or tetrahedra): the space, the exact
 largest cone violation in a cell, and the field an order-2 solve returns.
 
-The order-2 program (:mod:`cvxgeodesic.formulations_p2`) solves for ``φ = d²`` in the order-2 space: one value per
+The order-2 program (:mod:`cvxgeodesic.problems.squared_distance`) solves for ``φ = d²`` in the order-2 space: one value per
 vertex and one per edge midpoint, on surfaces (:class:`~cvxgeodesic.mesh.trimesh.TriMesh`, gradients in each face's
 2-D frame) and inside solids (:class:`~cvxgeodesic.mesh.tetmesh.TetMesh`, gradients in world coordinates) alike:
 the simplex dimension ``dim`` (2 or 3) and the order are parameters, not separate modules. Here: the shape

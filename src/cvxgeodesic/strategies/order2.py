@@ -1,14 +1,14 @@
 """The order-2 strategy: P2 elements for the squared distance on triangle and tetrahedral meshes, solved by the one
 interior-point solver.
 
-Per mesh: the mesh scaled to unit size, the program's per-mesh part (:class:`~cvxgeodesic.formulations_p2.P2Builder`)
+Per mesh: the mesh scaled to unit size, the program's per-mesh part (:class:`~cvxgeodesic.problems.squared_distance.P2Builder`)
 and one :class:`~cvxgeodesic.solvers.ipm.InteriorPointSolver` on the cell-clique pattern with the order-2 settings
 (:data:`~cvxgeodesic.solvers.ipm.settings.ORDER2`), under the backend policy every strategy shares
 (:class:`~cvxgeodesic.strategies.backend.Backend`). Per solve: source points inserted as vertices
 (:class:`~cvxgeodesic.mesh.split.SplitMesh`), the program built and solved, then cutting planes on the flat cells
 (:attr:`~cvxgeodesic.operators.lagrange.LagrangeSpace.flat_cells`: the flat faces of a surface, every tetrahedron)
 where the samples leave ``|∇φ|² ≤ 4φ`` free between them (on a surface: where the edge cones
-:class:`~cvxgeodesic.formulations_p2.BernsteinEdgeCones` do not reach, a source vertex's edges and a line of
+:class:`~cvxgeodesic.problems.squared_distance.BernsteinEdgeCones` do not reach, a source vertex's edges and a line of
 sources; in a solid: everywhere between the ten node samples). There ``d²`` is exactly quadratic wherever the source
 is visible, so a cone at the violating points (:func:`~cvxgeodesic.operators.lagrange.violations`, exact) closes the
 gap (docs/order2.md).
@@ -23,7 +23,7 @@ import numpy as np
 
 from .. import capabilities
 from ..errors import SolverError
-from ..formulations_p2 import P2Builder, P2Program, source_edges
+from ..problems.squared_distance import P2Builder, P2Program, source_edges
 from ..mesh.simplex import unit_mesh
 from ..mesh.split import SplitMesh
 from ..operators.lagrange import LagrangeField, SplitLagrangeField, violations
@@ -111,7 +111,7 @@ class Order2:
     def _ipm(self, builder: P2Builder) -> Any:
         """The structured solver on ``builder``'s cell-clique pattern (one symbolic analysis), or None; with a
         smoothness energy the pattern also couples the two vertices opposite each interior edge (the jump term,
-        :func:`~cvxgeodesic.operators.p2_energy.edge_diamonds`)."""
+        :func:`~cvxgeodesic.operators.squared_energy.edge_diamonds`)."""
         if self.backend != "ipm":
             return None
         from ..solvers.ipm import InteriorPointSolver

@@ -336,7 +336,7 @@ def warm_up() -> None:
     that one-time cost out of a timing. ``make setup`` runs it once so that the on-disk cache exists.
     """
     from ...formulations import MeshOperators, build_problem, smoothness_weight
-    from ...formulations_p2 import P2Builder
+    from ...problems.squared_distance import P2Builder
     from ...mesh.generate import icosphere
     from ..problem import clique_pattern, kkt_pattern
     from .settings import ORDER2

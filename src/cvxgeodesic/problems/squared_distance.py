@@ -59,14 +59,14 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
-from . import capabilities
-from .errors import DegenerateFacesWarning, MeshError, ParameterError, warn_user
-from .mesh.simplex import CELL_EDGES
-from .operators.lagrange import SAMPLES, LagrangeSpace, edge_basis, sample_points
-from .operators.metric import Medium
-from .operators.p2_energy import P2Energy, p2_energy
-from .solvers.problem import ConeGroup, ConicProblem, Equalities, PairInequalities
-from .validation import check_number
+from .. import capabilities
+from ..errors import DegenerateFacesWarning, MeshError, ParameterError, warn_user
+from ..mesh.simplex import CELL_EDGES
+from ..operators.lagrange import SAMPLES, LagrangeSpace, edge_basis, sample_points
+from ..operators.metric import Medium
+from ..operators.squared_energy import P2Energy, p2_energy
+from ..solvers.problem import ConeGroup, ConicProblem, Equalities, PairInequalities
+from ..validation import check_number
 
 __all__ = ["DEFAULT_SAMPLES", "DEFAULT_VOLUME_SAMPLES", "DEFAULT_WEIGHTS", "ORDER2_CACHE_VERSION", "BernsteinEdgeCones",
            "P2Builder", "P2Program", "bernstein_edge_cones", "eliminate_pair_equalities", "source_edges"]
@@ -199,7 +199,7 @@ class P2Builder:
         cones take the derivative along the edge's length in the medium, and Dijkstra (cone centres, start field)
         runs on the edge lengths in the medium.
     energy : {"hessian", "laplacian", "dirichlet"}, optional
-        Triangles only: smoothness energy of ``φ`` (:func:`~cvxgeodesic.operators.p2_energy.p2_energy`); None: none
+        Triangles only: smoothness energy of ``φ`` (:func:`~cvxgeodesic.operators.squared_energy.p2_energy`); None: none
         (``qclp``). Not with a ``medium``: the energies vanish on the squared *Euclidean* distance of flat regions
         (Hessian ``2I``), which is not the exact field in a medium.
     lam : float
