@@ -13,7 +13,7 @@ from cvxgeodesic.baselines import BASELINES
 from cvxgeodesic.errors import ParameterError, SourceError
 from cvxgeodesic.formulations import FORMULATIONS
 from cvxgeodesic.operators import ENERGIES_BY_DIM
-from cvxgeodesic.operators.squared_energy import P2_ENERGIES
+from cvxgeodesic.operators.squared_energy import SQUARED_ENERGIES
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "capabilities.md"
 
@@ -33,7 +33,7 @@ def test_the_table_names_the_solvers_methods():
     assert set(cap.methods_for(2)) == set(cap.METHODS)
     assert cap.methods_for(3) == (*(k for k, (_, e) in FORMULATIONS.items() if e in (None, *ENERGIES_BY_DIM[3])),
                                   "dijkstra", "heat")
-    assert set(cap.methods_for(2, 2)) == {"qclp", *(f"qcqp-{e}" for e in P2_ENERGIES)}
+    assert set(cap.methods_for(2, 2)) == {"qclp", *(f"qcqp-{e}" for e in SQUARED_ENERGIES)}
     assert cap.methods_for(3, 2) == ("qclp",)
     assert cap.methods_for(2, 1, "cost") == (*FORMULATIONS, "dijkstra")
 

@@ -77,7 +77,8 @@ from . import capabilities
 from .errors import DegenerateFacesWarning, MeshError, warn_user
 from .mesh.simplex import SimplexMesh
 from .mesh.trimesh import DEGENERATE_TOL
-from .operators import check_energy, energy_matrix, gradient_blocks
+from .operators import check_energy, energy_matrix
+from .operators.lagrange import LagrangeSpace
 from .operators.metric import Medium
 from .solvers.problem import ConeGroup, ConicProblem, PairInequalities
 from .sources import SourceSet, source_constraints
@@ -121,9 +122,10 @@ SECOND_ORDER_ENERGIES = ("hessian", "laplacian")
 #: (ridge sharpness 0.24, 0.41 of the exact field's; Laplacian 0.241, Dirichlet 0.243); docs/method.md has
 #: the sweep and what other values of κ trade.
 KAPPA = {"hessian": 3.0e-6, "laplacian": 3.0e-6, "dirichlet": 1.3e-2}
-#: ``κ₂`` of ``λ = m · κ₂`` at order 2 (the energies of ``φ = d²``, :mod:`cvxgeodesic.operators.squared_energy`, have the
-#: units of the stretch term, so λ is dimensionless); docs/order2.md, "Smoothing at order 2", has the calibration.
-#: Changing it changes every smoothed order-2 field: bump :data:`~cvxgeodesic.problems.squared_distance.ORDER2_CACHE_VERSION`.
+#: ``κ₂`` of ``λ = m · κ₂`` at order 2 (the energies of ``φ = d²``, :mod:`cvxgeodesic.operators.squared_energy`,
+#: have the units of the stretch term, so λ is dimensionless); docs/order2.md, "Smoothing at order 2", has the
+#: calibration. Changing it changes every smoothed order-2 field: bump
+#: :data:`~cvxgeodesic.problems.squared_distance.ORDER2_CACHE_VERSION`.
 KAPPA_ORDER2 = {"hessian": 5.0e-7, "laplacian": 5.0e-7, "dirichlet": 5.0e-7}
 #: The root of the measure in ``λ = m · κ · |Ω|^(1/dim)``: a length on a surface and in a solid alike. On volumes κ
 #: keeps the surface values (not calibrated there; measurements in ``docs/volumes.md``).
@@ -351,9 +353,12 @@ class MeshOperators:
 
     @functools.cached_property
     def gradient_blocks(self) -> np.ndarray:
-        """(k, dim, dim + 1) float ndarray: :func:`~cvxgeodesic.operators.gradient_blocks`, zero on degenerate
-        cells."""
-        blocks = gradient_blocks(self.mesh)
+        """(k, dim, dim + 1) float ndarray: the gradient rows of the order-1
+        :class:`~cvxgeodesic.operators.lagrange.LagrangeSpace` (:func:`~cvxgeodesic.operators.gradient_blocks`), zero
+        on degenerate cells."""
+        # the order-1 element's gradient rows, constant in a cell (gradient_blocks, zero on the degenerate cells)
+        space = LagrangeSpace(self.mesh, 1, degenerate_tol=self.degenerate_tol)
+        blocks = space.cell_cones(np.eye(space.reference.n_corners)[:1])[1][:, 0]
         if self.medium is not None:
             with np.errstate(invalid="ignore"):
                 blocks = np.einsum("tij,tjk->tik", self.medium.face_transforms, blocks)

@@ -336,8 +336,8 @@ def warm_up() -> None:
     that one-time cost out of a timing. ``make setup`` runs it once so that the on-disk cache exists.
     """
     from ...formulations import MeshOperators, build_problem, smoothness_weight
-    from ...problems.squared_distance import P2Builder
     from ...mesh.generate import icosphere
+    from ...problems.squared_distance import SquaredDistanceBuilder
     from ..problem import clique_pattern, kkt_pattern
     from .settings import ORDER2
 
@@ -346,7 +346,7 @@ def warm_up() -> None:
     for method in ("qclp", "lclp", "qcqp-hessian"):
         p = build_problem(ops, np.array([0]), method, smoothness_weight(mesh, 1.0))
         InteriorPointSolver(kkt_pattern(mesh.n_vertices, mesh.F, mesh.edges, p.P)).solve(p)
-    builder = P2Builder(mesh)  # order 2: the SOC(4) clique kernels
+    builder = SquaredDistanceBuilder(mesh)  # order 2: the SOC(4) clique kernels
     space = builder.space
     InteriorPointSolver(clique_pattern(space.n_dofs, [space.cell_dofs]), settings=ORDER2).solve(
         builder.build(np.array([0])).problem)
