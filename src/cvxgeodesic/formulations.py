@@ -80,6 +80,7 @@ from .mesh.trimesh import DEGENERATE_TOL
 from .operators import check_energy, energy_matrix
 from .operators.lagrange import LagrangeSpace
 from .operators.metric import Medium
+from .problems import _study
 from .solvers.problem import ConeGroup, ConicProblem, PairInequalities
 from .sources import SourceSet, source_constraints
 from .validation import check_choice, check_number
@@ -107,8 +108,9 @@ MIN_EDGE_BOUND = 1e-9
 #: ``c`` in the paper normalization's ``E_stretch = −(c/n) Σ d_i`` (see module docstring).
 STRETCH_SCALE = 10.0
 #: Stretch weights per vertex: ``"area"`` is ``−(1/|S|) ∫ d dA`` integrated exactly for the piecewise linear
-#: field (barycentric lumped mass); the others are the uniform weights of the paper normalization.
-STRETCH_WEIGHTS = ("area", "calibrated", "mean", "sum")
+#: field (barycentric lumped mass); ``"calibrated"`` the uniform weights of the paper normalization. (The uniform
+#: weights of the normalization study, ``"mean"`` and ``"sum"``, are study switches: :mod:`.problems._study`.)
+STRETCH_WEIGHTS = ("area", "calibrated")
 #: Factor on the whole ``"area"`` objective as the backends see it (see :func:`build_problem`).
 SOLVER_SCALE = 10.0
 #: Smallest stretch weight of a vertex in the ``"area"`` stretch, as a fraction of the mean vertex area.
@@ -140,12 +142,12 @@ def stretch_weights(mesh: SimplexMesh, stretch: str = "area", area_ratio: np.nda
     Parameters
     ----------
     mesh : TriMesh or TetMesh
-    stretch : {"area", "calibrated", "mean", "sum"}
+    stretch : {"area", "calibrated"}
         ``"area"``: ``w_i = M_i / |Ω|`` with ``M_i`` a third of the area of the faces around vertex ``i`` (a
         quarter of the volume of its tetrahedra): the exact integral of the piecewise linear field, so ``wᵀd`` is
         the mean of ``d`` over the surface (solid), whatever the mesh; floored at :data:`MIN_STRETCH_WEIGHT` of the
-        mean. ``"calibrated"``: ``10 / n`` (the paper normalization of this library); ``"mean"``: ``1 / n``;
-        ``"sum"``: 1 (the paper's literal ``−Σ d_i``).
+        mean. ``"calibrated"``: ``10 / n`` (the paper normalization of this library). Also the study values of
+        :data:`cvxgeodesic.problems._study.STRETCH_WEIGHTS`.
     area_ratio : (m,) float ndarray, optional
         With a metric (:attr:`~cvxgeodesic.operators.metric.Medium.area_ratio`): the areas of ``"area"`` are
         measured in it.
@@ -173,9 +175,10 @@ def stretch_weights(mesh: SimplexMesh, stretch: str = "area", area_ratio: np.nda
         floor = MIN_STRETCH_WEIGHT * total / max(int(mesh.referenced.sum()), 1)
         mass = np.where(mesh.referenced, np.maximum(mass, floor), 0.0)
         return mass / mass.sum()
+    if stretch in _study.STRETCH_WEIGHTS:
+        return np.full(n, _study.stretch_scale(stretch, n))
     check_choice(stretch, "stretch", STRETCH_WEIGHTS, lower=False)
-    scale = {"calibrated": STRETCH_SCALE / n, "mean": 1.0 / n, "sum": 1.0}[stretch]
-    return np.full(n, scale)
+    return np.full(n, STRETCH_SCALE / n)
 
 
 def canonical_method(method: str) -> str:
@@ -486,11 +489,11 @@ def build_problem(
         (:func:`capabilities.methods_for`).
     lam : float
         Smoothness weight λ (ignored by lclp / qclp).
-    stretch : {"area", "calibrated", "mean", "sum"}
+    stretch : {"area", "calibrated"}
         Weights of ``E_stretch`` (:func:`stretch_weights`): ``−(1/|S|) ∫ d dA``
         (default, normalization ``"area"``), ``−(10/n) Σd`` (normalization
-        ``"paper"``), ``−Σd/n`` or the paper's literal ``−Σd`` (the last two
-        reproduce the normalization study in ``docs/method.md``).
+        ``"paper"``); the study values of :mod:`cvxgeodesic.problems._study` reproduce the normalization study in
+        ``docs/method.md``.
     nonnegative : bool
         Add the bounds ``d_i ≥ 0`` for every free vertex.
 

@@ -26,6 +26,7 @@ import functools
 import itertools
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any, cast
 
 import numpy as np
 
@@ -33,6 +34,7 @@ from ..errors import ParameterError
 from ..mesh.reference import ReferenceSimplex
 from ..mesh.simplex import DEGENERATE_TOL, SimplexMesh
 from ..mesh.split import SplitMesh
+from ..mesh.trimesh import TriMesh
 from ..validation import check_order
 from .gradient import gradient_blocks
 from .metric import Medium
@@ -67,7 +69,7 @@ class LagrangeElement:
         ``"P1"``, ``"P2"``.
     order : int
         The polynomial degree.
-    entity_nodes : tuple of 4 float ndarrays
+    entity_nodes : tuple of 4 float array_likes
         Per vertex, edge, triangle and tetrahedron: the nodes of its DOFs, shape ``(dofs, d + 1)``, in the
         barycentric coordinates of the sub-simplex, its corners ordered by their global index (two cells sharing the
         sub-simplex then agree on each DOF's place). A set of nodes must be mapped onto itself by every permutation
@@ -91,7 +93,7 @@ class LagrangeElement:
 
     name: str
     order: int
-    entity_nodes: tuple[np.ndarray, ...]
+    entity_nodes: tuple[Any, ...]
     search: Search = field(repr=False)
     basis_function: Basis | None = field(default=None, repr=False)
     second_derivative_function: Callable[[ReferenceSimplex], np.ndarray] | None = field(default=None, repr=False)
@@ -547,7 +549,7 @@ class LagrangeSpace:
         (|cos| ≥ 1 − 1e-10)."""
         if self.dim == 3:  # dimension: a solid's cells span space, so each is flat; a surface's faces are compared
             return ~self.degenerate
-        nrm = self.mesh.face_normals_unnormalized
+        nrm = cast(TriMesh, self.mesh).face_normals_unnormalized
         with np.errstate(divide="ignore", invalid="ignore"):
             nrm = nrm / np.linalg.norm(nrm, axis=1, keepdims=True)
         fe = self.cell_edges.ravel()

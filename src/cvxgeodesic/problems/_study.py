@@ -1,7 +1,10 @@
-"""Study switches of the squared-distance program: choices no caller of the library makes, kept for the benchmark that
-measured them (``benchmarks/order2.py --weights=consistent``). Not part of the API; the defaults are the library's.
+"""Study switches of the programs: choices no caller of the library makes, kept for the measurements that made them.
+Not part of the API; the defaults are the library's.
 
-Set a switch before the program is built: ``cvxgeodesic.problems._study.WEIGHTS = "consistent"``.
+* the squared-distance program's objective weights (``benchmarks/order2.py --weights=consistent``): set
+  ``cvxgeodesic.problems._study.WEIGHTS = "consistent"`` before the program is built;
+* the order-1 program's uniform stretch weights of the normalization study (docs/method.md):
+  ``build_problem(..., stretch="mean" | "sum")`` (:data:`STRETCH_WEIGHTS`).
 """
 
 from __future__ import annotations
@@ -11,11 +14,19 @@ import numpy as np
 from ..errors import ParameterError
 from ..operators.lagrange import LagrangeSpace
 
+#: The uniform stretch weights of the normalization study: ``"mean"`` is ``1 / n``, ``"sum"`` is 1 (the paper's
+#: literal ``−Σ d_i``) per vertex (:func:`stretch_scale`).
+STRETCH_WEIGHTS = ("mean", "sum")
 #: The objective weights (:func:`objective_weights`).
 WEIGHTS_CHOICES = ("lumped", "consistent")
 #: The objective weights of every squared-distance program built from now on (docs/order2.md, "Objective weights",
 #: has the measurement behind ``"lumped"``).
 WEIGHTS = "lumped"
+
+
+def stretch_scale(stretch: str, n: int) -> float:
+    """The weight per vertex of a study stretch of :data:`STRETCH_WEIGHTS` on ``n`` vertices."""
+    return 1.0 / n if stretch == "mean" else 1.0
 
 
 def objective_weights(space: LagrangeSpace) -> np.ndarray:

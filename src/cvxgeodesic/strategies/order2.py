@@ -25,7 +25,7 @@ import numpy as np
 
 from .. import capabilities
 from ..errors import SolverError
-from ..mesh.simplex import unit_mesh
+from ..mesh.simplex import SimplexMesh, unit_mesh
 from ..mesh.split import SplitMesh
 from ..operators.lagrange import LagrangeField, SplitLagrangeField
 from ..operators.metric import Medium
@@ -110,7 +110,7 @@ class Order2:
         self.ipm = self._ipm(self.builder)
         self.setup_time = time.perf_counter() - t0
 
-    def _builder(self, mesh: Any, medium: Medium | None) -> SquaredDistanceBuilder:
+    def _builder(self, mesh: SimplexMesh, medium: Medium | None) -> SquaredDistanceBuilder:
         return SquaredDistanceBuilder(mesh, self.order, medium=medium, energy=self.energy,
                                       lam=self.config.lam if self.energy else 0.0)
 
