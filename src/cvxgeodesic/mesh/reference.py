@@ -77,6 +77,16 @@ def _world_coordinates(X: np.ndarray) -> np.ndarray:
     return X
 
 
+def _triangle_normals(X: np.ndarray) -> np.ndarray:
+    """(k, 1, 3) the normal ``(b − a) × (c − a)`` of triangles (k, 3, 3), of length twice the area."""
+    return np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])[:, None, :]
+
+
+def _no_normals(X: np.ndarray) -> np.ndarray:
+    """A solid cell spans space: (k, 0, 3)."""
+    return np.zeros((X.shape[0], 0, 3))
+
+
 @dataclass(frozen=True, eq=False)
 class ReferenceSimplex:
     """One cell kind: a simplex of dimension :attr:`dim` embedded in 3-D.
@@ -110,6 +120,7 @@ class ReferenceSimplex:
     _frame: Callable[[np.ndarray], np.ndarray] = field(repr=False)
     _point_type: str = field(repr=False)
     _locator: str = field(repr=False)
+    _normals: Callable[[np.ndarray], np.ndarray] = field(repr=False, default=_no_normals)
 
     @property
     def n_corners(self) -> int:
@@ -138,6 +149,21 @@ class ReferenceSimplex:
         [[[0.0, 0.0], [2.0, 0.0], [0.0, 3.0]]]
         """
         return self._frame(X)
+
+    def normals(self, X: np.ndarray) -> np.ndarray:
+        """Normals of each cell's affine hull in 3-D, of any length.
+
+        Parameters
+        ----------
+        X : (k, dim + 1, 3) float ndarray
+            The cells' corners.
+
+        Returns
+        -------
+        (k, 3 − dim, 3) float ndarray
+            Triangles: ``(b − a) × (c − a)`` (twice the area long); tetrahedra span space: none.
+        """
+        return self._normals(X)
 
     @property
     def point_type(self) -> type:
@@ -169,6 +195,7 @@ TRIANGLE = ReferenceSimplex(
     source_kinds=("vertex", "point", "curve", "boundary"),
     measure_root=np.sqrt,
     _frame=_triangle_frame_coordinates, _point_type="SurfacePoint", _locator="surface_point",
+    _normals=_triangle_normals,
 )
 
 TETRAHEDRON = ReferenceSimplex(

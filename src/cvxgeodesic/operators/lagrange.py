@@ -26,7 +26,7 @@ import functools
 import itertools
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, cast
+from typing import Any
 
 import numpy as np
 
@@ -34,7 +34,6 @@ from ..errors import ParameterError
 from ..mesh.reference import ReferenceSimplex
 from ..mesh.simplex import DEGENERATE_TOL, SimplexMesh
 from ..mesh.split import SplitMesh
-from ..mesh.trimesh import TriMesh
 from ..validation import check_order
 from .gradient import gradient_blocks
 from .metric import Medium
@@ -544,23 +543,23 @@ class LagrangeSpace:
 
     @functools.cached_property
     def flat_cells(self) -> np.ndarray:
-        """(k,) bool ndarray: proper cells where ``d²`` is a quadratic wherever a source is visible: every proper
-        tetrahedron (a solid is flat), the proper faces whose edge-neighbours all lie in their plane
-        (|cos| ≥ 1 − 1e-10)."""
-        if self.dim == 3:  # dimension: a solid's cells span space, so each is flat; a surface's faces are compared
-            return ~self.degenerate
-        nrm = cast(TriMesh, self.mesh).face_normals_unnormalized
+        """(k,) bool ndarray: proper cells where ``d²`` is a quadratic wherever a source is visible: those whose
+        edge-neighbours all share their affine hull (:meth:`ReferenceSimplex.normals`; |cos| ≥ 1 − 1e-10 between
+        the unit normals): every proper tetrahedron (a solid is flat), the faces of a surface whose edge-neighbours
+        lie in their plane."""
+        mesh = self.mesh
+        nrm = self.reference.normals(mesh.V[mesh.cells])  # (k, 3 − dim, 3)
         with np.errstate(divide="ignore", invalid="ignore"):
-            nrm = nrm / np.linalg.norm(nrm, axis=1, keepdims=True)
+            nrm = nrm / np.linalg.norm(nrm, axis=2, keepdims=True)
         fe = self.cell_edges.ravel()
-        fo = np.repeat(np.arange(self.mesh.n_cells), 3)
+        fo = np.repeat(np.arange(mesh.n_cells), self.cell_edges.shape[1])
         _, first = np.unique(fe, return_index=True)
-        ref = np.zeros((self.n_edges, 3))
+        ref = np.zeros((self.n_edges, *nrm.shape[1:]))
         ref[fe[first]] = nrm[fo[first]]
-        cos = np.abs(np.einsum("ij,ij->i", nrm[fo], ref[fe]))
-        edge_cos = np.ones(self.n_edges)
+        cos = np.abs(np.einsum("icj,icj->ic", nrm[fo], ref[fe]))
+        edge_cos = np.ones((self.n_edges, nrm.shape[1]))
         np.minimum.at(edge_cos, fe, np.where(np.isfinite(cos), cos, 0.0))
-        return (edge_cos[self.cell_edges] >= 1 - 1e-10).all(axis=1) & ~self.degenerate
+        return (edge_cos[self.cell_edges] >= 1 - 1e-10).all(axis=(1, 2)) & ~self.degenerate
 
     def weights(self) -> np.ndarray:
         """Objective weights ``w`` (``∫φ ≈ wᵀφ``): each cell's measure split equally over its nodes (``A/6`` on a
