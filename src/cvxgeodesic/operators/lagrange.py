@@ -73,21 +73,28 @@ class LagrangeElement:
         barycentric coordinates of the sub-simplex, its corners ordered by their global index (two cells sharing the
         sub-simplex then agree on each DOF's place). A set of nodes must be mapped onto itself by every permutation
         of the corners. A vertex holds one DOF (``[[1.0]]``): the field is continuous.
-    basis : callable, optional
-        ``basis(reference, bary)``: the shape functions at barycentric points and their derivatives in the
-        barycentric coordinates, in the local DOF order of :meth:`local_nodes`; default :func:`nodal_basis` of the
-        nodes (the polynomials of degree ``order`` that are 1 at one node and 0 at the others).
     search : callable
         The candidates for the largest ``|∇φ|² − 4φ`` in every cell of a space (:data:`Search`): for order 2
-        :func:`quadratic_candidates` (``v`` is itself a quadratic), for order 1 the corners (``v`` is affine).
-    second_derivatives : callable, optional
-        ``second_derivatives(reference)`` → ``(n_local, c, c)``: ``∂²N_a/∂λ_i∂λ_j`` of an element of order 2
+        :func:`quadratic_candidates` (``v`` is itself a quadratic), for order 1 :func:`corner_candidates` (``v`` is
+        affine).
+    basis_function : callable, optional
+        ``basis_function(reference, bary)``: the shape functions at barycentric points and their derivatives in the
+        barycentric coordinates, in the local DOF order of :meth:`local_nodes`; default :func:`nodal_basis` of the
+        nodes (the polynomials of degree ``order`` that are 1 at one node and 0 at the others).
+    second_derivative_function : callable, optional
+        ``second_derivative_function(reference)`` → ``(n_local, c, c)``: ``∂²N_a/∂λ_i∂λ_j`` of an element of order 2
         (constant); default from the nodal basis.
 
     Attributes
     ----------
     dofs : tuple of int
         DOFs per vertex, edge, triangle and tetrahedron (order 2: ``(1, 1, 0, 0)``).
+
+    Raises
+    ------
+    ParameterError
+        Nodes not given for each of the four kinds of sub-simplex, a vertex without its one DOF, or nodes that an
+        order of a sub-simplex's corners moves (two cells sharing it would not agree on them).
     """
 
     name: str
@@ -108,6 +115,7 @@ class LagrangeElement:
 
     @property
     def dofs(self) -> tuple[int, ...]:
+        """DOFs per vertex, edge, triangle and tetrahedron."""
         return tuple(n.shape[0] for n in self.entity_nodes)
 
     @functools.cache  # noqa: B019 (a handful of elements, each kept for the process)
@@ -455,18 +463,8 @@ class LagrangeSpace:
                 corners, ids = np.unique(np.sort(cells[:, local], axis=2).reshape(-1, d + 1), axis=0,
                                          return_inverse=True)
                 ids = ids.reshape(mesh.n_cells, -1)
-            # which global DOF of its sub-simplex each local one is, by the order of the corners' global indices
-            table = element._orientations(d)
-            order = np.argsort(cells[:, local], axis=2, kind="stable")  # (k, l, d + 1): perm[m] = the m-th corner
-            codes = {p: i for i, p in enumerate(table)}
-            lookup = np.stack(list(table.values()))  # (perms, per)
-            key = np.zeros(order.shape[:2], dtype=np.int64)
-            for m in range(d + 1):
-                key = key * (d + 1) + order[..., m]
-            perm_of_key = np.full((d + 1) ** (d + 1), -1, dtype=np.int64)
-            for p, i in codes.items():
-                perm_of_key[int(np.polyval(p, d + 1))] = i
-            blocks.append((start + ids[..., None] * per + lookup[perm_of_key[key]]).reshape(mesh.n_cells, -1))
+            dofs = start + ids[..., None] * per + self._local_order(cells[:, local], d)
+            blocks.append(dofs.reshape(mesh.n_cells, -1))
             owners.append((corners, per))
             start += len(corners) * per
         self.n_dofs = int(start)
@@ -474,6 +472,25 @@ class LagrangeSpace:
         per_edge = element.dofs[1]
         self.edge_dofs = (n + np.arange(self.n_edges * per_edge, dtype=np.int64)).reshape(self.n_edges, per_edge)
         self._owners = owners
+
+    def _local_order(self, corners: np.ndarray, d: int) -> np.ndarray:
+        """(k, l, per) which global DOF of its sub-simplex each local DOF of the sub-simplices with these global
+        ``corners`` (k, l, d + 1) is: the element's table for the order of the corners by global index."""
+        table = self.element._orientations(d)
+        lookup = np.stack(list(table.values()))  # (perms, per)
+        if (lookup == lookup[0]).all():  # one DOF, or none moved by any order (order 2's midpoint): no sort needed
+            return np.broadcast_to(lookup[0], (*corners.shape[:2], lookup.shape[1]))
+        order = np.argsort(corners, axis=2, kind="stable")  # perm[m] = the m-th corner by global index
+        key = np.zeros(order.shape[:2], dtype=np.int64)
+        for m in range(d + 1):
+            key = key * (d + 1) + order[..., m]
+        perm_of_key = np.full((d + 1) ** (d + 1), -1, dtype=np.int64)
+        for i, perm in enumerate(table):
+            code = 0
+            for m in perm:
+                code = code * (d + 1) + m
+            perm_of_key[code] = i
+        return lookup[perm_of_key[key]]
 
     def on_vertices(self, mask: np.ndarray) -> np.ndarray:
         """(n_dofs,) bool ndarray: the DOFs whose vertex, edge, triangle or cell has all its vertices in ``mask``

@@ -368,7 +368,7 @@ class SquaredDistanceBuilder:
             :func:`source_edges`: the edges whose midpoint is 0 (no derivative row along them); default the edges
             joining two vertices of ``vsrc``.
         extra : tuple (cells (p,) int ndarray, bary (p, dim + 1) float ndarray), optional
-            Additional cone sample points (the cutting planes, :func:`~cvxgeodesic.operators.lagrange.violations`).
+            Additional cone sample points (the cutting planes, :meth:`LagrangeSpace.violations`).
         eliminate : bool
             Substitute the equalities of two unknowns (:func:`eliminate_pair_equalities`); False keeps them as rows
             of ``E`` (the interior-point solver then solves them through its Schur complement: the same optimum,
