@@ -24,6 +24,7 @@ from cvxgeodesic.operators.lagrange import (
     LagrangeField,
     LagrangeSpace,
     corner_candidates,
+    quadratic_candidates,
 )
 
 
@@ -146,6 +147,24 @@ def test_generic_numbering_puts_each_dof_at_one_place_whatever_the_cells_orienta
     P = np.einsum("pi,pix->px", bary, mesh.V[mesh.cells[cells]])
     np.testing.assert_allclose(np.einsum("pa,pa->p", val, cubic(where)[space.cell_dofs[cells]]), cubic(P),
                                atol=1e-12)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_an_element_declared_by_its_nodes_alone_is_the_closed_form_one(dim, monkeypatch):
+    # the default basis (nodal_basis: the Vandermonde inverse of the monomials at the nodes) of P2's nodes is P2:
+    # the same values, gradients and Hessians in every cell
+    mesh = _mesh(dim)
+    by_nodes = LagrangeElement("P2-by-nodes", 2, P2.entity_nodes, search=quadratic_candidates)
+    rng = np.random.default_rng(5)
+    cells, bary = rng.integers(0, mesh.n_cells, 30), rng.dirichlet(np.ones(dim + 1), 30)
+    spaces = [LagrangeSpace(mesh, 2)]
+    monkeypatch.setitem(ELEMENTS, 2, by_nodes)
+    spaces.append(LagrangeSpace(mesh, 2))
+    (v0, g0), (v1, g1) = (s.value_and_gradient_rows(cells, bary) for s in spaces)
+    np.testing.assert_allclose(v1, v0, atol=1e-12)
+    np.testing.assert_allclose(g1, g0, atol=1e-10)
+    np.testing.assert_allclose(spaces[1].hessian_rows(cells), spaces[0].hessian_rows(cells), atol=1e-9)
+    np.testing.assert_array_equal(spaces[1].cell_dofs, spaces[0].cell_dofs)
 
 
 def test_nodes_that_an_order_of_the_corners_moves_are_refused():
