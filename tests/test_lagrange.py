@@ -192,6 +192,16 @@ def test_max_violation_is_the_maximum_over_each_cell(dim):
     assert inside >= (8 if dim == 2 else mesh.n_cells // 2)
 
 
+@pytest.mark.parametrize("dim", [2, 3])
+def test_the_order1_element_finds_its_largest_violation_at_a_corner(dim):
+    # at order 1 ∇φ is constant in a cell and v = |∇φ|² − 4φ affine: its maximum is at a corner
+    mesh = _mesh(dim, seed=4)
+    space = LagrangeSpace(mesh, 1)
+    x = np.random.default_rng(3).uniform(0.0, 1.0, space.n_dofs)
+    samples = np.vstack([np.random.default_rng(6).dirichlet(np.ones(dim + 1), 500), np.eye(dim + 1)])
+    assert _check_max(space, x, samples) == 0  # every maximum at a corner
+
+
 def _check_max(space, x, samples) -> int:
     vmax, bary, phi_at = space.max_violation(x)
     for t in range(space.mesh.n_cells):
