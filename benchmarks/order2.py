@@ -1,7 +1,8 @@
 """Order 2 (P2 squared distance) against order 1 (P1 qclp), heat, FMM and exact MMP.
 
-Usage: ``PYTHONPATH=src python benchmarks/order2.py [--weights=p2|lumped] OUT.json [mesh ...]``; meshes are names in
-../shared/meshes (``thingi10k_small`` expands to its files).
+Usage: ``PYTHONPATH=src python benchmarks/order2.py [--weights=consistent|lumped] OUT.json [mesh ...]``; meshes are
+names in ../shared/meshes (``thingi10k_small`` expands to its files); ``--weights`` sets the study switch
+:data:`cvxgeodesic.problems._study.WEIGHTS`.
 
 ``PYTHONPATH=src python benchmarks/order2.py --speed [--repeat=N] [--json=PATH] [mesh ...]`` (default spot,
 bunny_7k) prints the order-2 times (qclp, qcqp-hessian) beside P1 qclp's, the heat method's and exact MMP's (set-up
@@ -186,9 +187,9 @@ def main(argv):
         speed(argv[1:])
         return
     if argv[0].startswith("--weights="):
-        import cvxgeodesic.formulations_p2 as p2
+        from cvxgeodesic.problems import _study
 
-        p2.DEFAULT_WEIGHTS = argv.pop(0).split("=", 1)[1]
+        _study.WEIGHTS = argv.pop(0).split("=", 1)[1]
     dest = Path(argv[0])
     names = []
     for a in argv[1:]:

@@ -214,13 +214,13 @@ def sphere(ms=(0.0, 1.0, 10.0, 100.0, 1000.0)) -> list[dict]:
 
 
 def use_jump(jump: str) -> None:
-    """Build every order-2 energy with this form of the jump term (``p2_energy(..., jump=jump)``)."""
+    """Build every order-2 energy with this form of the jump term (``squared_energy(..., jump=jump)``)."""
     import functools
 
-    import cvxgeodesic.formulations_p2 as fp2
-    from cvxgeodesic.operators.p2_energy import p2_energy
+    import cvxgeodesic.problems.squared_distance as fp2
+    from cvxgeodesic.operators.squared_energy import squared_energy
 
-    fp2.p2_energy = functools.partial(p2_energy, jump=jump)
+    fp2.squared_energy = functools.partial(squared_energy, jump=jump)
 
 
 def main(argv: list[str]) -> None:

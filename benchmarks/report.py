@@ -1062,9 +1062,9 @@ SECTIONS = {
 
 def section_version(name: str) -> int | None:
     """The library code version a section's cached numbers depend on, or None: the order-2 section's
-    (:data:`cvxgeodesic.formulations_p2.ORDER2_CACHE_VERSION`, as its fields' cache keys)."""
+    (:data:`cvxgeodesic.problems.squared_distance.ORDER2_CACHE_VERSION`, as its fields' cache keys)."""
     if name in ("order2", "order2_smoothing"):
-        from cvxgeodesic.formulations_p2 import ORDER2_CACHE_VERSION
+        from cvxgeodesic.problems.squared_distance import ORDER2_CACHE_VERSION
 
         return ORDER2_CACHE_VERSION
     return None

@@ -196,10 +196,10 @@ def field_key(mesh_key: str, method: str, source: int, m: float, order: int, nor
     """The name of one cached field (``fields/<key>.npz``): mesh, method, order, m, source and mesh fingerprint.
 
     Order-1 keys are the ones used before order 2 existed, so the existing cache stays valid. Order-2 keys carry
-    :data:`cvxgeodesic.formulations_p2.ORDER2_CACHE_VERSION` (``__o2v<version>``): a field computed by order-2 code
-    whose results have changed since is recomputed, not reused.
+    :data:`cvxgeodesic.problems.squared_distance.ORDER2_CACHE_VERSION` (``__o2v<version>``): a field computed by
+    order-2 code whose results have changed since is recomputed, not reused.
     """
-    from cvxgeodesic.formulations_p2 import ORDER2_CACHE_VERSION
+    from cvxgeodesic.problems.squared_distance import ORDER2_CACHE_VERSION
 
     method = canonical(method)
     is_formulation = method in FORMULATIONS

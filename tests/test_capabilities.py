@@ -12,7 +12,7 @@ from cvxgeodesic import capabilities as cap
 from cvxgeodesic.baselines import BASELINES
 from cvxgeodesic.errors import ParameterError, SourceError
 from cvxgeodesic.operators import ENERGIES, check_energy
-from cvxgeodesic.operators.p2_energy import P2_ENERGIES
+from cvxgeodesic.operators.squared_energy import SQUARED_ENERGIES
 from cvxgeodesic.problems.formulations import FORMULATIONS
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "capabilities.md"
@@ -37,7 +37,7 @@ def test_the_table_names_the_solvers_methods():
     assert volume_energies == ["dirichlet", "laplacian"]
     assert cap.methods_for("volume") == (*(k for k, (_, e) in FORMULATIONS.items() if e in (None, *volume_energies)),
                                          "dijkstra", "heat")
-    assert set(cap.methods_for("surface", 2)) == {"qclp", *(f"qcqp-{e}" for e in P2_ENERGIES)}
+    assert set(cap.methods_for("surface", 2)) == {"qclp", *(f"qcqp-{e}" for e in SQUARED_ENERGIES)}
     assert cap.methods_for("volume", 2) == ("qclp",)
     assert cap.methods_for("surface", 1, "cost") == (*FORMULATIONS, "dijkstra")
     # a cloud: the surface's methods but those that need a manifold surface or a consistent orientation

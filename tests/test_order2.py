@@ -1,4 +1,5 @@
-"""Order 2: P2 elements for d² (``operators/lagrange.py``, ``formulations_p2.py``, ``strategies/order2.py``)."""
+"""Order 2: P2 elements for d² (``operators/lagrange.py``, ``problems/squared_distance.py``,
+``strategies/order2.py``)."""
 
 from __future__ import annotations
 
@@ -8,15 +9,17 @@ import numpy as np
 import pytest
 
 import cvxgeodesic as cg
-import cvxgeodesic.formulations_p2 as p2mod
+import cvxgeodesic.problems.squared_distance as p2mod
 from conftest import shared_mesh_path
 from cvxgeodesic.errors import ParameterError, SourceError
-from cvxgeodesic.formulations_p2 import P2Builder
 from cvxgeodesic.mesh.generate import delaunay_plane as delaunay_mesh
 from cvxgeodesic.mesh.generate import fan_plate, needle_strip
+from cvxgeodesic.mesh.reference import TRIANGLE
 from cvxgeodesic.mesh.simplex import unit_mesh
-from cvxgeodesic.operators.lagrange import LagrangeSpace, lagrange_basis, max_violation
+from cvxgeodesic.operators.lagrange import P2, LagrangeSpace
+from cvxgeodesic.problems import _study
 from cvxgeodesic.problems.conic import clique_pattern
+from cvxgeodesic.problems.squared_distance import SquaredDistanceBuilder
 from cvxgeodesic.solvers import solve_clarabel
 from cvxgeodesic.solvers.ipm import InteriorPointSolver
 from cvxgeodesic.solvers.ipm.settings import ORDER2
@@ -37,7 +40,7 @@ def pt(face, bary) -> cg.SurfacePoint:
     return cg.SurfacePoint(face, bary)
 
 
-def ipm_for(builder: P2Builder) -> InteriorPointSolver:
+def ipm_for(builder: SquaredDistanceBuilder) -> InteriorPointSolver:
     """The order-2 strategy's structured solver for ``builder``'s mesh."""
     space = builder.space
     return InteriorPointSolver(clique_pattern(space.n_dofs, [space.cell_dofs]), settings=ORDER2)
@@ -59,23 +62,31 @@ def flat_error(mesh, src) -> float:
 # ---------------------------------------------------------------- elements
 def test_p2_basis_partition_of_unity_and_nodal():
     nodes = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [0, .5, .5], [.5, 0, .5], [.5, .5, 0]])
-    N, dN = lagrange_basis(nodes)
+    N, dN = P2.basis(TRIANGLE, nodes)
     np.testing.assert_allclose(N, np.eye(6), atol=1e-15)
     lam = np.random.default_rng(0).dirichlet([1, 1, 1], 20)
-    N, dN = lagrange_basis(lam)
+    N, dN = P2.basis(TRIANGLE, lam)
     np.testing.assert_allclose(N.sum(axis=1), 1.0, atol=1e-14)
 
 
-def test_p2_weights_integrate_quadratics_exactly():
-    # ∫∫_{[0,1]²} (x² + y²) = 2/3 ; the consistent P2 weights are exact for quadratics on any triangulation
+def test_consistent_weights_integrate_quadratics_exactly(monkeypatch):
+    # ∫∫_{[0,1]²} (x² + y²) = 2/3 ; the consistent P2 weights (a study switch) are exact for quadratics on any
+    # triangulation
     mesh = cg.grid_plane(5, jitter=0.3, seed=2)
     space = LagrangeSpace(mesh)
     E = mesh.edges
     P = np.vstack([mesh.V, 0.5 * (mesh.V[E[:, 0]] + mesh.V[E[:, 1]])])
     phi = (P[:, :2] ** 2).sum(axis=1)
-    assert space.weights("p2") @ phi == pytest.approx(2 / 3, abs=1e-13)
-    assert space.weights("lumped").sum() == pytest.approx(1.0, abs=1e-13)
-    assert abs(space.weights("lumped") @ phi - 2 / 3) > 1e-4  # lumped weights are not exact
+    assert np.array_equal(_study.objective_weights(space), space.weights())  # the library's default: lumped
+    monkeypatch.setattr(_study, "WEIGHTS", "consistent")
+    assert _study.objective_weights(space) @ phi == pytest.approx(2 / 3, abs=1e-13)
+    assert space.weights().sum() == pytest.approx(1.0, abs=1e-13)
+    assert abs(space.weights() @ phi - 2 / 3) > 1e-4  # lumped weights are not exact
+    with pytest.raises(ParameterError, match="consistent weights are defined for order-2 triangles only"):
+        _study.objective_weights(LagrangeSpace(mesh, 1))
+    monkeypatch.setattr(_study, "WEIGHTS", "p2")
+    with pytest.raises(ParameterError, match="_study.WEIGHTS must be one of"):
+        _study.objective_weights(space)
 
 
 def test_gradient_of_exact_square_distance_on_a_face():
@@ -85,7 +96,7 @@ def test_gradient_of_exact_square_distance_on_a_face():
     P = np.vstack([mesh.V, 0.5 * (mesh.V[E[:, 0]] + mesh.V[E[:, 1]])])
     p = np.array([0.3, 0.4, 0.0])
     phi = ((P - p) ** 2).sum(axis=1)
-    vmax, _, _ = max_violation(space, phi)  # |∇φ|² − 4φ ≡ 0 for φ = |x − p|²
+    vmax, _, _ = space.max_violation(phi)  # |∇φ|² − 4φ ≡ 0 for φ = |x − p|²
     assert np.abs(vmax).max() < 1e-12
 
 
@@ -96,10 +107,10 @@ def test_max_violation_finds_interior_maximum():
     rng = np.random.default_rng(1)
     for _ in range(5):
         x = rng.random(space.n_dofs)
-        vmax, bary, _ = max_violation(space, x)
+        vmax, bary, _ = space.max_violation(x)
         g = np.linspace(0, 1, 81)
         B = np.array([[1 - a - b, a, b] for a in g for b in g if a + b <= 1 + 1e-12])
-        N, dN = lagrange_basis(B)
+        N, dN = P2.basis(TRIANGLE, B)
         grad = np.einsum("sai,ci->sca", dN, space.gbasis[0]) @ x[space.cell_dofs[0]]
         v = (grad**2).sum(axis=1) - 4 * N @ x[space.cell_dofs[0]]
         assert vmax[0] >= v.max() - 1e-12
@@ -107,8 +118,6 @@ def test_max_violation_finds_interior_maximum():
 
 
 def test_violations_lists_every_local_maximum_above_the_tolerance():
-    from cvxgeodesic.operators.lagrange import violations
-
     mesh = cg.TriMesh(np.array([[0, 0, 0], [1, 0, 0], [0.2, 0.9, 0.0]]), np.array([[0, 1, 2]]))
     space = LagrangeSpace(mesh)
     E = mesh.edges
@@ -116,13 +125,13 @@ def test_violations_lists_every_local_maximum_above_the_tolerance():
     for c in ([0.4, 0.3, 0.0], [0.5, 0.02, 0.0], [0.2, 0.2, 0.0]):
         # φ = ½|x − c|² − 0.1: v = |∇φ|² − 4φ = 0.4 − |x − c|², a maximum at c (inside the face or near an edge)
         x = 0.5 * ((nodes - c) ** 2).sum(axis=1) - 0.1
-        vmax, bary, _ = max_violation(space, x)
-        faces, points = violations(space, x, -np.inf, np.array([0]))
+        vmax, bary, _ = space.max_violation(x)
+        faces, points = space.violations(x, -np.inf, np.array([0]))
         assert (faces == 0).all() and points.shape == (faces.size, 3) and np.allclose(points.sum(axis=1), 1)
         assert vmax[0] == pytest.approx(0.4, abs=1e-12)
         assert np.abs(points - bary).max(axis=1).min() < 1e-12  # the worst point is among the listed ones
         assert np.abs(points @ mesh.V - c).max(axis=1).min() < 1e-12
-        none, _ = violations(space, x, np.inf, np.array([0]))
+        none, _ = space.violations(x, np.inf, np.array([0]))
         assert none.size == 0
 
 
@@ -203,7 +212,7 @@ def test_sampled_cones_need_cutting_planes_next_to_an_inserted_source():
     mesh = cg.grid_plane(20, jitter=0.4, seed=1)
     ex = euclid_from(mesh, pt(37, (0.2, 0.3, 0.5)))
     s = cg.GeodesicSolver(mesh, "qclp", order=2)
-    s._strategy.refine, s._strategy.samples = 0, "flat-nodes"
+    s._strategy.refine, s._strategy.edge_cones = 0, False
     res = s.solve(pt(37, (0.2, 0.3, 0.5)))
     assert np.abs(res.distance - ex).max() / ex.max() > 1e-3
     assert res.info.extra["rounds"] == 0 and len(res.info.extra["round_iterations"]) == 1
@@ -227,7 +236,7 @@ def test_edge_cones_make_a_flat_mesh_exact_in_one_solve():
 def test_cutting_plane_rounds_are_counted_in_the_info():
     mesh = cg.grid_plane(20, jitter=0.4, seed=1)
     s = cg.GeodesicSolver(mesh, "qclp", order=2)
-    s._strategy.samples = "flat-nodes"
+    s._strategy.edge_cones = False
     res = s.solve(pt(37, (0.2, 0.3, 0.5)))
     rounds = res.info.extra["round_iterations"]
     assert res.info.extra["rounds"] == len(rounds) - 1 >= 1
@@ -351,7 +360,7 @@ def test_scale_equivariance():
 @pytest.mark.parametrize("mesh", [cg.grid_plane(12, jitter=0.3, seed=1), cg.icosphere(2)], ids=["grid", "ico2"])
 def test_structured_ipm_matches_clarabel(mesh):
     unit, _ = unit_mesh(mesh)
-    b = P2Builder(unit)
+    b = SquaredDistanceBuilder(unit)
     pr = b.build(np.array([0])).problem
     ipm = ipm_for(b)
     ri = ipm.solve(pr)
@@ -499,7 +508,7 @@ def test_structured_ipm_iteration_counts():
 
 def _program(mesh, src, **kw):
     unit, _ = unit_mesh(mesh)
-    b = P2Builder(unit)
+    b = SquaredDistanceBuilder(unit)
     return b, b.build(np.asarray(src), **kw)
 
 
@@ -618,7 +627,7 @@ def test_eliminating_the_source_equalities_keeps_the_optimum():
 def test_pair_equalities_that_cannot_be_substituted_stay_rows():
     import scipy.sparse as sps
 
-    from cvxgeodesic.formulations_p2 import eliminate_pair_equalities
+    from cvxgeodesic.problems.squared_distance import eliminate_pair_equalities
 
     b, prog = _program(cg.icosphere(2), [0], eliminate=False)
     pr = prog.problem
@@ -636,7 +645,7 @@ def test_pair_equalities_that_cannot_be_substituted_stay_rows():
 def test_a_dof_fixed_by_a_one_unknown_row_keeps_no_cone_columns():
     import scipy.sparse as sps
 
-    from cvxgeodesic.formulations_p2 import eliminate_pair_equalities
+    from cvxgeodesic.problems.squared_distance import eliminate_pair_equalities
 
     b, prog = _program(cg.icosphere(2), [0], eliminate=False)
     pr = prog.problem
@@ -673,19 +682,16 @@ def test_flat_nodes_samples_all_nodes_on_flat_faces_and_midpoints_elsewhere():
     V = g.V.copy()
     V[40, 2] += 0.2  # a bump: the faces around vertex 40 and their neighbours are no longer flat
     mesh = cg.TriMesh(V, g.F)
-    b = P2Builder(mesh, samples="flat-nodes")
+    b = SquaredDistanceBuilder(mesh)
     flat = b.space.flat_cells
     assert 0 < flat.sum() < mesh.n_faces
     per_face = np.bincount(b.cone_cell, minlength=mesh.n_faces)
     assert (per_face[flat] == 6).all() and (per_face[~flat] == 3).all()
     mid = b.cone_bary[np.isin(b.cone_cell, np.flatnonzero(~flat))]
     assert np.isclose(mid.max(axis=1), 0.5).all()  # edge midpoints only
-    # the default: the same samples, and three edge cones on each flat face
-    d = P2Builder(mesh)
-    assert p2mod.DEFAULT_SAMPLES == "flat-bernstein" and d.cone_cell.size == b.cone_cell.size
-    assert np.array_equal(np.sort(d.bernstein.face), np.repeat(np.flatnonzero(flat), 3))
-    with pytest.raises(ParameterError, match="samples must be 'flat-bernstein', 'flat-nodes' or one of"):
-        P2Builder(mesh, samples="everywhere")
+    # and three edge cones on each flat face, which replace its midpoint samples
+    assert np.array_equal(np.sort(b.bernstein.face), np.repeat(np.flatnonzero(flat), 3))
+    assert b.cone_replaced.sum() == 3 * flat.sum()
 
 
 @pytest.mark.parametrize("threads", [1, 2])
@@ -766,10 +772,10 @@ def test_cones_on_sources_only():
     bary = np.array([[1, 0, 0], [0.5, 0.5, 0], [0, 0.5, 0.5], [0, 0.5, 0.5], [0.2, 0.4, 0.4]])
     is_src = np.isin(np.arange(4), [0, 1])
     zero = np.array([True, False, False, False, False])
-    np.testing.assert_array_equal(p2mod._on_sources(corners, edges, bary, is_src, zero),
+    np.testing.assert_array_equal(p2mod._on_sources(TRIANGLE, corners, edges, bary, is_src, zero),
                                   [True, True, False, True, False])
     # two sources joined by an edge that is no source edge (a chord of a solid's source wall): its midpoint is free
-    np.testing.assert_array_equal(p2mod._on_sources(corners, edges, bary, is_src, ~zero),
+    np.testing.assert_array_equal(p2mod._on_sources(TRIANGLE, corners, edges, bary, is_src, ~zero),
                                   [True, False, False, False, False])
 
 
@@ -785,9 +791,9 @@ def test_adjacent_sources_are_solved_by_the_structured_solver(which, monkeypatch
     assert r.info.solver == "ipm" and r.info.status == "optimal" and not r.info.notes
     assert r.info.iterations <= 13  # 11 and 12 (2026-12-02); 10 from one source
     # the optimum with the apex cones kept, solved by Clarabel: the cones were redundant
-    monkeypatch.setattr(p2mod, "_on_sources", lambda c, e, b, s, z: (b == 1).any(axis=1) & ((b <= 0) | s[c]).all(1))
+    monkeypatch.setattr(p2mod, "_on_sources", lambda r, c, e, b, s, z: (b == 1).any(axis=1) & ((b <= 0) | s[c]).all(1))
     unit, scale = unit_mesh(mesh)
-    full = P2Builder(unit).build(np.array(src))
+    full = SquaredDistanceBuilder(unit).build(np.array(src))
     x = full.restore(solve_clarabel(full.problem, tol=1e-10).x)
     d_full = np.sqrt(np.maximum(x[: mesh.n_vertices], 0.0)) * scale
     assert np.abs(r.distance - d_full).max() <= 1e-6 * mesh.bbox_diagonal
@@ -807,7 +813,7 @@ def test_a_point_source_in_a_face_of_a_vertex_source_is_solved_by_the_structured
 def _triangle_and_nodes(rng):
     V = np.column_stack([rng.uniform(-1, 1, (3, 2)), np.zeros(3)])
     mesh = cg.TriMesh(V, np.array([[0, 1, 2]]))
-    b = P2Builder(mesh)
+    b = SquaredDistanceBuilder(mesh)
     X = V[:, :2]
     nodes = np.vstack([X, 0.5 * (X[[1, 2, 0]] + X[[2, 0, 1]])])  # local DOF order: corners, then the midpoint
     return mesh, b, nodes  # opposite each corner
@@ -841,7 +847,7 @@ def test_edge_and_corner_cones_hold_the_gradient_bound_on_the_whole_face():
     l1, l2 = np.meshgrid(t, t)
     bary = np.column_stack([l1.ravel(), l2.ravel(), 1 - l1.ravel() - l2.ravel()])
     bary = bary[bary[:, 2] >= -1e-12]
-    N, dN = lagrange_basis(bary)
+    N, dN = P2.basis(TRIANGLE, bary)
     tried = accepted = 0
     while accepted < 200:
         mesh, b, nodes = _triangle_and_nodes(rng)
@@ -873,22 +879,17 @@ def test_edge_cones_that_leave_no_feasible_program_are_replaced_by_samples():
 
 
 def test_surface_only_options_are_refused_on_tetrahedra():
-    # the edge cones, the smoothness energies, a medium and the consistent weights exist on triangles only
+    # the edge cones and the smoothness energies exist on triangles only
     from cvxgeodesic.mesh.tet_generate import tet_box
-    from cvxgeodesic.operators.metric import make_medium
 
     box = tet_box(2)
-    assert P2Builder(box).space.dim == 3  # the volume default: every node of every tetrahedron
-    with pytest.raises(ParameterError, match="on tetrahedra takes no samples='flat-bernstein' \\(surfaces only\\)"):
-        P2Builder(box, samples="flat-bernstein")
+    b = SquaredDistanceBuilder(box)  # every node of every tetrahedron, no edge cones
+    assert b.space.dim == 3 and b.bernstein.face.size == 0 and not b.cone_replaced.any()
+    assert np.array_equal(np.bincount(b.cone_cell), np.full(box.n_cells, 10))
     # the builder's own argument check (the API edge refuses these with the capability table's reasons)
     for energy in ("hessian", "laplacian"):
-        with pytest.raises(ParameterError, match="^the order-2 program on tetrahedra takes no smoothness energy"):
-            P2Builder(box, energy=energy, lam=0.1)
-    assert P2Builder(box, energy="laplacian", lam=0.0).energy is None  # λ = 0: qclp
-    with pytest.raises(ParameterError, match="weights='p2' is defined for order-2 triangles only"):
-        P2Builder(box, weights="p2")
-    grid = cg.grid_plane(4)
-    medium = make_medium(grid, cost=np.ones(grid.n_vertices))
-    with pytest.raises(ParameterError, match="defined on surfaces only"):
-        LagrangeSpace(box, medium=medium)
+        with pytest.raises(ParameterError, match="^the order-2 program on tetrahedral meshes takes no smoothness "
+                                                 "energy"):
+            SquaredDistanceBuilder(box, energy=energy, lam=0.1)
+    assert SquaredDistanceBuilder(box, energy="laplacian", lam=0.0).energy is None  # λ = 0: qclp
+

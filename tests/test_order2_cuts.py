@@ -10,7 +10,6 @@ import cvxgeodesic as cg
 import cvxgeodesic.strategies.order2 as o2
 from cvxgeodesic.errors import SolverError
 from cvxgeodesic.mesh.tet_generate import tet_box, tet_l_prism
-from cvxgeodesic.operators.lagrange import violations
 
 
 def _cut_case(dim: int):
@@ -18,7 +17,7 @@ def _cut_case(dim: int):
     the node samples only (the edge cones would leave nothing to cut), a point inside a tetrahedron of a box."""
     if dim == 2:
         solver = cg.GeodesicSolver(cg.grid_plane(10, jitter=0.3, seed=5), "qclp", order=2)
-        solver._strategy.samples = "flat-nodes"
+        solver._strategy.edge_cones = False
         return solver, cg.SurfacePoint(12, (0.2, 0.5, 0.3))
     return cg.GeodesicSolver(tet_box(3, jitter=0.2, seed=1), "qclp", order=2), cg.VolumePoint(7, [0.1, 0.2, 0.3, 0.4])
 
@@ -62,5 +61,5 @@ def test_the_rounds_stop_when_a_round_no_longer_moves_the_field():
     fld = res.info.extra["p2_field"]
     space = fld.space
     x = fld.phi / o2.unit_mesh(m)[1] ** 2  # the program's field, on the unit mesh
-    left, _ = violations(space, x, o2.REFINE_TOL, np.flatnonzero(space.flat_cells))
+    left, _ = space.violations(x, o2.REFINE_TOL, np.flatnonzero(space.flat_cells))
     assert left.size > 0  # violations remained: the stall rule stopped the rounds, not REFINE_TOL

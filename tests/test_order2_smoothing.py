@@ -1,6 +1,6 @@
-"""Smoothing at order 2 (issue 25): the energies of ``φ = d²`` (``operators/p2_energy.py``), the smoothed order-2
-programs (``formulations_p2.py``, ``strategies/order2.py``), λ from ``m`` and the ridge deficit over a fixed surface
-width (``evaluation/smoothness.py``)."""
+"""Smoothing at order 2 (issue 25): the energies of ``φ = d²`` (``operators/squared_energy.py``), the smoothed
+order-2 programs (``problems/squared_distance.py``, ``strategies/order2.py``), λ from ``m`` and the ridge deficit over
+a fixed surface width (``evaluation/smoothness.py``)."""
 
 from __future__ import annotations
 
@@ -13,21 +13,21 @@ import pytest
 import cvxgeodesic as cg
 from cvxgeodesic.errors import ParameterError
 from cvxgeodesic.evaluation import cut_locus_band, ridge_deficit, rounding_width
-from cvxgeodesic.formulations_p2 import P2Builder, _restore_matrix
 from cvxgeodesic.mesh.simplex import unit_mesh
 from cvxgeodesic.operators.lagrange import LagrangeSpace
-from cvxgeodesic.operators.p2_energy import (
+from cvxgeodesic.operators.squared_energy import (
     JUMP_SIGMA,
     JUMPS,
-    P2_ENERGIES,
+    SQUARED_ENERGIES,
     edge_diamonds,
     edge_pair_dofs,
     face_hessian_energy,
     interior_edge_pairs,
-    p2_energy,
+    squared_energy,
 )
 from cvxgeodesic.problems.conic import clique_pattern
 from cvxgeodesic.problems.formulations import KAPPA_ORDER2, smoothness_weight
+from cvxgeodesic.problems.squared_distance import SquaredDistanceBuilder, _restore_matrix
 from cvxgeodesic.solvers import solve_clarabel
 from cvxgeodesic.solvers.ipm import InteriorPointSolver
 from cvxgeodesic.solvers.ipm.settings import ORDER2
@@ -82,11 +82,11 @@ def solve(mesh, src, method="qcqp-hessian", **kw):
 
 # ---------------------------------------------------------------- the energies
 @pytest.mark.parametrize("jump", JUMPS)
-@pytest.mark.parametrize("name", P2_ENERGIES)
+@pytest.mark.parametrize("name", SQUARED_ENERGIES)
 def test_energy_vanishes_on_flat_squared_distance(name, jump):
     mesh = grid(10)
     space = LagrangeSpace(mesh)
-    E = p2_energy(space, name, jump=jump)
+    E = squared_energy(space, name, jump=jump)
     phi = ((nodes(mesh) - [0.31, 0.27, 0.0]) ** 2).sum(axis=1)
     scale = magnitude(E, phi)
     assert scale > 1.0
@@ -97,12 +97,12 @@ def test_energy_vanishes_on_flat_squared_distance(name, jump):
 
 
 @pytest.mark.parametrize("jump", JUMPS)
-@pytest.mark.parametrize("name", P2_ENERGIES)
+@pytest.mark.parametrize("name", SQUARED_ENERGIES)
 def test_energy_vanishes_on_the_unfolded_field_of_a_folded_strip(name, jump):
     """The jump term compares conormal derivatives in each face's own plane: zero across a bent edge for the
     field unfolded across it, not for the squared 3-D distance."""
     mesh, phi = folded_strip()
-    E = p2_energy(LagrangeSpace(mesh), name, jump=jump)
+    E = squared_energy(LagrangeSpace(mesh), name, jump=jump)
     assert abs(E(phi)) <= 1e-10 * magnitude(E, phi)
     chord = ((nodes(mesh) - [0.3, 0.4, 0.0]) ** 2).sum(axis=1)
     assert E(chord) > 0.1
@@ -111,8 +111,8 @@ def test_energy_vanishes_on_the_unfolded_field_of_a_folded_strip(name, jump):
 @pytest.mark.parametrize("mesh", [grid(5), cg.icosphere(1), folded_strip()[0]], ids=["grid", "sphere", "fold"])
 def test_energies_are_positive_semidefinite(mesh):
     space = LagrangeSpace(mesh)
-    for name, jump in itertools.product(P2_ENERGIES, JUMPS):
-        Q = p2_energy(space, name, jump=jump).Q.toarray()
+    for name, jump in itertools.product(SQUARED_ENERGIES, JUMPS):
+        Q = squared_energy(space, name, jump=jump).Q.toarray()
         assert np.abs(Q - Q.T).max() <= 1e-12 * np.abs(Q).max()
         ev = np.linalg.eigvalsh(Q)
         assert ev.min() >= -1e-10 * ev.max()
@@ -126,18 +126,18 @@ def test_energies_of_hand_computed_fields():
     x, y = nodes(one)[:, 0], nodes(one)[:, 1]
     phi = x**2 + x * y + 3 * y**2
     space = LagrangeSpace(one)
-    assert p2_energy(space, "hessian")(phi) == pytest.approx(9.0, rel=1e-12)
-    assert p2_energy(space, "laplacian")(phi) == pytest.approx(8.0, rel=1e-12)
-    assert p2_energy(space, "dirichlet")(phi) == pytest.approx(0.0, abs=1e-12)
+    assert squared_energy(space, "hessian")(phi) == pytest.approx(9.0, rel=1e-12)
+    assert squared_energy(space, "laplacian")(phi) == pytest.approx(8.0, rel=1e-12)
+    assert squared_energy(space, "dirichlet")(phi) == pytest.approx(0.0, abs=1e-12)
     two = cg.TriMesh(np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]), np.array([[0, 1, 3], [1, 2, 3]]))
     X = nodes(two)
     kink = np.maximum(X[:, 0] + X[:, 1] - 1, 0.0)
     space = LagrangeSpace(two)
     for jump in JUMPS:  # both faces linear: the jump predicted from the vertices is the true one
-        assert p2_energy(space, "dirichlet", jump=jump)(kink) == pytest.approx(4 * JUMP_SIGMA, rel=1e-12)
-        assert p2_energy(space, "dirichlet", sigma=2.0, jump=jump)(kink) == pytest.approx(8.0, rel=1e-12)
+        assert squared_energy(space, "dirichlet", jump=jump)(kink) == pytest.approx(4 * JUMP_SIGMA, rel=1e-12)
+        assert squared_energy(space, "dirichlet", sigma=2.0, jump=jump)(kink) == pytest.approx(8.0, rel=1e-12)
         # + ∫‖0 − 2I‖² over the square
-        assert p2_energy(space, "hessian", jump=jump)(kink) == pytest.approx(4 * JUMP_SIGMA + 8.0, rel=1e-12)
+        assert squared_energy(space, "hessian", jump=jump)(kink) == pytest.approx(4 * JUMP_SIGMA + 8.0, rel=1e-12)
     assert edge_pair_dofs(space).shape == (1, 9) and set(edge_pair_dofs(space)[0]) == set(range(9))
     assert sorted(edge_diamonds(space)[0]) == [0, 1, 2, 3]
     # |x|² on the lower face, |x − (1, 1)|² on the upper one: equal on the diagonal x + y = 1, Hessian 2I on both;
@@ -147,7 +147,7 @@ def test_energies_of_hand_computed_fields():
     phi = np.where(X[:, 0] + X[:, 1] > 1 + 1e-12, upper, lower)
     for jump in JUMPS:
         want = JUMP_SIGMA * 2 / 1 * 8  # σ ℓ²/(A1 + A2) · J², J = 2√2
-        assert p2_energy(space, "hessian", jump=jump)(phi) == pytest.approx(want, rel=1e-12)
+        assert squared_energy(space, "hessian", jump=jump)(phi) == pytest.approx(want, rel=1e-12)
 
 
 def test_no_jump_term_on_boundary_or_non_manifold_edges():
@@ -167,23 +167,23 @@ def test_no_jump_term_on_boundary_or_non_manifold_edges():
         phi_f = (u + 0.8) ** 2 + (X[:, 1] - 0.3) ** 2
         on = np.isin(np.arange(len(X)), np.concatenate([own, mesh.n_vertices + space.cell_edges[f]]))
         phi[on] = phi_f[on]
-    for name in P2_ENERGIES:
-        E = p2_energy(space, name)
+    for name in SQUARED_ENERGIES:
+        E = squared_energy(space, name)
         assert abs(E(phi)) <= 1e-10 * magnitude(E, phi)
 
 
 def test_bad_energy_arguments():
     space = LagrangeSpace(grid(3))
     with pytest.raises(ParameterError, match="energy"):
-        p2_energy(space, "biharmonic")
+        squared_energy(space, "biharmonic")
     with pytest.raises(ParameterError, match="sigma"):
-        p2_energy(space, "hessian", sigma=0.0)
+        squared_energy(space, "hessian", sigma=0.0)
     with pytest.raises(ParameterError, match="unknown jump 'edge'; choose one of vertex, p2"):
-        p2_energy(space, "hessian", jump="edge")
+        squared_energy(space, "hessian", jump="edge")
     with pytest.raises(ParameterError, match="unknown kind 'dirichlet'; choose one of hessian, laplacian"):
         face_hessian_energy(space, "dirichlet")
     with pytest.raises(ParameterError, match="lambda"):
-        P2Builder(grid(3), energy="hessian", lam=-1.0)
+        SquaredDistanceBuilder(grid(3), energy="hessian", lam=-1.0)
 
 
 # ---------------------------------------------------------------- the program
@@ -192,7 +192,7 @@ def test_objective_is_mean_minus_lambda_energy_through_the_eliminations():
     midpoints (x_m = x_j / 4) carry their share of the quadratic."""
     mesh, _ = unit_mesh(cg.icosphere(2))
     lam = 0.3
-    b = P2Builder(mesh, energy="hessian", lam=lam)
+    b = SquaredDistanceBuilder(mesh, energy="hessian", lam=lam)
     prog = b.build(np.array([0, 7]))
     pr = prog.problem
     assert prog.eliminated[0].size > 0
@@ -207,7 +207,7 @@ def test_objective_is_mean_minus_lambda_energy_through_the_eliminations():
 
 def test_smoothed_program_fits_the_strategy_pattern_and_matches_clarabel():
     mesh, _ = unit_mesh(cg.icosphere(2))
-    b = P2Builder(mesh, energy="hessian", lam=1e-3)
+    b = SquaredDistanceBuilder(mesh, energy="hessian", lam=1e-3)
     space = b.space
     ipm = InteriorPointSolver(clique_pattern(space.n_dofs, b.energy.cliques), settings=ORDER2)
     pr = b.build(np.array([0, 100])).problem
@@ -275,7 +275,8 @@ def test_smoothing_with_a_cost_is_refused_at_order_2_but_m_zero_is_qclp():
         with pytest.raises(ParameterError, match="cost or metric"):
             cg.GeodesicSolver(mesh, order=2, **kw)
         with pytest.raises(ParameterError, match="cost or metric"):
-            P2Builder(mesh, medium=cg.GeodesicSolver(mesh, "qclp", **kw).medium, energy="hessian", lam=1e-6)
+            SquaredDistanceBuilder(mesh, medium=cg.GeodesicSolver(mesh, "qclp", **kw).medium, energy="hessian",
+                                   lam=1e-6)
         a = cg.GeodesicSolver(mesh, "qcqp-hessian", order=2, m=0, **kw).solve(0)
         b = cg.GeodesicSolver(mesh, "qclp", order=2, **kw).solve(0)
         assert np.array_equal(a.distance, b.distance)
@@ -289,8 +290,8 @@ def test_smoothed_solves_reuse_one_analysis_and_report_the_objective():
         assert res.info.extra["new_analyses"] == 0
     phi = res.info.extra["p2_field"].phi
     space = LagrangeSpace(mesh)
-    w = space.weights("lumped")
-    want = -(w @ phi) / w.sum() + res.info.lam * p2_energy(space, "hessian")(phi)
+    w = space.weights()
+    want = -(w @ phi) / w.sum() + res.info.lam * squared_energy(space, "hessian")(phi)
     assert res.info.objective == pytest.approx(want, rel=1e-6, abs=1e-9)
 
 

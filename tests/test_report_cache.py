@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-import cvxgeodesic.formulations_p2 as ep2
+import cvxgeodesic.problems.squared_distance as ep2
 
 BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
 

@@ -140,12 +140,12 @@ class GeodesicSolver:
         warm start yet, so this costs a coarse solve *more* than a direct solve.
     order : {1, 2}
         ``2``: second-order elements for the squared distance (``method="qclp"`` and the ``qcqp``
-        methods; :mod:`cvxgeodesic.formulations_p2`, ``docs/order2.md``): exact on flat regions whatever
+        methods; :mod:`cvxgeodesic.problems.squared_distance`, ``docs/order2.md``): exact on flat regions whatever
         the triangle shapes; sources may be vertices, SurfacePoints (at most one per face) and
         ``"boundary"``; ``info.extra["p2_field"].distance_at(faces, bary)`` evaluates the field
         inside faces. The same solvers and fallback as order 1. Not with ``multires`` or the
         baselines. The smoothed methods take energies of ``φ = d²`` that vanish on the exact
-        field of flat regions (:mod:`cvxgeodesic.operators.p2_energy`) with the dimensionless
+        field of flat regions (:mod:`cvxgeodesic.operators.squared_energy`) with the dimensionless
         ``λ = m · κ₂`` (:data:`~cvxgeodesic.problems.formulations.KAPPA_ORDER2`): ``m = 1`` rounds the ridge
         of two sources half a side apart on a unit square over about 1.2 % of the side, ``m = 30``
         over 4 % (order 1's ``m = 1``); the width grows as ``m^(1/3)`` (docs/order2.md,

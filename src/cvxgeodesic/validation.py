@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from . import capabilities
 from ._atomic import probe_folder
 from .errors import MeshError, ParameterError, SourceError
 
@@ -135,9 +136,11 @@ def check_choice(value: Any, name: str, choices: Iterable[str], *, lower: bool =
 
 
 def check_order(order: Any) -> int:
-    """The element order: 1 (P1 distance) or 2 (P2 squared distance); ParameterError otherwise."""
-    if not is_integer(order) or int(order) not in (1, 2):
-        raise ParameterError(f"order must be 1 (P1 distance) or 2 (P2 squared distance), got {short_repr(order)}")
+    """The element order: one of :data:`cvxgeodesic.capabilities.ORDERS` (the orders of the declared elements,
+    :data:`cvxgeodesic.operators.lagrange.ELEMENTS`); ParameterError otherwise."""
+    if not is_integer(order) or int(order) not in capabilities.ORDERS:
+        *rest, last = [f"{o} (P{o})" for o in capabilities.ORDERS]
+        raise ParameterError(f"order must be {', '.join(rest)} or {last}, got {short_repr(order)}")
     return int(order)
 
 

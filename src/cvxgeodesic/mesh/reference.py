@@ -100,6 +100,16 @@ def _world_vectors(G: np.ndarray, X: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(G.transpose(0, 2, 1))
 
 
+def _triangle_normals(X: np.ndarray) -> np.ndarray:
+    """(k, 1, 3) the normal ``(b − a) × (c − a)`` of triangles (k, 3, 3), of length twice the area."""
+    return np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])[:, None, :]
+
+
+def _no_normals(X: np.ndarray) -> np.ndarray:
+    """A solid cell spans space: (k, 0, 3)."""
+    return np.zeros((X.shape[0], 0, 3))
+
+
 @dataclass(frozen=True, eq=False)
 class ReferenceSimplex:
     """One cell kind: a simplex of dimension :attr:`dim` embedded in 3-D.
@@ -138,7 +148,7 @@ class ReferenceSimplex:
         The order-1 QC programs bound ``|d_i − d_j| ≤ l_ij`` on every edge of a cell that carries no cone (next to a
         source, a point's cell, a degenerate cell): a tetrahedron's cone does not cover all the edges its
         neighbours share with it. False (triangles): the source stars and the degenerate cells' edges are bounded
-        instead (:func:`cvxgeodesic.formulations.build_problem`).
+        instead (:func:`cvxgeodesic.problems.formulations.build_problem`).
     flat : bool
         Every cell of such a mesh lies in one flat space (a solid's cells, triangles in a plane): no cell bends
         against its neighbours, so ``d²`` is a quadratic in every proper cell that sees a source
@@ -163,6 +173,7 @@ class ReferenceSimplex:
     libigl_operators: bool = False
     coneless_cell_edges: bool = False
     flat: bool = False
+    _normals: Callable[[np.ndarray], np.ndarray] = field(repr=False, default=_no_normals)
 
     @property
     def n_corners(self) -> int:
@@ -210,6 +221,21 @@ class ReferenceSimplex:
         """
         return self._to_world(G, X)
 
+    def normals(self, X: np.ndarray) -> np.ndarray:
+        """Normals of each cell's affine hull in 3-D, of any length.
+
+        Parameters
+        ----------
+        X : (k, dim + 1, 3) float ndarray
+            The cells' corners.
+
+        Returns
+        -------
+        (k, 3 − dim, 3) float ndarray
+            Triangles: ``(b − a) × (c − a)`` (twice the area long); tetrahedra span space: none.
+        """
+        return self._normals(X)
+
     @property
     def point_type(self) -> type[Any]:  # a CellPoint subclass: mesh.locate is above this module
         """The :class:`~cvxgeodesic.mesh.locate.CellPoint` subclass of a point in such a cell."""
@@ -248,6 +274,7 @@ TRIANGLE = ReferenceSimplex(
     _frame=_triangle_frame_coordinates, _to_world=_triangle_frame_vectors, _point_type="SurfacePoint",
     _locator="surface_point",
     libigl_operators=True,
+    _normals=_triangle_normals,
 )
 
 TETRAHEDRON = ReferenceSimplex(

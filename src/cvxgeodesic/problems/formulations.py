@@ -76,10 +76,12 @@ from scipy.sparse.csgraph import dijkstra
 from ..errors import DegenerateFacesWarning, MeshError, warn_user
 from ..mesh.simplex import SimplexMesh
 from ..mesh.trimesh import DEGENERATE_TOL
-from ..operators import check_energy, energy_matrix, gradient_blocks
+from ..operators import check_energy, energy_matrix
+from ..operators.lagrange import LagrangeSpace
 from ..operators.metric import Medium
 from ..sources import SourceSet
 from ..validation import check_choice, check_number
+from . import _study
 from .conic import ConeGroup, ConicProblem, PairInequalities
 from .source_rows import source_constraints
 
@@ -106,8 +108,9 @@ MIN_EDGE_BOUND = 1e-9
 #: ``c`` in the paper normalization's ``E_stretch = −(c/n) Σ d_i`` (see module docstring).
 STRETCH_SCALE = 10.0
 #: Stretch weights per vertex: ``"area"`` is ``−(1/|S|) ∫ d dA`` integrated exactly for the piecewise linear
-#: field (barycentric lumped mass); the others are the uniform weights of the paper normalization.
-STRETCH_WEIGHTS = ("area", "calibrated", "mean", "sum")
+#: field (barycentric lumped mass); ``"calibrated"`` the uniform weights of the paper normalization. (The uniform
+#: weights of the normalization study, ``"mean"`` and ``"sum"``, are study switches: :mod:`.problems._study`.)
+STRETCH_WEIGHTS = ("area", "calibrated")
 #: Factor on the whole ``"area"`` objective as the backends see it (see :func:`build_problem`).
 SOLVER_SCALE = 10.0
 #: Smallest stretch weight of a vertex in the ``"area"`` stretch, as a fraction of the mean vertex area.
@@ -121,9 +124,10 @@ SECOND_ORDER_ENERGIES = ("hessian", "laplacian")
 #: (ridge sharpness 0.24, 0.41 of the exact field's; Laplacian 0.241, Dirichlet 0.243); docs/method.md has
 #: the sweep and what other values of κ trade.
 KAPPA = {"hessian": 3.0e-6, "laplacian": 3.0e-6, "dirichlet": 1.3e-2}
-#: ``κ₂`` of ``λ = m · κ₂`` at order 2 (the energies of ``φ = d²``, :mod:`cvxgeodesic.operators.p2_energy`, have the
-#: units of the stretch term, so λ is dimensionless); docs/order2.md, "Smoothing at order 2", has the calibration.
-#: Changing it changes every smoothed order-2 field: bump :data:`~cvxgeodesic.formulations_p2.ORDER2_CACHE_VERSION`.
+#: ``κ₂`` of ``λ = m · κ₂`` at order 2 (the energies of ``φ = d²``, :mod:`cvxgeodesic.operators.squared_energy`,
+#: have the units of the stretch term, so λ is dimensionless); docs/order2.md, "Smoothing at order 2", has the
+#: calibration. Changing it changes every smoothed order-2 field: bump
+#: :data:`~cvxgeodesic.problems.squared_distance.ORDER2_CACHE_VERSION`.
 KAPPA_ORDER2 = {"hessian": 5.0e-7, "laplacian": 5.0e-7, "dirichlet": 5.0e-7}
 
 
@@ -133,12 +137,12 @@ def stretch_weights(mesh: SimplexMesh, stretch: str = "area", area_ratio: np.nda
     Parameters
     ----------
     mesh : SimplexMesh
-    stretch : {"area", "calibrated", "mean", "sum"}
+    stretch : {"area", "calibrated"}
         ``"area"``: ``w_i = M_i / |Ω|`` with ``M_i`` a third of the area of the faces around vertex ``i`` (a
         quarter of the volume of its tetrahedra): the exact integral of the piecewise linear field, so ``wᵀd`` is
         the mean of ``d`` over the surface (solid), whatever the mesh; floored at :data:`MIN_STRETCH_WEIGHT` of the
-        mean. ``"calibrated"``: ``10 / n`` (the paper normalization of this library); ``"mean"``: ``1 / n``;
-        ``"sum"``: 1 (the paper's literal ``−Σ d_i``).
+        mean. ``"calibrated"``: ``10 / n`` (the paper normalization of this library). Also the study values of
+        :data:`cvxgeodesic.problems._study.STRETCH_WEIGHTS`.
     area_ratio : (m,) float ndarray, optional
         With a metric (:attr:`~cvxgeodesic.operators.metric.Medium.area_ratio`): the areas of ``"area"`` are
         measured in it.
@@ -166,9 +170,10 @@ def stretch_weights(mesh: SimplexMesh, stretch: str = "area", area_ratio: np.nda
         floor = MIN_STRETCH_WEIGHT * total / max(int(mesh.referenced.sum()), 1)
         mass = np.where(mesh.referenced, np.maximum(mass, floor), 0.0)
         return mass / mass.sum()
+    if stretch in _study.STRETCH_WEIGHTS:
+        return np.full(n, _study.stretch_scale(stretch, n))
     check_choice(stretch, "stretch", STRETCH_WEIGHTS, lower=False)
-    scale = {"calibrated": STRETCH_SCALE / n, "mean": 1.0 / n, "sum": 1.0}[stretch]
-    return np.full(n, scale)
+    return np.full(n, STRETCH_SCALE / n)
 
 
 def canonical_method(method: str) -> str:
@@ -349,9 +354,12 @@ class MeshOperators:
 
     @functools.cached_property
     def gradient_blocks(self) -> np.ndarray:
-        """(k, dim, dim + 1) float ndarray: :func:`~cvxgeodesic.operators.gradient_blocks`, zero on degenerate
-        cells."""
-        blocks = gradient_blocks(self.mesh)
+        """(k, dim, dim + 1) float ndarray: the gradient rows of the order-1
+        :class:`~cvxgeodesic.operators.lagrange.LagrangeSpace` (:func:`~cvxgeodesic.operators.gradient_blocks`), zero
+        on degenerate cells."""
+        # the order-1 element's gradient rows, constant in a cell (gradient_blocks, zero on the degenerate cells)
+        space = LagrangeSpace(self.mesh, 1, degenerate_tol=self.degenerate_tol)
+        blocks = space.cell_cones(np.eye(space.reference.n_corners)[:1])[1][:, 0]
         if self.medium is not None:
             with np.errstate(invalid="ignore"):
                 blocks = np.einsum("tij,tjk->tik", self.medium.face_transforms, blocks)
@@ -479,11 +487,11 @@ def build_problem(
         (:func:`capabilities.methods_for`).
     lam : float
         Smoothness weight λ (ignored by lclp / qclp).
-    stretch : {"area", "calibrated", "mean", "sum"}
+    stretch : {"area", "calibrated"}
         Weights of ``E_stretch`` (:func:`stretch_weights`): ``−(1/|S|) ∫ d dA``
         (default, normalization ``"area"``), ``−(10/n) Σd`` (normalization
-        ``"paper"``), ``−Σd/n`` or the paper's literal ``−Σd`` (the last two
-        reproduce the normalization study in ``docs/method.md``).
+        ``"paper"``); the study values of :mod:`cvxgeodesic.problems._study` reproduce the normalization study in
+        ``docs/method.md``.
     nonnegative : bool
         Add the bounds ``d_i ≥ 0`` for every free vertex.
 

@@ -42,7 +42,8 @@ def make_strategy(config: SolveConfig, *, baseline: bool, order: int = 1, multir
     config : SolveConfig
     baseline : bool
         ``config.method`` is a baseline.
-    order : {1, 2}
+    order : int
+        A key of :data:`~cvxgeodesic.operators.lagrange.ELEMENTS` (validated).
     multires_target : int, optional
         Coarse face count (from :func:`resolve_target`); None for a direct solve.
     polish : bool
@@ -59,8 +60,8 @@ def make_strategy(config: SolveConfig, *, baseline: bool, order: int = 1, multir
     """
     if resolution != "mesh":
         return Adapted(config, resolve_resolution(resolution, config.mesh.n_cells), resolution, estimate=estimate)
-    if order == 2:
-        return Order2(config)
+    if order > 1:  # above order 1 the program solves for φ = d² in the order's element (order 1: for d)
+        return Order2(config, order)
     if baseline:
         return BaselineStrategy(config)
     if multires_target is not None:

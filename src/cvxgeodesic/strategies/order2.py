@@ -1,16 +1,18 @@
-"""The order-2 strategy: P2 elements for the squared distance on triangle and tetrahedral meshes, solved by the one
-interior-point solver.
+"""The squared-distance strategy (``order=2``): the order's Lagrange element for the squared distance on any simplex
+mesh, solved by the one interior-point solver.
 
-Per mesh: the mesh scaled to unit size, the program's per-mesh part (:class:`~cvxgeodesic.formulations_p2.P2Builder`)
+Per mesh: the mesh scaled to unit size, the program's per-mesh part
+(:class:`~cvxgeodesic.problems.squared_distance.SquaredDistanceBuilder`)
 and one :class:`~cvxgeodesic.solvers.ipm.InteriorPointSolver` on the cell-clique pattern with the order-2 settings
 (:data:`~cvxgeodesic.solvers.ipm.settings.ORDER2`), under the backend policy every strategy shares
 (:class:`~cvxgeodesic.strategies.backend.Backend`). Per solve: source points inserted as vertices
 (:class:`~cvxgeodesic.mesh.split.SplitMesh`), the program built and solved, then cutting planes on the flat cells
 (:attr:`~cvxgeodesic.operators.lagrange.LagrangeSpace.flat_cells`: the flat faces of a surface, every tetrahedron)
 where the samples leave ``|∇φ|² ≤ 4φ`` free between them (on a surface: where the edge cones
-:class:`~cvxgeodesic.formulations_p2.BernsteinEdgeCones` do not reach, a source vertex's edges and a line of
+:class:`~cvxgeodesic.problems.squared_distance.BernsteinEdgeCones` do not reach, a source vertex's edges and a line of
 sources; in a solid: everywhere between the ten node samples). There ``d²`` is exactly quadratic wherever the source
-is visible, so a cone at the violating points (:func:`~cvxgeodesic.operators.lagrange.violations`, exact) closes the
+is visible, so a cone at the violating points (:meth:`~cvxgeodesic.operators.lagrange.LagrangeElement.violations`,
+exact) closes the
 gap (docs/order2.md).
 """
 
@@ -22,12 +24,12 @@ from typing import Any
 import numpy as np
 
 from ..errors import SolverError, SourceError
-from ..formulations_p2 import P2Builder, P2Program, source_edges
-from ..mesh.simplex import unit_mesh
+from ..mesh.simplex import SimplexMesh, unit_mesh
 from ..mesh.split import SplitMesh
-from ..operators.lagrange import LagrangeField, SplitLagrangeField, violations
+from ..operators.lagrange import LagrangeField, SplitLagrangeField
 from ..operators.metric import Medium
 from ..problems.conic import BackendResult, clique_pattern
+from ..problems.squared_distance import SquaredDistanceBuilder, SquaredDistanceProgram, source_edges
 from ..results import GeodesicResult, SolveInfo
 from .backend import Backend
 from .base import Callback, SolveConfig
@@ -58,20 +60,23 @@ REFINE_ROUNDS = 4
 
 
 class Order2:
-    """P2 squared-distance solves on one triangle or tetrahedral mesh (``order=2``).
+    """Squared-distance solves on one simplex mesh in the space of an order's element (``order=2``).
 
     Parameters
     ----------
     config : SolveConfig
-        ``config.method`` is one of :func:`~cvxgeodesic.capabilities.methods_for` of the mesh's dimension at order 2.
-    refine : int
-        Cutting-plane rounds at most (:data:`REFINE_ROUNDS`).
-    samples : str, optional
-        Where the cones are imposed (:class:`P2Builder`; default per dimension).
+        ``config.method`` is one of :func:`~cvxgeodesic.capabilities.methods_for` of the mesh's cells at ``order``.
+    order : int
+        The element's order (:data:`~cvxgeodesic.operators.lagrange.ELEMENTS`), as the caller validated it.
 
     Attributes
     ----------
-    builder : P2Builder
+    refine : int
+        Cutting-plane rounds at most (:data:`REFINE_ROUNDS`).
+    edge_cones : bool
+        Whether the flat faces of a surface get the :class:`~cvxgeodesic.problems.squared_distance.BernsteinEdgeCones`
+        (False: their midpoints are sampled, and the cutting planes close the gaps; for tests and studies).
+    builder : SquaredDistanceBuilder
     ipm : InteriorPointSolver or None
     scale : float
         The power of two the mesh was divided by.
@@ -85,11 +90,12 @@ class Order2:
         A method without an order-2 program on this kind of mesh; ``solver="ipm"`` without Numba.
     """
 
-    def __init__(self, config: SolveConfig, refine: int = REFINE_ROUNDS, samples: str | None = None) -> None:
+    def __init__(self, config: SolveConfig, order: int = 2) -> None:
         t0 = time.perf_counter()
         self.config = config
-        self.refine = int(refine)
-        self.samples = samples
+        self.order = order
+        self.refine = REFINE_ROUNDS
+        self.edge_cones = True
         unit, self.scale = unit_mesh(config.mesh)
         medium = None if config.medium is None else config.medium.on(unit)
         self.medium_scale = 1.0 if medium is None else medium.scale
@@ -102,14 +108,14 @@ class Order2:
         self.ipm = self._ipm(self.builder)
         self.setup_time = time.perf_counter() - t0
 
-    def _builder(self, mesh: Any, medium: Medium | None) -> P2Builder:
-        return P2Builder(mesh, samples=self.samples, medium=medium, energy=self.energy,
-                         lam=self.config.lam if self.energy else 0.0)
+    def _builder(self, mesh: SimplexMesh, medium: Medium | None) -> SquaredDistanceBuilder:
+        return SquaredDistanceBuilder(mesh, self.order, medium=medium, energy=self.energy,
+                                      lam=self.config.lam if self.energy else 0.0)
 
-    def _ipm(self, builder: P2Builder) -> Any:
+    def _ipm(self, builder: SquaredDistanceBuilder) -> Any:
         """The structured solver on ``builder``'s cell-clique pattern (one symbolic analysis), or None; with a
         smoothness energy the pattern also couples the two vertices opposite each interior edge (the jump term,
-        :func:`~cvxgeodesic.operators.p2_energy.edge_diamonds`)."""
+        :func:`~cvxgeodesic.operators.squared_energy.edge_diamonds`)."""
         if self.backend != "ipm":
             return None
         from ..solvers.ipm import InteriorPointSolver
@@ -148,15 +154,16 @@ class Order2:
             ipm = self._ipm(builder)
             fixed = np.concatenate([fixed, split.point_vertices])
             vertex_sources = np.concatenate([vertex_sources, split.point_vertices])
-            added = f"{sm.n_cells - mesh.n_cells} {'face(s)' if mesh.dim == 2 else 'tetrahedra'} added"
+            added = f"{sm.n_cells - mesh.n_cells} {mesh.reference.words.many} added"
             notes.append(f"{len(points)} source point(s) inserted as vertices ({added}; new symbolic analysis for "
                          "this solve)")
         zero = source_edges(builder.mesh, vertex_sources, sources.face_triangles(mesh))
         program, res, rounds = self._solve_with_cuts(builder, ipm, fixed, zero, callback, notes)
         return self._result(program, res, rounds, builder, split, sources, source_fixed, notes, t0)
 
-    def _solve_with_cuts(self, builder: P2Builder, ipm: Any, fixed: np.ndarray, zero: np.ndarray,
-                         callback: Callback | None, notes: list[str]) -> tuple[P2Program, BackendResult, list[int]]:
+    def _solve_with_cuts(self, builder: SquaredDistanceBuilder, ipm: Any, fixed: np.ndarray, zero: np.ndarray,
+                         callback: Callback | None,
+                         notes: list[str]) -> tuple[SquaredDistanceProgram, BackendResult, list[int]]:
         """The program solved, then re-solved with cutting planes on the flat cells until no cell violates the cone
         by :data:`REFINE_TOL`, a round moved the field by less than :data:`REFINE_STALL`, or ``refine`` rounds ran:
         ``(program, result, iterations of each round)``.
@@ -168,11 +175,11 @@ class Order2:
         program, res = self._first_solve(builder, ipm, fixed, zero, callback, notes)
         rounds = [res.iterations]
         cells = np.flatnonzero(builder.space.flat_cells)
-        extra_c, extra_b = np.zeros(0, dtype=np.int64), np.zeros((0, builder.dim + 1))
+        extra_c, extra_b = np.zeros(0, dtype=np.int64), np.zeros((0, builder.space.reference.n_corners))
         x = program.restore(res.x)
         moved = np.inf
         while len(rounds) <= self.refine and cells.size and moved > REFINE_STALL:
-            add, bary = violations(builder.space, x, REFINE_TOL, cells)
+            add, bary = builder.space.violations(x, REFINE_TOL, cells)
             if add.size == 0:
                 break
             # the last round's optimum, scaled into the new cones, is the next round's start: 25-30 % fewer
@@ -197,13 +204,13 @@ class Order2:
             notes.append(f"{len(rounds) - 1} cutting-plane round(s) added {extra_c.size} cone(s)")
         return program, res, rounds
 
-    def _first_solve(self, builder: P2Builder, ipm: Any, fixed: np.ndarray, zero: np.ndarray,
-                     callback: Callback | None, notes: list[str]) -> tuple[P2Program, BackendResult]:
+    def _first_solve(self, builder: SquaredDistanceBuilder, ipm: Any, fixed: np.ndarray, zero: np.ndarray,
+                     callback: Callback | None, notes: list[str]) -> tuple[SquaredDistanceProgram, BackendResult]:
         """The program solved; when its flat faces' edge cones leave it infeasible or the solver short of optimal
         (they are stricter than the gradient bound where the field is not a point's squared distance: between two
         sources of one flat region, measured on thingi_243015), solved again with the midpoint samples in their
         place, and the cutting planes after it, with a note."""
-        program = builder.build(fixed, zero)
+        program = builder.build(fixed, zero, edge_cones=self.edge_cones)
         notes[len(self.notes):len(self.notes)] = program.notes
         if not program.has_edge_cones:
             return program, self.policy.solve(program.problem, ipm, callback, notes)
@@ -219,9 +226,9 @@ class Order2:
         program = builder.build(fixed, zero, edge_cones=False)
         return program, self.policy.solve(program.problem, ipm, callback, notes)
 
-    def _result(self, program: P2Program, res: BackendResult, rounds: list[int], builder: P2Builder,
-                split: SplitMesh | None, sources: Any, source_fixed: np.ndarray, notes: list[str],
-                t0: float) -> GeodesicResult:
+    def _result(self, program: SquaredDistanceProgram, res: BackendResult, rounds: list[int],
+                builder: SquaredDistanceBuilder, split: SplitMesh | None, sources: Any, source_fixed: np.ndarray,
+                notes: list[str], t0: float) -> GeodesicResult:
         mesh = self.config.mesh
         problem = program.problem
         unit2 = (self.scale * self.medium_scale) ** 2
@@ -237,7 +244,7 @@ class Order2:
             primal_residual=res.primal_residual, dual_residual=res.dual_residual, gap=res.gap,
             objective=(res.objective + program.objective_constant) * unit2, lam=self.config.lam,
             n_unreachable=int(np.isinf(d).sum()),
-            notes=notes, extra={**res.extra, "order": 2, "p2_field": fld, "n_dofs": problem.n,
+            notes=notes, extra={**res.extra, "order": self.order, "p2_field": fld, "n_dofs": problem.n,
                                 "n_cones": problem.n_cones, "rounds": len(rounds) - 1, "round_iterations": rounds},
         )
         return GeodesicResult(distance=d, info=info, sources=sources.vertices,

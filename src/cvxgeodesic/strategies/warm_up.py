@@ -8,10 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..formulations_p2 import P2Builder
 from ..mesh.generate import icosphere
 from ..problems.conic import clique_pattern, kkt_pattern
 from ..problems.formulations import MeshOperators, build_problem, smoothness_weight
+from ..problems.squared_distance import SquaredDistanceBuilder
 from ..solvers.ipm.settings import ORDER2
 from ..solvers.ipm.solver import InteriorPointSolver
 
@@ -31,7 +31,7 @@ def warm_up() -> None:
     for method in ("qclp", "lclp", "qcqp-hessian"):
         p = build_problem(ops, np.array([0]), method, smoothness_weight(mesh, 1.0))
         InteriorPointSolver(kkt_pattern(mesh.n_vertices, mesh.F, mesh.edges, p.P)).solve(p)
-    builder = P2Builder(mesh)  # order 2: the SOC(4) clique kernels
+    builder = SquaredDistanceBuilder(mesh)  # order 2: the SOC(4) clique kernels
     space = builder.space
     InteriorPointSolver(clique_pattern(space.n_dofs, [space.cell_dofs]), settings=ORDER2).solve(
         builder.build(np.array([0])).problem)

@@ -1,8 +1,10 @@
-"""The order-2 program: P2 elements for the *squared* geodesic distance (``order=2``), as a :class:`ConicProblem`.
+"""The squared-distance program: Lagrange elements for the *squared* geodesic distance (``order=2``), as a
+:class:`ConicProblem`.
 
-The unknown is ``φ = d²`` in the continuous piecewise-quadratic space: one value per
-vertex and one per edge midpoint. ``|∇√φ| ≤ 1`` is the same as ``|∇φ|² ≤ 4φ``, which is
-a second-order cone in ``(φ, ∇φ)``::
+The unknown is ``φ = d²`` in the space of an order's element (:data:`~cvxgeodesic.operators.lagrange.ELEMENTS`;
+order 2, the continuous piecewise-quadratic space: one value per vertex and one per edge midpoint). Nothing here
+depends on the order but the element's declaration and the edge cones (order 2). ``|∇√φ| ≤ 1`` is the same as
+``|∇φ|² ≤ 4φ``, which is a second-order cone in ``(φ, ∇φ)``::
 
     ‖(∇φ, φ − 1)‖ ≤ φ + 1      ⇔      |∇φ|² ≤ 4φ
 
@@ -13,21 +15,22 @@ exactly, so flat distances come out exact on triangles of any shape.
 
 The same holds inside a solid (a :class:`~cvxgeodesic.mesh.tetmesh.TetMesh`, the 10-node P2 tetrahedron, SOC(5)
 cones): a solid is flat, so where the source is visible ``d² = |x − s|²`` is reproduced exactly whatever the
-tetrahedra's shape. One builder, :class:`P2Builder`, makes both programs; the simplex dimension is the mesh's.
+tetrahedra's shape. One builder, :class:`SquaredDistanceBuilder`, makes both programs; the cells are the mesh's.
 
 Discretization (choices and measurements in ``docs/order2.md``):
 
 * the cone is imposed at sample points of every cell, with the cone centred near the expected ``φ``
   (``‖(√a ∇φ, φ − a)‖ ≤ φ + a`` is the same cone for every ``a > 0``): on a curved face its three edge midpoints;
-  on a flat face its three corners (:data:`DEFAULT_SAMPLES`); in a tetrahedron its ten nodes;
+  on a flat face its three corners; in a tetrahedron its ten nodes;
 * surfaces only: on *flat* faces (where ``d²`` is exactly quadratic) one :class:`BernsteinEdgeCones` cone per edge:
   with the corner cones it holds ``|∇φ|² ≤ 4φ`` on the whole face, and it is tight on the squared distance to any
   point, so flat regions come out exact in one solve; at a source vertex's edges and next to a line of sources the
   edge midpoints are sampled instead. Elsewhere (those faces; tetrahedra between their node samples) the
   strategy's cutting planes close the gap (a cone where ``|∇φ|² − 4φ`` exceeds a tolerance in a flat cell,
-  :func:`~cvxgeodesic.operators.lagrange.violations`, exact, and the problem re-solved);
+  :meth:`~cvxgeodesic.operators.lagrange.LagrangeElement.violations`, exact, and the problem re-solved);
 * the objective is the mean of ``φ`` with lumped weights (``A/6`` per node of a face, ``vol/10`` per node of a
-  tetrahedron; on faces also the consistent P2 weights, 0 at corners and ``A/3`` at midpoints, ``weights="p2"``);
+  tetrahedron; the consistent weights of order-2 triangles, 0 at corners and ``A/3`` at midpoints, are a study
+  switch of :mod:`cvxgeodesic.problems._study`);
 * a source vertex ``s`` gets ``φ_s = 0`` and zero derivative at ``s`` along each of its edges to a non-source
   vertex (``4 φ_mid − φ_j = 0``), which is ``∇φ(s) = 0`` in every incident cell without redundant rows; the
   midpoint of a *source edge* (:func:`source_edges`: joining two source vertices, or an edge of a source face) is 0;
@@ -52,6 +55,7 @@ the solve in :mod:`cvxgeodesic.strategies.order2`.
 
 from __future__ import annotations
 
+import functools
 import itertools
 from dataclasses import dataclass
 
@@ -59,31 +63,28 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
-from .errors import DegenerateFacesWarning, MeshError, ParameterError, warn_user
-from .mesh.reference import reference_simplex
-from .operators.lagrange import SAMPLES, LagrangeSpace, edge_basis, sample_points
-from .operators.metric import Medium
-from .operators.p2_energy import P2Energy, p2_energy
-from .problems.conic import ConeGroup, ConicProblem, Equalities, PairInequalities
-from .validation import check_number
+from ..errors import DegenerateFacesWarning, MeshError, ParameterError, warn_user
+from ..mesh.reference import TRIANGLE, ReferenceSimplex
+from ..mesh.simplex import SimplexMesh
+from ..operators.lagrange import LagrangeSpace, quadratic_candidates
+from ..operators.metric import Medium
+from ..operators.squared_energy import SquaredEnergy, squared_energy
+from ..validation import check_number
+from . import _study
+from .conic import ConeGroup, ConicProblem, Equalities, PairInequalities
 
-__all__ = ["DEFAULT_SAMPLES", "DEFAULT_VOLUME_SAMPLES", "DEFAULT_WEIGHTS", "ORDER2_CACHE_VERSION", "BernsteinEdgeCones",
-           "P2Builder", "P2Program", "bernstein_edge_cones", "eliminate_pair_equalities", "source_edges"]
+__all__ = ["ORDER2_CACHE_VERSION", "BernsteinEdgeCones", "SquaredDistanceBuilder", "SquaredDistanceProgram",
+           "bernstein_edge_cones", "eliminate_pair_equalities", "source_edges"]
 
-#: Where the cone is imposed on triangles: "flat-bernstein" = the three corners and the three
-#: :class:`BernsteinEdgeCones` on flat faces (:attr:`LagrangeSpace.flat_cells`), the three edge midpoints on the
-#: others (since 2026-12-02: fandisk 4.1 → 1.1 s, thingi_32770 13 → 3.8 s, no cutting-plane round on the
-#: development set, the 53 coarse CAD meshes' median error 0.974 → 0.972 %; docs/order2.md); "flat-nodes" = all six
-#: nodes on flat faces, no edge cones (before).
-#: Midpoints only on curved faces, measured 2026-12-01 against exact MMP, source 0, mean relative error all nodes →
-#: flat-nodes: bimba 0.22 → 0.11 %, bunny 0.099 → 0.058 %, lucy_20k 0.34 → 0.15 %, dragon_20k 0.62 → 0.32 %, spot
-#: 0.25 → 0.15 %; the 53 coarse CAD meshes: median ratio to P1 qclp 0.216 → 0.204, median error 0.85 → 0.95 %
-#: (29 better, 24 worse; docs/order2.md); flat meshes unchanged (all their faces are flat).
-DEFAULT_SAMPLES = "flat-bernstein"
-#: ... and in tetrahedra: every node of every (flat) cell, the cutting planes between them.
-DEFAULT_VOLUME_SAMPLES = "flat-nodes"
-#: Objective weights (:meth:`LagrangeSpace.weights`; docs/order2.md has the measurement behind the choice).
-DEFAULT_WEIGHTS = "lumped"
+# Where the cone is imposed: every node of a flat cell (:attr:`LagrangeSpace.flat_cells`), the nodes off the corners
+# (order 2: the edge midpoints) of the others, and on flat faces of a surface the three :class:`BernsteinEdgeCones`
+# in place of the midpoints (since 2026-12-02: fandisk 4.1 → 1.1 s, thingi_32770 13 → 3.8 s, no cutting-plane round
+# on the development set, the 53 coarse CAD meshes' median error 0.974 → 0.972 %; docs/order2.md).
+# Midpoints only on curved faces, measured 2026-12-01 against exact MMP, source 0, mean relative error all nodes →
+# midpoints: bimba 0.22 → 0.11 %, bunny 0.099 → 0.058 %, lucy_20k 0.34 → 0.15 %, dragon_20k 0.62 → 0.32 %, spot
+# 0.25 → 0.15 %; the 53 coarse CAD meshes: median ratio to P1 qclp 0.216 → 0.204, median error 0.85 → 0.95 %
+# (29 better, 24 worse; docs/order2.md); flat meshes unchanged (all their faces are flat). In tetrahedra every node
+# of every (flat) cell, the cutting planes between them.
 #: Edges shorter than this fraction of the bounding-box diagonal get no 1-D cone (their DOF is tied linearly).
 MIN_EDGE = 1e-9
 #: Version of the order-2 fields, for caches keyed on the inputs only (``benchmarks/report_common.py``): bump it
@@ -98,13 +99,13 @@ ORDER2_CACHE_VERSION = 3
 
 
 @dataclass
-class P2Program:
-    """One order-2 program and what turns its solution back into ``φ`` on every DOF.
+class SquaredDistanceProgram:
+    """One squared-distance program and what turns its solution back into ``φ`` on every DOF.
 
     Attributes
     ----------
     problem : ConicProblem
-        Over the P2 DOFs (vertices, then edge midpoints), the equalities of two unknowns substituted.
+        Over the DOFs of the space (order 2: vertices, then edge midpoints), the equalities of two unknowns substituted.
     eliminated : tuple of (r,) int ndarray and (r, n) csr_matrix
         ``x[elim] = M @ x`` restores the substituted DOFs from a solution.
     unreachable_vertices : (n_vertices,) bool ndarray
@@ -144,7 +145,7 @@ def _cone_rows(val: np.ndarray, grad: np.ndarray, dim: int) -> tuple[np.ndarray,
     return G, h
 
 
-def source_edges(mesh, vertices: np.ndarray, facets: np.ndarray | None = None) -> np.ndarray:
+def source_edges(mesh: SimplexMesh, vertices: np.ndarray, facets: np.ndarray | None = None) -> np.ndarray:
     """(e,) bool ndarray over ``mesh.edges``: the edges whose midpoint is 0 (no derivative row along them): those
     joining two source vertices, and the edges of source facets.
 
@@ -173,75 +174,67 @@ def source_edges(mesh, vertices: np.ndarray, facets: np.ndarray | None = None) -
     return out
 
 
-class P2Builder:
-    """Per-mesh part of the order-2 program (everything that does not depend on the sources), on triangles or
-    tetrahedra.
+class SquaredDistanceBuilder:
+    """Per-mesh part of the squared-distance program (everything that does not depend on the sources), in the space
+    of an order's element (:data:`~cvxgeodesic.operators.lagrange.ELEMENTS`), on any simplex mesh.
 
-    The surface-only parts are options: the :class:`BernsteinEdgeCones` (``samples="flat-bernstein"``, the surface
-    default), the weights other than ``"lumped"``, a ``medium`` and a smoothness ``energy`` raise a
-    :class:`~cvxgeodesic.errors.ParameterError` on tetrahedra.
+    The cones are imposed at every node of a flat cell (:attr:`LagrangeSpace.flat_cells`) and at the nodes off the
+    corners of the others (order 2: the edge midpoints); on the flat faces of a surface without a medium, the three
+    :class:`BernsteinEdgeCones` stand in for the midpoints (their tangent is the Euclidean ``2I``).
 
     Parameters
     ----------
-    mesh : TriMesh or TetMesh
+    mesh : SimplexMesh
         Already scaled to unit size by the caller.
-    samples : str, optional
-        "flat-bernstein" (:data:`DEFAULT_SAMPLES`, triangles), "flat-nodes" (all nodes of flat cells, the midpoints
-        of the others; the default on tetrahedra, where every proper cell is flat), or a name of
-        :data:`~cvxgeodesic.operators.lagrange.SAMPLES` (on every cell, no edge cones). With a ``medium``
-        "flat-bernstein" is "flat-nodes": the edge cones' tangent is the Euclidean ``2I``.
-    weights : {"lumped", "p2"}, optional
-        Objective weights (:meth:`LagrangeSpace.weights`); default :data:`DEFAULT_WEIGHTS`.
+    order : int
+        The element's order (a key of :data:`~cvxgeodesic.operators.lagrange.ELEMENTS` above 1).
     medium : Medium, optional
-        Triangles only: a travel cost or metric on ``mesh`` (:mod:`cvxgeodesic.operators.metric`): every cone bounds
+        A travel cost or metric on ``mesh`` (:mod:`cvxgeodesic.operators.metric`, surfaces): every cone bounds
         ``|∇φ|²_{M⁻¹} ≤ 4c²φ`` with the medium at its sample point (:class:`LagrangeSpace`), a degenerate face's 1-D
         cones take the derivative along the edge's length in the medium, and Dijkstra (cone centres, start field)
         runs on the edge lengths in the medium.
     energy : {"hessian", "laplacian", "dirichlet"}, optional
-        Triangles only: smoothness energy of ``φ`` (:func:`~cvxgeodesic.operators.p2_energy.p2_energy`); None: none
-        (``qclp``). Not with a ``medium``: the energies vanish on the squared *Euclidean* distance of flat regions
-        (Hessian ``2I``), which is not the exact field in a medium.
+        Surfaces: smoothness energy of ``φ`` (:func:`~cvxgeodesic.operators.squared_energy.squared_energy`); None:
+        none (``qclp``). Not with a ``medium``: the energies vanish on the squared *Euclidean* distance of flat
+        regions (Hessian ``2I``), which is not the exact field in a medium.
     lam : float
         Its weight λ (dimensionless: the energy has the units of the mean of ``φ``); 0: no energy.
 
     Attributes
     ----------
     space : LagrangeSpace
-        Of order 2.
-    energy : P2Energy or None
+    energy : SquaredEnergy or None
         The smoothness energy when ``energy`` is given and ``lam > 0``.
     notes : list of str
         Substitutions made for every program of the mesh (degenerate cells).
     bernstein : BernsteinEdgeCones
-        The flat faces' edge cones (none unless ``samples="flat-bernstein"``).
+        The flat faces' edge cones (none in a solid or with a medium).
     cone_replaced : (k,) bool ndarray
         The sampled cones (flat faces' edge midpoints) that the edge cones replace: kept only on an edge at a source
         vertex, or for every edge when two sources share an edge (:meth:`build`).
     """
 
-    def __init__(self, mesh, samples: str | None = None, weights: str | None = None, medium: Medium | None = None,
-                 energy: str | None = None, lam: float = 0.0):
-        self.dim = dim = int(mesh.dim)
-        samples = (DEFAULT_SAMPLES if dim == 2 else DEFAULT_VOLUME_SAMPLES) if samples is None else samples
-        self._check(samples, medium, energy, lam)
+    def __init__(self, mesh: SimplexMesh, order: int = 2, medium: Medium | None = None, energy: str | None = None,
+                 lam: float = 0.0):
+        self.dim = dim = mesh.reference.dim
+        self._check(mesh, medium, energy, lam)
         self.mesh = mesh
-        self.space = sp_ = LagrangeSpace(mesh, 2, medium)
-        self.w = sp_.weights(DEFAULT_WEIGHTS if weights is None else weights)
+        self.space = sp_ = LagrangeSpace(mesh, order, medium)
+        self.w = _study.objective_weights(sp_)
         self.lam = float(lam) if energy is not None else 0.0
         self.energy_name = energy
-        self.energy: P2Energy | None = p2_energy(sp_, energy) if energy is not None and lam > 0 else None
-        if samples == "flat-bernstein" and medium is not None:
-            # the tangent in bernstein_edge_cones is taken at the Euclidean Hessian 2I
-            samples = "flat-nodes"
+        self.energy: SquaredEnergy | None = squared_energy(sp_, energy) if energy is not None and lam > 0 else None
+        # the edge cones hold the Bernstein coefficients of a quadratic |∇φ|² − 4φ (an order-2 element) on a
+        # triangle; their tangent is the Euclidean Hessian 2I (no medium)
+        quadratic = sp_.element.search is quadratic_candidates
+        edge_cones = quadratic and medium is None and dim == 2  # dimension: derived for triangles only
+        nodes = sp_.element.local_nodes(sp_.reference)
+        c = dim + 1
         good = np.flatnonzero(~sp_.degenerate)
-        flat_cells = np.zeros(0, dtype=np.int64)
-        if samples in ("flat-nodes", "flat-bernstein"):
-            flat = sp_.flat_cells[good]
-            flat_cells = good[flat]
-            # with Bernstein edge cones the flat faces' midpoint samples stand in for the edge cones at sources only
-            groups = [(flat_cells, sample_points("nodes", dim)), (good[~flat], sample_points("midpoints", dim))]
-        else:
-            groups = [(good, sample_points(samples, dim))]
+        flat = sp_.flat_cells[good]
+        flat_cells = good[flat]
+        # with Bernstein edge cones the flat faces' midpoint samples stand in for the edge cones at sources only
+        groups = [(flat_cells, nodes), (good[~flat], nodes[c:])]
         parts = []
         for cells, bary in groups:
             val, grad = sp_.cell_cones(bary)
@@ -253,26 +246,25 @@ class P2Builder:
         self.cone_cell = np.concatenate([*[np.repeat(f, b.shape[0]) for f, b in groups], e_cell]).astype(np.int64)
         # each cone's barycentric point (for dropping the cones on sources, :func:`_on_sources`)
         self.cone_bary = np.concatenate([*[np.tile(b, (f.size, 1)) for f, b in groups], e_samples])
-        self.bernstein = bernstein_edge_cones(sp_, flat_cells if samples == "flat-bernstein" else flat_cells[:0])
+        self.bernstein = bernstein_edge_cones(sp_, flat_cells if edge_cones else flat_cells[:0])
         # the midpoint samples a Bernstein edge cone replaces (kept on edges at a source, where it is dropped)
         self.cone_replaced = np.zeros(self.cone_cell.size, dtype=bool)
-        if samples == "flat-bernstein":
-            self.cone_replaced[:flat_cells.size * 6] = np.tile([False] * 3 + [True] * 3, flat_cells.size)
+        if edge_cones:
+            self.cone_replaced[:flat_cells.size * len(nodes)] = np.tile([False] * c + [True] * (len(nodes) - c),
+                                                                        flat_cells.size)
 
-    def _check(self, samples: str, medium: Medium | None, energy: str | None, lam: float) -> None:
-        """ParameterError for a bad option: a smoothness energy or the edge cones on tetrahedra (what the API takes is
-        the capability table's, :mod:`cvxgeodesic.capabilities`, checked there; this is the builder's own check)."""
+    def _check(self, mesh: SimplexMesh, medium: Medium | None, energy: str | None, lam: float) -> None:
+        """ParameterError for a bad option: a smoothness energy on cells it is not derived for, or with a medium
+        (what the API takes is the capability table's, :mod:`cvxgeodesic.capabilities`, checked there; this is the
+        builder's own check for a direct user)."""
         check_number(lam, "smoothness weight lambda", low=0)
-        if samples not in SAMPLES and samples not in ("flat-nodes", "flat-bernstein"):
-            raise ParameterError(f"samples must be 'flat-bernstein', 'flat-nodes' or one of {SAMPLES}, "
-                                 f"got {samples!r}")
-        if self.dim == 3 and energy is not None and lam > 0:
-            raise ParameterError("the order-2 program on tetrahedra takes no smoothness energy (surfaces only)")
-        if medium is not None and energy is not None and lam > 0:  # a field biased without a word, else
+        smoothed = energy is not None and lam > 0
+        if smoothed and mesh.reference is not TRIANGLE:  # the energies are derived on triangles (squared_energy.py)
+            raise ParameterError(f"the order-2 program on {mesh.reference.words.meshes} takes no smoothness energy "
+                                 "(surfaces only)")
+        if medium is not None and smoothed:  # a field biased without a word, else
             raise ParameterError("the order-2 smoothness energies vanish on the Euclidean squared distance only: a "
                                  "cost or metric takes lam=0")
-        if self.dim == 3 and samples == "flat-bernstein":
-            raise ParameterError("the order-2 program on tetrahedra takes no samples='flat-bernstein' (surfaces only)")
 
     def _degenerate_edge_cones(self):
         """The 1-D cones ``(dφ/ds)² ≤ 4φ`` along each edge of a degenerate cell (each edge once, in one of its
@@ -284,63 +276,92 @@ class P2Builder:
         owner, local = deg[first // n_e], first % n_e
         ok = mesh.edge_lengths[ids] > MIN_EDGE * max(mesh.bbox_diagonal, 1e-300)
         ids, owner, local = ids[ok], owner[ok], local[ok]
-        a, b = mesh.reference.edges[local, 0], mesh.reference.edges[local, 1]
+        E = sp_.reference.edges
+        a, b = E[local, 0], E[local, 1]
+        per = sp_.element.dofs[1]
         t = np.array([0.0, 0.5, 1.0])
-        Nt, dNt = edge_basis(t)
         r = np.arange(ids.size)
-        cols = np.column_stack([a, dim + 1 + local, b])  # along the edge from corner a to corner b: its local DOFs
+        # along the edge from corner a to corner b: its local DOFs (the edge's own in the local edge's direction)
+        cols = np.column_stack([a, *(dim + 1 + local * per + k for k in range(per)), b])
         val, grd = np.zeros((3, ids.size, n_loc)), np.zeros((3, ids.size, 1, n_loc))
         eb = np.zeros((3, ids.size, dim + 1))
         for j in range(3):  # the edge's ends and midpoint
+            eb[j, r, a], eb[j, r, b] = 1 - t[j], t[j]
+            N, dN = sp_.basis(eb[j])
+            dNt = dN[r, :, b] - dN[r, :, a]  # d/dt of the shape functions along the edge
             # dφ/ds along the edge's length (in the medium: its rate of length per unit t at the sample)
             L = mesh.edge_lengths[ids] if sp_.medium is None else sp_.medium.edge_speed(owner, a, b, t[j])
-            val[j, r[:, None], cols] = Nt[j]
-            grd[j, r[:, None], 0, cols] = dNt[j] / L[:, None]
-            eb[j, r, a], eb[j, r, b] = 1 - t[j], t[j]
+            val[j, r[:, None], cols] = N[r[:, None], cols]
+            grd[j, r[:, None], 0, cols] = dNt[r[:, None], cols] / L[:, None]
         Ge, he = _cone_rows(val.reshape(-1, n_loc), grd.reshape(-1, 1, n_loc), dim)
         if deg.size:
-            word = "face(s)" if dim == 2 else "tetrahedra"
-            note = (f"{deg.size} degenerate {word} carry no cones at order 2; their {ids.size} edge(s) get the 1-D "
-                    "cone (dφ/ds)² ≤ 4φ instead")
+            word = sp_.reference.words.many
+            note = (f"{deg.size} degenerate {word} carry no cones at order {sp_.order}; their {ids.size} edge(s) get "
+                    "the 1-D cone (dφ/ds)² ≤ 4φ instead")
             self.notes.append(note)
             warn_user(f"{mesh.name}: {note}", DegenerateFacesWarning)
         return Ge, he, np.tile(owner, 3), eb.reshape(-1, dim + 1)
 
+    def _along_edge(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """The shape functions of an edge's DOFs along it, at ``t`` from its start (0) to its end (1): values and
+        ``d/dt``, each (per + 2,) over (the start, the edge's own DOFs in its direction, the end)."""
+        sp_ = self.space
+        c, (a, b), per = sp_.reference.n_corners, sp_.reference.edges[0], sp_.element.dofs[1]
+        bary = np.zeros((1, c))
+        bary[0, a], bary[0, b] = 1 - t, t
+        N, dN = sp_.basis(bary)
+        cols = [a, *range(c, c + per), b]
+        return N[0, cols], (dN[0, :, b] - dN[0, :, a])[cols]
+
     def _source_rows(self, is_src: np.ndarray) -> sp.csr_matrix:
-        """Zero derivative along every edge from a source vertex ``s`` to a non-source ``j``:
-        ``4 φ_mid − φ_j − 3 φ_s = 0`` with ``φ_s = 0`` (``∇φ(s) = 0`` in every cell at ``s`` without redundant
-        rows), as an (r, n_dofs) matrix."""
-        n = self.mesh.n_vertices
+        """Zero derivative along every edge from a source vertex ``s`` to a non-source ``j``, over the edge's DOFs and
+        ``j`` (order 2: ``4 φ_mid − φ_j − 3 φ_s = 0`` with ``φ_s = 0``; ``∇φ(s) = 0`` in every cell at ``s`` without
+        redundant rows), as an (r, n_dofs) matrix."""
         E = self.mesh.edges
         one = np.flatnonzero(is_src[E[:, 0]] ^ is_src[E[:, 1]])
-        far = np.where(is_src[E[one, 0]], E[one, 1], E[one, 0])
-        rows = np.repeat(np.arange(one.size), 2)
-        cols = np.column_stack([n + one, far]).ravel()
-        vals = np.tile([4.0, -1.0], one.size)
-        return sp.csr_matrix((vals, (rows, cols)), shape=(one.size, self.space.n_dofs))
+        from_start = is_src[E[one, 0]]
+        far = np.where(from_start, E[one, 1], E[one, 0])
+        # d/dt at the start (the source at edges[:, 0]) or −d/dt at the end, without the source's own column
+        at_start = self._along_edge(0.0)[1][1:]  # over (the edge's DOFs, the end)
+        at_end = -self._along_edge(1.0)[1][:-1]  # over (the start, the edge's DOFs)
+        vals = np.where(from_start[:, None], at_start, np.concatenate([at_end[1:], at_end[:1]]))
+        cols = np.column_stack([self.space.edge_dofs[one], far])
+        rows = np.repeat(np.arange(one.size), cols.shape[1])
+        return sp.csr_matrix((vals.ravel(), (rows, cols.ravel())), shape=(one.size, self.space.n_dofs))
 
     def _tie_loose_midpoints(self, dofs, G, c, E, fixed):
-        """A free midpoint DOF in no cone and no equality (the edge of a degenerate cell too short for a 1-D cone,
-        :data:`MIN_EDGE`) would be unbounded: it is tied to the mean of its edge's ends, ``φ_m = (φ_a + φ_b)/2``, its
-        cost moved onto them. Returns ``(c, fixed, (elim, M))`` with ``x[elim] = M @ x``."""
-        n_v, n = self.mesh.n_vertices, self.space.n_dofs
+        """A free edge DOF (order 2: midpoint) in no cone and no equality (the edge of a degenerate cell too short for a
+        1-D cone, :data:`MIN_EDGE`) would be unbounded: it is tied to the linear interpolant of its edge's ends
+        (order 2: ``φ_m = (φ_a + φ_b)/2``), its cost moved onto them. Returns ``(c, fixed, (elim, M))`` with
+        ``x[elim] = M @ x``."""
+        n = self.space.n_dofs
         used = np.zeros(n, dtype=bool)
         used[dofs[np.abs(G).max(axis=1) > 0]] = True
         used[sp.csr_matrix(E).indices] = True
-        loose = np.flatnonzero(~used[n_v:] & ~fixed[n_v:]) + n_v
-        ends = self.mesh.edges[loose - n_v]
+        edge_dofs = self.space.edge_dofs
+        e_idx, k_idx = np.nonzero(~used[edge_dofs] & ~fixed[edge_dofs])
+        loose, ends = edge_dofs[e_idx, k_idx], self.mesh.edges[e_idx]
+        coef = self._edge_linear()[k_idx]  # (p, 2): the DOF of the ends' hat functions
         c, fixed = c.copy(), fixed.copy()
-        np.add.at(c, ends.ravel(), np.repeat(0.5 * c[loose], 2))
+        np.add.at(c, ends.ravel(), (coef * c[loose][:, None]).ravel())
         c[loose] = 0.0
         fixed[loose] = True
         c[fixed] = 0.0
-        M = sp.csr_matrix((np.full(2 * loose.size, 0.5), (np.repeat(np.arange(loose.size), 2), ends.ravel())),
-                          shape=(loose.size, n))
+        M = sp.csr_matrix((coef.ravel(), (np.repeat(np.arange(loose.size), 2), ends.ravel())), shape=(loose.size, n))
         return c, fixed, (loose, M)
+
+    def _edge_linear(self) -> np.ndarray:
+        """(per, 2): the value of each DOF of an edge in the hat functions of its start and end (its node's
+        barycentric coordinates for a nodal basis; order 2: ``(0.5, 0.5)``)."""
+        element, ref = self.space.element, self.space.reference
+        c, (a, b), per = ref.n_corners, ref.edges[0], element.dofs[1]
+        nodes, M = element.local_nodes(ref), element.node_values(ref)
+        coef = nodes if np.array_equal(M, np.eye(len(nodes))) else np.linalg.solve(M, nodes)
+        return coef[c:c + per][:, [a, b]]
 
     def build(self, vsrc: np.ndarray, zero_edges: np.ndarray | None = None,
               extra: tuple[np.ndarray, np.ndarray] | None = None, eliminate: bool = True, edge_cones: bool = True,
-              guess: np.ndarray | None = None) -> P2Program:
+              guess: np.ndarray | None = None) -> SquaredDistanceProgram:
         """The program for a set of source vertices.
 
         Parameters
@@ -352,7 +373,7 @@ class P2Builder:
             :func:`source_edges`: the edges whose midpoint is 0 (no derivative row along them); default the edges
             joining two vertices of ``vsrc``.
         extra : tuple (cells (p,) int ndarray, bary (p, dim + 1) float ndarray), optional
-            Additional cone sample points (the cutting planes, :func:`~cvxgeodesic.operators.lagrange.violations`).
+            Additional cone sample points (the cutting planes, :meth:`LagrangeSpace.violations`).
         eliminate : bool
             Substitute the equalities of two unknowns (:func:`eliminate_pair_equalities`); False keeps them as rows
             of ``E`` (the interior-point solver then solves them through its Schur complement: the same optimum,
@@ -366,7 +387,7 @@ class P2Builder:
 
         Returns
         -------
-        P2Program
+        SquaredDistanceProgram
 
         Raises
         ------
@@ -376,8 +397,9 @@ class P2Builder:
         mesh, space = self.mesh, self.space
         vsrc = np.asarray(vsrc, dtype=np.int64)
         if mesh.n_cells == 0 or np.all(space.degenerate):
-            one = "face" if self.dim == 2 else "tetrahedron"
-            raise MeshError(f"{mesh.name}: every {one} is degenerate; order 2 needs at least one proper {one}")
+            one = space.reference.words.one
+            raise MeshError(f"{mesh.name}: every {one} is degenerate; order {space.order} needs at least one proper "
+                            f"{one}")
         n, E = mesh.n_vertices, mesh.edges
         is_src = np.zeros(n, dtype=bool)
         is_src[vsrc] = True
@@ -385,12 +407,12 @@ class P2Builder:
             zero_edges = is_src[E[:, 0]] & is_src[E[:, 1]]
         reach_v = mesh.connected_to(vsrc) & mesh.referenced
         reach_v[vsrc] = True
-        reach = np.concatenate([reach_v, reach_v[E[:, 0]] & reach_v[E[:, 1]]])
+        reach = space.on_vertices(reach_v)
         fixed = ~reach
         fixed[vsrc] = True
         # a source edge's midpoint is 0 (the zero-derivative rows at both ends would give it; as an E row of one
         # unknown it left its cone columns in place)
-        fixed[n + np.flatnonzero(zero_edges)] = True
+        fixed[space.edge_dofs[zero_edges].ravel()] = True
         # sources joined by an edge form a curve, whose squared distance is not a point's (Hessian 2nnᵀ, not 2I):
         # the edge cones would hold the field back there, so the sampled cones and the cutting planes take over
         point_like = not zero_edges.any() and edge_cones
@@ -413,7 +435,7 @@ class P2Builder:
                 # edge cones, 2026-12-02), the jittered L prism (n = 4, 8) 25 → 19 and 39 → 27; with the corner and
                 # midpoint samples alone, a needle strip's solve from it had stopped 7.6e-5 of the largest distance
                 # away from the optimum (the samples barely determine it)
-                guess = np.concatenate([dv**2, (0.5 * (dv[E[:, 0]] + dv[E[:, 1]]))**2])
+                guess = space.interpolate(functools.partial(_squared_linear, mesh.cells, dv))
         cf, Gk, hk, n_s, hb = self._cones(is_src, zero_edges, extra, reach, point_like, dv)
         dofs = space.cell_dofs[cf]
         # a fixed DOF is 0: its columns do not matter, but zero them so that backends need not know
@@ -441,7 +463,7 @@ class P2Builder:
             guess=None if guess is None else np.where(fixed, 0.0, guess), equilibrate=True,
         )
         const = 0.0 if self.energy is None else self.lam * self.energy.c
-        return P2Program(problem, eliminated, ~reach_v, list(self.notes), const, bool(hb.shape[0]))
+        return SquaredDistanceProgram(problem, eliminated, ~reach_v, list(self.notes), const, bool(hb.shape[0]))
 
     def _cones(self, is_src: np.ndarray, zero_edges: np.ndarray, extra: tuple[np.ndarray, np.ndarray] | None,
                reach: np.ndarray, point_like: bool, dv: np.ndarray | None):
@@ -459,7 +481,8 @@ class P2Builder:
             G0, h0 = np.concatenate([G0, Gx]), np.concatenate([h0, hx])
             cone_cell, cone_bary = np.concatenate([cone_cell, ef]), np.concatenate([cone_bary, eb])
             replaced = np.pad(replaced, (0, ef.size))
-        keep = (~_on_sources(mesh.cells[cone_cell], space.cell_edges[cone_cell], cone_bary, is_src, zero_edges)
+        keep = (~_on_sources(space.reference, mesh.cells[cone_cell], space.cell_edges[cone_cell], cone_bary, is_src,
+                             zero_edges)
                 & reach[space.cell_dofs[cone_cell]].all(axis=1))
         # at a source the edge cone pins its far end (φ_j = |e|², ∇φ_j = 2e: no interior point), as the corner cone
         # there sits at its apex; the midpoint sample stands in for it
@@ -521,8 +544,8 @@ class BernsteinEdgeCones:
     field of a flat region stays feasible wherever it is the squared distance to a point, and the gap between the
     samples is closed without cutting planes. Where the field is not (a face crossed by the cut locus, the window
     behind a saddle vertex) the cone is stricter than needed by ``|(H − 2I)e|² / 2``; next to a line of sources
-    (``H = 2nnᵀ``) that cost 0.02 of the largest distance on a 12×12 square, so :meth:`P2Builder.build` keeps the
-    sampled cones and the cutting planes there (docs/order2.md).
+    (``H = 2nnᵀ``) that cost 0.02 of the largest distance on a 12×12 square, so
+    :meth:`SquaredDistanceBuilder.build` keeps the sampled cones and the cutting planes there (docs/order2.md).
 
     Attributes
     ----------
@@ -533,12 +556,16 @@ class BernsteinEdgeCones:
         ``(G_i, G_j)`` on the face's DOFs, in the face's 2-D frame.
     e2 : (k,) float ndarray
         ``|e|²``.
+    midpoints : (3, 6) float ndarray
+        The shape functions at the midpoint of the edge opposite each corner (a unit row for the nodal basis):
+        ``φ_m = midpoints[corner] @ x``.
     """
 
     face: np.ndarray
     corner: np.ndarray
     grad: np.ndarray
     e2: np.ndarray
+    midpoints: np.ndarray
 
     def rows(self, keep: np.ndarray, a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``G`` (k, 6, 6) and ``h`` (k, 6) with ``h − G x = (T + a, √a G_i, √a G_j, T − a)`` for the cones ``keep``
@@ -548,9 +575,9 @@ class BernsteinEdgeCones:
         k = grad.shape[0]
         r = np.arange(k)
         T = np.zeros((k, 6))  # T = 3φ_i + 3φ_j − 4φ_m − |e|²
-        T[r, (corner + 1) % 3] = 3.0
-        T[r, (corner + 2) % 3] = 3.0
-        T[r, 3 + corner] = -4.0
+        T -= 4.0 * self.midpoints[corner]
+        T[r, (corner + 1) % 3] += 3.0
+        T[r, (corner + 2) % 3] += 3.0
         G, h = _cone_rows(T, np.sqrt(a)[:, None, None] * grad, 4)  # h = (1, 0, 0, 0, 0, −1)
         h = a[:, None] * h
         h[:, [0, 5]] -= e2[:, None]
@@ -563,7 +590,9 @@ def bernstein_edge_cones(space: LagrangeSpace, faces: np.ndarray) -> BernsteinEd
     faces = np.asarray(faces, dtype=np.int64)
     if not faces.size:
         z = np.zeros(0, dtype=np.int64)
-        return BernsteinEdgeCones(z, z, np.zeros((0, 4, 6)), np.zeros(0))
+        return BernsteinEdgeCones(z, z, np.zeros((0, 4, 6)), np.zeros(0), np.zeros((0, 6)))
+    corners, E = np.eye(3), space.reference.edges
+    midpoints = space.basis(0.5 * (corners[E[:, 0]] + corners[E[:, 1]]))[0]  # edge k is opposite corner k
     face, corner = np.repeat(faces, 3), np.tile(np.arange(3), faces.size)
     r = np.arange(face.size)
     # the corners' gradient rows of each cone's face (k, 3, 2, 6), for these faces only
@@ -571,7 +600,13 @@ def bernstein_edge_cones(space: LagrangeSpace, faces: np.ndarray) -> BernsteinEd
     g = g.reshape(face.size, 3, 2, 6)
     grad_ij = np.concatenate([g[r, (corner + 1) % 3], g[r, (corner + 2) % 3]], axis=1)
     e2 = space.mesh.edge_lengths[space.cell_edges[face, corner]] ** 2
-    return BernsteinEdgeCones(face, corner, grad_ij, e2)
+    return BernsteinEdgeCones(face, corner, grad_ij, e2, midpoints)
+
+
+def _squared_linear(cells: np.ndarray, dv: np.ndarray, at: np.ndarray, bary: np.ndarray) -> np.ndarray:
+    """(p,) the square of the linear interpolant of the vertex values ``dv`` at points ``bary`` (p, c) of cells ``at``
+    (p,)."""
+    return np.einsum("pi,pi->p", bary, dv[cells[at]]) ** 2
 
 
 def _restore_matrix(elim: np.ndarray, M: sp.csr_matrix, n: int) -> sp.csr_matrix:
@@ -582,8 +617,8 @@ def _restore_matrix(elim: np.ndarray, M: sp.csr_matrix, n: int) -> sp.csr_matrix
     return (sp.diags(keep) + P @ M).tocsr()
 
 
-def _on_sources(corners: np.ndarray, edges: np.ndarray, bary: np.ndarray, is_src: np.ndarray,
-                zero_edges: np.ndarray) -> np.ndarray:
+def _on_sources(reference: ReferenceSimplex, corners: np.ndarray, edges: np.ndarray, bary: np.ndarray,
+                is_src: np.ndarray, zero_edges: np.ndarray) -> np.ndarray:
     """Which cone samples lie on sources only: the corners of their support all sources and its edges source edges
     (at a source, on a source edge, on a face of three sources joined by source edges).
 
@@ -594,10 +629,12 @@ def _on_sources(corners: np.ndarray, edges: np.ndarray, bary: np.ndarray, is_src
 
     Parameters
     ----------
+    reference : ReferenceSimplex
+        The cells'.
     corners : (p, dim + 1) int ndarray
         The vertices of each sample's cell.
     edges : (p, dim (dim + 1) / 2) int ndarray
-        Their edges (indices into ``mesh.edges``, ``mesh.reference.edges`` order).
+        Their edges (indices into ``mesh.edges``, ``reference.edges`` order).
     bary : (p, dim + 1) float ndarray
         The samples' barycentric coordinates in those cells.
     is_src : (n,) bool ndarray
@@ -610,7 +647,7 @@ def _on_sources(corners: np.ndarray, edges: np.ndarray, bary: np.ndarray, is_src
     (p,) bool ndarray
     """
     support = bary > 0
-    E = reference_simplex(corners.shape[1] - 1).edges
+    E = reference.edges
     need = support[:, E[:, 0]] & support[:, E[:, 1]]
     return (is_src[corners] | ~support).all(axis=1) & (zero_edges[edges] | ~need).all(axis=1)
 

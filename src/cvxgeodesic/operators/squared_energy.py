@@ -31,7 +31,7 @@ the conormal derivatives of two receiving faces do not cancel (they are equal) a
 wrong for the exact field. Degenerate faces (:attr:`LagrangeSpace.degenerate`) carry no face term and their edges
 no jump term (their shape-function derivatives grow like the inverse altitude).
 
-Every energy is returned as the quadratic ``E(φ) = φᵀQφ + 2gᵀφ + c`` (:class:`P2Energy`); ``Q`` couples the DOFs
+Every energy is returned as the quadratic ``E(φ) = φᵀQφ + 2gᵀφ + c`` (:class:`SquaredEnergy`); ``Q`` couples the DOFs
 of the two faces of each interior edge (:func:`edge_pair_dofs`: nine DOFs per edge).
 """
 
@@ -44,22 +44,22 @@ import scipy.sparse as sp
 
 from ..errors import ParameterError
 from ..validation import check_choice
-from .lagrange import LagrangeSpace, lagrange_basis
+from .lagrange import LagrangeSpace
 
-__all__ = ["JUMPS", "JUMP_SIGMA", "P2_ENERGIES", "P2Energy", "edge_diamonds", "edge_pair_dofs", "face_hessian_energy",
-           "interior_edge_pairs", "jump_energy", "p2_energy", "vertex_jump_energy"]
+__all__ = ["JUMPS", "JUMP_SIGMA", "SQUARED_ENERGIES", "SquaredEnergy", "edge_diamonds", "edge_pair_dofs",
+           "face_hessian_energy", "interior_edge_pairs", "jump_energy", "squared_energy", "vertex_jump_energy"]
 
 #: The order-2 energies by the formulation energy name they stand for (``"dirichlet"`` is the jump term alone).
-P2_ENERGIES = ("hessian", "laplacian", "dirichlet")
+SQUARED_ENERGIES = ("hessian", "laplacian", "dirichlet")
 #: ``σ`` of the jump penalty ``(σ / h_e) ∫_e J² ds``: 1/2 is the Hessian energy of a slope change spread evenly
 #: over the edge's two faces (module docstring). docs/order2.md, "Smoothing at order 2", has the measurements.
 JUMP_SIGMA = 0.5
-#: The two forms of the jump term (:func:`p2_energy`).
+#: The two forms of the jump term (:func:`squared_energy`).
 JUMPS = ("vertex", "p2")
 
 
 @dataclass
-class P2Energy:
+class SquaredEnergy:
     """A quadratic energy ``E(φ) = φᵀQφ + 2gᵀφ + c`` on the P2 DOFs.
 
     Attributes
@@ -142,7 +142,7 @@ def _conormal_rows(space: LagrangeSpace, faces: np.ndarray, corners: np.ndarray,
     bary[r, 0, loc_a] = 1.0
     bary[r, 1, loc_a] = bary[r, 1, loc_b] = 0.5
     bary[r, 2, loc_b] = 1.0
-    _, dN = lagrange_basis(bary.reshape(-1, 3))
+    _, dN = space.basis(bary.reshape(-1, 3))
     g = space.gbasis[faces]  # (k, 2, 3)
     grad = np.einsum("kpai,kci->kpca", dN.reshape(k, 3, 6, 3), g)
     nu = -g[r, :, corners]  # λ_corner grows towards the corner: its gradient points into the face
@@ -264,7 +264,8 @@ def face_hessian_energy(space: LagrangeSpace, kind: str = "hessian") -> tuple[sp
     return _assemble(dofs, blocks, space.n_dofs), g, float(c)
 
 
-def p2_energy(space: LagrangeSpace, name: str, sigma: float = JUMP_SIGMA, jump: str = "vertex") -> P2Energy:
+def squared_energy(space: LagrangeSpace, name: str, sigma: float = JUMP_SIGMA,
+                   jump: str = "vertex") -> SquaredEnergy:
     """A smoothness energy of the order-2 field by name.
 
     Parameters
@@ -282,7 +283,7 @@ def p2_energy(space: LagrangeSpace, name: str, sigma: float = JUMP_SIGMA, jump: 
 
     Returns
     -------
-    P2Energy
+    SquaredEnergy
 
     Examples
     --------
@@ -294,11 +295,11 @@ def p2_energy(space: LagrangeSpace, name: str, sigma: float = JUMP_SIGMA, jump: 
     >>> mesh = cg.grid_plane(6, jitter=0.3)
     >>> space = LagrangeSpace(mesh)
     >>> X = np.vstack([mesh.V, mesh.V[mesh.edges].mean(axis=1)])
-    >>> E = p2_energy(space, "hessian")
+    >>> E = squared_energy(space, "hessian")
     >>> abs(E(((X - [0.3, 0.2, 0.0]) ** 2).sum(axis=1))) < 1e-10
     True
     """
-    check_choice(name, "order-2 energy", P2_ENERGIES, lower=False)
+    check_choice(name, "order-2 energy", SQUARED_ENERGIES, lower=False)
     if not (np.isfinite(sigma) and sigma > 0):
         raise ParameterError(f"sigma must be a finite number > 0, got {sigma!r}")
     check_choice(jump, "jump", JUMPS, lower=False)
@@ -315,4 +316,4 @@ def p2_energy(space: LagrangeSpace, name: str, sigma: float = JUMP_SIGMA, jump: 
         QH, gH, cH = face_hessian_energy(space, name)
         Q, g, c = (QH + QJ).tocsr(), gH + gJ, cH + cJ
     Q.sum_duplicates()
-    return P2Energy(Q, g, c, cliques)
+    return SquaredEnergy(Q, g, c, cliques)
