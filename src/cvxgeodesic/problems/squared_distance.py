@@ -64,7 +64,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from ..errors import DegenerateFacesWarning, MeshError, ParameterError, warn_user
-from ..mesh.reference import TRIANGLE, ReferenceSimplex
+from ..mesh.reference import ReferenceSimplex
 from ..mesh.simplex import SimplexMesh
 from ..operators.lagrange import LagrangeSpace, quadratic_candidates
 from ..operators.metric import Medium
@@ -259,7 +259,7 @@ class SquaredDistanceBuilder:
         builder's own check for a direct user)."""
         check_number(lam, "smoothness weight lambda", low=0)
         smoothed = energy is not None and lam > 0
-        if smoothed and mesh.reference is not TRIANGLE:  # the energies are derived on triangles (squared_energy.py)
+        if smoothed and mesh.reference.dim != 2:  # dimension: the energies are derived on triangles (squared_energy)
             raise ParameterError(f"the order-2 program on {mesh.reference.words.meshes} takes no smoothness energy "
                                  "(surfaces only)")
         if medium is not None and smoothed:  # a field biased without a word, else
