@@ -37,17 +37,17 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike
 
-from .errors import ParameterError, SolverError, SourceError
-from .mesh.closest import segment_point, triangle_point
-from .mesh.convert import as_mesh
-from .mesh.corridor import node_position, straighten_corridor
-from .mesh.locate import POINT_AT, POINT_TYPES, CellPoint, SurfacePoint, VolumePoint, corner_interpolant
-from .mesh.simplex import CELL_FACETS
-from .operators.gradient import gradient_blocks, triangle_frames
-from .operators.metric import make_medium
-from .results import GeodesicResult, remembered_sources
-from .sources import BARY_SNAP, SourceSet, cells_around, closest_points, resolve_sources
-from .validation import as_vertex_field, check_count, is_integer
+from ..errors import ParameterError, SolverError, SourceError
+from ..mesh.closest import segment_point, triangle_point
+from ..mesh.convert import as_mesh
+from ..mesh.locate import POINT_AT, POINT_TYPES, CellPoint, SurfacePoint, VolumePoint, corner_interpolant
+from ..mesh.simplex import CELL_FACETS
+from ..operators.gradient import gradient_blocks, triangle_frames
+from ..operators.metric import make_medium
+from ..results import GeodesicResult, remembered_sources
+from ..sources import BARY_SNAP, SourceSet, cells_around, closest_points, resolve_sources
+from ..validation import as_vertex_field, check_count, is_integer
+from .corridor import node_position, straighten_corridor
 
 #: A distance field as the functions here take it: the vertex values or the result they came from.
 Field: TypeAlias = ArrayLike | GeodesicResult
@@ -620,7 +620,7 @@ def _exact_path(mesh: Any, ss: SourceSet, target, return_surface_points: bool):
     """pygeodesic's exact (MMP) path from ``target`` to the nearest source (points inserted as vertices)."""
     from pygeodesic import geodesic
 
-    from .baselines.points import _unique_points, insert_points
+    from ..baselines.points import _unique_points, insert_points
 
     X = _unique_points(mesh, ss)
     start = target.position(mesh) if isinstance(target, SurfacePoint) else mesh.V[int(target)]
