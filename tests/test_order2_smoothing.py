@@ -287,7 +287,7 @@ def test_smoothed_solves_reuse_one_analysis_and_report_the_objective():
     for src in (0, [5, 70]):
         res = solver.solve(src)
         assert res.info.extra["new_analyses"] == 0
-    phi = res.info.extra["p2_field"].phi
+    phi = res.field.phi
     space = LagrangeSpace(mesh)
     w = space.weights("lumped")
     want = -(w @ phi) / w.sum() + res.info.lam * p2_energy(space, "hessian")(phi)

@@ -77,6 +77,21 @@ def _world_coordinates(X: np.ndarray) -> np.ndarray:
     return X
 
 
+def _triangle_axes(X: np.ndarray) -> np.ndarray:
+    """(k, 2, 3) the axes ``ex``, ``ey`` of each triangle's frame (:func:`_triangle_frame_coordinates`)."""
+    e = X[:, 1] - X[:, 0]
+    normal = np.cross(e, X[:, 2] - X[:, 0])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ex = e / np.linalg.norm(e, axis=1, keepdims=True)
+        nhat = normal / np.linalg.norm(normal, axis=1, keepdims=True)
+    return np.stack([ex, np.cross(nhat, ex)], axis=1)
+
+
+def _world_axes(X: np.ndarray) -> np.ndarray:
+    """(k, 3, 3) a solid cell's frame is the world's: the identity."""
+    return np.broadcast_to(np.eye(3), (X.shape[0], 3, 3))
+
+
 @dataclass(frozen=True, eq=False)
 class ReferenceSimplex:
     """One cell kind: a simplex of dimension :attr:`dim` embedded in 3-D.
@@ -110,6 +125,7 @@ class ReferenceSimplex:
     _frame: Callable[[np.ndarray], np.ndarray] = field(repr=False)
     _point_type: str = field(repr=False)
     _locator: str = field(repr=False)
+    _axes: Callable[[np.ndarray], np.ndarray] = field(repr=False)
 
     @property
     def n_corners(self) -> int:
@@ -138,6 +154,22 @@ class ReferenceSimplex:
         [[[0.0, 0.0], [2.0, 0.0], [0.0, 3.0]]]
         """
         return self._frame(X)
+
+    def frame_axes(self, X: np.ndarray) -> np.ndarray:
+        """The world directions of the axes of each cell's frame (:meth:`local_coordinates`).
+
+        Parameters
+        ----------
+        X : (k, dim + 1, 3) float ndarray
+            The cells' corners in world coordinates.
+
+        Returns
+        -------
+        (k, dim, 3) float ndarray
+            Row ``a`` is axis ``a``: a vector ``g`` of the frame is ``g @ axes`` in the world. Triangles: ``ex``,
+            ``ey``; tetrahedra: the identity. NaN on triangles of zero area.
+        """
+        return self._axes(X)
 
     @property
     def point_type(self) -> type:
@@ -169,6 +201,7 @@ TRIANGLE = ReferenceSimplex(
     source_kinds=("vertex", "point", "curve", "boundary"),
     measure_root=np.sqrt,
     _frame=_triangle_frame_coordinates, _point_type="SurfacePoint", _locator="surface_point",
+    _axes=_triangle_axes,
 )
 
 TETRAHEDRON = ReferenceSimplex(
@@ -180,5 +213,5 @@ TETRAHEDRON = ReferenceSimplex(
                     domain="inside a volume", argument="tets"),
     source_kinds=("vertex", "point", "boundary", "boundary faces"),
     measure_root=np.cbrt,
-    _frame=_world_coordinates, _point_type="VolumePoint", _locator="volume_point",
+    _frame=_world_coordinates, _point_type="VolumePoint", _locator="volume_point", _axes=_world_axes,
 )

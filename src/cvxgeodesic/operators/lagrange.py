@@ -393,12 +393,16 @@ class LagrangeField:
         squared; ``inf`` on components without a source.
     space : LagrangeSpace, optional
         Of ``mesh`` (default: order 2).
+    medium : Medium, optional
+        The travel cost or metric the field measures, on ``mesh`` in its own units (the
+        :class:`~cvxgeodesic.results.Field` protocol's ``medium``); None: Euclidean.
     """
 
-    def __init__(self, mesh: Any, phi: np.ndarray, space: LagrangeSpace | None = None):
+    def __init__(self, mesh: Any, phi: np.ndarray, space: LagrangeSpace | None = None, medium: Medium | None = None):
         self.mesh = mesh
         self.space = space if space is not None else LagrangeSpace(mesh)
         self.phi = np.asarray(phi, dtype=float)
+        self.medium = medium
 
     @property
     def vertex_distance(self) -> np.ndarray:
@@ -448,20 +452,45 @@ class LagrangeField:
         """Distance ``√max(φ, 0)`` at points inside cells (see :meth:`squared_distance_at`)."""
         return np.sqrt(np.maximum(self.squared_distance_at(cells, bary), 0.0))
 
+    def gradient_at(self, cells, bary) -> np.ndarray:
+        """Euclidean gradient ``∇φ / 2√φ`` of the distance at points inside cells, in world coordinates.
+
+        Returns
+        -------
+        (p, 3) float ndarray
+            Zero where ``φ ≤ 0`` (the distance is 0 there), NaN in degenerate cells and where ``φ`` is not finite.
+        """
+        return self._gradient(*self._checked(cells, bary, self.mesh.n_cells))
+
+    def _gradient(self, cells: np.ndarray, bary: np.ndarray) -> np.ndarray:
+        _, dN = lagrange_basis(bary, self.space.order)
+        vals = self.phi[self.space.cell_dofs[cells]]
+        rows = np.einsum("kai,kci->kca", dN, self.space.gbasis[cells])
+        with np.errstate(invalid="ignore"):
+            g = np.einsum("kca,ka->kc", rows, vals)  # ∇φ in each cell's frame
+        mesh = self.space.mesh
+        g = g @ mesh.reference.frame_axes(mesh.V[mesh.cells[cells]]) if g.size else np.zeros((0, 3))
+        phi = self._phi(cells, bary)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out = np.where((phi > 0)[:, None], g / (2 * np.sqrt(np.maximum(phi, 0.0)))[:, None], 0.0)
+        out[~np.isfinite(phi) | self.space.degenerate[cells]] = np.nan
+        return out
+
 
 class SplitLagrangeField(LagrangeField):
     """:class:`LagrangeField` of a :class:`~cvxgeodesic.mesh.split.SplitMesh`, queried with the original mesh's
     cells."""
 
-    def __init__(self, original: Any, split: SplitMesh, phi: np.ndarray, space: LagrangeSpace | None = None):
-        super().__init__(split.mesh, phi, space)
-        self.original = original
+    def __init__(self, original: Any, split: SplitMesh, phi: np.ndarray, space: LagrangeSpace | None = None,
+                 medium: Medium | None = None):
+        super().__init__(split.mesh, phi, space, medium)
+        self.mesh = self.original = original  # the queries name the original cells; the space is the split mesh's
         self.split = split
-
-    @property
-    def vertex_distance(self) -> np.ndarray:
-        return super().vertex_distance[: self.split.n_original]
 
     def squared_distance_at(self, cells, bary) -> np.ndarray:
         cells, bary = self._checked(cells, bary, self.original.n_cells)
         return self._phi(*self.split.locate(cells, bary))
+
+    def gradient_at(self, cells, bary) -> np.ndarray:
+        cells, bary = self._checked(cells, bary, self.original.n_cells)
+        return self._gradient(*self.split.locate(cells, bary))

@@ -1,0 +1,145 @@
+"""The piecewise-linear (P1) field of vertex values on a simplex mesh: the :class:`~cvxgeodesic.results.Field` of
+order-1 solves and baselines.
+
+In each cell the field is ``d(x) = Σ_i λ_i(x) d_i`` and its gradient the constant ``Σ_i d_i ∇λ_i``, with the
+barycentric gradients of :func:`~cvxgeodesic.operators.gradient.gradient_blocks` carried from each cell's frame into
+world coordinates (:meth:`~cvxgeodesic.mesh.reference.ReferenceSimplex.frame_axes`): one code for triangles and
+tetrahedra.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..mesh.locate import corner_interpolant
+from ..mesh.simplex import SimplexMesh
+from .gradient import gradient_blocks
+
+__all__ = ["LinearField", "checked_points", "hat_gradients"]
+
+
+def hat_gradients(mesh: SimplexMesh) -> np.ndarray:
+    """World-coordinate gradients of each cell's barycentric coordinates.
+
+    Parameters
+    ----------
+    mesh : SimplexMesh
+        ``k`` cells of ``dim + 1`` corners.
+
+    Returns
+    -------
+    (k, dim + 1, 3) float ndarray
+        Row ``i`` of cell ``t`` is ``∇λ_i`` (tangent to a triangle's plane); NaN/inf on cells of zero measure.
+    """
+    with np.errstate(invalid="ignore", divide="ignore"):
+        B = gradient_blocks(mesh)  # (k, dim, dim + 1) in each cell's frame
+        axes = mesh.reference.frame_axes(mesh.V[mesh.cells])  # (k, dim, 3)
+        # a sum over the frame's axes, term by term: on tetrahedra (identity axes) the blocks come back exactly
+        return sum((B[:, a, :, None] * axes[:, a, None, :] for a in range(B.shape[1])),
+                   np.zeros((B.shape[0], B.shape[2], 3)))
+
+
+def checked_points(mesh: SimplexMesh, cells: Any, bary: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Points of a mesh's cells as arrays, checked.
+
+    Parameters
+    ----------
+    mesh : SimplexMesh
+    cells : int or (p,) int array_like
+    bary : (dim + 1,) or (p, dim + 1) float array_like
+
+    Returns
+    -------
+    cells : (p,) int64 ndarray
+    bary : (p, dim + 1) float ndarray
+
+    Raises
+    ------
+    ParameterError
+        Cells that are not integers or out of range, or barycentric rows of the wrong shape, negative or not summing
+        to 1.
+    """
+    words, c = mesh.reference.words, mesh.reference.n_corners
+    cells = np.atleast_1d(np.asarray(cells))
+    bary = np.atleast_2d(np.asarray(bary, dtype=float))
+    if cells.ndim != 1 or not np.issubdtype(cells.dtype, np.integer):
+        raise ParameterError(f"{words.argument} must be an int or a 1-D array of {words.one} indices")
+    if bary.shape != (cells.size, c):
+        raise ParameterError(f"bary must have shape ({cells.size}, {c}), got {bary.shape}")
+    if cells.size and (cells.min() < 0 or cells.max() >= mesh.n_cells):
+        raise ParameterError(f"{words.argument} must lie in [0, {mesh.n_cells})")
+    if not np.all(np.isfinite(bary)) or np.any(bary < -1e-9) or np.any(np.abs(bary.sum(axis=1) - 1) > 1e-9):
+        raise ParameterError("bary rows must be >= 0 and sum to 1")
+    return cells.astype(np.int64), bary
+
+
+class LinearField:
+    """The piecewise-linear interpolant of vertex values on a triangle or tetrahedral mesh.
+
+    Parameters
+    ----------
+    mesh : SimplexMesh
+        ``n`` vertices, ``k`` cells.
+    values : (n,) float ndarray
+        The field at the vertices (``inf`` where no source is reachable); kept, not copied.
+    medium : Medium, optional
+        The travel cost or metric the field measures (:mod:`cvxgeodesic.operators.metric`); None: Euclidean.
+
+    Attributes
+    ----------
+    mesh, medium
+        As given.
+    vertex_distance : (n,) float ndarray
+        ``values``.
+    """
+
+    def __init__(self, mesh: SimplexMesh, values: np.ndarray, medium: Any = None) -> None:
+        self.mesh, self.medium = mesh, medium
+        self.vertex_distance = values
+
+    @functools.cached_property
+    def hat_gradients(self) -> np.ndarray:
+        """(k, dim + 1, 3) float ndarray: :func:`hat_gradients` of the mesh."""
+        return hat_gradients(self.mesh)
+
+    @functools.cached_property
+    def cell_gradients(self) -> np.ndarray:
+        """(k, 3) float ndarray: the field's gradient in each cell; NaN on cells of zero measure and on cells with a
+        non-finite corner value."""
+        H = self.hat_gradients
+        with np.errstate(invalid="ignore"):
+            grad = np.einsum("kij,ki->kj", H, self.vertex_distance[self.mesh.cells])
+        grad[~np.isfinite(H).all(axis=(1, 2))] = np.nan
+        grad[self.mesh.degenerate_cells()] = np.nan
+        return grad
+
+    def distance_at(self, cells: Any, bary: Any) -> np.ndarray:
+        """The field at points of cells.
+
+        Parameters
+        ----------
+        cells : int or (p,) int array_like
+        bary : (dim + 1,) or (p, dim + 1) float array_like
+
+        Returns
+        -------
+        (p,) float ndarray
+            ``Σ_i b_i d_i``; a corner of weight 0 does not count (an unreachable corner leaves the others' value).
+        """
+        cells, bary = checked_points(self.mesh, cells, bary)
+        return corner_interpolant(self.vertex_distance[self.mesh.cells[cells]], bary)
+
+    def gradient_at(self, cells: Any, bary: Any) -> np.ndarray:
+        """The field's gradient at points of cells (constant in each cell).
+
+        Returns
+        -------
+        (p, 3) float ndarray
+            In world coordinates (in a triangle's plane); NaN where :attr:`cell_gradients` is.
+        """
+        cells, _ = checked_points(self.mesh, cells, bary)
+        return self.cell_gradients[cells]
