@@ -403,6 +403,7 @@ class LagrangeField:
         self.space = space if space is not None else LagrangeSpace(mesh)
         self.phi = np.asarray(phi, dtype=float)
         self.medium = medium
+        self._dof_mesh = mesh  # the cells of the DOFs, in the field's units (the space may be a scaled copy's)
 
     @property
     def vertex_distance(self) -> np.ndarray:
@@ -462,14 +463,22 @@ class LagrangeField:
         """
         return self._gradient(*self._checked(cells, bary, self.mesh.n_cells))
 
+    @functools.cached_property
+    def _gbasis(self) -> np.ndarray:
+        """(k, dim, dim + 1) ``∇λ_i`` of the DOF mesh's cells in the field's units, zero on degenerate cells."""
+        g = gradient_blocks(self._dof_mesh)
+        g[self.space.degenerate] = 0.0
+        return g
+
     def _gradient(self, cells: np.ndarray, bary: np.ndarray) -> np.ndarray:
         _, dN = lagrange_basis(bary, self.space.order)
         vals = self.phi[self.space.cell_dofs[cells]]
-        rows = np.einsum("kai,kci->kca", dN, self.space.gbasis[cells])
+        rows = np.einsum("kai,kci->kca", dN, self._gbasis[cells])
         with np.errstate(invalid="ignore"):
             g = np.einsum("kca,ka->kc", rows, vals)  # ∇φ in each cell's frame
-        mesh = self.space.mesh
-        g = g @ mesh.reference.frame_axes(mesh.V[mesh.cells[cells]]) if g.size else np.zeros((0, 3))
+        mesh = self._dof_mesh
+        axes = mesh.reference.frame_axes(mesh.V[mesh.cells[cells]])  # (p, dim, 3): the frame in the world
+        g = sum((g[:, a, None] * axes[:, a] for a in range(g.shape[1])), np.zeros((g.shape[0], 3)))
         phi = self._phi(cells, bary)
         with np.errstate(invalid="ignore", divide="ignore"):
             out = np.where((phi > 0)[:, None], g / (2 * np.sqrt(np.maximum(phi, 0.0)))[:, None], 0.0)
