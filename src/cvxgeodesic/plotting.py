@@ -44,6 +44,7 @@ from .evaluation.camera import (
     up_vector,
     view_list,
 )
+from .mesh.convert import MeshLike
 from .mesh.io import as_trimesh
 from .validation import as_vertex_field, check_count, check_number, check_output_path, vertex_indices
 
@@ -465,7 +466,7 @@ def _draw_panels(fig, axes, surf: _Surface, values, cameras, **kwargs) -> None:
 
 
 def plot_field(
-    mesh: Any,
+    mesh: MeshLike,
     values: ArrayLike,
     path: str | os.PathLike,
     *,

@@ -4,15 +4,21 @@ the same, or a :class:`~cvxgeodesic.mesh.tetmesh.TetMesh` for tetrahedra."""
 from __future__ import annotations
 
 import os
-from typing import Any
+from typing import Any, TypeAlias
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import MeshError
+from .simplex import SimplexMesh
 from .tetmesh import TetMesh
 from .trimesh import TriMesh
 
-__all__ = ["as_mesh", "as_trimesh"]
+__all__ = ["MeshLike", "as_mesh", "as_trimesh"]
+
+#: A mesh as the public functions take it: a mesh, a ``(V, F)`` / ``(V, T)`` pair, a file path, or another library's
+#: mesh (trimesh, open3d, meshio), which :func:`as_mesh` converts by duck typing, hence the ``object``.
+MeshLike: TypeAlias = SimplexMesh | tuple[ArrayLike, ArrayLike] | str | os.PathLike | object
 
 
 def _is_tet_pair(mesh: Any) -> bool:

@@ -11,7 +11,6 @@ import dataclasses
 import os
 import re
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -20,7 +19,7 @@ from .._atomic import atomic_write, check_replaceable
 from ..errors import ParameterError
 from ..validation import as_vertex_field
 from ..validation import check_output_path as _check_output_path
-from .convert import as_mesh, as_trimesh
+from .convert import MeshLike, as_mesh, as_trimesh
 from .fileorder import file_order_mesh, file_vertices, to_file_order
 from .formats import ply
 from .formats._common import FieldData, check_file, file_errors, format_error
@@ -48,7 +47,7 @@ _RESERVED = ("x", "y", "z", "vertex", "file_vertex")
 CLOUD_DISTANCE_EXTENSIONS = (".ply", ".npy", ".csv")
 
 
-def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, name: str = "distance",
+def save_distance(path: str | os.PathLike, mesh: MeshLike, distance: ArrayLike, *, name: str = "distance",
                   file_order: bool = False, overwrite_read_only: bool = False) -> Path:
     """Write a per-vertex distance field, atomically.
 
@@ -151,7 +150,7 @@ def save_distance(path: str | os.PathLike, mesh: Any, distance: ArrayLike, *, na
     if not file_order:
         field = FieldData(mesh.V, mesh.cells, d, name, np.arange(mesh.n_vertices), mesh.vertex_map, mesh.name)
     else:  # nothing is welded in a volume: its cells are the mesh's in the file's numbering
-        cells = mesh.file_faces if mesh.dim == 2 else mesh.vertex_map[mesh.cells]
+        cells = mesh.file_faces if isinstance(mesh, TriMesh) else mesh.vertex_map[mesh.cells]
         field = FieldData(file_vertices(mesh), cells, to_file_order(mesh, d), name, mesh.file_index,
                           np.arange(mesh.n_file_vertices), mesh.name)
     if getattr(mesh, "cloud", None) is not None:  # a point cloud's field: its points, not the fans' triangle soup

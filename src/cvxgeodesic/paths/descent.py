@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike
 
 from ..errors import ParameterError, SolverError, SourceError
 from ..mesh.closest import segment_point, triangle_point
-from ..mesh.convert import as_mesh
+from ..mesh.convert import MeshLike, as_mesh
 from ..mesh.locate import CellPoint, SurfacePoint, VolumePoint, corner_interpolant
 from ..mesh.reference import TRIANGLE, ReferenceSimplex
 from ..mesh.simplex import SimplexMesh
@@ -56,9 +56,6 @@ from .corridor import node_position, straighten_corridor
 
 #: A distance field as the functions here take it: the vertex values, the result they came from, or its field.
 FieldLike: TypeAlias = ArrayLike | GeodesicResult | Field
-#: A mesh as the functions here take it: a mesh, or anything :func:`~cvxgeodesic.mesh.convert.as_mesh` converts
-#: (a ``(V, F)`` / ``(V, T)`` pair, a file name, a trimesh, open3d or meshio object: duck-typed, hence ``object``).
-MeshLike: TypeAlias = SimplexMesh | tuple[ArrayLike, ArrayLike] | object
 #: A point of a mesh's cells: on a surface, or inside a volume.
 MeshPoint: TypeAlias = SurfacePoint | VolumePoint
 
