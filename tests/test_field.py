@@ -164,3 +164,12 @@ def test_the_projected_field_gradient_is_the_derivative_of_its_blend():
     clear &= np.abs(v - 0.9) > 1e-3
     assert ramp.sum() > 50 and (~ramp & clear).sum() > 50  # both the ramp and the rest are checked
     np.testing.assert_allclose(along[clear], fd[clear], atol=1e-7)
+
+
+def test_an_order1_field_remembers_its_point_sources():
+    mesh = cg.grid_plane(10, jitter=0.2)
+    point = cg.SurfacePoint(60, [0.2, 0.3, 0.5])
+    res = cg.GeodesicSolver(mesh, "qclp").solve(point)
+    P = cg.geodesic_path(mesh, res.field, 0)
+    np.testing.assert_allclose(P[-1], point.position(mesh), atol=1e-12)  # ends on the point, not on a vertex
+    np.testing.assert_array_equal(P, cg.geodesic_path(mesh, res, 0))

@@ -248,6 +248,8 @@ def _source_set(mesh: SimplexMesh, distance: Any, result: GeodesicResult | None,
         return resolve_sources(mesh, sources)
     if result is not None:
         return result.source_set if result.source_set is not None else resolve_sources(mesh, result.sources)
+    if isinstance(distance, Field):  # a result's field: its vertex values may be the result's remembered array
+        distance = distance.vertex_distance
     return remembered_sources(distance)  # an array returned by geodesic_distance
 
 
@@ -459,10 +461,10 @@ def geodesic_path(mesh: MeshLike, distance: FieldLike, target: Any, *, sources: 
         A vertex index or a point; a position stands for its closest surface point (the point inside the volume).
     sources : optional
         The field's sources (anything :meth:`GeodesicSolver.solve` takes), needed to end a path on a
-        point, curve or face source when ``distance`` is a plain array that did not come from this
-        library (an array returned by :func:`geodesic_distance` or ``GeodesicResult.distance``
-        remembers its sources). Without them, the sources are the vertices where ``distance``
-        takes its minimum (0 for vertex sources).
+        point, curve or face source when ``distance`` is a plain array (or a field) that did not come from
+        this library (an array returned by :func:`geodesic_distance` or ``GeodesicResult.distance``
+        remembers its sources, and so does an order-1 ``GeodesicResult.field``). Without them, the sources
+        are the vertices where ``distance`` takes its minimum (0 for vertex sources).
     return_surface_points : bool
         Also return the cell (face, or tetrahedron) and barycentric coordinates of every path point.
     straighten : bool
@@ -505,7 +507,7 @@ def geodesic_path(mesh: MeshLike, distance: FieldLike, target: Any, *, sources: 
     """
     mesh = as_mesh(mesh)
     d, result, field = _field(mesh, distance)
-    p1 = LinearField(mesh, d)  # the corridor follows the vertex values' interpolant: the straightening finds the path
+    p1 = LinearField(mesh, d)  # the walk's cells, and its slope wherever the field's own gradient is not asked
     geo = Cells(mesh, p1.hat_gradients)
     ends = _Ends(mesh, geo, d, distance, result, sources)
     medium = _path_medium(mesh, field, cost, metric)
