@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import cvxgeodesic as cg
+from cvxgeodesic.errors import ParameterError
 from cvxgeodesic.mesh.transfer import ProjectedField, SourcePatch
 from cvxgeodesic.operators.lagrange import LagrangeField, SplitLagrangeField
 from cvxgeodesic.operators.linear_field import LinearField
@@ -173,3 +174,16 @@ def test_an_order1_field_remembers_its_point_sources():
     P = cg.geodesic_path(mesh, res.field, 0)
     np.testing.assert_allclose(P[-1], point.position(mesh), atol=1e-12)  # ends on the point, not on a vertex
     np.testing.assert_array_equal(P, cg.geodesic_path(mesh, res, 0))
+
+
+@pytest.mark.parametrize("kw", [{}, {"order": 2}, {"order": 2, "resolution": 150}], ids=["P1", "P2", "adapted"])
+def test_a_field_names_the_bad_cell_or_coordinates(kw):
+    mesh = cg.grid_plane(10, jitter=0.2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fld = cg.GeodesicSolver(mesh, "qclp", **kw).solve(0).field
+    for ask in (fld.distance_at, fld.gradient_at):
+        with pytest.raises(ParameterError, match=rf"faces must lie in \[0, {mesh.n_faces}\)"):
+            ask([mesh.n_faces], [[1.0, 0.0, 0.0]])
+        with pytest.raises(ParameterError, match="bary must have shape"):
+            ask([0], [[0.5, 0.5]])

@@ -16,7 +16,7 @@ import numpy as np
 
 from .closest import closest_point_index
 from .geometry import clipped_barycentric
-from .locate import bary_positions
+from .locate import bary_positions, checked_points
 from .trimesh import TriMesh
 
 __all__ = ["ProjectedField", "SourcePatch", "SurfaceTransfer", "mix_patches"]
@@ -222,8 +222,7 @@ class ProjectedField:
 
     def _projected(self, faces: Any, bary: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """``(faces, bary)`` as arrays and the closest points of those points on ``solve_mesh`` (faces, bary)."""
-        faces = np.atleast_1d(np.asarray(faces, dtype=np.int64))
-        B = np.atleast_2d(np.asarray(bary, dtype=float))
+        faces, B = checked_points(self.mesh, faces, bary)
         X = bary_positions(self.mesh, faces, B)
         cf, cb, _ = closest_point_index(self.solve_mesh).query(np.ascontiguousarray(X))
         return faces, B, cf, cb

@@ -14,12 +14,11 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ParameterError
-from ..mesh.locate import corner_interpolant
+from ..mesh.locate import checked_points, corner_interpolant
 from ..mesh.simplex import SimplexMesh
 from .gradient import gradient_blocks
 
-__all__ = ["LinearField", "checked_points", "hat_gradients"]
+__all__ = ["LinearField", "hat_gradients"]
 
 
 def hat_gradients(mesh: SimplexMesh) -> np.ndarray:
@@ -41,40 +40,6 @@ def hat_gradients(mesh: SimplexMesh) -> np.ndarray:
         # a sum over the frame's axes, term by term: on tetrahedra (identity axes) the blocks come back exactly
         return sum((B[:, a, :, None] * axes[:, a, None, :] for a in range(B.shape[1])),
                    np.zeros((B.shape[0], B.shape[2], 3)))
-
-
-def checked_points(mesh: SimplexMesh, cells: Any, bary: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Points of a mesh's cells as arrays, checked.
-
-    Parameters
-    ----------
-    mesh : SimplexMesh
-    cells : int or (p,) int array_like
-    bary : (dim + 1,) or (p, dim + 1) float array_like
-
-    Returns
-    -------
-    cells : (p,) int64 ndarray
-    bary : (p, dim + 1) float ndarray
-
-    Raises
-    ------
-    ParameterError
-        Cells that are not integers or out of range, or barycentric rows of the wrong shape, negative or not summing
-        to 1.
-    """
-    words, c = mesh.reference.words, mesh.reference.n_corners
-    cells = np.atleast_1d(np.asarray(cells))
-    bary = np.atleast_2d(np.asarray(bary, dtype=float))
-    if cells.ndim != 1 or not np.issubdtype(cells.dtype, np.integer):
-        raise ParameterError(f"{words.argument} must be an int or a 1-D array of {words.one} indices")
-    if bary.shape != (cells.size, c):
-        raise ParameterError(f"bary must have shape ({cells.size}, {c}), got {bary.shape}")
-    if cells.size and (cells.min() < 0 or cells.max() >= mesh.n_cells):
-        raise ParameterError(f"{words.argument} must lie in [0, {mesh.n_cells})")
-    if not np.all(np.isfinite(bary)) or np.any(bary < -1e-9) or np.any(np.abs(bary.sum(axis=1) - 1) > 1e-9):
-        raise ParameterError("bary rows must be >= 0 and sum to 1")
-    return cells.astype(np.int64), bary
 
 
 class LinearField:
