@@ -77,19 +77,21 @@ def _world_coordinates(X: np.ndarray) -> np.ndarray:
     return X
 
 
-def _triangle_axes(X: np.ndarray) -> np.ndarray:
-    """(k, 2, 3) the axes ``ex``, ``ey`` of each triangle's frame (:func:`_triangle_frame_coordinates`)."""
+def _triangle_to_world(G: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """(k, m, 3) vectors ``G`` (k, 2, m) of each triangle's frame (:func:`_triangle_frame_coordinates`) in the
+    world: ``G_x ex + G_y ey``."""
     e = X[:, 1] - X[:, 0]
     normal = np.cross(e, X[:, 2] - X[:, 0])
     with np.errstate(divide="ignore", invalid="ignore"):
         ex = e / np.linalg.norm(e, axis=1, keepdims=True)
         nhat = normal / np.linalg.norm(normal, axis=1, keepdims=True)
-    return np.stack([ex, np.cross(nhat, ex)], axis=1)
+        ey = np.cross(nhat, ex)
+        return G[:, 0, :, None] * ex[:, None, :] + G[:, 1, :, None] * ey[:, None, :]
 
 
-def _world_axes(X: np.ndarray) -> np.ndarray:
-    """(k, 3, 3) a solid cell's frame is the world's: the identity."""
-    return np.broadcast_to(np.eye(3), (X.shape[0], 3, 3))
+def _world_to_world(G: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """A solid cell's frame is the world's: (k, m, 3) the vectors ``G`` (k, 3, m) as rows."""
+    return np.ascontiguousarray(np.swapaxes(G, 1, 2))
 
 
 @dataclass(frozen=True, eq=False)
@@ -125,7 +127,7 @@ class ReferenceSimplex:
     _frame: Callable[[np.ndarray], np.ndarray] = field(repr=False)
     _point_type: str = field(repr=False)
     _locator: str = field(repr=False)
-    _axes: Callable[[np.ndarray], np.ndarray] = field(repr=False)
+    _to_world: Callable[[np.ndarray, np.ndarray], np.ndarray] = field(repr=False)
 
     @property
     def n_corners(self) -> int:
@@ -155,21 +157,31 @@ class ReferenceSimplex:
         """
         return self._frame(X)
 
-    def frame_axes(self, X: np.ndarray) -> np.ndarray:
-        """The world directions of the axes of each cell's frame (:meth:`local_coordinates`).
+    def to_world(self, G: np.ndarray, X: np.ndarray) -> np.ndarray:
+        """Vectors given in each cell's frame (:meth:`local_coordinates`), in world coordinates.
 
         Parameters
         ----------
+        G : (k, dim, m) float ndarray
+            ``m`` vectors per cell, their frame components along axis 1 (the layout of
+            :func:`~cvxgeodesic.operators.gradient.gradient_blocks`).
         X : (k, dim + 1, 3) float ndarray
             The cells' corners in world coordinates.
 
         Returns
         -------
-        (k, dim, 3) float ndarray
-            Row ``a`` is axis ``a``: a vector ``g`` of the frame is ``g @ axes`` in the world. Triangles: ``ex``,
-            ``ey``; tetrahedra: the identity. NaN on triangles of zero area.
+        (k, m, 3) float ndarray
+            Triangles: ``G_x ex + G_y ey`` (in each face's plane; NaN on faces of zero area); tetrahedra: ``G``
+            itself, transposed.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> X = np.array([[[0.0, 0, 0], [0, 2, 0], [0, 0, 3]]])  # a face in the y-z plane: ex = y
+        >>> TRIANGLE.to_world(np.array([[[1.0], [0.0]]]), X).tolist()
+        [[[0.0, 1.0, 0.0]]]
         """
-        return self._axes(X)
+        return self._to_world(G, X)
 
     @property
     def point_type(self) -> type:
@@ -201,7 +213,7 @@ TRIANGLE = ReferenceSimplex(
     source_kinds=("vertex", "point", "curve", "boundary"),
     measure_root=np.sqrt,
     _frame=_triangle_frame_coordinates, _point_type="SurfacePoint", _locator="surface_point",
-    _axes=_triangle_axes,
+    _to_world=_triangle_to_world,
 )
 
 TETRAHEDRON = ReferenceSimplex(
@@ -213,5 +225,5 @@ TETRAHEDRON = ReferenceSimplex(
                     domain="inside a volume", argument="tets"),
     source_kinds=("vertex", "point", "boundary", "boundary faces"),
     measure_root=np.cbrt,
-    _frame=_world_coordinates, _point_type="VolumePoint", _locator="volume_point", _axes=_world_axes,
+    _frame=_world_coordinates, _point_type="VolumePoint", _locator="volume_point", _to_world=_world_to_world,
 )

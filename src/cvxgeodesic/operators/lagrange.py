@@ -477,8 +477,7 @@ class LagrangeField:
         with np.errstate(invalid="ignore"):
             g = np.einsum("kca,ka->kc", rows, vals)  # ∇φ in each cell's frame
         mesh = self._dof_mesh
-        axes = mesh.reference.frame_axes(mesh.V[mesh.cells[cells]])  # (p, dim, 3): the frame in the world
-        g = sum((g[:, a, None] * axes[:, a] for a in range(g.shape[1])), np.zeros((g.shape[0], 3)))
+        g = mesh.reference.to_world(g[:, :, None], mesh.V[mesh.cells[cells]])[:, 0]
         phi = self._phi(cells, bary)
         with np.errstate(invalid="ignore", divide="ignore"):
             out = np.where((phi > 0)[:, None], g / (2 * np.sqrt(np.maximum(phi, 0.0)))[:, None], 0.0)

@@ -3,7 +3,7 @@ order-1 solves and baselines.
 
 In each cell the field is ``d(x) = Σ_i λ_i(x) d_i`` and its gradient the constant ``Σ_i d_i ∇λ_i``, with the
 barycentric gradients of :func:`~cvxgeodesic.operators.gradient.gradient_blocks` carried from each cell's frame into
-world coordinates (:meth:`~cvxgeodesic.mesh.reference.ReferenceSimplex.frame_axes`): one code for triangles and
+world coordinates (:meth:`~cvxgeodesic.mesh.reference.ReferenceSimplex.to_world`): one code for triangles and
 tetrahedra.
 """
 
@@ -36,10 +36,7 @@ def hat_gradients(mesh: SimplexMesh) -> np.ndarray:
     """
     with np.errstate(invalid="ignore", divide="ignore"):
         B = gradient_blocks(mesh)  # (k, dim, dim + 1) in each cell's frame
-        axes = mesh.reference.frame_axes(mesh.V[mesh.cells])  # (k, dim, 3)
-        # a sum over the frame's axes, term by term: on tetrahedra (identity axes) the blocks come back exactly
-        return sum((B[:, a, :, None] * axes[:, a, None, :] for a in range(B.shape[1])),
-                   np.zeros((B.shape[0], B.shape[2], 3)))
+        return mesh.reference.to_world(B, mesh.V[mesh.cells])
 
 
 class LinearField:
