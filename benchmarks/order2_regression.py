@@ -71,7 +71,7 @@ def record(out_path: str, quick: bool, repeat: int) -> None:
         info = res.info
         key = label.replace(" ", "_")
         data[key + "/d"] = res.distance
-        data[key + "/phi"] = info.extra["p2_field"].phi
+        data[key + "/phi"] = res.field.phi
         last = info.extra.get("round_iterations", [info.iterations])[-1]  # the last cutting-plane round's solve
         data[key + "/meta"] = np.array([last, best, mesh.bbox_diagonal, info.status == "optimal",
                                         info.solver == "ipm"])

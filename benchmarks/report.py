@@ -977,7 +977,7 @@ def smooth_plane_case(plan) -> tuple[dict, list]:
                      "lowered_max": float(np.max(exact - d)),
                      "off_ridge_max": float(np.abs(d - exact)[off].max() / exact.max())}
         if order == 2:
-            fields[tag] = np.sqrt(np.maximum(res.info.extra["p2_field"].phi, 0.0))
+            fields[tag] = np.sqrt(np.maximum(res.field.phi, 0.0))
         else:
             fields[tag] = np.concatenate([d, d[mesh.edges].mean(axis=1)])  # linear along the edges
     return {"mesh": mesh.name, "faces": mesh.n_faces, "sources": s, "rows": rows}, [mesh, space, fields]

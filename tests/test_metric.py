@@ -106,7 +106,7 @@ def test_the_solve_records_the_medium():
     mesh = cg.icosphere(1)
     res = cg.GeodesicSolver(mesh, "qclp", cost=np.ones(mesh.n_vertices), metric=np.eye(3)).solve(0)
     assert res.info.extra["cost"] == "per-vertex" and res.info.extra["metric"] == "constant"
-    assert isinstance(res.info.extra["medium"], Medium)
+    assert isinstance(res.field.medium, Medium) and "medium" not in res.info.extra
     # as many vertices as faces: the array is read per vertex, and a note says so
     V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float)
     res = cg.GeodesicSolver((V, np.array([[0, 1, 2]])), "qclp", cost=np.array([1.0])).solve(0)
@@ -175,7 +175,7 @@ def test_constant_anisotropic_metric_is_exact_at_order2():
         exact = _metric_distance(mesh.V, x0, ANISO)
         assert _rel(res.distance, exact) < 1e-5  # measured 7e-10 (vertex), 7e-9 (point)
         # inside faces too: the P2 field is the exact quadratic
-        fld = res.info.extra["p2_field"]
+        fld = res.field
         faces = np.arange(0, mesh.n_faces, 7)
         bary = np.tile([0.2, 0.5, 0.3], (faces.size, 1))
         pts = np.einsum("kc,kcj->kj", bary, mesh.V[mesh.F[faces]])

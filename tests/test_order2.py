@@ -182,7 +182,7 @@ def test_an_edge_point_is_one_source_at_order_2():
 def test_field_inside_faces_flat():
     mesh = delaunay_mesh(120)
     res = order2(mesh, 3)
-    fld = res.info.extra["p2_field"]
+    fld = res.field
     rng = np.random.default_rng(0)
     faces = rng.integers(0, mesh.n_faces, 300)
     bary = rng.dirichlet([1, 1, 1], 300)
@@ -197,7 +197,7 @@ def test_field_inside_split_face_after_point_source():
     mesh = cg.grid_plane(10, jitter=0.3, seed=5)
     src = pt(12, (0.2, 0.5, 0.3))
     res = order2(mesh, src)
-    fld = res.info.extra["p2_field"]
+    fld = res.field
     p = src.position(mesh)
     bary = np.array([[0.6, 0.2, 0.2], [0.1, 0.1, 0.8], src.bary])
     pts = bary @ mesh.V[mesh.F[12]]
@@ -673,7 +673,7 @@ def test_a_midpoint_in_no_cone_is_tied_to_its_edge():
     assert m in prog.eliminated[0] and prog.problem.fixed_mask[m] and prog.problem.q[m] == 0
     res = order2(mesh, 0)
     assert res.info.status == "optimal"
-    phi = res.info.extra["p2_field"].phi
+    phi = res.field.phi
     assert phi[m] == pytest.approx(0.5 * (phi[1] + phi[4]), rel=1e-12)
 
 

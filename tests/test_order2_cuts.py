@@ -58,7 +58,7 @@ def test_the_rounds_stop_when_a_round_no_longer_moves_the_field():
     res = cg.GeodesicSolver(m, "qclp", order=2).solve(c)
     rounds = res.info.extra["rounds"]
     assert 1 <= rounds < o2.REFINE_ROUNDS
-    fld = res.info.extra["p2_field"]
+    fld = res.field
     space = fld.space
     x = fld.phi / o2.unit_mesh(m)[1] ** 2  # the program's field, on the unit mesh
     left, _ = space.violations(x, o2.REFINE_TOL, np.flatnonzero(space.flat_cells))

@@ -288,7 +288,7 @@ def test_smoothed_solves_reuse_one_analysis_and_report_the_objective():
     for src in (0, [5, 70]):
         res = solver.solve(src)
         assert res.info.extra["new_analyses"] == 0
-    phi = res.info.extra["p2_field"].phi
+    phi = res.field.phi
     space = LagrangeSpace(mesh)
     w = space.weights()
     want = -(w @ phi) / w.sum() + res.info.lam * squared_energy(space, "hessian")(phi)

@@ -144,7 +144,7 @@ def test_domain_recipe_mesh_has_the_vocabulary(square):
     # the gradient of a linear function, in the reference's frame and back in world coordinates
     f = mesh.V @ [2.0, -3.0, 0.0]
     g = np.einsum("kdc,kc->kd", gradient_blocks(mesh), f[mesh.cells])
-    np.testing.assert_allclose(PLANAR.world_vectors(g[:, :, None], mesh.V[mesh.cells])[:, 0], [[2.0, -3.0, 0.0]] * 200,
+    np.testing.assert_allclose(PLANAR.to_world(g[:, :, None], mesh.V[mesh.cells])[:, 0], [[2.0, -3.0, 0.0]] * 200,
                                atol=1e-12)
 
 

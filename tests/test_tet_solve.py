@@ -311,7 +311,7 @@ def test_a_midpoint_in_no_cone_is_tied_to_its_edge_in_a_solid():
         res = cg.GeodesicSolver(mesh, "qclp", order=2).solve(src)
     assert res.info.status == "optimal" and src not in B
     e = int(np.flatnonzero((mesh.edges == np.sort([B[0], m.n_vertices])).all(axis=1))[0])
-    phi = res.info.extra["p2_field"].phi
+    phi = res.field.phi
     assert phi[mesh.n_vertices + e] == pytest.approx(0.5 * (phi[B[0]] + phi[m.n_vertices]), rel=1e-12)
 
 

@@ -142,7 +142,7 @@ class GeodesicSolver:
         ``2``: second-order elements for the squared distance (``method="qclp"`` and the ``qcqp``
         methods; :mod:`cvxgeodesic.problems.squared_distance`, ``docs/order2.md``): exact on flat regions whatever
         the triangle shapes; sources may be vertices, SurfacePoints (at most one per face) and
-        ``"boundary"``; ``info.extra["p2_field"].distance_at(faces, bary)`` evaluates the field
+        ``"boundary"``; ``result.field.distance_at(faces, bary)`` evaluates the field
         inside faces. The same solvers and fallback as order 1. Not with ``multires`` or the
         baselines. The smoothed methods take energies of ``φ = d²`` that vanish on the exact
         field of flat regions (:mod:`cvxgeodesic.operators.squared_energy`) with the dimensionless
@@ -389,8 +389,8 @@ class GeodesicSolver:
         res.info.setup_time = self.setup_time
         res.info.solve_time += source_time
         res.info.extra["source_time"] = source_time
-        if self.medium is not None:  # what the field measures: {"cost": "per-vertex", ...} and the medium itself
-            res.info.extra.update(self.medium.describe(), medium=self.medium)
+        if self.medium is not None:  # what the field measures: {"cost": "per-vertex", ...}; the medium: res.field
+            res.info.extra.update(self.medium.describe())
         return res
 
     def solve_many(self, sources_list: Iterable[Any], *, progress: bool = False) -> list[GeodesicResult]:

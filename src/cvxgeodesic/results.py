@@ -1,4 +1,5 @@
-"""Result types of a solve: :class:`SolveInfo` and :class:`GeodesicResult` (a leaf module: NumPy only).
+"""Result types of a solve: :class:`SolveInfo`, :class:`GeodesicResult` and the :class:`Field` protocol of the
+field it holds (a leaf module: NumPy only).
 
 Every solve strategy (:mod:`cvxgeodesic.strategies`) returns a :class:`GeodesicResult`; both types are
 re-exported unchanged by :mod:`cvxgeodesic.api` and the package top level.
@@ -8,11 +9,11 @@ from __future__ import annotations
 
 import weakref
 from dataclasses import asdict, dataclass, field
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-__all__ = ["GeodesicResult", "SolveInfo", "remember_sources", "remembered_sources"]
+__all__ = ["Field", "GeodesicResult", "SolveInfo", "remember_sources", "remembered_sources"]
 
 # fields computed from point, curve or boundary sources remember them, so that a plain array returned by
 # geodesic_distance still leads geodesic_path to the source points (id -> (weak reference, source set))
@@ -36,6 +37,46 @@ def remembered_sources(distance: Any) -> Any:
     if entry is None or entry[0]() is not distance:
         return None
     return entry[1]
+
+
+@runtime_checkable
+class Field(Protocol):
+    """A distance field on a mesh, answered at points of its cells: what :attr:`GeodesicResult.field` holds.
+
+    Implemented by :class:`~cvxgeodesic.operators.linear_field.LinearField` (order 1 and the baselines: the
+    piecewise-linear interpolant of the vertex values), :class:`~cvxgeodesic.operators.lagrange.LagrangeField` and
+    :class:`~cvxgeodesic.operators.lagrange.SplitLagrangeField` (order 2: ``√φ`` of the squared distance), and
+    :class:`~cvxgeodesic.mesh.transfer.ProjectedField` (an adapted solve: a field of another mesh of the surface).
+    :func:`~cvxgeodesic.paths.distance_at` and :func:`~cvxgeodesic.paths.geodesic_path` ask it.
+
+    Attributes
+    ----------
+    mesh : SimplexMesh
+        The mesh whose cells the queries name (``n`` vertices, ``k`` cells of ``dim + 1`` corners). Typed ``Any``
+        here: this module sits below the mesh classes.
+    medium : Medium or None
+        The travel cost or metric the field measures (:mod:`cvxgeodesic.operators.metric`); None: Euclidean.
+    vertex_distance : (n,) float ndarray
+        The field at the vertices (``inf`` where no source is reachable): ``GeodesicResult.distance``.
+    """
+
+    @property
+    def mesh(self) -> Any: ...
+
+    @property
+    def medium(self) -> Any: ...
+
+    @property
+    def vertex_distance(self) -> np.ndarray: ...
+
+    def distance_at(self, cells: Any, bary: Any) -> np.ndarray:
+        """(p,) float ndarray: the field at points ``bary`` (p, dim + 1) of ``cells`` (p,)."""
+        ...
+
+    def gradient_at(self, cells: Any, bary: Any) -> np.ndarray:
+        """(p, 3) float ndarray: the field's (Euclidean) gradient there, in world coordinates; zero where the field
+        is 0 around a source, NaN in cells of zero measure or without a finite value."""
+        ...
 
 
 @dataclass
@@ -90,9 +131,9 @@ class SolveInfo:
         - Clarabel: ``clarabel_setup_time``, ``clarabel_solve_time``; after a retry ``ipm_failure`` (the
           interior-point status that caused it);
         - the ``d ≥ 0`` re-solve: ``negative_min``, ``resolved_nonnegative``;
-        - ``order=2``: ``order``, ``p2_field`` (:class:`~cvxgeodesic.operators.lagrange.LagrangeField`), ``n_dofs``,
-          ``n_cones``, ``rounds`` (cutting-plane rounds), ``round_iterations`` (iterations of each round's solve;
-          ``iterations`` is their sum);
+        - ``order=2``: ``order``, ``n_dofs``, ``n_cones``, ``rounds`` (cutting-plane rounds), ``round_iterations``
+          (iterations of each round's solve; ``iterations`` is their sum); the field itself is
+          :attr:`GeodesicResult.field`;
         - ``multires``: ``multires`` (the coarse mesh and the transfer), ``coarse``;
         - baselines: the library's own parameters (e.g. ``t_coef`` of the heat method).
     """
@@ -136,6 +177,8 @@ class GeodesicResult:
     sources : (k,) int64 ndarray
         The source vertices (fixed at 0). With point, curve or boundary sources: the vertices among them
         (points that lie on a vertex, boundary vertices), possibly none; the whole set is ``source_set``.
+    field : Field
+        The field inside the cells (values and gradients at any point; its medium), ``distance`` at the vertices.
     source_set : SourceSet or None
         The normalized sources (:func:`cvxgeodesic.sources.resolve_sources`) when they were not all
         vertices; ``None`` otherwise.
@@ -144,6 +187,7 @@ class GeodesicResult:
     distance: np.ndarray
     info: SolveInfo
     sources: np.ndarray
+    field: Field
     source_set: Any = None
 
     def __post_init__(self) -> None:

@@ -454,3 +454,37 @@ def corner_interpolant(Dv: np.ndarray, bary: np.ndarray) -> np.ndarray:
     (``inf · 0`` is NaN: a point whose cell touches an unreachable vertex takes the other corners' value)."""
     with np.errstate(invalid="ignore"):
         return np.where(bary > 0, bary * Dv, 0.0).sum(axis=1)
+
+
+def checked_points(mesh: SimplexMesh, cells: Any, bary: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Points of a mesh's cells as arrays, checked.
+
+    Parameters
+    ----------
+    mesh : SimplexMesh
+    cells : int or (p,) int array_like
+    bary : (dim + 1,) or (p, dim + 1) float array_like
+
+    Returns
+    -------
+    cells : (p,) int64 ndarray
+    bary : (p, dim + 1) float ndarray
+
+    Raises
+    ------
+    ParameterError
+        Cells that are not integers or out of range, or barycentric rows of the wrong shape, negative or not summing
+        to 1.
+    """
+    words, c = mesh.reference.words, mesh.reference.n_corners
+    cells = np.atleast_1d(np.asarray(cells))
+    bary = np.atleast_2d(np.asarray(bary, dtype=float))
+    if cells.ndim != 1 or not np.issubdtype(cells.dtype, np.integer):
+        raise ParameterError(f"{words.argument} must be an int or a 1-D array of {words.one} indices")
+    if bary.shape != (cells.size, c):
+        raise ParameterError(f"bary must have shape ({cells.size}, {c}), got {bary.shape}")
+    if cells.size and (cells.min() < 0 or cells.max() >= mesh.n_cells):
+        raise ParameterError(f"{words.argument} must lie in [0, {mesh.n_cells})")
+    if not np.all(np.isfinite(bary)) or np.any(bary < -1e-9) or np.any(np.abs(bary.sum(axis=1) - 1) > 1e-9):
+        raise ParameterError("bary rows must be >= 0 and sum to 1")
+    return cells.astype(np.int64), bary

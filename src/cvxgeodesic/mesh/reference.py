@@ -67,27 +67,23 @@ class CellWords:
     repeat_remedy: str = "remove them first"
 
 
-def _triangle_frame_coordinates(X: np.ndarray) -> np.ndarray:
-    """(k, 3, 2) corners of triangles (k, 3, 3) in each one's plane: ``ex`` along corner 0→1, ``ey = n̂ × ex``."""
+def _triangle_axes(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(k, 3) each, the orthonormal frame of triangles (k, 3, 3): ``ex`` along corner 0→1, ``ey = n̂ × ex`` (NaN on
+    triangles of zero area, without a warning)."""
     e = X[:, 1] - X[:, 0]
     normal = np.cross(e, X[:, 2] - X[:, 0])
     with np.errstate(divide="ignore", invalid="ignore"):
         ex = e / np.linalg.norm(e, axis=1, keepdims=True)
         nhat = normal / np.linalg.norm(normal, axis=1, keepdims=True)
-    ey = np.cross(nhat, ex)
+        ey = np.cross(nhat, ex)
+    return ex, ey
+
+
+def _triangle_frame_coordinates(X: np.ndarray) -> np.ndarray:
+    """(k, 3, 2) corners of triangles (k, 3, 3) in each one's plane (:func:`_triangle_axes`), corner 0 at 0."""
+    ex, ey = _triangle_axes(X)
     rel = X - X[:, :1]
     return np.stack([np.einsum("kvx,kx->kv", rel, ex), np.einsum("kvx,kx->kv", rel, ey)], axis=2)
-
-
-def _triangle_frame_vectors(G: np.ndarray, X: np.ndarray) -> np.ndarray:
-    """(k, m, 3) world vectors of ``G`` (k, 2, m), given in the frames of :func:`_triangle_frame_coordinates`."""
-    e = X[:, 1] - X[:, 0]
-    normal = np.cross(e, X[:, 2] - X[:, 0])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ex = e / np.linalg.norm(e, axis=1, keepdims=True)
-        nhat = normal / np.linalg.norm(normal, axis=1, keepdims=True)
-    ey = np.cross(nhat, ex)
-    return G[:, 0, :, None] * ex[:, None, :] + G[:, 1, :, None] * ey[:, None, :]
 
 
 def _world_coordinates(X: np.ndarray) -> np.ndarray:
@@ -95,9 +91,16 @@ def _world_coordinates(X: np.ndarray) -> np.ndarray:
     return X
 
 
-def _world_vectors(G: np.ndarray, X: np.ndarray) -> np.ndarray:
-    """(k, m, 3): vectors ``G`` (k, 3, m) already in world coordinates, one per row."""
-    return np.ascontiguousarray(G.transpose(0, 2, 1))
+def _triangle_to_world(G: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """(k, m, 3) vectors ``G`` (k, 2, m) of each triangle's frame (:func:`_triangle_frame_coordinates`) in the
+    world: ``G_x ex + G_y ey``."""
+    ex, ey = _triangle_axes(X)
+    return G[:, 0, :, None] * ex[:, None, :] + G[:, 1, :, None] * ey[:, None, :]
+
+
+def _world_to_world(G: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """A solid cell's frame is the world's: (k, m, 3) the vectors ``G`` (k, 3, m) as rows."""
+    return np.ascontiguousarray(np.swapaxes(G, 1, 2))
 
 
 def _triangle_normals(X: np.ndarray) -> np.ndarray:
@@ -203,21 +206,29 @@ class ReferenceSimplex:
         """
         return self._frame(X)
 
-    def world_vectors(self, G: np.ndarray, X: np.ndarray) -> np.ndarray:
-        """Vectors given in the cells' frames (:meth:`local_coordinates`), in world coordinates.
+    def to_world(self, G: np.ndarray, X: np.ndarray) -> np.ndarray:
+        """Vectors given in each cell's frame (:meth:`local_coordinates`), in world coordinates.
 
         Parameters
         ----------
         G : (k, dim, m) float ndarray
-            ``m`` vectors per cell in its frame (a cell's gradient blocks, say).
+            ``m`` vectors per cell, their frame components along axis 1 (the layout of
+            :func:`~cvxgeodesic.operators.gradient.gradient_blocks`).
         X : (k, dim + 1, 3) float ndarray
             The cells' corners in world coordinates.
 
         Returns
         -------
         (k, m, 3) float ndarray
-            Row ``j`` of cell ``t``: ``Σ_i G[t, i, j] e_i`` with ``e_i`` the frame's axes (NaN on triangles of zero
-            area).
+            Triangles: ``G_x ex + G_y ey`` (in each face's plane; NaN on faces of zero area); tetrahedra: ``G``
+            itself, transposed.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> X = np.array([[[0.0, 0, 0], [0, 2, 0], [0, 0, 3]]])  # a face in the y-z plane: ex = y
+        >>> TRIANGLE.to_world(np.array([[[1.0], [0.0]]]), X).tolist()
+        [[[0.0, 1.0, 0.0]]]
         """
         return self._to_world(G, X)
 
@@ -271,7 +282,7 @@ TRIANGLE = ReferenceSimplex(
                     repeat_remedy="remove degenerate faces first"),
     source_kinds=("vertex", "point", "curve", "boundary"),
     measure_root=np.sqrt, shared_points=True,
-    _frame=_triangle_frame_coordinates, _to_world=_triangle_frame_vectors, _point_type="SurfacePoint",
+    _frame=_triangle_frame_coordinates, _to_world=_triangle_to_world, _point_type="SurfacePoint",
     _locator="surface_point",
     libigl_operators=True,
     _normals=_triangle_normals,
@@ -286,7 +297,7 @@ TETRAHEDRON = ReferenceSimplex(
                     domain="inside a volume", argument="tets"),
     source_kinds=("vertex", "point", "boundary", "boundary faces"),
     measure_root=np.cbrt, shared_points=False,
-    _frame=_world_coordinates, _to_world=_world_vectors, _point_type="VolumePoint", _locator="volume_point",
+    _frame=_world_coordinates, _to_world=_world_to_world, _point_type="VolumePoint", _locator="volume_point",
     picture="slice", coneless_cell_edges=True, flat=True,
 )
 

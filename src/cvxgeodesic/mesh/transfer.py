@@ -3,7 +3,8 @@
 For every query point (the fine mesh's vertices), :class:`SurfaceTransfer` finds the closest point on the
 coarse surface (libigl's AABB tree, exact point–triangle distance) and its barycentric coordinates in that
 coarse triangle; a coarse per-vertex field is then interpolated there. :class:`ProjectedField` does the same for a
-field that answers at points of the coarse mesh's faces (an order-2 field): it answers at points of the fine mesh.
+field that answers at points of the coarse mesh's faces (an order-2 field): it answers at points of the fine mesh, a
+:class:`~cvxgeodesic.results.Field` there.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ import numpy as np
 
 from .closest import closest_point_index
 from .geometry import clipped_barycentric
-from .locate import bary_positions
+from .locate import bary_positions, checked_points
 from .trimesh import TriMesh
 
 __all__ = ["ProjectedField", "SourcePatch", "SurfaceTransfer", "mix_patches"]
@@ -122,8 +123,8 @@ class SourcePatch:
         The patch's face of each face of the whole mesh, -1 outside the patch.
     vertices : (p,) int64 ndarray
         The whole mesh's index of each patch vertex.
-    field : object
-        ``distance_at(faces, bary)`` and ``vertex_distance`` on the patch's faces and vertices.
+    field : Field
+        A :class:`~cvxgeodesic.results.Field` on the patch (its faces, its vertices).
     inner, outer : float
         Distances of the blend, ``0 < inner < outer``.
     """
@@ -151,6 +152,15 @@ class SourcePatch:
         inside = np.flatnonzero(local >= 0)
         if inside.size:
             out[inside] = np.asarray(self.field.distance_at(local[inside], bary[inside]), dtype=float)
+        return out
+
+    def gradient_at_points(self, faces: np.ndarray, bary: np.ndarray) -> np.ndarray:
+        """(k, 3) the patch's field's gradient at points of the whole mesh's faces, NaN outside the patch."""
+        out = np.full((faces.size, 3), np.nan)
+        local = self.face_map[faces]
+        inside = np.flatnonzero(local >= 0)
+        if inside.size:
+            out[inside] = self.field.gradient_at(local[inside], bary[inside])
         return out
 
 
@@ -190,22 +200,32 @@ class ProjectedField:
         The mesh the queries name faces of (``m`` faces).
     solve_mesh : TriMesh
         The mesh the field lives on.
-    field : object
-        Anything with ``distance_at(faces, bary) -> (p,) float ndarray`` on ``solve_mesh`` (a
+    field : Field
+        A :class:`~cvxgeodesic.results.Field` on ``solve_mesh`` (a
         :class:`~cvxgeodesic.operators.lagrange.LagrangeField`).
     vertex_distance : (n,) float ndarray
         The field at ``mesh``'s vertices (what the solve returned).
     patches : sequence of SourcePatch
         Fields solved on ``mesh`` itself around the sources, mixed in near them (in order).
+    medium : Medium, optional
+        The travel cost or metric the field measures, on ``mesh``; None: Euclidean.
     """
 
     def __init__(self, mesh: TriMesh, solve_mesh: TriMesh, field: Any, vertex_distance: np.ndarray,
-                 patches: Any = ()) -> None:
+                 patches: Any = (), medium: Any = None) -> None:
         self.mesh = mesh
         self.solve_mesh = solve_mesh
         self.field = field
         self.vertex_distance = vertex_distance
         self.patches = tuple(patches)
+        self.medium = medium
+
+    def _projected(self, faces: Any, bary: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(faces, bary)`` as arrays and the closest points of those points on ``solve_mesh`` (faces, bary)."""
+        faces, B = checked_points(self.mesh, faces, bary)
+        X = bary_positions(self.mesh, faces, B)
+        cf, cb, _ = closest_point_index(self.solve_mesh).query(np.ascontiguousarray(X))
+        return faces, B, cf, cb
 
     def distance_at(self, faces: Any, bary: Any) -> np.ndarray:
         """Distance at points of ``mesh``'s faces.
@@ -219,11 +239,40 @@ class ProjectedField:
         -------
         (p,) float ndarray
         """
-        faces = np.atleast_1d(np.asarray(faces, dtype=np.int64))
-        B = np.atleast_2d(np.asarray(bary, dtype=float))
-        X = bary_positions(self.mesh, faces, B)
-        cf, cb, _ = closest_point_index(self.solve_mesh).query(np.ascontiguousarray(X))
+        faces, B, cf, cb = self._projected(faces, bary)
         out = np.asarray(self.field.distance_at(cf, cb), dtype=float)
         if not self.patches:
             return out
         return mix_patches(out, self.patches, [p.at_points(faces, B) for p in self.patches])
+
+    def gradient_at(self, faces: Any, bary: Any) -> np.ndarray:
+        """Gradient of :meth:`distance_at` at points of ``mesh``'s faces: the solve mesh's field's gradient at the
+        closest point, in the plane of ``mesh``'s face; where a source patch is mixed in, the gradient of the blend.
+
+        Returns
+        -------
+        (p, 3) float ndarray
+        """
+        faces, B, cf, cb = self._projected(faces, bary)
+        base = np.asarray(self.field.distance_at(cf, cb), dtype=float)
+        grad = np.asarray(self.field.gradient_at(cf, cb), dtype=float)
+        n = self.mesh.face_normals_unnormalized[faces]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            n = n / np.linalg.norm(n, axis=1, keepdims=True)
+        grad = grad - np.einsum("pj,pj->p", grad, n)[:, None] * n
+        best = np.full(faces.size, np.inf)
+        out = grad.copy()
+        for patch in self.patches:  # the gradient of the blend mix_patches takes, where it takes one
+            near = patch.at_points(faces, B)
+            w = patch.weight(near)
+            with np.errstate(invalid="ignore"):
+                blend = np.where(w > 0, w * near + (1 - w) * base, np.inf)
+                # d/dx [w(near) near + (1 − w(near)) base], with w' = −1/(outer − inner) inside the ramp
+                slope = np.where((w > 0) & (w < 1), -1.0 / (patch.outer - patch.inner), 0.0)
+            take = blend < best
+            if take.any():
+                gn = patch.gradient_at_points(faces[take], B[take])
+                wt, st = w[take, None], slope[take, None]
+                out[take] = wt * gn + (1 - wt) * grad[take] + st * (near[take] - base[take])[:, None] * gn
+                best[take] = blend[take]
+        return out

@@ -638,12 +638,18 @@ class LagrangeField:
         in the mesh's units squared; ``inf`` on components without a source.
     space : LagrangeSpace, optional
         Of ``mesh`` (default: order 2).
+    medium : Medium, optional
+        The travel cost or metric the field measures, on ``mesh`` in its own units (the
+        :class:`~cvxgeodesic.results.Field` protocol's ``medium``); None: Euclidean.
     """
 
-    def __init__(self, mesh: SimplexMesh, phi: np.ndarray, space: LagrangeSpace | None = None):
+    def __init__(self, mesh: SimplexMesh, phi: np.ndarray, space: LagrangeSpace | None = None,
+                 medium: Medium | None = None):
         self.mesh = mesh
         self.space = space if space is not None else LagrangeSpace(mesh)
         self.phi = np.asarray(phi, dtype=float)
+        self.medium = medium
+        self._dof_mesh = mesh  # the cells of the DOFs, in the field's units (the space may be a scaled copy's)
 
     @property
     def vertex_distance(self) -> np.ndarray:
@@ -694,20 +700,52 @@ class LagrangeField:
         """Distance ``√max(φ, 0)`` at points inside cells (see :meth:`squared_distance_at`)."""
         return np.sqrt(np.maximum(self.squared_distance_at(cells, bary), 0.0))
 
+    def gradient_at(self, cells, bary) -> np.ndarray:
+        """Euclidean gradient ``∇φ / 2√φ`` of the distance at points inside cells, in world coordinates.
+
+        Returns
+        -------
+        (p, 3) float ndarray
+            Zero where ``φ ≤ 0`` (the distance is 0 there), NaN in degenerate cells and where ``φ`` is not finite.
+        """
+        return self._gradient(*self._checked(cells, bary, self.mesh.n_cells))
+
+    @functools.cached_property
+    def _gbasis(self) -> np.ndarray:
+        """(k, dim, dim + 1) ``∇λ_i`` of the DOF mesh's cells in the field's units, zero on degenerate cells."""
+        g = gradient_blocks(self._dof_mesh)
+        g[self.space.degenerate] = 0.0
+        return g
+
+    def _gradient(self, cells: np.ndarray, bary: np.ndarray) -> np.ndarray:
+        _, dN = lagrange_basis(bary, self.space.order)
+        vals = self.phi[self.space.cell_dofs[cells]]
+        rows = np.einsum("kai,kci->kca", dN, self._gbasis[cells])
+        with np.errstate(invalid="ignore"):
+            g = np.einsum("kca,ka->kc", rows, vals)  # ∇φ in each cell's frame
+        mesh = self._dof_mesh
+        g = mesh.reference.to_world(g[:, :, None], mesh.V[mesh.cells[cells]])[:, 0]
+        phi = self._phi(cells, bary)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out = np.where((phi > 0)[:, None], g / (2 * np.sqrt(np.maximum(phi, 0.0)))[:, None], 0.0)
+        out[~np.isfinite(phi) | self.space.degenerate[cells]] = np.nan
+        return out
+
 
 class SplitLagrangeField(LagrangeField):
     """:class:`LagrangeField` of a :class:`~cvxgeodesic.mesh.split.SplitMesh`, queried with the original mesh's
     cells."""
 
-    def __init__(self, original: SimplexMesh, split: SplitMesh, phi: np.ndarray, space: LagrangeSpace | None = None):
-        super().__init__(split.mesh, phi, space)
-        self.original = original
+    def __init__(self, original: SimplexMesh, split: SplitMesh, phi: np.ndarray, space: LagrangeSpace | None = None,
+                 medium: Medium | None = None):
+        super().__init__(split.mesh, phi, space, medium)
+        self.mesh = self.original = original  # the queries name the original cells; the space is the split mesh's
         self.split = split
-
-    @property
-    def vertex_distance(self) -> np.ndarray:
-        return super().vertex_distance[: self.split.n_original]
 
     def squared_distance_at(self, cells, bary) -> np.ndarray:
         cells, bary = self._checked(cells, bary, self.original.n_cells)
         return self._phi(*self.split.locate(cells, bary))
+
+    def gradient_at(self, cells, bary) -> np.ndarray:
+        cells, bary = self._checked(cells, bary, self.original.n_cells)
+        return self._gradient(*self.split.locate(cells, bary))

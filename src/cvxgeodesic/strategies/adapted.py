@@ -395,7 +395,7 @@ class _Copy:
             raise SourceError(f"resolution={requested!r}: on the {self.mesh.n_faces}-face solve mesh, {exc}; give a "
                               "finer resolution or resolution='mesh'") from None
         t0 = time.perf_counter()
-        d = np.asarray(cres.info.extra["p2_field"].distance_at(self.vertex_faces, self.vertex_bary), dtype=float)
+        d = np.asarray(cres.field.distance_at(self.vertex_faces, self.vertex_bary), dtype=float)
         d[sources.fixed_vertices(self.user)] = 0.0
         d[~self.user.referenced] = np.inf
         return cres, d, offset, time.perf_counter() - t0
@@ -585,7 +585,7 @@ class Adapted:
             except (SolverError, SourceError, MeshError, ParameterError) as exc:  # the copy's field stays
                 notes.append(f"the patch solve around source vertex {center} failed ({exc}); the copy's field kept")
                 continue
-            out.append(SourcePatch(face_map, patch.vertices, res.info.extra["p2_field"], radius / 6, radius / 3))
+            out.append(SourcePatch(face_map, patch.vertices, res.field, radius / 6, radius / 3))
         if out:
             notes.append(f"{len(out)} patch(es) of the mesh around the sources solved at order 2 and mixed in within "
                          f"{radius / 3:.3g} of them")
@@ -595,10 +595,9 @@ class Adapted:
                 t0: float, patches: list[SourcePatch]) -> GeodesicResult:
         ci = cres.info
         assert self.copy is not None
-        extra = {k: v for k, v in ci.extra.items() if k != "p2_field"}
-        field = ProjectedField(self.config.surface, self.solve_mesh, ci.extra["p2_field"], d, patches)
-        extra.update(adapted=record, p2_field=field, solve_mesh=self.solve_mesh)
+        extra = dict(ci.extra, adapted=record, solve_mesh=self.solve_mesh)
+        field = ProjectedField(self.config.surface, self.solve_mesh, cres.field, d, patches, medium=self.config.medium)
         info = replace(ci, setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
                        n_unreachable=int(np.isinf(d).sum()), notes=notes, extra=extra)
-        return GeodesicResult(distance=d, info=info, sources=sources.vertices,
+        return GeodesicResult(distance=d, info=info, sources=sources.vertices, field=field,
                               source_set=None if sources.vertex_only else sources)

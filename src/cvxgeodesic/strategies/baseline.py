@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from ..baselines import BASELINES
+from ..operators.linear_field import LinearField
 from ..results import GeodesicResult, SolveInfo
 from .base import Callback, SolveConfig
 
@@ -54,4 +55,5 @@ class BaselineStrategy:
             extra={k: v for k, v in binfo.items() if k not in _OWN_FIELDS},
         )
         return GeodesicResult(distance=d, info=info, sources=sources.vertices,
+                              field=LinearField(self.config.mesh, d, self.config.medium),
                               source_set=None if sources.vertex_only else sources)

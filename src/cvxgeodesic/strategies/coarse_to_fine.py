@@ -36,6 +36,7 @@ import numpy as np
 from ..errors import ParameterError, SourceError
 from ..mesh.decimate import simplify_mesh
 from ..mesh.transfer import SurfaceTransfer
+from ..operators.linear_field import LinearField
 from ..results import GeodesicResult, SolveInfo
 from ..sources import SourceSet, resolve_sources
 from .base import Callback, SolveConfig
@@ -239,4 +240,4 @@ class CoarseToFine:
             n_unreachable=int((~reach).sum()), notes=[f"coarse mesh: {note}" for note in cinfo.notes],
             extra={"multires": mr, "coarse": {k: v for k, v in cinfo.as_dict().items() if k != "extra"}},
         )
-        return GeodesicResult(distance=d, info=info, sources=src)
+        return GeodesicResult(distance=d, info=info, sources=src, field=LinearField(mesh, d, cfg.medium))

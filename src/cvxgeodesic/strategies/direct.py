@@ -19,6 +19,7 @@ import numpy as np
 from ..errors import SolverError
 from ..linalg import SymbolicCholesky
 from ..mesh.simplex import unit_mesh
+from ..operators.linear_field import LinearField
 from ..problems.conic import BackendResult, ConicProblem, kkt_pattern
 from ..problems.formulations import MeshOperators, build_problem
 from ..results import GeodesicResult, SolveInfo
@@ -128,7 +129,7 @@ class DirectStrategy:
             n_unreachable=int(problem.unreachable.sum()),
             notes=notes, extra=res.extra,
         )
-        return GeodesicResult(distance=d, info=info, sources=src.vertices,
+        return GeodesicResult(distance=d, info=info, sources=src.vertices, field=LinearField(cfg.mesh, d, cfg.medium),
                               source_set=None if src.vertex_only else src)
 
     def _run_backend(self, problem: ConicProblem, callback: Callback | None, notes: list[str]) -> BackendResult:

@@ -234,8 +234,9 @@ class Order2:
         unit2 = (self.scale * self.medium_scale) ** 2
         phi = program.restore(res.x) * unit2
         phi[problem.unreachable] = np.inf
-        fld = (LagrangeField(mesh, phi, builder.space) if split is None
-               else SplitLagrangeField(mesh, split, phi, builder.space))
+        medium = self.config.medium
+        fld = (LagrangeField(mesh, phi, builder.space, medium=medium) if split is None
+               else SplitLagrangeField(mesh, split, phi, builder.space, medium=medium))
         d = fld.vertex_distance.copy()
         d[source_fixed] = 0.0
         info = SolveInfo(
@@ -244,10 +245,10 @@ class Order2:
             primal_residual=res.primal_residual, dual_residual=res.dual_residual, gap=res.gap,
             objective=(res.objective + program.objective_constant) * unit2, lam=self.config.lam,
             n_unreachable=int(np.isinf(d).sum()),
-            notes=notes, extra={**res.extra, "order": self.order, "p2_field": fld, "n_dofs": problem.n,
+            notes=notes, extra={**res.extra, "order": self.order, "n_dofs": problem.n,
                                 "n_cones": problem.n_cones, "rounds": len(rounds) - 1, "round_iterations": rounds},
         )
-        return GeodesicResult(distance=d, info=info, sources=sources.vertices,
+        return GeodesicResult(distance=d, info=info, sources=sources.vertices, field=fld,
                               source_set=None if sources.vertex_only else sources)
 
 

@@ -8,7 +8,8 @@ into the incident cell or along the incident edge of steepest descent. It stops 
 straight to the source once it reaches a cell that holds a source point, a piece of a source curve or a source
 face (a straight segment inside a flat triangle or a tetrahedron is the geodesic there); a descent that crosses
 a source face of a volume ends on it. For an order-2 field inside a volume the direction is ``−∇φ`` of its
-quadratic ``φ = d²``, read at the current point.
+quadratic ``φ = d²``, read at the current point: the descent asks the field (:class:`~cvxgeodesic.results.Field`)
+for its gradient wherever no straightening follows.
 
 On a surface the descent then only chooses the corridor (``straighten=True``, default): the faces it crossed,
 plus, at each vertex it passed through, the fan of faces around that vertex on the side of the smaller angle.
@@ -30,41 +31,54 @@ from __future__ import annotations
 
 import contextlib
 import io
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any, Literal, TypeAlias, cast, overload
 
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike
 
-from .capabilities import check_path
-from .errors import ParameterError, SolverError, SourceError
-from .mesh.closest import segment_point, triangle_point
-from .mesh.convert import as_mesh
-from .mesh.corridor import node_position, straighten_corridor
-from .mesh.locate import CellPoint, SurfacePoint, VolumePoint, cells_around, closest_points, corner_interpolant
-from .operators.gradient import gradient_blocks, triangle_frames
-from .operators.metric import make_medium
-from .results import GeodesicResult, remembered_sources
-from .sources import BARY_SNAP, SourceSet, resolve_sources
-from .validation import as_vertex_field, check_count, is_integer
+from ..capabilities import check_path
+from ..errors import ParameterError, SolverError, SourceError
+from ..mesh.closest import segment_point, triangle_point
+from ..mesh.convert import MeshLike, as_mesh
+from ..mesh.locate import CellPoint, SurfacePoint, VolumePoint, closest_points, corner_interpolant
+from ..mesh.reference import TRIANGLE, ReferenceSimplex
+from ..mesh.simplex import SimplexMesh
+from ..mesh.trimesh import TriMesh
+from ..operators.gradient import triangle_frames
+from ..operators.linear_field import LinearField
+from ..operators.metric import make_medium
+from ..results import Field, GeodesicResult, remembered_sources
+from ..sources import BARY_SNAP, SourceSet, resolve_sources
+from ..validation import as_vertex_field, check_count, is_integer
+from .cells import Cells
+from .corridor import node_position, straighten_corridor
 
-#: A distance field as the functions here take it: the vertex values or the result they came from.
-Field: TypeAlias = ArrayLike | GeodesicResult
+#: A distance field as the functions here take it: the vertex values, the result they came from, or its field.
+FieldLike: TypeAlias = ArrayLike | GeodesicResult | Field
 #: A point of a mesh's cells: on a surface, or inside a volume.
 MeshPoint: TypeAlias = SurfacePoint | VolumePoint
 
+#: The straightening of each cell kind's descent (module docstring): a corridor of triangles unfolds into the plane.
+#: A kind without one keeps the raw descent, which then follows the gradient of the field itself.
+STRAIGHTENERS: dict[ReferenceSimplex, Callable[..., list[tuple]]] = {TRIANGLE: straighten_corridor}
 
-def _field(mesh: Any, distance: Any) -> tuple[np.ndarray, Any]:
-    """(n,) float field and the result object it came from (or None)."""
+
+def _field(mesh: SimplexMesh, distance: Any) -> tuple[np.ndarray, GeodesicResult | None, Field]:
+    """The (n,) float vertex values, the result they came from (or None) and the field (a plain array's is its
+    piecewise-linear interpolant)."""
     result = None
-    if hasattr(distance, "distance") and hasattr(distance, "info"):
-        result, distance = distance, distance.distance
-    return as_vertex_field(distance, "distance", mesh.n_vertices, nan_ok=False), result
+    if isinstance(distance, GeodesicResult):
+        result, distance = distance, distance.field
+    if isinstance(distance, Field):
+        return as_vertex_field(distance.vertex_distance, "distance", mesh.n_vertices, nan_ok=False), result, distance
+    d = as_vertex_field(distance, "distance", mesh.n_vertices, nan_ok=False)
+    return d, result, LinearField(mesh, d)
 
 
-# -- points of the cells: SurfacePoint on triangles, VolumePoint in tetrahedra ------------------------------------
-def _as_points(mesh: Any, points: Any) -> tuple[np.ndarray, np.ndarray, bool]:
+# -- points of the cells: the point type of the mesh's reference cell (SurfacePoint, VolumePoint) -----------------
+def _as_points(mesh: SimplexMesh, points: Any) -> tuple[np.ndarray, np.ndarray, bool]:
     """(cells (k,), bary (k, dim + 1), single) of points of the mesh's kind or of positions."""
     kind = mesh.reference.point_type
     found = points
@@ -80,32 +94,32 @@ def _as_points(mesh: Any, points: Any) -> tuple[np.ndarray, np.ndarray, bool]:
     for k, p in enumerate(pts):
         p.check(mesh, f"point {k}")
     cells = np.array([p.cell for p in pts], dtype=np.int64)
-    return cells, np.array([p.bary for p in pts]).reshape(-1, mesh.dim + 1), single
+    return cells, np.array([p.bary for p in pts]).reshape(-1, mesh.reference.n_corners), single
 
 
 @overload
-def distance_at(mesh: Any, distance: Field, points: MeshPoint) -> float: ...
+def distance_at(mesh: MeshLike, distance: FieldLike, points: MeshPoint) -> float: ...
 @overload
-def distance_at(mesh: Any, distance: Field, points: Sequence[MeshPoint]) -> np.ndarray: ...
+def distance_at(mesh: MeshLike, distance: FieldLike, points: Sequence[MeshPoint]) -> np.ndarray: ...
 @overload
-def distance_at(mesh: Any, distance: Field, points: Sequence[float]) -> float: ...
+def distance_at(mesh: MeshLike, distance: FieldLike, points: Sequence[float]) -> float: ...
 @overload
-def distance_at(mesh: Any, distance: Field, points: Sequence[Sequence[float]]) -> np.ndarray: ...
+def distance_at(mesh: MeshLike, distance: FieldLike, points: Sequence[Sequence[float]]) -> np.ndarray: ...
 @overload
-def distance_at(mesh: Any, distance: Field, points: ArrayLike) -> float | np.ndarray: ...
+def distance_at(mesh: MeshLike, distance: FieldLike, points: ArrayLike) -> float | np.ndarray: ...
 
 
-def distance_at(mesh: Any, distance: Field, points: Any) -> float | np.ndarray:
+def distance_at(mesh: MeshLike, distance: FieldLike, points: Any) -> float | np.ndarray:
     """Values of a distance field at points of a surface or inside a volume.
 
-    A vertex field is interpolated linearly in each cell (face or tetrahedron); the result of an ``order=2``
-    solve (a :class:`~cvxgeodesic.api.GeodesicResult`) is evaluated as its piecewise quadratic squared distance,
-    ``√φ``.
+    A vertex field is interpolated linearly in each cell (face or tetrahedron); a
+    :class:`~cvxgeodesic.api.GeodesicResult` answers with its field (:attr:`~cvxgeodesic.api.GeodesicResult.field`):
+    an ``order=2`` solve's is its piecewise quadratic squared distance, ``√φ``.
 
     Parameters
     ----------
     mesh : TriMesh, TetMesh, or tuple (V, F) / (V, T)
-    distance : (n,) float array_like or GeodesicResult
+    distance : (n,) float array_like, GeodesicResult or Field
     points : SurfacePoint (VolumePoint in a TetMesh), a sequence of them, or (3,) / (k, 3) positions
         On a surface the closest points of positions are used; in a volume positions must lie inside it.
 
@@ -134,70 +148,38 @@ def distance_at(mesh: Any, distance: Field, points: Any) -> float | np.ndarray:
     """
     mesh = as_mesh(mesh)
     cells, bary, single = _as_points(mesh, points)
-    p2_field = getattr(getattr(distance, "info", None), "extra", {}).get("p2_field")
-    if p2_field is not None:  # an order=2 result: its piecewise quadratic field, not the vertex values
-        vals = p2_field.distance_at(cells, bary)
-    else:
-        d, _ = _field(mesh, distance)
-        vals = corner_interpolant(d[mesh.cells[cells]], bary)
+    _, _, field = _field(mesh, distance)
+    vals = field.distance_at(cells, bary)
     return float(vals[0]) if single else vals
 
 
-# -- the descent's view of the mesh --------------------------------------------------------------------------------
-def _hat_gradients(mesh: Any) -> np.ndarray:
-    """(k, dim + 1, 3) world-coordinate gradients of each cell's barycentric coordinates (NaN/inf on degenerate
-    cells): a surface's blocks are in each face's 2D frame and go back to 3D; a volume's are 3D already."""
-    with np.errstate(invalid="ignore", divide="ignore"):
-        B = gradient_blocks(mesh)  # (k, dim, dim + 1)
-        return mesh.reference.world_vectors(B, mesh.V[mesh.cells])
-
-
-class _Cells:
-    """Per-mesh data of the descent: hat-function gradients, the cells it may step through, vertex → cells."""
-
-    def __init__(self, mesh: Any):
-        self.mesh, self.V, self.C = mesh, mesh.V, mesh.cells
-        self.H = _hat_gradients(mesh)
-        with np.errstate(invalid="ignore"):
-            self.ok = np.isfinite(self.H).all(axis=(1, 2)) & ~np.isin(np.arange(len(self.C)), mesh.degenerate_cells())
-
-    def cells_of(self, verts: Sequence[int]) -> np.ndarray:
-        """The cells that contain all of ``verts`` (the cells around a vertex, an edge or a face)."""
-        return cells_around(self.mesh, verts)
-
-    def bary(self, c: int, x: np.ndarray) -> np.ndarray:
-        """Barycentric coordinates of ``x`` in cell ``c``, clipped to it (least squares: any cell shape)."""
-        A = np.vstack([self.V[self.C[c]].T, np.ones(self.C.shape[1])])
-        b = np.clip(np.linalg.lstsq(A, np.r_[x, 1.0], rcond=None)[0], 0.0, None)
-        return b / b.sum()
-
-
+# -- the descent's slope --------------------------------------------------------------------------------------------
 class _Slope:
     """The direction of steepest descent and its rate per unit length.
 
-    Piecewise linear: constant in a cell, ``−∇d`` and ``|∇d|`` (in a medium on a surface ``−M⁻¹∇d`` and
-    ``√(∇dᵀM⁻¹∇d)``); an order-2 field in a volume: ``−∇φ`` at the point (``φ = d²`` is quadratic where the source
-    is visible, so ``−∇φ`` points straight at it) and the rate ``|∇φ| / 2d``. NaN in cells the walk skips.
+    Piecewise linear (``p1``): constant in a cell, ``−∇d`` and ``|∇d|`` (in a medium on a surface ``−M⁻¹∇d`` and
+    ``√(∇dᵀM⁻¹∇d)``); another ``field`` (an order-2 field in a volume): ``−∇d`` at the point, which the field
+    answers (``φ = d²`` is quadratic where the source is visible, so ``−∇d`` points straight at it). NaN in cells
+    the walk skips.
     """
 
-    def __init__(self, geo: _Cells, d: np.ndarray, medium: Any = None, p2_field: Any = None):
+    def __init__(self, geo: Cells, p1: LinearField, medium: Any = None, field: Field | None = None):
         mesh = geo.mesh
-        self.geo, self.p2 = geo, p2_field
-        with np.errstate(invalid="ignore"):
-            grad = np.einsum("kij,ki->kj", geo.H, d[geo.C])  # (k, 3) gradient of the field in each cell
-        grad[~geo.ok] = np.nan
+        self.geo, self.field = geo, field
+        grad = p1.cell_gradients  # (k, 3) gradient of the field in each cell, NaN where the walk does not step
         self.adjacency = sp.csr_matrix(mesh.vertex_adjacency)
         if medium is None:
             self.down, self.rate = -grad, np.linalg.norm(grad, axis=1)
         else:
             self._in_medium(geo, grad, medium.on(mesh))
 
-    def _in_medium(self, geo: _Cells, grad: np.ndarray, medium: Any) -> None:
+    def _in_medium(self, geo: Cells, grad: np.ndarray, medium: Any) -> None:
         """``−M_t⁻¹∇d`` and its rate in each face of a surface (the medium read at the face's centroid)."""
         self.adjacency = sp.csr_matrix(medium.adjacency())  # edge lengths in the medium, as the rates
+        mesh = cast(TriMesh, geo.mesh)  # a medium lives on a surface (make_medium)
         with np.errstate(invalid="ignore", divide="ignore"):
-            ex, ey = triangle_frames(geo.mesh)
-        P = medium.plane(np.arange(geo.mesh.n_faces), np.full(3, 1 / 3))
+            ex, ey = triangle_frames(mesh)
+        P = medium.plane(np.arange(mesh.n_faces), np.full(3, 1 / 3))
         P[~geo.ok] = np.eye(2)
         g2 = np.stack([np.einsum("fj,fj->f", grad, ex), np.einsum("fj,fj->f", grad, ey)], 1)
         with np.errstate(invalid="ignore"):
@@ -206,21 +188,11 @@ class _Slope:
             self.rate = np.sqrt(np.maximum(-np.einsum("fi,fi->f", g2, step), 0.0))
 
     def at(self, c: int, b: np.ndarray) -> tuple[np.ndarray, float]:
-        """(3,) descent direction and its rate (``|∇φ|`` for an order-2 field) at barycentric ``b`` of cell ``c``."""
-        if self.p2 is None or not self.geo.ok[c]:
+        """(3,) descent direction and its rate at barycentric ``b`` of cell ``c``."""
+        if self.field is None or not self.geo.ok[c]:
             return self.down[c], float(self.rate[c])
-        fld = self.p2
-        tt, bb = np.array([c]), b[None]
-        if hasattr(fld, "split"):  # a field on the mesh with the source points inserted
-            tt, bb = fld.split.locate(tt, bb)
-        _, rows = fld.space.value_and_gradient_rows(tt, bb)
-        vals = fld.phi[fld.space.cell_dofs[tt[0]]]
-        g = rows[0] @ vals if np.all(np.isfinite(vals)) else np.zeros(3)
+        g = self.field.gradient_at(np.array([c]), b[None])[0]
         return -g, float(np.linalg.norm(g))
-
-    def per_length(self, rate: float, dv: float) -> float:
-        """The rate of decrease of ``d`` itself from a vertex at ``d = dv``: ``|∇φ| / 2d`` for an order-2 field."""
-        return rate / (2 * dv) if self.p2 is not None else rate
 
 
 # -- the sources as the walk ends on them ------------------------------------------------------------------------
@@ -229,7 +201,8 @@ class _Ends:
     (q = 1), curve pieces (2) and faces (3) in each cell, gone to straight from inside it; ``facets``, the
     source faces of a volume (frozensets of vertices), on which a crossing ends; ``ss``, the source set."""
 
-    def __init__(self, mesh: Any, geo: _Cells, d: np.ndarray, distance: Any, result: Any, sources: Any):
+    def __init__(self, mesh: SimplexMesh, geo: Cells, d: np.ndarray, distance: Any, result: GeodesicResult | None,
+                 sources: Any):
         self.ss = _source_set(mesh, distance, result, sources)
         self.vertices = np.zeros(mesh.n_vertices, dtype=bool)
         self.items: dict[int, list[np.ndarray]] = {}
@@ -243,19 +216,19 @@ class _Ends:
     def _add(self, cell: int, simplex: np.ndarray) -> None:
         self.items.setdefault(int(cell), []).append(simplex)
 
-    def _sources(self, mesh: Any, geo: _Cells, ss: SourceSet) -> None:
-        """Fixed vertices; each point in the cells that hold it (on a surface the source set lists a point on an
-        edge in both faces; in a volume one on a face or an edge goes to every tetrahedron around it); curve pieces
-        in their faces; each source face in its tetrahedron, and as a wall on which the walk ends."""
+    def _sources(self, mesh: SimplexMesh, geo: Cells, ss: SourceSet) -> None:
+        """Fixed vertices; each point in every cell around it (a point on a facet or an edge in each cell that holds
+        it); curve pieces in their faces; each source face in its tetrahedron, and as a wall on which the walk ends."""
         self.vertices[ss.fixed_vertices(mesh)] = True
         for f, x, b in zip(ss.point_faces, ss.point_positions(mesh), ss.point_bary, strict=True):
-            for c in [f] if mesh.dim == 2 else geo.cells_of(mesh.cells[f][b > 0]):
+            for c in geo.cells_of(mesh.cells[f][b > 0]):
                 self._add(c, x[None])
-        for f, xa, xb in zip(ss.segment_faces, *ss.segment_ends(mesh), strict=True):
-            self._add(f, np.stack([xa, xb]))
-        for f, t in zip(ss.face_triangles(mesh), mesh.boundary_face_tets[ss.facets] if ss.facets.size else (),
-                        strict=True):  # a volume's source faces
-            self._add(t, mesh.V[f])
+        if ss.segment_faces.size:  # curves are sources of surfaces (the capability table)
+            for f, xa, xb in zip(ss.segment_faces, *ss.segment_ends(cast(TriMesh, mesh)), strict=True):
+                self._add(f, np.stack([xa, xb]))
+        for f in ss.face_triangles(mesh):  # a volume's source faces, each in its one cell
+            for t in geo.cells_of(f):
+                self._add(t, mesh.V[f])
             self.facets.add(frozenset(f.tolist()))
 
     def closest(self, cell: int, x: np.ndarray) -> tuple[np.ndarray | None, float]:
@@ -270,12 +243,14 @@ class _Ends:
         return best, bd
 
 
-def _source_set(mesh: Any, distance: Any, result: Any, sources: Any) -> Any:
+def _source_set(mesh: SimplexMesh, distance: Any, result: GeodesicResult | None, sources: Any) -> Any:
     """The field's normalized sources: given, from the result, remembered by the array; None when unknown."""
     if sources is not None:
         return resolve_sources(mesh, sources)
     if result is not None:
         return result.source_set if result.source_set is not None else resolve_sources(mesh, result.sources)
+    if isinstance(distance, Field):  # a result's field: its vertex values may be the result's remembered array
+        distance = distance.vertex_distance
     return remembered_sources(distance)  # an array returned by geodesic_distance
 
 
@@ -295,7 +270,7 @@ class _Descent:
     crossed and returns the next state, or None at a source.
     """
 
-    def __init__(self, geo: _Cells, d: np.ndarray, ends: _Ends, slope: _Slope) -> None:
+    def __init__(self, geo: Cells, d: np.ndarray, ends: _Ends, slope: _Slope) -> None:
         self.geo, self.d, self.ends, self.slope = geo, d, ends, slope
         self.tol = 1e-12 * geo.mesh.bbox_diagonal
         self.nodes: list[tuple] = []
@@ -339,7 +314,7 @@ class _Descent:
             iv = int(np.flatnonzero(geo.C[c] == v)[0])
             corner = np.eye(geo.C.shape[1])[iv]
             down, rate = self.slope.at(int(c), corner)
-            if not np.all(np.isfinite(down)) or (rate := self.slope.per_length(rate, d[v])) <= best:
+            if not np.all(np.isfinite(down)) or rate <= best:
                 continue
             db = geo.H[c] @ down  # change of the barycentric coordinates per unit step
             if all(db[j] >= -1e-12 * np.abs(db).max() for j in range(len(db)) if j != iv):
@@ -425,12 +400,13 @@ class _Descent:
         return state
 
 
-def _as_target(mesh: Any, target: Any) -> int | CellPoint:
+def _as_target(mesh: SimplexMesh, target: Any) -> int | CellPoint:
     """A vertex index or a point of the mesh's kind (a position: the closest surface point, the point inside)."""
     kind = mesh.reference.point_type
     if isinstance(target, kind):
-        target.check(mesh, "target")
-        return target
+        point = cast(CellPoint, target)
+        point.check(mesh, "target")
+        return point
     if is_integer(target):
         if not 0 <= int(target) < mesh.n_vertices:
             raise SourceError(f"target vertex {int(target)} is out of range: the mesh has {mesh.n_vertices} "
@@ -447,22 +423,22 @@ def _as_target(mesh: Any, target: Any) -> int | CellPoint:
 
 
 @overload
-def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = None,
+def geodesic_path(mesh: MeshLike, distance: FieldLike, target: Any, *, sources: Any = None,
                   return_surface_points: Literal[False] = False, straighten: bool = True,
                   max_steps: int | None = None, cost: Any = None, metric: Any = None) -> np.ndarray: ...
 @overload
-def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = None,
+def geodesic_path(mesh: MeshLike, distance: FieldLike, target: Any, *, sources: Any = None,
                   return_surface_points: Literal[True], straighten: bool = True,
                   max_steps: int | None = None, cost: Any = None,
                   metric: Any = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
 @overload
-def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = None,
+def geodesic_path(mesh: MeshLike, distance: FieldLike, target: Any, *, sources: Any = None,
                   return_surface_points: bool = False, straighten: bool = True,
                   max_steps: int | None = None, cost: Any = None,
                   metric: Any = None) -> np.ndarray | tuple[np.ndarray, np.ndarray, np.ndarray]: ...
 
 
-def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = None,
+def geodesic_path(mesh: MeshLike, distance: FieldLike, target: Any, *, sources: Any = None,
                   return_surface_points: bool = False, straighten: bool = True,
                   max_steps: int | None = None, cost: Any = None,
                   metric: Any = None) -> np.ndarray | tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -478,16 +454,18 @@ def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = Non
     Parameters
     ----------
     mesh : TriMesh, TetMesh, or tuple (V, F) / (V, T)
-    distance : (n,) float array_like or GeodesicResult
-        The field. A :class:`~cvxgeodesic.api.GeodesicResult` also gives its sources.
+    distance : (n,) float array_like, GeodesicResult or Field
+        The field. A :class:`~cvxgeodesic.api.GeodesicResult` also gives its sources; a field that is no plain
+        array (an order-2 solve's, :attr:`~cvxgeodesic.api.GeodesicResult.field`) gives the gradient the raw
+        descent follows inside a volume.
     target : int, SurfacePoint (VolumePoint in a TetMesh) or (3,) position
         A vertex index or a point; a position stands for its closest surface point (the point inside the volume).
     sources : optional
         The field's sources (anything :meth:`GeodesicSolver.solve` takes), needed to end a path on a
-        point, curve or face source when ``distance`` is a plain array that did not come from this
-        library (an array returned by :func:`geodesic_distance` or ``GeodesicResult.distance``
-        remembers its sources). Without them, the sources are the vertices where ``distance``
-        takes its minimum (0 for vertex sources).
+        point, curve or face source when ``distance`` is a plain array (or a field) that did not come from
+        this library (an array returned by :func:`geodesic_distance` or ``GeodesicResult.distance``
+        remembers its sources, and so does an order-1 ``GeodesicResult.field``). Without them, the sources
+        are the vertices where ``distance`` takes its minimum (0 for vertex sources).
     return_surface_points : bool
         Also return the cell (face, or tetrahedron) and barycentric coordinates of every path point.
     straighten : bool
@@ -529,15 +507,18 @@ def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = Non
     ([1.0, 1.0, 0.0], [0.0, 0.0, 0.0])
     """
     mesh = as_mesh(mesh)
-    d, result = _field(mesh, distance)
-    geo = _Cells(mesh)
+    d, result, field = _field(mesh, distance)
+    p1 = LinearField(mesh, d)  # the walk's cells, and its slope wherever the field's own gradient is not asked
+    geo = Cells(mesh, p1.hat_gradients)
     ends = _Ends(mesh, geo, d, distance, result, sources)
-    medium = _path_medium(mesh, result, cost, metric)
+    medium = _path_medium(mesh, field, cost, metric)
     if _exact_applies(mesh, result, ends.ss, target):
-        return _exact_path(mesh, ends.ss, target, return_surface_points)
-    max_steps = check_count((mesh.dim + 1) * mesh.n_cells + 10 if max_steps is None else max_steps, "max_steps")
-    p2_field = getattr(getattr(result, "info", None), "extra", {}).get("p2_field") if mesh.dim == 3 else None
-    walk = _Descent(geo, d, ends, _Slope(geo, d, medium, p2_field))
+        return _exact_path(cast(TriMesh, mesh), ends.ss, target, return_surface_points)
+    max_steps = check_count(mesh.reference.n_corners * mesh.n_cells + 10 if max_steps is None else max_steps,
+                            "max_steps")
+    straighten_with = STRAIGHTENERS.get(mesh.reference)
+    inner = None if straighten_with is not None or isinstance(field, LinearField) else field
+    walk = _Descent(geo, d, ends, _Slope(geo, p1, medium, inner))
     state: tuple | None = walk.start(target)
     for _ in range(max_steps):
         assert state is not None
@@ -547,27 +528,27 @@ def geodesic_path(mesh: Any, distance: Field, target: Any, *, sources: Any = Non
     else:
         raise SolverError(f"geodesic_path: no source reached within max_steps={max_steps} steps",
                           solver="geodesic_path", status="max_steps")
-    return _finish_path(geo, walk.nodes, straighten, return_surface_points, medium)
+    return _finish_path(geo, walk.nodes, straighten_with if straighten else None, return_surface_points, medium)
 
 
-def _path_medium(mesh: Any, result: Any, cost: Any, metric: Any) -> Any:
-    """The surface's travel cost or metric (given, else the result's); a volume's paths are Euclidean (the capability
-    table refuses a medium there: a volume's results have none)."""
+def _path_medium(mesh: SimplexMesh, field: Field, cost: Any, metric: Any) -> Any:
+    """The surface's travel cost or metric (given, else the field's); a volume's paths are Euclidean (the capability
+    table refuses a medium there: a volume's fields have none)."""
     check_path(domain=mesh.domain, medium="none" if cost is None and metric is None else "cost")
     medium = make_medium(mesh, cost, metric)
-    if medium is None and result is not None:
-        medium = result.info.extra.get("medium")
+    if medium is None:
+        medium = field.medium
     return medium
 
 
-def _finish_path(geo: _Cells, nodes: list[tuple], straighten: bool, return_points: bool,
+def _finish_path(geo: Cells, nodes: list[tuple], straighten: Callable[..., list[tuple]] | None, return_points: bool,
                  medium: Any = None) -> Any:
-    """Straighten the walk's nodes on a surface, drop duplicates and return positions (and cells, barycentric
-    coordinates)."""
+    """Straighten the walk's nodes (the shortest path through the corridor of faces of a surface), drop duplicates
+    and return positions (and cells, barycentric coordinates)."""
     mesh = geo.mesh
     tol = 1e-12 * mesh.bbox_diagonal
-    if straighten and mesh.dim == 2:  # the shortest path through the corridor of faces
-        nodes = straighten_corridor(geo, nodes, None if medium is None else medium.on(mesh))
+    if straighten is not None:
+        nodes = straighten(geo, nodes, None if medium is None else medium.on(mesh))
     P = np.array([node_position(geo, nd) for nd in nodes])
     # consecutive duplicates (a valley that starts at a crossing, a point that was already on its source)
     keep = np.r_[True, np.linalg.norm(np.diff(P, axis=0), axis=1) > tol]
@@ -580,10 +561,10 @@ def _finish_path(geo: _Cells, nodes: list[tuple], straighten: bool, return_point
         return P
     located = [_locate(geo, nd) for nd in nodes]
     return (P, np.array([c for c, _ in located], dtype=np.int64),
-            np.array([b for _, b in located]).reshape(-1, mesh.dim + 1))
+            np.array([b for _, b in located]).reshape(-1, mesh.reference.n_corners))
 
 
-def _locate(geo: _Cells, node) -> tuple[int, np.ndarray]:
+def _locate(geo: Cells, node) -> tuple[int, np.ndarray]:
     """A cell containing the node and the node's barycentric coordinates in it."""
     if node[0] == "v":
         c = int(geo.cells_of((node[1],))[0])
@@ -597,24 +578,25 @@ def _locate(geo: _Cells, node) -> tuple[int, np.ndarray]:
 
 
 # -- surfaces: the exact path of method="exact" -------------------------------------------------------------------
-def _exact_applies(mesh: Any, result: Any, ss: Any, target: Any) -> bool:
-    """pygeodesic's path applies: an exact field on a surface, vertex or point sources, a vertex or point target,
-    one manifold component."""
-    if mesh.dim != 2 or result is None or getattr(result.info, "method", None) != "exact" or ss is None:
+def _exact_applies(mesh: SimplexMesh, result: GeodesicResult | None, ss: Any, target: Any) -> bool:
+    """pygeodesic's path applies: an exact field (a surface's: the capability table refuses ``"exact"`` elsewhere),
+    vertex or point sources, a vertex or point target, one manifold component."""
+    if result is None or result.info.method != "exact" or ss is None:
         return False
+    mesh = cast(TriMesh, mesh)
     if isinstance(target, SurfacePoint):
         on_mesh = target.face < mesh.n_faces
     else:
         on_mesh = is_integer(target) and 0 <= int(target) < mesh.n_vertices
-    return (on_mesh and not ss.segment_faces.size and mesh.is_edge_manifold and mesh.referenced.all()
-            and np.unique(mesh.component_labels).size == 1)
+    return bool(on_mesh and not ss.segment_faces.size and mesh.is_edge_manifold and mesh.referenced.all()
+                and np.unique(mesh.component_labels).size == 1)
 
 
-def _exact_path(mesh: Any, ss: SourceSet, target, return_surface_points: bool):
+def _exact_path(mesh: TriMesh, ss: SourceSet, target, return_surface_points: bool):
     """pygeodesic's exact (MMP) path from ``target`` to the nearest source (points inserted as vertices)."""
     from pygeodesic import geodesic
 
-    from .baselines.points import _unique_points, insert_points
+    from ..baselines.points import _unique_points, insert_points
 
     X = _unique_points(mesh, ss)
     start = target.position(mesh) if isinstance(target, SurfacePoint) else mesh.V[int(target)]

@@ -8,7 +8,7 @@ crossings is unfolded into the plane and replaced by the shortest path through i
 medium, :meth:`~cvxgeodesic.operators.metric.Medium.least_crossings`), and where that path still wraps around a
 vertex with the smaller angle on the other side, the corridor goes around that side (at most 64 rounds).
 
-``geo`` is the descent's view of the mesh (:class:`cvxgeodesic.paths._Cells`): ``V``, ``C`` (the faces),
+``geo`` is the descent's view of the mesh (:class:`cvxgeodesic.paths.Cells`): ``V``, ``C`` (the faces),
 ``cells_of(vertices)`` (the faces around an edge), ``bary(face, x)`` and ``mesh``.
 """
 
@@ -18,15 +18,18 @@ from typing import Any
 
 import numpy as np
 
+from .cells import Cells
+
 __all__ = ["straighten_corridor"]
 
 
-def straighten_corridor(geo: Any, nodes: list[tuple], medium: Any = None) -> list[tuple]:
+def straighten_corridor(geo: Cells, nodes: list[tuple], medium: Any = None) -> list[tuple]:
     """The locally shortest path through the corridor of the descent's ``nodes`` (a new list; module docstring).
 
     Parameters
     ----------
-    geo : the descent's view of a triangle mesh
+    geo : Cells
+        The descent's view of a triangle mesh.
     nodes : list of tuple
         The raw descent, from the target to the source.
     medium : Medium, optional
@@ -46,12 +49,12 @@ def straighten_corridor(geo: Any, nodes: list[tuple], medium: Any = None) -> lis
     return nodes
 
 
-def node_position(geo: Any, node: tuple) -> np.ndarray:
+def node_position(geo: Cells, node: tuple) -> np.ndarray:
     """(3,) float ndarray: the position of a node of the path (module docstring)."""
     return geo.V[node[1]] if node[0] == "v" else node[-1]
 
 
-def _segment_face(geo: Any, a, b) -> int | None:
+def _segment_face(geo: Cells, a, b) -> int | None:
     """A face that contains the path segment between nodes ``a`` and ``b``."""
     if b[0] == "e":
         return b[2]
@@ -65,7 +68,7 @@ def _segment_face(geo: Any, a, b) -> int | None:
     return int(shared[0]) if len(shared) else None
 
 
-def _fan(geo: Any, v: int, start: int, goal: int) -> list[tuple[list[int], list[int]]]:
+def _fan(geo: Cells, v: int, start: int, goal: int) -> list[tuple[list[int], list[int]]]:
     """The two walks around vertex ``v`` from face ``start`` to face ``goal``: (edge ends, faces) each."""
     F = geo.C
     walks = []
@@ -88,7 +91,7 @@ def _fan(geo: Any, v: int, start: int, goal: int) -> list[tuple[list[int], list[
     return walks
 
 
-def _open_vertices(geo: Any, nodes: list) -> list:
+def _open_vertices(geo: Cells, nodes: list) -> list:
     """Replace each vertex the descent passed through by crossings of the edges around it.
 
     The crossings start at the vertex; :func:`_straighten` may then pull them off it, on the side of the
@@ -114,7 +117,7 @@ def _open_vertices(geo: Any, nodes: list) -> list:
     return out
 
 
-def _crossings(geo: Any, u: int, walk: tuple[list[int], list[int]]) -> list[tuple]:
+def _crossings(geo: Cells, u: int, walk: tuple[list[int], list[int]]) -> list[tuple]:
     """The edge crossings of a walk around vertex ``u``, placed near it (:func:`_straighten` moves them)."""
     ends, faces = walk
     return [("e", (u, w), faces[k], faces[k + 1], 0.7 * geo.V[u] + 0.3 * geo.V[w]) for k, w in enumerate(ends)]
@@ -128,7 +131,7 @@ def _corner(V, u, p, q) -> float:
     return float(np.arccos(np.clip(a @ b / (na * nb), -1.0, 1.0)))
 
 
-def _walk_angle(geo: Any, u: int, walk, q0: np.ndarray, q1: np.ndarray) -> float:
+def _walk_angle(geo: Cells, u: int, walk, q0: np.ndarray, q1: np.ndarray) -> float:
     """Angle at ``u`` swept by a walk around it from the direction of ``q0`` to that of ``q1``."""
     V, F = geo.V, geo.C
     ends, faces = walk
@@ -139,7 +142,7 @@ def _walk_angle(geo: Any, u: int, walk, q0: np.ndarray, q1: np.ndarray) -> float
     return total
 
 
-def _switch_sides(geo: Any, nodes: list) -> tuple[list, bool]:
+def _switch_sides(geo: Cells, nodes: list) -> tuple[list, bool]:
     """Where the straightened path is held at a vertex, go around it on the side of the smaller angle.
 
     A run of crossings that all sit on one vertex means the shortest path through the current faces wraps
@@ -241,7 +244,7 @@ def _funnel(start, portals, end) -> tuple[list[np.ndarray], list[int]]:
     return path, idx
 
 
-def _chain_crossings(geo: Any, q0: np.ndarray, chain: list, q1: np.ndarray) -> list[float]:
+def _chain_crossings(geo: Cells, q0: np.ndarray, chain: list, q1: np.ndarray) -> list[float]:
     """Shortest path from ``q0`` (in the first face) through the chain's edges to ``q1`` (in the last face): where
     it crosses each edge ``(a, c)``, as the parameter ``t`` of ``(1 − t) a + t c``."""
     V, F = geo.V, geo.C
@@ -295,7 +298,7 @@ def _chain_crossings(geo: Any, q0: np.ndarray, chain: list, q1: np.ndarray) -> l
     return out
 
 
-def _straighten(geo: Any, nodes: list, medium: Any = None) -> None:
+def _straighten(geo: Cells, nodes: list, medium: Any = None) -> None:
     """Move every chain of edge crossings between two fixed nodes to the shortest path through its faces
     (in a medium: the path of least length in it, :meth:`~cvxgeodesic.operators.metric.Medium.least_crossings`)."""
     n = len(nodes)
