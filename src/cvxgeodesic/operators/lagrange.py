@@ -718,7 +718,7 @@ class LagrangeField:
         return g
 
     def _gradient(self, cells: np.ndarray, bary: np.ndarray) -> np.ndarray:
-        _, dN = lagrange_basis(bary, self.space.order)
+        _, dN = self.space.basis(bary)
         vals = self.phi[self.space.cell_dofs[cells]]
         rows = np.einsum("kai,kci->kca", dN, self._gbasis[cells])
         with np.errstate(invalid="ignore"):
