@@ -75,7 +75,7 @@ PLANAR = ReferenceSimplex(
                     mesh="a planar triangulation", meshes="planar triangulations", preposition="in",
                     domain="in the plane", argument="triangles"),
     source_kinds=("vertex", "point", "boundary"), measure_root=np.sqrt, shared_points=True,
-    _frame=_plane_frame, _to_world=_plane_vectors, _point_type=PlanarPoint, _locator=planar_point, flat=True,
+    _frame=_plane_frame, _to_world=_plane_vectors, _point_type=PlanarPoint, _locator=planar_point,
 )
 
 
@@ -197,9 +197,14 @@ def test_domain_recipe_baselines(square, method):
     np.testing.assert_allclose(_solve(mesh, 0, method).distance, _solve(tri, 0, method).distance, rtol=1e-12)
 
 
-def test_domain_recipe_distance_at_and_geodesic_path(square):
+def test_domain_recipe_distance_at_and_geodesic_path(square, monkeypatch):
     """The field between vertices (the order-1 interpolant: within 0.02 of ``|x|``) and the path back to a vertex
-    source: the straight segment in the plane."""
+    source: the straight segment in the plane, once the domain's triangles name their straightening (the corridor of
+    faces unfolded; a kind without one keeps the raw descent along the field's gradient)."""
+    from cvxgeodesic.paths.corridor import straighten_corridor
+    from cvxgeodesic.paths.descent import STRAIGHTENERS
+
+    monkeypatch.setitem(STRAIGHTENERS, PLANAR, straighten_corridor)
     mesh, _ = square
     res = _solve(mesh, 0, "qclp")
     X = np.array([[0.55, 0.45, 0.0], [0.91, 0.13, 0.0]])
@@ -269,7 +274,7 @@ def test_a_toy_element_order_declared_by_the_recipe_runs_through_the_order2_path
     np.testing.assert_allclose(res.distance, regular.distance, rtol=0, atol=1e-8 * exact.max())
     assert res.info.iterations == regular.info.iterations
     # its DOFs are not values: the edge DOF of d² = |x − s|² is the bubble's coefficient −|e|²/4
-    space, phi = res.info.extra["p2_field"].space, res.info.extra["p2_field"].phi
+    space, phi = res.field.space, res.field.phi
     E = mesh.edges
     bubbles = phi[space.edge_dofs[:, 0]]
     np.testing.assert_allclose(bubbles, -0.25 * np.sum((mesh.V[E[:, 0]] - mesh.V[E[:, 1]]) ** 2, axis=1),
@@ -278,7 +283,7 @@ def test_a_toy_element_order_declared_by_the_recipe_runs_through_the_order2_path
     rng = np.random.default_rng(0)
     cells, bary = rng.integers(0, mesh.n_cells, 30), rng.dirichlet(np.ones(mesh.dim + 1), 30)
     P = np.einsum("pi,pix->px", bary, mesh.V[mesh.cells[cells]])
-    inside = res.info.extra["p2_field"].distance_at(cells, bary)
+    inside = res.field.distance_at(cells, bary)
     np.testing.assert_allclose(inside, np.linalg.norm(P - mesh.V[0], axis=1), atol=1e-8 * exact.max())
 
 

@@ -152,10 +152,6 @@ class ReferenceSimplex:
         source, a point's cell, a degenerate cell): a tetrahedron's cone does not cover all the edges its
         neighbours share with it. False (triangles): the source stars and the degenerate cells' edges are bounded
         instead (:func:`cvxgeodesic.problems.formulations.build_problem`).
-    flat : bool
-        Every cell of such a mesh lies in one flat space (a solid's cells, triangles in a plane): no cell bends
-        against its neighbours, so ``d²`` is a quadratic in every proper cell that sees a source
-        (:attr:`cvxgeodesic.operators.lagrange.LagrangeSpace.flat_cells`). False (surfaces): decided cell by cell.
     point_type, locate
         Given as objects, or as names in :mod:`cvxgeodesic.mesh.locate` (imported when first asked).
     """
@@ -175,7 +171,6 @@ class ReferenceSimplex:
     picture: str = "surface"
     libigl_operators: bool = False
     coneless_cell_edges: bool = False
-    flat: bool = False
     _normals: Callable[[np.ndarray], np.ndarray] = field(repr=False, default=_no_normals)
 
     @property
@@ -298,7 +293,7 @@ TETRAHEDRON = ReferenceSimplex(
     source_kinds=("vertex", "point", "boundary", "boundary faces"),
     measure_root=np.cbrt, shared_points=False,
     _frame=_world_coordinates, _to_world=_world_to_world, _point_type="VolumePoint", _locator="volume_point",
-    picture="slice", coneless_cell_edges=True, flat=True,
+    picture="slice", coneless_cell_edges=True,
 )
 
 
