@@ -202,8 +202,6 @@ def test_the_only_accepted_upward_imports_are_the_thread_limits():
 COUNTS_TOOL = Path(__file__).resolve().parents[1] / "tools" / "architecture_counts.py"
 #: Targets of issue 42: at most this many dimension branches outside mesh/, each with a ``# dimension:`` reason.
 MAX_DIMENSION_BRANCHES = 5
-#: Why a target is not met yet where it is marked xfail: the branches that meet it are merged one by one.
-NOT_YET = "issue 42: not met on this branch; the lead tightens the mark as the other branches are merged"
 
 
 def _counting_tool():
@@ -237,7 +235,6 @@ def test_the_counting_tool_sees_what_it_counts(tmp_path):
     assert c.dim_tables == ["shared.py:4"] and c.mesh_any == ["shared.py:2"]
 
 
-@pytest.mark.xfail(strict=False, reason=NOT_YET)
 def test_dimension_branches_outside_mesh_are_few_and_give_their_reason():
     c = _counting_tool().counts(PACKAGE)
     assert not c.branches, (f"{len(c.branches)} dimension branches outside mesh/ without a '# dimension: <reason>' "
@@ -247,13 +244,11 @@ def test_dimension_branches_outside_mesh_are_few_and_give_their_reason():
         f"{_places(c.branches_with_reason)}")
 
 
-@pytest.mark.xfail(strict=False, reason=NOT_YET)
 def test_no_table_is_keyed_by_the_dimension():
     c = _counting_tool().counts(PACKAGE)
     assert not c.dim_tables, f"{len(c.dim_tables)} dicts keyed by 2 and 3:\n{_places(c.dim_tables)}"
 
 
-@pytest.mark.xfail(strict=False, reason=NOT_YET)
 def test_no_mesh_parameter_is_typed_any():
     c = _counting_tool().counts(PACKAGE)
     assert not c.mesh_any, f"{len(c.mesh_any)} parameters 'mesh: Any':\n{_places(c.mesh_any)}"

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -276,7 +276,7 @@ class SourceSet:
                 out.append(p)
         return out
 
-    def face_triangles(self, mesh: Any) -> np.ndarray:
+    def face_triangles(self, mesh: SimplexMesh) -> np.ndarray:
         """(f, dim) int64 ndarray: the source facets' vertices."""
         return mesh.boundary_facets[self.facets]
 
@@ -504,7 +504,7 @@ def source_types(mesh: SimplexMesh) -> tuple[type, ...]:
     return tuple(classes[k] for k in mesh.reference.source_kinds if k in classes)
 
 
-def _named_source(mesh: Any, name: str) -> SourceSet:
+def _named_source(mesh: SimplexMesh, name: str) -> SourceSet:
     """The one named source, ``"boundary"``: every boundary edge of a surface, every boundary face of a solid."""
     if name.strip().lower() != "boundary":
         kinds = ", ".join(f"{t.__name__}s" if t is not BoundaryFaces else t.__name__ for t in source_types(mesh))
@@ -530,7 +530,7 @@ def _named_source(mesh: Any, name: str) -> SourceSet:
     return builder.build("boundary", f"boundary ({len(E)} edges)")
 
 
-def resolve_sources(mesh: Any, sources: Any) -> SourceSet:
+def resolve_sources(mesh: SimplexMesh, sources: Any) -> SourceSet:
     """Normalize any accepted ``sources`` value against ``mesh``.
 
     Parameters
@@ -577,10 +577,10 @@ def resolve_sources(mesh: Any, sources: Any) -> SourceSet:
                 builder.add_bary(s.cell, s.bary)
                 kinds.add("points")
             elif isinstance(s, SurfaceCurve) and isinstance(s, accepted):
-                _add_curve(builder, mesh, s, f"{label} (SurfaceCurve)")
+                _add_curve(builder, cast(TriMesh, mesh), s, f"{label} (SurfaceCurve)")  # accepted: a surface
                 kinds.add("curve")
             elif isinstance(s, BoundaryFaces) and isinstance(s, accepted):
-                builder.facets.append(s.resolve(mesh))
+                builder.facets.append(s.resolve(cast(TetMesh, mesh)))  # accepted: a solid
                 kinds.add("faces")
             elif is_integer(s) or (isinstance(s, float | np.floating) and float(s).is_integer()):
                 try:
@@ -611,7 +611,7 @@ def _describe(items) -> str:
 # ---------------------------------------------------------------------------------------------------------------
 # bounds at the vertices around the sources (the program's rows, problems/source_rows.py, and the baselines' seeds)
 # ---------------------------------------------------------------------------------------------------------------
-def vertex_bounds(mesh: Any, ss: SourceSet, medium: Any = None) -> np.ndarray:
+def vertex_bounds(mesh: SimplexMesh, ss: SourceSet, medium: Any = None) -> np.ndarray:
     """Upper bounds of the distance at the vertices of the cells of the sources.
 
     Parameters
@@ -640,7 +640,7 @@ def vertex_bounds(mesh: Any, ss: SourceSet, medium: Any = None) -> np.ndarray:
         dist = np.stack([medium.segment_lengths(ss.point_faces, ss.point_bary, eye[i]) for i in range(3)], 1)
     np.minimum.at(bound, Cv.ravel(), dist.ravel())
     Fs = C[ss.segment_faces]  # the curve pieces' faces (none in a solid)
-    A, B = ss.segment_ends(mesh)
+    A, B = ss.segment_ends(cast(TriMesh, mesh))  # curve pieces lie on a surface (none elsewhere)
     for i in range(3):
         t = segment_parameter(V[Fs[:, i]], A, B)[:, None]
         if medium is None:
@@ -651,7 +651,7 @@ def vertex_bounds(mesh: Any, ss: SourceSet, medium: Any = None) -> np.ndarray:
         np.minimum.at(bound, Fs[:, i], dist)
     if ss.facets.size:  # the fourth corner of each source face's tetrahedron: its distance to the face
         tri = ss.face_triangles(mesh)
-        t_of, local = ss.face_slots(mesh)
+        t_of, local = ss.face_slots(cast(TetMesh, mesh))  # source faces bound a solid
         other = C[t_of, local]
         np.minimum.at(bound, other, point_triangle_distance(V[other], V[tri[:, 0]], V[tri[:, 1]], V[tri[:, 2]]))
     return bound
