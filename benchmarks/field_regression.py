@@ -7,6 +7,10 @@ the new one, then compare::
     PYTHONPATH=src python benchmarks/field_regression.py --save new.npz
     python benchmarks/field_regression.py --compare old.npz new.npz
 
+With ``--shared`` (needs ``../shared/meshes``) three scan-sized cases are added, where setup and solve take
+seconds rather than milliseconds: the default method on bimba (46K faces), qclp on max_planck (11K), and order 2
+on spot (5.9K); their times are the ones that show whether a refactor slowed the solver.
+
 The cases cover both dimensions (surfaces, tetrahedra), both element orders, the order-1 formulations with and
 without an energy, vertex / point / curve / boundary sources, a travel cost, the baselines and geodesic paths, on
 generated meshes (no ../shared needed). Only the public API is called, so the script runs unchanged on both trees.
@@ -25,6 +29,24 @@ import time
 os.environ.setdefault("CVXGEODESIC_THREADS", "1")
 
 import numpy as np  # noqa: E402
+
+SHARED = os.path.join(os.path.dirname(__file__), "..", "..", "shared", "meshes")
+
+
+def _shared_cases():
+    """Scan-sized (name, thunk) pairs on ../shared/meshes: construction (setup) and one solve."""
+    import cvxgeodesic as cg
+
+    def solve(name, method, source, **kw):
+        def run():
+            mesh = cg.load_mesh(os.path.join(SHARED, name))
+            r = cg.GeodesicSolver(mesh, method, **kw).solve(source)
+            return r.distance, r.info.iterations
+        return run
+
+    return [("scan bimba qcqp-hessian", solve("bimba.obj", "qcqp-hessian", 0)),
+            ("scan max_planck qclp", solve("max_planck.obj", "qclp", 0)),
+            ("scan spot order2", solve("spot.obj", "qclp", 0, order=2))]
 
 
 def _cases():
@@ -76,9 +98,9 @@ def _cases():
     ]
 
 
-def save(path: str, repeat: int) -> None:
+def save(path: str, repeat: int, shared: bool = False) -> None:
     out = {}
-    for name, run in _cases():
+    for name, run in _cases() + (_shared_cases() if shared else []):
         times = []
         for _ in range(repeat):
             t0 = time.perf_counter()
@@ -94,7 +116,7 @@ def save(path: str, repeat: int) -> None:
 def compare(old_path: str, new_path: str) -> None:
     old, new = np.load(old_path), np.load(new_path)
     print(f"{'case':28s} {'max |Δd| / max d':>17s} {'iterations':>11s} {'time new/old':>12s}")
-    for name in [k for k in old.files if "/" not in k]:
+    for name in [k for k in old.files if "/" not in k and k in new.files]:
         a, b = old[name], new[name]
         if a.shape != b.shape:
             print(f"{name:28s} shapes differ: {a.shape} vs {b.shape}")
@@ -113,13 +135,16 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--save", help="solve every case and save fields, iterations and times to this .npz")
     ap.add_argument("--compare", nargs=2, metavar=("OLD", "NEW"), help="compare two saved runs")
     ap.add_argument("--repeat", type=int, default=1, help="solves per case; the fastest time is kept")
+    ap.add_argument("--shared", action="store_true", help="add three scan-sized cases from ../shared/meshes")
     args = ap.parse_args(argv)
     print(f"load average {os.getloadavg()[0]:.1f}, {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}")
     if args.save:
         import cvxgeodesic
 
         print(f"cvxgeodesic from {os.path.dirname(cvxgeodesic.__file__)}")
-        save(args.save, args.repeat)
+        if args.shared and not os.path.isdir(SHARED):
+            ap.error(f"--shared: {SHARED} is not there")
+        save(args.save, args.repeat, args.shared)
     if args.compare:
         compare(*args.compare)
     return 0
