@@ -16,7 +16,13 @@ import pytest
 import cvxgeodesic as cg
 from cvxgeodesic.cli import build_parser
 from cvxgeodesic.errors import MeshFileNotFoundError, MeshFormatError, ParameterError
-from cvxgeodesic.mesh.formats.registry import DISTANCE_EXTENSIONS, FORMATS, MESH_EXTENSIONS, VOLUME_EXTENSIONS
+from cvxgeodesic.mesh.formats.registry import (
+    DISTANCE_EXTENSIONS,
+    FORMATS,
+    MESH_EXTENSIONS,
+    POINT_EXTENSIONS,
+    VOLUME_EXTENSIONS,
+)
 
 SPHERE = cg.icosphere(2)  # 162 vertices
 EXT_RE = re.compile(r"(?<![\w/])\.[a-z0-9]+\b")  # ".obj", not "data/*.obj" or "cvxgeodesic[io]"
@@ -58,7 +64,9 @@ def test_every_mesh_argument_lists_exactly_the_registry_formats():
                 # the commands that take a volume list the tetrahedral files too (issue 26; batch: issue 41)
                 volume = VOLUME_EXTENSIONS if command in ("distance", "compare", "view", "path", "matrix",
                                                           "batch") else ()
-                assert sorted(set(found)) == sorted({*MESH_EXTENSIONS, *volume}), (command, action.help)
+                # the commands that read their input with cli/_common.load_input take point files (issue 44)
+                points = POINT_EXTENSIONS if command in ("distance", "path", "matrix") else ()
+                assert sorted(set(found)) == sorted({*MESH_EXTENSIONS, *volume, *points}), (command, action.help)
                 checked.append(command)
     assert sorted(checked) == ["batch", "compare", "distance", "matrix", "path", "view"]
     # what `path --help` printed before: no .glb
@@ -78,7 +86,36 @@ def test_the_extension_lists_come_from_the_registry():
     for ext in DISTANCE_EXTENSIONS:  # every file save_distance writes, load_distance reads
         assert FORMATS[ext].read_field is not None, ext
     for ext, fmt in FORMATS.items():
-        assert ext == ext.lower() and ext.startswith(".") and fmt.package in (None, "trimesh", "meshio")
+        assert ext == ext.lower() and ext.startswith(".") and fmt.package in (None, "trimesh", "meshio", "laspy")
+    assert POINT_EXTENSIONS == tuple(e for e, f in FORMATS.items() if f.read_points)
+    assert {".xyz", ".pts", ".csv", ".npy", ".ply", ".las", ".laz"} == set(POINT_EXTENSIONS)
+    for ext in POINT_EXTENSIONS:  # a format holding meshes and points says which a file holds
+        assert (FORMATS[ext].holds_points is not None) == (FORMATS[ext].read_mesh is not None), ext
+
+
+def test_point_files_are_read_through_the_registry(tmp_path, monkeypatch):
+    from cvxgeodesic.mesh.formats._common import RawPoints
+    from cvxgeodesic.mesh.formats.registry import Format, is_point_file
+
+    g = np.linspace(0.0, 1.0, 6)
+    P = np.c_[np.repeat(g, 6), np.tile(g, 6), np.zeros(36)]
+    path = tmp_path / "c.xyz"
+    path.write_text("not read\n")
+    monkeypatch.setitem(FORMATS, ".xyz", Format(".xyz", "a test's points", dims=(), read_points=lambda p: RawPoints(P)))
+    assert is_point_file(path) and not is_point_file(tmp_path / "m.obj")
+    np.testing.assert_array_equal(cg.load_point_cloud(path).P, P)
+    assert cg.GeodesicSolver(path, "dijkstra").mesh.n_vertices == 36  # as_mesh's dispatch: the same table
+    monkeypatch.setitem(FORMATS, ".xyz", Format(".xyz", "a test's mesh-only format", read_mesh=lambda p: None))
+    assert not is_point_file(path)
+
+
+def test_a_point_file_of_an_unknown_extension_lists_the_registry(tmp_path):
+    path = tmp_path / "c.obj"
+    path.write_text("v 0 0 0\n")
+    with pytest.raises(MeshFormatError, match=re.escape("supported: " + ", ".join(POINT_EXTENSIONS))):
+        cg.load_point_cloud(path)
+    with pytest.raises(MeshFormatError, match=r"\.xyz files hold points: load_point_cloud reads them"):
+        cg.load_mesh(tmp_path / "c.xyz")
 
 
 def test_unsupported_extensions_list_the_registry(tmp_path):

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import cvxgeodesic as cg
-from cvxgeodesic.errors import MeshError, ParameterError, SourceError
+from cvxgeodesic.errors import MeshError, MeshFormatError, ParameterError, SourceError
 from cvxgeodesic.mesh.pointcloud import CloudMesh, PointCloud
 
 RNG = np.random.default_rng(1)
@@ -200,6 +200,64 @@ def test_point_files_round_trip(tmp_path, ext):
     if ext != ".pts":
         np.testing.assert_array_equal(cloud.normals, N)
     assert isinstance(cg.GeodesicSolver(path, "qclp").mesh, CloudMesh)  # a path is taken where a mesh is
+
+
+def _write_las(path, P, N=None):
+    """A LAS or LAZ file of ``P`` (coordinates stored as integers of 1e-6), with ``nx, ny, nz`` extra dimensions."""
+    laspy = pytest.importorskip("laspy", reason="LAS/LAZ files need laspy (the io extra)")
+    header = laspy.LasHeader(point_format=3, version="1.2")
+    header.scales, header.offsets = np.full(3, 1e-6), np.array([5e5, 4e6, 0.0])  # georeferenced: offsets kept
+    if N is not None:
+        header.add_extra_dims([laspy.ExtraBytesParams(name=c, type=np.float64) for c in ("nx", "ny", "nz")])
+    las = laspy.LasData(header)
+    las.x, las.y, las.z = (P + header.offsets).T
+    if N is not None:
+        las.nx, las.ny, las.nz = N.T
+    las.write(path)
+
+
+@pytest.mark.parametrize("ext", [".las", ".laz"])
+def test_las_files_round_trip(tmp_path, ext):
+    laspy = pytest.importorskip("laspy", reason="LAS/LAZ files need laspy (the io extra)")
+    if ext == ".laz" and not laspy.LazBackend.detect_available():
+        pytest.skip("LAZ needs lazrs (the io extra)")
+    P = _plane(8)
+    N = np.tile([0.0, 0.0, 1.0], (P.shape[0], 1))
+    path = tmp_path / f"scan{ext.upper()}"  # any case
+    _write_las(path, P, N)
+    cloud = cg.load_point_cloud(path)
+    # the file stores integers of 1e-6 on top of the offsets: the points within half of that, in float64
+    np.testing.assert_allclose(cloud.P - [5e5, 4e6, 0.0], P, rtol=0, atol=0.6e-6)
+    np.testing.assert_array_equal(cloud.normals, N)
+    assert cloud.name == path.name
+    _write_las(tmp_path / f"bare{ext}", P)
+    assert cg.load_point_cloud(tmp_path / f"bare{ext}").normals is None
+    assert isinstance(cg.GeodesicSolver(path, "qclp").mesh, CloudMesh)  # a path is taken where a mesh is
+
+
+def test_las_without_laspy_names_the_extra(tmp_path, monkeypatch):
+    import sys
+
+    path = tmp_path / "scan.las"
+    path.write_bytes(b"LASF not read")
+    monkeypatch.setitem(sys.modules, "laspy", None)  # import fails as if not installed
+    with pytest.raises(MeshFormatError, match=r"scan.las: reading .las files needs the optional package laspy: "
+                                              r"pip install 'cvxgeodesic\[io\]'"):
+        cg.load_point_cloud(path)
+
+
+def test_laz_without_a_backend_names_lazrs_and_a_bad_las_is_named(tmp_path, monkeypatch):
+    laspy = pytest.importorskip("laspy", reason="LAS/LAZ files need laspy (the io extra)")
+    path = tmp_path / "scan.laz"
+    path.write_bytes(b"LASF not read")
+    monkeypatch.setattr(laspy.LazBackend, "detect_available", staticmethod(lambda: ()))
+    with pytest.raises(MeshFormatError, match=r"scan.laz: reading .laz files needs a LAZ backend of laspy, the "
+                                              r"optional package lazrs: pip install 'cvxgeodesic\[io\]'"):
+        cg.load_point_cloud(path)
+    bad = tmp_path / "bad.las"
+    bad.write_bytes(b"LASF" + bytes(40))
+    with pytest.raises(MeshFormatError, match=r"bad.las: not a readable LAS file \("):
+        cg.load_point_cloud(bad)
 
 
 def test_a_ply_with_faces_is_still_a_mesh(tmp_path):

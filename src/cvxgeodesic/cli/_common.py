@@ -95,10 +95,11 @@ class Signals:
 
 
 def load_input(path: str) -> SimplexMesh:
-    """The command's input: a point file's cloud (its triangle soup, ``mesh/pointcloud_io.is_point_file``), else
+    """The command's input: a point file's cloud (its triangle soup; ``mesh/formats/registry.is_point_file``), else
     :func:`~cvxgeodesic.mesh.load.load_mesh`."""
+    from ..mesh.formats.registry import is_point_file
     from ..mesh.io import load_mesh
-    from ..mesh.pointcloud_io import is_point_file, load_point_cloud
+    from ..mesh.pointcloud_io import load_point_cloud
 
     return load_point_cloud(path).mesh if is_point_file(path) else load_mesh(path)
 

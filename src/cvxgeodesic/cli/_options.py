@@ -41,6 +41,13 @@ def volume_help() -> str:
             f"meshio, {', '.join(TETGEN_EXTENSIONS)} (TetGen)")
 
 
+def input_help() -> str:
+    """Help of the mesh argument of the commands that take point files too (``_common.load_input``)."""
+    from ..mesh.formats.registry import point_formats_help
+
+    return f"{volume_help()}; or a point cloud: {point_formats_help()} (laspy: the io extra too)"
+
+
 def output_help() -> str:
     """Help of ``distance -o``."""
     from ..mesh.formats.registry import field_formats_help

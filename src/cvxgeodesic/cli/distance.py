@@ -20,7 +20,7 @@ if TYPE_CHECKING:
 def add_parser(sub: Any) -> None:
     """The ``distance`` sub-command."""
     p = sub.add_parser("distance", help="compute one distance field and write it")
-    add_common_options(p)
+    add_common_options(p, points=True)
     p.add_argument("--lam", type=float, default=None, help="give λ directly (overrides --m)")
     p.add_argument("--normalization", default="area", choices=("area", "paper"),
                    help="meaning of --m: 'area' (default) or the paper's λ = m·100·h/n")
@@ -38,10 +38,10 @@ def add_parser(sub: Any) -> None:
     p.set_defaults(func=run)
 
 
-def add_common_options(p: argparse.ArgumentParser, *, method: bool = True) -> None:
-    """The mesh (a surface or tetrahedra), the sources, ``--method``, ``--m``, ``--solver`` and ``--quiet``: what
-    ``distance``, ``compare`` and ``view`` share."""
-    p.add_argument("mesh", help=opt.volume_help())
+def add_common_options(p: argparse.ArgumentParser, *, method: bool = True, points: bool = False) -> None:
+    """The mesh (a surface or tetrahedra; with ``points``, a point file too), the sources, ``--method``, ``--m``,
+    ``--solver`` and ``--quiet``: what ``distance``, ``compare`` and ``view`` share."""
+    p.add_argument("mesh", help=opt.input_help() if points else opt.volume_help())
     opt.add_source_options(p)
     opt.add_solve_options(p, method=method)
     p.add_argument("--quiet", "-q", action="store_true", help="no progress output")

@@ -15,14 +15,14 @@ from ._options import (
     add_solve_options,
     add_source_options,
     check_tol,
-    volume_help,
+    input_help,
 )
 
 
 def add_parser(sub: Any) -> None:
     """The ``matrix`` sub-command."""
     p = sub.add_parser("matrix", help="distance matrix: one row per source vertex (-s), in the given order")
-    p.add_argument("mesh", help=volume_help())
+    p.add_argument("mesh", help=input_help())
     add_source_options(p, "source vertex of a row, in the file's numbering (repeat, or give a list: -s 0,5,9)",
                        points=False)
     from ..api import ALL_METHODS, DEFAULT_ROW_METHOD, LOCAL_ROW_TOL

@@ -22,7 +22,7 @@ PATH_EXTENSIONS = (".csv", ".npy", ".ply")
 def add_parser(sub: Any) -> None:
     """The ``path`` sub-command."""
     p = sub.add_parser("path", help="geodesic path from a target down the distance field to the nearest source")
-    p.add_argument("mesh", help=opt.volume_help())
+    p.add_argument("mesh", help=opt.input_help())
     opt.add_source_options(p)
     p.add_argument("--to", type=int, default=None, metavar="I", help="target vertex")
     p.add_argument("--to-point", type=opt.xyz, default=None, metavar="X,Y,Z",

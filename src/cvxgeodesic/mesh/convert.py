@@ -163,7 +163,7 @@ def as_trimesh(mesh: MeshLike, name: str = "mesh") -> TriMesh:
 
 def _as_cloud(obj: Any) -> Any:
     """``obj`` as a :class:`~cvxgeodesic.mesh.pointcloud.PointCloud` when it is one, or a trimesh or open3d point
-    cloud, or a point file (:func:`~cvxgeodesic.mesh.pointcloud_io.is_point_file`); else None."""
+    cloud, or a point file (:func:`~cvxgeodesic.mesh.formats.registry.is_point_file`); else None."""
     from .pointcloud import PointCloud, is_point_cloud_object
 
     if isinstance(obj, PointCloud):
@@ -171,7 +171,8 @@ def _as_cloud(obj: Any) -> Any:
     if is_point_cloud_object(obj):
         return PointCloud.from_object(obj, name=getattr(obj, "name", None) or None)
     if isinstance(obj, str | os.PathLike):
-        from .pointcloud_io import is_point_file, load_point_cloud
+        from .formats.registry import is_point_file
+        from .pointcloud_io import load_point_cloud
 
         if is_point_file(obj):
             return load_point_cloud(obj)

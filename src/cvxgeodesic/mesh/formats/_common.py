@@ -14,8 +14,8 @@ import numpy as np
 
 from ...errors import MeshError, MeshFileNotFoundError, MeshFormatError
 
-__all__ = ["FieldData", "RawMesh", "at_line", "check_file", "file_errors", "format_error", "optional_package",
-           "read_bytes"]
+__all__ = ["FieldData", "RawMesh", "RawPoints", "at_line", "check_file", "file_errors", "format_error",
+           "optional_package", "read_bytes", "split_normals"]
 
 #: What to install for a format read or written through an optional package.
 INSTALL_HINT = "pip install 'cvxgeodesic[io]' (or pip install {pkg})"
@@ -58,6 +58,22 @@ class RawMesh:
     other_cells: dict[str, int] | None = None
     notes: list[str] = field(default_factory=list)
     name: str | None = None
+
+
+@dataclass(frozen=True)
+class RawPoints:
+    """The points a point file holds, as read, before :class:`~cvxgeodesic.mesh.pointcloud.PointCloud` checks them.
+
+    Attributes
+    ----------
+    P : (n, 3) float64 ndarray
+        The points in file order.
+    normals : (n, 3) float64 ndarray or None
+        Their normals, when the file has them.
+    """
+
+    P: np.ndarray
+    normals: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -172,3 +188,11 @@ def optional_package(pkg: str, needed_for: str, error: type[Exception]) -> Any:
         return importlib.import_module(pkg)
     except ImportError:
         raise error(f"{needed_for} needs the optional package {pkg}: " + INSTALL_HINT.format(pkg=pkg)) from None
+
+
+def split_normals(path: Path, A: np.ndarray) -> RawPoints:
+    """The points of an (n, 3) array, or the points and normals of an (n, 6) one; (n, k > 6) keeps its first three
+    columns (a MeshFormatError for fewer than three)."""
+    if A.ndim != 2 or A.shape[1] < 3:
+        raise format_error(path, f"points must be an (n, 3) array (or (n, 6) with normals), got shape {A.shape}")
+    return RawPoints(A[:, :3], A[:, 3:6] if A.shape[1] == 6 else None)

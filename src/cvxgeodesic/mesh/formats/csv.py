@@ -1,4 +1,5 @@
-"""CSV: header ``vertex,file_vertex,x,y,z,<name>``, one row per vertex (``inf`` written as such)."""
+"""CSV: header ``vertex,file_vertex,x,y,z,<name>``, one row per vertex (``inf`` written as such); points in, one a
+row (:func:`read_points`: the columns ``x, y, z`` and ``nx, ny, nz`` of a header, else the first three or six)."""
 
 from __future__ import annotations
 
@@ -7,9 +8,15 @@ from typing import BinaryIO
 
 import numpy as np
 
-from ._common import FieldData, format_error
+from ._common import FieldData, RawPoints, format_error
+from .xyz import read_text_points
 
-__all__ = ["read_field", "write_field"]
+__all__ = ["read_field", "read_points", "write_field"]
+
+
+def read_points(path: Path) -> RawPoints:
+    """The points (and normals) of a comma-separated file, one point a row (:func:`.xyz.read_text_points`)."""
+    return read_text_points(path, ",")
 
 
 def write_field(fh: BinaryIO, field: FieldData) -> None:

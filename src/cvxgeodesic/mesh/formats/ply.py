@@ -1,4 +1,5 @@
-"""PLY (ASCII, binary little- and big-endian): meshes in, fields out as a ``double`` vertex property."""
+"""PLY (ASCII, binary little- and big-endian): meshes in, fields out as a ``double`` vertex property; a PLY without
+faces holds points (:func:`holds_points`, :func:`read_points`: ``nx, ny, nz`` vertex properties are normals)."""
 
 from __future__ import annotations
 
@@ -9,10 +10,11 @@ from typing import Any, BinaryIO
 
 import numpy as np
 
-from ._common import FieldData, RawMesh, format_error, read_bytes
+from ...errors import MeshFormatError
+from ._common import FieldData, RawMesh, RawPoints, format_error, read_bytes
 from ._text import INT_RE, decode, parse_floats, parse_int_tokens
 
-__all__ = ["read_field", "read_fields", "read_mesh", "write_field"]
+__all__ = ["holds_points", "read_field", "read_fields", "read_mesh", "read_points", "write_field"]
 
 #: numpy's type code of each PLY type, by both of its names (the original and the sized one).
 _PLY_TYPES = {name: code for names, code in (("char int8", "i1"), ("uchar uint8", "u1"), ("short int16", "i2"),
@@ -47,6 +49,44 @@ def read_mesh(path: Path) -> RawMesh:
     values, line_nos = _read_elements(path, read_bytes(path, "a mesh file"))
     V, idx, sizes, v_lines, f_lines, _ = _mesh_parts(path, values, line_nos)
     return RawMesh(V, idx, sizes, v_lines, f_lines)
+
+
+def holds_points(path: Path) -> bool:
+    """Whether the PLY file ``path`` holds points: its header declares no ``face`` element, or one of count 0 (an
+    unreadable header: False, and ``load_mesh`` says what is wrong)."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(1 << 16)
+        return not _has_faces(_parse_header(path, head)[1])
+    except (OSError, MeshFormatError):
+        return False
+
+
+def read_points(path: Path) -> RawPoints:
+    """The ``vertex`` element's ``x, y, z`` (and ``nx, ny, nz`` when it has all three) of a PLY without faces.
+
+    Raises
+    ------
+    MeshFormatError
+        The file has faces (it is a mesh: ``load_mesh``), or no scalar ``x``, ``y``, ``z`` vertex properties.
+    """
+    data = read_bytes(path, "a PLY file")
+    if _has_faces(_parse_header(path, data)[1]):
+        raise format_error(path, "the PLY file has faces: it is a mesh (load_mesh), not a point cloud")
+    vert = _read_elements(path, data)[0].get("vertex", {})
+    missing = [c for c in "xyz" if c not in vert or isinstance(vert[c], tuple)]
+    if missing:
+        raise format_error(path, f"the PLY 'vertex' element has no scalar propert{'y' if len(missing) == 1 else 'ies'}"
+                                 f" {', '.join(missing)}")
+    P = np.stack([np.asarray(vert[c], dtype=np.float64) for c in "xyz"], axis=1)
+    normals = ("nx", "ny", "nz")
+    if not all(c in vert and not isinstance(vert[c], tuple) for c in normals):
+        return RawPoints(P)
+    return RawPoints(P, np.stack([np.asarray(vert[c], dtype=np.float64) for c in normals], axis=1))
+
+
+def _has_faces(elements: list[_PlyElement]) -> bool:
+    return any(el.name == "face" and el.count > 0 for el in elements)
 
 
 def read_fields(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, np.ndarray]]:

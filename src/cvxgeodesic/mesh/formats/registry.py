@@ -1,13 +1,16 @@
-"""The one table of file formats: it drives ``load_mesh``, ``save_distance``, ``load_distance`` and the CLI's help.
+"""The one table of file formats: it drives ``load_mesh``, ``load_point_cloud``, ``save_distance``, ``load_distance``
+and the CLI's help.
 
 Adding a format is a module in this package and a line in :data:`FORMATS`; the extension lists, the
 dispatch and every command-line help text that lists formats follow. A format says which meshes it holds
 (``dims``: 2 for triangle surfaces, 3 for tetrahedral volumes); one reader serves both where a file may
-hold either (VTK, VTU), and ``load_mesh`` builds what the file has.
+hold either (VTK, VTU), and ``load_mesh`` builds what the file has. A format with ``read_points`` holds point
+clouds; one that holds meshes too (PLY) says which a file holds (``holds_points``: a PLY without faces).
 """
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
@@ -16,12 +19,13 @@ from typing import BinaryIO
 
 import numpy as np
 
-from . import csv, gltf, npy, obj, off, ply, stl, tetgen, via_meshio
-from ._common import FieldData, RawMesh, format_error
+from . import csv, gltf, las, npy, obj, off, ply, stl, tetgen, via_meshio, xyz
+from ._common import FieldData, RawMesh, RawPoints, format_error
 
 __all__ = ["DISTANCE_EXTENSIONS", "FORMATS", "Format", "MESHIO_TET_EXTENSIONS", "MESH_EXTENSIONS",
-           "PROPERTY_EXTENSIONS", "TETGEN_EXTENSIONS", "VOLUME_DISTANCE_EXTENSIONS", "VOLUME_EXTENSIONS",
-           "field_formats_help", "field_reader", "mesh_format", "mesh_formats_help", "property_reader"]
+           "POINT_EXTENSIONS", "PROPERTY_EXTENSIONS", "TETGEN_EXTENSIONS", "VOLUME_DISTANCE_EXTENSIONS",
+           "VOLUME_EXTENSIONS", "field_formats_help", "field_reader", "is_point_file", "mesh_format",
+           "mesh_formats_help", "point_formats_help", "point_reader", "property_reader"]
 
 
 @dataclass(frozen=True)
@@ -46,6 +50,11 @@ class Format:
     dims : tuple of int
         The simplex dimensions of the meshes it holds, read or written: 2, triangle surfaces; 3, tetrahedral
         volumes.
+    read_points : callable ``(path) -> RawPoints`` or None
+        For :func:`~cvxgeodesic.mesh.pointcloud_io.load_point_cloud`: the points (and normals) of a point file.
+    holds_points : callable ``(path) -> bool`` or None
+        For a format that holds meshes and points (``read_mesh`` and ``read_points``): whether the file at hand
+        holds points (a PLY without faces); None: every file of the format with a ``read_points`` does.
     """
 
     extension: str
@@ -56,6 +65,8 @@ class Format:
     read_field: Callable[[Path, str], np.ndarray] | None = None
     field_note: str = ""
     dims: tuple[int, ...] = (2,)
+    read_points: Callable[[Path], RawPoints] | None = None
+    holds_points: Callable[[Path], bool] | None = None
 
 
 #: Every format, keyed by extension; the order is the order of the extension lists and help texts.
@@ -63,12 +74,13 @@ FORMATS: dict[str, Format] = {f.extension: f for f in (
     Format(".obj", "Wavefront OBJ", read_mesh=obj.read_mesh),
     Format(".off", "OFF (ASCII)", read_mesh=off.read_mesh),
     Format(".ply", "PLY (ASCII or binary)", read_mesh=ply.read_mesh, write_field=ply.write_field,
-           read_field=ply.read_field, field_note="mesh + field, float64"),
+           read_field=ply.read_field, field_note="mesh + field, float64", read_points=ply.read_points,
+           holds_points=ply.holds_points),
     Format(".stl", "STL (ASCII or binary)", read_mesh=stl.read_mesh),
     Format(".npy", "NumPy array", write_field=npy.write_field, read_field=npy.read_field, field_note="field only",
-           dims=(2, 3)),
+           dims=(2, 3), read_points=npy.read_points),
     Format(".csv", "CSV table", write_field=csv.write_field, read_field=csv.read_field,
-           field_note="vertex,file_vertex,x,y,z,distance"),
+           field_note="vertex,file_vertex,x,y,z,distance", read_points=csv.read_points),
     Format(".glb", "binary glTF", "trimesh", gltf.read_mesh, gltf.write_field, gltf.read_field,
            field_note="vertex attribute _DISTANCE, float32"),
     Format(".gltf", "glTF", "trimesh", gltf.read_mesh),
@@ -84,6 +96,10 @@ FORMATS: dict[str, Format] = {f.extension: f for f in (
     Format(".med", "Salome MED", "meshio", via_meshio.read_mesh, dims=(3,)),
     Format(".node", "TetGen points (and the .ele beside it)", read_mesh=tetgen.read_mesh, dims=(3,)),
     Format(".ele", "TetGen tetrahedra (and the .node beside it)", read_mesh=tetgen.read_mesh, dims=(3,)),
+    Format(".xyz", "XYZ points", dims=(), read_points=xyz.read_points),
+    Format(".pts", "PTS points", dims=(), read_points=xyz.read_points),
+    Format(".las", "LAS (LiDAR points)", "laspy", dims=(), read_points=las.read_points),
+    Format(".laz", "LAZ (compressed LAS)", "laspy", dims=(), read_points=las.read_points),
 )}
 
 #: Surface files understood by :func:`~cvxgeodesic.mesh.load.load_mesh` (compared case-insensitively).
@@ -99,6 +115,9 @@ TETGEN_EXTENSIONS = tuple(e for e in VOLUME_EXTENSIONS if FORMATS[e].read_mesh i
 DISTANCE_EXTENSIONS = tuple(e for e, f in FORMATS.items() if f.write_field is not None)
 #: The distance files :func:`~cvxgeodesic.mesh.io.save_distance` writes for a field on a tetrahedral mesh.
 VOLUME_DISTANCE_EXTENSIONS = tuple(e for e in DISTANCE_EXTENSIONS if 3 in FORMATS[e].dims)
+#: Point files understood by :func:`~cvxgeodesic.mesh.pointcloud_io.load_point_cloud` (a ``.ply`` when it has no
+#: faces).
+POINT_EXTENSIONS = tuple(e for e, f in FORMATS.items() if f.read_points is not None)
 
 
 #: Mesh file extensions whose files carry named per-vertex properties (PLY properties, VTK point data, glTF
@@ -122,9 +141,30 @@ def mesh_format(path: Path) -> Format:
     fmt = FORMATS.get(path.suffix.lower())
     if fmt is None or fmt.read_mesh is None:
         volumes = [e for e in VOLUME_EXTENSIONS if e not in MESH_EXTENSIONS]
+        points = f"; {path.suffix} files hold points: load_point_cloud reads them" if fmt is not None else ""
         raise format_error(path, f"unsupported mesh file extension {path.suffix!r}; supported: "
-                                 f"{', '.join(MESH_EXTENSIONS)} (any case), and for tetrahedra {', '.join(volumes)}")
+                                 f"{', '.join(MESH_EXTENSIONS)} (any case), and for tetrahedra {', '.join(volumes)}"
+                                 + points)
     return fmt
+
+
+def point_reader(path: Path) -> Callable[[Path], RawPoints]:
+    """The points reader for ``path``'s extension, or a MeshFormatError listing the point files' extensions."""
+    fmt = FORMATS.get(path.suffix.lower())
+    if fmt is None or fmt.read_points is None:
+        raise format_error(path, f"unsupported point file extension {path.suffix!r}; supported: "
+                                 f"{', '.join(POINT_EXTENSIONS)} (any case; a .ply without faces)")
+    return fmt.read_points
+
+
+def is_point_file(path: str | os.PathLike) -> bool:
+    """Whether ``path`` names a point file: a format with ``read_points`` whose file holds points
+    (``holds_points``: a PLY whose header declares no face)."""
+    p = Path(path)
+    fmt = FORMATS.get(p.suffix.lower())
+    if fmt is None or fmt.read_points is None:
+        return False
+    return fmt.holds_points is None or (p.is_file() and fmt.holds_points(p))
 
 
 def field_reader(path: Path) -> Callable[[Path, str], np.ndarray]:
@@ -148,6 +188,11 @@ def _grouped(extensions: tuple[str, ...], note: Callable[[Format], str]) -> str:
 def mesh_formats_help() -> str:
     """The mesh formats for command-line help: ``".obj, .off, .ply, .stl; .glb, .gltf, .3mf with trimesh; ..."``."""
     return _grouped(MESH_EXTENSIONS, lambda f: "")
+
+
+def point_formats_help() -> str:
+    """The point files for command-line help: ``".ply (without faces), ...; .las, .laz with laspy"``."""
+    return _grouped(POINT_EXTENSIONS, lambda f: "without faces" if f.read_mesh is not None else "")
 
 
 def field_formats_help() -> str:
