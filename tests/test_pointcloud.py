@@ -106,6 +106,24 @@ def test_a_non_finite_point_is_refused_by_index():
         PointCloud(P)
 
 
+def test_a_non_finite_or_misshapen_normal_is_refused():
+    P = _plane(6)
+    N = np.tile([0.0, 0.0, 1.0], (P.shape[0], 1))
+    N[4, 2] = np.inf
+    with pytest.raises(MeshError, match=r"^c: normal 4 has a non-finite coordinate"):
+        PointCloud(P, N, name="c")
+    with pytest.raises(MeshError, match=r"normals must have the points' shape \(36, 3\), got \(35, 3\)"):
+        PointCloud(P, np.delete(N, 4, axis=0), name="c")
+
+
+def test_a_non_finite_point_of_a_file_names_the_file_and_the_point(tmp_path):
+    P = _plane(6)
+    P[2, 0] = np.nan
+    np.savetxt(tmp_path / "c.xyz", P)
+    with pytest.raises(MeshError, match=r"^c.xyz: point 2 has a non-finite coordinate"):
+        cg.load_point_cloud(tmp_path / "c.xyz")
+
+
 def test_duplicate_points_are_merged_with_a_note():
     P = _plane(8)
     Q = np.r_[P, P[[3, 10]]]
@@ -144,6 +162,21 @@ def test_consensus_leaves_no_point_unreachable_once_repaired(monkeypatch):
     assert lonely in repaired.mesh.F
     assert any("added back" in n for n in repaired.notes)
     assert np.isfinite(cg.geodesic_distance(repaired, 0, method="qclp")).all()
+
+
+def test_fans_that_share_no_triangle_are_repaired_into_the_union(monkeypatch):
+    # no triangle in two fans: the consensus is empty (refused), the repair gives the fans back
+    from cvxgeodesic.mesh import pointcloud
+
+    P = _plane(8)
+    tri, owner = pointcloud.fan_triangles(P, 30)
+    _, first = np.unique(tri, axis=0, return_index=True)
+    monkeypatch.setattr(pointcloud, "fan_triangles", lambda P, k: (tri[first], owner[first]))
+    with pytest.raises(MeshError, match="made no triangle"):
+        PointCloud(P, triangles="consensus")
+    repaired = PointCloud(P, triangles="repaired")  # every point but one (the consensus' "largest piece") stranded
+    assert repaired.mesh.n_faces > 0.9 * first.size
+    assert any(f"{P.shape[0] - 1} points would be cut off" in n for n in repaired.notes)
 
 
 @pytest.mark.parametrize("method", ["exact", "fmm", "qcqp-hessian"])

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import cvxgeodesic as cg
-from cvxgeodesic.errors import ParameterError, SourceError
+from cvxgeodesic.errors import MeshError, ParameterError, SourceError
 from cvxgeodesic.validation import (
     as_points,
     as_vertex_field,
@@ -84,6 +84,17 @@ def test_points_name_the_first_bad_row():
         as_points(np.zeros((2, 2)), "x")
     with pytest.raises(SourceError, match=r"xyz must be .* finite positions: xyz = \[0.5, inf, 0.0\]"):
         cg.surface_point(cg.grid_plane(3), [0.5, np.inf, 0.0])
+
+
+def test_rows_of_a_data_set_name_the_set_and_the_row():
+    # a point cloud's points (mesh/pointcloud.py): the message names the cloud (its file) and the point
+    with pytest.raises(MeshError, match=r"^scan.xyz: point 2 has a non-finite coordinate \(\[0.0, nan, 0.0\]\); "
+                                        "2 such points in all$"):
+        as_points([[0, 0, 0], [1, 1, 1], [0, np.nan, 0], [np.inf, 0, 0]], "scan.xyz", error=MeshError, row="point")
+    with pytest.raises(MeshError, match=r"^c: normals must be an \(n, 3\) array, got shape \(3,\)$"):
+        as_points([0.0, 0.0, 1.0], "c", error=MeshError, row="normal")  # one position is not rows
+    with pytest.raises(MeshError, match=r"^c: points must be an \(n, 3\) array of numbers"):
+        as_points([["a", 0, 0]], "c", error=MeshError, row="point")
 
 
 def test_validate_sources():

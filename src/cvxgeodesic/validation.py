@@ -218,7 +218,8 @@ def as_vertex_field(values: ArrayLike, name: str, n: int | None = None, *, nan_o
     return arr
 
 
-def as_points(x: ArrayLike, name: str, *, error: type[Exception] = ParameterError) -> np.ndarray:
+def as_points(x: ArrayLike, name: str, *, error: type[Exception] = ParameterError,
+              row: str | None = None) -> np.ndarray:
     """Return ``x`` as a (3,) or (k, 3) float64 array of finite positions, or raise ``error`` naming ``name``.
 
     Parameters
@@ -229,7 +230,10 @@ def as_points(x: ArrayLike, name: str, *, error: type[Exception] = ParameterErro
         Parameter name used in the message.
     error : type
         :class:`~cvxgeodesic.errors.ParameterError` (default) or :class:`~cvxgeodesic.errors.SourceError`
-        (positions that define sources).
+        (positions that define sources); :class:`~cvxgeodesic.errors.MeshError` for a point cloud's points.
+    row : str, optional
+        What one row is, for rows of a data set (``"point"``, ``"normal"`` of a point cloud named ``name``): then
+        ``x`` must be (k, 3) and the messages read ``"<name>: <row> <i> has a non-finite coordinate ..."``.
 
     Returns
     -------
@@ -241,6 +245,8 @@ def as_points(x: ArrayLike, name: str, *, error: type[Exception] = ParameterErro
         Not numeric, of another shape, or with a NaN or infinite coordinate (the message names the
         first such row).
     """
+    if row is not None:
+        return _as_rows(x, name, error, row)
     try:
         X = np.asarray(x, dtype=float)
     except (TypeError, ValueError):
@@ -253,6 +259,21 @@ def as_points(x: ArrayLike, name: str, *, error: type[Exception] = ParameterErro
         where = name if X.ndim == 1 else f"{name}[{k}]"
         raise error(f"{name} must be a (3,) or (k, 3) array of finite positions: {where} = "
                     f"{X.reshape(-1, 3)[k].tolist()}")
+    return X
+
+
+def _as_rows(x: ArrayLike, name: str, error: type[Exception], row: str) -> np.ndarray:
+    """:func:`as_points` for the (k, 3) rows of a data set: the messages name the data set and the row."""
+    try:
+        X = np.asarray(x, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise error(f"{name}: {row}s must be an (n, 3) array of numbers ({exc})") from None
+    if X.ndim != 2 or X.shape[1] != 3:
+        raise error(f"{name}: {row}s must be an (n, 3) array, got shape {X.shape}")
+    bad = np.flatnonzero(~np.isfinite(X).all(axis=1))
+    if bad.size:
+        raise error(f"{name}: {row} {int(bad[0])} has a non-finite coordinate ({X[bad[0]].tolist()}); "
+                    f"{bad.size} such {row}s in all")
     return X
 
 

@@ -14,11 +14,10 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import ArrayLike
-from scipy.sparse.csgraph import connected_components
 
 from ..errors import MeshError, ParameterError
+from ..validation import as_points
 from .trimesh import TriMesh
 
 __all__ = ["TRIANGLE_SETS", "CloudMesh", "PointCloud", "fan_triangles", "triangle_set"]
@@ -78,8 +77,9 @@ def fan_triangles(P: np.ndarray, neighbours: int) -> tuple[np.ndarray, np.ndarra
     return np.sort(flat[keep], axis=1), owner[keep]
 
 
-def triangle_set(tri: np.ndarray, owner: np.ndarray, n: int, kind: str) -> tuple[np.ndarray, list[str]]:
-    """The triangles of one of :data:`TRIANGLE_SETS` from the fans' triangles (:func:`fan_triangles`).
+def triangle_set(tri: np.ndarray, owner: np.ndarray, P: np.ndarray, kind: str) -> tuple[np.ndarray, list[str]]:
+    """The triangles of one of :data:`TRIANGLE_SETS` from the fans' triangles (:func:`fan_triangles`) of the points
+    ``P`` (n, 3).
 
     Returns
     -------
@@ -96,8 +96,8 @@ def triangle_set(tri: np.ndarray, owner: np.ndarray, n: int, kind: str) -> tuple
     if kind == "consensus":
         return uniq[chosen], []
     # repaired: points the consensus leaves in a smaller piece than the union's component get their fans back
-    union_labels = _components(uniq, n)
-    labels = _components(uniq[chosen], n)
+    union_labels = _component_labels(P, uniq)
+    labels = _component_labels(P, uniq[chosen])
     big = _largest_piece(labels, union_labels)
     stranded = np.flatnonzero(labels != big[union_labels])
     if stranded.size:
@@ -108,12 +108,9 @@ def triangle_set(tri: np.ndarray, owner: np.ndarray, n: int, kind: str) -> tuple
     return uniq[chosen], notes
 
 
-def _components(F: np.ndarray, n: int) -> np.ndarray:
-    """Component label of every point in the graph of the triangles' edges (a point in no triangle: its own)."""
-    i = F[:, [0, 1, 2]].ravel()
-    j = F[:, [1, 2, 0]].ravel()
-    A = sp.coo_matrix((np.ones(i.size), (i, j)), shape=(n, n))
-    return connected_components(A, directed=False)[1]
+def _component_labels(P: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """Component label of every point in the edge graph of the triangles ``F`` (a point in no triangle: its own)."""
+    return CloudMesh(P, F).component_labels if F.shape[0] else np.arange(P.shape[0])
 
 
 def _largest_piece(labels: np.ndarray, union_labels: np.ndarray) -> np.ndarray:
@@ -180,7 +177,7 @@ class PointCloud:
         if isinstance(neighbours, bool) or not isinstance(neighbours, int | np.integer):
             raise ParameterError(f"neighbours must be an integer, got {neighbours!r}")
         self.neighbours, self.triangles = int(neighbours), triangles
-        raw = _check_points(P, self.name)
+        raw = as_points(P, self.name, error=MeshError, row="point")
         notes: list[str] = []
         uniq, first, inverse = np.unique(raw, axis=0, return_index=True, return_inverse=True)
         inverse = inverse.reshape(-1)
@@ -202,7 +199,7 @@ class PointCloud:
         self.file_index = file_index
         self.normals = None if normals is None else _check_normals(normals, raw.shape[0], self.name)[keep]
         tri, owner = fan_triangles(pts, self.neighbours)
-        F, added = triangle_set(tri, owner, pts.shape[0], triangles)
+        F, added = triangle_set(tri, owner, pts, triangles)
         notes += added
         alone = np.setdiff1d(np.arange(pts.shape[0]), F.ravel())
         if alone.size:
@@ -259,20 +256,6 @@ def is_point_cloud_object(obj: Any) -> bool:
     return kind.startswith(("trimesh.points.PointCloud", "open3d")) and "PointCloud" in kind
 
 
-def _check_points(P: ArrayLike, name: str) -> np.ndarray:
-    try:
-        X = np.asarray(P, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise MeshError(f"{name}: points must be an (n, 3) array of numbers ({exc})") from None
-    if X.ndim != 2 or X.shape[1] != 3:
-        raise MeshError(f"{name}: points must be an (n, 3) array, got shape {X.shape}")
-    bad = np.flatnonzero(~np.isfinite(X).all(axis=1))
-    if bad.size:
-        raise MeshError(f"{name}: point {int(bad[0])} has a non-finite coordinate ({X[bad[0]].tolist()}); "
-                        f"{bad.size} such points in all")
-    return X
-
-
 def _check_shape(P: np.ndarray, name: str) -> None:
     if P.shape[0] < 4:
         raise MeshError(f"{name}: a point cloud needs at least 4 distinct points, got {P.shape[0]}")
@@ -283,10 +266,7 @@ def _check_shape(P: np.ndarray, name: str) -> None:
 
 
 def _check_normals(N: ArrayLike, n: int, name: str) -> np.ndarray:
-    X = np.asarray(N, dtype=np.float64)
+    X = as_points(N, name, error=MeshError, row="normal")
     if X.shape != (n, 3):
         raise MeshError(f"{name}: normals must have the points' shape ({n}, 3), got {X.shape}")
-    bad = np.flatnonzero(~np.isfinite(X).all(axis=1))
-    if bad.size:
-        raise MeshError(f"{name}: normal {int(bad[0])} has a non-finite coordinate")
     return X
