@@ -65,7 +65,7 @@ def test_every_mesh_argument_lists_exactly_the_registry_formats():
                 volume = VOLUME_EXTENSIONS if command in ("distance", "compare", "view", "path", "matrix",
                                                           "batch") else ()
                 # the commands that read their input with cli/_common.load_input take point files (issue 44)
-                points = POINT_EXTENSIONS if command in ("distance", "path", "matrix") else ()
+                points = POINT_EXTENSIONS if command in ("distance", "path", "matrix", "view") else ()
                 assert sorted(set(found)) == sorted({*MESH_EXTENSIONS, *volume, *points}), (command, action.help)
                 checked.append(command)
     assert sorted(checked) == ["batch", "compare", "distance", "matrix", "path", "view"]

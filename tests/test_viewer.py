@@ -257,3 +257,115 @@ def test_show_draws_a_solid_by_its_slice_with_the_normal_given(gl, tmp_path):
     along_z = _render(tmp_path, "z.png", box, sources=0, normal=(0.0, 0.0, 1.0))
     assert _surface(along_x).mean() > 0.05 and _surface(along_z).mean() > 0.05
     assert np.abs(along_x - along_z).sum(axis=-1).mean() > 0.01  # another cut, seen from another side
+
+
+# -- point clouds (issue 44): drawn as polyscope point clouds -----------------------------------------------------
+
+
+class _Structure:
+    """What the viewer calls on a polyscope structure, recorded."""
+
+    def __init__(self, kind, name, points):
+        self.kind, self.name, self.points, self.quantities, self.radius = kind, name, np.asarray(points), {}, None
+
+    def add_scalar_quantity(self, name, values, **kw):
+        self.quantities[name] = np.asarray(values)
+
+    def set_radius(self, radius, relative=True):
+        self.radius = radius
+
+    def set_selection_mode(self, mode):
+        pass
+
+
+class _FakePolyscope:
+    """The polyscope calls of ``_Viewer`` and ``_add_marks``, recorded (no OpenGL)."""
+
+    def __init__(self):
+        self.structures = []
+
+    def _add(self, kind, name, points):
+        self.structures.append(_Structure(kind, name, points))
+        return self.structures[-1]
+
+    def register_point_cloud(self, name, points, **kw):
+        return self._add("point cloud", name, points)
+
+    def register_surface_mesh(self, name, V, F, **kw):
+        return self._add("surface mesh", name, V)
+
+    def register_curve_network(self, name, nodes, edges, **kw):
+        return self._add("curve network", name, nodes)
+
+    def has_curve_network(self, name):
+        return False
+
+
+@pytest.fixture()
+def fake_ps(monkeypatch):
+    import cvxgeodesic.viewer as viewer
+
+    ps = _FakePolyscope()
+    monkeypatch.setattr(viewer, "_start", lambda *args: ps)
+    monkeypatch.setattr(viewer, "_present", lambda *args, **kw: None)
+    return ps
+
+
+def _sphere_cloud(n=600):
+    X = np.random.default_rng(3).normal(size=(n, 3))
+    return cg.PointCloud(X / np.linalg.norm(X, axis=1)[:, None])
+
+
+def test_a_cloud_is_shown_as_its_points_coloured_by_the_field(fake_ps, tmp_path):
+    cloud = _sphere_cloud()
+    d = cg.show(cloud, sources=5, screenshot=tmp_path / "x.png")  # the cloud's default method: qclp
+    np.testing.assert_allclose(d, cg.geodesic_distance(cloud, 5, method="qclp"), rtol=1e-6, atol=1e-9)
+    kinds = [(s.kind, s.name) for s in fake_ps.structures]
+    assert ("point cloud", "points") in kinds and ("surface mesh", "surface") not in kinds
+    (points,) = [s for s in fake_ps.structures if s.name == "points"]
+    np.testing.assert_array_equal(points.points, cloud.P)
+    np.testing.assert_array_equal(points.quantities["geodesic distance"], d)
+    assert 0 < points.radius < 0.2  # about the spacing of 600 points on the unit sphere, not the scene's scale
+    marks = [s for s in fake_ps.structures if s.name == "sources"]
+    np.testing.assert_array_equal(marks[-1].points, cloud.P[[5]])
+    fake_ps.structures.clear()
+    cg.show(cg.icosphere(1), np.zeros(42), screenshot=tmp_path / "x.png")  # a surface is still its triangles
+    assert [s.kind for s in fake_ps.structures][0] == "surface mesh"
+
+
+def test_cli_view_takes_a_point_file(fake_ps, tmp_path):
+    from cvxgeodesic.cli import main
+
+    cloud = _sphere_cloud()
+    np.savetxt(tmp_path / "c.xyz", cloud.P)
+    assert main(["view", str(tmp_path / "c.xyz"), "-s", "3", "--screenshot", str(tmp_path / "v.png"), "-q"]) == 0
+    (points,) = [s for s in fake_ps.structures if s.kind == "point cloud" and s.name == "points"]
+    np.testing.assert_allclose(points.quantities["geodesic distance"], cg.geodesic_distance(cloud, 3, method="qclp"),
+                               rtol=1e-6, atol=1e-9)
+
+
+def test_a_picked_point_of_a_cloud_resolves_from_it(fake_ps):
+    from types import SimpleNamespace
+
+    from cvxgeodesic.viewer import _Viewer
+
+    cloud = _sphere_cloud()
+    v = _Viewer(fake_ps, cloud.mesh, method="dijkstra", solver_kwargs={}, isolines=True)
+    v.solve([0])
+    # polyscope's pick of a point cloud: the structure's name and the point's index, no element type
+    assert v.pick(SimpleNamespace(is_hit=True, structure_name="points", structure_data={"index": 17}))
+    np.testing.assert_array_equal(v.distance, cg.geodesic_distance(cloud, 17, method="dijkstra"))
+    assert not v.pick(SimpleNamespace(is_hit=True, structure_name="sources", structure_data={"index": 0}))
+
+
+def test_screenshot_of_a_cloud_shows_coloured_points(gl, tmp_path):
+    cloud = _sphere_cloud(2000)
+    front = int(np.argmax(cloud.P[:, 2]))
+    img = _render(tmp_path, "cloud.png", cloud, sources=front, method="dijkstra", isolines=False)
+    surf = _surface(img)
+    assert surf.mean() > 0.2  # the points cover the sphere's disc (a tenth of the diagonal would not)
+    colours = img[surf & ~_red(img)]
+    assert np.median(colours.max(axis=1) - colours.min(axis=1)) > 0.1  # coloured by the field, not grey
+    red = _red(img)
+    ys, xs = np.nonzero(red)
+    assert red.sum() > 10 and abs(xs.mean() - W / 2) < 0.1 * W and abs(ys.mean() - H / 2) < 0.1 * H

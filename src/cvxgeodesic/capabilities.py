@@ -66,6 +66,10 @@ class Domain:
         The comparison's reference field (:mod:`cvxgeodesic.compare`): ``(method, order)``.
     output_format : str
         A batch's distance file when no format is given (:mod:`cvxgeodesic.batch`).
+    drawn_as : str
+        What the viewer draws (:func:`cvxgeodesic.viewer.show`): ``"cells"``, the mesh as its cell kind is drawn
+        (``reference.picture``); ``"points"``, its vertices coloured by the field (a cloud's soup of overlapping fans
+        is no surface to shade).
     """
 
     name: str
@@ -77,6 +81,7 @@ class Domain:
     default_resolution: Any
     reference: tuple[str, int]
     output_format: str
+    drawn_as: str = "cells"
 
 
 #: Every domain by name (``mesh.domain``). The curved Hessian energy exists on surfaces only: ``qclp`` in a volume;
@@ -89,7 +94,7 @@ DOMAINS: dict[str, Domain] = {
     "volume": Domain("volume", "tetrahedral meshes", "inside a volume", "on a volume", 3, "qclp", "mesh",
                      ("qclp", 2), "vtu"),
     "cloud": Domain("cloud", "point clouds", "on a point cloud", "on a point cloud", 2, "qclp", "mesh",
-                    ("qclp", 2), "ply"),
+                    ("qclp", 2), "ply", drawn_as="points"),
 }
 
 _HESSIAN = ("lcqp-hessian", "qcqp-hessian")

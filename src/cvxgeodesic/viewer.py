@@ -31,6 +31,10 @@ __all__ = ["show", "show_volume"]
 
 INSTALL_HINT = "pip install 'cvxgeodesic[viewer]' (or pip install polyscope)"
 MESH_NAME = "surface"
+#: a point cloud's structure (``Domain.drawn_as == "points"``)
+POINTS_NAME = "points"
+#: a cloud's point radius per mean edge length of its triangles: gaps between neighbours, where isolines show
+POINT_RADIUS = 0.3
 FIELD_NAME = "geodesic distance"
 SOURCES_NAME = "sources"
 VOLUME_NAME = "volume"
@@ -109,11 +113,23 @@ class _Viewer:
         self._last_selection: tuple | None = None
         self.message = "click a vertex to re-solve from it"
         self.distance: np.ndarray | None = None
-        self.surface = ps.register_surface_mesh(MESH_NAME, mesh.V, mesh.cells, smooth_shade=True,
-                                                color=(0.8, 0.8, 0.8))
-        self.surface.set_selection_mode("vertices_only")
+        self.name, self.surface = self._register(ps, mesh)
         diag = float(mesh.bbox_diagonal)
         self._diag = diag if np.isfinite(diag) and diag > 0 else 1.0
+
+    @staticmethod
+    def _register(ps: Any, mesh: SimplexMesh) -> tuple[str, Any]:
+        """The structure that shows the field, by the mesh's domain (``Domain.drawn_as``): a point cloud's points,
+        else the surface's triangles, clickable at vertices."""
+        from .capabilities import DOMAINS
+
+        if DOMAINS[mesh.domain].drawn_as == "points":
+            cloud = ps.register_point_cloud(POINTS_NAME, mesh.V, color=(0.8, 0.8, 0.8))
+            cloud.set_radius(POINT_RADIUS * float(mesh.mean_edge_length), relative=False)
+            return POINTS_NAME, cloud
+        surface = ps.register_surface_mesh(MESH_NAME, mesh.V, mesh.cells, smooth_shade=True, color=(0.8, 0.8, 0.8))
+        surface.set_selection_mode("vertices_only")
+        return MESH_NAME, surface
 
     def solver(self) -> Any:
         if self._solver is None:
@@ -152,10 +168,12 @@ class _Viewer:
         return res.distance
 
     def pick(self, result: Any) -> bool:
-        """Re-solve from the vertex of a polyscope ``PickResult`` on the surface; False if it is none."""
+        """Re-solve from the vertex of a polyscope ``PickResult`` on the surface (or from the point of a cloud); False
+        if it is none."""
         data = getattr(result, "structure_data", {}) or {}
-        if not (getattr(result, "is_hit", False) and getattr(result, "structure_name", None) == MESH_NAME
-                and data.get("element_type") == "vertex"):
+        # a point cloud's pick has only the index: every pick of it is a point
+        if not (getattr(result, "is_hit", False) and getattr(result, "structure_name", None) == self.name
+                and data.get("element_type", "vertex") == "vertex"):
             return False
         self.solve([int(data["index"])])
         return True
@@ -194,7 +212,8 @@ def show(
     mesh : TriMesh, (V, F) tuple or path
         The surface, ``n`` vertices (anything :class:`~cvxgeodesic.GeodesicSolver` accepts); a mesh drawn by a
         slice (``mesh.reference.picture``: a tetrahedral mesh) goes to :func:`show_volume` (default method
-        ``"qclp"``).
+        ``"qclp"``); a point cloud (a :class:`~cvxgeodesic.PointCloud`, its ``CloudMesh``, a point file) is drawn
+        as its points coloured by the field (``Domain.drawn_as``), clicking a point re-solves from it.
     distance : (n,) array_like of float, optional
         The field to show (``inf`` where unreachable). Without it the field is solved from ``sources``.
     sources : optional
@@ -202,7 +221,7 @@ def show(
         vertices where ``distance`` is 0). Without ``distance``: solved (default: vertex 0).
     method : str (:data:`~cvxgeodesic.api.Method`), optional
         Method of the initial solve (when ``distance`` is None) and of the re-solves after a click (default
-        ``"qcqp-hessian"``).
+        the domain's: ``"qcqp-hessian"`` on a surface, ``"qclp"`` on a cloud).
     screenshot : str or path-like, optional
         Render one frame to this PNG and return without opening a window (works without a display).
     isolines : bool
@@ -237,7 +256,7 @@ def show(
     if distance is not None:
         d = as_vertex_field(distance, "distance", mesh.n_vertices)
     ps = _start(window_size, screenshot, overwrite_read_only)
-    viewer = _Viewer(ps, mesh, method=method or "qcqp-hessian", solver_kwargs=solver_kwargs, isolines=isolines)
+    viewer = _Viewer(ps, mesh, method=method or _default_method(mesh), solver_kwargs=solver_kwargs, isolines=isolines)
     if distance is None:
         viewer.solve(0 if sources is None else sources)
     else:
@@ -245,6 +264,13 @@ def show(
     _present(ps, screenshot, viewer.callback, overwrite_read_only=overwrite_read_only)
     assert viewer.distance is not None
     return viewer.distance
+
+
+def _default_method(mesh: SimplexMesh) -> Method:
+    """The method of a surface's solves without ``method=``: the mesh's domain's (a cloud's is ``qclp``)."""
+    from .capabilities import DOMAINS
+
+    return DOMAINS[mesh.domain].default_method  # type: ignore[return-value]
 
 
 def _start(window_size: tuple[int, int], screenshot: str | os.PathLike | None, overwrite_read_only: bool) -> Any:

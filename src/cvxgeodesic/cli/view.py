@@ -6,7 +6,7 @@ import argparse
 import sys
 from typing import Any
 
-from ._common import add_overwrite_option, check_outputs
+from ._common import add_overwrite_option, check_outputs, load_input
 from ._options import cli_sources, method_for
 from .distance import add_common_options, add_slice_option, slice_normal
 
@@ -15,7 +15,7 @@ def add_parser(sub: Any) -> None:
     """The ``view`` sub-command."""
     p = sub.add_parser("view", help="interactive viewer (polyscope): field, isolines, sources; a click re-solves "
                                       "(default source: the first vertex of a face)")
-    add_common_options(p)
+    add_common_options(p, points=True)
     p.add_argument("--screenshot", default=None, metavar="OUT.png",
                    help="render one frame to this PNG without opening a window (works without a display)")
     add_slice_option(p)
@@ -25,11 +25,10 @@ def add_parser(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """``cvxgeodesic view``: returns the exit code."""
-    from ..mesh.io import load_mesh
     from ..viewer import show
 
     check_outputs(args, ("--screenshot", args.screenshot, (".png",)))
-    mesh = load_mesh(args.mesh)
+    mesh = load_input(args.mesh)  # a point file: its cloud's soup, drawn as the points
     given = args.source or args.source_point or args.boundary
     sources = cli_sources(args, mesh)[0] if given else 0  # a field to start from; clicks choose the next ones
     # a solid is shown cut by a plane through the centre with this normal (show_volume); a surface ignores it
