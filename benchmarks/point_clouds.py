@@ -16,8 +16,8 @@ time over pc-heat's (best of ``--repeats``; building the cloud's triangles inclu
 each is a fresh ``PointCloud`` + solver + solve; pc-heat's includes its own set-up), and unreachable points
 (infinite distance).
 ``--neighbours 12,20,30`` measures the neighbour count instead: ``qclp`` at both orders on the union of the fans of
-:func:`local_fans` (the same construction as potpourri3d's, whose k is fixed at 30; at k = 30 they agree on 99.95 %
-of kitten's triangles), after a row on potpourri3d's own fans.
+:func:`~cvxgeodesic.mesh.pointcloud.local_fans` (potpourri3d's construction, whose k is fixed at 30; at k = 30 they
+build the same triangles on evenly sampled clouds), after a row on potpourri3d's own fans.
 One process; run with one thread::
 
     CVXGEODESIC_THREADS=1 OMP_NUM_THREADS=1 PYTHONPATH=src python benchmarks/point_clouds.py --quick
@@ -59,29 +59,6 @@ def knn_dijkstra(P: np.ndarray, src: int, k: int) -> np.ndarray:
 
 
 
-def local_fans(P: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
-    """``(tri, owner)`` as :func:`~cvxgeodesic.mesh.pointcloud.fan_triangles`, for any neighbour count ``k``: each
-    point's fan is the 1-ring of the point in the Delaunay triangulation of its ``k`` nearest neighbours projected on
-    their PCA plane (scipy). What geometry-central's local triangulation does with its fixed k = 30, without its
-    degeneracy heuristic (potpourri3d 1.4 does not take another k); ``--neighbours`` measures the count with it."""
-    from scipy.spatial import Delaunay, QhullError
-
-    _, idx = cKDTree(P).query(P, k=k + 1)  # column 0: the point itself
-    Q = P[idx] - P[idx].mean(axis=1, keepdims=True)
-    frame = np.linalg.eigh(np.einsum("nki,nkj->nij", Q, Q))[1][:, :, 1:]  # the two largest principal axes
-    uv = np.einsum("nki,nij->nkj", P[idx] - P[:, None, :], frame)  # (n, k + 1, 2), the point at the origin
-    tris, owners = [], []
-    for i in range(P.shape[0]):
-        try:
-            simplices = Delaunay(uv[i]).simplices
-        except QhullError:  # a flat or collinear neighbourhood: no fan
-            continue
-        fan = simplices[(simplices == 0).any(axis=1)]
-        tris.append(idx[i][fan])
-        owners.append(np.full(fan.shape[0], i))
-    return np.sort(np.concatenate(tris), axis=1), np.concatenate(owners)
-
-
 def row(name, noise, label, d, exact, src, t, t_heat):
     reach = np.isfinite(d)
     err = relative_error(np.where(reach, d, exact), exact, [src])[reach]  # unreachable: counted, not averaged
@@ -113,8 +90,7 @@ def main() -> None:
     ap.add_argument("--m", type=float, default=1.0, help="smoothness of qcqp-dirichlet")
     ap.add_argument("--repeats", type=int, default=2, help="times are the best of this many runs")
     ap.add_argument("--neighbours", default="", help="instead of the methods: qclp at both orders on the union of "
-                    "the fans of local_fans at these neighbour counts (e.g. 12,20,30,45); times without building the "
-                    "fans (scipy, per point), the solver's set-up and solve over pc-heat's")
+                    "the fans of pointcloud.local_fans at these neighbour counts (e.g. 12,20,30,45)")
     ap.add_argument("--resample", default="", help="instead of the vertices: random surface points, these fractions "
                     "of the face count (e.g. 0.5,0.25: two densities); the reference is exact MMP on the mesh with "
                     "the points inserted as vertices")
@@ -194,9 +170,10 @@ def compare(name: str, noise: float, P: np.ndarray, exact: np.ndarray, src: int,
 
 
 def compare_neighbours(name: str, noise: float, P: np.ndarray, exact: np.ndarray, src: int, args) -> None:
-    """One row per neighbour count and order: ``qclp`` on the union of :func:`local_fans`' fans; first potpourri3d's
-    own fans (k = 30) through ``PointCloud``, the check that local_fans stands for them."""
-    from cvxgeodesic.mesh.pointcloud import CloudMesh, triangle_set
+    """One row per neighbour count and order: ``qclp`` on the union of the fans of
+    :func:`~cvxgeodesic.mesh.pointcloud.local_fans`; first on potpourri3d's own fans (k = 30, the default). Times
+    include building the fans, as in :func:`compare`."""
+    from cvxgeodesic.mesh.pointcloud import CloudMesh, local_fans, triangle_set
 
     def pc_heat():
         import potpourri3d as pp3d
@@ -205,19 +182,20 @@ def compare_neighbours(name: str, noise: float, P: np.ndarray, exact: np.ndarray
     d, t_heat = timed(pc_heat, args.repeats)
     row(name, noise, "pc-heat", d, exact, src, t_heat, t_heat)
     orders = (1,) if args.no_order2 else (1, 2)
-    cloud = cg.PointCloud(P)
-    for order in orders:
-        d, t = timed(lambda order=order: cg.GeodesicSolver(cloud.mesh, "qclp", order=order).solve(src).distance,
-                     args.repeats)
-        row(name, noise, f"qclp order {order}, potpourri3d's fans (k = 30, {cloud.mesh.n_faces} triangles)", d, exact,
-            src, t, t_heat)
-    for k in (int(x) for x in args.neighbours.split(",")):
-        tri, owner = local_fans(P, k)
-        mesh = CloudMesh(P, triangle_set(tri, owner, P, "union")[0])
+
+    def solve(k: int | None, order: int) -> tuple[np.ndarray, int]:
+        if k is None:
+            mesh = cg.PointCloud(P).mesh
+        else:
+            tri, owner = local_fans(P, k)
+            mesh = CloudMesh(P, triangle_set(tri, owner, P, "union")[0])
+        return cg.GeodesicSolver(mesh, "qclp", order=order).solve(src).distance, mesh.n_faces
+
+    for k in [None, *(int(x) for x in args.neighbours.split(","))]:
         for order in orders:
-            d, t = timed(lambda mesh=mesh, order=order: cg.GeodesicSolver(mesh, "qclp", order=order).solve(src)
-                         .distance, args.repeats)
-            row(name, noise, f"qclp order {order}, k = {k} ({mesh.n_faces} triangles)", d, exact, src, t, t_heat)
+            (d, n_faces), t = timed(lambda k=k, order=order: solve(k, order), args.repeats)
+            fans = "potpourri3d's fans (k = 30)" if k is None else f"k = {k}"
+            row(name, noise, f"qclp order {order}, {fans}, {n_faces} triangles)", d, exact, src, t, t_heat)
 
 
 if __name__ == "__main__":

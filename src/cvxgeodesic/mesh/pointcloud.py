@@ -20,7 +20,7 @@ from ..errors import MeshError, ParameterError
 from ..validation import as_points
 from .trimesh import TriMesh
 
-__all__ = ["TRIANGLE_SETS", "CloudMesh", "PointCloud", "fan_triangles", "triangle_set"]
+__all__ = ["TRIANGLE_SETS", "CloudMesh", "PointCloud", "fan_triangles", "local_fans", "triangle_set"]
 
 #: The triangle sets a cloud can be solved on (docs/pointclouds.md has their measured errors):
 #: ``"union"`` every triangle of every fan; ``"consensus"`` the triangles that appear in at least two fans;
@@ -28,6 +28,9 @@ __all__ = ["TRIANGLE_SETS", "CloudMesh", "PointCloud", "fan_triangles", "triangl
 #: reaches in the union, the union's triangles of its fan (so no point becomes unreachable).
 TRIANGLE_SETS = ("union", "consensus", "repaired")
 DEFAULT_NEIGHBOURS = 30
+#: Fewer neighbours than this leave most fans open (benchmarks/point_clouds.py --neighbours: at 8 a cloud of irregular
+#: spacing already loses accuracy).
+MIN_NEIGHBOURS = 4
 #: docs/pointclouds.md: the repaired consensus has the lower mean error on clean and on unevenly sampled clouds (up to
 #: 1.5× at order 2) but leaves holes where the fans disagree (max error up to 4.5× the union's on a sphere's cloud);
 #: the union has the lower mean error on noisy evenly sampled clouds (up to 1.5×) and no holes.
@@ -49,13 +52,16 @@ class CloudMesh(TriMesh):
 
 
 def fan_triangles(P: np.ndarray, neighbours: int) -> tuple[np.ndarray, np.ndarray]:
-    """Every fan triangle of ``potpourri3d.PointCloudLocalTriangulation``, and the point whose fan it is in.
+    """Every fan triangle of the cloud's local triangulation, and the point whose fan it is in.
+
+    At the default 30 neighbours, ``potpourri3d.PointCloudLocalTriangulation`` (geometry-central); at another count,
+    which potpourri3d 1.4 does not take, :func:`local_fans`, the same construction in numpy.
 
     Parameters
     ----------
     P : (n, 3) float ndarray
     neighbours : int
-        Points in each local neighbourhood.
+        Points in each local neighbourhood, below ``n``.
 
     Returns
     -------
@@ -67,14 +73,92 @@ def fan_triangles(P: np.ndarray, neighbours: int) -> tuple[np.ndarray, np.ndarra
     import potpourri3d as pp3d
 
     if neighbours != DEFAULT_NEIGHBOURS:  # geometry-central's k; potpourri3d 1.4 does not pass another one
-        raise ParameterError(f"neighbours: potpourri3d's local triangulation uses {DEFAULT_NEIGHBOURS} neighbours "
-                             f"and does not take another count; got {neighbours!r}")
+        return local_fans(P, neighbours)
     fans = np.asarray(pp3d.PointCloudLocalTriangulation(np.ascontiguousarray(P)).get_local_triangulation(),
                       dtype=np.int64)
     owner = np.repeat(np.arange(fans.shape[0]), fans.shape[1])
     flat = fans.reshape(-1, 3)
     keep = (flat >= 0).all(axis=1)
     return np.sort(flat[keep], axis=1), owner[keep]
+
+
+def local_fans(P: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """The fans of every point among its ``k`` nearest neighbours, as :func:`fan_triangles` returns them.
+
+    A point's fan is its 1-ring in the Delaunay triangulation of its neighbours projected on their principal plane.
+    Inverted about the point (``w = q / |q|²``), a circle through the point becomes a line, so its Delaunay
+    neighbours are the corners of the convex hull of the inverted neighbours and the point itself, and its triangles
+    the hull's edges that do not touch it: one gift-wrapping march over all points at once. At ``k = 30`` it builds
+    potpourri3d's triangles on evenly sampled clouds (99.95 % of kitten's); on uneven ones 85–91 % of them (its
+    tangent planes and degeneracy heuristic differ).
+
+    Parameters
+    ----------
+    P : (n, 3) float ndarray
+    k : int
+        Neighbours of each point, ``0 < k < n``.
+
+    Returns
+    -------
+    tri : (m, 3) int64 ndarray
+        Point indices, each row sorted.
+    owner : (m,) int64 ndarray
+        The point whose fan holds each triangle.
+    """
+    from scipy.spatial import cKDTree
+
+    idx = cKDTree(P).query(P, k=k + 1)[1]  # column 0: the point itself
+    uv = _tangent_coordinates(P, idx)
+    r2 = np.einsum("nkj,nkj->nk", uv, uv)
+    r2[:, 0] = 1.0
+    W = uv / r2[..., None]
+    W[:, 0] = 0.0  # the point itself, a corner of the hull when it lies on the cloud's border
+    hull = _hull_march(W)
+    a, b = hull[:, :-1], hull[:, 1:]
+    owner, t = np.nonzero((a > 0) & (b > 0) & (a != b))  # hull edges that do not touch the point
+    A, B = a[owner, t], b[owner, t]
+    ua, ub = uv[owner, A], uv[owner, B]
+    flat = np.abs(ua[:, 0] * ub[:, 1] - ua[:, 1] * ub[:, 0]) <= 1e-12 * np.sqrt(r2[owner, A] * r2[owner, B])
+    tri = np.stack([owner, idx[owner, A], idx[owner, B]], axis=1)[~flat]
+    return np.sort(tri, axis=1).astype(np.int64), owner[~flat].astype(np.int64)
+
+
+def _tangent_coordinates(P: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """(n, k + 1, 2): each point's neighbours ``P[idx]`` relative to it, in the plane of their two principal axes."""
+    X = P[idx]
+    Q = X - X.mean(axis=1, keepdims=True)
+    frame = np.linalg.eigh(np.einsum("nki,nkj->nij", Q, Q))[1][:, :, 1:]  # eigenvalues ascending: drop the normal
+    return np.einsum("nki,nij->nkj", X - P[:, None, :], frame)
+
+
+def _hull_march(W: np.ndarray) -> np.ndarray:
+    """(n, k + 2) int: the corners of the convex hull of each row of ``W`` (n, k, 2), counter-clockwise from its
+    lowest point back to it (Jarvis' march, all rows at once; -1 after a row's end). Of points on one hull edge only
+    the ends are corners."""
+    n, k = W.shape[:2]
+    rows = np.arange(n)
+    start = np.argmin(W[..., 1], axis=1)
+    hull = np.full((n, k + 1), -1)
+    hull[:, 0] = start
+    cur = start.copy()
+    d = np.tile([1.0, 0.0], (n, 1))  # the direction the march arrived in
+    live = rows
+    for step in range(1, k + 1):
+        c = cur[live]
+        V = W[live] - W[live, c][:, None, :]
+        turn = np.arctan2(d[live, :1] * V[..., 1] - d[live, 1:] * V[..., 0],
+                          d[live, :1] * V[..., 0] + d[live, 1:] * V[..., 1]) % (2.0 * np.pi)
+        length = np.hypot(V[..., 0], V[..., 1])
+        turn[length <= 0.0] = np.inf  # the current corner (and points on it)
+        nearest = turn <= turn.min(axis=1, keepdims=True) + 1e-12
+        nxt = np.argmax(np.where(nearest, length, -1.0), axis=1)  # of points in one direction, the farthest
+        j = np.arange(live.size)
+        hull[live, step] = cur[live] = nxt
+        d[live] = V[j, nxt] / length[j, nxt][:, None]
+        live = live[nxt != start[live]]
+        if live.size == 0:
+            break
+    return np.c_[hull, np.full(n, -1)]
 
 
 def triangle_set(tri: np.ndarray, owner: np.ndarray, P: np.ndarray, kind: str) -> tuple[np.ndarray, list[str]]:
@@ -136,8 +220,8 @@ class PointCloud:
     normals : (n, 3) array_like of float, optional
         Normals as read from a file; kept with the points (the fans fit their own tangent planes).
     neighbours : int, default 30
-        Points in each local neighbourhood (potpourri3d's fixed default; another value is refused until the
-        library exposes it).
+        Points in each local neighbourhood: at 30, potpourri3d's local triangulation; another count (4 or more,
+        below the number of distinct points) builds the same fans with :func:`local_fans`.
     triangles : {"union", "consensus", "repaired"}, default "union"
         Which of the fans' triangles to solve on (:data:`TRIANGLE_SETS`; docs/pointclouds.md measures them).
     name : str, optional
@@ -157,7 +241,8 @@ class PointCloud:
     MeshError
         A non-finite coordinate (the message names the point), fewer than 4 distinct points, all points on a line.
     ParameterError
-        An unknown ``triangles`` or a ``neighbours`` other than 30.
+        An unknown ``triangles``, or ``neighbours`` not an integer, below 4 or not below the number of distinct
+        points.
 
     Examples
     --------
@@ -196,6 +281,9 @@ class PointCloud:
             file_index = keep
             pts = raw
         _check_shape(pts, self.name)
+        if not MIN_NEIGHBOURS <= self.neighbours < pts.shape[0]:
+            raise ParameterError(f"neighbours must be at least {MIN_NEIGHBOURS} and below the number of distinct "
+                                 f"points ({pts.shape[0]}), got {self.neighbours}")
         self.file_index = file_index
         self.normals = None if normals is None else _check_normals(normals, raw.shape[0], self.name)[keep]
         tri, owner = fan_triangles(pts, self.neighbours)
