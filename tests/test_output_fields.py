@@ -3,6 +3,8 @@ values, and a slice of a tetrahedral mesh asks the field at its cut points."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -40,6 +42,8 @@ def test_as_field_reads_arrays_results_and_fields(box_order2):
     values, field = as_field(res, "values", n)
     np.testing.assert_array_equal(values, res.distance)  # the result's distance (0 at the source vertex)
     assert field is res.field and values[s] == 0.0
+    edited = dataclasses.replace(res, distance=2 * res.distance)  # the result's own array, not its field's values
+    np.testing.assert_array_equal(as_field(edited, "values", n)[0], 2 * res.distance)
     values, field = as_field(res.field, "values", n)
     np.testing.assert_array_equal(values, res.field.vertex_distance)
     assert field is res.field
