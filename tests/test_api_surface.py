@@ -39,7 +39,9 @@ def _public_callables():
             yield name, obj
         elif inspect.isclass(obj) and not issubclass(obj, BaseException):
             for attr, member in vars(obj).items():
-                if inspect.isfunction(member) and (not attr.startswith("_") or attr == "__init__"):
+                # not the __init__ typing gives a Protocol (cvxgeodesic.Field): the package's own functions
+                ours = member.__module__.startswith("cvxgeodesic") if inspect.isfunction(member) else False
+                if ours and (not attr.startswith("_") or attr == "__init__"):
                     yield f"{name}.{attr}", member
 
 

@@ -97,6 +97,7 @@ if TYPE_CHECKING:
     from .paths import distance_at, geodesic_path
     from .plotting import plot_field
     from .problems.formulations import FORMULATIONS, smoothness_weight
+    from .results import Field
     from .sources import BoundaryFaces, SurfaceCurve
     from .viewer import show
 
@@ -112,6 +113,7 @@ __all__ = [
     "surface_point", "distance_at", "geodesic_path", "show", "Method", "SolverName",
     "BoundaryFaces", "TetMesh", "VolumePoint", "tet_ball", "tet_box", "tet_l_prism", "tetrahedralize", "volume_point",
     "PointCloud", "load_point_cloud",
+    "Field",
 ]
 
 
@@ -136,6 +138,7 @@ _LAZY = {
     **dict.fromkeys(("SurfacePoint", "VolumePoint", "surface_point", "volume_point"), ".mesh.locate"),
     **dict.fromkeys(("BoundaryFaces", "SurfaceCurve"), ".sources"),
     "show": ".viewer",  # polyscope is an optional extra: imported when show() runs
+    "Field": ".results",
 }
 
 

@@ -437,7 +437,7 @@ def write_pictures(out: Path, mesh: SimplexMesh, sset: Any, runs: list[Run], res
         if res is None:
             continue
         title = f"{_label(run)} on {mesh.name} (source {src_txt})"
-        draw_field(mesh, res.distance, out / f"field_{_label(run, '_order')}.png", sources=src, title=title,
+        draw_field(mesh, res, out / f"field_{_label(run, '_order')}.png", sources=src, title=title,
                    levels=levels, vmin=0.0 if vmax_field is not None else None, vmax=vmax_field, label="distance",
                    view=view, up=up)
         if run in rel_errors:

@@ -46,7 +46,8 @@ from .evaluation.camera import (
 )
 from .mesh.convert import MeshLike
 from .mesh.io import as_trimesh
-from .validation import as_vertex_field, check_count, check_number, check_output_path, vertex_indices
+from .results import Field, GeodesicResult
+from .validation import as_field, as_vertex_field, check_count, check_number, check_output_path, vertex_indices
 
 __all__ = ["plot_field", "plot_error_map", "plot_gradient_histogram", "isoline_segments", "up_vector", "view_list"]
 
@@ -63,10 +64,12 @@ _SEGMENT_BLOCK = 400_000  # (triangle, level) pairs processed at once by the mar
 # ----------------------------------------------------------------------------------------------------------------------
 
 
-def _surface_inputs(mesh, values, name: str, sources, path, dpi) -> tuple[Any, np.ndarray, np.ndarray, Path, float]:
-    """The checked inputs of a surface picture: ``(mesh, values (n,), marked vertices (k,), path, dpi)``."""
+def _surface_inputs(mesh, values, name: str, sources, path, dpi, *,
+                    field: bool = False) -> tuple[Any, np.ndarray, np.ndarray, Path, float]:
+    """The checked inputs of a surface picture: ``(mesh, values (n,), marked vertices (k,), path, dpi)``; ``field``:
+    ``values`` may be a result or a field (its vertex values are drawn)."""
     mesh = as_trimesh(mesh)
-    vals = as_vertex_field(values, name, mesh.n_vertices)
+    vals = as_field(values, name, mesh.n_vertices)[0] if field else as_vertex_field(values, name, mesh.n_vertices)
     marks = np.empty(0, dtype=np.int64) if sources is None else vertex_indices(sources, "sources", mesh.n_vertices)
     return mesh, vals, marks, check_output_path(path, PLOT_EXTENSIONS), check_number(dpi, "dpi", low=10, high=2000)
 
@@ -467,7 +470,7 @@ def _draw_panels(fig, axes, surf: _Surface, values, cameras, **kwargs) -> None:
 
 def plot_field(
     mesh: MeshLike,
-    values: ArrayLike,
+    values: ArrayLike | GeodesicResult | Field,
     path: str | os.PathLike,
     *,
     isolines: int | ArrayLike | None = 20,
@@ -489,8 +492,9 @@ def plot_field(
     ----------
     mesh : TriMesh or (V, F) tuple
         The surface, ``n`` vertices and ``m`` faces.
-    values : (n,) array_like of float
-        One value per vertex (e.g. a distance field). ``inf`` / ``NaN``
+    values : (n,) array_like of float, GeodesicResult or Field
+        One value per vertex (e.g. a distance field), or a result of a solve on this mesh (or its
+        :attr:`~cvxgeodesic.results.GeodesicResult.field`): its values at the vertices. ``inf`` / ``NaN``
         (unreachable) vertices are drawn light grey and carry no isolines.
     path : str or os.PathLike
         Output file; must end in ``.png``. Its directory must exist. The file
@@ -539,8 +543,9 @@ def plot_field(
     ------
     ValueError
         A :class:`~cvxgeodesic.errors.ParameterError` (a ``ValueError``) if ``view`` or ``up`` is malformed,
-        ``values`` does not have shape ``(n,)``, ``path`` does not end in ``.png`` or cannot be written
-        (its directory does not exist), ``dpi`` is out of range or a source index is out of range.
+        ``values`` does not have shape ``(n,)`` (or is a field of another mesh), ``path`` does not end in ``.png``
+        or cannot be written (its directory does not exist), ``dpi`` is out of range or a source index is out of
+        range.
 
     Notes
     -----
@@ -559,7 +564,7 @@ def plot_field(
     from matplotlib.cm import ScalarMappable
     from matplotlib.colors import Colormap, Normalize
 
-    mesh, vals, marks, p, dpi = _surface_inputs(mesh, values, "values", sources, path, dpi)
+    mesh, vals, marks, p, dpi = _surface_inputs(mesh, values, "values", sources, path, dpi, field=True)
     views = view_list(view)
     up_vector(mesh.V, up)  # checked before the work
     cm = cmap if isinstance(cmap, Colormap) else colormaps[cmap]

@@ -58,6 +58,24 @@ class Field(Protocol):
         The travel cost or metric the field measures (:mod:`cvxgeodesic.operators.metric`); None: Euclidean.
     vertex_distance : (n,) float ndarray
         The field at the vertices (``inf`` where no source is reachable): ``GeodesicResult.distance``.
+
+    Examples
+    --------
+    An order-2 field is exact on a flat mesh: inside a triangle of the unit square, from the corner vertex 0 (the
+    origin), it is the point's distance from the origin, and its gradient the unit vector away from it. Pictures,
+    files and paths (:func:`~cvxgeodesic.plot_field`, :func:`~cvxgeodesic.save_distance`,
+    :func:`~cvxgeodesic.geodesic_path`) take a result or its field as well as vertex values.
+
+    >>> import numpy as np, cvxgeodesic as cg
+    >>> mesh = cg.grid_plane(4)
+    >>> res = cg.GeodesicSolver(mesh, "qclp", order=2).solve(0)
+    >>> isinstance(res.field, cg.Field)
+    True
+    >>> centre = mesh.V[mesh.F[0]].mean(axis=0)  # (1/6, 1/12, 0)
+    >>> print(res.field.distance_at([0], [[1 / 3, 1 / 3, 1 / 3]]).round(6), round(float(np.linalg.norm(centre)), 6))
+    [0.186339] 0.186339
+    >>> print(res.field.gradient_at([0], [[1 / 3, 1 / 3, 1 / 3]]).round(6))
+    [[0.894427 0.447214 0.      ]]
     """
 
     @property

@@ -7,7 +7,8 @@ whose message names the parameter and the offending value or index:
   (numbers, counts, choices, fields, masks, index arrays, output paths);
 - :class:`~cvxgeodesic.errors.SourceError` for source vertices (:func:`validate_sources`).
 
-A leaf module (NumPy and :mod:`cvxgeodesic.errors` only), so that the mesh code, the problem
+A leaf module (NumPy and the other leaf modules: :mod:`cvxgeodesic.errors`, the result types of
+:mod:`cvxgeodesic.results`, ...), so that the mesh code, the problem
 builders, the API and the applications can all use it without importing each other.
 """
 
@@ -27,9 +28,11 @@ from numpy.typing import ArrayLike
 from . import capabilities
 from ._atomic import probe_folder
 from .errors import MeshError, ParameterError, SourceError
+from .results import Field, GeodesicResult
 
 __all__ = [
     "MAX_COORDINATE", "MAX_COST", "MAX_COST_RATIO", "MAX_M", "MAX_METRIC_CONDITION", "MIN_COST", "MIN_EXTENT",
+    "as_field",
     "as_points", "as_vertex_field", "check_choice", "check_coordinates", "check_cost", "check_count", "check_lam",
     "check_metric", "check_not_an_input", "check_number", "check_output_path",
     "check_plane_metric", "check_real", "check_type", "is_integer", "is_real", "short_repr", "validate_sources",
@@ -216,6 +219,47 @@ def as_vertex_field(values: ArrayLike, name: str, n: int | None = None, *, nan_o
     if not nan_ok and np.isnan(arr).any():
         raise ParameterError(f"{name} has NaN values (first at vertex {int(np.flatnonzero(np.isnan(arr))[0])})")
     return arr
+
+
+def as_field(values: ArrayLike | GeodesicResult | Field, name: str, n: int, *,
+             nan_ok: bool = True) -> tuple[np.ndarray, Field | None]:
+    """The vertex values of a field given as an array, a :class:`~cvxgeodesic.results.GeodesicResult` or a
+    :class:`~cvxgeodesic.results.Field`, and that field: what the outputs (pictures, files, paths) take.
+
+    Parameters
+    ----------
+    values : (n,) array_like of float, GeodesicResult or Field
+        One number per vertex, or a result (its :attr:`~cvxgeodesic.results.GeodesicResult.field`), or a field.
+    name : str
+        Parameter name used in the message.
+    n : int
+        The mesh's vertex count.
+    nan_ok : bool
+        Accept NaN values (as :func:`as_vertex_field`).
+
+    Returns
+    -------
+    values : (n,) float64 ndarray
+        The field at the vertices: a result's ``distance``, a field's ``vertex_distance``.
+    field : Field or None
+        The field, to be asked inside cells; None for an array (its piecewise-linear interpolant is meant).
+
+    Raises
+    ------
+    ParameterError
+        A field of a mesh with another vertex count (the message names both), or values as
+        :func:`as_vertex_field` refuses them.
+    """
+    if isinstance(values, GeodesicResult):  # its distance: the field's vertex values, 0 at the source vertices
+        field, vertex_values = values.field, values.distance
+    elif isinstance(values, Field):
+        field, vertex_values = values, values.vertex_distance
+    else:
+        return as_vertex_field(values, name, n, nan_ok=nan_ok), None
+    m = field.mesh.n_vertices
+    if m != n:
+        raise ParameterError(f"{name} is a field on a mesh of {m} vertices, not on this mesh of {n} vertices")
+    return as_vertex_field(vertex_values, name, n, nan_ok=nan_ok), field
 
 
 def as_points(x: ArrayLike, name: str, *, error: type[Exception] = ParameterError,

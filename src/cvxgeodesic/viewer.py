@@ -21,8 +21,9 @@ from .mesh.convert import MeshLike, as_mesh
 from .mesh.simplex import SimplexMesh
 from .mesh.tet_slice import plane_frame
 from .plotting import isoline_segments
+from .results import Field, GeodesicResult
 from .sources import resolve_sources
-from .validation import as_points, as_vertex_field, check_output_path
+from .validation import as_field, as_points, as_vertex_field, check_output_path
 
 if TYPE_CHECKING:
     from .api import Method
@@ -194,7 +195,7 @@ class _Viewer:
 
 def show(
     mesh: MeshLike,
-    distance: ArrayLike | None = None,
+    distance: ArrayLike | GeodesicResult | Field | None = None,
     *,
     sources: Any = None,
     method: Method | None = None,
@@ -214,8 +215,9 @@ def show(
         slice (``mesh.reference.picture``: a tetrahedral mesh) goes to :func:`show_volume` (default method
         ``"qclp"``); a point cloud (a :class:`~cvxgeodesic.PointCloud`, its ``CloudMesh``, a point file) is drawn
         as its points coloured by the field (``Domain.drawn_as``), clicking a point re-solves from it.
-    distance : (n,) array_like of float, optional
-        The field to show (``inf`` where unreachable). Without it the field is solved from ``sources``.
+    distance : (n,) array_like of float, GeodesicResult or Field, optional
+        The field to show (``inf`` where unreachable): vertex values, or a result of a solve on this mesh (its
+        ``distance``) or a field (its ``vertex_distance``). Without it the field is solved from ``sources``.
     sources : optional
         Anything :meth:`GeodesicSolver.solve` takes. With ``distance``: only marked (default: the
         vertices where ``distance`` is 0). Without ``distance``: solved (default: vertex 0).
@@ -249,12 +251,13 @@ def show(
         without ``overwrite_read_only``), or no display (or polyscope already started off-screen in this process)
         and no ``screenshot``.
     """
-    if (mesh := as_mesh(mesh)).reference.picture == "slice":
+    mesh = as_mesh(mesh)
+    if distance is not None:  # a result or a field: its vertex values
+        distance = d = as_field(distance, "distance", mesh.n_vertices)[0]
+    if mesh.reference.picture == "slice":
         return show_volume(mesh, distance, sources=sources, method=method or "qclp", screenshot=screenshot,
                            normal=normal, window_size=window_size, overwrite_read_only=overwrite_read_only,
                            **solver_kwargs)
-    if distance is not None:
-        d = as_vertex_field(distance, "distance", mesh.n_vertices)
     ps = _start(window_size, screenshot, overwrite_read_only)
     viewer = _Viewer(ps, mesh, method=method or _default_method(mesh), solver_kwargs=solver_kwargs, isolines=isolines)
     if distance is None:

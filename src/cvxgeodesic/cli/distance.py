@@ -19,13 +19,14 @@ if TYPE_CHECKING:
 
 def add_parser(sub: Any) -> None:
     """The ``distance`` sub-command."""
+    from ..capabilities import ORDERS
+
     p = sub.add_parser("distance", help="compute one distance field and write it")
     add_common_options(p, points=True)
     p.add_argument("--lam", type=float, default=None, help="give λ directly (overrides --m)")
     p.add_argument("--normalization", default="area", choices=("area", "paper"),
                    help="meaning of --m: 'area' (default) or the paper's λ = m·100·h/n")
-    p.add_argument("--order", type=int, default=1, choices=(1, 2),
-                   help="2: second-order elements for the squared distance (qclp and the qcqp methods; docs/order2.md)")
+    p.add_argument("--order", type=int, default=1, choices=ORDERS, help=opt.ORDER_HELP)
     opt.add_cost_options(p)
     opt.add_resolution_option(p)
     p.add_argument("-o", "--output", required=True, help=opt.output_help())
@@ -115,5 +116,5 @@ def draw_field(mesh: SimplexMesh, res: Any, path: Any, *, title: str, normal: tu
     if sset is not None:  # the vertices at 0 and the points (a slice's marks; a surface marks res.sources)
         points = np.vstack([mesh.V[sset.fixed_vertices(mesh)], sset.point_positions(mesh)])
     label = None if line is not None and mesh.reference.picture == "surface" else "geodesic distance"
-    draw(mesh, res.distance, path, title=title, sources=res.sources, points=points, line=line, normal=normal,
+    draw(mesh, res, path, title=title, sources=res.sources, points=points, line=line, normal=normal,
          label=label, view=view, up=up)

@@ -4,7 +4,8 @@
 The slice (:func:`~cvxgeodesic.mesh.tet_slice.slice_tets`) is drawn flat in the plane's own frame
 (``e1`` to the right, ``e2`` up; for the default normal ``z`` that is the ``x``–``y`` view from
 above), coloured by the field with Gouraud shading, with isolines and the outline of the cut.
-Unreachable parts (``inf``/NaN) are light grey.
+Unreachable parts (``inf``/NaN) are light grey. A result's field (:class:`~cvxgeodesic.results.Field`) gives the
+values at the cut points, so an order-2 field is drawn with its own (quadratic) values there.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from ..mesh.simplex import SimplexMesh
 from ..mesh.tet_slice import slice_tets
 from ..mesh.tetmesh import TetMesh
 from ..plotting import PLOT_EXTENSIONS, _finite_range, _isolevels, _new_figure, _save_atomic
+from ..results import Field, GeodesicResult
 from ..validation import as_points, check_number, check_output_path
 
 __all__ = ["draw_field", "plot_slice"]
@@ -38,7 +40,7 @@ def _axis_label(e: np.ndarray) -> str:
 
 def plot_slice(
     mesh: MeshLike,
-    values: ArrayLike,
+    values: ArrayLike | GeodesicResult | Field,
     path: str | os.PathLike,
     *,
     origin: ArrayLike | None = None,
@@ -52,14 +54,16 @@ def plot_slice(
     colorbar_label: str | None = None,
     points: ArrayLike | None = None,
 ) -> Path:
-    """Render a vertex field on the slice of a tetrahedral mesh by a plane into a PNG.
+    """Render a field on the slice of a tetrahedral mesh by a plane into a PNG.
 
     Parameters
     ----------
     mesh : TetMesh, (V, T) tuple or file path
         ``n`` vertices (what :func:`~cvxgeodesic.mesh.convert.as_mesh` takes, holding tetrahedra).
-    values : (n,) float array_like
-        One value per vertex (``inf``/NaN: grey, no isolines).
+    values : (n,) float array_like, GeodesicResult or Field
+        One value per vertex (``inf``/NaN: grey, no isolines), interpolated linearly along the cut edges; or a result
+        of a solve on this mesh (or its :attr:`~cvxgeodesic.results.GeodesicResult.field`), asked at the cut points
+        (:func:`~cvxgeodesic.mesh.tet_slice.slice_tets`).
     path : str or os.PathLike
         Output ``.png`` (written atomically; its folder must exist).
     origin : (3,) float array_like, optional
@@ -88,7 +92,8 @@ def plot_slice(
     MeshError
         A mesh without tetrahedra (a surface: :func:`~cvxgeodesic.plotting.plot_field`).
     ParameterError
-        ``values`` of the wrong length, a bad path, normal or dpi; or the plane misses the mesh.
+        ``values`` of the wrong length (a field of another mesh), a bad path, normal or dpi; or the plane misses the
+        mesh.
 
     Examples
     --------
@@ -157,13 +162,15 @@ def plot_slice(
     return p
 
 
-def draw_field(mesh: SimplexMesh, values: ArrayLike, path: str | os.PathLike, *, title: str, sources: ArrayLike = (),
-               points: ArrayLike | None = None, line: ArrayLike | None = None, normal: ArrayLike = (0.0, 0.0, 1.0),
-               levels: int | ArrayLike | None = 20, vmin: float | None = None, vmax: float | None = None,
-               label: str | None = None, error: bool = False, view: Any = None, up: Any = "auto") -> None:
+def draw_field(mesh: SimplexMesh, values: ArrayLike | GeodesicResult | Field, path: str | os.PathLike, *, title: str,
+               sources: ArrayLike = (), points: ArrayLike | None = None, line: ArrayLike | None = None,
+               normal: ArrayLike = (0.0, 0.0, 1.0), levels: int | ArrayLike | None = 20, vmin: float | None = None,
+               vmax: float | None = None, label: str | None = None, error: bool = False, view: Any = None,
+               up: Any = "auto") -> None:
     """A field (``error``: a relative error) into a PNG: on a surface (:func:`~cvxgeodesic.plotting.plot_field`,
     :func:`~cvxgeodesic.plotting.plot_error_map`), or on the slice of a tetrahedral mesh by the plane through its
-    centre with this ``normal`` (:func:`plot_slice`): what the command line and the comparison draw.
+    centre with this ``normal`` (:func:`plot_slice`): what the command line and the comparison draw. A field is
+    (n,) vertex values, or a result or its field, which a slice asks at its cut points; an error is vertex values.
 
     The (k,) ``sources`` are marked, in a volume at their positions or at the (p, 3) ``points`` when given; a (q, 3)
     ``line`` (a geodesic path) replaces the marks. ``levels`` (isolines), ``vmin``, ``vmax`` and ``label`` (the

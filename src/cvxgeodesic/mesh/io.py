@@ -17,7 +17,8 @@ from numpy.typing import ArrayLike
 
 from .._atomic import atomic_write, check_replaceable
 from ..errors import ParameterError
-from ..validation import as_vertex_field
+from ..results import Field, GeodesicResult
+from ..validation import as_field
 from ..validation import check_output_path as _check_output_path
 from .convert import MeshLike, as_mesh, as_trimesh
 from .fileorder import file_order_mesh, file_vertices, to_file_order
@@ -47,8 +48,8 @@ _RESERVED = ("x", "y", "z", "vertex", "file_vertex")
 CLOUD_DISTANCE_EXTENSIONS = (".ply", ".npy", ".csv")
 
 
-def save_distance(path: str | os.PathLike, mesh: MeshLike, distance: ArrayLike, *, name: str = "distance",
-                  file_order: bool = False, overwrite_read_only: bool = False) -> Path:
+def save_distance(path: str | os.PathLike, mesh: MeshLike, distance: ArrayLike | GeodesicResult | Field, *,
+                  name: str = "distance", file_order: bool = False, overwrite_read_only: bool = False) -> Path:
     """Write a per-vertex distance field, atomically.
 
     The format follows the extension (case-insensitive; the list is
@@ -94,8 +95,9 @@ def save_distance(path: str | os.PathLike, mesh: MeshLike, distance: ArrayLike, 
     mesh : TriMesh, TetMesh or tuple (V, F) or (V, T)
         The mesh the field lives on, with ``n`` vertices (anything
         :func:`~cvxgeodesic.mesh.convert.as_mesh` takes).
-    distance : (n,) array_like of float
-        One value per vertex (``inf`` allowed, e.g. for unreachable vertices).
+    distance : (n,) array_like of float, GeodesicResult or Field
+        One value per vertex (``inf`` allowed, e.g. for unreachable vertices), or a result of a solve on this mesh
+        (its ``distance``) or a field (its ``vertex_distance``).
     name : str, optional
         Name of the PLY property / CSV column (letters, digits, ``_``, ``.``, ``-``;
         not ``x``, ``y``, ``z``, ``vertex`` or ``file_vertex``).
@@ -118,7 +120,8 @@ def save_distance(path: str | os.PathLike, mesh: MeshLike, distance: ArrayLike, 
     Raises
     ------
     ParameterError
-        If the extension is unsupported (for the mesh's kind), ``distance`` does not have shape (n,),
+        If the extension is unsupported (for the mesh's kind), ``distance`` does not have shape (n,) (or is the field
+        of a mesh with another vertex count),
         ``name`` is invalid, the parent directory does not exist, or ``path`` is a read-only
         file and ``overwrite_read_only`` is False.
     OSError
@@ -142,7 +145,7 @@ def save_distance(path: str | os.PathLike, mesh: MeshLike, distance: ArrayLike, 
         *first, last = VOLUME_DISTANCE_EXTENSIONS
         raise ParameterError(f"{p}: a field on a tetrahedral mesh is written as {', '.join(first)} or {last}, not "
                              f"{p.suffix!r}")
-    d = as_vertex_field(distance, "distance", mesh.n_vertices)
+    d = as_field(distance, "distance", mesh.n_vertices)[0]
     if not isinstance(name, str) or not _NAME_RE.match(name) or name in _RESERVED:
         raise ParameterError(
             f"invalid field name {name!r}: use letters, digits, '_', '.', '-' (not x, y, z, vertex, file_vertex)"

@@ -1,11 +1,13 @@
-"""A planar slice through a tetrahedral mesh: the cut polygons as triangles, with a field interpolated on them.
+"""A planar slice through a tetrahedral mesh: the cut polygons as triangles, with a field read on them.
 
 Marching tetrahedra: the plane cuts a tetrahedron whose vertices lie on both sides of it in a
 triangle (one vertex against three) or a quadrilateral (two against two, split into two
 triangles). Each cut point lies on a mesh edge and is shared by every tetrahedron of that edge, so
-the slice is a connected triangulation whose field is the exact restriction of the piecewise-linear
-field to the plane. A vertex exactly on the plane counts as being on the positive side (the rule
-of :func:`~cvxgeodesic.plotting.isoline_segments`), so no piece is counted twice.
+the slice is a connected triangulation. A vertex array is interpolated linearly along the cut edges (the exact
+restriction of the piecewise-linear field to the plane); a :class:`~cvxgeodesic.results.Field` (a result's) is
+asked at the cut points, so an order-2 field has its own values there. A vertex exactly on the plane counts as
+being on the positive side (the rule of :func:`~cvxgeodesic.plotting.isoline_segments`), so no piece is counted
+twice.
 """
 
 from __future__ import annotations
@@ -16,7 +18,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import ParameterError
-from ..validation import as_points, as_vertex_field
+from ..results import Field, GeodesicResult
+from ..validation import as_field, as_points
 from .reference import TETRAHEDRON
 from .tetmesh import TetMesh
 
@@ -63,7 +66,8 @@ class TetSlice:
     triangles : (q, 3) int64 ndarray
         Triangles of the cut, indices into ``points``.
     values : (p,) float ndarray
-        The field at the cut points (linear along the edge; ``inf`` if an end is ``inf``).
+        The field at the cut points (a vertex array: linear along the edge, ``inf`` if an end is ``inf``; a field:
+        its own value there).
     tets : (q,) int64 ndarray
         The tetrahedron each triangle comes from.
     outline : (r, 2) int64 ndarray
@@ -113,15 +117,16 @@ def plane_frame(normal: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return n, e1, np.cross(n, e1)
 
 
-def slice_tets(mesh: TetMesh, values: ArrayLike | None = None, *, origin: ArrayLike | None = None,
-               normal: ArrayLike = (0.0, 0.0, 1.0)) -> TetSlice:
+def slice_tets(mesh: TetMesh, values: ArrayLike | GeodesicResult | Field | None = None, *,
+               origin: ArrayLike | None = None, normal: ArrayLike = (0.0, 0.0, 1.0)) -> TetSlice:
     """Cut ``mesh`` by the plane through ``origin`` with normal ``normal``.
 
     Parameters
     ----------
     mesh : TetMesh
-    values : (n,) float array_like, optional
-        A vertex field to interpolate (default zeros). ``inf``/NaN allowed.
+    values : (n,) float array_like, GeodesicResult or Field, optional
+        A vertex field to interpolate (default zeros; ``inf``/NaN allowed), or a field (a result's) of this mesh's
+        cells, asked at the cut points (:meth:`~cvxgeodesic.results.Field.distance_at`).
     origin : (3,) float array_like, optional
         A point of the plane; default the centre of the bounding box.
     normal : (3,) float array_like
@@ -132,6 +137,11 @@ def slice_tets(mesh: TetMesh, values: ArrayLike | None = None, *, origin: ArrayL
     TetSlice
         Empty arrays when the plane misses the mesh.
 
+    Raises
+    ------
+    ParameterError
+        ``values`` of the wrong length, or a field of another mesh (another vertex count, or other tetrahedra).
+
     Examples
     --------
     >>> from cvxgeodesic.mesh.tet_generate import tet_box
@@ -139,7 +149,9 @@ def slice_tets(mesh: TetMesh, values: ArrayLike | None = None, *, origin: ArrayL
     >>> round(cut.area, 12)
     1.0
     """
-    d = np.zeros(mesh.n_vertices) if values is None else as_vertex_field(values, "values", mesh.n_vertices)
+    d, field = (np.zeros(mesh.n_vertices), None) if values is None else as_field(values, "values", mesh.n_vertices)
+    if field is not None and field.mesh is not mesh and not np.array_equal(field.mesh.cells, mesh.cells):
+        raise ParameterError(f"values is a field on other tetrahedra than those of {mesh.name} (same vertex count)")
     n, e1, e2 = plane_frame(normal)
     o = (mesh.V.min(axis=0) + mesh.V.max(axis=0)) / 2 if origin is None else as_points(origin, "origin").reshape(3)
     s = (mesh.V - o) @ n
@@ -152,17 +164,32 @@ def slice_tets(mesh: TetMesh, values: ArrayLike | None = None, *, origin: ArrayL
             tri_t.append(tets)
             tri_e.append(mesh.cell_edges[tets][:, list(tri)])
     tets, edges_of = np.concatenate(tri_t), np.concatenate(tri_e)  # one array per case: none is missing
-    cut, triangles = np.unique(edges_of, return_inverse=True)
+    cut, first, triangles = np.unique(edges_of, return_index=True, return_inverse=True)
     triangles = triangles.reshape(-1, 3).astype(np.int64)
     a, b = mesh.edges[cut, 0], mesh.edges[cut, 1]
     w = s[a] / (s[a] - s[b])  # in [0, 1]: the ends are on opposite sides
     P = mesh.V[a] + w[:, None] * (mesh.V[b] - mesh.V[a])
-    with np.errstate(invalid="ignore"):
-        vals = np.where(w == 0, d[a], np.where(w == 1, d[b], (1 - w) * d[a] + w * d[b]))
+    if field is None:
+        with np.errstate(invalid="ignore"):
+            vals = np.where(w == 0, d[a], np.where(w == 1, d[b], (1 - w) * d[a] + w * d[b]))
+    else:
+        vals = _field_at_edges(mesh, field, tets[first // 3], a, b, w)
     uv = np.column_stack([(P - o) @ e1, (P - o) @ e2])
     order = np.argsort(tets, kind="stable")
     return TetSlice(P, uv, triangles[order], vals, tets[order].astype(np.int64), _outline(mesh, below, cut), o, n,
                     e1, e2)
+
+
+def _field_at_edges(mesh: TetMesh, field: Field, cells: np.ndarray, a: np.ndarray, b: np.ndarray,
+                    w: np.ndarray) -> np.ndarray:
+    """(p,) the field at the points ``(1 − w) V[a] + w V[b]`` of edges ``a``–``b`` (p,) of the tetrahedra ``cells``
+    (p,) that hold them."""
+    corners = mesh.T[cells]
+    bary = np.zeros(corners.shape)
+    rows = np.arange(len(cells))
+    bary[rows, np.argmax(corners == a[:, None], axis=1)] = 1 - w
+    bary[rows, np.argmax(corners == b[:, None], axis=1)] = w
+    return np.asarray(field.distance_at(cells, bary), dtype=np.float64)
 
 
 def _outline(mesh: TetMesh, below: np.ndarray, cut: np.ndarray) -> np.ndarray:

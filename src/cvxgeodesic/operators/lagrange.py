@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError
+from ..mesh.locate import checked_points
 from ..mesh.reference import ReferenceSimplex
 from ..mesh.simplex import DEGENERATE_TOL, SimplexMesh
 from ..mesh.split import SplitMesh
@@ -656,22 +657,6 @@ class LagrangeField:
         """(n,) float ndarray: ``√max(φ, 0)`` at the vertices."""
         return np.sqrt(np.maximum(self.phi[: self.mesh.n_vertices], 0.0))
 
-    def _checked(self, cells, bary, n_cells: int) -> tuple[np.ndarray, np.ndarray]:
-        words = self.space.reference.words
-        one, arg = words.one, words.argument
-        c = self.space.reference.n_corners
-        cells = np.atleast_1d(np.asarray(cells))
-        bary = np.atleast_2d(np.asarray(bary, dtype=float))
-        if cells.ndim != 1 or not np.issubdtype(cells.dtype, np.integer):
-            raise ParameterError(f"{arg} must be an int or a 1-D array of {one} indices")
-        if bary.shape != (cells.size, c):
-            raise ParameterError(f"bary must have shape ({cells.size}, {c}), got {bary.shape}")
-        if cells.size and (cells.min() < 0 or cells.max() >= n_cells):
-            raise ParameterError(f"{arg} must lie in [0, {n_cells})")
-        if not np.all(np.isfinite(bary)) or np.any(bary < -1e-9) or np.any(np.abs(bary.sum(axis=1) - 1) > 1e-9):
-            raise ParameterError("bary rows must be >= 0 and sum to 1")
-        return cells.astype(np.int64), bary
-
     def squared_distance_at(self, cells, bary) -> np.ndarray:
         """``φ`` at points given by cells and barycentric coordinates.
 
@@ -685,7 +670,7 @@ class LagrangeField:
         -------
         (p,) float ndarray
         """
-        return self._phi(*self._checked(cells, bary, self.mesh.n_cells))
+        return self._phi(*checked_points(self.mesh, cells, bary))
 
     def _phi(self, cells: np.ndarray, bary: np.ndarray) -> np.ndarray:
         N, _ = self.space.basis(bary)
@@ -708,7 +693,7 @@ class LagrangeField:
         (p, 3) float ndarray
             Zero where ``φ ≤ 0`` (the distance is 0 there), NaN in degenerate cells and where ``φ`` is not finite.
         """
-        return self._gradient(*self._checked(cells, bary, self.mesh.n_cells))
+        return self._gradient(*checked_points(self.mesh, cells, bary))
 
     @functools.cached_property
     def _gbasis(self) -> np.ndarray:
@@ -743,9 +728,9 @@ class SplitLagrangeField(LagrangeField):
         self.split = split
 
     def squared_distance_at(self, cells, bary) -> np.ndarray:
-        cells, bary = self._checked(cells, bary, self.original.n_cells)
+        cells, bary = checked_points(self.original, cells, bary)
         return self._phi(*self.split.locate(cells, bary))
 
     def gradient_at(self, cells, bary) -> np.ndarray:
-        cells, bary = self._checked(cells, bary, self.original.n_cells)
+        cells, bary = checked_points(self.original, cells, bary)
         return self._gradient(*self.split.locate(cells, bary))

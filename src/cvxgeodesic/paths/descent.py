@@ -51,7 +51,7 @@ from ..operators.linear_field import LinearField
 from ..operators.metric import make_medium
 from ..results import Field, GeodesicResult, remembered_sources
 from ..sources import BARY_SNAP, SourceSet, resolve_sources
-from ..validation import as_vertex_field, check_count, is_integer
+from ..validation import as_field, check_count, is_integer
 from .cells import Cells
 from .corridor import node_position, straighten_corridor
 
@@ -68,13 +68,10 @@ STRAIGHTENERS: dict[ReferenceSimplex, Callable[..., list[tuple]]] = {TRIANGLE: s
 def _field(mesh: SimplexMesh, distance: Any) -> tuple[np.ndarray, GeodesicResult | None, Field]:
     """The (n,) float vertex values, the result they came from (or None) and the field (a plain array's is its
     piecewise-linear interpolant)."""
-    result = None
-    if isinstance(distance, GeodesicResult):
-        result, distance = distance, distance.field
-    if isinstance(distance, Field):
-        return as_vertex_field(distance.vertex_distance, "distance", mesh.n_vertices, nan_ok=False), result, distance
-    d = as_vertex_field(distance, "distance", mesh.n_vertices, nan_ok=False)
-    return d, result, LinearField(mesh, d)
+    result = distance if isinstance(distance, GeodesicResult) else None
+    # a result's field, whose vertex values the walk reads (not the result's distance, set to 0 at source vertices)
+    d, field = as_field(distance if result is None else result.field, "distance", mesh.n_vertices, nan_ok=False)
+    return d, result, LinearField(mesh, d) if field is None else field
 
 
 # -- points of the cells: the point type of the mesh's reference cell (SurfacePoint, VolumePoint) -----------------
