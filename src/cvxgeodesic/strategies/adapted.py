@@ -69,10 +69,10 @@ SOURCE_SNAP = 2e-3
 #: The error estimate brackets the solve between two companion copies: a coarser one with ``ESTIMATE_RATIO`` of the
 #: solve mesh's faces and a finer one with ``ESTIMATE_FINER`` times them (the user's mesh itself when that reaches its
 #: face count). With ``Dc``, ``Df`` the mean relative differences of their fields to the solve's, the estimate is
-#: ``ESTIMATE_FACTOR * sqrt(Dc * Df)``. Measured on 17 meshes of 5.9-97K faces, sources vertex 0 and n/2, 90 solves
-#: (docs/dev/accuracy_per_second.md, "The error estimate"): ``Dc`` alone follows the coarser field's error, 1-3x the
-#: solve's from mesh to mesh (``Dc`` / true error 0.42-3.35), ``Df`` alone 0.30-1.74; ``sqrt(Dc * Df)`` 0.42-1.74, a
-#: spread of 4.1 that this factor centres (0.49-2.03). The finer solve costs about 1.4x the solve, the coarser 0.45x.
+#: ``ESTIMATE_FACTOR * sqrt(Dc * Df)``. Measured on 17 meshes of 5.9-97K faces, sources vertex 0 and n/2, 104 solves
+#: (docs/dev/accuracy_per_second.md, run 4): ``Dc`` alone follows the coarser field's error, 1-3x the solve's from
+#: mesh to mesh (``Dc`` / true error 0.47-3.35), ``Df`` alone 0.30-1.74; ``sqrt(Dc * Df)`` 0.42-1.78, a spread of 4.2
+#: that this factor centres (0.49-2.06). The finer solve costs about 1.4x the solve, the coarser 0.45x (medians).
 ESTIMATE_RATIO = 0.5
 ESTIMATE_FINER = 2.0
 ESTIMATE_FACTOR = 1.16
