@@ -5,7 +5,8 @@ quadric copy, with its source patch), then the fields of companion copies at oth
 source patch mixed in, as the library's estimate does) and the eikonal residual of the adapted field on the user's
 triangles. Printed per row (one JSON line): the true mean relative error, and per candidate its raw figure and time:
 
-``half``, ``quarter``, ``double``  the mean relative difference to the field on a copy with 1/2, 1/4, 2x the faces;
+``half``, ``quarter``, ``double``  the mean relative difference to the field on a copy with 1/2, 1/4, 2x (``--finer``)
+                  the faces;
 ``resid_p1``      area-weighted mean of ``||grad d| - 1|`` for the P1 gradient of the vertex values on each user face;
 ``resid_p1_exact`` the same for the exact field (the user's mesh's own floor);
 ``resid_p2``      the same for the transferred order-2 field's gradient (``ProjectedField.gradient_at``) at centroids;
@@ -68,8 +69,8 @@ def rel_diff(a, b, src):
     return A._relative_difference(a, b, np.array([src]))
 
 
-def run(mesh, name: str, setting, exact: np.ndarray, save: Path | None, double_max: int, src: int = 0
-        ) -> dict | None:
+def run(mesh, name: str, setting, exact: np.ndarray, save: Path | None, double_max: int, src: int = 0,
+        finer: float = 2.0, quarter: bool = True) -> dict | None:
     t0 = time.perf_counter()
     solver = cg.GeodesicSolver(mesh, "qclp", resolution=setting, estimate_error=False)
     res = solver.solve(src)
@@ -87,7 +88,9 @@ def run(mesh, name: str, setting, exact: np.ndarray, save: Path | None, double_m
            "true": st["rel_mean"], "t_solve": t_solve, "agg": ad.record["agg"],
            "shortening": ad.record["edge_shortening"]}
     fields = {"d": d, "exact": exact}
-    for key, factor in (("half", 0.5), ("quarter", 0.25), ("double", 2.0)):
+    for key, factor in (("half", 0.5), ("quarter", 0.25 if quarter else 0.0), ("double", finer)):
+        if factor == 0:
+            continue
         target = int(factor * faces)
         if factor > 1 and (target > double_max or target > 0.7 * mesh.n_faces):
             continue
@@ -127,6 +130,8 @@ def main() -> None:
     ap.add_argument("--settings", default="auto,0.25,0.1,0.05")
     ap.add_argument("--double-max", type=int, default=25_000, help="no 2x companion above this many faces")
     ap.add_argument("--source", type=float, default=0, help="vertex index, or a fraction (0, 1) of the vertices")
+    ap.add_argument("--finer", type=float, default=2.0, help="the finer companion's faces over the solve's")
+    ap.add_argument("--no-quarter", action="store_true", help="no companion with 1/4 of the faces")
     ap.add_argument("--save", type=Path, default=None)
     ap.add_argument("--out", default=None, help="append JSON lines here")
     args = ap.parse_args()
@@ -145,7 +150,8 @@ def main() -> None:
             if target in seen:
                 continue
             seen.add(target)
-            row = run(mesh, name, setting, exact, args.save, args.double_max, src)
+            row = run(mesh, name, setting, exact, args.save, args.double_max, src, args.finer,
+                      not args.no_quarter)
             if row is None:
                 continue
             row["load"] = __import__("os").getloadavg()[0]

@@ -74,7 +74,9 @@ SOURCE_SNAP = 2e-3
 #: mesh to mesh (``Dc`` / true error 0.47-3.35), ``Df`` alone 0.30-1.74; ``sqrt(Dc * Df)`` 0.42-1.78, a spread of 4.2
 #: that this factor centres (0.49-2.06). The finer solve costs about 1.4x the solve, the coarser 0.45x (medians).
 ESTIMATE_RATIO = 0.5
+#: The error estimate's finer copy has this many times the solve mesh's faces (:data:`ESTIMATE_RATIO`).
 ESTIMATE_FINER = 2.0
+#: The error estimate is this times the geometric mean of the two differences (:data:`ESTIMATE_RATIO`).
 ESTIMATE_FACTOR = 1.16
 #: The targets (times the asked face count) tried in turn until a copy keeps the mesh's topology.
 RETRY_TARGETS = (1.0, 1.02, 0.98, 1.05, 0.95)
