@@ -19,8 +19,9 @@ distance (MMP) on the user's vertices, the source left out:
 ``order 2``         order 2 QCLP on the user's mesh (skipped above ``--order2-max`` faces).
 ``adapted f``       the library's ``resolution=f`` (a fraction of the faces, or ``"auto"``): order 2 on a
                     quadric-decimated copy, the source at its exact position, the field evaluated at the user's
-                    vertices. Its time counts decimation, solve and transfer, and the error estimate's second
-                    (coarser) solve; ``adapted auto, no estimate`` is ``"auto"`` with ``estimate_error=False``.
+                    vertices. Its time counts decimation, solve and transfer, and the error estimate's two
+                    more solves (a coarser and a finer copy); ``adapted auto, no estimate`` is ``"auto"``
+                    with ``estimate_error=False``.
 
 Per case: mean and max relative error, time and its ratio to heat, the ridge figure
 (:func:`cvxgeodesic.evaluation.smoothness.smoothness_report`'s ``ridge_jump_ratio``: 1 = as creased as the

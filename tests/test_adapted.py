@@ -137,31 +137,46 @@ def test_info_record_and_one_decimation(grid, monkeypatch):
     solver = cg.GeodesicSolver(grid, "qclp", resolution=0.2)
     r1, r2 = solver.solve(5), solver.solve(250)
     ad = r1.info.extra["adapted"]
-    assert calls == [1, 1]  # the copy and the error estimate's coarser copy, made once per solver
+    assert calls == [1, 1, 1]  # the copy and the error estimate's coarser and finer copies, made once per solver
     assert set(ad) >= {"faces", "simplifier", "decimate_time", "solve_time", "transfer_time", "error_estimate",
                        "error_estimate_method"}
     assert 90 <= ad["faces"] <= 110 and "quadric" in ad["simplifier"] and isinstance(ad["error_estimate"], float)
-    assert ad["error_estimate"] < 1e-6  # both fields are exact on a flat mesh
+    assert ad["error_estimate"] < 1e-6 and max(ad["estimate_differences"]) < 1e-6  # order 2 is exact on a flat mesh
     assert "two resolutions" in ad["error_estimate_method"]
+    coarser, finer = ad["estimate_faces"]
+    assert coarser < ad["faces"] < finer < grid.n_faces
     assert any(f"{ad['faces']}-face copy" in n for n in r1.info.notes)
     assert r1.info.extra["solve_mesh"] is r2.info.extra["solve_mesh"]
     assert r1.distance.shape == (grid.n_vertices,)
     D = cg.distance_matrix(grid, [5, 250], "qclp", resolution=0.2)
     np.testing.assert_allclose(D, np.stack([r1.distance, r2.distance]), atol=1e-9)
-    assert calls == [1, 1, 1]  # one more solver, one more copy, for both rows (and no estimate: rows keep no info)
+    assert calls == [1, 1, 1, 1]  # one more solver, one more copy, for both rows (no estimate: rows keep no info)
 
 
 def test_error_estimate_within_two_times_the_error():
     sphere = cg.icosphere(4)  # 5120 faces
-    exact = cg.geodesic_distance(sphere, 0, method="exact")  # the polyhedron's: what the user's mesh means
+    unit = sphere.V / np.linalg.norm(sphere.V, axis=1, keepdims=True)
+    radius = float(np.linalg.norm(sphere.V, axis=1).mean())
+    great_circle = radius * np.arccos(np.clip(unit @ unit[0], -1.0, 1.0))  # the sphere's distance, analytic
     for faces in (300, 800):
         ad = (res := cg.GeodesicSolver(sphere, "qclp", resolution=faces).solve(0)).info.extra["adapted"]
-        true = np.mean(np.abs(res.distance[1:] - exact[1:]) / exact[1:])
+        true = np.mean(np.abs(res.distance[1:] - great_circle[1:]) / great_circle[1:])
+        # measured 2026-12-06: estimate / true 0.99 at 300 faces (0.462 % for 0.467 %), 0.85 at 800 (0.191 % for
+        # 0.225 %); the coarser difference alone, the estimate before, 1.34 and 0.83
         assert true / 2 <= ad["error_estimate"] <= 2 * true, (faces, true, ad["error_estimate"])
+        coarser, finer = ad["estimate_differences"]
+        assert coarser > finer > 0  # the coarser copy's field is the farther off
         assert ad["edge_shortening"] > 0  # the copy of a sphere is shorter
     assert edge_shortening(sphere, sphere.V) == 0  # no shortening when the copy is the mesh itself
     off = cg.GeodesicSolver(sphere, "qclp", resolution=300, estimate_error=False).solve(0).info.extra["adapted"]
-    assert off["error_estimate"] is None
+    assert off["error_estimate"] is None and "estimate_differences" not in off
+
+
+def test_error_estimate_finer_field_is_the_mesh_itself_near_its_size(grid):
+    # a solve mesh with more than 1/ESTIMATE_FINER of the faces: the finer field is order 2 on the mesh itself
+    ad = cg.GeodesicSolver(grid, "qclp", resolution=300).solve(119).info.extra["adapted"]
+    assert ad["estimate_faces"][1] == grid.n_faces and "the mesh itself" in ad["error_estimate_method"]
+    assert ad["estimate_fine_decimation_tries"] == [] and ad["error_estimate"] < 1e-6
 
 
 def test_sources_in_one_coarse_face_are_refused_naming_the_option(grid):
@@ -330,7 +345,8 @@ def test_a_folded_copy_is_decimated_again(grid, monkeypatch):
     # the error estimate's coarser copy starts at the solve copy's aggressiveness (no estimate of a fold)
     aggs.clear()
     ad = cg.GeodesicSolver(grid, "qclp", resolution=200).solve(119).info.extra["adapted"]
-    assert aggs == [7.0, 5.0, 5.0] and ad["estimate_agg"] == 5.0 and ad["error_estimate"] < FLAT
+    assert aggs == [7.0, 5.0, 5.0, 5.0] and ad["estimate_agg"] == ad["estimate_fine_agg"] == 5.0
+    assert ad["error_estimate"] < FLAT
     # every copy folded: the least folded is kept, and said so
     monkeypatch.setattr(adapted, "simplify_mesh", lambda *a, **k: _flip_a_face(real(*a, **k)))
     res = cg.GeodesicSolver(grid, "qclp", resolution=100, estimate_error=False).solve(119)

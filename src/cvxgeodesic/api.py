@@ -176,8 +176,9 @@ class GeodesicSolver:
         at order 1 instead, with a note. Surfaces only; not with ``multires``. None: the mesh's domain's
         (:attr:`cvxgeodesic.capabilities.Domain.default_resolution`: ``"mesh"``).
     estimate_error : bool
-        With ``resolution``: estimate every solve's mean relative error by a second solve on a copy with half the
-        faces (``info.extra["adapted"]["error_estimate"]``; about half a solve more). False: None there.
+        With ``resolution``: estimate every solve's mean relative error by two more solves, on copies with half and
+        twice the faces (``info.extra["adapted"]["error_estimate"]``; about twice the solve's time more). False: None
+        there.
 
     Raises
     ------

@@ -153,6 +153,9 @@ class SolveInfo:
           (iterations of each round's solve; ``iterations`` is their sum); the field itself is
           :attr:`GeodesicResult.field`;
         - ``multires``: ``multires`` (the coarse mesh and the transfer), ``coarse``;
+        - ``resolution=``: ``adapted`` (the solve mesh's counts and times; ``error_estimate``, made from
+          ``estimate_differences`` to the fields on the coarser and finer copies of ``estimate_faces``; the keys are
+          listed in docs/adapted.md, "What info records"), ``solve_mesh`` (the copy);
         - baselines: the library's own parameters (e.g. ``t_coef`` of the heat method).
     """
 

@@ -20,8 +20,8 @@ copy:
    or faces of zero area, or whose every copy was refused, is solved on itself at order 1, with a note (quadric
    decimation gave NaN fields on a non-manifold mesh, issue 43).
 
-``info.extra["adapted"]`` records the solve mesh, its times and an error estimate (a second solve on a copy with
-:data:`ESTIMATE_RATIO` of the faces).
+``info.extra["adapted"]`` records the solve mesh, its times and an error estimate (two more solves, on a coarser
+and a finer copy: :data:`ESTIMATE_RATIO`, :data:`ESTIMATE_FINER`, :data:`ESTIMATE_FACTOR`).
 """
 
 from __future__ import annotations
@@ -66,11 +66,18 @@ AUTO_MIN_FACES = 2000
 #: leaves without cones (measured on fandisk at 1/10, source vertex 0 at 4.6e-4 from an edge: mean error 1.95 %, max
 #: 108 %, against 1.08 % at 1/20 where the point fell on the edge). Recorded as ``source_offset``.
 SOURCE_SNAP = 2e-3
-#: The error estimate's second copy has this fraction of the solve mesh's faces: the mean relative difference of the
-#: two fields estimates the solve's mean error. Measured by `bench` (adapted-findings.md §3, 9 meshes of 5.9-20K faces,
-#: source vertex 0): the difference between the 1/10 and 1/20 fields was 0.58-1.10x the true error of the 1/10 field;
-#: the coarser companion costs about half the solve.
+#: The error estimate brackets the solve between two companion copies: a coarser one with ``ESTIMATE_RATIO`` of the
+#: solve mesh's faces and a finer one with ``ESTIMATE_FINER`` times them (the user's mesh itself when that reaches its
+#: face count). With ``Dc``, ``Df`` the mean relative differences of their fields to the solve's, the estimate is
+#: ``ESTIMATE_FACTOR * sqrt(Dc * Df)``. Measured on 17 meshes of 5.9-97K faces, sources vertex 0 and n/2, 104 solves
+#: (docs/dev/accuracy_per_second.md, run 4): ``Dc`` alone follows the coarser field's error, 1-3x the solve's from
+#: mesh to mesh (``Dc`` / true error 0.47-3.35), ``Df`` alone 0.30-1.74; ``sqrt(Dc * Df)`` 0.42-1.78, a spread of 4.2
+#: that this factor centres (0.49-2.06). The finer solve costs about 1.4x the solve, the coarser 0.45x (medians).
 ESTIMATE_RATIO = 0.5
+#: The error estimate's finer copy has this many times the solve mesh's faces (:data:`ESTIMATE_RATIO`).
+ESTIMATE_FINER = 2.0
+#: The error estimate is this times the geometric mean of the two differences (:data:`ESTIMATE_RATIO`).
+ESTIMATE_FACTOR = 1.16
 #: The targets (times the asked face count) tried in turn until a copy keeps the mesh's topology.
 RETRY_TARGETS = (1.0, 1.02, 0.98, 1.05, 0.95)
 #: ... all of them at the first aggressiveness (:data:`RETRY_AGGS`), the first this many at the others (each try is a
@@ -432,14 +439,17 @@ class Adapted:
     requested : object
         The ``resolution`` the user gave (for the record).
     estimate : bool
-        Estimate the error of every solve by a second solve on a copy with :data:`ESTIMATE_RATIO` of the faces.
+        Estimate the error of every solve by two more solves, on a coarser and a finer copy (:data:`ESTIMATE_RATIO`,
+        :data:`ESTIMATE_FINER`, :data:`ESTIMATE_FACTOR`).
 
     Attributes
     ----------
     solve_mesh : TriMesh
         The mesh the order-2 program is solved on (the user's after a fallback).
-    copy, companion : _Copy or None
-        The solve mesh's copy; the coarser copy of the error estimate.
+    copy : _Copy or None
+        The solve mesh's copy.
+    companions : list of _Copy
+        The error estimate's coarser and finer copies (empty without an estimate).
     inner : Order2 or DirectStrategy
         The strategy on ``solve_mesh``.
     record : dict
@@ -468,7 +478,7 @@ class Adapted:
                 self._record_decimation(made, "")
         self.record["decimate_time"] = time.perf_counter() - t0
         self.copy: _Copy | None = None
-        self.companion: _Copy | None = None
+        self.companions: list[_Copy] = []
         self.inner: Any
         if coarse is None:
             self.solve_mesh = mesh
@@ -489,21 +499,32 @@ class Adapted:
         self.setup_time = time.perf_counter() - t0
 
     def _companion(self, faces: int) -> None:
-        """The coarser copy of the error estimate (none, with the reason, when its decimation fails)."""
+        """The coarser and finer copies of the error estimate (none, with the reason, when a decimation fails)."""
         t0 = time.perf_counter()
+        mesh = self.config.surface
         # the solve copy's aggressiveness first: a companion folded where the copy is not would be an estimate of the
         # fold (bimba at 1/10: the agg-5 copy 0.33 % off, the agg-7 companion 1.58 %, the estimate 1.44 %)
-        coarser, why, made = _decimated(self.config.surface, max(MIN_RESOLUTION_FACES, int(ESTIMATE_RATIO * faces)),
+        coarser, why, made = _decimated(mesh, max(MIN_RESOLUTION_FACES, int(ESTIMATE_RATIO * faces)),
                                         self.record["agg"])
-        self.record["decimate_time"] += time.perf_counter() - t0
         self._record_decimation(made, "estimate_")
-        if coarser is None:
-            self.record["error_estimate_method"] = f"none: the coarser copy failed ({why})"
+        finer: TriMesh | None = mesh
+        fine_target, made = int(ESTIMATE_FINER * faces), {"tries": []}
+        if coarser is not None and fine_target < mesh.n_faces:
+            finer, why_fine, made = _decimated(mesh, fine_target, self.record["agg"])
+            why = None if finer is not None else f"the finer copy failed ({why_fine})"
+        self._record_decimation(made, "estimate_fine_")
+        self.record["decimate_time"] += time.perf_counter() - t0
+        if coarser is None or finer is None:
+            self.record["error_estimate_method"] = (f"none: the coarser copy failed ({why})" if coarser is None
+                                                    else f"none: {why}")
             return
-        self.companion = _Copy(self.config, coarser)
+        self.companions = [_Copy(self.config, coarser), _Copy(self.config, finer)]
+        self.record["estimate_faces"] = [coarser.n_faces, finer.n_faces]
+        fine = "the mesh itself" if finer is mesh else f"a {finer.n_faces}-face copy"
         self.record["error_estimate_method"] = (
-            f"two resolutions: the mean relative difference to the field solved on a {coarser.n_faces}-face copy "
-            f"({ESTIMATE_RATIO:g} of the solve mesh's faces)")
+            f"two resolutions around the solve's: {ESTIMATE_FACTOR:g} x the geometric mean of the mean relative "
+            f"differences to the fields solved on a {coarser.n_faces}-face copy ({ESTIMATE_RATIO:g} of the solve "
+            f"mesh's faces) and on {fine}")
 
     def _record_decimation(self, made: dict[str, Any], prefix: str) -> None:
         """``made`` (:func:`_decimated`) into the record (keys ``agg``, ``fold_angle``, ``decimation_tries``, with
@@ -550,16 +571,28 @@ class Adapted:
         if offset > 1e-12 * self.config.mesh.bbox_diagonal:
             notes.append(f"a source within {SOURCE_SNAP:g} of a face's altitude from an edge of the solve mesh was "
                          f"moved onto it (by {offset:.3g})")
-        if self.companion is not None:
+        if self.companions:
             t2 = time.perf_counter()
-            try:
-                _, dc, _, _ = self.companion.solve(sources, None, self.requested)
-                dc = mix_patches(dc, patches, nears)  # the same near the sources: the estimate is of the rest
-                record["error_estimate"] = _relative_difference(dc, d, sources.fixed_vertices(self.config.mesh))
-            except SourceError as exc:
-                record["error_estimate_method"] = f"none: the coarser copy took not the sources ({exc})"
+            self._estimate(sources, d, patches, nears, record)
             record["estimate_time"] = time.perf_counter() - t2
         return self._result(cres, d, sources, notes, record, t0, patches)
+
+    def _estimate(self, sources: SourceSet, d: np.ndarray, patches: list[SourcePatch], nears: list[np.ndarray],
+                  record: dict[str, Any]) -> None:
+        """The error estimate into ``record``: :data:`ESTIMATE_FACTOR` times the geometric mean of the mean relative
+        differences of the companions' fields to ``d`` (``estimate_differences``: coarser, finer)."""
+        fixed = sources.fixed_vertices(self.config.mesh)
+        diffs = []
+        for which, companion in zip(("coarser", "finer"), self.companions, strict=True):
+            try:
+                _, dc, _, _ = companion.solve(sources, None, self.requested)
+            except SourceError as exc:
+                record["error_estimate_method"] = f"none: the {which} copy took not the sources ({exc})"
+                return
+            dc = mix_patches(dc, patches, nears)  # the same near the sources: the estimate is of the rest
+            diffs.append(_relative_difference(dc, d, fixed))
+        record["estimate_differences"] = diffs
+        record["error_estimate"] = ESTIMATE_FACTOR * float(np.sqrt(diffs[0] * diffs[1]))
 
     def _source_patches(self, sources: SourceSet, notes: list[str]) -> list[SourcePatch]:
         """The order-2 fields on the user's mesh around each source (:data:`SOURCE_PATCH_EDGES`)."""
