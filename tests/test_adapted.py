@@ -134,7 +134,7 @@ def test_info_record_and_one_decimation(grid, monkeypatch):
     calls = []
     real = adapted.simplify_mesh
     monkeypatch.setattr(adapted, "simplify_mesh", lambda *a, **k: calls.append(1) or real(*a, **k))
-    solver = cg.GeodesicSolver(grid, "qclp", resolution=0.2)
+    solver = cg.GeodesicSolver(grid, "qclp", resolution=0.2, estimate_error=True)
     r1, r2 = solver.solve(5), solver.solve(250)
     ad = r1.info.extra["adapted"]
     assert calls == [1, 1, 1]  # the copy and the error estimate's coarser and finer copies, made once per solver
@@ -159,7 +159,8 @@ def test_error_estimate_within_two_times_the_error():
     radius = float(np.linalg.norm(sphere.V, axis=1).mean())
     great_circle = radius * np.arccos(np.clip(unit @ unit[0], -1.0, 1.0))  # the sphere's distance, analytic
     for faces in (300, 800):
-        ad = (res := cg.GeodesicSolver(sphere, "qclp", resolution=faces).solve(0)).info.extra["adapted"]
+        ad = (res := cg.GeodesicSolver(sphere, "qclp", resolution=faces, estimate_error=True).solve(0)).info.extra[
+            "adapted"]
         true = np.mean(np.abs(res.distance[1:] - great_circle[1:]) / great_circle[1:])
         # measured 2026-12-06: estimate / true 0.99 at 300 faces (0.462 % for 0.467 %), 0.85 at 800 (0.191 % for
         # 0.225 %); the coarser difference alone, the estimate before, 1.34 and 0.83
@@ -168,13 +169,13 @@ def test_error_estimate_within_two_times_the_error():
         assert coarser > finer > 0  # the coarser copy's field is the farther off
         assert ad["edge_shortening"] > 0  # the copy of a sphere is shorter
     assert edge_shortening(sphere, sphere.V) == 0  # no shortening when the copy is the mesh itself
-    off = cg.GeodesicSolver(sphere, "qclp", resolution=300, estimate_error=False).solve(0).info.extra["adapted"]
+    off = cg.GeodesicSolver(sphere, "qclp", resolution=300).solve(0).info.extra["adapted"]  # off by default
     assert off["error_estimate"] is None and "estimate_differences" not in off
 
 
 def test_error_estimate_finer_field_is_the_mesh_itself_near_its_size(grid):
     # a solve mesh with more than 1/ESTIMATE_FINER of the faces: the finer field is order 2 on the mesh itself
-    ad = cg.GeodesicSolver(grid, "qclp", resolution=300).solve(119).info.extra["adapted"]
+    ad = cg.GeodesicSolver(grid, "qclp", resolution=300, estimate_error=True).solve(119).info.extra["adapted"]
     assert ad["estimate_faces"][1] == grid.n_faces and "the mesh itself" in ad["error_estimate_method"]
     assert ad["estimate_fine_decimation_tries"] == [] and ad["error_estimate"] < 1e-6
 
@@ -252,6 +253,9 @@ def test_cli_resolution(grid, tmp_path, capsys):
     out = tmp_path / "d.npy"
     assert main(["distance", str(path), "-s", "119", "--method", "qclp", "--resolution", "80", "-o", str(out)]) == 0
     np.testing.assert_allclose(np.load(out), _euclid(grid, grid.V[119]), atol=FLAT)
+    assert "estimated mean relative error" not in capsys.readouterr().err  # the estimate is asked for
+    assert main(["distance", str(path), "-s", "119", "--method", "qclp", "--resolution", "80", "--estimate-error",
+                 "-o", str(out)]) == 0
     assert "estimated mean relative error" in capsys.readouterr().err
     D = tmp_path / "D.npy"
     assert main(["matrix", str(path), "-s", "119,5", "--method", "qclp", "--resolution", "0.2", "-q",
@@ -344,7 +348,7 @@ def test_a_folded_copy_is_decimated_again(grid, monkeypatch):
     np.testing.assert_allclose(res.distance, _euclid(grid, grid.V[119]), atol=FLAT)  # the flat copy was solved
     # the error estimate's coarser copy starts at the solve copy's aggressiveness (no estimate of a fold)
     aggs.clear()
-    ad = cg.GeodesicSolver(grid, "qclp", resolution=200).solve(119).info.extra["adapted"]
+    ad = cg.GeodesicSolver(grid, "qclp", resolution=200, estimate_error=True).solve(119).info.extra["adapted"]
     assert aggs == [7.0, 5.0, 5.0, 5.0] and ad["estimate_agg"] == ad["estimate_fine_agg"] == 5.0
     assert ad["error_estimate"] < FLAT
     # every copy folded: the least folded is kept, and said so

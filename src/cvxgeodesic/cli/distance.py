@@ -29,6 +29,9 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--order", type=int, default=1, choices=ORDERS, help=opt.ORDER_HELP)
     opt.add_cost_options(p)
     opt.add_resolution_option(p)
+    p.add_argument("--estimate-error", action="store_true",
+                   help="with --resolution: estimate the mean relative error by two more solves, on copies with half "
+                        "and twice the faces (about twice the solve's time more; docs/adapted.md)")
     p.add_argument("-o", "--output", required=True, help=opt.output_help())
     p.add_argument("--png", default=None,
                    help="also render the field with isolines and the sources to this PNG (both files or neither; "
@@ -80,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
               + (f", order {args.order}" if args.order != 1 else ""), file=log)
     solver = GeodesicSolver(mesh, method, m=args.m, lam=args.lam, solver=args.solver,
                             normalization=args.normalization, order=args.order, cost=opt.cli_cost(args, mesh),
-                            resolution=args.resolution)
+                            resolution=args.resolution, estimate_error=args.estimate_error)
     res = solver.solve(sources, callback=None if args.quiet else progress_printer(log))
     for note in res.info.notes:
         args.notes.say(note)
