@@ -172,8 +172,9 @@ class GeodesicSolver:
         Any of these solves **at order 2** (``order`` is then 2 whatever it says) on the copy, with the sources
         at their exact positions, and answers on this mesh: ``distance`` per vertex, ``distance_at`` and
         ``geodesic_path`` on this surface; ``info.extra["adapted"]`` records the solve mesh, its times and, with
-        ``estimate_error=True``, an error estimate. Non-manifold meshes, several components and faces of zero area are solved on this mesh
-        at order 1 instead, with a note. Surfaces only; not with ``multires``. None: the mesh's domain's
+        ``estimate_error=True``, an error estimate. Non-manifold meshes, several components and faces of zero area
+        are solved on this mesh at order 1 instead, with a note. Surfaces only; not with ``multires``. None: the
+        mesh's domain's
         (:attr:`cvxgeodesic.capabilities.Domain.default_resolution`: ``"mesh"``).
     estimate_error : bool, default False
         With ``resolution``: estimate every solve's mean relative error by two more solves, on copies with half and
