@@ -99,6 +99,8 @@ ALIASES = {"qgdf": "lcqp-hessian"}
 #: Every formulation bounds the vertices within this many edges of a source (of a source point's or curve's faces)
 #: below by 0 (module docstring).
 NONNEGATIVE_HOPS = 2
+#: ... and the vertices within this many mean edge lengths of a source, measured along edges (module docstring).
+NONNEGATIVE_EDGE_RADIUS = 2.5
 #: ... and, with a second-order smoothness energy (Hessian, Laplacian), the vertices within this many smoothing lengths
 #: (:func:`smoothing_length`) of a source, measured along edges (module docstring).
 NONNEGATIVE_RADIUS = 4.0
@@ -546,6 +548,7 @@ def build_problem(
         bounded = ~fixed_mask
     else:
         bounded = _within(mesh, np.ones(len(mesh.edges)), sc.anchors, NONNEGATIVE_HOPS) & ~fixed_mask  # edge hops
+        bounded |= _within(mesh, ell, sc.anchors, NONNEGATIVE_EDGE_RADIUS * float(ell.mean())) & ~fixed_mask
         if energy in SECOND_ORDER_ENERGIES and lam > 0:
             radius = NONNEGATIVE_RADIUS * smoothing_length(ops, lam, stretch)
             bounded |= _within(mesh, ell, sc.anchors, radius) & ~fixed_mask
