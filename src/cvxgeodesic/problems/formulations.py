@@ -58,10 +58,11 @@ along edges from it (skinny faces, edges of 0.1× the mean at the source), and f
 0.4 mean edge lengths away; both were solved twice. Bounding the vertices within ``R`` mean edge lengths as well,
 6104's optimum went down to −4.2e-3 (R = 1), −1.9e-4 (1.5, one vertex at 1.6), and stayed ≥ 0 from R = 1.75 on.
 :data:`NONNEGATIVE_EDGE_RADIUS` = 2.5 is 1.4× that. Its cost, over the end-game sweep's 240 solves on the 14 shared
-manifold scans (QCLP and QCQP-Hessian, the same sources side by side): every solve within ±1 iteration of the hop
-rule alone but one camelhead QCLP solve (+2), the two re-solves gone; the iteration tables of
-``tests/test_ipm_regression.py`` move by −1 on two cylinder counts. With R = 3 they moved by up to +2 (grid14's
-LCQP-Laplacian) on 7 of 32 counts. The hop rule stays: where a source's edges are longer than the mean, two edges
+manifold scans (QCLP and QCQP-Hessian, the same sources side by side): 235 of 238 solves within ±1 iteration of
+the hop rule alone, three QCLP solves +2 (each +0 or +1 at R = 2 and 3: the path, not a trend), 3559 → 3568 in all,
+the two re-solves gone; the iteration tables of ``tests/test_ipm_regression.py`` move by −1 on two cylinder counts.
+R = 2 kept every solve within ±1 and the tables as they were, with a margin of 1.14× over 1.75; R = 3 moved 5 of
+the tables' 32 counts (+7 iterations, +2 on grid14's LCQP-Laplacian). The hop rule stays: where a source's edges are longer than the mean, two edges
 reach vertices the radius does not (up to 13 on 12 of the 14 scans' sweep sources, 25 on the medial-axis bug, whose
 QCLP dips were within two edges).
 
