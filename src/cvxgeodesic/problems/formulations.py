@@ -62,9 +62,9 @@ manifold scans (QCLP and QCQP-Hessian, the same sources side by side): 235 of 23
 the hop rule alone, three QCLP solves +2 (each +0 or +1 at R = 2 and 3: the path, not a trend), 3559 → 3568 in all,
 the two re-solves gone; the iteration tables of ``tests/test_ipm_regression.py`` move by −1 on two cylinder counts.
 R = 2 kept every solve within ±1 and the tables as they were, with a margin of 1.14× over 1.75; R = 3 moved 5 of
-the tables' 32 counts (+7 iterations, +2 on grid14's LCQP-Laplacian). The hop rule stays: where a source's edges are longer than the mean, two edges
-reach vertices the radius does not (up to 13 on 12 of the 14 scans' sweep sources, 25 on the medial-axis bug, whose
-QCLP dips were within two edges).
+the tables' 32 counts (+7 iterations, +2 on grid14's LCQP-Laplacian). The hop rule stays: where a source's edges
+are longer than the mean, two edges reach vertices the radius does not (up to 13 on 12 of the 14 scans' sweep
+sources, 25 on the medial-axis bug, whose QCLP dips were within two edges).
 
 Vertices in connected components without a source are fixed and reported as
 ``inf``. Degenerate (zero or near-zero area) faces carry no cone and no energy
