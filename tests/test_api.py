@@ -126,7 +126,8 @@ def _raise_solver_error(*args, **kwargs):
 def test_negative_values_trigger_a_nonnegative_resolve(monkeypatch):
     # the paper normalization smooths a 3x3 grid so strongly that it trades negative values for a larger sum
     # (measured: min -0.11); the re-solve with d >= 0 is recorded in the notes. The bounds next to the sources
-    # (formulations.NONNEGATIVE_HOPS, NONNEGATIVE_RADIUS) prevent it there: without them the re-solve is what remains
+    # (formulations.NONNEGATIVE_HOPS, NONNEGATIVE_EDGE_RADIUS, NONNEGATIVE_RADIUS) prevent it there: without them the
+    # re-solve is what remains
     import cvxgeodesic.problems.formulations as formulations
 
     mesh = cg.grid_plane(3, jitter=0.3, seed=1)
@@ -134,6 +135,7 @@ def test_negative_values_trigger_a_nonnegative_resolve(monkeypatch):
     assert res.distance.min() == 0.0 and "resolved_nonnegative" not in res.info.extra  # one solve
     monkeypatch.setattr(formulations, "NONNEGATIVE_HOPS", 0)
     monkeypatch.setattr(formulations, "NONNEGATIVE_RADIUS", 0.0)
+    monkeypatch.setattr(formulations, "NONNEGATIVE_EDGE_RADIUS", 0.0)
     res = cg.GeodesicSolver(mesh, "qcqp-hessian", solver="clarabel", normalization="paper").solve(4)
     assert res.distance.min() == 0.0
     assert res.info.extra["resolved_nonnegative"] and res.info.extra["negative_min"] < -0.05

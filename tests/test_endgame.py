@@ -168,3 +168,21 @@ def test_order2_notes_a_strong_cost_contrast(ratio, noted):
     assert any("travel-cost ratio" in note for note in info.notes) == noted
     plain = cg.GeodesicSolver(mesh, "qclp", order=1, cost=cost).solve(0).info
     assert not any("travel-cost ratio" in note for note in plain.notes)
+
+
+@pytest.mark.shared
+@pytest.mark.parametrize("source", [5637, 6104])
+def test_camelhead_qclp_near_skinny_faces_stays_nonnegative_in_one_solve(source):
+    # the end-game sweep (docs/dev/endgame.md, 2026-12-06): QCLP from these sources went down to -4.4e-5 and -5.2e-3
+    # 3-8 edges from the source but within 3.3 mean edge lengths along edges (edges of 0.1x the mean next to 6104),
+    # beyond the two edges bounded then, and was solved twice (20 iterations more, 2.4-2.6x the median time). The
+    # bounds within formulations.NONNEGATIVE_EDGE_RADIUS mean edge lengths make it one solve.
+    from conftest import shared_mesh_path
+
+    mesh = cg.load_mesh(shared_mesh_path("camelhead_open.off"))
+    res = cg.GeodesicSolver(mesh, "qclp", threads=1).solve(source)
+    assert res.info.solver == "ipm" and res.info.status == "optimal"
+    assert "resolved_nonnegative" not in res.info.extra, res.info.notes
+    assert not any("re-solved with the bounds d >= 0" in note for note in res.info.notes)
+    # the interior-point iterate is strictly inside the bounds: no rounding tolerance needed
+    assert res.distance.min() >= 0.0

@@ -290,7 +290,12 @@ def test_the_bounds_next_to_a_source_cover_one_surface_disc_at_every_resolution(
     subdivided to 21K vertices went negative three edges from its sources, beyond the NONNEGATIVE_HOPS = 2 that
     covered it at 5K (2026-12-03). The bounds reach NONNEGATIVE_RADIUS smoothing lengths along edges, whatever the
     triangulation (m = 20 makes the disc wider than two edges of the finer grid, so the radius shows)."""
-    from cvxgeodesic.problems.formulations import NONNEGATIVE_HOPS, NONNEGATIVE_RADIUS, smoothing_length
+    from cvxgeodesic.problems.formulations import (
+        NONNEGATIVE_EDGE_RADIUS,
+        NONNEGATIVE_HOPS,
+        NONNEGATIVE_RADIUS,
+        smoothing_length,
+    )
 
     reach = {}
     for n in (9, 41):
@@ -304,7 +309,8 @@ def test_the_bounds_next_to_a_source_cover_one_surface_disc_at_every_resolution(
         bounded = _bounded_below(build_problem(ops, np.array([centre]), "qcqp-hessian", lam))
         path = dijkstra(mesh.vertex_adjacency, indices=centre)  # edge-path lengths, as the bounds measure them
         hops = dijkstra(mesh.vertex_adjacency, indices=centre, unweighted=True)
-        inside = np.flatnonzero((path <= radius) | (hops <= NONNEGATIVE_HOPS))
+        edge_radius = NONNEGATIVE_EDGE_RADIUS * mesh.mean_edge_length
+        inside = np.flatnonzero((path <= max(radius, edge_radius)) | (hops <= NONNEGATIVE_HOPS))
         np.testing.assert_array_equal(bounded, inside[inside != centre])
         reach[n] = (float(path[bounded].max()), int(hops[bounded].max()), radius)
     assert reach[9][1] == NONNEGATIVE_HOPS  # the coarse grid: two edges (0.25, 0.35 long) reach beyond the disc
@@ -316,7 +322,8 @@ def test_the_bounds_next_to_a_source_cover_one_surface_disc_at_every_resolution(
 @pytest.mark.parametrize("method", ["qclp", "lclp", "qcqp-dirichlet"])
 def test_without_a_second_order_energy_the_bounds_reach_two_edges(method):
     # the smoothing length is that of the energies of second derivatives; QCLP's negative values (the medial-axis
-    # bug) and the Dirichlet energy's were all within NONNEGATIVE_HOPS edges
+    # bug) and the Dirichlet energy's were all within NONNEGATIVE_HOPS edges, or NONNEGATIVE_EDGE_RADIUS mean edge
+    # lengths on camelhead_open: on this uniform grid 2.5 mean edge lengths (0.071) fall short of three edges (0.075)
     from cvxgeodesic.problems.formulations import NONNEGATIVE_HOPS
 
     mesh = grid_plane(41)
@@ -324,6 +331,33 @@ def test_without_a_second_order_energy_the_bounds_reach_two_edges(method):
     problem = build_problem(MeshOperators(mesh), np.array([centre]), method, smoothness_weight(mesh, 20.0))
     hops = dijkstra(mesh.vertex_adjacency, indices=centre, unweighted=True)
     assert hops[_bounded_below(problem)].max() == NONNEGATIVE_HOPS
+
+
+def test_the_bounds_next_to_a_source_reach_a_radius_in_mean_edge_lengths_through_tiny_edges():
+    """camelhead_open's QCLP from vertex 6104 went negative (-5.2e-3) 3-8 edges from the source, 0.7-3.3 mean edge
+    lengths along edges, among skinny faces with edges 0.1x the mean: the two edges bounded then reached a tenth of
+    that, and the solve was repeated with d >= 0 everywhere (2026-12-06, docs/dev/endgame.md). Every formulation now
+    also bounds the vertices within NONNEGATIVE_EDGE_RADIUS mean edge lengths along edges. Here a grid graded
+    cubically towards its centre (edges of 0.0005 at the source, 0.060 on average): 24 vertices within two edges,
+    164 within the radius (0.150), up to 6 edges away."""
+    from cvxgeodesic.problems.formulations import NONNEGATIVE_EDGE_RADIUS, NONNEGATIVE_HOPS
+
+    grid = grid_plane(20)
+    t = 2.0 * grid.V[:, :2] - 1.0
+    V = grid.V.copy()
+    V[:, :2] = 0.5 + 0.5 * np.sign(t) * np.abs(t) ** 3
+    mesh = cg.TriMesh(V, grid.F)
+    centre = int(np.argmin(np.linalg.norm(mesh.V[:, :2] - 0.5, axis=1)))
+    assert mesh.edge_lengths[(mesh.edges == centre).any(axis=1)].max() < 0.02 * mesh.mean_edge_length
+    path = dijkstra(mesh.vertex_adjacency, indices=centre)
+    hops = dijkstra(mesh.vertex_adjacency, indices=centre, unweighted=True)
+    inside = np.flatnonzero((path <= NONNEGATIVE_EDGE_RADIUS * mesh.mean_edge_length) | (hops <= NONNEGATIVE_HOPS))
+    for method in ("qclp", "qcqp-hessian"):  # the smoothing length of m = 1 is shorter than this radius here
+        bounded = _bounded_below(build_problem(MeshOperators(mesh), np.array([centre]), method,
+                                               smoothness_weight(mesh, 1.0)))
+        np.testing.assert_array_equal(bounded, inside[inside != centre])
+    assert (hops[bounded] <= NONNEGATIVE_HOPS).sum() == 24 and len(bounded) == 164
+    assert hops[bounded].max() == NONNEGATIVE_HOPS + 4
 
 
 def test_the_bounded_disc_of_a_constant_travel_cost_is_that_of_the_scaled_mesh():

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.sparse.csgraph import dijkstra
 
 import cvxgeodesic as cg
 from cvxgeodesic.errors import ParameterError
@@ -17,6 +18,7 @@ from cvxgeodesic.mesh.tetmesh import TetMesh
 from cvxgeodesic.problems.formulations import (
     KAPPA,
     MIN_STRETCH_WEIGHT,
+    NONNEGATIVE_EDGE_RADIUS,
     NONNEGATIVE_HOPS,
     MeshOperators,
     build_problem,
@@ -63,7 +65,8 @@ def _nonnegative_rows(problem) -> np.ndarray:
 
 
 def test_near_source_bounds_in_both_dimensions(kind):
-    """The bounds ``d >= 0`` on the vertices within NONNEGATIVE_HOPS edges of a source existed on surfaces only; a
+    """The bounds ``d >= 0`` on the vertices within NONNEGATIVE_HOPS edges of a source existed on surfaces only;
+    those within NONNEGATIVE_EDGE_RADIUS mean edge lengths along edges are bounded in both dimensions, and a
     second-order energy adds those within NONNEGATIVE_RADIUS smoothing lengths, the length measured in the volume
     in a solid."""
     mesh = MESHES[kind]()
@@ -73,6 +76,8 @@ def test_near_source_bounds_in_both_dimensions(kind):
     near[0] = True
     for _ in range(NONNEGATIVE_HOPS):
         near[mesh.edges[near[mesh.edges].any(axis=1)].ravel()] = True
+    path = dijkstra(mesh.vertex_adjacency, indices=0)  # edge-path lengths
+    near |= path <= NONNEGATIVE_EDGE_RADIUS * mesh.mean_edge_length
     near[0] = False
     plain = _nonnegative_rows(build_problem(ops, src, "qclp", 0.0))
     assert plain.tolist() == np.flatnonzero(near).tolist()

@@ -38,9 +38,10 @@ to a source, the stars of neighbouring sources) gets the LC bound
 formulations keep every edge constraint (Lemma 1 then makes LCLP equal to
 Dijkstra).
 
-Every formulation bounds the vertices within :data:`NONNEGATIVE_HOPS` edges of the sources below by 0 from the
-start, and with a second-order smoothness energy (Hessian, Laplacian) also those within :data:`NONNEGATIVE_RADIUS`
-smoothing lengths (:func:`smoothing_length`, measured along edges): there, and only there, optima went negative.
+Every formulation bounds the vertices within :data:`NONNEGATIVE_HOPS` edges and within
+:data:`NONNEGATIVE_EDGE_RADIUS` mean edge lengths (along edges) of the sources below by 0 from the start, and with a
+second-order smoothness energy (Hessian, Laplacian) also those within :data:`NONNEGATIVE_RADIUS` smoothing lengths
+(:func:`smoothing_length`, measured along edges): there, and only there, optima went negative.
 The source stars carry no cone, so nothing bounds their vertices from below: the smoothing energy flattens the cone's
 tip into a dip, −2.6e-4 to −0.51 on beetle, max_planck and the medial-axis bug; QCLP's optimum is not unique on the
 medial axis's sheets that meet at a source, −0.76 to −5.2 there (docs/method.md). The dip is as wide as the
@@ -50,6 +51,20 @@ went negative three edges away and was solved twice (2026-12-03). On request (``
 re-solves with it when a solution still has negative values, noted in ``info.notes``) every free vertex is bounded
 below by 0: bounds everywhere cost the interior-point method 20-35 % more iterations, which is why they are not the
 default (docs/dev/performance-log.md, "Negative distances in one solve").
+
+The radius in mean edge lengths (2026-12-06, issue 41; docs/dev/endgame.md, "after"): on camelhead_open, QCLP from
+vertex 6104 went down to −5.2e-3 at 25 vertices 3–8 edges from the source but only 0.7–3.3 mean edge lengths
+along edges from it (skinny faces, edges of 0.1× the mean at the source), and from 5637 to −4.4e-5 four edges but
+0.4 mean edge lengths away; both were solved twice. Bounding the vertices within ``R`` mean edge lengths as well,
+6104's optimum went down to −4.2e-3 (R = 1), −1.9e-4 (1.5, one vertex at 1.6), and stayed ≥ 0 from R = 1.75 on.
+:data:`NONNEGATIVE_EDGE_RADIUS` = 2.5 is 1.4× that. Its cost, over the end-game sweep's 240 solves on the 14 shared
+manifold scans (QCLP and QCQP-Hessian, the same sources side by side): 235 of 238 solves within ±1 iteration of
+the hop rule alone, three QCLP solves +2 (each +0 or +1 at R = 2 and 3: the path, not a trend), 3559 → 3568 in all,
+the two re-solves gone; the iteration tables of ``tests/test_ipm_regression.py`` move by −1 on two cylinder counts.
+R = 2 kept every solve within ±1 and the tables as they were, with a margin of 1.14× over 1.75; R = 3 moved 5 of
+the tables' 32 counts (+7 iterations, +2 on grid14's LCQP-Laplacian). The hop rule stays: where a source's edges
+are longer than the mean, two edges reach vertices the radius does not (up to 13 on 12 of the 14 scans' sweep
+sources, 25 on the medial-axis bug, whose QCLP dips were within two edges).
 
 Vertices in connected components without a source are fixed and reported as
 ``inf``. Degenerate (zero or near-zero area) faces carry no cone and no energy
@@ -99,6 +114,10 @@ ALIASES = {"qgdf": "lcqp-hessian"}
 #: Every formulation bounds the vertices within this many edges of a source (of a source point's or curve's faces)
 #: below by 0 (module docstring).
 NONNEGATIVE_HOPS = 2
+#: ... and the vertices within this many mean edge lengths (of the edges the cones and bounds use, in a medium's
+#: lengths) of a source, measured along edges: tiny edges next to a source make a short distance many edges
+#: (module docstring: camelhead_open).
+NONNEGATIVE_EDGE_RADIUS = 2.5
 #: ... and, with a second-order smoothness energy (Hessian, Laplacian), the vertices within this many smoothing lengths
 #: (:func:`smoothing_length`) of a source, measured along edges (module docstring).
 NONNEGATIVE_RADIUS = 4.0
@@ -546,6 +565,7 @@ def build_problem(
         bounded = ~fixed_mask
     else:
         bounded = _within(mesh, np.ones(len(mesh.edges)), sc.anchors, NONNEGATIVE_HOPS) & ~fixed_mask  # edge hops
+        bounded |= _within(mesh, ell, sc.anchors, NONNEGATIVE_EDGE_RADIUS * float(ell.mean())) & ~fixed_mask
         if energy in SECOND_ORDER_ENERGIES and lam > 0:
             radius = NONNEGATIVE_RADIUS * smoothing_length(ops, lam, stretch)
             bounded |= _within(mesh, ell, sc.anchors, radius) & ~fixed_mask

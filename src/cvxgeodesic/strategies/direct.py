@@ -5,7 +5,8 @@ The policy (:class:`~cvxgeodesic.strategies.backend.Backend`: the structured sol
 under ``solver="auto"``) and what this strategy adds, every step recorded in ``info.notes``:
 
 - an optimum with negative distances (beyond the bounds next to the sources that every formulation has,
-  :data:`~cvxgeodesic.problems.formulations.NONNEGATIVE_RADIUS`) is re-solved with the bounds ``d >= 0`` everywhere;
+  :data:`~cvxgeodesic.problems.formulations.NONNEGATIVE_HOPS`, ``NONNEGATIVE_EDGE_RADIUS``, ``NONNEGATIVE_RADIUS``)
+  is re-solved with the bounds ``d >= 0`` everywhere;
 - a failed Hessian solve says that the curved Hessian energy can be indefinite.
 """
 
@@ -108,7 +109,8 @@ class DirectStrategy:
         res = self._run_backend(problem, callback, notes)
         negative_min = np.min(res.x[~problem.fixed_mask], initial=0.0)
         if negative_min < -1e-9 * cfg.mesh.bbox_diagonal / self.scale:
-            # the bounds next to the sources (formulations.NONNEGATIVE_HOPS, NONNEGATIVE_RADIUS) cover the dips seen;
+            # the bounds next to the sources (formulations.NONNEGATIVE_HOPS, NONNEGATIVE_EDGE_RADIUS,
+            # NONNEGATIVE_RADIUS) cover the dips seen;
             # a negative value elsewhere is re-solved with d >= 0 everywhere, which slows ordinary solves down by
             # 20-35 % and is therefore not the default
             extra = dict(res.extra, negative_min=float(negative_min * self.scale), resolved_nonnegative=True)
