@@ -193,10 +193,10 @@ def test_the_registry_says_which_formats_hold_volumes(tmp_path):
     assert set(registry.MESHIO_TET_EXTENSIONS) == {".msh", ".vtu", ".vtk", ".mesh", ".inp", ".xdmf", ".med"}
     assert registry.TETGEN_EXTENSIONS == (".node", ".ele")
     assert set(registry.VOLUME_DISTANCE_EXTENSIONS) == {".vtu", ".vtk", ".npy"}
-    path = tmp_path / "x.xyz"
+    path = tmp_path / "x.abc"  # an extension no format has (.xyz is a point file's: test_pointcloud)
     path.write_text("0 0 0\n")
     volumes_only = r"\.msh, \.mesh, \.inp, \.xdmf, \.med, \.node, \.ele"
-    with pytest.raises(MeshFormatError, match=r"x.xyz: unsupported mesh file extension '.xyz'; supported: \.obj, .*"
+    with pytest.raises(MeshFormatError, match=r"x.abc: unsupported mesh file extension '.abc'; supported: \.obj, .*"
                                               rf"\(any case\), and for tetrahedra {volumes_only}$"):
         load_mesh(path)
 
