@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["TETRAHEDRON", "TRIANGLE", "CellWords", "ReferenceSimplex", "reference_simplex"]
+__all__ = ["TETRAHEDRON", "TRIANGLE", "CellWords", "ReferenceSimplex"]
 
 
 @dataclass(frozen=True)
@@ -295,20 +295,3 @@ TETRAHEDRON = ReferenceSimplex(
     _frame=_world_coordinates, _to_world=_world_to_world, _point_type="VolumePoint", _locator="volume_point",
     picture="slice", coneless_cell_edges=True,
 )
-
-
-def reference_simplex(dim: int) -> ReferenceSimplex:
-    """The reference simplex of the library's meshes of dimension ``dim`` (:data:`TRIANGLE`, :data:`TETRAHEDRON`).
-
-    For code that is handed a dimension and no mesh (the Lagrange element functions, a source set's point type);
-    code that has a mesh asks ``mesh.reference``, which a new kind of cell sets (docs/architecture.md, "A domain").
-
-    Raises
-    ------
-    ValueError
-        No reference simplex of that dimension.
-    """
-    for reference in (TRIANGLE, TETRAHEDRON):
-        if reference.dim == dim:
-            return reference
-    raise ValueError(f"no reference simplex of dimension {dim}")

@@ -27,31 +27,22 @@ each half-edge ``3 f + e`` (−1 on the boundary).
 from __future__ import annotations
 
 import math
-import os
 
-import numba
 import numpy as np
 from numba import prange
 
-from .._jit import njit, watch_compiles  # njit: numba.njit, uncached where no cache location is writable
+from .._jit import HELPER_OPTIONS as _HELPER
+from .._jit import KERNEL_OPTIONS as _JIT
+from .._jit import njit, prefer_openmp, watch_compiles  # njit: numba.njit, uncached where no cache is writable
 
 watch_compiles()  # one line on stderr when a kernel compiles (a cold cache: the first run after installation)
-
-# the same threading layer as the solver's kernels (cvxgeodesic.solvers.ipm._kernels, which explains the choice),
-# for a process that builds an energy before it imports the solver
-if "NUMBA_THREADING_LAYER" not in os.environ and "NUMBA_THREADING_LAYER_PRIORITY" not in os.environ:
-    numba.config.THREADING_LAYER_PRIORITY = ["omp", "tbb", "workqueue"]
+prefer_openmp()  # the solver's threading layer, for a process that builds an energy before it imports the solver
 
 # Serial, although the face and row loops are written with prange and have no conflicting writes: parallel=True
 # doubles these kernels' compile time (the first QCQP-Hessian set-up of spot after an install: 3.1 s serial
 # against 5.3-5.9 s), and the four loops take about 80 ms of a 0.5 s set-up of a 97K-face mesh (face_blocks 23 ms,
 # gather_rows 43 ms; the same with 2 threads parallel on a 2-core machine shared with other jobs, 2026-12-02).
-# no_cfunc_wrapper: the kernels are called from Python and from each other, never through a C function pointer,
-# and the C wrapper Numba builds by default took about 5 % of the first compile (spot, qcqp-hessian: 5.1-5.2 s
-# against 5.4 s)
-_JIT = {"cache": True, "nogil": True, "error_model": "numpy", "no_cfunc_wrapper": True}
-# the helpers called only from the kernels above: no Python wrapper either (cvxgeodesic.solvers.ipm._kernels._HELPER)
-_HELPER = {**_JIT, "no_cpython_wrapper": True}
+# The options (_JIT, _HELPER) are the package's (cvxgeodesic._jit.KERNEL_OPTIONS, HELPER_OPTIONS).
 
 
 @njit(**_JIT)

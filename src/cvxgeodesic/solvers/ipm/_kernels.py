@@ -27,30 +27,16 @@ Compiled code is cached on disk (``cache=True``): the first solve after an insta
 from __future__ import annotations
 
 import math
-import os
 
-import numba
 import numpy as np
 from numba import prange
 
-from ..._jit import njit, watch_compiles  # njit: numba.njit, uncached where no cache location is writable
+from ..._jit import HELPER_OPTIONS as _HELPER  # helpers (``_w_apply``, ``_jdiv_winv``, the clique kernels' rows)
+from ..._jit import KERNEL_OPTIONS as _JIT
+from ..._jit import njit, prefer_openmp, watch_compiles  # njit: numba.njit, uncached where no cache is writable
 
 watch_compiles()  # one line on stderr when a kernel compiles (a cold cache: the first run after installation)
-
-# Numba's thread pool (started by a solve's thread limit, cvxgeodesic._threads): OpenMP first, since MKL PARDISO
-# uses the GNU OpenMP runtime too, so both share one thread pool instead of two pools spinning against each other
-# on a small machine.
-if "NUMBA_THREADING_LAYER" not in os.environ and "NUMBA_THREADING_LAYER_PRIORITY" not in os.environ:
-    numba.config.THREADING_LAYER_PRIORITY = ["omp", "tbb", "workqueue"]
-
-# no_cfunc_wrapper: the kernels are called from Python and from each other, never through a C function pointer,
-# and the C wrapper Numba builds by default took about 5 % of the first compile (spot, qcqp-hessian: 5.1-5.2 s
-# against 5.4 s)
-_JIT = {"cache": True, "nogil": True, "error_model": "numpy", "no_cfunc_wrapper": True}
-# The helpers that only other kernels call (``_w_apply``, ``_jdiv_winv``; the clique kernels' row helpers): no
-# Python wrapper, whose argument unboxing is about a third of a small kernel's compile; the first QCLP solve of
-# spot with an empty cache took 8-17 % less (2026-12-06, 3 alternating pairs on a 2-core machine at load 9-11)
-_HELPER = {**_JIT, "no_cpython_wrapper": True}
+prefer_openmp()  # Numba's thread pool shares PARDISO's OpenMP runtime
 # NumPy calls: the kernels fill and copy arrays with loops, not np.full, np.zeros, np.cumsum, .copy() or a[:] = x: each
 # such NumPy function is a generic implementation that Numba compiles too (a counting-sort kernel compiled in 0.25 s
 # of CPU with loops against 0.8 s with np.cumsum and .copy(), the half-edge twins in 0.29 s against 0.51 s with
