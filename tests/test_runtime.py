@@ -195,3 +195,32 @@ def test_a_signal_inside_a_ctypes_callback_is_kept_for_the_next_check(monkeypatc
             _signals.check()
     assert lost == []
     assert "Traceback" not in capfd.readouterr().err
+
+
+def test_a_signal_inside_an_import_locks_weakref_callback_is_kept_for_the_next_check(monkeypatch, capfd):
+    # importlib's module locks are released through a weak-reference callback (`_get_module_lock.<locals>.cb` in
+    # <frozen importlib._bootstrap>); a KeyboardInterrupt raised there is printed as "Exception ignored" and lost
+    import weakref
+
+    from cvxgeodesic import _signals
+    from cvxgeodesic.cli._common import Signals
+
+    namespace: dict = {}
+    source = ("def cb(ref):\n    import os, signal\n    os.kill(os.getpid(), signal.SIGINT)\n"
+              "    for _ in range(1000):\n        pass\n")
+    exec(compile(source, "<frozen importlib._bootstrap>", "exec"), namespace)  # a function where importlib's runs
+    lost = []
+    monkeypatch.setattr(sys, "unraisablehook", lost.append)
+
+    class Held:
+        pass
+
+    held = Held()
+    ref = weakref.ref(held, namespace["cb"])
+    with Signals() as signals:
+        del held  # the callback runs, and the handler under it
+        assert ref() is None and signals.received == signal.SIGINT
+        with pytest.raises(KeyboardInterrupt):
+            _signals.check()
+    assert lost == []
+    assert "Traceback" not in capfd.readouterr().err

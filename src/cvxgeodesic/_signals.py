@@ -28,9 +28,11 @@ EARLY_MARK = "cvxgeodesic_early"
 
 _pending: dict[str, int | None] = {"signum": None}
 
-#: Python functions that C code calls back through ctypes, as (file name ending, function name): an exception raised
-#: under them is printed ("Exception ignored on calling ctypes callback function", with a traceback) and dropped.
-C_CALLBACKS = (("threadpoolctl.py", "match_library_callback"),)
+#: Python functions whose exceptions the interpreter prints ("Exception ignored ...", with a traceback) and drops, as
+#: (file name ending, function name): a callback C code calls through ctypes (threadpoolctl's), and the weak-reference
+#: callback of importlib's module locks, which runs while the start-up imports (a Ctrl-C 0.05–0.3 s after NumPy was
+#: mapped printed its traceback in a clean clone's first test run, 2026-12-06).
+C_CALLBACKS = (("threadpoolctl.py", "match_library_callback"), ("importlib._bootstrap>", "cb"))
 
 
 def in_c_callback(frame: object) -> bool:
