@@ -22,7 +22,7 @@ Run from the repository root, one thread::
 from __future__ import annotations
 
 import argparse
-import json
+import os
 import time
 from pathlib import Path
 
@@ -33,6 +33,7 @@ from cvxgeodesic.evaluation.errors import error_stats
 from cvxgeodesic.mesh.transfer import mix_patches
 from cvxgeodesic.sources import resolve_sources
 from cvxgeodesic.strategies import adapted as A
+from report_common import emit_row
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "meshes"
 
@@ -154,11 +155,8 @@ def main() -> None:
                       not args.no_quarter)
             if row is None:
                 continue
-            row["load"] = __import__("os").getloadavg()[0]
-            print(json.dumps(row), flush=True)
-            if args.out:
-                with open(args.out, "a") as fh:
-                    fh.write(json.dumps(row) + "\n")
+            row["load"] = os.getloadavg()[0]
+            emit_row(row, args.out)
 
 
 if __name__ == "__main__":

@@ -15,7 +15,6 @@ Run from the repository root, one thread::
 from __future__ import annotations
 
 import argparse
-import json
 import time
 from pathlib import Path
 
@@ -23,7 +22,7 @@ import numpy as np
 
 import cvxgeodesic as cg
 from cvxgeodesic.evaluation.errors import relative_error
-from report_common import timed
+from report_common import emit_row, timed
 
 MESHES = Path(__file__).resolve().parents[1].parent / "shared" / "meshes"
 
@@ -66,10 +65,7 @@ def main() -> None:
                    "estimate": est["error_estimate"], "t_est_over_heat": t_est / t_heat,
                    "shortening": ad.get("edge_shortening"), "fallback": ad["fallback"],
                    "max_surface_distance_rel": ad.get("max_surface_distance", 0.0) / mesh.bbox_diagonal}
-            print(json.dumps(row), flush=True)
-            if args.out:
-                with open(args.out, "a") as fh:
-                    fh.write(json.dumps(row) + "\n")
+            emit_row(row, args.out)
 
 
 if __name__ == "__main__":

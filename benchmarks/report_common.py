@@ -434,6 +434,16 @@ def environment(argv: list[str]) -> dict:
     }
 
 
+def emit_row(row: dict, out: str | os.PathLike | None) -> None:
+    """Print one measured row as a JSON line and, given ``out``, append it there (a run stopped midway keeps
+    its rows)."""
+    line = json.dumps(row)
+    print(line, flush=True)
+    if out:
+        with open(out, "a") as fh:
+            fh.write(line + "\n")
+
+
 def timed(fn, repeats: int):
     """The result of ``fn()`` and its best time over ``repeats`` runs."""
     best, out = np.inf, None
