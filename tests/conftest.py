@@ -77,3 +77,20 @@ def interrupt_cli(args: list[str], ready, *, settle: float = 1.5):
     elapsed = time.time() - t0
     reader.join(timeout=10)
     return proc.returncode, b"".join(chunks).decode(), elapsed
+
+
+@pytest.fixture
+def plot_field_calls(monkeypatch) -> list[dict]:
+    """The keyword arguments of every ``cvxgeodesic.plotting.plot_field`` call during the test (the picture is still
+    drawn): what the CLI and compare hand to the picture."""
+    import cvxgeodesic.plotting as plotting
+
+    calls: list[dict] = []
+    real = plotting.plot_field
+
+    def spy(*args, **kwargs):
+        calls.append(kwargs)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(plotting, "plot_field", spy)
+    return calls

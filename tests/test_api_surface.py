@@ -106,17 +106,8 @@ def test_comma_separated_sources(tmp_path, capsys):
     assert exc.value.code == 2 and "invalid vertex index list '0,x'" in capsys.readouterr().err
 
 
-def test_png_marks_the_sources_and_labels_the_colour_bar(tmp_path, monkeypatch):
-    import cvxgeodesic.plotting as plotting
-
-    calls = []
-    real = plotting.plot_field
-
-    def spy(*args, **kwargs):
-        calls.append(kwargs)
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(plotting, "plot_field", spy)
+def test_png_marks_the_sources_and_labels_the_colour_bar(tmp_path, plot_field_calls):
+    calls = plot_field_calls
     path = _mesh_file(tmp_path)
     rc = main(["distance", str(path), "-s", "3,7", "--method", "dijkstra", "-q", "-o", str(tmp_path / "d.ply"),
                "--png", str(tmp_path / "d.png")])

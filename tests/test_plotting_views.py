@@ -170,28 +170,14 @@ def test_cli_names_match_the_library():
     assert _options.VIEW_NAMES == VIEW_NAMES and _options.UP_NAMES == UP_NAMES
 
 
-def _spy(monkeypatch):
-    import cvxgeodesic.plotting as plotting
-
-    calls = []
-    real = plotting.plot_field
-
-    def spy(*args, **kwargs):
-        calls.append(kwargs)
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(plotting, "plot_field", spy)
-    return calls
-
-
 @pytest.mark.parametrize("args, view, up", [
     ([], None, "auto"),
     (["--view", "front,back"], ["front", "back"], "auto"),
     (["--view", "30,45", "--view", "BACK", "--up=-y"], [(30.0, 45.0), "back"], "-y"),
     (["--view=-20,90", "--up", "0,0,2"], [(-20.0, 90.0)], (0.0, 0.0, 2.0)),
 ])
-def test_cli_view_and_up_reach_the_picture(tmp_path, monkeypatch, args, view, up):
-    calls = _spy(monkeypatch)
+def test_cli_view_and_up_reach_the_picture(tmp_path, plot_field_calls, args, view, up):
+    calls = plot_field_calls
     path = cg.save_distance(tmp_path / "in.ply", icosphere(1), np.zeros(42))
     rc = main(["distance", str(path), "-s", "3", "--method", "dijkstra", "-q", "-o", str(tmp_path / "d.ply"),
                "--png", str(tmp_path / "d.png"), *args])
@@ -223,8 +209,8 @@ def test_cli_bad_view_or_up_is_one_line_before_any_solve(tmp_path, capsys, monke
     assert not solved and not list(tmp_path.glob("*.png"))
 
 
-def test_compare_draws_the_views_it_is_given(tmp_path, monkeypatch):
-    calls = _spy(monkeypatch)
+def test_compare_draws_the_views_it_is_given(tmp_path, plot_field_calls):
+    calls = plot_field_calls
     mesh = icosphere(2)
     from cvxgeodesic.compare import run_compare
 
