@@ -33,20 +33,26 @@ import numpy as np  # noqa: E402
 SHARED = os.path.join(os.path.dirname(__file__), "..", "..", "shared", "meshes")
 
 
-def _shared_cases():
-    """Scan-sized (name, thunk) pairs on ../shared/meshes: construction (setup) and one solve."""
+def _solve(mesh, method, sources, **kw):
+    """A thunk: construction (setup) and one solve, returning (field, iterations)."""
     import cvxgeodesic as cg
 
-    def solve(name, method, source, **kw):
-        def run():
-            mesh = cg.load_mesh(os.path.join(SHARED, name))
-            r = cg.GeodesicSolver(mesh, method, **kw).solve(source)
-            return r.distance, r.info.iterations
-        return run
+    def run():
+        r = cg.GeodesicSolver(mesh, method, **kw).solve(sources)
+        return r.distance, r.info.iterations
+    return run
 
-    return [("scan bimba qcqp-hessian", solve("bimba.obj", "qcqp-hessian", 0)),
-            ("scan max_planck qclp", solve("max_planck.obj", "qclp", 0)),
-            ("scan spot order2", solve("spot.obj", "qclp", 0, order=2))]
+
+def _shared_cases():
+    """Scan-sized (name, thunk) pairs on ../shared/meshes, each mesh read once (outside the timed thunks)."""
+    import cvxgeodesic as cg
+
+    def load(name):
+        return cg.load_mesh(os.path.join(SHARED, name))
+
+    return [("scan bimba qcqp-hessian", _solve(load("bimba.obj"), "qcqp-hessian", 0)),
+            ("scan max_planck qclp", _solve(load("max_planck.obj"), "qclp", 0)),
+            ("scan spot order2", _solve(load("spot.obj"), "qclp", 0, order=2))]
 
 
 def _cases():
@@ -59,11 +65,7 @@ def _cases():
     p_tri = cg.surface_point(sphere, sphere.V[5] * 0.6 + sphere.V[40] * 0.4)
     p_tet = cg.volume_point(box, [0.31, 0.42, 0.27])
 
-    def solve(mesh, method, sources, **kw):
-        def run():
-            r = cg.GeodesicSolver(mesh, method, **kw).solve(sources)
-            return r.distance, r.info.iterations
-        return run
+    solve = _solve
 
     def path(mesh, sources, target, **kw):
         def run():
