@@ -153,20 +153,19 @@ def _with_a_loose_vertex(mesh: TriMesh) -> TriMesh:
 
 TETRAHEDRON = TriMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.3, 0.2, 0.9]],
                       [[0, 1, 2], [0, 3, 1], [1, 3, 2], [2, 3, 0]], name="tetrahedron")
-COMPILED_MESHES = [icosphere(2), grid_plane(7, jitter=0.3, seed=2), cylinder(10, 4),
-                   _flipped(icosphere(1)), _with_a_loose_vertex(grid_plane(4, jitter=0.2)), TETRAHEDRON]
+FACE_ASSEMBLY_MESHES = [icosphere(2), grid_plane(7, jitter=0.3, seed=2), cylinder(10, 4),
+                         _flipped(icosphere(1)), _with_a_loose_vertex(grid_plane(4, jitter=0.2)), TETRAHEDRON]
 
 
-@pytest.mark.parametrize("mesh", COMPILED_MESHES, ids=lambda m: m.name)
-def test_compiled_curved_hessian_equals_libigl(mesh):
-    """The compiled face-by-face assembly is libigl's matrix to rounding (closed, open, inconsistently oriented
+@pytest.mark.parametrize("mesh", FACE_ASSEMBLY_MESHES, ids=lambda m: m.name)
+def test_face_assembly_of_curved_hessian_equals_libigl(mesh):
+    """The face-by-face assembly is libigl's matrix to rounding (closed, open, inconsistently oriented
     meshes, a loose vertex, a tetrahedron whose three opposite vertices coincide), on libigl's pattern but for
     entries whose contributions cancel (exactly 0 in one assembly, rounding in the other)."""
-    pytest.importorskip("numba")
     from cvxgeodesic.operators.energies import curved_hessian_energy
 
-    Q = curved_hessian_energy(mesh, compiled=True)
-    ref = curved_hessian_energy(mesh, compiled=False)
+    Q = curved_hessian_energy(mesh, libigl=False)
+    ref = curved_hessian_energy(mesh, libigl=True)
     assert Q.shape == ref.shape == (mesh.n_vertices, mesh.n_vertices)
     scale = abs(ref).max()
     assert abs(Q - ref).max() <= 1e-13 * scale
@@ -181,22 +180,21 @@ def test_compiled_curved_hessian_equals_libigl(mesh):
 
 @pytest.mark.shared
 @pytest.mark.parametrize("name", ["spot.obj", "camelhead_open.off", "thingi_37881.stl"])
-def test_compiled_curved_hessian_equals_libigl_on_shared_meshes(name):
+def test_face_assembly_of_curved_hessian_equals_libigl_on_shared_meshes(name):
     """Real meshes: a closed one, an open one (the angle defect is 0 on the boundary) and the CAD mesh whose
     curved energy is indefinite (the PSD check must see the same matrix)."""
-    pytest.importorskip("numba")
     from conftest import shared_mesh_path
     from cvxgeodesic import load_mesh
     from cvxgeodesic.operators.energies import curved_hessian_energy
 
     mesh = load_mesh(shared_mesh_path(name))
-    Q, ref = curved_hessian_energy(mesh, compiled=True), curved_hessian_energy(mesh, compiled=False)
+    Q, ref = curved_hessian_energy(mesh, libigl=False), curved_hessian_energy(mesh, libigl=True)
     assert abs(Q - ref).max() <= 1e-13 * abs(ref).max()
     assert abs(Q.nnz - ref.nnz) <= 1e-4 * ref.nnz
 
 
-def test_curved_hessian_uses_libigl_off_the_compiled_path():
-    """A non-manifold mesh (not handled by the compiled assembly) and a degenerate face (inf/nan there) get
+def test_curved_hessian_uses_libigl_off_the_face_assembly():
+    """A non-manifold mesh (not handled by the face assembly) and a degenerate face (inf/nan there) get
     libigl's matrix itself."""
     import igl
 

@@ -20,10 +20,9 @@ from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
-from numba import njit
 
 from cvxgeodesic.mesh.io import load_mesh
-from cvxgeodesic.operators import _hessian_kernels as K
+from cvxgeodesic.operators import curved_hessian
 from cvxgeodesic.operators.energies import (
     curved_hessian_energy,  # noqa: F401 (re-exported for the scripts)
     curved_hessian_face_data,
@@ -31,26 +30,12 @@ from cvxgeodesic.operators.energies import (
 from cvxgeodesic.problems.conic import kkt_pattern  # noqa: F401
 
 
-@njit(cache=True)
-def _face_factors(F, E, twin, lsq, dA, theta, minv, sk, Cs, LKs, verts):
-    m = F.shape[0]
-    for f in range(m):
-        C = np.zeros((6, 6))
-        LK = np.zeros((6, 6))
-        K._gradient_block(F, E, twin, lsq, dA, minv, f, C, verts)
-        K._laplacian_block(F, lsq, dA, theta, sk, f, LK)
-        Cs[f] = C
-        LKs[f] = LK
-
-
 def face_factors(mesh):
     """Per face: C (m, 6, 6) rows of G on the face's 6 edge unknowns (par_0..2, perp_0..2), columns verts (m, 6);
     LK (m, 6, 6) the face's block of S = L + K; unknown ids (m, 6) = 2 * edge + (0 par, 1 perp)."""
-    F, E, n_edges, lsq, dA, theta, minv, sk = curved_hessian_face_data(mesh, K)
-    m = F.shape[0]
-    Cs, LKs = np.empty((m, 6, 6)), np.empty((m, 6, 6))
-    verts = np.empty((m, 6), dtype=np.int64)
-    _face_factors(F, E, K.twins(E, n_edges), lsq, dA, theta, minv, sk, Cs, LKs, verts)
+    F, E, n_edges, lsq, dA, theta, minv, sk = curved_hessian_face_data(mesh)
+    Cs, verts = curved_hessian.gradient_blocks(F, E, curved_hessian.twins(E, n_edges), lsq, dA, minv)
+    LKs = curved_hessian.laplacian_blocks(F, lsq, dA, theta, sk)
     unk = np.concatenate([2 * E, 2 * E + 1], axis=1)
     return Cs, LKs, verts, unk, n_edges
 

@@ -1,13 +1,14 @@
 """One line when the package's compiled kernels are being compiled: the first run after an installation.
 
-The Numba kernels (:mod:`cvxgeodesic.solvers.ipm._kernels`, :mod:`cvxgeodesic.operators._hessian_kernels`, the
-order-2 solver's) are compiled on their first call and cached on disk (``cache=True``); later processes load them
+The Numba kernels (:mod:`cvxgeodesic.solvers.ipm._kernels`, the order-2 solver's
+``_clique_kernels``) are compiled on their first call and cached on disk (``cache=True``); later processes load them
 in well under a second. The first solve after an installation (or a Numba upgrade, or with an empty
 ``NUMBA_CACHE_DIR``) therefore pauses for a few seconds, which would look like a hang without a word. What compiles
 is what the solve needs, each kernel once per process: the order-1 solver's kernels (``_kernels``) at the first
-order-1 solve, the curved Hessian energy's (``operators._hessian_kernels``) when a Hessian method builds its energy,
-the order-2 solver's (``_clique_kernels``) at the first order-2 solve; ``benchmarks/first_run.py`` lists and times
-them.
+order-1 solve, the order-2 solver's (``_clique_kernels``) at the first order-2 solve; ``benchmarks/first_run.py``
+lists and times them. No set-up compiles anything: the curved Hessian energy is assembled in NumPy
+(:mod:`cvxgeodesic.operators.curved_hessian`), whose Numba kernels were half the first QCQP-Hessian run's compile
+time.
 
 Numba announces every real compilation (a miss of its on-disk cache, after the cache was looked up) as a
 ``"numba:compile"`` event, so a listener learns of a cold cache at no cost: no marker file, no look at the
@@ -64,11 +65,11 @@ def prefer_openmp() -> None:
         numba.config.THREADING_LAYER_PRIORITY = ["omp", "tbb", "workqueue"]  # type: ignore[attr-defined]
 
 #: What the compilation costs: the first solve of the bundled spot mesh in a fresh process with an empty cache minus
-#: the same with the cache filled (``benchmarks/first_run.py``, CPU time, 2026-12-06 05:25 UTC on a 2-core machine
-#: at load 8-9): QCLP 3.17 - 0.52 s, order 2 3.51 - 1.10 s, QCQP-Hessian 6.71 - 0.63 s (its energy's kernels 3.4 s
-#: more), both orders in one process 6.26 - 1.20 s. Per element order, so that one line holds for a process that
-#: uses both.
-_COST = "about 3 s for each element order used, 3 s more for the curved Hessian energy"
+#: the same with the cache filled (``benchmarks/first_run.py --repeat 2``, wall clock, 2026-12-06 09:42 UTC on a
+#: 2-core machine at load 2.3-2.6): QCLP 2.48 - 0.38 s, order 2 2.84 - 0.88 s, QCQP-Hessian 2.61 - 0.44 s (its energy
+#: compiles nothing), both orders in one process 4.67 - 0.89 s. Per element order, so that one line holds for a
+#: process that uses both.
+_COST = "about 2-3 s for each element order used"
 NOTICE = f"compiling the solver's kernels once after installation ({_COST}); later runs load them from the cache"
 
 #: The line instead of :data:`NOTICE` when Numba has no writable cache location (see the module's docstring).

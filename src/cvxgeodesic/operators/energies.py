@@ -18,6 +18,7 @@ from ..mesh.patch import is_patch
 from ..mesh.reference import TRIANGLE
 from ..mesh.simplex import SimplexMesh
 from ..mesh.trimesh import TriMesh
+from . import curved_hessian
 from .gradient import gradient_blocks, gradient_matrix
 from .laplacian import barycentric_mass, cotan_stiffness, mass_matrix, selected_cells
 
@@ -155,20 +156,19 @@ def _oriented(mesh: TriMesh, notes: list[str]) -> TriMesh:
     return TriMesh(mesh.V, orientation.F, name=mesh.name) if orientation.flipped.any() else mesh
 
 
-def curved_hessian_face_data(mesh: TriMesh, kern) -> tuple:
-    """The per-face inputs of the compiled curved Hessian assembly (:mod:`._hessian_kernels`).
+def curved_hessian_face_data(mesh: TriMesh) -> tuple:
+    """The per-face inputs of the face-by-face curved Hessian assembly (:mod:`.curved_hessian`).
 
     Returns ``(F, E, n_edges, lsq, dA, theta, minv, sk)``: faces (m, 3) and their edges (m, 3) as contiguous
     int64, the edge count, squared edge lengths (m, 3), doubled areas (m,), corner angles (m, 3), the inverse
     Crouzeix–Raviart edge masses (n_edges,) (0 on a massless edge) and each vertex's angle defect over its angle
-    sum (n,) (0 on the boundary, as libigl). ``kern`` is the kernels module.
+    sum (n,) (0 on the boundary, as libigl).
     """
     V = np.ascontiguousarray(mesh.V, dtype=np.float64)
     F = np.ascontiguousarray(mesh.F, dtype=np.int64)
     E = np.ascontiguousarray(mesh.cell_edges, dtype=np.int64)
-    n, m, n_edges = mesh.n_vertices, F.shape[0], len(mesh.edges)
-    lsq, dA, theta = np.empty((m, 3)), np.empty(m), np.empty((m, 3))
-    kern.face_geometry(V, F, lsq, dA, theta)
+    n, n_edges = mesh.n_vertices, len(mesh.edges)
+    lsq, dA, theta = curved_hessian.face_geometry(V, F)
     mass = np.bincount(E.ravel(), weights=np.repeat(dA / 6.0, 3), minlength=n_edges)
     minv = np.zeros(n_edges)
     np.divide(1.0, mass, out=minv, where=mass > 0)
@@ -180,18 +180,17 @@ def curved_hessian_face_data(mesh: TriMesh, kern) -> tuple:
     return F, E, n_edges, lsq, dA, theta, minv, sk
 
 
-def curved_hessian_energy(mesh: TriMesh, *, compiled: bool | None = None) -> sp.csc_matrix:
+def curved_hessian_energy(mesh: TriMesh, *, libigl: bool = False) -> sp.csc_matrix:
     """libigl's curved Hessian energy matrix (``igl.curved_hessian_energy``), symmetrized, sized (n, n).
 
     Parameters
     ----------
     mesh : TriMesh
-    compiled : bool, optional
-        ``True``: the compiled face-by-face assembly of :mod:`._hessian_kernels` (needs Numba; the same
-        matrix to rounding, 3e-16 of its largest entry; 4-8x faster, measured 2026-12-01 on bimba and a
-        1.1M-face bunny, docs/dev/performance-log.md "Set-up cost");
-        ``False``: libigl's; ``None`` (default): compiled when Numba can be imported. libigl's is used anyway on a
-        mesh that is not edge-manifold and where the compiled assembly has non-finite entries (degenerate faces).
+    libigl : bool, optional
+        ``False`` (default): the face-by-face assembly of :mod:`.curved_hessian` (the same matrix to rounding,
+        3e-16 of its largest entry; 4-8x faster than libigl's products on bimba and a 1.1M-face bunny,
+        docs/dev/performance-log.md "Set-up cost"); ``True``: libigl's. libigl's is used anyway on a mesh that is
+        not edge-manifold and where the face-by-face assembly has non-finite entries (degenerate faces).
 
     Returns
     -------
@@ -199,43 +198,18 @@ def curved_hessian_energy(mesh: TriMesh, *, compiled: bool | None = None) -> sp.
         Symmetric, on the structural pattern of libigl's product less the entries that are exactly 0 (as
         libigl's after SciPy's symmetrization).
     """
-    if compiled is None:
-        compiled = _kernels() is not None
-    if not compiled or not mesh.is_edge_manifold:
+    if libigl or not mesh.is_edge_manifold:
         return _padded_symmetric(igl.curved_hessian_energy(mesh.V, mesh.F), mesh.n_vertices)
-    kern = _kernels()
-    if kern is None:
-        raise ImportError("compiled=True needs Numba")
-    F, E, n_edges, lsq, dA, theta, minv, sk = curved_hessian_face_data(mesh, kern)
-    n, m = mesh.n_vertices, F.shape[0]
-    blocks, verts = np.empty((m, 6, 6)), np.empty((m, 6), dtype=np.int64)
-    kern.face_blocks(F, E, kern.twins(E, n_edges), lsq, dA, theta, minv, sk, blocks, verts)
-    slot_ptr, slots = kern.vertex_slots(verts, n)
-    width = 6 * int(np.diff(slot_ptr).max(initial=0))
-    length = np.zeros(n, dtype=np.int64)
-    kern.row_lengths(verts, slot_ptr, slots, width, length)
-    indptr = np.zeros(n + 1, dtype=np.int64)
-    np.cumsum(length, out=indptr[1:])
-    index = np.int32 if indptr[-1] < np.iinfo(np.int32).max else np.int64  # SciPy's choice for this size
-    indices, data = np.empty(indptr[-1], dtype=index), np.zeros(indptr[-1])
-    kern.gather_rows(verts, blocks, slot_ptr, slots, width, indptr, indices, data)
-    if not np.isfinite(data).all():
+    F, E, _, lsq, dA, theta, minv, sk = curved_hessian_face_data(mesh)
+    Q = curved_hessian.energy_matrix(F, E, lsq, dA, theta, minv, sk, mesh.n_vertices)
+    if Q is None:
         # faces without a proper shape (zero area, zero-length edges) give inf/nan in both assemblies, where they
         # need not agree: libigl's is the reference
         return _padded_symmetric(igl.curved_hessian_energy(mesh.V, mesh.F), mesh.n_vertices)
-    # rows of a symmetric matrix are its columns; exact zeros (cancelling contributions) are dropped, as SciPy's
-    # symmetrization of libigl's matrix drops them, so that both give one pattern
-    Q = sp.csc_matrix((data, indices, indptr.astype(index)), shape=(n, n))
+    # exact zeros (cancelling contributions) are dropped, as SciPy's symmetrization of libigl's matrix drops them,
+    # so that both give one pattern
     Q.eliminate_zeros()
     return Q
-
-
-def _kernels():
-    try:
-        from . import _hessian_kernels
-    except ImportError:
-        return None
-    return _hessian_kernels
 
 
 def _padded_symmetric(Q, n: int) -> sp.csc_matrix:

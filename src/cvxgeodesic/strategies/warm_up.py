@@ -19,8 +19,8 @@ __all__ = ["warm_up"]
 
 
 def warm_up() -> None:
-    """Compile (first run after an install: the kernels of both orders and of the curved Hessian energy, about 9 s
-    by :data:`cvxgeodesic._jit.NOTICE`'s estimates) or load (later, under a second) the solver's kernels.
+    """Compile (first run after an install: the kernels of both orders, about 5 s by :data:`cvxgeodesic._jit.NOTICE`'s
+    estimates) or load (later, under a second) the solver's kernels.
 
     The first :meth:`~cvxgeodesic.solvers.ipm.InteriorPointSolver.solve` of a process does this by itself; call it
     beforehand to keep that one-time cost out of a timing. ``make setup`` runs it once so that the on-disk cache

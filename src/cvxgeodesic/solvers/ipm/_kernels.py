@@ -14,7 +14,7 @@ as in :class:`cvxgeodesic.solvers.ipm.cones._SocScaling`, whose formulas are CVX
 
 Loops without scatter (no two cones write the same entry) are written with ``prange`` but compiled
 serially: a ``parallel=True`` kernel takes 2-4x longer to compile (the first solve of spot after an install:
-qclp 4.6 s with parallel kernels, 2.6 s without; qcqp-hessian, with :mod:`cvxgeodesic.operators._hessian_kernels`,
+qclp 4.6 s with parallel kernels, 2.6 s without; qcqp-hessian, with the curved Hessian energy's kernels of that day,
 10.0 s against 5.5 s), and these loops are short (about 1 ms per call at 300K cones) and a few percent of a
 solve: in QCLP solves with 2 threads of horse and armadillo (87-97K faces), all kernel calls took 0.21 s serial
 against 0.26-0.41 s parallel (waking the threads for each short loop costs more than it saves), of 1.1-1.9 s
