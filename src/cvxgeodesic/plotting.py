@@ -46,6 +46,8 @@ from .evaluation.camera import (
 )
 from .mesh.convert import MeshLike
 from .mesh.io import as_trimesh
+from .mesh.trimesh import TriMesh
+from .operators.linear_field import LinearField
 from .results import Field, GeodesicResult
 from .validation import as_field, as_vertex_field, check_count, check_number, check_output_path, vertex_indices
 
@@ -67,11 +69,43 @@ _SEGMENT_BLOCK = 400_000  # (triangle, level) pairs processed at once by the mar
 def _surface_inputs(mesh, values, name: str, sources, path, dpi, *,
                     field: bool = False) -> tuple[Any, np.ndarray, np.ndarray, Path, float]:
     """The checked inputs of a surface picture: ``(mesh, values (n,), marked vertices (k,), path, dpi)``; ``field``:
-    ``values`` may be a result or a field (its vertex values are drawn)."""
+    ``values`` may be a result or a field (a field that is not linear in its faces is drawn on the mesh split
+    4-to-1, :func:`_sampled`; the first ``n`` vertices are the mesh's)."""
     mesh = as_trimesh(mesh)
-    vals = as_field(values, name, mesh.n_vertices)[0] if field else as_vertex_field(values, name, mesh.n_vertices)
     marks = np.empty(0, dtype=np.int64) if sources is None else vertex_indices(sources, "sources", mesh.n_vertices)
+    if field:
+        mesh, vals = _sampled(mesh, *as_field(values, name, mesh.n_vertices))
+    else:
+        vals = as_vertex_field(values, name, mesh.n_vertices)
     return mesh, vals, marks, check_output_path(path, PLOT_EXTENSIONS), check_number(dpi, "dpi", low=10, high=2000)
+
+
+#: A field that is not linear in its faces (order 2, an adapted solve's) is drawn on the mesh split 4-to-1 up to this
+#: many faces; above it a face is about a pixel of a 960-pixel panel and the split would not show.
+MAX_SAMPLED_FACES = 50_000
+
+
+def _sampled(mesh: TriMesh, values: np.ndarray, field: Field | None) -> tuple[TriMesh, np.ndarray]:
+    """The mesh and vertex values to draw: for a field that is not linear in its faces, the mesh with every face split
+    in four at its edge midpoints (its vertices first, then one per edge) and the field asked at the midpoints.
+
+    Drawn linearly, the split field meets a quadratic one at the six nodes of every face, so the isolines follow
+    the order-2 field's curves instead of the chords between its vertex values.
+    """
+    if field is None or isinstance(field, LinearField) or mesh.n_faces > MAX_SAMPLED_FACES:
+        return mesh, values
+    n, F = mesh.n_vertices, mesh.F
+    cell_edges = mesh.cell_edges  # (m, 3): the edge opposite each corner
+    first = np.unique(cell_edges.ravel(), return_index=True)[1]  # one (face, corner) across from each edge
+    face, corner = first // 3, first % 3
+    bary = np.full((face.size, 3), 0.5)
+    bary[np.arange(face.size), corner] = 0.0
+    mid = field.distance_at(face, bary)  # inf where no source is reachable, as at the vertices
+    m0, m1, m2 = (n + cell_edges[:, e] for e in range(3))  # the midpoints opposite corners 0, 1, 2
+    a, b, c = F.T
+    split = np.concatenate([np.c_[a, m2, m1], np.c_[m2, b, m0], np.c_[m1, m0, c], np.c_[m2, m0, m1]])
+    V = np.vstack([mesh.V, mesh.V[mesh.edges].mean(axis=1)])
+    return TriMesh(V, split, name=mesh.name), np.concatenate([values, mid])
 
 
 def _new_figure(dpi: float, figsize=_FIGSIZE):
@@ -494,8 +528,11 @@ def plot_field(
         The surface, ``n`` vertices and ``m`` faces.
     values : (n,) array_like of float, GeodesicResult or Field
         One value per vertex (e.g. a distance field), or a result of a solve on this mesh (or its
-        :attr:`~cvxgeodesic.results.GeodesicResult.field`): its values at the vertices. ``inf`` / ``NaN``
-        (unreachable) vertices are drawn light grey and carry no isolines.
+        :attr:`~cvxgeodesic.results.GeodesicResult.field`). Vertex values are drawn linearly across each face; a
+        field that is not linear in its faces (order 2, ``resolution=``) is also asked at every edge's midpoint
+        and drawn on the faces split in four there, so that its isolines show its curves (up to
+        :data:`MAX_SAMPLED_FACES` faces, above which a face is about a pixel). ``inf`` / ``NaN`` (unreachable)
+        vertices are drawn light grey and carry no isolines.
     path : str or os.PathLike
         Output file; must end in ``.png``. Its directory must exist. The file
         is written atomically (temporary file + :func:`os.replace`).
