@@ -328,8 +328,9 @@ def edge_shortening(mesh: TriMesh, positions: np.ndarray) -> float:
     """The error estimate of an adapted solve: how much shorter the user's edges are on the solve mesh.
 
     Each user edge ``(i, j)`` is compared with the segment between the closest points of its ends on the solve
-    mesh: ``Σ (ℓ_ij − |p_i − p_j|) / Σ ℓ_ij`` over the edges. On detailed scans the error of an adapted solve is
-    mostly this shortening (issue 43); order 2 adds little on the solve mesh itself.
+    mesh: ``Σ (ℓ_ij − |p_i − p_j|) / Σ ℓ_ij`` over the edges: roughness below the solve mesh's scale. It follows
+    the adapted error on scans, but it is not that error's cause: the solve mesh's own exact distances are longer
+    than the user's there, and order 2 on it falls short of them (docs/dev/adapted-log.md, "A length correction").
 
     Parameters
     ----------
