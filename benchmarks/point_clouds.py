@@ -15,6 +15,10 @@ Columns: mean and max relative error over the reachable points (``cvxgeodesic.ev
 time over pc-heat's (best of ``--repeats``; building the cloud's triangles included for the library's methods:
 each is a fresh ``PointCloud`` + solver + solve; pc-heat's includes its own set-up), and unreachable points
 (infinite distance).
+``--denoise 1,2`` adds rows of ``qclp`` at both orders on the first set of the cloud denoised by that many passes of
+jet projection (``PointCloud(P, denoise=passes)``, :mod:`cvxgeodesic.mesh.denoise`; its time included), and, on vertex
+clouds, a ``floor`` row: the exact field read at each noisy point's closest point of the mesh (the error that no
+method answering at the noisy positions avoids: the noise's tangential part moves the point along the field).
 ``--neighbours 12,20,30`` measures the neighbour count instead: ``qclp`` at both orders on the union of the fans of
 :func:`~cvxgeodesic.mesh.pointcloud.local_fans` (potpourri3d's construction, whose k is fixed at 30; at k = 30 they
 build the same triangles on evenly sampled clouds), after a row on potpourri3d's own fans.
@@ -62,7 +66,7 @@ def knn_dijkstra(P: np.ndarray, src: int, k: int) -> np.ndarray:
 def row(name, noise, label, d, exact, src, t, t_heat):
     reach = np.isfinite(d)
     err = relative_error(np.where(reach, d, exact), exact, [src])[reach]  # unreachable: counted, not averaged
-    print(f"| {name} | {noise * 100:.1f} % | {label} | {np.nanmean(err) * 100:.3f} % | {np.nanmax(err) * 100:.2f} % "
+    print(f"| {name} | {noise * 100:g} % | {label} | {np.nanmean(err) * 100:.3f} % | {np.nanmax(err) * 100:.2f} % "
           f"| {t / t_heat:.2f}× | {int((~reach).sum())} |", flush=True)
 
 
@@ -91,6 +95,8 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=2, help="times are the best of this many runs")
     ap.add_argument("--neighbours", default="", help="instead of the methods: qclp at both orders on the union of "
                     "the fans of pointcloud.local_fans at these neighbour counts (e.g. 12,20,30,45)")
+    ap.add_argument("--denoise", default="", help="also qclp on the first set of the cloud denoised by these "
+                    "passes of jet projection (e.g. 1,2), and the floor row")
     ap.add_argument("--resample", default="", help="instead of the vertices: random surface points, these fractions "
                     "of the face count (e.g. 0.5,0.25: two densities); the reference is exact MMP on the mesh with "
                     "the points inserted as vertices")
@@ -111,6 +117,9 @@ def main() -> None:
                     compare_neighbours(name, noise, P, exact, src, args)
                 else:
                     compare(name, noise, P, exact, src, sets, args)
+                    if args.denoise:
+                        compare_denoised(name, noise, P, exact, src, sets[0], args,
+                                         None if args.resample else mesh)
 
 
 def clouds_of(mesh, stem: str, args, rng) -> list[tuple[str, np.ndarray, np.ndarray, int]]:
@@ -167,6 +176,32 @@ def compare(name: str, noise: float, P: np.ndarray, exact: np.ndarray, src: int,
             d, t = timed(solve, args.repeats)
             label = f"{method} order {order}{f' m={m:g}' if m else ''}, {kind}"
             row(name, noise, label, d, exact, src, t, t_heat)
+
+
+def compare_denoised(name: str, noise: float, P: np.ndarray, exact: np.ndarray, src: int, kind: str, args,
+                     mesh) -> None:
+    """Rows of ``qclp`` at both orders on the cloud denoised by each of ``--denoise``'s pass counts (the time: the
+    denoising, the triangles, the solver and the solve, over pc-heat's on the raw cloud); first, given the mesh whose
+    vertices the cloud's points are, the floor: the exact field at each point's closest point of the mesh."""
+    from cvxgeodesic.mesh.closest import closest_point_index
+
+    def pc_heat():
+        import potpourri3d as pp3d
+
+        return pp3d.PointCloudHeatSolver(P).compute_distance(src)
+    _, t_heat = timed(pc_heat, args.repeats)
+    if mesh is not None:
+        faces, bary, _ = closest_point_index(mesh).query(P)
+        floor = np.einsum("ki,ki->k", exact[mesh.F[faces]], bary)
+        row(name, noise, "floor: exact at the closest surface point", floor, exact, src, t_heat, t_heat)
+    for passes in (int(x) for x in args.denoise.split(",")):
+        for order in (1,) if args.no_order2 else (1, 2):
+            def solve(passes=passes, order=order):
+                cloud = cg.PointCloud(P, triangles=kind, denoise=passes)
+                return cg.GeodesicSolver(cloud, "qclp", order=order).solve(src).distance
+            d, t = timed(solve, args.repeats)
+            row(name, noise, f"qclp order {order}, {kind}, denoised ({passes} pass{'es' if passes > 1 else ''})", d,
+                exact, src, t, t_heat)
 
 
 def compare_neighbours(name: str, noise: float, P: np.ndarray, exact: np.ndarray, src: int, args) -> None:

@@ -35,6 +35,9 @@ MIN_NEIGHBOURS = 4
 #: 1.5× at order 2) but leaves holes where the fans disagree (max error up to 4.5× the union's on a sphere's cloud);
 #: the union has the lower mean error on noisy evenly sampled clouds (up to 1.5×) and no holes.
 DEFAULT_TRIANGLES = "union"
+#: Passes of jet projection of ``denoise="jet"`` (docs/pointclouds.md, "Denoised clouds"), and the most taken.
+DENOISE_PASSES = 1
+MAX_DENOISE_PASSES = 10
 #: A cloud whose second principal extent is below this fraction of its first lies on a line.
 COLLINEAR_TOL = 1e-9
 
@@ -224,13 +227,19 @@ class PointCloud:
         below the number of distinct points) builds the same fans with :func:`local_fans`.
     triangles : {"union", "consensus", "repaired"}, default "union"
         Which of the fans' triangles to solve on (:data:`TRIANGLE_SETS`; docs/pointclouds.md measures them).
+    denoise : {None, "jet"} or int, default None
+        Move the points onto the jets (degree-2 height fits) of their neighbourhoods before the triangles are built
+        (:func:`cvxgeodesic.mesh.denoise.jet_project`): ``"jet"`` one pass, an integer that many passes (0: none,
+        as ``None``). The points keep their order and count; :attr:`P`, the triangles and the lengths are the moved
+        points', and a note says so. docs/pointclouds.md measures it on noisy clouds.
     name : str, optional
         Label for messages.
 
     Attributes
     ----------
     P : (n, 3) float ndarray, read-only
-        The distinct points (duplicates merged: :attr:`file_index` maps the input's points to them).
+        The distinct points (duplicates merged: :attr:`file_index` maps the input's points to them), denoised when
+        ``denoise`` asks.
     mesh : CloudMesh
         The triangle soup; its vertices are ``P``.
     notes : tuple of str
@@ -241,8 +250,8 @@ class PointCloud:
     MeshError
         A non-finite coordinate (the message names the point), fewer than 4 distinct points, all points on a line.
     ParameterError
-        An unknown ``triangles``, or ``neighbours`` not an integer, below 4 or not below the number of distinct
-        points.
+        An unknown ``triangles``, ``neighbours`` not an integer, below 4 or not below the number of distinct
+        points, or ``denoise`` not None, "jet" or an integer from 0 to 10.
 
     Examples
     --------
@@ -255,8 +264,10 @@ class PointCloud:
     """
 
     def __init__(self, P: ArrayLike, normals: ArrayLike | None = None, *, neighbours: int = DEFAULT_NEIGHBOURS,
-                 triangles: str = DEFAULT_TRIANGLES, name: str | None = None) -> None:
+                 triangles: str = DEFAULT_TRIANGLES, name: str | None = None,
+                 denoise: str | int | None = None) -> None:
         self.name = name or "point cloud"
+        passes = denoise_passes(denoise)
         if triangles not in TRIANGLE_SETS:
             raise ParameterError(f"triangles must be one of {', '.join(TRIANGLE_SETS)}, got {triangles!r}")
         if isinstance(neighbours, bool) or not isinstance(neighbours, int | np.integer):
@@ -286,6 +297,8 @@ class PointCloud:
                                  f"points ({pts.shape[0]}), got {self.neighbours}")
         self.file_index = file_index
         self.normals = None if normals is None else _check_normals(normals, raw.shape[0], self.name)[keep]
+        if passes:
+            pts = _denoised(pts, passes, self.name, notes)
         tri, owner = fan_triangles(pts, self.neighbours)
         F, added = triangle_set(tri, owner, pts, triangles)
         notes += added
@@ -342,6 +355,31 @@ def is_point_cloud_object(obj: Any) -> bool:
         return True
     kind = f"{type(obj).__module__}.{type(obj).__qualname__}"
     return kind.startswith(("trimesh.points.PointCloud", "open3d")) and "PointCloud" in kind
+
+
+def denoise_passes(denoise: Any) -> int:
+    """The passes of jet projection that ``PointCloud``'s ``denoise`` asks for (0: none)."""
+    if denoise is None:
+        return 0
+    if isinstance(denoise, str) and denoise == "jet":
+        return DENOISE_PASSES
+    if isinstance(denoise, int | np.integer) and not isinstance(denoise, bool) and 0 <= denoise <= MAX_DENOISE_PASSES:
+        return int(denoise)
+    raise ParameterError(f"denoise must be None, 'jet' or an integer from 0 to {MAX_DENOISE_PASSES} (passes of jet "
+                         f"projection), got {denoise!r}")
+
+
+def _denoised(P: np.ndarray, passes: int, name: str, notes: list[str]) -> np.ndarray:
+    """``P`` moved onto the jets of its neighbourhoods ``passes`` times, with a note of how far."""
+    from .denoise import DEFAULT_DENOISE_NEIGHBOURS, jet_project
+
+    k = min(DEFAULT_DENOISE_NEIGHBOURS, P.shape[0] - 1)
+    X = jet_project(P, k=k, passes=passes)
+    moved = np.linalg.norm(X - P, axis=1)
+    notes.append(f"{name}: denoised: the points moved onto the degree-2 jets of their {k} nearest neighbours "
+                 f"({passes} pass{'es' if passes > 1 else ''}; mean move {moved.mean():.3g}, max {moved.max():.3g}); "
+                 "the triangles and lengths are the moved points'")
+    return X
 
 
 def _check_shape(P: np.ndarray, name: str) -> None:

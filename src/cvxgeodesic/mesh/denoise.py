@@ -1,0 +1,79 @@
+"""Point-set denoising: each point moved onto the jet (a local height polynomial) fitted to its nearest neighbours.
+
+:func:`jet_project` is the jet smoothing of Cazals and Pouget ("Estimating differential quantities using polynomial
+fitting of osculating jets", SGP 2003; CGAL's ``jet_smooth_point_set``): in the principal frame of a point's ``k``
+nearest neighbours, fit the height over the tangent plane by a polynomial of degree 2 (Gaussian weights in the
+distance to the point) and move the point along the frame's normal onto it. Degree 2 follows the surface's curvature,
+so a clean curved surface is not shrunk (a plane fit, degree 1, pulls every point of a convex region inwards by about
+``h² κ / 2``, ``h`` the neighbourhood's radius). Only the height moves: the point keeps its index and its tangential
+position. Pure numpy and scipy; docs/pointclouds.md measures what it does to the distance fields of noisy clouds.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+__all__ = ["DEFAULT_DENOISE_NEIGHBOURS", "DEFAULT_PASSES", "jet_project"]
+
+#: Neighbours of each fit (the point itself not counted): CGAL's examples use 24; a degree-2 jet has 6 coefficients.
+DEFAULT_DENOISE_NEIGHBOURS = 24
+DEFAULT_PASSES = 1
+#: Points fitted at once: bounds the (chunk, k, 6) design arrays to a few tens of MB.
+CHUNK = 20000
+#: Relative ridge on the normal equations (coordinates scaled by each neighbourhood's radius): keeps a fit of
+#: neighbours on one line (a scan line) finite; far below the weights of a well-spread neighbourhood.
+RIDGE = 1e-9
+
+
+def jet_project(P: np.ndarray, k: int = DEFAULT_DENOISE_NEIGHBOURS, passes: int = DEFAULT_PASSES,
+                degree: int = 2) -> np.ndarray:
+    """The points moved onto the jets fitted to their neighbourhoods, ``passes`` times.
+
+    Parameters
+    ----------
+    P : (n, 3) float ndarray
+        Distinct finite points, ``n > k``.
+    k : int
+        Neighbours of each fit, besides the point itself (at least 6 at degree 2).
+    passes : int
+        Times to project; each pass fits to the positions of the previous one (neighbours found again).
+    degree : {1, 2}
+        Of the height polynomial: 2, the jet; 1, the plane (for comparison: it shrinks curved regions).
+
+    Returns
+    -------
+    (n, 3) float ndarray
+        The projected points, in ``P``'s order.
+    """
+    X = np.asarray(P, dtype=np.float64)
+    for _ in range(passes):
+        idx = cKDTree(X).query(X, k=k + 1)[1]
+        X = np.concatenate([_project(X, idx[s:s + CHUNK], np.arange(s, min(s + CHUNK, X.shape[0])), degree)
+                            for s in range(0, X.shape[0], CHUNK)])
+    return X
+
+
+def _project(X: np.ndarray, idx: np.ndarray, rows: np.ndarray, degree: int) -> np.ndarray:
+    """Points ``X[rows]`` (m, 3) projected on the jets of their neighbours ``X[idx]`` (idx: (m, k + 1), column 0 the
+    point itself)."""
+    p = X[rows]
+    Q = X[idx] - p[:, None, :]
+    r2 = np.einsum("mkj,mkj->mk", Q, Q)
+    h2 = r2.max(axis=1, keepdims=True)  # squared radius of the neighbourhood
+    h2[h2 <= 0.0] = 1.0
+    w = np.exp(-r2 / h2)  # Gaussian of width ~ the radius: the far neighbours count ~e^-1 as much
+    c = np.einsum("mk,mkj->mj", w, Q) / w.sum(axis=1, keepdims=True)
+    D = Q - c[:, None, :]
+    frame = np.linalg.eigh(np.einsum("mk,mki,mkj->mij", w, D, D))[1]  # ascending: column 0 the normal
+    L = np.einsum("mki,mij->mkj", Q, frame) / np.sqrt(h2)[..., None]  # (height, u, v), scaled by the radius
+    z, u, v = L[..., 0], L[..., 1], L[..., 2]
+    one = np.ones_like(u)
+    cols = [one, u, v] + ([u * u, u * v, v * v] if degree == 2 else [])
+    A = np.stack(cols, axis=-1)  # (m, k + 1, terms)
+    AtW = A.transpose(0, 2, 1) * w[:, None, :]
+    N = AtW @ A
+    N += RIDGE * np.trace(N, axis1=1, axis2=2)[:, None, None] * np.eye(A.shape[-1])
+    coef = np.linalg.solve(N, np.einsum("mtk,mk->mt", AtW, z)[..., None])[..., 0]
+    height = coef[:, 0] * np.sqrt(h2[:, 0])  # the fit's height at the point's own tangent position (u = v = 0)
+    return p + height[:, None] * frame[:, :, 0]
