@@ -36,8 +36,8 @@ MIN_NEIGHBOURS = 4
 #: the union has the lower mean error on noisy evenly sampled clouds (up to 1.5×) and no holes.
 DEFAULT_TRIANGLES = "union"
 #: Passes of jet projection of ``denoise="jet"`` (docs/pointclouds.md, "Denoised clouds"), and the most taken.
-DENOISE_PASSES = 1
-MAX_DENOISE_PASSES = 10
+DENOISE_PASSES = 2
+MAX_DENOISE_PASSES = 20
 #: A cloud whose second principal extent is below this fraction of its first lies on a line.
 COLLINEAR_TOL = 1e-9
 
@@ -228,10 +228,10 @@ class PointCloud:
     triangles : {"union", "consensus", "repaired"}, default "union"
         Which of the fans' triangles to solve on (:data:`TRIANGLE_SETS`; docs/pointclouds.md measures them).
     denoise : {None, "jet"} or int, default None
-        Move the points onto the jets (degree-2 height fits) of their neighbourhoods before the triangles are built
-        (:func:`cvxgeodesic.mesh.denoise.jet_project`): ``"jet"`` one pass, an integer that many passes (0: none,
-        as ``None``). The points keep their order and count; :attr:`P`, the triangles and the lengths are the moved
-        points', and a note says so. docs/pointclouds.md measures it on noisy clouds.
+        Move the points onto the jets (degree-2 height fits to their 12 nearest neighbours) before the triangles are
+        built (:func:`cvxgeodesic.mesh.denoise.jet_project`): ``"jet"`` two passes, an integer that many passes
+        (0: none, as ``None``). The points keep their order and count; :attr:`P`, the triangles and the lengths are
+        the moved points', and a note says so. For noisy clouds, with order 2: docs/pointclouds.md measures it.
     name : str, optional
         Label for messages.
 
