@@ -37,7 +37,7 @@ MIN_NEIGHBOURS = 4
 DEFAULT_TRIANGLES = "union"
 #: Passes of jet projection of ``denoise="jet"`` (docs/pointclouds.md, "Denoised clouds"), and the most taken.
 DENOISE_PASSES = 2
-MAX_DENOISE_PASSES = 20
+MAX_DENOISE_PASSES = 10
 #: A cloud whose second principal extent is below this fraction of its first lies on a line.
 COLLINEAR_TOL = 1e-9
 
