@@ -17,8 +17,9 @@ from scipy.spatial import cKDTree
 __all__ = ["DEFAULT_DENOISE_NEIGHBOURS", "DEFAULT_PASSES", "jet_project"]
 
 #: Neighbours of each fit (the point itself not counted; a degree-2 jet has 6 coefficients). Measured on kitten and
-#: bimba (docs/pointclouds.md, "Denoised clouds"): 24 (CGAL's examples) removes more noise but costs a clean cloud's
-#: order-2 field 2.1-2.4x its error; 12 costs it 1.1-1.6x, and two passes of 12 come near 24 at 0.3 % noise.
+#: bimba (docs/pointclouds.md, "Denoised clouds"): one pass of 24 (CGAL's examples) removes the most noise but costs
+#: a clean cloud's order-2 field 2.1-2.4x its error; one pass of 12 costs it 1.1-1.6x, two (``denoise="jet"``)
+#: 1.3-1.9x and remove more of the noise (order 2 at 0.3 %: 1.4-1.6 % against 1.8-2.0 % after one, 1.0-1.4 % with 24).
 DEFAULT_DENOISE_NEIGHBOURS = 12
 DEFAULT_PASSES = 1
 #: Points fitted at once: bounds the (chunk, k, 6) design arrays to a few tens of MB.
