@@ -345,13 +345,13 @@ class PointCloud:
         SourceError
             Naming the first such point and why it was left out.
         """
-        for i in np.asarray(vertices, dtype=np.int64).reshape(-1):
-            why = ("an isolated outlier" if i in self.outliers else
-                   "a point whose neighbours lie on a line" if i in self.line_points else None)
-            if why is not None:
-                raise SourceError(f"source point {int(i)} of {self.name} is {why}, left out of the cloud's triangles "
-                                  "(its distance is infinite): choose another source, or build the cloud with "
-                                  "PointCloud(..., outliers='keep')")
+        v = np.asarray(vertices, dtype=np.int64).reshape(-1)
+        bad = v[np.isin(v, self.outliers) | np.isin(v, self.line_points)]
+        if bad.size:
+            why = "an isolated outlier" if bad[0] in self.outliers else "a point whose neighbours lie on a line"
+            raise SourceError(f"source point {int(bad[0])} of {self.name} is {why}, left out of the cloud's triangles "
+                              "(its distance is infinite): choose another source, or build the cloud with "
+                              "PointCloud(..., outliers='keep')")
 
     @property
     def n_points(self) -> int:
