@@ -158,3 +158,21 @@ def test_an_unknown_outlier_handling_and_too_few_points_left_are_refused():
     with pytest.raises(ParameterError, match=r"below the number of distinct points \(411 without the outliers\), "
                                              "got 420"):
         PointCloud(P, neighbours=420)
+
+
+def test_a_click_on_an_outlier_in_the_viewer_says_why_and_keeps_the_field():
+    from types import SimpleNamespace
+
+    from cvxgeodesic.viewer import _Viewer
+
+    class _Recorder:  # the polyscope calls of _Viewer.solve, recorded (no OpenGL)
+        def __getattr__(self, name):
+            return lambda *args, **kw: self
+
+    Y, rows = _with_outliers(_sphere())
+    cloud = PointCloud(Y)
+    v = _Viewer(_Recorder(), cloud.mesh, method="dijkstra", solver_kwargs={}, isolines=False)
+    before = v.solve([0])
+    assert v.pick(SimpleNamespace(is_hit=True, structure_name="points", structure_data={"index": int(rows[0])}))
+    assert v.message.startswith(f"source point {rows[0]} of point cloud is an isolated outlier")
+    np.testing.assert_array_equal(v.distance, before)
