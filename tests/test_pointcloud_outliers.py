@@ -52,6 +52,40 @@ def test_planted_outliers_are_left_out_with_a_note_and_an_infinite_distance():
     assert np.isinf(cg.geodesic_distance(cloud, 0, method="heat")[rows]).all()
 
 
+@pytest.mark.parametrize("triangles", ["union", "consensus", "repaired"])
+@pytest.mark.parametrize("neighbours", [30, 20])
+def test_without_its_outliers_a_cloud_has_the_clean_cloud_s_triangles(triangles, neighbours):
+    # potpourri3d's fans at 30 neighbours, local_fans at 20; the consensus and its repair count the fans' agreement
+    X = _sphere()
+    Y, rows = _with_outliers(X)
+    cloud = PointCloud(Y, triangles=triangles, neighbours=neighbours)
+    to_clean = np.cumsum(~np.isin(np.arange(Y.shape[0]), rows)) - 1
+    ours = {tuple(t) for t in np.sort(to_clean[cloud.mesh.F], axis=1).tolist()}
+    clean = PointCloud(X, triangles=triangles, neighbours=neighbours)
+    assert ours == {tuple(t) for t in np.sort(clean.mesh.F, axis=1).tolist()}
+    assert cloud.notes[1:] == clean.notes  # the outliers' note, then the same repairs
+
+
+def test_the_repair_gives_back_the_fan_of_the_stranded_point_not_of_its_clean_number(monkeypatch):
+    # the fans are built on the points without the outliers (renumbered); a point the other fans forget gets its own
+    # fan back in the input's numbering (as in test_pointcloud's test without outliers)
+    from cvxgeodesic.mesh import pointcloud
+
+    Y, rows = _with_outliers(_sphere())
+    real = pointcloud.fan_triangles
+    lonely = 44  # among the points the fans are built on: input point 45 (outlier 3 comes before it)
+
+    def forgetful(P, k):
+        tri, owner = real(P, k)
+        keep = ~(tri == lonely).any(axis=1) | (owner == lonely)
+        return tri[keep], owner[keep]
+
+    monkeypatch.setattr(pointcloud, "fan_triangles", forgetful)
+    cloud = PointCloud(Y, triangles="repaired")
+    assert 45 in cloud.mesh.F and any("1 points would be cut off" in n for n in cloud.notes)
+    assert np.isfinite(cg.geodesic_distance(cloud, 0, method="dijkstra")[45])
+
+
 def test_kept_outliers_are_triangulated_and_pull_the_field():
     X = _sphere()
     Y, rows = _with_outliers(X)
