@@ -436,6 +436,11 @@ CLAIMS: list[Claim] = [
        "--noise 0 --sets union,repaired --repeats 1`", (POINTCLOUDS, "| kitten, every face | 18,894 |")),
     _r("pointclouds-uneven", "2026-12-06", "`python benchmarks/point_clouds.py --meshes fandisk max_planck --sets "
        "union,repaired --repeats 1`", (POINTCLOUDS, "| fandisk | 0 | 3.44 %, 1× |")),
+    _r("pointclouds-neighbours", "2026-12-06", "`python benchmarks/point_clouds.py --neighbours 20,30 --repeats 1` "
+       "with `--quick`; `--meshes fandisk max_planck`; `--quick --resample 1.0,0.25 --noise 0`",
+       (POINTCLOUDS, "on fandisk 0.49–0.80× its mean error")),
+    _r("pointclouds-outliers", "2026-12-06", "`python benchmarks/cloud_outliers.py --resample 1.0,0.25`; `--no-plant "
+       "--meshes …` for the 12 other meshes", (POINTCLOUDS, "1,392 of 1,440 found")),
     _r("adapted-fold-retry", "2026-12-06", "`python benchmarks/accuracy_per_second.py --order2-max 0 --meshes "
        "bimba.obj lucy_20k.obj buddha.obj dragon_20k.obj camelhead_open.off kitten.obj fandisk.obj`",
        (ADAPTED, "the mean error falls from 1.95 % to 0.334 % (order 1 on the mesh: 1.13 %)"),
