@@ -210,3 +210,30 @@ def test_a_click_on_an_outlier_in_the_viewer_says_why_and_keeps_the_field():
     assert v.pick(SimpleNamespace(is_hit=True, structure_name="points", structure_data={"index": int(rows[0])}))
     assert v.message.startswith(f"source point {rows[0]} of point cloud is an isolated outlier")
     np.testing.assert_array_equal(v.distance, before)
+
+
+def test_the_command_line_builds_the_cloud_with_its_options(tmp_path, capsys):
+    """``--outliers``, ``--triangles`` and ``--neighbours`` reach the cloud of a point file; a mesh file refuses them;
+    their values are the library's (the command line spells them to build its parser without NumPy)."""
+    from cvxgeodesic.cli import _options, main
+    from cvxgeodesic.mesh import pointcloud
+
+    assert _options.CLOUD_TRIANGLES == pointcloud.TRIANGLE_SETS
+    assert _options.CLOUD_OUTLIERS == pointcloud.OUTLIER_HANDLING
+    X, planted = _with_outliers(_sphere())
+    np.savetxt(tmp_path / "c.xyz", X)
+    out = tmp_path / "d.npy"
+    base = ["distance", str(tmp_path / "c.xyz"), "--source", "0", "--method", "qclp", "--quiet", "-o", str(out)]
+    assert main([*base, "--outliers", "error"]) == 2
+    assert f"input points {planted[0]}" in capsys.readouterr().err
+    assert main([*base, "--outliers", "keep", "--neighbours", "20", "--triangles", "repaired"]) == 0
+    kept = np.load(out)
+    assert np.isfinite(kept).all()
+    np.testing.assert_allclose(kept, cg.geodesic_distance(PointCloud(X, outliers="keep", neighbours=20,
+                                                                     triangles="repaired"), 0), rtol=1e-6, atol=1e-9)
+    assert main([*base, "--overwrite"]) == 0  # the default: left out
+    assert np.isinf(np.load(out)[planted]).all()
+    mesh = tmp_path / "m.obj"
+    mesh.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
+    assert main(["distance", str(mesh), "--source", "0", "--neighbours", "12", "-o", str(tmp_path / "m.npy")]) == 2
+    assert "--neighbours applies to point files; " in capsys.readouterr().err

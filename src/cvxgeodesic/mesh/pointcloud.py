@@ -59,6 +59,10 @@ class CloudMesh(TriMesh):
     domain = "cloud"
     cloud: PointCloud
 
+    def check_source_vertices(self, vertices: np.ndarray) -> None:
+        """The cloud's outliers and line points are no sources (:meth:`PointCloud.check_sources`)."""
+        self.cloud.check_sources(vertices)
+
 
 def fan_triangles(P: np.ndarray, neighbours: int) -> tuple[np.ndarray, np.ndarray]:
     """Every fan triangle of the cloud's local triangulation, and the point whose fan it is in.
@@ -351,7 +355,7 @@ class PointCloud:
             why = "an isolated outlier" if bad[0] in self.outliers else "a point whose neighbours lie on a line"
             raise SourceError(f"source point {int(bad[0])} of {self.name} is {why}, left out of the cloud's triangles "
                               "(its distance is infinite): choose another source, or build the cloud with "
-                              "PointCloud(..., outliers='keep')")
+                              "PointCloud(..., outliers='keep') (--outliers keep on the command line)")
 
     @property
     def n_points(self) -> int:
@@ -427,7 +431,7 @@ def _defect_notes(found: CloudDefects, keep: np.ndarray, name: str) -> list[str]
     if not found.points.size:
         return []
     return [f"{name}: {_describe_defects(found, keep)} were left out of the triangles: their distance is infinite "
-            "(PointCloud(..., outliers='keep') triangulates them)"]
+            "(PointCloud(..., outliers='keep'), --outliers keep on the command line, triangulates them)"]
 
 
 def _check_normals(N: ArrayLike, n: int, name: str) -> np.ndarray:
