@@ -414,9 +414,10 @@ CLAIMS: list[Claim] = [
     _r("endgame-resolve", "2026-12-06", "`python benchmarks/endgame_sweep.py --meshes max_planck.obj@subdiv1`",
        (BENCH, "a Clarabel re-solve cost 7–25× the time for a field equal within 1e-6")),
     _r("adapted-targets", "2026-12-06", "`python benchmarks/accuracy_per_second.py`",
-       (BENCH, "the scans of 50K–100K faces reached ≤ 0.3 % at ≤ 3× heat on horse only")),
+       (BENCH, "the scans of 50K–100K faces reached ≤ 0.3 % at ≤ 3× heat on horse only"),
+       (BENCH, "scans of 50K–100K faces reach ≤ 0.3 % at ≤ 3× heat on bunny (0.29 % at 2.5×) and horse")),
     _r("choice-adapted", "2026-12-06", "`python benchmarks/accuracy_per_second.py`",
-       (README, "| 0.91 / 0.33 / 1.19 % |"), (README, "0.24–0.37 % mean error at 2.9–4.1× the heat method's time")),
+       (README, "| 0.91 / 0.33 / 1.19 % |"), (README, "0.24–0.37 % mean error at 2.3–3.2× the heat method's time")),
     _r("rows-default", "2026-12-06", "`python benchmarks/row_default.py`",
        (PERF, "0.063 s (28× heat), 2.04 %"), (PERF, "cost 1.5–2.3× `qclp`'s")),
     _r("adapted-source-snap", "2026-12-06", "`python benchmarks/adapted_levers.py fandisk`",
@@ -435,6 +436,11 @@ CLAIMS: list[Claim] = [
        "--noise 0 --sets union,repaired --repeats 1`", (POINTCLOUDS, "| kitten, every face | 18,894 |")),
     _r("pointclouds-uneven", "2026-12-06", "`python benchmarks/point_clouds.py --meshes fandisk max_planck --sets "
        "union,repaired --repeats 1`", (POINTCLOUDS, "| fandisk | 0 | 3.44 %, 1× |")),
+    _r("pointclouds-neighbours", "2026-12-06", "`python benchmarks/point_clouds.py --neighbours 20,30 --repeats 1` "
+       "with `--quick`; `--meshes fandisk max_planck`; `--quick --resample 1.0,0.25 --noise 0`",
+       (POINTCLOUDS, "on fandisk 0.49–0.80× its mean error")),
+    _r("pointclouds-outliers", "2026-12-06", "`python benchmarks/cloud_outliers.py --resample 1.0,0.25`; `--no-plant "
+       "--meshes …` for the 12 other meshes", (POINTCLOUDS, "1,392 of 1,440 found")),
     _r("pointclouds-denoise-table", "2026-12-06", "`python benchmarks/point_clouds.py --meshes kitten bimba max_planck "
        "--sets union --denoise 1,2` (load 1.4 → 1.2)", (POINTCLOUDS, "| kitten | 0.3 % | 7.73 % | 0.80 % |"),
        (POINTCLOUDS, "70 % at order 1 and 77 % at order 2 raw, 86 % and 71 % denoised")),

@@ -220,7 +220,7 @@ def compare_neighbours(name: str, noise: float, P: np.ndarray, exact: np.ndarray
 
     def solve(k: int | None, order: int) -> tuple[np.ndarray, int]:
         if k is None:
-            mesh = cg.PointCloud(P).mesh
+            mesh = cg.PointCloud(P, outliers="keep").mesh  # the fans alone, as the rows of local_fans
         else:
             tri, owner = local_fans(P, k)
             mesh = CloudMesh(P, triangle_set(tri, owner, P, "union")[0])

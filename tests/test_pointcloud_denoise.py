@@ -96,3 +96,14 @@ def test_denoising_is_recorded_in_the_notes():
     res = cg.GeodesicSolver(cloud, "qclp").solve(0)
     assert any("denoised" in n for n in res.info.notes)
     assert not any("denoised" in n for n in PointCloud(_plane(8)).notes + PointCloud(_plane(8), denoise=0).notes)
+
+
+def test_outliers_stay_where_they_are_and_out_of_the_fits():
+    # a point half a radius off the sphere: found as an outlier, not moved, and no neighbour's jet fitted to it
+    P = np.vstack([NOISY, [[1.5, 0.0, 0.0]]])
+    cloud = PointCloud(P, denoise="jet")
+    assert 2000 in cloud.outliers
+    assert np.array_equal(cloud.P[2000], P[2000])
+    clean = PointCloud(NOISY, denoise="jet")
+    assert np.array_equal(np.setdiff1d(cloud.outliers, [2000]), clean.outliers)
+    np.testing.assert_allclose(cloud.P[:2000], clean.P, rtol=0.0, atol=1e-12)

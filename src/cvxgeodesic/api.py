@@ -667,6 +667,7 @@ def _matrix_rows(mesh: SimplexMesh, vertices: Any) -> tuple[list, np.ndarray]:
         return items, np.arange(len(items))  # one row per item
     uniq, inverse = np.unique(validate_sources(vertices, mesh.n_vertices, name="vertices", repeats=True),
                               return_inverse=True)
+    mesh.check_source_vertices(uniq)  # before any row (local rows never resolve their sources on the mesh)
     return uniq.tolist(), np.asarray(inverse).ravel()
 
 

@@ -584,7 +584,7 @@ def resolve_sources(mesh: SimplexMesh, sources: Any) -> SourceSet:
                 kinds.add("faces")
             elif is_integer(s) or (isinstance(s, float | np.floating) and float(s).is_integer()):
                 try:
-                    builder.vertices.append(int(validate_sources(s, n)[0]))
+                    builder.vertices.append(int(_startable(mesh, validate_sources(s, n))[0]))
                 except SourceError as exc:
                     raise SourceError(f"{label}: {exc}") from None
                 kinds.add("vertices")
@@ -596,11 +596,17 @@ def resolve_sources(mesh: SimplexMesh, sources: Any) -> SourceSet:
                                      else ")")))
         kind = kinds.pop() if len(kinds) == 1 else "mixed"
         return builder.build(kind, _describe(sources))
-    src = validate_sources(sources, n)
+    src = _startable(mesh, validate_sources(sources, n))
     return SourceSet(vertices=src, point_faces=np.zeros(0, np.int64), point_bary=np.zeros((0, corners)),
                      segment_faces=np.zeros(0, np.int64), segment_bary=np.zeros((0, 2, 3)), kind="vertices",
                      description=f"vertices {src.tolist()}" if src.size <= 8 else f"{src.size} vertices",
                      reference=mesh.reference)
+
+
+def _startable(mesh: SimplexMesh, vertices: np.ndarray) -> np.ndarray:
+    """``vertices``, once the mesh has refused those no solve can start from (a point cloud's outliers)."""
+    mesh.check_source_vertices(vertices)
+    return vertices
 
 
 def _describe(items) -> str:

@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ._atomic import check_replaceable, output_set
-from .errors import ParameterError
+from .errors import ParameterError, SourceError
 from .mesh.convert import MeshLike, as_mesh
 from .mesh.simplex import SimplexMesh
 from .mesh.tet_slice import plane_frame
@@ -176,7 +176,10 @@ class _Viewer:
         if not (getattr(result, "is_hit", False) and getattr(result, "structure_name", None) == self.name
                 and data.get("element_type", "vertex") == "vertex"):
             return False
-        self.solve([int(data["index"])])
+        try:
+            self.solve([int(data["index"])])
+        except SourceError as exc:  # a cloud's outlier (in no triangle): the field stays, the message says why
+            self.message = str(exc)
         return True
 
     def callback(self) -> None:

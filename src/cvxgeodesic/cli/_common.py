@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 import signal
 import sys
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ..errors import ParameterError
 
@@ -94,14 +94,20 @@ class Signals:
         return "cvxgeodesic: interrupted", EXIT_INTERRUPTED
 
 
-def load_input(path: str) -> SimplexMesh:
-    """The command's input: a point file's cloud (its triangle soup; ``mesh/formats/registry.is_point_file``), else
-    :func:`~cvxgeodesic.mesh.load.load_mesh`."""
+def load_input(path: str, cloud: dict[str, Any] | None = None) -> SimplexMesh:
+    """The command's input: a point file's cloud (its triangle soup; ``mesh/formats/registry.is_point_file``) built
+    with ``cloud``'s keywords (``_options.cloud_options``), else :func:`~cvxgeodesic.mesh.load.load_mesh`, which
+    takes none of them (a ParameterError names the first option given)."""
     from ..mesh.formats.registry import is_point_file
     from ..mesh.io import load_mesh
     from ..mesh.pointcloud_io import load_point_cloud
 
-    return load_point_cloud(path).mesh if is_point_file(path) else load_mesh(path)
+    cloud = cloud or {}
+    if is_point_file(path):
+        return load_point_cloud(path, **cloud).mesh
+    if cloud:
+        raise ParameterError(f"--{next(iter(cloud))} applies to point files; {path} is a mesh file")
+    return load_mesh(path)
 
 
 def check_numbers(args: argparse.Namespace) -> None:

@@ -48,6 +48,33 @@ def input_help() -> str:
     return f"{volume_help()}; or a point cloud: {point_formats_help()} (laspy: the io extra too)"
 
 
+#: The point-file options (``PointCloud``'s keywords) and their values, spelled here because the command line imports
+#: only the standard library to build its parser (``tests/test_cli.py`` holds them equal to
+#: :mod:`cvxgeodesic.mesh.pointcloud`'s).
+CLOUD_TRIANGLES = ("union", "consensus", "repaired")
+CLOUD_OUTLIERS = ("exclude", "keep", "error")
+CLOUD_OPTIONS = ("neighbours", "triangles", "outliers")
+
+
+def add_input_argument(p: argparse.ArgumentParser) -> None:
+    """The input (a surface, tetrahedra or a point file) and the options of a point file's cloud."""
+    p.add_argument("mesh", help=input_help())
+    g = p.add_argument_group("point files", "how a point file's triangles are built (docs/pointclouds.md); "
+                                            "refused for a mesh file")
+    g.add_argument("--neighbours", type=int, default=None, metavar="K",
+                   help="nearest neighbours of each point's local Delaunay fan (default 30)")
+    g.add_argument("--triangles", default=None, choices=CLOUD_TRIANGLES,
+                   help="which fan triangles to solve on (default union)")
+    g.add_argument("--outliers", default=None, choices=CLOUD_OUTLIERS,
+                   help="isolated outliers and points whose neighbours lie on a line: left out with a note "
+                        "(exclude, the default), kept in the triangles (keep), or refused (error)")
+
+
+def cloud_options(args: argparse.Namespace) -> dict[str, Any]:
+    """The point-file options given on the command line, as :class:`~cvxgeodesic.PointCloud` keywords."""
+    return {k: getattr(args, k) for k in CLOUD_OPTIONS if getattr(args, k, None) is not None}
+
+
 def output_help() -> str:
     """Help of ``distance -o``."""
     from ..mesh.formats.registry import field_formats_help

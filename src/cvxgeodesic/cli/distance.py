@@ -45,7 +45,10 @@ def add_parser(sub: Any) -> None:
 def add_common_options(p: argparse.ArgumentParser, *, method: bool = True, points: bool = False) -> None:
     """The mesh (a surface or tetrahedra; with ``points``, a point file too), the sources, ``--method``, ``--m``,
     ``--solver`` and ``--quiet``: what ``distance``, ``compare`` and ``view`` share."""
-    p.add_argument("mesh", help=opt.input_help() if points else opt.volume_help())
+    if points:
+        opt.add_input_argument(p)
+    else:
+        p.add_argument("mesh", help=opt.volume_help())
     opt.add_source_options(p)
     opt.add_solve_options(p, method=method)
     p.add_argument("--quiet", "-q", action="store_true", help="no progress output")
@@ -71,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
     from ..validation import check_output_path
 
     check_outputs(args, ("-o", args.output, DISTANCE_EXTENSIONS), ("--png", args.png, (".png",)))
-    mesh = load_input(args.mesh)
+    mesh = load_input(args.mesh, opt.cloud_options(args))
     # before the solve: the formats that hold a field on this mesh's cells (a volume's: fewer)
     check_output_path(args.output, tuple(e for e in DISTANCE_EXTENSIONS if mesh.dim in FORMATS[e].dims))
     sources, label = opt.cli_sources(args, mesh)

@@ -10,19 +10,20 @@ from typing import Any
 from ..errors import ParameterError, SourceError
 from ._common import add_overwrite_option, check_outputs, load_input
 from ._options import (
+    add_input_argument,
     add_precision_options,
     add_resolution_option,
     add_solve_options,
     add_source_options,
     check_tol,
-    input_help,
+    cloud_options,
 )
 
 
 def add_parser(sub: Any) -> None:
     """The ``matrix`` sub-command."""
     p = sub.add_parser("matrix", help="distance matrix: one row per source vertex (-s), in the given order")
-    p.add_argument("mesh", help=input_help())
+    add_input_argument(p)
     add_source_options(p, "source vertex of a row, in the file's numbering (repeat, or give a list: -s 0,5,9)",
                        points=False)
     from ..api import ALL_METHODS, DEFAULT_ROW_METHOD, LOCAL_ROW_TOL
@@ -80,7 +81,7 @@ def run(args: argparse.Namespace) -> int:
     from ..rows import checkpoint_rows, sparse_to_file_order
 
     local = _check(args)
-    mesh = load_input(args.mesh)  # a TriMesh or a TetMesh: both have the file's numbering
+    mesh = load_input(args.mesh, cloud_options(args))  # a TriMesh or a TetMesh: both have the file's numbering
     if not args.source:
         raise SourceError("give the source vertex of each row: -s I[,J...] (repeatable)")
     rows = [int(file_sources(mesh, [s])[0]) for s in args.source]  # one row per -s, in the given order

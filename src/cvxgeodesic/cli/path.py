@@ -22,7 +22,7 @@ PATH_EXTENSIONS = (".csv", ".npy", ".ply")
 def add_parser(sub: Any) -> None:
     """The ``path`` sub-command."""
     p = sub.add_parser("path", help="geodesic path from a target down the distance field to the nearest source")
-    p.add_argument("mesh", help=opt.input_help())
+    opt.add_input_argument(p)
     opt.add_source_options(p)
     p.add_argument("--to", type=int, default=None, metavar="I", help="target vertex")
     p.add_argument("--to-point", type=opt.xyz, default=None, metavar="X,Y,Z",
@@ -91,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
     from ..paths import distance_at, geodesic_path
 
     check_outputs(args, ("-o", args.output, PATH_EXTENSIONS), ("--png", args.png, (".png",)))
-    mesh = load_input(args.mesh)
+    mesh = load_input(args.mesh, opt.cloud_options(args))
     sources, label = opt.cli_sources(args, mesh)
     target = _target(args, mesh)
     cost = opt.cli_cost(args, mesh)

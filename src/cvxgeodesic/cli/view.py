@@ -7,7 +7,7 @@ import sys
 from typing import Any
 
 from ._common import add_overwrite_option, check_outputs, load_input
-from ._options import cli_sources, method_for
+from ._options import cli_sources, cloud_options, method_for
 from .distance import add_common_options, add_slice_option, slice_normal
 
 
@@ -28,7 +28,7 @@ def run(args: argparse.Namespace) -> int:
     from ..viewer import show
 
     check_outputs(args, ("--screenshot", args.screenshot, (".png",)))
-    mesh = load_input(args.mesh)  # a point file: its cloud's soup, drawn as the points
+    mesh = load_input(args.mesh, cloud_options(args))  # a point file: its cloud's soup, drawn as the points
     given = args.source or args.source_point or args.boundary
     sources = cli_sources(args, mesh)[0] if given else 0  # a field to start from; clicks choose the next ones
     # a solid is shown cut by a plane through the centre with this normal (show_volume); a surface ignores it

@@ -1,10 +1,11 @@
 """Point clouds: raw points (no faces) solved on the triangles of their local Delaunay fans.
 
 :class:`PointCloud` validates the points (finite, at least four, not all on a line; exact duplicates merged with a
-note) and builds a triangle soup from ``potpourri3d.PointCloudLocalTriangulation``: for every point, the fan of
-triangles around it in its tangent plane (its ``neighbours`` nearest points, Delaunay in the plane fitted to them).
-The soup is a :class:`CloudMesh`, a :class:`~cvxgeodesic.mesh.trimesh.TriMesh` that remembers its cloud, so every
-function that takes a mesh takes the cloud (``mesh/convert.as_mesh``) and returns one value per point. The convex
+note; isolated outliers and points of line-like neighbourhoods left out with a note, :mod:`.cloud_outliers`) and
+builds a triangle soup from ``potpourri3d.PointCloudLocalTriangulation``: for every point, the fan of triangles
+around it in its tangent plane (its ``neighbours`` nearest points, Delaunay in the plane fitted to them). The soup
+is a :class:`CloudMesh`, a :class:`~cvxgeodesic.mesh.trimesh.TriMesh` that remembers its cloud, so every function
+that takes a mesh takes the cloud (``mesh/convert.as_mesh``) and returns one value per point. The convex
 formulations accept the non-manifold soup as it is (one cone per triangle). docs/pointclouds.md has the choices and
 their measured errors.
 """
@@ -16,11 +17,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import MeshError, ParameterError
+from ..errors import MeshError, ParameterError, SourceError
 from ..validation import as_points
+from .cloud_outliers import CloudDefects, find_defects
 from .trimesh import TriMesh
 
-__all__ = ["TRIANGLE_SETS", "CloudMesh", "PointCloud", "fan_triangles", "local_fans", "triangle_set"]
+__all__ = ["OUTLIER_HANDLING", "TRIANGLE_SETS", "CloudMesh", "PointCloud", "fan_triangles", "local_fans",
+           "triangle_set"]
 
 #: The triangle sets a cloud can be solved on (docs/pointclouds.md has their measured errors):
 #: ``"union"`` every triangle of every fan; ``"consensus"`` the triangles that appear in at least two fans;
@@ -40,6 +43,12 @@ DENOISE_PASSES = 2
 MAX_DENOISE_PASSES = 10
 #: A cloud whose second principal extent is below this fraction of its first lies on a line.
 COLLINEAR_TOL = 1e-9
+#: What a cloud does with its isolated outliers and points of line-like neighbourhoods
+#: (:func:`~cvxgeodesic.mesh.cloud_outliers.find_defects`): ``"exclude"`` leaves them out of the fans (their neighbours'
+#: fans are built without them; their distance is ``inf``; a note names them); ``"keep"`` triangulates every point
+#: (no detection); ``"error"`` refuses the cloud naming them.
+OUTLIER_HANDLING = ("exclude", "keep", "error")
+DEFAULT_OUTLIERS = "exclude"
 
 
 class CloudMesh(TriMesh):
@@ -52,6 +61,10 @@ class CloudMesh(TriMesh):
 
     domain = "cloud"
     cloud: PointCloud
+
+    def check_source_vertices(self, vertices: np.ndarray) -> None:
+        """The cloud's outliers and line points are no sources (:meth:`PointCloud.check_sources`)."""
+        self.cloud.check_sources(vertices)
 
 
 def fan_triangles(P: np.ndarray, neighbours: int) -> tuple[np.ndarray, np.ndarray]:
@@ -227,6 +240,9 @@ class PointCloud:
         below the number of distinct points) builds the same fans with :func:`local_fans`.
     triangles : {"union", "consensus", "repaired"}, default "union"
         Which of the fans' triangles to solve on (:data:`TRIANGLE_SETS`; docs/pointclouds.md measures them).
+    outliers : {"exclude", "keep", "error"}, default "exclude"
+        Isolated outliers (points far off the surface their neighbours sample) and points whose neighbours lie on a
+        line (:data:`OUTLIER_HANDLING`): left out of the triangles with a note, kept, or refused.
     denoise : {None, "jet"} or int, default None
         Move the points onto the jets (degree-2 height fits to their 12 nearest neighbours) before the triangles are
         built (:func:`cvxgeodesic.mesh.denoise.jet_project`): ``"jet"`` two passes, an integer that many passes
@@ -243,15 +259,20 @@ class PointCloud:
     mesh : CloudMesh
         The triangle soup; its vertices are ``P``.
     notes : tuple of str
-        Every repair made (merged duplicates, stranded points given their fans back, points in no triangle).
+        Every repair made (merged duplicates, outliers left out, stranded points given their fans back, points in no
+        triangle).
+    outliers, line_points : (a,), (b,) int64 ndarray
+        The distinct points left out of the triangles as isolated outliers and as points of line-like
+        neighbourhoods (empty with ``outliers="keep"``); their distance is ``inf`` and they cannot be sources.
 
     Raises
     ------
     MeshError
-        A non-finite coordinate (the message names the point), fewer than 4 distinct points, all points on a line.
+        A non-finite coordinate (the message names the point), fewer than 4 distinct points, all points on a line;
+        with ``outliers="error"``, outliers or line-like neighbourhoods (the message names the first points).
     ParameterError
-        An unknown ``triangles``, ``neighbours`` not an integer, below 4 or not below the number of distinct
-        points, or ``denoise`` not None, "jet" or an integer from 0 to 10.
+        An unknown ``triangles`` or ``outliers``, ``neighbours`` not an integer, below 4 or not below the number of
+        distinct points (after the outliers are left out), or ``denoise`` not None, "jet" or an integer from 0 to 10.
 
     Examples
     --------
@@ -264,12 +285,14 @@ class PointCloud:
     """
 
     def __init__(self, P: ArrayLike, normals: ArrayLike | None = None, *, neighbours: int = DEFAULT_NEIGHBOURS,
-                 triangles: str = DEFAULT_TRIANGLES, name: str | None = None,
-                 denoise: str | int | None = None) -> None:
+                 triangles: str = DEFAULT_TRIANGLES, outliers: str = DEFAULT_OUTLIERS,
+                 name: str | None = None, denoise: str | int | None = None) -> None:
         self.name = name or "point cloud"
         passes = denoise_passes(denoise)
         if triangles not in TRIANGLE_SETS:
             raise ParameterError(f"triangles must be one of {', '.join(TRIANGLE_SETS)}, got {triangles!r}")
+        if outliers not in OUTLIER_HANDLING:
+            raise ParameterError(f"outliers must be one of {', '.join(OUTLIER_HANDLING)}, got {outliers!r}")
         if isinstance(neighbours, bool) or not isinstance(neighbours, int | np.integer):
             raise ParameterError(f"neighbours must be an integer, got {neighbours!r}")
         self.neighbours, self.triangles = int(neighbours), triangles
@@ -292,17 +315,25 @@ class PointCloud:
             file_index = keep
             pts = raw
         _check_shape(pts, self.name)
-        if not MIN_NEIGHBOURS <= self.neighbours < pts.shape[0]:
+        defects = _defects(pts, outliers, keep, self.name)
+        self.outliers, self.line_points = defects.outliers, defects.lines
+        notes += _defect_notes(defects, keep, self.name)
+        solid = np.setdiff1d(np.arange(pts.shape[0]), defects.points)  # the points the fans are built on
+        if solid.size < pts.shape[0]:
+            _check_shape(pts[solid], f"{self.name} without its {pts.shape[0] - solid.size} outliers")
+        if not MIN_NEIGHBOURS <= self.neighbours < solid.size:
             raise ParameterError(f"neighbours must be at least {MIN_NEIGHBOURS} and below the number of distinct "
-                                 f"points ({pts.shape[0]}), got {self.neighbours}")
+                                 f"points ({solid.size}{' without the outliers' if solid.size < pts.shape[0] else ''})"
+                                 f", got {self.neighbours}")
         self.file_index = file_index
         self.normals = None if normals is None else _check_normals(normals, raw.shape[0], self.name)[keep]
-        if passes:
-            pts = _denoised(pts, passes, self.name, notes)
-        tri, owner = fan_triangles(pts, self.neighbours)
-        F, added = triangle_set(tri, owner, pts, triangles)
+        if passes:  # the points the fans are built on, fitted without the outliers
+            pts = pts.copy()
+            pts[solid] = _denoised(pts[solid], passes, self.name, notes)
+        tri, owner = fan_triangles(pts[solid], self.neighbours)
+        F, added = triangle_set(solid[tri], solid[owner], pts, triangles)
         notes += added
-        alone = np.setdiff1d(np.arange(pts.shape[0]), F.ravel())
+        alone = np.setdiff1d(solid, F.ravel())
         if alone.size:
             notes.append(f"{self.name}: {alone.size} points are in no triangle (isolated; first: "
                          f"{', '.join(str(int(i)) for i in alone[:4])}): their distance is infinite")
@@ -317,6 +348,27 @@ class PointCloud:
     def P(self) -> np.ndarray:
         """(n, 3) float ndarray: the distinct points (the soup's vertices)."""
         return self.mesh.V
+
+    def check_sources(self, vertices: np.ndarray) -> None:
+        """Refuse source points that were left out of the triangles (their field would be ``inf`` everywhere).
+
+        Parameters
+        ----------
+        vertices : (s,) int ndarray
+            Source indices among the distinct points.
+
+        Raises
+        ------
+        SourceError
+            Naming the first such point and why it was left out.
+        """
+        v = np.asarray(vertices, dtype=np.int64).reshape(-1)
+        bad = v[np.isin(v, self.outliers) | np.isin(v, self.line_points)]
+        if bad.size:
+            why = "an isolated outlier" if bad[0] in self.outliers else "a point whose neighbours lie on a line"
+            raise SourceError(f"source point {int(bad[0])} of {self.name} is {why}, left out of the cloud's triangles "
+                              "(its distance is infinite): choose another source, or build the cloud with "
+                              "PointCloud(..., outliers='keep') (--outliers keep on the command line)")
 
     @property
     def n_points(self) -> int:
@@ -389,6 +441,35 @@ def _check_shape(P: np.ndarray, name: str) -> None:
     if s[1] <= COLLINEAR_TOL * s[0]:
         raise MeshError(f"{name}: all {P.shape[0]} points lie on one line (second principal extent "
                         f"{s[1] / max(s[0], 1e-300):.1e} of the first): there is no surface to measure on")
+
+
+def _defects(P: np.ndarray, outliers: str, keep: np.ndarray, name: str) -> CloudDefects:
+    """The points to leave out (none with ``outliers="keep"``); refused with ``outliers="error"``."""
+    none = np.zeros(0, dtype=np.int64)
+    if outliers == "keep":
+        return CloudDefects(none, none)
+    found = find_defects(P)
+    if outliers == "error" and found.points.size:
+        raise MeshError(f"{name}: {_describe_defects(found, keep)} (outliers='error'; outliers='exclude' leaves them "
+                        "out of the triangles, outliers='keep' triangulates them)")
+    return found
+
+
+def _describe_defects(found: CloudDefects, keep: np.ndarray) -> str:
+    """The defects in words, naming the first points in the input's numbering (``keep``: distinct → input)."""
+    parts = []
+    for idx, what in ((found.outliers, "isolated outliers (far off the surface their neighbours sample"),
+                      (found.lines, "points whose neighbours lie on a line (no surface around them")):
+        if idx.size:
+            parts.append(f"{idx.size} {what}; first: input points {', '.join(str(int(i)) for i in keep[idx[:4]])})")
+    return " and ".join(parts)
+
+
+def _defect_notes(found: CloudDefects, keep: np.ndarray, name: str) -> list[str]:
+    if not found.points.size:
+        return []
+    return [f"{name}: {_describe_defects(found, keep)} were left out of the triangles: their distance is infinite "
+            "(PointCloud(..., outliers='keep'), --outliers keep on the command line, triangulates them)"]
 
 
 def _check_normals(N: ArrayLike, n: int, name: str) -> np.ndarray:

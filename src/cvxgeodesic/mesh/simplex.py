@@ -111,6 +111,16 @@ class SimplexMesh:
         """tuple of str: one line per repair the reader made."""
         return self._reader_notes
 
+    def check_source_vertices(self, vertices: np.ndarray) -> None:
+        """Raise :class:`~cvxgeodesic.errors.SourceError` for source vertices that no solve can start from; every
+        vertex of a mesh can (a point cloud's mesh refuses the points its triangles leave out).
+
+        Parameters
+        ----------
+        vertices : (s,) int ndarray
+            Validated vertex indices.
+        """
+
     @property
     def cell_measures(self) -> np.ndarray:
         """(k,) float ndarray: the area of each triangle or the volume of each tetrahedron."""

@@ -1,0 +1,119 @@
+"""Isolated outliers and line-like neighbourhoods of a point cloud, found before its fans are built.
+
+A stray point off the surface (a LiDAR return in the air) is among the nearest neighbours of the surface points below
+it, so their local Delaunay fans (:mod:`cvxgeodesic.mesh.pointcloud`) reach up to it with long triangles: the field
+would take shortcuts through it. A point whose neighbours lie on a line (a wire sticking out of a scan) has no surface
+around it: its fan is empty or made of slivers. :func:`find_defects` finds both from statistics of every point's
+:data:`DEFECT_NEIGHBOURS` nearest neighbours, all scale-free:
+
+- ``spread``: the point's mean distance to its neighbours over the median of that mean among its neighbours (a
+  local outlier factor: about 1 on the surface whatever the density, the outlier's height over the local spacing for
+  a point off the surface);
+- ``height``: the point's distance to the plane fitted to its neighbours (without it), over the same local spacing;
+- ``isolation``: the point's mean distance over the cloud's median of it (statistical outlier removal as open3d does
+  it, which a group of outliers that are each other's neighbours cannot hide from);
+- ``flatness``: the second eigenvalue of the covariance of the neighbours over the first (0 on a line). Over fewer
+  neighbours (10) it flagged 340 points of beetle_open's vertices, which lie along scan lines a few spacings apart:
+  their 30 neighbours span several lines, a surface.
+
+The thresholds below were measured with benchmarks/cloud_outliers.py (docs/pointclouds.md has the numbers): no
+false positive on the vertices and random surface points of the shared scans, clean and with Gaussian noise of 0.1 %
+and 0.3 % of the diagonal, and the planted outliers listed there found.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["DEFECT_NEIGHBOURS", "HEIGHT_MADS", "ISOLATION_MAX", "LINE_TOL", "SPREAD_HEIGHT",
+           "SPREAD_ISOLATION", "SPREAD_MAX", "CloudDefects", "defect_statistics", "find_defects"]
+
+#: Neighbours the statistics are taken over (fewer on a cloud of at most this many points): potpourri3d's fan size,
+#: at which the thresholds below were measured.
+DEFECT_NEIGHBOURS = 30
+#: ``spread`` above this: an outlier (the 36 clouds of benchmarks/cloud_outliers.py: at most 1.85, max_planck's
+#: uneven vertices; a random point in every face of the decimated lucy_20k: 4.7).
+SPREAD_MAX = 6.0
+#: ``spread`` above the first and ``height`` above the second: an outlier (a point lifted a few spacings off the
+#: surface; its 30 neighbours still lie below it).
+SPREAD_HEIGHT = (1.8, 1.5)
+#: A noisy cloud's heights are larger everywhere: the height threshold is at least the cloud's median height plus
+#: this many median absolute deviations (on the shared scans at 0.3 % noise: up to 1.9).
+HEIGHT_MADS = 15.0
+#: ``spread`` and ``isolation`` both above this: an outlier (one far enough off for its neighbours' plane to tilt
+#: towards it).
+SPREAD_ISOLATION = 3.0
+#: ``isolation`` above this: an outlier (a group of outliers among each other's neighbours, whose ``spread`` is 1).
+ISOLATION_MAX = 10.0
+#: ``flatness`` below this: the point's neighbourhood is a line (its width under 5.5 % of its length), no surface.
+LINE_TOL = 3e-3
+
+
+@dataclass(frozen=True)
+class CloudDefects:
+    """What :func:`find_defects` found: point indices, ascending.
+
+    Attributes
+    ----------
+    outliers : (a,) int64 ndarray
+        Isolated points off the surface.
+    lines : (b,) int64 ndarray
+        Points whose neighbourhood lies on a line (not among ``outliers``).
+    """
+
+    outliers: np.ndarray
+    lines: np.ndarray
+
+    @property
+    def points(self) -> np.ndarray:
+        """(a + b,) int64 ndarray: both kinds, ascending."""
+        return np.union1d(self.outliers, self.lines)
+
+
+def defect_statistics(P: np.ndarray, k: int = DEFECT_NEIGHBOURS) -> np.ndarray:
+    """The four statistics of every point (the module's docstring defines them).
+
+    Parameters
+    ----------
+    P : (n, 3) float ndarray
+        Distinct points, ``n >= 2``.
+    k : int
+        Neighbours of each point (capped at ``n - 1``).
+
+    Returns
+    -------
+    (n, 4) float ndarray
+        Columns ``spread``, ``height``, ``isolation``, ``flatness``.
+    """
+    from scipy.spatial import cKDTree
+
+    k = min(k, P.shape[0] - 1)
+    dist, idx = cKDTree(P).query(P, k=k + 1)
+    dist, idx = dist[:, 1:], idx[:, 1:]  # column 0: the point itself (distinct points)
+    mean = dist.mean(axis=1)
+    local = np.median(mean[idx], axis=1)
+    X = P[idx]
+    centre = X.mean(axis=1)
+    Q = X - centre[:, None, :]
+    w, frame = np.linalg.eigh(Q.transpose(0, 2, 1) @ Q)  # ascending: frame[:, :, 0] is the plane's normal
+    height = np.abs(np.einsum("ni,ni->n", P - centre, frame[:, :, 0]))
+    flat = w[:, 1] / np.maximum(w[:, 2], np.finfo(float).tiny)
+    return np.c_[mean / local, height / local, mean / np.median(mean), flat]
+
+
+def find_defects(P: np.ndarray, k: int = DEFECT_NEIGHBOURS) -> CloudDefects:
+    """Isolated outliers and points of line-like neighbourhoods of the distinct points ``P`` (n, 3).
+
+    Returns
+    -------
+    CloudDefects
+    """
+    spread, height, isolation, flat = defect_statistics(P, k).T
+    med = np.median(height)
+    tall = height > max(SPREAD_HEIGHT[1], med + HEIGHT_MADS * np.median(np.abs(height - med)))
+    out = ((spread > SPREAD_MAX) | ((spread > SPREAD_HEIGHT[0]) & tall)
+           | ((spread > SPREAD_ISOLATION) & (isolation > SPREAD_ISOLATION)) | (isolation > ISOLATION_MAX))
+    line = (flat < LINE_TOL) & ~out
+    return CloudDefects(np.flatnonzero(out).astype(np.int64), np.flatnonzero(line).astype(np.int64))

@@ -1,0 +1,239 @@
+"""Outliers and line-like neighbourhoods of point clouds (mesh/cloud_outliers.py, PointCloud(outliers=...)): found,
+left out of the fans with a note, refused as sources; the rest of the field as on the clean cloud."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import cvxgeodesic as cg
+from cvxgeodesic.errors import MeshError, ParameterError, SourceError
+from cvxgeodesic.mesh.cloud_outliers import find_defects
+from cvxgeodesic.mesh.pointcloud import PointCloud
+
+#: 1,500 random points of the unit sphere: mean distance to the 6 nearest about 0.063
+SPACING = 0.063
+
+
+def _sphere(n: int = 1500, seed: int = 2) -> np.ndarray:
+    X = np.random.default_rng(seed).normal(size=(n, 3))
+    return X / np.linalg.norm(X, axis=1)[:, None]
+
+
+def _with_outliers(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``X`` with five points moved off the sphere by 5, 10, 20 and 50 spacings (out and in) inserted at scattered
+    positions; returns the cloud and the outliers' indices in it."""
+    heights = np.array([5.0, 10.0, -5.0, 20.0, 50.0]) * SPACING
+    rows = np.array([3, 400, 777, 1200, 1500])  # positions in the result
+    U = _sphere(5, seed=9)
+    Y = np.insert(X, rows - np.arange(5), U * (1.0 + heights)[:, None], axis=0)
+    return Y, rows
+
+
+def test_planted_outliers_are_left_out_with_a_note_and_an_infinite_distance():
+    X = _sphere()
+    Y, rows = _with_outliers(X)
+    cloud = PointCloud(Y)
+    assert cloud.outliers.tolist() == rows.tolist() and cloud.line_points.size == 0
+    assert not np.isin(cloud.mesh.F, rows).any()  # no fan reaches up to them
+    note = "5 isolated outliers (far off the surface their neighbours sample; first: input points 3, 400, 777, 1200)"
+    assert any(note in n and "left out of the triangles" in n for n in cloud.notes)
+    res = cg.GeodesicSolver(cloud, "qclp").solve(0)
+    assert any(note in n for n in res.info.notes)
+    assert np.isinf(res.distance[rows]).all()
+    # the other points: the clean cloud's triangles, so its field up to the solver's tolerance (the unknowns are in
+    # another order): measured 1.6e-6 (5e-7 of the largest distance), asserted at 1e-5 of it
+    ref = PointCloud(X)
+    to_clean = np.cumsum(~np.isin(np.arange(Y.shape[0]), rows)) - 1
+    assert {tuple(t) for t in np.sort(to_clean[cloud.mesh.F], axis=1).tolist()} == \
+        {tuple(t) for t in np.sort(ref.mesh.F, axis=1).tolist()}
+    clean = cg.geodesic_distance(ref, 0, method="qclp")
+    assert np.abs(np.delete(res.distance, rows) - clean).max() <= 1e-5 * clean.max()
+    assert np.isinf(cg.geodesic_distance(cloud, 0, method="heat")[rows]).all()
+
+
+@pytest.mark.parametrize("triangles", ["union", "consensus", "repaired"])
+@pytest.mark.parametrize("neighbours", [30, 20])
+def test_without_its_outliers_a_cloud_has_the_clean_cloud_s_triangles(triangles, neighbours):
+    # potpourri3d's fans at 30 neighbours, local_fans at 20; the consensus and its repair count the fans' agreement
+    X = _sphere()
+    Y, rows = _with_outliers(X)
+    cloud = PointCloud(Y, triangles=triangles, neighbours=neighbours)
+    to_clean = np.cumsum(~np.isin(np.arange(Y.shape[0]), rows)) - 1
+    ours = {tuple(t) for t in np.sort(to_clean[cloud.mesh.F], axis=1).tolist()}
+    clean = PointCloud(X, triangles=triangles, neighbours=neighbours)
+    assert ours == {tuple(t) for t in np.sort(clean.mesh.F, axis=1).tolist()}
+    assert cloud.notes[1:] == clean.notes  # the outliers' note, then the same repairs
+
+
+def test_the_repair_gives_back_the_fan_of_the_stranded_point_not_of_its_clean_number(monkeypatch):
+    # the fans are built on the points without the outliers (renumbered); a point the other fans forget gets its own
+    # fan back in the input's numbering (as in test_pointcloud's test without outliers)
+    from cvxgeodesic.mesh import pointcloud
+
+    Y, rows = _with_outliers(_sphere())
+    real = pointcloud.fan_triangles
+    lonely = 44  # among the points the fans are built on: input point 45 (outlier 3 comes before it)
+
+    def forgetful(P, k):
+        tri, owner = real(P, k)
+        keep = ~(tri == lonely).any(axis=1) | (owner == lonely)
+        return tri[keep], owner[keep]
+
+    monkeypatch.setattr(pointcloud, "fan_triangles", forgetful)
+    cloud = PointCloud(Y, triangles="repaired")
+    assert 45 in cloud.mesh.F and any("1 points would be cut off" in n for n in cloud.notes)
+    assert np.isfinite(cg.geodesic_distance(cloud, 0, method="dijkstra")[45])
+
+
+def test_kept_outliers_are_triangulated_and_pull_the_field():
+    X = _sphere()
+    Y, rows = _with_outliers(X)
+    kept = PointCloud(Y, outliers="keep")
+    assert kept.outliers.size == 0 and np.isin(rows, kept.mesh.F).all()
+    d = cg.geodesic_distance(kept, 0, method="qclp")
+    assert np.isfinite(d).all()  # the outliers are reached, through the long triangles of their neighbours' fans
+
+
+@pytest.mark.parametrize("noise", [0.001, 0.003, 0.01, 0.03])
+def test_no_point_of_a_noisy_sphere_is_an_outlier(noise):
+    # Gaussian noise of 0.1 %, 0.3 %, 1 % and 3 % of the diagonal (2√3): up to 1.6 spacings. Measured: at 3 % three
+    # points would be outliers by their height without the threshold's median absolute deviations (HEIGHT_MADS)
+    X = _sphere()
+    P = X + np.random.default_rng(4).normal(scale=noise * 2 * np.sqrt(3), size=X.shape)
+    found = find_defects(P)
+    assert found.outliers.size == 0 and found.lines.size == 0
+    assert PointCloud(P).notes == ()
+
+
+@pytest.mark.shared
+@pytest.mark.parametrize("name", ["max_planck.obj", "fandisk.obj", "kitten.obj"])
+def test_no_point_of_a_shared_scan_s_cloud_is_an_outlier(name):
+    # the clouds of benchmarks/cloud_outliers.py that come closest to the thresholds (max_planck's: the pair rule fires
+    # at 1.3 times their largest values; fandisk's sharp edges: height up to 1.05), clean and with 0.3 % noise
+    from conftest import shared_mesh_path
+
+    mesh = cg.load_mesh(shared_mesh_path(name), kind="surface")
+    rng = np.random.default_rng(0)
+    random = np.einsum("fi,fij->fj", rng.dirichlet([1.0, 1.0, 1.0], size=mesh.n_faces), mesh.V[mesh.F])
+    for X in (mesh.V, random):  # its vertices, and a random point in every face
+        for P in (X, X + rng.normal(scale=0.003 * mesh.bbox_diagonal, size=X.shape)):
+            found = find_defects(P)
+            assert found.outliers.size == 0 and found.lines.size == 0
+
+
+def test_outliers_error_names_them_in_the_input_numbering():
+    X = _sphere()
+    Y, rows = _with_outliers(X)
+    Y = np.insert(Y, 1, Y[0], axis=0)  # a duplicate before them: the input's numbering is one ahead of the cloud's
+    with pytest.raises(MeshError, match=r"^point cloud: 5 isolated outliers .*first: input points 4, 401, 778, 1201\) "
+                                        r"\(outliers='error'"):
+        PointCloud(Y, outliers="error")
+    cloud = PointCloud(Y)
+    assert cloud.outliers.tolist() == rows.tolist()  # the distinct points' numbering, that of the field
+    assert any("first: input points 4, 401, 778, 1201" in n for n in cloud.notes)
+
+
+def test_a_source_at_an_outlier_is_refused():
+    Y, rows = _with_outliers(_sphere())
+    cloud = PointCloud(Y)
+    with pytest.raises(SourceError, match=f"^source point {rows[1]} of point cloud is an isolated outlier, left out "
+                                          r"of the cloud's triangles .*outliers='keep'"):
+        cg.geodesic_distance(cloud, int(rows[1]), method="qclp")
+    with pytest.raises(SourceError, match=f"^source 1: source point {rows[0]} of point cloud is an isolated outlier"):
+        cg.GeodesicSolver(cloud, "qclp").solve([0, int(rows[0]), cg.surface_point(cloud, Y[10])])
+    with pytest.raises(SourceError, match="is an isolated outlier"):
+        cg.distance_matrix(cloud, [0, int(rows[2])], method="dijkstra")
+    with pytest.raises(SourceError, match=f"^source point {rows[2]} of point cloud is an isolated outlier"):
+        cg.distance_matrix(cloud, [0, int(rows[2])], method="qclp", max_distance=0.5)  # local rows: no resolution
+
+
+def _plane_and_wire() -> tuple[np.ndarray, float]:
+    """A 20 × 20 grid of the unit square and a line of 40 points, one spacing apart, standing on it."""
+    g = np.linspace(0.0, 1.0, 20)
+    x, y = np.meshgrid(g, g)
+    h = g[1]
+    wire = np.c_[np.full(40, 0.5 + h / 3), np.full(40, 0.5 + h / 3), h * np.arange(1, 41)]
+    return np.r_[np.c_[x.ravel(), y.ravel(), np.zeros(x.size)], wire], h
+
+
+def test_a_wire_standing_on_a_plane_is_left_out_as_a_line():
+    P, h = _plane_and_wire()
+    cloud = PointCloud(P)
+    # measured: the wire's points from 12 spacings up (their 30 nearest are on it) are line points; the 11 below keep
+    # fans that join them to the plane
+    assert cloud.line_points.tolist() == list(range(411, 440)) and cloud.outliers.size == 0
+    assert any("29 points whose neighbours lie on a line (no surface around them; first: input points 411, 412, 413, "
+               "414) were left out" in n for n in cloud.notes)
+    assert not np.isin(cloud.mesh.F, cloud.line_points).any()
+    assert cloud.mesh.face_areas.min() > 0.1 * h**2  # no sliver of the wire reaches the solver
+    d = cg.geodesic_distance(cloud, 0, method="qclp")
+    assert np.isfinite(d[:411]).all() and np.isinf(d[411:]).all()
+    with pytest.raises(SourceError, match="source point 420 of point cloud is a point whose neighbours lie on a line"):
+        cg.geodesic_distance(cloud, 420, method="qclp")
+    with pytest.raises(MeshError, match="29 points whose neighbours lie on a line"):
+        PointCloud(P, outliers="error")
+
+
+def test_points_along_scan_lines_are_no_line_points():
+    # a surface scanned along lines 5 spacings apart (as beetle_open's vertices are): each point's 10 nearest lie on
+    # its line, its 30 nearest span three lines; measured flatness at least 0.30 (LINE_TOL: 0.003)
+    t = np.arange(0.0, 60.0)
+    x, y = np.meshgrid(t, 5.0 * np.arange(12))
+    P = np.c_[x.ravel(), y.ravel(), 0.002 * (x * y).ravel()]
+    found = find_defects(P)
+    assert found.lines.size == 0 and found.outliers.size == 0
+
+
+def test_an_unknown_outlier_handling_and_too_few_points_left_are_refused():
+    with pytest.raises(ParameterError, match="outliers must be one of exclude, keep, error, got 'drop'"):
+        PointCloud(_sphere(50), outliers="drop")
+    P, _ = _plane_and_wire()
+    with pytest.raises(ParameterError, match=r"below the number of distinct points \(411 without the outliers\), "
+                                             "got 420"):
+        PointCloud(P, neighbours=420)
+
+
+def test_a_click_on_an_outlier_in_the_viewer_says_why_and_keeps_the_field():
+    from types import SimpleNamespace
+
+    from cvxgeodesic.viewer import _Viewer
+
+    class _Recorder:  # the polyscope calls of _Viewer.solve, recorded (no OpenGL)
+        def __getattr__(self, name):
+            return lambda *args, **kw: self
+
+    Y, rows = _with_outliers(_sphere())
+    cloud = PointCloud(Y)
+    v = _Viewer(_Recorder(), cloud.mesh, method="dijkstra", solver_kwargs={}, isolines=False)
+    before = v.solve([0])
+    assert v.pick(SimpleNamespace(is_hit=True, structure_name="points", structure_data={"index": int(rows[0])}))
+    assert v.message.startswith(f"source point {rows[0]} of point cloud is an isolated outlier")
+    np.testing.assert_array_equal(v.distance, before)
+
+
+def test_the_command_line_builds_the_cloud_with_its_options(tmp_path, capsys):
+    """``--outliers``, ``--triangles`` and ``--neighbours`` reach the cloud of a point file; a mesh file refuses them;
+    their values are the library's (the command line spells them to build its parser without NumPy)."""
+    from cvxgeodesic.cli import _options, main
+    from cvxgeodesic.mesh import pointcloud
+
+    assert _options.CLOUD_TRIANGLES == pointcloud.TRIANGLE_SETS
+    assert _options.CLOUD_OUTLIERS == pointcloud.OUTLIER_HANDLING
+    X, planted = _with_outliers(_sphere())
+    np.savetxt(tmp_path / "c.xyz", X)
+    out = tmp_path / "d.npy"
+    base = ["distance", str(tmp_path / "c.xyz"), "--source", "0", "--method", "qclp", "--quiet", "-o", str(out)]
+    assert main([*base, "--outliers", "error"]) == 2
+    assert f"input points {planted[0]}" in capsys.readouterr().err
+    assert main([*base, "--outliers", "keep", "--neighbours", "20", "--triangles", "repaired"]) == 0
+    kept = np.load(out)
+    assert np.isfinite(kept).all()
+    np.testing.assert_allclose(kept, cg.geodesic_distance(PointCloud(X, outliers="keep", neighbours=20,
+                                                                     triangles="repaired"), 0), rtol=1e-6, atol=1e-9)
+    assert main([*base, "--overwrite"]) == 0  # the default: left out
+    assert np.isinf(np.load(out)[planted]).all()
+    mesh = tmp_path / "m.obj"
+    mesh.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
+    assert main(["distance", str(mesh), "--source", "0", "--neighbours", "12", "-o", str(tmp_path / "m.npy")]) == 2
+    assert "--neighbours applies to point files; " in capsys.readouterr().err
