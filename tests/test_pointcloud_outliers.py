@@ -213,8 +213,9 @@ def test_a_click_on_an_outlier_in_the_viewer_says_why_and_keeps_the_field():
 
 
 def test_the_command_line_builds_the_cloud_with_its_options(tmp_path, capsys):
-    """``--outliers``, ``--triangles`` and ``--neighbours`` reach the cloud of a point file; a mesh file refuses them;
-    their values are the library's (the command line spells them to build its parser without NumPy)."""
+    """``--outliers``, ``--triangles``, ``--neighbours`` and ``--denoise`` reach the cloud of a point file; a mesh
+    file refuses them; their values are the library's (the command line spells them to build its parser without
+    NumPy)."""
     from cvxgeodesic.cli import _options, main
     from cvxgeodesic.mesh import pointcloud
 
@@ -233,6 +234,10 @@ def test_the_command_line_builds_the_cloud_with_its_options(tmp_path, capsys):
                                                                      triangles="repaired"), 0), rtol=1e-6, atol=1e-9)
     assert main([*base, "--overwrite"]) == 0  # the default: left out
     assert np.isinf(np.load(out)[planted]).all()
+    assert main([*base, "--overwrite", "--denoise", "1"]) == 0
+    np.testing.assert_allclose(np.load(out), cg.geodesic_distance(PointCloud(X, denoise=1), 0), rtol=1e-6, atol=1e-9)
+    assert main([*base, "--overwrite", "--denoise", "11"]) == 2
+    assert "denoise must be None, 'jet' or an integer from 0 to 10" in capsys.readouterr().err
     mesh = tmp_path / "m.obj"
     mesh.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
     assert main(["distance", str(mesh), "--source", "0", "--neighbours", "12", "-o", str(tmp_path / "m.npy")]) == 2

@@ -53,7 +53,7 @@ def input_help() -> str:
 #: :mod:`cvxgeodesic.mesh.pointcloud`'s).
 CLOUD_TRIANGLES = ("union", "consensus", "repaired")
 CLOUD_OUTLIERS = ("exclude", "keep", "error")
-CLOUD_OPTIONS = ("neighbours", "triangles", "outliers")
+CLOUD_OPTIONS = ("neighbours", "triangles", "outliers", "denoise")
 
 
 def add_input_argument(p: argparse.ArgumentParser) -> None:
@@ -68,6 +68,19 @@ def add_input_argument(p: argparse.ArgumentParser) -> None:
     g.add_argument("--outliers", default=None, choices=CLOUD_OUTLIERS,
                    help="isolated outliers and points whose neighbours lie on a line: left out with a note "
                         "(exclude, the default), kept in the triangles (keep), or refused (error)")
+    g.add_argument("--denoise", type=denoise_spec, default=None, metavar="jet|PASSES",
+                   help="move the points onto local degree-2 fits before the triangles are built: jet (two passes) "
+                        "or a number of passes; for noisy scans with --order 2 (docs/pointclouds.md)")
+
+
+def denoise_spec(text: str) -> str | int:
+    """``--denoise``: ``jet`` or a number of passes (its range is ``PointCloud``'s check)."""
+    if text == "jet":
+        return text
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected 'jet' or a number of passes, got {text!r}") from None
 
 
 def cloud_options(args: argparse.Namespace) -> dict[str, Any]:
