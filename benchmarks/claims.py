@@ -451,8 +451,9 @@ CLAIMS: list[Claim] = [
        "union --denoise 2 --repeats 1` (load 0.3 → 0.6)", (POINTCLOUDS, "costs its clean order 2 7 % (3.34 → 3.58 %)")),
     _r("pointclouds-denoise-summary", "2026-12-06", "the two runs of pointclouds-denoise-table and -sweep; the closest-"
        "point geometry, the jet's median move and 24 neighbours: " + NO_SCRIPT,
-       (POINTCLOUDS, "On the clean clouds it costs order 2 1.2–1.9× its error"),
-       (POINTCLOUDS, "0.24 of the spacing on the clean"), (POINTCLOUDS, "cost the clean clouds' order 2 2.1–2.4×")),
+       (POINTCLOUDS, "On the clean clouds it makes order 2's error 1.2–1.9× larger"),
+       (POINTCLOUDS, "0.24 of the spacing on the clean"),
+       (POINTCLOUDS, "made the clean clouds' order-2 error 2.1–2.4× larger")),
     _r("adapted-fold-retry", "2026-12-06", "`python benchmarks/accuracy_per_second.py --order2-max 0 --meshes "
        "bimba.obj lucy_20k.obj buddha.obj dragon_20k.obj camelhead_open.off kitten.obj fandisk.obj`",
        (ADAPTED, "the mean error falls from 1.95 % to 0.334 % (order 1 on the mesh: 1.13 %)"),
