@@ -286,7 +286,7 @@ class PointCloud:
 
     def __init__(self, P: ArrayLike, normals: ArrayLike | None = None, *, neighbours: int = DEFAULT_NEIGHBOURS,
                  triangles: str = DEFAULT_TRIANGLES, outliers: str = DEFAULT_OUTLIERS,
-                 name: str | None = None, denoise: str | int | None = None) -> None:
+                 denoise: str | int | None = None, name: str | None = None) -> None:
         self.name = name or "point cloud"
         passes = denoise_passes(denoise)
         if triangles not in TRIANGLE_SETS:

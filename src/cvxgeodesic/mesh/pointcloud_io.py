@@ -33,7 +33,7 @@ def load_point_cloud(path: str | os.PathLike, **kwargs: Any) -> PointCloud:
         vertex properties are normals), ``.las`` / ``.laz`` with laspy (the ``io`` extra; extra dimensions
         ``nx, ny, nz`` are normals).
     **kwargs
-        Passed to :class:`PointCloud` (``triangles=``, ``neighbours=``, ``outliers=``).
+        Passed to :class:`PointCloud` (``neighbours=``, ``triangles=``, ``outliers=``, ``denoise=``).
 
     Returns
     -------
