@@ -19,6 +19,10 @@ each is a fresh ``PointCloud`` + solver + solve; pc-heat's includes its own set-
 jet projection (``PointCloud(P, denoise=passes)``, :mod:`cvxgeodesic.mesh.denoise`; its time included), and, on vertex
 clouds, a ``floor`` row: the exact field read at each noisy point's closest point of the mesh (the error that no
 method answering at the noisy positions avoids: the noise's tangential part moves the point along the field).
+``--normals`` adds rows of ``qclp`` at both orders on the first set of the cloud given normals (the mesh's vertex
+normals; on resampled clouds each point's face normal): ``PointCloud(P, normals)``'s fans leave out the neighbours
+whose normal turns by more than 60 degrees (:func:`cvxgeodesic.mesh.pointcloud.normal_fans`).
+
 ``--neighbours 12,20,30`` measures the neighbour count instead: ``qclp`` at both orders on the union of the fans of
 :func:`~cvxgeodesic.mesh.pointcloud.local_fans` (potpourri3d's construction, whose k is fixed at 30; at k = 30 they
 build the same triangles on evenly sampled clouds), after a row on potpourri3d's own fans.
@@ -97,6 +101,8 @@ def main() -> None:
                     "the fans of pointcloud.local_fans at these neighbour counts (e.g. 12,20,30,45)")
     ap.add_argument("--denoise", default="", help="also qclp on the first set of the cloud denoised by these "
                     "passes of jet projection (e.g. 1,2), and the floor row")
+    ap.add_argument("--normals", action="store_true", help="also qclp at both orders on the first set of the cloud "
+                    "with normals (the mesh's vertex normals; on resampled clouds each point's face normal)")
     ap.add_argument("--resample", default="", help="instead of the vertices: random surface points, these fractions "
                     "of the face count (e.g. 0.5,0.25: two densities); the reference is exact MMP on the mesh with "
                     "the points inserted as vertices")
@@ -110,38 +116,44 @@ def main() -> None:
     rng = np.random.default_rng(0)
     for path in paths:
         mesh = cg.load_mesh(path, kind="surface")
-        for name, V0, exact, src in clouds_of(mesh, path.stem, args, rng):
+        for name, V0, exact, src, normals in clouds_of(mesh, path.stem, args, rng):
             for noise in (float(x) for x in args.noise.split(",")):
                 P = V0 + rng.normal(scale=noise * mesh.bbox_diagonal, size=V0.shape) if noise else V0
                 if args.neighbours:
                     compare_neighbours(name, noise, P, exact, src, args)
                 else:
                     compare(name, noise, P, exact, src, sets, args)
+                    if args.normals:
+                        compare_normals(name, noise, P, normals, exact, src, sets[0], args)
                     if args.denoise:
                         compare_denoised(name, noise, P, exact, src, sets[0], args,
                                          None if args.resample else mesh)
 
 
-def clouds_of(mesh, stem: str, args, rng) -> list[tuple[str, np.ndarray, np.ndarray, int]]:
-    """``(label, points, exact field at them, source index)``: the vertices, or with ``--resample`` the clouds of
-    random surface points (:func:`resample`)."""
+def clouds_of(mesh, stem: str, args, rng) -> list[tuple[str, np.ndarray, np.ndarray, int, np.ndarray]]:
+    """``(label, points, exact field at them, source index, normals)``: the vertices (libigl's vertex normals), or with
+    ``--resample`` the clouds of random surface points (:func:`resample`; each point's face normal)."""
+    import igl
+
     if not args.resample:
         src = int(args.source * mesh.n_vertices)
         return [(f"{stem} ({mesh.n_vertices // 1000}K)", mesh.V, cg.geodesic_distance(mesh, src, method="exact"),
-                 src)]
+                 src, igl.per_vertex_normals(mesh.V, mesh.F.astype(np.int64)))]
     out = []
+    normals = mesh.face_normals_unnormalized / np.linalg.norm(mesh.face_normals_unnormalized, axis=1)[:, None]
     for fraction in (float(x) for x in args.resample.split(",")):
-        X, split, idx = resample(mesh, fraction, rng)
+        X, split, idx, faces = resample(mesh, fraction, rng)
         src = int(args.source * X.shape[0])
         exact = cg.geodesic_distance(split, int(idx[src]), method="exact")[idx]
-        out.append((f"{stem} resampled ({X.shape[0] // 1000}K)", X, exact, src))
+        out.append((f"{stem} resampled ({X.shape[0] // 1000}K)", X, exact, src, normals[faces]))
     return out
 
 
-def resample(mesh, fraction: float, rng) -> tuple[np.ndarray, cg.TriMesh, np.ndarray]:
+def resample(mesh, fraction: float, rng) -> tuple[np.ndarray, cg.TriMesh, np.ndarray, np.ndarray]:
     """Random surface points: ``fraction`` of the faces drawn without replacement with probability proportional to
     their area, one uniform point in each. Returns the points, the mesh with each point inserted as a vertex (its face
-    split in three: the same surface, so exact MMP on it gives the exact field at the points) and their indices."""
+    split in three: the same surface, so exact MMP on it gives the exact field at the points), their indices there
+    and the faces they lie in."""
     V, F = mesh.V, mesh.F
     area = mesh.face_areas
     k = int(fraction * mesh.n_faces)
@@ -152,7 +164,7 @@ def resample(mesh, fraction: float, rng) -> tuple[np.ndarray, cg.TriMesh, np.nda
     keep = np.ones(mesh.n_faces, dtype=bool)
     keep[faces] = False
     split = cg.TriMesh(np.vstack([V, X]), np.vstack([F[keep], np.c_[a, b, idx], np.c_[b, c, idx], np.c_[c, a, idx]]))
-    return X, split, idx
+    return X, split, idx, faces
 
 
 def compare(name: str, noise: float, P: np.ndarray, exact: np.ndarray, src: int, sets: list[str], args) -> None:
@@ -176,6 +188,22 @@ def compare(name: str, noise: float, P: np.ndarray, exact: np.ndarray, src: int,
             d, t = timed(solve, args.repeats)
             label = f"{method} order {order}{f' m={m:g}' if m else ''}, {kind}"
             row(name, noise, label, d, exact, src, t, t_heat)
+
+
+def compare_normals(name: str, noise: float, P: np.ndarray, normals: np.ndarray, exact: np.ndarray, src: int,
+                    kind: str, args) -> None:
+    """Rows of ``qclp`` at both orders on the cloud given ``normals`` (``PointCloud(P, normals)``: fans that leave out
+    neighbours whose normal turns by more than 60 degrees, :func:`~cvxgeodesic.mesh.pointcloud.normal_fans`)."""
+    def pc_heat():
+        import potpourri3d as pp3d
+
+        return pp3d.PointCloudHeatSolver(P).compute_distance(src)
+    _, t_heat = timed(pc_heat, args.repeats)
+    for order in (1,) if args.no_order2 else (1, 2):
+        def solve(order=order):
+            return cg.GeodesicSolver(cg.PointCloud(P, normals, triangles=kind), "qclp", order=order).solve(src).distance
+        d, t = timed(solve, args.repeats)
+        row(name, noise, f"qclp order {order}, {kind}, with normals", d, exact, src, t, t_heat)
 
 
 def compare_denoised(name: str, noise: float, P: np.ndarray, exact: np.ndarray, src: int, kind: str, args,

@@ -155,7 +155,7 @@ def test_consensus_leaves_no_point_unreachable_once_repaired(monkeypatch):
     lonely = 44
     mine = (tri == lonely).any(axis=1)
     keep = ~mine | (owner == lonely)  # the other fans forget point 44
-    monkeypatch.setattr(pointcloud, "fan_triangles", lambda P, k: (tri[keep], owner[keep]))
+    monkeypatch.setattr(pointcloud, "fan_triangles", lambda P, k, normals=None: (tri[keep], owner[keep]))
     consensus = PointCloud(P, triangles="consensus")
     repaired = PointCloud(P, triangles="repaired")
     assert lonely not in consensus.mesh.F
@@ -171,7 +171,7 @@ def test_fans_that_share_no_triangle_are_repaired_into_the_union(monkeypatch):
     P = _plane(8)
     tri, owner = pointcloud.fan_triangles(P, 30)
     _, first = np.unique(tri, axis=0, return_index=True)
-    monkeypatch.setattr(pointcloud, "fan_triangles", lambda P, k: (tri[first], owner[first]))
+    monkeypatch.setattr(pointcloud, "fan_triangles", lambda P, k, normals=None: (tri[first], owner[first]))
     with pytest.raises(MeshError, match="made no triangle"):
         PointCloud(P, triangles="consensus")
     repaired = PointCloud(P, triangles="repaired")  # every point but one (the consensus' "largest piece") stranded

@@ -75,8 +75,8 @@ def test_the_repair_gives_back_the_fan_of_the_stranded_point_not_of_its_clean_nu
     real = pointcloud.fan_triangles
     lonely = 44  # among the points the fans are built on: input point 45 (outlier 3 comes before it)
 
-    def forgetful(P, k):
-        tri, owner = real(P, k)
+    def forgetful(P, k, normals=None):
+        tri, owner = real(P, k, normals)
         keep = ~(tri == lonely).any(axis=1) | (owner == lonely)
         return tri[keep], owner[keep]
 

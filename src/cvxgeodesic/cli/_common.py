@@ -106,7 +106,9 @@ def load_input(path: str, cloud: dict[str, Any] | None = None) -> SimplexMesh:
     if is_point_file(path):
         return load_point_cloud(path, **cloud).mesh
     if cloud:
-        raise ParameterError(f"--{next(iter(cloud))} applies to point files; {path} is a mesh file")
+        from ._options import CLOUD_OPTIONS
+
+        raise ParameterError(f"{CLOUD_OPTIONS[next(iter(cloud))]} applies to point files; {path} is a mesh file")
     return load_mesh(path)
 
 

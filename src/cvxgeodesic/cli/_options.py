@@ -53,7 +53,9 @@ def input_help() -> str:
 #: :mod:`cvxgeodesic.mesh.pointcloud`'s).
 CLOUD_TRIANGLES = ("union", "consensus", "repaired")
 CLOUD_OUTLIERS = ("exclude", "keep", "error")
-CLOUD_OPTIONS = ("neighbours", "triangles", "outliers", "denoise")
+#: ``PointCloud``'s keyword of each point-file option, and the option.
+CLOUD_OPTIONS = {"neighbours": "--neighbours", "triangles": "--triangles", "outliers": "--outliers",
+                 "denoise": "--denoise", "use_normals": "--ignore-normals"}
 
 
 def add_input_argument(p: argparse.ArgumentParser) -> None:
@@ -68,6 +70,9 @@ def add_input_argument(p: argparse.ArgumentParser) -> None:
     g.add_argument("--outliers", default=None, choices=CLOUD_OUTLIERS,
                    help="isolated outliers and points whose neighbours lie on a line: left out with a note "
                         "(exclude, the default), kept in the triangles (keep), or refused (error)")
+    g.add_argument("--ignore-normals", dest="use_normals", action="store_const", const=False, default=None,
+                   help="build the fans without the file's normals (by default oriented normals keep the fans from "
+                        "crossing thin walls and sharp creases)")
     g.add_argument("--denoise", type=denoise_spec, default=None, metavar="jet|PASSES",
                    help="move the points onto local degree-2 fits before the triangles are built: jet (two passes) "
                         "or a number of passes; for noisy scans with --order 2 (docs/pointclouds.md)")

@@ -22,8 +22,8 @@ from ..validation import as_points
 from .cloud_outliers import CloudDefects, find_defects
 from .trimesh import TriMesh
 
-__all__ = ["OUTLIER_HANDLING", "TRIANGLE_SETS", "CloudMesh", "PointCloud", "fan_triangles", "local_fans",
-           "triangle_set"]
+__all__ = ["NORMAL_FAN_ANGLE", "OUTLIER_HANDLING", "TRIANGLE_SETS", "CloudMesh", "PointCloud", "fan_triangles",
+           "local_fans", "normal_fans", "triangle_set"]
 
 #: The triangle sets a cloud can be solved on (docs/pointclouds.md has their measured errors):
 #: ``"union"`` every triangle of every fan; ``"consensus"`` the triangles that appear in at least two fans;
@@ -41,6 +41,20 @@ DEFAULT_TRIANGLES = "union"
 #: Passes of jet projection of ``denoise="jet"`` (docs/pointclouds.md, "Denoised clouds"), and the most taken.
 DENOISE_PASSES = 2
 MAX_DENOISE_PASSES = 10
+#: With oriented normals, a point's fan leaves out the neighbours whose normal turns from its own by more than this
+#: many degrees: the other side of a thin wall, the other face of a sharp crease (docs/pointclouds.md, "Normals":
+#: fandisk's order-2 field 3.34 -> 0.052 % with the mesh's vertex normals; 45 degrees cut points off, 75 the same
+#: as 60).
+NORMAL_FAN_ANGLE = 60.0
+#: Before the test, each normal is averaged with those of its nearest neighbours, this many: a sampled crease whose
+#: two faces carry their own normals is bridged by the points next to it (fandisk's points sampled on its faces, with
+#: the faces' normals: 9,817 of 12,946 points cut off unaveraged, none with 6, order 2 2.23 -> 0.84 %).
+NORMAL_SMOOTHING_NEIGHBOURS = 6
+#: Normals are taken as unoriented (and not used for the fans, with a note) where more than this fraction of the
+#: pairs of a point and one of its :data:`NORMAL_SMOOTHING_NEIGHBOURS` nearest neighbours point apart (a negative dot
+#: product): about half with random signs, almost none for oriented normals (so few neighbours reach across a wall
+#: only where it is thinner than about one spacing).
+UNORIENTED_FRACTION = 0.1
 #: A cloud whose second principal extent is below this fraction of its first lies on a line.
 COLLINEAR_TOL = 1e-9
 #: What a cloud does with its isolated outliers and points of line-like neighbourhoods
@@ -67,17 +81,21 @@ class CloudMesh(TriMesh):
         self.cloud.check_sources(vertices)
 
 
-def fan_triangles(P: np.ndarray, neighbours: int) -> tuple[np.ndarray, np.ndarray]:
+def fan_triangles(P: np.ndarray, neighbours: int,
+                  normals: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Every fan triangle of the cloud's local triangulation, and the point whose fan it is in.
 
     At the default 30 neighbours, ``potpourri3d.PointCloudLocalTriangulation`` (geometry-central); at another count,
-    which potpourri3d 1.4 does not take, :func:`local_fans`, the same construction in numpy.
+    which potpourri3d 1.4 does not take, :func:`local_fans`, the same construction in numpy; with oriented normals,
+    :func:`normal_fans`.
 
     Parameters
     ----------
     P : (n, 3) float ndarray
     neighbours : int
         Points in each local neighbourhood, below ``n``.
+    normals : (n, 3) float ndarray, optional
+        Unit normals, oriented consistently.
 
     Returns
     -------
@@ -88,6 +106,8 @@ def fan_triangles(P: np.ndarray, neighbours: int) -> tuple[np.ndarray, np.ndarra
     """
     import potpourri3d as pp3d
 
+    if normals is not None:
+        return normal_fans(P, normals, neighbours)
     if neighbours != DEFAULT_NEIGHBOURS:  # geometry-central's k; potpourri3d 1.4 does not pass another one
         return local_fans(P, neighbours)
     fans = np.asarray(pp3d.PointCloudLocalTriangulation(np.ascontiguousarray(P)).get_local_triangulation(),
@@ -124,15 +144,62 @@ def local_fans(P: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
     from scipy.spatial import cKDTree
 
     idx = cKDTree(P).query(P, k=k + 1)[1]  # column 0: the point itself
-    uv = _tangent_coordinates(P, idx)
+    return _fans(_tangent_coordinates(P, idx), idx)
+
+
+def normal_fans(P: np.ndarray, N: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`local_fans` in the tangent planes of oriented normals, without the neighbours whose normal turns by more
+    than :data:`NORMAL_FAN_ANGLE` from the point's (the other side of a thin wall or of a sharp crease).
+
+    A point whose fan is then empty gets its fan of :func:`local_fans` back.
+
+    Parameters
+    ----------
+    P : (n, 3) float ndarray
+    N : (n, 3) float ndarray
+        Unit normals, oriented consistently.
+    k : int
+        Neighbours of each point, ``0 < k < n``.
+
+    Returns
+    -------
+    tri, owner
+        As :func:`local_fans`.
+    """
+    from scipy.spatial import cKDTree
+
+    idx = cKDTree(P).query(P, k=k + 1)[1]
+    helper = np.where(np.abs(N[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])  # not along the normal
+    e1 = np.cross(N, helper)
+    e1 /= np.linalg.norm(e1, axis=1)[:, None]
+    frame = np.stack([e1, np.cross(N, e1)], axis=2)  # (n, 3, 2)
+    uv = np.einsum("nki,nij->nkj", P[idx] - P[:, None, :], frame)
+    turned = np.einsum("nki,ni->nk", N[idx], N) < np.cos(np.radians(NORMAL_FAN_ANGLE))
+    tri, owner = _fans(uv, idx, turned)
+    empty = np.setdiff1d(np.arange(P.shape[0]), owner)
+    if empty.size:
+        tri0, owner0 = local_fans(P, k)
+        back = np.isin(owner0, empty)
+        tri, owner = np.concatenate([tri, tri0[back]]), np.concatenate([owner, owner0[back]])
+    return tri, owner
+
+
+def _fans(uv: np.ndarray, idx: np.ndarray, left_out: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The fans of the points whose neighbours ``idx`` (n, k + 1) lie at ``uv`` (n, k + 1, 2) in their tangent planes;
+    ``left_out`` (n, k + 1) bool: neighbours in no triangle of that fan."""
     r2 = np.einsum("nkj,nkj->nk", uv, uv)
     r2[:, 0] = 1.0
     W = uv / r2[..., None]
     W[:, 0] = 0.0  # the point itself, a corner of the hull when it lies on the cloud's border
+    if left_out is not None:
+        W[left_out] = 0.0  # on the point itself: never a corner but on the border, where the test below drops it
     hull = _hull_march(W)
     a, b = hull[:, :-1], hull[:, 1:]
     owner, t = np.nonzero((a > 0) & (b > 0) & (a != b))  # hull edges that do not touch the point
     A, B = a[owner, t], b[owner, t]
+    if left_out is not None:
+        kept = ~left_out[owner, A] & ~left_out[owner, B]
+        owner, A, B = owner[kept], A[kept], B[kept]
     ua, ub = uv[owner, A], uv[owner, B]
     flat = np.abs(ua[:, 0] * ub[:, 1] - ua[:, 1] * ub[:, 0]) <= 1e-12 * np.sqrt(r2[owner, A] * r2[owner, B])
     tri = np.stack([owner, idx[owner, A], idx[owner, B]], axis=1)[~flat]
@@ -234,7 +301,11 @@ class PointCloud:
     P : (n, 3) array_like of float
         The points. Finite; at least 4 distinct ones, not all on one line.
     normals : (n, 3) array_like of float, optional
-        Normals as read from a file; kept with the points (the fans fit their own tangent planes).
+        Normals as read from a file, oriented consistently (outward, say). Unless ``use_normals=False``, each point's
+        fan is built in the plane of its normal (averaged with its 6 nearest neighbours') and leaves out the
+        neighbours whose normal turns by more than :data:`NORMAL_FAN_ANGLE` degrees: no triangle across a thin wall
+        or a sharp crease (:func:`normal_fans`; docs/pointclouds.md, "Normals"). Normals that look unoriented are
+        not used, with a note.
     neighbours : int, default 30
         Points in each local neighbourhood: at 30, potpourri3d's local triangulation; another count (4 or more,
         below the number of distinct points) builds the same fans with :func:`local_fans`.
@@ -243,6 +314,8 @@ class PointCloud:
     outliers : {"exclude", "keep", "error"}, default "exclude"
         Isolated outliers (points far off the surface their neighbours sample) and points whose neighbours lie on a
         line (:data:`OUTLIER_HANDLING`): left out of the triangles with a note, kept, or refused.
+    use_normals : bool, default True
+        Whether given ``normals`` shape the fans (above); ``False`` builds them as without normals.
     denoise : {None, "jet"} or int, default None
         Move the points onto the jets (degree-2 height fits to their 12 nearest neighbours) before the triangles are
         built (:func:`cvxgeodesic.mesh.denoise.jet_project`): ``"jet"`` two passes, an integer that many passes
@@ -286,7 +359,7 @@ class PointCloud:
 
     def __init__(self, P: ArrayLike, normals: ArrayLike | None = None, *, neighbours: int = DEFAULT_NEIGHBOURS,
                  triangles: str = DEFAULT_TRIANGLES, outliers: str = DEFAULT_OUTLIERS,
-                 denoise: str | int | None = None, name: str | None = None) -> None:
+                 use_normals: bool = True, denoise: str | int | None = None, name: str | None = None) -> None:
         self.name = name or "point cloud"
         passes = denoise_passes(denoise)
         if triangles not in TRIANGLE_SETS:
@@ -330,7 +403,10 @@ class PointCloud:
         if passes:  # the points the fans are built on, fitted without the outliers
             pts = pts.copy()
             pts[solid] = _denoised(pts[solid], passes, self.name, notes)
-        tri, owner = fan_triangles(pts[solid], self.neighbours)
+        if not isinstance(use_normals, bool | np.bool_):
+            raise ParameterError(f"use_normals must be True or False, got {use_normals!r}")
+        oriented = _oriented_normals(self.normals if use_normals else None, pts, solid, self.name, notes)
+        tri, owner = fan_triangles(pts[solid], self.neighbours, oriented)
         F, added = triangle_set(solid[tri], solid[owner], pts, triangles)
         notes += added
         alone = np.setdiff1d(solid, F.ravel())
@@ -470,6 +546,33 @@ def _defect_notes(found: CloudDefects, keep: np.ndarray, name: str) -> list[str]
         return []
     return [f"{name}: {_describe_defects(found, keep)} were left out of the triangles: their distance is infinite "
             "(PointCloud(..., outliers='keep'), --outliers keep on the command line, triangulates them)"]
+
+
+def _oriented_normals(normals: np.ndarray | None, P: np.ndarray, solid: np.ndarray, name: str,
+                      notes: list[str]) -> np.ndarray | None:
+    """The unit normals of the points ``solid`` for :func:`normal_fans`, each averaged with its
+    :data:`NORMAL_SMOOTHING_NEIGHBOURS` nearest neighbours'; or None: without normals, and where they look unoriented
+    (:data:`UNORIENTED_FRACTION`; noted) or some are zero (noted)."""
+    if normals is None:
+        return None
+    from scipy.spatial import cKDTree
+
+    N = normals[solid]
+    length = np.linalg.norm(N, axis=1)
+    if not (length > 0).all():
+        notes.append(f"{name}: {int((length <= 0).sum())} normals are zero: the fans are built without the normals")
+        return None
+    N = N / length[:, None]
+    near = cKDTree(P[solid]).query(P[solid], k=min(NORMAL_SMOOTHING_NEIGHBOURS, solid.size - 1) + 1)[1][:, 1:]
+    apart = float((np.einsum("nki,ni->nk", N[near], N) < 0).mean())
+    if apart > UNORIENTED_FRACTION:
+        notes.append(f"{name}: the normals look unoriented ({100 * apart:.0f} % of nearest-neighbour pairs point "
+                     "apart): the fans are built without them; orient them consistently to keep the fans from "
+                     "crossing thin walls and sharp creases")
+        return None
+    mean = N + N[near].sum(axis=1)
+    length = np.linalg.norm(mean, axis=1)
+    return np.where(length[:, None] > 1e-6, mean / np.maximum(length, 1e-300)[:, None], N)
 
 
 def _check_normals(N: ArrayLike, n: int, name: str) -> np.ndarray:
