@@ -167,13 +167,18 @@ def resample(mesh, fraction: float, rng) -> tuple[np.ndarray, cg.TriMesh, np.nda
     return X, split, idx, faces
 
 
-def compare(name: str, noise: float, P: np.ndarray, exact: np.ndarray, src: int, sets: list[str], args) -> None:
-    """One row per method on the cloud ``P``."""
+def timed_pc_heat(P: np.ndarray, src: int, repeats: int) -> tuple[np.ndarray, float]:
+    """The point-cloud heat method's field on ``P`` from ``src`` and its time (set-up and solve), the time unit."""
     def pc_heat():
         import potpourri3d as pp3d
 
         return pp3d.PointCloudHeatSolver(P).compute_distance(src)
-    d, t_heat = timed(pc_heat, args.repeats)
+    return timed(pc_heat, repeats)
+
+
+def compare(name: str, noise: float, P: np.ndarray, exact: np.ndarray, src: int, sets: list[str], args) -> None:
+    """One row per method on the cloud ``P``."""
+    d, t_heat = timed_pc_heat(P, src, args.repeats)
     row(name, noise, "pc-heat", d, exact, src, t_heat, t_heat)
     d, t = timed(lambda: knn_dijkstra(P, src, args.knn), args.repeats)
     row(name, noise, f"{args.knn}-NN Dijkstra", d, exact, src, t, t_heat)
@@ -194,11 +199,7 @@ def compare_normals(name: str, noise: float, P: np.ndarray, normals: np.ndarray,
                     kind: str, args) -> None:
     """Rows of ``qclp`` at both orders on the cloud given ``normals`` (``PointCloud(P, normals)``: fans that leave out
     neighbours whose normal turns by more than 60 degrees, :func:`~cvxgeodesic.mesh.pointcloud.normal_fans`)."""
-    def pc_heat():
-        import potpourri3d as pp3d
-
-        return pp3d.PointCloudHeatSolver(P).compute_distance(src)
-    _, t_heat = timed(pc_heat, args.repeats)
+    _, t_heat = timed_pc_heat(P, src, args.repeats)
     for order in (1,) if args.no_order2 else (1, 2):
         def solve(order=order):
             return cg.GeodesicSolver(cg.PointCloud(P, normals, triangles=kind), "qclp", order=order).solve(src).distance
@@ -213,11 +214,7 @@ def compare_denoised(name: str, noise: float, P: np.ndarray, exact: np.ndarray, 
     vertices the cloud's points are, the floor: the exact field at each point's closest point of the mesh."""
     from cvxgeodesic.mesh.closest import closest_point_index
 
-    def pc_heat():
-        import potpourri3d as pp3d
-
-        return pp3d.PointCloudHeatSolver(P).compute_distance(src)
-    _, t_heat = timed(pc_heat, args.repeats)
+    _, t_heat = timed_pc_heat(P, src, args.repeats)
     if mesh is not None:
         faces, bary, _ = closest_point_index(mesh).query(P)
         floor = np.einsum("ki,ki->k", exact[mesh.F[faces]], bary)
@@ -238,11 +235,7 @@ def compare_neighbours(name: str, noise: float, P: np.ndarray, exact: np.ndarray
     include building the fans, as in :func:`compare`."""
     from cvxgeodesic.mesh.pointcloud import CloudMesh, local_fans, triangle_set
 
-    def pc_heat():
-        import potpourri3d as pp3d
-
-        return pp3d.PointCloudHeatSolver(P).compute_distance(src)
-    d, t_heat = timed(pc_heat, args.repeats)
+    d, t_heat = timed_pc_heat(P, src, args.repeats)
     row(name, noise, "pc-heat", d, exact, src, t_heat, t_heat)
     orders = (1,) if args.no_order2 else (1, 2)
 
