@@ -104,3 +104,17 @@ def test_the_command_line_reads_a_point_file_s_normals_and_can_ignore_them(tmp_p
     mesh.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
     assert main(["distance", str(mesh), "--source", "0", "--ignore-normals", "-o", str(tmp_path / "m.npy")]) == 2
     assert "--ignore-normals applies to point files; " in capsys.readouterr().err
+
+
+def test_a_point_whose_every_neighbour_turns_away_gets_its_plain_fan_back():
+    from cvxgeodesic.mesh.pointcloud import local_fans, normal_fans
+
+    rng = np.random.default_rng(4)
+    P = np.c_[rng.random((800, 2)), np.zeros(800)]
+    N = np.tile([0.0, 0.0, 1.0], (800, 1))
+    lone = int(np.argmin(np.linalg.norm(P - [0.5, 0.5, 0.0], axis=1)))
+    N[lone] = -N[lone]  # every neighbour's normal turns by 180 degrees from this one's
+    tri, owner = normal_fans(P, N, 20)
+    tri0, owner0 = local_fans(P, 20)
+    mine = tri[owner == lone]
+    assert mine.size and np.array_equal(np.unique(mine, axis=0), np.unique(tri0[owner0 == lone], axis=0))

@@ -191,9 +191,12 @@ def _fans(uv: np.ndarray, idx: np.ndarray, left_out: np.ndarray | None = None) -
     r2[:, 0] = 1.0
     W = uv / r2[..., None]
     W[:, 0] = 0.0  # the point itself, a corner of the hull when it lies on the cloud's border
+    hull = np.full((W.shape[0], W.shape[1] + 2), -1)
+    marched = np.arange(W.shape[0])
     if left_out is not None:
         W[left_out] = 0.0  # on the point itself: never a corner but on the border, where the test below drops it
-    hull = _hull_march(W)
+        marched = np.flatnonzero((~left_out[:, 1:]).sum(axis=1) >= 2)  # fewer neighbours make no triangle
+    hull[marched] = _hull_march(W[marched])
     a, b = hull[:, :-1], hull[:, 1:]
     owner, t = np.nonzero((a > 0) & (b > 0) & (a != b))  # hull edges that do not touch the point
     A, B = a[owner, t], b[owner, t]
