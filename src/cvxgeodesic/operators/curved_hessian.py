@@ -81,11 +81,20 @@ def _gradient_rows(F: np.ndarray, lsq: np.ndarray, dA: np.ndarray, h: np.ndarray
     (par_i, par_j, perp_i, perp_j, perp_k) with i, j, k = F[f, e+1], F[f, e+2], F[f, e]."""
     f, e = h // 3, h % 3
     e1, e2 = (e + 1) % 3, (e + 2) % 3
-    o = np.where(F[f, e1] < F[f, e2], 1.0, -1.0)
-    eij, ejk, eki = lsq[f, e], lsq[f, e1], lsq[f, e2]
+    return _rows(F[f, e1] < F[f, e2], lsq[f, e], lsq[f, e1], lsq[f, e2], dA[f])
+
+
+def _face_gradient_rows(F: np.ndarray, lsq: np.ndarray, dA: np.ndarray) -> np.ndarray:
+    """(5, k, 3): :func:`_gradient_rows` of the three half-edges of each face of ``F`` (k, 3), by columns."""
+    return _rows(F[:, _NEXT] < F[:, _PREV], lsq, lsq[:, _NEXT], lsq[:, _PREV], dA[:, None])
+
+
+def _rows(ascending, eij, ejk, eki, dA):
+    """The five entries of a half-edge from its orientation (i < j), its squared edge lengths and its face's doubled
+    area."""
+    o = np.where(ascending, 1.0, -1.0)
     s = np.sqrt(eij)
-    a = dA[f]
-    return np.stack([-o * a / (6.0 * s), o * a / (6.0 * s), -o * (eij + ejk - eki) / (12.0 * s),
+    return np.stack([-o * dA / (6.0 * s), o * dA / (6.0 * s), -o * (eij + ejk - eki) / (12.0 * s),
                      -o * (eij - ejk + eki) / (12.0 * s), o * s / 6.0])
 
 
@@ -97,7 +106,7 @@ def gradient_blocks(F, E, twin, lsq, dA, minv, faces=_ALL):
     t = twin[own]
     has = t >= 0
     w = minv[Ek]
-    rows = _gradient_rows(F, lsq, dA, own) * w
+    rows = _face_gradient_rows(Fk, lsq[faces], dA[faces]) * w
     trows = _gradient_rows(F, lsq, dA, np.where(has, t, 0)) * np.where(has, w, 0.0)
     g, ge = np.where(has, t // 3, 0), np.where(has, t % 3, 0)
     verts = np.concatenate([Fk, np.where(has, F[g, ge], -1)], axis=1)
