@@ -177,16 +177,16 @@ def normal_fans(P: np.ndarray, N: np.ndarray, k: int) -> tuple[np.ndarray, np.nd
     turned = np.einsum("nki,ni->nk", N[idx], N) < np.cos(np.radians(NORMAL_FAN_ANGLE))
     tri, owner = _fans(uv, idx, turned)
     empty = np.setdiff1d(np.arange(P.shape[0]), owner)
-    if empty.size:
-        tri0, owner0 = local_fans(P, k)
-        back = np.isin(owner0, empty)
-        tri, owner = np.concatenate([tri, tri0[back]]), np.concatenate([owner, owner0[back]])
+    if empty.size:  # their fans of local_fans, from the same neighbours
+        tri0, owner0 = _fans(_tangent_coordinates(P, idx[empty]), idx[empty])
+        tri, owner = np.concatenate([tri, tri0]), np.concatenate([owner, owner0])
     return tri, owner
 
 
 def _fans(uv: np.ndarray, idx: np.ndarray, left_out: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """The fans of the points whose neighbours ``idx`` (n, k + 1) lie at ``uv`` (n, k + 1, 2) in their tangent planes;
-    ``left_out`` (n, k + 1) bool: neighbours in no triangle of that fan."""
+    """The fans of the points whose neighbours ``idx`` (r, k + 1; column 0 the point itself) lie at ``uv``
+    (r, k + 1, 2) in their tangent planes; ``left_out`` (r, k + 1) bool: neighbours in no triangle of that fan. Any
+    rows of the cloud's: the owners are the points ``idx[:, 0]``."""
     r2 = np.einsum("nkj,nkj->nk", uv, uv)
     r2[:, 0] = 1.0
     W = uv / r2[..., None]
@@ -198,23 +198,25 @@ def _fans(uv: np.ndarray, idx: np.ndarray, left_out: np.ndarray | None = None) -
         marched = np.flatnonzero((~left_out[:, 1:]).sum(axis=1) >= 2)  # fewer neighbours make no triangle
     hull[marched] = _hull_march(W[marched])
     a, b = hull[:, :-1], hull[:, 1:]
-    owner, t = np.nonzero((a > 0) & (b > 0) & (a != b))  # hull edges that do not touch the point
-    A, B = a[owner, t], b[owner, t]
+    row, t = np.nonzero((a > 0) & (b > 0) & (a != b))  # hull edges that do not touch the point
+    A, B = a[row, t], b[row, t]
     if left_out is not None:
-        kept = ~left_out[owner, A] & ~left_out[owner, B]
-        owner, A, B = owner[kept], A[kept], B[kept]
-    ua, ub = uv[owner, A], uv[owner, B]
-    flat = np.abs(ua[:, 0] * ub[:, 1] - ua[:, 1] * ub[:, 0]) <= 1e-12 * np.sqrt(r2[owner, A] * r2[owner, B])
-    tri = np.stack([owner, idx[owner, A], idx[owner, B]], axis=1)[~flat]
-    return np.sort(tri, axis=1).astype(np.int64), owner[~flat].astype(np.int64)
+        kept = ~left_out[row, A] & ~left_out[row, B]
+        row, A, B = row[kept], A[kept], B[kept]
+    ua, ub = uv[row, A], uv[row, B]
+    flat = np.abs(ua[:, 0] * ub[:, 1] - ua[:, 1] * ub[:, 0]) <= 1e-12 * np.sqrt(r2[row, A] * r2[row, B])
+    row, A, B = row[~flat], A[~flat], B[~flat]
+    tri = np.stack([idx[row, 0], idx[row, A], idx[row, B]], axis=1)
+    return np.sort(tri, axis=1).astype(np.int64), idx[row, 0].astype(np.int64)
 
 
 def _tangent_coordinates(P: np.ndarray, idx: np.ndarray) -> np.ndarray:
-    """(n, k + 1, 2): each point's neighbours ``P[idx]`` relative to it, in the plane of their two principal axes."""
+    """(r, k + 1, 2): the neighbours ``P[idx]`` of each row's point ``P[idx[:, 0]]``, relative to it, in the plane of
+    their two principal axes."""
     X = P[idx]
     Q = X - X.mean(axis=1, keepdims=True)
     frame = np.linalg.eigh(np.einsum("nki,nkj->nij", Q, Q))[1][:, :, 1:]  # eigenvalues ascending: drop the normal
-    return np.einsum("nki,nij->nkj", X - P[:, None, :], frame)
+    return np.einsum("nki,nij->nkj", X - X[:, :1, :], frame)
 
 
 def _hull_march(W: np.ndarray) -> np.ndarray:
