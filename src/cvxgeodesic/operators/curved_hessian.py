@@ -196,7 +196,7 @@ def face_blocks(F: np.ndarray, E: np.ndarray, twin: np.ndarray, lsq: np.ndarray,
 CHUNK_FACES = 65536
 
 
-def energy_matrix(F: np.ndarray, E: np.ndarray, lsq: np.ndarray, dA: np.ndarray, theta: np.ndarray,
+def energy_matrix(F: np.ndarray, E: np.ndarray, n_edges: int, lsq: np.ndarray, dA: np.ndarray, theta: np.ndarray,
                   minv: np.ndarray, sk: np.ndarray, n: int) -> sp.csc_matrix | None:
     """The (n, n) curved Hessian energy matrix, the blocks of :func:`face_blocks` summed, exactly symmetric;
     ``None`` where a block is not finite (a face without a proper shape: zero area, a zero-length edge).
@@ -206,7 +206,7 @@ def energy_matrix(F: np.ndarray, E: np.ndarray, lsq: np.ndarray, dA: np.ndarray,
     are kept depends on the vertices only, so the triplets are counted first, allocated once and filled pass by
     pass (every temporary is of one pass's size).
     """
-    twin = twins(E, int(E.max(initial=-1)) + 1)
+    twin = twins(E, n_edges)
     index = np.int32 if n < np.iinfo(np.int32).max else np.int64
     passes = [slice(start, start + CHUNK_FACES) for start in range(0, F.shape[0], CHUNK_FACES)]
     vertices = [_block_vertices(F, twin, faces).astype(index) for faces in passes]

@@ -200,8 +200,8 @@ def curved_hessian_energy(mesh: TriMesh, *, libigl: bool = False) -> sp.csc_matr
     """
     if libigl or not mesh.is_edge_manifold:
         return _padded_symmetric(igl.curved_hessian_energy(mesh.V, mesh.F), mesh.n_vertices)
-    F, E, _, lsq, dA, theta, minv, sk = curved_hessian_face_data(mesh)
-    Q = curved_hessian.energy_matrix(F, E, lsq, dA, theta, minv, sk, mesh.n_vertices)
+    F, E, n_edges, lsq, dA, theta, minv, sk = curved_hessian_face_data(mesh)
+    Q = curved_hessian.energy_matrix(F, E, n_edges, lsq, dA, theta, minv, sk, mesh.n_vertices)
     if Q is None:
         # faces without a proper shape (zero area, zero-length edges) give inf/nan in both assemblies, where they
         # need not agree: libigl's is the reference
