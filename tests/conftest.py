@@ -23,6 +23,27 @@ def shared_mesh_path(name: str) -> Path:
     return path
 
 
+def plane_points(n: int = 20, seed: int = 1):
+    """(n², 3) points of a point cloud's tests: a jittered n × n grid of the unit square, rotated into a generic plane
+    of 3-D."""
+    import numpy as np
+
+    rng = np.random.default_rng(seed)
+    g = np.linspace(0.0, 1.0, n)
+    x, y = np.meshgrid(g, g)
+    P = np.c_[x.ravel(), y.ravel(), np.zeros(x.size)]
+    P[:, :2] += rng.uniform(-0.2 / n, 0.2 / n, (P.shape[0], 2))
+    return P @ np.linalg.qr(rng.normal(size=(3, 3)))[0].T
+
+
+def sphere_points(n: int = 1500, seed: int = 2):
+    """(n, 3) random points of the unit sphere (a point cloud's tests)."""
+    import numpy as np
+
+    X = np.random.default_rng(seed).normal(size=(n, 3))
+    return X / np.linalg.norm(X, axis=1)[:, None]
+
+
 def sphere_file_with_a_loose_vertex(tmp_path: Path):
     """icosphere(2) as OBJ with a vertex in no face first: the file's numbering is the mesh's plus one.
 

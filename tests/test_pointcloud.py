@@ -7,38 +7,25 @@ import numpy as np
 import pytest
 
 import cvxgeodesic as cg
+from conftest import plane_points, sphere_points
 from cvxgeodesic.errors import MeshError, MeshFormatError, ParameterError, SourceError
 from cvxgeodesic.mesh.pointcloud import CloudMesh, PointCloud
 
 RNG = np.random.default_rng(1)
 
 
-def _plane(n: int = 20, seed: int = 1) -> np.ndarray:
-    """A jittered n × n grid of the unit square, rotated into a generic plane of 3-D."""
-    rng = np.random.default_rng(seed)
-    g = np.linspace(0.0, 1.0, n)
-    x, y = np.meshgrid(g, g)
-    P = np.c_[x.ravel(), y.ravel(), np.zeros(x.size)]
-    P[:, :2] += rng.uniform(-0.2 / n, 0.2 / n, (P.shape[0], 2))
-    R = np.linalg.qr(rng.normal(size=(3, 3)))[0]
-    return P @ R.T
-
-
-def _sphere(n: int = 1500, seed: int = 2) -> np.ndarray:
-    X = np.random.default_rng(seed).normal(size=(n, 3))
-    return X / np.linalg.norm(X, axis=1)[:, None]
 
 
 @pytest.fixture(scope="module")
 def plane_cloud() -> PointCloud:
-    return PointCloud(_plane())
+    return PointCloud(plane_points())
 
 
 @pytest.mark.parametrize("triangles", ["union", "consensus", "repaired"])
 def test_plane_cloud_is_exact_at_order_2(triangles):
     # the P2 squared distance is exact on flat triangles, overlapping fans included; measured 2e-10..3e-9 of the
     # largest distance (the solver's tolerance), asserted at 1e-6
-    P = _plane()
+    P = plane_points()
     src = 210
     d = cg.geodesic_distance(PointCloud(P, triangles=triangles), src, method="qclp", order=2)
     exact = np.linalg.norm(P - P[src], axis=1)
@@ -49,7 +36,7 @@ def test_plane_cloud_is_exact_at_order_2(triangles):
 def test_sphere_cloud_is_near_the_great_circle_distance():
     # 1,500 random points of the unit sphere, the default (union) triangles; measured max error 0.0043 π at order 2
     # and 0.030 π at order 1, mean 0.0011 π and 0.013 π (the consensus: 0.0195 π at order 2, a hole where fans disagree)
-    X = _sphere()
+    X = sphere_points()
     cloud = PointCloud(X)
     exact = np.arccos(np.clip(X @ X[0], -1.0, 1.0))
     d2 = cg.geodesic_distance(cloud, 0, method="qclp", order=2)
@@ -67,7 +54,7 @@ def test_the_default_method_on_a_cloud_is_qclp(plane_cloud):
 def test_heat_on_a_cloud_is_the_point_cloud_heat_method():
     import potpourri3d as pp3d
 
-    X = _sphere(800)
+    X = sphere_points(800)
     res = cg.GeodesicSolver(PointCloud(X), "heat").solve(3)
     assert res.info.solver == "potpourri3d.PointCloudHeatSolver"
     np.testing.assert_allclose(res.distance, pp3d.PointCloudHeatSolver(X).compute_distance(3), rtol=1e-12,
@@ -100,14 +87,14 @@ def test_distance_matrix_takes_a_cloud(plane_cloud):
 
 
 def test_a_non_finite_point_is_refused_by_index():
-    P = _plane(6)
+    P = plane_points(6)
     P[9, 1] = np.nan
     with pytest.raises(MeshError, match="point 9 has a non-finite"):
         PointCloud(P)
 
 
 def test_a_non_finite_or_misshapen_normal_is_refused():
-    P = _plane(6)
+    P = plane_points(6)
     N = np.tile([0.0, 0.0, 1.0], (P.shape[0], 1))
     N[4, 2] = np.inf
     with pytest.raises(MeshError, match=r"^c: normal 4 has a non-finite coordinate"):
@@ -117,7 +104,7 @@ def test_a_non_finite_or_misshapen_normal_is_refused():
 
 
 def test_a_non_finite_point_of_a_file_names_the_file_and_the_point(tmp_path):
-    P = _plane(6)
+    P = plane_points(6)
     P[2, 0] = np.nan
     np.savetxt(tmp_path / "c.xyz", P)
     with pytest.raises(MeshError, match=r"^c.xyz: point 2 has a non-finite coordinate"):
@@ -125,7 +112,7 @@ def test_a_non_finite_point_of_a_file_names_the_file_and_the_point(tmp_path):
 
 
 def test_duplicate_points_are_merged_with_a_note():
-    P = _plane(8)
+    P = plane_points(8)
     Q = np.r_[P, P[[3, 10]]]
     cloud = PointCloud(Q)
     assert cloud.n_points == P.shape[0]
@@ -150,7 +137,7 @@ def test_consensus_leaves_no_point_unreachable_once_repaired(monkeypatch):
     # a point whose fan's triangles appear in no other fan: the consensus drops it, the repair gives it back
     from cvxgeodesic.mesh import pointcloud
 
-    P = _plane(10)
+    P = plane_points(10)
     tri, owner = pointcloud.fan_triangles(P, 30)
     lonely = 44
     mine = (tri == lonely).any(axis=1)
@@ -168,7 +155,7 @@ def test_fans_that_share_no_triangle_are_repaired_into_the_union(monkeypatch):
     # no triangle in two fans: the consensus is empty (refused), the repair gives the fans back
     from cvxgeodesic.mesh import pointcloud
 
-    P = _plane(8)
+    P = plane_points(8)
     tri, owner = pointcloud.fan_triangles(P, 30)
     _, first = np.unique(tri, axis=0, return_index=True)
     monkeypatch.setattr(pointcloud, "fan_triangles", lambda P, k, normals=None: (tri[first], owner[first]))
@@ -197,14 +184,14 @@ def test_boundary_sources_and_multires_are_refused_on_clouds(plane_cloud):
 
 def test_unknown_triangle_set_and_neighbour_count_are_refused():
     with pytest.raises(ParameterError, match="triangles must be one of"):
-        PointCloud(_plane(6), triangles="all")
+        PointCloud(plane_points(6), triangles="all")
     with pytest.raises(ParameterError, match=r"neighbours must be at least 4 and below the number of distinct points "
                                              r"\(36\), got 3"):
-        PointCloud(_plane(6), neighbours=3)
+        PointCloud(plane_points(6), neighbours=3)
     with pytest.raises(ParameterError, match=r"below the number of distinct points \(36\), got 36"):
-        PointCloud(_plane(6), neighbours=36)
+        PointCloud(plane_points(6), neighbours=36)
     with pytest.raises(ParameterError, match="neighbours must be an integer"):
-        PointCloud(_plane(6), neighbours=12.0)
+        PointCloud(plane_points(6), neighbours=12.0)
 
 
 # -- files ----------------------------------------------------------------------------------------------------------
@@ -220,7 +207,7 @@ def _ply(path, P, N=None):
 
 @pytest.mark.parametrize("ext", [".xyz", ".pts", ".csv", ".npy", ".ply"])
 def test_point_files_round_trip(tmp_path, ext):
-    P = _plane(8)
+    P = plane_points(8)
     N = np.tile([0.0, 0.0, 1.0], (P.shape[0], 1))
     path = tmp_path / f"cloud{ext}"
     if ext == ".npy":
@@ -259,7 +246,7 @@ def test_las_files_round_trip(tmp_path, ext):
     laspy = pytest.importorskip("laspy", reason="LAS/LAZ files need laspy (the io extra)")
     if ext == ".laz" and not laspy.LazBackend.detect_available():
         pytest.skip("LAZ needs lazrs (the io extra)")
-    P = _plane(8)
+    P = plane_points(8)
     N = np.tile([0.0, 0.0, 1.0], (P.shape[0], 1))
     path = tmp_path / f"scan{ext.upper()}"  # any case
     _write_las(path, P, N)
@@ -321,7 +308,7 @@ def test_a_bad_line_of_a_point_file_is_named(tmp_path):
 
 
 def test_trimesh_and_open3d_like_clouds_are_taken():
-    P = _plane(8)
+    P = plane_points(8)
 
     class O3dCloud:  # the duck type of open3d.geometry.PointCloud
         points = P
@@ -355,7 +342,7 @@ def test_formats_that_need_cells_are_refused_for_a_cloud(tmp_path, plane_cloud):
 def test_the_command_line_takes_a_point_file(tmp_path):
     from cvxgeodesic.cli import main
 
-    P = _plane(8)
+    P = plane_points(8)
     np.savetxt(tmp_path / "c.xyz", P)
     out = tmp_path / "d.ply"
     assert main(["distance", str(tmp_path / "c.xyz"), "--source", "0", "--quiet", "-o", str(out)]) == 0
@@ -400,7 +387,7 @@ def test_local_fans_are_the_delaunay_one_rings(k):
     # measured: identical triangles on this sphere at every k (fandisk, a CAD grid of cocircular points: 99.6 %)
     from cvxgeodesic.mesh.pointcloud import local_fans
 
-    X = _sphere(400)
+    X = sphere_points(400)
     tri, owner = local_fans(X, k)
     assert (tri == owner[:, None]).any(axis=1).all()  # each triangle is in its owner's fan
     assert {tuple(t) for t in tri.tolist()} == _delaunay_fans(X, k)
@@ -410,14 +397,14 @@ def test_local_fans_at_30_neighbours_are_potpourri3d_s():
     # measured: 99.3 % of the triangles of this sphere, 99.95 % of kitten's (85-91 % on unevenly sampled scans)
     from cvxgeodesic.mesh import pointcloud
 
-    X = _sphere()
+    X = sphere_points()
     ours = {tuple(t) for t in pointcloud.local_fans(X, 30)[0].tolist()}
     theirs = {tuple(t) for t in pointcloud.fan_triangles(X, 30)[0].tolist()}
     assert len(ours & theirs) >= 0.98 * len(ours | theirs)
 
 
 def test_another_neighbour_count_is_exact_on_a_plane_at_order_2():
-    P = _plane()
+    P = plane_points()
     cloud = PointCloud(P, neighbours=12)
     assert cloud.neighbours == 12 and cloud.mesh.n_faces != PointCloud(P).mesh.n_faces
     d = cg.geodesic_distance(cloud, 210, method="qclp", order=2)

@@ -7,29 +7,14 @@ import numpy as np
 import pytest
 
 import cvxgeodesic as cg
+from conftest import plane_points, sphere_points
 from cvxgeodesic.errors import ParameterError
 from cvxgeodesic.mesh.denoise import jet_project
 from cvxgeodesic.mesh.pointcloud import PointCloud
 
-
-def _sphere(n: int, seed: int) -> np.ndarray:
-    X = np.random.default_rng(seed).normal(size=(n, 3))
-    return X / np.linalg.norm(X, axis=1)[:, None]
-
-
-def _plane(n: int = 20, seed: int = 1) -> np.ndarray:
-    """A jittered n × n grid of the unit square, rotated into a generic plane of 3-D."""
-    rng = np.random.default_rng(seed)
-    g = np.linspace(0.0, 1.0, n)
-    x, y = np.meshgrid(g, g)
-    P = np.c_[x.ravel(), y.ravel(), np.zeros(x.size)]
-    P[:, :2] += rng.uniform(-0.2 / n, 0.2 / n, (P.shape[0], 2))
-    return P @ np.linalg.qr(rng.normal(size=(3, 3)))[0].T
-
-
 #: 2,000 random points of the unit sphere (spacing about 0.08) and the same moved by Gaussian noise of 0.3 % of the
 #: bounding-box diagonal (sigma 0.0104, 0.13 of the spacing)
-CLEAN = _sphere(2000, 3)
+CLEAN = sphere_points(2000, 3)
 NOISY = CLEAN + np.random.default_rng(4).normal(scale=0.003 * 2.0 * np.sqrt(3.0), size=CLEAN.shape)
 
 
@@ -73,7 +58,7 @@ def test_the_order_2_field_of_a_denoised_noisy_sphere_is_closer_to_the_great_cir
 
 def test_a_plane_stays_planar_and_order_2_exact():
     # measured: points moved by 3e-17, order 2's error 2e-10..3e-9 of the largest distance (the solver's tolerance)
-    P = _plane()
+    P = plane_points()
     cloud = PointCloud(P, denoise=3)
     normal = np.linalg.svd(P - P.mean(axis=0))[2][2]
     assert np.abs((cloud.P - P.mean(axis=0)) @ normal).max() <= 1e-12
@@ -87,15 +72,16 @@ def test_a_plane_stays_planar_and_order_2_exact():
 @pytest.mark.parametrize("bad", ["plane", "JET", -1, 11, 1.5, True, [1]])
 def test_a_bad_denoise_value_is_refused_naming_the_parameter(bad):
     with pytest.raises(ParameterError, match="denoise must be"):
-        PointCloud(_plane(8), denoise=bad)
+        PointCloud(plane_points(8), denoise=bad)
 
 
 def test_denoising_is_recorded_in_the_notes():
-    cloud = PointCloud(_plane(8), denoise=2)
+    cloud = PointCloud(plane_points(8), denoise=2)
     assert any("denoised" in n and "2 passes" in n for n in cloud.notes)
     res = cg.GeodesicSolver(cloud, "qclp").solve(0)
     assert any("denoised" in n for n in res.info.notes)
-    assert not any("denoised" in n for n in PointCloud(_plane(8)).notes + PointCloud(_plane(8), denoise=0).notes)
+    plain = PointCloud(plane_points(8)).notes + PointCloud(plane_points(8), denoise=0).notes
+    assert not any("denoised" in n for n in plain)
 
 
 def test_outliers_stay_where_they_are_and_out_of_the_fits():

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import cvxgeodesic as cg
+from conftest import sphere_points
 from cvxgeodesic.errors import MeshError, ParameterError, SourceError
 from cvxgeodesic.mesh.cloud_outliers import find_defects
 from cvxgeodesic.mesh.pointcloud import PointCloud
@@ -15,23 +16,19 @@ from cvxgeodesic.mesh.pointcloud import PointCloud
 SPACING = 0.063
 
 
-def _sphere(n: int = 1500, seed: int = 2) -> np.ndarray:
-    X = np.random.default_rng(seed).normal(size=(n, 3))
-    return X / np.linalg.norm(X, axis=1)[:, None]
-
 
 def _with_outliers(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``X`` with five points moved off the sphere by 5, 10, 20 and 50 spacings (out and in) inserted at scattered
     positions; returns the cloud and the outliers' indices in it."""
     heights = np.array([5.0, 10.0, -5.0, 20.0, 50.0]) * SPACING
     rows = np.array([3, 400, 777, 1200, 1500])  # positions in the result
-    U = _sphere(5, seed=9)
+    U = sphere_points(5, seed=9)
     Y = np.insert(X, rows - np.arange(5), U * (1.0 + heights)[:, None], axis=0)
     return Y, rows
 
 
 def test_planted_outliers_are_left_out_with_a_note_and_an_infinite_distance():
-    X = _sphere()
+    X = sphere_points()
     Y, rows = _with_outliers(X)
     cloud = PointCloud(Y)
     assert cloud.outliers.tolist() == rows.tolist() and cloud.line_points.size == 0
@@ -56,7 +53,7 @@ def test_planted_outliers_are_left_out_with_a_note_and_an_infinite_distance():
 @pytest.mark.parametrize("neighbours", [30, 20])
 def test_without_its_outliers_a_cloud_has_the_clean_cloud_s_triangles(triangles, neighbours):
     # potpourri3d's fans at 30 neighbours, local_fans at 20; the consensus and its repair count the fans' agreement
-    X = _sphere()
+    X = sphere_points()
     Y, rows = _with_outliers(X)
     cloud = PointCloud(Y, triangles=triangles, neighbours=neighbours)
     to_clean = np.cumsum(~np.isin(np.arange(Y.shape[0]), rows)) - 1
@@ -71,7 +68,7 @@ def test_the_repair_gives_back_the_fan_of_the_stranded_point_not_of_its_clean_nu
     # fan back in the input's numbering (as in test_pointcloud's test without outliers)
     from cvxgeodesic.mesh import pointcloud
 
-    Y, rows = _with_outliers(_sphere())
+    Y, rows = _with_outliers(sphere_points())
     real = pointcloud.fan_triangles
     lonely = 44  # among the points the fans are built on: input point 45 (outlier 3 comes before it)
 
@@ -87,7 +84,7 @@ def test_the_repair_gives_back_the_fan_of_the_stranded_point_not_of_its_clean_nu
 
 
 def test_kept_outliers_are_triangulated_and_pull_the_field():
-    X = _sphere()
+    X = sphere_points()
     Y, rows = _with_outliers(X)
     kept = PointCloud(Y, outliers="keep")
     assert kept.outliers.size == 0 and np.isin(rows, kept.mesh.F).all()
@@ -99,7 +96,7 @@ def test_kept_outliers_are_triangulated_and_pull_the_field():
 def test_no_point_of_a_noisy_sphere_is_an_outlier(noise):
     # Gaussian noise of 0.1 %, 0.3 %, 1 % and 3 % of the diagonal (2√3): up to 1.6 spacings. Measured: at 3 % three
     # points would be outliers by their height without the threshold's median absolute deviations (HEIGHT_MADS)
-    X = _sphere()
+    X = sphere_points()
     P = X + np.random.default_rng(4).normal(scale=noise * 2 * np.sqrt(3), size=X.shape)
     found = find_defects(P)
     assert found.outliers.size == 0 and found.lines.size == 0
@@ -123,7 +120,7 @@ def test_no_point_of_a_shared_scan_s_cloud_is_an_outlier(name):
 
 
 def test_outliers_error_names_them_in_the_input_numbering():
-    X = _sphere()
+    X = sphere_points()
     Y, rows = _with_outliers(X)
     Y = np.insert(Y, 1, Y[0], axis=0)  # a duplicate before them: the input's numbering is one ahead of the cloud's
     with pytest.raises(MeshError, match=r"^point cloud: 5 isolated outliers .*first: input points 4, 401, 778, 1201\) "
@@ -135,7 +132,7 @@ def test_outliers_error_names_them_in_the_input_numbering():
 
 
 def test_a_source_at_an_outlier_is_refused():
-    Y, rows = _with_outliers(_sphere())
+    Y, rows = _with_outliers(sphere_points())
     cloud = PointCloud(Y)
     with pytest.raises(SourceError, match=f"^source point {rows[1]} of point cloud is an isolated outlier, left out "
                                           r"of the cloud's triangles .*outliers='keep'"):
@@ -187,7 +184,7 @@ def test_points_along_scan_lines_are_no_line_points():
 
 def test_an_unknown_outlier_handling_and_too_few_points_left_are_refused():
     with pytest.raises(ParameterError, match="outliers must be one of exclude, keep, error, got 'drop'"):
-        PointCloud(_sphere(50), outliers="drop")
+        PointCloud(sphere_points(50), outliers="drop")
     P, _ = _plane_and_wire()
     with pytest.raises(ParameterError, match=r"below the number of distinct points \(411 without the outliers\), "
                                              "got 420"):
@@ -203,7 +200,7 @@ def test_a_click_on_an_outlier_in_the_viewer_says_why_and_keeps_the_field():
         def __getattr__(self, name):
             return lambda *args, **kw: self
 
-    Y, rows = _with_outliers(_sphere())
+    Y, rows = _with_outliers(sphere_points())
     cloud = PointCloud(Y)
     v = _Viewer(_Recorder(), cloud.mesh, method="dijkstra", solver_kwargs={}, isolines=False)
     before = v.solve([0])
@@ -221,7 +218,7 @@ def test_the_command_line_builds_the_cloud_with_its_options(tmp_path, capsys):
 
     assert _options.CLOUD_TRIANGLES == pointcloud.TRIANGLE_SETS
     assert _options.CLOUD_OUTLIERS == pointcloud.OUTLIER_HANDLING
-    X, planted = _with_outliers(_sphere())
+    X, planted = _with_outliers(sphere_points())
     np.savetxt(tmp_path / "c.xyz", X)
     out = tmp_path / "d.npy"
     base = ["distance", str(tmp_path / "c.xyz"), "--source", "0", "--method", "qclp", "--quiet", "-o", str(out)]
