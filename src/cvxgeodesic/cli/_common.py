@@ -11,6 +11,7 @@ import sys
 from typing import TYPE_CHECKING, Any
 
 from ..errors import ParameterError
+from ._options import CLOUD_OPTIONS
 
 if TYPE_CHECKING:
     from ..mesh.simplex import SimplexMesh
@@ -106,8 +107,6 @@ def load_input(path: str, cloud: dict[str, Any] | None = None) -> SimplexMesh:
     if is_point_file(path):
         return load_point_cloud(path, **cloud).mesh
     if cloud:
-        from ._options import CLOUD_OPTIONS
-
         raise ParameterError(f"{CLOUD_OPTIONS[next(iter(cloud))]} applies to point files; {path} is a mesh file")
     return load_mesh(path)
 
