@@ -9,7 +9,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from ..linalg import analyse
+from ..linalg import factor_matrix as _factor
 from ..mesh.convert import MeshLike
 from ..mesh.reference import TETRAHEDRON
 from ..mesh.simplex import unit_mesh
@@ -119,16 +119,6 @@ class HeatBaseline(ComponentwiseSolver):
         d, info = super()._solve(sources)
         info.update(t_coef=self.t_coef, use_robust=self.use_robust, max_abs_at_sources=float(np.abs(d[sources]).max()))
         return d, info
-
-
-def _factor(K: sp.spmatrix):
-    """A Cholesky factor of the SPD matrix ``K`` through :mod:`cvxgeodesic.linalg`, and the backend's name."""
-    K = sp.csc_matrix(K)
-    S = analyse(K)
-    low = sp.tril(K, format="coo")
-    data = np.zeros(S.nnz)
-    np.add.at(data, S.positions(low.row, low.col), low.data)
-    return S.factorize(data), S.backend
 
 
 def _pinned(K: sp.spmatrix, pinned: np.ndarray) -> sp.csc_matrix:

@@ -33,7 +33,7 @@ from .base import Backend, Factor, symmetric_matrix
 from .cholmod import CholmodBackend, cholmod_available
 from .superlu import SuperLUBackend
 
-__all__ = ["BACKENDS", "SymbolicCholesky", "analyse", "cholmod_available", "pardiso_available"]
+__all__ = ["BACKENDS", "SymbolicCholesky", "analyse", "cholmod_available", "factor_matrix", "pardiso_available"]
 
 #: backend name → class, in the order ``"auto"`` tries them (SuperLU last, with a warning)
 BACKENDS: dict[str, type] = {"pardiso": _pardiso.PardisoBackend, "cholmod": CholmodBackend, "scipy": SuperLUBackend}
@@ -234,3 +234,20 @@ class SymbolicCholesky:
 def analyse(pattern, *, backend: str = "auto", ordering: str = "metis", mode: str = "auto") -> SymbolicCholesky:
     """Analyse a symmetric sparsity pattern once: :class:`SymbolicCholesky` (same parameters)."""
     return SymbolicCholesky(pattern, backend=backend, ordering=ordering, mode=mode)
+
+
+def factor_matrix(K: sp.spmatrix) -> tuple[Factor, str]:
+    """A Cholesky factor of the symmetric positive definite matrix ``K`` (analysed and factorized once), and the
+    backend's name: ``factor(b)`` solves ``K x = b``.
+
+    Raises
+    ------
+    NotPositiveDefiniteError
+        ``K`` is not numerically positive definite.
+    """
+    K = sp.csc_matrix(K)
+    S = analyse(K)
+    low = sp.tril(K, format="coo")
+    data = np.zeros(S.nnz)
+    np.add.at(data, S.positions(low.row, low.col), low.data)
+    return S.factorize(data), S.backend
