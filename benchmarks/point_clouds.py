@@ -23,6 +23,12 @@ method answering at the noisy positions avoids: the noise's tangential part move
 normals; on resampled clouds each point's face normal): ``PointCloud(P, normals)``'s fans leave out the neighbours
 whose normal turns by more than 60 degrees (:func:`cvxgeodesic.mesh.pointcloud.normal_fans`).
 
+``--subsample 0.2,0.25`` adds rows of ``qclp`` at order 2 on a Poisson-disk subsample of the cloud with about that
+fraction of its points (:func:`poisson_subsample`), answered at every point of the cloud: the P2 field at each point's
+closest point of the subsample's triangles (the order-2 program on fewer points, the lever of ``resolution=`` on
+meshes; not a library option: docs/dev/adapted-log.md has why). The source is its point's closest point there; the
+time includes the subsampling.
+
 ``--neighbours 12,20,30`` measures the neighbour count instead: ``qclp`` at both orders on the union of the fans of
 :func:`~cvxgeodesic.mesh.pointcloud.local_fans` (potpourri3d's construction, whose k is fixed at 30; at k = 30 they
 build the same triangles on evenly sampled clouds), after a row on potpourri3d's own fans.
@@ -103,6 +109,8 @@ def main() -> None:
                     "passes of jet projection (e.g. 1,2), and the floor row")
     ap.add_argument("--normals", action="store_true", help="also qclp at both orders on the first set of the cloud "
                     "with normals (the mesh's vertex normals; on resampled clouds each point's face normal)")
+    ap.add_argument("--subsample", default="", help="also qclp order 2 on Poisson-disk subsamples with about these "
+                    "fractions of the points (e.g. 0.2,0.25), answered at every point")
     ap.add_argument("--resample", default="", help="instead of the vertices: random surface points, these fractions "
                     "of the face count (e.g. 0.5,0.25: two densities); the reference is exact MMP on the mesh with "
                     "the points inserted as vertices")
@@ -125,6 +133,8 @@ def main() -> None:
                     compare(name, noise, P, exact, src, sets, args)
                     if args.normals:
                         compare_normals(name, noise, P, normals, exact, src, sets[0], args)
+                    if args.subsample:
+                        compare_subsampled(name, noise, P, exact, src, args)
                     if args.denoise:
                         compare_denoised(name, noise, P, exact, src, sets[0], args,
                                          None if args.resample else mesh)
@@ -227,6 +237,49 @@ def compare_denoised(name: str, noise: float, P: np.ndarray, exact: np.ndarray, 
             d, t = timed(solve, args.repeats)
             row(name, noise, f"qclp order {order}, {kind}, denoised ({passes} pass{'es' if passes > 1 else ''})", d,
                 exact, src, t, t_heat)
+
+
+def poisson_subsample(P: np.ndarray, fraction: float, seed: int = 1) -> np.ndarray:
+    """Indices (ascending) of a Poisson-disk subsample of ``P`` with ``fraction`` of its points, within 5 %: points
+    taken in a random order, each kept unless a kept point lies within ``r`` of it, ``r`` bisected on the count."""
+    tree = cKDTree(P)
+    order = np.random.default_rng(seed).permutation(P.shape[0])
+    target = fraction * P.shape[0]
+    lo, hi = 0.0, 4 * float(np.mean(tree.query(P, k=2)[0][:, 1])) / np.sqrt(fraction)
+    for _ in range(20):
+        r = 0.5 * (lo + hi)
+        alive = np.ones(P.shape[0], dtype=bool)
+        keep = []
+        for i, near in zip(order, tree.query_ball_point(P[order], r), strict=True):
+            if alive[i]:
+                keep.append(i)
+                alive[near] = False
+        if abs(len(keep) - target) <= 0.05 * target:
+            break
+        lo, hi = (r, hi) if len(keep) > target else (lo, r)
+    return np.sort(np.asarray(keep, dtype=np.int64))
+
+
+def compare_subsampled(name: str, noise: float, P: np.ndarray, exact: np.ndarray, src: int, args) -> None:
+    """Rows of ``qclp`` at order 2 on Poisson-disk subsamples (``--subsample``), answered at every point of ``P``
+    (the P2 field at each point's closest point of the subsample's triangles; the source at its point's closest
+    point there). The time: subsampling, the subsample's cloud, the solver, the solve and the answer."""
+    from cvxgeodesic.mesh.closest import closest_point_index
+    from cvxgeodesic.mesh.locate import SurfacePoint
+
+    _, t_heat = timed_pc_heat(P, src, args.repeats)
+    for fraction in (float(x) for x in args.subsample.split(",")):
+        def solve(fraction=fraction):
+            keep = poisson_subsample(P, fraction)
+            cloud = cg.PointCloud(P[keep])
+            faces, bary, _ = closest_point_index(cloud.mesh).query(np.ascontiguousarray(P))
+            res = cg.GeodesicSolver(cloud, "qclp", order=2).solve([SurfacePoint(int(faces[src]), bary[src])])
+            d = np.asarray(res.field.distance_at(faces, bary), dtype=float)
+            d[src] = 0.0
+            return d, keep.size
+        (d, kept), t = timed(solve, args.repeats)
+        row(name, noise, f"qclp order 2 on a Poisson-disk subsample of {kept} points ({fraction:g})", d, exact, src,
+            t, t_heat)
 
 
 def compare_neighbours(name: str, noise: float, P: np.ndarray, exact: np.ndarray, src: int, args) -> None:
