@@ -416,8 +416,14 @@ CLAIMS: list[Claim] = [
     _r("adapted-targets", "2026-12-06", "`python benchmarks/accuracy_per_second.py`",
        (BENCH, "the scans of 50K–100K faces reached ≤ 0.3 % at ≤ 3× heat on horse only"),
        (BENCH, "scans of 50K–100K faces reach ≤ 0.3 % at ≤ 3× heat on bunny (0.29 % at 2.5×) and horse")),
-    _r("choice-adapted", "2026-12-06", "`python benchmarks/accuracy_per_second.py`",
-       (README, "| 0.91 / 0.33 / 1.19 % |"), (README, "0.24–0.37 % mean error at 2.3–3.2× the heat method's time")),
+    _r("choice-adapted", "2026-12-06", "`python benchmarks/accuracy_per_second.py --meshes spot.obj bimba.obj "
+       "thingi_37881.stl bunny.obj armadillo.obj horse.ply --repeat 2`; `--meshes lucy_20k.obj dragon_20k.obj "
+       "buddha.obj camelhead_open.off thingi_32770.stl beetle_open.off --repeat 2 --order2-max 0`; `--meshes "
+       "fandisk.obj --repeat 2` (12:01–12:06 UTC, load 0.15–0.96; docs/dev/accuracy_per_second.md, run 6)",
+       (README, "| 0.91 / 0.33 / 1.19 % |"), (README, "| 0.97 / 0.45 / 2.13 % |"),
+       (README, "0.24–0.37 % mean error at 2.4–3.3× the heat method's time"),
+       (README, "it had 0.33–2.2 % mean error (the default: 0.92–3.8 %), a ridge of 0.29–0.60"),
+       (ADAPTED, "the ridge figure goes from 0.77–1.06 to 0.29–0.37")),
     _r("rows-default", "2026-12-06", "`python benchmarks/row_default.py`",
        (PERF, "0.063 s (28× heat), 2.04 %"), (PERF, "cost 1.5–2.3× `qclp`'s")),
     _r("adapted-source-snap", "2026-12-06", "`python benchmarks/adapted_levers.py fandisk`",

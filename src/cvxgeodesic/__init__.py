@@ -97,6 +97,7 @@ if TYPE_CHECKING:
     from .paths import distance_at, geodesic_path
     from .plotting import plot_field
     from .problems.formulations import FORMULATIONS, smoothness_weight
+    from .problems.ridge_rounding import round_ridge
     from .results import Field
     from .sources import BoundaryFaces, SurfaceCurve
     from .viewer import show
@@ -109,7 +110,8 @@ __all__ = [
     "MeshError", "MeshFileNotFoundError", "MeshFormatError", "MeshRepairWarning",
     "NonManifoldError", "OutputError", "ParameterError", "SolveInfo", "SolverError", "SourceError",
     "TriMesh", "cylinder", "distance_matrix", "geodesic_distance", "grid_plane", "icosphere", "load_distance",
-    "load_mesh", "plot_field", "save_distance", "smoothness_weight", "to_file_order", "SurfaceCurve", "SurfacePoint",
+    "load_mesh", "plot_field", "round_ridge", "save_distance", "smoothness_weight", "to_file_order", "SurfaceCurve",
+    "SurfacePoint",
     "surface_point", "distance_at", "geodesic_path", "show", "Method", "SolverName",
     "BoundaryFaces", "TetMesh", "VolumePoint", "tet_ball", "tet_box", "tet_l_prism", "tetrahedralize", "volume_point",
     "PointCloud", "load_point_cloud",
@@ -125,6 +127,7 @@ _LAZY = {
                      "MeshFileNotFoundError", "MeshFormatError", "MeshRepairWarning", "NonManifoldError",
                      "OutputError", "ParameterError", "SolverError", "SourceError"), ".errors"),
     **dict.fromkeys(("FORMULATIONS", "smoothness_weight"), ".problems.formulations"),
+    "round_ridge": ".problems.ridge_rounding",
     **dict.fromkeys(("TriMesh", "cylinder", "grid_plane", "icosphere"), ".mesh"),
     "to_file_order": ".mesh.fileorder",
     **dict.fromkeys(("load_distance", "load_mesh", "save_distance"), ".mesh.io"),

@@ -209,16 +209,21 @@ class ProjectedField:
         Fields solved on ``mesh`` itself around the sources, mixed in near them (in order).
     medium : Medium, optional
         The travel cost or metric the field measures, on ``mesh``; None: Euclidean.
+    correction : (n,) float ndarray, optional
+        Added to the field, linearly interpolated on ``mesh``'s faces (the ridge rounding of an adapted solve,
+        :func:`~cvxgeodesic.problems.ridge_rounding.round_ridge`: the rounded minus the transferred vertex values),
+        after the patches are mixed in; 0 at vertices of no finite value.
     """
 
     def __init__(self, mesh: TriMesh, solve_mesh: TriMesh, field: Any, vertex_distance: np.ndarray,
-                 patches: Any = (), medium: Any = None) -> None:
+                 patches: Any = (), medium: Any = None, correction: np.ndarray | None = None) -> None:
         self.mesh = mesh
         self.solve_mesh = solve_mesh
         self.field = field
         self.vertex_distance = vertex_distance
         self.patches = tuple(patches)
         self.medium = medium
+        self.correction = None if correction is None else np.where(np.isfinite(correction), correction, 0.0)
 
     def _projected(self, faces: Any, bary: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """``(faces, bary)`` as arrays and the closest points of those points on ``solve_mesh`` (faces, bary)."""
@@ -241,9 +246,11 @@ class ProjectedField:
         """
         faces, B, cf, cb = self._projected(faces, bary)
         out = np.asarray(self.field.distance_at(cf, cb), dtype=float)
-        if not self.patches:
-            return out
-        return mix_patches(out, self.patches, [p.at_points(faces, B) for p in self.patches])
+        if self.patches:
+            out = mix_patches(out, self.patches, [p.at_points(faces, B) for p in self.patches])
+        if self.correction is not None:
+            out = out + np.einsum("pc,pc->p", B, self.correction[self.mesh.F[faces]])
+        return out
 
     def gradient_at(self, faces: Any, bary: Any) -> np.ndarray:
         """Gradient of :meth:`distance_at` at points of ``mesh``'s faces: the solve mesh's field's gradient at the
@@ -275,4 +282,20 @@ class ProjectedField:
                 wt, st = w[take, None], slope[take, None]
                 out[take] = wt * gn + (1 - wt) * grad[take] + st * (near[take] - base[take])[:, None] * gn
                 best[take] = blend[take]
+        if self.correction is not None:
+            out = out + _linear_gradients(self.mesh, faces, self.correction)
         return out
+
+
+def _linear_gradients(mesh: TriMesh, faces: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """(p, 3) the gradients on ``faces`` of the linear interpolant of the vertex ``values`` (0 on faces of no area):
+    ``(c₁ − c₀) ∇λ₁ + (c₂ − c₀) ∇λ₂`` with ``∇λᵢ = n × eᵢ / (2A)``, ``eᵢ`` the edge opposite corner ``i``."""
+    P = mesh.V[mesh.F[faces]]
+    c = values[mesh.F[faces]]
+    N = np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
+    twice_area = np.linalg.norm(N, axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        n = N / twice_area[:, None]
+        g = ((c[:, 1] - c[:, 0])[:, None] * np.cross(n, P[:, 0] - P[:, 2])
+             + (c[:, 2] - c[:, 0])[:, None] * np.cross(n, P[:, 1] - P[:, 0])) / twice_area[:, None]
+    return np.where(twice_area[:, None] > 0, g, 0.0)

@@ -14,7 +14,11 @@ copy:
    (found once); :class:`~cvxgeodesic.mesh.transfer.ProjectedField` answers ``distance_at`` at any point of the user's
    faces the same way, and ``geodesic_path`` descends the vertex values on the user's mesh;
 4. **next to the sources** a patch of the user's mesh solved at order 2 and mixed in (:data:`SOURCE_PATCH_EDGES`);
-5. **retries and fallbacks**: a copy that changes the topology (Euler characteristic, components, a non-manifold
+5. **the ridge rounded** for the smoothed methods (``m > 0``): the field's cut locus on the user's mesh rounded over
+   the Hessian energy's smoothing length at ``m`` (:func:`~cvxgeodesic.problems.ridge_rounding.round_ridge`), the
+   rest of the field as the copy gave it: the order-2 energy of ``φ = d²`` rounds the ridge only by flattening the
+   whole field (docs/dev/adapted-log.md);
+6. **retries and fallbacks**: a copy that changes the topology (Euler characteristic, components, a non-manifold
    edge) or is folded (:func:`fold_excess`) is decimated again at other targets and aggressiveness values
    (:func:`_decimated`, recorded in ``decimation_tries``); a mesh that is not edge-manifold, has several components
    or faces of zero area, or whose every copy was refused, is solved on itself at order 1, with a note (quadric
@@ -39,8 +43,10 @@ from ..mesh.locate import SurfacePoint, bary_positions
 from ..mesh.patch import ball_patch
 from ..mesh.transfer import ProjectedField, SourcePatch, mix_patches
 from ..mesh.trimesh import TriMesh
+from ..operators.energies import hessian_energy_matrix
 from ..operators.metric import Medium
 from ..problems.formulations import smoothness_weight
+from ..problems.ridge_rounding import ridge_rounding_length, round_ridge
 from ..results import GeodesicResult
 from ..sources import SourceSet, resolve_sources
 from .base import Callback, SolveConfig
@@ -496,8 +502,43 @@ class Adapted:
                                edge_shortening=self.copy.shortening)
             if estimate:
                 self._companion(coarse.n_faces)
+        self.ridge_length = self._ridge_length()
+        self._ridge_energy: tuple[Any, list[str]] | None = None
         self.backend = self.inner.backend
         self.setup_time = time.perf_counter() - t0
+
+    def _ridge_length(self) -> float | None:
+        """The ridge rounding's length (:func:`~cvxgeodesic.problems.ridge_rounding.ridge_rounding_length` at ``m``),
+        or None: a method without smoothing, ``m = 0``, or a fallback to the mesh itself (its own order-1 smoothing
+        rounds the ridge). A smoothed order-2 method takes no medium (the capability table), so the field is of unit
+        speed, as the rounding's ridge test assumes."""
+        config = self.config
+        if self.copy is None or config.energy is None or not config.m:
+            self.record["ridge_rounding"] = None
+            return None
+        length = ridge_rounding_length(config.surface, config.m)
+        self.record["ridge_rounding"] = {"length": length}
+        return length
+
+    def _round_ridge(self, d: np.ndarray, sources: SourceSet, notes: list[str],
+                     record: dict[str, Any]) -> np.ndarray | None:
+        """``d`` with its ridge rounded in place (:attr:`ridge_length`), the correction (rounded minus transferred)
+        returned; None without rounding."""
+        if self.ridge_length is None:
+            return None
+        mesh = self.config.surface
+        if self._ridge_energy is None:  # built on the first solve, kept for the next sources
+            energy_notes: list[str] = []
+            self._ridge_energy = (hessian_energy_matrix(mesh, energy_notes), energy_notes)
+        energy, energy_notes = self._ridge_energy
+        rounded = round_ridge(mesh, d, sources.fixed_vertices(mesh), length=self.ridge_length, energy=energy)
+        correction = np.where(np.isfinite(d), rounded.distance - d, 0.0)
+        d[:] = rounded.distance
+        notes += [*energy_notes, f"the ridge rounded over {self.ridge_length:.3g} on the mesh "
+                                 f"({int(rounded.band.sum())} vertices around the field's cut locus)"]
+        record["ridge_rounding"] = {"length": self.ridge_length, "band_vertices": int(rounded.band.sum()),
+                                    "time": rounded.time}
+        return correction
 
     def _companion(self, faces: int) -> None:
         """The coarser and finer copies of the error estimate (none, with the reason, when a decimation fails)."""
@@ -572,11 +613,12 @@ class Adapted:
         if offset > 1e-12 * self.config.mesh.bbox_diagonal:
             notes.append(f"a source within {SOURCE_SNAP:g} of a face's altitude from an edge of the solve mesh was "
                          f"moved onto it (by {offset:.3g})")
-        if self.companions:
+        if self.companions:  # of the order-2 field, before the rounding
             t2 = time.perf_counter()
             self._estimate(sources, d, patches, nears, record)
             record["estimate_time"] = time.perf_counter() - t2
-        return self._result(cres, d, sources, notes, record, t0, patches)
+        correction = self._round_ridge(d, sources, notes, record)
+        return self._result(cres, d, sources, notes, record, t0, patches, correction)
 
     def _estimate(self, sources: SourceSet, d: np.ndarray, patches: list[SourcePatch], nears: list[np.ndarray],
                   record: dict[str, Any]) -> None:
@@ -626,11 +668,12 @@ class Adapted:
         return out
 
     def _result(self, cres: GeodesicResult, d: np.ndarray, sources: SourceSet, notes: list[str], record: dict,
-                t0: float, patches: list[SourcePatch]) -> GeodesicResult:
+                t0: float, patches: list[SourcePatch], correction: np.ndarray | None) -> GeodesicResult:
         ci = cres.info
         assert self.copy is not None
         extra = dict(ci.extra, adapted=record, solve_mesh=self.solve_mesh)
-        field = ProjectedField(self.config.surface, self.solve_mesh, cres.field, d, patches, medium=self.config.medium)
+        field = ProjectedField(self.config.surface, self.solve_mesh, cres.field, d, patches, medium=self.config.medium,
+                               correction=correction)
         info = replace(ci, setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
                        n_unreachable=int(np.isinf(d).sum()), notes=notes, extra=extra)
         return GeodesicResult(distance=d, info=info, sources=sources.vertices, field=field,

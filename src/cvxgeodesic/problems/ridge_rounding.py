@@ -1,0 +1,152 @@
+"""Ridge rounding: a distance field's cut locus rounded over a length, the rest of the field left as it is.
+
+An order-2 field read at the user's vertices (an adapted solve, :mod:`cvxgeodesic.strategies.adapted`) is as creased
+at the ridge as the exact field, and the order-2 smoothness energy of ``φ = d²`` rounds that crease only by flattening
+the whole field (docs/dev/adapted-log.md, "The default switch"). :func:`round_ridge` rounds the ridge alone: in a band
+around the field's own cut locus (:func:`~cvxgeodesic.evaluation.smoothness.cut_locus_band` of the field, every vertex
+within :data:`RIDGE_BAND` lengths of it) the values are replaced by the minimizer of
+
+    ``∫ |∇²u|² dA + ℓ⁻⁴ ∫ (u − d)² dA``  (the curved Hessian energy, the barycentric mass)
+
+with ``u = d`` outside the band (where the curved Hessian energy is indefinite, the planar one, with a note): a
+convex quadratic problem, one sparse Cholesky factorization of the band's size.
+For a crease of the field rounded over a width ``w`` the first term is about ``θ² L / w`` and the second
+``θ² L w³ / ℓ⁴`` (``θ`` its turn, ``L`` its length): they balance at ``w = ℓ``, the rounding width. Off the band the
+field is unchanged bit for bit; a field without a ridge (one source on a plane) is returned as it is.
+
+The default length is the order-1 Hessian energy's smoothing length at the multiplier ``m``
+(:func:`~cvxgeodesic.problems.formulations.smoothing_length`: ``(m κ)^(1/3) √|S|``, 0.0144 √|S| at ``m = 1``) times
+:data:`RIDGE_LENGTH`: a length on the surface, whatever the triangulation.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..evaluation._validate import check_mesh
+from ..evaluation.smoothness import cut_locus_band
+from ..linalg import factor_matrix
+from ..mesh.trimesh import TriMesh
+from ..operators.energies import hessian_energy_matrix
+from ..operators.laplacian import barycentric_mass
+from ..validation import as_vertex_field, check_number, vertex_indices
+from .formulations import KAPPA
+
+__all__ = ["RIDGE_BAND", "RIDGE_LENGTH", "RidgeRounding", "ridge_rounding_length", "round_ridge"]
+
+#: The rounding length is this times the order-1 Hessian energy's smoothing length at the multiplier ``m``.
+#: Measured with ``RIDGE_BAND = 1`` on bimba, horse, bunny and armadillo (sources vertex 0 and n/2, the adapted
+#: ``"auto"`` field): docs/dev/adapted-log.md, "Rounding the ridge".
+RIDGE_LENGTH = 1.0
+#: The band rounded: the vertices within this many rounding lengths (edge-graph distance) of the field's cut locus.
+RIDGE_BAND = 1.0
+
+
+@dataclass(frozen=True)
+class RidgeRounding:
+    """What :func:`round_ridge` did.
+
+    Attributes
+    ----------
+    distance : (n,) float ndarray
+        The rounded field (the input outside ``band``).
+    band : (n,) bool ndarray
+        The vertices whose values were replaced.
+    length : float
+        The rounding length ``ℓ`` (the mesh's units).
+    time : float
+        Seconds (band, energy, factorization and solve).
+    notes : tuple of str
+        Substitutions made in the energy (:func:`~cvxgeodesic.operators.energies.hessian_energy_matrix`: the planar
+        Hessian energy where the curved one is indefinite, a manifold cover).
+    """
+
+    distance: np.ndarray
+    band: np.ndarray
+    length: float
+    time: float
+    notes: tuple[str, ...] = ()
+
+
+def ridge_rounding_length(mesh: TriMesh, m: float = 1.0) -> float:
+    """The default rounding length of :func:`round_ridge` at the multiplier ``m``: :data:`RIDGE_LENGTH` times
+    ``(m κ)^(1/3) √|S|`` (``κ`` the Hessian energy's :data:`~cvxgeodesic.problems.formulations.KAPPA`, ``|S|`` the
+    surface area).
+
+    Examples
+    --------
+    >>> import cvxgeodesic as cg
+    >>> round(ridge_rounding_length(cg.grid_plane(20)), 4)
+    0.0144
+    """
+    m = check_number(m, "m", low=0, low_open=True)
+    return RIDGE_LENGTH * float(np.cbrt(m * KAPPA["hessian"])) * float(np.sqrt(mesh.face_areas.sum()))
+
+
+def round_ridge(mesh: TriMesh, distance: np.ndarray, sources, *, length: float | None = None, m: float = 1.0,
+                energy: sp.spmatrix | None = None) -> RidgeRounding:
+    """Round a distance field's ridge (cut locus) over a length, leaving the rest of it as it is.
+
+    Parameters
+    ----------
+    mesh : TriMesh
+        A triangle surface with ``n`` vertices.
+    distance : (n,) float array_like
+        A distance field measured in the mesh's own lengths (unit speed: its ridge is found where its gradient norm
+        drops below 0.9 or its normal derivative jumps across an edge); ``inf`` on unreached vertices, which stay so.
+    sources : int or (k,) int array_like
+        The vertices where the field is 0 by construction (no ridge is looked for next to them).
+    length : float, optional
+        The rounding width ``ℓ`` (> 0, the mesh's units); default :func:`ridge_rounding_length` at ``m``.
+    m : float, default 1.0
+        The multiplier of the default length.
+    energy : (n, n) scipy.sparse matrix, optional
+        The mesh's Hessian energy (:func:`~cvxgeodesic.operators.energies.hessian_energy_matrix`: the curved one,
+        or the planar one where the curved one is indefinite), when already built; built otherwise.
+
+    Returns
+    -------
+    RidgeRounding
+
+    Raises
+    ------
+    ParameterError
+        ``distance`` not of length ``n`` or NaN, a source index out of range, ``length`` or ``m`` not positive.
+
+    Examples
+    --------
+    Two sources on a flat square: their fronts meet on the bisector, which the rounding lowers; far from it the
+    field is untouched.
+
+    >>> import numpy as np
+    >>> import cvxgeodesic as cg
+    >>> plane = cg.grid_plane(40)
+    >>> a, b = 20 * 41 + 5, 20 * 41 + 35
+    >>> d = np.minimum(*(np.linalg.norm(plane.V - plane.V[s], axis=1) for s in (a, b)))
+    >>> r = cg.round_ridge(plane, d, [a, b], length=0.05)
+    >>> bool(r.band[20 * 41 + 20]), bool(r.distance[20 * 41 + 20] < d[20 * 41 + 20]), bool(r.band[a])
+    (True, True, False)
+    """
+    t0 = time.perf_counter()
+    mesh = check_mesh(mesh)
+    n = mesh.n_vertices
+    d = as_vertex_field(distance, "distance", n, nan_ok=False)
+    fixed = vertex_indices(sources, "sources", n)
+    ell = ridge_rounding_length(mesh, m) if length is None else check_number(length, "length", low=0, low_open=True)
+    band = cut_locus_band(mesh, d, 2 * RIDGE_BAND * ell, sources=fixed)
+    band[fixed] = False
+    out = d.copy()
+    inner = np.flatnonzero(band)
+    notes: list[str] = []
+    if inner.size:
+        H = sp.csr_matrix(hessian_energy_matrix(mesh, notes) if energy is None else energy)
+        rows = H[inner]
+        mass = sp.diags(barycentric_mass(mesh).diagonal()[inner] / ell**4)
+        outside = np.where(band | ~np.isfinite(d), 0.0, d)
+        factor, _ = factor_matrix(rows[:, inner] + mass)
+        out[inner] = factor(mass @ d[inner] - rows @ outside)
+    return RidgeRounding(out, band, float(ell), time.perf_counter() - t0, tuple(notes))
