@@ -424,6 +424,9 @@ CLAIMS: list[Claim] = [
        (README, "0.24–0.37 % mean error at 2.4–3.3× the heat method's time"),
        (README, "it had 0.33–2.2 % mean error (the default: 0.92–3.8 %), a ridge of 0.29–0.60"),
        (ADAPTED, "the ridge figure goes from 0.77–1.06 to 0.29–0.37")),
+    _r("adapted-switch", "2026-12-06", "`python benchmarks/accuracy_per_second.py` (run 6 of "
+       "docs/dev/accuracy_per_second.md: the three invocations of choice-adapted); from n/2: " + NO_SCRIPT,
+       (BENCH, "the default-switch rule passes from vertex 0 on 7 of the 9 surfaces of ≥ 20K faces")),
     _r("rows-default", "2026-12-06", "`python benchmarks/row_default.py`",
        (PERF, "0.063 s (28× heat), 2.04 %"), (PERF, "cost 1.5–2.3× `qclp`'s")),
     _r("adapted-source-snap", "2026-12-06", "`python benchmarks/adapted_levers.py fandisk`",

@@ -82,6 +82,12 @@ def test_bad_input_names_the_parameter(plane, kwargs, match):
         cg.round_ridge(plane, args.pop("distance"), args.pop("sources"), **args)
 
 
+def test_a_mesh_that_is_not_a_surface_is_refused(plane):
+    d, sources = _two_sources(plane)
+    with pytest.raises(TypeError, match="mesh"):
+        cg.round_ridge(plane.V, d, sources)
+
+
 @pytest.fixture(scope="module")
 def cylinder():
     return cg.cylinder(48, 24, height=3.0)  # 2304 faces; from one vertex the fronts meet on the opposite line

@@ -60,23 +60,18 @@ little.
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import dijkstra
 
-from ..operators.gradient import gradient_blocks, gradient_norms, triangle_frames
+from ..operators import ridge as _ridge
 from ..operators.laplacian import barycentric_mass
 from ..validation import as_vertex_field, check_count, check_number, vertex_indices, vertex_mask
 from ._validate import check_mesh
 from .errors import error_stats, percentile
 
 
-def _ring_dilate(mesh, mask: np.ndarray, rings: int) -> np.ndarray:
-    A = mesh.vertex_adjacency
-    A = sp.csr_matrix((np.ones_like(A.data), A.indices, A.indptr), shape=A.shape)
-    out = mask.copy()
-    for _ in range(rings):
-        out = out | (A @ out.astype(np.float64) > 0)
-    return out
+def _source_mask(mesh, d, sources) -> np.ndarray:
+    """(n,) bool: the source vertices given, or where ``d`` is 0 when none are."""
+    n = mesh.n_vertices
+    return d == 0 if sources is None else np.isin(np.arange(n), vertex_indices(sources, "sources", n))
 
 
 def ridge_band(mesh, d_exact, rings: int = 2, *, sources=None, threshold: float = 0.9,
@@ -121,20 +116,9 @@ def ridge_band(mesh, d_exact, rings: int = 2, *, sources=None, threshold: float 
     d_exact = as_vertex_field(d_exact, "d_exact", mesh.n_vertices)
     rings = check_count(rings, "rings", minimum=0)
     exclude_radius = check_number(exclude_radius, "exclude_radius", low=0)
-    n = mesh.n_vertices
-    src = d_exact == 0 if sources is None else np.isin(np.arange(n), vertex_indices(sources, "sources", n))
-    finite = np.isfinite(d_exact)
-    h_v = mesh.vertex_adjacency.max(axis=1).toarray().ravel()
-    near_src = _ring_dilate(mesh, src, 1) | (finite & (d_exact < exclude_radius * h_v))
-    valid = finite[mesh.F].all(axis=1) & (mesh.face_areas > 0) & ~near_src[mesh.F].any(axis=1)
-    norms = gradient_norms(mesh, np.where(finite, d_exact, 0.0))
-    seeds = np.zeros(mesh.n_vertices, dtype=bool)
-    seeds[mesh.F[valid & (norms < threshold)].ravel()] = True
-    edges, jumps = edge_gradient_jumps(mesh, d_exact, signed=True)
-    with np.errstate(invalid="ignore"):
-        crease = (jumps < -jump_threshold) & ~near_src[edges[:, 0]] & ~near_src[edges[:, 1]]
-    seeds[edges[crease].ravel()] = True
-    return _ring_dilate(mesh, seeds, rings) & finite
+    seeds = _ridge.ridge_seeds(mesh, d_exact, _source_mask(mesh, d_exact, sources), threshold=threshold,
+                               jump_threshold=jump_threshold, exclude_radius=exclude_radius)
+    return _ridge.ring_dilate(mesh, seeds, rings) & np.isfinite(d_exact)
 
 
 def interior_edges(mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -153,16 +137,7 @@ def interior_edges(mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     opposite : (k, 2) int64 ndarray
         The vertex of each face opposite the edge.
     """
-    mesh = check_mesh(mesh)
-    # the mesh's edge table (cell_edges: the edge opposite each corner), one row per (corner, face), corner-major
-    face = np.tile(np.arange(mesh.n_faces), 3)
-    opp = mesh.F.T.ravel()
-    order = np.argsort(mesh.cell_edges.T.ravel(), kind="stable")
-    counts = mesh.edge_cell_counts
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    two = np.flatnonzero(counts == 2)
-    first, second = order[starts[two]], order[starts[two] + 1]
-    return mesh.edges[two], np.column_stack([face[first], face[second]]), np.column_stack([opp[first], opp[second]])
+    return _ridge.interior_edges(check_mesh(mesh))
 
 
 def triangle_gradients_3d(mesh, d) -> np.ndarray:
@@ -179,10 +154,7 @@ def triangle_gradients_3d(mesh, d) -> np.ndarray:
         Lies in each triangle's plane.
     """
     mesh = check_mesh(mesh)
-    d = as_vertex_field(d, "d", mesh.n_vertices)
-    g2 = np.einsum("tij,tj->ti", gradient_blocks(mesh), d[mesh.F])
-    ex, ey = triangle_frames(mesh)
-    return g2[:, :1] * ex + g2[:, 1:] * ey
+    return _ridge.triangle_gradients_3d(mesh, as_vertex_field(d, "d", mesh.n_vertices))
 
 
 def edge_gradient_jumps(mesh, d, *, signed: bool = False) -> tuple[np.ndarray, np.ndarray]:
@@ -208,26 +180,7 @@ def edge_gradient_jumps(mesh, d, *, signed: bool = False) -> tuple[np.ndarray, n
         has zero area.
     """
     mesh = check_mesh(mesh)
-    d = as_vertex_field(d, "d", mesh.n_vertices)
-    edges, faces, opp = interior_edges(mesh)
-    finite = np.isfinite(d)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        g = triangle_gradients_3d(mesh, np.where(finite, d, 0.0))
-        V = mesh.V
-        a = V[edges[:, 0]]
-        u = V[edges[:, 1]] - a
-        u /= np.linalg.norm(u, axis=1, keepdims=True)
-        jump = np.zeros(len(edges))
-        for k in range(2):
-            r = V[opp[:, k]] - a
-            w = r - np.einsum("ij,ij->i", r, u)[:, None] * u
-            w /= np.linalg.norm(w, axis=1, keepdims=True)
-            jump += np.einsum("ij,ij->i", g[faces[:, k]], w)
-        if not signed:
-            jump = np.abs(jump)
-    ok = finite[mesh.F].all(axis=1) & (mesh.face_areas > 0)
-    jump[~(ok[faces[:, 0]] & ok[faces[:, 1]])] = np.nan
-    return edges, jump
+    return _ridge.edge_gradient_jumps(mesh, as_vertex_field(d, "d", mesh.n_vertices), signed=signed)
 
 
 def ridge_sharpness(mesh, d, band) -> dict:
@@ -348,12 +301,11 @@ def cut_locus_band(mesh, d_exact, width: float, *, sources=None, threshold: floa
     (n,) bool ndarray
     """
     width = check_number(width, "width", low=0, low_open=True)
-    seeds = ridge_band(mesh, d_exact, 0, sources=sources, threshold=threshold, jump_threshold=jump_threshold,
-                       exclude_radius=exclude_radius)
-    if not seeds.any():
-        return seeds
-    dist = dijkstra(mesh.vertex_adjacency, indices=np.flatnonzero(seeds), min_only=True, limit=0.5 * width)
-    return (dist <= 0.5 * width) & np.isfinite(as_vertex_field(d_exact, "d_exact", mesh.n_vertices))
+    mesh = check_mesh(mesh)
+    d_exact = as_vertex_field(d_exact, "d_exact", mesh.n_vertices)
+    exclude_radius = check_number(exclude_radius, "exclude_radius", low=0)
+    return _ridge.cut_locus_band(mesh, d_exact, width, _source_mask(mesh, d_exact, sources), threshold=threshold,
+                                 jump_threshold=jump_threshold, exclude_radius=exclude_radius)
 
 
 def ridge_deficit(mesh, d, d_exact, width: float, *, sources=None, threshold: float = 0.9,

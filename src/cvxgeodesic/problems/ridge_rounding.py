@@ -3,7 +3,7 @@
 An order-2 field read at the user's vertices (an adapted solve, :mod:`cvxgeodesic.strategies.adapted`) is as creased
 at the ridge as the exact field, and the order-2 smoothness energy of ``φ = d²`` rounds that crease only by flattening
 the whole field (docs/dev/adapted-log.md, "The default switch"). :func:`round_ridge` rounds the ridge alone: in a band
-around the field's own cut locus (:func:`~cvxgeodesic.evaluation.smoothness.cut_locus_band` of the field, every vertex
+around the field's own cut locus (:func:`~cvxgeodesic.operators.ridge.cut_locus_band` of the field, every vertex
 within :data:`RIDGE_BAND` lengths of it) the values are replaced by the minimizer of
 
     ``∫ |∇²u|² dA + ℓ⁻⁴ ∫ (u − d)² dA``  (the curved Hessian energy, the barycentric mass)
@@ -26,14 +26,14 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
+from numpy.typing import ArrayLike
 
-from ..evaluation._validate import check_mesh
-from ..evaluation.smoothness import cut_locus_band
 from ..linalg import factor_matrix
 from ..mesh.trimesh import TriMesh
 from ..operators.energies import hessian_energy_matrix
 from ..operators.laplacian import barycentric_mass
-from ..validation import as_vertex_field, check_number, vertex_indices
+from ..operators.ridge import cut_locus_band
+from ..validation import as_vertex_field, check_number, check_type, vertex_indices
 from .formulations import KAPPA
 
 __all__ = ["RIDGE_BAND", "RIDGE_LENGTH", "RidgeRounding", "ridge_rounding_length", "round_ridge"]
@@ -87,7 +87,7 @@ def ridge_rounding_length(mesh: TriMesh, m: float = 1.0) -> float:
     return RIDGE_LENGTH * float(np.cbrt(m * KAPPA["hessian"])) * float(np.sqrt(mesh.face_areas.sum()))
 
 
-def round_ridge(mesh: TriMesh, distance: np.ndarray, sources, *, length: float | None = None, m: float = 1.0,
+def round_ridge(mesh: TriMesh, distance: ArrayLike, sources: ArrayLike, *, length: float | None = None, m: float = 1.0,
                 energy: sp.spmatrix | None = None) -> RidgeRounding:
     """Round a distance field's ridge (cut locus) over a length, leaving the rest of it as it is.
 
@@ -114,6 +114,8 @@ def round_ridge(mesh: TriMesh, distance: np.ndarray, sources, *, length: float |
 
     Raises
     ------
+    TypeError
+        ``mesh`` not a :class:`~cvxgeodesic.TriMesh`.
     ParameterError
         ``distance`` not of length ``n`` or NaN, a source index out of range, ``length`` or ``m`` not positive.
 
@@ -132,12 +134,14 @@ def round_ridge(mesh: TriMesh, distance: np.ndarray, sources, *, length: float |
     (True, True, False)
     """
     t0 = time.perf_counter()
-    mesh = check_mesh(mesh)
+    mesh = check_type(mesh, "mesh", TriMesh, "a TriMesh")
     n = mesh.n_vertices
     d = as_vertex_field(distance, "distance", n, nan_ok=False)
     fixed = vertex_indices(sources, "sources", n)
     ell = ridge_rounding_length(mesh, m) if length is None else check_number(length, "length", low=0, low_open=True)
-    band = cut_locus_band(mesh, d, 2 * RIDGE_BAND * ell, sources=fixed)
+    is_source = np.zeros(n, dtype=bool)
+    is_source[fixed] = True
+    band = cut_locus_band(mesh, d, 2 * RIDGE_BAND * ell, is_source)
     band[fixed] = False
     out = d.copy()
     inner = np.flatnonzero(band)
