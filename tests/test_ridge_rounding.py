@@ -133,3 +133,27 @@ def test_distance_at_and_gradient_read_the_rounded_field(cylinder):
     along = np.einsum("pj,pj->p", res.field.gradient_at(faces, B0), edge)
     # all but a few points (where the step crosses an edge of the solve mesh, whose field has a kink there)
     assert np.mean(np.abs(along - fd) <= 1e-3 * np.abs(fd) + 1e-12) > 0.95
+
+
+def test_smoothed_adapted_field_stays_exact_on_a_flat_mesh():
+    """One source on a flat square: no cut locus, nothing rounded, and order 2 is exact there."""
+    grid = cg.grid_plane(16, jitter=0.2, seed=3)
+    res = cg.GeodesicSolver(grid, "qcqp-hessian", order=2, resolution=80).solve(119)
+    assert res.info.extra["adapted"]["ridge_rounding"]["band_vertices"] == 0
+    np.testing.assert_allclose(res.distance, np.linalg.norm(grid.V - grid.V[119], axis=1), atol=1e-6)
+
+
+def test_two_sources_on_a_flat_mesh_are_rounded_between_them_only(monkeypatch):
+    grid = cg.grid_plane(24)  # cell 1/24
+    a, b = 12 * 25 + 3, 12 * 25 + 21  # their fronts meet on x = 0.5
+    smooth = cg.GeodesicSolver(grid, "qcqp-hessian", order=2, resolution=300, m=30).solve([a, b])
+    length = smooth.info.extra["adapted"]["ridge_rounding"]["length"]
+    assert length == pytest.approx(ridge_rounding_length(grid, 30.0))
+    monkeypatch.setattr(adapted, "round_ridge", lambda mesh, d, *a, **k: RidgeRounding(d, d < 0, 1.0, 0.0))
+    plain = cg.GeodesicSolver(grid, "qcqp-hessian", order=2, resolution=300, m=30).solve([a, b])
+    changed = smooth.distance != plain.distance
+    ridge = np.abs(grid.V[:, 0] - 0.5) < 1e-9
+    assert smooth.distance[ridge].mean() < plain.distance[ridge].mean() - 1e-3  # the crease is lowered
+    # no ridge is looked for within 3 longest edges of a source (the cone's tip): nothing changes there
+    near = np.minimum(*(np.linalg.norm(grid.V - grid.V[s], axis=1) for s in (a, b))) < 3 / 24 * np.sqrt(2) - length
+    assert not changed[near].any() and near.sum() > 20
