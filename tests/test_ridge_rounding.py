@@ -157,3 +157,22 @@ def test_two_sources_on_a_flat_mesh_are_rounded_between_them_only(monkeypatch):
     # no ridge is looked for within 3 longest edges of a source (the cone's tip): nothing changes there
     near = np.minimum(*(np.linalg.norm(grid.V - grid.V[s], axis=1) for s in (a, b))) < 3 / 24 * np.sqrt(2) - length
     assert not changed[near].any() and near.sum() > 20
+
+
+def test_the_default_length_rounds_about_as_the_default_method_does():
+    """One m, one rounding: two sources on a jittered square, the ridge's deficit below the exact field after
+    ``round_ridge`` at m = 1 against the default method's (order 1, m = 1) beyond `qclp`'s (measured 1.78x at 64²,
+    1.23x at 128²: widths 1.33x and 1.11x, the square root)."""
+    from cvxgeodesic.evaluation.smoothness import ridge_deficit
+
+    g = cg.grid_plane(64, jitter=0.25, seed=1)
+    a, b = (int(np.argmin(np.linalg.norm(g.V - [x, 0.5, 0.0], axis=1))) for x in (0.25, 0.75))
+    exact = np.minimum(*(np.linalg.norm(g.V - g.V[s], axis=1) for s in (a, b)))
+
+    def deficit(d):
+        return ridge_deficit(g, d, exact, 0.3, sources=[a, b])["deficit_integral"]
+
+    rounded = deficit(cg.round_ridge(g, exact, [a, b]).distance)
+    default = deficit(cg.GeodesicSolver(g).solve([a, b]).distance) - deficit(
+        cg.GeodesicSolver(g, "qclp").solve([a, b]).distance)
+    assert 1.0 < rounded / default < 2.5
