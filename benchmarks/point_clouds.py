@@ -29,6 +29,10 @@ closest point of the subsample's triangles (the order-2 program on fewer points,
 meshes; not a library option: docs/dev/adapted-log.md has why). The source is its point's closest point there; the
 time includes the subsampling.
 
+``--resolution auto,0.25`` adds rows of ``qclp`` at order 2 with ``resolution=`` (the library's option: order 2 on a
+quadric copy of the surface through the points, :meth:`~cvxgeodesic.mesh.pointcloud.PointCloud.surface`, answered at
+every point; the time includes building the cloud and the copy).
+
 ``--neighbours 12,20,30`` measures the neighbour count instead: ``qclp`` at both orders on the union of the fans of
 :func:`~cvxgeodesic.mesh.pointcloud.local_fans` (potpourri3d's construction, whose k is fixed at 30; at k = 30 they
 build the same triangles on evenly sampled clouds), after a row on potpourri3d's own fans.
@@ -109,6 +113,7 @@ def main() -> None:
                     "passes of jet projection (e.g. 1,2), and the floor row")
     ap.add_argument("--normals", action="store_true", help="also qclp at both orders on the first set of the cloud "
                     "with normals (the mesh's vertex normals; on resampled clouds each point's face normal)")
+    ap.add_argument("--resolution", default="", help="also qclp order 2 with these resolution= values (e.g. auto,0.25)")
     ap.add_argument("--subsample", default="", help="also qclp order 2 on Poisson-disk subsamples with about these "
                     "fractions of the points (e.g. 0.2,0.25), answered at every point")
     ap.add_argument("--resample", default="", help="instead of the vertices: random surface points, these fractions "
@@ -133,6 +138,8 @@ def main() -> None:
                     compare(name, noise, P, exact, src, sets, args)
                     if args.normals:
                         compare_normals(name, noise, P, normals, exact, src, sets[0], args)
+                    if args.resolution:
+                        compare_resolution(name, noise, P, exact, src, args)
                     if args.subsample:
                         compare_subsampled(name, noise, P, exact, src, args)
                     if args.denoise:
@@ -237,6 +244,20 @@ def compare_denoised(name: str, noise: float, P: np.ndarray, exact: np.ndarray, 
             d, t = timed(solve, args.repeats)
             row(name, noise, f"qclp order {order}, {kind}, denoised ({passes} pass{'es' if passes > 1 else ''})", d,
                 exact, src, t, t_heat)
+
+
+def compare_resolution(name: str, noise: float, P: np.ndarray, exact: np.ndarray, src: int, args) -> None:
+    """Rows of ``qclp`` at order 2 with each ``--resolution`` value; a fallback's reason goes in the label."""
+    _, t_heat = timed_pc_heat(P, src, args.repeats)
+    for value in args.resolution.split(","):
+        resolution = value if value == "auto" else float(value)
+
+        def solve(resolution=resolution):
+            return cg.GeodesicSolver(cg.PointCloud(P), "qclp", order=2, resolution=resolution).solve(src)
+        res, t = timed(solve, args.repeats)
+        ad = res.info.extra["adapted"]
+        how = f"{ad['faces']} faces" if ad["fallback"] is None else f"fallback: {ad['fallback']}"
+        row(name, noise, f"qclp order 2, resolution={value} ({how})", res.distance, exact, src, t, t_heat)
 
 
 def poisson_subsample(P: np.ndarray, fraction: float, seed: int = 1) -> np.ndarray:

@@ -173,7 +173,8 @@ class GeodesicSolver:
         at their exact positions, and answers on this mesh: ``distance`` per vertex, ``distance_at`` and
         ``geodesic_path`` on this surface; ``info.extra["adapted"]`` records the solve mesh, its times and, with
         ``estimate_error=True``, an error estimate. Non-manifold meshes, several components and faces of zero area
-        are solved on this mesh at order 1 instead, with a note. Surfaces only; not with ``multires``. None: the
+        are solved on this mesh at order 1 instead, with a note. Surfaces, and point clouds (the copy decimated from
+        the surface through the points, ``PointCloud.surface``; docs/pointclouds.md); not with ``multires``. None: the
         mesh's domain's
         (:attr:`cvxgeodesic.capabilities.Domain.default_resolution`: ``"mesh"``).
     estimate_error : bool, default False

@@ -191,8 +191,6 @@ RULES: tuple[Rule, ...] = (
     # an adapted solve (resolution= other than "mesh": order 2 on a decimated copy, strategies/adapted.py)
     Rule("resolution", "resolution= decimates triangle meshes; tetrahedral meshes are solved on themselves",
          domains=("volume",)),
-    Rule("resolution", "resolution= decimates a mesh; a cloud's triangles are a soup that quadric decimation does "
-         "not keep; give resolution='mesh'", domains=("cloud",)),
     Rule("resolution", "resolution= solves at order 2, which the baselines do not have; give resolution='mesh'",
          BASELINE_METHODS),
     Rule("resolution", "resolution= solves at order 2, which the LC formulations do not have; use qclp or a qcqp "

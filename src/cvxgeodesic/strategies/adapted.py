@@ -155,6 +155,18 @@ def _euler(mesh: TriMesh) -> int:
     return int(mesh.referenced.sum()) - len(mesh.edges) + mesh.n_faces
 
 
+def _decimation_source(mesh: TriMesh) -> tuple[TriMesh, str | None]:
+    """The surface the copies are decimated from, and why there is none: the mesh itself, or for a point cloud's
+    soup the surface through its points (:meth:`~cvxgeodesic.mesh.pointcloud.PointCloud.surface`; the answer is
+    still read at every point of the cloud)."""
+    if getattr(mesh, "domain", "surface") != "cloud":
+        return mesh, None
+    surface, why = mesh.cloud.surface()  # type: ignore[attr-defined]
+    if surface is None:
+        return mesh, f"no manifold surface through the points ({why})"
+    return surface, None
+
+
 def _unsuitable(mesh: TriMesh) -> str | None:
     """Why the mesh is not decimated (solved on itself instead), or None."""
     if not mesh.is_edge_manifold:
@@ -475,13 +487,14 @@ class Adapted:
                                        "fallback": None, "order": 2, "error_estimate": None,
                                        "error_estimate_method": None}
         coarse: TriMesh | None = None
-        small = target is None or target >= mesh.n_faces
+        self.source, why = _decimation_source(mesh)
+        small = why is None and (target is None or target >= self.source.n_faces)
         if target is None or small:
-            why: str | None = f"the target of {target} faces is not below the mesh's {mesh.n_faces}"
-        else:
-            why = _unsuitable(mesh)
+            why = f"the target of {target} faces is not below the mesh's {self.source.n_faces}"
+        elif why is None:
+            why = _unsuitable(self.source)
             if why is None:
-                coarse, why, made = _decimated(mesh, target)
+                coarse, why, made = _decimated(self.source, target)
                 self._record_decimation(made, "")
         self.record["decimate_time"] = time.perf_counter() - t0
         self.copy: _Copy | None = None
@@ -516,6 +529,9 @@ class Adapted:
         if self.copy is None or config.energy is None or not config.m:
             self.record["ridge_rounding"] = None
             return None
+        if self.source is not config.surface:  # a cloud: its soup's ridge is not rounded
+            self.record["ridge_rounding"] = "none: a point cloud (the ridge of its triangle soup is not rounded)"
+            return None
         length = ridge_rounding_length(config.surface, config.m)
         self.record["ridge_rounding"] = {"length": length}
         return length
@@ -543,7 +559,7 @@ class Adapted:
     def _companion(self, faces: int) -> None:
         """The coarser and finer copies of the error estimate (none, with the reason, when a decimation fails)."""
         t0 = time.perf_counter()
-        mesh = self.config.surface
+        mesh = self.source
         # the solve copy's aggressiveness first: a companion folded where the copy is not would be an estimate of the
         # fold (bimba at 1/10: the agg-5 copy 0.33 % off, the agg-7 companion 1.58 %, the estimate 1.44 %)
         coarser, why, made = _decimated(mesh, max(MIN_RESOLUTION_FACES, int(ESTIMATE_RATIO * faces)),
@@ -562,7 +578,7 @@ class Adapted:
             return
         self.companions = [_Copy(self.config, coarser), _Copy(self.config, finer)]
         self.record["estimate_faces"] = [coarser.n_faces, finer.n_faces]
-        fine = "the mesh itself" if finer is mesh else f"a {finer.n_faces}-face copy"
+        fine = "the mesh itself" if finer is mesh and mesh is self.config.surface else f"a {finer.n_faces}-face copy"
         self.record["error_estimate_method"] = (
             f"two resolutions around the solve's: {ESTIMATE_FACTOR:g} x the geometric mean of the mean relative "
             f"differences to the fields solved on a {coarser.n_faces}-face copy ({ESTIMATE_RATIO:g} of the solve "

@@ -1,0 +1,51 @@
+"""Point clouds at ``resolution=``: order 2 on a quadric copy of the surface through the points, answered at every
+point."""
+
+import numpy as np
+import pytest
+
+import cvxgeodesic as cg
+from conftest import plane_points, sphere_points
+from cvxgeodesic.mesh.pointcloud import PointCloud
+
+
+def test_a_plane_cloud_is_exact_at_every_point():
+    P = plane_points(30, seed=2)  # 900 points (seed 1: the copy has a sliver at a corner, exact to 2e-4 only there)
+    cloud = PointCloud(P)
+    res = cg.GeodesicSolver(cloud, "qclp", resolution=300).solve(12)
+    ad = res.info.extra["adapted"]
+    assert ad["fallback"] is None and ad["faces"] < cloud.surface()[0].n_faces and ad["order"] == 2
+    assert any("copy" in n for n in res.info.notes)
+    np.testing.assert_allclose(res.distance, np.linalg.norm(cloud.P - cloud.P[12], axis=1), atol=1e-6)
+    p = cg.SurfacePoint(40, [0.2, 0.3, 0.5])  # a point of the cloud's triangles: at its position on the copy
+    assert abs(cg.distance_at(cloud, res, p) - np.linalg.norm(p.position(cloud.mesh) - cloud.P[12])) < 1e-6
+
+
+def test_a_sphere_cloud_is_close_to_the_great_circle_distance():
+    cloud = PointCloud(sphere_points(3000))
+    res = cg.GeodesicSolver(cloud, "qclp", resolution=0.25).solve(0)
+    great_circle = np.arccos(np.clip(cloud.P @ cloud.P[0], -1.0, 1.0))
+    assert res.info.extra["adapted"]["fallback"] is None
+    assert np.isfinite(res.distance).all()
+    # the copy's chords shorten it: about the error of order 2 on a sphere mesh of the copy's size (measured 0.4 %)
+    assert np.abs(res.distance - great_circle)[great_circle > 0.3].mean() < 0.01 * np.pi
+    path = cg.geodesic_path(cloud, res, 1500)
+    assert np.linalg.norm(np.diff(path, axis=0), axis=1).sum() == pytest.approx(res.distance[1500], rel=0.05)
+
+
+def test_a_cloud_of_two_pieces_falls_back_to_order_1_with_a_note():
+    P = plane_points(20)
+    cloud = PointCloud(np.vstack([P, P + [5.0, 0.0, 0.0]]))
+    res = cg.GeodesicSolver(cloud, "qclp", resolution=200).solve(0)
+    ad = res.info.extra["adapted"]
+    assert ad["order"] == 1 and "pieces" in ad["fallback"]
+    assert any("no manifold surface through the points" in n for n in res.info.notes)
+    assert np.isinf(res.distance[400:]).all() and np.isfinite(res.distance[:400]).all()
+
+
+def test_surface_through_the_points_is_manifold_and_keeps_the_indices():
+    cloud = PointCloud(sphere_points(1500))
+    surface, why = cloud.surface()
+    assert why is None and surface.is_edge_manifold and surface.n_components == 1
+    assert surface.n_vertices == cloud.n_points and np.array_equal(surface.V, cloud.P)
+    assert surface.n_faces <= cloud.mesh.n_faces
