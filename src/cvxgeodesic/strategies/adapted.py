@@ -96,6 +96,11 @@ RETRY_TARGETS_LATER = 3
 SOURCE_PATCH_EDGES = 3.0
 #: At most this many sources get a patch (each is an order-2 solve of its own).
 MAX_SOURCE_PATCHES = 8
+#: A point cloud's surface (:meth:`~cvxgeodesic.mesh.pointcloud.PointCloud.surface`) is decimated at this many targets
+#: per aggressiveness: a noisy cloud's surface has handles and holes that no nearby target mends (at 0.3 % noise every
+#: copy of kitten, bimba and max_planck was refused, and the 11 decimations tried cost 2-3x the point-cloud heat
+#: method's time before the fallback to order 1: docs/pointclouds.md).
+CLOUD_TARGETS = 1
 #: fast-simplification's aggressiveness for the copies, tried in turn (:func:`_decimated`): 7 first (its default, the
 #: best on most meshes), then 5 and 3 for a copy that 7 folds or breaks (measured in docs/adapted.md).
 RETRY_AGGS = (7.0, 5.0, 3.0)
@@ -179,12 +184,13 @@ def _unsuitable(mesh: TriMesh) -> str | None:
     return None
 
 
-def _decimated(mesh: TriMesh, target: int, first_agg: float | None = None
+def _decimated(mesh: TriMesh, target: int, first_agg: float | None = None, targets: int | None = None
                ) -> tuple[TriMesh | None, str | None, dict[str, Any]]:
     """The quadric copy of ``mesh`` with about ``target`` faces, ``(None, why, record)`` when no try gave one.
 
     The aggressiveness values of :data:`RETRY_AGGS` are tried in turn (``first_agg`` first when given), and at each
-    the targets of :data:`RETRY_TARGETS` (:data:`RETRY_TARGETS_LATER` of them after the first aggressiveness): a
+    the targets of :data:`RETRY_TARGETS` (:data:`RETRY_TARGETS_LATER` of them after the first aggressiveness; at most
+    ``targets`` of them when given: :data:`CLOUD_TARGETS` for a point cloud's surface): a
     copy that changes the topology is refused and the next target tried (the collapses that break a copy depend on
     where the decimation stops); a folded copy (:func:`fold_excess`) moves on to the next aggressiveness (its folds
     do not go away with a few faces more or less: bimba at 1/10). The first copy neither refused nor folded is kept;
@@ -207,7 +213,8 @@ def _decimated(mesh: TriMesh, target: int, first_agg: float | None = None
     mesh_turn = fold_reference(mesh)
     aggs = RETRY_AGGS if first_agg is None else (first_agg, *(a for a in RETRY_AGGS if a != first_agg))
     for i, agg in enumerate(aggs):
-        for factor in RETRY_TARGETS if i == 0 else RETRY_TARGETS[:RETRY_TARGETS_LATER]:
+        factors = RETRY_TARGETS if i == 0 else RETRY_TARGETS[:RETRY_TARGETS_LATER]
+        for factor in factors[:targets]:
             faces = max(MIN_RESOLUTION_FACES, int(round(factor * target)))
             coarse, why = _decimated_once(mesh, faces, agg)
             if coarse is None:
@@ -488,13 +495,14 @@ class Adapted:
                                        "error_estimate_method": None}
         coarse: TriMesh | None = None
         self.source, why = _decimation_source(mesh)
+        self._targets = None if self.source is mesh else CLOUD_TARGETS
         small = why is None and (target is None or target >= self.source.n_faces)
         if target is None or small:
             why = f"the target of {target} faces is not below the mesh's {self.source.n_faces}"
         elif why is None:
             why = _unsuitable(self.source)
             if why is None:
-                coarse, why, made = _decimated(self.source, target)
+                coarse, why, made = _decimated(self.source, target, targets=self._targets)
                 self._record_decimation(made, "")
         self.record["decimate_time"] = time.perf_counter() - t0
         self.copy: _Copy | None = None
@@ -563,12 +571,12 @@ class Adapted:
         # the solve copy's aggressiveness first: a companion folded where the copy is not would be an estimate of the
         # fold (bimba at 1/10: the agg-5 copy 0.33 % off, the agg-7 companion 1.58 %, the estimate 1.44 %)
         coarser, why, made = _decimated(mesh, max(MIN_RESOLUTION_FACES, int(ESTIMATE_RATIO * faces)),
-                                        self.record["agg"])
+                                        self.record["agg"], self._targets)
         self._record_decimation(made, "estimate_")
         finer: TriMesh | None = mesh
         fine_target, made = int(ESTIMATE_FINER * faces), {"tries": []}
         if coarser is not None and fine_target < mesh.n_faces:
-            finer, why_fine, made = _decimated(mesh, fine_target, self.record["agg"])
+            finer, why_fine, made = _decimated(mesh, fine_target, self.record["agg"], self._targets)
             why = None if finer is not None else f"the finer copy failed ({why_fine})"
         self._record_decimation(made, "estimate_fine_")
         self.record["decimate_time"] += time.perf_counter() - t0
