@@ -49,3 +49,16 @@ def test_surface_through_the_points_is_manifold_and_keeps_the_indices():
     assert why is None and surface.is_edge_manifold and surface.n_components == 1
     assert surface.n_vertices == cloud.n_points and np.array_equal(surface.V, cloud.P)
     assert surface.n_faces <= cloud.mesh.n_faces
+
+
+def test_a_clouds_refused_copies_cost_one_decimation_per_aggressiveness(monkeypatch):
+    from cvxgeodesic.strategies import adapted
+
+    calls = []
+    monkeypatch.setattr(adapted, "_decimated_once",
+                        lambda mesh, target, agg=7.0: calls.append(agg) or (None, "refused (test)"))
+    res = cg.GeodesicSolver(PointCloud(plane_points(30, seed=2)), "qclp", resolution=300).solve(0)
+    assert calls == list(adapted.RETRY_AGGS) and res.info.extra["adapted"]["fallback"] == "refused (test)"
+    calls.clear()
+    cg.GeodesicSolver(cg.grid_plane(30), "qclp", resolution=300).solve(0)  # a mesh: every target at every agg
+    assert len(calls) == len(adapted.RETRY_TARGETS) + (len(adapted.RETRY_AGGS) - 1) * adapted.RETRY_TARGETS_LATER
