@@ -1,5 +1,8 @@
 """Adapted solves: order 2 on a quadric-decimated copy of the surface, the answer on the user's mesh.
 
+A point cloud's copy is decimated from the surface through its points (:meth:`PointCloud.surface
+<cvxgeodesic.mesh.pointcloud.PointCloud.surface>`, :func:`_decimation_source`), and the answer is read at every point.
+
 The resolution a distance field needs is not the resolution of the file it came in (issue 43, DESIGN.md §11).
 :class:`Adapted` decimates the user's mesh once, in its constructor (quadric error, ``fast-simplification``, the
 boundary kept vertex for vertex), and every solve then runs the order-2 strategy (:class:`~.order2.Order2`) on that
