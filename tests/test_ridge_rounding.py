@@ -176,3 +176,35 @@ def test_the_default_length_rounds_about_as_the_default_method_does():
     default = deficit(cg.GeodesicSolver(g).solve([a, b]).distance) - deficit(
         cg.GeodesicSolver(g, "qclp").solve([a, b]).distance)
     assert 1.0 < rounded / default < 2.5
+
+
+def test_band_rows_are_the_whole_meshs_energy_rows():
+    from cvxgeodesic.operators.energies import curved_hessian_energy
+    from cvxgeodesic.problems.ridge_rounding import band_energy_rows
+
+    cyl = cg.cylinder(48, 24, height=3.0)
+    d = cg.GeodesicSolver(cyl, "qclp").solve(0).distance
+    band = cg.round_ridge(cyl, d, [0], m=30.0).band
+    assert 0 < band.sum() < 0.5 * cyl.n_vertices
+    whole = curved_hessian_energy(cyl).tocsr()[band]
+    near = band_energy_rows(cyl, band)[band]
+    assert abs(whole - near).max() <= 1e-12 * abs(whole).max()
+
+
+def test_an_indefinite_band_block_is_rounded_with_the_planar_energy(plane, monkeypatch):
+    from cvxgeodesic.linalg import NotPositiveDefiniteError
+    from cvxgeodesic.problems import ridge_rounding
+
+    real, calls = ridge_rounding.factor_matrix, []
+
+    def first_fails(K):
+        calls.append(1)
+        if len(calls) == 1:
+            raise NotPositiveDefiniteError("test")
+        return real(K)
+
+    monkeypatch.setattr(ridge_rounding, "factor_matrix", first_fails)
+    d, sources = _two_sources(plane)
+    r = cg.round_ridge(plane, d, sources, length=0.05)
+    assert len(calls) == 2 and any("planar Hessian energy" in n for n in r.notes)
+    assert np.isfinite(r.distance).all() and r.distance[20 * 41 + 20] < d[20 * 41 + 20]

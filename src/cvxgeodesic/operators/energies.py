@@ -77,7 +77,8 @@ def _squared_laplacian(S: sp.spmatrix, mass: np.ndarray) -> sp.csc_matrix:
 
 
 def hessian_energy_matrix(mesh: TriMesh, notes: list[str] | None = None, *,
-                          analyse: Callable[[sp.csc_matrix], SymbolicCholesky] | None = None) -> sp.csc_matrix:
+                          analyse: Callable[[sp.csc_matrix], SymbolicCholesky] | None = None,
+                          planar: bool | None = None) -> sp.csc_matrix:
     """Curved-surface Hessian energy (paper eq. 18; Stein et al. TOG 2020) via libigl.
 
     ``E(d) = dᵀ Q d ≈ ∫ ‖Hess d‖² dA``. It vanishes on functions linear on a
@@ -99,6 +100,11 @@ def hessian_energy_matrix(mesh: TriMesh, notes: list[str] | None = None, *,
         own, e.g. the interior-point solver's, which it keeps); the PSD check then factors ``Q`` in it
         (:func:`~cvxgeodesic.linalg.is_positive_semidefinite`, ``analysis=``). Not called on a manifold cover
         (the cover has vertices of its own).
+    planar : bool, optional
+        None (default): the curved energy, or the planar one where the curved one is indefinite (the check
+        below). False: the curved energy, unchecked (for a caller that factorizes a part of it and checks that,
+        as the ridge rounding does on the faces near a band, whose cut edges can make the whole indefinite).
+        True: the planar energy.
 
     Warns
     -----
@@ -126,9 +132,12 @@ def hessian_energy_matrix(mesh: TriMesh, notes: list[str] | None = None, *,
             energy_mesh = TriMesh(energy_mesh.V, energy_mesh.F[keep], name=energy_mesh.name)
     energy_mesh = _oriented(energy_mesh, notes)
     n = energy_mesh.n_vertices
+    if planar:
+        Q = _padded_symmetric(igl.hessian_energy(energy_mesh.V, energy_mesh.F), n)
+        return Q if to_mesh is None else pull_back(Q, to_mesh, mesh.n_vertices)
     Q = curved_hessian_energy(energy_mesh)
     analysis = analyse(Q) if analyse is not None and to_mesh is None else None
-    if is_positive_semidefinite(Q, analysis=analysis) is False:
+    if planar is None and is_positive_semidefinite(Q, analysis=analysis) is False:
         # measured: lucy_20k and thingi_37881 (min eigenvalue -59 against a largest diagonal of 1.2e7); the
         # curvature correction of the curved energy is not PSD where the angle defect is large, and the QP would
         # then be non-convex. The planar Hessian energy (Stein et al. 2018) is PSD by construction.

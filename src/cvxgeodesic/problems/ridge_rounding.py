@@ -8,8 +8,10 @@ within :data:`RIDGE_BAND` lengths of it) the values are replaced by the minimize
 
     ``∫ |∇²u|² dA + ℓ⁻⁴ ∫ (u − d)² dA``  (the curved Hessian energy, the barycentric mass)
 
-with ``u = d`` outside the band (where the curved Hessian energy is indefinite, the planar one, with a note): a
-convex quadratic problem, one sparse Cholesky factorization of the band's size.
+with ``u = d`` outside the band: a convex quadratic problem, one sparse Cholesky factorization of the band's size.
+The energy's rows in the band are built on the faces near it (:func:`band_energy_rows`: the whole mesh's rows, at a
+fraction of the cost); where the band's block is not positive definite (the curved energy's curvature term is
+indefinite where angle defects are large), the planar Hessian energy of Stein et al. 2018 is used, with a note.
 For a crease of the field rounded over a width ``w`` the first term is about ``θ² L / w`` and the second
 ``θ² L w³ / ℓ⁴`` (``θ`` its turn, ``L`` its length): they balance at ``w = ℓ``, the rounding width. Off the band the
 field is unchanged bit for bit; a field without a ridge (one source on a plane) is returned as it is.
@@ -28,15 +30,16 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike
 
-from ..linalg import factor_matrix
+from ..linalg import NotPositiveDefiniteError, factor_matrix
 from ..mesh.trimesh import TriMesh
 from ..operators.energies import hessian_energy_matrix
 from ..operators.laplacian import barycentric_mass
-from ..operators.ridge import cut_locus_band
+from ..operators.ridge import cut_locus_band, ring_dilate
 from ..validation import as_vertex_field, check_number, check_type, vertex_indices
 from .formulations import KAPPA
 
-__all__ = ["RIDGE_BAND", "RIDGE_LENGTH", "RidgeRounding", "ridge_rounding_length", "round_ridge"]
+__all__ = ["ENERGY_RINGS", "RIDGE_BAND", "RIDGE_LENGTH", "RidgeRounding", "band_energy_rows", "ridge_rounding_length",
+           "round_ridge"]
 
 #: The rounding length is this times the order-1 Hessian energy's smoothing length at the multiplier ``m``.
 #: Measured with ``RIDGE_BAND = 1`` on bimba, horse, bunny and armadillo (sources vertex 0 and n/2, the adapted
@@ -44,6 +47,8 @@ __all__ = ["RIDGE_BAND", "RIDGE_LENGTH", "RidgeRounding", "ridge_rounding_length
 RIDGE_LENGTH = 1.0
 #: The band rounded: the vertices within this many rounding lengths (edge-graph distance) of the field's cut locus.
 RIDGE_BAND = 1.0
+#: :func:`band_energy_rows` builds the energy on the faces touching a vertex within this many rings of the band.
+ENERGY_RINGS = 2
 
 
 @dataclass(frozen=True)
@@ -87,6 +92,38 @@ def ridge_rounding_length(mesh: TriMesh, m: float = 1.0) -> float:
     return RIDGE_LENGTH * float(np.cbrt(m * KAPPA["hessian"])) * float(np.sqrt(mesh.face_areas.sum()))
 
 
+def band_energy_rows(mesh: TriMesh, band: np.ndarray, notes: list[str] | None = None, *,
+                     planar: bool = False) -> sp.csr_matrix:
+    """The Hessian energy's rows of the ``band`` vertices, built on the faces near the band only.
+
+    A row of the curved Hessian energy (:func:`~cvxgeodesic.operators.energies.hessian_energy_matrix`) sums the
+    blocks of the faces within one ring of its vertex; each block reads its face's neighbours across its edges, their
+    edge masses and its corners' angle defects. So the faces touching a vertex within :data:`ENERGY_RINGS` rings of
+    the band give the band's rows as the whole mesh's energy does (to rounding, on a mesh the energy takes as it is:
+    ``tests/test_ridge_rounding.py``), at a fraction of its cost when the band is small.
+
+    Parameters
+    ----------
+    mesh : TriMesh
+    band : (n,) bool ndarray
+    notes : list of str, optional
+        Gets the energy's repairs (:func:`~cvxgeodesic.operators.energies.hessian_energy_matrix`: a manifold cover,
+        the faces' orientation) on the faces near the band.
+    planar : bool
+        The planar Hessian energy instead of the curved one. The curved one is not checked here: its rows in the band
+        are the whole mesh's, and :func:`round_ridge` checks the band's block by factorizing it.
+
+    Returns
+    -------
+    (n, n) scipy.sparse.csr_matrix
+        Exact in the rows of ``band``; the other rows are of the faces near the band.
+    """
+    near = ring_dilate(mesh, band, ENERGY_RINGS)
+    faces = near[mesh.F].any(axis=1)
+    local = mesh if faces.all() else TriMesh(mesh.V, mesh.F[faces], name=mesh.name)
+    return sp.csr_matrix(hessian_energy_matrix(local, notes, planar=planar))
+
+
 def round_ridge(mesh: TriMesh, distance: ArrayLike, sources: ArrayLike, *, length: float | None = None, m: float = 1.0,
                 energy: sp.spmatrix | None = None) -> RidgeRounding:
     """Round a distance field's ridge (cut locus) over a length, leaving the rest of it as it is.
@@ -106,7 +143,8 @@ def round_ridge(mesh: TriMesh, distance: ArrayLike, sources: ArrayLike, *, lengt
         The multiplier of the default length.
     energy : (n, n) scipy.sparse matrix, optional
         The mesh's Hessian energy (:func:`~cvxgeodesic.operators.energies.hessian_energy_matrix`: the curved one,
-        or the planar one where the curved one is indefinite), when already built; built otherwise.
+        or the planar one where the curved one is indefinite), when already built; otherwise its rows in the band
+        are built on the faces near it (:func:`band_energy_rows`).
 
     Returns
     -------
@@ -147,10 +185,19 @@ def round_ridge(mesh: TriMesh, distance: ArrayLike, sources: ArrayLike, *, lengt
     inner = np.flatnonzero(band)
     notes: list[str] = []
     if inner.size:
-        H = sp.csr_matrix(hessian_energy_matrix(mesh, notes) if energy is None else energy)
-        rows = H[inner]
+        rows = sp.csr_matrix(band_energy_rows(mesh, band, notes) if energy is None else energy)[inner]
         mass = sp.diags(barycentric_mass(mesh).diagonal()[inner] / ell**4)
+        try:
+            factor, _ = factor_matrix(rows[:, inner] + mass)
+        except NotPositiveDefiniteError:
+            if energy is not None:
+                raise
+            # the curved energy's curvature term is not positive where angle defects are large (lucy_20k,
+            # thingi_37881): the planar energy, positive semidefinite by construction, as hessian_energy_matrix does
+            notes.append(f"{mesh.name}: the curved Hessian energy is indefinite near the ridge; the ridge rounded with "
+                         "the planar Hessian energy (Stein et al. 2018)")
+            rows = band_energy_rows(mesh, band, planar=True)[inner]
+            factor, _ = factor_matrix(rows[:, inner] + mass)
         outside = np.where(band | ~np.isfinite(d), 0.0, d)
-        factor, _ = factor_matrix(rows[:, inner] + mass)
         out[inner] = factor(mass @ d[inner] - rows @ outside)
     return RidgeRounding(out, band, float(ell), time.perf_counter() - t0, tuple(notes))
