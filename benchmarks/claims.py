@@ -419,12 +419,13 @@ CLAIMS: list[Claim] = [
     _r("choice-adapted", "2026-12-06", "`python benchmarks/accuracy_per_second.py --meshes spot.obj bimba.obj "
        "thingi_37881.stl bunny.obj armadillo.obj horse.ply --repeat 2`; `--meshes lucy_20k.obj dragon_20k.obj "
        "buddha.obj camelhead_open.off thingi_32770.stl beetle_open.off --repeat 2 --order2-max 0`; `--meshes "
-       "fandisk.obj --repeat 2` (12:01–12:06 UTC, load 0.15–0.96; docs/dev/accuracy_per_second.md, run 6)",
+       "fandisk.obj --repeat 2` (13:04–13:08 UTC, load 0.4–1.05, runs 7 and 6 (fandisk, 12:06) of "
+       "docs/dev/accuracy_per_second.md)",
        (README, "| 0.91 / 0.33 / 1.19 % |"), (README, "| 0.97 / 0.45 / 2.13 % |"),
-       (README, "0.24–0.37 % mean error at 2.4–3.3× the heat method's time"),
+       (README, "0.24–0.37 % mean error at 2.5–3.2× the heat method's time"),
        (README, "it had 0.33–2.2 % mean error (the default: 0.92–3.8 %), a ridge of 0.29–0.60"),
        (ADAPTED, "the ridge figure goes from 0.77–1.06 to 0.29–0.37")),
-    _r("adapted-switch", "2026-12-06", "`python benchmarks/accuracy_per_second.py` (run 6 of "
+    _r("adapted-switch", "2026-12-06", "`python benchmarks/accuracy_per_second.py` (run 7 of "
        "docs/dev/accuracy_per_second.md: the three invocations of choice-adapted); from n/2: " + NO_SCRIPT,
        (BENCH, "the default-switch rule passes from vertex 0 on 7 of the 9 surfaces of ≥ 20K faces")),
     _r("rows-default", "2026-12-06", "`python benchmarks/row_default.py`",
