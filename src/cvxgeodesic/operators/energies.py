@@ -132,22 +132,22 @@ def hessian_energy_matrix(mesh: TriMesh, notes: list[str] | None = None, *,
             energy_mesh = TriMesh(energy_mesh.V, energy_mesh.F[keep], name=energy_mesh.name)
     energy_mesh = _oriented(energy_mesh, notes)
     n = energy_mesh.n_vertices
+    if not planar:
+        Q = curved_hessian_energy(energy_mesh)
+        analysis = analyse(Q) if analyse is not None and to_mesh is None else None
+        if planar is None and is_positive_semidefinite(Q, analysis=analysis) is False:
+            # measured: lucy_20k and thingi_37881 (min eigenvalue -59 against a largest diagonal of 1.2e7); the
+            # curvature correction of the curved energy is not PSD where the angle defect is large, and the QP would
+            # then be non-convex. The planar Hessian energy (Stein et al. 2018) is PSD by construction.
+            # a local row's patch (measured: every patch of spot at r = 10 % of the diagonal, not the whole mesh)
+            where = ("on this patch, not necessarily on the whole mesh" if is_patch(mesh)
+                     else "on this mesh (sharp corners or large angle defects)")
+            message = (f"{mesh.name}: libigl's curved Hessian energy is indefinite {where}; using the planar Hessian "
+                       "energy (Stein et al. 2018) instead")
+            warn_user(message, IndefiniteEnergyWarning)
+            notes.append(message)
+            planar = True
     if planar:
-        Q = _padded_symmetric(igl.hessian_energy(energy_mesh.V, energy_mesh.F), n)
-        return Q if to_mesh is None else pull_back(Q, to_mesh, mesh.n_vertices)
-    Q = curved_hessian_energy(energy_mesh)
-    analysis = analyse(Q) if analyse is not None and to_mesh is None else None
-    if planar is None and is_positive_semidefinite(Q, analysis=analysis) is False:
-        # measured: lucy_20k and thingi_37881 (min eigenvalue -59 against a largest diagonal of 1.2e7); the
-        # curvature correction of the curved energy is not PSD where the angle defect is large, and the QP would
-        # then be non-convex. The planar Hessian energy (Stein et al. 2018) is PSD by construction.
-        # a local row's patch (measured: every patch of spot at r = 10 % of the diagonal, not the whole mesh)
-        where = ("on this patch, not necessarily on the whole mesh" if is_patch(mesh)
-                 else "on this mesh (sharp corners or large angle defects)")
-        message = (f"{mesh.name}: libigl's curved Hessian energy is indefinite {where}; using the planar Hessian "
-                   "energy (Stein et al. 2018) instead")
-        warn_user(message, IndefiniteEnergyWarning)
-        notes.append(message)
         Q = _padded_symmetric(igl.hessian_energy(energy_mesh.V, energy_mesh.F), n)
     return Q if to_mesh is None else pull_back(Q, to_mesh, mesh.n_vertices)
 
