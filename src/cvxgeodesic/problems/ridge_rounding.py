@@ -66,8 +66,8 @@ class RidgeRounding:
     time : float
         Seconds (band, energy, factorization and solve).
     notes : tuple of str
-        Substitutions made in the energy (:func:`~cvxgeodesic.operators.energies.hessian_energy_matrix`: the planar
-        Hessian energy where the curved one is indefinite, a manifold cover).
+        What the energy near the band needed (:func:`band_energy_rows`: a manifold cover, the faces' orientation)
+        and the planar Hessian energy where the band's block of the curved one is not positive definite.
     """
 
     distance: np.ndarray
@@ -124,8 +124,8 @@ def band_energy_rows(mesh: TriMesh, band: np.ndarray, notes: list[str] | None = 
     return sp.csr_matrix(hessian_energy_matrix(local, notes, planar=planar))
 
 
-def round_ridge(mesh: TriMesh, distance: ArrayLike, sources: ArrayLike, *, length: float | None = None, m: float = 1.0,
-                energy: sp.spmatrix | None = None) -> RidgeRounding:
+def round_ridge(mesh: TriMesh, distance: ArrayLike, sources: ArrayLike, *, length: float | None = None,
+                m: float = 1.0) -> RidgeRounding:
     """Round a distance field's ridge (cut locus) over a length, leaving the rest of it as it is.
 
     Parameters
@@ -141,10 +141,6 @@ def round_ridge(mesh: TriMesh, distance: ArrayLike, sources: ArrayLike, *, lengt
         The rounding width ``ℓ`` (> 0, the mesh's units); default :func:`ridge_rounding_length` at ``m``.
     m : float, default 1.0
         The multiplier of the default length.
-    energy : (n, n) scipy.sparse matrix, optional
-        The mesh's Hessian energy (:func:`~cvxgeodesic.operators.energies.hessian_energy_matrix`: the curved one,
-        or the planar one where the curved one is indefinite), when already built; otherwise its rows in the band
-        are built on the faces near it (:func:`band_energy_rows`).
 
     Returns
     -------
@@ -185,13 +181,11 @@ def round_ridge(mesh: TriMesh, distance: ArrayLike, sources: ArrayLike, *, lengt
     inner = np.flatnonzero(band)
     notes: list[str] = []
     if inner.size:
-        rows = sp.csr_matrix(band_energy_rows(mesh, band, notes) if energy is None else energy)[inner]
+        rows = band_energy_rows(mesh, band, notes)[inner]
         mass = sp.diags(barycentric_mass(mesh).diagonal()[inner] / ell**4)
         try:
             factor, _ = factor_matrix(rows[:, inner] + mass)
         except NotPositiveDefiniteError:
-            if energy is not None:
-                raise
             # the curved energy's curvature term is not positive where angle defects are large (lucy_20k,
             # thingi_37881): the planar energy, positive semidefinite by construction, as hessian_energy_matrix does
             notes.append(f"{mesh.name}: the curved Hessian energy is indefinite near the ridge; the ridge rounded with "
