@@ -209,10 +209,10 @@ class ProjectedField:
         Fields solved on ``mesh`` itself around the sources, mixed in near them (in order).
     medium : Medium, optional
         The travel cost or metric the field measures, on ``mesh``; None: Euclidean.
-    correction : (n,) float ndarray, optional
+    correction : (n,) finite float ndarray, optional
         Added to the field, linearly interpolated on ``mesh``'s faces (the ridge rounding of an adapted solve,
-        :func:`~cvxgeodesic.problems.ridge_rounding.round_ridge`: the rounded minus the transferred vertex values),
-        after the patches are mixed in; 0 at vertices of no finite value.
+        :func:`~cvxgeodesic.problems.ridge_rounding.round_ridge`: the rounded minus the transferred vertex values, 0
+        at vertices of no finite value), after the patches are mixed in.
     """
 
     def __init__(self, mesh: TriMesh, solve_mesh: TriMesh, field: Any, vertex_distance: np.ndarray,
@@ -223,7 +223,7 @@ class ProjectedField:
         self.vertex_distance = vertex_distance
         self.patches = tuple(patches)
         self.medium = medium
-        self.correction = None if correction is None else np.where(np.isfinite(correction), correction, 0.0)
+        self.correction = correction
 
     def _projected(self, faces: Any, bary: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """``(faces, bary)`` as arrays and the closest points of those points on ``solve_mesh`` (faces, bary)."""
