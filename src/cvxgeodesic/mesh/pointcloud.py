@@ -456,17 +456,20 @@ class PointCloud:
         F, _ = triangle_set(tri, owner, self.P, "consensus")
         if F.shape[0] == 0:
             return None, "no triangle is in two fans"
-        consensus = TriMesh(self.P, F, name=f"{self.name} (consensus surface)")
+        consensus = TriMesh(self.P, F)
         F = F[~(consensus.edge_cell_counts[consensus.cell_edges] > 2).any(axis=1)]
         if F.shape[0] == 0:
             return None, "every consensus triangle is on a non-manifold edge"
-        labels = TriMesh(self.P, F).component_labels[F[:, 0]]
+        name = f"{self.name} (consensus surface)"
+        surface = TriMesh(self.P, F, name=name)
+        labels = surface.component_labels[F[:, 0]]
         values, counts = np.unique(labels, return_counts=True)
-        largest = values[np.argmax(counts)]
         if counts.max() < (1 - SURFACE_FRAGMENTS) * F.shape[0]:
             return None, (f"the consensus of the fans breaks into {values.size} pieces (the largest holds "
                           f"{counts.max() / F.shape[0]:.0%} of its triangles)")
-        return TriMesh(self.P, F[labels == largest], name=f"{self.name} (consensus surface)"), None
+        if values.size == 1:
+            return surface, None
+        return TriMesh(self.P, F[labels == values[np.argmax(counts)]], name=name), None
 
     def check_sources(self, vertices: np.ndarray) -> None:
         """Refuse source points that were left out of the triangles (their field would be ``inf`` everywhere).
