@@ -419,19 +419,22 @@ CLAIMS: list[Claim] = [
     _r("choice-adapted", "2026-12-06", "`python benchmarks/accuracy_per_second.py --meshes spot.obj bimba.obj "
        "thingi_37881.stl bunny.obj armadillo.obj horse.ply --repeat 2`; `--meshes lucy_20k.obj dragon_20k.obj "
        "buddha.obj camelhead_open.off thingi_32770.stl beetle_open.off --repeat 2 --order2-max 0`; `--meshes "
-       "fandisk.obj --repeat 2` (13:04–13:08 UTC, load 0.4–1.05, runs 7 and 6 (fandisk, 12:06) of "
-       "docs/dev/accuracy_per_second.md)",
-       (README, "| 0.91 / 0.33 / 1.19 % |"), (README, "| 0.97 / 0.45 / 2.13 % |"),
-       (README, "0.24–0.37 % mean error at 2.5–3.2× the heat method's time"),
-       (README, "it had 0.33–2.2 % mean error (the default: 0.92–3.8 %), a ridge of 0.29–0.60"),
-       (ADAPTED, "the ridge figure goes from 0.77–1.06 to 0.29–0.37")),
-    _r("adapted-switch", "2026-12-06", "`python benchmarks/accuracy_per_second.py` (run 7 of "
+       "fandisk.obj --repeat 2` (13:52–13:56 UTC, load 0.3–1.0, run 8 of docs/dev/accuracy_per_second.md)",
+       (README, "| 0.89 / 0.32 / 1.22 % |"), (README, "| 0.95 / 0.43 / 2.16 % |"),
+       (README, "0.24–0.33 % mean error at 2.5–3.3× the heat method's time"),
+       (README, "it had 0.32–2.2 % mean error (the default: 0.92–3.8 %), a ridge of 0.29–0.60"),
+       (ADAPTED, "the ridge figure goes from 0.77–1.05 to 0.29–0.37")),
+    _r("adapted-switch", "2026-12-06", "`python benchmarks/accuracy_per_second.py` (run 8 of "
        "docs/dev/accuracy_per_second.md: the three invocations of choice-adapted); from n/2: " + NO_SCRIPT,
        (BENCH, "the default-switch rule passes from vertex 0 on 7 of the 9 surfaces of ≥ 20K faces")),
     _r("rows-default", "2026-12-06", "`python benchmarks/row_default.py`",
        (PERF, "0.063 s (28× heat), 2.04 %"), (PERF, "cost 1.5–2.3× `qclp`'s")),
     _r("adapted-source-snap", "2026-12-06", "`python benchmarks/adapted_levers.py fandisk`",
        (ADAPTED, "edge: mean error 1.95 %, max 108 %; snapped: 0.59 %")),
+    _r("adapted-patch-reach", "2026-12-06", "`python benchmarks/accuracy_per_second.py` (vertex 0: runs 7 and 8 of "
+       "docs/dev/accuracy_per_second.md); the 20 solves from vertex 0 and n/2, before and after: " + NO_SCRIPT +
+       " (docs/dev/adapted-log.md)",
+       (ADAPTED, "armadillo from vertex 0: 0.366 → 0.334 %, max 21.9 → 10.7 %")),
     _r("adapted-estimate-choice", "2026-12-06", "`python benchmarks/adapted_levers.py kitten fandisk bimba`",
        (ADAPTED, "0.59 % error), so it is not the estimate")),
     _r("adapted-table", "2026-12-06", "`python benchmarks/adapted_levers.py kitten fandisk bimba`",

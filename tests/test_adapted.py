@@ -381,3 +381,37 @@ def test_a_copy_refused_for_topology_is_retried_at_other_aggressiveness(grid, mo
                         breaking(mesh, target, *a, **k))
     res = cg.GeodesicSolver(grid, "qclp", resolution=100, estimate_error=False).solve(119)
     assert "stopped at" in res.info.extra["adapted"]["fallback"]
+
+
+def test_a_patch_reaches_as_far_as_its_field_is_the_whole_meshs():
+    """``patch_reach``: below it the patch's distance is the whole mesh's, even where a wall left out of the patch
+    makes its paths longer beyond it (exact distances on a plane: no discretization error)."""
+    from cvxgeodesic.mesh.patch import ball_patch
+
+    grid = cg.grid_plane(40)
+    source = int(np.argmin(np.linalg.norm(grid.V - [0.5, 0.5, 0.0], axis=1)))
+    x, y = grid.V[:, 0], grid.V[:, 1]
+    wall = (np.abs(x - 0.6) < 0.02) & (np.abs(y - 0.5) < 0.2)
+    patch = ball_patch(grid, source, 0.45, allowed=~wall)
+    inside = cg.geodesic_distance(patch.mesh, patch.source, method="exact")
+    whole = cg.geodesic_distance(grid, source, method="exact")[patch.vertices]
+    assert (inside - whole).max() > 0.02  # behind the wall the patch's paths go around it
+    reach = adapted.patch_reach(patch, inside)
+    assert 0.05 < reach < 0.1  # the wall's face is 0.075 from the source
+    below = inside < reach
+    np.testing.assert_allclose(inside[below], whole[below], atol=1e-9)
+    assert adapted.patch_reach(ball_patch(grid, source, 10.0), whole) == np.inf  # the whole plane: no cut
+
+
+def test_two_sources_get_one_reach_and_exact_fields_next_to_them(grid):
+    """Each source's patch is mixed in within one reach for all, so near either source the field is the nearer
+    source's (exact on a flat mesh), never the other patch's longer distance."""
+    a, b = 119, 140
+    res = cg.GeodesicSolver(grid, "qclp", resolution=80).solve([a, b])
+    assert res.info.extra["adapted"]["source_patches"] == 2
+    note = next(n for n in res.info.notes if "patch(es)" in n)
+    reach = float(note.split("within ")[1].split(" of them")[0])
+    want = np.minimum(_euclid(grid, grid.V[a]), _euclid(grid, grid.V[b]))
+    near = want < adapted.PATCH_FULL_SHARE * reach  # the patches alone (beyond, the copy's field is mixed in)
+    assert near.sum() > 10
+    np.testing.assert_allclose(res.distance[near], want[near], atol=FLAT)

@@ -56,8 +56,9 @@ class Patch:
     faces: np.ndarray
 
 
-def ball_patch(mesh: TriMesh, source: int, radius: float) -> Patch:
-    """The faces of ``mesh`` whose three vertices are within ``radius`` of ``source`` on the edge graph.
+def ball_patch(mesh: TriMesh, source: int, radius: float, allowed: np.ndarray | None = None) -> Patch:
+    """The faces of ``mesh`` whose three vertices are within ``radius`` of ``source`` on the edge graph (and
+    ``allowed``).
 
     Parameters
     ----------
@@ -66,6 +67,8 @@ def ball_patch(mesh: TriMesh, source: int, radius: float) -> Patch:
         A valid vertex index.
     radius : float
         Edge-graph (Dijkstra) distance, > 0.
+    allowed : (n,) bool ndarray, optional
+        The vertices a face may have besides (a rounder ball from an estimate of the geodesic distance).
 
     Returns
     -------
@@ -75,6 +78,8 @@ def ball_patch(mesh: TriMesh, source: int, radius: float) -> Patch:
     """
     source = int(source)
     near = dijkstra(mesh.vertex_adjacency, indices=source, limit=radius) <= radius
+    if allowed is not None:
+        near &= allowed
     inside = near[mesh.F]
     keep = inside.all(axis=1)
     if not keep.any():

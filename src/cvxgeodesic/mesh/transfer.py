@@ -126,7 +126,7 @@ class SourcePatch:
     field : Field
         A :class:`~cvxgeodesic.results.Field` on the patch (its faces, its vertices).
     inner, outer : float
-        Distances of the blend, ``0 < inner < outer``.
+        Distances of the blend, ``0 < inner < outer``; ``outer`` inf: the patch's field wherever it is finite.
     """
 
     def __init__(self, face_map: np.ndarray, vertices: np.ndarray, field: Any, inner: float, outer: float) -> None:
@@ -135,6 +135,8 @@ class SourcePatch:
 
     def weight(self, near: np.ndarray) -> np.ndarray:
         """(k,) float in [0, 1]: the patch's share where its field is ``near``."""
+        if np.isinf(self.outer):  # the patch is its source's whole component
+            return np.where(np.isfinite(near), 1.0, 0.0)
         with np.errstate(invalid="ignore"):
             w = np.clip((self.outer - near) / (self.outer - self.inner), 0.0, 1.0)
         return np.where(np.isfinite(near), w, 0.0)

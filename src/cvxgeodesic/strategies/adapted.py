@@ -16,7 +16,8 @@ copy:
 3. **the answer on the user's mesh**: the P2 field evaluated at each user vertex's closest point of the solve mesh
    (found once); :class:`~cvxgeodesic.mesh.transfer.ProjectedField` answers ``distance_at`` at any point of the user's
    faces the same way, and ``geodesic_path`` descends the vertex values on the user's mesh;
-4. **next to the sources** a patch of the user's mesh solved at order 2 and mixed in (:data:`SOURCE_PATCH_EDGES`);
+4. **next to the sources** a patch of the user's mesh solved at order 2 and mixed in as far as its field is the whole
+   mesh's (:data:`SOURCE_PATCH_EDGES`, :func:`patch_reach`);
 5. **the ridge rounded** for the smoothed methods (``m > 0``): the field's cut locus on the user's mesh rounded over
    the Hessian energy's smoothing length at ``m`` (:func:`~cvxgeodesic.problems.ridge_rounding.round_ridge`), the
    rest of the field as the copy gave it: the order-2 energy of ``φ = d²`` rounds the ridge only by flattening the
@@ -43,7 +44,7 @@ from ..errors import MeshError, ParameterError, SolverError, SourceError
 from ..mesh.closest import closest_point_index
 from ..mesh.decimate import simplify_mesh
 from ..mesh.locate import SurfacePoint, bary_positions
-from ..mesh.patch import ball_patch
+from ..mesh.patch import Patch, ball_patch
 from ..mesh.transfer import ProjectedField, SourcePatch, mix_patches
 from ..mesh.trimesh import TriMesh
 from ..operators.metric import Medium
@@ -57,7 +58,7 @@ from .order2 import Order2
 
 __all__ = ["AUTO_FRACTION", "AUTO_MIN_FACES", "MIN_RESOLUTION_FACES", "RESOLUTIONS", "SIMPLIFIER", "Adapted",
            "edge_shortening", "fold_excess", "fold_reference", "max_turn",
-           "resolve_resolution"]
+           "patch_reach", "resolve_resolution"]
 
 #: The named values of ``resolution``; any other is a face count (int) or a fraction of the faces (float).
 RESOLUTIONS = ("mesh", "auto")
@@ -92,10 +93,17 @@ RETRY_TARGETS = (1.0, 1.02, 0.98, 1.05, 0.95)
 #: decimation: bounded set-up time).
 RETRY_TARGETS_LATER = 3
 #: Near each source the field is solved again on the user's own mesh, on the patch of faces within this many of the
-#: copy's mean edge lengths (edge-graph distance, :func:`~cvxgeodesic.mesh.patch.ball_patch`), and mixed in where it
-#: is below 1/3 of that radius (fully below 1/6): the copy's field is weakest next to the sources (docs/adapted.md).
-#: 0 turns it off. Not with a medium, ``"boundary"`` or more than :data:`MAX_SOURCE_PATCHES` sources.
+#: copy's mean edge lengths (edge-graph distance, :func:`~cvxgeodesic.mesh.patch.ball_patch`), and mixed in as far
+#: as it is the whole mesh's field (:func:`patch_reach`): the copy's field is weakest next to the sources
+#: (docs/adapted.md). 0 turns it off. Not with a medium, ``"boundary"`` or more than :data:`MAX_SOURCE_PATCHES`
+#: sources.
 SOURCE_PATCH_EDGES = 3.0
+#: The patch's field replaces the copy's fully below this share of its reach and is mixed in linearly up to the
+#: reach (a seam of a third of it: the copy's error next to the source, 1-4 %, becomes a gradient error of a few %).
+PATCH_FULL_SHARE = 2 / 3
+#: The patch's faces are those within :data:`SOURCE_PATCH_EDGES` of the source by the copy's field (a round ball),
+#: and within this many times that on the edge graph (a bound where several sources' balls meet).
+PATCH_DETOUR = 1.5
 #: At most this many sources get a patch (each is an order-2 solve of its own).
 MAX_SOURCE_PATCHES = 8
 #: A point cloud's surface (:meth:`~cvxgeodesic.mesh.pointcloud.PointCloud.surface`) is decimated at this many targets
@@ -234,6 +242,40 @@ def _decimated(mesh: TriMesh, target: int, first_agg: float | None = None, targe
     if folded is not None:
         return folded[1], None, {**folded[2], "tries": tries}
     return None, why, {"tries": tries}
+
+
+def patch_reach(patch: Patch, distance: np.ndarray) -> float:
+    """How far from its source a patch's field is the whole mesh's: below the least distance it gives a point of its
+    cut.
+
+    A shortest path of the whole mesh that leaves the patch crosses the cut first at a point ``x`` that it reached
+    inside the patch, so the patch's distance at ``x`` is the whole mesh's. The patch's distance is never below the
+    whole mesh's (it has fewer paths), so where it is below its least value on the cut the whole mesh's is too, and its
+    shortest path never reached the cut: there the two are one field, whatever the shape of the patch. On a cut edge
+    ``ab`` the field, 1-Lipschitz, is at least ``(d_a + d_b - |ab|) / 2``.
+
+    Parameters
+    ----------
+    patch : Patch
+        From :func:`~cvxgeodesic.mesh.patch.ball_patch`, with a mesh.
+    distance : (p,) float ndarray
+        The patch's field at its vertices.
+
+    Returns
+    -------
+    float
+        ``inf`` for a patch without a cut (its source's whole component).
+    """
+    if patch.cut.size == 0:
+        return float("inf")
+    mesh = patch.mesh
+    assert mesh is not None
+    d = np.asarray(distance, dtype=float)
+    edges = mesh.boundary_facets  # the patch's rim: its cut, and the mesh's own boundary where they share an edge
+    edges = edges[np.isin(edges, patch.cut).all(axis=1)]
+    lengths = np.linalg.norm(mesh.V[edges[:, 0]] - mesh.V[edges[:, 1]], axis=1)
+    on_edges = (d[edges[:, 0]] + d[edges[:, 1]] - lengths) / 2
+    return float(min(d[patch.cut].min(), on_edges.min(initial=np.inf)))
 
 
 def fold_excess(coarse: TriMesh, mesh_turn: float) -> tuple[float, float]:
@@ -626,7 +668,7 @@ class Adapted:
         cres, d, offset, transfer = self.copy.solve(sources, callback, self.requested)
         t1 = time.perf_counter()
         notes = [*self.notes, *cres.info.notes]
-        patches = self._source_patches(sources, notes)
+        patches = self._source_patches(sources, d, notes)
         n = self.config.mesh.n_vertices
         nears = [p.at_vertices(n) for p in patches]
         d = mix_patches(d, patches, nears)
@@ -660,7 +702,7 @@ class Adapted:
         record["estimate_differences"] = diffs
         record["error_estimate"] = ESTIMATE_FACTOR * float(np.sqrt(diffs[0] * diffs[1]))
 
-    def _source_patches(self, sources: SourceSet, notes: list[str]) -> list[SourcePatch]:
+    def _source_patches(self, sources: SourceSet, d: np.ndarray, notes: list[str]) -> list[SourcePatch]:
         """The order-2 fields on the user's mesh around each source (:data:`SOURCE_PATCH_EDGES`)."""
         mesh = self.config.surface
         if SOURCE_PATCH_EDGES <= 0 or sources.boundary or self.config.medium is not None or self.copy is None:
@@ -673,7 +715,7 @@ class Adapted:
         radius = SOURCE_PATCH_EDGES * self.copy.mesh.mean_edge_length
         out = []
         for center, point in items:
-            patch = ball_patch(mesh, center, radius)
+            patch = ball_patch(mesh, center, PATCH_DETOUR * radius, allowed=d <= radius)
             if patch.mesh is None:
                 continue
             face_map = np.full(mesh.n_faces, -1, dtype=np.int64)
@@ -684,11 +726,18 @@ class Adapted:
             except (SolverError, SourceError, MeshError, ParameterError) as exc:  # the copy's field stays
                 notes.append(f"the patch solve around source vertex {center} failed ({exc}); the copy's field kept")
                 continue
-            out.append(SourcePatch(face_map, patch.vertices, res.field, radius / 6, radius / 3))
-        if out:
-            notes.append(f"{len(out)} patch(es) of the mesh around the sources solved at order 2 and mixed in within "
-                         f"{radius / 3:.3g} of them")
-        return out
+            reach = patch_reach(patch, res.field.vertex_distance)
+            if not reach > 0:  # the source on the cut: no room to mix it in
+                notes.append(f"the patch around source vertex {center} touches its own cut; the copy's field kept")
+                continue
+            out.append((face_map, patch.vertices, res.field, reach))
+        if not out:
+            return []
+        # one reach for all: where a patch's field is mixed in fully, so is that of any source nearer there
+        reach = min(r for *_, r in out)
+        notes.append(f"{len(out)} patch(es) of the mesh around the sources solved at order 2 and mixed in within "
+                     f"{reach:.3g} of them")
+        return [SourcePatch(*p[:3], PATCH_FULL_SHARE * reach, reach) for p in out]
 
     def _result(self, cres: GeodesicResult, d: np.ndarray, sources: SourceSet, notes: list[str], record: dict,
                 t0: float, patches: list[SourcePatch], correction: np.ndarray | None) -> GeodesicResult:
