@@ -431,6 +431,9 @@ CLAIMS: list[Claim] = [
        (PERF, "0.063 s (28× heat), 2.04 %"), (PERF, "cost 1.5–2.3× `qclp`'s")),
     _r("adapted-source-snap", "2026-12-06", "`python benchmarks/adapted_levers.py fandisk`",
        (ADAPTED, "edge: mean error 1.95 %, max 108 %; snapped: 0.59 %")),
+    _r("order2-source-corners", "2026-12-06", "`python benchmarks/source_position.py spot fandisk cylinder icosphere "
+       "--faces 3` (and `--corners 0`); the vertex sources: " + NO_SCRIPT + " (docs/dev/adapted-log.md)",
+       (ORDER2, "an icosphere 1.35–1.48 → 0.051–0.061 %")),
     _r("adapted-patch-reach", "2026-12-06", "`python benchmarks/accuracy_per_second.py` (vertex 0: runs 7 and 8 of "
        "docs/dev/accuracy_per_second.md); the 20 solves from vertex 0 and n/2, before and after: " + NO_SCRIPT +
        " (docs/dev/adapted-log.md)",

@@ -21,7 +21,8 @@ Discretization (choices and measurements in ``docs/order2.md``):
 
 * the cone is imposed at sample points of every cell, with the cone centred near the expected ``φ``
   (``‖(√a ∇φ, φ − a)‖ ≤ φ + a`` is the same cone for every ``a > 0``): on a curved face its three edge midpoints;
-  on a flat face its three corners; in a tetrahedron its ten nodes;
+  on a flat face its three corners; in a tetrahedron its ten nodes; on a curved face also at a corner next to a
+  source (:data:`SOURCE_CORNER_NEAR`);
 * surfaces only: on *flat* faces (where ``d²`` is exactly quadratic) one :class:`BernsteinEdgeCones` cone per edge:
   with the corner cones it holds ``|∇φ|² ≤ 4φ`` on the whole face, and it is tight on the squared distance to any
   point, so flat regions come out exact in one solve; at a source vertex's edges and next to a line of sources the
@@ -85,6 +86,16 @@ __all__ = ["ORDER2_CACHE_VERSION", "BernsteinEdgeCones", "SquaredDistanceBuilder
 # 0.25 → 0.15 %; the 53 coarse CAD meshes: median ratio to P1 qclp 0.216 → 0.204, median error 0.85 → 0.95 %
 # (29 better, 24 worse; docs/order2.md); flat meshes unchanged (all their faces are flat). In tetrahedra every node
 # of every (flat) cell, the cutting planes between them.
+#: A vertex joined to a source vertex (or to an inserted source point) by an edge shorter than this times its own
+#: mean edge length is also sampled at, in every curved cell around it. Around a curved vertex that close to the
+#: source the field is not one quadratic per face (the vertex's shadow or cut locus starts there): with the midpoints
+#: alone the field overshot there and carried the overshoot downstream, so a source point moved toward a vertex lost
+#: accuracy until it reached it. Measured 2026-12-06 (docs/dev/adapted-log.md, "Corner samples next to the
+#: sources"): spot from points 0.9-0.98 of the way to a vertex, 0.40-1.37 → 0.11-0.19 % mean error; a cylinder from
+#: a point 0.98 of the way, 1.66 % → exact; `resolution="auto"` from vertex n/2 (the source's closest point of the
+#: copy next to a copy vertex): kitten 1.34 → 0.52 %, bimba 0.48 → 0.18 %. Sampling the corners of every curved cell
+#: within a ring of the sources instead made lucy_20k from vertex n/2 worse (0.36 → 0.46 %). 0 turns it off.
+SOURCE_CORNER_NEAR = 0.8
 #: Edges shorter than this fraction of the bounding-box diagonal get no 1-D cone (their DOF is tied linearly).
 MIN_EDGE = 1e-9
 #: Version of the order-2 fields, for caches keyed on the inputs only (``benchmarks/report_common.py``): bump it
@@ -95,7 +106,8 @@ MIN_EDGE = 1e-9
 #: ~1e-6 of the largest distance). 3: 2026-12-02 (the Bernstein edge cones on flat faces: CAD fields move by up to
 #: ~1e-2 of the largest distance, flat ones by solver rounding). Still 3 after the one builder of both dimensions
 #: (2026-12-03): the surface fields of the tests' cases bit-identical, or within 2e-14 where cutting planes ran.
-ORDER2_CACHE_VERSION = 3
+#: 4: 2026-12-06 (corner samples on the curved faces at vertices next to the sources, :data:`SOURCE_CORNER_NEAR`).
+ORDER2_CACHE_VERSION = 4
 
 
 @dataclass
@@ -436,7 +448,8 @@ class SquaredDistanceBuilder:
                 # midpoint samples alone, a needle strip's solve from it had stopped 7.6e-5 of the largest distance
                 # away from the optimum (the samples barely determine it)
                 guess = space.interpolate(functools.partial(_squared_linear, mesh.cells, dv))
-        cf, Gk, hk, n_s, hb = self._cones(is_src, zero_edges, extra, reach, point_like, dv)
+        cf, Gk, hk, n_s, hb = self._cones(is_src, zero_edges, self._with_source_corners(is_src, extra), reach,
+                                          point_like, dv)
         dofs = space.cell_dofs[cf]
         # a fixed DOF is 0: its columns do not matter, but zero them so that backends need not know
         Gk = np.where(fixed[dofs][:, None, :], 0.0, Gk)
@@ -464,6 +477,30 @@ class SquaredDistanceBuilder:
         )
         const = 0.0 if self.energy is None else self.lam * self.energy.c
         return SquaredDistanceProgram(problem, eliminated, ~reach_v, list(self.notes), const, bool(hb.shape[0]))
+
+    def _with_source_corners(self, is_src: np.ndarray, extra: tuple[np.ndarray, np.ndarray] | None
+                             ) -> tuple[np.ndarray, np.ndarray] | None:
+        """``extra`` and the corner samples at the vertices next to the sources (:data:`SOURCE_CORNER_NEAR`), in each
+        curved cell around them."""
+        mesh, space = self.mesh, self.space
+        if SOURCE_CORNER_NEAR <= 0 or not is_src.any() or space.flat_cells.all():
+            return extra
+        E, L = mesh.edges, mesh.edge_lengths
+        n = mesh.n_vertices
+        mean_edge = np.bincount(E.ravel(), np.repeat(L, 2), n) / np.maximum(np.bincount(E.ravel(), minlength=n), 1)
+        near = np.zeros(n, dtype=bool)
+        for a, b in ((0, 1), (1, 0)):
+            to_source = is_src[E[:, a]] & ~is_src[E[:, b]]
+            v = E[to_source, b]
+            near[v[L[to_source] < SOURCE_CORNER_NEAR * mean_edge[v]]] = True
+        cells = np.flatnonzero(near[mesh.cells].any(axis=1) & ~space.flat_cells & ~space.degenerate)
+        k = space.reference.n_corners
+        cell, corner = np.repeat(cells, k), np.tile(np.arange(k), cells.size)
+        keep = near[mesh.cells[cell, corner]]
+        cell, bary = cell[keep], np.eye(k)[corner[keep]]
+        if extra is None or not len(extra[0]):
+            return cell, bary
+        return np.concatenate([np.asarray(extra[0], dtype=np.int64), cell]), np.concatenate([extra[1], bary])
 
     def _cones(self, is_src: np.ndarray, zero_edges: np.ndarray, extra: tuple[np.ndarray, np.ndarray] | None,
                reach: np.ndarray, point_like: bool, dv: np.ndarray | None):
