@@ -415,3 +415,16 @@ def test_two_sources_get_one_reach_and_exact_fields_next_to_them(grid):
     near = want < adapted.PATCH_FULL_SHARE * reach  # the patches alone (beyond, the copy's field is mixed in)
     assert near.sum() > 10
     np.testing.assert_allclose(res.distance[near], want[near], atol=FLAT)
+
+
+def test_the_copy_is_solved_to_its_own_tolerance_and_says_so(grid):
+    """A curved copy's program stops at ``COPY_TOL`` (its field is 0.2-2 % from the exact one anyway), or at ``tol=``
+    when that is looser; a planar copy keeps ``tol`` (its field is exact); the record and the note say which."""
+    sphere = cg.icosphere(3)
+    res = cg.GeodesicSolver(sphere, "qclp", resolution=300).solve(0)
+    assert res.info.extra["adapted"]["copy_tol"] == adapted.COPY_TOL
+    assert any(f"relative tolerance of {adapted.COPY_TOL:g}" in n for n in res.info.notes)
+    loose = cg.GeodesicSolver(sphere, "qclp", resolution=300, tol=1e-3).solve(0)
+    assert loose.info.extra["adapted"]["copy_tol"] == 1e-3
+    flat = cg.GeodesicSolver(grid, "qclp", resolution=80).solve(119)
+    assert flat.info.extra["adapted"]["copy_tol"] == cg.api.DEFAULT_TOL
