@@ -419,12 +419,12 @@ CLAIMS: list[Claim] = [
     _r("choice-adapted", "2026-12-06", "`python benchmarks/accuracy_per_second.py --meshes spot.obj bimba.obj "
        "thingi_37881.stl bunny.obj armadillo.obj horse.ply --repeat 2`; `--meshes lucy_20k.obj dragon_20k.obj "
        "buddha.obj camelhead_open.off thingi_32770.stl beetle_open.off --repeat 2 --order2-max 0`; `--meshes "
-       "fandisk.obj --repeat 2` (14:35–14:39 UTC, load 0.9–1.0, run 10 of docs/dev/accuracy_per_second.md)",
+       "fandisk.obj --repeat 2` (14:43–14:47 UTC, load 0.5–1.0, run 11 of docs/dev/accuracy_per_second.md)",
        (README, "| 0.71 / 0.31 / 1.39 % |"), (README, "| 0.79 / 0.43 / 2.43 % |"),
-       (README, "0.20–0.30 % mean error at 2.3–3.3× the heat method's time"),
+       (README, "0.20–0.30 % mean error at 2.2–3.1× the heat method's time"),
        (README, "it had 0.24–2.2 % mean error (the default: 0.92–3.8 %), a ridge of 0.29–0.60"),
        (ADAPTED, "the ridge figure goes from 0.77–1.04 to 0.29–0.37")),
-    _r("adapted-switch", "2026-12-06", "`python benchmarks/accuracy_per_second.py` (run 10 of "
+    _r("adapted-switch", "2026-12-06", "`python benchmarks/accuracy_per_second.py` (run 11 of "
        "docs/dev/accuracy_per_second.md: the three invocations of choice-adapted); from n/2: " + NO_SCRIPT,
        (BENCH, "mean error 0.24–1.13 % against the default's 0.92–2.47 %")),
     _r("rows-default", "2026-12-06", "`python benchmarks/row_default.py`",
