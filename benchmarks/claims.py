@@ -462,10 +462,10 @@ CLAIMS: list[Claim] = [
        "--sets union --normals --repeats 1`", (POINTCLOUDS, "| fandisk vertices | 0 | 3.44 % (36.7 %) |"),
        (POINTCLOUDS, "with its vertex normals order 2 goes from 3.34 % to 0.058 % (59× below pc-heat")),
     _r("pointclouds-resolution", "2026-12-06", "`python benchmarks/point_clouds.py --meshes kitten bimba max_planck "
-       "fandisk --sets union --no-order2 --resolution auto --repeats 2` (12:39 UTC, load 0.8–0.9; with all 11 "
-       "decimation tries: 12:31 UTC, load 0.5–0.7)",
+       "fandisk --sets union --no-order2 --resolution auto --repeats 2` (14:48 UTC, load 0.4–0.8; the 12:39 UTC run "
+       "before the patch and corner changes; with all 11 decimation tries: 12:31 UTC, load 0.5–0.7)",
        (POINTCLOUDS, "| kitten | 0 / 0.1 / 0.3 % | 1.32 / 1.54 / 7.73 % |"),
-       (POINTCLOUDS, "At 0.1 % noise it had 0.35 of"), (POINTCLOUDS, "3.1–3.3× pc-heat's time, against")),
+       (POINTCLOUDS, "At 0.1 % noise it had 0.32 of"), (POINTCLOUDS, "3.0–3.2× pc-heat's time, against")),
     _r("pointclouds-denoise-table", "2026-12-06", "`python benchmarks/point_clouds.py --meshes kitten bimba max_planck "
        "--sets union --denoise 1,2` (load 1.4 → 1.2)", (POINTCLOUDS, "| kitten | 0.3 % | 7.73 % | 0.80 % |"),
        (POINTCLOUDS, "70 % at order 1 and 77 % at order 2 raw, 86 % and 71 % denoised")),
