@@ -735,9 +735,10 @@ class Adapted:
             notes.append(f"{len(items)} sources: no patch solve around them (at most {MAX_SOURCE_PATCHES})")
             return []
         radius = SOURCE_PATCH_EDGES * self.copy.mesh.mean_edge_length
+        allowed = d <= radius  # every source's ball by the copy's field (the least distance to any source)
         out = []
         for center, point in items:
-            patch = ball_patch(mesh, center, PATCH_DETOUR * radius, allowed=d <= radius)
+            patch = ball_patch(mesh, center, PATCH_DETOUR * radius, allowed=allowed)
             if patch.mesh is None:
                 continue
             face_map = np.full(mesh.n_faces, -1, dtype=np.int64)
