@@ -706,6 +706,16 @@ def test_order2_pardiso_follows_the_thread_setting(threads):
     assert chol.backend == "pardiso" and chol.numeric.threads == threads
 
 
+def test_a_solve_from_points_never_analyses_the_unsplit_mesh():
+    # a point source is solved on its split mesh with that mesh's own analysis: the unsplit mesh's analysis would be
+    # paid for nothing (an adapted copy's sources are always points)
+    solver = cg.GeodesicSolver(cg.icosphere(2), "qclp", order=2, solver="ipm")
+    solver.solve(cg.SurfacePoint(3, (0.2, 0.3, 0.5)))
+    assert "ipm" not in vars(solver._strategy)
+    solver.solve(0)
+    assert "ipm" in vars(solver._strategy)
+
+
 def test_guess_start_on_flat_faces_steps_over_the_cones_that_hold_at_zero(monkeypatch):
     # the edge cones do not hold at φ = 0 (T = −|e|² there): the segment from x_F towards the guess is bounded by
     # the sampled cones alone, and the edge cones' slacks are shifted into their cone

@@ -147,9 +147,11 @@ class Order2:
         # where φ = 0, the vertex sources alone (source_edges), the points to insert, a solid's source wall
         fixed = source_fixed = sources.fixed_vertices(mesh)
         vertex_sources, points = np.asarray(sources.vertices, dtype=np.int64), sources.distinct_points(mesh)
-        builder, ipm, split = self.builder, self.ipm, None
+        split = None
         notes = list(self.notes)
-        if points:
+        if not points:
+            builder, ipm = self.builder, self.ipm
+        else:
             # a point inside a cell becomes a vertex of a locally split mesh (measured: imposing φ(p) = 0,
             # ∇φ(p) = 0 on the unsplit face leaves 2–7e-3 errors on a flat grid; docs/order2.md)
             split = SplitMesh(mesh, points)
