@@ -51,14 +51,15 @@ def test_surface_through_the_points_is_manifold_and_keeps_the_indices():
     assert surface.n_faces <= cloud.mesh.n_faces
 
 
-def test_a_clouds_refused_copies_cost_one_decimation_per_aggressiveness(monkeypatch):
+def test_a_clouds_refused_copies_cost_one_decimation_per_cloud_aggressiveness(monkeypatch):
     from cvxgeodesic.strategies import adapted
 
     calls = []
     monkeypatch.setattr(adapted, "_decimated_once",
                         lambda mesh, target, agg=7.0: calls.append(agg) or (None, "refused (test)"))
     res = cg.GeodesicSolver(PointCloud(plane_points(30, seed=2)), "qclp", resolution=300).solve(0)
-    assert calls == list(adapted.RETRY_AGGS) and res.info.extra["adapted"]["fallback"] == "refused (test)"
+    assert calls == list(adapted.CLOUD_AGGS) and res.info.extra["adapted"]["fallback"] == "refused (test)"
+    assert len(adapted.CLOUD_AGGS) < len(adapted.RETRY_AGGS)  # the gentlest never kept a cloud's copy
     calls.clear()
     cg.GeodesicSolver(cg.grid_plane(30), "qclp", resolution=300).solve(0)  # a mesh: every target at every agg
     assert len(calls) == len(adapted.RETRY_TARGETS) + (len(adapted.RETRY_AGGS) - 1) * adapted.RETRY_TARGETS_LATER
