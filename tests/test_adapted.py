@@ -417,6 +417,25 @@ def test_two_sources_get_one_reach_and_exact_fields_next_to_them(grid):
     np.testing.assert_allclose(res.distance[near], want[near], atol=FLAT)
 
 
+def test_the_source_patch_is_solved_to_the_copys_tolerance(grid, monkeypatch):
+    """A curved patch stops at ``COPY_TOL`` as the copy does; a planar one keeps ``tol`` (its field is exact)."""
+    tols = []
+    real = adapted.Order2
+
+    class Recording(real):
+        def __init__(self, config, order=2):
+            tols.append(config.tol)
+            super().__init__(config, order)
+
+    monkeypatch.setattr(adapted, "Order2", Recording)
+    res = cg.GeodesicSolver(cg.icosphere(4), "qclp", resolution=300).solve(0)
+    assert res.info.extra["adapted"]["source_patches"] == 1
+    assert tols == [adapted.COPY_TOL] * 2  # the copy's, then the patch's on the sphere's own faces
+    tols.clear()
+    cg.GeodesicSolver(grid, "qclp", resolution=80).solve(119)
+    assert tols == [cg.api.DEFAULT_TOL] * 2
+
+
 def test_the_copy_is_solved_to_its_own_tolerance_and_says_so(grid):
     """A curved copy's program stops at ``COPY_TOL`` (its field is 0.2-2 % from the exact one anyway), or at ``tol=``
     when that is looser; a planar copy keeps ``tol`` (its field is exact); the record and the note say which."""

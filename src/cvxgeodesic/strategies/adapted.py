@@ -108,9 +108,10 @@ PATCH_DETOUR = 1.5
 #: 0.2-2 % from the user's exact distances, so the last digits of the default 1e-8 bought nothing there. Measured
 #: 2026-12-06 on 8 shared surfaces from vertex 0 and n/2 (docs/dev/adapted-log.md, "The copy's tolerance"): 3-5
 #: fewer iterations, 3-12 % less time, the mean errors equal to 1e-4 of a point. 1e-4 saved more on the scans but
-#: left fandisk's flat faces a violation that cost a cutting-plane round (21 → 28 iterations). The source patches,
-#: on the user's mesh, and a planar copy (its field is exact: flat meshes stay exact to 1e-6) keep the solver's
-#: tolerance.
+#: left fandisk's flat faces a violation that cost a cutting-plane round (21 → 28 iterations). The source patches
+#: are solved to it too (fandisk, spot, bimba, armadillo, camelhead_open: the same mean and max errors to 4 digits,
+#: the patches 15-25 % faster); a planar copy or patch (its field is exact: flat meshes stay exact to 1e-6) keeps the
+#: solver's tolerance (:func:`_tol`).
 COPY_TOL = 1e-5
 #: At most this many sources get a patch (each is an order-2 solve of its own).
 MAX_SOURCE_PATCHES = 8
@@ -381,6 +382,12 @@ def _decimated_once(mesh: TriMesh, target: int, agg: float = 7.0) -> tuple[TriMe
     return coarse, None
 
 
+def _tol(config: SolveConfig, mesh: TriMesh) -> float:
+    """The tolerance of an order-2 solve on a copy or a source patch: :data:`COPY_TOL`, or ``tol=`` when looser or
+    when ``mesh`` is planar (its field is exact there: flat meshes stay exact to 1e-6)."""
+    return config.tol if _is_planar(mesh) else max(config.tol, COPY_TOL)
+
+
 def _is_planar(mesh: TriMesh) -> bool:
     """Every proper face in one plane (|cos| ≥ 1 − 1e-10 between unit normals, the order-2 builder's flatness)."""
     N = mesh.face_normals_unnormalized
@@ -458,7 +465,7 @@ class _Copy:
         mesh = config.surface
         self.user, self.mesh = mesh, coarse
         # a planar copy's field is exact (order 2 on flat faces): it keeps the solver's tolerance
-        self.tol = config.tol if _is_planar(coarse) else max(config.tol, COPY_TOL)
+        self.tol = _tol(config, coarse)
         self.strategy = Order2(replace(config.on(coarse, lam=config.lam), tol=self.tol,
                                        medium=_medium_on(config.medium, mesh, coarse)))
         self.vertex_faces, self.vertex_bary, gap = closest_point_index(coarse).query(np.ascontiguousarray(mesh.V))
@@ -750,7 +757,8 @@ class Adapted:
             face_map[patch.faces] = np.arange(patch.faces.size)
             src = patch.source if point is None else SurfacePoint(int(face_map[point.cell]), point.bary)
             try:
-                res = Order2(self.config.on(patch.mesh, lam=self.config.lam)).solve(resolve_sources(patch.mesh, src))
+                res = Order2(replace(self.config.on(patch.mesh, lam=self.config.lam), tol=_tol(self.config, patch.mesh))
+                             ).solve(resolve_sources(patch.mesh, src))
             except (SolverError, SourceError, MeshError, ParameterError) as exc:  # the copy's field stays
                 notes.append(f"the patch solve around source vertex {center} failed ({exc}); the copy's field kept")
                 continue
