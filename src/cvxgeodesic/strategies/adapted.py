@@ -43,6 +43,7 @@ import numpy as np
 from ..errors import MeshError, ParameterError, SolverError, SourceError
 from ..mesh.closest import closest_point_index
 from ..mesh.decimate import simplify_mesh
+from ..mesh.envelope import lipschitz_envelope
 from ..mesh.locate import SurfacePoint, bary_positions
 from ..mesh.patch import Patch, ball_patch
 from ..mesh.transfer import ProjectedField, SourcePatch, mix_patches
@@ -712,12 +713,42 @@ class Adapted:
         if offset > 1e-12 * self.config.mesh.bbox_diagonal:
             notes.append(f"a source within {SOURCE_SNAP:g} of a face's altitude from an edge of the solve mesh was "
                          f"moved onto it (by {offset:.3g})")
+        lowered = self._cloud_envelope(d, notes, record)
+        if lowered is not None:
+            d = d + lowered
         if self.companions:  # of the order-2 field, before the rounding
             t2 = time.perf_counter()
             self._estimate(sources, d, patches, nears, record)
             record["estimate_time"] = time.perf_counter() - t2
         correction = self._round_ridge(d, sources, notes, record)
+        if lowered is not None:
+            correction = lowered if correction is None else correction + lowered
         return self._result(cres, d, sources, notes, record, t0, patches, correction)
+
+    def _cloud_envelope(self, d: np.ndarray, notes: list[str] | None, record: dict[str, Any] | None
+                        ) -> np.ndarray | None:
+        """On a point cloud, how far the transferred field drops to its envelope along the cloud's own triangles'
+        edges (:func:`~cvxgeodesic.mesh.envelope.lipschitz_envelope`, ≤ 0), recorded and noted; None on a mesh.
+
+        The copy is decimated from the surface through the points, which leaves out the triangles the fans disagree
+        on: its field goes around those holes, which the cloud's triangles close (measured 2026-12-06 from vertex 0:
+        the clean fandisk cloud 4.41 → 1.53 % mean error, max_planck 0.71 → 0.51 %, 1,500 points of a sphere max
+        10 → 2.7 %; bimba clean and fandisk at 0.1 % noise 1-5 % worse, where the fans' chords cut a corner; 1-7 ms).
+        """
+        if self.source is self.config.surface:
+            return None
+        mesh = self.config.surface
+        t0 = time.perf_counter()
+        lowered = np.where(np.isfinite(d), lipschitz_envelope(mesh, d) - d, 0.0)
+        if record is not None:
+            count = int(np.count_nonzero(lowered < 0))
+            record["cloud_envelope"] = {"points": count, "max_lowered": float(-lowered.min(initial=0.0)),
+                                        "time": time.perf_counter() - t0}
+            if count and notes is not None:
+                notes.append(f"{count} point(s) lowered to the least distance over the cloud's triangle edges (the "
+                             f"surface through the points, which the copy is decimated from, has holes there; by at "
+                             f"most {-lowered.min():.3g})")
+        return lowered
 
     def _estimate(self, sources: SourceSet, d: np.ndarray, patches: list[SourcePatch], nears: list[np.ndarray],
                   record: dict[str, Any]) -> None:
@@ -732,6 +763,9 @@ class Adapted:
                 record["error_estimate_method"] = f"none: the {which} copy took not the sources ({exc})"
                 return
             dc = mix_patches(dc, patches, nears)  # the same near the sources: the estimate is of the rest
+            envelope = self._cloud_envelope(dc, None, None)
+            if envelope is not None:
+                dc = dc + envelope
             diffs.append(_relative_difference(dc, d, fixed))
         record["estimate_differences"] = diffs
         record["error_estimate"] = ESTIMATE_FACTOR * float(np.sqrt(diffs[0] * diffs[1]))
