@@ -415,16 +415,17 @@ CLAIMS: list[Claim] = [
        (BENCH, "a Clarabel re-solve cost 7–25× the time for a field equal within 1e-6")),
     _r("adapted-targets", "2026-12-06", "`python benchmarks/accuracy_per_second.py`",
        (BENCH, "the scans of 50K–100K faces reached ≤ 0.3 % at ≤ 3× heat on horse only"),
-       (BENCH, "scans of 50K–100K faces reach ≤ 0.3 % at ≤ 3× heat on bunny (0.29 % at 2.5×) and horse")),
+       (BENCH, "scans of 50K–100K faces reach ≤ 0.3 % at ≤ 3× heat on bunny (0.29 % at 2.5×) and horse"),
+       (BENCH, "armadillo 0.295 % at 2.7×); fandisk 0.341 % at 7.3× heat, not ≤ 5×.")),
     _r("choice-adapted", "2026-12-06", "`python benchmarks/accuracy_per_second.py --meshes spot.obj bimba.obj "
        "thingi_37881.stl bunny.obj armadillo.obj horse.ply --repeat 2`; `--meshes lucy_20k.obj dragon_20k.obj "
        "buddha.obj camelhead_open.off thingi_32770.stl beetle_open.off --repeat 2 --order2-max 0`; `--meshes "
-       "fandisk.obj --repeat 2` (14:43–14:47 UTC, load 0.5–1.0, run 11 of docs/dev/accuracy_per_second.md)",
+       "fandisk.obj --repeat 2` (15:49–15:54 UTC, load 0.3–1.0, run 12 of docs/dev/accuracy_per_second.md)",
        (README, "| 0.71 / 0.31 / 1.39 % |"), (README, "| 0.79 / 0.43 / 2.43 % |"),
-       (README, "0.20–0.30 % mean error at 2.2–3.1× the heat method's time"),
+       (README, "0.20–0.30 % mean error at 2.0–2.7× the heat method's time"),
        (README, "it had 0.24–2.2 % mean error (the default: 0.92–3.8 %), a ridge of 0.29–0.60"),
        (ADAPTED, "the ridge figure goes from 0.77–1.04 to 0.29–0.37")),
-    _r("adapted-switch", "2026-12-06", "`python benchmarks/accuracy_per_second.py` (run 11 of "
+    _r("adapted-switch", "2026-12-06", "`python benchmarks/accuracy_per_second.py` (run 12 of "
        "docs/dev/accuracy_per_second.md: the three invocations of choice-adapted); from n/2: " + NO_SCRIPT,
        (BENCH, "mean error 0.24–1.13 % against the default's 0.92–2.47 %")),
     _r("rows-default", "2026-12-06", "`python benchmarks/row_default.py`",
@@ -462,10 +463,11 @@ CLAIMS: list[Claim] = [
        "--sets union --normals --repeats 1`", (POINTCLOUDS, "| fandisk vertices | 0 | 3.44 % (36.7 %) |"),
        (POINTCLOUDS, "with its vertex normals order 2 goes from 3.34 % to 0.058 % (59× below pc-heat")),
     _r("pointclouds-resolution", "2026-12-06", "`python benchmarks/point_clouds.py --meshes kitten bimba max_planck "
-       "fandisk --sets union --no-order2 --resolution auto --repeats 2` (14:48 UTC, load 0.4–0.8; the 12:39 UTC run "
-       "before the patch and corner changes; with all 11 decimation tries: 12:31 UTC, load 0.5–0.7)",
+       "fandisk --sets union --no-order2 --resolution auto --repeats 2` (15:57 UTC, load 0.6; without the envelope: "
+       "15:52 UTC, load 0.3–1.0; with three decimation tries: 14:48 UTC, load 0.4–0.8)",
        (POINTCLOUDS, "| kitten | 0 / 0.1 / 0.3 % | 1.32 / 1.54 / 7.73 % |"),
-       (POINTCLOUDS, "At 0.1 % noise it had 0.32 of"), (POINTCLOUDS, "3.0–3.2× pc-heat's time, against")),
+       (POINTCLOUDS, "At 0.1 % noise it had 0.32 of"), (POINTCLOUDS, "kitten 0.386 → 0.375 % and 0.496 → 0.490 %"),
+       (POINTCLOUDS, "2.8–3.0× pc-heat's time, against")),
     _r("pointclouds-denoise-table", "2026-12-06", "`python benchmarks/point_clouds.py --meshes kitten bimba max_planck "
        "--sets union --denoise 1,2` (load 1.4 → 1.2)", (POINTCLOUDS, "| kitten | 0.3 % | 7.73 % | 0.80 % |"),
        (POINTCLOUDS, "70 % at order 1 and 77 % at order 2 raw, 86 % and 71 % denoised")),
