@@ -107,3 +107,17 @@ def test_vertex_cells_and_centroid_tree_are_cached_members(mesh):
     corners = mesh.V[mesh.cells]
     assert np.all(np.linalg.norm(corners - tree.data[:, None], axis=2) <= radius)
     assert not [k for k in vars(mesh) if k.startswith("_cg") or k == "_tet_locator"]
+
+
+@pytest.mark.parametrize("n", [50, 2**21])  # keys of one int64, and rows too wide for them (np.unique's path)
+def test_unique_rows_is_numpys_row_unique(n):
+    from cvxgeodesic.mesh.simplex import unique_rows
+
+    rng = np.random.default_rng(4)
+    rows = np.sort(rng.integers(0, 50, size=(400, 3)), axis=1) * (n // 50)
+    unique, inverse, counts = unique_rows(rows, n)
+    want_u, want_i, want_c = np.unique(rows, axis=0, return_inverse=True, return_counts=True)
+    np.testing.assert_array_equal(unique, want_u)
+    np.testing.assert_array_equal(inverse, want_i.reshape(-1))
+    np.testing.assert_array_equal(counts, want_c)
+    assert unique.dtype == inverse.dtype == counts.dtype == np.int64

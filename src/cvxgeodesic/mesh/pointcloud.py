@@ -20,6 +20,7 @@ from numpy.typing import ArrayLike
 from ..errors import MeshError, ParameterError, SourceError
 from ..validation import as_points
 from .cloud_outliers import CloudDefects, find_defects
+from .simplex import unique_rows
 from .trimesh import TriMesh
 
 __all__ = ["NORMAL_FAN_ANGLE", "OUTLIER_HANDLING", "TRIANGLE_SETS", "CloudMesh", "PointCloud", "fan_triangles",
@@ -264,8 +265,7 @@ def triangle_set(tri: np.ndarray, owner: np.ndarray, P: np.ndarray, kind: str) -
     notes : list of str
         What the repair added, if anything.
     """
-    uniq, inverse, counts = np.unique(tri, axis=0, return_inverse=True, return_counts=True)
-    inverse = inverse.reshape(-1)
+    uniq, inverse, counts = unique_rows(tri, P.shape[0])
     if kind == "union":
         return uniq, []
     chosen = counts >= 2

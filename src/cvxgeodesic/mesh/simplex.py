@@ -39,7 +39,7 @@ from ..errors import MeshError
 from ..validation import check_coordinates
 from .reference import ReferenceSimplex
 
-__all__ = ["DEGENERATE_TOL", "SimplexMesh", "file_numbering", "unit_mesh", "unit_scale"]
+__all__ = ["DEGENERATE_TOL", "SimplexMesh", "file_numbering", "unique_rows", "unit_mesh", "unit_scale"]
 
 #: Default of :meth:`SimplexMesh.degenerate_cells` (``TriMesh.degenerate_faces``, ``TetMesh.degenerate_tets``): a
 #: cell whose smallest altitude is below ``DEGENERATE_TOL`` times its longest edge (a sliver, needle, cap or wedge;
@@ -48,6 +48,43 @@ __all__ = ["DEGENERATE_TOL", "SimplexMesh", "file_numbering", "unit_mesh", "unit
 DEGENERATE_TOL = 1e-3
 
 MeshT = TypeVar("MeshT", bound="SimplexMesh")
+
+
+def unique_rows(rows: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``np.unique(rows, axis=0, return_inverse=True, return_counts=True)`` for rows of vertex indices below ``n``.
+
+    Each row becomes one 1-D key where they fit in 62 bits: 10-20x faster than ``np.unique(axis=0)`` (a point cloud's
+    32K fan triangles: 0.7 ms against 15 ms).
+
+    Parameters
+    ----------
+    rows : (k, s) int array
+        Indices in ``[0, n)``.
+    n : int
+
+    Returns
+    -------
+    unique : (u, s) int64 ndarray
+        The distinct rows, in lexicographic order.
+    inverse : (k,) int64 ndarray
+        Index into ``unique`` of each row.
+    counts : (u,) int64 ndarray
+        How many rows each distinct row is.
+    """
+    rows = np.asarray(rows, dtype=np.int64)
+    s = rows.shape[1]
+    if max(n, 1) ** s < 2**62:
+        keys = rows[:, 0].copy()
+        for j in range(1, s):
+            keys = keys * np.int64(n) + rows[:, j]
+        uniq, inv, counts = np.unique(keys, return_inverse=True, return_counts=True)
+        unique = np.empty((uniq.size, s), dtype=np.int64)
+        for j in reversed(range(s)):
+            unique[:, j] = uniq % n
+            uniq = uniq // n
+    else:
+        unique, inv, counts = np.unique(rows, axis=0, return_inverse=True, return_counts=True)
+    return unique.astype(np.int64), inv.reshape(-1).astype(np.int64), counts.astype(np.int64)
 
 
 def _cached_parts(data: str, *docs: str) -> tuple[cached_property, ...]:
@@ -173,19 +210,8 @@ class SimplexMesh:
             How many cells share each one.
         """
         rows = np.sort(self.cells[:, local].reshape(-1, local.shape[1]), axis=1)
-        n, s = self.n_vertices, rows.shape[1]
-        if n ** s < 2**62:  # one 1-D key per row: ~10x faster than np.unique(axis=0) on million-cell meshes
-            keys = rows[:, 0].copy()
-            for j in range(1, s):
-                keys = keys * np.int64(n) + rows[:, j]
-            uniq, inv, counts = np.unique(keys, return_inverse=True, return_counts=True)
-            unique = np.empty((uniq.size, s), dtype=np.int64)
-            for j in reversed(range(s)):
-                unique[:, j] = uniq % n
-                uniq = uniq // n
-        else:
-            unique, inv, counts = np.unique(rows, axis=0, return_inverse=True, return_counts=True)
-        return unique.astype(np.int64), inv.reshape(self.n_cells, -1).astype(np.int64), counts.astype(np.int64)
+        unique, inv, counts = unique_rows(rows, self.n_vertices)
+        return unique, inv.reshape(self.n_cells, -1), counts
 
     @cached_property
     def _edge_data(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -46,6 +46,7 @@ from ..mesh.decimate import simplify_mesh
 from ..mesh.envelope import lipschitz_envelope
 from ..mesh.locate import SurfacePoint, bary_positions
 from ..mesh.patch import Patch, ball_patch
+from ..mesh.simplex import unique_rows
 from ..mesh.transfer import ProjectedField, SourcePatch, mix_patches
 from ..mesh.trimesh import TriMesh
 from ..operators.metric import Medium
@@ -355,9 +356,8 @@ def _turns(mesh: TriMesh) -> np.ndarray:
 def _without_fins(mesh: TriMesh) -> TriMesh:
     """``mesh`` without the faces that appear twice (a collapse can fold two faces onto each other, opposite ways:
     a fin of no area that makes their edges non-manifold; measured on bimba at 1/10), nor the vertices they left."""
-    key = np.sort(mesh.F, axis=1)
-    _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
-    keep = counts[inverse.ravel()] == 1
+    _, inverse, counts = unique_rows(np.sort(mesh.F, axis=1), mesh.n_vertices)
+    keep = counts[inverse] == 1
     if keep.all():
         return mesh
     used, local = np.unique(mesh.F[keep], return_inverse=True)
