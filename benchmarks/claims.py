@@ -463,11 +463,11 @@ CLAIMS: list[Claim] = [
        "--sets union --normals --repeats 1`", (POINTCLOUDS, "| fandisk vertices | 0 | 3.44 % (36.7 %) |"),
        (POINTCLOUDS, "with its vertex normals order 2 goes from 3.34 % to 0.058 % (59× below pc-heat")),
     _r("pointclouds-resolution", "2026-12-06", "`python benchmarks/point_clouds.py --meshes kitten bimba max_planck "
-       "fandisk --sets union --no-order2 --resolution auto --repeats 2` (15:57 UTC, load 0.6; without the envelope: "
-       "15:52 UTC, load 0.3–1.0; with three decimation tries: 14:48 UTC, load 0.4–0.8)",
+       "fandisk --sets union --no-order2 --resolution auto --repeats 2` (16:10 UTC, load 0.3–0.6; the envelope: 15:57 "
+       "UTC, load 0.6, against 15:52 UTC, load 0.3–1.0; with three decimation tries: 14:48 UTC, load 0.4–0.8)",
        (POINTCLOUDS, "| kitten | 0 / 0.1 / 0.3 % | 1.32 / 1.54 / 7.73 % |"),
        (POINTCLOUDS, "At 0.1 % noise it had 0.32 of"), (POINTCLOUDS, "kitten 0.386 → 0.375 % and 0.496 → 0.490 %"),
-       (POINTCLOUDS, "2.8–3.0× pc-heat's time, against")),
+       (POINTCLOUDS, "2.4–2.7× pc-heat's time, against")),
     _r("pointclouds-denoise-table", "2026-12-06", "`python benchmarks/point_clouds.py --meshes kitten bimba max_planck "
        "--sets union --denoise 1,2` (load 1.4 → 1.2)", (POINTCLOUDS, "| kitten | 0.3 % | 7.73 % | 0.80 % |"),
        (POINTCLOUDS, "70 % at order 1 and 77 % at order 2 raw, 86 % and 71 % denoised")),
