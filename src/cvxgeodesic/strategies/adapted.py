@@ -731,13 +731,13 @@ class Adapted:
         edges (:func:`~cvxgeodesic.mesh.envelope.lipschitz_envelope`, ≤ 0), recorded and noted; None on a mesh.
 
         The copy is decimated from the surface through the points, which leaves out the triangles the fans disagree
-        on: its field goes around those holes, which the cloud's triangles close. Measured 2026-12-06 (scratch, one
-        thread) on the vertex clouds of kitten, bimba, max_planck and fandisk at 0, 0.1 and 0.3 % noise from vertex 0
-        and n/2, and 1,500 points of a sphere: of the 19 solved on a copy, 14 more accurate (clean fandisk from 0
-        4.41 → 1.53 % mean error, at 0.1 % noise 2.43 → 1.49 %; max_planck 0.71 → 0.51 %; the sphere's max error
-        10 → 2.7 %), 2 equal, 5 less (by 1-11 %: fandisk at 0.1 % from n/2 3.35 → 3.73 %, max_planck from n/2
-        0.47 → 0.52 %), where the fans' chords cut across a corner or a thin wall. Lowering only the drops above
-        0.5-1.5 edges kept neither side whole. 1-7 ms.
+        on: its field goes around those holes, which the cloud's triangles close. Measured 2026-12-06 (one thread;
+        docs/dev/adapted-log.md, "The cloud envelope") on the vertex clouds of kitten, bimba, max_planck and fandisk
+        at 0, 0.1 and 0.3 % noise from vertex 0 and n/2, and 1,500 points of a sphere: of the 19 solved on a copy,
+        14 more accurate (clean fandisk from 0 4.41 → 1.53 % mean error, at 0.1 % noise 2.43 → 1.49 %; max_planck
+        0.71 → 0.51 %; the sphere's max error 10 → 2.7 %), 2 equal, 5 less (by 1-11 %: fandisk at 0.1 % from n/2
+        3.35 → 3.73 %, max_planck from n/2 0.47 → 0.52 %), where the fans' chords cut across a corner or a thin
+        wall. Lowering only the drops above 0.5-1.5 edges kept neither side whole. 1-7 ms.
         """
         if self.source is self.config.surface:
             return None
