@@ -39,8 +39,11 @@ from ..validation import check_order
 from .gradient import gradient_blocks
 from .metric import Medium
 
-__all__ = ["ELEMENTS", "P1", "P2", "LagrangeElement", "LagrangeField", "LagrangeSpace", "SplitLagrangeField",
-           "lagrange_basis", "nodal_basis"]
+__all__ = ["ELEMENTS", "FLAT_COS", "P1", "P2", "LagrangeElement", "LagrangeField", "LagrangeSpace",
+           "SplitLagrangeField", "lagrange_basis", "nodal_basis"]
+
+#: Two cells lie in one affine hull where their unit normals' |cos| is at least this (:attr:`LagrangeSpace.flat_cells`).
+FLAT_COS = 1 - 1e-10
 
 #: Shape functions of an element: ``basis(reference, bary (s, c))`` → ``(N (s, n_local), dN (s, n_local, c))``.
 Basis = Callable[[ReferenceSimplex, np.ndarray], tuple[np.ndarray, np.ndarray]]
@@ -562,9 +565,9 @@ class LagrangeSpace:
     @functools.cached_property
     def flat_cells(self) -> np.ndarray:
         """(k,) bool ndarray: proper cells where ``d²`` is a quadratic wherever a source is visible: those whose
-        edge-neighbours all share their affine hull (:meth:`ReferenceSimplex.normals`; |cos| ≥ 1 − 1e-10 between
-        the unit normals): every proper tetrahedron (a solid is flat), the faces of a surface whose edge-neighbours
-        lie in their plane."""
+        edge-neighbours all share their affine hull (:meth:`ReferenceSimplex.normals`; |cos| ≥ :data:`FLAT_COS`
+        between the unit normals): every proper tetrahedron (a solid is flat), the faces of a surface whose
+        edge-neighbours lie in their plane."""
         mesh = self.mesh
         nrm = self.reference.normals(mesh.V[mesh.cells])  # (k, 3 − dim, 3)
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -577,7 +580,7 @@ class LagrangeSpace:
         cos = np.abs(np.einsum("icj,icj->ic", nrm[fo], ref[fe]))
         edge_cos = np.ones((self.n_edges, nrm.shape[1]))
         np.minimum.at(edge_cos, fe, np.where(np.isfinite(cos), cos, 0.0))
-        return (edge_cos[self.cell_edges] >= 1 - 1e-10).all(axis=(1, 2)) & ~self.degenerate
+        return (edge_cos[self.cell_edges] >= FLAT_COS).all(axis=(1, 2)) & ~self.degenerate
 
     def weights(self) -> np.ndarray:
         """Objective weights ``w`` (``∫φ ≈ wᵀφ``): each cell's measure split equally over its nodes (``A/6`` on a
