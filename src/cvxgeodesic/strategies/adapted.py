@@ -713,8 +713,10 @@ class Adapted:
         if offset > 1e-12 * self.config.mesh.bbox_diagonal:
             notes.append(f"a source within {SOURCE_SNAP:g} of a face's altitude from an edge of the solve mesh was "
                          f"moved onto it (by {offset:.3g})")
-        lowered = self._cloud_envelope(d, notes, record)
+        t_envelope = time.perf_counter()
+        lowered = self._cloud_envelope(d)
         if lowered is not None:
+            self._record_envelope(lowered, time.perf_counter() - t_envelope, notes, record)
             d = d + lowered
         if self.companions:  # of the order-2 field, before the rounding
             t2 = time.perf_counter()
@@ -725,10 +727,10 @@ class Adapted:
             correction = lowered if correction is None else correction + lowered
         return self._result(cres, d, sources, notes, record, t0, patches, correction)
 
-    def _cloud_envelope(self, d: np.ndarray, notes: list[str] | None, record: dict[str, Any] | None
-                        ) -> np.ndarray | None:
-        """On a point cloud, how far the transferred field drops to its envelope along the cloud's own triangles'
-        edges (:func:`~cvxgeodesic.mesh.envelope.lipschitz_envelope`, ≤ 0), recorded and noted; None on a mesh.
+    def _cloud_envelope(self, d: np.ndarray) -> np.ndarray | None:
+        """On a point cloud, how far the transferred field ``d`` drops to its envelope along the cloud's own
+        triangles' edges (:func:`~cvxgeodesic.mesh.envelope.lipschitz_envelope`, ≤ 0, 0 where ``d`` is not finite);
+        None on a mesh.
 
         The copy is decimated from the surface through the points, which leaves out the triangles the fans disagree
         on: its field goes around those holes, which the cloud's triangles close. Measured 2026-12-06 (one thread;
@@ -741,18 +743,17 @@ class Adapted:
         """
         if self.source is self.config.surface:
             return None
-        mesh = self.config.surface
-        t0 = time.perf_counter()
-        lowered = np.where(np.isfinite(d), lipschitz_envelope(mesh, d) - d, 0.0)
-        if record is not None:
-            count = int(np.count_nonzero(lowered < 0))
-            record["cloud_envelope"] = {"points": count, "max_lowered": float(-lowered.min(initial=0.0)),
-                                        "time": time.perf_counter() - t0}
-            if count and notes is not None:
-                notes.append(f"{count} point(s) lowered to the least distance over the cloud's triangle edges (the "
-                             f"surface through the points, which the copy is decimated from, has holes there; by at "
-                             f"most {-lowered.min():.3g})")
-        return lowered
+        return np.where(np.isfinite(d), lipschitz_envelope(self.config.surface, d) - d, 0.0)
+
+    @staticmethod
+    def _record_envelope(lowered: np.ndarray, seconds: float, notes: list[str], record: dict[str, Any]) -> None:
+        """What :meth:`_cloud_envelope` lowered, into the solve's record and, where it lowered a point, its notes."""
+        count = int(np.count_nonzero(lowered < 0))
+        record["cloud_envelope"] = {"points": count, "max_lowered": float(-lowered.min(initial=0.0)), "time": seconds}
+        if count:
+            notes.append(f"{count} point(s) lowered to the least distance over the cloud's triangle edges (the "
+                         f"surface through the points, which the copy is decimated from, has holes there; by at "
+                         f"most {-lowered.min():.3g})")
 
     def _estimate(self, sources: SourceSet, d: np.ndarray, patches: list[SourcePatch], nears: list[np.ndarray],
                   record: dict[str, Any]) -> None:
@@ -767,7 +768,7 @@ class Adapted:
                 record["error_estimate_method"] = f"none: the {which} copy took not the sources ({exc})"
                 return
             dc = mix_patches(dc, patches, nears)  # the same near the sources: the estimate is of the rest
-            envelope = self._cloud_envelope(dc, None, None)
+            envelope = self._cloud_envelope(dc)
             if envelope is not None:
                 dc = dc + envelope
             diffs.append(_relative_difference(dc, d, fixed))
