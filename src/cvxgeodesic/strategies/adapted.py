@@ -49,6 +49,7 @@ from ..mesh.patch import Patch, ball_patch
 from ..mesh.simplex import unique_rows
 from ..mesh.transfer import ProjectedField, SourcePatch, mix_patches
 from ..mesh.trimesh import TriMesh
+from ..operators.lagrange import FLAT_COS
 from ..operators.metric import Medium
 from ..problems.formulations import smoothness_weight
 from ..problems.ridge_rounding import ridge_rounding_length, round_ridge
@@ -390,14 +391,15 @@ def _tol(config: SolveConfig, mesh: TriMesh) -> float:
 
 
 def _is_planar(mesh: TriMesh) -> bool:
-    """Every proper face in one plane (|cos| ≥ 1 − 1e-10 between unit normals, the order-2 builder's flatness)."""
+    """Every proper face in one plane (|cos| ≥ :data:`~cvxgeodesic.operators.lagrange.FLAT_COS` between unit
+    normals, the order-2 builder's flatness)."""
     N = mesh.face_normals_unnormalized
     length = np.linalg.norm(N, axis=1)
     proper = length > 0
     if not proper.any():
         return False
     unit = N[proper] / length[proper, None]
-    return bool(np.all(np.abs(unit @ unit[0]) >= 1 - 1e-10))
+    return bool(np.all(np.abs(unit @ unit[0]) >= FLAT_COS))
 
 
 def _medium_on(medium: Medium | None, mesh: TriMesh, coarse: TriMesh) -> Medium | None:
