@@ -11,6 +11,9 @@ is vertex ``i`` of the mesh; resampled points are inserted into the mesh as vert
 - ``qclp`` at order 1 and 2 on each triangle set of :data:`~cvxgeodesic.mesh.pointcloud.TRIANGLE_SETS`
   (``--sets``), and the smoothed ``qcqp-dirichlet`` (``--m``) at both orders on the first set.
 
+``the default`` is ``GeodesicSolver(PointCloud(P)).solve(src)``: what a user gets without options (``qclp`` at order 2
+on a copy, ``resolution="auto"``, or its fallback to order 1 on the cloud's triangles, named in the label).
+
 Columns: mean and max relative error over the reachable points (``cvxgeodesic.evaluation.errors.relative_error``),
 time over pc-heat's (best of ``--repeats``; building the cloud's triangles included for the library's methods:
 each is a fresh ``PointCloud`` + solver + solve; pc-heat's includes its own set-up), and unreachable points
@@ -199,6 +202,8 @@ def compare(name: str, noise: float, P: np.ndarray, exact: np.ndarray, src: int,
     row(name, noise, "pc-heat", d, exact, src, t_heat, t_heat)
     d, t = timed(lambda: knn_dijkstra(P, src, args.knn), args.repeats)
     row(name, noise, f"{args.knn}-NN Dijkstra", d, exact, src, t, t_heat)
+    res, t = timed(lambda: cg.GeodesicSolver(cg.PointCloud(P)).solve(src), args.repeats)
+    row(name, noise, f"the default ({_solved_on(res)})", res.distance, exact, src, t, t_heat)
     for kind in sets:
         runs = [("qclp", 1, 0.0)] + ([] if args.no_order2 else [("qclp", 2, 0.0)])
         if kind == sets[0]:  # the smoothed formulation, at both orders, on the first set
@@ -255,9 +260,16 @@ def compare_resolution(name: str, noise: float, P: np.ndarray, exact: np.ndarray
         def solve(resolution=resolution):
             return cg.GeodesicSolver(cg.PointCloud(P), "qclp", order=2, resolution=resolution).solve(src)
         res, t = timed(solve, args.repeats)
-        ad = res.info.extra["adapted"]
-        how = f"{ad['faces']} faces" if ad["fallback"] is None else f"fallback: {ad['fallback']}"
-        row(name, noise, f"qclp order 2, resolution={value} ({how})", res.distance, exact, src, t, t_heat)
+        row(name, noise, f"qclp order 2, resolution={value} ({_solved_on(res)})", res.distance, exact, src, t,
+            t_heat)
+
+
+def _solved_on(res) -> str:
+    """What an adapted solve ran on: the copy's faces, or the fallback's reason (order 1 on the cloud's triangles)."""
+    ad = res.info.extra.get("adapted")
+    if ad is None:
+        return "the cloud's triangles"
+    return f"{ad['faces']} faces" if ad["fallback"] is None else f"fallback: {ad['fallback']}"
 
 
 def poisson_subsample(P: np.ndarray, fraction: float, seed: int = 1) -> np.ndarray:

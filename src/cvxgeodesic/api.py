@@ -138,18 +138,19 @@ class GeodesicSolver:
         ``max_diff_to_coarse_transfer``, the largest difference between the
         transferred and the optimal field. The interior-point solver takes no
         warm start yet, so this costs a coarse solve *more* than a direct solve.
-    order : {1, 2}
-        ``2``: second-order elements for the squared distance (``method="qclp"`` and the ``qcqp``
-        methods; :mod:`cvxgeodesic.problems.squared_distance`, ``docs/order2.md``): exact on flat regions whatever
-        the triangle shapes; sources may be vertices, SurfacePoints (at most one per face) and
-        ``"boundary"``; ``result.field.distance_at(faces, bary)`` evaluates the field
-        inside faces. The same solvers and fallback as order 1. Not with ``multires`` or the
-        baselines. The smoothed methods take energies of ``φ = d²`` that vanish on the exact
-        field of flat regions (:mod:`cvxgeodesic.operators.squared_energy`) with the dimensionless
-        ``λ = m · κ₂`` (:data:`~cvxgeodesic.problems.formulations.KAPPA_ORDER2`): ``m = 1`` rounds the ridge
-        of two sources half a side apart on a unit square over about 1.2 % of the side, ``m = 30``
-        over 4 % (order 1's ``m = 1``); the width grows as ``m^(1/3)`` (docs/order2.md,
-        "Smoothing at order 2").
+    order : {1, 2}, optional
+        The element order. None (the default): order 1 on this mesh, except where the domain's default resolution
+        applies (point clouds: ``resolution="auto"``, order 2 on a decimated copy; docs/pointclouds.md). A given order
+        solves on this mesh unless ``resolution`` is given too. ``2``: second-order elements for the squared
+        distance (``method="qclp"`` and the ``qcqp`` methods; :mod:`cvxgeodesic.problems.squared_distance`,
+        ``docs/order2.md``): exact on flat regions whatever the triangle shapes; sources may be vertices,
+        SurfacePoints (at most one per face) and ``"boundary"``; ``result.field.distance_at(faces, bary)`` evaluates
+        the field inside faces. The same solvers and fallback as order 1. Not with ``multires`` or the baselines. The
+        smoothed methods take energies of ``φ = d²`` that vanish on the exact field of flat regions
+        (:mod:`cvxgeodesic.operators.squared_energy`) with the dimensionless ``λ = m · κ₂``
+        (:data:`~cvxgeodesic.problems.formulations.KAPPA_ORDER2`): ``m = 1`` rounds the ridge of two sources half a
+        side apart on a unit square over about 1.2 % of the side, ``m = 30`` over 4 % (order 1's ``m = 1``); the width
+        grows as ``m^(1/3)`` (docs/order2.md, "Smoothing at order 2").
     threads : int, optional
         Threads of every pool the solver uses (PARDISO, the compiled kernels, BLAS),
         for its construction and each solve; recorded in ``info.extra["threads"]``.
@@ -169,14 +170,15 @@ class GeodesicSolver:
         The mesh the field is solved on (``docs/adapted.md``). ``"mesh"``: this mesh. An int (>= 4): a
         quadric-decimated copy with about that many faces; a float in (0, 1): that fraction of the faces;
         ``"auto"``: 1/10 of the faces, at least 2,000 (:data:`~cvxgeodesic.strategies.adapted.AUTO_FRACTION`).
-        Any of these solves **at order 2** (``order`` is then 2 whatever it says) on the copy, with the sources
+        Any of these solves **at order 2** (``order=1`` with one of them is refused) on the copy, with the sources
         at their exact positions, and answers on this mesh: ``distance`` per vertex, ``distance_at`` and
         ``geodesic_path`` on this surface; ``info.extra["adapted"]`` records the solve mesh, its times and, with
         ``estimate_error=True``, an error estimate. Non-manifold meshes, several components and faces of zero area
         are solved on this mesh at order 1 instead, with a note. Surfaces, and point clouds (the copy decimated from
         the surface through the points, ``PointCloud.surface``; docs/pointclouds.md); not with ``multires``. None: the
-        mesh's domain's
-        (:attr:`cvxgeodesic.capabilities.Domain.default_resolution`: ``"mesh"``).
+        mesh's domain's (:attr:`cvxgeodesic.capabilities.Domain.default_resolution`: ``"mesh"`` on surfaces and
+        volumes, ``"auto"`` on point clouds) when ``order`` is not given and the method, medium and smoothing have an
+        adapted solve, else ``"mesh"``.
     estimate_error : bool, default False
         With ``resolution``: estimate every solve's mean relative error by two more solves, on copies with half and
         twice the faces (``info.extra["adapted"]["error_estimate"]``, within [0.5, 2] of the true mean error in 100
@@ -243,7 +245,7 @@ class GeodesicSolver:
         multires: bool | int = False,
         multires_polish: bool = False,
         normalization: str = "area",
-        order: int = 1,
+        order: int | None = None,
         threads: int | None = None,
         cost: Any = None,
         metric: Any = None,
@@ -254,11 +256,13 @@ class GeodesicSolver:
         self.mesh: SimplexMesh = as_mesh(mesh)  # a TriMesh, TetMesh or CloudMesh: what differs, its reference says,
         self.domain = DOMAINS[self.mesh.domain]  # and its domain names its defaults and the words of its messages
         self._check_method_and_solver(method, solver)
-        self.order = check_order(order)
         target = resolve_target(multires, self.mesh.n_cells)  # a volume refuses multires below (capabilities)
-        self._set_resolution(resolution, multires=target is not None)
         medium = "none" if cost is None and metric is None else "cost" if cost is not None else "metric"
-        m_value, lam_value = self._check_capabilities(m, lam, medium=medium, multires=target is not None)
+        m_value, lam_value = check_smoothness(m, lam)
+        smoothing = self._smoothing(m_value, lam_value)
+        self._set_order_and_resolution(order, resolution, multires=target is not None, medium=medium,
+                                       smoothing=smoothing)
+        self._check_capabilities(medium=medium, multires=target is not None, smoothing=smoothing)
         # a travel cost or metric (operators/metric.py): validated here, once
         self.medium = make_medium(self.mesh, cost, metric)
         self.tol = check_number(tol, "tol", low=0, high=1, low_open=True, high_open=True)
@@ -279,13 +283,21 @@ class GeodesicSolver:
         self.notes: list[str] = self._strategy.notes
         self.setup_time = time.perf_counter() - t0
 
-    def _set_resolution(self, resolution: Any, *, multires: bool) -> None:
-        """``self.resolution`` (``"mesh"``, or what :func:`resolve_resolution` takes) checked; any other than
-        ``"mesh"`` solves at order 2 (docs/adapted.md)."""
-        if resolution is None:  # the default applies where an adapted solve exists
-            resolution = self.domain.default_resolution
-            if not supported(self.method, domain=self.domain.name, resolution=True) or multires:
-                resolution = "mesh"
+    def _set_order_and_resolution(self, order: Any, resolution: Any, *, multires: bool, medium: str,
+                                  smoothing: bool) -> None:
+        """``self.order`` and ``self.resolution`` (``"mesh"``, or what :func:`resolve_resolution` takes) checked. A
+        resolution other than ``"mesh"`` solves at order 2 (docs/adapted.md), so ``order=1`` with one is refused.
+        With neither given, the domain's default resolution applies where the capability table has an adapted
+        solve for this method, medium and smoothing (:attr:`~cvxgeodesic.capabilities.Domain.default_resolution`:
+        ``"auto"`` on point clouds), else this mesh at order 1."""
+        given = None if order is None else check_order(order)
+        if resolution is None:
+            resolution = "mesh"
+            if given is None and not multires and supported(
+                    self.method, domain=self.domain.name, order=2, medium=medium, smoothing=smoothing,
+                    resolution=True):
+                resolution = self.domain.default_resolution
+        self.order: int = 1 if given is None else given
         if resolve_resolution(resolution, self.mesh.n_cells) is None:
             self.resolution: Any = "mesh"
             return
@@ -293,6 +305,10 @@ class GeodesicSolver:
             raise ParameterError("give multires= or resolution=, not both: each chooses the mesh the field is "
                                  "solved on (resolution= at order 2 with the sources at their positions, "
                                  "docs/adapted.md)")
+        if given == 1:
+            raise ParameterError(f"resolution={resolution!r} solves at order 2 on a decimated copy; order=1 solves "
+                                 "on this mesh: give resolution='mesh' with order=1, or leave order out "
+                                 "(docs/adapted.md)")
         self.resolution = resolution.strip().lower() if isinstance(resolution, str) else resolution
         self.order = 2
 
@@ -315,19 +331,20 @@ class GeodesicSolver:
                 f"solver={self._solver!r} applies to the convex formulations, not to baseline {self.method!r}"
             )
 
-    def _check_capabilities(self, m: Any, lam: Any, *, medium: str, multires: bool) -> tuple[float, float | None]:
+    def _smoothing(self, m_value: float, lam_value: float | None) -> bool:
+        """Whether the solve has a smoothness term (a smoothed order-2 solve takes no medium); sets ``self.energy``
+        (None: the method has none)."""
+        self.energy = FORMULATIONS.get(self.method, ("", None))[1]
+        return self.energy is not None and (m_value > 0 if lam_value is None else lam_value > 0)
+
+    def _check_capabilities(self, *, medium: str, multires: bool, smoothing: bool) -> None:
         """Raise when the capability table (:mod:`cvxgeodesic.capabilities`) refuses the method on this mesh's domain,
         at this order, with this medium, multires and resolution: the one :func:`~cvxgeodesic.capabilities.check` of
         this solver, whose cell (``self.capability``) the strategy is given and each solve's sources are checked
-        against. ``m`` and ``lam`` are checked first (a smoothed order-2 solve takes no medium) and returned, and
-        ``self.energy`` set (None: no smoothness term)."""
-        m_value, lam_value = check_smoothness(m, lam)
-        self.energy = FORMULATIONS.get(self.method, ("", None))[1]
-        smoothing = self.energy is not None and (m_value > 0 if lam_value is None else lam_value > 0)
+        against."""
         self.capability: Capability = capabilities.check(
             self.method, domain=self.domain.name, order=self.order, medium=medium, multires=multires,
             smoothing=smoothing, resolution=self.resolution != "mesh")
-        return m_value, lam_value
 
     def _set_smoothness(self, m_value: float, lam_value: float | None) -> None:
         """``self.lam`` (λ in the mesh's units) and ``self.m`` from the checked ``m`` or ``lam``
@@ -422,7 +439,7 @@ def geodesic_distance(mesh: MeshLike, *args: Any, sources: Any = None, method: M
                       m: float | None = None, solver: SolverName | None = None, lam: float | None = None,
                       tol: float = DEFAULT_TOL,
                       max_iter: int = 200, normalization: str = "area",
-                      order: int = 1, threads: int | None = None, cost: Any = None, metric: Any = None,
+                      order: int | None = None, threads: int | None = None, cost: Any = None, metric: Any = None,
                       resolution: Any = None) -> np.ndarray:
     """Geodesic distance field from source vertices (one-shot form of :class:`GeodesicSolver`).
 
@@ -497,7 +514,7 @@ LOCAL_ROW_TOL = 1e-5
 def distance_matrix(mesh: MeshLike, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
                     solver: SolverName = "auto", progress: bool | None = None, *, lam: float | None = None,
                     tol: float | None = None, max_iter: int = 200, multires: bool | int = False,
-                    normalization: str = "area", order: int = 1, threads: int | None = None,
+                    normalization: str = "area", order: int | None = None, threads: int | None = None,
                     workers: int | None = None, scheduler: Any = None, cost: Any = None, metric: Any = None,
                     max_distance: None = None, checkpoint: str | os.PathLike | None = None,
                     resolution: Any = None) -> np.ndarray: ...
@@ -505,7 +522,7 @@ def distance_matrix(mesh: MeshLike, vertices: ArrayLike, method: Method | None =
 def distance_matrix(mesh: MeshLike, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
                     solver: SolverName = "auto", progress: bool | None = None, *, lam: float | None = None,
                     tol: float | None = None, max_iter: int = 200, multires: bool | int = False,
-                    normalization: str = "area", order: int = 1, threads: int | None = None,
+                    normalization: str = "area", order: int | None = None, threads: int | None = None,
                     workers: int | None = None, scheduler: Any = None, cost: Any = None, metric: Any = None,
                     max_distance: float, checkpoint: str | os.PathLike | None = None,
                     resolution: Any = None) -> sp.csr_matrix: ...
@@ -513,7 +530,7 @@ def distance_matrix(mesh: MeshLike, vertices: ArrayLike, method: Method | None =
 def distance_matrix(mesh: MeshLike, vertices: ArrayLike, method: Method | None = None, m: float = 1.0,
                     solver: SolverName = "auto", progress: bool | None = None, *, lam: float | None = None,
                     tol: float | None = None, max_iter: int = 200, multires: bool | int = False,
-                    normalization: str = "area", order: int = 1, threads: int | None = None,
+                    normalization: str = "area", order: int | None = None, threads: int | None = None,
                     workers: int | None = None, scheduler: Any = None, cost: Any = None, metric: Any = None,
                     max_distance: float | None = None,
                     checkpoint: str | os.PathLike | None = None,
@@ -524,7 +541,7 @@ def distance_matrix(mesh: MeshLike, vertices: ArrayLike, method: Method | None =
                     solver: SolverName = "auto",
                     progress: bool | None = None, *, lam: float | None = None, tol: float | None = None,
                     max_iter: int = 200, multires: bool | int = False, normalization: str = "area",
-                    order: int = 1, threads: int | None = None, workers: int | None = None,
+                    order: int | None = None, threads: int | None = None, workers: int | None = None,
                     scheduler: Any = None, cost: Any = None, metric: Any = None, max_distance: float | None = None,
                     checkpoint: str | os.PathLike | None = None, resolution: Any = None) -> np.ndarray | sp.csr_matrix:
     """Distance fields from several vertices, one row per vertex, with one :class:`GeodesicSolver`.
@@ -713,8 +730,9 @@ def _local_rows(mesh: SimplexMesh, options: dict, max_distance: Any, items: list
     if key in ALL_METHODS:  # an unknown name: the solver names the known ones
         medium = "cost" if given["cost"] else "metric" if given["metric"] else "none"
         capabilities.check(key, domain=mesh.domain, local=True, multires=given["multires"], medium=medium,
-                         order=2 if given["resolution"] else check_order(options["order"]),
+                         order=2 if given["resolution"] else check_order(options["order"] or 1),
                          resolution=given["resolution"], sources=_named_kinds(items, points=True) | (
                              {"boundary"} if any(isinstance(i, str) for i in items) else set()))  # any word
     rest = {k: v for k, v in options.items() if k not in given}
+    rest["resolution"] = "mesh"  # a patch is solved on itself, whatever the domain's default resolution
     return LocalRows, {"max_distance": r, "factory": _PatchSolver, **rest}

@@ -60,8 +60,8 @@ class Domain:
     default_method : str
         The method of ``method=None`` (``GeodesicSolver``, the CLI, batches).
     default_resolution : "mesh", "auto", int or float
-        The ``resolution`` of ``resolution=None`` (docs/adapted.md); a method without an adapted solve falls back to
-        ``"mesh"`` whatever this says.
+        The ``resolution`` of ``resolution=None`` and ``order=None`` (docs/adapted.md); a given order, local rows,
+        multires, and a method, medium or smoothing without an adapted solve take ``"mesh"`` whatever this says.
     reference : (str, int)
         The comparison's reference field (:mod:`cvxgeodesic.compare`): ``(method, order)``.
     output_format : str
@@ -85,15 +85,16 @@ class Domain:
 
 
 #: Every domain by name (``mesh.domain``). The curved Hessian energy exists on surfaces only: ``qclp`` in a volume;
-#: on a point cloud ``qclp`` is the most accurate on noisy clouds at about the point-cloud heat method's cost
-#: (docs/pointclouds.md). Where no exact method applies (a volume, a cloud's soup) the comparison's reference is the
-#: most accurate field the library computes there, ``qclp`` at order 2.
+#: on a point cloud ``qclp`` at order 2 on a decimated copy of the surface through the points (``"auto"``), which
+#: falls back to order 1 on the cloud's own triangles where the copy is refused (docs/pointclouds.md). Where no exact
+#: method applies (a volume, a cloud's soup) the comparison's reference is the most accurate field the library
+#: computes there, ``qclp`` at order 2.
 DOMAINS: dict[str, Domain] = {
     "surface": Domain("surface", "triangle meshes", "on a surface", "on a surface", 2, "qcqp-hessian", "mesh",
                       ("exact", 1), "ply"),
     "volume": Domain("volume", "tetrahedral meshes", "inside a volume", "on a volume", 3, "qclp", "mesh",
                      ("qclp", 2), "vtu"),
-    "cloud": Domain("cloud", "point clouds", "on a point cloud", "on a point cloud", 2, "qclp", "mesh",
+    "cloud": Domain("cloud", "point clouds", "on a point cloud", "on a point cloud", 2, "qclp", "auto",
                     ("qclp", 2), "ply", drawn_as="points"),
 }
 

@@ -104,9 +104,13 @@ def fingerprint(mesh: SimplexMesh, items: Sequence[Any], options: dict) -> dict[
     text = repr([int(i) if isinstance(i, int | np.integer)
                  else f"{type(i).__name__} {hashlib.sha256(pickle.dumps(i)).hexdigest()[:12]}" for i in items])
     out["sources"] = text if len(text) <= 60 else f"{len(items)} rows, {hashlib.sha256(text.encode()).hexdigest()[:16]}"
+    from .capabilities import DOMAINS
+
     for key, value in sorted(options.items()):
         if key in RESUMABLE_ACROSS:
             continue
+        if key == "order" and value is None and DOMAINS[mesh.domain].default_resolution == "mesh":
+            value = 1  # no order on a domain solved on itself by default: order 1 (a cloud's default is another)
         value = _canonical(key, value)
         text = f"array {digest(value)}" if isinstance(value, np.ndarray) else repr(value)
         short = f"{type(value).__name__} {hashlib.sha256(text.encode()).hexdigest()[:12]}"
@@ -395,7 +399,7 @@ def _whole_mesh_lambda(mesh: TriMesh, options: dict) -> float | None:
     energy = FORMULATIONS[canonical_method(method)][1]
     if energy is None:
         return None
-    normalization, order = options.get("normalization", "area"), options.get("order", 1)
+    normalization, order = options.get("normalization", "area"), options.get("order") or 1  # None: order 1
     if lam is not None:  # its range on the whole mesh: each patch takes it scaled, unchecked (api._PatchSolver)
         return check_lam(lam, smoothness_weight(mesh, 1.0, normalization, energy, order=order))
     return smoothness_weight(mesh, m, normalization, energy, order=order)

@@ -379,7 +379,8 @@ def parse_view_options(args: argparse.Namespace) -> None:
 
 
 LAM_HELP = "give λ directly (overrides --m)"
-ORDER_HELP = "2: second-order elements for the squared distance (qclp and the qcqp methods; docs/order2.md)"
+ORDER_HELP = ("2: second-order elements for the squared distance (qclp and the qcqp methods; docs/order2.md); "
+              "default 1, or on a point cloud order 2 on a decimated copy (--resolution auto; docs/pointclouds.md)")
 
 
 def add_precision_options(p: argparse.ArgumentParser, *, tol_default: str) -> None:
@@ -389,7 +390,7 @@ def add_precision_options(p: argparse.ArgumentParser, *, tol_default: str) -> No
     from ..capabilities import ORDERS
 
     p.add_argument("--lam", type=float, default=None, help=LAM_HELP)
-    p.add_argument("--order", type=int, default=1, choices=ORDERS, help=ORDER_HELP)
+    p.add_argument("--order", type=int, default=None, choices=ORDERS, help=ORDER_HELP)
     p.add_argument("--tol", type=float, default=None, metavar="TOL",
                    help=f"relative tolerance of the solver's residuals and duality gap, in (0, 1) "
                         f"(default {tol_default})")
@@ -408,7 +409,8 @@ def add_resolution_option(p: argparse.ArgumentParser) -> None:
     p.add_argument("--resolution", type=resolution, default=None, metavar="R",
                    help="solve at order 2 on a quadric-decimated copy and answer on this mesh: a face count (e.g. "
                         "4000), a fraction of the faces (e.g. 0.1), 'auto' (1/10, at least 2000 faces) or 'mesh' "
-                        "(this mesh, the default; docs/adapted.md)")
+                        "(this mesh; docs/adapted.md). Default: 'mesh', and 'auto' on a point cloud without --order "
+                        "(docs/pointclouds.md)")
 
 
 def resolution(text: str) -> Any:

@@ -26,7 +26,7 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--lam", type=float, default=None, help="give λ directly (overrides --m)")
     p.add_argument("--normalization", default="area", choices=("area", "paper"),
                    help="meaning of --m: 'area' (default) or the paper's λ = m·100·h/n")
-    p.add_argument("--order", type=int, default=1, choices=ORDERS, help=opt.ORDER_HELP)
+    p.add_argument("--order", type=int, default=None, choices=ORDERS, help=opt.ORDER_HELP)
     opt.add_cost_options(p)
     opt.add_resolution_option(p)
     p.add_argument("--estimate-error", action="store_true",
@@ -80,13 +80,14 @@ def run(args: argparse.Namespace) -> int:
     sources, label = opt.cli_sources(args, mesh)
     method = opt.method_for(args, mesh)
     log = sys.stderr
-    if not args.quiet:
-        cells = mesh.reference.words.many
-        print(f"{mesh.name}: {mesh.n_file_vertices} vertices, {mesh.n_cells} {cells}; method {method}"
-              + (f", order {args.order}" if args.order != 1 else ""), file=log)
     solver = GeodesicSolver(mesh, method, m=args.m, lam=args.lam, solver=args.solver,
                             normalization=args.normalization, order=args.order, cost=opt.cli_cost(args, mesh),
                             resolution=args.resolution, estimate_error=args.estimate_error)
+    if not args.quiet:  # the order and resolution the solver chose (a cloud's default is order 2 on a copy)
+        cells = mesh.reference.words.many
+        print(f"{mesh.name}: {mesh.n_file_vertices} vertices, {mesh.n_cells} {cells}; method {method}"
+              + (f", order {solver.order}" if solver.order != 1 else "")
+              + (f", resolution {solver.resolution}" if solver.resolution != "mesh" else ""), file=log)
     res = solver.solve(sources, callback=None if args.quiet else progress_printer(log))
     for note in res.info.notes:
         args.notes.say(note)

@@ -91,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
         where = ("" if args.workers is None and args.scheduler is None
                  else f"; on {args.scheduler or f'a local cluster of {args.workers} worker processes'}")
         within = (f", distances up to {args.max_distance:g}" if local else "") + (
-            f", order {args.order}" if args.order != 1 else "")
+            f", order {args.order}" if args.order not in (None, 1) else "")
         print(f"{mesh.name}: {mesh.n_file_vertices} vertices, {len(rows)} rows{within}; method {method}{where}",
               file=sys.stderr)  # "resuming from ..." comes from distance_matrix, once it has accepted the checkpoint
     try:

@@ -745,7 +745,10 @@ class Adapted:
         """
         if self.source is self.config.surface:
             return None
-        return np.where(np.isfinite(d), lipschitz_envelope(self.config.surface, d) - d, 0.0)
+        drop = np.zeros_like(d)
+        finite = np.isfinite(d)  # an unreached point stays unreached (inf - inf is no drop)
+        drop[finite] = lipschitz_envelope(self.config.surface, d)[finite] - d[finite]
+        return drop
 
     @staticmethod
     def _record_envelope(lowered: np.ndarray, seconds: float, notes: list[str], record: dict[str, Any]) -> None:
