@@ -468,6 +468,13 @@ CLAIMS: list[Claim] = [
        (POINTCLOUDS, "| kitten | 0 / 0.1 / 0.3 % | 1.32 / 1.54 / 7.73 % |"),
        (POINTCLOUDS, "At 0.1 % noise it had 0.32 of"), (POINTCLOUDS, "kitten 0.386 → 0.375 % and 0.496 → 0.490 %"),
        (POINTCLOUDS, "2.4–2.7× pc-heat's time, against")),
+    _r("pointclouds-tilt", "2026-12-06", "`python benchmarks/point_clouds.py --meshes kitten bimba max_planck fandisk "
+       "--sets union --no-order2 --repeats 2`, without the filter (17:04 UTC, load 0.3) and with it (17:11 UTC, load "
+       "0.9); its cost (cProfile of PointCloud on kitten and max_planck), the angle alone and the thin box: "
+       + NO_SCRIPT,
+       (POINTCLOUDS, "| fandisk | 0 / 0.1 / 0.3 % | 5.24 → 1.84 / 4.97 → 2.30 / 6.05 → 3.95 % |"),
+       (POINTCLOUDS, "It costs 0.01–0.03 s per cloud"), (POINTCLOUDS, "left out 20,030 of noisy bimba's 46K triangles"),
+       (POINTCLOUDS, "grids 1.5–2.8 spacings apart")),
     _r("pointclouds-denoise-table", "2026-12-06", "`python benchmarks/point_clouds.py --meshes kitten bimba max_planck "
        "--sets union --denoise 1,2` (load 1.4 → 1.2)", (POINTCLOUDS, "| kitten | 0.3 % | 7.73 % | 0.80 % |"),
        (POINTCLOUDS, "70 % at order 1 and 77 % at order 2 raw, 86 % and 71 % denoised")),

@@ -100,7 +100,8 @@ def test_no_point_of_a_noisy_sphere_is_an_outlier(noise):
     P = X + np.random.default_rng(4).normal(scale=noise * 2 * np.sqrt(3), size=X.shape)
     found = find_defects(P)
     assert found.outliers.size == 0 and found.lines.size == 0
-    assert PointCloud(P).notes == ()
+    notes = PointCloud(P).notes  # at most the fan triangles that the noise stands across the surface (cloud_tilt)
+    assert all("fan triangles turned by more than" in n for n in notes), notes
 
 
 @pytest.mark.shared

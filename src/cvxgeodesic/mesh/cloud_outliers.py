@@ -28,7 +28,8 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["DEFECT_NEIGHBOURS", "HEIGHT_MADS", "ISOLATION_MAX", "LINE_TOL", "SPREAD_HEIGHT",
-           "SPREAD_ISOLATION", "SPREAD_MAX", "CloudDefects", "defect_statistics", "find_defects"]
+           "SPREAD_ISOLATION", "SPREAD_MAX", "CloudDefects", "defect_statistics", "find_defects",
+           "nearest_neighbours"]
 
 #: Neighbours the statistics are taken over (fewer on a cloud of at most this many points): potpourri3d's fan size,
 #: at which the thresholds below were measured.
@@ -72,7 +73,22 @@ class CloudDefects:
         return np.union1d(self.outliers, self.lines)
 
 
-def defect_statistics(P: np.ndarray, k: int = DEFECT_NEIGHBOURS) -> np.ndarray:
+def nearest_neighbours(P: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """Each point's ``k`` nearest other points (capped at ``n - 1``), nearest first.
+
+    Returns
+    -------
+    dist, idx : (n, k) ndarray
+        Their distances (float) and indices (int).
+    """
+    from scipy.spatial import cKDTree
+
+    dist, idx = cKDTree(P).query(P, k=min(k, P.shape[0] - 1) + 1)
+    return dist[:, 1:], idx[:, 1:]  # column 0: the point itself (distinct points)
+
+
+def defect_statistics(P: np.ndarray, k: int = DEFECT_NEIGHBOURS,
+                      knn: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """The four statistics of every point (the module's docstring defines them).
 
     Parameters
@@ -81,17 +97,17 @@ def defect_statistics(P: np.ndarray, k: int = DEFECT_NEIGHBOURS) -> np.ndarray:
         Distinct points, ``n >= 2``.
     k : int
         Neighbours of each point (capped at ``n - 1``).
+    knn : (dist, idx), optional
+        :func:`nearest_neighbours` of ``P`` for ``k`` or more (the first ``k`` columns are read).
 
     Returns
     -------
     (n, 4) float ndarray
         Columns ``spread``, ``height``, ``isolation``, ``flatness``.
     """
-    from scipy.spatial import cKDTree
-
     k = min(k, P.shape[0] - 1)
-    dist, idx = cKDTree(P).query(P, k=k + 1)
-    dist, idx = dist[:, 1:], idx[:, 1:]  # column 0: the point itself (distinct points)
+    dist, idx = knn if knn is not None else nearest_neighbours(P, k)
+    dist, idx = dist[:, :k], idx[:, :k]
     mean = dist.mean(axis=1)
     local = np.median(mean[idx], axis=1)
     X = P[idx]
@@ -103,14 +119,16 @@ def defect_statistics(P: np.ndarray, k: int = DEFECT_NEIGHBOURS) -> np.ndarray:
     return np.c_[mean / local, height / local, mean / np.median(mean), flat]
 
 
-def find_defects(P: np.ndarray, k: int = DEFECT_NEIGHBOURS) -> CloudDefects:
-    """Isolated outliers and points of line-like neighbourhoods of the distinct points ``P`` (n, 3).
+def find_defects(P: np.ndarray, k: int = DEFECT_NEIGHBOURS,
+                 knn: tuple[np.ndarray, np.ndarray] | None = None) -> CloudDefects:
+    """Isolated outliers and points of line-like neighbourhoods of the distinct points ``P`` (n, 3); ``knn`` as
+    :func:`defect_statistics` takes it.
 
     Returns
     -------
     CloudDefects
     """
-    spread, height, isolation, flat = defect_statistics(P, k).T
+    spread, height, isolation, flat = defect_statistics(P, k, knn).T
     med = np.median(height)
     tall = height > max(SPREAD_HEIGHT[1], med + HEIGHT_MADS * np.median(np.abs(height - med)))
     out = ((spread > SPREAD_MAX) | ((spread > SPREAD_HEIGHT[0]) & tall)

@@ -19,7 +19,8 @@ from numpy.typing import ArrayLike
 
 from ..errors import MeshError, ParameterError, SourceError
 from ..validation import as_points
-from .cloud_outliers import CloudDefects, find_defects
+from .cloud_outliers import DEFECT_NEIGHBOURS, CloudDefects, find_defects, nearest_neighbours
+from .cloud_tilt import TILT_ANGLE, TILT_NEIGHBOURS, principal_planes, untilted_fans
 from .simplex import unique_rows
 from .trimesh import TriMesh
 
@@ -397,7 +398,8 @@ class PointCloud:
             file_index = keep
             pts = raw
         _check_shape(pts, self.name)
-        defects = _defects(pts, outliers, keep, self.name)
+        knn = nearest_neighbours(pts, max(DEFECT_NEIGHBOURS, TILT_NEIGHBOURS))  # one query for both
+        defects = _defects(pts, outliers, keep, self.name, knn)
         self.outliers, self.line_points = defects.outliers, defects.lines
         notes += _defect_notes(defects, keep, self.name)
         solid = np.setdiff1d(np.arange(pts.shape[0]), defects.points)  # the points the fans are built on
@@ -416,6 +418,14 @@ class PointCloud:
             raise ParameterError(f"use_normals must be True or False, got {use_normals!r}")
         oriented = _oriented_normals(self.normals if use_normals else None, pts, solid, self.name, notes)
         tri, owner = fan_triangles(pts[solid], self.neighbours, oriented)
+        if oriented is None:  # fans in fitted planes: those standing across a thin wall or a sharp crease left out
+            planes = principal_planes(pts, knn[1])  # an outlier among a point's neighbours moves its plane a little
+            tri, owner, dropped, restored = untilted_fans(pts[solid], tri, owner, tuple(a[solid] for a in planes))
+            if dropped:
+                notes.append(f"{self.name}: {dropped} fan triangles turned by more than {TILT_ANGLE:g} degrees from "
+                             "the plane of the points around a corner (across a thin wall or a sharp crease) were "
+                             f"left out" + (f"; {restored} points they would cut off kept their fans" if restored
+                                            else ""))
         self._fans = (solid[tri], solid[owner])  # for surface(): the consensus of the same fans
         F, added = triangle_set(solid[tri], solid[owner], pts, triangles)
         notes += added
@@ -565,12 +575,13 @@ def _check_shape(P: np.ndarray, name: str) -> None:
                         f"{s[1] / max(s[0], 1e-300):.1e} of the first): there is no surface to measure on")
 
 
-def _defects(P: np.ndarray, outliers: str, keep: np.ndarray, name: str) -> CloudDefects:
+def _defects(P: np.ndarray, outliers: str, keep: np.ndarray, name: str,
+             knn: tuple[np.ndarray, np.ndarray]) -> CloudDefects:
     """The points to leave out (none with ``outliers="keep"``); refused with ``outliers="error"``."""
     none = np.zeros(0, dtype=np.int64)
     if outliers == "keep":
         return CloudDefects(none, none)
-    found = find_defects(P)
+    found = find_defects(P, knn=knn)
     if outliers == "error" and found.points.size:
         raise MeshError(f"{name}: {_describe_defects(found, keep)} (outliers='error'; outliers='exclude' leaves them "
                         "out of the triangles, outliers='keep' triangulates them)")
