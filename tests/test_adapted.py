@@ -418,7 +418,8 @@ def test_two_sources_get_one_reach_and_exact_fields_next_to_them(grid):
 
 
 def test_the_source_patch_is_solved_to_the_copys_tolerance(grid, monkeypatch):
-    """A curved patch stops at ``COPY_TOL`` as the copy does; a planar one keeps ``tol`` (its field is exact)."""
+    """A patch stops at the copy's tolerance: ``CURVED_COPY_TOL`` where no face is flat, ``COPY_TOL`` with flat faces
+    (a cutting-plane round runs there); a planar one keeps ``tol`` (its field is exact)."""
     tols = []
     real = adapted.Order2
 
@@ -430,10 +431,23 @@ def test_the_source_patch_is_solved_to_the_copys_tolerance(grid, monkeypatch):
     monkeypatch.setattr(adapted, "Order2", Recording)
     res = cg.GeodesicSolver(cg.icosphere(4), "qclp", resolution=300).solve(0)
     assert res.info.extra["adapted"]["source_patches"] == 1
-    assert tols == [adapted.COPY_TOL] * 2  # the copy's, then the patch's on the sphere's own faces
+    assert tols == [adapted.CURVED_COPY_TOL] * 2  # the copy's, then the patch's on the sphere's own faces
+    tols.clear()
+    folded = _folded(grid)
+    on_crease = int(np.argmin(_euclid(folded, [0.5, 0.5, 0.0])))  # its patch holds faces of both halves
+    cg.GeodesicSolver(folded, "qclp", resolution=300).solve(on_crease)
+    assert tols == [adapted.COPY_TOL] * 2
     tols.clear()
     cg.GeodesicSolver(grid, "qclp", resolution=80).solve(119)
     assert tols == [cg.api.DEFAULT_TOL] * 2
+
+
+def _folded(mesh):
+    """``mesh`` (a grid of [0, 1]²) folded up by 90 degrees along x = 0.5: two flat halves and a crease."""
+    V = mesh.V.copy()
+    V[:, 2] = np.maximum(V[:, 0] - 0.5, 0.0)
+    V[:, 0] = np.minimum(V[:, 0], 0.5)
+    return cg.TriMesh(V, mesh.F)
 
 
 def test_the_copy_is_solved_to_its_own_tolerance_and_says_so(grid):
@@ -441,8 +455,8 @@ def test_the_copy_is_solved_to_its_own_tolerance_and_says_so(grid):
     when that is looser; a planar copy keeps ``tol`` (its field is exact); the record and the note say which."""
     sphere = cg.icosphere(3)
     res = cg.GeodesicSolver(sphere, "qclp", resolution=300).solve(0)
-    assert res.info.extra["adapted"]["copy_tol"] == adapted.COPY_TOL
-    assert any(f"relative tolerance of {adapted.COPY_TOL:g}" in n for n in res.info.notes)
+    assert res.info.extra["adapted"]["copy_tol"] == adapted.CURVED_COPY_TOL
+    assert any(f"relative tolerance of {adapted.CURVED_COPY_TOL:g}" in n for n in res.info.notes)
     loose = cg.GeodesicSolver(sphere, "qclp", resolution=300, tol=1e-3).solve(0)
     assert loose.info.extra["adapted"]["copy_tol"] == 1e-3
     flat = cg.GeodesicSolver(grid, "qclp", resolution=80).solve(119)

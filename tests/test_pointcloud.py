@@ -445,3 +445,24 @@ def test_local_fans_make_no_flat_triangle_on_a_straight_border():
     V = P[tri]
     area = 0.5 * np.linalg.norm(np.cross(V[:, 1] - V[:, 0], V[:, 2] - V[:, 0]), axis=1)
     assert area.min() > 0.5 * (1 / 7) ** 2 * 0.99  # every triangle is half a grid square or more
+
+
+def test_a_noisy_cloud_s_default_is_order_1_on_its_triangles_with_a_note():
+    # 1,500 sphere points: Gaussian noise of 0.3 of sqrt(area / n) read 0.094 of the spacing by the jets (0.034 at 0.1),
+    # above AUTO_NOISE_MAX; the clean cloud 1e-4
+    from cvxgeodesic.mesh.pointcloud import AUTO_NOISE_MAX
+
+    X = sphere_points()
+    spacing = np.sqrt(4 * np.pi / X.shape[0])
+    clean = PointCloud(X)
+    assert clean.noise < 0.2 * AUTO_NOISE_MAX and clean.default_refusal() is None
+    noisy = PointCloud(X + np.random.default_rng(2).normal(scale=0.3 * spacing, size=X.shape))
+    assert AUTO_NOISE_MAX < noisy.noise < 0.2
+    solver = cg.GeodesicSolver(noisy)
+    assert (solver.order, solver.resolution) == (1, "mesh")
+    res = solver.solve(0)
+    assert "adapted" not in res.info.extra
+    assert any("solved at order 1 on its triangles, not at order 2 on a copy" in n and "noise" in n
+               for n in res.info.notes)
+    forced = cg.GeodesicSolver(noisy, resolution="auto")  # asked for: taken, whatever the noise
+    assert (forced.order, forced.resolution) == (2, "auto")

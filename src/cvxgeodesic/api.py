@@ -273,7 +273,8 @@ class GeodesicSolver:
         config = SolveConfig(mesh=self.mesh, method=self.method, lam=self.lam, m=self.m,
                              normalization=self.normalization, solver=self._solver, tol=self.tol,
                              max_iter=self.max_iter, verbose=self.verbose, medium=self.medium,
-                             notes=(*getattr(self.mesh, "notes", ()), *getattr(self.medium, "notes", ())),
+                             notes=(*getattr(self.mesh, "notes", ()), *self._default_notes,
+                                    *getattr(self.medium, "notes", ())),
                              capability=self.capability)
         self._strategy: SolveStrategy = make_strategy(config, baseline=self.is_baseline, order=self.order,
                                                       multires_target=target, polish=bool(multires_polish),
@@ -291,12 +292,21 @@ class GeodesicSolver:
         solve for this method, medium and smoothing (:attr:`~cvxgeodesic.capabilities.Domain.default_resolution`:
         ``"auto"`` on point clouds), else this mesh at order 1."""
         given = None if order is None else check_order(order)
+        self._default_notes: list[str] = []
         if resolution is None:
             resolution = "mesh"
             if given is None and not multires and supported(
                     self.method, domain=self.domain.name, order=2, medium=medium, smoothing=smoothing,
                     resolution=True):
                 resolution = self.domain.default_resolution
+                cloud = getattr(self.mesh, "cloud", None)
+                why = None if cloud is None or resolution == "mesh" else cloud.default_refusal()
+                if why is not None:  # a noisy cloud: order 1 on its own triangles is the more accurate
+                    resolution = "mesh"
+                    self._default_notes.append(
+                        f"{self.mesh.name}: solved at order 1 on its triangles, not at order 2 on a copy (the "
+                        f"default, resolution={self.domain.default_resolution!r}): {why} (docs/pointclouds.md); "
+                        f"resolution={self.domain.default_resolution!r} asks for it")
         self.order: int = 1 if given is None else given
         if resolve_resolution(resolution, self.mesh.n_cells) is None:
             self.resolution: Any = "mesh"

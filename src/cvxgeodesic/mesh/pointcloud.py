@@ -21,11 +21,12 @@ from ..errors import MeshError, ParameterError, SourceError
 from ..validation import as_points
 from .cloud_outliers import DEFECT_NEIGHBOURS, CloudDefects, find_defects, nearest_neighbours
 from .cloud_tilt import TILT_ANGLE, TILT_NEIGHBOURS, principal_planes, untilted_fans
+from .denoise import jet_noise
 from .simplex import unique_rows
 from .trimesh import TriMesh
 
-__all__ = ["NORMAL_FAN_ANGLE", "OUTLIER_HANDLING", "TRIANGLE_SETS", "CloudMesh", "PointCloud", "fan_triangles",
-           "local_fans", "normal_fans", "triangle_set"]
+__all__ = ["AUTO_NOISE_MAX", "NORMAL_FAN_ANGLE", "OUTLIER_HANDLING", "TRIANGLE_SETS", "CloudMesh", "PointCloud",
+           "fan_triangles", "local_fans", "normal_fans", "triangle_set"]
 
 #: The triangle sets a cloud can be solved on (docs/pointclouds.md has their measured errors):
 #: ``"union"`` every triangle of every fan; ``"consensus"`` the triangles that appear in at least two fans;
@@ -40,6 +41,13 @@ MIN_NEIGHBOURS = 4
 #: 1.5× at order 2) but leaves holes where the fans disagree (max error up to 4.5× the union's on a sphere's cloud);
 #: the union has the lower mean error on noisy evenly sampled clouds (up to 1.5×) and no holes.
 DEFAULT_TRIANGLES = "union"
+#: The default solve of a cloud (order 2 on a decimated copy, ``resolution="auto"``) applies up to this noise, in
+#: units of the point spacing (:func:`~cvxgeodesic.mesh.denoise.jet_noise`; about 0.55 of the noise's standard
+#: deviation over the spacing); a noisier cloud is solved at order 1 on its own triangles. Measured 2026-12-06 on the
+#: vertex clouds of kitten, bimba, max_planck, fandisk and dragon_20k at 0.1-0.3 % noise (docs/pointclouds.md, "Which
+#: to use"): the copy's field was more accurate than order 1 up to 0.071 (bimba at 0.1 %), less accurate on max_planck
+#: at 0.2 % (0.079: 1.0-1.8 % against 1.1-1.3 %) and above, equal on kitten and dragon at 0.2 % (0.087, 0.099).
+AUTO_NOISE_MAX = 0.075
 #: Passes of jet projection of ``denoise="jet"`` (docs/pointclouds.md, "Denoised clouds"), and the most taken.
 DENOISE_PASSES = 2
 MAX_DENOISE_PASSES = 10
@@ -398,7 +406,7 @@ class PointCloud:
             file_index = keep
             pts = raw
         _check_shape(pts, self.name)
-        knn = nearest_neighbours(pts, max(DEFECT_NEIGHBOURS, TILT_NEIGHBOURS))  # one query for both
+        knn = nearest_neighbours(pts, max(DEFECT_NEIGHBOURS, TILT_NEIGHBOURS))  # one query for all three
         defects = _defects(pts, outliers, keep, self.name, knn)
         self.outliers, self.line_points = defects.outliers, defects.lines
         notes += _defect_notes(defects, keep, self.name)
@@ -414,6 +422,9 @@ class PointCloud:
         if passes:  # the points the fans are built on, fitted without the outliers
             pts = pts.copy()
             pts[solid] = _denoised(pts[solid], passes, self.name, notes)
+        #: The noise in units of the spacing (:func:`~cvxgeodesic.mesh.denoise.jet_noise`); above
+        #: :data:`AUTO_NOISE_MAX`, the default solve is order 1 on the cloud's triangles.
+        self.noise = jet_noise(pts, *knn, points=solid)  # a denoised cloud: the old neighbours, the moved points
         if not isinstance(use_normals, bool | np.bool_):
             raise ParameterError(f"use_normals must be True or False, got {use_normals!r}")
         oriented = _oriented_normals(self.normals if use_normals else None, pts, solid, self.name, notes)
@@ -439,6 +450,14 @@ class PointCloud:
         mesh.cloud = self
         self.mesh = mesh
         self.notes = tuple(notes)
+
+    def default_refusal(self) -> str | None:
+        """Why the default solve (order 2 on a copy, ``resolution="auto"``) is not taken on this cloud, or None: its
+        noise (:attr:`noise`) above :data:`AUTO_NOISE_MAX`."""
+        if self.noise <= AUTO_NOISE_MAX:
+            return None
+        return (f"its noise, {self.noise:.3f} of the point spacing by its jets, is above {AUTO_NOISE_MAX}, where "
+                "order 2 on a copy stops paying")
 
     @property
     def P(self) -> np.ndarray:
