@@ -442,6 +442,20 @@ def test_the_source_patch_is_solved_to_the_copys_tolerance(grid, monkeypatch):
     assert tols == [cg.api.DEFAULT_TOL] * 2
 
 
+def test_a_lone_face_is_no_flat_region_for_the_copy_s_tolerance():
+    # a decimated cloud surface keeps a few faces joined to the rest by a vertex only (max_planck's copy: 18); they
+    # are flat cells whatever the surface, and gave no cutting-plane round to guard against
+    from cvxgeodesic.strategies.base import SolveConfig
+
+    sphere = cg.icosphere(2)
+    a, b = sphere.F[0][:2]
+    lone = cg.TriMesh(np.r_[sphere.V, [[2.0, 0.0, 0.0], [2.0, 1.0, 0.0]]],
+                      np.r_[sphere.F, [[a, sphere.n_vertices, sphere.n_vertices + 1]]])
+    config = SolveConfig(mesh=lone, method="qclp", lam=0.0, m=0.0, tol=1e-8)
+    assert adapted._tol(config, lone) == adapted.CURVED_COPY_TOL
+    assert adapted._tol(config, _folded(cg.grid_plane(8))) == adapted.COPY_TOL
+
+
 def _folded(mesh):
     """``mesh`` (a grid of [0, 1]²) folded up by 90 degrees along x = 0.5: two flat halves and a crease."""
     V = mesh.V.copy()

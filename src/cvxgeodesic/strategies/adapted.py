@@ -116,12 +116,12 @@ PATCH_DETOUR = 1.5
 #: the patches 15-25 % faster); a planar copy or patch (its field is exact: flat meshes stay exact to 1e-6) keeps the
 #: solver's tolerance (:func:`_tol`).
 COPY_TOL = 1e-5
-#: ... and to this one where no face is flat (no face whose edge-neighbours lie in its plane): there the order-2
-#: solve has no cutting-plane round for a looser solve to trigger. Measured 2026-12-06 against 1e-5, from vertex n/2:
-#: bunny, horse and armadillo 5-11 % faster (one iteration fewer), the mean errors 0.0002-0.0003 points higher
-#: (0.1966 → 0.1969 %, 0.1728 → 0.1730 %, 0.4390 → 0.4392 %); the point clouds of max_planck and kitten at 0.1 % noise
-#: 2 and 1 iterations fewer, 0.621 → 0.623 % and 0.491 → 0.491 %. A copy with flat faces keeps 1e-5: fandisk's clean
-#: cloud at 1e-4 took 32 iterations instead of 19 (a cutting-plane round).
+#: ... and to this one where no face is flat (no face whose edge-neighbours lie in its plane, lone faces not counted):
+#: there the order-2 solve has no cutting-plane round for a looser solve to trigger. Measured 2026-12-06 against 1e-5,
+#: from vertex n/2: bunny, horse and armadillo 5-11 % faster (one iteration fewer), the mean errors 0.0002-0.0003
+#: points higher (0.1966 → 0.1969 %, 0.1728 → 0.1730 %, 0.4390 → 0.4392 %); the point clouds of max_planck and kitten
+#: at 0.1 % noise 2 and 1 iterations fewer, 0.621 → 0.623 % and 0.491 → 0.491 %. A copy with flat faces keeps 1e-5:
+#: fandisk's clean cloud at 1e-4 took 32 iterations instead of 19 (a cutting-plane round).
 CURVED_COPY_TOL = 1e-4
 #: At most this many sources get a patch (each is an order-2 solve of its own).
 MAX_SOURCE_PATCHES = 8
@@ -397,7 +397,8 @@ def _tol(config: SolveConfig, mesh: TriMesh) -> float:
     exact to 1e-6)."""
     if _is_planar(mesh):
         return config.tol
-    flat = LagrangeSpace(mesh, 1).flat_cells.any()  # the cutting-plane rounds run on flat faces only
+    joined = (mesh.edge_cell_counts[mesh.cell_edges] > 1).any(axis=1)  # a lone face (a cloud's copy has a few)
+    flat = (LagrangeSpace(mesh, 1).flat_cells & joined).any()  # is flat whatever the surface: no flat region
     return max(config.tol, COPY_TOL if flat else CURVED_COPY_TOL)
 
 
