@@ -477,10 +477,12 @@ CLAIMS: list[Claim] = [
     _r("pointclouds-tilt", "2026-12-06", "`python benchmarks/point_clouds.py --meshes kitten bimba max_planck fandisk "
        "--sets union --no-order2 --repeats 2`, without the filter (17:04 UTC, load 0.3) and with it (17:11 UTC, load "
        "0.9); order 2: `--meshes max_planck fandisk kitten --noise 0 --sets union,repaired --repeats 1` (17:41 UTC) "
-       "against the table of pointclouds-table; its cost (cProfile of PointCloud on kitten and max_planck), the angle alone and the thin box: "
-       + NO_SCRIPT,
+       "against the table of pointclouds-table; its cost (cProfile of PointCloud on kitten and max_planck), the angle "
+       "alone and the thin box: " + NO_SCRIPT,
        (POINTCLOUDS, "| fandisk | 0 / 0.1 / 0.3 % | 5.24 → 1.84 / 4.97 → 2.30 / 6.05 → 3.95 % |"),
-       (POINTCLOUDS, "It costs 0.01–0.03 s per cloud"), (POINTCLOUDS, "fandisk 3.34 → 0.206 % (1/17 of pc-heat's error"), (POINTCLOUDS, "left out 20,030 of noisy bimba's 46K triangles"),
+       (POINTCLOUDS, "It costs 0.01–0.03 s per cloud"),
+       (POINTCLOUDS, "fandisk 3.34 → 0.206 % (1/17 of pc-heat's error"),
+       (POINTCLOUDS, "left out 20,030 of noisy bimba's 46K triangles"),
        (POINTCLOUDS, "grids 1.5–2.8 spacings apart")),
     _r("pointclouds-denoise-table", "2026-12-06", "`python benchmarks/point_clouds.py --meshes kitten bimba max_planck "
        "--sets union --denoise 1,2` (load 1.4 → 1.2)", (POINTCLOUDS, "| kitten | 0.3 % | 7.73 % | 0.80 % |"),

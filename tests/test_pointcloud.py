@@ -3,6 +3,8 @@ files, and what the domain refuses."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -369,6 +371,19 @@ def test_the_command_line_takes_a_point_file(tmp_path):
     assert main(["distance", str(tmp_path / "c.xyz"), "--source", "0", "--quiet", "-o", str(out)]) == 0
     d = cg.load_distance(out)
     np.testing.assert_allclose(d, cg.geodesic_distance(PointCloud(P), 0), rtol=1e-6, atol=1e-9)
+
+
+def test_the_command_line_says_which_solve_a_cloud_got(tmp_path, capsys):
+    # the default on a cloud is order 2 on a copy (a 64-point plane is below the copy's floor: solved on itself at
+    # order 2); --order 1 is order 1 on the cloud's triangles
+    from cvxgeodesic.cli import main
+
+    np.savetxt(tmp_path / "c.xyz", plane_points(8))
+    for extra, said in (([], "order 2, resolution auto"), (["--order", "1"], "method qclp\n")):
+        assert main(["distance", str(tmp_path / "c.xyz"), "--source", "0", "-o", str(tmp_path / "d.npy"),
+                     "--overwrite", *extra]) == 0
+        err = capsys.readouterr().err
+        assert re.search(said, err), err
 
 
 def test_docs_list_every_refusal_of_the_cloud_domain():
