@@ -294,19 +294,8 @@ class GeodesicSolver:
         given = None if order is None else check_order(order)
         self._default_notes: list[str] = []
         if resolution is None:
-            resolution = "mesh"
-            if given is None and not multires and supported(
-                    self.method, domain=self.domain.name, order=2, medium=medium, smoothing=smoothing,
-                    resolution=True):
-                resolution = self.domain.default_resolution
-                cloud = getattr(self.mesh, "cloud", None)
-                why = None if cloud is None or resolution == "mesh" else cloud.default_refusal()
-                if why is not None:  # a noisy cloud: order 1 on its own triangles is the more accurate
-                    resolution = "mesh"
-                    self._default_notes.append(
-                        f"{self.mesh.name}: solved at order 1 on its triangles, not at order 2 on a copy (the "
-                        f"default, resolution={self.domain.default_resolution!r}): {why} (docs/pointclouds.md); "
-                        f"resolution={self.domain.default_resolution!r} asks for it")
+            resolution = "mesh" if given is not None else self._default_resolution(
+                multires=multires, medium=medium, smoothing=smoothing)
         self.order: int = 1 if given is None else given
         if resolve_resolution(resolution, self.mesh.n_cells) is None:
             self.resolution: Any = "mesh"
@@ -321,6 +310,23 @@ class GeodesicSolver:
                                  "(docs/adapted.md)")
         self.resolution = resolution.strip().lower() if isinstance(resolution, str) else resolution
         self.order = 2
+
+    def _default_resolution(self, *, multires: bool, medium: str, smoothing: bool) -> Any:
+        """The resolution of ``resolution=None`` and ``order=None``: the domain's where the capability table has an
+        adapted solve for this method, medium and smoothing, else ``"mesh"``; on a point cloud too noisy for a copy
+        (:meth:`~cvxgeodesic.mesh.pointcloud.PointCloud.default_refusal`), ``"mesh"`` with a note."""
+        resolution = self.domain.default_resolution
+        if resolution == "mesh" or multires or not supported(
+                self.method, domain=self.domain.name, order=2, medium=medium, smoothing=smoothing, resolution=True):
+            return "mesh"
+        cloud = getattr(self.mesh, "cloud", None)
+        why = None if cloud is None else cloud.default_refusal()
+        if why is None:
+            return resolution
+        self._default_notes.append(  # a noisy cloud: order 1 on its own triangles is the more accurate
+            f"{self.mesh.name}: solved at order 1 on its triangles, not at order 2 on a copy (the default, "
+            f"resolution={resolution!r}): {why} (docs/pointclouds.md); resolution={resolution!r} asks for it")
+        return "mesh"
 
     def _check_method_and_solver(self, method: Any, solver: Any) -> None:
         if method is None:
