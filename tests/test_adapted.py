@@ -456,6 +456,21 @@ def test_a_lone_face_is_no_flat_region_for_the_copy_s_tolerance():
     assert adapted._tol(config, _folded(cg.grid_plane(8))) == adapted.COPY_TOL
 
 
+def test_a_copy_that_lost_part_of_the_surface_is_refused():
+    # thingi_32770's cloud: its copy passed the decimation's checks but lay 48 of its edges from 1,526 points, which
+    # read the field of another part (5.35 % against order 1's 2.14 %); here, a far triangle the copy does not have
+    from cvxgeodesic.strategies.base import SolveConfig
+
+    fine, coarse = cg.icosphere(3), cg.icosphere(2)
+    n = fine.n_vertices
+    far = cg.TriMesh(np.r_[fine.V, [[5.0, 0, 0], [5.0, 0.2, 0], [5.0, 0, 0.2]]], np.r_[fine.F, [[n, n + 1, n + 2]]])
+    for mesh, lost in ((fine, False), (far, True)):
+        config = SolveConfig(mesh=mesh, method="qclp", lam=0.0, m=0.0, tol=1e-8)
+        why = adapted._lost_surface(adapted._Copy(config, coarse))
+        assert (why is not None) == lost, why
+    assert "lost part of the surface" in why and "mean edges" in why
+
+
 def _folded(mesh):
     """``mesh`` (a grid of [0, 1]²) folded up by 90 degrees along x = 0.5: two flat halves and a crease."""
     V = mesh.V.copy()
