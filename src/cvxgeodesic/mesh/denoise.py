@@ -57,7 +57,8 @@ def jet_project(P: np.ndarray, k: int = DEFAULT_DENOISE_NEIGHBOURS, passes: int 
     return X
 
 
-#: Points whose jets :func:`jet_noise` fits (evenly spaced in the cloud's order; all of a smaller cloud).
+#: Points whose jets :func:`jet_noise` fits (evenly spaced in the cloud's order; all of a smaller cloud): 9 ms at 12
+#: neighbours. 1,000 moved max_planck at 0.2 % noise from 0.079 to 0.073, across the threshold (bimba at 0.1 %: 0.069).
 NOISE_SAMPLE = 2000
 
 

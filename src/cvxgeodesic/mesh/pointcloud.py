@@ -428,11 +428,12 @@ class PointCloud:
         if passes:  # the points the fans are built on, fitted without the outliers
             pts = pts.copy()
             pts[solid] = _denoised(pts[solid], passes, self.name, notes)
-        #: The noise in units of the spacing (:func:`~cvxgeodesic.mesh.denoise.jet_noise`), and how much it grows from
-        #: 12 to 30 neighbours; above :data:`AUTO_NOISE_MAX`, and growing less than :data:`DETAIL_GROWTH` (noise, not
-        #: detail), the default solve is order 1 on the cloud's triangles.
+        #: The noise in units of the spacing (:func:`~cvxgeodesic.mesh.denoise.jet_noise`), and above
+        #: :data:`AUTO_NOISE_MAX` how much it grows from 12 to 30 neighbours (None below); growing less than
+        #: :data:`DETAIL_GROWTH` (noise, not detail), the default solve is order 1 on the cloud's triangles.
         self.noise = jet_noise(pts, *knn, points=solid)  # a denoised cloud: the old neighbours, the moved points
-        self.noise_growth = jet_noise(pts, *knn, points=solid, k=DEFECT_NEIGHBOURS) / max(self.noise, 1e-300)
+        self.noise_growth = (jet_noise(pts, *knn, points=solid, k=DEFECT_NEIGHBOURS) / self.noise
+                             if self.noise > AUTO_NOISE_MAX else None)  # asked only above the threshold
         if not isinstance(use_normals, bool | np.bool_):
             raise ParameterError(f"use_normals must be True or False, got {use_normals!r}")
         oriented = _oriented_normals(self.normals if use_normals else None, pts, solid, self.name, notes)
@@ -462,7 +463,7 @@ class PointCloud:
     def default_refusal(self) -> str | None:
         """Why the default solve (order 2 on a copy, ``resolution="auto"``) is not taken on this cloud, or None: its
         noise (:attr:`noise`) above :data:`AUTO_NOISE_MAX`."""
-        if self.noise <= AUTO_NOISE_MAX or self.noise_growth >= DETAIL_GROWTH:
+        if self.noise_growth is None or self.noise_growth >= DETAIL_GROWTH:
             return None
         return (f"its noise, {self.noise:.3f} of the point spacing by its jets (growing {self.noise_growth:.2f}× "
                 f"from 12 to 30 neighbours: noise, not detail), is above {AUTO_NOISE_MAX}, where order 2 on a copy "
