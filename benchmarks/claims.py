@@ -468,18 +468,18 @@ CLAIMS: list[Claim] = [
        "UTC, load 0.6, against 15:52 UTC, load 0.3–1.0; with three decimation tries: 14:48 UTC, load 0.4–0.8)",
        (POINTCLOUDS, "3.50 / 3.69 / 4.98 % on the CAD part"), (POINTCLOUDS, "(2.4–2.7× pc-heat's time)")),
     _r("pointclouds-default", "2026-12-06", "`python benchmarks/point_clouds.py --meshes kitten bimba max_planck "
-       "fandisk --sets union --no-order2 --repeats 2` (17:35 UTC, load 0.9); the noise readings and the noisier "
+       "fandisk --sets union --no-order2 --repeats 2` (18:11 UTC, load 0.7); the noise readings and the noisier "
        "draws (scratch scripts over the vertex clouds, one noise draw per seed): " + NO_SCRIPT,
        (POINTCLOUDS, "| kitten | 0 / 0.1 / 0.3 % | 1.32 / 1.54 / 7.73 % |"),
-       (POINTCLOUDS, "the default had 0.20–0.66 clean"), (POINTCLOUDS, "got order 1 at 2.0–2.9× pc-heat's"),
+       (POINTCLOUDS, "the default had 0.20–0.66 clean"), (POINTCLOUDS, "got order 1 at 2.2–3.0× pc-heat's"),
        (POINTCLOUDS, "It reads 0.000–0.025 on the clean vertex clouds of 10 shared scans"),
        (POINTCLOUDS, "from 12 to 30 neighbours by 2.2–2.7× on those two"),
        (POINTCLOUDS, "max_planck 2.0–2.2 % against 1.3–1.4 %")),
     _r("pointclouds-default-all", "2026-12-06", "`python benchmarks/point_clouds.py --meshes bunny horse armadillo "
        "lucy_20k dragon_20k buddha camelhead_open bug_surface thingi_32770 --sets union --no-order2 --repeats 1` "
-       "(17:48 UTC, load 0.3–0.5)",
+       "(18:06 UTC, load 0.8; the clean thingi_32770 copy before its refusal: 17:48 UTC)",
        (POINTCLOUDS, "| bunny | 0 / 0.1 / 0.3 % | 1.10 / 2.99 / 15.4 % |"),
-       (POINTCLOUDS, "more accurate than order 1 on 9 of these 12 clouds (0.44–0.95 of its")),
+       (POINTCLOUDS, "more accurate than order 1 on 9 of these 11 clouds (0.44–0.95 of its")),
     _r("pointclouds-tilt", "2026-12-06", "`python benchmarks/point_clouds.py --meshes kitten bimba max_planck fandisk "
        "--sets union --no-order2 --repeats 2`, without the filter (17:04 UTC, load 0.3) and with it (17:11 UTC, load "
        "0.9); order 2: `--meshes max_planck fandisk kitten --noise 0 --sets union,repaired --repeats 1` (17:41 UTC) "
