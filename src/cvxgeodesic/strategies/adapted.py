@@ -620,8 +620,8 @@ class Adapted:
         self.inner: Any
         copy = None if coarse is None else _Copy(config, coarse)
         if copy is not None and (lost := _lost_surface(copy)) is not None:
-            coarse, why = None, lost
-        if coarse is None:
+            copy, why = None, lost
+        if coarse is None or copy is None:
             self.solve_mesh = mesh
             # a small mesh is the solve mesh asked for; a mesh that cannot be decimated gets what a copy would cost
             self.inner, order = (Order2(config), 2) if small else _fallback(config)
