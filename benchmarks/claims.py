@@ -475,6 +475,11 @@ CLAIMS: list[Claim] = [
        (POINTCLOUDS, "It reads 0.000–0.025 on the clean vertex clouds of 10 shared scans"),
        (POINTCLOUDS, "from 12 to 30 neighbours by 2.2–2.7× on those two"),
        (POINTCLOUDS, "max_planck 2.0–2.2 % against 1.3–1.4 %")),
+    _r("pointclouds-clean-all", "2026-12-06", "`python benchmarks/point_clouds.py --meshes bunny horse armadillo "
+       "lucy_20k dragon_20k buddha camelhead_open bug_surface thingi_32770 --noise 0 --sets union --m 0 --repeats 1` "
+       "(18:26 UTC, load 0.2–1.0); `--meshes bunny horse armadillo bug_surface thingi_32770 --noise 0 --sets union "
+       "--no-order2 --resolution 0.25,0.5 --repeats 1` (18:30 UTC, load 0.6–0.9)",
+       (POINTCLOUDS, "| bunny | 1.10 % | 0.052 %, 12.7× | 0.149 % at 1/4, 2.7× |")),
     _r("pointclouds-default-all", "2026-12-06", "`python benchmarks/point_clouds.py --meshes bunny horse armadillo "
        "lucy_20k dragon_20k buddha camelhead_open bug_surface thingi_32770 --sets union --no-order2 --repeats 1` "
        "(18:06 UTC, load 0.8; the clean thingi_32770 copy before its refusal: 17:48 UTC)",
