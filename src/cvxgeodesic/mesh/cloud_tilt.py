@@ -27,7 +27,8 @@ import numpy as np
 
 from .simplex import unique_rows
 
-__all__ = ["TILT_ANGLE", "TILT_NEIGHBOURS", "TILT_OFFSET", "principal_planes", "tilted_triangles", "untilted_fans"]
+__all__ = ["TILT_ANGLE", "TILT_NEIGHBOURS", "TILT_OFFSET", "principal_planes", "stranded_points", "tilted_triangles",
+           "untilted_fans"]
 
 #: Neighbours of each point's principal plane: few enough that the plane of a point next to a crease is its own
 #: face's (at 30, the fans' count, fandisk's clean field kept 2.91 % instead of 1.55 %).
@@ -99,30 +100,48 @@ def untilted_fans(P: np.ndarray, tri: np.ndarray, owner: np.ndarray,
     tilted = tilted_triangles(P, uniq, planes)[inverse]
     if not tilted.any():
         return tri, owner, 0, 0
-    before = _components(P.shape[0], tri)
-    after = _components(P.shape[0], tri[~tilted])
-    # each piece of the fans' graph keeps the largest part of it that the untilted triangles hold together
-    order = np.lexsort((after, before))
-    pairs, counts = np.unique(np.c_[before[order], after[order]], axis=0, return_counts=True)
-    best = np.full(before.max() + 1, -1)
-    ranked = np.lexsort((-counts, pairs[:, 0]))  # per piece, the largest part first
-    first = np.r_[True, pairs[ranked[1:], 0] != pairs[ranked[:-1], 0]]
-    best[pairs[ranked[first], 0]] = pairs[ranked[first], 1]
-    stranded = np.flatnonzero(after != best[before])
+    stranded = stranded_points(P.shape[0], tri, tri[~tilted])
     given_back = np.isin(owner, stranded)
     keep = ~tilted | given_back
     dropped = np.unique(inverse[~keep]).size
     return tri[keep], owner[keep], dropped, np.unique(owner[tilted & given_back]).size
 
 
+def stranded_points(n: int, tri: np.ndarray, kept: np.ndarray) -> np.ndarray:
+    """The points that the triangles ``kept`` (a subset of ``tri``) leave outside the largest part of their piece of
+    ``tri``'s edge graph (the largest by points; the lowest label among equals).
+
+    Parameters
+    ----------
+    n : int
+        Points.
+    tri, kept : (m, 3), (k, 3) int arrays
+        Triangles (indices below ``n``), and those kept.
+
+    Returns
+    -------
+    (s,) int64 ndarray
+        Ascending.
+    """
+    before, after = _components(n, tri), _components(n, kept)
+    order = np.lexsort((after, before))
+    pairs, counts = np.unique(np.c_[before[order], after[order]], axis=0, return_counts=True)
+    best = np.full(before.max() + 1, -1)
+    ranked = np.lexsort((-counts, pairs[:, 0]))  # per piece, the largest part first
+    first = np.r_[True, pairs[ranked[1:], 0] != pairs[ranked[:-1], 0]]
+    best[pairs[ranked[first], 0]] = pairs[ranked[first], 1]
+    return np.flatnonzero(after != best[before]).astype(np.int64)
+
+
 def _components(n: int, tri: np.ndarray) -> np.ndarray:
-    """The component label of every point in the edge graph of ``tri`` (a point in no triangle is its own)."""
+    """The component label of every point in the edge graph of ``tri`` (a point in no triangle is its own): the labels
+    of :attr:`~cvxgeodesic.mesh.simplex.SimplexMesh.component_labels` without building a mesh."""
     import scipy.sparse as sp
     from scipy.sparse.csgraph import connected_components
 
     i = np.r_[tri[:, 0], tri[:, 1], tri[:, 2]]
     j = np.r_[tri[:, 1], tri[:, 2], tri[:, 0]]
-    graph = sp.coo_matrix((np.ones(i.size, dtype=np.int8), (i, j)), shape=(n, n))
+    graph = sp.coo_matrix((np.ones(i.size, dtype=bool), (i, j)), shape=(n, n))  # repeated edges stay one edge
     return connected_components(graph, directed=False)[1]
 
 

@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike
 from ..errors import MeshError, ParameterError, SourceError
 from ..validation import as_points
 from .cloud_outliers import DEFECT_NEIGHBOURS, CloudDefects, find_defects, nearest_neighbours
-from .cloud_tilt import TILT_ANGLE, TILT_NEIGHBOURS, principal_planes, untilted_fans
+from .cloud_tilt import TILT_ANGLE, TILT_NEIGHBOURS, principal_planes, stranded_points, untilted_fans
 from .denoise import jet_noise
 from .simplex import unique_rows
 from .trimesh import TriMesh
@@ -287,34 +287,13 @@ def triangle_set(tri: np.ndarray, owner: np.ndarray, P: np.ndarray, kind: str) -
     if kind == "consensus":
         return uniq[chosen], []
     # repaired: points the consensus leaves in a smaller piece than the union's component get their fans back
-    union_labels = _component_labels(P, uniq)
-    labels = _component_labels(P, uniq[chosen])
-    big = _largest_piece(labels, union_labels)
-    stranded = np.flatnonzero(labels != big[union_labels])
+    stranded = stranded_points(P.shape[0], uniq, uniq[chosen])
     if stranded.size:
         chosen = chosen.copy()
         chosen[np.unique(inverse[np.isin(owner, stranded)])] = True
     notes = [f"point cloud: {stranded.size} points would be cut off by the consensus triangles; their fans' "
              "triangles were added back"] if stranded.size else []
     return uniq[chosen], notes
-
-
-def _component_labels(P: np.ndarray, F: np.ndarray) -> np.ndarray:
-    """Component label of every point in the edge graph of the triangles ``F`` (a point in no triangle: its own)."""
-    return CloudMesh(P, F).component_labels if F.shape[0] else np.arange(P.shape[0])
-
-
-def _largest_piece(labels: np.ndarray, union_labels: np.ndarray) -> np.ndarray:
-    """For each union component, the consensus label holding most of its points."""
-    order = np.lexsort((labels, union_labels))
-    pairs = np.stack([union_labels[order], labels[order]], axis=1)
-    uniq, counts = np.unique(pairs, axis=0, return_counts=True)
-    best = np.full(union_labels.max() + 1, -1)
-    top = np.zeros(union_labels.max() + 1, dtype=np.int64)
-    for (u, c), k in zip(uniq, counts, strict=True):
-        if k > top[u]:
-            top[u], best[u] = k, c
-    return best
 
 
 class PointCloud:

@@ -401,8 +401,7 @@ def _lost_surface(copy: _Copy) -> str | None:
     """Why the copy is refused although it passed the decimation's checks: a point of the mesh farther from it than
     :data:`MAX_GAP_EDGES` of its mean edges (part of the surface gone: its points would read the field of another part
     of the copy), or None."""
-    coarse = copy.mesh
-    edge = float(np.linalg.norm(coarse.V[coarse.edges[:, 0]] - coarse.V[coarse.edges[:, 1]], axis=1).mean())
+    edge = copy.mesh.mean_edge_length
     if copy.max_gap <= MAX_GAP_EDGES * edge:
         return None
     return (f"the decimated copy lost part of the surface (a point of the mesh lies {copy.max_gap / edge:.0f} of the "
