@@ -104,6 +104,35 @@ def test_no_point_of_a_noisy_sphere_is_an_outlier(noise):
     assert all("fan triangles turned by more than" in n for n in notes), notes
 
 
+@pytest.mark.parametrize("size", [5, 12])
+def test_a_tight_group_of_outliers_apart_from_the_surface_is_found(size):
+    # within 0.2 spacings of each other, 20 spacings off the sphere: each other's nearest neighbours, so only their
+    # group apart from the surface (cloud_outliers.GAP) tells them from a sparse piece of it
+    X = sphere_points()
+    G = np.array([0.0, 0.6, 0.8]) * (1 + 20 * SPACING) + \
+        np.random.default_rng(5).normal(scale=0.2 * SPACING, size=(size, 3))
+    found = find_defects(np.r_[X, G])
+    assert found.outliers.tolist() == list(range(X.shape[0], X.shape[0] + size))
+
+
+def test_a_sparse_face_beside_a_dense_patch_is_no_group_of_outliers():
+    # a CAD part's vertices: a large flat face sampled 12 spacings apart beside a dense patch, in its plane. Its points'
+    # mean distance to their 30 nearest is 6-20 times the cloud's median (isolation), as for a group of outliers, but
+    # they are joined to the patch (cloud_outliers.GAP): before, all 100 were flagged; now only the 8 of its first two
+    # columns whose nearest are the patch's points (spread above 4.7, as for a point planted beside the surface)
+    g = np.linspace(0.0, 1.0, 30)
+    x, y = np.meshgrid(g, g)
+    s = 12 * g[1] * np.arange(10)
+    xs, ys = np.meshgrid(1.0 + 12 * g[1] + s, s)
+    P = np.r_[np.c_[x.ravel(), y.ravel(), np.zeros(x.size)], np.c_[xs.ravel(), ys.ravel(), np.zeros(xs.size)]]
+    found = find_defects(P)
+    column = (found.outliers - 900) % 10
+    assert found.outliers.size == 8 and (found.outliers >= 900).all() and (column <= 1).all()
+    lifted = P.copy()
+    lifted[955, 2] = 5 * 12 * g[1]  # a point inside the sparse face lifted by 5 of its spacings: found
+    assert 955 in find_defects(lifted).outliers
+
+
 @pytest.mark.shared
 @pytest.mark.parametrize("name", ["max_planck.obj", "fandisk.obj", "kitten.obj"])
 def test_no_point_of_a_shared_scan_s_cloud_is_an_outlier(name):
