@@ -2,8 +2,9 @@
 
 For each cloud of ``benchmarks/point_clouds.py`` (the vertices of a shared mesh, and with ``--resample`` random
 surface points of it; clean and with Gaussian noise of ``--noise`` times the bounding-box diagonal, a fixed seed),
-:func:`cvxgeodesic.mesh.cloud_outliers.find_defects` is run on the cloud as it is (every point it flags is a false
-positive) and on the cloud with outliers planted:
+``PointCloud(P)`` is built on the cloud as it is (every point it leaves out as an outlier or a line point is a false
+positive: :func:`cvxgeodesic.mesh.cloud_outliers.find_defects`, then the flagged outliers that lie on the other
+points' fans kept, ``pointcloud.ON_SURFACE``) and on the cloud with outliers planted:
 
 - ``f`` (each of ``--heights``): 20 points moved along their neighbours' normal and 20 in a random direction by ``f``
   local spacings (the mean distance to their 6 nearest neighbours), kept only if they end at least ``0.9 f``
@@ -30,7 +31,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 import cvxgeodesic as cg
-from cvxgeodesic.mesh.cloud_outliers import find_defects
+from cvxgeodesic.mesh.cloud_outliers import CloudDefects
+from cvxgeodesic.mesh.pointcloud import PointCloud
 from point_clouds import resample, shared_meshes
 
 DEFAULT_MESHES = ("kitten", "bimba", "max_planck", "fandisk")
@@ -72,11 +74,15 @@ def plant(P: np.ndarray, rng, f: float, m: int, normal: bool, others: list[np.nd
     return out
 
 
+def left_out(P: np.ndarray) -> CloudDefects:
+    """The outliers and line points that ``PointCloud(P)`` leaves out (``P``: distinct points, its numbering)."""
+    cloud = PointCloud(P)
+    return CloudDefects(cloud.outliers, cloud.line_points)
+
+
 def found(P: np.ndarray, planted: np.ndarray) -> int:
-    """How many of ``planted`` :func:`find_defects` flags on the cloud ``P`` with them appended."""
-    n = P.shape[0]
-    d = find_defects(np.r_[P, planted])
-    return int(np.count_nonzero(d.points >= n))
+    """How many of ``planted`` the cloud ``P`` with them appended leaves out."""
+    return int(np.count_nonzero(left_out(np.r_[P, planted]).points >= P.shape[0]))
 
 
 def main() -> None:
@@ -94,7 +100,7 @@ def main() -> None:
     print("|---|---|---|---|" + "---|---|" * len(heights))
     rng = np.random.default_rng(0)
     for label, P in clouds(args, rng):
-        d = find_defects(P)
+        d = left_out(P)
         cells = [str(P.shape[0]), str(d.outliers.size), str(d.lines.size)]
         for f in heights:
             lone = plant(P, rng, f, 20, True, [])

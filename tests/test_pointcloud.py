@@ -173,6 +173,24 @@ def test_consensus_leaves_no_point_unreachable_once_repaired(monkeypatch):
     assert np.isfinite(cg.geodesic_distance(repaired, 0, method="qclp")).all()
 
 
+def test_a_point_with_an_empty_fan_is_repaired_with_the_other_fans_triangles(monkeypatch):
+    # the thin-wall filter (cloud_tilt) can empty a point's own fan; the point is then in one other fan's triangles
+    # only, which the consensus drops: the repair adds those back (before, 2 points of max_planck's cloud stayed in
+    # no triangle)
+    from cvxgeodesic.mesh import pointcloud
+
+    P = plane_points(10)
+    tri, owner = pointcloud.fan_triangles(P, 30)
+    lonely = 44
+    mine = (tri == lonely).any(axis=1)
+    first = np.flatnonzero(mine & (owner != lonely))[0]
+    keep = ~mine | (np.arange(tri.shape[0]) == first)  # its fan empty, one triangle through it in another fan
+    monkeypatch.setattr(pointcloud, "fan_triangles", lambda P, k, normals=None: (tri[keep], owner[keep]))
+    repaired = PointCloud(P, triangles="repaired")
+    assert lonely in repaired.mesh.F and any("added back" in n for n in repaired.notes)
+    assert np.isfinite(cg.geodesic_distance(repaired, 0, method="dijkstra")).all()
+
+
 def test_fans_that_share_no_triangle_are_repaired_into_the_union(monkeypatch):
     # no triangle in two fans: the consensus is empty (refused), the repair gives the fans back
     from cvxgeodesic.mesh import pointcloud

@@ -115,11 +115,12 @@ def test_a_tight_group_of_outliers_apart_from_the_surface_is_found(size):
     assert found.outliers.tolist() == list(range(X.shape[0], X.shape[0] + size))
 
 
-def test_a_sparse_face_beside_a_dense_patch_is_no_group_of_outliers():
+def test_a_sparse_face_beside_a_dense_patch_is_kept():
     # a CAD part's vertices: a large flat face sampled 12 spacings apart beside a dense patch, in its plane. Its points'
     # mean distance to their 30 nearest is 6-20 times the cloud's median (isolation), as for a group of outliers, but
     # they are joined to the patch (cloud_outliers.GAP): before, all 100 were flagged; now only the 8 of its first two
-    # columns whose nearest are the patch's points (spread above 4.7, as for a point planted beside the surface)
+    # columns whose nearest are the patch's points (spread above 4.7, as for a point planted beside the surface),
+    # and the cloud keeps even those
     g = np.linspace(0.0, 1.0, 30)
     x, y = np.meshgrid(g, g)
     s = 12 * g[1] * np.arange(10)
@@ -128,9 +129,12 @@ def test_a_sparse_face_beside_a_dense_patch_is_no_group_of_outliers():
     found = find_defects(P)
     column = (found.outliers - 900) % 10
     assert found.outliers.size == 8 and (found.outliers >= 900).all() and (column <= 1).all()
+    # those 8 lie on the fans of the other points (pointcloud.ON_SURFACE): the cloud keeps them
+    cloud = PointCloud(P)
+    assert cloud.outliers.size == 0 and np.isin(found.outliers, cloud.mesh.F).all() and not cloud.notes
     lifted = P.copy()
-    lifted[955, 2] = 5 * 12 * g[1]  # a point inside the sparse face lifted by 5 of its spacings: found
-    assert 955 in find_defects(lifted).outliers
+    lifted[955, 2] = 5 * 12 * g[1]  # a point inside the sparse face lifted by 5 of its spacings: left out
+    assert 955 in find_defects(lifted).outliers and PointCloud(lifted).outliers.tolist() == [955]
 
 
 @pytest.mark.shared

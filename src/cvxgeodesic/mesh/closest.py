@@ -15,7 +15,6 @@ import weakref
 import numpy as np
 
 from .geometry import clipped_barycentric
-from .simplex import SimplexMesh
 from .trimesh import TriMesh
 
 #: A position farther than this many bounding-box diagonals from the box's center is moved in along the ray from
@@ -171,13 +170,13 @@ def point_triangle_distance(P: np.ndarray, A: np.ndarray, B: np.ndarray, C: np.n
     return np.linalg.norm(P - triangle_point(P, A, B, C), axis=1)
 
 
-def nearest_triangle_distance(mesh: SimplexMesh, tri: np.ndarray, X: np.ndarray) -> np.ndarray:
-    """(p,) distance from each row of ``X`` to the nearest of the triangles ``tri`` (f, 3) of ``mesh``."""
+def nearest_triangle_distance(V: np.ndarray, tri: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """(p,) distance from each row of ``X`` to the nearest of the triangles ``tri`` (f, 3) on the vertices ``V``."""
     import igl
 
     if not len(X) or not len(tri):
         return np.full(len(X), np.inf)
     sqd, _, _ = igl.point_mesh_squared_distance(np.ascontiguousarray(X, dtype=np.float64),
-                                               np.ascontiguousarray(mesh.V, dtype=np.float64),
+                                               np.ascontiguousarray(V, dtype=np.float64),
                                                np.ascontiguousarray(tri, dtype=np.int64))
     return np.sqrt(np.maximum(np.asarray(sqd, dtype=float).reshape(-1), 0.0))

@@ -30,7 +30,7 @@ and 0.3 % of the diagonal, and the planted outliers listed there found.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -72,10 +72,13 @@ class CloudDefects:
         Isolated points off the surface.
     lines : (b,) int64 ndarray
         Points whose neighbourhood lies on a line (not among ``outliers``).
+    grouped : (c,) int64 ndarray
+        The outliers in a small group apart from the rest (``group`` of :func:`defect_statistics`).
     """
 
     outliers: np.ndarray
     lines: np.ndarray
+    grouped: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
 
     @property
     def points(self) -> np.ndarray:
@@ -158,4 +161,4 @@ def find_defects(P: np.ndarray, k: int = DEFECT_NEIGHBOURS,
     out = ((spread > SPREAD_MAX) | ((spread > SPREAD_HEIGHT[0]) & tall)
            | ((spread > SPREAD_ISOLATION) & (isolation > SPREAD_ISOLATION)) | ((isolation > ISOLATION_MAX) & apart))
     line = (flat < LINE_TOL) & ~out
-    return CloudDefects(np.flatnonzero(out).astype(np.int64), np.flatnonzero(line).astype(np.int64))
+    return CloudDefects(*(np.flatnonzero(mask).astype(np.int64) for mask in (out, line, out & apart)))

@@ -90,7 +90,7 @@ def _steep_cells(ops: Any, ss: SourceSet, near: np.ndarray, medium: Any) -> np.n
     if medium is not None:  # the local field in the medium: the distance to the nearest point, in cell cand's
         local = medium.vector_lengths(np.repeat(cand, C.shape[1]), V[corners] - P[nearest])
     if ss.facets.size:
-        local = np.minimum(local, nearest_triangle_distance(mesh, ss.face_triangles(mesh), V[corners]))
+        local = np.minimum(local, nearest_triangle_distance(mesh.V, ss.face_triangles(mesh), V[corners]))
         local[np.isin(corners, ss.fixed_vertices(mesh))] = 0.0
     g = np.einsum("tij,tj->ti", ops.gradient_blocks[cand], local.reshape(len(cand), -1))
     return cand[np.linalg.norm(g, axis=1) > 1.0 + 1e-9]
