@@ -444,16 +444,16 @@ CLAIMS: list[Claim] = [
        (ADAPTED, "0.59 % error), so it is not the estimate")),
     _r("adapted-table", "2026-12-06", "`python benchmarks/adapted_levers.py kitten fandisk bimba`",
        (ADAPTED, "was within 2× of the true mean error in 16 of these 18 rows")),
-    _r("pointclouds-table", "2026-12-06", "`python benchmarks/point_clouds.py --quick` (load 5.8 → 2.4)",
+    _r("pointclouds-table", "2026-12-06", "`python benchmarks/point_clouds.py --quick` (19:26–19:32 UTC, load 0.5, one other job)",
        (POINTCLOUDS, "| cloud | noise | pc-heat | 8-NN Dijkstra |")),
     _r("pointclouds-max", "2026-12-06", "`python benchmarks/point_clouds.py --quick`",
-       (POINTCLOUDS, "7–8 % for order 1 and 1.6–1.7 % for order 2")),
+       (POINTCLOUDS, "7–8 % for order 1 and 1.3–1.7 % for order 2")),
     _r("pointclouds-summary", "2026-12-06", "`python benchmarks/point_clouds.py --quick`; `--m 10` for m = 10",
-       (POINTCLOUDS, "is 17–21× more accurate than the point-cloud heat method")),
+       (POINTCLOUDS, "on the union is 15–21× more accurate than the point-cloud heat")),
     _r("pointclouds-resampled", "2026-12-06", "`python benchmarks/point_clouds.py --quick --resample 1.0,0.25 "
        "--noise 0 --sets union,repaired --repeats 1`", (POINTCLOUDS, "| kitten, every face | 18,894 |")),
     _r("pointclouds-uneven", "2026-12-06", "`python benchmarks/point_clouds.py --meshes fandisk max_planck --sets "
-       "union,repaired --repeats 1`", (POINTCLOUDS, "| fandisk | 0 | 3.44 %, 1× |")),
+       "union,repaired --repeats 1`", (POINTCLOUDS, "| fandisk | 0 | 3.44 %, 1× | 2.93 %, 0.07× | 0.681 %, 6.9× |")),
     _r("pointclouds-neighbours", "2026-12-06", "`python benchmarks/point_clouds.py --neighbours 20,30 --repeats 1` "
        "with `--quick`; `--meshes fandisk max_planck`; `--quick --resample 1.0,0.25 --noise 0`",
        (POINTCLOUDS, "on fandisk 0.49–0.80× its mean error")),
@@ -493,6 +493,7 @@ CLAIMS: list[Claim] = [
        (POINTCLOUDS, "| fandisk | 0 / 0.1 / 0.3 % | 5.24 → 1.84 / 4.97 → 2.30 / 6.05 → 3.95 % |"),
        (POINTCLOUDS, "It costs 0.01–0.03 s per cloud"),
        (POINTCLOUDS, "fandisk 3.34 → 0.206 % (1/17 of pc-heat's error"),
+       (POINTCLOUDS, "fandisk's order-2 error on the union fell from 3.34 % to 0.206 %"),
        (POINTCLOUDS, "left out 20,030 of noisy bimba's 46K triangles"),
        (POINTCLOUDS, "grids 1.5–2.8 spacings apart")),
     _r("pointclouds-denoise-table", "2026-12-06", "`python benchmarks/point_clouds.py --meshes kitten bimba max_planck "
