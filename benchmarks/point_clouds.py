@@ -34,7 +34,8 @@ time includes the subsampling.
 
 ``--resolution auto,0.25`` adds rows of ``qclp`` at order 2 with ``resolution=`` (the library's option: order 2 on a
 quadric copy of the surface through the points, :meth:`~cvxgeodesic.mesh.pointcloud.PointCloud.surface`, answered at
-every point; the time includes building the cloud and the copy).
+every point; the time includes building the cloud and the copy); with ``--denoise``, also on the cloud denoised by
+each pass count (``PointCloud(P, denoise=passes)``).
 
 ``--neighbours 12,20,30`` measures the neighbour count instead: ``qclp`` at both orders on the union of the fans of
 :func:`~cvxgeodesic.mesh.pointcloud.local_fans` (potpourri3d's construction, whose k is fixed at 30; at k = 30 they
@@ -252,16 +253,20 @@ def compare_denoised(name: str, noise: float, P: np.ndarray, exact: np.ndarray, 
 
 
 def compare_resolution(name: str, noise: float, P: np.ndarray, exact: np.ndarray, src: int, args) -> None:
-    """Rows of ``qclp`` at order 2 with each ``--resolution`` value; a fallback's reason goes in the label."""
+    """Rows of ``qclp`` at order 2 with each ``--resolution`` value, on the cloud and on the cloud denoised by each of
+    ``--denoise``'s pass counts (the denoising's time included); a fallback's reason goes in the label."""
     _, t_heat = timed_pc_heat(P, src, args.repeats)
-    for value in args.resolution.split(","):
+    passes = [None] + [int(x) for x in args.denoise.split(",") if x]
+    for value, denoise in ((v, p) for v in args.resolution.split(",") for p in passes):
         resolution = value if value == "auto" else float(value)
 
-        def solve(resolution=resolution):
-            return cg.GeodesicSolver(cg.PointCloud(P), "qclp", order=2, resolution=resolution).solve(src)
+        def solve(resolution=resolution, denoise=denoise):
+            cloud = cg.PointCloud(P, denoise=denoise)
+            return cg.GeodesicSolver(cloud, "qclp", order=2, resolution=resolution).solve(src)
         res, t = timed(solve, args.repeats)
-        row(name, noise, f"qclp order 2, resolution={value} ({_solved_on(res)})", res.distance, exact, src, t,
-            t_heat)
+        smoothed = "" if denoise is None else f", denoised ({denoise} pass{'es' if denoise > 1 else ''})"
+        row(name, noise, f"qclp order 2, resolution={value}{smoothed} ({_solved_on(res)})", res.distance, exact,
+            src, t, t_heat)
 
 
 def _solved_on(res) -> str:
