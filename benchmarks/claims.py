@@ -485,6 +485,13 @@ CLAIMS: list[Claim] = [
        "(19:46 UTC, load 0.7; the clean thingi_32770 copy that lost a part: 17:48 UTC)",
        (POINTCLOUDS, "| bunny | 0 / 0.1 / 0.3 % | 1.10 / 2.99 / 15.4 % |"),
        (POINTCLOUDS, "more accurate than order 1 on 10 of these 12 clouds (0.44–0.95 of its")),
+    _r("pointclouds-noisy-copy", "2026-12-06", "`python benchmarks/point_clouds.py --meshes kitten bimba max_planck "
+       "fandisk --sets union --no-order2 --noise 0.001,0.003 --denoise 2 --resolution auto --repeats 2` (19:49 UTC, "
+       "load 1.2); `--meshes bunny horse armadillo lucy_20k dragon_20k buddha camelhead_open bug_surface thingi_32770 "
+       "--m 0 --repeats 1` (19:52 UTC); the copy read at the raw points: " + NO_SCRIPT,
+       (POINTCLOUDS, "| bimba | 0.3 % | 12.4 % | 3.93 %, 2.2× | **1.09 %**, 2.4× | 0.28 / 1.10 |"),
+       (POINTCLOUDS, "on 15 of the 17 noisy clouds measured, at 0.98–1.94× the default's time"),
+       (POINTCLOUDS, "(tried, not kept) lost on dragon_20k at 0.3 % (6.3 % against 2.8 %)")),
     _r("pointclouds-tilt", "2026-12-06", "`python benchmarks/point_clouds.py --meshes kitten bimba max_planck fandisk "
        "--sets union --no-order2 --repeats 2`, without the filter (17:04 UTC, load 0.3) and with it (17:11 UTC, load "
        "0.9); order 2: `--meshes max_planck fandisk kitten --noise 0 --sets union,repaired --repeats 1` (17:41 UTC) "
