@@ -323,9 +323,11 @@ class GeodesicSolver:
         why = None if cloud is None else cloud.default_refusal()
         if why is None:
             return resolution
-        self._default_notes.append(  # a noisy cloud: order 1 on its own triangles is the more accurate
+        self._default_notes.append(  # a noisy cloud: order 1 on its own triangles beats a copy of the raw cloud
             f"{self.mesh.name}: solved at order 1 on its triangles, not at order 2 on a copy (the default, "
-            f"resolution={resolution!r}): {why} (docs/pointclouds.md); resolution={resolution!r} asks for it")
+            f"resolution={resolution!r}): {why} (docs/pointclouds.md); resolution={resolution!r} asks for it, and "
+            f"on the cloud denoised first (PointCloud(..., denoise='jet')) was more accurate on most noisy clouds "
+            "measured, at up to twice the time")
         return "mesh"
 
     def _check_method_and_solver(self, method: Any, solver: Any) -> None:
