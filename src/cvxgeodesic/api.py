@@ -325,8 +325,8 @@ class GeodesicSolver:
             return resolution
         self._default_notes.append(  # a noisy cloud: order 1 on its own triangles beats a copy of the raw cloud
             f"{self.mesh.name}: solved at order 1 on its triangles, not at order 2 on a copy (the default, "
-            f"resolution={resolution!r}): {why} (docs/pointclouds.md); resolution={resolution!r} asks for it, and "
-            f"on the cloud denoised first (PointCloud(..., denoise='jet')) was more accurate on most noisy clouds "
+            f"resolution={resolution!r}): {why} (docs/pointclouds.md); resolution={resolution!r} asks for it; on "
+            "the cloud denoised first (PointCloud(..., denoise='jet')) it was more accurate on most noisy clouds "
             "measured, at up to twice the time")
         return "mesh"
 

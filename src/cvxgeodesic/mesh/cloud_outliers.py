@@ -21,7 +21,7 @@ around it: its fan is empty or made of slivers. :func:`find_defects` finds both 
   (``isolation`` above :data:`ISOLATION_MAX`) flagged 50 of the 18,944 vertices of the CAD part thingi_32770, which
   lie on the edges of large flat faces; it now needs the group too. The other rules were not given this condition:
   planted outliers that they alone find (a point beside the surface, nearly in its neighbours' plane) are not in
-  small groups, and left in the fans they move the field of max_planck's cloud by up to 1.5-5 % at some points.
+  small groups, and left in the fans they moved the field of max_planck's cloud by up to 1.5-5.4 % at some points.
 
 The thresholds below were measured with benchmarks/cloud_outliers.py (docs/pointclouds.md has the numbers): no
 false positive on the vertices and random surface points of the shared scans, clean and with Gaussian noise of 0.1 %
