@@ -492,7 +492,7 @@ CLAIMS: list[Claim] = [
        "--m 0 --repeats 1` (19:52 UTC); the copy read at the raw points: " + NO_SCRIPT,
        (POINTCLOUDS, "| bimba | 0.3 % | 12.4 % | 3.93 %, 2.2× | **1.09 %**, 2.4× | 0.28 / 1.10 |"),
        (POINTCLOUDS, "on 15 of the 17 noisy clouds measured, at 0.98–1.94× the default's time"),
-       (POINTCLOUDS, "(tried, not kept) lost on dragon_20k at 0.3 % (6.3 % against 2.8 %)")),
+       (POINTCLOUDS, "(tried, not kept) lost on dragon_20k at 0.3 % (6.3 % against 2.8 %): the surface the")),
     _r("pointclouds-tilt", "2026-12-06", "`python benchmarks/point_clouds.py --meshes kitten bimba max_planck fandisk "
        "--sets union --no-order2 --repeats 2`, without the filter (17:04 UTC, load 0.3) and with it (17:11 UTC, load "
        "0.9); order 2: `--meshes max_planck fandisk kitten --noise 0 --sets union,repaired --repeats 1` (17:41 UTC) "
