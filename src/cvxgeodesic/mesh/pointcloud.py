@@ -601,7 +601,7 @@ def _defects(P: np.ndarray, outliers: str, keep: np.ndarray, name: str,
     found = find_defects(P, knn=knn)
     if found.outliers.size:
         kept = _on_the_others_fans(P, found, knn)
-        found = CloudDefects(np.setdiff1d(found.outliers, kept), found.lines, np.setdiff1d(found.grouped, kept))
+        found = CloudDefects(np.setdiff1d(found.outliers, kept), found.lines, found.grouped)  # kept: none grouped
     if outliers == "error" and found.points.size:
         raise MeshError(f"{name}: {_describe_defects(found, keep)} (outliers='error'; outliers='exclude' leaves them "
                         "out of the triangles, outliers='keep' triangulates them)")
