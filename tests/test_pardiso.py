@@ -76,6 +76,25 @@ def test_symbolic_cholesky_maps_not_positive_definite():
     chol.factorize(vals - 0.5 * np.isin(np.arange(chol.nnz), chol.diag_positions), beta=0.5)
 
 
+def test_auto_ordering_is_amd_on_small_patterns_and_metis_on_large(monkeypatch):
+    """``ordering="auto"`` (the default) picks by the pattern's stored entries; both orderings solve exactly."""
+    import cvxgeodesic.linalg.symbolic as symbolic
+
+    low, A = _spd_lower()
+    b = np.random.default_rng(2).normal(size=A.shape[0])
+    picked = {}
+    for limit, expected in ((low.nnz + 1, "amd"), (low.nnz, "metis")):
+        monkeypatch.setattr(symbolic, "AMD_BELOW_NNZ", limit)
+        chol = SymbolicCholesky(low, backend="pardiso")
+        assert chol.ordering == expected
+        vals = np.zeros(chol.nnz)
+        vals[chol.positions(*sp.find(low)[:2])] = sp.find(low)[2]
+        np.testing.assert_allclose(A @ chol.factorize(vals)(b), b, atol=1e-10)
+        picked[expected] = chol.numeric.factor._iparm[1]
+    assert picked["amd"] == 0 and picked["metis"] != 0  # PARDISO's iparm[1]: 0 is minimum degree
+    assert SymbolicCholesky(low, backend="pardiso", ordering="metis").ordering == "metis"  # a name is kept
+
+
 def test_thread_limits_between_phases_are_safe():
     """PARDISO crashed (segfault) when MKL's thread count changed between analysis and factorization."""
     low, A = _spd_lower()

@@ -130,6 +130,10 @@ class CheckpointWarning(UserWarning):
     without it."""
 
 
+#: Modules whose frames :func:`warn_user` passes over, as it does the package's own.
+_TRANSPARENT = frozenset({"functools", "contextlib"})
+
+
 def warn_user(message: str, category: type[Warning] = UserWarning) -> None:
     """``warnings.warn`` attributed to the first frame outside this package (the user's call), however deep the
     library's own call chain is."""
@@ -142,7 +146,10 @@ def warn_user(message: str, category: type[Warning] = UserWarning) -> None:
     # attributed the warning to the last frame inside the package (issue 41: ``_threads.py:318``)
     frame: types.FrameType | None = sys._getframe(1)
     level = 2
-    while frame is not None and (frame.f_globals.get("__name__") or "").startswith(package):
+    # the standard library's wrappers between two of the package's frames (a ``functools.cached_property``, a
+    # ``contextlib`` manager) are the package's too: a lazy builder's warning was attributed to functools.py
+    while frame is not None and ((name := frame.f_globals.get("__name__") or "").startswith(package)
+                                 or name in _TRANSPARENT):
         frame, level = frame.f_back, level + 1
     warnings.warn(message, category, stacklevel=level)
 

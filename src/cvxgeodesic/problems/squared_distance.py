@@ -229,7 +229,7 @@ class SquaredDistanceBuilder:
     def __init__(self, mesh: SimplexMesh, order: int = 2, medium: Medium | None = None, energy: str | None = None,
                  lam: float = 0.0):
         self.dim = dim = mesh.reference.dim
-        self._check(mesh, medium, energy, lam)
+        self.check(mesh, medium, energy, lam)
         self.mesh = mesh
         self.space = sp_ = LagrangeSpace(mesh, order, medium)
         self.w = _study.objective_weights(sp_)
@@ -265,7 +265,8 @@ class SquaredDistanceBuilder:
             self.cone_replaced[:flat_cells.size * len(nodes)] = np.tile([False] * c + [True] * (len(nodes) - c),
                                                                         flat_cells.size)
 
-    def _check(self, mesh: SimplexMesh, medium: Medium | None, energy: str | None, lam: float) -> None:
+    @staticmethod
+    def check(mesh: SimplexMesh, medium: Medium | None, energy: str | None, lam: float) -> None:
         """ParameterError for a bad option: a smoothness energy on cells it is not derived for, or with a medium
         (what the API takes is the capability table's, :mod:`cvxgeodesic.capabilities`, checked there; this is the
         builder's own check for a direct user)."""

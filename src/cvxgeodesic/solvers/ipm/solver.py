@@ -80,7 +80,8 @@ class InteriorPointSolver:
     backend : {"auto", "pardiso", "cholmod", "scipy"}
         Sparse Cholesky backend, see :class:`~cvxgeodesic.linalg.SymbolicCholesky`.
     ordering : str
-        Fill-reducing ordering of the analysis.
+        Fill-reducing ordering of the analysis (:class:`~cvxgeodesic.linalg.SymbolicCholesky`; ``"auto"``: by the
+        pattern's size).
     settings : IPMSettings
         Tuning constants (:mod:`.settings`; the defaults are the measured choices).
 
@@ -104,7 +105,7 @@ class InteriorPointSolver:
     ('optimal', 1)
     """
 
-    def __init__(self, pattern, *, backend: str = "auto", ordering: str = "metis",
+    def __init__(self, pattern, *, backend: str = "auto", ordering: str = "auto",
                  settings: IPMSettings | None = None):
         if settings is not None and not isinstance(settings, IPMSettings):
             raise TypeError(f"settings must be an IPMSettings, got {type(settings).__name__}")
