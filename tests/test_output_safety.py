@@ -526,14 +526,13 @@ def _swallowed_sigint() -> None:
 def test_a_ctrl_c_swallowed_by_a_ctypes_callback_stops_the_matrix(tmp_path, monkeypatch, capsys):
     """Seen in a loaded run: the interrupt landed in threadpoolctl's dl_iterate_phdr callback, was printed as
     'Exception ignored on calling ctypes callback function', and the 320-row matrix ran to its end (exit 0)."""
-    import threadpoolctl
-
+    from cvxgeodesic import _threads
     from cvxgeodesic.cli import main
 
     mesh = cg.icosphere(2)
     path = cg.save_distance(tmp_path / "s.ply", mesh, np.zeros(mesh.n_vertices))
     calls = {"n": 0}
-    real = threadpoolctl.threadpool_limits
+    real = _threads.pool_limits
 
     def limits_with_a_swallowed_interrupt(*args, **kwargs):
         calls["n"] += 1
@@ -541,7 +540,7 @@ def test_a_ctrl_c_swallowed_by_a_ctypes_callback_stops_the_matrix(tmp_path, monk
             _swallowed_sigint()
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(threadpoolctl, "threadpool_limits", limits_with_a_swallowed_interrupt)
+    monkeypatch.setattr(_threads, "pool_limits", limits_with_a_swallowed_interrupt)
     out = tmp_path / "D.npy"
     code = main(["matrix", str(path), "-s", ",".join(map(str, range(0, 160, 4))), "--method", "dijkstra", "-o",
                  str(out), "-q"])

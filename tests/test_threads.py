@@ -124,6 +124,25 @@ def test_blas_pools_bounded_during_setup(no_env):
     assert _threads._local.limit is None
 
 
+def test_the_pool_controller_is_kept_until_a_module_is_imported(monkeypatch):
+    """threadpoolctl scans every loaded library for a controller (a third of a small heat solve): one is kept, and
+    made again after an import, the way a new thread pool arrives."""
+    import sys
+    import types
+
+    from threadpoolctl import threadpool_info
+
+    with _threads.pool_limits(1):
+        first = _threads._controller[1]
+        assert {p["num_threads"] for p in threadpool_info()} == {1}
+    with _threads.pool_limits(1):
+        assert _threads._controller[1] is first
+    monkeypatch.setitem(sys.modules, "cvxgeodesic_test_new_module", types.ModuleType("cvxgeodesic_test_new_module"))
+    with _threads.pool_limits(1):
+        assert _threads._controller[1] is not first
+        assert {p["num_threads"] for p in threadpool_info()} == {1}
+
+
 def test_multires_coarse_solver_inherits(no_env):
     solver = cg.GeodesicSolver(cg.icosphere(4), "qclp", multires=500, threads=1)
     coarse = solver._strategy.coarse.ipm.cholesky  # the coarse mesh's solver, built inside the façade's limit

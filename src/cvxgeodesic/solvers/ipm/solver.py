@@ -38,8 +38,8 @@ import time
 from collections.abc import Callable
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 
+from ... import _threads
 from ...errors import SolverError
 from ...linalg import NotPositiveDefiniteError, SymbolicCholesky
 from ...problems.conic import BackendResult, ConicProblem
@@ -193,7 +193,7 @@ class InteriorPointSolver:
             # PARDISO pins its own threads; an idle OpenBLAS thread pool spins after NumPy's BLAS calls and
             # takes a core from it (measured on bimba's QCLP: 1.2 s with OpenBLAS on one thread, 2.4 s without).
             limits = {"libopenblas": 1, "libscipy_openblas": 1}
-        with threadpool_limits(limits):
+        with _threads.pool_limits(limits):
             return self._solve(problem, tol=tol, max_iter=max_iter, callback=callback)
 
     def _solve(self, problem: ConicProblem, *, tol: float, max_iter: int, callback) -> BackendResult:
