@@ -97,13 +97,61 @@ def test_non_manifold_mesh_falls_back_with_a_note(grid):
     np.testing.assert_allclose(res.distance, direct.distance, atol=1e-9)
 
 
-def test_several_components_fall_back_with_a_note(grid):
-    other = grid.V + [2.0, 0, 0]
-    mesh = TriMesh(np.vstack([grid.V, other]), np.vstack([grid.F, grid.F + grid.n_vertices]))
-    res = cg.GeodesicSolver(mesh, "qclp", resolution=100).solve(0)
-    assert "components" in res.info.extra["adapted"]["fallback"]
-    assert any("components" in n for n in res.info.notes)
+def _two(grid, shift):
+    return TriMesh(np.vstack([grid.V, grid.V + shift]), np.vstack([grid.F, grid.F + grid.n_vertices]))
+
+
+def test_several_components_are_decimated_one_at_a_time(grid):
+    mesh = _two(grid, [2.0, 0, 0])
+    res = cg.GeodesicSolver(mesh, "qclp", resolution=100).solve(119)
+    ad = res.info.extra["adapted"]
+    assert ad["fallback"] is None and ad["components"] == 2 and ad["faces"] < 250
+    assert any("2 components were decimated one at a time" in n for n in res.info.notes)
+    n = grid.n_vertices
+    np.testing.assert_allclose(res.distance[:n], _euclid(grid, grid.V[119]), atol=FLAT)
+    assert np.isinf(res.distance[n:]).all()
+    other = cg.GeodesicSolver(mesh, "qclp", resolution=100).solve(n + 119)  # a source on the second one
+    np.testing.assert_allclose(other.distance[n:], _euclid(grid, grid.V[119]), atol=FLAT)
+    assert np.isinf(other.distance[:n]).all()
+
+
+def test_each_vertex_reads_its_own_components_copy(grid):
+    """A rough sheet 0.02 above the source's plane, its heights jittered by ±0.03: many of its vertices lie nearer
+    to the plane's copy than to their own sheet's coarse copy, and must stay unreached all the same."""
+    rough = grid.V + [0, 0, 0.02]
+    rough[:, 2] += np.random.default_rng(0).uniform(-0.03, 0.03, grid.n_vertices)
+    mesh = TriMesh(np.vstack([grid.V, rough]), np.vstack([grid.F, grid.F + grid.n_vertices]))
+    res = cg.GeodesicSolver(mesh, "qclp", resolution=100).solve(119)
+    assert res.info.extra["adapted"]["components"] == 2
+    assert not any("decimated 2 times" in n for n in res.info.notes)  # two components kept: no retry to note
+    # a copy that is not planar as a whole is solved to adapted.COPY_TOL (1e-5), its flat parts too
+    np.testing.assert_allclose(res.distance[:grid.n_vertices], _euclid(grid, grid.V[119]), atol=1e-4)
     assert np.isinf(res.distance[grid.n_vertices:]).all()
+    # the same for points of the faces (distance_at): the rough sheet's faces follow the plane's
+    faces = np.arange(mesh.n_faces)
+    at = cg.distance_at(mesh, res, [cg.SurfacePoint(int(f), [0.2, 0.3, 0.5]) for f in faces])
+    assert np.isinf(at[grid.n_faces:]).all()
+    want = [np.linalg.norm(cg.SurfacePoint(int(f), [0.2, 0.3, 0.5]).position(grid) - grid.V[119]) for f in
+            range(grid.n_faces)]
+    np.testing.assert_allclose(at[:grid.n_faces], want, atol=1e-4)
+
+
+def test_a_speck_is_kept_as_it_is(grid):
+    speck = np.array([[5.0, 5, 5], [5.01, 5, 5], [5, 5.01, 5]])
+    mesh = TriMesh(np.vstack([grid.V, speck]), np.vstack([grid.F, [[0, 1, 2]] + np.int64(grid.n_vertices)]))
+    res = cg.GeodesicSolver(mesh, "qclp", resolution=100).solve(119)
+    copy = res.info.extra["solve_mesh"]
+    assert res.info.extra["adapted"]["components"] == 2
+    assert any(np.allclose(copy.V[f], speck) for f in copy.F)  # the speck's one face, unchanged
+    np.testing.assert_allclose(res.distance[:grid.n_vertices], _euclid(grid, grid.V[119]), atol=FLAT)
+    assert np.isinf(res.distance[grid.n_vertices:]).all()
+
+
+def test_components_too_small_to_decimate_fall_back_with_a_note(grid):
+    mesh = _two(grid, [2.0, 0, 0])
+    res = cg.GeodesicSolver(mesh, "qclp", resolution=60).solve(0)  # 30 faces each: under MIN_PART_FACES
+    assert "components' share" in res.info.extra["adapted"]["fallback"]
+    assert any("solved on the mesh itself" in n for n in res.info.notes)
     np.testing.assert_allclose(res.distance, cg.GeodesicSolver(mesh, "qclp").solve(0).distance, atol=1e-9)
 
 

@@ -10,6 +10,7 @@ field that answers at points of the coarse mesh's faces (an order-2 field): it a
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -215,10 +216,16 @@ class ProjectedField:
         Added to the field, linearly interpolated on ``mesh``'s faces (the ridge rounding of an adapted solve,
         :func:`~cvxgeodesic.problems.ridge_rounding.round_ridge`: the rounded minus the transferred vertex values, 0
         at vertices of no finite value), after the patches are mixed in.
+    closest : callable, optional
+        ``closest(X (p, 3), labels (p,)) -> (faces, bary, distance)`` on ``solve_mesh`` for points of ``mesh``'s
+        components ``labels``: a copy made one component at a time answers each point on its own component's copy.
+        Default: the closest point on the whole of ``solve_mesh``.
     """
 
     def __init__(self, mesh: TriMesh, solve_mesh: TriMesh, field: Any, vertex_distance: np.ndarray,
-                 patches: Any = (), medium: Any = None, correction: np.ndarray | None = None) -> None:
+                 patches: Any = (), medium: Any = None, correction: np.ndarray | None = None,
+                 closest: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
+                 ) -> None:
         self.mesh = mesh
         self.solve_mesh = solve_mesh
         self.field = field
@@ -226,12 +233,16 @@ class ProjectedField:
         self.patches = tuple(patches)
         self.medium = medium
         self.correction = correction
+        self.closest = closest
 
     def _projected(self, faces: Any, bary: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """``(faces, bary)`` as arrays and the closest points of those points on ``solve_mesh`` (faces, bary)."""
         faces, B = checked_points(self.mesh, faces, bary)
-        X = bary_positions(self.mesh, faces, B)
-        cf, cb, _ = closest_point_index(self.solve_mesh).query(np.ascontiguousarray(X))
+        X = np.ascontiguousarray(bary_positions(self.mesh, faces, B))
+        if self.closest is None:
+            cf, cb, _ = closest_point_index(self.solve_mesh).query(X)
+        else:
+            cf, cb, _ = self.closest(X, self.mesh.component_labels[self.mesh.F[faces, 0]])
         return faces, B, cf, cb
 
     def distance_at(self, faces: Any, bary: Any) -> np.ndarray:

@@ -34,6 +34,7 @@ and a finer copy: :data:`ESTIMATE_RATIO`, :data:`ESTIMATE_FINER`, :data:`ESTIMAT
 
 from __future__ import annotations
 
+import functools
 import time
 from dataclasses import replace
 from typing import Any
@@ -154,6 +155,9 @@ CREASE_ANGLE = 60.0
 #: estimate's copy would be nearly the solve copy). The most aggressive copy is kept however many faces it has (a
 #: kept boundary stops the decimation early on a small mesh; no gentler one gets further).
 MAX_FACES_OVER = 1.25
+#: A mesh in several components is decimated one component at a time, each to its share of the target; a component
+#: whose share is below this many faces is kept as it is (a speck of a scan: too small to gain from a copy).
+MIN_PART_FACES = 50
 #: How the solve mesh is made (recorded in ``info.extra["adapted"]["simplifier"]``).
 SIMPLIFIER = "quadric (fast-simplification, boundary kept)"
 
@@ -211,12 +215,14 @@ def _decimation_source(mesh: TriMesh) -> tuple[TriMesh, str | None]:
     return surface, None
 
 
-def _unsuitable(mesh: TriMesh) -> str | None:
-    """Why the mesh is not decimated (solved on itself instead), or None."""
+def _unsuitable(mesh: TriMesh, parts: bool = True) -> str | None:
+    """Why the mesh is not decimated (solved on itself instead), or None; several components are decimated one at a
+    time (:func:`_decimated_parts`) unless ``parts`` is False (a point cloud's surface: its points read the copy by
+    the cloud's own triangles, whose pieces are not the surface's)."""
     if not mesh.is_edge_manifold:
         return "the mesh is not edge-manifold (quadric decimation can merge its sheets)"
     comps = np.unique(mesh.component_labels[mesh.referenced]).size
-    if comps > 1:
+    if comps > 1 and not parts:
         return f"the mesh has {comps} connected components (decimation could merge them)"
     if mesh.degenerate_faces(0.0).size:
         return f"the mesh has {mesh.degenerate_faces(0.0).size} face(s) of zero area"
@@ -271,6 +277,55 @@ def _decimated(mesh: TriMesh, target: int, first_agg: float | None = None, targe
     if folded is not None:
         return folded[1], None, {**folded[2], "tries": tries}
     return None, why, {"tries": tries}
+
+
+def _decimated_parts(mesh: TriMesh, target: int, first_agg: float | None = None, targets: int | None = None,
+                     aggs: tuple[float, ...] = RETRY_AGGS) -> tuple[TriMesh | None, str | None, dict[str, Any]]:
+    """:func:`_decimated` of a mesh in one or several components: each component decimated on its own to its share
+    of ``target`` (the decimation never sees two, so it cannot merge them), or kept as it is below
+    :data:`MIN_PART_FACES`, and the copies put side by side.
+
+    Returns
+    -------
+    coarse, why, record
+        As :func:`_decimated`; with several components the record's ``tries`` name the component, ``agg`` is the
+        largest decimated component's, and ``part_of_face`` (the copy's faces' component labels in ``mesh``,
+        :attr:`~cvxgeodesic.mesh.simplex.SimplexMesh.component_labels`) and ``components`` are added.
+    """
+    face_label = mesh.component_labels[mesh.F[:, 0]]
+    labels, counts = np.unique(face_label, return_counts=True)
+    if labels.size == 1:
+        return _decimated(mesh, target, first_agg, targets, aggs)
+    V, F, part_of_face, tries = [], [], [], []
+    record: dict[str, Any] = {"agg": None, "fold_angle": 0.0, "mesh_turn": 0.0, "folded": False,
+                              "components": int(labels.size)}
+    offset, largest = 0, -1
+    for k, (label, count) in enumerate(zip(labels, counts, strict=True)):
+        faces = mesh.F[face_label == label]
+        used = np.unique(faces)
+        part = TriMesh(mesh.V[used], np.searchsorted(used, faces), name=f"{mesh.name}[component {k + 1}]")
+        share = int(round(target * count / mesh.n_faces))
+        if share < count and share >= MIN_PART_FACES:
+            copy, why, made = _decimated(part, share, first_agg, targets, aggs)
+            tries += [(a, t, f"component {k + 1} of {labels.size}: {o}") for a, t, o in made["tries"]]
+            if copy is None:
+                return None, f"component {k + 1} of {labels.size} ({count} faces): {why}", {"tries": tries}
+            part = copy
+            record["fold_angle"] = max(record["fold_angle"], made["fold_angle"])
+            record["mesh_turn"] = max(record["mesh_turn"], made["mesh_turn"])
+            record["folded"] |= made["folded"]
+            if count > largest:
+                record["agg"], largest = made["agg"], count
+        V.append(part.V)
+        F.append(part.F + offset)
+        part_of_face.append(np.full(part.n_faces, label))
+        offset += part.n_vertices
+    if record["agg"] is None:
+        return None, (f"each of its {labels.size} components' share of the {target}-face target is below "
+                      f"{MIN_PART_FACES} faces or above its own"), {"tries": tries}
+    coarse = TriMesh(np.vstack(V), np.vstack(F), name=mesh.name)
+    coarse.simplifier = SIMPLIFIER
+    return coarse, None, {**record, "tries": tries, "part_of_face": np.concatenate(part_of_face)}
 
 
 def patch_reach(patch: Patch, distance: np.ndarray) -> float:
@@ -493,16 +548,43 @@ class _Copy:
         The copy (:func:`_decimated`).
     """
 
-    def __init__(self, config: SolveConfig, coarse: TriMesh) -> None:
+    def __init__(self, config: SolveConfig, coarse: TriMesh, part_of_face: np.ndarray | None = None) -> None:
         mesh = config.surface
         self.user, self.mesh = mesh, coarse
+        self.part_of_face = part_of_face
         # a planar copy's field is exact (order 2 on flat faces): it keeps the solver's tolerance
         self.tol = _tol(config, coarse)
         self.strategy = Order2(replace(config.on(coarse, lam=config.lam), tol=self.tol,
                                        medium=_medium_on(config.medium, mesh, coarse)))
-        self.vertex_faces, self.vertex_bary, gap = closest_point_index(coarse).query(np.ascontiguousarray(mesh.V))
+        self.vertex_faces, self.vertex_bary, gap = self.closest(np.ascontiguousarray(mesh.V), mesh.component_labels)
         self.max_gap = float(gap[mesh.referenced].max(initial=0.0))
         self.shortening = edge_shortening(mesh, bary_positions(coarse, self.vertex_faces, self.vertex_bary))
+
+    def closest(self, X: np.ndarray, labels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Closest face, barycentric coordinates and distance on the copy of each position ``X`` (k, 3), found on the
+        copy of its own component of the user's mesh (``labels`` (k,)) when the components were decimated apart:
+        two components near each other (a shell inside another) must not read each other's field. A position of no
+        decimated component (an unreferenced vertex) gets face 0 and an infinite distance."""
+        if self.part_of_face is None:
+            return closest_point_index(self.mesh).query(X)
+        faces, gap = np.zeros(len(X), dtype=np.int64), np.full(len(X), np.inf)
+        bary = np.tile([1.0, 0.0, 0.0], (len(X), 1))
+        for label, (ids, index) in self._part_indexes.items():
+            inside = labels == label
+            if inside.any():
+                f, bary[inside], gap[inside] = index.query(X[inside])
+                faces[inside] = ids[f]
+        return faces, bary, gap
+
+    @functools.cached_property
+    def _part_indexes(self) -> dict[int, tuple[np.ndarray, Any]]:
+        """Component label → (the copy's faces of that component, a closest-point index of them)."""
+        assert self.part_of_face is not None
+        out = {}
+        for label in np.unique(self.part_of_face):
+            ids = np.flatnonzero(self.part_of_face == label)
+            out[int(label)] = (ids, closest_point_index(TriMesh(self.mesh.V, self.mesh.F[ids])))
+        return out
 
     def sources(self, sources: SourceSet) -> tuple[SourceSet, float]:
         """The user's sources on the copy, at their positions, and the largest snap (:data:`SOURCE_SNAP`): vertices
@@ -510,9 +592,10 @@ class _Copy:
         mesh, coarse = self.user, self.mesh
         if sources.boundary:
             return resolve_sources(coarse, "boundary"), 0.0
-        X = np.concatenate([mesh.V[sources.vertices],
-                            np.array([p.position(mesh) for p in sources.distinct_points(mesh)]).reshape(-1, 3)])
-        faces, bary, _ = closest_point_index(coarse).query(np.ascontiguousarray(X))
+        given = sources.distinct_points(mesh)
+        X = np.concatenate([mesh.V[sources.vertices], np.array([p.position(mesh) for p in given]).reshape(-1, 3)])
+        at = np.concatenate([sources.vertices, [mesh.F[p.cell][0] for p in given]]).astype(np.int64)
+        faces, bary, _ = self.closest(np.ascontiguousarray(X), mesh.component_labels[at])
         snapped = np.where(bary < SOURCE_SNAP, 0.0, bary)
         snapped /= snapped.sum(axis=1, keepdims=True)
         moved = np.linalg.norm(bary_positions(coarse, faces, snapped) - bary_positions(coarse, faces, bary), axis=1)
@@ -602,6 +685,7 @@ class Adapted:
                                        "fallback": None, "order": 2, "error_estimate": None,
                                        "error_estimate_method": None}
         coarse: TriMesh | None = None
+        self._parts: np.ndarray | None = None
         self.source, why = _decimation_source(mesh)
         self._targets = None if self.source is mesh else CLOUD_TARGETS
         self._aggs = RETRY_AGGS if self.source is mesh else CLOUD_AGGS
@@ -609,15 +693,16 @@ class Adapted:
         if target is None or small:
             why = f"the target of {target} faces is not below the mesh's {self.source.n_faces}"
         elif why is None:
-            why = _unsuitable(self.source)
+            why = _unsuitable(self.source, parts=self.source is mesh)
             if why is None:
-                coarse, why, made = _decimated(self.source, target, targets=self._targets, aggs=self._aggs)
+                coarse, why, made = _decimated_parts(self.source, target, targets=self._targets, aggs=self._aggs)
                 self._record_decimation(made, "")
+                self._parts = made.get("part_of_face")
         self.record["decimate_time"] = time.perf_counter() - t0
         self.copy: _Copy | None = None
         self.companions: list[_Copy] = []
         self.inner: Any
-        copy = None if coarse is None else _Copy(config, coarse)
+        copy = None if coarse is None else _Copy(config, coarse, self._parts)
         if copy is not None and (lost := _lost_surface(copy)) is not None:
             copy, why = None, lost
         if coarse is None or copy is None:
@@ -632,6 +717,11 @@ class Adapted:
             self.notes.append(f"resolution={requested!r}: solved at order 2 on a {coarse.n_faces}-face copy of the "
                               f"mesh ({mesh.n_faces} faces; {SIMPLIFIER}) to a relative tolerance of "
                               f"{self.copy.tol:g}, the field read at the mesh's vertices")
+            if self._parts is not None:
+                self.notes.append(f"resolution={requested!r}: the mesh's {made['components']} components were "
+                                  f"decimated one at a time (those under {MIN_PART_FACES} faces of the target kept as "
+                                  "they are), each vertex read on its own component's copy")
+                self.record["components"] = made["components"]
             self.record.update(faces=coarse.n_faces, simplifier=SIMPLIFIER, max_surface_distance=self.copy.max_gap,
                                edge_shortening=self.copy.shortening, copy_tol=self.copy.tol)
             if estimate:
@@ -680,13 +770,15 @@ class Adapted:
         mesh = self.source
         # the solve copy's aggressiveness first: a companion folded where the copy is not would be an estimate of the
         # fold (bimba at 1/10: the agg-5 copy 0.33 % off, the agg-7 companion 1.58 %, the estimate 1.44 %)
-        coarser, why, made = _decimated(mesh, max(MIN_RESOLUTION_FACES, int(ESTIMATE_RATIO * faces)),
-                                        self.record["agg"], self._targets, self._aggs)
+        decimate = _decimated_parts if self._parts is not None else _decimated
+        coarser, why, made = decimate(mesh, max(MIN_RESOLUTION_FACES, int(ESTIMATE_RATIO * faces)),
+                                      self.record["agg"], self._targets, self._aggs)
+        coarser_parts = made.get("part_of_face")
         self._record_decimation(made, "estimate_")
         finer: TriMesh | None = mesh
         fine_target, made = int(ESTIMATE_FINER * faces), {"tries": []}
         if coarser is not None and fine_target < mesh.n_faces:
-            finer, why_fine, made = _decimated(mesh, fine_target, self.record["agg"], self._targets, self._aggs)
+            finer, why_fine, made = decimate(mesh, fine_target, self.record["agg"], self._targets, self._aggs)
             why = None if finer is not None else f"the finer copy failed ({why_fine})"
         self._record_decimation(made, "estimate_fine_")
         self.record["decimate_time"] += time.perf_counter() - t0
@@ -694,7 +786,8 @@ class Adapted:
             self.record["error_estimate_method"] = (f"none: the coarser copy failed ({why})" if coarser is None
                                                     else f"none: {why}")
             return
-        self.companions = [_Copy(self.config, coarser), _Copy(self.config, finer)]
+        finer_parts = None if finer is mesh else made.get("part_of_face")
+        self.companions = [_Copy(self.config, coarser, coarser_parts), _Copy(self.config, finer, finer_parts)]
         self.record["estimate_faces"] = [coarser.n_faces, finer.n_faces]
         fine = "the mesh itself" if finer is mesh and mesh is self.config.surface else f"a {finer.n_faces}-face copy"
         self.record["error_estimate_method"] = (
@@ -714,11 +807,12 @@ class Adapted:
             self.notes.append(f"resolution={self.requested!r}: every copy for {what} is folded (an edge turns "
                               f"{made['fold_angle']:.0f} deg, the mesh at most {made['mesh_turn']:.0f}); the least "
                               f"folded is used (aggressiveness {made['agg']:g})")
-        elif made.get("agg") is not None and len(tries) > 1:
-            outcomes = [o for _, _, o in tries[:-1]]
-            refused = "; ".join(f"{outcomes.count(o)}x {o}" for o in dict.fromkeys(outcomes))
-            self.notes.append(f"resolution={self.requested!r}: {what} was decimated {len(tries)} times ({refused}); "
-                              f"kept aggressiveness {made['agg']:g}, {tries[-1][1]} faces")
+        elif made.get("agg") is not None and (refused := [o for _, _, o in tries if not o.endswith("kept")]):
+            summary = "; ".join(f"{refused.count(o)}x {o}" for o in dict.fromkeys(refused))
+            # several components: a try per component kept, each at its own target
+            kept = "" if "part_of_face" in made else f"; kept aggressiveness {made['agg']:g}, {tries[-1][1]} faces"
+            self.notes.append(f"resolution={self.requested!r}: {what} was decimated {len(tries)} times "
+                              f"({summary}){kept}")
 
     def solve(self, sources: SourceSet, *, callback: Callback | None = None) -> GeodesicResult:
         """Distance field on the user's mesh from sources resolved on it.
@@ -857,7 +951,8 @@ class Adapted:
         assert self.copy is not None
         extra = dict(ci.extra, adapted=record, solve_mesh=self.solve_mesh)
         field = ProjectedField(self.config.surface, self.solve_mesh, cres.field, d, patches, medium=self.config.medium,
-                               correction=correction)
+                               correction=correction,
+                               closest=None if self.copy.part_of_face is None else self.copy.closest)
         info = replace(ci, setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
                        n_unreachable=int(np.isinf(d).sum()), notes=notes, extra=extra)
         return GeodesicResult(distance=d, info=info, sources=sources.vertices, field=field,
