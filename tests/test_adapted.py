@@ -6,7 +6,7 @@ import pytest
 import cvxgeodesic as cg
 from cvxgeodesic.errors import ParameterError, SourceError
 from cvxgeodesic.mesh.trimesh import TriMesh
-from cvxgeodesic.strategies import adapted
+from cvxgeodesic.strategies import adapted, decimation
 from cvxgeodesic.strategies.adapted import edge_shortening, resolve_resolution
 
 FLAT = 1e-6  # order 2 is exact on flat regions whatever the triangles
@@ -180,8 +180,8 @@ def test_flat_path_is_straight(grid):
 
 def test_info_record_and_one_decimation(grid, monkeypatch):
     calls = []
-    real = adapted.simplify_mesh
-    monkeypatch.setattr(adapted, "simplify_mesh", lambda *a, **k: calls.append(1) or real(*a, **k))
+    real = decimation.simplify_mesh
+    monkeypatch.setattr(decimation, "simplify_mesh", lambda *a, **k: calls.append(1) or real(*a, **k))
     solver = cg.GeodesicSolver(grid, "qclp", resolution=0.2, estimate_error=True)
     r1, r2 = solver.solve(5), solver.solve(250)
     ad = r1.info.extra["adapted"]
@@ -274,7 +274,7 @@ def test_duplicate_face_fins_are_removed():
     grid = cg.grid_plane(4)
     fin = TriMesh(grid.V, np.vstack([grid.F, grid.F[[3]][:, ::-1], grid.F[[3]]]))  # face 3 three times
     assert not fin.is_edge_manifold
-    clean = adapted._without_fins(fin)
+    clean = decimation._without_fins(fin)
     assert clean.is_edge_manifold and clean.n_faces == grid.n_faces - 1
 
 
@@ -359,35 +359,35 @@ def _flip_a_face(coarse):
 
 
 def test_max_turn_and_the_fold_detector(grid):
-    assert adapted.max_turn(grid) < 1e-6  # flat
+    assert decimation.max_turn(grid) < 1e-6  # flat
     folded = _flip_a_face(grid)
-    assert adapted.max_turn(folded) > 170
-    excess, angle = adapted.fold_excess(folded, adapted.max_turn(grid))
+    assert decimation.max_turn(folded) > 170
+    excess, angle = decimation.fold_excess(folded, decimation.max_turn(grid))
     assert excess > 0 and angle > 170
     # the same turn is no fold where the user's mesh turns as sharply itself (a crease of its own)
-    assert adapted.fold_excess(folded, 179.0)[0] <= 0
-    assert adapted.fold_excess(grid, 0.0)[0] <= 0
+    assert decimation.fold_excess(folded, 179.0)[0] <= 0
+    assert decimation.fold_excess(grid, 0.0)[0] <= 0
     # a folded corner of a real crease: two faces at a 150 deg turn
     book = TriMesh([[0, 0, 0], [1, 0, 0], [0.5, 1, 0], [0.5, np.cos(np.radians(30)), -np.sin(np.radians(30))]],
                    [[0, 1, 2], [1, 0, 3]])
-    assert abs(adapted.max_turn(book) - 150) < 1e-6
+    assert abs(decimation.max_turn(book) - 150) < 1e-6
     # a creased mesh (a cube: its edges turn by 90 deg) is not checked: a sharp turn of its copy is a crease's corner
     cube = TriMesh(np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], dtype=float),
                    [[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1], [2, 3, 7], [2, 7, 6],
                     [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
-    assert abs(adapted.max_turn(cube) - 90) < 1e-6
-    assert adapted.fold_reference(cube) == 180 and adapted.fold_reference(grid) < 1e-6
+    assert abs(decimation.max_turn(cube) - 90) < 1e-6
+    assert decimation.fold_reference(cube) == 180 and decimation.fold_reference(grid) < 1e-6
 
 
 def test_a_folded_copy_is_decimated_again(grid, monkeypatch):
-    real, aggs = adapted.simplify_mesh, []
+    real, aggs = decimation.simplify_mesh, []
 
     def folding(mesh, target, *args, **kwargs):
         aggs.append(kwargs["agg"])
         coarse = real(mesh, target, *args, **kwargs)
-        return _flip_a_face(coarse) if kwargs["agg"] == adapted.RETRY_AGGS[0] else coarse
+        return _flip_a_face(coarse) if kwargs["agg"] == decimation.RETRY_AGGS[0] else coarse
 
-    monkeypatch.setattr(adapted, "simplify_mesh", folding)
+    monkeypatch.setattr(decimation, "simplify_mesh", folding)
     res = cg.GeodesicSolver(grid, "qclp", resolution=100, estimate_error=False).solve(119)
     ad = res.info.extra["adapted"]
     assert aggs == [7.0, 5.0] and ad["agg"] == 5.0 and ad["fold_angle"] < 1e-6
@@ -400,31 +400,32 @@ def test_a_folded_copy_is_decimated_again(grid, monkeypatch):
     assert aggs == [7.0, 5.0, 5.0, 5.0] and ad["estimate_agg"] == ad["estimate_fine_agg"] == 5.0
     assert ad["error_estimate"] < FLAT
     # every copy folded: the least folded is kept, and said so
-    monkeypatch.setattr(adapted, "simplify_mesh", lambda *a, **k: _flip_a_face(real(*a, **k)))
+    monkeypatch.setattr(decimation, "simplify_mesh", lambda *a, **k: _flip_a_face(real(*a, **k)))
     res = cg.GeodesicSolver(grid, "qclp", resolution=100, estimate_error=False).solve(119)
     ad = res.info.extra["adapted"]
-    assert len(ad["decimation_tries"]) == len(adapted.RETRY_AGGS) and ad["fold_angle"] > 170
+    assert len(ad["decimation_tries"]) == len(decimation.RETRY_AGGS) and ad["fold_angle"] > 170
     assert any("every copy for the solve mesh is folded" in n for n in res.info.notes)
 
 
 def test_a_copy_refused_for_topology_is_retried_at_other_aggressiveness(grid, monkeypatch):
-    real = adapted.simplify_mesh
+    real = decimation.simplify_mesh
 
     def breaking(mesh, target, *args, **kwargs):
-        if kwargs["agg"] != adapted.RETRY_AGGS[-1]:
+        if kwargs["agg"] != decimation.RETRY_AGGS[-1]:
             raise RuntimeError("collapse broke the mesh")
         return real(mesh, target, *args, **kwargs)
 
-    monkeypatch.setattr(adapted, "simplify_mesh", breaking)
+    monkeypatch.setattr(decimation, "simplify_mesh", breaking)
     res = cg.GeodesicSolver(grid, "qclp", resolution=100, estimate_error=False).solve(119)
     ad = res.info.extra["adapted"]
-    assert ad["order"] == 2 and ad["fallback"] is None and ad["agg"] == adapted.RETRY_AGGS[-1]
+    assert ad["order"] == 2 and ad["fallback"] is None and ad["agg"] == decimation.RETRY_AGGS[-1]
     tries = ad["decimation_tries"]
-    assert len(tries) == len(adapted.RETRY_TARGETS) + adapted.RETRY_TARGETS_LATER * (len(adapted.RETRY_AGGS) - 2) + 1
+    d = decimation
+    assert len(tries) == len(d.RETRY_TARGETS) + d.RETRY_TARGETS_LATER * (len(d.RETRY_AGGS) - 2) + 1
     assert all("collapse broke" in t["outcome"] for t in tries[:-1]) and tries[-1]["outcome"] == "kept"
     np.testing.assert_allclose(res.distance, _euclid(grid, grid.V[119]), atol=FLAT)
     # a retry that stops far above the target is refused too (it would cost more than the solve asked for)
-    monkeypatch.setattr(adapted, "simplify_mesh",
+    monkeypatch.setattr(decimation, "simplify_mesh",
                         lambda mesh, target, *a, **k: real(mesh, 3 * target, *a, **k) if k["agg"] == 3 else
                         breaking(mesh, target, *a, **k))
     res = cg.GeodesicSolver(grid, "qclp", resolution=100, estimate_error=False).solve(119)

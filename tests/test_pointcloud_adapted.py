@@ -67,14 +67,15 @@ def test_surface_through_the_points_is_manifold_and_keeps_the_indices():
 
 
 def test_a_clouds_refused_copies_cost_one_decimation_per_cloud_aggressiveness(monkeypatch):
-    from cvxgeodesic.strategies import adapted
+    from cvxgeodesic.strategies import decimation
 
     calls = []
-    monkeypatch.setattr(adapted, "_decimated_once",
+    monkeypatch.setattr(decimation, "_decimated_once",
                         lambda mesh, target, agg=7.0: calls.append(agg) or (None, "refused (test)"))
     res = cg.GeodesicSolver(PointCloud(plane_points(30, seed=2)), "qclp", resolution=300).solve(0)
-    assert calls == list(adapted.CLOUD_AGGS) and res.info.extra["adapted"]["fallback"] == "refused (test)"
-    assert len(adapted.CLOUD_AGGS) < len(adapted.RETRY_AGGS)  # the gentlest never kept a cloud's copy
+    assert calls == list(decimation.CLOUD_AGGS) and res.info.extra["adapted"]["fallback"] == "refused (test)"
+    assert len(decimation.CLOUD_AGGS) < len(decimation.RETRY_AGGS)  # the gentlest never kept a cloud's copy
     calls.clear()
     cg.GeodesicSolver(cg.grid_plane(30), "qclp", resolution=300).solve(0)  # a mesh: every target at every agg
-    assert len(calls) == len(adapted.RETRY_TARGETS) + (len(adapted.RETRY_AGGS) - 1) * adapted.RETRY_TARGETS_LATER
+    retries = len(decimation.RETRY_TARGETS) + (len(decimation.RETRY_AGGS) - 1) * decimation.RETRY_TARGETS_LATER
+    assert len(calls) == retries
