@@ -22,11 +22,12 @@ copy:
    the Hessian energy's smoothing length at ``m`` (:func:`~cvxgeodesic.problems.ridge_rounding.round_ridge`), the
    rest of the field as the copy gave it: the order-2 energy of ``φ = d²`` rounds the ridge only by flattening the
    whole field (docs/dev/adapted-log.md);
-6. **retries and fallbacks**: a copy that changes the topology (Euler characteristic, components, a non-manifold
-   edge) or is folded (:func:`fold_excess`) is decimated again at other targets and aggressiveness values
-   (:func:`_decimated`, recorded in ``decimation_tries``); a mesh that is not edge-manifold, has several components
-   or faces of zero area, or whose every copy was refused, is solved on itself at order 1, with a note (quadric
-   decimation gave NaN fields on a non-manifold mesh, issue 43).
+6. **retries and fallbacks** (:mod:`.decimation`): a copy that changes the topology (Euler characteristic,
+   components, a non-manifold edge) or is folded (:func:`fold_excess`) is decimated again at other targets and
+   aggressiveness values (recorded in ``decimation_tries``); a mesh in several components is decimated one component
+   at a time, each vertex read on its own component's copy (:meth:`_Copy.closest`); a mesh that is not
+   edge-manifold or has faces of zero area, or whose every copy was refused, is solved on itself at order 1, with a
+   note (quadric decimation gave NaN fields on a non-manifold mesh, issue 43).
 
 ``info.extra["adapted"]`` records the solve mesh, its times and an error estimate (two more solves, on a coarser
 and a finer copy: :data:`ESTIMATE_RATIO`, :data:`ESTIMATE_FINER`, :data:`ESTIMATE_FACTOR`).
