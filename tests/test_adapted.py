@@ -74,6 +74,21 @@ def test_constant_cost_scales_the_distance(grid, kind):
     cost = {"constant": c, "vertices": np.full(grid.n_vertices, c), "faces": np.full(grid.n_faces, c)}[kind]
     res = cg.GeodesicSolver(grid, "qclp", resolution=100, cost=cost).solve(119)
     np.testing.assert_allclose(res.distance, c * _euclid(grid, grid.V[119]), atol=FLAT)
+    assert res.info.extra["adapted"]["source_patches"] == 1  # solved with the cost on the patch, and mixed in
+
+
+def test_patch_reach_takes_the_travel_time_along_the_rim(grid):
+    from cvxgeodesic.mesh.patch import ball_patch
+
+    patch = ball_patch(grid, 119, 0.2)
+    d = _euclid(patch.mesh, grid.V[119])
+    plain = adapted.patch_reach(patch, d)
+    assert 0 < plain < np.inf
+    assert adapted.patch_reach(patch, d, patch.mesh.edge_lengths) == plain
+    # a cost of 3: distances and travel times both three times the lengths, the reach too
+    assert adapted.patch_reach(patch, 3 * d, 3 * patch.mesh.edge_lengths) == pytest.approx(3 * plain, rel=1e-12)
+    # the rim's travel times, not the Euclidean lengths: a shorter reach when the rim is slower to cross
+    assert adapted.patch_reach(patch, d, 10 * patch.mesh.edge_lengths) < plain
 
 
 def test_metric_moved_to_the_solve_mesh(grid):
