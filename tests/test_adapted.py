@@ -55,6 +55,7 @@ def test_boundary_source_is_the_users_boundary(grid):
     x, y = grid.V[:, 0], grid.V[:, 1]
     exact = np.minimum.reduce([x, 1 - x, y, 1 - y])
     assert np.abs(res.distance[ub]).max() == 0
+    assert adapted.BOUNDARY_NOTE.format(requested=200) in res.info.notes  # order 1 is more accurate: the user is told
     # the ridges of the distance to a square's sides cross the coarse faces: close, not exact; exact where d² is
     # one quadratic (near a side, away from the diagonals)
     err = np.abs(res.distance - exact)

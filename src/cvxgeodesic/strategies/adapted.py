@@ -137,6 +137,13 @@ CURVED_COPY_TOL = 1e-4
 #: read the field of another part (5.35 % mean error, against 2.14 % at order 1 and 0.10 % at order 2 on the surface
 #: through the points).
 MAX_GAP_EDGES = 10.0
+#: The note of an adapted solve from ``"boundary"``: order 2 from a curve source runs short on a coarse copy. Measured
+#: on camelhead_open (2026-12-06, docs/dev/adapted-log.md): the copy's exact distance read at the user's vertices is
+#: 0.77 % off, order 2 on the copy 4.35 % off the copy's exact distance (too short everywhere, 8.5 % in the tenth
+#: nearest the boundary), so the field is 3.9 % off against order 1's 0.86 % on the mesh.
+BOUNDARY_NOTE = ("resolution={requested!r} from the boundary: order 2 from a curve source runs short on a coarse copy "
+                 "(camelhead_open: 3.9 % mean error against 0.86 % at order 1 on the mesh, docs/adapted.md); order=1 "
+                 "or resolution='mesh' is more accurate")
 #: At most this many sources get a patch (each is an order-2 solve of its own).
 MAX_SOURCE_PATCHES = 8
 #: A point cloud's surface (:meth:`~cvxgeodesic.mesh.pointcloud.PointCloud.surface`) is decimated at this many targets
@@ -644,6 +651,8 @@ class Adapted:
         if offset > 1e-12 * self.config.mesh.bbox_diagonal:
             notes.append(f"a source within {SOURCE_SNAP:g} of a face's altitude from an edge of the solve mesh was "
                          f"moved onto it (by {offset:.3g})")
+        if sources.boundary:
+            notes.append(BOUNDARY_NOTE.format(requested=self.requested))
         t_envelope = time.perf_counter()
         lowered = self._cloud_envelope(d)
         if lowered is not None:
