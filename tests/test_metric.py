@@ -212,6 +212,26 @@ def test_per_face_edge_length_is_the_cheaper_face():
     assert med.edge_lengths[shared] * med.scale == pytest.approx(2.0 * np.sqrt(2.0))
 
 
+@pytest.mark.parametrize("kind", ["vertices", "faces"])
+def test_a_patch_of_faces_keeps_their_medium(kind):
+    """``Medium.subset``: the source patches of an adapted solve; the patch's edge lengths are the mesh's."""
+    from cvxgeodesic.mesh.patch import ball_patch
+
+    mesh = delaunay_grid(12)
+    n = mesh.n_vertices if kind == "vertices" else mesh.n_faces
+    med = make_medium(mesh, cost=1.0 + np.arange(n) / n, metric=ANISO)
+    patch = ball_patch(mesh, 60, 0.3)
+    sub = med.subset(patch.mesh, patch.vertices, patch.faces)
+    assert sub.scale == med.scale and sub.cost_kind == kind and sub.metric_kind == med.metric_kind
+    np.testing.assert_array_equal(sub.cost, med.cost[patch.vertices if kind == "vertices" else patch.faces])
+    # every patch edge in two patch faces has the same two faces in the mesh: the same length
+    inner = patch.mesh.edge_cell_counts == 2
+    ends = patch.vertices[patch.mesh.edges[inner]]
+    ids = np.searchsorted(mesh.edges[:, 0] * mesh.n_vertices + mesh.edges[:, 1],
+                          ends.min(axis=1) * mesh.n_vertices + ends.max(axis=1))
+    np.testing.assert_allclose(sub.edge_lengths[inner], med.edge_lengths[ids], rtol=1e-12)
+
+
 def test_order1_metric_field_is_close():
     mesh = delaunay_grid(20)
     exact = _metric_distance(mesh.V, mesh.V[220], ANISO)

@@ -157,6 +157,31 @@ class Medium:
         return Medium(cast(TriMesh, split_mesh), cost, self.cost_kind, metric, self.metric_kind, scale=self.scale,
                       check=False)
 
+    def subset(self, mesh: TriMesh, vertices: np.ndarray, faces: np.ndarray) -> Medium:
+        """The medium on a mesh made of some of this one's faces (a patch around a source).
+
+        Parameters
+        ----------
+        mesh : TriMesh
+            The smaller mesh.
+        vertices : (p,) int ndarray
+            This medium's vertex of each vertex of ``mesh``.
+        faces : (k,) int ndarray
+            This medium's face of each face of ``mesh``.
+
+        Returns
+        -------
+        Medium
+            The values taken as they are, the normalization kept.
+        """
+        def taken(values: np.ndarray | None, kind: str | None) -> np.ndarray | None:
+            if values is None or kind == "constant":
+                return values
+            return values[faces] if kind == "faces" else values[vertices]
+
+        return Medium(mesh, taken(self.cost, self.cost_kind), self.cost_kind, taken(self.metric, self.metric_kind),
+                      self.metric_kind, scale=self.scale, check=False)
+
     # -- pointwise values ------------------------------------------------------------------------------------
     def _cost_at(self, faces: np.ndarray, bary: np.ndarray) -> np.ndarray:
         """(k,) cost at points (unnormalized; 1 without a cost)."""

@@ -62,7 +62,6 @@ from .decimation import (
     MIN_RESOLUTION_FACES,
     RETRY_AGGS,
     SIMPLIFIER,
-    _decimated,
     _decimated_parts,
     _unsuitable,
     fold_excess,
@@ -304,22 +303,6 @@ def _medium_on(medium: Medium | None, mesh: TriMesh, coarse: TriMesh) -> Medium 
                              f"positive definite there ({exc}); give resolution='mesh'") from None
 
 
-def _medium_on_patch(medium: Medium | None, patch: Patch) -> Medium | None:
-    """The user's medium on a source patch (its faces and vertices are the user's: the values are taken as they are;
-    the normalization kept)."""
-    if medium is None:
-        return None
-    assert patch.mesh is not None
-
-    def taken(values: np.ndarray | None, kind: str | None) -> np.ndarray | None:
-        if values is None or kind == "constant":
-            return values
-        return values[patch.faces] if kind == "faces" else values[patch.vertices]
-
-    return Medium(patch.mesh, taken(medium.cost, medium.cost_kind), medium.cost_kind,
-                  taken(medium.metric, medium.metric_kind), medium.metric_kind, scale=medium.scale, check=False)
-
-
 def edge_shortening(mesh: TriMesh, positions: np.ndarray) -> float:
     """The error estimate of an adapted solve: how much shorter the user's edges are on the solve mesh.
 
@@ -355,7 +338,7 @@ class _Copy:
     config : SolveConfig
         The user's.
     coarse : TriMesh
-        The copy (:func:`_decimated`).
+        The copy (:func:`~.decimation._decimated_parts`).
     """
 
     def __init__(self, config: SolveConfig, coarse: TriMesh, part_of_face: np.ndarray | None = None) -> None:
@@ -495,7 +478,8 @@ class Adapted:
                                        "fallback": None, "order": 2, "error_estimate": None,
                                        "error_estimate_method": None}
         coarse: TriMesh | None = None
-        self._parts: np.ndarray | None = None
+        parts: np.ndarray | None = None  # a mesh in several components: the copy's faces' component labels
+        components: int | None = None
         self.source, why = _decimation_source(mesh)
         self._targets = None if self.source is mesh else CLOUD_TARGETS
         self._aggs = RETRY_AGGS if self.source is mesh else CLOUD_AGGS
@@ -507,12 +491,12 @@ class Adapted:
             if why is None:
                 coarse, why, made = _decimated_parts(self.source, target, targets=self._targets, aggs=self._aggs)
                 self._record_decimation(made, "")
-                self._parts = made.get("part_of_face")
+                parts, components = made.get("part_of_face"), made.get("components")
         self.record["decimate_time"] = time.perf_counter() - t0
         self.copy: _Copy | None = None
         self.companions: list[_Copy] = []
         self.inner: Any
-        copy = None if coarse is None else _Copy(config, coarse, self._parts)
+        copy = None if coarse is None else _Copy(config, coarse, parts)
         if copy is not None and (lost := _lost_surface(copy)) is not None:
             copy, why = None, lost
         if coarse is None or copy is None:
@@ -527,11 +511,11 @@ class Adapted:
             self.notes.append(f"resolution={requested!r}: solved at order 2 on a {coarse.n_faces}-face copy of the "
                               f"mesh ({mesh.n_faces} faces; {SIMPLIFIER}) to a relative tolerance of "
                               f"{self.copy.tol:g}, the field read at the mesh's vertices")
-            if self._parts is not None:
-                self.notes.append(f"resolution={requested!r}: the mesh's {made['components']} components were "
+            if components is not None:
+                self.notes.append(f"resolution={requested!r}: the mesh's {components} components were "
                                   f"decimated one at a time (those under {MIN_PART_FACES} faces of the target kept as "
                                   "they are), each vertex read on its own component's copy")
-                self.record["components"] = made["components"]
+                self.record["components"] = components
             self.record.update(faces=coarse.n_faces, simplifier=SIMPLIFIER, max_surface_distance=self.copy.max_gap,
                                edge_shortening=self.copy.shortening, copy_tol=self.copy.tol)
             if estimate:
@@ -580,15 +564,14 @@ class Adapted:
         mesh = self.source
         # the solve copy's aggressiveness first: a companion folded where the copy is not would be an estimate of the
         # fold (bimba at 1/10: the agg-5 copy 0.33 % off, the agg-7 companion 1.58 %, the estimate 1.44 %)
-        decimate = _decimated_parts if self._parts is not None else _decimated
-        coarser, why, made = decimate(mesh, max(MIN_RESOLUTION_FACES, int(ESTIMATE_RATIO * faces)),
-                                      self.record["agg"], self._targets, self._aggs)
+        coarser, why, made = _decimated_parts(mesh, max(MIN_RESOLUTION_FACES, int(ESTIMATE_RATIO * faces)),
+                                              self.record["agg"], self._targets, self._aggs)
         coarser_parts = made.get("part_of_face")
         self._record_decimation(made, "estimate_")
         finer: TriMesh | None = mesh
         fine_target, made = int(ESTIMATE_FINER * faces), {"tries": []}
         if coarser is not None and fine_target < mesh.n_faces:
-            finer, why_fine, made = decimate(mesh, fine_target, self.record["agg"], self._targets, self._aggs)
+            finer, why_fine, made = _decimated_parts(mesh, fine_target, self.record["agg"], self._targets, self._aggs)
             why = None if finer is not None else f"the finer copy failed ({why_fine})"
         self._record_decimation(made, "estimate_fine_")
         self.record["decimate_time"] += time.perf_counter() - t0
@@ -606,8 +589,8 @@ class Adapted:
             f"mesh's faces) and on {fine}")
 
     def _record_decimation(self, made: dict[str, Any], prefix: str) -> None:
-        """``made`` (:func:`_decimated`) into the record (keys ``agg``, ``fold_angle``, ``decimation_tries``, with
-        ``prefix``), and a note when the copy is not the first decimation's or is folded."""
+        """``made`` (:func:`~.decimation._decimated_parts`) into the record (keys ``agg``, ``fold_angle``,
+        ``decimation_tries``, with ``prefix``), and a note when the copy is not the first decimation's or is folded."""
         tries = made["tries"]
         self.record[prefix + "decimation_tries"] = [{"agg": a, "target": t, "outcome": o} for a, t, o in tries]
         self.record[prefix + "agg"] = made.get("agg")
@@ -741,7 +724,8 @@ class Adapted:
             face_map[patch.faces] = np.arange(patch.faces.size)
             src = patch.source if point is None else SurfacePoint(int(face_map[point.cell]), point.bary)
             try:
-                medium = _medium_on_patch(self.config.medium, patch)
+                medium = None if self.config.medium is None else self.config.medium.subset(
+                    patch.mesh, patch.vertices, patch.faces)
                 res = Order2(replace(self.config.on(patch.mesh, lam=self.config.lam), tol=_tol(self.config, patch.mesh),
                                      medium=medium)).solve(resolve_sources(patch.mesh, src))
             except (SolverError, SourceError, MeshError, ParameterError) as exc:  # the copy's field stays
@@ -767,8 +751,7 @@ class Adapted:
         assert self.copy is not None
         extra = dict(ci.extra, adapted=record, solve_mesh=self.solve_mesh)
         field = ProjectedField(self.config.surface, self.solve_mesh, cres.field, d, patches, medium=self.config.medium,
-                               correction=correction,
-                               closest=None if self.copy.part_of_face is None else self.copy.closest)
+                               correction=correction, closest=self.copy.closest)
         info = replace(ci, setup_time=self.setup_time, solve_time=time.perf_counter() - t0,
                        n_unreachable=int(np.isinf(d).sum()), notes=notes, extra=extra)
         return GeodesicResult(distance=d, info=info, sources=sources.vertices, field=field,
