@@ -21,6 +21,24 @@ def test_a_plane_cloud_is_exact_at_every_point():
     assert abs(cg.distance_at(cloud, res, p) - np.linalg.norm(p.position(cloud.mesh) - cloud.P[12])) < 1e-6
 
 
+def test_a_regular_grid_cloud_s_default_is_order_2_on_a_copy_and_exact():
+    # every square's corners are cocircular: fans that chose its two diagonals differently overlapped and left the
+    # consensus in pieces (30 x 30: 28), so the default fell back to order 1 (0.02-0.03 max error); the fans now
+    # choose on points moved alike, and the three collinear points of a border row make no triangle
+    g = np.linspace(0.0, 1.0, 40)
+    x, y = np.meshgrid(g, g)
+    P = np.c_[x.ravel(), y.ravel(), np.zeros(x.size)]
+    cloud = PointCloud(P)
+    np.testing.assert_array_equal(cloud.P, P)  # the move is for the fans' choices only
+    assert cloud.mesh.degenerate_faces(1e-6).size == 0
+    surface, why = cloud.surface()
+    assert why is None and surface.n_faces == 2 * 39**2
+    res = cg.GeodesicSolver(cloud).solve(0)
+    ad = res.info.extra["adapted"]
+    assert ad["fallback"] is None and ad["order"] == 2 and ad["faces"] < surface.n_faces
+    np.testing.assert_allclose(res.distance, np.linalg.norm(P - P[0], axis=1), atol=1e-6)
+
+
 def test_a_sphere_cloud_is_close_to_the_great_circle_distance():
     cloud = PointCloud(sphere_points(3000))
     res = cg.GeodesicSolver(cloud, "qclp", resolution=0.25).solve(0)
