@@ -77,6 +77,18 @@ def _igl_decimate(mesh: TriMesh, target_faces: int):
     return (U, G), None
 
 
+def _centre(V: np.ndarray) -> np.ndarray:
+    """(3,) float: the bounding box's centre, rounded to the last bit of each axis's largest coordinate.
+
+    The quadric decimation's plane offsets are in the coordinates it is given: kitten (size 1) at (5e5, 4e6, 100),
+    coordinates of a survey grid, made a copy whose vertices moved by up to 0.92 from the same copy at the origin and
+    doubled the mean error of the default's field (0.511 → 0.962 %). Rounded so, ``(v - c) + c == v`` exactly for the
+    vertices the decimation does not move."""
+    centre = 0.5 * (V.min(axis=0) + V.max(axis=0))
+    last_bit = np.spacing(np.abs(V).max(axis=0))
+    return np.round(centre / last_bit) * last_bit
+
+
 def simplify_mesh(mesh: TriMesh, target_faces: int, method: str = "shortest-edge", *,
                   preserve_border: bool = False, agg: float = 7.0) -> TriMesh:
     """Decimate a mesh to about ``target_faces`` faces by edge collapses.
@@ -119,7 +131,7 @@ def simplify_mesh(mesh: TriMesh, target_faces: int, method: str = "shortest-edge
     if not 0 < target_faces < mesh.n_faces:
         raise ParameterError(f"target_faces must be in (0, {mesh.n_faces}), got {target_faces}")
     check_choice(method, "simplification method", SIMPLIFIERS, lower=False)
-    result, used = None, method
+    result, used, offset = None, method, np.zeros(3)
     if method == "shortest-edge":
         if mesh.is_edge_manifold:
             result, why = _igl_decimate(mesh, target_faces)
@@ -129,11 +141,12 @@ def simplify_mesh(mesh: TriMesh, target_faces: int, method: str = "shortest-edge
             used = f"quadric (shortest-edge: {why})"
     if result is None:
         fs = _fast_simplification()
+        offset = _centre(mesh.V)
         # writable copies: the extension rejects the read-only arrays of a TriMesh
-        result = fs.simplify(np.array(mesh.V, dtype=np.float64), np.array(mesh.F, dtype=np.int64),
+        result = fs.simplify(np.array(mesh.V - offset, dtype=np.float64), np.array(mesh.F, dtype=np.int64),
                              target_count=int(target_faces), preserve_border=bool(preserve_border),
                              agg=float(agg))
-    pts = np.asarray(result[0], dtype=np.float64)
+    pts = np.asarray(result[0], dtype=np.float64) + offset
     tris = np.asarray(result[1], dtype=np.int64).reshape(-1, 3)
     ok = (tris[:, 0] != tris[:, 1]) & (tris[:, 1] != tris[:, 2]) & (tris[:, 0] != tris[:, 2])
     tris = tris[ok]
