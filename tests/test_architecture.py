@@ -40,7 +40,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("baselines", ("baselines",)),
     ("api", ("api", "rows", "strategies", "paths", "_verbose")),
     ("evaluation/pictures", ("evaluation", "plotting", "viewer")),
-    ("applications", ("cli", "compare", "batch", "demo",
+    ("applications", ("cli", "compare", "batch", "demo", "__main__",
                       "")),  # "": the package __init__
 ]
 

@@ -99,8 +99,9 @@ def test_importing_the_cli_loads_the_standard_library_only():
     assert proc.stdout.strip() == "[]", proc.stdout + proc.stderr
 
 
-def test_python_m_runs_the_package():
-    proc = subprocess.run([sys.executable, "-m", "cvxgeodesic.cli", "--version"], capture_output=True, text=True)
+@pytest.mark.parametrize("module", ["cvxgeodesic", "cvxgeodesic.cli"])
+def test_python_m_runs_the_command(module):
+    proc = subprocess.run([sys.executable, "-m", module, "--version"], capture_output=True, text=True)
     assert proc.returncode == 0 and proc.stdout.startswith("cvxgeodesic ")
 
 
