@@ -27,7 +27,7 @@ def test_target_outside_the_face_count_is_refused(target):
 
 def test_the_quadric_copy_does_not_depend_on_where_the_mesh_lies():
     # survey coordinates: kitten at (5e5, 4e6, 100) made a copy up to 0.92 off the same copy at the origin (its
-    # default's field 0.511 -> 0.962 % mean error); the decimation now runs on centred coordinates
+    # default's field 0.511 -> 0.962 % mean error); a mesh that far is moved to the origin for the decimation
     sphere = icosphere(4)
     offset = np.array([5e5, 4e6, 100.0])
     here = simplify_mesh(sphere, 1000, method="quadric")
