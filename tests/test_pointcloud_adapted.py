@@ -76,13 +76,46 @@ def test_the_field_drops_to_its_envelope_over_the_clouds_own_edges():
     np.testing.assert_allclose(cg.distance_at(cloud, res, cloud.P[idx]), res.distance[idx], atol=1e-9)
 
 
-def test_a_cloud_of_two_pieces_falls_back_to_order_1_with_a_note():
+@pytest.mark.parametrize("off_surface", [None, 5])
+def test_a_cloud_of_two_pieces_is_decimated_piece_by_piece(monkeypatch, off_surface):
+    # before: "no manifold surface through the points (the cloud's triangles form 2 pieces)", order 1 on the cloud.
+    # A point of the first piece off the surface (its consensus triangles dropped) gives the surface's components
+    # other labels than the cloud's pieces: the points must still read their own piece's copy
+    from cvxgeodesic.mesh import pointcloud
+
+    if off_surface is not None:
+        real = pointcloud.triangle_set
+        monkeypatch.setattr(pointcloud, "triangle_set", lambda tri, owner, X, kind: (
+            lambda F, notes: (F[~(F == off_surface).any(axis=1)] if kind == "consensus" else F, notes))(
+                *real(tri, owner, X, kind)))
     P = plane_points(20)
     cloud = PointCloud(np.vstack([P, P + [5.0, 0.0, 0.0]]))
+    surface, why = cloud.surface()
+    assert why is None and np.unique(surface.component_labels[surface.F]).size == 2
+    for source, own, other in ((0, slice(0, 400), slice(400, 800)), (450, slice(400, 800), slice(0, 400))):
+        res = cg.GeodesicSolver(cloud, "qclp", resolution=200).solve(source)
+        ad = res.info.extra["adapted"]
+        assert ad["fallback"] is None and ad["order"] == 2 and ad["components"] == 2
+        assert any("2 components were decimated one at a time" in n for n in res.info.notes)
+        assert np.isinf(res.distance[other]).all()
+        # exact on the planes; around the hole of the point off the surface the copy's field goes round it
+        # (measured 0.0028 at most)
+        np.testing.assert_allclose(res.distance[own], np.linalg.norm(cloud.P[own] - cloud.P[source], axis=1),
+                                   atol=1e-6 if off_surface is None else 0.01)
+
+
+def test_a_piece_of_a_cloud_without_consensus_falls_back_to_order_1_naming_it(monkeypatch):
+    from cvxgeodesic.mesh import pointcloud
+
+    P = plane_points(20)
+    cloud = PointCloud(np.vstack([P, P + [5.0, 0.0, 0.0]]))
+    real = pointcloud.triangle_set
+    # the consensus of the second piece (its points 400..799) left empty
+    monkeypatch.setattr(pointcloud, "triangle_set", lambda tri, owner, X, kind: (
+        lambda F, notes: (F[(F < 400).all(axis=1)], notes))(*real(tri, owner, X, kind)))
     res = cg.GeodesicSolver(cloud, "qclp", resolution=200).solve(0)
     ad = res.info.extra["adapted"]
-    assert ad["order"] == 1 and "pieces" in ad["fallback"]
-    assert any("no manifold surface through the points" in n for n in res.info.notes)
+    assert ad["order"] == 1 and "no consensus triangle in piece 2 of the cloud's 2" in ad["fallback"]
     assert np.isinf(res.distance[400:]).all() and np.isfinite(res.distance[:400]).all()
 
 

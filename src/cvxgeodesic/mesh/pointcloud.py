@@ -505,19 +505,18 @@ class PointCloud:
         """A manifold triangle surface through the points, for ``resolution=`` (quadric decimation needs one).
 
         The consensus of the fans (the triangles in two fans or more, :data:`TRIANGLE_SETS`) without the triangles
-        on an edge of more than two, and without the pieces that break off it (noise makes a few), as long as they
-        hold at most :data:`SURFACE_FRAGMENTS` of its triangles and the cloud's own triangles are connected.
+        on an edge of more than two; in each piece of the cloud's own triangles (a cloud of several objects), its
+        largest connected piece, as long as the pieces that break off it (noise makes a few) hold at most
+        :data:`SURFACE_FRAGMENTS` of that piece's consensus triangles.
 
         Returns
         -------
         surface : TriMesh or None
-            Its vertices are the cloud's points (:attr:`P`, the same indices; the points off it are unreferenced).
+            Its vertices are the cloud's points (:attr:`P`, the same indices; the points off it are unreferenced);
+            one connected piece in each piece of the cloud's triangles.
         why : str or None
-            Why there is none: the cloud's triangles in several pieces, or the consensus in pieces.
+            Why there is none: a piece of the cloud's triangles without consensus, or its consensus in pieces.
         """
-        cloud_pieces = np.unique(self.mesh.component_labels[self.mesh.referenced]).size
-        if cloud_pieces > 1:
-            return None, f"the cloud's triangles form {cloud_pieces} pieces"
         tri, owner = self._fans
         F, _ = triangle_set(tri, owner, self.P, "consensus")
         if F.shape[0] == 0:
@@ -527,15 +526,21 @@ class PointCloud:
         if F.shape[0] == 0:
             return None, "every consensus triangle is on a non-manifold edge"
         name = f"{self.name} (consensus surface)"
-        surface = TriMesh(self.P, F, name=name)
-        labels = surface.component_labels[F[:, 0]]
-        values, counts = np.unique(labels, return_counts=True)
-        if counts.max() < (1 - SURFACE_FRAGMENTS) * F.shape[0]:
-            return None, (f"the consensus of the fans breaks into {values.size} pieces (the largest holds "
-                          f"{counts.max() / F.shape[0]:.0%} of its triangles)")
-        if values.size == 1:
-            return surface, None
-        return TriMesh(self.P, F[labels == values[np.argmax(counts)]], name=name), None
+        labels = TriMesh(self.P, F).component_labels[F[:, 0]]
+        piece_of_face = self.mesh.component_labels[F[:, 0]]
+        pieces = np.unique(self.mesh.component_labels[self.mesh.referenced])
+        keep = np.zeros(F.shape[0], dtype=bool)
+        for k, piece in enumerate(pieces):
+            inside = piece_of_face == piece
+            where = f" in piece {k + 1} of the cloud's {pieces.size}" if pieces.size > 1 else ""
+            if not inside.any():
+                return None, f"no consensus triangle{where}"
+            values, counts = np.unique(labels[inside], return_counts=True)
+            if counts.max() < (1 - SURFACE_FRAGMENTS) * counts.sum():
+                return None, (f"the consensus of the fans{where} breaks into {values.size} pieces (the largest "
+                              f"holds {counts.max() / counts.sum():.0%} of its triangles)")
+            keep |= inside & (labels == values[np.argmax(counts)])
+        return TriMesh(self.P, F[keep], name=name), None
 
     def check_sources(self, vertices: np.ndarray) -> None:
         """Refuse source points that were left out of the triangles (their field would be ``inf`` everywhere).

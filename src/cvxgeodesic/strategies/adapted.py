@@ -483,13 +483,18 @@ class Adapted:
         self.source, why = _decimation_source(mesh)
         self._targets = None if self.source is mesh else CLOUD_TARGETS
         self._aggs = RETRY_AGGS if self.source is mesh else CLOUD_AGGS
+        # a cloud's surface: its faces by the piece of the cloud's triangles their points are in (the labels the
+        # points read the copy by); a mesh: its own components
+        self._face_label = (self.source.component_labels if self.source is mesh else mesh.component_labels)[
+            self.source.F[:, 0]]
         small = why is None and (target is None or target >= self.source.n_faces)
         if target is None or small:
             why = f"the target of {target} faces is not below the mesh's {self.source.n_faces}"
         elif why is None:
-            why = _unsuitable(self.source, parts=self.source is mesh)
+            why = _unsuitable(self.source)
             if why is None:
-                coarse, why, made = _decimated_parts(self.source, target, targets=self._targets, aggs=self._aggs)
+                coarse, why, made = _decimated_parts(self.source, target, targets=self._targets, aggs=self._aggs,
+                                                     face_label=self._face_label)
                 self._record_decimation(made, "")
                 parts, components = made.get("part_of_face"), made.get("components")
         self.record["decimate_time"] = time.perf_counter() - t0
@@ -565,13 +570,14 @@ class Adapted:
         # the solve copy's aggressiveness first: a companion folded where the copy is not would be an estimate of the
         # fold (bimba at 1/10: the agg-5 copy 0.33 % off, the agg-7 companion 1.58 %, the estimate 1.44 %)
         coarser, why, made = _decimated_parts(mesh, max(MIN_RESOLUTION_FACES, int(ESTIMATE_RATIO * faces)),
-                                              self.record["agg"], self._targets, self._aggs)
+                                              self.record["agg"], self._targets, self._aggs, self._face_label)
         coarser_parts = made.get("part_of_face")
         self._record_decimation(made, "estimate_")
         finer: TriMesh | None = mesh
         fine_target, made = int(ESTIMATE_FINER * faces), {"tries": []}
         if coarser is not None and fine_target < mesh.n_faces:
-            finer, why_fine, made = _decimated_parts(mesh, fine_target, self.record["agg"], self._targets, self._aggs)
+            finer, why_fine, made = _decimated_parts(mesh, fine_target, self.record["agg"], self._targets, self._aggs,
+                                                     self._face_label)
             why = None if finer is not None else f"the finer copy failed ({why_fine})"
         self._record_decimation(made, "estimate_fine_")
         self.record["decimate_time"] += time.perf_counter() - t0
@@ -579,7 +585,10 @@ class Adapted:
             self.record["error_estimate_method"] = (f"none: the coarser copy failed ({why})" if coarser is None
                                                     else f"none: {why}")
             return
-        finer_parts = None if finer is mesh else made.get("part_of_face")
+        # the mesh itself as the finer copy: read by component too when it has several (a point must not read a
+        # neighbouring component's field)
+        several = np.unique(self._face_label).size > 1
+        finer_parts = (self._face_label if several else None) if finer is mesh else made.get("part_of_face")
         self.companions = [_Copy(self.config, coarser, coarser_parts), _Copy(self.config, finer, finer_parts)]
         self.record["estimate_faces"] = [coarser.n_faces, finer.n_faces]
         fine = "the mesh itself" if finer is mesh and mesh is self.config.surface else f"a {finer.n_faces}-face copy"

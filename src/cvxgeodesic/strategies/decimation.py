@@ -61,15 +61,11 @@ def _euler(mesh: TriMesh) -> int:
     return int(mesh.referenced.sum()) - len(mesh.edges) + mesh.n_faces
 
 
-def _unsuitable(mesh: TriMesh, parts: bool = True) -> str | None:
+def _unsuitable(mesh: TriMesh) -> str | None:
     """Why the mesh is not decimated (solved on itself instead), or None; several components are decimated one at a
-    time (:func:`_decimated_parts`) unless ``parts`` is False (a point cloud's surface: its points read the copy by
-    the cloud's own triangles, whose pieces are not the surface's)."""
+    time (:func:`_decimated_parts`)."""
     if not mesh.is_edge_manifold:
         return "the mesh is not edge-manifold (quadric decimation can merge its sheets)"
-    comps = np.unique(mesh.component_labels[mesh.referenced]).size
-    if comps > 1 and not parts:
-        return f"the mesh has {comps} connected components (decimation could merge them)"
     if mesh.degenerate_faces(0.0).size:
         return f"the mesh has {mesh.degenerate_faces(0.0).size} face(s) of zero area"
     return None
@@ -126,19 +122,24 @@ def _decimated(mesh: TriMesh, target: int, first_agg: float | None = None, targe
 
 
 def _decimated_parts(mesh: TriMesh, target: int, first_agg: float | None = None, targets: int | None = None,
-                     aggs: tuple[float, ...] = RETRY_AGGS) -> tuple[TriMesh | None, str | None, dict[str, Any]]:
+                     aggs: tuple[float, ...] = RETRY_AGGS, face_label: np.ndarray | None = None,
+                     ) -> tuple[TriMesh | None, str | None, dict[str, Any]]:
     """:func:`_decimated` of a mesh in one or several components: each component decimated on its own to its share
     of ``target`` (the decimation never sees two, so it cannot merge them), or kept as it is below
-    :data:`MIN_PART_FACES`, and the copies put side by side.
+    :data:`MIN_PART_FACES`, and the copies put side by side. ``face_label`` (m,) labels the components otherwise
+    (a point cloud's surface: each face by its piece of the cloud's own triangles, which the cloud's points are read
+    by; one connected piece of the surface to a label); default: the mesh's own components.
 
     Returns
     -------
     coarse, why, record
         As :func:`_decimated`; with several components the record's ``tries`` name the component, ``agg`` is the
-        largest decimated component's, and ``part_of_face`` (the copy's faces' component labels in ``mesh``,
-        :attr:`~cvxgeodesic.mesh.simplex.SimplexMesh.component_labels`) and ``components`` are added.
+        largest decimated component's, and ``part_of_face`` (the copy's faces' labels: ``face_label``'s, by default
+        the component labels of ``mesh``, :attr:`~cvxgeodesic.mesh.simplex.SimplexMesh.component_labels`) and
+        ``components`` are added.
     """
-    face_label = mesh.component_labels[mesh.F[:, 0]]
+    if face_label is None:
+        face_label = mesh.component_labels[mesh.F[:, 0]]
     labels, counts = np.unique(face_label, return_counts=True)
     if labels.size == 1:
         return _decimated(mesh, target, first_agg, targets, aggs)
