@@ -287,7 +287,9 @@ class _Descent:
             value = corner_interpolant(d[geo.C[p.cell]][None], p.bary[None])[0]
             self.nodes.append(("p", p.cell, p.position(geo.mesh)))
         if not np.isfinite(value):
-            raise ParameterError("the distance is infinite at the target: no source is reachable from it")
+            where = f"vertex {p}" if isinstance(p, int) else f"the point in cell {p.cell}"
+            raise ParameterError(f"the distance is infinite at the target ({where}): no source is reachable from it "
+                                 "(it lies on another component, or piece of a cloud, than the sources)")
         return state
 
     def _finish_in(self, c: int, x: np.ndarray, dx: float) -> bool:
