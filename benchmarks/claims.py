@@ -413,13 +413,15 @@ CLAIMS: list[Claim] = [
        (VOLUMES, "Order 2 is slower: the P2 Newton matrix")),
     _r("endgame-resolve", "2026-12-06", "`python benchmarks/endgame_sweep.py --meshes max_planck.obj@subdiv1`",
        (BENCH, "a Clarabel re-solve cost 7–25× the time for a field equal within 1e-6")),
-    _r("adapted-targets", "2026-12-06", "`python benchmarks/accuracy_per_second.py`",
+    _r("adapted-targets", "2026-12-07", "`python benchmarks/accuracy_per_second.py` (the last run: 00:41–00:45 UTC, "
+       "run 16 of docs/dev/accuracy_per_second.md)",
        (BENCH, "the scans of 50K–100K faces reached ≤ 0.3 % at ≤ 3× heat on horse only"),
        (BENCH, "scans of 50K–100K faces reach ≤ 0.3 % at ≤ 3× heat on bunny (0.29 % at 2.5×) and horse"),
        (BENCH, "armadillo 0.295 % at 2.7×); fandisk 0.341 % at 7.3× heat, not ≤ 5×."),
        (BENCH, "bunny 0.202 % at 1.9×, horse 0.264 % at 1.8×, armadillo 0.298 % at 2.5×"),
        (BENCH, "bunny 0.202 % at 1.7×, horse 0.264 % at 1.9×, armadillo 0.298 % at 2.3×"),
-       (BENCH, "5.9–6.0× at 0.1 and 6.9–7.4× for `\"auto\"`, so the CAD target is not settled by one run")),
+       (BENCH, "5.9–6.0× at 0.1 and 6.9–7.4× for `\"auto\"`, so the CAD target is not settled by one run"),
+       (BENCH, "0.439 % at 4.4× heat, and 4.6× in two more runs"), (README, "fandisk 0.439 % at 4.4–4.6× heat")),
     _r("choice-adapted", "2026-12-06", "`python benchmarks/accuracy_per_second.py --meshes spot.obj bimba.obj "
        "thingi_37881.stl bunny.obj armadillo.obj horse.ply --repeat 2`; `--meshes lucy_20k.obj dragon_20k.obj "
        "buddha.obj camelhead_open.off thingi_32770.stl beetle_open.off --repeat 2 --order2-max 0`; `--meshes "

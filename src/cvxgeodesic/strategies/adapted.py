@@ -114,6 +114,16 @@ PATCH_FULL_SHARE = 2 / 3
 #: The patch's faces are those within :data:`SOURCE_PATCH_EDGES` of the source by the copy's field (a round ball),
 #: and within this many times that on the edge graph (a bound where several sources' balls meet).
 PATCH_DETOUR = 1.5
+#: ... and, where the mesh lies on the copy (every patch vertex within :data:`ON_COPY_EDGES` of the copy's mean edge
+#: from it: the copy's geometry is the mesh's, and the patch adds resolution only), at most this share of the copy's
+#: face count (both radii shrunk to fit). Measured 2026-12-07 (docs/dev/adapted-log.md, "A smaller patch where the
+#: mesh lies on the copy"): fandisk at ``resolution=0.1`` (its 1,117 patch faces beside the copy's 1,295) 0.434 →
+#: 0.439 % at 0.27 → 0.17 s; applied everywhere the cap cost camelhead_open and spot 12-13 % of their accuracy.
+PATCH_MAX_SHARE = 0.25
+#: See :data:`PATCH_MAX_SHARE`: the farthest vertex of a source's ball from the copy, in the copy's mean edges
+#: (2026-12-07, from vertex 0 and n/2): on the CAD parts fandisk (at ``"auto"``, 0.1 and 0.05), thingi_37881 and
+#: thingi_32770 0.002-0.027; on camelhead_open, spot, dragon_20k, buddha and lucy_20k 0.053-0.20.
+ON_COPY_EDGES = 0.04
 #: The copy's program is solved to this relative tolerance (or the solver's, when looser): the copy's field is
 #: 0.2-2 % from the user's exact distances, so the last digits of the default 1e-8 bought nothing there. Measured
 #: 2026-12-06 on 8 shared surfaces from vertex 0 and n/2 (docs/dev/adapted-log.md, "The copy's tolerance"): 3-5
@@ -245,6 +255,23 @@ def patch_reach(patch: Patch, distance: np.ndarray, edge_lengths: np.ndarray | N
     return float(min(d[patch.cut].min(), on_edges.min(initial=np.inf)))
 
 
+def _source_ball(copy: _Copy, center: int, radius: float, d: np.ndarray, reach_radius: float) -> Patch:
+    """The source patch around vertex ``center`` of the user's mesh: the faces within ``reach_radius`` by the copy's
+    field ``d`` (the least distance to any source: a round ball) and within :data:`PATCH_DETOUR` times ``radius`` on
+    the edge graph. Where the mesh there lies on the copy (every vertex within :data:`ON_COPY_EDGES` of its mean
+    edge) and the ball holds more than :data:`PATCH_MAX_SHARE` of the copy's faces, both radii shrink by the square
+    root of the excess."""
+    mesh = copy.user
+    patch = ball_patch(mesh, center, PATCH_DETOUR * radius, allowed=d <= reach_radius)
+    max_faces = PATCH_MAX_SHARE * copy.mesh.n_faces
+    if patch.mesh is None or patch.faces.size <= max_faces:
+        return patch
+    if copy.gap[patch.vertices].max() > ON_COPY_EDGES * copy.mesh.mean_edge_length:
+        return patch
+    shrink = float(np.sqrt(max_faces / patch.faces.size))
+    return ball_patch(mesh, center, PATCH_DETOUR * radius * shrink, allowed=d <= reach_radius * shrink)
+
+
 def _lost_surface(copy: _Copy) -> str | None:
     """Why the copy is refused although it passed the decimation's checks: a point of the mesh farther from it than
     :data:`MAX_GAP_EDGES` of its mean edges (part of the surface gone: its points would read the field of another part
@@ -349,8 +376,9 @@ class _Copy:
         self.tol = _tol(config, coarse)
         self.strategy = Order2(replace(config.on(coarse, lam=config.lam), tol=self.tol,
                                        medium=_medium_on(config.medium, mesh, coarse)))
-        self.vertex_faces, self.vertex_bary, gap = self.closest(np.ascontiguousarray(mesh.V), mesh.component_labels)
-        self.max_gap = float(gap[mesh.referenced].max(initial=0.0))
+        self.vertex_faces, self.vertex_bary, self.gap = self.closest(np.ascontiguousarray(mesh.V),
+                                                                    mesh.component_labels)
+        self.max_gap = float(self.gap[mesh.referenced].max(initial=0.0))
         self.shortening = edge_shortening(mesh, bary_positions(coarse, self.vertex_faces, self.vertex_bary))
 
     def closest(self, X: np.ndarray, labels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -639,6 +667,7 @@ class Adapted:
         d = mix_patches(d, patches, nears)
         record = {**self.record, "solve_time": t1 - t0 - transfer, "transfer_time": transfer,
                   "source_offset": offset, "source_patches": len(patches),
+                  "source_patch_faces": [int(np.count_nonzero(p.face_map >= 0)) for p in patches],
                   "source_patch_time": time.perf_counter() - t1}
         if offset > 1e-12 * self.config.mesh.bbox_diagonal:
             notes.append(f"a source within {SOURCE_SNAP:g} of a face's altitude from an edge of the solve mesh was "
@@ -723,10 +752,9 @@ class Adapted:
         radius = SOURCE_PATCH_EDGES * self.copy.mesh.mean_edge_length
         copy_medium = self.copy.strategy.config.medium  # the field's units: travel time with a cost or metric
         reach_radius = radius if copy_medium is None else SOURCE_PATCH_EDGES * copy_medium.mean_edge_length
-        allowed = d <= reach_radius  # every source's ball by the copy's field (the least distance to any source)
         out = []
         for center, point in items:
-            patch = ball_patch(mesh, center, PATCH_DETOUR * radius, allowed=allowed)
+            patch = _source_ball(self.copy, center, radius, d, reach_radius)
             if patch.mesh is None:
                 continue
             face_map = np.full(mesh.n_faces, -1, dtype=np.int64)
