@@ -421,7 +421,7 @@ CLAIMS: list[Claim] = [
        (BENCH, "bunny 0.202 % at 1.9×, horse 0.264 % at 1.8×, armadillo 0.298 % at 2.5×"),
        (BENCH, "bunny 0.202 % at 1.7×, horse 0.264 % at 1.9×, armadillo 0.298 % at 2.3×"),
        (BENCH, "5.9–6.0× at 0.1 and 6.9–7.4× for `\"auto\"`, so the CAD target is not settled by one run"),
-       (BENCH, "0.439 % at 4.4× heat, and 4.6× in two more runs"), (README, "fandisk 0.439 % at 4.4–4.6× heat")),
+       (BENCH, "0.439 % at 4.4× heat, and 4.6× in two more runs"), (README, "0.439 % at 4.4–4.6× heat with")),
     _r("choice-adapted", "2026-12-06", "`python benchmarks/accuracy_per_second.py --meshes spot.obj bimba.obj "
        "thingi_37881.stl bunny.obj armadillo.obj horse.ply --repeat 2`; `--meshes lucy_20k.obj dragon_20k.obj "
        "buddha.obj camelhead_open.off thingi_32770.stl beetle_open.off --repeat 2 --order2-max 0`; `--meshes "
