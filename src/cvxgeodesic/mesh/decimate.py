@@ -82,7 +82,7 @@ def _igl_decimate(mesh: TriMesh, target_faces: int):
 FAR_FROM_ORIGIN = 100.0
 
 
-def _decimation_offset(V: np.ndarray) -> np.ndarray:
+def _decimation_offset(mesh: TriMesh) -> np.ndarray:
     """(3,) float: what the quadric decimation's coordinates are moved by: 0, or for a mesh farther from the origin
     than :data:`FAR_FROM_ORIGIN` diagonals its bounding box's low corner, rounded to the last bit of each axis's
     largest coordinate (so that ``(v - c) + c == v`` for the vertices the decimation does not move).
@@ -94,8 +94,8 @@ def _decimation_offset(V: np.ndarray) -> np.ndarray:
     clouds' surfaces on their mean or box centre left slivers in 7 of 8 copies, 0.05-0.18 max error where the copy at
     the given coordinates is exact; docs/dev/adapted-log.md, "Survey coordinates").
     """
-    diagonal = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
-    if not np.abs(V).max() > FAR_FROM_ORIGIN * diagonal:
+    V = mesh.V
+    if not np.abs(V).max() > FAR_FROM_ORIGIN * mesh.bbox_diagonal:
         return np.zeros(3)
     last_bit = np.spacing(np.abs(V).max(axis=0))
     return np.round(V.min(axis=0) / last_bit) * last_bit
@@ -153,7 +153,7 @@ def simplify_mesh(mesh: TriMesh, target_faces: int, method: str = "shortest-edge
             used = f"quadric (shortest-edge: {why})"
     if result is None:
         fs = _fast_simplification()
-        offset = _decimation_offset(mesh.V)
+        offset = _decimation_offset(mesh)
         # writable copies: the extension rejects the read-only arrays of a TriMesh
         result = fs.simplify(np.array(mesh.V - offset, dtype=np.float64), np.array(mesh.F, dtype=np.int64),
                              target_count=int(target_faces), preserve_border=bool(preserve_border),

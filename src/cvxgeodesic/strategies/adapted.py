@@ -255,14 +255,15 @@ def patch_reach(patch: Patch, distance: np.ndarray, edge_lengths: np.ndarray | N
     return float(min(d[patch.cut].min(), on_edges.min(initial=np.inf)))
 
 
-def _source_ball(copy: _Copy, center: int, radius: float, d: np.ndarray, reach_radius: float) -> Patch:
+def _source_ball(copy: _Copy, center: int, radius: float, d: np.ndarray, reach_radius: float,
+                 allowed: np.ndarray) -> Patch:
     """The source patch around vertex ``center`` of the user's mesh: the faces within ``reach_radius`` by the copy's
-    field ``d`` (the least distance to any source: a round ball) and within :data:`PATCH_DETOUR` times ``radius`` on
-    the edge graph. Where the mesh there lies on the copy (every vertex within :data:`ON_COPY_EDGES` of its mean
-    edge) and the ball holds more than :data:`PATCH_MAX_SHARE` of the copy's faces, both radii shrink by the square
-    root of the excess."""
+    field ``d`` (the least distance to any source: a round ball; ``allowed`` is ``d <= reach_radius``, made once for
+    every source) and within :data:`PATCH_DETOUR` times ``radius`` on the edge graph. Where the mesh there lies on the
+    copy (every vertex within :data:`ON_COPY_EDGES` of its mean edge) and the ball holds more than
+    :data:`PATCH_MAX_SHARE` of the copy's faces, both radii shrink by the square root of the excess."""
     mesh = copy.user
-    patch = ball_patch(mesh, center, PATCH_DETOUR * radius, allowed=d <= reach_radius)
+    patch = ball_patch(mesh, center, PATCH_DETOUR * radius, allowed=allowed)
     max_faces = PATCH_MAX_SHARE * copy.mesh.n_faces
     if patch.mesh is None or patch.faces.size <= max_faces:
         return patch
@@ -598,14 +599,15 @@ class Adapted:
         # the solve copy's aggressiveness first: a companion folded where the copy is not would be an estimate of the
         # fold (bimba at 1/10: the agg-5 copy 0.33 % off, the agg-7 companion 1.58 %, the estimate 1.44 %)
         coarser, why, made = _decimated_parts(mesh, max(MIN_RESOLUTION_FACES, int(ESTIMATE_RATIO * faces)),
-                                              self.record["agg"], self._targets, self._aggs, self._face_label)
+                                              self.record["agg"], self._targets, self._aggs,
+                                              face_label=self._face_label)
         coarser_parts = made.get("part_of_face")
         self._record_decimation(made, "estimate_")
         finer: TriMesh | None = mesh
         fine_target, made = int(ESTIMATE_FINER * faces), {"tries": []}
         if coarser is not None and fine_target < mesh.n_faces:
             finer, why_fine, made = _decimated_parts(mesh, fine_target, self.record["agg"], self._targets, self._aggs,
-                                                     self._face_label)
+                                                     face_label=self._face_label)
             why = None if finer is not None else f"the finer copy failed ({why_fine})"
         self._record_decimation(made, "estimate_fine_")
         self.record["decimate_time"] += time.perf_counter() - t0
@@ -752,9 +754,10 @@ class Adapted:
         radius = SOURCE_PATCH_EDGES * self.copy.mesh.mean_edge_length
         copy_medium = self.copy.strategy.config.medium  # the field's units: travel time with a cost or metric
         reach_radius = radius if copy_medium is None else SOURCE_PATCH_EDGES * copy_medium.mean_edge_length
+        allowed = d <= reach_radius  # every source's ball by the copy's field (the least distance to any source)
         out = []
         for center, point in items:
-            patch = _source_ball(self.copy, center, radius, d, reach_radius)
+            patch = _source_ball(self.copy, center, radius, d, reach_radius, allowed)
             if patch.mesh is None:
                 continue
             face_map = np.full(mesh.n_faces, -1, dtype=np.int64)

@@ -122,24 +122,21 @@ def _decimated(mesh: TriMesh, target: int, first_agg: float | None = None, targe
 
 
 def _decimated_parts(mesh: TriMesh, target: int, first_agg: float | None = None, targets: int | None = None,
-                     aggs: tuple[float, ...] = RETRY_AGGS, face_label: np.ndarray | None = None,
+                     aggs: tuple[float, ...] = RETRY_AGGS, *, face_label: np.ndarray,
                      ) -> tuple[TriMesh | None, str | None, dict[str, Any]]:
     """:func:`_decimated` of a mesh in one or several components: each component decimated on its own to its share
     of ``target`` (the decimation never sees two, so it cannot merge them), or kept as it is below
-    :data:`MIN_PART_FACES`, and the copies put side by side. ``face_label`` (m,) labels the components otherwise
-    (a point cloud's surface: each face by its piece of the cloud's own triangles, which the cloud's points are read
-    by; one connected piece of the surface to a label); default: the mesh's own components.
+    :data:`MIN_PART_FACES`, and the copies put side by side. ``face_label`` (m,) labels each face's component: the
+    mesh's own components, or for a point cloud's surface the piece of the cloud's own triangles its points are in
+    (which the cloud's points are read by; one connected piece of the surface to a label).
 
     Returns
     -------
     coarse, why, record
         As :func:`_decimated`; with several components the record's ``tries`` name the component, ``agg`` is the
-        largest decimated component's, and ``part_of_face`` (the copy's faces' labels: ``face_label``'s, by default
-        the component labels of ``mesh``, :attr:`~cvxgeodesic.mesh.simplex.SimplexMesh.component_labels`) and
+        largest decimated component's, and ``part_of_face`` (the copy's faces' labels, ``face_label``'s) and
         ``components`` are added.
     """
-    if face_label is None:
-        face_label = mesh.component_labels[mesh.F[:, 0]]
     labels, counts = np.unique(face_label, return_counts=True)
     if labels.size == 1:
         return _decimated(mesh, target, first_agg, targets, aggs)
