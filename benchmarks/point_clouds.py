@@ -220,9 +220,12 @@ def compare(name: str, noise: float, P: np.ndarray, exact: np.ndarray, src: int,
 
 def compare_normals(name: str, noise: float, P: np.ndarray, normals: np.ndarray, exact: np.ndarray, src: int,
                     kind: str, args) -> None:
-    """Rows of ``qclp`` at both orders on the cloud given ``normals`` (``PointCloud(P, normals)``: fans that leave out
-    neighbours whose normal turns by more than 60 degrees, :func:`~cvxgeodesic.mesh.pointcloud.normal_fans`)."""
+    """Rows of the default and of ``qclp`` at both orders on the cloud given ``normals`` (``PointCloud(P, normals)``:
+    fans that leave out neighbours whose normal turns by more than 60 degrees,
+    :func:`~cvxgeodesic.mesh.pointcloud.normal_fans`)."""
     _, t_heat = timed_pc_heat(P, src, args.repeats)
+    res, t = timed(lambda: cg.GeodesicSolver(cg.PointCloud(P, normals)).solve(src), args.repeats)
+    row(name, noise, f"the default ({_solved_on(res)}), with normals", res.distance, exact, src, t, t_heat)
     for order in (1,) if args.no_order2 else (1, 2):
         def solve(order=order):
             return cg.GeodesicSolver(cg.PointCloud(P, normals, triangles=kind), "qclp", order=order).solve(src).distance
