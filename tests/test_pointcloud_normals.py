@@ -27,7 +27,8 @@ def _thin_box(n: int = 6000, seed: int = 3, t: float = THICKNESS) -> tuple[np.nd
         P.append(np.asarray(o) + a[:, None] * np.asarray(u) + b[:, None] * np.asarray(v))
         N.append(np.tile(np.asarray(nrm, dtype=float), (c, 1)))
     P, N = np.vstack(P), np.vstack(N)
-    top, bottom = (int(np.argmin(np.linalg.norm(P - [0.5, 0.5, z], axis=1) + (N[:, 2] != s))) for z, s in ((t, 1), (0, -1)))
+    top, bottom = (int(np.argmin(np.linalg.norm(P - [0.5, 0.5, z], axis=1) + (N[:, 2] != side)))
+                   for z, side in ((t, 1), (0, -1)))  # on the top face and on the bottom face
     return P, N, top, bottom
 
 
@@ -55,6 +56,37 @@ def test_oriented_normals_across_a_gap_thinner_than_a_spacing_are_used_and_not_a
     d = cg.geodesic_distance(cloud, top, method="qclp")
     assert abs(d[bottom] - 1.012) < 0.05, d[bottom]
     assert np.isfinite(d).all()
+
+
+def _grid(n: int = 40, seed: int = 2) -> tuple[np.ndarray, np.ndarray, float]:
+    """A jittered n x n grid of the unit square with normals +z, and its spacing."""
+    rng = np.random.default_rng(seed)
+    g = np.linspace(0, 1, n)
+    x, y = np.meshgrid(g, g)
+    h = 1 / (n - 1)
+    P = np.c_[x.ravel(), y.ravel(), np.zeros(n * n)] + rng.normal(scale=0.1 * h, size=(n * n, 3)) * [1, 1, 0]
+    return P, np.tile([0.0, 0.0, 1.0], (n * n, 1)), h
+
+
+@pytest.mark.parametrize("k", [3, 6])
+def test_a_few_points_facing_away_from_all_their_neighbours_stay_reachable(k):
+    """A few points a third of a spacing over a plane, their normals facing it (buddha's thin sheets, whose nearest
+    neighbours all lie on the facing side): their fans hold only each other, so they were a piece of their own
+    (distance inf); a group that small gets its whole fans back."""
+    P, N, h = _grid()
+    rng = np.random.default_rng(k)
+    Q = np.r_[P, np.c_[0.5 + rng.normal(scale=0.5 * h, size=(k, 2)), np.full(k, 0.3 * h)]]
+    d = cg.geodesic_distance(PointCloud(Q, np.r_[N, np.tile([0.0, 0.0, -1.0], (k, 1))]), 0, method="qclp")
+    np.testing.assert_allclose(d[-k:], np.linalg.norm(Q[-k:] - Q[0], axis=1), rtol=0.05)
+
+
+def test_two_plates_facing_within_a_spacing_stay_apart():
+    """A second plate 0.4 spacings over the first, facing it, not joined: a surface of its own, not given the
+    fans that would join it to the first."""
+    P, N, h = _grid()
+    Q = np.r_[P, np.c_[P[:, :2] + 0.3 * h, np.full(len(P), 0.4 * h)]]
+    d = cg.geodesic_distance(PointCloud(Q, np.r_[N, -N]), 0, method="qclp")
+    assert np.isinf(d[len(P):]).all() and np.isfinite(d[:len(P)]).all()
 
 
 def test_unoriented_normals_are_not_used_and_a_note_says_so():

@@ -28,6 +28,7 @@ import numpy as np
 from .simplex import unique_rows
 
 __all__ = ["TILT_ANGLE", "TILT_NEIGHBOURS", "TILT_OFFSET", "principal_planes", "stranded_points", "tilted_triangles",
+           "triangle_components",
            "untilted_fans"]
 
 #: Neighbours of each point's principal plane: few enough that the plane of a point next to a crease is its own
@@ -123,7 +124,7 @@ def stranded_points(n: int, tri: np.ndarray, kept: np.ndarray) -> np.ndarray:
     (s,) int64 ndarray
         Ascending.
     """
-    before, after = _components(n, tri), _components(n, kept)
+    before, after = triangle_components(n, tri), triangle_components(n, kept)
     order = np.lexsort((after, before))
     pairs, counts = np.unique(np.c_[before[order], after[order]], axis=0, return_counts=True)
     best = np.full(before.max() + 1, -1)
@@ -133,7 +134,7 @@ def stranded_points(n: int, tri: np.ndarray, kept: np.ndarray) -> np.ndarray:
     return np.flatnonzero(after != best[before]).astype(np.int64)
 
 
-def _components(n: int, tri: np.ndarray) -> np.ndarray:
+def triangle_components(n: int, tri: np.ndarray) -> np.ndarray:
     """The component label of every point in the edge graph of ``tri`` (a point in no triangle is its own): the labels
     of :attr:`~cvxgeodesic.mesh.simplex.SimplexMesh.component_labels` without building a mesh."""
     import scipy.sparse as sp

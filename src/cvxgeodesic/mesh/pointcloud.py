@@ -20,7 +20,14 @@ from numpy.typing import ArrayLike
 from ..errors import MeshError, ParameterError, SourceError
 from ..validation import as_points
 from .cloud_outliers import DEFECT_NEIGHBOURS, CloudDefects, find_defects, nearest_neighbours
-from .cloud_tilt import TILT_ANGLE, TILT_NEIGHBOURS, principal_planes, stranded_points, untilted_fans
+from .cloud_tilt import (
+    TILT_ANGLE,
+    TILT_NEIGHBOURS,
+    principal_planes,
+    stranded_points,
+    triangle_components,
+    untilted_fans,
+)
 from .denoise import jet_noise
 from .simplex import unique_rows
 from .trimesh import TriMesh
@@ -86,6 +93,11 @@ TANGENT_PAIR_ANGLE = 10.0
 #: ... and a normal is averaged only with those that turn from it by less than this many degrees: the other side of a
 #: gap thinner than a spacing faces it, and the mean of the two is no normal of either.
 NORMAL_SMOOTHING_ANGLE = 120.0
+#: With normals, a group of at most this many points that the normals cut off from the rest gets its whole fans back
+#: (three points of buddha's vertex cloud, on a sheet thinner than a spacing whose 7 nearest neighbours lie on the
+#: facing side, made a triangle of their own: unreachable); a larger group is a surface of its own (a plate facing
+#: another within a spacing) and stays apart. A neighbourhood's size, as for groups of outliers.
+CUT_OFF_MAX = 30
 #: :meth:`PointCloud.surface` drops the pieces that break off the consensus surface while they hold at most this
 #: fraction of its triangles (noise of 0.1 % of the diagonal broke 2-8 small pieces off kitten, bimba and max_planck;
 #: at 0.3 % the consensus falls apart: docs/pointclouds.md, "Order 2 on a surface through the points").
@@ -225,7 +237,10 @@ def normal_fans(P: np.ndarray, N: np.ndarray, k: int) -> tuple[np.ndarray, np.nd
     """:func:`local_fans` in the tangent planes of oriented normals, without the neighbours whose normal turns by more
     than :data:`NORMAL_FAN_ANGLE` from the point's (the other side of a thin wall or of a sharp crease).
 
-    A point whose fan is then empty gets its fan of :func:`local_fans` back.
+    A point whose fan is then empty gets its fan of :func:`local_fans` back, and the points of a group of at most
+    :data:`CUT_OFF_MAX` that the left-out neighbours cut off from the piece their whole fans reach
+    (:func:`~cvxgeodesic.mesh.cloud_tilt.stranded_points`: a few points of a thin sheet whose nearest neighbours all
+    lie on its facing side) get their whole fans in their normals' planes back.
 
     Parameters
     ----------
@@ -254,6 +269,14 @@ def normal_fans(P: np.ndarray, N: np.ndarray, k: int) -> tuple[np.ndarray, np.nd
     if empty.size:  # their fans of local_fans, from the same neighbours
         tri0, owner0 = _fans(_tangent_coordinates(P, idx[empty]), idx[empty])
         tri, owner = np.concatenate([tri, tri0]), np.concatenate([owner, owner0])
+    labels = triangle_components(P.shape[0], tri)
+    apart = np.flatnonzero(np.bincount(labels)[labels] <= CUT_OFF_MAX)  # a facing sheet of its own is left apart
+    whole, whole_owner = _fans(uv[apart], idx[apart])
+    stranded = np.intersect1d(stranded_points(P.shape[0], np.concatenate([tri, whole]), tri), apart)
+    if stranded.size:
+        back = np.isin(whole_owner, stranded)
+        mine = ~np.isin(owner, stranded)
+        tri, owner = np.concatenate([tri[mine], whole[back]]), np.concatenate([owner[mine], whole_owner[back]])
     return tri, owner
 
 
@@ -723,9 +746,9 @@ def _oriented_normals(normals: np.ndarray | None, P: np.ndarray, solid: np.ndarr
     beside = rise <= np.sin(np.radians(TANGENT_PAIR_ANGLE))  # across a thin gap a neighbour lies off the plane
     apart = float((agree[beside] < 0).mean() if beside.mean() >= 0.25 else (agree < 0).mean())
     if apart > UNORIENTED_FRACTION:
-        notes.append(f"{name}: the normals look unoriented ({100 * apart:.0f} % of nearest-neighbour pairs beside each other point "
-                     "apart): the fans are built without them; orient them consistently to keep the fans from "
-                     "crossing thin walls and sharp creases")
+        notes.append(f"{name}: the normals look unoriented ({100 * apart:.0f} % of nearest-neighbour pairs beside "
+                     "each other point apart): the fans are built without them; orient them consistently to keep the "
+                     "fans from crossing thin walls and sharp creases")
         return None
     same_side = agree > np.cos(np.radians(NORMAL_SMOOTHING_ANGLE))  # not the facing side of a thin gap
     mean = N + np.einsum("nk,nki->ni", same_side, N[near])
