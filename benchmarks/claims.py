@@ -469,8 +469,11 @@ CLAIMS: list[Claim] = [
        "--meshes …` for the 12 other meshes", (POINTCLOUDS, "1,384 of 1,440 found")),
     _r("pointclouds-normals", "2026-12-06", "`python benchmarks/point_clouds.py --meshes kitten bimba max_planck "
        "fandisk --sets union --normals --repeats 1` (load 0.5); `--meshes fandisk max_planck --resample 1.0 --noise 0 "
-       "--sets union --normals --repeats 1`", (POINTCLOUDS, "| fandisk vertices | 0 | 3.44 % (36.7 %) |"),
-       (POINTCLOUDS, "with its vertex normals order 2 goes from 3.34 % to 0.058 % (59× below pc-heat")),
+       "--sets union --normals --repeats 1`; the statues (2026-12-07 02:19 UTC): `--meshes dragon_20k buddha "
+       "camelhead_open lucy_20k --noise 0 --sets union --m 0 --normals --repeats 1`",
+       (POINTCLOUDS, "| fandisk vertices | 0 | 3.44 % (36.7 %) |"),
+       (POINTCLOUDS, "with its vertex normals order 2 goes from 3.34 % to 0.058 % (59× below pc-heat"),
+       (POINTCLOUDS, "| camelhead_open | 6.32 % | 5.95 / 5.30 / 5.67 % | 2.89 / 1.79 / 4.45 % |")),
     _r("pointclouds-resolution", "2026-12-06", "`python benchmarks/point_clouds.py --meshes kitten bimba max_planck "
        "fandisk --sets union --no-order2 --resolution auto --repeats 2` (16:10 UTC, load 0.3–0.6; the envelope: 15:57 "
        "UTC, load 0.6, against 15:52 UTC, load 0.3–1.0; with three decimation tries: 14:48 UTC, load 0.4–0.8)",
@@ -484,11 +487,13 @@ CLAIMS: list[Claim] = [
        (POINTCLOUDS, "It reads 0.000–0.025 on the clean vertex clouds of 10 shared scans"),
        (POINTCLOUDS, "from 12 to 30 neighbours by 2.2–2.7× on those two"),
        (POINTCLOUDS, "max_planck 2.0–2.2 % against 1.3–1.4 %")),
-    _r("pointclouds-clean-all", "2026-12-06", "`python benchmarks/point_clouds.py --meshes bunny horse armadillo "
-       "lucy_20k dragon_20k buddha camelhead_open bug_surface thingi_32770 --noise 0 --sets union --m 0 --repeats 1` "
-       "(18:26 UTC, load 0.2–1.0); `--meshes bunny horse armadillo bug_surface thingi_32770 --noise 0 --sets union "
-       "--no-order2 --resolution 0.25,0.5 --repeats 1` (18:30 UTC, load 0.6–0.9)",
-       (POINTCLOUDS, "| bunny | 1.10 % | 0.052 %, 12.7× | 0.149 % at 1/4, 2.7× |")),
+    _r("pointclouds-clean-all", "2026-12-07", "`python benchmarks/point_clouds.py --meshes bunny horse armadillo "
+       "lucy_20k dragon_20k buddha camelhead_open bug_surface thingi_32770 --noise 0 --sets union --m 0 --normals "
+       "--resolution 0.25,0.5 --repeats 1` (02:08 UTC, load 0.6–1.0); `--meshes armadillo thingi_32770 --noise 0 "
+       "--sets union,repaired,consensus --m 0 --repeats 1` (01:45 UTC); why the statues miss (fan edges against the "
+       "mesh's edge paths, the oracle, the flipped triangulations): " + NO_SCRIPT,
+       (POINTCLOUDS, "| bunny | 1.10 % | 0.052 %, 10.8× | 0.132 % at 1/2, 4.7× |"),
+       (POINTCLOUDS, "camelhead_open's order 2 goes from 5.30 % to 0.42 %")),
     _r("pointclouds-default-all", "2026-12-06", "`python benchmarks/point_clouds.py --meshes bunny horse armadillo "
        "lucy_20k dragon_20k buddha camelhead_open bug_surface thingi_32770 --sets union --no-order2 --repeats 1` "
        "(19:46 UTC, load 0.7; the clean thingi_32770 copy that lost a part: 17:48 UTC)",
