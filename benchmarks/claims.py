@@ -456,7 +456,11 @@ CLAIMS: list[Claim] = [
     _r("pointclouds-summary", "2026-12-06", "`python benchmarks/point_clouds.py --quick`; `--m 10` for m = 10",
        (POINTCLOUDS, "on the union is 15–21× more accurate than the point-cloud heat")),
     _r("pointclouds-resampled", "2026-12-06", "`python benchmarks/point_clouds.py --quick --resample 1.0,0.25 "
-       "--noise 0 --sets union,repaired --repeats 1`", (POINTCLOUDS, "| kitten, every face | 18,894 |")),
+       "--noise 0 --sets union,repaired --repeats 1`; every other mesh (2026-12-07 02:34 UTC): `--meshes max_planck "
+       "fandisk bug_surface dragon_20k lucy_20k buddha camelhead_open thingi_32770 bunny horse armadillo --resample "
+       "1.0,0.25 --noise 0 --sets union --no-order2 --m 0 --resolution 0.25 --repeats 1`",
+       (POINTCLOUDS, "| kitten, every face | 18,894 |"),
+       (POINTCLOUDS, "| armadillo (86K / 21K) | 0.602 / **0.717** % | 0.609 / 1.60 %, 1.6 / 2.1× |")),
     _r("pointclouds-uneven", "2026-12-06", "`python benchmarks/point_clouds.py --meshes fandisk max_planck --sets "
        "union,repaired --repeats 1`; the re-measurement: `--sets union --no-order2 --repeats 2`",
        (POINTCLOUDS, "| fandisk | 0 | 3.44 %, 1× | 2.93 %, 0.07× | 0.681 %, 6.9× |"),
