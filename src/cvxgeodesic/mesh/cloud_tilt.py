@@ -28,8 +28,7 @@ import numpy as np
 from .simplex import unique_rows
 
 __all__ = ["TILT_ANGLE", "TILT_NEIGHBOURS", "TILT_OFFSET", "principal_planes", "stranded_points", "tilted_triangles",
-           "triangle_components",
-           "untilted_fans"]
+           "triangle_components", "untilted_fans"]
 
 #: Neighbours of each point's principal plane: few enough that the plane of a point next to a crease is its own
 #: face's (at 30, the fans' count, fandisk's clean field kept 2.91 % instead of 1.55 %).

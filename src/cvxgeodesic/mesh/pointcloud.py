@@ -271,11 +271,10 @@ def normal_fans(P: np.ndarray, N: np.ndarray, k: int) -> tuple[np.ndarray, np.nd
         tri, owner = np.concatenate([tri, tri0]), np.concatenate([owner, owner0])
     labels = triangle_components(P.shape[0], tri)
     apart = np.flatnonzero(np.bincount(labels)[labels] <= CUT_OFF_MAX)  # a facing sheet of its own is left apart
-    whole, whole_owner = _fans(uv[apart], idx[apart])
-    stranded = np.intersect1d(stranded_points(P.shape[0], np.concatenate([tri, whole]), tri), apart)
-    if stranded.size:
-        back = np.isin(whole_owner, stranded)
-        mine = ~np.isin(owner, stranded)
+    if apart.size:
+        whole, whole_owner = _fans(uv[apart], idx[apart])
+        stranded = np.intersect1d(stranded_points(P.shape[0], np.concatenate([tri, whole]), tri), apart)
+        back, mine = np.isin(whole_owner, stranded), ~np.isin(owner, stranded)
         tri, owner = np.concatenate([tri[mine], whole[back]]), np.concatenate([owner[mine], whole_owner[back]])
     return tri, owner
 
