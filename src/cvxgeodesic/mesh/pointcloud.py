@@ -384,10 +384,10 @@ class PointCloud:
         The points. Finite; at least 4 distinct ones, not all on one line.
     normals : (n, 3) array_like of float, optional
         Normals as read from a file, oriented consistently (outward, say). Unless ``use_normals=False``, each point's
-        fan is built in the plane of its normal (averaged with its 6 nearest neighbours') and leaves out the
-        neighbours whose normal turns by more than :data:`NORMAL_FAN_ANGLE` degrees: no triangle across a thin wall
-        or a sharp crease (:func:`normal_fans`; docs/pointclouds.md, "Normals"). Normals that look unoriented are
-        not used, with a note.
+        fan is built in the plane of its normal (averaged with those of its 6 nearest neighbours on its side) and
+        leaves out the neighbours whose normal turns by more than :data:`NORMAL_FAN_ANGLE` degrees: no triangle
+        across a thin wall or a sharp crease (:func:`normal_fans`; docs/pointclouds.md, "Normals"). Normals that
+        look unoriented are not used, with a note.
     neighbours : int, default 30
         Points in each local neighbourhood: at 30, potpourri3d's local triangulation; another count (4 or more,
         below the number of distinct points) builds the same fans with :func:`local_fans`.
@@ -724,9 +724,10 @@ def _defect_notes(found: CloudDefects, keep: np.ndarray, name: str) -> list[str]
 
 def _oriented_normals(normals: np.ndarray | None, P: np.ndarray, solid: np.ndarray, name: str,
                       notes: list[str]) -> np.ndarray | None:
-    """The unit normals of the points ``solid`` for :func:`normal_fans`, each averaged with its
-    :data:`NORMAL_SMOOTHING_NEIGHBOURS` nearest neighbours'; or None: without normals, and where they look unoriented
-    (:data:`UNORIENTED_FRACTION`; noted) or some are zero (noted)."""
+    """The unit normals of the points ``solid`` for :func:`normal_fans`, each averaged with those of its
+    :data:`NORMAL_SMOOTHING_NEIGHBOURS` nearest neighbours that turn by less than :data:`NORMAL_SMOOTHING_ANGLE`; or
+    None: without normals, and where they look unoriented (:data:`UNORIENTED_FRACTION` of the pairs within
+    :data:`TANGENT_PAIR_ANGLE` of the tangent plane point apart; noted) or some are zero (noted)."""
     if normals is None:
         return None
     from scipy.spatial import cKDTree
