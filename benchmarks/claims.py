@@ -494,8 +494,8 @@ CLAIMS: list[Claim] = [
     _r("pointclouds-clean-all", "2026-12-07", "`python benchmarks/point_clouds.py --meshes bunny horse armadillo "
        "lucy_20k dragon_20k buddha camelhead_open bug_surface thingi_32770 --noise 0 --sets union --m 0 --normals "
        "--resolution 0.25,0.5 --repeats 1` (02:08 UTC, load 0.6–1.0); `--meshes armadillo thingi_32770 --noise 0 "
-       "--sets union,repaired,consensus --m 0 --repeats 1` (01:45 UTC); why the statues miss (fan edges against the "
-       "mesh's edge paths, the oracle, the flipped triangulations): " + NO_SCRIPT,
+       "--sets union,repaired,consensus --m 0 --repeats 1` (01:45 UTC); why the statues miss: `python "
+       "benchmarks/cloud_shortcuts.py` (03:00 UTC)",
        (POINTCLOUDS, "| bunny | 1.10 % | 0.052 %, 10.8× | 0.132 % at 1/2, 4.7× |"),
        (POINTCLOUDS, "camelhead_open's order 2 goes from 5.30 % to 0.42 %")),
     _r("pointclouds-default-all", "2026-12-06", "`python benchmarks/point_clouds.py --meshes bunny horse armadillo "
