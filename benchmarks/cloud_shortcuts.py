@@ -28,7 +28,6 @@ import datetime
 import os
 
 import numpy as np
-import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 import cvxgeodesic as cg
@@ -37,23 +36,14 @@ from cvxgeodesic.mesh.pointcloud import CloudMesh, PointCloud
 from point_clouds import shared_meshes
 
 
-def edges_of(F: np.ndarray) -> np.ndarray:
-    """(e, 2) the distinct edges of the triangles ``F``, each sorted."""
-    return np.unique(np.sort(np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1), axis=0)
-
-
-def path_ratios(mesh, E: np.ndarray, most: float = 3.0) -> np.ndarray:
-    """(e,) the path along the edges of ``mesh`` subdivided twice between the ends of each edge ``E``, over its
-    length; ``inf`` above ``most`` (the search stops there)."""
+def path_ratios(mesh, cloud_mesh, most: float = 3.0) -> np.ndarray:
+    """(e,) the path along the edges of ``mesh`` subdivided twice between the ends of each edge of ``cloud_mesh``
+    (whose vertices are ``mesh``'s), over its length; ``inf`` above ``most`` (the search stops there)."""
     import igl
 
     VU, FU = igl.upsample(mesh.V, mesh.F.astype(np.int64), 2)  # the mesh's vertices first, in their order
-    sub = edges_of(FU)
-    w = np.linalg.norm(VU[sub[:, 0]] - VU[sub[:, 1]], axis=1)
-    n = VU.shape[0]
-    graph = sp.coo_matrix((np.r_[w, w], (np.r_[sub[:, 0], sub[:, 1]], np.r_[sub[:, 1], sub[:, 0]])), shape=(n, n))
-    graph = graph.tocsr()
-    length = np.linalg.norm(mesh.V[E[:, 0]] - mesh.V[E[:, 1]], axis=1)
+    graph = cg.TriMesh(VU, FU).vertex_adjacency
+    E, length = cloud_mesh.edges, cloud_mesh.edge_lengths
     ratio = np.full(len(E), np.inf)
     starts = np.unique(E[:, 0])
     for batch in np.array_split(starts, max(1, len(starts) // 500)):
@@ -106,17 +96,15 @@ def measure(path, ratio_cut: float) -> str:
     src = mesh.n_vertices // 2
     exact = cg.geodesic_distance(mesh, src, method="exact")
     cloud = PointCloud(mesh.V)
-    F = cloud.mesh.F
-    E = edges_of(F)
-    ratio = path_ratios(mesh, E)
+    E = cloud.mesh.edges
+    ratio = path_ratios(mesh, cloud.mesh)
     normals = igl.per_vertex_normals(mesh.V, mesh.F.astype(np.int64))
     worst = ratio > 3
     cos = np.median((normals[E[worst, 0]] * normals[E[worst, 1]]).sum(axis=1)) if worst.any() else np.nan
-    bad = E[ratio > ratio_cut].astype(np.int64) @ [mesh.n_vertices, 1]
-    sides = np.sort(np.stack([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1), axis=2).astype(np.int64)
-    cut = np.isin(sides @ [mesh.n_vertices, 1], bad).any(axis=1)
+    cut = (ratio > ratio_cut)[cloud.mesh.cell_edges].any(axis=1)
     n = mesh.n_vertices
-    oracle = CloudMesh(mesh.V, F[~cut], name="oracle", vertex_map=np.arange(n), file_index=np.arange(n), notes=[])
+    oracle = CloudMesh(mesh.V, cloud.mesh.F[~cut], name="oracle", vertex_map=np.arange(n), file_index=np.arange(n),
+                       notes=[])
     oracle.cloud = cloud
     fields = [cg.GeodesicSolver(m, "qclp", order=order).solve(src).distance
               for m in (cloud, oracle) for order in (1, 2)]
