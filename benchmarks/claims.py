@@ -498,6 +498,14 @@ CLAIMS: list[Claim] = [
        "benchmarks/cloud_shortcuts.py` (03:00 UTC)",
        (POINTCLOUDS, "| bunny | 1.10 % | 0.052 %, 10.8× | 0.132 % at 1/2, 4.7× |"),
        (POINTCLOUDS, "camelhead_open's order 2 goes from 5.30 % to 0.42 %")),
+    _r("pointclouds-clean-copy", "2026-12-07", "`CVXGEODESIC_THREADS=1 python benchmarks/point_clouds.py --noise 0 "
+       "--sets union --no-order2 --m 0 --resolution tenth --repeats 2` and the same with `--resample 1.0,0.25 "
+       "--repeats 1` (04:12–04:25 UTC, load 0.3–0.9; bug_surface and thingi_32770 by `--meshes`); with normals: "
+       "`--meshes camelhead_open dragon_20k --noise 0 --sets union --no-order2 --m 0 --normals --repeats 1` (04:34 "
+       "UTC); the noise readings, bug_surface's random points and the far points' fill: " + NO_SCRIPT,
+       (POINTCLOUDS, "| kitten (9K) | 1.32 % | **0.151 %**, 3.1× (4,727) | 0.375 %, 2.3× (1,999) | 0.40 / 1.33 |"),
+       (POINTCLOUDS, "the default had 0.18–1.01 of the 1/10 copy's"),
+       (POINTCLOUDS, "the vertex clouds of the 13 shared scans and CAD parts 0.000–0.024")),
     _r("pointclouds-default-all", "2026-12-06", "`python benchmarks/point_clouds.py --meshes bunny horse armadillo "
        "lucy_20k dragon_20k buddha camelhead_open bug_surface thingi_32770 --sets union --no-order2 --repeats 1` "
        "(19:46 UTC, load 0.7; the clean thingi_32770 copy that lost a part: 17:48 UTC)",

@@ -140,3 +140,57 @@ def test_a_clouds_refused_copies_cost_one_decimation_per_cloud_aggressiveness(mo
     cg.GeodesicSolver(cg.grid_plane(30), "qclp", resolution=300).solve(0)  # a mesh: every target at every agg
     retries = len(decimation.RETRY_TARGETS) + (len(decimation.RETRY_AGGS) - 1) * decimation.RETRY_TARGETS_LATER
     assert len(calls) == retries
+
+
+def _mean_error(cloud, res):
+    great_circle = np.arccos(np.clip(cloud.P @ cloud.P[0], -1.0, 1.0))
+    return float(np.abs(res.distance - great_circle).mean())
+
+
+def test_a_clean_cloud_s_default_copy_has_a_quarter_of_the_faces_a_noisy_one_a_tenth():
+    # 8,000 sphere points: 16K faces, so 1/4 is 4,000 faces and 1/10 the floor of 2,000. Measured mean error 0.00033 π
+    # at 1/4 against 0.00069 π at 2,000 faces
+    from cvxgeodesic.strategies.adapted import AUTO_MIN_FACES, CLEAN_CLOUD_FRACTION
+
+    X = sphere_points(8000, seed=3)
+    clean = PointCloud(X)
+    assert clean.clean and clean.noise < 0.01
+    res = cg.GeodesicSolver(clean).solve(0)
+    ad = res.info.extra["adapted"]
+    assert ad["target_faces"] == round(CLEAN_CLOUD_FRACTION * clean.mesh.n_faces) > 1.5 * AUTO_MIN_FACES
+    assert ad["refused"] is None and ad["fallback"] is None
+    assert any("on a clean point cloud" in n and "0.25 of the faces" in n for n in res.info.notes)
+    usual = cg.GeodesicSolver(clean, resolution=AUTO_MIN_FACES).solve(0)  # "auto" on a noisy cloud of this size
+    assert _mean_error(clean, res) < 0.8 * _mean_error(clean, usual)
+    # noise of 0.1 of the spacing reads about 0.055: not clean, below the order-1 threshold: the usual copy
+    spacing = np.sqrt(4 * np.pi / X.shape[0])
+    noisy = PointCloud(X + np.random.default_rng(4).normal(scale=0.1 * spacing, size=X.shape))
+    assert not noisy.clean and noisy.default_refusal() is None
+    res = cg.GeodesicSolver(noisy).solve(0)
+    assert res.info.extra["adapted"]["target_faces"] == AUTO_MIN_FACES
+    assert not any("on a clean point cloud" in n for n in res.info.notes)
+
+
+def test_a_clean_cloud_s_refused_finer_copy_is_followed_by_the_usual_one(monkeypatch):
+    from cvxgeodesic.strategies import adapted
+
+    cloud = PointCloud(sphere_points(8000, seed=3))
+    lost = adapted._lost_surface
+    monkeypatch.setattr(adapted, "_lost_surface",
+                        lambda copy: "refused by the test" if copy.mesh.n_faces > 3000 else lost(copy))
+    res = cg.GeodesicSolver(cloud).solve(0)
+    ad = res.info.extra["adapted"]
+    assert ad["refused"]["target_faces"] > 3000 and ad["refused"]["why"] == "refused by the test"
+    assert ad["refused"]["decimation_tries"] and ad["fallback"] is None
+    assert ad["target_faces"] == adapted.AUTO_MIN_FACES and ad["faces"] < 3000
+    assert any("copy was refused (refused by the test); tried 2000 faces" in n for n in res.info.notes)
+    assert _mean_error(cloud, res) < 0.002 * np.pi
+
+
+def test_clean_is_a_noise_reading_of_at_most_clean_noise_max():
+    from cvxgeodesic.mesh.pointcloud import CLEAN_NOISE_MAX
+
+    cloud = PointCloud(sphere_points(500))
+    for noise, clean in ((0.0, True), (CLEAN_NOISE_MAX, True), (1.01 * CLEAN_NOISE_MAX, False)):
+        cloud.noise = noise
+        assert cloud.clean is clean

@@ -32,8 +32,8 @@ from .denoise import jet_noise
 from .simplex import unique_rows
 from .trimesh import TriMesh
 
-__all__ = ["AUTO_NOISE_MAX", "DETAIL_GROWTH", "NORMAL_FAN_ANGLE", "OUTLIER_HANDLING", "TRIANGLE_SETS", "CloudMesh",
-           "PointCloud", "fan_triangles", "local_fans", "normal_fans", "triangle_set"]
+__all__ = ["AUTO_NOISE_MAX", "CLEAN_NOISE_MAX", "DETAIL_GROWTH", "NORMAL_FAN_ANGLE", "OUTLIER_HANDLING",
+           "TRIANGLE_SETS", "CloudMesh", "PointCloud", "fan_triangles", "local_fans", "normal_fans", "triangle_set"]
 
 #: The triangle sets a cloud can be solved on (docs/pointclouds.md has their measured errors):
 #: ``"union"`` every triangle of every fan; ``"consensus"`` the triangles that appear in at least two fans;
@@ -67,6 +67,13 @@ AUTO_NOISE_MAX = 0.075
 #: against 10.0 %). The scans and the CAD part with noise grew 1.2-1.6×; lucy_20k and thingi_32770 at 0.3 % noise
 #: 1.7-1.87×, where the copy lost (7.39 % against 6.99 %, 12.1 % against 7.0 %).
 DETAIL_GROWTH = 1.9
+#: A cloud whose noise reads at most this is clean (:attr:`PointCloud.clean`): its default copy is finer
+#: (:data:`~cvxgeodesic.strategies.adapted.CLEAN_CLOUD_FRACTION`). Read 2026-12-07 (docs/pointclouds.md, "The copy of
+#: a clean cloud"): the vertex clouds of 13 shared meshes 0.000-0.024 but dragon_20k 0.035, lucy_20k 0.118 and buddha
+#: 0.098 (detail, which grows 2.2-2.6× from 12 to 30 neighbours: telling it apart would cost a second reading, 23 ms
+#: on max_planck, a fifth of the point-cloud heat method's time), their random surface points 0.001-0.027 (the two
+#: statues' 0.046-0.091); at 0.05 % noise of the diagonal 0.025-0.125, at 0.1 % 0.041-0.176.
+CLEAN_NOISE_MAX = 0.03
 #: Passes of jet projection of ``denoise="jet"`` (docs/pointclouds.md, "Denoised clouds"), and the most taken.
 DENOISE_PASSES = 2
 MAX_DENOISE_PASSES = 10
@@ -520,12 +527,18 @@ class PointCloud:
 
     def default_refusal(self) -> str | None:
         """Why the default solve (order 2 on a copy, ``resolution="auto"``) is not taken on this cloud, or None: its
-        noise (:attr:`noise`) above :data:`AUTO_NOISE_MAX`."""
+        noise (:attr:`noise`) above :data:`AUTO_NOISE_MAX`, not growing like detail (:data:`DETAIL_GROWTH`)."""
         if self.noise_growth is None or self.noise_growth >= DETAIL_GROWTH:
             return None
         return (f"its noise, {self.noise:.3f} of the point spacing by its jets (growing {self.noise_growth:.2f}× "
                 f"from 12 to 30 neighbours: noise, not detail), is above {AUTO_NOISE_MAX}, where order 2 on a copy "
                 "stops paying")
+
+    @property
+    def clean(self) -> bool:
+        """Whether the cloud reads as free of noise: its :attr:`noise` at most :data:`CLEAN_NOISE_MAX`. The default
+        solve of a clean cloud takes a finer copy (:data:`~cvxgeodesic.strategies.adapted.CLEAN_CLOUD_FRACTION`)."""
+        return self.noise <= CLEAN_NOISE_MAX
 
     @property
     def P(self) -> np.ndarray:

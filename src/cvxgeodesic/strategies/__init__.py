@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from .adapted import Adapted, resolve_resolution
+from .adapted import Adapted, resolution_targets
 from .backend import Backend, ipm_available
 from .base import Callback, SolveConfig, SolveStrategy
 from .baseline import BaselineStrategy
@@ -50,7 +50,7 @@ def make_strategy(config: SolveConfig, *, baseline: bool, order: int = 1, multir
         With ``multires_target``: finish with a direct solve on the mesh.
     resolution : "mesh", "auto", int or float
         Anything but ``"mesh"``: an :class:`Adapted` solve (order 2 on a decimated copy,
-        :func:`resolve_resolution`).
+        :func:`~.adapted.resolution_targets`).
     estimate : bool
         With ``resolution``: estimate each solve's error (a second, coarser solve; :class:`Adapted`).
 
@@ -59,7 +59,8 @@ def make_strategy(config: SolveConfig, *, baseline: bool, order: int = 1, multir
     SolveStrategy
     """
     if resolution != "mesh":
-        return Adapted(config, resolve_resolution(resolution, config.mesh.n_cells), resolution, estimate=estimate)
+        target, retry = resolution_targets(resolution, config.mesh)
+        return Adapted(config, target, resolution, estimate=estimate, retry=retry)
     if order > 1:  # above order 1 the program solves for φ = d² in the order's element (order 1: for d)
         return Order2(config, order)
     if baseline:

@@ -71,9 +71,10 @@ from .decimation import (
 from .direct import DirectStrategy
 from .order2 import Order2
 
-__all__ = ["AUTO_FRACTION", "AUTO_MIN_FACES", "MIN_RESOLUTION_FACES", "RESOLUTIONS", "SIMPLIFIER", "Adapted",
+__all__ = ["AUTO_FRACTION", "AUTO_MIN_FACES", "CLEAN_CLOUD_FRACTION", "MIN_RESOLUTION_FACES", "RESOLUTIONS",
+           "SIMPLIFIER", "Adapted",
            "edge_shortening", "fold_excess", "fold_reference", "max_turn",
-           "patch_reach", "resolve_resolution"]
+           "patch_reach", "resolution_targets", "resolve_resolution"]
 
 #: The named values of ``resolution``; any other is a face count (int) or a fraction of the faces (float).
 RESOLUTIONS = ("mesh", "auto")
@@ -83,6 +84,12 @@ AUTO_FRACTION = 0.1
 #: ... but never fewer faces than this; a mesh with fewer than ``AUTO_MIN_FACES / AUTO_FRACTION`` faces is solved at
 #: this count, and one with at most ``AUTO_MIN_FACES`` on itself (see docs/adapted.md for the measurement).
 AUTO_MIN_FACES = 2000
+#: ``resolution="auto"`` on a clean point cloud (:attr:`~cvxgeodesic.mesh.pointcloud.PointCloud.clean`): this
+#: fraction of its faces (at least :data:`AUTO_MIN_FACES`), and where that copy is refused, :data:`AUTO_FRACTION`.
+#: A clean cloud's error is the copy's, not the noise's, and the surface through its points is rougher than a mesh:
+#: measured 2026-12-07 (docs/pointclouds.md, "The copy of a clean cloud") on the vertex clouds of 13 shared meshes
+#: and the random surface points of 13, against 1/10.
+CLEAN_CLOUD_FRACTION = 0.25
 #: A source's barycentric coordinate on the solve mesh below this is set to 0: the point moves onto the edge (by at
 #: most this fraction of the face's altitude) instead of splitting the face into a sliver, which the order-2 program
 #: leaves without cones (measured on fandisk at 1/10, source vertex 0 at 4.6e-4 from an edge: mean error 1.95 %, max
@@ -197,6 +204,32 @@ def resolve_resolution(resolution: Any, n_faces: int) -> int | None:
         return max(MIN_RESOLUTION_FACES, int(round(float(resolution) * n_faces)))
     raise ParameterError(f"resolution must be 'mesh', 'auto', a face count >= {MIN_RESOLUTION_FACES} (int) or a "
                          f"fraction of the faces in (0, 1) (float), got {resolution!r}")
+
+
+def resolution_targets(resolution: Any, mesh: Any) -> tuple[int | None, int | None]:
+    """The solve mesh's target face count for ``resolution`` on ``mesh`` (:func:`resolve_resolution`), and a coarser
+    one to try where the copy at the first is refused, or None.
+
+    ``"auto"`` on a clean point cloud (:attr:`~cvxgeodesic.mesh.pointcloud.PointCloud.clean`) targets
+    :data:`CLEAN_CLOUD_FRACTION` of its faces first, then ``"auto"``'s own count; everything else has one target.
+
+    Parameters
+    ----------
+    resolution : "mesh", "auto", int or float
+    mesh : SimplexMesh
+        The user's mesh (a point cloud's soup carries its cloud).
+
+    Returns
+    -------
+    target, retry : int or None
+    """
+    target = resolve_resolution(resolution, mesh.n_cells)
+    cloud = getattr(mesh, "cloud", None)
+    auto = isinstance(resolution, str) and resolution.strip().lower() == "auto"
+    if target is None or not auto or cloud is None or not cloud.clean:
+        return target, None
+    finer = max(AUTO_MIN_FACES, int(round(CLEAN_CLOUD_FRACTION * mesh.n_cells)))
+    return (finer, target) if finer > target else (target, None)
 
 
 def _decimation_source(mesh: TriMesh) -> tuple[TriMesh, str | None]:
@@ -496,7 +529,7 @@ class Adapted:
     """
 
     def __init__(self, config: SolveConfig, target: int | None, requested: Any = None, *,
-                 estimate: bool = True) -> None:
+                 estimate: bool = True, retry: int | None = None) -> None:
         t0 = time.perf_counter()
         mesh = config.surface  # an adapted resolution: triangle surfaces only
         self.config = config
@@ -504,11 +537,10 @@ class Adapted:
         self.notes: list[str] = list(config.notes)
         self.record: dict[str, Any] = {"resolution": requested, "target_faces": target, "user_faces": mesh.n_faces,
                                        "faces": mesh.n_faces, "simplifier": None, "decimate_time": 0.0,
-                                       "fallback": None, "order": 2, "error_estimate": None,
+                                       "fallback": None, "refused": None, "order": 2, "error_estimate": None,
                                        "error_estimate_method": None}
-        coarse: TriMesh | None = None
-        parts: np.ndarray | None = None  # a mesh in several components: the copy's faces' component labels
-        components: int | None = None
+        copy: _Copy | None = None
+        components: int | None = None  # a mesh in several components, decimated one at a time: how many
         self.source, why = _decimation_source(mesh)
         self._targets = None if self.source is mesh else CLOUD_TARGETS
         self._aggs = RETRY_AGGS if self.source is mesh else CLOUD_AGGS
@@ -516,31 +548,39 @@ class Adapted:
         # points read the copy by); a mesh: its own components
         self._face_label = (self.source.component_labels if self.source is mesh else mesh.component_labels)[
             self.source.F[:, 0]]
+        if retry is not None and target is not None and target >= self.source.n_faces:
+            target, retry = retry, None  # a clean cloud whose surface is smaller than its finer copy's target
         small = why is None and (target is None or target >= self.source.n_faces)
         if target is None or small:
             why = f"the target of {target} faces is not below the mesh's {self.source.n_faces}"
         elif why is None:
             why = _unsuitable(self.source)
             if why is None:
-                coarse, why, made = _decimated_parts(self.source, target, targets=self._targets, aggs=self._aggs,
-                                                     face_label=self._face_label)
-                self._record_decimation(made, "")
-                parts, components = made.get("part_of_face"), made.get("components")
+                if retry is not None:
+                    noise = mesh.cloud.noise  # type: ignore[attr-defined]
+                    self.notes.append(f"resolution={requested!r} on a clean point cloud (its noise {noise:.3f} of "
+                                      f"the point spacing): a copy with {CLEAN_CLOUD_FRACTION:g} of the faces, not "
+                                      f"{AUTO_FRACTION:g} (docs/pointclouds.md)")
+                copy, why, components = self._copy(target)
+                if copy is None and retry is not None:  # a clean cloud's finer copy: the usual one next
+                    self.notes.append(f"resolution={requested!r}: the {target}-face copy was refused ({why}); "
+                                      f"tried {retry} faces")
+                    self.record["refused"] = {"target_faces": target, "why": why,
+                                              "decimation_tries": self.record["decimation_tries"]}
+                    self.record["target_faces"] = retry
+                    copy, why, components = self._copy(retry)
         self.record["decimate_time"] = time.perf_counter() - t0
         self.copy: _Copy | None = None
         self.companions: list[_Copy] = []
         self.inner: Any
-        copy = None if coarse is None else _Copy(config, coarse, parts)
-        if copy is not None and (lost := _lost_surface(copy)) is not None:
-            copy, why = None, lost
-        if coarse is None or copy is None:
+        if copy is None:
             self.solve_mesh = mesh
             # a small mesh is the solve mesh asked for; a mesh that cannot be decimated gets what a copy would cost
             self.inner, order = (Order2(config), 2) if small else _fallback(config)
             self.record.update(fallback=why, order=order, error_estimate_method="none: solved on the mesh itself")
             self.notes.append(f"resolution={requested!r}: solved on the mesh itself at order {order} ({why})")
         else:
-            self.copy = copy
+            self.copy, coarse = copy, copy.mesh
             self.solve_mesh, self.inner = coarse, self.copy.strategy
             self.notes.append(f"resolution={requested!r}: solved at order 2 on a {coarse.n_faces}-face copy of the "
                               f"mesh ({mesh.n_faces} faces; {SIMPLIFIER}) to a relative tolerance of "
@@ -557,6 +597,19 @@ class Adapted:
         self.ridge_length = self._ridge_length()
         self.backend = self.inner.backend
         self.setup_time = time.perf_counter() - t0
+
+    def _copy(self, target: int) -> tuple[_Copy | None, str | None, int | None]:
+        """The copy decimated from :attr:`source` to ``target`` faces (its decimation recorded), or None and why
+        (every decimation refused, or the copy lost part of the surface: :func:`_lost_surface`); and the mesh's
+        component count where they were decimated one at a time."""
+        coarse, why, made = _decimated_parts(self.source, target, targets=self._targets, aggs=self._aggs,
+                                             face_label=self._face_label)
+        self._record_decimation(made, "")
+        if coarse is None:
+            return None, why, None
+        copy = _Copy(self.config, coarse, made.get("part_of_face"))
+        lost = _lost_surface(copy)
+        return (None, lost, None) if lost is not None else (copy, None, made.get("components"))
 
     def _ridge_length(self) -> float | None:
         """The ridge rounding's length (:func:`~cvxgeodesic.problems.ridge_rounding.ridge_rounding_length` at ``m``),
