@@ -277,16 +277,16 @@ def compare_resolution(name: str, noise: float, P: np.ndarray, exact: np.ndarray
 
 
 def _resolution(value: str, cloud) -> str | int | float:
-    """``resolution=`` for a ``--resolution`` value: ``auto``, a fraction, or ``tenth``: the face count ``"auto"``
-    takes on a cloud that is not clean (1/10 of the faces, at least 2,000; the default before 2026-12-07 on every
-    cloud)."""
+    """``resolution=`` for a ``--resolution`` value: ``auto``, a fraction, a face count, or ``tenth``: the face
+    count ``"auto"`` takes on a cloud that is not clean (1/10 of the faces, at least 2,000; the default before
+    2026-12-07 on every cloud)."""
     from cvxgeodesic.strategies.adapted import AUTO_FRACTION, AUTO_MIN_FACES
 
     if value == "auto":
         return value
     if value == "tenth":
         return max(AUTO_MIN_FACES, round(AUTO_FRACTION * cloud.mesh.n_cells))
-    return float(value)
+    return int(value) if value.isdigit() else float(value)
 
 
 def _solved_on(res) -> str:
