@@ -72,9 +72,8 @@ from .direct import DirectStrategy
 from .order2 import Order2
 
 __all__ = ["AUTO_FRACTION", "AUTO_MIN_FACES", "CLEAN_CLOUD_FRACTION", "MIN_RESOLUTION_FACES", "RESOLUTIONS",
-           "SIMPLIFIER", "Adapted",
-           "edge_shortening", "fold_excess", "fold_reference", "max_turn",
-           "patch_reach", "resolution_targets", "resolve_resolution"]
+           "SIMPLIFIER", "Adapted", "edge_shortening", "fold_excess", "fold_reference", "max_turn", "patch_reach",
+           "resolution_targets", "resolve_resolution"]
 
 #: The named values of ``resolution``; any other is a face count (int) or a fraction of the faces (float).
 RESOLUTIONS = ("mesh", "auto")
@@ -513,6 +512,9 @@ class Adapted:
     estimate : bool
         Estimate the error of every solve by two more solves, on a coarser and a finer copy (:data:`ESTIMATE_RATIO`,
         :data:`ESTIMATE_FINER`, :data:`ESTIMATE_FACTOR`).
+    retry : int, optional
+        A coarser target, tried where the copy at ``target`` is refused (a clean point cloud's ``"auto"``:
+        :func:`resolution_targets`); the refused one is recorded as ``record["refused"]``, with a note.
 
     Attributes
     ----------
