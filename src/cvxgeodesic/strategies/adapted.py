@@ -47,6 +47,7 @@ from ..mesh.closest import closest_point_index
 from ..mesh.envelope import lipschitz_envelope
 from ..mesh.locate import SurfacePoint, bary_positions
 from ..mesh.patch import Patch, ball_patch
+from ..mesh.simplex import SimplexMesh
 from ..mesh.transfer import ProjectedField, SourcePatch, mix_patches
 from ..mesh.trimesh import TriMesh
 from ..operators.lagrange import FLAT_COS, LagrangeSpace
@@ -205,7 +206,7 @@ def resolve_resolution(resolution: Any, n_faces: int) -> int | None:
                          f"fraction of the faces in (0, 1) (float), got {resolution!r}")
 
 
-def resolution_targets(resolution: Any, mesh: Any) -> tuple[int | None, int | None]:
+def resolution_targets(resolution: Any, mesh: SimplexMesh) -> tuple[int | None, int | None]:
     """The solve mesh's target face count for ``resolution`` on ``mesh`` (:func:`resolve_resolution`), and a coarser
     one to try where the copy at the first is refused, or None.
 
