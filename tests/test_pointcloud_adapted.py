@@ -158,7 +158,7 @@ def test_a_clean_cloud_s_default_copy_has_a_quarter_of_the_faces_a_noisy_one_a_t
     res = cg.GeodesicSolver(clean).solve(0)
     ad = res.info.extra["adapted"]
     assert ad["target_faces"] == round(CLEAN_CLOUD_FRACTION * clean.mesh.n_faces) > 1.5 * AUTO_MIN_FACES
-    assert ad["refused"] is None and ad["fallback"] is None
+    assert ad["refused"] is None and ad["fallback"] is None and ad["source_patches"] == 1
     assert any("on a clean point cloud" in n and "0.25 of the faces" in n for n in res.info.notes)
     usual = cg.GeodesicSolver(clean, resolution=AUTO_MIN_FACES).solve(0)  # "auto" on a noisy cloud of this size
     assert _mean_error(clean, res) < 0.8 * _mean_error(clean, usual)
@@ -169,6 +169,9 @@ def test_a_clean_cloud_s_default_copy_has_a_quarter_of_the_faces_a_noisy_one_a_t
     res = cg.GeodesicSolver(noisy).solve(0)
     assert res.info.extra["adapted"]["target_faces"] == AUTO_MIN_FACES
     assert not any("on a clean point cloud" in n for n in res.info.notes)
+    # and no order-2 patch of the cloud's own (noisy) triangles around the source
+    assert res.info.extra["adapted"]["source_patches"] == 0
+    assert any(n.startswith("no patch solve around the sources: a noisy point cloud") for n in res.info.notes)
 
 
 def test_a_clean_cloud_s_refused_finer_copy_is_followed_by_the_usual_one(monkeypatch):

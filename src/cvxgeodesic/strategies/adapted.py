@@ -113,7 +113,10 @@ ESTIMATE_FACTOR = 1.16
 #: (docs/adapted.md). 0 turns it off. Not for ``"boundary"`` or more than :data:`MAX_SOURCE_PATCHES` sources; with a
 #: cost or metric the patch carries it and the ball is in travel time (kitten from vertex 0 and n/2 with the cost
 #: ``1 + z²``: 0.562 → 0.537 % and 0.564 → 0.537 % against order 2 on the mesh with that cost; with the metric
-#: diag(2, 1, 0.5): 0.609 → 0.587 % and 0.617 → 0.592 %, the max 8.98 → 5.49 % from n/2; 2026-12-06).
+#: diag(2, 1, 0.5): 0.609 → 0.587 % and 0.617 → 0.592 %, the max 8.98 → 5.49 % from n/2; 2026-12-06). Not on a
+#: point cloud that is not clean (:attr:`~cvxgeodesic.mesh.pointcloud.PointCloud.clean`): order 2 on its own noisy
+#: triangles reads the noise as length, and at 0.1 % noise the patch bought nothing (mean errors equal within 1.6 % on
+#: six clouds, the max errors mixed) for 5-8 % of the time (docs/dev/adapted-log.md, 2026-12-07).
 SOURCE_PATCH_EDGES = 3.0
 #: The patch's field replaces the copy's fully below this share of its reach and is mixed in linearly up to the
 #: reach (a seam of a third of it: the copy's error next to the source, 1-4 %, becomes a gradient error of a few %).
@@ -801,6 +804,11 @@ class Adapted:
         """The order-2 fields on the user's mesh around each source (:data:`SOURCE_PATCH_EDGES`)."""
         mesh = self.config.surface
         if SOURCE_PATCH_EDGES <= 0 or sources.boundary or self.copy is None:
+            return []
+        cloud = getattr(mesh, "cloud", None)
+        if cloud is not None and not cloud.clean:
+            notes.append(f"no patch solve around the sources: a noisy point cloud (its noise {cloud.noise:.3f} of the "
+                         "point spacing), whose own triangles read the noise as length at order 2")
             return []
         items: list[tuple[int, Any]] = [(int(v), None) for v in sources.vertices]
         items += [(int(mesh.F[p.cell][np.argmax(p.bary)]), p) for p in sources.distinct_points(mesh)]
