@@ -115,7 +115,7 @@ ESTIMATE_FACTOR = 1.16
 #: ``1 + z²``: 0.562 → 0.537 % and 0.564 → 0.537 % against order 2 on the mesh with that cost; with the metric
 #: diag(2, 1, 0.5): 0.609 → 0.587 % and 0.617 → 0.592 %, the max 8.98 → 5.49 % from n/2; 2026-12-06). Not on a
 #: point cloud that is not clean (:attr:`~cvxgeodesic.mesh.pointcloud.PointCloud.clean`): order 2 on its own noisy
-#: triangles reads the noise as length, and at 0.1 % noise the patch bought nothing (mean errors equal within 1.6 % on
+#: triangles reads the noise as length, and at 0.1 % noise the patch bought nothing (mean errors equal within 1.2 % on
 #: six clouds, the max errors mixed) for 5-8 % of the time (docs/dev/adapted-log.md, 2026-12-07).
 SOURCE_PATCH_EDGES = 3.0
 #: The patch's field replaces the copy's fully below this share of its reach and is mixed in linearly up to the
