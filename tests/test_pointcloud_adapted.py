@@ -150,7 +150,12 @@ def _mean_error(cloud, res):
 def test_a_clean_cloud_s_default_copy_has_a_quarter_of_the_faces_a_noisy_one_a_tenth():
     # 8,000 sphere points: 16K faces, so 1/4 is 4,000 faces and 1/10 the floor of 2,000. Measured mean error 0.00033 π
     # at 1/4 against 0.00069 π at 2,000 faces
-    from cvxgeodesic.strategies.adapted import AUTO_MIN_FACES, CLEAN_CLOUD_FRACTION
+    from cvxgeodesic.strategies.adapted import (
+        AUTO_MIN_FACES,
+        CLEAN_CLOUD_FRACTION,
+        CURVED_COPY_TOL,
+        NOISY_CLOUD_COPY_TOL,
+    )
 
     X = sphere_points(8000, seed=3)
     clean = PointCloud(X)
@@ -159,6 +164,7 @@ def test_a_clean_cloud_s_default_copy_has_a_quarter_of_the_faces_a_noisy_one_a_t
     ad = res.info.extra["adapted"]
     assert ad["target_faces"] == round(CLEAN_CLOUD_FRACTION * clean.mesh.n_faces) > 1.5 * AUTO_MIN_FACES
     assert ad["refused"] is None and ad["fallback"] is None and ad["source_patches"] == 1
+    assert ad["copy_tol"] == CURVED_COPY_TOL
     assert any("on a clean point cloud" in n and "0.25 of the faces" in n for n in res.info.notes)
     usual = cg.GeodesicSolver(clean, resolution=AUTO_MIN_FACES).solve(0)  # "auto" on a noisy cloud of this size
     assert _mean_error(clean, res) < 0.8 * _mean_error(clean, usual)
@@ -169,8 +175,9 @@ def test_a_clean_cloud_s_default_copy_has_a_quarter_of_the_faces_a_noisy_one_a_t
     res = cg.GeodesicSolver(noisy).solve(0)
     assert res.info.extra["adapted"]["target_faces"] == AUTO_MIN_FACES
     assert not any("on a clean point cloud" in n for n in res.info.notes)
-    # and no order-2 patch of the cloud's own (noisy) triangles around the source
+    # no order-2 patch of the cloud's own (noisy) triangles around the source, and a looser copy
     assert res.info.extra["adapted"]["source_patches"] == 0
+    assert res.info.extra["adapted"]["copy_tol"] == NOISY_CLOUD_COPY_TOL
     assert any(n.startswith("no patch solve around the sources: a noisy point cloud") for n in res.info.notes)
 
 
