@@ -397,7 +397,8 @@ def test_the_command_line_says_which_solve_a_cloud_got(tmp_path, capsys):
     from cvxgeodesic.cli import main
 
     np.savetxt(tmp_path / "c.xyz", plane_points(8))
-    for extra, said in (([], "order 2, resolution auto"), (["--order", "1"], "method qclp\n")):
+    for extra, said in (([], "c.xyz: 64 points, [0-9]+ fan triangles; method qclp, order 2, resolution auto"),
+                        (["--order", "1"], "method qclp\n")):
         assert main(["distance", str(tmp_path / "c.xyz"), "--source", "0", "-o", str(tmp_path / "d.npy"),
                      "--overwrite", *extra]) == 0
         err = capsys.readouterr().err

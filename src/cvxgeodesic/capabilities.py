@@ -70,6 +70,9 @@ class Domain:
         What the viewer draws (:func:`cvxgeodesic.viewer.show`): ``"cells"``, the mesh as its cell kind is drawn
         (``reference.picture``); ``"points"``, its vertices coloured by the field (a cloud's soup of overlapping fans
         is no surface to shade).
+    vertex_words, cell_words : str
+        How the command line counts its vertices and cells (``"points"``, ``"fan triangles"`` on a cloud); an empty
+        ``cell_words`` takes the cell kind's (``reference.words.many``).
     """
 
     name: str
@@ -82,6 +85,8 @@ class Domain:
     reference: tuple[str, int]
     output_format: str
     drawn_as: str = "cells"
+    vertex_words: str = "vertices"
+    cell_words: str = ""
 
 
 #: Every domain by name (``mesh.domain``). The curved Hessian energy exists on surfaces only: ``qclp`` in a volume;
@@ -95,7 +100,7 @@ DOMAINS: dict[str, Domain] = {
     "volume": Domain("volume", "tetrahedral meshes", "inside a volume", "on a volume", 3, "qclp", "mesh",
                      ("qclp", 2), "vtu"),
     "cloud": Domain("cloud", "point clouds", "on a point cloud", "on a point cloud", 2, "qclp", "auto",
-                    ("qclp", 2), "ply", drawn_as="points"),
+                    ("qclp", 2), "ply", drawn_as="points", vertex_words="points", cell_words="fan triangles"),
 }
 
 _HESSIAN = ("lcqp-hessian", "qcqp-hessian")

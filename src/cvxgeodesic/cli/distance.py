@@ -69,6 +69,7 @@ def run(args: argparse.Namespace) -> int:
     from .._atomic import output_set
     from .._verbose import progress_printer
     from ..api import GeodesicSolver
+    from ..capabilities import DOMAINS
     from ..mesh.formats.registry import DISTANCE_EXTENSIONS, FORMATS
     from ..mesh.io import save_distance
     from ..validation import check_output_path
@@ -84,8 +85,9 @@ def run(args: argparse.Namespace) -> int:
                             normalization=args.normalization, order=args.order, cost=opt.cli_cost(args, mesh),
                             resolution=args.resolution, estimate_error=args.estimate_error)
     if not args.quiet:  # the order and resolution the solver chose (a cloud's default is order 2 on a copy)
-        cells = mesh.reference.words.many
-        print(f"{mesh.name}: {mesh.n_file_vertices} vertices, {mesh.n_cells} {cells}; method {method}"
+        domain = DOMAINS[mesh.domain]
+        print(f"{mesh.name}: {mesh.n_file_vertices} {domain.vertex_words}, {mesh.n_cells} "
+              f"{domain.cell_words or mesh.reference.words.many}; method {method}"
               + (f", order {solver.order}" if solver.order != 1 else "")
               + (f", resolution {solver.resolution}" if solver.resolution != "mesh" else ""), file=log)
     res = solver.solve(sources, callback=None if args.quiet else progress_printer(log))

@@ -77,6 +77,7 @@ def run(args: argparse.Namespace) -> int:
     """``cvxgeodesic matrix``: returns the exit code."""
     from .._atomic import atomic_write
     from ..api import DEFAULT_ROW_METHOD, distance_matrix
+    from ..capabilities import DOMAINS
     from ..mesh.fileorder import file_sources, to_file_order
     from ..rows import checkpoint_rows, sparse_to_file_order
 
@@ -92,7 +93,8 @@ def run(args: argparse.Namespace) -> int:
                  else f"; on {args.scheduler or f'a local cluster of {args.workers} worker processes'}")
         within = (f", distances up to {args.max_distance:g}" if local else "") + (
             f", order {args.order}" if args.order not in (None, 1) else "")
-        print(f"{mesh.name}: {mesh.n_file_vertices} vertices, {len(rows)} rows{within}; method {method}{where}",
+        print(f"{mesh.name}: {mesh.n_file_vertices} {DOMAINS[mesh.domain].vertex_words}, {len(rows)} rows{within}; "
+              f"method {method}{where}",
               file=sys.stderr)  # "resuming from ..." comes from distance_matrix, once it has accepted the checkpoint
     try:
         D: Any = distance_matrix(mesh, rows, method, m=args.m, solver=args.solver, progress=not args.quiet,
