@@ -38,7 +38,7 @@ from __future__ import annotations
 import functools
 import time
 from dataclasses import replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -71,6 +71,9 @@ from .decimation import (
 )
 from .direct import DirectStrategy
 from .order2 import Order2
+
+if TYPE_CHECKING:
+    from ..mesh.pointcloud import PointCloud
 
 __all__ = ["AUTO_FRACTION", "AUTO_MIN_FACES", "CLEAN_CLOUD_FRACTION", "MIN_RESOLUTION_FACES", "NOISY_CLOUD_COPY_TOL",
            "RESOLUTIONS", "SIMPLIFIER", "Adapted", "edge_shortening", "fold_excess", "fold_reference", "max_turn",
@@ -335,8 +338,15 @@ def _tol(config: SolveConfig, mesh: TriMesh) -> float:
     flat = (LagrangeSpace(mesh, 1).flat_cells & joined).any()  # is flat whatever the surface: no flat region
     if flat:
         return max(config.tol, COPY_TOL)
-    cloud = getattr(config.surface, "cloud", None)
-    return max(config.tol, NOISY_CLOUD_COPY_TOL if cloud is not None and not cloud.clean else CURVED_COPY_TOL)
+    return max(config.tol, CURVED_COPY_TOL if _noisy_cloud(config.surface) is None else NOISY_CLOUD_COPY_TOL)
+
+
+def _noisy_cloud(mesh: TriMesh) -> PointCloud | None:
+    """The point cloud whose soup ``mesh`` is, where it is not clean
+    (:attr:`~cvxgeodesic.mesh.pointcloud.PointCloud.clean`: its copy is solved looser and gets no source patch), or
+    None (a mesh, or a clean cloud)."""
+    cloud = getattr(mesh, "cloud", None)
+    return None if cloud is None or cloud.clean else cloud
 
 
 def _is_planar(mesh: TriMesh) -> bool:
@@ -813,8 +823,7 @@ class Adapted:
         mesh = self.config.surface
         if SOURCE_PATCH_EDGES <= 0 or sources.boundary or self.copy is None:
             return []
-        cloud = getattr(mesh, "cloud", None)
-        if cloud is not None and not cloud.clean:
+        if (cloud := _noisy_cloud(mesh)) is not None:
             notes.append(f"no patch solve around the sources: a noisy point cloud (its noise {cloud.noise:.3f} of the "
                          "point spacing), whose own triangles read the noise as length at order 2")
             return []
