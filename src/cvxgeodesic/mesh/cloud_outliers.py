@@ -35,6 +35,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .frames import plane_fits, scatter_matrices
+
 __all__ = ["DEFECT_NEIGHBOURS", "GAP", "HEIGHT_MADS", "LINE_TOL", "SPREAD_HEIGHT",
            "SPREAD_ISOLATION", "SPREAD_MAX", "CloudDefects", "defect_statistics", "find_defects",
            "nearest_neighbours"]
@@ -125,9 +127,8 @@ def defect_statistics(P: np.ndarray, k: int = DEFECT_NEIGHBOURS,
     local = np.median(mean[idx], axis=1)
     X = P[idx]
     centre = X.mean(axis=1)
-    Q = X - centre[:, None, :]
-    w, frame = np.linalg.eigh(Q.transpose(0, 2, 1) @ Q)  # ascending: frame[:, :, 0] is the plane's normal
-    height = np.abs(np.einsum("ni,ni->n", P - centre, frame[:, :, 0]))
+    w, normal = plane_fits(scatter_matrices(X - centre[:, None, :]))  # w ascending
+    height = np.abs(np.einsum("ni,ni->n", P - centre, normal))
     flat = w[:, 1] / np.maximum(w[:, 2], np.finfo(float).tiny)
     return np.c_[mean / local, height / local, mean / np.median(mean), flat, _group_sizes(dist, idx)]
 

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .frames import plane_fits, scatter_matrices
 from .simplex import unique_rows
 
 __all__ = ["TILT_ANGLE", "TILT_NEIGHBOURS", "TILT_OFFSET", "principal_planes", "stranded_points", "tilted_triangles",
@@ -65,8 +66,10 @@ def principal_planes(P: np.ndarray, idx: np.ndarray) -> tuple[np.ndarray, np.nda
     X = P[idx[:, :TILT_NEIGHBOURS]]
     centres = X.mean(axis=1)
     Q = X - centres[:, None, :]
-    w, frame = np.linalg.eigh(Q.transpose(0, 2, 1) @ Q)  # ascending: the least spread is the normal
-    return frame[:, :, 0], centres, np.sqrt(np.maximum(w[:, 0], 0.0) / X.shape[1])
+    normals = plane_fits(scatter_matrices(Q))[1]
+    heights = np.einsum("nki,ni->nk", Q, normals)  # the least eigenvalue, their sum of squares, is good to 1e-16 of
+    # the largest only
+    return normals, centres, np.sqrt(np.einsum("nk,nk->n", heights, heights) / X.shape[1])
 
 
 Planes = tuple[np.ndarray, np.ndarray, np.ndarray]
@@ -124,8 +127,8 @@ def stranded_points(n: int, tri: np.ndarray, kept: np.ndarray) -> np.ndarray:
         Ascending.
     """
     before, after = triangle_components(n, tri), triangle_components(n, kept)
-    order = np.lexsort((after, before))
-    pairs, counts = np.unique(np.c_[before[order], after[order]], axis=0, return_counts=True)
+    codes, counts = np.unique(before.astype(np.int64) * n + after, return_counts=True)  # labels are below n
+    pairs = np.c_[codes // n, codes % n]
     best = np.full(before.max() + 1, -1)
     ranked = np.lexsort((-counts, pairs[:, 0]))  # per piece, the largest part first
     first = np.r_[True, pairs[ranked[1:], 0] != pairs[ranked[:-1], 0]]

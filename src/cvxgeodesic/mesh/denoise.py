@@ -14,6 +14,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from .frames import plane_fits, scatter_matrices, tangent_frames
+
 __all__ = ["DEFAULT_DENOISE_NEIGHBOURS", "DEFAULT_PASSES", "NOISE_SAMPLE", "jet_noise", "jet_project"]
 
 #: Neighbours of each fit (the point itself not counted; a degree-2 jet has 6 coefficients). Measured on kitten and
@@ -108,7 +110,7 @@ def _project(X: np.ndarray, idx: np.ndarray, rows: np.ndarray, degree: int) -> n
     w = np.exp(-r2 / h2)  # Gaussian of width ~ the radius: the far neighbours count ~e^-1 as much
     c = np.einsum("mk,mkj->mj", w, Q) / w.sum(axis=1, keepdims=True)
     D = Q - c[:, None, :]
-    frame = np.linalg.eigh(np.einsum("mk,mki,mkj->mij", w, D, D))[1]  # ascending: column 0 the normal
+    frame = tangent_frames(plane_fits(scatter_matrices(D, w))[1])  # column 0 the normal
     L = np.einsum("mki,mij->mkj", Q, frame) / np.sqrt(h2)[..., None]  # (height, u, v), scaled by the radius
     z, u, v = L[..., 0], L[..., 1], L[..., 2]
     one = np.ones_like(u)
