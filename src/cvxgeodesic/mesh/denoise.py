@@ -32,7 +32,7 @@ RIDGE = 1e-9
 
 
 def jet_project(P: np.ndarray, k: int = DEFAULT_DENOISE_NEIGHBOURS, passes: int = DEFAULT_PASSES,
-                degree: int = 2) -> np.ndarray:
+                degree: int = 2, neighbours: np.ndarray | None = None) -> np.ndarray:
     """The points moved onto the jets fitted to their neighbourhoods, ``passes`` times.
 
     Parameters
@@ -45,6 +45,9 @@ def jet_project(P: np.ndarray, k: int = DEFAULT_DENOISE_NEIGHBOURS, passes: int 
         Times to project; each pass fits to the positions of the previous one (neighbours found again).
     degree : {1, 2}
         Of the height polynomial: 2, the jet; 1, the plane (for comparison: it shrinks curved regions).
+    neighbours : (n, j) int ndarray, optional
+        Each point's nearest other points, nearest first, ``j >= k``
+        (:func:`~cvxgeodesic.mesh.cloud_outliers.nearest_neighbours`): the first pass's, found when None.
 
     Returns
     -------
@@ -52,8 +55,11 @@ def jet_project(P: np.ndarray, k: int = DEFAULT_DENOISE_NEIGHBOURS, passes: int 
         The projected points, in ``P``'s order.
     """
     X = np.asarray(P, dtype=np.float64)
-    for _ in range(passes):
-        idx = cKDTree(X).query(X, k=k + 1)[1]
+    for i in range(passes):
+        if i == 0 and neighbours is not None:
+            idx = np.c_[np.arange(X.shape[0]), neighbours[:, :k]]  # column 0: the point itself, as the query's
+        else:
+            idx = cKDTree(X).query(X, k=k + 1)[1]
         X = np.concatenate([_project(X, idx[s:s + CHUNK], np.arange(s, min(s + CHUNK, X.shape[0])), degree)
                             for s in range(0, X.shape[0], CHUNK)])
     return X
@@ -111,8 +117,8 @@ def _project(X: np.ndarray, idx: np.ndarray, rows: np.ndarray, degree: int) -> n
     c = np.einsum("mk,mkj->mj", w, Q) / w.sum(axis=1, keepdims=True)
     D = Q - c[:, None, :]
     frame = tangent_frames(plane_fits(scatter_matrices(D, w))[1])  # column 0 the normal
-    L = np.einsum("mki,mij->mkj", Q, frame) / np.sqrt(h2)[..., None]  # (height, u, v), scaled by the radius
-    z, u, v = L[..., 0], L[..., 1], L[..., 2]
+    scale = 1.0 / np.sqrt(h2)  # (height, u, v) in units of the radius
+    z, u, v = (np.einsum("mkj,mj->mk", Q, frame[:, :, c]) * scale for c in range(3))
     one = np.ones_like(u)
     cols = [one, u, v] + ([u * u, u * v, v * v] if degree == 2 else [])
     A = np.stack(cols, axis=-1)  # (m, k + 1, terms)

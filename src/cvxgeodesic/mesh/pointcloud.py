@@ -492,7 +492,8 @@ class PointCloud:
         self.normals = None if normals is None else _check_normals(normals, raw.shape[0], self.name)[keep]
         if passes:  # the points the fans are built on, fitted without the outliers
             pts = pts.copy()
-            pts[solid] = _denoised(pts[solid], passes, self.name, notes)
+            reuse = knn[1] if solid.size == pts.shape[0] else None  # the outliers' rows would need renumbering
+            pts[solid] = _denoised(pts[solid], passes, self.name, notes, reuse)
         #: The noise in units of the spacing (:func:`~cvxgeodesic.mesh.denoise.jet_noise`), and above
         #: :data:`AUTO_NOISE_MAX` how much it grows from 12 to 30 neighbours (None below); growing less than
         #: :data:`DETAIL_GROWTH` (noise, not detail), the default solve is order 1 on the cloud's triangles.
@@ -658,12 +659,14 @@ def denoise_passes(denoise: Any) -> int:
                          f"projection), got {denoise!r}")
 
 
-def _denoised(P: np.ndarray, passes: int, name: str, notes: list[str]) -> np.ndarray:
-    """``P`` moved onto the jets of its neighbourhoods ``passes`` times, with a note of how far."""
+def _denoised(P: np.ndarray, passes: int, name: str, notes: list[str],
+              neighbours: np.ndarray | None = None) -> np.ndarray:
+    """``P`` moved onto the jets of its neighbourhoods ``passes`` times, with a note of how far; ``neighbours`` as
+    :func:`~cvxgeodesic.mesh.denoise.jet_project` takes them."""
     from .denoise import DEFAULT_DENOISE_NEIGHBOURS, jet_project
 
     k = min(DEFAULT_DENOISE_NEIGHBOURS, P.shape[0] - 1)
-    X = jet_project(P, k=k, passes=passes)
+    X = jet_project(P, k=k, passes=passes, neighbours=neighbours)
     moved = np.linalg.norm(X - P, axis=1)
     notes.append(f"{name}: denoised: the points moved onto the degree-2 jets of their {k} nearest neighbours "
                  f"({passes} pass{'es' if passes > 1 else ''}; mean move {moved.mean():.3g}, max {moved.max():.3g}); "
