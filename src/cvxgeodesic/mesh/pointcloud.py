@@ -460,9 +460,9 @@ class PointCloud:
         self.neighbours, self.triangles = int(neighbours), triangles
         raw = as_points(P, self.name, error=MeshError, row="point")
         notes: list[str] = []
-        uniq, first, inverse = np.unique(raw, axis=0, return_index=True, return_inverse=True)
-        inverse = inverse.reshape(-1)
-        if uniq.shape[0] < raw.shape[0]:
+        if _has_duplicates(raw):
+            uniq, first, inverse = np.unique(raw, axis=0, return_index=True, return_inverse=True)
+            inverse = inverse.reshape(-1)
             keep = np.sort(first)  # the input's order, first occurrence of each position
             remap = np.empty(uniq.shape[0], dtype=np.int64)
             remap[inverse[keep]] = np.arange(keep.size)
@@ -571,7 +571,7 @@ class PointCloud:
         if F.shape[0] == 0:
             return None, "every consensus triangle is on a non-manifold edge"
         name = f"{self.name} (consensus surface)"
-        labels = TriMesh(self.P, F).component_labels[F[:, 0]]
+        labels = triangle_components(self.P.shape[0], F)[F[:, 0]]  # the edge graph's, without a mesh to validate
         piece_of_face = self.mesh.component_labels[F[:, 0]]
         pieces = np.unique(self.mesh.component_labels[self.mesh.referenced])
         keep = np.zeros(F.shape[0], dtype=bool)
@@ -672,6 +672,13 @@ def _denoised(P: np.ndarray, passes: int, name: str, notes: list[str],
                  f"({passes} pass{'es' if passes > 1 else ''}; mean move {moved.mean():.3g}, max {moved.max():.3g}); "
                  "the triangles and lengths are the moved points'")
     return X
+
+
+def _has_duplicates(P: np.ndarray) -> bool:
+    """Whether two rows of ``P`` (n, 3) are equal: a sort by columns, 3-4× faster than ``np.unique(axis=0)``, which
+    the rare cloud with duplicates then runs for the merge."""
+    rows = P[np.lexsort(P.T[::-1])]
+    return bool((rows[1:] == rows[:-1]).all(axis=1).any())
 
 
 def _check_shape(P: np.ndarray, name: str) -> None:
