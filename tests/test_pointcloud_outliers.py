@@ -27,7 +27,16 @@ def _with_outliers(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return Y, rows
 
 
-def test_planted_outliers_are_left_out_with_a_note_and_an_infinite_distance():
+def _carried(Y: np.ndarray, d: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """The outliers' distances through their 30 nearest other points (none of them an outlier here)."""
+    from scipy.spatial import cKDTree
+
+    dist, idx = cKDTree(Y).query(Y[rows], k=31)
+    assert not np.isin(idx[:, 1:], rows).any()
+    return (d[idx[:, 1:]] + dist[:, 1:]).min(axis=1)
+
+
+def test_planted_outliers_are_left_out_with_a_note_and_their_distance_carried_from_their_neighbours():
     X = sphere_points()
     Y, rows = _with_outliers(X)
     cloud = PointCloud(Y)
@@ -37,7 +46,16 @@ def test_planted_outliers_are_left_out_with_a_note_and_an_infinite_distance():
     assert any(note in n and "left out of the triangles" in n for n in cloud.notes)
     res = cg.GeodesicSolver(cloud, "qclp").solve(0)
     assert any(note in n for n in res.info.notes)
-    assert np.isinf(res.distance[rows]).all()
+    # the outliers: a neighbour's distance plus the step to it, the least of them; 5 to 50 spacings off the sphere:
+    # at least the straight distance from the source (less order 1's shortness, ~1 %), at most the great circle to
+    # their foot plus their height (plus a spacing: the foot's nearest point is among the neighbours)
+    np.testing.assert_allclose(res.distance[rows], _carried(Y, res.distance, rows), rtol=1e-12)
+    assert res.info.extra["left_out_reached"] == 5 and res.info.n_unreachable == 0
+    assert any("5 point(s) in no triangle (outliers, line points or isolated points" in n for n in res.info.notes)
+    foot = np.arccos(np.clip(Y[rows] @ Y[0] / np.linalg.norm(Y[rows], axis=1), -1, 1))
+    height = np.abs(np.linalg.norm(Y[rows], axis=1) - 1.0)
+    assert np.all(res.distance[rows] >= 0.98 * np.linalg.norm(Y[rows] - Y[0], axis=1))
+    assert np.all(res.distance[rows] <= foot + height + SPACING)
     # the other points: the clean cloud's triangles, so its field up to the solver's tolerance (the unknowns are in
     # another order): measured 1.6e-6 (5e-7 of the largest distance), asserted at 1e-5 of it
     ref = PointCloud(X)
@@ -46,7 +64,8 @@ def test_planted_outliers_are_left_out_with_a_note_and_an_infinite_distance():
         {tuple(t) for t in np.sort(ref.mesh.F, axis=1).tolist()}
     clean = cg.geodesic_distance(ref, 0, method="qclp")
     assert np.abs(np.delete(res.distance, rows) - clean).max() <= 1e-5 * clean.max()
-    assert np.isinf(cg.geodesic_distance(cloud, 0, method="heat")[rows]).all()
+    heat = cg.geodesic_distance(cloud, 0, method="heat")
+    np.testing.assert_allclose(heat[rows], _carried(Y, heat, rows), rtol=1e-12)
 
 
 @pytest.mark.parametrize("triangles", ["union", "consensus", "repaired"])
@@ -212,7 +231,10 @@ def test_a_wire_standing_on_a_plane_is_left_out_as_a_line():
     assert not np.isin(cloud.mesh.F, cloud.line_points).any()
     assert cloud.mesh.face_areas.min() > 0.1 * h**2  # no sliver of the wire reaches the solver
     d = cg.geodesic_distance(cloud, 0, method="qclp")
-    assert np.isfinite(d[:411]).all() and np.isinf(d[411:]).all()
+    # the line points carry the field up the wire, a step of h from each to the next (no point of the plane is
+    # among their 30 nearest)
+    assert np.isfinite(d).all()
+    np.testing.assert_allclose(np.diff(d[410:]), h, rtol=1e-9)
     with pytest.raises(SourceError, match="source point 420 of point cloud is a point whose neighbours lie on a line"):
         cg.geodesic_distance(cloud, 420, method="qclp")
     with pytest.raises(MeshError, match="29 points whose neighbours lie on a line"):
@@ -276,8 +298,10 @@ def test_the_command_line_builds_the_cloud_with_its_options(tmp_path, capsys):
     assert np.isfinite(kept).all()
     np.testing.assert_allclose(kept, cg.geodesic_distance(PointCloud(X, outliers="keep", neighbours=20,
                                                                      triangles="repaired"), 0), rtol=1e-6, atol=1e-9)
-    assert main([*base, "--overwrite"]) == 0  # the default: left out
-    assert np.isinf(np.load(out)[planted]).all()
+    assert main([*base, "--overwrite"]) == 0  # the default: left out, their distance carried from their neighbours
+    left_out = cg.GeodesicSolver(PointCloud(X), "qclp").solve(0).distance
+    assert np.isfinite(left_out).all()
+    np.testing.assert_allclose(np.load(out), left_out, rtol=1e-6, atol=1e-9)
     assert main([*base, "--overwrite", "--denoise", "1"]) == 0
     np.testing.assert_allclose(np.load(out), cg.geodesic_distance(PointCloud(X, denoise=1), 0), rtol=1e-6, atol=1e-9)
     assert main([*base, "--overwrite", "--denoise", "11"]) == 2
@@ -286,3 +310,21 @@ def test_the_command_line_builds_the_cloud_with_its_options(tmp_path, capsys):
     mesh.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
     assert main(["distance", str(mesh), "--source", "0", "--neighbours", "12", "-o", str(tmp_path / "m.npy")]) == 2
     assert "--neighbours applies to point files; " in capsys.readouterr().err
+
+
+def test_local_rows_carry_the_outliers_like_whole_rows_and_no_path_starts_at_one():
+    Y, rows = _with_outliers(sphere_points())
+    cloud = PointCloud(Y)
+    assert cloud.left_out.tolist() == rows.tolist()
+    local = cg.distance_matrix(cloud, [0, 10], method="qclp", max_distance=1.5)
+    for i in range(2):
+        row = np.full(cloud.n_points, np.inf)
+        row[local[i].indices] = local[i].data
+        expected = _carried(Y, row, rows)  # from the patch's field, as whole rows carry the whole field
+        inside = expected <= 1.5
+        assert inside.any() and (~inside).any()  # some outliers within the radius, some beyond
+        np.testing.assert_allclose(row[rows][inside], expected[inside], rtol=1e-12)
+        assert np.isinf(row[rows][~inside]).all()
+    res = cg.GeodesicSolver(cloud, "qclp").solve(0)
+    with pytest.raises(ParameterError, match=f"target vertex {rows[0]} is in no face .*outlier.*no path runs from it"):
+        cg.geodesic_path(cloud, res, int(rows[0]))

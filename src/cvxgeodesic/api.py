@@ -425,12 +425,31 @@ class GeodesicSolver:
         source_time = time.perf_counter() - t0  # closest points and curve samples: part of this solve
         with reporting_to(callback):  # Clarabel's iterations too, wherever a strategy runs it
             res = self._strategy.solve(sset, callback=callback)
+        self._carry_to_left_out(res)
         res.info.setup_time = self.setup_time
         res.info.solve_time += source_time
         res.info.extra["source_time"] = source_time
         if self.medium is not None:  # what the field measures: {"cost": "per-vertex", ...}; the medium: res.field
             res.info.extra.update(self.medium.describe())
         return res
+
+    def _carry_to_left_out(self, res: GeodesicResult) -> None:
+        """On a point cloud, the field carried to the points in no triangle (its outliers, line points and isolated
+        points: :meth:`~cvxgeodesic.mesh.pointcloud.PointCloud.reach_left_out`), in place, with a note and
+        ``info.extra["left_out_reached"]``."""
+        cloud = getattr(self.mesh, "cloud", None)
+        if cloud is None:
+            return
+        carried, reached = cloud.reach_left_out(res.distance)
+        if not reached:
+            return
+        left = np.flatnonzero(np.isinf(res.distance) & np.isfinite(carried))
+        res.distance[left] = carried[left]  # in place: the array keeps its remembered sources (geodesic_path)
+        res.info.n_unreachable = int(np.isinf(res.distance).sum())
+        res.info.extra["left_out_reached"] = reached
+        res.info.notes.append(f"{self.mesh.name}: {reached} point(s) in no triangle (outliers, line points or isolated "
+                              "points, left out of the triangles) given the least distance through their nearest "
+                              "neighbours (a neighbour's distance plus the straight distance to it)")
 
     def solve_many(self, sources_list: Iterable[Any], *, progress: bool = False) -> list[GeodesicResult]:
         """Solve for each entry of ``sources_list`` (each anything :meth:`solve` takes), reusing all per-mesh work.

@@ -374,6 +374,13 @@ class LocalRows:
             if patch.cut.size == 0 or d[patch.cut].min() > r:
                 break
             radius *= PATCH_GROWTH
+        cloud = getattr(self.mesh, "cloud", None)
+        if cloud is not None and cloud.left_out.size:  # a cloud's points in no triangle, carried as in whole rows
+            whole = np.full(self.mesh.n_vertices, np.inf)
+            whole[patch.vertices] = d
+            whole = cloud.reach_left_out(whole)[0]
+            near = np.flatnonzero(whole <= r)
+            return LocalRow(_sparse_row(near, whole[near], self.mesh.n_vertices), patch.mesh.n_faces)
         keep = d <= r
         return LocalRow(_sparse_row(patch.vertices[keep], d[keep], self.mesh.n_vertices), patch.mesh.n_faces)
 

@@ -113,7 +113,8 @@ SURFACE_FRAGMENTS = 0.05
 COLLINEAR_TOL = 1e-9
 #: What a cloud does with its isolated outliers and points of line-like neighbourhoods
 #: (:func:`~cvxgeodesic.mesh.cloud_outliers.find_defects`): ``"exclude"`` leaves them out of the fans (their neighbours'
-#: fans are built without them; their distance is ``inf``; a note names them); ``"keep"`` triangulates every point
+#: fans are built without them; a solve carries the field to them, :meth:`PointCloud.reach_left_out`; a note names
+#: them); ``"keep"`` triangulates every point
 #: (no detection); ``"error"`` refuses the cloud naming them.
 OUTLIER_HANDLING = ("exclude", "keep", "error")
 DEFAULT_OUTLIERS = "exclude"
@@ -425,7 +426,8 @@ class PointCloud:
         triangle).
     outliers, line_points : (a,), (b,) int64 ndarray
         The distinct points left out of the triangles as isolated outliers and as points of line-like
-        neighbourhoods (empty with ``outliers="keep"``); their distance is ``inf`` and they cannot be sources.
+        neighbourhoods (empty with ``outliers="keep"``); they cannot be sources, and a solve's field reaches them
+        from their neighbours (:meth:`reach_left_out`).
 
     Raises
     ------
@@ -518,13 +520,70 @@ class PointCloud:
         alone = np.setdiff1d(solid, F.ravel())
         if alone.size:
             notes.append(f"{self.name}: {alone.size} points are in no triangle (isolated; first: "
-                         f"{', '.join(str(int(i)) for i in alone[:4])}): their distance is infinite")
+                         f"{', '.join(str(int(i)) for i in alone[:4])}): their distance is carried from their "
+                         "nearest neighbours")
         if F.shape[0] == 0:
             raise MeshError(f"{self.name}: the local triangulation of the {pts.shape[0]} points made no triangle")
+        left_out = np.setdiff1d(np.arange(pts.shape[0]), F.ravel())  # outliers, line points, isolated points
+        self._left_out = (left_out, knn[0][left_out], knn[1][left_out])  # for reach_left_out
         mesh = CloudMesh(pts, F, name=self.name, vertex_map=keep, file_index=file_index, notes=notes)
         mesh.cloud = self
         self.mesh = mesh
         self.notes = tuple(notes)
+
+    @property
+    def left_out(self) -> np.ndarray:
+        """(k,) int64 ndarray: the points in no triangle (outliers, line points, isolated points), ascending."""
+        return self._left_out[0]
+
+    def reach_left_out(self, distance: np.ndarray) -> tuple[np.ndarray, int]:
+        """A field of the cloud's triangles carried to the points in none (outliers, line points, isolated points).
+
+        Each such point takes the least, over its :data:`~cvxgeodesic.mesh.cloud_outliers.DEFECT_NEIGHBOURS`
+        nearest points, of a neighbour's distance plus the straight distance to it, through other such points too
+        (Dijkstra on those neighbour edges): a point beside the surface is as far as its foot plus the step to it, a
+        wire's points as far as its foot plus the length along it. A point whose neighbours are all unreached (on
+        another piece than the sources) stays ``inf``.
+
+        Parameters
+        ----------
+        distance : (n,) float ndarray
+            A field on the cloud's points, ``inf`` at the points in no triangle.
+
+        Returns
+        -------
+        distance : (n,) float ndarray
+            A copy with those points' values, or ``distance`` itself where the cloud has none.
+        reached : int
+            Points given a finite value.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> g = np.linspace(0, 1, 12)
+        >>> x, y = np.meshgrid(g, g)
+        >>> P = np.r_[np.c_[x.ravel(), y.ravel(), 0 * x.ravel()], [[0.5, 0.5, 0.6]]]  # one point far above the grid
+        >>> cloud = PointCloud(P)
+        >>> cloud.outliers.tolist()
+        [144]
+        >>> d = np.linalg.norm(P[:, :2] - P[0, :2], axis=1)  # the plane's distances from point 0
+        >>> d[144] = np.inf
+        >>> carried, reached = cloud.reach_left_out(d)
+        >>> reached, round(float(carried[144]), 3)  # through a neighbour: 0.927 straight, 1.307 through its foot
+        (1, 1.11)
+        """
+        from scipy.sparse.csgraph import dijkstra
+
+        points, dist, idx = self._left_out
+        if points.size == 0:
+            return distance, 0
+        row_of = np.full(distance.shape[0], -1)
+        row_of[points] = np.arange(points.size)
+        other = row_of[idx]  # each neighbour's row among the left-out points, -1 for a point of the triangles
+        first = np.where(other < 0, distance[idx] + dist, np.inf).min(axis=1)  # one step from the triangles
+        carried = distance.copy()
+        carried[points] = np.minimum(distance[points], dijkstra(_left_out_graph(other, dist, first), indices=0)[1:])
+        return carried, int(np.isfinite(carried[points]).sum())
 
     def default_refusal(self) -> str | None:
         """Why the default solve (order 2 on a copy, ``resolution="auto"``) is not taken on this cloud, or None: its
@@ -605,7 +664,7 @@ class PointCloud:
         if bad.size:
             why = "an isolated outlier" if bad[0] in self.outliers else "a point whose neighbours lie on a line"
             raise SourceError(f"source point {int(bad[0])} of {self.name} is {why}, left out of the cloud's triangles "
-                              "(its distance is infinite): choose another source, or build the cloud with "
+                              "(no field starts there): choose another source, or build the cloud with "
                               "PointCloud(..., outliers='keep') (--outliers keep on the command line)")
 
     @property
@@ -672,6 +731,23 @@ def _denoised(P: np.ndarray, passes: int, name: str, notes: list[str],
                  f"({passes} pass{'es' if passes > 1 else ''}; mean move {moved.mean():.3g}, max {moved.max():.3g}); "
                  "the triangles and lengths are the moved points'")
     return X
+
+
+def _left_out_graph(other: np.ndarray, dist: np.ndarray, first: np.ndarray) -> Any:
+    """The graph :meth:`PointCloud.reach_left_out` runs Dijkstra on, a ``scipy.sparse`` CSR matrix: node 0 joined
+    to each left-out point (node ``i + 1``) at its best step from the triangles, ``first`` (m,), where finite; two
+    left-out points joined both ways where one is among the other's neighbours (``other`` (m, k): their rows, -1 for a
+    point of the triangles), at their distance ``dist`` (m, k). One entry per pair: a sparse matrix sums repeats."""
+    import scipy.sparse as sp
+
+    m = other.shape[0]
+    r, c = np.nonzero(other >= 0)
+    a, b, w = r + 1, other[r, c] + 1, dist[r, c]
+    keys, at = np.unique(np.r_[a * (m + 1) + b, b * (m + 1) + a], return_index=True)
+    start = np.flatnonzero(np.isfinite(first))
+    rows = np.r_[keys // (m + 1), np.zeros(start.size, dtype=np.int64)]
+    cols = np.r_[keys % (m + 1), start + 1]
+    return sp.csr_matrix((np.r_[np.r_[w, w][at], first[start]], (rows, cols)), shape=(m + 1, m + 1))
 
 
 def _has_duplicates(P: np.ndarray) -> bool:
@@ -741,8 +817,9 @@ def _describe_defects(found: CloudDefects, keep: np.ndarray) -> str:
 def _defect_notes(found: CloudDefects, keep: np.ndarray, name: str) -> list[str]:
     if not found.points.size:
         return []
-    return [f"{name}: {_describe_defects(found, keep)} were left out of the triangles: their distance is infinite "
-            "(PointCloud(..., outliers='keep'), --outliers keep on the command line, triangulates them)"]
+    return [f"{name}: {_describe_defects(found, keep)} were left out of the triangles: their distance is carried "
+            "from their nearest neighbours (PointCloud(..., outliers='keep'), --outliers keep on the command line, "
+            "triangulates them)"]
 
 
 def _oriented_normals(normals: np.ndarray | None, P: np.ndarray, solid: np.ndarray, name: str,

@@ -410,6 +410,10 @@ def _as_target(mesh: SimplexMesh, target: Any) -> int | CellPoint:
         if not 0 <= int(target) < mesh.n_vertices:
             raise SourceError(f"target vertex {int(target)} is out of range: the mesh has {mesh.n_vertices} "
                               "vertices")
+        if not mesh.referenced[int(target)]:  # a cloud's outlier has a distance (carried), but no cell to descend
+            raise ParameterError(f"target vertex {int(target)} is in no {mesh.reference.words.one} (a loose vertex, or "
+                                 "a point cloud's outlier, line point or isolated point, left out of its triangles): "
+                                 "no path runs from it")
         return int(target)
     wrong = f"target must be a vertex index, a {kind.__name__} or a finite (3,) position, got {target!r}"
     try:
