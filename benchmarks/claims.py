@@ -509,11 +509,14 @@ CLAIMS: list[Claim] = [
        (POINTCLOUDS, "| kitten (9K) | 1.32 % | **0.151 %**, 3.1× (4,727) | 0.375 %, 2.3× (1,999) | 0.40 / 1.33 |"),
        (POINTCLOUDS, "the default had 0.18–1.01 of the 1/10 copy's"),
        (POINTCLOUDS, "the vertex clouds of the 13 shared scans and CAD parts 0.000–0.024")),
-    _r("pointclouds-default-all", "2026-12-06", "`python benchmarks/point_clouds.py --meshes bunny horse armadillo "
-       "lucy_20k dragon_20k buddha camelhead_open bug_surface thingi_32770 --sets union --no-order2 --repeats 1` "
-       "(19:46 UTC, load 0.7; the clean thingi_32770 copy that lost a part: 17:48 UTC)",
+    _r("pointclouds-random-all", "2026-12-07", "`CVXGEODESIC_THREADS=1 python benchmarks/point_clouds.py --resample "
+       "1.0,0.25 --noise 0 --sets union --no-order2 --m 0 --repeats 1` (06:50 UTC, load 0.6–0.9)",
+       (POINTCLOUDS, "pc-heat's error on all 26 clouds, at most half on 15")),
+    _r("pointclouds-default-all", "2026-12-07", "`CVXGEODESIC_THREADS=1 python benchmarks/point_clouds.py --meshes "
+       "bunny horse armadillo lucy_20k dragon_20k buddha camelhead_open bug_surface thingi_32770 --sets union "
+       "--no-order2 --repeats 1` (06:47 UTC, load 1.2 falling; before: 2026-12-06 19:46 UTC)",
        (POINTCLOUDS, "| bunny | 0 / 0.1 / 0.3 % | 1.10 / 2.99 / 15.4 % |"),
-       (POINTCLOUDS, "more accurate than order 1 on 10 of these 12 clouds (0.44–0.95 of its")),
+       (POINTCLOUDS, "more accurate than order 1 on 10 of these 12 clouds (0.17–0.90 of its")),
     _r("pointclouds-noisy-copy", "2026-12-06", "`python benchmarks/point_clouds.py --meshes kitten bimba max_planck "
        "fandisk --sets union --no-order2 --noise 0.001,0.003 --denoise 2 --resolution auto --repeats 2` (19:49 UTC, "
        "load 1.2); `--meshes bunny horse armadillo lucy_20k dragon_20k buddha camelhead_open bug_surface thingi_32770 "

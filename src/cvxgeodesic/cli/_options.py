@@ -68,8 +68,9 @@ def add_input_argument(p: argparse.ArgumentParser) -> None:
     g.add_argument("--triangles", default=None, choices=CLOUD_TRIANGLES,
                    help="which fan triangles to solve on (default union)")
     g.add_argument("--outliers", default=None, choices=CLOUD_OUTLIERS,
-                   help="isolated outliers and points whose neighbours lie on a line: left out with a note "
-                        "(exclude, the default), kept in the triangles (keep), or refused (error)")
+                   help="isolated outliers and points whose neighbours lie on a line: left out of the triangles "
+                        "with a note, their distance carried from their neighbours (exclude, the default), kept in "
+                        "the triangles (keep), or refused (error)")
     g.add_argument("--ignore-normals", dest="use_normals", action="store_const", const=False, default=None,
                    help="build the fans without the file's normals (by default oriented normals keep the fans from "
                         "crossing thin walls and sharp creases)")

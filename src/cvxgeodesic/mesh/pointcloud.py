@@ -1,7 +1,8 @@
 """Point clouds: raw points (no faces) solved on the triangles of their local Delaunay fans.
 
 :class:`PointCloud` validates the points (finite, at least four, not all on a line; exact duplicates merged with a
-note; isolated outliers and points of line-like neighbourhoods left out with a note, :mod:`.cloud_outliers`) and
+note; isolated outliers and points of line-like neighbourhoods left out with a note, :mod:`.cloud_outliers`, a
+solve's field carried to them from their neighbours, :meth:`PointCloud.reach_left_out`) and
 builds a triangle soup from ``potpourri3d.PointCloudLocalTriangulation``: for every point, the fan of triangles
 around it in its tangent plane (its ``neighbours`` nearest points, Delaunay in the plane fitted to them). The soup
 is a :class:`CloudMesh`, a :class:`~cvxgeodesic.mesh.trimesh.TriMesh` that remembers its cloud, so every function
