@@ -67,8 +67,8 @@ def principal_planes(P: np.ndarray, idx: np.ndarray) -> tuple[np.ndarray, np.nda
     centres = np.einsum("nki->ni", X) / X.shape[1]  # 2-3x faster than mean(axis=1) over the middle axis
     Q = X - centres[:, None, :]
     normals = plane_fits(scatter_matrices(Q))[1]
-    heights = np.einsum("nki,ni->nk", Q, normals)  # the least eigenvalue, their sum of squares, is good to 1e-16 of
-    # the largest only
+    # the spread from the heights: the least eigenvalue (their sum of squares) is good to 1e-16 of the largest only
+    heights = np.einsum("nki,ni->nk", Q, normals)
     return normals, centres, np.sqrt(np.einsum("nk,nk->n", heights, heights) / X.shape[1])
 
 
