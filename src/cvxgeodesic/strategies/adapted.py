@@ -59,13 +59,11 @@ from ..sources import SourceSet, resolve_sources
 from .base import Callback, SolveConfig
 from .decimation import (
     CLOUD_AGGS,
-    CLOUD_EULER_SLACK,
     MIN_PART_FACES,
     MIN_RESOLUTION_FACES,
     RETRY_AGGS,
     SIMPLIFIER,
     _decimated_parts,
-    _euler,
     _unsuitable,
     fold_excess,
     fold_reference,
@@ -570,7 +568,6 @@ class Adapted:
         self.source, why = _decimation_source(mesh)
         self._targets = None if self.source is mesh else CLOUD_TARGETS
         self._aggs = RETRY_AGGS if self.source is mesh else CLOUD_AGGS
-        self._euler_slack = 0.0 if self.source is mesh else CLOUD_EULER_SLACK
         # a cloud's surface: its faces by the piece of the cloud's triangles their points are in (the labels the
         # points read the copy by); a mesh: its own components
         self._face_label = (self.source.component_labels if self.source is mesh else mesh.component_labels)[
@@ -630,16 +627,10 @@ class Adapted:
         (every decimation refused, or the copy lost part of the surface: :func:`_lost_surface`); and the mesh's
         component count where they were decimated one at a time."""
         coarse, why, made = _decimated_parts(self.source, target, targets=self._targets, aggs=self._aggs,
-                                             face_label=self._face_label, euler_slack=self._euler_slack)
+                                             face_label=self._face_label)
         self._record_decimation(made, "")
         if coarse is None:
             return None, why, None
-        before, after = _euler(self.source), _euler(coarse)
-        self.record["euler"] = (before, after)
-        if before != after:
-            self.notes.append(f"resolution={self.requested!r}: the copy's Euler characteristic is {after}, the "
-                              f"surface's {before} (a point cloud's surface: noise leaves handles a spacing wide; a "
-                              f"change of at most {CLOUD_EULER_SLACK:.0%} of it is accepted)")
         copy = _Copy(self.config, coarse, made.get("part_of_face"))
         lost = _lost_surface(copy)
         return (None, lost, None) if lost is not None else (copy, None, made.get("components"))

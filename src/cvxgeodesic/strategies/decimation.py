@@ -17,9 +17,9 @@ from ..mesh.decimate import simplify_mesh
 from ..mesh.simplex import unique_rows
 from ..mesh.trimesh import TriMesh
 
-__all__ = ["CLOUD_AGGS", "CLOUD_EULER_SLACK", "CREASE_ANGLE", "FOLD_ANGLE", "FOLD_MARGIN", "MAX_FACES_OVER",
-           "MIN_PART_FACES", "MIN_RESOLUTION_FACES", "RETRY_AGGS", "RETRY_TARGETS", "RETRY_TARGETS_LATER", "SIMPLIFIER",
-           "fold_excess", "fold_reference", "max_turn"]
+__all__ = ["CLOUD_AGGS", "CREASE_ANGLE", "FOLD_ANGLE", "FOLD_MARGIN", "MAX_FACES_OVER", "MIN_PART_FACES",
+           "MIN_RESOLUTION_FACES", "RETRY_AGGS", "RETRY_TARGETS", "RETRY_TARGETS_LATER", "SIMPLIFIER", "fold_excess",
+           "fold_reference", "max_turn"]
 
 #: The smallest face count ``resolution`` takes.
 MIN_RESOLUTION_FACES = 4
@@ -36,11 +36,6 @@ RETRY_TARGETS_LATER = 3
 #: failed try costs a decimation (0.03-0.18 s, 0.2-0.3x the point-cloud heat method's time) before the fallback to
 #: order 1.
 CLOUD_AGGS = (7.0, 5.0)
-#: A copy of a point cloud's surface may change its Euler characteristic by at most this fraction of it (a mesh's copy
-#: by none): noise leaves hundreds of handles a spacing wide in the surface through a statue's points, and a copy that
-#: closes one of them refused the copy altogether (buddha at 0.1 % noise: χ −1375 → −1374, order 1 on the cloud's
-#: triangles at 9.16 % where the copy reads 5.12 %, 2026-12-07). A surface of χ 2, 0 or −2 keeps it exactly.
-CLOUD_EULER_SLACK = 0.01
 #: fast-simplification's aggressiveness for the copies, tried in turn (:func:`_decimated`): 7 first (its default, the
 #: best on most meshes), then 5 and 3 for a copy that 7 folds or breaks (measured in docs/adapted.md).
 RETRY_AGGS = (7.0, 5.0, 3.0)
@@ -77,18 +72,16 @@ def _unsuitable(mesh: TriMesh) -> str | None:
 
 
 def _decimated(mesh: TriMesh, target: int, first_agg: float | None = None, targets: int | None = None,
-               aggs: tuple[float, ...] = RETRY_AGGS, euler_slack: float = 0.0,
-               ) -> tuple[TriMesh | None, str | None, dict[str, Any]]:
+               aggs: tuple[float, ...] = RETRY_AGGS) -> tuple[TriMesh | None, str | None, dict[str, Any]]:
     """The quadric copy of ``mesh`` with about ``target`` faces, ``(None, why, record)`` when no try gave one.
 
     The aggressiveness values ``aggs`` are tried in turn (``first_agg`` first when given; :data:`CLOUD_AGGS` for a
     point cloud's surface), and at each the targets of :data:`RETRY_TARGETS` (:data:`RETRY_TARGETS_LATER` of them
     after the first aggressiveness; at most ``targets`` of them when given: :data:`CLOUD_TARGETS` for a point cloud's
-    surface): a copy that changes the topology (its Euler characteristic by more than ``euler_slack`` of it:
-    :data:`CLOUD_EULER_SLACK` for a point cloud's surface) is refused and the next target tried (the collapses that
-    break a copy depend on where the decimation stops); a folded copy (:func:`fold_excess`) moves on to the next
-    aggressiveness (its folds do not go away with a few faces more or less: bimba at 1/10). The first copy neither
-    refused nor folded is kept; when every copy is folded, the least folded one, with a note.
+    surface): a copy that changes the topology is refused and the next target tried (the collapses that break a copy
+    depend on where the decimation stops); a folded copy (:func:`fold_excess`) moves on to the next aggressiveness
+    (its folds do not go away with a few faces more or less: bimba at 1/10). The first copy neither refused nor folded
+    is kept; when every copy is folded, the least folded one, with a note.
 
     Returns
     -------
@@ -110,7 +103,7 @@ def _decimated(mesh: TriMesh, target: int, first_agg: float | None = None, targe
         factors = RETRY_TARGETS if i == 0 else RETRY_TARGETS[:RETRY_TARGETS_LATER]
         for factor in factors[:targets]:
             faces = max(MIN_RESOLUTION_FACES, int(round(factor * target)))
-            coarse, why = _decimated_once(mesh, faces, agg, euler_slack)
+            coarse, why = _decimated_once(mesh, faces, agg)
             if coarse is None:
                 tries.append((agg, faces, str(why)))
                 continue
@@ -129,7 +122,7 @@ def _decimated(mesh: TriMesh, target: int, first_agg: float | None = None, targe
 
 
 def _decimated_parts(mesh: TriMesh, target: int, first_agg: float | None = None, targets: int | None = None,
-                     aggs: tuple[float, ...] = RETRY_AGGS, *, face_label: np.ndarray, euler_slack: float = 0.0,
+                     aggs: tuple[float, ...] = RETRY_AGGS, *, face_label: np.ndarray,
                      ) -> tuple[TriMesh | None, str | None, dict[str, Any]]:
     """:func:`_decimated` of a mesh in one or several components: each component decimated on its own to its share
     of ``target`` (the decimation never sees two, so it cannot merge them), or kept as it is below
@@ -146,7 +139,7 @@ def _decimated_parts(mesh: TriMesh, target: int, first_agg: float | None = None,
     """
     labels, counts = np.unique(face_label, return_counts=True)
     if labels.size == 1:
-        return _decimated(mesh, target, first_agg, targets, aggs, euler_slack)
+        return _decimated(mesh, target, first_agg, targets, aggs)
     V, F, part_of_face, tries = [], [], [], []
     record: dict[str, Any] = {"agg": None, "fold_angle": 0.0, "mesh_turn": 0.0, "folded": False,
                               "components": int(labels.size)}
@@ -157,7 +150,7 @@ def _decimated_parts(mesh: TriMesh, target: int, first_agg: float | None = None,
         part = TriMesh(mesh.V[used], np.searchsorted(used, faces), name=f"{mesh.name}[component {k + 1}]")
         share = int(round(target * count / mesh.n_faces))
         if share < count and share >= MIN_PART_FACES:
-            copy, why, made = _decimated(part, share, first_agg, targets, aggs, euler_slack)
+            copy, why, made = _decimated(part, share, first_agg, targets, aggs)
             tries += [(a, t, f"component {k + 1} of {labels.size}: {o}") for a, t, o in made["tries"]]
             if copy is None:
                 return None, f"component {k + 1} of {labels.size} ({count} faces): {why}", {"tries": tries}
@@ -250,16 +243,15 @@ def _without_fins(mesh: TriMesh) -> TriMesh:
     return TriMesh(mesh.V[used], local.reshape(-1, 3), name=mesh.name)
 
 
-def _decimated_once(mesh: TriMesh, target: int, agg: float = 7.0,
-                    euler_slack: float = 0.0) -> tuple[TriMesh | None, str | None]:
+def _decimated_once(mesh: TriMesh, target: int, agg: float = 7.0) -> tuple[TriMesh | None, str | None]:
     try:
         coarse = _without_fins(simplify_mesh(mesh, target, method="quadric", preserve_border=True, agg=agg))
     except Exception as exc:  # noqa: BLE001 - any failure of the extension falls back, with its message
         return None, f"the decimation failed ({type(exc).__name__}: {exc})"
     checks = ((not coarse.is_edge_manifold, "the decimated copy has non-manifold edges"),
               (coarse.n_components != 1, f"the decimated copy has {coarse.n_components} components"),
-              (abs(_euler(coarse) - _euler(mesh)) > euler_slack * abs(_euler(mesh)),
-               f"the decimated copy changed the Euler characteristic ({_euler(mesh)} -> {_euler(coarse)})"),
+              (_euler(coarse) != _euler(mesh), f"the decimated copy changed the Euler characteristic "
+                                               f"({_euler(mesh)} -> {_euler(coarse)})"),
               (coarse.degenerate_faces(0.0).size > 0, "the decimated copy has faces of zero area"),
               (agg < max(RETRY_AGGS) and coarse.n_faces > MAX_FACES_OVER * target,
                f"the decimation stopped at {coarse.n_faces} faces"))
