@@ -512,6 +512,10 @@ CLAIMS: list[Claim] = [
     _r("pointclouds-random-all", "2026-12-07", "`CVXGEODESIC_THREADS=1 python benchmarks/point_clouds.py --resample "
        "1.0,0.25 --noise 0 --sets union --no-order2 --m 0 --repeats 1` (06:50 UTC, load 0.6–0.9)",
        (POINTCLOUDS, "pc-heat's error on all 26 clouds, at most half on 15")),
+    _r("pointclouds-random-noisy", "2026-12-07", "`CVXGEODESIC_THREADS=1 python benchmarks/point_clouds.py --resample "
+       "1.0,0.25 --noise 0.001,0.003 --sets union --no-order2 --m 0 --repeats 1` (06:56 UTC, errors; 07:09 UTC, "
+       "times, with the copies' Euler slack since reverted)",
+       (POINTCLOUDS, "the default had 0.19–1.77 of pc-heat's error, at most")),
     _r("pointclouds-default-all", "2026-12-07", "`CVXGEODESIC_THREADS=1 python benchmarks/point_clouds.py --meshes "
        "bunny horse armadillo lucy_20k dragon_20k buddha camelhead_open bug_surface thingi_32770 --sets union "
        "--no-order2 --repeats 1` (06:47 UTC, load 1.2 falling; before: 2026-12-06 19:46 UTC)",
