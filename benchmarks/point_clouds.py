@@ -17,7 +17,8 @@ on a copy, ``resolution="auto"``, or its fallback to order 1 on the cloud's tria
 Columns: mean and max relative error over the reachable points (``cvxgeodesic.evaluation.errors.relative_error``),
 time over pc-heat's (best of ``--repeats``; building the cloud's triangles included for the library's methods:
 each is a fresh ``PointCloud`` + solver + solve; pc-heat's includes its own set-up), and unreachable points
-(infinite distance).
+(infinite distance). The default's label also counts the points left out of the cloud's triangles (outliers, line
+points) that took their distance from their neighbours (``PointCloud.reach_left_out``).
 ``--denoise 1,2`` adds rows of ``qclp`` at both orders on the first set of the cloud denoised by that many passes of
 jet projection (``PointCloud(P, denoise=passes)``, :mod:`cvxgeodesic.mesh.denoise`; its time included), and, on vertex
 clouds, a ``floor`` row: the exact field read at each noisy point's closest point of the mesh (the error that no
@@ -290,11 +291,14 @@ def _resolution(value: str, cloud) -> str | int | float:
 
 
 def _solved_on(res) -> str:
-    """What an adapted solve ran on: the copy's faces, or the fallback's reason (order 1 on the cloud's triangles)."""
+    """What an adapted solve ran on: the copy's faces, or the fallback's reason (order 1 on the cloud's triangles);
+    and how many points left out of the triangles (outliers) took their distance from their neighbours."""
     ad = res.info.extra.get("adapted")
+    carried = res.info.extra.get("left_out_reached", 0)
+    also = f"; {carried} left-out point{'s' if carried > 1 else ''} carried" if carried else ""
     if ad is None:
-        return "the cloud's triangles"
-    return f"{ad['faces']} faces" if ad["fallback"] is None else f"fallback: {ad['fallback']}"
+        return "the cloud's triangles" + also
+    return (f"{ad['faces']} faces" if ad["fallback"] is None else f"fallback: {ad['fallback']}") + also
 
 
 def poisson_subsample(P: np.ndarray, fraction: float, seed: int = 1) -> np.ndarray:
