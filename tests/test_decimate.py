@@ -34,3 +34,39 @@ def test_the_quadric_copy_does_not_depend_on_where_the_mesh_lies():
     there = simplify_mesh(TriMesh(sphere.V + offset, sphere.F), 1000, method="quadric")
     np.testing.assert_array_equal(there.F, here.F)
     np.testing.assert_allclose(there.V - offset, here.V, atol=1e-7)
+
+
+def _grid_with_holes(n: int, holes: int) -> TriMesh:
+    """An ``n`` × ``n`` grid of the unit square without ``holes`` of its triangles, three squares apart:
+    χ = 1 − holes."""
+    from cvxgeodesic.mesh.generate import grid_plane
+
+    grid = grid_plane(n)
+    cell = grid.V[grid.F].mean(axis=1) * n
+    picked = np.flatnonzero((np.floor(cell[:, 0]) % 3 == 1) & (np.floor(cell[:, 1]) % 3 == 1) & (cell[:, 0] % 1 < 0.5))
+    return TriMesh(grid.V, np.delete(grid.F, picked[:holes], axis=0))
+
+
+@pytest.mark.parametrize("holes", [0, 1, 12])
+def test_a_kept_border_copy_stops_at_the_face_floor_and_is_the_same_copy(holes, monkeypatch):
+    from cvxgeodesic.mesh import decimate
+
+    mesh = _grid_with_holes(24, holes)
+    floor = decimate.kept_border_floor(mesh)
+    boundary = np.unique(mesh.boundary_facets).size
+    assert floor == boundary - 2 * (1 - holes)  # a disc with holes: χ = 1 − holes, its loops apart
+    asked = simplify_mesh(mesh, 4, method="quadric", preserve_border=True)  # far below the floor
+    assert asked.n_faces >= floor
+    monkeypatch.setattr(decimate, "kept_border_floor", lambda m: 0)  # fast-simplification asked for 4 faces
+    unasked = simplify_mesh(mesh, 4, method="quadric", preserve_border=True)
+    np.testing.assert_array_equal(asked.F, unasked.F)
+    np.testing.assert_array_equal(asked.V, unasked.V)
+
+
+def test_the_face_floor_counts_a_vertex_where_two_boundary_loops_touch_once():
+    from cvxgeodesic.mesh.decimate import kept_border_floor
+
+    # two triangles sharing one vertex: 5 vertices, 6 boundary edges, χ = 1; fully decimated it keeps both faces
+    bowtie = TriMesh(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0]], dtype=float),
+                     np.array([[0, 1, 2], [0, 3, 4]]))
+    assert kept_border_floor(bowtie) == 2 * 5 - 6 - 2 * 1 == 2

@@ -14,7 +14,7 @@ from ..errors import MeshError, ParameterError
 from ..validation import check_choice
 from .trimesh import TriMesh
 
-__all__ = ["SIMPLIFIERS", "decimate_timeout", "simplify_mesh"]
+__all__ = ["SIMPLIFIERS", "decimate_timeout", "kept_border_floor", "simplify_mesh"]
 
 
 def _fast_simplification():
@@ -101,6 +101,36 @@ def _decimation_offset(mesh: TriMesh) -> np.ndarray:
     return np.round(V.min(axis=0) / last_bit) * last_bit
 
 
+def kept_border_floor(mesh: TriMesh) -> int:
+    """The fewest faces a decimation that keeps every boundary vertex and the topology can leave: ``2B − Bₑ − 2χ``.
+
+    A triangulated surface with ``V`` vertices, ``Bₑ`` boundary edges and Euler characteristic ``χ`` has
+    ``F = 2V − Bₑ − 2χ`` faces (each face has three edges, each inner edge two faces, each boundary edge one), and with
+    its ``B`` boundary vertices kept ``V ≥ B`` (``B = Bₑ`` on boundary loops that touch nowhere; a vertex where two
+    loops touch counts once). fast-simplification asked for fewer faces runs all of its 100 passes trying (fandisk's
+    0.1 %-noise cloud surface: 27.6 ms for the 2,461 faces it could reach, 11.3 ms asked for 2,461, the same copy);
+    asked for the floor it stops when it gets there. A closed surface's floor is ``−2χ``, below any target.
+
+    Parameters
+    ----------
+    mesh : TriMesh
+        Edge-manifold.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> from cvxgeodesic.mesh.generate import grid_plane
+    >>> kept_border_floor(grid_plane(10))  # a disc (χ = 1) with 40 boundary vertices
+    38
+    """
+    edges = mesh.boundary_facets
+    euler = int(mesh.referenced.sum()) - len(mesh.edges) + mesh.n_faces
+    return 2 * np.unique(edges).size - len(edges) - 2 * euler
+
+
 def simplify_mesh(mesh: TriMesh, target_faces: int, method: str = "shortest-edge", *,
                   preserve_border: bool = False, agg: float = 7.0) -> TriMesh:
     """Decimate a mesh to about ``target_faces`` faces by edge collapses.
@@ -154,10 +184,11 @@ def simplify_mesh(mesh: TriMesh, target_faces: int, method: str = "shortest-edge
     if result is None:
         fs = _fast_simplification()
         offset = _decimation_offset(mesh)
+        # below the kept boundary's face floor fast-simplification would run all of its 100 passes without a collapse
+        count = max(int(target_faces), kept_border_floor(mesh)) if preserve_border else int(target_faces)
         # writable copies: the extension rejects the read-only arrays of a TriMesh
         result = fs.simplify(np.array(mesh.V - offset, dtype=np.float64), np.array(mesh.F, dtype=np.int64),
-                             target_count=int(target_faces), preserve_border=bool(preserve_border),
-                             agg=float(agg))
+                             target_count=count, preserve_border=bool(preserve_border), agg=float(agg))
     pts = np.asarray(result[0], dtype=np.float64) + offset
     tris = np.asarray(result[1], dtype=np.int64).reshape(-1, 3)
     ok = (tris[:, 0] != tris[:, 1]) & (tris[:, 1] != tris[:, 2]) & (tris[:, 0] != tris[:, 2])
