@@ -483,8 +483,9 @@ CLAIMS: list[Claim] = [
        "UTC, load 0.6, against 15:52 UTC, load 0.3–1.0; with three decimation tries: 14:48 UTC, load 0.4–0.8)",
        (POINTCLOUDS, "3.50 / 3.69 / 4.98 % on the CAD part"), (POINTCLOUDS, "(2.4–2.7× pc-heat's time)")),
     _r("pointclouds-default", "2026-12-07", "`CVXGEODESIC_THREADS=1 python benchmarks/point_clouds.py --meshes kitten "
-       "bimba max_planck fandisk --sets union --no-order2 --repeats 2` (two runs, 06:33 and 06:34 UTC, load 0.3–0.7; "
-       "before: 05:02 and 05:04 UTC, load 0.7–0.9, and 00:27 UTC, load 0.8); the noise readings and "
+       "bimba max_planck fandisk --sets union --no-order2 --repeats 2` (two runs, 07:42 and 07:43 UTC, load 1.1–1.3; "
+       "06:33 and 06:34 UTC, load 0.3–0.7; before: 05:02 and 05:04 UTC, load 0.7–0.9, and 00:27 UTC, load 0.8); "
+       "the noise readings and "
        "(2026-12-06) the noisier "
        "draws (scratch scripts over the vertex clouds, one noise draw per seed): " + NO_SCRIPT,
        (POINTCLOUDS, "| kitten | 0 / 0.1 / 0.3 % | 1.32 / 1.54 / 7.73 % |"),
