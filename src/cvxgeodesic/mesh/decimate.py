@@ -14,7 +14,7 @@ from ..errors import MeshError, ParameterError
 from ..validation import check_choice
 from .trimesh import TriMesh
 
-__all__ = ["SIMPLIFIERS", "decimate_timeout", "kept_border_floor", "simplify_mesh"]
+__all__ = ["SIMPLIFIERS", "decimate_timeout", "euler_characteristic", "kept_border_floor", "simplify_mesh"]
 
 
 def _fast_simplification():
@@ -127,8 +127,12 @@ def kept_border_floor(mesh: TriMesh) -> int:
     38
     """
     edges = mesh.boundary_facets
-    euler = int(mesh.referenced.sum()) - len(mesh.edges) + mesh.n_faces
-    return 2 * np.unique(edges).size - len(edges) - 2 * euler
+    return 2 * np.unique(edges).size - len(edges) - 2 * euler_characteristic(mesh)
+
+
+def euler_characteristic(mesh: TriMesh) -> int:
+    """``V − E + F`` over the vertices of some face: what a copy must keep (the adapted solves' topology check)."""
+    return int(mesh.referenced.sum()) - len(mesh.edges) + mesh.n_faces
 
 
 def simplify_mesh(mesh: TriMesh, target_faces: int, method: str = "shortest-edge", *,

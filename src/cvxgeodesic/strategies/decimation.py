@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from ..mesh.decimate import simplify_mesh
+from ..mesh.decimate import euler_characteristic, simplify_mesh
 from ..mesh.simplex import unique_rows
 from ..mesh.trimesh import TriMesh
 
@@ -55,10 +55,6 @@ MAX_FACES_OVER = 1.25
 MIN_PART_FACES = 50
 #: How the solve mesh is made (recorded in ``info.extra["adapted"]["simplifier"]``).
 SIMPLIFIER = "quadric (fast-simplification, boundary kept)"
-
-
-def _euler(mesh: TriMesh) -> int:
-    return int(mesh.referenced.sum()) - len(mesh.edges) + mesh.n_faces
 
 
 def _unsuitable(mesh: TriMesh) -> str | None:
@@ -250,8 +246,9 @@ def _decimated_once(mesh: TriMesh, target: int, agg: float = 7.0) -> tuple[TriMe
         return None, f"the decimation failed ({type(exc).__name__}: {exc})"
     checks = ((not coarse.is_edge_manifold, "the decimated copy has non-manifold edges"),
               (coarse.n_components != 1, f"the decimated copy has {coarse.n_components} components"),
-              (_euler(coarse) != _euler(mesh), f"the decimated copy changed the Euler characteristic "
-                                               f"({_euler(mesh)} -> {_euler(coarse)})"),
+              (euler_characteristic(coarse) != euler_characteristic(mesh),
+               f"the decimated copy changed the Euler characteristic ({euler_characteristic(mesh)} -> "
+               f"{euler_characteristic(coarse)})"),
               (coarse.degenerate_faces(0.0).size > 0, "the decimated copy has faces of zero area"),
               (agg < max(RETRY_AGGS) and coarse.n_faces > MAX_FACES_OVER * target,
                f"the decimation stopped at {coarse.n_faces} faces"))
