@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .frames import plane_fits, scatter_matrices
+from .frames import neighbourhood_planes
 
 __all__ = ["DEFECT_NEIGHBOURS", "GAP", "HEIGHT_MADS", "LINE_TOL", "SPREAD_HEIGHT",
            "SPREAD_ISOLATION", "SPREAD_MAX", "CloudDefects", "defect_statistics", "find_defects",
@@ -125,9 +125,7 @@ def defect_statistics(P: np.ndarray, k: int = DEFECT_NEIGHBOURS,
     dist, idx = dist[:, :k], idx[:, :k]
     mean = dist.mean(axis=1)
     local = np.median(mean[idx], axis=1)
-    X = P[idx]
-    centre = np.einsum("nki->ni", X) / X.shape[1]  # 2-3x faster than mean(axis=1) over the middle axis
-    w, normal = plane_fits(scatter_matrices(X - centre[:, None, :]))  # w ascending
+    centre, _, w, normal = neighbourhood_planes(P[idx])  # w ascending
     height = np.abs(np.einsum("ni,ni->n", P - centre, normal))
     flat = w[:, 1] / np.maximum(w[:, 2], np.finfo(float).tiny)
     return np.c_[mean / local, height / local, mean / np.median(mean), flat, _group_sizes(dist, idx)]

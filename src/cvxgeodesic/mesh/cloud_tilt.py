@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .frames import plane_fits, scatter_matrices
+from .frames import neighbourhood_planes
 from .simplex import unique_rows
 
 __all__ = ["TILT_ANGLE", "TILT_NEIGHBOURS", "TILT_OFFSET", "principal_planes", "stranded_points", "tilted_triangles",
@@ -63,13 +63,10 @@ def principal_planes(P: np.ndarray, idx: np.ndarray) -> tuple[np.ndarray, np.nda
     spread : (n,) float ndarray
         The root mean square distance of the neighbours from the plane.
     """
-    X = P[idx[:, :TILT_NEIGHBOURS]]
-    centres = np.einsum("nki->ni", X) / X.shape[1]  # 2-3x faster than mean(axis=1) over the middle axis
-    Q = X - centres[:, None, :]
-    normals = plane_fits(scatter_matrices(Q))[1]
+    centres, Q, _, normals = neighbourhood_planes(P[idx[:, :TILT_NEIGHBOURS]])
     # the spread from the heights: the least eigenvalue (their sum of squares) is good to 1e-16 of the largest only
     heights = np.einsum("nki,ni->nk", Q, normals)
-    return normals, centres, np.sqrt(np.einsum("nk,nk->n", heights, heights) / X.shape[1])
+    return normals, centres, np.sqrt(np.einsum("nk,nk->n", heights, heights) / Q.shape[1])
 
 
 Planes = tuple[np.ndarray, np.ndarray, np.ndarray]
