@@ -12,7 +12,9 @@ is vertex ``i`` of the mesh; resampled points are inserted into the mesh as vert
   (``--sets``), and the smoothed ``qcqp-dirichlet`` (``--m``) at both orders on the first set.
 
 ``the default`` is ``GeodesicSolver(PointCloud(P)).solve(src)``: what a user gets without options (``qclp`` at order 2
-on a copy, ``resolution="auto"``, or its fallback to order 1 on the cloud's triangles, named in the label).
+on a copy, ``resolution="auto"``, or its fallback to order 1 on the cloud's triangles, named in the label; "denoised"
+where ``PointCloud``'s ``denoise="auto"`` moved the points onto their jets first). Every other row builds the cloud
+of the points as given (``denoise=None``) unless it says "denoised".
 
 Columns: mean and max relative error over the reachable points (``cvxgeodesic.evaluation.errors.relative_error``),
 time over pc-heat's (best of ``--repeats``; building the cloud's triangles included for the library's methods:
@@ -218,7 +220,7 @@ def compare(name: str, noise: float, P: np.ndarray, exact: np.ndarray, src: int,
             runs += [("qcqp-dirichlet", order, args.m) for order in (1, 2) if order == 1 or not args.no_order2]
         for method, order, m in runs:
             def solve(kind=kind, method=method, order=order, m=m):
-                cloud = cg.PointCloud(P, triangles=kind)
+                cloud = cg.PointCloud(P, triangles=kind, denoise=None)  # the points as given
                 return cg.GeodesicSolver(cloud, method, order=order, m=m).solve(src).distance
             d, t = timed(solve, args.repeats)
             label = f"{method} order {order}{f' m={m:g}' if m else ''}, {kind}"
@@ -235,7 +237,8 @@ def compare_normals(name: str, noise: float, P: np.ndarray, normals: np.ndarray,
     row(name, noise, f"the default ({_solved_on(res)}), with normals", res.distance, exact, src, t, t_heat)
     for order in (1,) if args.no_order2 else (1, 2):
         def solve(order=order):
-            return cg.GeodesicSolver(cg.PointCloud(P, normals, triangles=kind), "qclp", order=order).solve(src).distance
+            cloud = cg.PointCloud(P, normals, triangles=kind, denoise=None)  # the points as given
+            return cg.GeodesicSolver(cloud, "qclp", order=order).solve(src).distance
         d, t = timed(solve, args.repeats)
         row(name, noise, f"qclp order {order}, {kind}, with normals", d, exact, src, t, t_heat)
 
@@ -296,9 +299,11 @@ def _solved_on(res) -> str:
     ad = res.info.extra.get("adapted")
     carried = res.info.extra.get("left_out_reached", 0)
     also = f"; {carried} left-out point{'s' if carried > 1 else ''} carried" if carried else ""
+    denoised = any("denoise='auto'" in note for note in res.info.notes)  # PointCloud's "auto" took the jets
+    first = "denoised; " if denoised else ""
     if ad is None:
-        return "the cloud's triangles" + also
-    return (f"{ad['faces']} faces" if ad["fallback"] is None else f"fallback: {ad['fallback']}") + also
+        return first + "the cloud's triangles" + also
+    return first + (f"{ad['faces']} faces" if ad["fallback"] is None else f"fallback: {ad['fallback']}") + also
 
 
 def poisson_subsample(P: np.ndarray, fraction: float, seed: int = 1) -> np.ndarray:
@@ -333,7 +338,7 @@ def compare_subsampled(name: str, noise: float, P: np.ndarray, exact: np.ndarray
     for fraction in (float(x) for x in args.subsample.split(",")):
         def solve(fraction=fraction):
             keep = poisson_subsample(P, fraction)
-            cloud = cg.PointCloud(P[keep])
+            cloud = cg.PointCloud(P[keep], denoise=None)
             faces, bary, _ = closest_point_index(cloud.mesh).query(np.ascontiguousarray(P))
             res = cg.GeodesicSolver(cloud, "qclp", order=2).solve([SurfacePoint(int(faces[src]), bary[src])])
             d = np.asarray(res.field.distance_at(faces, bary), dtype=float)
@@ -356,7 +361,7 @@ def compare_neighbours(name: str, noise: float, P: np.ndarray, exact: np.ndarray
 
     def solve(k: int | None, order: int) -> tuple[np.ndarray, int]:
         if k is None:
-            mesh = cg.PointCloud(P, outliers="keep").mesh  # the fans alone, as the rows of local_fans
+            mesh = cg.PointCloud(P, outliers="keep", denoise=None).mesh  # the fans alone, as the rows of local_fans
         else:
             tri, owner = local_fans(P, k)
             mesh = CloudMesh(P, triangle_set(tri, owner, P, "union")[0])

@@ -305,7 +305,7 @@ def test_the_command_line_builds_the_cloud_with_its_options(tmp_path, capsys):
     assert main([*base, "--overwrite", "--denoise", "1"]) == 0
     np.testing.assert_allclose(np.load(out), cg.geodesic_distance(PointCloud(X, denoise=1), 0), rtol=1e-6, atol=1e-9)
     assert main([*base, "--overwrite", "--denoise", "11"]) == 2
-    assert "denoise must be None, 'jet' or an integer from 0 to 10" in capsys.readouterr().err
+    assert "denoise must be 'auto', None, 'jet' or an integer from 0 to 10" in capsys.readouterr().err
     mesh = tmp_path / "m.obj"
     mesh.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
     assert main(["distance", str(mesh), "--source", "0", "--neighbours", "12", "-o", str(tmp_path / "m.npy")]) == 2

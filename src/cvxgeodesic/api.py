@@ -30,6 +30,7 @@ from .solvers._interrupt import reporting_to
 from .sources import resolve_sources
 from .strategies import SolveConfig, SolveStrategy, make_strategy, resolve_target
 from .strategies.adapted import resolve_resolution
+from .strategies.cloud_default import denoised_copy_refusal
 from .validation import (
     check_choice,
     check_count,
@@ -314,20 +315,26 @@ class GeodesicSolver:
     def _default_resolution(self, *, multires: bool, medium: str, smoothing: bool) -> Any:
         """The resolution of ``resolution=None`` and ``order=None``: the domain's where the capability table has an
         adapted solve for this method, medium and smoothing, else ``"mesh"``; on a point cloud too noisy for a copy
-        (:meth:`~cvxgeodesic.mesh.pointcloud.PointCloud.default_refusal`), ``"mesh"`` with a note."""
+        (:meth:`~cvxgeodesic.mesh.pointcloud.PointCloud.default_refusal`), or denoised with a surface whose holes
+        keep its copy above target (:func:`~cvxgeodesic.strategies.cloud_default.denoised_copy_refusal`), ``"mesh"``
+        with a note."""
         resolution = self.domain.default_resolution
         if resolution == "mesh" or multires or not supported(
                 self.method, domain=self.domain.name, order=2, medium=medium, smoothing=smoothing, resolution=True):
             return "mesh"
         cloud = getattr(self.mesh, "cloud", None)
-        why = None if cloud is None else cloud.default_refusal()
+        if cloud is None:
+            return resolution
+        why = cloud.default_refusal()  # noisy points as given: order 1 on their triangles beats a copy of them
+        advice = ("; on the cloud denoised first (PointCloud(..., denoise='jet')) it was more accurate on most "
+                  "noisy clouds measured, at up to twice the time")
+        if why is None:
+            why, advice = denoised_copy_refusal(self.mesh, resolution), ""
         if why is None:
             return resolution
-        self._default_notes.append(  # a noisy cloud: order 1 on its own triangles beats a copy of the raw cloud
+        self._default_notes.append(
             f"{self.mesh.name}: solved at order 1 on its triangles, not at order 2 on a copy (the default, "
-            f"resolution={resolution!r}): {why} (docs/pointclouds.md); resolution={resolution!r} asks for it; on "
-            "the cloud denoised first (PointCloud(..., denoise='jet')) it was more accurate on most noisy clouds "
-            "measured, at up to twice the time")
+            f"resolution={resolution!r}): {why} (docs/pointclouds.md); resolution={resolution!r} asks for it{advice}")
         return "mesh"
 
     def _check_method_and_solver(self, method: Any, solver: Any) -> None:

@@ -74,24 +74,33 @@ def add_input_argument(p: argparse.ArgumentParser) -> None:
     g.add_argument("--ignore-normals", dest="use_normals", action="store_const", const=False, default=None,
                    help="build the fans without the file's normals (by default oriented normals keep the fans from "
                         "crossing thin walls and sharp creases)")
-    g.add_argument("--denoise", type=denoise_spec, default=None, metavar="jet|PASSES",
-                   help="move the points onto local degree-2 fits before the triangles are built: jet (two passes) "
-                        "or a number of passes; for noisy scans with --order 2 (docs/pointclouds.md)")
+    g.add_argument("--denoise", type=denoise_spec, default=None, metavar="auto|none|jet|PASSES",
+                   help="move the points onto local degree-2 fits before the triangles are built: auto (the "
+                        "default: two passes where the points read as noisy, and there are at least 6,000), none, "
+                        "jet (two passes) or a number of passes (docs/pointclouds.md)")
+
+
+#: ``--denoise none``: ``PointCloud(..., denoise=None)``, the points as given.
+NO_DENOISE = "none"
 
 
 def denoise_spec(text: str) -> str | int:
-    """``--denoise``: ``jet`` or a number of passes (its range is ``PointCloud``'s check)."""
-    if text == "jet":
+    """``--denoise``: ``auto``, ``none``, ``jet`` or a number of passes (its range is ``PointCloud``'s check)."""
+    if text in ("auto", NO_DENOISE, "jet"):
         return text
     try:
         return int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected 'jet' or a number of passes, got {text!r}") from None
+        raise argparse.ArgumentTypeError(f"expected 'auto', 'none', 'jet' or a number of passes, "
+                                         f"got {text!r}") from None
 
 
 def cloud_options(args: argparse.Namespace) -> dict[str, Any]:
     """The point-file options given on the command line, as :class:`~cvxgeodesic.PointCloud` keywords."""
-    return {k: getattr(args, k) for k in CLOUD_OPTIONS if getattr(args, k, None) is not None}
+    options = {k: getattr(args, k) for k in CLOUD_OPTIONS if getattr(args, k, None) is not None}
+    if options.get("denoise") == NO_DENOISE:
+        options["denoise"] = None  # given, as None: the points as given, not the default "auto"
+    return options
 
 
 def output_help() -> str:

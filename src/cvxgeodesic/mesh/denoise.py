@@ -11,12 +11,16 @@ position. Pure numpy and scipy; docs/pointclouds.md measures what it does to the
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..errors import ParameterError
 from .frames import plane_fits, scatter_matrices, tangent_frames
 
-__all__ = ["DEFAULT_DENOISE_NEIGHBOURS", "DEFAULT_PASSES", "NOISE_SAMPLE", "jet_noise", "jet_project"]
+__all__ = ["DEFAULT_DENOISE_NEIGHBOURS", "DEFAULT_PASSES", "DENOISE_PASSES", "MAX_DENOISE_PASSES", "NOISE_SAMPLE",
+           "denoise_passes", "denoised_with_note", "jet_noise", "jet_project"]
 
 #: Neighbours of each fit (the point itself not counted; a degree-2 jet has 6 coefficients). Measured on kitten and
 #: bimba (docs/pointclouds.md, "Denoised clouds"): one pass of 24 (CGAL's examples) removes the most noise but costs
@@ -24,6 +28,10 @@ __all__ = ["DEFAULT_DENOISE_NEIGHBOURS", "DEFAULT_PASSES", "NOISE_SAMPLE", "jet_
 #: 1.3-1.9x and remove more of the noise (order 2 at 0.3 %: 1.4-1.6 % against 1.8-2.0 % after one, 1.0-1.4 % with 24).
 DEFAULT_DENOISE_NEIGHBOURS = 12
 DEFAULT_PASSES = 1
+#: Passes of jet projection of ``PointCloud``'s ``denoise="jet"`` (and of ``"auto"`` where it denoises;
+#: docs/pointclouds.md, "Denoised clouds"), and the most it takes.
+DENOISE_PASSES = 2
+MAX_DENOISE_PASSES = 10
 #: Points fitted at once: bounds the (chunk, k, 6) design arrays to a few tens of MB.
 CHUNK = 20000
 #: Relative ridge on the normal equations (coordinates scaled by each neighbourhood's radius): keeps a fit of
@@ -128,3 +136,32 @@ def _project(X: np.ndarray, idx: np.ndarray, rows: np.ndarray, degree: int) -> n
     coef = np.linalg.solve(N, np.einsum("mtk,mk->mt", AtW, z)[..., None])[..., 0]
     height = coef[:, 0] * np.sqrt(h2[:, 0])  # the fit's height at the point's own tangent position (u = v = 0)
     return p + height[:, None] * frame[:, :, 0]
+
+
+def denoise_passes(denoise: Any) -> int | None:
+    """The passes of jet projection that ``PointCloud``'s ``denoise`` asks for (0: none), None for ``"auto"``
+    (decided by the cloud's noise)."""
+    if denoise is None:
+        return 0
+    if isinstance(denoise, str) and denoise == "auto":
+        return None
+    if isinstance(denoise, str) and denoise == "jet":
+        return DENOISE_PASSES
+    if isinstance(denoise, int | np.integer) and not isinstance(denoise, bool) and 0 <= denoise <= MAX_DENOISE_PASSES:
+        return int(denoise)
+    raise ParameterError(f"denoise must be 'auto', None, 'jet' or an integer from 0 to {MAX_DENOISE_PASSES} "
+                         f"(passes of jet projection), got {denoise!r}")
+
+
+def denoised_with_note(P: np.ndarray, passes: int, name: str, notes: list[str],
+              neighbours: np.ndarray | None = None, why: str | None = None) -> np.ndarray:
+    """``P`` moved onto the jets of its neighbourhoods ``passes`` times, with a note of how far (and ``why``, for
+    ``denoise="auto"``); ``neighbours`` as :func:`~cvxgeodesic.mesh.denoise.jet_project` takes them."""
+    k = min(DEFAULT_DENOISE_NEIGHBOURS, P.shape[0] - 1)
+    X = jet_project(P, k=k, passes=passes, neighbours=neighbours)
+    moved = np.linalg.norm(X - P, axis=1)
+    notes.append(f"{name}: denoised{f' ({why})' if why else ''}: the points moved onto the degree-2 jets of their "
+                 f"{k} nearest neighbours ({passes} pass{'es' if passes > 1 else ''}; mean move {moved.mean():.3g}, "
+                 f"max {moved.max():.3g}); the triangles and lengths are the moved points'"
+                 + ("; denoise=None keeps the points as given" if why else ""))
+    return X

@@ -74,9 +74,10 @@ def save_distance(path: str | os.PathLike, mesh: MeshLike, distance: ArrayLike |
       float32 (glTF has no float64), and ``inf`` is written as -1 (the format's JSON header
       cannot hold infinity).
 
-    A field on a :class:`~cvxgeodesic.mesh.pointcloud.PointCloud` is written on its points, without the triangles
-    it was solved on (a ``.ply`` then has no faces, and :func:`~cvxgeodesic.mesh.pointcloud_io.load_point_cloud`
-    reads it back as a cloud); ``.vtu`` and ``.glb`` are refused for clouds.
+    A field on a :class:`~cvxgeodesic.mesh.pointcloud.PointCloud` is written on its points as given (before any
+    denoising), without the triangles it was solved on (a ``.ply`` then has no faces, and
+    :func:`~cvxgeodesic.mesh.pointcloud_io.load_point_cloud` reads it back as a cloud); ``.vtu`` and ``.glb`` are
+    refused for clouds.
 
     A field on a tetrahedral mesh (:class:`~cvxgeodesic.mesh.tetmesh.TetMesh`) is written as ``.vtu`` / ``.vtk``
     with the tetrahedra (ParaView opens it: slices, clips, contours), or as ``.npy``
@@ -159,7 +160,8 @@ def save_distance(path: str | os.PathLike, mesh: MeshLike, distance: ArrayLike |
         if p.suffix.lower() not in CLOUD_DISTANCE_EXTENSIONS:
             raise ParameterError(f"{p}: a field on a point cloud is written as {', '.join(CLOUD_DISTANCE_EXTENSIONS)} "
                                  f"(its points, no faces), not {p.suffix!r}")
-        field = dataclasses.replace(field, cells=field.cells[:0])
+        # at the points as given (a denoised cloud's moved points are where it was solved, not the user's data)
+        field = dataclasses.replace(field, V=mesh.cloud.points_as_given[field.vertex], cells=field.cells[:0])
     write = fmt.write_field
     atomic_write(p, lambda fh: write(fh, field), overwrite_read_only=overwrite_read_only)
     return p

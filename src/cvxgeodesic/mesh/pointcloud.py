@@ -29,12 +29,13 @@ from .cloud_tilt import (
     triangle_components,
     untilted_fans,
 )
-from .denoise import jet_noise
+from .denoise import DENOISE_PASSES, denoise_passes, denoised_with_note, jet_noise
 from .simplex import unique_rows
 from .trimesh import TriMesh
 
-__all__ = ["AUTO_NOISE_MAX", "CLEAN_NOISE_MAX", "DETAIL_GROWTH", "NORMAL_FAN_ANGLE", "OUTLIER_HANDLING",
-           "TRIANGLE_SETS", "CloudMesh", "PointCloud", "fan_triangles", "local_fans", "normal_fans", "triangle_set"]
+__all__ = ["AUTO_DENOISE_MIN_POINTS", "AUTO_NOISE_MAX", "CLEAN_NOISE_MAX", "DETAIL_GROWTH", "NORMAL_FAN_ANGLE",
+           "OUTLIER_HANDLING", "TRIANGLE_SETS", "CloudMesh", "PointCloud", "fan_triangles", "local_fans", "normal_fans",
+           "triangle_set"]
 
 #: The triangle sets a cloud can be solved on (docs/pointclouds.md has their measured errors):
 #: ``"union"`` every triangle of every fan; ``"consensus"`` the triangles that appear in at least two fans;
@@ -75,9 +76,15 @@ DETAIL_GROWTH = 1.9
 #: on max_planck, a fifth of the point-cloud heat method's time), their random surface points 0.001-0.027 (the two
 #: statues' 0.046-0.091); at 0.05 % noise of the diagonal 0.025-0.125, at 0.1 % 0.041-0.176.
 CLEAN_NOISE_MAX = 0.03
-#: Passes of jet projection of ``denoise="jet"`` (docs/pointclouds.md, "Denoised clouds"), and the most taken.
-DENOISE_PASSES = 2
-MAX_DENOISE_PASSES = 10
+#: ``denoise="auto"`` (the default) takes :data:`~cvxgeodesic.mesh.denoise.DENOISE_PASSES` where the noise rule
+#: would leave the default at order 1 on the cloud's triangles (:data:`AUTO_NOISE_MAX`, :data:`DETAIL_GROWTH`), the
+#: cloud has at least this many points and no oriented normals shape its fans (the jets do not read them, and a gap
+#: thinner than a spacing, which the normals keep open, reads as noise: the jets would join its sides). The default
+#: is then order 2 on a copy of the surface through the moved points. Measured 2026-12-07
+#: (docs/dev/adapted-log.md, "The noisy default on the denoised cloud"): on the noisy clouds of 13 shared meshes it
+#: took the default from 0.24-0.41 of the point-cloud heat method's error to 0.10-0.31 on the scans and CAD parts;
+#: below about 6,000 points the copy's floor of 2,000 faces (AUTO_MIN_FACES) took it past 3x that method's time.
+AUTO_DENOISE_MIN_POINTS = 6000
 #: With oriented normals, a point's fan leaves out the neighbours whose normal turns from its own by more than this
 #: many degrees: the other side of a thin wall, the other face of a sharp crease (docs/pointclouds.md, "Normals":
 #: fandisk's order-2 field 3.34 -> 0.052 % with the mesh's vertex normals; 45 degrees cut points off, 75 the same
@@ -407,11 +414,13 @@ class PointCloud:
         line (:data:`OUTLIER_HANDLING`): left out of the triangles with a note, kept, or refused.
     use_normals : bool, default True
         Whether given ``normals`` shape the fans (above); ``False`` builds them as without normals.
-    denoise : {None, "jet"} or int, default None
+    denoise : {"auto", None, "jet"} or int, default "auto"
         Move the points onto the jets (degree-2 height fits to their 12 nearest neighbours) before the triangles are
         built (:func:`cvxgeodesic.mesh.denoise.jet_project`): ``"jet"`` two passes, an integer that many passes
-        (0: none, as ``None``). The points keep their order and count; :attr:`P`, the triangles and the lengths are
-        the moved points', and a note says so. For noisy clouds, with order 2: docs/pointclouds.md measures it.
+        (0: none, as ``None``); ``"auto"`` two passes where the points read as :attr:`noisy` and number at least
+        :data:`AUTO_DENOISE_MIN_POINTS`, else none. The points keep their order and count; :attr:`P`, the triangles
+        and the lengths are the moved points', a note says so and why, and :attr:`denoised` counts the passes.
+        docs/pointclouds.md ("Noise and the default", "Denoised clouds") measures it.
     name : str, optional
         Label for messages.
 
@@ -425,6 +434,13 @@ class PointCloud:
     notes : tuple of str
         Every repair made (merged duplicates, outliers left out, stranded points given their fans back, points in no
         triangle).
+    noise : float
+        The noise of the points as given, in units of their spacing (:attr:`noisy`, :attr:`clean`).
+    denoised : int
+        Passes of jet projection the points took (``denoise``); 0 where they are as given.
+    points_as_given : (n, 3) float ndarray
+        The distinct points before any denoising (:attr:`P` itself where :attr:`denoised` is 0): where
+        :func:`~cvxgeodesic.save_distance` writes the field.
     outliers, line_points : (a,), (b,) int64 ndarray
         The distinct points left out of the triangles as isolated outliers and as points of line-like
         neighbourhoods (empty with ``outliers="keep"``); they cannot be sources, and a solve's field reaches them
@@ -451,7 +467,7 @@ class PointCloud:
 
     def __init__(self, P: ArrayLike, normals: ArrayLike | None = None, *, neighbours: int = DEFAULT_NEIGHBOURS,
                  triangles: str = DEFAULT_TRIANGLES, outliers: str = DEFAULT_OUTLIERS,
-                 use_normals: bool = True, denoise: str | int | None = None, name: str | None = None) -> None:
+                 use_normals: bool = True, denoise: str | int | None = "auto", name: str | None = None) -> None:
         self.name = name or "point cloud"
         passes = denoise_passes(denoise)
         if triangles not in TRIANGLE_SETS:
@@ -493,19 +509,29 @@ class PointCloud:
                                  f", got {self.neighbours}")
         self.file_index = file_index
         self.normals = None if normals is None else _check_normals(normals, raw.shape[0], self.name)[keep]
-        if passes:  # the points the fans are built on, fitted without the outliers
-            pts = pts.copy()
-            reuse = knn[1] if solid.size == pts.shape[0] else None  # the outliers' rows would need renumbering
-            pts[solid] = _denoised(pts[solid], passes, self.name, notes, reuse)
-        #: The noise in units of the spacing (:func:`~cvxgeodesic.mesh.denoise.jet_noise`), and above
-        #: :data:`AUTO_NOISE_MAX` how much it grows from 12 to 30 neighbours (None below); growing less than
-        #: :data:`DETAIL_GROWTH` (noise, not detail), the default solve is order 1 on the cloud's triangles.
-        self.noise = jet_noise(pts, *knn, points=solid)  # a denoised cloud: the old neighbours, the moved points
+        #: The noise of the points as given, in units of the spacing (:func:`~cvxgeodesic.mesh.denoise.jet_noise`),
+        #: and above :data:`AUTO_NOISE_MAX` how much it grows from 12 to 30 neighbours (None below): growing less
+        #: than :data:`DETAIL_GROWTH`, it is noise, not detail (:attr:`noisy`).
+        self.noise = jet_noise(pts, *knn, points=solid)
         self.noise_growth = (jet_noise(pts, *knn, points=solid, k=DEFECT_NEIGHBOURS) / self.noise
                              if self.noise > AUTO_NOISE_MAX else None)  # asked only above the threshold
         if not isinstance(use_normals, bool | np.bool_):
             raise ParameterError(f"use_normals must be True or False, got {use_normals!r}")
         oriented = _oriented_normals(self.normals if use_normals else None, pts, solid, self.name, notes)
+        #: Whether oriented normals shape the fans (:func:`normal_fans`).
+        self.fans_by_normals = oriented is not None
+        why = None
+        if passes is None:  # "auto": where the noise would leave the default at order 1; normals keep sheets apart
+            auto = self.noisy and pts.shape[0] >= AUTO_DENOISE_MIN_POINTS and oriented is None
+            passes, why = (DENOISE_PASSES, f"denoise='auto', as {self._noise_words()}") if auto else (0, None)
+        #: Passes of jet projection the points took (0: the points as given).
+        self.denoised = passes
+        self.points_as_given = pts.view()  # the distinct points before any denoising (what save_distance writes)
+        self.points_as_given.flags.writeable = False
+        if passes:  # the points the fans are built on, fitted without the outliers
+            pts = pts.copy()
+            reuse = knn[1] if solid.size == pts.shape[0] else None  # the outliers' rows would need renumbering
+            pts[solid] = denoised_with_note(pts[solid], passes, self.name, notes, reuse, why)
         tri, owner = fan_triangles(pts[solid], self.neighbours, oriented)
         if oriented is None:  # fans in fitted planes: those standing across a thin wall or a sharp crease left out
             planes = principal_planes(pts, knn[1])  # an outlier among a point's neighbours moves its plane a little
@@ -516,6 +542,7 @@ class PointCloud:
                              f"left out" + (f"; {restored} points they would cut off kept their fans" if restored
                                             else ""))
         self._fans = (solid[tri], solid[owner])  # for surface(): the consensus of the same fans
+        self._surface: tuple[TriMesh | None, str | None] | None = None
         F, added = triangle_set(solid[tri], solid[owner], pts, triangles)
         notes += added
         alone = np.setdiff1d(solid, F.ravel())
@@ -586,14 +613,31 @@ class PointCloud:
         carried[points] = np.minimum(distance[points], dijkstra(_left_out_graph(other, dist, first), indices=0)[1:])
         return carried, int(np.isfinite(carried[points]).sum())
 
-    def default_refusal(self) -> str | None:
-        """Why the default solve (order 2 on a copy, ``resolution="auto"``) is not taken on this cloud, or None: its
-        noise (:attr:`noise`) above :data:`AUTO_NOISE_MAX`, not growing like detail (:data:`DETAIL_GROWTH`)."""
-        if self.noise_growth is None or self.noise_growth >= DETAIL_GROWTH:
-            return None
+    @property
+    def noisy(self) -> bool:
+        """Whether the points as given read as too noisy for order 2 on a copy of the surface through them: their
+        :attr:`noise` above :data:`AUTO_NOISE_MAX`, growing by less than :data:`DETAIL_GROWTH` (noise, not detail).
+        ``denoise="auto"`` denoises such a cloud (:data:`AUTO_DENOISE_MIN_POINTS`)."""
+        return self.noise_growth is not None and self.noise_growth < DETAIL_GROWTH
+
+    def _noise_words(self) -> str:
         return (f"its noise, {self.noise:.3f} of the point spacing by its jets (growing {self.noise_growth:.2f}× "
-                f"from 12 to 30 neighbours: noise, not detail), is above {AUTO_NOISE_MAX}, where order 2 on a copy "
-                "stops paying")
+                f"from 12 to 30 neighbours: noise, not detail), is above {AUTO_NOISE_MAX}")
+
+    def default_refusal(self) -> str | None:
+        """Why the default solve (order 2 on a copy, ``resolution="auto"``) is not taken on this cloud, or None: the
+        points as given too :attr:`noisy` for it, and not denoised (:attr:`denoised`: a denoised cloud's copy is
+        decimated from the moved points)."""
+        if self.denoised or not self.noisy:
+            return None
+        if self.n_points < AUTO_DENOISE_MIN_POINTS:
+            kept = f"; a cloud of fewer than {AUTO_DENOISE_MIN_POINTS} points is not denoised by denoise='auto'"
+        elif self.fans_by_normals:
+            kept = ("; denoise='auto' does not denoise a cloud whose normals shape its fans (the jets would join the "
+                    "sides of gaps thinner than a spacing)")
+        else:
+            kept = ""  # denoise=None
+        return f"{self._noise_words()}, where order 2 on a copy of the raw points stops paying{kept}"
 
     @property
     def clean(self) -> bool:
@@ -622,6 +666,11 @@ class PointCloud:
         why : str or None
             Why there is none: a piece of the cloud's triangles without consensus, or its consensus in pieces.
         """
+        if self._surface is None:  # built once: the default's check of a denoised cloud's copy reads it too
+            self._surface = self._consensus_surface()
+        return self._surface
+
+    def _consensus_surface(self) -> tuple[TriMesh | None, str | None]:
         tri, owner = self._fans
         F, _ = triangle_set(tri, owner, self.P, "consensus")
         if F.shape[0] == 0:
@@ -705,33 +754,6 @@ def is_point_cloud_object(obj: Any) -> bool:
         return True
     kind = f"{type(obj).__module__}.{type(obj).__qualname__}"
     return kind.startswith(("trimesh.points.PointCloud", "open3d")) and "PointCloud" in kind
-
-
-def denoise_passes(denoise: Any) -> int:
-    """The passes of jet projection that ``PointCloud``'s ``denoise`` asks for (0: none)."""
-    if denoise is None:
-        return 0
-    if isinstance(denoise, str) and denoise == "jet":
-        return DENOISE_PASSES
-    if isinstance(denoise, int | np.integer) and not isinstance(denoise, bool) and 0 <= denoise <= MAX_DENOISE_PASSES:
-        return int(denoise)
-    raise ParameterError(f"denoise must be None, 'jet' or an integer from 0 to {MAX_DENOISE_PASSES} (passes of jet "
-                         f"projection), got {denoise!r}")
-
-
-def _denoised(P: np.ndarray, passes: int, name: str, notes: list[str],
-              neighbours: np.ndarray | None = None) -> np.ndarray:
-    """``P`` moved onto the jets of its neighbourhoods ``passes`` times, with a note of how far; ``neighbours`` as
-    :func:`~cvxgeodesic.mesh.denoise.jet_project` takes them."""
-    from .denoise import DEFAULT_DENOISE_NEIGHBOURS, jet_project
-
-    k = min(DEFAULT_DENOISE_NEIGHBOURS, P.shape[0] - 1)
-    X = jet_project(P, k=k, passes=passes, neighbours=neighbours)
-    moved = np.linalg.norm(X - P, axis=1)
-    notes.append(f"{name}: denoised: the points moved onto the degree-2 jets of their {k} nearest neighbours "
-                 f"({passes} pass{'es' if passes > 1 else ''}; mean move {moved.mean():.3g}, max {moved.max():.3g}); "
-                 "the triangles and lengths are the moved points'")
-    return X
 
 
 def _left_out_graph(other: np.ndarray, dist: np.ndarray, first: np.ndarray) -> Any:
