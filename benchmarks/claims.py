@@ -483,13 +483,15 @@ CLAIMS: list[Claim] = [
        "UTC, load 0.6, against 15:52 UTC, load 0.3–1.0; with three decimation tries: 14:48 UTC, load 0.4–0.8)",
        (POINTCLOUDS, "3.50 / 3.69 / 4.98 % on the CAD part"), (POINTCLOUDS, "(2.4–2.7× pc-heat's time)")),
     _r("pointclouds-default", "2026-12-07", "`CVXGEODESIC_THREADS=1 python benchmarks/point_clouds.py --meshes kitten "
-       "bimba max_planck fandisk --sets union --no-order2 --repeats 2` (two runs, 07:42 and 07:43 UTC, load 1.1–1.3; "
-       "06:33 and 06:34 UTC, load 0.3–0.7; before: 05:02 and 05:04 UTC, load 0.7–0.9, and 00:27 UTC, load 0.8); "
-       "the noise readings and "
-       "(2026-12-06) the noisier "
-       "draws (scratch scripts over the vertex clouds, one noise draw per seed): " + NO_SCRIPT,
+       "bimba max_planck fandisk --sets union --no-order2 --repeats 2` (two runs, 09:06 and 09:07 UTC, load 0.8–0.9; "
+       "before denoise='auto': 07:42 and 07:43 UTC, load 1.1–1.3; 06:33 and 06:34 UTC, load 0.3–0.7; 05:02 and 05:04 "
+       "UTC, load 0.7–0.9, and 00:27 UTC, load 0.8); the same with `--meshes bunny horse armadillo lucy_20k "
+       "dragon_20k buddha camelhead_open bug_surface thingi_32770 --repeats 1` (09:08 UTC); the noise readings, "
+       "(2026-12-06) the noisier draws and the small clouds' denoised copies (scratch scripts): " + NO_SCRIPT,
        (POINTCLOUDS, "| kitten | 0 / 0.1 / 0.3 % | 1.32 / 1.54 / 7.73 % |"),
-       (POINTCLOUDS, "the default had 0.11–0.50 clean"), (POINTCLOUDS, "got order 1 at 2.0–2.5×"),
+       (POINTCLOUDS, "the default had 0.11–0.50 clean"),
+       (POINTCLOUDS, "2.0–2.9× its time (order 1 on the points as given, the default before: 0.37, 0.32 and 0.63 at"),
+       (POINTCLOUDS, "0.09–0.46 on kitten, bimba and the CAD part (max_planck's vertex cloud, 5,272 points, stays"),
        (POINTCLOUDS, "It reads 0.000–0.025 on the clean vertex clouds of 10 shared scans"),
        (POINTCLOUDS, "from 12 to 30 neighbours by 2.2–2.7× on those two"),
        (POINTCLOUDS, "max_planck 2.0–2.2 % against 1.3–1.4 %")),
@@ -514,13 +516,15 @@ CLAIMS: list[Claim] = [
        "1.0,0.25 --noise 0 --sets union --no-order2 --m 0 --repeats 1` (06:50 UTC, load 0.6–0.9)",
        (POINTCLOUDS, "pc-heat's error on all 26 clouds, at most half on 15")),
     _r("pointclouds-random-noisy", "2026-12-07", "`CVXGEODESIC_THREADS=1 python benchmarks/point_clouds.py --resample "
-       "1.0,0.25 --noise 0.001,0.003 --sets union --no-order2 --m 0 --repeats 1` (06:56 UTC, errors; 07:09 UTC, "
-       "times, with the copies' Euler slack since reverted)",
-       (POINTCLOUDS, "the default had 0.19–1.77 of pc-heat's error, at most")),
+       "1.0,0.25 --noise 0.001,0.003 --sets union --no-order2 --m 0 --repeats 1` (09:11 UTC, load 0.9; before "
+       "denoise='auto': 06:56 UTC)",
+       (POINTCLOUDS, "the default had 0.07–1.77 of pc-heat's error (mean 0.52), at most half on 32"),
+       (POINTCLOUDS, "| 0.07–1.77 (at most 0.5 on 32, above 1 on 7) | 1.4–4.2× |")),
     _r("pointclouds-default-all", "2026-12-07", "`CVXGEODESIC_THREADS=1 python benchmarks/point_clouds.py --meshes "
        "bunny horse armadillo lucy_20k dragon_20k buddha camelhead_open bug_surface thingi_32770 --sets union "
-       "--no-order2 --repeats 1` (06:47 UTC, load 1.2 falling; before: 2026-12-06 19:46 UTC)",
+       "--no-order2 --repeats 1` (09:08 UTC, load 0.9; before denoise='auto': 06:47 UTC; 2026-12-06 19:46 UTC)",
        (POINTCLOUDS, "| bunny | 0 / 0.1 / 0.3 % | 1.10 / 2.99 / 15.4 % |"),
+       (POINTCLOUDS, "Denoised, it was more accurate than order 1 on the points as given on 8 of the 13 noisy"),
        (POINTCLOUDS, "more accurate than order 1 on 10 of these 12 clouds (0.17–0.90 of its")),
     _r("pointclouds-noisy-copy", "2026-12-06", "`python benchmarks/point_clouds.py --meshes kitten bimba max_planck "
        "fandisk --sets union --no-order2 --noise 0.001,0.003 --denoise 2 --resolution auto --repeats 2` (19:49 UTC, "
