@@ -139,32 +139,24 @@ def test_auto_leaves_clean_and_small_clouds_as_given():
     assert f"fewer than {AUTO_DENOISE_MIN_POINTS} points is not denoised" in small.default_refusal()
 
 
-#: the same sphere with noise of 0.1 of the spacing: it reads about 0.055, not clean, below the noise rule (as given)
-LIGHT_8K = SPHERE_8K + np.random.default_rng(4).normal(scale=0.1 * np.sqrt(4 * np.pi / 8000), size=SPHERE_8K.shape)
-
-
-@pytest.mark.parametrize(("points", "denoised", "words"), [(NOISY_8K, True, "denoised points"),
-                                                           (LIGHT_8K, False, "points")])
-def test_a_noisy_cloud_whose_copy_cannot_reach_its_target_is_solved_at_order_1(monkeypatch, points, denoised, words):
-    # the surface through the points is whole here; its holes' floor is set by the test, at NOISY_COPY_FLOOR times
-    # the target (the copy) and one face above it (order 1 on the cloud's triangles, with a note)
+def test_a_denoised_cloud_whose_copy_cannot_reach_its_target_is_solved_at_order_1(monkeypatch):
+    # the surface through the moved points is whole here; its holes' floor is set by the test, at DENOISED_COPY_FLOOR
+    # times the target (the copy) and one face above it (order 1 on the denoised cloud's triangles, with a note)
     from cvxgeodesic.mesh import decimate
     from cvxgeodesic.strategies.adapted import AUTO_MIN_FACES
-    from cvxgeodesic.strategies.cloud_default import NOISY_COPY_FLOOR
+    from cvxgeodesic.strategies.cloud_default import DENOISED_COPY_FLOOR
 
-    cloud = PointCloud(points)
-    assert bool(cloud.denoised) is denoised and not cloud.clean
-    at = int(NOISY_COPY_FLOOR * AUTO_MIN_FACES)
+    cloud = PointCloud(NOISY_8K)
+    at = int(DENOISED_COPY_FLOOR * AUTO_MIN_FACES)
     for floor, order in ((at, 2), (at + 1, 1)):
         monkeypatch.setattr(decimate, "kept_border_floor", lambda surface, floor=floor: floor)
         solver = cg.GeodesicSolver(cloud)
         assert solver.order == order
     res = solver.solve(0)
-    assert any(f"the surface through its {words} has holes whose borders keep every copy at {at + 1} faces or more, "
-               f"{(at + 1) / AUTO_MIN_FACES:.2f} times its target of {AUTO_MIN_FACES}" in n for n in res.info.notes)
+    assert any(f"keep every copy at {at + 1} faces or more, {(at + 1) / AUTO_MIN_FACES:.2f} times its target of "
+               f"{AUTO_MIN_FACES}" in n for n in res.info.notes)
     assert cg.GeodesicSolver(cloud, resolution="auto").order == 2  # asked for: taken
-    clean = PointCloud(SPHERE_8K)  # a clean cloud's copies are finer and retried coarser: no floor rule
-    assert cg.GeodesicSolver(clean).order == 2
+    assert cg.GeodesicSolver(PointCloud(NOISY_8K, denoise=None), resolution="auto").order == 2
 
 
 def test_a_denoised_cloud_s_field_is_saved_at_the_points_as_given(tmp_path):

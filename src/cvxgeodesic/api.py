@@ -30,7 +30,7 @@ from .solvers._interrupt import reporting_to
 from .sources import resolve_sources
 from .strategies import SolveConfig, SolveStrategy, make_strategy, resolve_target
 from .strategies.adapted import resolve_resolution
-from .strategies.cloud_default import noisy_copy_refusal
+from .strategies.cloud_default import denoised_copy_refusal
 from .validation import (
     check_choice,
     check_count,
@@ -315,9 +315,9 @@ class GeodesicSolver:
     def _default_resolution(self, *, multires: bool, medium: str, smoothing: bool) -> Any:
         """The resolution of ``resolution=None`` and ``order=None``: the domain's where the capability table has an
         adapted solve for this method, medium and smoothing, else ``"mesh"``; on a point cloud too noisy for a copy
-        (:meth:`~cvxgeodesic.mesh.pointcloud.PointCloud.default_refusal`), or not clean with a surface whose holes keep
-        its copy above target (:func:`~cvxgeodesic.strategies.cloud_default.noisy_copy_refusal`), ``"mesh"`` with a
-        note."""
+        (:meth:`~cvxgeodesic.mesh.pointcloud.PointCloud.default_refusal`), or denoised with a surface whose holes
+        keep its copy above target (:func:`~cvxgeodesic.strategies.cloud_default.denoised_copy_refusal`), ``"mesh"``
+        with a note."""
         resolution = self.domain.default_resolution
         if resolution == "mesh" or multires or not supported(
                 self.method, domain=self.domain.name, order=2, medium=medium, smoothing=smoothing, resolution=True):
@@ -329,7 +329,7 @@ class GeodesicSolver:
         advice = ("; on the cloud denoised first (PointCloud(..., denoise='jet')) it was more accurate on most "
                   "noisy clouds measured, at up to twice the time")
         if why is None:
-            why, advice = noisy_copy_refusal(self.mesh, resolution), ""
+            why, advice = denoised_copy_refusal(self.mesh, resolution), ""
         if why is None:
             return resolution
         self._default_notes.append(
