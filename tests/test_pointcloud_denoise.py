@@ -116,6 +116,7 @@ def test_auto_denoises_a_noisy_cloud_and_its_default_is_the_denoised_copy():
     auto = PointCloud(NOISY_8K)
     given = PointCloud(NOISY_8K, denoise=None)
     assert auto.noise == given.noise > AUTO_NOISE_MAX and auto.noisy and given.noisy  # the points as given, both
+    assert PointCloud(NOISY_8K, denoise="jet").noise == given.noise  # asked for, too
     assert (auto.denoised, given.denoised) == (DENOISE_PASSES, 0)
     assert not np.allclose(auto.P, NOISY_8K) and np.array_equal(auto.points_as_given, NOISY_8K)
     assert np.array_equal(given.P, NOISY_8K) and np.array_equal(given.points_as_given, NOISY_8K)
