@@ -124,9 +124,12 @@ def test_auto_denoises_a_noisy_cloud_and_its_default_is_the_denoised_copy():
     assert not any("denoised" in n for n in given.notes)
     res = cg.GeodesicSolver(auto).solve(0)
     assert res.info.extra["adapted"]["fallback"] is None  # order 2 on the denoised surface's copy
+    assert res.info.extra["denoised"] == {"passes": DENOISE_PASSES, "noise": auto.noise, "automatic": True}
     assert any("denoise='auto'" in n for n in res.info.notes)
     raw = cg.GeodesicSolver(given).solve(0)
-    assert "adapted" not in raw.info.extra  # the noise rule: order 1 on the raw triangles
+    assert "adapted" not in raw.info.extra and "denoised" not in raw.info.extra  # the noise rule: order 1 as given
+    asked = cg.GeodesicSolver(PointCloud(NOISY_8K, denoise=1), order=1).solve(0)
+    assert asked.info.extra["denoised"] == {"passes": 1, "noise": given.noise, "automatic": False}
     assert _great_circle_error(res) < 0.6 * _great_circle_error(raw)
 
 

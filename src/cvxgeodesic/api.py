@@ -433,6 +433,10 @@ class GeodesicSolver:
         with reporting_to(callback):  # Clarabel's iterations too, wherever a strategy runs it
             res = self._strategy.solve(sset, callback=callback)
         self._carry_to_left_out(res)
+        cloud = getattr(self.mesh, "cloud", None)
+        if cloud is not None and cloud.denoised:  # the substitution recorded, not only noted
+            res.info.extra["denoised"] = {"passes": cloud.denoised, "noise": cloud.noise,
+                                          "automatic": cloud.denoised_automatically}
         res.info.setup_time = self.setup_time
         res.info.solve_time += source_time
         res.info.extra["source_time"] = source_time

@@ -438,6 +438,8 @@ class PointCloud:
         The noise of the points as given, in units of their spacing (:attr:`noisy`, :attr:`clean`).
     denoised : int
         Passes of jet projection the points took (``denoise``); 0 where they are as given.
+    denoised_automatically : bool
+        Whether ``denoise="auto"`` chose them (a solve records it in ``info.extra["denoised"]``).
     points_as_given : (n, 3) float ndarray
         The distinct points before any denoising (:attr:`P` itself where :attr:`denoised` is 0): where
         :func:`~cvxgeodesic.save_distance` writes the field.
@@ -524,8 +526,9 @@ class PointCloud:
         if passes is None:  # "auto": where the noise would leave the default at order 1; normals keep sheets apart
             auto = self.noisy and pts.shape[0] >= AUTO_DENOISE_MIN_POINTS and oriented is None
             passes, why = (DENOISE_PASSES, f"denoise='auto', as {self._noise_words()}") if auto else (0, None)
-        #: Passes of jet projection the points took (0: the points as given).
+        #: Passes of jet projection the points took (0: the points as given), and whether ``"auto"`` chose them.
         self.denoised = passes
+        self.denoised_automatically = why is not None
         self.points_as_given = pts.view()  # the distinct points before any denoising (what save_distance writes)
         self.points_as_given.flags.writeable = False
         if passes:  # the points the fans are built on, fitted without the outliers
