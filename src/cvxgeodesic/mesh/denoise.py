@@ -154,7 +154,7 @@ def denoise_passes(denoise: Any) -> int | None:
 
 
 def denoised_with_note(P: np.ndarray, passes: int, name: str, notes: list[str],
-              neighbours: np.ndarray | None = None, why: str | None = None) -> np.ndarray:
+                       neighbours: np.ndarray | None = None, why: str | None = None) -> np.ndarray:
     """``P`` moved onto the jets of its neighbourhoods ``passes`` times, with a note of how far (and ``why``, for
     ``denoise="auto"``); ``neighbours`` as :func:`~cvxgeodesic.mesh.denoise.jet_project` takes them."""
     k = min(DEFAULT_DENOISE_NEIGHBOURS, P.shape[0] - 1)

@@ -80,10 +80,11 @@ CLEAN_NOISE_MAX = 0.03
 #: would leave the default at order 1 on the cloud's triangles (:data:`AUTO_NOISE_MAX`, :data:`DETAIL_GROWTH`), the
 #: cloud has at least this many points and no oriented normals shape its fans (the jets do not read them, and a gap
 #: thinner than a spacing, which the normals keep open, reads as noise: the jets would join its sides). The default
-#: is then order 2 on a copy of the surface through the moved points. Measured 2026-12-07
-#: (docs/dev/adapted-log.md, "The noisy default on the denoised cloud"): on the noisy clouds of 13 shared meshes it
-#: took the default from 0.24-0.41 of the point-cloud heat method's error to 0.10-0.31 on the scans and CAD parts;
-#: below about 6,000 points the copy's floor of 2,000 faces (AUTO_MIN_FACES) took it past 3x that method's time.
+#: is then order 2 on a copy of the surface through the moved points. Measured 2026-12-07 (docs/pointclouds.md,
+#: "Noise and the default"; docs/dev/adapted-log.md, "The noisy default on the denoised cloud"): on the benchmark's
+#: noisy vertex clouds of eight scans and CAD parts it took the default from 0.21-0.63 of the point-cloud heat
+#: method's error to 0.088-0.46 (the statues lost 10-19 %); below 6,000 points the denoised copy, at the copy's floor
+#: of 2,000 faces (AUTO_MIN_FACES), took 2.8-4.4x that method's time (a scratch script).
 AUTO_DENOISE_MIN_POINTS = 6000
 #: With oriented normals, a point's fan leaves out the neighbours whose normal turns from its own by more than this
 #: many degrees: the other side of a thin wall, the other face of a sharp crease (docs/pointclouds.md, "Normals":
