@@ -299,8 +299,7 @@ def _solved_on(res) -> str:
     ad = res.info.extra.get("adapted")
     carried = res.info.extra.get("left_out_reached", 0)
     also = f"; {carried} left-out point{'s' if carried > 1 else ''} carried" if carried else ""
-    denoised = any("denoised (denoise='auto'" in note for note in res.info.notes)  # PointCloud's "auto" moved them
-    first = "denoised; " if denoised else ""
+    first = "denoised; " if res.info.extra.get("denoised", {}).get("automatic") else ""  # "auto" moved the points
     if ad is None:
         return first + "the cloud's triangles" + also
     return first + (f"{ad['faces']} faces" if ad["fallback"] is None else f"fallback: {ad['fallback']}") + also

@@ -10,7 +10,7 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable, Iterable
-from typing import Any, Literal, TypeAlias, overload
+from typing import TYPE_CHECKING, Any, Literal, TypeAlias, overload
 
 import numpy as np
 import scipy.sparse as sp
@@ -41,6 +41,9 @@ from .validation import (
     check_smoothness,
     validate_sources,
 )
+
+if TYPE_CHECKING:
+    from .mesh.pointcloud import PointCloud
 
 __all__ = ["ALL_METHODS", "BASELINE_METHODS", "DEFAULT_TOL", "GeodesicResult", "GeodesicSolver", "Method", "SOLVERS",
            "SolveInfo", "SolverName", "distance_matrix", "geodesic_distance"]
@@ -327,9 +330,8 @@ class GeodesicSolver:
             return resolution
         why = cloud.default_refusal()  # noisy points as given: order 1 on their triangles beats a copy of them
         advice = ("; on the cloud denoised first (PointCloud(..., denoise='jet')) it was more accurate on most "
-                  "noisy clouds measured, at up to twice the time")
-        if why is None:
-            why, advice = denoised_copy_refusal(self.mesh, resolution), ""
+                  "noisy clouds measured, at up to twice the time") if why else ""
+        why = why or denoised_copy_refusal(self.mesh, resolution)
         if why is None:
             return resolution
         self._default_notes.append(
@@ -432,11 +434,12 @@ class GeodesicSolver:
         source_time = time.perf_counter() - t0  # closest points and curve samples: part of this solve
         with reporting_to(callback):  # Clarabel's iterations too, wherever a strategy runs it
             res = self._strategy.solve(sset, callback=callback)
-        self._carry_to_left_out(res)
         cloud = getattr(self.mesh, "cloud", None)
-        if cloud is not None and cloud.denoised:  # the substitution recorded, not only noted
-            res.info.extra["denoised"] = {"passes": cloud.denoised, "noise": cloud.noise,
-                                          "automatic": cloud.denoised_automatically}
+        if cloud is not None:
+            self._carry_to_left_out(res, cloud)
+            if cloud.denoised:  # the substitution recorded, not only noted
+                res.info.extra["denoised"] = {"passes": cloud.denoised, "noise": cloud.noise,
+                                              "automatic": cloud.denoised_automatically}
         res.info.setup_time = self.setup_time
         res.info.solve_time += source_time
         res.info.extra["source_time"] = source_time
@@ -444,13 +447,10 @@ class GeodesicSolver:
             res.info.extra.update(self.medium.describe())
         return res
 
-    def _carry_to_left_out(self, res: GeodesicResult) -> None:
-        """On a point cloud, the field carried to the points in no triangle (its outliers, line points and isolated
-        points: :meth:`~cvxgeodesic.mesh.pointcloud.PointCloud.reach_left_out`), in place, with a note and
-        ``info.extra["left_out_reached"]``."""
-        cloud = getattr(self.mesh, "cloud", None)
-        if cloud is None:
-            return
+    def _carry_to_left_out(self, res: GeodesicResult, cloud: PointCloud) -> None:
+        """On the point cloud whose soup this solver's mesh is, the field carried to the points in no triangle (its
+        outliers, line points and isolated points: :meth:`~cvxgeodesic.mesh.pointcloud.PointCloud.reach_left_out`), in
+        place, with a note and ``info.extra["left_out_reached"]``."""
         carried, reached = cloud.reach_left_out(res.distance)
         if not reached:
             return
