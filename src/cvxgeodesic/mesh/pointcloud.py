@@ -30,6 +30,7 @@ from .cloud_tilt import (
     untilted_fans,
 )
 from .denoise import DENOISE_PASSES, denoise_passes, denoised_with_note, jet_noise
+from .frames import plane_fits, scatter_matrices, tangent_frames
 from .simplex import unique_rows
 from .trimesh import TriMesh
 
@@ -275,10 +276,7 @@ def normal_fans(P: np.ndarray, N: np.ndarray, k: int) -> tuple[np.ndarray, np.nd
     from scipy.spatial import cKDTree
 
     idx = cKDTree(P).query(P, k=k + 1)[1]
-    helper = np.where(np.abs(N[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])  # not along the normal
-    e1 = np.cross(N, helper)
-    e1 /= np.linalg.norm(e1, axis=1)[:, None]
-    frame = np.stack([e1, np.cross(N, e1)], axis=2)  # (n, 3, 2)
+    frame = tangent_frames(N)[:, :, 1:]  # (n, 3, 2): the normal's plane
     uv = np.einsum("nki,nij->nkj", P[idx] - P[:, None, :], frame)
     turned = np.einsum("nki,ni->nk", N[idx], N) < np.cos(np.radians(NORMAL_FAN_ANGLE))
     tri, owner = _fans(uv, idx, turned)
@@ -327,9 +325,8 @@ def _tangent_coordinates(P: np.ndarray, idx: np.ndarray) -> np.ndarray:
     """(r, k + 1, 2): the neighbours ``P[idx]`` of each row's point ``P[idx[:, 0]]``, relative to it, in the plane of
     their two principal axes."""
     X = P[idx]
-    Q = X - X.mean(axis=1, keepdims=True)
-    frame = np.linalg.eigh(np.einsum("nki,nkj->nij", Q, Q))[1][:, :, 1:]  # eigenvalues ascending: drop the normal
-    return np.einsum("nki,nij->nkj", X - X[:, :1, :], frame)
+    normal = plane_fits(scatter_matrices(X - X.mean(axis=1, keepdims=True)))[1]
+    return np.einsum("nki,nij->nkj", X - X[:, :1, :], tangent_frames(normal)[:, :, 1:])
 
 
 def _hull_march(W: np.ndarray) -> np.ndarray:
